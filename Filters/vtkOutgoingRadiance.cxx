@@ -1,0 +1,173 @@
+#include "vtkOutgoingRadiance.h"
+
+#include "Radiance.h"
+#include "TetMesh.h"
+#include "vtkTranslucencyMeshConversion.h"
+
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkDoubleArray.h>
+#include <vtkIdTypeArray.h>
+#include <vtkInformation.h>
+#include <vtkInformationVector.h>
+#include <vtkNew.h>
+#include <vtkObjectFactory.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkSMPTools.h>
+#include <vtkUnstructuredGrid.h>
+
+#include <cmath>
+
+vtkStandardNewMacro(vtkOutgoingRadiance);
+
+struct vtkOutgoingRadiance::Internals
+{
+  translucency::TetMesh Mesh;
+  std::string MeshKey;
+};
+
+//------------------------------------------------------------------------------
+vtkOutgoingRadiance::vtkOutgoingRadiance()
+  : Internal(new Internals)
+{
+}
+
+vtkOutgoingRadiance::~vtkOutgoingRadiance() = default;
+
+//------------------------------------------------------------------------------
+int vtkOutgoingRadiance::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkUnstructuredGrid");
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+int vtkOutgoingRadiance::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
+  vtkPolyData* output = vtkPolyData::GetData(outputVector);
+  std::string error;
+  translucency::TetMesh& mesh = this->Internal->Mesh;
+  const std::string key = input ? vtkTranslucency::GeometryKey(input) : std::string();
+  if (key.empty() || key != this->Internal->MeshKey)
+  {
+    this->Internal->MeshKey.clear();
+    if (!vtkTranslucency::ToTetMesh(input, mesh, error))
+    {
+      vtkErrorMacro(<< error);
+      return 0;
+    }
+    this->Internal->MeshKey = key;
+  }
+  std::vector<double> fluence, irradiance;
+  if (!vtkTranslucency::ReadPointArray(input, vtkTranslucency::FluenceName, 3, fluence, error) ||
+    !vtkTranslucency::ReadPointArray(
+      input, vtkTranslucency::IrradianceName, 3, irradiance, error))
+  {
+    vtkErrorMacro(<< error << " (run vtkSurfaceIrradiance and vtkSolveDiffusion first)");
+    return 0;
+  }
+  vtkDataArray* etaArray = input->GetCellData()->GetArray(vtkTranslucency::RefractiveIndexName);
+  if (!etaArray || etaArray->GetNumberOfComponents() != 1)
+  {
+    vtkErrorMacro(<< "the input has no 1-component cell array '"
+                  << vtkTranslucency::RefractiveIndexName << "'");
+    return 0;
+  }
+  std::vector<double> tetEta(static_cast<size_t>(etaArray->GetNumberOfTuples()));
+  for (size_t t = 0; t < tetEta.size(); ++t)
+  {
+    tetEta[t] = etaArray->GetComponent(static_cast<vtkIdType>(t), 0);
+  }
+  const std::vector<double> pointEta = translucency::PointRefractiveIndex(mesh, tetEta);
+
+  // Compact surface: boundary points only.
+  const std::vector<int>& boundary = mesh.GetBoundaryPoints();
+  const vtkIdType n = static_cast<vtkIdType>(boundary.size());
+  std::vector<vtkIdType> surfaceId(static_cast<size_t>(mesh.GetNumberOfPoints()), -1);
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(n);
+  vtkNew<vtkIdTypeArray> originalIds;
+  originalIds->SetName("vtkOriginalPointIds");
+  originalIds->SetNumberOfTuples(n);
+  for (vtkIdType k = 0; k < n; ++k)
+  {
+    surfaceId[boundary[k]] = k;
+    points->SetPoint(k, mesh.GetPoint(boundary[k]));
+    originalIds->SetValue(k, boundary[k]);
+  }
+  const std::vector<int>& tris = mesh.GetBoundaryTriangles();
+  vtkNew<vtkCellArray> polys;
+  polys->AllocateExact(static_cast<vtkIdType>(tris.size() / 3), static_cast<vtkIdType>(tris.size()));
+  for (size_t f = 0; f < tris.size() / 3; ++f)
+  {
+    const vtkIdType ids[3] = { surfaceId[tris[3 * f]], surfaceId[tris[3 * f + 1]],
+      surfaceId[tris[3 * f + 2]] };
+    polys->InsertNextCell(3, ids);
+  }
+
+  auto makeArray = [n](const char* name) {
+    vtkDoubleArray* a = vtkDoubleArray::New();
+    a->SetName(name);
+    a->SetNumberOfComponents(3);
+    a->SetNumberOfTuples(n);
+    return a;
+  };
+  vtkDoubleArray* radiance = makeArray(vtkTranslucency::RadianceName);
+  vtkDoubleArray* phiOut = makeArray(vtkTranslucency::FluenceName);
+  vtkDoubleArray* qOut = makeArray(vtkTranslucency::IrradianceName);
+  vtkDoubleArray* normalsOut = makeArray("Normals");
+  const std::vector<double>& normals = mesh.GetPointNormals();
+  const bool useView = this->UseViewPoint;
+  const double* view = this->ViewPoint;
+  vtkSMPTools::For(0, n, [&](vtkIdType begin, vtkIdType end) {
+    for (vtkIdType k = begin; k < end; ++k)
+    {
+      const size_t i = static_cast<size_t>(boundary[k]);
+      const double* nrm = &normals[3 * i];
+      double cosOut = 1.0;
+      if (useView)
+      {
+        const double* x = mesh.GetPoint(static_cast<int>(i));
+        double d[3] = { view[0] - x[0], view[1] - x[1], view[2] - x[2] };
+        const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
+      }
+      for (int c = 0; c < 3; ++c)
+      {
+        radiance->SetTypedComponent(k, c,
+          translucency::OutgoingRadiance(
+            fluence[3 * i + c], irradiance[3 * i + c], pointEta[i], cosOut));
+        phiOut->SetTypedComponent(k, c, fluence[3 * i + c]);
+        qOut->SetTypedComponent(k, c, irradiance[3 * i + c]);
+        normalsOut->SetTypedComponent(k, c, nrm[c]);
+      }
+    }
+  });
+  output->SetPoints(points);
+  output->SetPolys(polys);
+  output->GetPointData()->AddArray(radiance);
+  output->GetPointData()->AddArray(phiOut);
+  output->GetPointData()->AddArray(qOut);
+  output->GetPointData()->SetNormals(normalsOut);
+  output->GetPointData()->AddArray(originalIds);
+  output->GetPointData()->SetActiveScalars(vtkTranslucency::RadianceName);
+  radiance->Delete();
+  phiOut->Delete();
+  qOut->Delete();
+  normalsOut->Delete();
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+void vtkOutgoingRadiance::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "UseViewPoint: " << this->UseViewPoint << "\n";
+  os << indent << "ViewPoint: " << this->ViewPoint[0] << ", " << this->ViewPoint[1] << ", "
+     << this->ViewPoint[2] << "\n";
+}

@@ -1,0 +1,67 @@
+/**
+ * @class   vtkOutgoingRadiance
+ * @brief   Boundary surface of a solved tet mesh with its outgoing radiance.
+ *
+ * Extracts the boundary triangles of the input tetrahedral mesh (outward
+ * oriented) as a vtkPolyData and evaluates, at every surface point,
+ * L_o(x, w_o) = F_t(w_o)/(4 pi) [ (1 + 1/A) phi(x) - 4/(1 + Fdr) q(x) ]
+ * (TransCut eq. 3, after Arbree et al.) from the input's point arrays
+ * `Fluence` (phi) and `Irradiance` (q) and the cell array `RefractiveIndex`.
+ *
+ * Output point data: `Radiance` (3 components, W/mm^2/sr, linear, not tone
+ * mapped), `Fluence`, `Irradiance`, `Normals` (outward unit normals) and
+ * `vtkOriginalPointIds` (ids in the tet mesh).
+ *
+ * The outgoing direction w_o is the surface normal by default (F_t at normal
+ * exit); with UseViewPoint on, it points from each surface point to the
+ * ViewPoint (a camera position), and points facing away get 0.
+ *
+ * @sa vtkSolveDiffusion vtkSurfaceIrradiance
+ */
+#ifndef vtkOutgoingRadiance_h
+#define vtkOutgoingRadiance_h
+
+#include "vtkPolyDataAlgorithm.h"
+#include "TranslucencyFiltersModule.h" // for export macro
+
+#include <memory>
+
+class TRANSLUCENCYFILTERS_EXPORT vtkOutgoingRadiance : public vtkPolyDataAlgorithm
+{
+public:
+  static vtkOutgoingRadiance* New();
+  vtkTypeMacro(vtkOutgoingRadiance, vtkPolyDataAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  ///@{
+  /// Evaluate F_t towards ViewPoint instead of along the normal (default off).
+  vtkSetMacro(UseViewPoint, bool);
+  vtkGetMacro(UseViewPoint, bool);
+  vtkBooleanMacro(UseViewPoint, bool);
+  ///@}
+
+  ///@{
+  /// Camera position (mm) used when UseViewPoint is on. Default (0, 0, 0).
+  vtkSetVector3Macro(ViewPoint, double);
+  vtkGetVector3Macro(ViewPoint, double);
+  ///@}
+
+protected:
+  vtkOutgoingRadiance();
+  ~vtkOutgoingRadiance() override;
+
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  bool UseViewPoint = false;
+  double ViewPoint[3] = { 0.0, 0.0, 0.0 };
+
+private:
+  vtkOutgoingRadiance(const vtkOutgoingRadiance&) = delete;
+  void operator=(const vtkOutgoingRadiance&) = delete;
+
+  struct Internals;
+  std::unique_ptr<Internals> Internal;
+};
+
+#endif

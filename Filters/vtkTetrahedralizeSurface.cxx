@@ -1,0 +1,401 @@
+#include "vtkTetrahedralizeSurface.h"
+
+#include "TetMesh.h"
+
+#include <vtkCellArray.h>
+#include <vtkCellArrayIterator.h>
+#include <vtkIdTypeArray.h>
+#include <vtkInformation.h>
+#include <vtkInformationVector.h>
+#include <vtkNew.h>
+#include <vtkObjectFactory.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkStaticCleanPolyData.h>
+#include <vtkUnstructuredGrid.h>
+
+#include <tetgen.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+vtkStandardNewMacro(vtkTetrahedralizeSurface);
+
+namespace
+{
+/// A triangle surface after checks, ids 0..n-1.
+struct Surface
+{
+  std::vector<double> Points;
+  std::vector<std::array<vtkIdType, 3>> Triangles;
+};
+
+std::string FormatPoint(const double* p)
+{
+  std::ostringstream os;
+  os << "(" << p[0] << ", " << p[1] << ", " << p[2] << ")";
+  return os.str();
+}
+
+/// Checks: triangles only, no degenerate triangle, every edge used exactly twice.
+bool CheckSurface(vtkPolyData* input, Surface& surface, double& volume, std::string& error)
+{
+  if (!input || input->GetNumberOfPoints() == 0 || input->GetNumberOfPolys() == 0)
+  {
+    error = "the input surface is empty (no points or no polygons)";
+    return false;
+  }
+  if (input->GetNumberOfStrips() > 0 || input->GetNumberOfLines() > 0)
+  {
+    error = "the input has triangle strips or lines: give a surface of triangles "
+            "(vtkTriangleFilter converts strips and polygons)";
+    return false;
+  }
+  const vtkIdType np = input->GetNumberOfPoints();
+  surface.Points.resize(3 * np);
+  for (vtkIdType i = 0; i < np; ++i)
+  {
+    input->GetPoint(i, &surface.Points[3 * i]);
+    for (int k = 0; k < 3; ++k)
+    {
+      if (!std::isfinite(surface.Points[3 * i + k]))
+      {
+        error = "point " + std::to_string(i) + " has a non-finite coordinate";
+        return false;
+      }
+    }
+  }
+  double bounds[6];
+  input->GetBounds(bounds);
+  const double diag = std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
+    (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) + (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
+  const double minArea = 1e-12 * diag * diag;
+
+  vtkCellArray* polys = input->GetPolys();
+  auto it = vtk::TakeSmartPointer(polys->NewIterator());
+  vtkIdType cellId = input->GetNumberOfVerts(); // polys follow verts in cell numbering
+  std::vector<std::array<vtkIdType, 3>> edges; // (min, max, triangle)
+  volume = 0.0;
+  for (it->GoToFirstCell(); !it->IsDoneWithTraversal(); it->GoToNextCell(), ++cellId)
+  {
+    vtkIdType npts;
+    const vtkIdType* ids;
+    it->GetCurrentCell(npts, ids);
+    if (npts != 3)
+    {
+      error = "cell " + std::to_string(cellId) + " is a polygon with " + std::to_string(npts) +
+        " points: give a surface of triangles (vtkTriangleFilter triangulates it)";
+      return false;
+    }
+    const double* a = &surface.Points[3 * ids[0]];
+    const double* b = &surface.Points[3 * ids[1]];
+    const double* c = &surface.Points[3 * ids[2]];
+    double u[3], v[3], n[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      u[k] = b[k] - a[k];
+      v[k] = c[k] - a[k];
+    }
+    n[0] = u[1] * v[2] - u[2] * v[1];
+    n[1] = u[2] * v[0] - u[0] * v[2];
+    n[2] = u[0] * v[1] - u[1] * v[0];
+    const double area = 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(area > minArea))
+    {
+      error = "triangle " + std::to_string(cellId) + " is degenerate (area " +
+        std::to_string(area) + " mm^2) at " + FormatPoint(a);
+      return false;
+    }
+    volume += (a[0] * n[0] + a[1] * n[1] + a[2] * n[2]) / 6.0; // divergence theorem
+    const vtkIdType tri = static_cast<vtkIdType>(surface.Triangles.size());
+    surface.Triangles.push_back({ ids[0], ids[1], ids[2] });
+    for (int e = 0; e < 3; ++e)
+    {
+      vtkIdType p = ids[e], q = ids[(e + 1) % 3];
+      edges.push_back({ std::min(p, q), std::max(p, q), tri });
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  size_t open = 0, nonManifold = 0;
+  std::string firstOpen, firstNonManifold;
+  for (size_t i = 0; i < edges.size();)
+  {
+    size_t j = i;
+    while (j < edges.size() && edges[j][0] == edges[i][0] && edges[j][1] == edges[i][1])
+    {
+      ++j;
+    }
+    const size_t uses = j - i;
+    if (uses == 1 && open++ == 0)
+    {
+      firstOpen = FormatPoint(&surface.Points[3 * edges[i][0]]) + "-" +
+        FormatPoint(&surface.Points[3 * edges[i][1]]);
+    }
+    if (uses > 2 && nonManifold++ == 0)
+    {
+      firstNonManifold = FormatPoint(&surface.Points[3 * edges[i][0]]) + "-" +
+        FormatPoint(&surface.Points[3 * edges[i][1]]) + " (" + std::to_string(uses) + " triangles)";
+    }
+    i = j;
+  }
+  if (nonManifold > 0)
+  {
+    error = "surface is not manifold: " + std::to_string(nonManifold) +
+      " edges are shared by more than two triangles, first at " + firstNonManifold;
+    return false;
+  }
+  if (open > 0)
+  {
+    error = "surface is not closed: " + std::to_string(open) + " boundary edges, first at " +
+      firstOpen + " (fill the holes, e.g. with vtkFillHolesFilter)";
+    return false;
+  }
+  volume = std::abs(volume);
+  return true;
+}
+
+std::string TetGenErrorText(int code)
+{
+  switch (code)
+  {
+    case 1:
+      return "out of memory";
+    case 2:
+      return "internal error";
+    case 3:
+      return "the surface self-intersects";
+    case 4:
+      return "the surface has a very small feature relative to the requested tet size";
+    case 5:
+      return "two surface facets are nearly coplanar and overlapping";
+    case 10:
+      return "the surface has duplicate or nearly coincident vertices";
+    default:
+      return "error code " + std::to_string(code);
+  }
+}
+
+/// Run TetGen with the given switches; fills points and tets (0-based).
+bool RunTetGen(const Surface& surface, const std::string& switches, std::vector<double>& points,
+  std::vector<int>& tets, std::string& error)
+{
+  tetgenio in, out;
+  in.firstnumber = 0;
+  in.numberofpoints = static_cast<int>(surface.Points.size() / 3);
+  in.pointlist = new REAL[surface.Points.size()];
+  std::copy(surface.Points.begin(), surface.Points.end(), in.pointlist);
+  in.numberoffacets = static_cast<int>(surface.Triangles.size());
+  in.facetlist = new tetgenio::facet[in.numberoffacets];
+  for (int f = 0; f < in.numberoffacets; ++f)
+  {
+    tetgenio::facet& facet = in.facetlist[f];
+    tetgenio::init(&facet);
+    facet.numberofpolygons = 1;
+    facet.polygonlist = new tetgenio::polygon[1];
+    tetgenio::init(&facet.polygonlist[0]);
+    facet.polygonlist[0].numberofvertices = 3;
+    facet.polygonlist[0].vertexlist = new int[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      facet.polygonlist[0].vertexlist[k] = static_cast<int>(surface.Triangles[f][k]);
+    }
+  }
+  std::vector<char> sw(switches.begin(), switches.end());
+  sw.push_back('\0');
+  try
+  {
+    tetrahedralize(sw.data(), &in, &out);
+  }
+  catch (int code)
+  {
+    error = "TetGen failed: " + TetGenErrorText(code);
+    return false;
+  }
+  if (out.numberoftetrahedra <= 0)
+  {
+    error = "TetGen produced no tetrahedra";
+    return false;
+  }
+  points.assign(out.pointlist, out.pointlist + 3 * static_cast<size_t>(out.numberofpoints));
+  const int corners = out.numberofcorners;
+  tets.resize(4 * static_cast<size_t>(out.numberoftetrahedra));
+  for (int t = 0; t < out.numberoftetrahedra; ++t)
+  {
+    for (int k = 0; k < 4; ++k)
+    {
+      tets[4 * t + k] = out.tetrahedronlist[corners * t + k] - out.firstnumber;
+    }
+  }
+  return true;
+}
+}
+
+//------------------------------------------------------------------------------
+vtkTetrahedralizeSurface::vtkTetrahedralizeSurface() = default;
+
+//------------------------------------------------------------------------------
+int vtkTetrahedralizeSurface::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPolyData");
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+int vtkTetrahedralizeSurface::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkPolyData* input = vtkPolyData::GetData(inputVector[0]);
+  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
+
+  // Merge coincident points (STL/OBJ files often repeat them) before the checks.
+  vtkNew<vtkStaticCleanPolyData> clean;
+  vtkNew<vtkPolyData> copy;
+  if (input)
+  {
+    copy->ShallowCopy(input);
+  }
+  clean->SetInputData(copy);
+  clean->SetTolerance(0.0);
+  clean->ConvertPolysToLinesOff();
+  clean->ConvertLinesToPointsOff();
+  clean->ConvertStripsToPolysOff();
+  if (input && input->GetNumberOfPoints() > 0)
+  {
+    clean->Update();
+  }
+  Surface surface;
+  double volume = 0.0;
+  std::string error;
+  if (!CheckSurface(input && input->GetNumberOfPoints() > 0 ? clean->GetOutput() : input, surface,
+        volume, error))
+  {
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  this->UpdateProgress(0.05);
+
+  auto switchesFor = [this](double maxVolume) {
+    std::ostringstream os;
+    os.precision(17);
+    os << "pq" << this->Quality;
+    if (maxVolume > 0)
+    {
+      os << "a" << maxVolume;
+    }
+    os << "zQ";
+    return os.str();
+  };
+
+  std::vector<double> points;
+  std::vector<int> tets;
+  if (this->TargetNumberOfTets > 0)
+  {
+    // TetGen's mean tet volume under a bound a is roughly a/2 with -q1.414;
+    // start there and correct once from the count obtained.
+    double bound = 2.0 * volume / static_cast<double>(this->TargetNumberOfTets);
+    if (!RunTetGen(surface, switchesFor(bound), points, tets, error))
+    {
+      vtkErrorMacro(<< error);
+      return 0;
+    }
+    const double ratio = static_cast<double>(tets.size() / 4) / this->TargetNumberOfTets;
+    if (std::abs(ratio - 1.0) > 0.15)
+    {
+      this->UpdateProgress(0.5);
+      bound *= ratio;
+      if (!RunTetGen(surface, switchesFor(bound), points, tets, error))
+      {
+        vtkErrorMacro(<< error);
+        return 0;
+      }
+    }
+  }
+  else if (!RunTetGen(surface, switchesFor(this->MaxTetVolume), points, tets, error))
+  {
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  this->UpdateProgress(0.9);
+
+  const size_t numPoints = points.size() / 3;
+  const size_t numTets = tets.size() / 4;
+  std::vector<int> pointOrder, tetOrder;
+  if (this->SpatialReordering)
+  {
+    translucency::TetMesh::ComputeSpatialOrder(points, tets, pointOrder, tetOrder);
+  }
+  else
+  {
+    pointOrder.resize(numPoints);
+    tetOrder.resize(numTets);
+    for (size_t i = 0; i < numPoints; ++i)
+    {
+      pointOrder[i] = static_cast<int>(i);
+    }
+    for (size_t t = 0; t < numTets; ++t)
+    {
+      tetOrder[t] = static_cast<int>(t);
+    }
+  }
+  std::vector<vtkIdType> newId(numPoints);
+  vtkNew<vtkPoints> outPoints;
+  outPoints->SetDataTypeToDouble();
+  outPoints->SetNumberOfPoints(static_cast<vtkIdType>(numPoints));
+  for (size_t k = 0; k < numPoints; ++k)
+  {
+    newId[pointOrder[k]] = static_cast<vtkIdType>(k);
+    outPoints->SetPoint(static_cast<vtkIdType>(k), &points[3 * pointOrder[k]]);
+  }
+  vtkNew<vtkIdTypeArray> connectivity;
+  connectivity->SetNumberOfValues(static_cast<vtkIdType>(4 * numTets));
+  vtkNew<vtkIdTypeArray> offsets;
+  offsets->SetNumberOfValues(static_cast<vtkIdType>(numTets + 1));
+  for (size_t k = 0; k < numTets; ++k)
+  {
+    const int* t = &tets[4 * static_cast<size_t>(tetOrder[k])];
+    vtkIdType ids[4] = { newId[t[0]], newId[t[1]], newId[t[2]], newId[t[3]] };
+    // VTK's positive orientation: (p1-p0) x (p2-p0) . (p3-p0) > 0.
+    const double* p0 = &points[3 * t[0]];
+    const double* p1 = &points[3 * t[1]];
+    const double* p2 = &points[3 * t[2]];
+    const double* p3 = &points[3 * t[3]];
+    double a[3], b[3], c[3];
+    for (int d = 0; d < 3; ++d)
+    {
+      a[d] = p1[d] - p0[d];
+      b[d] = p2[d] - p0[d];
+      c[d] = p3[d] - p0[d];
+    }
+    const double det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+      a[2] * (b[0] * c[1] - b[1] * c[0]);
+    if (det < 0)
+    {
+      std::swap(ids[0], ids[1]);
+    }
+    for (int d = 0; d < 4; ++d)
+    {
+      connectivity->SetValue(static_cast<vtkIdType>(4 * k + d), ids[d]);
+    }
+    offsets->SetValue(static_cast<vtkIdType>(k), static_cast<vtkIdType>(4 * k));
+  }
+  offsets->SetValue(static_cast<vtkIdType>(numTets), static_cast<vtkIdType>(4 * numTets));
+  vtkNew<vtkCellArray> cells;
+  cells->SetData(offsets, connectivity);
+  output->SetPoints(outPoints);
+  output->SetCells(VTK_TETRA, cells);
+  this->UpdateProgress(1.0);
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+void vtkTetrahedralizeSurface::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "Quality: " << this->Quality << "\n";
+  os << indent << "MaxTetVolume: " << this->MaxTetVolume << "\n";
+  os << indent << "TargetNumberOfTets: " << this->TargetNumberOfTets << "\n";
+  os << indent << "SpatialReordering: " << this->SpatialReordering << "\n";
+}

@@ -1,0 +1,188 @@
+#include "vtkTranslucencyMeshConversion.h"
+
+#include "Error.h"
+
+#include <vtkCellArray.h>
+#include <vtkCellArrayIterator.h>
+#include <vtkCellData.h>
+#include <vtkCellTypes.h>
+#include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkSMPTools.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkUnstructuredGrid.h>
+
+#include <cmath>
+#include <sstream>
+
+namespace vtkTranslucency
+{
+
+bool ToTetMesh(vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::string& error)
+{
+  if (!grid || grid->GetNumberOfPoints() == 0 || grid->GetNumberOfCells() == 0)
+  {
+    error = "the input mesh is empty (no points or no cells)";
+    return false;
+  }
+  const vtkIdType numPoints = grid->GetNumberOfPoints();
+  const vtkIdType numCells = grid->GetNumberOfCells();
+  std::vector<double> points(3 * static_cast<size_t>(numPoints));
+  vtkDataArray* coords = grid->GetPoints()->GetData();
+  vtkSMPTools::For(0, numPoints, [&](vtkIdType begin, vtkIdType end) {
+    for (vtkIdType i = begin; i < end; ++i)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        points[3 * i + k] = coords->GetComponent(i, k);
+      }
+    }
+  });
+  std::vector<int> tets(4 * static_cast<size_t>(numCells));
+  vtkUnsignedCharArray* types = grid->GetCellTypesArray();
+  vtkCellArray* cells = grid->GetCells();
+  for (vtkIdType c = 0; c < numCells; ++c)
+  {
+    if (types->GetValue(c) != VTK_TETRA)
+    {
+      std::ostringstream os;
+      os << "cell " << c << " is a " << vtkCellTypes::GetClassNameFromTypeId(types->GetValue(c))
+         << ", not a linear tetrahedron: tetrahedralize the input first "
+            "(vtkTetrahedralizeSurface on its surface, or vtkDataSetTriangleFilter)";
+      error = os.str();
+      return false;
+    }
+  }
+  vtkSMPTools::For(0, numCells, [&](vtkIdType begin, vtkIdType end) {
+    vtkIdType npts;
+    const vtkIdType* ids;
+    auto it = vtk::TakeSmartPointer(cells->NewIterator());
+    for (vtkIdType c = begin; c < end; ++c)
+    {
+      it->GetCellAtId(c, npts, ids);
+      for (int k = 0; k < 4; ++k)
+      {
+        tets[4 * c + k] = static_cast<int>(ids[k]);
+      }
+    }
+  });
+  try
+  {
+    mesh.SetGeometry(std::move(points), std::move(tets));
+  }
+  catch (const translucency::Error& e)
+  {
+    error = e.what();
+    return false;
+  }
+  return true;
+}
+
+namespace
+{
+bool ReadCellArray(vtkUnstructuredGrid* grid, const char* name, int components,
+  std::vector<double>& values, std::string& error)
+{
+  vtkDataArray* array = grid->GetCellData()->GetArray(name);
+  if (!array)
+  {
+    error = std::string("the input has no cell array '") + name +
+      "': assign coefficients first (vtkAssignScatteringCoefficients)";
+    return false;
+  }
+  if (array->GetNumberOfComponents() != components)
+  {
+    std::ostringstream os;
+    os << "cell array '" << name << "' has " << array->GetNumberOfComponents()
+       << " components; expected " << components;
+    error = os.str();
+    return false;
+  }
+  const vtkIdType n = array->GetNumberOfTuples();
+  values.resize(static_cast<size_t>(n) * components);
+  vtkSMPTools::For(0, n, [&](vtkIdType begin, vtkIdType end) {
+    for (vtkIdType i = begin; i < end; ++i)
+    {
+      for (int k = 0; k < components; ++k)
+      {
+        values[components * i + k] = array->GetComponent(i, k);
+      }
+    }
+  });
+  return true;
+}
+}
+
+bool ToOpticalProperties(
+  vtkUnstructuredGrid* grid, translucency::OpticalProperties& material, std::string& error)
+{
+  if (!ReadCellArray(grid, AbsorptionName, 3, material.AbsorptionCoefficient, error) ||
+    !ReadCellArray(grid, ScatteringName, 3, material.ReducedScatteringCoefficient, error) ||
+    !ReadCellArray(grid, RefractiveIndexName, 1, material.RefractiveIndex, error))
+  {
+    return false;
+  }
+  try
+  {
+    material.Validate(static_cast<int>(grid->GetNumberOfCells()));
+  }
+  catch (const translucency::Error& e)
+  {
+    error = e.what();
+    return false;
+  }
+  return true;
+}
+
+bool ReadPointArray(vtkUnstructuredGrid* grid, const char* name, int components,
+  std::vector<double>& values, std::string& error)
+{
+  vtkDataArray* array = grid->GetPointData()->GetArray(name);
+  if (!array)
+  {
+    error = std::string("the input has no point array '") + name + "'";
+    return false;
+  }
+  if (array->GetNumberOfComponents() != components)
+  {
+    std::ostringstream os;
+    os << "point array '" << name << "' has " << array->GetNumberOfComponents()
+       << " components; expected " << components;
+    error = os.str();
+    return false;
+  }
+  const vtkIdType n = array->GetNumberOfTuples();
+  values.resize(static_cast<size_t>(n) * components);
+  for (vtkIdType i = 0; i < n; ++i)
+  {
+    for (int k = 0; k < components; ++k)
+    {
+      values[components * i + k] = array->GetComponent(i, k);
+    }
+  }
+  return true;
+}
+
+vtkDataArray* NewTripleArray(const char* name, const std::vector<double>& values)
+{
+  vtkDoubleArray* array = vtkDoubleArray::New();
+  array->SetName(name);
+  array->SetNumberOfComponents(3);
+  array->SetNumberOfTuples(static_cast<vtkIdType>(values.size() / 3));
+  std::copy(values.begin(), values.end(), array->GetPointer(0));
+  return array;
+}
+
+std::string GeometryKey(vtkUnstructuredGrid* grid)
+{
+  std::ostringstream os;
+  os << grid->GetNumberOfPoints() << ':' << grid->GetNumberOfCells() << ':'
+     << static_cast<const void*>(grid->GetPoints()) << ':'
+     << (grid->GetPoints() ? grid->GetPoints()->GetMTime() : 0) << ':'
+     << (grid->GetCells() ? grid->GetCells()->GetMTime() : 0);
+  return os.str();
+}
+
+}

@@ -1,0 +1,59 @@
+/**
+ * @file ConjugateGradient.h
+ * @brief Jacobi-preconditioned conjugate gradient per colour channel for the
+ * SPD systems of the vertex discretisations (Eigen's ConjugateGradient on the
+ * shared-pattern maps; its SpMV runs on OpenMP threads).
+ */
+#pragma once
+
+#include "DiffusionSystem.h"
+
+#include <array>
+#include <functional>
+
+namespace translucency
+{
+
+class ConjugateGradient
+{
+public:
+  /// Relative residual ||b - Mx|| / ||b|| to reach. Default 1e-6.
+  void SetRelTol(double tol) { RelTol_ = tol; }
+  double GetRelTol() const { return RelTol_; }
+  /// Iteration limit per channel. Default 2000.
+  void SetMaxIter(int n) { MaxIter_ = n; }
+  int GetMaxIter() const { return MaxIter_; }
+
+  /**
+   * Called between channels with the fraction done in [0, 1]; returning
+   * false aborts the solve (Solve then returns false and the statistics of
+   * the unsolved channels say not converged).
+   */
+  void SetProgressCallback(std::function<bool(double)> callback) { Progress_ = std::move(callback); }
+
+  /**
+   * Solve the three channels. If warmStart and x[c] has the right size, it
+   * is the initial guess; otherwise iteration starts from zero. A zero
+   * right-hand side gives x = 0 with 0 iterations. Returns false if
+   * aborted. Not converging is not an error: see GetConverged().
+   */
+  bool Solve(const DiffusionSystem& system, std::array<Eigen::VectorXd, NumberOfChannels>& x,
+    bool warmStart = false);
+
+  /// Statistics of the last Solve, per channel: iterations done, the final
+  /// relative residual ||b - Mx|| / ||b|| (as updated by the CG recurrence;
+  /// 0 for a zero right-hand side) and whether it reached GetRelTol().
+  int GetNumIterations(int c) const { return Iterations_[c]; }
+  double GetFinalNorm(int c) const { return FinalNorm_[c]; }
+  bool GetConverged(int c) const { return Converged_[c]; }
+
+private:
+  double RelTol_ = 1e-6;
+  int MaxIter_ = 2000;
+  std::function<bool(double)> Progress_;
+  std::array<int, NumberOfChannels> Iterations_{};
+  std::array<double, NumberOfChannels> FinalNorm_{};
+  std::array<bool, NumberOfChannels> Converged_{};
+};
+
+} // namespace translucency

@@ -1,0 +1,44 @@
+/**
+ * @file Discretization.h
+ * @brief Common interface: a discretisation turns (mesh, material, boundary
+ * irradiance) into a linear system on its own unknowns and maps a solution
+ * back to fluence at the mesh vertices.
+ */
+#pragma once
+
+#include "DiffusionSystem.h"
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace translucency
+{
+
+class TetMesh;
+
+class Discretization
+{
+public:
+  virtual ~Discretization() = default;
+
+  /// Short name used by scripts and the CLI ("divergence", ...).
+  virtual std::string GetName() const = 0;
+
+  /**
+   * Build the three-channel system.
+   * @param irradiance q, 3 values (R, G, B, W/mm^2) per mesh point; only
+   *        boundary points are read.
+   * Throws translucency::Error on inconsistent sizes or invalid values.
+   */
+  virtual void Assemble(const TetMesh& mesh, const OpticalProperties& material,
+    const std::vector<double>& irradiance, DiffusionSystem& system) = 0;
+
+  /// Map the per-channel solutions to fluence phi, 3 values per mesh point
+  /// (W/mm^2).
+  virtual void ToPointFluence(const TetMesh& mesh, const DiffusionSystem& system,
+    const std::array<Eigen::VectorXd, NumberOfChannels>& solution,
+    std::vector<double>& fluence) const = 0;
+};
+
+} // namespace translucency

@@ -1,0 +1,121 @@
+#include "Fresnel.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace translucency
+{
+namespace Fresnel
+{
+
+namespace
+{
+
+constexpr int QuadratureOrder = 64;
+constexpr double Pi = 3.14159265358979323846;
+
+/// Gauss-Legendre nodes and weights on [0, 1], computed once by Newton's
+/// iteration on the Legendre polynomial P_n (Golub-Welsch would do too).
+struct GaussLegendre
+{
+  std::array<double, QuadratureOrder> Nodes;
+  std::array<double, QuadratureOrder> Weights;
+
+  GaussLegendre()
+  {
+    const int n = QuadratureOrder;
+    for (int i = 0; i < n; ++i)
+    {
+      // Initial guess: Chebyshev-like approximation of the i-th root.
+      double x = std::cos(Pi * (i + 0.75) / (n + 0.5));
+      double dp = 0.0;
+      for (int iter = 0; iter < 100; ++iter)
+      {
+        double p0 = 1.0;
+        double p1 = x;
+        for (int k = 2; k <= n; ++k)
+        {
+          const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
+          p0 = p1;
+          p1 = p2;
+        }
+        // p1 = P_n(x), p0 = P_{n-1}(x)
+        dp = n * (x * p1 - p0) / (x * x - 1.0);
+        const double dx = p1 / dp;
+        x -= dx;
+        if (std::abs(dx) < 1e-16)
+        {
+          break;
+        }
+      }
+      // Map from [-1, 1] to [0, 1].
+      Nodes[i] = 0.5 * (x + 1.0);
+      Weights[i] = 0.5 * 2.0 / ((1.0 - x * x) * dp * dp);
+    }
+  }
+};
+
+const GaussLegendre& Quadrature()
+{
+  static const GaussLegendre rule;
+  return rule;
+}
+
+} // namespace
+
+double DiffuseReflectance(double eta)
+{
+  // SPEC "The physics"; Jensen et al. 2001 fit, used by TransCut eq. 2.
+  return -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
+}
+
+double MismatchA(double eta)
+{
+  const double fdr = DiffuseReflectance(eta);
+  return (1.0 + fdr) / (1.0 - fdr); // TransCut eq. 2: A = (1 + Fdr)/(1 - Fdr)
+}
+
+double Reflectance(double cosOutside, double eta)
+{
+  if (eta == 1.0)
+  {
+    return 0.0; // index matched: no interface
+  }
+  const double cosI = std::clamp(cosOutside, 0.0, 1.0);
+  const double sinI2 = std::max(0.0, 1.0 - cosI * cosI);
+  // Snell: sin_t = sin_i / eta (vacuum -> medium): never total reflection
+  // for eta >= 1; for eta < 1 a grazing vacuum-side direction can exceed the
+  // critical angle, which means total reflection.
+  const double sinT2 = sinI2 / (eta * eta);
+  if (sinT2 > 1.0)
+  {
+    return 1.0;
+  }
+  const double cosT = std::sqrt(1.0 - sinT2);
+  const double rs = (cosI - eta * cosT) / (cosI + eta * cosT);
+  const double rp = (eta * cosI - cosT) / (eta * cosI + cosT);
+  return 0.5 * (rs * rs + rp * rp);
+}
+
+double Transmittance(double cosOutside, double eta)
+{
+  return 1.0 - Reflectance(cosOutside, eta);
+}
+
+double UniformTransmittance(double eta)
+{
+  // (1/pi) int_{H} F_t (n.w) dw = 2 int_0^{pi/2} F_t(theta) cos sin dtheta
+  //                             = 2 int_0^1 F_t(mu) mu dmu  (mu = cos theta).
+  const GaussLegendre& rule = Quadrature();
+  double sum = 0.0;
+  for (int i = 0; i < QuadratureOrder; ++i)
+  {
+    const double mu = rule.Nodes[i];
+    sum += rule.Weights[i] * Transmittance(mu, eta) * mu;
+  }
+  return 2.0 * sum;
+}
+
+} // namespace Fresnel
+} // namespace translucency

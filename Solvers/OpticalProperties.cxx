@@ -1,0 +1,167 @@
+#include "OpticalProperties.h"
+
+#include "Error.h"
+
+#include <algorithm>
+#include <cctype>
+#include <climits>
+#include <cmath>
+#include <sstream>
+
+namespace translucency
+{
+
+namespace
+{
+
+const char* const ChannelNames[NumberOfChannels] = { "R", "G", "B" };
+
+std::string Lower(std::string s)
+{
+  std::transform(s.begin(), s.end(), s.begin(),
+    [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  return s;
+}
+
+/// Index of the first value of `values` failing `ok`, or -1. Parallel scan
+/// (the arrays can hold millions of values), lowest index reported.
+template <typename Predicate>
+long long FirstFailing(const std::vector<double>& values, Predicate ok)
+{
+  const long long n = static_cast<long long>(values.size());
+  long long first = LLONG_MAX;
+#pragma omp parallel for reduction(min : first) schedule(static)
+  for (long long k = 0; k < n; ++k)
+  {
+    if (!ok(values[k]) && k < first)
+    {
+      first = k;
+    }
+  }
+  return first == LLONG_MAX ? -1 : first;
+}
+
+} // namespace
+
+OpticalProperties OpticalProperties::Uniform(
+  int numTets, const double muA[3], const double sigmaS[3], double eta)
+{
+  if (numTets < 0)
+  {
+    throw Error("OpticalProperties::Uniform: negative number of tets " + std::to_string(numTets));
+  }
+  OpticalProperties p;
+  const size_t n = static_cast<size_t>(numTets);
+  p.AbsorptionCoefficient.resize(3 * n);
+  p.ReducedScatteringCoefficient.resize(3 * n);
+  p.RefractiveIndex.assign(n, eta);
+  for (size_t t = 0; t < n; ++t)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      p.AbsorptionCoefficient[3 * t + c] = muA[c];
+      p.ReducedScatteringCoefficient[3 * t + c] = sigmaS[c];
+    }
+  }
+  return p;
+}
+
+void OpticalProperties::Validate(int numTets) const
+{
+  const size_t n = numTets < 0 ? 0 : static_cast<size_t>(numTets);
+  auto checkSize = [&](const std::vector<double>& a, const char* name, size_t perTet) {
+    if (a.size() != perTet * n)
+    {
+      std::ostringstream os;
+      os << name << " has " << a.size() << " values but the mesh has " << n << " tets ("
+         << perTet * n << " values expected, " << perTet << " per tet)";
+      throw Error(os.str());
+    }
+  };
+  checkSize(AbsorptionCoefficient, "AbsorptionCoefficient", 3);
+  checkSize(ReducedScatteringCoefficient, "ReducedScatteringCoefficient", 3);
+  checkSize(RefractiveIndex, "RefractiveIndex", 1);
+
+  auto nonNegative = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  auto report = [](const char* name, long long k, double v, const char* rule) {
+    std::ostringstream os;
+    os << name << " of tet " << k / 3 << ", channel " << ChannelNames[k % 3] << " is " << v
+       << " 1/mm: must be " << rule;
+    throw Error(os.str());
+  };
+  long long bad = FirstFailing(AbsorptionCoefficient, nonNegative);
+  if (bad >= 0)
+  {
+    report("AbsorptionCoefficient", bad, AbsorptionCoefficient[bad], "finite and >= 0");
+  }
+  bad = FirstFailing(ReducedScatteringCoefficient, nonNegative);
+  if (bad >= 0)
+  {
+    report(
+      "ReducedScatteringCoefficient", bad, ReducedScatteringCoefficient[bad], "finite and >= 0");
+  }
+  bad = FirstFailing(RefractiveIndex, [](double v) { return std::isfinite(v) && v > 0.0; });
+  if (bad >= 0)
+  {
+    std::ostringstream os;
+    os << "RefractiveIndex of tet " << bad << " is " << RefractiveIndex[bad]
+       << ": must be finite and > 0";
+    throw Error(os.str());
+  }
+  // mu_a + sigma_s' > 0 (kappa finite): both are >= 0 here, so both zero.
+  for (size_t k = 0; k < 3 * n; ++k)
+  {
+    if (AbsorptionCoefficient[k] + ReducedScatteringCoefficient[k] <= 0.0)
+    {
+      std::ostringstream os;
+      os << "tet " << k / 3 << ", channel " << ChannelNames[k % 3]
+         << " has AbsorptionCoefficient + ReducedScatteringCoefficient = 0 1/mm: the "
+            "diffusion coefficient kappa = 1/(3 (mu_a + sigma_s')) would be infinite";
+      throw Error(os.str());
+    }
+  }
+}
+
+const std::vector<MaterialPreset>& GetMaterialPresets()
+{
+  // Jensen, Marschner, Levoy, Hanrahan 2001, "A Practical Model for
+  // Subsurface Light Transport", Fig. 5 table: sigma_s' and sigma_a in 1/mm
+  // (R, G, B), eta = 1.3 for all.
+  static const std::vector<MaterialPreset> presets = {
+    { "apple", { 2.29, 2.39, 1.97 }, { 0.0030, 0.0034, 0.046 }, 1.3 },
+    { "chicken1", { 0.15, 0.21, 0.38 }, { 0.015, 0.077, 0.19 }, 1.3 },
+    { "chicken2", { 0.19, 0.25, 0.32 }, { 0.018, 0.088, 0.20 }, 1.3 },
+    { "cream", { 7.38, 5.47, 3.15 }, { 0.0002, 0.0028, 0.0163 }, 1.3 },
+    { "ketchup", { 0.18, 0.07, 0.03 }, { 0.061, 0.97, 1.45 }, 1.3 },
+    { "marble", { 2.19, 2.62, 3.00 }, { 0.0021, 0.0041, 0.0071 }, 1.3 },
+    { "potato", { 0.68, 0.70, 0.55 }, { 0.0024, 0.0090, 0.12 }, 1.3 },
+    { "skimmilk", { 0.70, 1.22, 1.90 }, { 0.0014, 0.0025, 0.0142 }, 1.3 },
+    { "skin1", { 0.74, 0.88, 1.01 }, { 0.032, 0.17, 0.48 }, 1.3 },
+    { "skin2", { 1.09, 1.59, 1.79 }, { 0.013, 0.070, 0.145 }, 1.3 },
+    { "spectralon", { 11.6, 20.4, 14.9 }, { 0.00, 0.00, 0.00 }, 1.3 },
+    { "wholemilk", { 2.55, 3.21, 3.77 }, { 0.0011, 0.0024, 0.014 }, 1.3 },
+  };
+  return presets;
+}
+
+const MaterialPreset& FindMaterialPreset(const std::string& name)
+{
+  const std::string key = Lower(name);
+  const std::vector<MaterialPreset>& presets = GetMaterialPresets();
+  for (const MaterialPreset& p : presets)
+  {
+    if (p.Name == key)
+    {
+      return p;
+    }
+  }
+  std::ostringstream os;
+  os << "unknown material preset '" << name << "'; known presets:";
+  for (size_t k = 0; k < presets.size(); ++k)
+  {
+    os << (k == 0 ? " " : ", ") << presets[k].Name;
+  }
+  throw Error(os.str());
+}
+
+} // namespace translucency

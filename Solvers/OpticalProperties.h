@@ -1,0 +1,61 @@
+/**
+ * @file OpticalProperties.h
+ * @brief Piecewise-constant optical coefficients, one value set per tet.
+ */
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace translucency
+{
+
+/// Number of colour channels (R, G, B) solved for.
+constexpr int NumberOfChannels = 3;
+
+/**
+ * Per-tet optical coefficients (SPEC "The physics"). Arrays are owned here.
+ * AbsorptionCoefficient and ReducedScatteringCoefficient hold 3 values per
+ * tet (R, G, B, 1/mm); RefractiveIndex holds 1 value per tet (dimensionless).
+ */
+struct OpticalProperties
+{
+  std::vector<double> AbsorptionCoefficient;        ///< mu_a, 1/mm, >= 0
+  std::vector<double> ReducedScatteringCoefficient; ///< sigma_s', 1/mm, >= 0
+  std::vector<double> RefractiveIndex;              ///< eta, > 0
+
+  /// Uniform material on numTets tets.
+  static OpticalProperties Uniform(
+    int numTets, const double muA[3], const double sigmaS[3], double eta);
+
+  /**
+   * Throw translucency::Error unless the arrays have the sizes for numTets
+   * tets and every value is finite, mu_a >= 0, mu_a + sigma_s' > 0 and
+   * eta > 0. The message names the array, the tet, the channel and the value.
+   */
+  void Validate(int numTets) const;
+
+  /// kappa = 1 / (3 (mu_a + sigma_s')) of tet t, channel c (mm).
+  double Kappa(int t, int c) const
+  {
+    return 1.0 / (3.0 * (AbsorptionCoefficient[3 * t + c] + ReducedScatteringCoefficient[3 * t + c]));
+  }
+};
+
+/// A named measured material (Jensen et al. 2001; SPEC "The physics").
+struct MaterialPreset
+{
+  std::string Name;
+  double ReducedScattering[3]; ///< 1/mm
+  double Absorption[3];        ///< 1/mm
+  double RefractiveIndex;
+};
+
+/// The measured presets (marble, skin1, ketchup, wholemilk, ...).
+const std::vector<MaterialPreset>& GetMaterialPresets();
+
+/// Look up a preset by (case-insensitive) name; throws translucency::Error
+/// listing the known names when there is none.
+const MaterialPreset& FindMaterialPreset(const std::string& name);
+
+} // namespace translucency

@@ -1,0 +1,100 @@
+#include "Radiance.h"
+
+#include "Error.h"
+#include "Fresnel.h"
+#include "TetMesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace translucency
+{
+
+namespace
+{
+
+constexpr double Pi = 3.14159265358979323846;
+
+void CheckTetEta(const TetMesh& mesh, const std::vector<double>& tetEta)
+{
+  if (tetEta.size() != static_cast<size_t>(mesh.GetNumberOfTets()))
+  {
+    std::ostringstream os;
+    os << "RefractiveIndex has " << tetEta.size() << " values but the mesh has "
+       << mesh.GetNumberOfTets() << " tets";
+    throw Error(os.str());
+  }
+}
+
+} // namespace
+
+double OutgoingRadiance(double phi, double q, double eta, double cosOut)
+{
+  if (!(cosOut > 0.0))
+  {
+    return 0.0;
+  }
+  const double fdr = Fresnel::DiffuseReflectance(eta);
+  const double a = Fresnel::MismatchA(eta);
+  const double ft = Fresnel::Transmittance(std::min(cosOut, 1.0), eta);
+  // TransCut eq. 3: L_o = F_t/(4 pi) [ (1 + 1/A) phi - 4/(1 + Fdr) q ]
+  const double radiance = ft / (4.0 * Pi) * ((1.0 + 1.0 / a) * phi - 4.0 / (1.0 + fdr) * q);
+  return std::max(0.0, radiance);
+}
+
+std::vector<double> BoundaryPointRefractiveIndex(
+  const TetMesh& mesh, const std::vector<double>& tetEta)
+{
+  CheckTetEta(mesh, tetEta);
+  const int numPoints = mesh.GetNumberOfPoints();
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
+  const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
+  const std::vector<double>& pointAreas = mesh.GetBoundaryAreas();
+  std::vector<double> eta(numPoints, 0.0);
+  for (size_t f = 0; f < owners.size(); ++f)
+  {
+    const double weighted = areas[f] * tetEta[owners[f]];
+    for (int m = 0; m < 3; ++m)
+    {
+      eta[triangles[3 * f + m]] += weighted;
+    }
+  }
+  for (int i : mesh.GetBoundaryPoints())
+  {
+    eta[i] /= pointAreas[i];
+  }
+  return eta;
+}
+
+std::vector<double> PointRefractiveIndex(const TetMesh& mesh, const std::vector<double>& tetEta)
+{
+  std::vector<double> eta = BoundaryPointRefractiveIndex(mesh, tetEta);
+  const int numPoints = mesh.GetNumberOfPoints();
+  const std::vector<int>& offsets = mesh.GetPointTetOffsets();
+  const std::vector<int>& pointTets = mesh.GetPointTets();
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < numPoints; ++i)
+  {
+    if (mesh.IsBoundaryPoint(i))
+    {
+      continue;
+    }
+    const int count = offsets[i + 1] - offsets[i];
+    if (count == 0)
+    {
+      eta[i] = 1.0;
+      continue;
+    }
+    double sum = 0.0;
+    for (int k = offsets[i]; k < offsets[i + 1]; ++k)
+    {
+      sum += tetEta[pointTets[k]];
+    }
+    eta[i] = sum / count;
+  }
+  return eta;
+}
+
+} // namespace translucency

@@ -1,0 +1,41 @@
+/**
+ * @file Radiance.h
+ * @brief Outgoing radiance read-out (TransCut eq. 3, after Arbree et al.).
+ */
+#pragma once
+
+#include <vector>
+
+namespace translucency
+{
+
+class TetMesh;
+
+/**
+ * L_o = F_t(w_o)/(4 pi) [ (1 + 1/A) phi - 4/(1 + Fdr) q ]   (TransCut eq. 3)
+ * @param phi fluence at the point (W/mm^2)
+ * @param q boundary irradiance at the point (W/mm^2)
+ * @param eta refractive index at the point
+ * @param cosOut cosine between the outgoing direction and the outward normal
+ *        (<= 0 gives 0: the point is not seen from that side)
+ * @return radiance (W/mm^2/sr), clamped below at 0
+ */
+double OutgoingRadiance(double phi, double q, double eta, double cosOut);
+
+/**
+ * Refractive index seen by each mesh point: the area-weighted mean of the
+ * RefractiveIndex of the tets owning the boundary triangles around it
+ * (interior points get the mean over their tets; points used by no tet get 1).
+ * Throws translucency::Error if tetEta does not hold one value per tet.
+ */
+std::vector<double> PointRefractiveIndex(const TetMesh& mesh, const std::vector<double>& tetEta);
+
+/**
+ * PointRefractiveIndex restricted to the boundary points (the only ones the
+ * boundary condition needs); other points get 0. Cheaper: it reads only the
+ * boundary triangles.
+ */
+std::vector<double> BoundaryPointRefractiveIndex(
+  const TetMesh& mesh, const std::vector<double>& tetEta);
+
+} // namespace translucency

@@ -1,0 +1,773 @@
+#include "TetMesh.h"
+
+#include "Error.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <sstream>
+#include <utility>
+
+namespace translucency
+{
+
+namespace
+{
+
+/// Local vertices of the face opposite local vertex f, ordered so that for a
+/// positively oriented tet the normal (p1-p0)x(p2-p0) points out of the tet.
+constexpr int FaceVertices[4][3] = { { 1, 2, 3 }, { 0, 3, 2 }, { 0, 1, 3 }, { 0, 2, 1 } };
+
+/// Tets per chunk of the scatter schedule.
+constexpr int ScatterChunkSize = 512;
+
+/// Bits per axis of the Morton codes.
+constexpr int MortonBits = 21;
+
+inline void Sub(const double* a, const double* b, double* r)
+{
+  r[0] = a[0] - b[0];
+  r[1] = a[1] - b[1];
+  r[2] = a[2] - b[2];
+}
+
+inline void Cross(const double* a, const double* b, double* r)
+{
+  r[0] = a[1] * b[2] - a[2] * b[1];
+  r[1] = a[2] * b[0] - a[0] * b[2];
+  r[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+inline double Dot(const double* a, const double* b)
+{
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/// Signed volume of the tet (p0, p1, p2, p3) (mm^3).
+inline double SignedVolume(const double* p0, const double* p1, const double* p2, const double* p3)
+{
+  double e1[3], e2[3], e3[3], c[3];
+  Sub(p1, p0, e1);
+  Sub(p2, p0, e2);
+  Sub(p3, p0, e3);
+  Cross(e2, e3, c);
+  return Dot(e1, c) / 6.0;
+}
+
+/// Spread the low 21 bits of v so that two zero bits separate each bit.
+inline std::uint64_t SpreadBits(std::uint64_t v)
+{
+  std::uint64_t x = v & 0x1fffffULL;
+  x = (x | x << 32) & 0x1f00000000ffffULL;
+  x = (x | x << 16) & 0x1f0000ff0000ffULL;
+  x = (x | x << 8) & 0x100f00f00f00f00fULL;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+  x = (x | x << 2) & 0x1249249249249249ULL;
+  return x;
+}
+
+/// Quantises coordinates in a bounding cube to 21-bit Morton codes.
+struct MortonEncoder
+{
+  double Origin[3] = { 0.0, 0.0, 0.0 };
+  double Scale = 0.0;
+
+  explicit MortonEncoder(const std::vector<double>& points)
+  {
+    const size_t n = points.size() / 3;
+    if (n == 0)
+    {
+      return;
+    }
+    double lo[3] = { points[0], points[1], points[2] };
+    double hi[3] = { points[0], points[1], points[2] };
+    for (size_t i = 1; i < n; ++i)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        lo[d] = std::min(lo[d], points[3 * i + d]);
+        hi[d] = std::max(hi[d], points[3 * i + d]);
+      }
+    }
+    const double extent = std::max({ hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2] });
+    for (int d = 0; d < 3; ++d)
+    {
+      Origin[d] = lo[d];
+    }
+    // One cube for the three axes keeps the curve isotropic.
+    Scale = extent > 0.0 ? ((1u << MortonBits) - 1) / extent : 0.0;
+  }
+
+  std::uint64_t operator()(const double* x) const
+  {
+    std::uint64_t code = 0;
+    for (int d = 0; d < 3; ++d)
+    {
+      double q = (x[d] - Origin[d]) * Scale;
+      q = std::clamp(q, 0.0, static_cast<double>((1u << MortonBits) - 1));
+      code |= SpreadBits(static_cast<std::uint64_t>(q)) << d;
+    }
+    return code;
+  }
+};
+
+/// Ids sorted by code, ties by id (a deterministic total order).
+std::vector<int> SortByCode(const std::vector<std::uint64_t>& codes)
+{
+  const int n = static_cast<int>(codes.size());
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  if (std::is_sorted(codes.begin(), codes.end()))
+  {
+    return order;
+  }
+  std::vector<std::pair<std::uint64_t, int>> keyed(n);
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < n; ++k)
+  {
+    keyed[k] = { codes[k], k };
+  }
+  std::sort(keyed.begin(), keyed.end());
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < n; ++k)
+  {
+    order[k] = keyed[k].second;
+  }
+  return order;
+}
+
+/// Morton codes of the tet centroids (tets assumed validated).
+std::vector<std::uint64_t> CentroidCodes(
+  const MortonEncoder& encode, const std::vector<double>& points, const std::vector<int>& tets)
+{
+  const int numTets = static_cast<int>(tets.size() / 4);
+  std::vector<std::uint64_t> codes(numTets);
+#pragma omp parallel for schedule(static)
+  for (int t = 0; t < numTets; ++t)
+  {
+    double c[3] = { 0.0, 0.0, 0.0 };
+    for (int a = 0; a < 4; ++a)
+    {
+      const double* p = &points[3 * static_cast<size_t>(tets[4 * static_cast<size_t>(t) + a])];
+      c[0] += 0.25 * p[0];
+      c[1] += 0.25 * p[1];
+      c[2] += 0.25 * p[2];
+    }
+    codes[t] = encode(c);
+  }
+  return codes;
+}
+
+/// Bounding box diagonal length of the points (mm).
+double BoundingBoxDiagonal(const std::vector<double>& points)
+{
+  const size_t n = points.size() / 3;
+  if (n == 0)
+  {
+    return 0.0;
+  }
+  double lo[3] = { points[0], points[1], points[2] };
+  double hi[3] = { points[0], points[1], points[2] };
+  for (size_t i = 1; i < n; ++i)
+  {
+    for (int d = 0; d < 3; ++d)
+    {
+      lo[d] = std::min(lo[d], points[3 * i + d]);
+      hi[d] = std::max(hi[d], points[3 * i + d]);
+    }
+  }
+  const double dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/// Throw unless every coordinate is finite; names the first bad point.
+void CheckPointsFinite(const std::vector<double>& points)
+{
+  if (points.size() % 3 != 0)
+  {
+    std::ostringstream os;
+    os << "the point array has " << points.size() << " values: expected 3 (x, y, z) per point";
+    throw Error(os.str());
+  }
+  if (points.size() / 3 > static_cast<size_t>(INT_MAX))
+  {
+    throw Error("too many points for 32-bit ids: " + std::to_string(points.size() / 3));
+  }
+  const long long n = static_cast<long long>(points.size() / 3);
+  long long first = LLONG_MAX;
+#pragma omp parallel for reduction(min : first) schedule(static)
+  for (long long i = 0; i < n; ++i)
+  {
+    if (!(std::isfinite(points[3 * i]) && std::isfinite(points[3 * i + 1]) &&
+          std::isfinite(points[3 * i + 2])) &&
+      i < first)
+    {
+      first = i;
+    }
+  }
+  if (first != LLONG_MAX)
+  {
+    std::ostringstream os;
+    os << "point " << first << " has a non-finite coordinate (" << points[3 * first] << ", "
+       << points[3 * first + 1] << ", " << points[3 * first + 2] << ")";
+    throw Error(os.str());
+  }
+}
+
+/// Throw unless every tet has 4 distinct ids in [0, numPoints).
+void CheckTetIds(const std::vector<int>& tets, int numPoints)
+{
+  if (tets.size() % 4 != 0)
+  {
+    std::ostringstream os;
+    os << "the tet array has " << tets.size() << " ids: expected 4 per tet";
+    throw Error(os.str());
+  }
+  // 16 matrix positions per tet are addressed with size_t; the tet count
+  // itself must fit an int.
+  if (tets.size() / 4 > static_cast<size_t>(INT_MAX))
+  {
+    throw Error("too many tets for 32-bit ids: " + std::to_string(tets.size() / 4));
+  }
+  const long long numTets = static_cast<long long>(tets.size() / 4);
+  long long firstRange = LLONG_MAX, firstRepeat = LLONG_MAX;
+#pragma omp parallel for reduction(min : firstRange, firstRepeat) schedule(static)
+  for (long long t = 0; t < numTets; ++t)
+  {
+    const int* v = &tets[4 * t];
+    bool inRange = true;
+    for (int a = 0; a < 4; ++a)
+    {
+      inRange = inRange && v[a] >= 0 && v[a] < numPoints;
+    }
+    if (!inRange)
+    {
+      firstRange = std::min(firstRange, t);
+    }
+    else if (v[0] == v[1] || v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3] ||
+      v[2] == v[3])
+    {
+      firstRepeat = std::min(firstRepeat, t);
+    }
+  }
+  if (firstRange != LLONG_MAX && firstRange <= firstRepeat)
+  {
+    const int* v = &tets[4 * firstRange];
+    for (int a = 0; a < 4; ++a)
+    {
+      if (v[a] < 0 || v[a] >= numPoints)
+      {
+        std::ostringstream os;
+        os << "tet " << firstRange << " has vertex id " << v[a] << " but the mesh has "
+           << numPoints << " points";
+        throw Error(os.str());
+      }
+    }
+  }
+  if (firstRepeat != LLONG_MAX)
+  {
+    const int* v = &tets[4 * firstRepeat];
+    std::ostringstream os;
+    os << "tet " << firstRepeat << " repeats a vertex id: vertices " << v[0] << ", " << v[1]
+       << ", " << v[2] << ", " << v[3];
+    throw Error(os.str());
+  }
+}
+
+} // namespace
+
+void TetMesh::SetGeometry(std::vector<double> points, std::vector<int> tets)
+{
+  CheckPointsFinite(points);
+  CheckTetIds(tets, static_cast<int>(points.size() / 3));
+
+  // Build into a fresh mesh so that *this is unchanged if anything throws.
+  TetMesh mesh;
+  mesh.Points_ = std::move(points);
+  mesh.Tets_ = std::move(tets);
+  mesh.ComputeTetVolumes(true);
+  mesh.BuildTopology();
+  mesh.ComputeMeasures();
+  *this = std::move(mesh);
+}
+
+void TetMesh::UpdatePoints(const std::vector<double>& points)
+{
+  if (points.size() != Points_.size())
+  {
+    std::ostringstream os;
+    os << "UpdatePoints: " << points.size() / 3 << " points given but the mesh has "
+       << GetNumberOfPoints();
+    throw Error(os.str());
+  }
+  CheckPointsFinite(points);
+  std::vector<double> previous = Points_;
+  Points_ = points;
+  try
+  {
+    ComputeTetVolumes(false);
+  }
+  catch (...)
+  {
+    Points_.swap(previous);
+    throw;
+  }
+  ComputeMeasures();
+}
+
+void TetMesh::ComputeTetVolumes(bool allowReorient)
+{
+  const int numTets = GetNumberOfTets();
+  const double diagonal = BoundingBoxDiagonal(Points_);
+  const double threshold = 1e-14 * diagonal * diagonal * diagonal;
+  std::vector<double> volumes(numTets);
+  int firstDegenerate = INT_MAX, firstInverted = INT_MAX;
+#pragma omp parallel for reduction(min : firstDegenerate, firstInverted) schedule(static)
+  for (int t = 0; t < numTets; ++t)
+  {
+    int* v = &Tets_[4 * static_cast<size_t>(t)];
+    const double vol =
+      SignedVolume(GetPoint(v[0]), GetPoint(v[1]), GetPoint(v[2]), GetPoint(v[3]));
+    if (!(std::abs(vol) > threshold))
+    {
+      firstDegenerate = std::min(firstDegenerate, t);
+    }
+    else if (vol < 0.0)
+    {
+      if (allowReorient)
+      {
+        std::swap(v[2], v[3]);
+      }
+      else
+      {
+        firstInverted = std::min(firstInverted, t);
+      }
+    }
+    volumes[t] = std::abs(vol);
+  }
+  auto describe = [&](int t, const char* what) {
+    const int* v = GetTet(t);
+    const double vol =
+      SignedVolume(GetPoint(v[0]), GetPoint(v[1]), GetPoint(v[2]), GetPoint(v[3]));
+    std::ostringstream os;
+    os << "tet " << t << " is " << what << " (volume " << vol << " mm^3): vertices " << v[0]
+       << ", " << v[1] << ", " << v[2] << ", " << v[3];
+    return os.str();
+  };
+  if (firstDegenerate != INT_MAX && firstDegenerate <= firstInverted)
+  {
+    throw Error(describe(firstDegenerate, "degenerate"));
+  }
+  if (firstInverted != INT_MAX)
+  {
+    throw Error(describe(firstInverted, "inverted by the point update"));
+  }
+  TetVolumes_ = std::move(volumes);
+}
+
+void TetMesh::BuildTopology()
+{
+  const int numPoints = GetNumberOfPoints();
+  const int numTets = GetNumberOfTets();
+
+  // 1. Point -> tets incidence (counting sort; tets ascending in each list).
+  PointTetOffsets_.assign(static_cast<size_t>(numPoints) + 1, 0);
+  for (int id : Tets_)
+  {
+    ++PointTetOffsets_[id + 1];
+  }
+  for (int i = 0; i < numPoints; ++i)
+  {
+    PointTetOffsets_[i + 1] += PointTetOffsets_[i];
+  }
+  PointTets_.resize(Tets_.size());
+  {
+    std::vector<int> cursor(PointTetOffsets_.begin(), PointTetOffsets_.end() - 1);
+    for (int t = 0; t < numTets; ++t)
+    {
+      for (int a = 0; a < 4; ++a)
+      {
+        PointTets_[cursor[Tets_[4 * static_cast<size_t>(t) + a]]++] = t;
+      }
+    }
+  }
+
+  const int maxThreads = omp_get_max_threads();
+  // Face keys are grouped by their smallest vertex: each vertex v sorts the
+  // faces of its tets in which it is the smallest id. Threads own contiguous
+  // vertex ranges (static schedule), so concatenating their outputs in thread
+  // order gives a result independent of the thread count.
+  struct FaceEntry
+  {
+    int Lo, Hi, Tet, Face;
+    bool operator<(const FaceEntry& o) const
+    {
+      return Lo != o.Lo ? Lo < o.Lo : (Hi != o.Hi ? Hi < o.Hi : Tet < o.Tet);
+    }
+  };
+  std::vector<std::vector<std::pair<int, int>>> boundaryPerThread(maxThreads);
+  std::vector<int> firstNonManifold(maxThreads, INT_MAX);
+  std::vector<std::vector<int>> columnsPerThread(maxThreads);
+  std::vector<int> firstPointOfThread(maxThreads, -1);
+  std::vector<int> rowCount(numPoints, 0);
+
+  // 2. Boundary faces and the adjacency rows (sorted, unique, diagonal included).
+#pragma omp parallel
+  {
+    const int tid = omp_get_thread_num();
+    std::vector<FaceEntry> faces;
+    std::vector<int> row;
+    auto& boundary = boundaryPerThread[tid];
+    auto& columns = columnsPerThread[tid];
+#pragma omp for schedule(static)
+    for (int v = 0; v < numPoints; ++v)
+    {
+      if (firstPointOfThread[tid] < 0)
+      {
+        firstPointOfThread[tid] = v;
+      }
+      faces.clear();
+      row.clear();
+      row.push_back(v);
+      for (int k = PointTetOffsets_[v]; k < PointTetOffsets_[v + 1]; ++k)
+      {
+        const int t = PointTets_[k];
+        const int* tv = &Tets_[4 * static_cast<size_t>(t)];
+        row.insert(row.end(), tv, tv + 4);
+        for (int f = 0; f < 4; ++f)
+        {
+          const int* fv = FaceVertices[f];
+          const int a = tv[fv[0]], b = tv[fv[1]], c = tv[fv[2]];
+          if (a != v && b != v && c != v)
+          {
+            continue; // face opposite v
+          }
+          if (std::min({ a, b, c }) != v)
+          {
+            continue; // handled by its smallest vertex
+          }
+          const int o1 = a == v ? b : a;
+          const int o2 = c == v ? b : c;
+          faces.push_back({ std::min(o1, o2), std::max(o1, o2), t, f });
+        }
+      }
+      std::sort(faces.begin(), faces.end());
+      for (size_t s = 0; s < faces.size();)
+      {
+        size_t e = s + 1;
+        while (e < faces.size() && faces[e].Lo == faces[s].Lo && faces[e].Hi == faces[s].Hi)
+        {
+          ++e;
+        }
+        if (e - s == 1)
+        {
+          boundary.emplace_back(faces[s].Tet, faces[s].Face);
+        }
+        else if (e - s > 2 && firstNonManifold[tid] == INT_MAX)
+        {
+          firstNonManifold[tid] = v;
+        }
+        s = e;
+      }
+      std::sort(row.begin(), row.end());
+      row.erase(std::unique(row.begin(), row.end()), row.end());
+      rowCount[v] = static_cast<int>(row.size());
+      columns.insert(columns.end(), row.begin(), row.end());
+    }
+  }
+
+  // A face shared by more than two tets: report the one with the smallest
+  // vertex (deterministic), naming the tets.
+  const int badVertex = *std::min_element(firstNonManifold.begin(), firstNonManifold.end());
+  if (badVertex != INT_MAX)
+  {
+    std::vector<FaceEntry> faces;
+    for (int k = PointTetOffsets_[badVertex]; k < PointTetOffsets_[badVertex + 1]; ++k)
+    {
+      const int t = PointTets_[k];
+      const int* tv = GetTet(t);
+      for (int f = 0; f < 4; ++f)
+      {
+        const int* fv = FaceVertices[f];
+        const int a = tv[fv[0]], b = tv[fv[1]], c = tv[fv[2]];
+        if ((a == badVertex || b == badVertex || c == badVertex) &&
+          std::min({ a, b, c }) == badVertex)
+        {
+          const int o1 = a == badVertex ? b : a;
+          const int o2 = c == badVertex ? b : c;
+          faces.push_back({ std::min(o1, o2), std::max(o1, o2), t, f });
+        }
+      }
+    }
+    std::sort(faces.begin(), faces.end());
+    for (size_t s = 0; s < faces.size();)
+    {
+      size_t e = s + 1;
+      while (e < faces.size() && faces[e].Lo == faces[s].Lo && faces[e].Hi == faces[s].Hi)
+      {
+        ++e;
+      }
+      if (e - s > 2)
+      {
+        std::ostringstream os;
+        os << "face (" << badVertex << ", " << faces[s].Lo << ", " << faces[s].Hi
+           << ") is shared by " << e - s << " tets (";
+        for (size_t k = s; k < e; ++k)
+        {
+          os << (k == s ? "tet " : ", tet ") << faces[k].Tet;
+        }
+        os << "): a face can belong to at most two tets";
+        throw Error(os.str());
+      }
+      s = e;
+    }
+  }
+
+  // Boundary triangles, outward (tets are positively oriented here).
+  size_t numBoundary = 0;
+  for (const auto& b : boundaryPerThread)
+  {
+    numBoundary += b.size();
+  }
+  BoundaryTriangles_.resize(3 * numBoundary);
+  BoundaryTriangleTets_.resize(numBoundary);
+  {
+    size_t k = 0;
+    for (const auto& b : boundaryPerThread)
+    {
+      for (const auto& [t, f] : b)
+      {
+        const int* tv = GetTet(t);
+        for (int m = 0; m < 3; ++m)
+        {
+          BoundaryTriangles_[3 * k + m] = tv[FaceVertices[f][m]];
+        }
+        BoundaryTriangleTets_[k] = t;
+        ++k;
+      }
+    }
+  }
+
+  // 3. CSR pattern: offsets, then every thread copies its rows.
+  RowOffsets_.assign(static_cast<size_t>(numPoints) + 1, 0);
+  for (int i = 0; i < numPoints; ++i)
+  {
+    const long long next = static_cast<long long>(RowOffsets_[i]) + rowCount[i];
+    if (next > INT_MAX)
+    {
+      throw Error("the vertex adjacency has more than 2^31 entries: mesh too large");
+    }
+    RowOffsets_[i + 1] = static_cast<int>(next);
+  }
+  ColumnIndices_.resize(RowOffsets_[numPoints]);
+  DiagonalPositions_.resize(numPoints);
+  TetNonZeros_.resize(16 * static_cast<size_t>(numTets));
+#pragma omp parallel
+  {
+    const int tid = omp_get_thread_num();
+    if (firstPointOfThread[tid] >= 0)
+    {
+      std::copy(columnsPerThread[tid].begin(), columnsPerThread[tid].end(),
+        ColumnIndices_.begin() + RowOffsets_[firstPointOfThread[tid]]);
+    }
+    std::vector<int>().swap(columnsPerThread[tid]);
+#pragma omp barrier
+    // 4. Positions of the local matrix entries: row v fills entries 4a+b of
+    //    the tets where v is local vertex a (each (t, a) is written once).
+#pragma omp for schedule(static)
+    for (int v = 0; v < numPoints; ++v)
+    {
+      const int* rowBegin = ColumnIndices_.data() + RowOffsets_[v];
+      const int* rowEnd = ColumnIndices_.data() + RowOffsets_[v + 1];
+      DiagonalPositions_[v] =
+        static_cast<int>(std::lower_bound(rowBegin, rowEnd, v) - ColumnIndices_.data());
+      for (int k = PointTetOffsets_[v]; k < PointTetOffsets_[v + 1]; ++k)
+      {
+        const int t = PointTets_[k];
+        const int* tv = &Tets_[4 * static_cast<size_t>(t)];
+        const int a = tv[0] == v ? 0 : tv[1] == v ? 1 : tv[2] == v ? 2 : 3;
+        int* positions = &TetNonZeros_[16 * static_cast<size_t>(t) + 4 * a];
+        for (int b = 0; b < 4; ++b)
+        {
+          positions[b] = static_cast<int>(
+            std::lower_bound(rowBegin, rowEnd, tv[b]) - ColumnIndices_.data());
+        }
+      }
+    }
+  }
+
+  BuildScatterSchedule();
+}
+
+void TetMesh::BuildScatterSchedule()
+{
+  const int numPoints = GetNumberOfPoints();
+  const int numTets = GetNumberOfTets();
+  const MortonEncoder encode(Points_);
+  const std::vector<int> order = SortByCode(CentroidCodes(encode, Points_, Tets_));
+
+  const int numChunks = (numTets + ScatterChunkSize - 1) / ScatterChunkSize;
+  auto chunkBegin = [&](int k) { return k * ScatterChunkSize; };
+  auto chunkEnd = [&](int k) { return std::min(numTets, (k + 1) * ScatterChunkSize); };
+
+  // Greedy colouring of the chunks: two chunks sharing a vertex get
+  // different colours. Colours are handed out in rounds of 64 (one bit per
+  // colour in a per-vertex mask); a chunk finding all 64 colours of a round
+  // taken waits for the next round.
+  std::vector<int> colour(numChunks, -1);
+  std::vector<int> pending(numChunks);
+  std::iota(pending.begin(), pending.end(), 0);
+  std::vector<std::uint64_t> used;
+  int round = 0;
+  while (!pending.empty())
+  {
+    used.assign(numPoints, 0);
+    std::vector<int> deferred;
+    for (int k : pending)
+    {
+      std::uint64_t forbidden = 0;
+      for (int s = chunkBegin(k); s < chunkEnd(k); ++s)
+      {
+        const int* tv = GetTet(order[s]);
+        forbidden |= used[tv[0]] | used[tv[1]] | used[tv[2]] | used[tv[3]];
+      }
+      if (forbidden == ~std::uint64_t(0))
+      {
+        deferred.push_back(k);
+        continue;
+      }
+      int c = 0;
+      while (forbidden & (std::uint64_t(1) << c))
+      {
+        ++c;
+      }
+      colour[k] = 64 * round + c;
+      const std::uint64_t bit = std::uint64_t(1) << c;
+      for (int s = chunkBegin(k); s < chunkEnd(k); ++s)
+      {
+        const int* tv = GetTet(order[s]);
+        used[tv[0]] |= bit;
+        used[tv[1]] |= bit;
+        used[tv[2]] |= bit;
+        used[tv[3]] |= bit;
+      }
+    }
+    pending.swap(deferred);
+    ++round;
+  }
+
+  // Group the chunks by colour (stable: chunks of one colour in curve order).
+  const int numColours = numChunks == 0 ? 0 : *std::max_element(colour.begin(), colour.end()) + 1;
+  Schedule_.ColourOffsets.assign(static_cast<size_t>(numColours) + 1, 0);
+  for (int k = 0; k < numChunks; ++k)
+  {
+    ++Schedule_.ColourOffsets[colour[k] + 1];
+  }
+  for (int c = 0; c < numColours; ++c)
+  {
+    Schedule_.ColourOffsets[c + 1] += Schedule_.ColourOffsets[c];
+  }
+  std::vector<int> chunksByColour(numChunks);
+  {
+    std::vector<int> cursor(Schedule_.ColourOffsets.begin(), Schedule_.ColourOffsets.end() - 1);
+    for (int k = 0; k < numChunks; ++k)
+    {
+      chunksByColour[cursor[colour[k]]++] = k;
+    }
+  }
+  Schedule_.ChunkOffsets.assign(static_cast<size_t>(numChunks) + 1, 0);
+  Schedule_.Tets.resize(numTets);
+  for (int m = 0; m < numChunks; ++m)
+  {
+    const int k = chunksByColour[m];
+    const int begin = Schedule_.ChunkOffsets[m];
+    std::copy(order.begin() + chunkBegin(k), order.begin() + chunkEnd(k),
+      Schedule_.Tets.begin() + begin);
+    Schedule_.ChunkOffsets[m + 1] = begin + (chunkEnd(k) - chunkBegin(k));
+  }
+}
+
+void TetMesh::ComputeMeasures()
+{
+  const int numPoints = GetNumberOfPoints();
+
+  // V_i = sum of the volumes of the tets around i (TransCut Sec. 3.1: |Upsilon| ~ V_i/4).
+  VertexVolume_.assign(numPoints, 0.0);
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < numPoints; ++i)
+  {
+    double sum = 0.0;
+    for (int k = PointTetOffsets_[i]; k < PointTetOffsets_[i + 1]; ++k)
+    {
+      sum += TetVolumes_[PointTets_[k]];
+    }
+    VertexVolume_[i] = sum;
+  }
+
+  // S_i = sum of the areas of the boundary triangles around i (TransCut eq. 11).
+  const int numTriangles = GetNumberOfBoundaryTriangles();
+  BoundaryTriangleAreas_.resize(numTriangles);
+  BoundaryArea_.assign(numPoints, 0.0);
+  PointNormals_.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  for (int f = 0; f < numTriangles; ++f)
+  {
+    const int* tri = &BoundaryTriangles_[3 * static_cast<size_t>(f)];
+    double e1[3], e2[3], n[3];
+    Sub(GetPoint(tri[1]), GetPoint(tri[0]), e1);
+    Sub(GetPoint(tri[2]), GetPoint(tri[0]), e2);
+    Cross(e1, e2, n);
+    // Area vector: unit normal times area.
+    n[0] *= 0.5;
+    n[1] *= 0.5;
+    n[2] *= 0.5;
+    const double area = std::sqrt(Dot(n, n));
+    BoundaryTriangleAreas_[f] = area;
+    for (int m = 0; m < 3; ++m)
+    {
+      const int i = tri[m];
+      BoundaryArea_[i] += area;
+      PointNormals_[3 * static_cast<size_t>(i) + 0] += n[0];
+      PointNormals_[3 * static_cast<size_t>(i) + 1] += n[1];
+      PointNormals_[3 * static_cast<size_t>(i) + 2] += n[2];
+    }
+  }
+  BoundaryPoints_.clear();
+  for (int i = 0; i < numPoints; ++i)
+  {
+    if (BoundaryArea_[i] > 0.0)
+    {
+      BoundaryPoints_.push_back(i);
+      double* n = &PointNormals_[3 * static_cast<size_t>(i)];
+      const double length = std::sqrt(Dot(n, n));
+      if (length > 0.0)
+      {
+        n[0] /= length;
+        n[1] /= length;
+        n[2] /= length;
+      }
+    }
+  }
+}
+
+void TetMesh::ComputeSpatialOrder(const std::vector<double>& points, const std::vector<int>& tets,
+  std::vector<int>& pointOrder, std::vector<int>& tetOrder)
+{
+  CheckPointsFinite(points);
+  CheckTetIds(tets, static_cast<int>(points.size() / 3));
+  const MortonEncoder encode(points);
+  const int numPoints = static_cast<int>(points.size() / 3);
+  std::vector<std::uint64_t> codes(numPoints);
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < numPoints; ++i)
+  {
+    codes[i] = encode(&points[3 * static_cast<size_t>(i)]);
+  }
+  pointOrder = SortByCode(codes);
+  tetOrder = SortByCode(CentroidCodes(encode, points, tets));
+}
+
+} // namespace translucency
