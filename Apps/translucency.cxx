@@ -22,9 +22,11 @@
 #include "vtkTetGenReader.h"
 #include "vtkTetrahedralizeSurface.h"
 
+#include <vtkAlgorithm.h>
 #include <vtkCallbackCommand.h>
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
+#include <vtkExecutive.h>
 #include <vtkNew.h>
 #include <vtkOBJReader.h>
 #include <vtkOutputWindow.h>
@@ -158,6 +160,7 @@ struct MessageCollector
   std::string Errors;
   vtkNew<vtkCallbackCommand> ErrorCallback;
   vtkNew<vtkCallbackCommand> WarningCallback;
+  vtkNew<vtkCallbackCommand> IgnoreCallback;
   MessageCollector()
   {
     this->ErrorCallback->SetClientData(this);
@@ -173,6 +176,13 @@ struct MessageCollector
   {
     object->AddObserver(vtkCommand::ErrorEvent, this->ErrorCallback);
     object->AddObserver(vtkCommand::WarningEvent, this->WarningCallback);
+    // The executive's "Algorithm ... returned failure for request" follows
+    // every filter error, which is already reported: silence it (it would
+    // otherwise go to stderr through vtkLogger, whatever the output window).
+    if (auto* algorithm = vtkAlgorithm::SafeDownCast(object))
+    {
+      algorithm->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, this->IgnoreCallback);
+    }
   }
   /// The message of the last error, without VTK's "ERROR: In file, line" header.
   std::string Last() const
@@ -434,8 +444,18 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
       out[c] = j[key][c].get<double>();
     }
   };
+  if (!j.is_object())
+  {
+    throw translucency::Error("material file '" + material +
+      "' must hold a JSON object {\"absorption\": [r, g, b], ...}");
+  }
   if (j.contains("preset"))
   {
+    if (!j["preset"].is_string())
+    {
+      throw translucency::Error(
+        "material file '" + material + "': \"preset\" must be a preset name (a string)");
+    }
     assign->SetMaterialName(j["preset"].get<std::string>().c_str());
     return;
   }
@@ -445,6 +465,11 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
   assign->SetMaterialName("");
   assign->SetAbsorptionCoefficient(muA);
   assign->SetReducedScatteringCoefficient(sigmaS);
+  if (j.contains("refractive_index") && !j["refractive_index"].is_number())
+  {
+    throw translucency::Error(
+      "material file '" + material + "': \"refractive_index\" must be a number");
+  }
   assign->SetRefractiveIndex(j.value("refractive_index", 1.3));
 }
 

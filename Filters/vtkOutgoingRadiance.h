@@ -9,7 +9,9 @@
  * `Fluence` (phi) and `Irradiance` (q) and the cell array `RefractiveIndex`.
  *
  * Output point data: `Radiance` (3 components, W/mm^2/sr, linear, not tone
- * mapped), `Fluence`, `Irradiance`, `Normals` (outward unit normals) and
+ * mapped; clamped below at 0 where eq. 3 would go negative, which happens under
+ * strong direct light on meshes too coarse to resolve the fluence near the
+ * surface), `Fluence`, `Irradiance`, `Normals` (outward unit normals) and
  * `vtkOriginalPointIds` (ids in the tet mesh).
  *
  * The outgoing direction w_o is the surface normal by default (F_t at normal

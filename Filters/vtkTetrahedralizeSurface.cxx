@@ -154,6 +154,18 @@ bool CheckSurface(vtkPolyData* input, Surface& surface, double& volume, std::str
     return false;
   }
   volume = std::abs(volume);
+  // A closed surface lying in a plane (or enclosing next to nothing) would
+  // make TetGen abort (an assertion on the flat bounding box), not throw.
+  const double extent[3] = { bounds[1] - bounds[0], bounds[3] - bounds[2], bounds[5] - bounds[4] };
+  if (!(std::min({ extent[0], extent[1], extent[2] }) > 1e-9 * diag) ||
+    !(volume > 1e-12 * diag * diag * diag))
+  {
+    std::ostringstream os;
+    os << "the surface encloses no volume (" << volume << " mm^3; bounding box " << extent[0]
+       << " x " << extent[1] << " x " << extent[2] << " mm): it is flat";
+    error = os.str();
+    return false;
+  }
   return true;
 }
 
@@ -178,11 +190,9 @@ std::string TetGenErrorText(int code)
   }
 }
 
-/// Run TetGen with the given switches; fills points and tets (0-based).
-bool RunTetGen(const Surface& surface, const std::string& switches, std::vector<double>& points,
-  std::vector<int>& tets, std::string& error)
+/// The surface as TetGen's input: one triangle facet per triangle.
+void FillTetGenInput(const Surface& surface, tetgenio& in)
 {
-  tetgenio in, out;
   in.firstnumber = 0;
   in.numberofpoints = static_cast<int>(surface.Points.size() / 3);
   in.pointlist = new REAL[surface.Points.size()];
@@ -203,6 +213,49 @@ bool RunTetGen(const Surface& surface, const std::string& switches, std::vector<
       facet.polygonlist[0].vertexlist[k] = static_cast<int>(surface.Triangles[f][k]);
     }
   }
+}
+
+/// TetGen 1.5.0 (the Debian/Ubuntu libtet) crashes (SIGSEGV in
+/// tetgenmesh::freememory) when meshing with -p stops on a self-intersecting
+/// surface, instead of throwing its error code. So that error, the one a
+/// user is most likely to hit, is detected beforehand with TetGen's -d
+/// switch, which only reports the intersecting triangles and returns.
+bool CheckSelfIntersections(const Surface& surface, std::string& error)
+{
+  tetgenio in, out;
+  FillTetGenInput(surface, in);
+  char switches[] = "dQ";
+  try
+  {
+    tetrahedralize(switches, &in, &out);
+  }
+  catch (int code)
+  {
+    error = "TetGen failed: " + TetGenErrorText(code);
+    return false;
+  }
+  if (out.numberoftrifaces > 0)
+  {
+    std::ostringstream os;
+    os << "the surface intersects itself: " << out.numberoftrifaces
+       << " triangles cross other triangles";
+    const int v = out.trifacelist[0] - out.firstnumber;
+    if (out.pointlist && v >= 0 && v < out.numberofpoints)
+    {
+      os << ", first near " << FormatPoint(&out.pointlist[3 * v]);
+    }
+    error = os.str();
+    return false;
+  }
+  return true;
+}
+
+/// Run TetGen with the given switches; fills points and tets (0-based).
+bool RunTetGen(const Surface& surface, const std::string& switches, std::vector<double>& points,
+  std::vector<int>& tets, std::string& error)
+{
+  tetgenio in, out;
+  FillTetGenInput(surface, in);
   std::vector<char> sw(switches.begin(), switches.end());
   sw.push_back('\0');
   try
@@ -271,6 +324,11 @@ int vtkTetrahedralizeSurface::RequestData(
   std::string error;
   if (!CheckSurface(input && input->GetNumberOfPoints() > 0 ? clean->GetOutput() : input, surface,
         volume, error))
+  {
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  if (!CheckSelfIntersections(surface, error))
   {
     vtkErrorMacro(<< error);
     return 0;

@@ -12,12 +12,17 @@
  * The input is checked before TetGen sees it; the error names the problem:
  * empty input, a non-triangle cell, a degenerate (zero-area) triangle, an
  * edge used by one triangle (the surface is open; the count and the first
- * edge's position are given) or by more than two (non-manifold).
+ * edge's position are given) or by more than two (non-manifold), a flat
+ * surface enclosing no volume, and triangles crossing each other
+ * (self-intersection, found by a TetGen -d pass, because TetGen 1.5.0 crashes
+ * instead of reporting it when meshing).
  *
  * @warning TetGen is single-threaded: about 6 s for a million tets. With a
  * target number of tets, TetGen may run twice (the second run corrects the
- * volume bound from the first run's count); the result is within about 15 %
- * of the target.
+ * volume bound from the first run's count). TetGen's count is not a smooth
+ * function of the bound: for large targets (1e5 and up on the bunny) the result
+ * is within about 20 % of the target; small targets are bounded below by the
+ * resolution of the input surface and can be off by 50 % or more.
  *
  * @sa vtkAssignScatteringCoefficients vtkSolveDiffusion
  */

@@ -1,0 +1,190 @@
+"""Test of the Translucency ParaView plugin, run by pvpython.
+
+How to run (ctest does this):
+
+    pvpython --force-offscreen-rendering TestPlugin.py <build>/lib/paraview-plugins/Translucency/Translucency.so
+
+1. Loads the plugin and applies the chain of its proxies to a Sphere source:
+   Triangulate -> TetrahedralizeSurface -> AssignScatteringCoefficients ->
+   SurfaceIrradiance -> SolveDiffusion -> OutgoingRadiance.
+2. Fetches the results and checks the arrays of the data contract, Fluence > 0,
+   and that the proxy properties reach the filters: a material preset, the
+   repeated DirectionalLights property (doubling the light doubles the
+   fluence, two lights add up: the diffusion problem is linear in q).
+3. Reads a small TetGen mesh written here with the TetGenReader proxy, both
+   directly and through OpenDataFile (the plugin's reader factory hint).
+
+Exits non-zero on failure (unittest). No rendering.
+"""
+
+import os
+import sys
+import tempfile
+import unittest
+
+from paraview.simple import *  # noqa: F401,F403
+from paraview import servermanager
+
+if len(sys.argv) < 2 or not os.path.isfile(sys.argv[1]):
+    sys.exit("usage: pvpython --force-offscreen-rendering TestPlugin.py <Translucency plugin>")
+PLUGIN = sys.argv[1]
+LoadPlugin(PLUGIN, ns=globals())
+
+# paraview.simple names a proxy's function after its label: the label
+# The proxy label "Tetrahedralize Surface" gives the paraview.simple name TetrahedralizeSurface.
+Tetrahedralize = TetrahedralizeSurface
+
+from vtkmodules.util.numpy_support import vtk_to_numpy  # noqa: E402
+import numpy as np  # noqa: E402
+
+VTK_TETRA = 10
+
+
+def point_array(data, name):
+    a = data.GetPointData().GetArray(name)
+    if a is None:
+        raise AssertionError("no point array '%s'" % name)
+    return vtk_to_numpy(a)
+
+
+def cell_array(data, name):
+    a = data.GetCellData().GetArray(name)
+    if a is None:
+        raise AssertionError("no cell array '%s'" % name)
+    return vtk_to_numpy(a)
+
+
+class PluginTest(unittest.TestCase):
+
+    @classmethod
+    def setUpClass(cls):
+        cls.sphere = Sphere(Radius=4.0, ThetaResolution=12, PhiResolution=12)
+        cls.triangles = Triangulate(Input=cls.sphere)
+        cls.tetra = Tetrahedralize(Input=cls.triangles, TargetNumberOfTets=1500)
+        cls.assign = AssignScatteringCoefficients(Input=cls.tetra)
+        cls.irradiance = SurfaceIrradiance(Input=cls.assign)
+        cls.solve = SolveDiffusion(Input=cls.irradiance)
+        cls.radiance = OutgoingRadiance(Input=cls.solve)
+
+    def fetch(self, proxy):
+        proxy.UpdatePipeline()
+        return servermanager.Fetch(proxy)
+
+    def test_chain(self):
+        surface = self.fetch(self.radiance)
+        grid = self.fetch(self.solve)
+        self.assertEqual(grid.GetClassName(), "vtkUnstructuredGrid")
+        self.assertGreater(grid.GetNumberOfCells(), 500)
+        self.assertTrue(all(grid.GetCellType(i) == VTK_TETRA for i in range(grid.GetNumberOfCells())))
+        for name, components in (("AbsorptionCoefficient", 3), ("ReducedScatteringCoefficient", 3),
+                                 ("RefractiveIndex", 1), ("vtkOriginalCellIds", 1)):
+            self.assertEqual(grid.GetCellData().GetArray(name).GetNumberOfComponents(), components,
+                             name)
+        # The XML's defaults: marble (SPEC: mu_a = (0.0021, 0.0041, 0.0071) 1/mm, eta 1.3).
+        self.assertTrue(np.allclose(cell_array(grid, "AbsorptionCoefficient"),
+                                    [0.0021, 0.0041, 0.0071], rtol=1e-12))
+        self.assertTrue(np.allclose(cell_array(grid, "RefractiveIndex"), 1.3, rtol=1e-12))
+        for name in ("Irradiance", "Fluence"):
+            self.assertEqual(grid.GetPointData().GetArray(name).GetNumberOfComponents(), 3, name)
+        fluence = point_array(grid, "Fluence")
+        self.assertTrue(np.all(np.isfinite(fluence)) and np.all(fluence > 0.0))
+        self.assertEqual(surface.GetClassName(), "vtkPolyData")
+        self.assertGreater(surface.GetNumberOfCells(), 0)
+        for name in ("Radiance", "Fluence", "Irradiance"):
+            self.assertEqual(surface.GetPointData().GetArray(name).GetNumberOfComponents(), 3, name)
+        self.assertTrue(np.all(point_array(surface, "Radiance") >= 0.0))
+        self.assertGreater(np.max(point_array(surface, "Radiance")), 0.0)
+
+    def test_material_property(self):
+        self.assign.MaterialName = "skin1"
+        try:
+            grid = self.fetch(self.assign)
+            self.assertTrue(np.allclose(cell_array(grid, "AbsorptionCoefficient"),
+                                        [0.032, 0.17, 0.48], rtol=1e-12))
+            self.assertTrue(np.allclose(cell_array(grid, "ReducedScatteringCoefficient"),
+                                        [0.74, 0.88, 1.01], rtol=1e-12))
+            # Explicit coefficients when the name is empty.
+            self.assign.MaterialName = ""
+            self.assign.AbsorptionCoefficient = [0.1, 0.2, 0.3]
+            self.assign.ReducedScatteringCoefficient = [1.0, 2.0, 3.0]
+            self.assign.RefractiveIndex = 1.5
+            grid = self.fetch(self.assign)
+            self.assertTrue(np.allclose(cell_array(grid, "AbsorptionCoefficient"), [0.1, 0.2, 0.3]))
+            self.assertTrue(np.allclose(cell_array(grid, "RefractiveIndex"), 1.5))
+        finally:
+            self.assign.MaterialName = "marble"
+
+    def test_lights_are_linear(self):
+        # q is linear in the light powers, phi linear in q.
+        self.irradiance.UniformLightIrradiance = 0.0
+        self.solve.RelTol = 1e-11
+        try:
+            def fluence(lights):
+                self.irradiance.DirectionalLights = lights
+                return point_array(self.fetch(self.solve), "Fluence").copy()
+
+            one = fluence([0, -1, -1, 1.0])
+            two = fluence([0, -1, -1, 2.0])
+            other = fluence([1, 0, 0, 1.0])
+            both = fluence([0, -1, -1, 1.0, 1, 0, 0, 1.0])
+            scale = np.max(np.abs(both))
+            self.assertGreater(np.max(np.abs(one - other)), 1e-3 * scale, "the lights differ")
+            self.assertTrue(np.allclose(two, 2.0 * one, rtol=0, atol=1e-8 * scale))
+            self.assertTrue(np.allclose(both, one + other, rtol=0, atol=1e-8 * scale))
+        finally:
+            self.irradiance.DirectionalLights = [0, -1, -1, 1]
+            self.irradiance.UniformLightIrradiance = 0.1
+            self.solve.RelTol = 1e-6
+
+    def test_tetgen_reader(self):
+        # A unit cube split into five tetrahedra, 1-based TetGen files.
+        corners = [(x, y, z) for z in (0, 1) for y in (0, 1) for x in (0, 1)]
+        tets = [(0, 1, 2, 4), (3, 2, 1, 7), (5, 4, 7, 1), (6, 7, 4, 2), (1, 2, 4, 7)]
+
+        def volume(t):
+            a, b, c, d = (np.array(corners[k], float) for k in t)
+            return np.dot(np.cross(b - a, c - a), d - a) / 6.0
+
+        tets = [t if volume(t) > 0 else (t[1], t[0], t[2], t[3]) for t in tets]
+        with tempfile.TemporaryDirectory(prefix="translucency-plugin-") as tmp:
+            base = os.path.join(tmp, "cube")
+            with open(base + ".node", "w") as f:
+                f.write("8 3 0 0\n")
+                for i, p in enumerate(corners):
+                    f.write("%d %g %g %g\n" % ((i + 1,) + p))
+            with open(base + ".ele", "w") as f:
+                f.write("5 4 1\n")
+                for i, t in enumerate(tets):
+                    f.write("%d %s %d\n" % (i + 1, " ".join(str(k + 1) for k in t), 10 + i))
+
+            for reader in (TetGenReader(FileName=base + ".node"), OpenDataFile(base + ".ele")):
+                self.assertIsNotNone(reader, "no reader for .ele files")
+                self.assertEqual(reader.GetXMLName(), "TetGenReader")
+                mesh = self.fetch(reader)
+                self.assertEqual(mesh.GetNumberOfPoints(), 8)
+                self.assertEqual(mesh.GetNumberOfCells(), 5)
+                self.assertTrue(np.array_equal(cell_array(mesh, "RegionAttribute"),
+                                               [10, 11, 12, 13, 14]))
+                # The tets read fill the unit cube, positively oriented.
+                points = vtk_to_numpy(mesh.GetPoints().GetData()).astype(float)
+                cells = vtk_to_numpy(mesh.GetCells().GetConnectivityArray()).reshape(-1, 4)
+                a, b, c, d = (points[cells[:, k]] for k in range(4))
+                volumes = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a) / 6.0
+                self.assertTrue(np.all(volumes > 0))
+                self.assertAlmostEqual(float(volumes.sum()), 1.0, places=12)
+                Delete(reader)
+
+            # The read mesh goes through the rest of the chain.
+            reader = TetGenReader(FileName=base + ".node")
+            assign = AssignScatteringCoefficients(Input=reader)
+            light = SurfaceIrradiance(Input=assign)
+            solve = SolveDiffusion(Input=light)
+            grid = self.fetch(solve)
+            self.assertTrue(np.all(point_array(grid, "Fluence") > 0.0))
+            for proxy in (solve, light, assign, reader):
+                Delete(proxy)
+
+
+if __name__ == "__main__":
+    result = unittest.main(argv=[sys.argv[0]], exit=False, verbosity=2).result
+    sys.exit(0 if result.wasSuccessful() else 1)
