@@ -14,9 +14,11 @@
  *    flat surface would receive.
  * The object shadows itself: a light contributes at a point only if a ray
  * from the point towards the light leaves without hitting the boundary
- * surface again (vtkStaticCellLocator over the boundary triangles; vtkModifiedBSPTree of VTK 9.2 crashes on such queries). The uniform
- * light is integrated with UniformLightSamples cosine-weighted rays per point
- * (ambient occlusion); with 0 samples it is unoccluded and exact.
+ * surface again (translucency::RayCaster, a bounding volume hierarchy over
+ * the boundary triangles; the points are processed in parallel with OpenMP by
+ * translucency::ComputeBoundaryIrradiance). The uniform light is integrated
+ * with UniformLightSamples cosine-weighted rays per point (ambient
+ * occlusion); with 0 samples it is unoccluded and exact.
  *
  * Output: a shallow copy of the input with the point array `Irradiance`
  * (3 components R, G, B, W/mm^2; 0 at interior points).

@@ -29,16 +29,17 @@ void CheckSystem(const DiffusionSystem& system)
     os << "ConjugateGradient: inconsistent system (" << n << " unknowns, "
        << system.RowOffsets.size() << " row offsets, " << nnz << " column indices, values "
        << system.Values[0].size() << "/" << system.Values[1].size() << "/"
-       << system.Values[2].size() << ", right-hand sides " << system.RightHandSide[0].size()
-       << "/" << system.RightHandSide[1].size() << "/" << system.RightHandSide[2].size() << ")";
+       << system.Values[2].size() << ", right-hand sides " << system.RightHandSide[0].size() << "/"
+       << system.RightHandSide[1].size() << "/" << system.RightHandSide[2].size() << ")";
     throw Error(os.str());
   }
 }
 
 } // namespace
 
-bool ConjugateGradient::Solve(
-  const DiffusionSystem& system, std::array<Eigen::VectorXd, NumberOfChannels>& x, bool warmStart)
+bool ConjugateGradient::Solve(const DiffusionSystem& system,
+  std::array<Eigen::VectorXd, NumberOfChannels>& x,
+  bool warmStart)
 {
   CheckSystem(system);
   Iterations_.fill(0);
@@ -50,8 +51,9 @@ bool ConjugateGradient::Solve(
   // Lower|Upper makes it use the full row-major product, which Eigen runs on
   // OpenMP threads.
   using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
-  Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>>
-    solver;
+  Eigen::
+    ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>>
+      solver;
   solver.setTolerance(RelTol_);
   solver.setMaxIterations(MaxIter_);
 

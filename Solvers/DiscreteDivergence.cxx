@@ -19,6 +19,9 @@ namespace
 
 const char* const ChannelNames[NumberOfChannels] = { "R", "G", "B" };
 
+/// Throws if the irradiance has the wrong size or a value that is not finite
+/// and >= 0 (serial; Assemble checks the values in parallel first and calls
+/// this for the message).
 void CheckIrradiance(const TetMesh& mesh, const std::vector<double>& irradiance)
 {
   const size_t expected = 3 * static_cast<size_t>(mesh.GetNumberOfPoints());
@@ -31,10 +34,9 @@ void CheckIrradiance(const TetMesh& mesh, const std::vector<double>& irradiance)
   }
   const long long n = static_cast<long long>(expected);
   long long first = LLONG_MAX;
-#pragma omp parallel for reduction(min : first) schedule(static)
-  for (long long k = 0; k < n; ++k)
+  for (long long k = 0; k < n && first == LLONG_MAX; ++k)
   {
-    if (!(std::isfinite(irradiance[k]) && irradiance[k] >= 0.0) && k < first)
+    if (!(std::isfinite(irradiance[k]) && irradiance[k] >= 0.0))
     {
       first = k;
     }
@@ -50,24 +52,37 @@ void CheckIrradiance(const TetMesh& mesh, const std::vector<double>& irradiance)
 
 } // namespace
 
-void DiscreteDivergence::Assemble(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<double>& irradiance, DiffusionSystem& system)
+void DiscreteDivergence::Assemble(const TetMesh& mesh,
+  const OpticalProperties& material,
+  const std::vector<double>& irradiance,
+  DiffusionSystem& system)
 {
   const int numPoints = mesh.GetNumberOfPoints();
   const int numTets = mesh.GetNumberOfTets();
-  material.Validate(numTets);
-  CheckIrradiance(mesh, irradiance);
+  const size_t tetCount = static_cast<size_t>(numTets);
+  if (material.AbsorptionCoefficient.size() != 3 * tetCount ||
+    material.ReducedScatteringCoefficient.size() != 3 * tetCount ||
+    material.RefractiveIndex.size() != tetCount)
+  {
+    material.Validate(numTets); // throws, naming the array
+  }
+  if (irradiance.size() != 3 * static_cast<size_t>(numPoints))
+  {
+    CheckIrradiance(mesh, irradiance); // throws
+  }
 
+  // Boundary points only (a few percent of the points). The values are
+  // checked below; an invalid eta here only gives values that are not used.
   const std::vector<double> pointEta = BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
 
   const size_t nnz = mesh.GetColumnIndices().size();
   system.NumberOfUnknowns = numPoints;
   system.RowOffsets = mesh.GetRowOffsets();
-  system.ColumnIndices = mesh.GetColumnIndices();
+  system.ColumnIndices.resize(nnz); // filled in parallel below
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     system.Values[c].resize(nnz);
-    system.RightHandSide[c].setZero(numPoints);
+    system.RightHandSide[c].resize(numPoints);
   }
 
   const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
@@ -78,147 +93,184 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh, const OpticalProperties& 
   const int* positions = mesh.GetTetNonZeroPositions().data();
   const double* muA = material.AbsorptionCoefficient.data();
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
-  double* values[NumberOfChannels] = { system.Values[0].data(), system.Values[1].data(),
-    system.Values[2].data() };
+  const double* tetEta = material.RefractiveIndex.data();
+  const double* q = irradiance.data();
+  double* values[NumberOfChannels] = {
+    system.Values[0].data(), system.Values[1].data(), system.Values[2].data()
+  };
+  double* rhs[NumberOfChannels] = {
+    system.RightHandSide[0].data(), system.RightHandSide[1].data(), system.RightHandSide[2].data()
+  };
   const long long numValues = static_cast<long long>(nnz);
+  const long long numMaterialValues = static_cast<long long>(3 * tetCount);
+  const long long numIrradianceValues = static_cast<long long>(irradiance.size());
+  const int* meshColumns = mesh.GetColumnIndices().data();
+  int* columns = system.ColumnIndices.data();
+  const std::vector<int>& boundaryPoints = mesh.GetBoundaryPoints();
+  const std::vector<double>& boundaryArea = mesh.GetBoundaryAreas();
+  const int* diagonal = mesh.GetDiagonalPositions().data();
+  const int* pointTetOffsets = mesh.GetPointTetOffsets().data();
+  const int numBoundary = static_cast<int>(boundaryPoints.size());
 
+  // One parallel region (fork/join and barriers are what costs on a busy
+  // machine): check values, clear, scatter the tets colour by colour, add
+  // the boundary terms.
+  int invalid = 0;
 #pragma omp parallel num_threads(numThreads)
   {
-#pragma omp for schedule(static)
-    for (long long k = 0; k < numValues; ++k)
+#pragma omp for schedule(static) reduction(| : invalid)
+    for (long long k = 0; k < numMaterialValues; ++k)
     {
-      values[0][k] = 0.0;
-      values[1][k] = 0.0;
-      values[2][k] = 0.0;
+      const double a = muA[k], s = sigmaS[k];
+      const bool ok = std::isfinite(a) && a >= 0.0 && std::isfinite(s) && s >= 0.0 && a + s > 0.0 &&
+        std::isfinite(tetEta[k / 3]) && tetEta[k / 3] > 0.0;
+      invalid |= ok ? 0 : 1;
     }
-
-    // Tets: colour classes in turn; within a class, vertex-disjoint chunks in
-    // parallel, each chunk's tets in order (deterministic summation order).
-    for (int colour = 0; colour < numColours; ++colour)
+#pragma omp for schedule(static) reduction(| : invalid)
+    for (long long k = 0; k < numIrradianceValues; ++k)
     {
-#pragma omp for schedule(dynamic, 1)
-      for (int chunk = schedule.ColourOffsets[colour]; chunk < schedule.ColourOffsets[colour + 1];
-           ++chunk)
+      invalid |= (std::isfinite(q[k]) && q[k] >= 0.0) ? 0 : 1;
+    }
+    // After the implicit barrier every thread sees the same flag.
+    if (!invalid)
+    {
+#pragma omp for schedule(static)
+      for (long long k = 0; k < numValues; ++k)
       {
-        for (int s = schedule.ChunkOffsets[chunk]; s < schedule.ChunkOffsets[chunk + 1]; ++s)
+        columns[k] = meshColumns[k];
+        values[0][k] = 0.0;
+        values[1][k] = 0.0;
+        values[2][k] = 0.0;
+      }
+      // Right-hand sides, and identity rows for points used by no tet (the
+      // tet loop below never touches those diagonals: no barrier needed).
+#pragma omp for schedule(static) nowait
+      for (int i = 0; i < numPoints; ++i)
+      {
+        const bool orphan = pointTetOffsets[i + 1] == pointTetOffsets[i];
+        for (int c = 0; c < NumberOfChannels; ++c)
         {
-          const size_t t = static_cast<size_t>(schedule.Tets[s]);
-          const int* tv = tets + 4 * t;
-          const double* p0 = points + 3 * static_cast<size_t>(tv[0]);
-          const double* p1 = points + 3 * static_cast<size_t>(tv[1]);
-          const double* p2 = points + 3 * static_cast<size_t>(tv[2]);
-          const double* p3 = points + 3 * static_cast<size_t>(tv[3]);
-          const double e1[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
-          const double e2[3] = { p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2] };
-          const double e3[3] = { p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2] };
-          // N[a] = 2 S_a n_a: twice the area times the unit normal of the face
-          // opposite vertex a, pointing towards a (TransCut eq. 4 notation).
-          double n[4][3];
-          n[1][0] = e2[1] * e3[2] - e2[2] * e3[1];
-          n[1][1] = e2[2] * e3[0] - e2[0] * e3[2];
-          n[1][2] = e2[0] * e3[1] - e2[1] * e3[0];
-          n[2][0] = e3[1] * e1[2] - e3[2] * e1[1];
-          n[2][1] = e3[2] * e1[0] - e3[0] * e1[2];
-          n[2][2] = e3[0] * e1[1] - e3[1] * e1[0];
-          n[3][0] = e1[1] * e2[2] - e1[2] * e2[1];
-          n[3][1] = e1[2] * e2[0] - e1[0] * e2[2];
-          n[3][2] = e1[0] * e2[1] - e1[1] * e2[0];
-          // Closed surface: the face area vectors sum to zero.
-          n[0][0] = -(n[1][0] + n[2][0] + n[3][0]);
-          n[0][1] = -(n[1][1] + n[2][1] + n[3][1]);
-          n[0][2] = -(n[1][2] + n[2][2] + n[3][2]);
-          const double sixV = e1[0] * n[1][0] + e1[1] * n[1][1] + e1[2] * n[1][2];
-          const double volume = sixV / 6.0;
-          // Geometric edge weights g_ab = w_abt / kappa_t. The faces opposite
-          // a and b meet at the opposite edge kl with interior dihedral angle
-          // theta_kl: n_a.n_b = -cos(theta_kl) and sin(theta_kl) =
-          // 3 V_t |kl| / (2 S_a S_b), so
-          //   -(1/6) |kl| cot(theta_kl) = S_a S_b (n_a.n_b) / (9 V_t)
-          //                             = N_a.N_b / (36 V_t)     (TransCut eq. 10, Sec. 3.3)
-          const double scale = 1.0 / (6.0 * sixV);
-          double g[4][4];
-          for (int a = 0; a < 4; ++a)
+          rhs[c][i] = 0.0;
+          if (orphan)
           {
-            for (int b = a + 1; b < 4; ++b)
-            {
-              g[a][b] = g[b][a] =
-                (n[a][0] * n[b][0] + n[a][1] * n[b][1] + n[a][2] * n[b][2]) * scale;
-            }
+            values[c][diagonal[i]] = 1.0;
           }
-          // -sum_j w_ijt (TransCut Sec. 3.3: w_iit = -(w_ijt + w_ikt + w_ilt)).
-          for (int a = 0; a < 4; ++a)
+        }
+      }
+
+      // Tets: colour classes in turn; within a class, vertex-disjoint chunks in
+      // parallel, each chunk's tets in order (deterministic summation order).
+      for (int colour = 0; colour < numColours; ++colour)
+      {
+#pragma omp for schedule(dynamic, 1)
+        for (int chunk = schedule.ColourOffsets[colour]; chunk < schedule.ColourOffsets[colour + 1];
+             ++chunk)
+        {
+          for (int s = schedule.ChunkOffsets[chunk]; s < schedule.ChunkOffsets[chunk + 1]; ++s)
           {
-            double sum = 0.0;
-            for (int b = 0; b < 4; ++b)
+            const size_t t = static_cast<size_t>(schedule.Tets[s]);
+            const int* tv = tets + 4 * t;
+            const double* p0 = points + 3 * static_cast<size_t>(tv[0]);
+            const double* p1 = points + 3 * static_cast<size_t>(tv[1]);
+            const double* p2 = points + 3 * static_cast<size_t>(tv[2]);
+            const double* p3 = points + 3 * static_cast<size_t>(tv[3]);
+            const double e1x = p1[0] - p0[0], e1y = p1[1] - p0[1], e1z = p1[2] - p0[2];
+            const double e2x = p2[0] - p0[0], e2y = p2[1] - p0[1], e2z = p2[2] - p0[2];
+            const double e3x = p3[0] - p0[0], e3y = p3[1] - p0[1], e3z = p3[2] - p0[2];
+            // N_a = 2 S_a n_a: twice the area times the unit normal of the face
+            // opposite vertex a, pointing towards a (TransCut eq. 4 notation).
+            const double n1x = e2y * e3z - e2z * e3y, n1y = e2z * e3x - e2x * e3z,
+                         n1z = e2x * e3y - e2y * e3x;
+            const double n2x = e3y * e1z - e3z * e1y, n2y = e3z * e1x - e3x * e1z,
+                         n2z = e3x * e1y - e3y * e1x;
+            const double n3x = e1y * e2z - e1z * e2y, n3y = e1z * e2x - e1x * e2z,
+                         n3z = e1x * e2y - e1y * e2x;
+            // Closed surface: the face area vectors sum to zero.
+            const double n0x = -(n1x + n2x + n3x), n0y = -(n1y + n2y + n3y),
+                         n0z = -(n1z + n2z + n3z);
+            const double sixV = e1x * n1x + e1y * n1y + e1z * n1z; // 6 V_t > 0
+            const double volume = sixV * (1.0 / 6.0);
+            // Geometric edge weights g_ab = w_abt / kappa_t. The faces opposite
+            // a and b meet at the opposite edge kl with interior dihedral angle
+            // theta_kl: n_a.n_b = -cos(theta_kl) and sin(theta_kl) =
+            // 3 V_t |kl| / (2 S_a S_b), so
+            //   -(1/6) |kl| cot(theta_kl) = S_a S_b (n_a.n_b) / (9 V_t)
+            //                             = N_a.N_b / (36 V_t)   (TransCut eq. 10, Sec. 3.3)
+            const double scale = 1.0 / (6.0 * sixV);
+            const double g01 = (n0x * n1x + n0y * n1y + n0z * n1z) * scale;
+            const double g02 = (n0x * n2x + n0y * n2y + n0z * n2z) * scale;
+            const double g03 = (n0x * n3x + n0y * n3y + n0z * n3z) * scale;
+            const double g12 = (n1x * n2x + n1y * n2y + n1z * n2z) * scale;
+            const double g13 = (n1x * n3x + n1y * n3y + n1z * n3z) * scale;
+            const double g23 = (n2x * n3x + n2y * n3y + n2z * n3z) * scale;
+            // -sum_j w_ijt (TransCut Sec. 3.3: w_iit = -(w_ijt + w_ikt + w_ilt)).
+            const double g00 = -(g01 + g02 + g03), g11 = -(g01 + g12 + g13),
+                         g22 = -(g02 + g12 + g23), g33 = -(g03 + g13 + g23);
+            // Entry 4a+b of the tet's 16 is (row tv[a], column tv[b]).
+            const int* pos = positions + 16 * t;
+            const int q00 = pos[0], q01 = pos[1], q02 = pos[2], q03 = pos[3];
+            const int q10 = pos[4], q11 = pos[5], q12 = pos[6], q13 = pos[7];
+            const int q20 = pos[8], q21 = pos[9], q22 = pos[10], q23 = pos[11];
+            const int q30 = pos[12], q31 = pos[13], q32 = pos[14], q33 = pos[15];
+            for (int c = 0; c < NumberOfChannels; ++c)
             {
-              sum += b == a ? 0.0 : g[a][b];
-            }
-            g[a][a] = -sum;
-          }
-          const int* pos = positions + 16 * t;
-          for (int c = 0; c < NumberOfChannels; ++c)
-          {
-            const double mu = muA[3 * t + c];
-            const double kappa = 1.0 / (3.0 * (mu + sigmaS[3 * t + c]));
-            const double four = 4.0 * kappa;
-            const double mass = volume * mu; // V_t mu_t: the tet's share of V_i mu(x_i), eq. 13
-            double* v = values[c];
-            for (int a = 0; a < 4; ++a)
-            {
-              for (int b = 0; b < 4; ++b)
-              {
-                if (a == b)
-                {
-                  v[pos[5 * a]] += four * g[a][a] + mass; // TransCut eq. 13: -4 sum_j w_ij + V_i mu
-                }
-                else
-                {
-                  v[pos[4 * a + b]] += four * g[a][b]; // TransCut eq. 14: M_ij = 4 w_ij
-                }
-              }
+              const double mu = muA[3 * t + c];
+              const double four = 4.0 / (3.0 * (mu + sigmaS[3 * t + c])); // 4 kappa_t
+              const double mass = volume * mu; // V_t mu_t: the tet's share of V_i mu(x_i), eq. 13
+              // TransCut eq. 14: M_ij = 4 w_ij.
+              const double w01 = four * g01, w02 = four * g02, w03 = four * g03;
+              const double w12 = four * g12, w13 = four * g13, w23 = four * g23;
+              double* v = values[c];
+              // TransCut eq. 13: M_ii = -4 sum_j w_ij + V_i mu(x_i).
+              v[q00] += four * g00 + mass;
+              v[q11] += four * g11 + mass;
+              v[q22] += four * g22 + mass;
+              v[q33] += four * g33 + mass;
+              v[q01] += w01;
+              v[q10] += w01;
+              v[q02] += w02;
+              v[q20] += w02;
+              v[q03] += w03;
+              v[q30] += w03;
+              v[q12] += w12;
+              v[q21] += w12;
+              v[q13] += w13;
+              v[q31] += w13;
+              v[q23] += w23;
+              v[q32] += w23;
             }
           }
         }
       }
-    }
-  }
 
-  // Boundary rows: lumped Robin term and source (TransCut eq. 11-13).
-  const std::vector<int>& boundaryPoints = mesh.GetBoundaryPoints();
-  const std::vector<double>& boundaryArea = mesh.GetBoundaryAreas();
-  const std::vector<int>& diagonal = mesh.GetDiagonalPositions();
-  const int numBoundary = static_cast<int>(boundaryPoints.size());
-#pragma omp parallel for schedule(static) num_threads(numThreads)
-  for (int k = 0; k < numBoundary; ++k)
-  {
-    const int i = boundaryPoints[k];
-    const double fdr = Fresnel::DiffuseReflectance(pointEta[i]);
-    const double a = Fresnel::MismatchA(pointEta[i]);
-    const double s = boundaryArea[i];
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      values[c][diagonal[i]] += 2.0 * s / (3.0 * a); // TransCut eq. 13, boundary case
-      system.RightHandSide[c][i] =
-        8.0 * s * irradiance[3 * static_cast<size_t>(i) + c] / (3.0 * a * (1.0 - fdr)); // eq. 12
-    }
-  }
-
-  // Points used by no tet: identity row, zero right-hand side.
-  const std::vector<int>& pointTetOffsets = mesh.GetPointTetOffsets();
-#pragma omp parallel for schedule(static) num_threads(numThreads)
-  for (int i = 0; i < numPoints; ++i)
-  {
-    if (pointTetOffsets[i + 1] == pointTetOffsets[i])
-    {
-      for (int c = 0; c < NumberOfChannels; ++c)
+      // Boundary rows: lumped Robin term and source (TransCut eq. 11-13).
+#pragma omp for schedule(static)
+      for (int k = 0; k < numBoundary; ++k)
       {
-        values[c][diagonal[i]] = 1.0;
+        const int i = boundaryPoints[k];
+        const double fdr = Fresnel::DiffuseReflectance(pointEta[i]);
+        const double a = Fresnel::MismatchA(pointEta[i]);
+        const double s = boundaryArea[i];
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          values[c][diagonal[i]] += 2.0 * s / (3.0 * a); // TransCut eq. 13, boundary case
+          rhs[c][i] =
+            8.0 * s * q[3 * static_cast<size_t>(i) + c] / (3.0 * a * (1.0 - fdr)); // eq. 12
+        }
       }
     }
   }
+  if (invalid)
+  {
+    // Serial re-checks that name the culprit.
+    material.Validate(numTets);
+    CheckIrradiance(mesh, irradiance);
+    throw Error("DiscreteDivergence: invalid material or irradiance");
+  }
 }
 
-void DiscreteDivergence::ToPointFluence(const TetMesh& mesh, const DiffusionSystem& system,
+void DiscreteDivergence::ToPointFluence(const TetMesh& mesh,
+  const DiffusionSystem& system,
   const std::array<Eigen::VectorXd, NumberOfChannels>& solution,
   std::vector<double>& fluence) const
 {

@@ -1,10 +1,17 @@
 #include "LightSources.h"
 
+#include "Error.h"
 #include "Fresnel.h"
+#include "RayCaster.h"
+#include "TetMesh.h"
+
+#include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 namespace translucency
 {
@@ -88,6 +95,201 @@ double HemisphereDirection(const double n[3], int k, int count, double rotation,
     w[d] = a * t[d] + c * b[d] + cosTheta * n[d];
   }
   return cosTheta;
+}
+
+namespace
+{
+
+/// Throw translucency::Error for a light that cannot be evaluated.
+void CheckLight(const LightSource& light, size_t index)
+{
+  std::ostringstream msg;
+  msg << "light " << index << ": ";
+  if (light.Type == LightSource::Kind::Uniform)
+  {
+    msg << "a uniform light is not accepted in the light list: pass its irradiance as "
+           "uniformIrradiance";
+    throw Error(msg.str());
+  }
+  for (int c = 0; c < 3; ++c)
+  {
+    if (!(light.Power[c] >= 0.0) || !std::isfinite(light.Power[c]))
+    {
+      msg << "power " << light.Power[c] << " in channel " << c << ": must be finite and >= 0";
+      throw Error(msg.str());
+    }
+  }
+  if (light.Type == LightSource::Kind::Directional)
+  {
+    const double len2 = light.Direction[0] * light.Direction[0] +
+      light.Direction[1] * light.Direction[1] + light.Direction[2] * light.Direction[2];
+    if (!(len2 > 0.0) || !std::isfinite(len2))
+    {
+      msg << "a directional light has a zero or non-finite direction";
+      throw Error(msg.str());
+    }
+  }
+  else if (!std::isfinite(light.Position[0]) || !std::isfinite(light.Position[1]) ||
+    !std::isfinite(light.Position[2]))
+  {
+    msg << "a point light has a non-finite position";
+    throw Error(msg.str());
+  }
+}
+
+} // namespace
+
+bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& pointEta,
+  const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
+  bool shadows, std::vector<double>& q, const std::function<bool()>& abort)
+{
+  const int numPoints = mesh.GetNumberOfPoints();
+  if (pointEta.size() != static_cast<size_t>(numPoints))
+  {
+    std::ostringstream msg;
+    msg << "boundary irradiance: " << pointEta.size() << " refractive indices for "
+        << numPoints << " points";
+    throw Error(msg.str());
+  }
+  const std::vector<int>& boundary = mesh.GetBoundaryPoints();
+  for (int i : boundary)
+  {
+    if (!(pointEta[i] > 0.0) || !std::isfinite(pointEta[i]))
+    {
+      std::ostringstream msg;
+      msg << "boundary irradiance: the refractive index at point " << i << " is " << pointEta[i]
+          << ": must be finite and > 0";
+      throw Error(msg.str());
+    }
+  }
+  if (!(uniformIrradiance >= 0.0) || !std::isfinite(uniformIrradiance))
+  {
+    std::ostringstream msg;
+    msg << "boundary irradiance: uniform irradiance " << uniformIrradiance
+        << " W/mm^2: must be finite and >= 0";
+    throw Error(msg.str());
+  }
+  if (uniformSamples < 0)
+  {
+    std::ostringstream msg;
+    msg << "boundary irradiance: " << uniformSamples << " uniform light samples: must be >= 0";
+    throw Error(msg.str());
+  }
+  for (size_t l = 0; l < lights.size(); ++l)
+  {
+    CheckLight(lights[l], l);
+  }
+
+  q.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  if (boundary.empty())
+  {
+    return true;
+  }
+
+  // Bounding box diagonal (mm): scale of the ray offset and reach.
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    lo[k] = std::numeric_limits<double>::infinity();
+    hi[k] = -lo[k];
+  }
+  for (int i = 0; i < numPoints; ++i)
+  {
+    const double* x = mesh.GetPoint(i);
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], x[k]);
+      hi[k] = std::max(hi[k], x[k]);
+    }
+  }
+  const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
+    (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const double offset = 1e-5 * diag;
+
+  const bool needRays =
+    shadows && (!lights.empty() || (uniformIrradiance > 0.0 && uniformSamples > 0));
+  RayCaster caster;
+  if (needRays)
+  {
+    caster.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
+  }
+  // Visibility of direction w from boundary point x with normal n: the ray
+  // starts just off the surface so that it does not hit the triangles at x.
+  auto occluded = [&](const double* x, const double* n, const double* w, double distance) {
+    const double reach = std::min(distance, 2.0 * diag);
+    const double origin[3] = { x[0] + offset * (n[0] + w[0]), x[1] + offset * (n[1] + w[1]),
+      x[2] + offset * (n[2] + w[2]) };
+    return caster.Occluded(origin, w, reach);
+  };
+
+  const std::vector<double>& normals = mesh.GetPointNormals();
+  const int numBoundary = static_cast<int>(boundary.size());
+  if (abort && abort())
+  {
+    return false;
+  }
+  // Only the calling thread (thread 0 of the team) calls abort(): the callback
+  // need not be thread-safe (a VTK filter's may fire events).
+  std::atomic<bool> aborted(false);
+#pragma omp parallel for schedule(dynamic, 64)
+  for (int b = 0; b < numBoundary; ++b)
+  {
+    if (aborted.load(std::memory_order_relaxed))
+    {
+      continue; // an OpenMP loop cannot break: skip the remaining points
+    }
+    if (abort && b % 64 == 0 && omp_get_thread_num() == 0 && abort())
+    {
+      aborted.store(true, std::memory_order_relaxed);
+      continue;
+    }
+    const int i = boundary[b];
+    const double* x = mesh.GetPoint(i);
+    const double* n = &normals[3 * static_cast<size_t>(i)];
+    const double eta = pointEta[i];
+    double* qi = &q[3 * static_cast<size_t>(i)];
+    for (const auto& light : lights)
+    {
+      double ql[3], w[3], distance;
+      if (DirectIrradiance(light, x, n, eta, ql, w, distance) &&
+        !(shadows && occluded(x, n, w, distance)))
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          qi[c] += ql[c];
+        }
+      }
+    }
+    if (uniformIrradiance > 0.0)
+    {
+      double qu = 0.0;
+      if (!shadows || uniformSamples == 0)
+      {
+        // q = pi L * (1/pi) int F_t cos dw = E * UniformTransmittance.
+        qu = uniformIrradiance * Fresnel::UniformTransmittance(eta);
+      }
+      else
+      {
+        // Cosine-weighted estimate of (1/pi) int V F_t cos dw.
+        const double rotation = std::fmod(0.6180339887498949 * i, 1.0);
+        for (int k = 0; k < uniformSamples; ++k)
+        {
+          double w[3];
+          const double cosTheta = HemisphereDirection(n, k, uniformSamples, rotation, w);
+          if (!occluded(x, n, w, 2.0 * diag))
+          {
+            qu += Fresnel::Transmittance(cosTheta, eta);
+          }
+        }
+        qu *= uniformIrradiance / uniformSamples;
+      }
+      for (int c = 0; c < 3; ++c)
+      {
+        qi[c] += qu;
+      }
+    }
+  }
+  return !aborted.load();
 }
 
 } // namespace translucency

@@ -3,15 +3,20 @@
  * @brief Boundary irradiance q from simple light sources (SPEC "The physics":
  * q(x) = integral of L_i (n . w_i) F_t(w_i) dw_i; TransCut eq. 2).
  *
- * Visibility (self-shadowing) is the caller's business: these functions give
- * the unoccluded contribution and the direction to test.
+ * DirectIrradiance() and HemisphereDirection() give the unoccluded
+ * contribution and the direction to test; ComputeBoundaryIrradiance() adds
+ * the visibility (self-shadowing) with a RayCaster over the whole boundary.
  */
 #pragma once
 
 #include <array>
+#include <functional>
+#include <vector>
 
 namespace translucency
 {
+
+class TetMesh;
 
 /// A white or coloured light. Units per type:
 /// - Directional: irradiance E (W/mm^2) on a surface facing the light;
@@ -50,5 +55,44 @@ bool DirectIrradiance(const LightSource& light, const double x[3], const double 
  * decorrelate neighbouring points). Returns the cosine to n.
  */
 double HemisphereDirection(const double n[3], int k, int count, double rotation, double w[3]);
+
+/**
+ * Irradiance transmitted into the medium at every boundary point (W/mm^2 per
+ * channel): the sum of DirectIrradiance() over `lights` plus the uniform
+ * light, with self-shadowing by the mesh's own boundary surface when
+ * `shadows` is set.
+ *
+ * Shadow rays start at x + offset (n + w), offset = 1e-5 times the diagonal
+ * of the mesh's bounding box (x the point, n its normal, w the unit direction
+ * of the ray), and reach min(distance to the light, 2 * diagonal); they are
+ * cast with a RayCaster built over mesh.GetBoundaryTriangles() (only when a
+ * ray is needed).
+ *
+ * The uniform light, of irradiance uniformIrradiance (W/mm^2, >= 0; 0 means
+ * none), gives E * Fresnel::UniformTransmittance(eta) without shadows or with
+ * uniformSamples == 0, and otherwise the cosine-weighted estimate
+ * E / N * sum_k V(w_k) F_t(w_k) over N = uniformSamples HemisphereDirection()
+ * rays (rotation fmod(0.618... * i, 1) for point i), V = 1 if the ray escapes.
+ *
+ * @param mesh the tet mesh (its boundary triangles, boundary points and
+ *   point normals are used)
+ * @param pointEta refractive index per mesh point (only boundary points are
+ *   read; they must be finite and > 0), e.g. from PointRefractiveIndex()
+ * @param lights directional and point lights (Kind::Uniform is not accepted
+ *   here: pass it as uniformIrradiance)
+ * @param uniformSamples rays per point for the shadowed uniform light (>= 0)
+ * @param q output, 3 per mesh point (R, G, B), 0 at interior points
+ * @param abort optional; called from the calling thread only, once before
+ *   the rays are cast and then about every 64 boundary points that thread
+ *   handles; returning true stops the computation
+ * @return false if aborted (q is then incomplete), true otherwise.
+ *
+ * OpenMP-parallel over the boundary points (dynamic schedule); every point is
+ * computed independently, so q does not depend on the number of threads.
+ * Throws translucency::Error on invalid input (before any work).
+ */
+bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& pointEta,
+  const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
+  bool shadows, std::vector<double>& q, const std::function<bool()>& abort = {});
 
 } // namespace translucency

@@ -18,33 +18,19 @@ const char* const ChannelNames[NumberOfChannels] = { "R", "G", "B" };
 
 std::string Lower(std::string s)
 {
-  std::transform(s.begin(), s.end(), s.begin(),
+  std::transform(s.begin(),
+    s.end(),
+    s.begin(),
     [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
   return s;
 }
 
-/// Index of the first value of `values` failing `ok`, or -1. Parallel scan
-/// (the arrays can hold millions of values), lowest index reported.
-template <typename Predicate>
-long long FirstFailing(const std::vector<double>& values, Predicate ok)
-{
-  const long long n = static_cast<long long>(values.size());
-  long long first = LLONG_MAX;
-#pragma omp parallel for reduction(min : first) schedule(static)
-  for (long long k = 0; k < n; ++k)
-  {
-    if (!ok(values[k]) && k < first)
-    {
-      first = k;
-    }
-  }
-  return first == LLONG_MAX ? -1 : first;
-}
-
 } // namespace
 
-OpticalProperties OpticalProperties::Uniform(
-  int numTets, const double muA[3], const double sigmaS[3], double eta)
+OpticalProperties OpticalProperties::Uniform(int numTets,
+  const double muA[3],
+  const double sigmaS[3],
+  double eta)
 {
   if (numTets < 0)
   {
@@ -68,8 +54,13 @@ OpticalProperties OpticalProperties::Uniform(
 
 void OpticalProperties::Validate(int numTets) const
 {
-  const size_t n = numTets < 0 ? 0 : static_cast<size_t>(numTets);
-  auto checkSize = [&](const std::vector<double>& a, const char* name, size_t perTet) {
+  if (numTets < 0)
+  {
+    throw Error("OpticalProperties::Validate: negative number of tets " + std::to_string(numTets));
+  }
+  const size_t n = static_cast<size_t>(numTets);
+  auto checkSize = [&](const std::vector<double>& a, const char* name, size_t perTet)
+  {
     if (a.size() != perTet * n)
     {
       std::ostringstream os;
@@ -82,43 +73,71 @@ void OpticalProperties::Validate(int numTets) const
   checkSize(ReducedScatteringCoefficient, "ReducedScatteringCoefficient", 3);
   checkSize(RefractiveIndex, "RefractiveIndex", 1);
 
-  auto nonNegative = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  auto report = [](const char* name, long long k, double v, const char* rule) {
+  // One parallel pass (the arrays can hold millions of values); the lowest
+  // failing index of each check is reported.
+  const long long numValues = static_cast<long long>(3 * n);
+  const double* muA = AbsorptionCoefficient.data();
+  const double* sigmaS = ReducedScatteringCoefficient.data();
+  long long badA = LLONG_MAX, badS = LLONG_MAX, badSum = LLONG_MAX;
+#pragma omp parallel for reduction(min : badA, badS, badSum) schedule(static)
+  for (long long k = 0; k < numValues; ++k)
+  {
+    const double a = muA[k], s = sigmaS[k];
+    if (!(std::isfinite(a) && a >= 0.0))
+    {
+      badA = std::min(badA, k);
+    }
+    if (!(std::isfinite(s) && s >= 0.0))
+    {
+      badS = std::min(badS, k);
+    }
+    if (!(a + s > 0.0))
+    {
+      badSum = std::min(badSum, k);
+    }
+  }
+  const long long numTetsLL = static_cast<long long>(n);
+  const double* eta = RefractiveIndex.data();
+  long long badEta = LLONG_MAX;
+#pragma omp parallel for reduction(min : badEta) schedule(static)
+  for (long long t = 0; t < numTetsLL; ++t)
+  {
+    if (!(std::isfinite(eta[t]) && eta[t] > 0.0))
+    {
+      badEta = std::min(badEta, t);
+    }
+  }
+
+  auto report = [](const char* name, long long k, double v)
+  {
     std::ostringstream os;
     os << name << " of tet " << k / 3 << ", channel " << ChannelNames[k % 3] << " is " << v
-       << " 1/mm: must be " << rule;
+       << " 1/mm: must be finite and >= 0";
     throw Error(os.str());
   };
-  long long bad = FirstFailing(AbsorptionCoefficient, nonNegative);
-  if (bad >= 0)
+  if (badA != LLONG_MAX)
   {
-    report("AbsorptionCoefficient", bad, AbsorptionCoefficient[bad], "finite and >= 0");
+    report("AbsorptionCoefficient", badA, muA[badA]);
   }
-  bad = FirstFailing(ReducedScatteringCoefficient, nonNegative);
-  if (bad >= 0)
+  if (badS != LLONG_MAX)
   {
-    report(
-      "ReducedScatteringCoefficient", bad, ReducedScatteringCoefficient[bad], "finite and >= 0");
+    report("ReducedScatteringCoefficient", badS, sigmaS[badS]);
   }
-  bad = FirstFailing(RefractiveIndex, [](double v) { return std::isfinite(v) && v > 0.0; });
-  if (bad >= 0)
+  if (badEta != LLONG_MAX)
   {
     std::ostringstream os;
-    os << "RefractiveIndex of tet " << bad << " is " << RefractiveIndex[bad]
+    os << "RefractiveIndex of tet " << badEta << " is " << eta[badEta]
        << ": must be finite and > 0";
     throw Error(os.str());
   }
-  // mu_a + sigma_s' > 0 (kappa finite): both are >= 0 here, so both zero.
-  for (size_t k = 0; k < 3 * n; ++k)
+  if (badSum != LLONG_MAX)
   {
-    if (AbsorptionCoefficient[k] + ReducedScatteringCoefficient[k] <= 0.0)
-    {
-      std::ostringstream os;
-      os << "tet " << k / 3 << ", channel " << ChannelNames[k % 3]
-         << " has AbsorptionCoefficient + ReducedScatteringCoefficient = 0 1/mm: the "
-            "diffusion coefficient kappa = 1/(3 (mu_a + sigma_s')) would be infinite";
-      throw Error(os.str());
-    }
+    // Both are >= 0 here, so both are zero.
+    std::ostringstream os;
+    os << "tet " << badSum / 3 << ", channel " << ChannelNames[badSum % 3]
+       << " has AbsorptionCoefficient + ReducedScatteringCoefficient = 0 1/mm: the "
+          "diffusion coefficient kappa = 1/(3 (mu_a + sigma_s')) would be infinite";
+    throw Error(os.str());
   }
 }
 

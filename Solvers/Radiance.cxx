@@ -43,8 +43,8 @@ double OutgoingRadiance(double phi, double q, double eta, double cosOut)
   return std::max(0.0, radiance);
 }
 
-std::vector<double> BoundaryPointRefractiveIndex(
-  const TetMesh& mesh, const std::vector<double>& tetEta)
+std::vector<double> BoundaryPointRefractiveIndex(const TetMesh& mesh,
+  const std::vector<double>& tetEta)
 {
   CheckTetEta(mesh, tetEta);
   const int numPoints = mesh.GetNumberOfPoints();

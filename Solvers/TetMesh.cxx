@@ -22,8 +22,14 @@ namespace
 /// positively oriented tet the normal (p1-p0)x(p2-p0) points out of the tet.
 constexpr int FaceVertices[4][3] = { { 1, 2, 3 }, { 0, 3, 2 }, { 0, 1, 3 }, { 0, 2, 1 } };
 
-/// Tets per chunk of the scatter schedule.
-constexpr int ScatterChunkSize = 512;
+/// Tets per chunk of the scatter schedule: large chunks keep the scatter
+/// cache-friendly (fewer rows shared between chunks of different colours),
+/// small ones give each colour enough chunks to balance the threads. About
+/// 256 chunks in all, within [256, 8192] tets each.
+int ScatterChunkSize(int numTets)
+{
+  return std::clamp(numTets / 256, 256, 8192);
+}
 
 /// Bits per axis of the Morton codes.
 constexpr int MortonBits = 21;
@@ -141,8 +147,9 @@ std::vector<int> SortByCode(const std::vector<std::uint64_t>& codes)
 }
 
 /// Morton codes of the tet centroids (tets assumed validated).
-std::vector<std::uint64_t> CentroidCodes(
-  const MortonEncoder& encode, const std::vector<double>& points, const std::vector<int>& tets)
+std::vector<std::uint64_t> CentroidCodes(const MortonEncoder& encode,
+  const std::vector<double>& points,
+  const std::vector<int>& tets)
 {
   const int numTets = static_cast<int>(tets.size() / 4);
   std::vector<std::uint64_t> codes(numTets);
@@ -227,11 +234,11 @@ void CheckTetIds(const std::vector<int>& tets, int numPoints)
     os << "the tet array has " << tets.size() << " ids: expected 4 per tet";
     throw Error(os.str());
   }
-  // 16 matrix positions per tet are addressed with size_t; the tet count
-  // itself must fit an int.
-  if (tets.size() / 4 > static_cast<size_t>(INT_MAX))
+  // The point -> tet incidence lists (4 entries per tet) use int offsets.
+  if (tets.size() > static_cast<size_t>(INT_MAX))
   {
-    throw Error("too many tets for 32-bit ids: " + std::to_string(tets.size() / 4));
+    throw Error("too many tets for 32-bit offsets: " + std::to_string(tets.size() / 4) +
+      " (at most " + std::to_string(INT_MAX / 4) + ")");
   }
   const long long numTets = static_cast<long long>(tets.size() / 4);
   long long firstRange = LLONG_MAX, firstRepeat = LLONG_MAX;
@@ -262,8 +269,8 @@ void CheckTetIds(const std::vector<int>& tets, int numPoints)
       if (v[a] < 0 || v[a] >= numPoints)
       {
         std::ostringstream os;
-        os << "tet " << firstRange << " has vertex id " << v[a] << " but the mesh has "
-           << numPoints << " points";
+        os << "tet " << firstRange << " has vertex id " << v[a] << " but the mesh has " << numPoints
+           << " points";
         throw Error(os.str());
       }
     }
@@ -272,8 +279,8 @@ void CheckTetIds(const std::vector<int>& tets, int numPoints)
   {
     const int* v = &tets[4 * firstRepeat];
     std::ostringstream os;
-    os << "tet " << firstRepeat << " repeats a vertex id: vertices " << v[0] << ", " << v[1]
-       << ", " << v[2] << ", " << v[3];
+    os << "tet " << firstRepeat << " repeats a vertex id: vertices " << v[0] << ", " << v[1] << ", "
+       << v[2] << ", " << v[3];
     throw Error(os.str());
   }
 }
@@ -330,8 +337,7 @@ void TetMesh::ComputeTetVolumes(bool allowReorient)
   for (int t = 0; t < numTets; ++t)
   {
     int* v = &Tets_[4 * static_cast<size_t>(t)];
-    const double vol =
-      SignedVolume(GetPoint(v[0]), GetPoint(v[1]), GetPoint(v[2]), GetPoint(v[3]));
+    const double vol = SignedVolume(GetPoint(v[0]), GetPoint(v[1]), GetPoint(v[2]), GetPoint(v[3]));
     if (!(std::abs(vol) > threshold))
     {
       firstDegenerate = std::min(firstDegenerate, t);
@@ -349,13 +355,13 @@ void TetMesh::ComputeTetVolumes(bool allowReorient)
     }
     volumes[t] = std::abs(vol);
   }
-  auto describe = [&](int t, const char* what) {
+  auto describe = [&](int t, const char* what)
+  {
     const int* v = GetTet(t);
-    const double vol =
-      SignedVolume(GetPoint(v[0]), GetPoint(v[1]), GetPoint(v[2]), GetPoint(v[3]));
+    const double vol = SignedVolume(GetPoint(v[0]), GetPoint(v[1]), GetPoint(v[2]), GetPoint(v[3]));
     std::ostringstream os;
-    os << "tet " << t << " is " << what << " (volume " << vol << " mm^3): vertices " << v[0]
-       << ", " << v[1] << ", " << v[2] << ", " << v[3];
+    os << "tet " << t << " is " << what << " (volume " << vol << " mm^3): vertices " << v[0] << ", "
+       << v[1] << ", " << v[2] << ", " << v[3];
     return os.str();
   };
   if (firstDegenerate != INT_MAX && firstDegenerate <= firstInverted)
@@ -571,7 +577,8 @@ void TetMesh::BuildTopology()
     const int tid = omp_get_thread_num();
     if (firstPointOfThread[tid] >= 0)
     {
-      std::copy(columnsPerThread[tid].begin(), columnsPerThread[tid].end(),
+      std::copy(columnsPerThread[tid].begin(),
+        columnsPerThread[tid].end(),
         ColumnIndices_.begin() + RowOffsets_[firstPointOfThread[tid]]);
     }
     std::vector<int>().swap(columnsPerThread[tid]);
@@ -593,8 +600,8 @@ void TetMesh::BuildTopology()
         int* positions = &TetNonZeros_[16 * static_cast<size_t>(t) + 4 * a];
         for (int b = 0; b < 4; ++b)
         {
-          positions[b] = static_cast<int>(
-            std::lower_bound(rowBegin, rowEnd, tv[b]) - ColumnIndices_.data());
+          positions[b] =
+            static_cast<int>(std::lower_bound(rowBegin, rowEnd, tv[b]) - ColumnIndices_.data());
         }
       }
     }
@@ -610,9 +617,10 @@ void TetMesh::BuildScatterSchedule()
   const MortonEncoder encode(Points_);
   const std::vector<int> order = SortByCode(CentroidCodes(encode, Points_, Tets_));
 
-  const int numChunks = (numTets + ScatterChunkSize - 1) / ScatterChunkSize;
-  auto chunkBegin = [&](int k) { return k * ScatterChunkSize; };
-  auto chunkEnd = [&](int k) { return std::min(numTets, (k + 1) * ScatterChunkSize); };
+  const int chunkSize = ScatterChunkSize(numTets);
+  const int numChunks = (numTets + chunkSize - 1) / chunkSize;
+  auto chunkBegin = [&](int k) { return k * chunkSize; };
+  auto chunkEnd = [&](int k) { return std::min(numTets, (k + 1) * chunkSize); };
 
   // Greedy colouring of the chunks: two chunks sharing a vertex get
   // different colours. Colours are handed out in rounds of 64 (one bit per
@@ -685,8 +693,8 @@ void TetMesh::BuildScatterSchedule()
   {
     const int k = chunksByColour[m];
     const int begin = Schedule_.ChunkOffsets[m];
-    std::copy(order.begin() + chunkBegin(k), order.begin() + chunkEnd(k),
-      Schedule_.Tets.begin() + begin);
+    std::copy(
+      order.begin() + chunkBegin(k), order.begin() + chunkEnd(k), Schedule_.Tets.begin() + begin);
     Schedule_.ChunkOffsets[m + 1] = begin + (chunkEnd(k) - chunkBegin(k));
   }
 }
@@ -753,8 +761,10 @@ void TetMesh::ComputeMeasures()
   }
 }
 
-void TetMesh::ComputeSpatialOrder(const std::vector<double>& points, const std::vector<int>& tets,
-  std::vector<int>& pointOrder, std::vector<int>& tetOrder)
+void TetMesh::ComputeSpatialOrder(const std::vector<double>& points,
+  const std::vector<int>& tets,
+  std::vector<int>& pointOrder,
+  std::vector<int>& tetOrder)
 {
   CheckPointsFinite(points);
   CheckTetIds(tets, static_cast<int>(points.size() / 3));

@@ -9,6 +9,8 @@
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <random>
 
 namespace
@@ -147,10 +149,12 @@ TEST_F(ConjugateGradientTest, ProgressCallbackCanAbort)
 {
   ConjugateGradient cg;
   std::vector<double> fractions;
-  cg.SetProgressCallback([&](double f) {
-    fractions.push_back(f);
-    return f < 0.3; // abort before the second channel
-  });
+  cg.SetProgressCallback(
+    [&](double f)
+    {
+      fractions.push_back(f);
+      return f < 0.3; // abort before the second channel
+    });
   std::array<Eigen::VectorXd, 3> x;
   EXPECT_FALSE(cg.Solve(*System, x));
   ASSERT_EQ(fractions.size(), 2u);
@@ -161,12 +165,37 @@ TEST_F(ConjugateGradientTest, ProgressCallbackCanAbort)
   EXPECT_FALSE(cg.GetConverged(2));
 
   fractions.clear();
-  cg.SetProgressCallback([&](double f) {
-    fractions.push_back(f);
-    return true;
-  });
+  cg.SetProgressCallback(
+    [&](double f)
+    {
+      fractions.push_back(f);
+      return true;
+    });
   EXPECT_TRUE(cg.Solve(*System, x));
   EXPECT_EQ(fractions.back(), 1.0);
+}
+
+TEST_F(ConjugateGradientTest, ParallelEqualsSerial)
+{
+  // Eigen's OpenMP product splits rows between threads; every row is still
+  // summed by one thread in order, and the vector reductions are serial.
+  ASSERT_GT(System->ColumnIndices.size(), 20000u); // Eigen's threshold to go parallel
+  ConjugateGradient cg;
+  cg.SetRelTol(1e-10);
+  std::array<Eigen::VectorXd, 3> serial, parallel;
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  ASSERT_TRUE(cg.Solve(*System, serial));
+  omp_set_num_threads(2);
+  ASSERT_TRUE(cg.Solve(*System, parallel));
+  omp_set_num_threads(saved);
+  for (int c = 0; c < 3; ++c)
+  {
+    for (Eigen::Index i = 0; i < serial[c].size(); ++i)
+    {
+      ASSERT_EQ(serial[c][i], parallel[c][i]) << "channel " << c << " unknown " << i;
+    }
+  }
 }
 
 TEST_F(ConjugateGradientTest, InconsistentSystemThrows)

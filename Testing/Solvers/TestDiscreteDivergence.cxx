@@ -6,6 +6,7 @@
 #include "DiscreteDivergence.h"
 #include "Error.h"
 #include "Fresnel.h"
+#include "Radiance.h"
 #include "TestMeshes.h"
 #include "TetMesh.h"
 
@@ -108,8 +109,9 @@ struct FemReference
   std::array<Eigen::VectorXd, 3> Load;
 };
 
-FemReference AssembleFem(
-  const TetMesh& mesh, const OpticalProperties& material, const std::vector<double>& q)
+FemReference AssembleFem(const TetMesh& mesh,
+  const OpticalProperties& material,
+  const std::vector<double>& q)
 {
   const int n = mesh.GetNumberOfPoints();
   std::array<std::vector<Eigen::Triplet<double>>, 3> triplets;
@@ -376,8 +378,12 @@ struct ConvergenceErrors
   std::array<double, 3> Max, Rms;
 };
 
-ConvergenceErrors ManufacturedErrors(int cells, double length, const double muA[3],
-  const double sigma[3], const Eigen::Vector3d& direction, double eta)
+ConvergenceErrors ManufacturedErrors(int cells,
+  double length,
+  const double muA[3],
+  const double sigma[3],
+  const Eigen::Vector3d& direction,
+  double eta)
 {
   const MeshData data = CubeMesh(cells, length);
   const TetMesh mesh = Build(data);
@@ -462,8 +468,9 @@ TEST(DiscreteDivergence, ConvergenceToManufacturedSolution)
   const MaterialPreset& marble = FindMaterialPreset("marble");
   const MaterialPreset& apple = FindMaterialPreset("apple");
   const double muA[3] = { skin.Absorption[0], marble.Absorption[0], apple.Absorption[2] };
-  const double sigma[3] = { skin.ReducedScattering[0], marble.ReducedScattering[0],
-    apple.ReducedScattering[2] };
+  const double sigma[3] = {
+    skin.ReducedScattering[0], marble.ReducedScattering[0], apple.ReducedScattering[2]
+  };
   const Eigen::Vector3d direction(1.0, 2.0, 3.0);
   const int levels[] = { 4, 8, 16, 32 };
   std::vector<ConvergenceErrors> errors;
@@ -489,14 +496,52 @@ TEST(DiscreteDivergence, ConvergenceToManufacturedSolution)
     const size_t f = errors.size() - 1;
     const double rmsOrder = std::log2(errors[f - 1].Rms[c] / errors[f].Rms[c]);
     const double maxOrder = std::log2(errors[f - 1].Max[c] / errors[f].Max[c]);
-    ::testing::Test::RecordProperty("rms_order_channel_" + std::to_string(c),
-      std::to_string(rmsOrder));
-    ::testing::Test::RecordProperty("max_order_channel_" + std::to_string(c),
-      std::to_string(maxOrder));
+    ::testing::Test::RecordProperty(
+      "rms_order_channel_" + std::to_string(c), std::to_string(rmsOrder));
+    ::testing::Test::RecordProperty(
+      "max_order_channel_" + std::to_string(c), std::to_string(maxOrder));
     EXPECT_GE(rmsOrder, 1.7) << "channel " << c;
     EXPECT_LT(errors[f].Rms[c], errors[0].Rms[c]);
   }
   std::cout << "[ convergence ] relative vertex errors, phi = exp(a.x):\n" << report.str();
+}
+
+TEST(DiscreteDivergence, PointRefractiveIndex)
+{
+  MeshData data = CubeMesh(4, 2.0, 0.25, 12);
+  data.Points.insert(data.Points.end(), { 9.0, 9.0, 9.0 }); // used by no tet
+  const TetMesh mesh = Build(data);
+  const OpticalProperties material = RandomMaterial(mesh.GetNumberOfTets(), 13);
+  const std::vector<double> eta = PointRefractiveIndex(mesh, material.RefractiveIndex);
+  const std::vector<double> boundary = BoundaryEta(mesh, material.RefractiveIndex);
+  const std::vector<double> boundaryOnly =
+    BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
+  ASSERT_EQ(eta.size(), static_cast<size_t>(mesh.GetNumberOfPoints()));
+  for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    if (mesh.IsBoundaryPoint(i))
+    {
+      EXPECT_NEAR(eta[i], boundary[i], 1e-14) << "point " << i;
+      EXPECT_EQ(boundaryOnly[i], eta[i]);
+      continue;
+    }
+    EXPECT_EQ(boundaryOnly[i], 0.0);
+    // Interior: mean over the tets containing the point.
+    double sum = 0.0;
+    int count = 0;
+    for (int t = 0; t < mesh.GetNumberOfTets(); ++t)
+    {
+      const int* tv = mesh.GetTet(t);
+      if (tv[0] == i || tv[1] == i || tv[2] == i || tv[3] == i)
+      {
+        sum += material.RefractiveIndex[t];
+        ++count;
+      }
+    }
+    EXPECT_NEAR(eta[i], count ? sum / count : 1.0, 1e-14) << "point " << i;
+  }
+  EXPECT_EQ(eta.back(), 1.0);
+  EXPECT_THROW(PointRefractiveIndex(mesh, std::vector<double>(3, 1.3)), Error);
 }
 
 // ---- input checks ----
@@ -527,9 +572,8 @@ TEST(DiscreteDivergenceErrors, MaterialAndIrradianceValidation)
   const std::vector<double> q = RandomIrradiance(mesh, 8);
   DiscreteDivergence divergence;
   DiffusionSystem system;
-  auto assemble = [&](const OpticalProperties& m, const std::vector<double>& irradiance) {
-    return ErrorMessage([&] { divergence.Assemble(mesh, m, irradiance, system); });
-  };
+  auto assemble = [&](const OpticalProperties& m, const std::vector<double>& irradiance)
+  { return ErrorMessage([&] { divergence.Assemble(mesh, m, irradiance, system); }); };
   EXPECT_EQ(assemble(good, q), "");
 
   OpticalProperties bad = good;

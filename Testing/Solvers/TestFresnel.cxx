@@ -126,8 +126,8 @@ TEST(Fresnel, ReflectanceAtBrewsterAngle)
   // And against the angle form at a few other angles.
   for (double theta : { 0.1, 0.5, 1.0, 1.4 })
   {
-    EXPECT_NEAR(Fresnel::Reflectance(std::cos(theta), eta), ReflectanceAngles(theta, 1.0, eta),
-      1e-13)
+    EXPECT_NEAR(
+      Fresnel::Reflectance(std::cos(theta), eta), ReflectanceAngles(theta, 1.0, eta), 1e-13)
       << "theta " << theta;
   }
 }

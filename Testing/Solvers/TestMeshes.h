@@ -36,8 +36,14 @@ inline double Uniform01(std::mt19937_64& rng)
   return static_cast<double>(rng() >> 11) * (1.0 / 9007199254740992.0);
 }
 
-inline MeshData BoxMesh(int nx, int ny, int nz, double lx, double ly, double lz,
-  double jitter = 0.0, std::uint64_t seed = 1)
+inline MeshData BoxMesh(int nx,
+  int ny,
+  int nz,
+  double lx,
+  double ly,
+  double lz,
+  double jitter = 0.0,
+  std::uint64_t seed = 1)
 {
   MeshData mesh;
   const int px = nx + 1, py = ny + 1, pz = nz + 1;
@@ -71,8 +77,9 @@ inline MeshData BoxMesh(int nx, int ny, int nz, double lx, double ly, double lz,
   }
   // Kuhn split: one tet per permutation (p0, p1, p2) of the axes, along the
   // path 0 -> e_p0 -> e_p0 + e_p1 -> (1, 1, 1).
-  static const int permutations[6][3] = { { 0, 1, 2 }, { 0, 2, 1 }, { 1, 0, 2 }, { 1, 2, 0 },
-    { 2, 0, 1 }, { 2, 1, 0 } };
+  static const int permutations[6][3] = {
+    { 0, 1, 2 }, { 0, 2, 1 }, { 1, 0, 2 }, { 1, 2, 0 }, { 2, 0, 1 }, { 2, 1, 0 }
+  };
   mesh.Tets.reserve(24 * static_cast<size_t>(nx) * ny * nz);
   for (int k = 0; k < nz; ++k)
   {
@@ -103,8 +110,9 @@ inline MeshData CubeMesh(int n, double l, double jitter = 0.0, std::uint64_t see
 }
 
 /// Renumber points and tets: new point k is old point pointOrder[k], likewise tets.
-inline MeshData Permute(
-  const MeshData& mesh, const std::vector<int>& pointOrder, const std::vector<int>& tetOrder)
+inline MeshData Permute(const MeshData& mesh,
+  const std::vector<int>& pointOrder,
+  const std::vector<int>& tetOrder)
 {
   MeshData out;
   std::vector<int> newId(pointOrder.size());

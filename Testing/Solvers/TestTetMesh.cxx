@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -100,11 +102,11 @@ TEST_P(BoxMeshTest, CountsAndMeasures)
     const double* p2 = mesh.GetPoint(tri[2]);
     const double e1[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
     const double e2[3] = { p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2] };
-    const double n[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-      e1[0] * e2[1] - e1[1] * e2[0] };
+    const double n[3] = {
+      e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]
+    };
     const int axis = static_cast<int>(
-      std::max_element(n, n + 3, [](double a, double b) { return std::abs(a) < std::abs(b); }) -
-      n);
+      std::max_element(n, n + 3, [](double a, double b) { return std::abs(a) < std::abs(b); }) - n);
     // The triangle lies in the plane x_axis = 0 or x_axis = size[axis].
     const double side = p0[axis] > centre[axis] ? 1.0 : -1.0;
     for (const double* p : { p0, p1, p2 })
@@ -317,6 +319,19 @@ TEST(TetMesh, PointsUsedByNoTetAreAllowed)
   EXPECT_EQ(mesh.GetRowOffsets()[orphan + 1] - mesh.GetRowOffsets()[orphan], 1);
 }
 
+TEST(TetMesh, PointsWithoutTets)
+{
+  TetMesh mesh;
+  mesh.SetGeometry({ 0, 0, 0, 1, 2, 3 }, {});
+  EXPECT_EQ(mesh.GetNumberOfPoints(), 2);
+  EXPECT_EQ(mesh.GetNumberOfTets(), 0);
+  EXPECT_EQ(mesh.GetNumberOfBoundaryTriangles(), 0);
+  EXPECT_EQ(mesh.GetRowOffsets(), (std::vector<int>{ 0, 1, 2 }));
+  EXPECT_EQ(mesh.GetScatterSchedule().GetNumberOfColours(), 0);
+  mesh.SetGeometry({}, {});
+  EXPECT_EQ(mesh.GetNumberOfPoints(), 0);
+}
+
 TEST(TetMesh, SpatialOrderIsAPermutationAndIdempotent)
 {
   const MeshData data = BoxMesh(6, 5, 4, 3.0, 2.0, 1.0, 0.2, 11);
@@ -345,6 +360,41 @@ TEST(TetMesh, SpatialOrderIsAPermutationAndIdempotent)
   {
     ASSERT_EQ(tetOrder2[k], k);
   }
+}
+
+TEST(TetMesh, BuildIsIndependentOfThreadCount)
+{
+  // Serial twin of the parallel loops of SetGeometry and ComputeSpatialOrder.
+  const MeshData data = BoxMesh(14, 12, 11, 3.0, 2.0, 2.0, 0.25, 13);
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  TetMesh serial = Build(data);
+  std::vector<int> pointOrder1, tetOrder1;
+  TetMesh::ComputeSpatialOrder(data.Points, data.Tets, pointOrder1, tetOrder1);
+  omp_set_num_threads(2);
+  TetMesh parallel = Build(data);
+  std::vector<int> pointOrder2, tetOrder2;
+  TetMesh::ComputeSpatialOrder(data.Points, data.Tets, pointOrder2, tetOrder2);
+  omp_set_num_threads(saved);
+  EXPECT_EQ(serial.GetTets(), parallel.GetTets());
+  EXPECT_EQ(serial.GetTetVolumes(), parallel.GetTetVolumes());
+  EXPECT_EQ(serial.GetBoundaryTriangles(), parallel.GetBoundaryTriangles());
+  EXPECT_EQ(serial.GetBoundaryTriangleTets(), parallel.GetBoundaryTriangleTets());
+  EXPECT_EQ(serial.GetBoundaryPoints(), parallel.GetBoundaryPoints());
+  EXPECT_EQ(serial.GetVertexVolumes(), parallel.GetVertexVolumes());
+  EXPECT_EQ(serial.GetBoundaryAreas(), parallel.GetBoundaryAreas());
+  EXPECT_EQ(serial.GetPointNormals(), parallel.GetPointNormals());
+  EXPECT_EQ(serial.GetRowOffsets(), parallel.GetRowOffsets());
+  EXPECT_EQ(serial.GetColumnIndices(), parallel.GetColumnIndices());
+  EXPECT_EQ(serial.GetTetNonZeroPositions(), parallel.GetTetNonZeroPositions());
+  EXPECT_EQ(serial.GetDiagonalPositions(), parallel.GetDiagonalPositions());
+  EXPECT_EQ(serial.GetPointTets(), parallel.GetPointTets());
+  EXPECT_EQ(serial.GetScatterSchedule().Tets, parallel.GetScatterSchedule().Tets);
+  EXPECT_EQ(serial.GetScatterSchedule().ChunkOffsets, parallel.GetScatterSchedule().ChunkOffsets);
+  EXPECT_EQ(
+    serial.GetScatterSchedule().ColourOffsets, parallel.GetScatterSchedule().ColourOffsets);
+  EXPECT_EQ(pointOrder1, pointOrder2);
+  EXPECT_EQ(tetOrder1, tetOrder2);
 }
 
 // ---- input checks: every message names the culprit ----
@@ -405,8 +455,11 @@ TEST(TetMeshErrors, FaceSharedByThreeTets)
 TEST(TetMeshErrors, WrongArraySizes)
 {
   EXPECT_TRUE(Contains(ErrorMessage([] { TetMesh().SetGeometry({ 0, 0 }, {}); }), "3 (x, y, z)"));
-  EXPECT_TRUE(Contains(
-    ErrorMessage([] { TetMesh().SetGeometry({ 0, 0, 0 }, { 0, 0, 0 }); }), "4 per tet"));
+  EXPECT_TRUE(Contains(ErrorMessage(
+                         [] {
+                           TetMesh().SetGeometry({ 0, 0, 0 }, { 0, 0, 0 });
+                         }),
+    "4 per tet"));
 }
 
 TEST(TetMeshErrors, FailedSetGeometryKeepsThePreviousMesh)
