@@ -24,8 +24,7 @@ vtkStandardNewMacro(vtkOutgoingRadiance);
 
 struct vtkOutgoingRadiance::Internals
 {
-  translucency::TetMesh Mesh;
-  std::string MeshKey;
+  std::shared_ptr<const translucency::TetMesh> Mesh;
 };
 
 //------------------------------------------------------------------------------
@@ -50,18 +49,13 @@ int vtkOutgoingRadiance::RequestData(
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkPolyData* output = vtkPolyData::GetData(outputVector);
   std::string error;
-  translucency::TetMesh& mesh = this->Internal->Mesh;
-  const std::string key = input ? vtkTranslucency::GeometryKey(input) : std::string();
-  if (key.empty() || key != this->Internal->MeshKey)
+  this->Internal->Mesh = vtkTranslucency::AcquireTetMesh(input, error);
+  if (!this->Internal->Mesh)
   {
-    this->Internal->MeshKey.clear();
-    if (!vtkTranslucency::ToTetMesh(input, mesh, error))
-    {
-      vtkErrorMacro(<< error);
-      return 0;
-    }
-    this->Internal->MeshKey = key;
+    vtkErrorMacro(<< error);
+    return 0;
   }
+  const translucency::TetMesh& mesh = *this->Internal->Mesh;
   std::vector<double> fluence, irradiance;
   if (!vtkTranslucency::ReadPointArray(input, vtkTranslucency::FluenceName, 3, fluence, error) ||
     !vtkTranslucency::ReadPointArray(
@@ -70,17 +64,11 @@ int vtkOutgoingRadiance::RequestData(
     vtkErrorMacro(<< error << " (run vtkSurfaceIrradiance and vtkSolveDiffusion first)");
     return 0;
   }
-  vtkDataArray* etaArray = input->GetCellData()->GetArray(vtkTranslucency::RefractiveIndexName);
-  if (!etaArray || etaArray->GetNumberOfComponents() != 1)
+  std::vector<double> tetEta;
+  if (!vtkTranslucency::ReadRefractiveIndex(input, tetEta, error))
   {
-    vtkErrorMacro(<< "the input has no 1-component cell array '"
-                  << vtkTranslucency::RefractiveIndexName << "'");
+    vtkErrorMacro(<< error);
     return 0;
-  }
-  std::vector<double> tetEta(static_cast<size_t>(etaArray->GetNumberOfTuples()));
-  for (size_t t = 0; t < tetEta.size(); ++t)
-  {
-    tetEta[t] = etaArray->GetComponent(static_cast<vtkIdType>(t), 0);
   }
   const std::vector<double> pointEta = translucency::PointRefractiveIndex(mesh, tetEta);
 

@@ -19,8 +19,7 @@ vtkStandardNewMacro(vtkSolveDiffusion);
 
 struct vtkSolveDiffusion::Internals
 {
-  translucency::TetMesh Mesh;
-  std::string MeshKey;
+  std::shared_ptr<const translucency::TetMesh> Mesh;
   translucency::DiscreteDivergence Discretization;
   translucency::DiffusionSystem System;
   translucency::ConjugateGradient Solver;
@@ -78,17 +77,22 @@ int vtkSolveDiffusion::RequestData(
   this->TopologyTime = this->AssemblyTime = this->SolveTime = 0.0;
 
   auto start = std::chrono::steady_clock::now();
-  const std::string key = input ? vtkTranslucency::GeometryKey(input) : std::string();
-  if (key.empty() || key != in.MeshKey)
+  bool built = false;
+  auto mesh = vtkTranslucency::AcquireTetMesh(input, error, &built);
+  if (!mesh)
   {
-    in.MeshKey.clear();
+    in.Mesh.reset();
     in.HaveSolution = false;
-    if (!vtkTranslucency::ToTetMesh(input, in.Mesh, error))
-    {
-      vtkErrorMacro(<< error);
-      return 0;
-    }
-    in.MeshKey = key;
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  if (mesh != in.Mesh)
+  {
+    in.Mesh = mesh; // a new geometry: the previous solution is no start point
+    in.HaveSolution = false;
+  }
+  if (built)
+  {
     this->TopologyTime = MillisecondsSince(start);
   }
   this->UpdateProgress(0.1);
@@ -110,7 +114,7 @@ int vtkSolveDiffusion::RequestData(
   try
   {
     in.Discretization.SetNumberOfThreads(this->NumberOfThreads);
-    in.Discretization.Assemble(in.Mesh, material, irradiance, in.System);
+    in.Discretization.Assemble(*in.Mesh, material, irradiance, in.System);
   }
   catch (const translucency::Error& e)
   {
@@ -148,7 +152,7 @@ int vtkSolveDiffusion::RequestData(
   }
 
   std::vector<double> fluence;
-  in.Discretization.ToPointFluence(in.Mesh, in.System, in.Solution, fluence);
+  in.Discretization.ToPointFluence(*in.Mesh, in.System, in.Solution, fluence);
   output->ShallowCopy(input);
   vtkDataArray* array = vtkTranslucency::NewTripleArray(vtkTranslucency::FluenceName, fluence);
   output->GetPointData()->AddArray(array);

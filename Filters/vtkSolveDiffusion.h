@@ -70,7 +70,9 @@ public:
   ///@}
 
   ///@{
-  /// Wall times of the last execution (ms): topology (0 if reused), assembly, solve.
+  /// Wall times of the last execution (ms): topology (0 if reused: the
+  /// topology is shared with the other filters of the pipeline through a
+  /// cache keyed by the input's points and cells), assembly, solve.
   double GetTopologyTime() const { return this->TopologyTime; }
   double GetAssemblyTime() const { return this->AssemblyTime; }
   double GetSolveTime() const { return this->SolveTime; }

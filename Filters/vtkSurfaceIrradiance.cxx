@@ -14,6 +14,7 @@
 #include <vtkPointData.h>
 #include <vtkUnstructuredGrid.h>
 
+#include <chrono>
 #include <cmath>
 #include <vector>
 
@@ -23,8 +24,7 @@ struct vtkSurfaceIrradiance::Internals
 {
   std::vector<translucency::LightSource> Directional;
   std::vector<translucency::LightSource> Point;
-  translucency::TetMesh Mesh;
-  std::string MeshKey;
+  std::shared_ptr<const translucency::TetMesh> Mesh;
 };
 
 //------------------------------------------------------------------------------
@@ -109,37 +109,19 @@ int vtkSurfaceIrradiance::RequestData(
   }
 
   std::string error;
-  translucency::TetMesh& mesh = this->Internal->Mesh;
-  const std::string key = input ? vtkTranslucency::GeometryKey(input) : std::string();
-  if (key != this->Internal->MeshKey || key.empty())
+  bool built = false;
+  const auto start = std::chrono::steady_clock::now();
+  this->Internal->Mesh = vtkTranslucency::AcquireTetMesh(input, error, &built);
+  this->TopologyTime = built
+    ? std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count()
+    : 0.0;
+  std::vector<double> tetEta;
+  if (!this->Internal->Mesh || !vtkTranslucency::ReadRefractiveIndex(input, tetEta, error))
   {
-    this->Internal->MeshKey.clear();
-    if (!vtkTranslucency::ToTetMesh(input, mesh, error))
-    {
-      vtkErrorMacro(<< error);
-      return 0;
-    }
-    this->Internal->MeshKey = key;
-  }
-  vtkDataArray* etaArray = input->GetCellData()->GetArray(vtkTranslucency::RefractiveIndexName);
-  if (!etaArray || etaArray->GetNumberOfComponents() != 1)
-  {
-    vtkErrorMacro(<< "the input has no 1-component cell array '"
-                  << vtkTranslucency::RefractiveIndexName
-                  << "': assign coefficients first (vtkAssignScatteringCoefficients)");
+    vtkErrorMacro(<< error);
     return 0;
   }
-  std::vector<double> tetEta(static_cast<size_t>(etaArray->GetNumberOfTuples()));
-  for (vtkIdType t = 0; t < etaArray->GetNumberOfTuples(); ++t)
-  {
-    tetEta[t] = etaArray->GetComponent(t, 0);
-    if (!(tetEta[t] > 0.0) || !std::isfinite(tetEta[t]))
-    {
-      vtkErrorMacro(<< "RefractiveIndex of tet " << t << " is " << tetEta[t]
-                    << ": must be finite and > 0");
-      return 0;
-    }
-  }
+  const translucency::TetMesh& mesh = *this->Internal->Mesh;
   const std::vector<double> pointEta = translucency::PointRefractiveIndex(mesh, tetEta);
   this->UpdateProgress(0.1);
 

@@ -82,6 +82,10 @@ public:
   vtkBooleanMacro(Shadows, bool);
   ///@}
 
+  /// Wall time (ms) this filter spent building the mesh topology in its last
+  /// execution; 0 when the topology came from the shared cache.
+  double GetTopologyTime() const { return this->TopologyTime; }
+
 protected:
   vtkSurfaceIrradiance();
   ~vtkSurfaceIrradiance() override;
@@ -91,6 +95,7 @@ protected:
   double UniformLightIrradiance = 0.0;
   int UniformLightSamples = 32;
   bool Shadows = true;
+  double TopologyTime = 0.0;
 
 private:
   vtkSurfaceIrradiance(const vtkSurfaceIrradiance&) = delete;

@@ -7,6 +7,7 @@
 #include <vtkCellData.h>
 #include <vtkCellTypes.h>
 #include <vtkDataArray.h>
+#include <vtkDataSetAttributes.h>
 #include <vtkDoubleArray.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
@@ -15,6 +16,8 @@
 #include <vtkUnstructuredGrid.h>
 
 #include <cmath>
+#include <deque>
+#include <mutex>
 #include <sstream>
 
 namespace vtkTranslucency
@@ -82,20 +85,21 @@ bool ToTetMesh(vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::stri
 
 namespace
 {
-bool ReadCellArray(vtkUnstructuredGrid* grid, const char* name, int components,
-  std::vector<double>& values, std::string& error)
+/// Copy array `name` of `attributes` (cell or point data, `kind` names it in
+/// messages) into `values`, checking presence and number of components.
+bool ReadArray(vtkDataSetAttributes* attributes, const char* kind, const char* name,
+  int components, std::vector<double>& values, std::string& error)
 {
-  vtkDataArray* array = grid->GetCellData()->GetArray(name);
+  vtkDataArray* array = attributes->GetArray(name);
   if (!array)
   {
-    error = std::string("the input has no cell array '") + name +
-      "': assign coefficients first (vtkAssignScatteringCoefficients)";
+    error = std::string("the input has no ") + kind + " array '" + name + "'";
     return false;
   }
   if (array->GetNumberOfComponents() != components)
   {
     std::ostringstream os;
-    os << "cell array '" << name << "' has " << array->GetNumberOfComponents()
+    os << kind << " array '" << name << "' has " << array->GetNumberOfComponents()
        << " components; expected " << components;
     error = os.str();
     return false;
@@ -111,6 +115,20 @@ bool ReadCellArray(vtkUnstructuredGrid* grid, const char* name, int components,
       }
     }
   });
+  return true;
+}
+
+bool ReadCellArray(vtkUnstructuredGrid* grid, const char* name, int components,
+  std::vector<double>& values, std::string& error)
+{
+  if (!ReadArray(grid->GetCellData(), "cell", name, components, values, error))
+  {
+    if (!grid->GetCellData()->GetArray(name))
+    {
+      error += ": assign coefficients first (vtkAssignScatteringCoefficients)";
+    }
+    return false;
+  }
   return true;
 }
 }
@@ -139,27 +157,23 @@ bool ToOpticalProperties(
 bool ReadPointArray(vtkUnstructuredGrid* grid, const char* name, int components,
   std::vector<double>& values, std::string& error)
 {
-  vtkDataArray* array = grid->GetPointData()->GetArray(name);
-  if (!array)
+  return ReadArray(grid->GetPointData(), "point", name, components, values, error);
+}
+
+bool ReadRefractiveIndex(vtkUnstructuredGrid* grid, std::vector<double>& values, std::string& error)
+{
+  if (!ReadCellArray(grid, RefractiveIndexName, 1, values, error))
   {
-    error = std::string("the input has no point array '") + name + "'";
     return false;
   }
-  if (array->GetNumberOfComponents() != components)
+  for (size_t t = 0; t < values.size(); ++t)
   {
-    std::ostringstream os;
-    os << "point array '" << name << "' has " << array->GetNumberOfComponents()
-       << " components; expected " << components;
-    error = os.str();
-    return false;
-  }
-  const vtkIdType n = array->GetNumberOfTuples();
-  values.resize(static_cast<size_t>(n) * components);
-  for (vtkIdType i = 0; i < n; ++i)
-  {
-    for (int k = 0; k < components; ++k)
+    if (!(values[t] > 0.0) || !std::isfinite(values[t]))
     {
-      values[components * i + k] = array->GetComponent(i, k);
+      std::ostringstream os;
+      os << "RefractiveIndex of tet " << t << " is " << values[t] << ": must be finite and > 0";
+      error = os.str();
+      return false;
     }
   }
   return true;
@@ -175,14 +189,53 @@ vtkDataArray* NewTripleArray(const char* name, const std::vector<double>& values
   return array;
 }
 
-std::string GeometryKey(vtkUnstructuredGrid* grid)
+std::shared_ptr<const translucency::TetMesh> AcquireTetMesh(
+  vtkUnstructuredGrid* grid, std::string& error, bool* built)
 {
+  if (built)
+  {
+    *built = false;
+  }
+  if (!grid || !grid->GetPoints() || !grid->GetCells())
+  {
+    error = "the input mesh is empty (no points or no cells)";
+    return nullptr;
+  }
   std::ostringstream os;
-  os << grid->GetNumberOfPoints() << ':' << grid->GetNumberOfCells() << ':'
-     << static_cast<const void*>(grid->GetPoints()) << ':'
-     << (grid->GetPoints() ? grid->GetPoints()->GetMTime() : 0) << ':'
-     << (grid->GetCells() ? grid->GetCells()->GetMTime() : 0);
-  return os.str();
+  os << static_cast<const void*>(grid->GetPoints()) << ':' << grid->GetPoints()->GetMTime() << ':'
+     << grid->GetPoints()->GetData()->GetMTime() << ':' << static_cast<const void*>(grid->GetCells())
+     << ':' << grid->GetCells()->GetMTime() << ':' << grid->GetNumberOfPoints() << ':'
+     << grid->GetNumberOfCells();
+  const std::string key = os.str();
+
+  static std::mutex mutex;
+  static std::deque<std::pair<std::string, std::shared_ptr<const translucency::TetMesh>>> cache;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& entry : cache)
+    {
+      if (entry.first == key)
+      {
+        return entry.second;
+      }
+    }
+  }
+  auto mesh = std::make_shared<translucency::TetMesh>();
+  if (!ToTetMesh(grid, *mesh, error))
+  {
+    return nullptr;
+  }
+  if (built)
+  {
+    *built = true;
+  }
+  std::lock_guard<std::mutex> lock(mutex);
+  cache.emplace_front(key, mesh);
+  if (cache.size() > 4)
+  {
+    cache.pop_back();
+  }
+  return mesh;
 }
 
 }

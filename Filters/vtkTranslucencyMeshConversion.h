@@ -10,6 +10,7 @@
 #include "OpticalProperties.h"
 #include "TetMesh.h"
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -44,12 +45,25 @@ bool ToOpticalProperties(
 bool ReadPointArray(vtkUnstructuredGrid* grid, const char* name, int components,
   std::vector<double>& values, std::string& error);
 
+/// Read the `RefractiveIndex` cell array (1 component, every value finite
+/// and > 0; the message names the first bad tet).
+bool ReadRefractiveIndex(vtkUnstructuredGrid* grid, std::vector<double>& values, std::string& error);
+
 /// A new vtkDoubleArray named `name` with 3 components holding `values`.
 vtkDataArray* NewTripleArray(const char* name, const std::vector<double>& values);
 
-/// A cheap fingerprint of the geometry (points and cells MTime and counts),
-/// so a filter can keep its topology while only coefficients or lights change.
-std::string GeometryKey(vtkUnstructuredGrid* grid);
+/**
+ * The core mesh (topology included) of `grid`, built once and shared: the
+ * filters of one pipeline pass shallow copies of the same vtkPoints and
+ * vtkCellArray downstream, so vtkSurfaceIrradiance, vtkSolveDiffusion and
+ * vtkOutgoingRadiance get the same object instead of each rebuilding the
+ * topology. The key is the identity and modification time of the points and
+ * cells; a small process-wide cache (the last 4 meshes) holds them. Returns
+ * null and fills `error` if the grid is not a valid tet mesh. `built` tells
+ * whether this call built the mesh (false: taken from the cache).
+ */
+std::shared_ptr<const translucency::TetMesh> AcquireTetMesh(
+  vtkUnstructuredGrid* grid, std::string& error, bool* built = nullptr);
 }
 
 #endif

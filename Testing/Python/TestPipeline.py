@@ -628,12 +628,15 @@ class PipelineTest(unittest.TestCase):
         pipe.solve.SetRelTol(1e-8)
         pipe.solve.WarmStartOn()
         pipe.update(self, pipe.solve)
-        self.assertGreater(pipe.solve.GetTopologyTime(), 0.0)
+        # The topology is built once, by the first filter needing it, and shared.
+        self.assertGreater(pipe.irradiance.GetTopologyTime(), 0.0)
+        self.assertEqual(pipe.solve.GetTopologyTime(), 0.0, "the solver should reuse it")
         # A small change of the light direction (about 3 degrees).
         pipe.irradiance.RemoveAllDirectionalLights()
         pipe.irradiance.AddDirectionalLight(0.0, -1.0, -0.9, 1.0)
         pipe.update(self, pipe.solve)
         self.assertEqual(pipe.solve.GetTopologyTime(), 0.0, "the topology should be reused")
+        self.assertEqual(pipe.irradiance.GetTopologyTime(), 0.0, "the topology should be reused")
         warm = [pipe.solve.GetNumberOfIterations(c) for c in range(3)]
         warm_phi = array(pipe.solve.GetOutput(), "Fluence").copy()
 
@@ -657,6 +660,34 @@ class PipelineTest(unittest.TestCase):
         pipe.update(self, pipe.solve)
         for c in range(3):
             self.assertLessEqual(abs(pipe.solve.GetNumberOfIterations(c) - cold[c]), 1)
+
+    def test_h_moved_points_rebuild_the_shared_topology(self):
+        # The topology cache is keyed by the points and cells: moving the
+        # points in place (and saying so with Modified()) must rebuild it.
+        pipe = Pipeline(sphere_surface(), target_tets=3000)
+        pipe.assign.Update()
+        grid = pipe.assign.GetOutput().NewInstance()
+        grid.DeepCopy(pipe.assign.GetOutput())
+        irradiance = translucency.vtkSurfaceIrradiance()
+        irradiance.SetInputData(grid)
+        irradiance.SetUniformLightIrradiance(1.0)
+        irradiance.SetUniformLightSamples(0)
+        solve = translucency.vtkSolveDiffusion()
+        solve.SetInputConnection(irradiance.GetOutputPort())
+        solve.Update()
+        self.assertGreater(irradiance.GetTopologyTime(), 0.0)
+        before = array(solve.GetOutput(), "Fluence").copy()
+        coords = vtk_to_numpy(grid.GetPoints().GetData())
+        coords *= 2.0  # twice the size: less light reaches the centre
+        grid.GetPoints().Modified()
+        grid.Modified()
+        solve.Update()
+        self.assertGreater(irradiance.GetTopologyTime(), 0.0, "the topology was not rebuilt")
+        after = array(solve.GetOutput(), "Fluence")
+        inside = np.linalg.norm(points_of(solve.GetOutput()), axis=1) < 2.0
+        self.assertTrue(np.any(inside))
+        self.assertTrue(np.all(after[inside] < before[inside]),
+                        "a larger marble sphere must be darker inside under the same light")
 
     def test_g_script_supplied_irradiance(self):
         eta = 1.3
