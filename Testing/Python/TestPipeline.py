@@ -689,6 +689,27 @@ class PipelineTest(unittest.TestCase):
         self.assertTrue(np.all(after[inside] < before[inside]),
                         "a larger marble sphere must be darker inside under the same light")
 
+    def test_i_not_converged_is_a_warning_with_numbers(self):
+        pipe = Pipeline(sphere_surface(), target_tets=3000)
+        pipe.irradiance.AddDirectionalLight(0.0, -1.0, 0.0, 1.0)
+        pipe.solve.SetMaxIter(3)
+        pipe.solve.SetRelTol(1e-10)
+        messages = Messages(*pipe.all)
+        try:
+            pipe.solve.Update()
+        finally:
+            messages.remove()
+        self.assertEqual(messages.errors + messages.pipeline_errors, [])
+        self.assertEqual(len(messages.warnings), 3, messages.warnings)
+        for c, name in enumerate("RGB"):
+            self.assertFalse(pipe.solve.GetConverged(c))
+            self.assertEqual(pipe.solve.GetNumberOfIterations(c), 3)
+            self.assertGreater(pipe.solve.GetFinalResidual(c), 1e-10)
+            self.assertIn("channel %s did not converge" % name, messages.warnings[c])
+            self.assertIn("after 3 iterations", messages.warnings[c])
+        # The output still carries the (unconverged) fluence.
+        self.assertEqual(array(pipe.solve.GetOutput(), "Fluence").shape[1], 3)
+
     def test_g_script_supplied_irradiance(self):
         eta = 1.3
         tetra = translucency.vtkTetrahedralizeSurface()
