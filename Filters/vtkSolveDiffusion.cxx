@@ -1,40 +1,44 @@
 #include "vtkSolveDiffusion.h"
 
-#include "ConjugateGradient.h"
+#include "DiffusionSolver.h"
 #include "DiscreteDivergence.h"
 #include "Error.h"
 #include "TetMesh.h"
+#include "VertexDiffusionSolver.h"
 #include "vtkTranslucencyMeshConversion.h"
 
 #include <vtkDataArray.h>
+#include <vtkFieldData.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
 #include <vtkObjectFactory.h>
 #include <vtkPointData.h>
 #include <vtkUnstructuredGrid.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 
 vtkStandardNewMacro(vtkSolveDiffusion);
 
-struct vtkSolveDiffusion::Internals
-{
-  std::shared_ptr<const translucency::TetMesh> Mesh;
-  translucency::DiscreteDivergence Discretization;
-  translucency::DiffusionSystem System;
-  translucency::ConjugateGradient Solver;
-  std::array<Eigen::VectorXd, translucency::NumberOfChannels> Solution;
-  bool HaveSolution = false;
-};
-
 namespace
 {
+const char* const SolverNames[] = { "divergence", "fem", "quadgraph", "grid", "montecarlo" };
+
 double MillisecondsSince(std::chrono::steady_clock::time_point start)
 {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
     .count();
 }
 }
+
+struct vtkSolveDiffusion::Internals
+{
+  std::shared_ptr<const translucency::TetMesh> Mesh;
+  std::unique_ptr<translucency::DiffusionSolver> Solver;
+  int SolverKind = -1;
+  translucency::SolverReport Report;
+};
 
 //------------------------------------------------------------------------------
 vtkSolveDiffusion::vtkSolveDiffusion()
@@ -46,24 +50,100 @@ vtkSolveDiffusion::vtkSolveDiffusion()
 vtkSolveDiffusion::~vtkSolveDiffusion() = default;
 
 //------------------------------------------------------------------------------
-int vtkSolveDiffusion::GetNumberOfIterations(int channel) const
+bool vtkSolveDiffusion::SetSolverByName(const char* name)
 {
-  return (channel >= 0 && channel < 3) ? this->Internal->Solver.GetNumIterations(channel) : 0;
-}
-
-double vtkSolveDiffusion::GetFinalResidual(int channel) const
-{
-  return (channel >= 0 && channel < 3) ? this->Internal->Solver.GetFinalNorm(channel) : 0.0;
-}
-
-bool vtkSolveDiffusion::GetConverged(int channel) const
-{
-  return (channel >= 0 && channel < 3) && this->Internal->Solver.GetConverged(channel);
+  std::string key = name ? name : "";
+  std::transform(key.begin(), key.end(), key.begin(),
+    [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  for (int k = SOLVER_DIVERGENCE; k <= SOLVER_MONTECARLO; ++k)
+  {
+    if (key == SolverNames[k])
+    {
+      this->SetSolver(k);
+      return true;
+    }
+  }
+  vtkErrorMacro(<< "unknown solver '" << (name ? name : "")
+                << "' (known solvers: divergence, fem, quadgraph, grid, montecarlo)");
+  return false;
 }
 
 const char* vtkSolveDiffusion::GetSolverName() const
 {
-  return "divergence";
+  return SolverNames[this->Solver];
+}
+
+//------------------------------------------------------------------------------
+int vtkSolveDiffusion::GetNumberOfIterations(int channel) const
+{
+  return (channel >= 0 && channel < 3) ? this->Internal->Report.Iterations[channel] : 0;
+}
+
+double vtkSolveDiffusion::GetFinalResidual(int channel) const
+{
+  return (channel >= 0 && channel < 3) ? this->Internal->Report.Residual[channel] : 0.0;
+}
+
+bool vtkSolveDiffusion::GetConverged(int channel) const
+{
+  return (channel >= 0 && channel < 3) && this->Internal->Report.Converged[channel];
+}
+
+vtkTypeInt64 vtkSolveDiffusion::GetNumberOfUnknowns() const
+{
+  return this->Internal->Report.NumberOfUnknowns;
+}
+
+vtkTypeInt64 vtkSolveDiffusion::GetNumberOfNonZeros() const
+{
+  return this->Internal->Report.NumberOfNonZeros;
+}
+
+vtkTypeInt64 vtkSolveDiffusion::GetMemoryBytes() const
+{
+  return static_cast<vtkTypeInt64>(this->Internal->Report.MemoryBytes);
+}
+
+//------------------------------------------------------------------------------
+namespace
+{
+/// The lights vtkSurfaceIrradiance recorded in the field data (for Monte Carlo).
+void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& problem)
+{
+  vtkFieldData* fd = input->GetFieldData();
+  if (vtkDataArray* lights = fd->GetArray("TranslucencyLights"))
+  {
+    if (lights->GetNumberOfComponents() == 7)
+    {
+      for (vtkIdType k = 0; k < lights->GetNumberOfTuples(); ++k)
+      {
+        double v[7];
+        lights->GetTuple(k, v);
+        translucency::LightSource light;
+        light.Type = v[0] == 0 ? translucency::LightSource::Kind::Directional
+                               : translucency::LightSource::Kind::Point;
+        if (light.Type == translucency::LightSource::Kind::Directional)
+        {
+          light.Direction = { v[1], v[2], v[3] };
+        }
+        else
+        {
+          light.Position = { v[1], v[2], v[3] };
+        }
+        light.Power = { v[4], v[5], v[6] };
+        problem.Lights.push_back(light);
+      }
+    }
+  }
+  if (vtkDataArray* uniform = fd->GetArray("TranslucencyUniformLight"))
+  {
+    problem.UniformIrradiance = uniform->GetComponent(0, 0);
+  }
+  if (vtkDataArray* shadows = fd->GetArray("TranslucencyShadows"))
+  {
+    problem.Shadows = shadows->GetComponent(0, 0) != 0;
+  }
+}
 }
 
 //------------------------------------------------------------------------------
@@ -75,6 +155,7 @@ int vtkSolveDiffusion::RequestData(
   Internals& in = *this->Internal;
   std::string error;
   this->TopologyTime = this->AssemblyTime = this->SolveTime = 0.0;
+  in.Report = translucency::SolverReport();
 
   auto start = std::chrono::steady_clock::now();
   bool built = false;
@@ -82,20 +163,14 @@ int vtkSolveDiffusion::RequestData(
   if (!mesh)
   {
     in.Mesh.reset();
-    in.HaveSolution = false;
     vtkErrorMacro(<< error);
     return 0;
-  }
-  if (mesh != in.Mesh)
-  {
-    in.Mesh = mesh; // a new geometry: the previous solution is no start point
-    in.HaveSolution = false;
   }
   if (built)
   {
     this->TopologyTime = MillisecondsSince(start);
   }
-  this->UpdateProgress(0.1);
+  this->UpdateProgress(0.05);
 
   translucency::OpticalProperties material;
   std::vector<double> irradiance;
@@ -110,53 +185,85 @@ int vtkSolveDiffusion::RequestData(
     return 0;
   }
 
-  start = std::chrono::steady_clock::now();
   try
   {
-    in.Discretization.SetNumberOfThreads(this->NumberOfThreads);
-    in.Discretization.Assemble(*in.Mesh, material, irradiance, in.System);
+    if (!in.Solver || in.SolverKind != this->Solver)
+    {
+      in.Solver = translucency::CreateDiffusionSolver(SolverNames[this->Solver]);
+      in.SolverKind = this->Solver;
+    }
+    if (mesh != in.Mesh)
+    {
+      in.Solver->Reset(); // a new geometry: the previous solution is no start point
+      in.Mesh = mesh;
+    }
+    translucency::DiffusionSolver& solver = *in.Solver;
+    if (auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver))
+    {
+      if (auto* divergence =
+            dynamic_cast<translucency::DiscreteDivergence*>(&vertex->GetDiscretization()))
+      {
+        divergence->SetNumberOfThreads(this->NumberOfThreads);
+      }
+    }
+    solver.SetRelTol(this->RelTol);
+    solver.SetMaxIter(this->MaxIter);
+    solver.SetWarmStart(this->WarmStart);
+    solver.SetGridSpacing(this->GridSpacing);
+    solver.SetNumberOfPhotons(this->NumberOfPhotons);
+    solver.SetSeed(this->Seed);
+    solver.SetLinearSolver(this->LinearSolver);
+    solver.SetMultiLevel(this->MultiLevel);
+    solver.SetProgressCallback([this](double fraction) {
+      this->UpdateProgress(0.05 + 0.9 * fraction);
+      return !this->CheckAbort();
+    });
+
+    translucency::DiffusionProblem problem;
+    problem.Mesh = mesh.get();
+    problem.Material = &material;
+    problem.Irradiance = &irradiance;
+    ReadLights(input, problem);
+
+    std::vector<double> fluence;
+    if (!solver.Solve(problem, fluence, in.Report))
+    {
+      return 0; // aborted by the user
+    }
+    this->AssemblyTime = in.Report.SetupMilliseconds;
+    this->SolveTime = in.Report.SolveMilliseconds;
+
+    static const char* channelNames[3] = { "R", "G", "B" };
+    for (int c = 0; c < 3; ++c)
+    {
+      if (!in.Report.Converged[c] && in.Report.Iterations[c] > 0)
+      {
+        vtkWarningMacro(<< "channel " << channelNames[c] << " did not converge: relative residual "
+                        << in.Report.Residual[c] << " after " << in.Report.Iterations[c]
+                        << " iterations (RelTol " << this->RelTol << ", MaxIter "
+                        << this->MaxIter << ")");
+      }
+    }
+
+    output->ShallowCopy(input);
+    auto attach = [output](const char* name, const std::vector<double>& values) {
+      if (values.size() == 3 * static_cast<size_t>(output->GetNumberOfPoints()))
+      {
+        vtkDataArray* array = vtkTranslucency::NewTripleArray(name, values);
+        output->GetPointData()->AddArray(array);
+        array->Delete();
+      }
+    };
+    attach(vtkTranslucency::FluenceName, fluence);
+    attach("FluenceStandardError", in.Report.FluenceStandardError);
+    attach("MonteCarloRadiance", in.Report.Radiance);
+    attach("MonteCarloRadianceStandardError", in.Report.RadianceStandardError);
   }
   catch (const translucency::Error& e)
   {
     vtkErrorMacro(<< e.what());
     return 0;
   }
-  this->AssemblyTime = MillisecondsSince(start);
-  this->UpdateProgress(0.2);
-
-  start = std::chrono::steady_clock::now();
-  in.Solver.SetRelTol(this->RelTol);
-  in.Solver.SetMaxIter(this->MaxIter);
-  in.Solver.SetProgressCallback([this](double fraction) {
-    this->UpdateProgress(0.2 + 0.75 * fraction);
-    return !this->CheckAbort();
-  });
-  const bool warm = this->WarmStart && in.HaveSolution;
-  if (!in.Solver.Solve(in.System, in.Solution, warm))
-  {
-    in.HaveSolution = false;
-    return 0; // aborted by the user
-  }
-  in.HaveSolution = true;
-  this->SolveTime = MillisecondsSince(start);
-  static const char* channelNames[3] = { "R", "G", "B" };
-  for (int c = 0; c < 3; ++c)
-  {
-    if (!in.Solver.GetConverged(c))
-    {
-      vtkWarningMacro(<< "channel " << channelNames[c] << " did not converge: relative residual "
-                      << in.Solver.GetFinalNorm(c) << " after " << in.Solver.GetNumIterations(c)
-                      << " iterations (RelTol " << this->RelTol << ", MaxIter " << this->MaxIter
-                      << ")");
-    }
-  }
-
-  std::vector<double> fluence;
-  in.Discretization.ToPointFluence(*in.Mesh, in.System, in.Solution, fluence);
-  output->ShallowCopy(input);
-  vtkDataArray* array = vtkTranslucency::NewTripleArray(vtkTranslucency::FluenceName, fluence);
-  output->GetPointData()->AddArray(array);
-  array->Delete();
   this->UpdateProgress(1.0);
   return 1;
 }
@@ -165,8 +272,14 @@ int vtkSolveDiffusion::RequestData(
 void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
+  os << indent << "Solver: " << this->GetSolverName() << "\n";
   os << indent << "RelTol: " << this->RelTol << "\n";
   os << indent << "MaxIter: " << this->MaxIter << "\n";
   os << indent << "WarmStart: " << this->WarmStart << "\n";
+  os << indent << "GridSpacing: " << this->GridSpacing << "\n";
+  os << indent << "NumberOfPhotons: " << this->NumberOfPhotons << "\n";
+  os << indent << "Seed: " << this->Seed << "\n";
+  os << indent << "LinearSolver: " << this->LinearSolver << "\n";
+  os << indent << "MultiLevel: " << this->MultiLevel << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
 }

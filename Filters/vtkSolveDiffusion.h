@@ -5,16 +5,25 @@
  * Reads the cell arrays `AbsorptionCoefficient`, `ReducedScatteringCoefficient`
  * (3 components, 1/mm) and `RefractiveIndex`, and the point array
  * `Irradiance` (q, 3 components, W/mm^2; only boundary points are read) of its
- * input, assembles the discrete-divergence system of the TransCut paper
- * (Sec. 3, eq. 10-14) for the three colour channels on one sparsity pattern,
- * solves each channel by Jacobi-preconditioned conjugate gradient, and adds
- * the point array `Fluence` (phi, 3 components, W/mm^2) to a shallow copy of
- * the input. A script may supply its own `Irradiance` instead of running
+ * input, solves for the three colour channels with the selected solver and
+ * adds the point array `Fluence` (phi, 3 components, W/mm^2) to a shallow copy
+ * of the input. A script may supply its own `Irradiance` instead of running
  * vtkSurfaceIrradiance.
  *
- * The filter keeps its mesh topology while the input geometry is unchanged
- * and, with WarmStart on, starts each solve from the previous fluence
- * (relighting, painting).
+ * Solvers (all give fluence at the mesh points, so they compare point by point):
+ *  - SOLVER_DIVERGENCE ("divergence", default): the TransCut discrete
+ *    divergence (paper Sec. 3, eq. 10-14) + Jacobi-preconditioned CG;
+ *  - SOLVER_FEM ("fem"): consistent linear Galerkin (the Arbree et al. role);
+ *  - SOLVER_QUADGRAPH ("quadgraph"): finite differences on the tet dual graph;
+ *  - SOLVER_GRID ("grid"): regular-grid finite differences of spacing GridSpacing;
+ *  - SOLVER_MONTECARLO ("montecarlo"): a photon random walk, the ground truth.
+ *    It needs the lights, which vtkSurfaceIrradiance records in the field data
+ *    (`TranslucencyLights`); it adds `FluenceStandardError`,
+ *    `MonteCarloRadiance` and `MonteCarloRadianceStandardError` point arrays.
+ *
+ * The mesh topology is shared with the other filters of the pipeline, and with
+ * WarmStart on, an iterative solve starts from the previous solution when the
+ * unknowns are unchanged (relighting, painting).
  *
  * @warning A solve that does not reach RelTol within MaxIter iterations is
  * not an error: the filter warns with the channel, iterations and residual,
@@ -29,6 +38,7 @@
 #include "vtkUnstructuredGridAlgorithm.h"
 
 #include <memory>
+#include <string>
 
 class TRANSLUCENCYFILTERS_EXPORT vtkSolveDiffusion : public vtkUnstructuredGridAlgorithm
 {
@@ -37,8 +47,35 @@ public:
   vtkTypeMacro(vtkSolveDiffusion, vtkUnstructuredGridAlgorithm);
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
+  enum Solvers
+  {
+    SOLVER_DIVERGENCE = 0,
+    SOLVER_FEM = 1,
+    SOLVER_QUADGRAPH = 2,
+    SOLVER_GRID = 3,
+    SOLVER_MONTECARLO = 4
+  };
+
   ///@{
-  /// Relative residual ||b - M phi|| / ||b|| to reach per channel. Default 1e-6.
+  /// The solver (one of Solvers). Default SOLVER_DIVERGENCE.
+  vtkSetClampMacro(Solver, int, SOLVER_DIVERGENCE, SOLVER_MONTECARLO);
+  vtkGetMacro(Solver, int);
+  ///@}
+
+  /**
+   * Select the solver by name: "divergence", "fem", "quadgraph", "grid" or
+   * "montecarlo" (case-insensitive). An unknown name is an error (reported
+   * with the list of names); the solver is then left unchanged and false
+   * is returned.
+   */
+  bool SetSolverByName(const char* name);
+
+  /// Name of the selected solver.
+  const char* GetSolverName() const;
+
+  ///@{
+  /// Iterative solvers: relative residual ||b - M phi|| / ||b|| to reach per
+  /// channel. Default 1e-6.
   vtkSetClampMacro(RelTol, double, 1e-16, 1.0);
   vtkGetMacro(RelTol, double);
   ///@}
@@ -50,14 +87,41 @@ public:
   ///@}
 
   ///@{
-  /// Start from the previous solution when the mesh is unchanged (default on).
+  /// Start from the previous solution when the unknowns are unchanged (default on).
   vtkSetMacro(WarmStart, bool);
   vtkGetMacro(WarmStart, bool);
   vtkBooleanMacro(WarmStart, bool);
   ///@}
 
   ///@{
-  /// OpenMP threads for assembly (0 = OpenMP's default). Default 0.
+  /// Grid solver: voxel spacing h (mm). Default 0 = chosen from the mesh.
+  vtkSetMacro(GridSpacing, double);
+  vtkGetMacro(GridSpacing, double);
+  ///@}
+
+  ///@{
+  /// Monte Carlo: number of photons (default 1e6) and random seed (default 1).
+  vtkSetMacro(NumberOfPhotons, vtkTypeInt64);
+  vtkGetMacro(NumberOfPhotons, vtkTypeInt64);
+  vtkSetMacro(Seed, vtkTypeUInt64);
+  vtkGetMacro(Seed, vtkTypeUInt64);
+  ///@}
+
+  ///@{
+  /// QuadGraph and grid: "bicgstab" (default) or "relaxation".
+  vtkSetStdStringFromCharMacro(LinearSolver);
+  vtkGetCharFromStdStringMacro(LinearSolver);
+  ///@}
+
+  ///@{
+  /// QuadGraph and grid: coarse-to-fine initialisation (default off).
+  vtkSetMacro(MultiLevel, bool);
+  vtkGetMacro(MultiLevel, bool);
+  vtkBooleanMacro(MultiLevel, bool);
+  ///@}
+
+  ///@{
+  /// OpenMP threads for the discrete-divergence assembly (0 = OpenMP's default).
   vtkSetClampMacro(NumberOfThreads, int, 0, 1024);
   vtkGetMacro(NumberOfThreads, int);
   ///@}
@@ -70,16 +134,20 @@ public:
   ///@}
 
   ///@{
+  /// Size of the last system: unknowns and nonzeros per channel, memory (bytes).
+  vtkTypeInt64 GetNumberOfUnknowns() const;
+  vtkTypeInt64 GetNumberOfNonZeros() const;
+  vtkTypeInt64 GetMemoryBytes() const;
+  ///@}
+
+  ///@{
   /// Wall times of the last execution (ms): topology (0 if reused: the
   /// topology is shared with the other filters of the pipeline through a
-  /// cache keyed by the input's points and cells), assembly, solve.
+  /// cache keyed by the input's points and cells), set-up (assembly), solve.
   double GetTopologyTime() const { return this->TopologyTime; }
   double GetAssemblyTime() const { return this->AssemblyTime; }
   double GetSolveTime() const { return this->SolveTime; }
   ///@}
-
-  /// Name of the discretisation ("divergence").
-  const char* GetSolverName() const;
 
 protected:
   vtkSolveDiffusion();
@@ -87,9 +155,15 @@ protected:
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
+  int Solver = SOLVER_DIVERGENCE;
   double RelTol = 1e-6;
   int MaxIter = 2000;
   bool WarmStart = true;
+  double GridSpacing = 0.0;
+  vtkTypeInt64 NumberOfPhotons = 1000000;
+  vtkTypeUInt64 Seed = 1;
+  std::string LinearSolver = "bicgstab";
+  bool MultiLevel = false;
   int NumberOfThreads = 0;
   double TopologyTime = 0.0;
   double AssemblyTime = 0.0;

@@ -8,6 +8,9 @@
 
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
+#include <vtkNew.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
 #include <vtkObjectFactory.h>
@@ -143,6 +146,31 @@ int vtkSurfaceIrradiance::RequestData(
     return 0;
   }
   output->ShallowCopy(input);
+  // Record the lights for solvers that launch photons from them (Monte Carlo):
+  // kind (0 directional, 1 point), direction or position, power R, G, B.
+  vtkNew<vtkFieldData> fieldData;
+  fieldData->ShallowCopy(input->GetFieldData());
+  vtkNew<vtkDoubleArray> lightArray;
+  lightArray->SetName("TranslucencyLights");
+  lightArray->SetNumberOfComponents(7);
+  for (const auto& light : lights)
+  {
+    const bool directional = light.Type == translucency::LightSource::Kind::Directional;
+    const auto& v = directional ? light.Direction : light.Position;
+    const double tuple[7] = { directional ? 0.0 : 1.0, v[0], v[1], v[2], light.Power[0],
+      light.Power[1], light.Power[2] };
+    lightArray->InsertNextTuple(tuple);
+  }
+  fieldData->AddArray(lightArray);
+  vtkNew<vtkDoubleArray> uniformArray;
+  uniformArray->SetName("TranslucencyUniformLight");
+  uniformArray->InsertNextValue(this->UniformLightIrradiance);
+  fieldData->AddArray(uniformArray);
+  vtkNew<vtkDoubleArray> shadowArray;
+  shadowArray->SetName("TranslucencyShadows");
+  shadowArray->InsertNextValue(this->Shadows ? 1.0 : 0.0);
+  fieldData->AddArray(shadowArray);
+  output->SetFieldData(fieldData);
   vtkDataArray* array = vtkTranslucency::NewTripleArray(vtkTranslucency::IrradianceName, q);
   output->GetPointData()->AddArray(array);
   array->Delete();

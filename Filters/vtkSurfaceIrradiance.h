@@ -21,7 +21,11 @@
  * occlusion); with 0 samples it is unoccluded and exact.
  *
  * Output: a shallow copy of the input with the point array `Irradiance`
- * (3 components R, G, B, W/mm^2; 0 at interior points).
+ * (3 components R, G, B, W/mm^2; 0 at interior points). The lights are
+ * also recorded in the field data (`TranslucencyLights`: 7 components per
+ * light — kind 0 directional / 1 point, direction or position, power R, G, B;
+ * `TranslucencyUniformLight`; `TranslucencyShadows`) for solvers that launch
+ * photons from them (vtkSolveDiffusion's Monte Carlo reference).
  *
  * @warning Lights are white (same value in R, G, B). The input must hold
  * only linear tetrahedra and the cell array `RefractiveIndex`.
