@@ -103,8 +103,8 @@ public:
   /// Monte Carlo: number of photons (default 1e6) and random seed (default 1).
   vtkSetMacro(NumberOfPhotons, vtkTypeInt64);
   vtkGetMacro(NumberOfPhotons, vtkTypeInt64);
-  vtkSetMacro(Seed, vtkTypeUInt64);
-  vtkGetMacro(Seed, vtkTypeUInt64);
+  vtkSetClampMacro(Seed, int, 0, VTK_INT_MAX);
+  vtkGetMacro(Seed, int);
   ///@}
 
   ///@{
@@ -161,7 +161,7 @@ protected:
   bool WarmStart = true;
   double GridSpacing = 0.0;
   vtkTypeInt64 NumberOfPhotons = 1000000;
-  vtkTypeUInt64 Seed = 1;
+  int Seed = 1;
   std::string LinearSolver = "bicgstab";
   bool MultiLevel = false;
   int NumberOfThreads = 0;
