@@ -1,6 +1,14 @@
 #include "PipelineRender.h"
 
 #include <vtkActor.h>
+#include <vtkAxis.h>
+#include <vtkChartLegend.h>
+#include <vtkChartXY.h>
+#include <vtkContextScene.h>
+#include <vtkContextView.h>
+#include <vtkDoubleArray.h>
+#include <vtkPlot.h>
+#include <vtkTable.h>
 #include <vtkCamera.h>
 #include <vtkCutter.h>
 #include <vtkDataArray.h>
@@ -226,6 +234,102 @@ bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions&
   window->SetSize(options.Width, options.Height);
   PlaceCamera(renderer, bounds, options);
   return Snapshot(window, fileName, error);
+}
+
+bool WriteScalarMapPNG(vtkPolyData* surface, const char* arrayName, double lo, double hi,
+  const std::string& title, const RadianceImageOptions& options, const std::string& fileName,
+  std::string& error)
+{
+  if (!surface->GetPointData()->GetArray(arrayName))
+  {
+    error = std::string("no point array '") + arrayName + "' to render";
+    return false;
+  }
+  vtkNew<vtkLookupTable> lut;
+  lut->SetTableRange(lo, hi > lo ? hi : lo + 1e-12);
+  lut->SetHueRange(0.667, 0.0);
+  lut->SetNumberOfTableValues(256);
+  lut->Build();
+  vtkNew<vtkPolyDataMapper> mapper;
+  mapper->SetInputData(surface);
+  mapper->SetLookupTable(lut);
+  mapper->SetScalarModeToUsePointFieldData();
+  mapper->SelectColorArray(arrayName);
+  mapper->SetUseLookupTableScalarRange(true);
+  mapper->ScalarVisibilityOn();
+  vtkNew<vtkActor> actor;
+  actor->SetMapper(mapper);
+  actor->GetProperty()->LightingOff();
+  vtkNew<vtkScalarBarActor> bar;
+  bar->SetLookupTable(lut);
+  bar->SetTitle(title.c_str());
+  bar->SetNumberOfLabels(5);
+  bar->SetLabelFormat("%.3g");
+  bar->SetPosition(0.84, 0.1);
+  bar->SetPosition2(0.14, 0.8);
+  bar->GetTitleTextProperty()->SetFontSize(14);
+  bar->GetLabelTextProperty()->SetFontSize(12);
+  bar->UnconstrainedFontSizeOn();
+  vtkNew<vtkRenderer> renderer;
+  renderer->AddActor(actor);
+  renderer->AddViewProp(bar);
+  renderer->SetBackground(0.08, 0.08, 0.1);
+  vtkNew<vtkRenderWindow> window;
+  window->SetOffScreenRendering(1);
+  window->SetMultiSamples(0);
+  window->AddRenderer(renderer);
+  window->SetSize(options.Width, options.Height);
+  PlaceCamera(renderer, surface->GetBounds(), options);
+  return Snapshot(window, fileName, error);
+}
+
+bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTitle,
+  const std::string& yTitle, const std::string& fileName, std::string& error)
+{
+  vtkNew<vtkContextView> view;
+  view->GetRenderWindow()->SetOffScreenRendering(1);
+  view->GetRenderWindow()->SetSize(800, 600);
+  view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
+  vtkNew<vtkChartXY> chart;
+  view->GetScene()->AddItem(chart);
+  chart->SetShowLegend(true);
+  chart->GetAxis(vtkAxis::BOTTOM)->SetTitle(xTitle);
+  chart->GetAxis(vtkAxis::LEFT)->SetTitle(yTitle);
+  chart->GetAxis(vtkAxis::LEFT)->SetLogScale(true);
+  static const unsigned char colours[][3] = { { 31, 119, 180 }, { 255, 127, 14 },
+    { 44, 160, 44 }, { 214, 39, 40 }, { 148, 103, 189 }, { 140, 86, 75 } };
+  int k = 0;
+  std::vector<vtkSmartPointer<vtkTable>> tables;
+  for (const PlotSeries& s : series)
+  {
+    if (s.X.empty())
+    {
+      continue;
+    }
+    auto table = vtkSmartPointer<vtkTable>::New();
+    vtkNew<vtkDoubleArray> x, y;
+    x->SetName(xTitle.c_str());
+    y->SetName(s.Name.c_str());
+    for (size_t i = 0; i < s.X.size(); ++i)
+    {
+      x->InsertNextValue(s.X[i]);
+      y->InsertNextValue(std::max(s.Y[i], 1e-12)); // log scale
+    }
+    table->AddColumn(x);
+    table->AddColumn(y);
+    tables.push_back(table);
+    vtkPlot* line = chart->AddPlot(vtkChart::LINE);
+    line->SetInputData(table, 0, 1);
+    const unsigned char* c = colours[k++ % 6];
+    line->SetColor(c[0], c[1], c[2], 255);
+    line->SetWidth(2.0);
+  }
+  if (tables.empty())
+  {
+    error = "nothing to plot";
+    return false;
+  }
+  return Snapshot(view->GetRenderWindow(), fileName, error);
 }
 
 } // namespace translucency_app

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 class vtkPolyData;
 class vtkUnstructuredGrid;
@@ -42,5 +43,29 @@ bool WriteRadiancePNG(vtkPolyData* surface, const RadianceImageOptions& options,
 /// the centre of `mesh`, normal to the view direction.
 bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions& options,
   const std::string& fileName, std::string& error);
+
+/**
+ * Render `surface` coloured by its 1-component point array `arrayName` on the
+ * linear range [lo, hi] (a shared scale across pictures), with a colour bar
+ * titled `title`.
+ */
+bool WriteScalarMapPNG(vtkPolyData* surface, const char* arrayName, double lo, double hi,
+  const std::string& title, const RadianceImageOptions& options, const std::string& fileName,
+  std::string& error);
+
+/// One curve of a line plot.
+struct PlotSeries
+{
+  std::string Name;
+  std::vector<double> X;
+  std::vector<double> Y;
+};
+
+/**
+ * A line plot (log-scale y) of several series, e.g. relative error against
+ * wall time (TransCut Fig. 7 style).
+ */
+bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTitle,
+  const std::string& yTitle, const std::string& fileName, std::string& error);
 
 } // namespace translucency_app

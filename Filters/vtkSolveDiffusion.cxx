@@ -89,6 +89,11 @@ bool vtkSolveDiffusion::GetConverged(int channel) const
   return (channel >= 0 && channel < 3) && this->Internal->Report.Converged[channel];
 }
 
+const char* vtkSolveDiffusion::GetLinearSolverUsed() const
+{
+  return this->Internal->Report.LinearSolver.c_str();
+}
+
 vtkTypeInt64 vtkSolveDiffusion::GetNumberOfUnknowns() const
 {
   return this->Internal->Report.NumberOfUnknowns;

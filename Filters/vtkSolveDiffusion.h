@@ -133,6 +133,10 @@ public:
   bool GetConverged(int channel) const;
   ///@}
 
+  /// The linear solver the last solve used (e.g. "cg-jacobi", "bicgstab",
+  /// "relaxation"; "photons" for Monte Carlo). Empty before the first solve.
+  const char* GetLinearSolverUsed() const;
+
   ///@{
   /// Size of the last system: unknowns and nonzeros per channel, memory (bytes).
   vtkTypeInt64 GetNumberOfUnknowns() const;

@@ -1,0 +1,564 @@
+#include "CommandLine.h"
+
+#include "Error.h"
+#include "OpticalProperties.h"
+
+#include "vtkAssignScatteringCoefficients.h"
+#include "vtkSurfaceIrradiance.h"
+#include "vtkTetGenReader.h"
+#include "vtkTetrahedralizeSurface.h"
+
+#include <vtkAlgorithm.h>
+#include <vtkCallbackCommand.h>
+#include <vtkCellData.h>
+#include <vtkExecutive.h>
+#include <vtkOBJReader.h>
+#include <vtkPLYReader.h>
+#include <vtkPolyData.h>
+#include <vtkSTLReader.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLPolyDataReader.h>
+#include <vtkXMLUnstructuredGridReader.h>
+#include <vtkXMLWriter.h>
+
+#include "vtk_nlohmannjson.h"
+#include VTK_NLOHMANN_JSON(json.hpp)
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+namespace translucency_app
+{
+using json = nlohmann::json;
+
+
+
+double Since(Clock::time_point start)
+{
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+std::vector<double> ParseNumbers(const std::string& text, const std::string& what)
+{
+  std::vector<double> values;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ','))
+  {
+    try
+    {
+      size_t used = 0;
+      values.push_back(std::stod(item, &used));
+      if (used != item.size() || !std::isfinite(values.back()))
+      {
+        throw std::invalid_argument(item);
+      }
+    }
+    catch (const std::exception&)
+    {
+      throw UsageError("'" + item + "' in " + what + " is not a number");
+    }
+  }
+  return values;
+}
+
+std::string Extension(const std::string& path)
+{
+  const size_t dot = path.find_last_of('.');
+  std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+  return ext;
+}
+
+MessageCollector::MessageCollector()
+{
+  this->ErrorCallback->SetClientData(this);
+  this->ErrorCallback->SetCallback([](vtkObject*, unsigned long, void* self, void* data) {
+    auto* collector = static_cast<MessageCollector*>(self);
+    collector->Errors += static_cast<const char*>(data);
+  });
+  this->WarningCallback->SetCallback([](vtkObject*, unsigned long, void*, void* data) {
+    std::cerr << "translucency: warning: " << static_cast<const char*>(data) << "\n";
+  });
+}
+
+void MessageCollector::Watch(vtkObject* object)
+{
+  object->AddObserver(vtkCommand::ErrorEvent, this->ErrorCallback);
+  object->AddObserver(vtkCommand::WarningEvent, this->WarningCallback);
+  // The executive's "Algorithm ... returned failure for request" follows
+  // every filter error, which is already reported: silence it (it would
+  // otherwise go to stderr through vtkLogger, whatever the output window).
+  if (auto* algorithm = vtkAlgorithm::SafeDownCast(object))
+  {
+    algorithm->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, this->IgnoreCallback);
+  }
+}
+
+std::string MessageCollector::Last() const
+{
+  std::string text = this->Errors;
+  const size_t pos = text.rfind("): ");
+  if (pos != std::string::npos)
+  {
+    text = text.substr(pos + 3);
+  }
+  while (!text.empty() && (text.back() == '\n' || text.back() == ' '))
+  {
+    text.pop_back();
+  }
+  return text;
+}
+
+Light ParseLight(const std::string& spec)
+{
+  Light light;
+  std::vector<std::string> parts;
+  std::stringstream ss(spec);
+  std::string part;
+  while (std::getline(ss, part, ':'))
+  {
+    parts.push_back(part);
+  }
+  if (parts.empty())
+  {
+    throw UsageError("empty --light");
+  }
+  light.Type = parts[0];
+  if (light.Type == "uniform")
+  {
+    if (parts.size() > 2)
+    {
+      throw UsageError("--light uniform[:E] takes at most one value: '" + spec + "'");
+    }
+    if (parts.size() == 2)
+    {
+      light.Power = ParseNumbers(parts[1], "--light " + spec).at(0);
+    }
+  }
+  else if (light.Type == "directional" || light.Type == "point")
+  {
+    if (parts.size() < 2 || parts.size() > 3)
+    {
+      throw UsageError("--light " + light.Type + " needs x,y,z[:power]: '" + spec + "'");
+    }
+    std::vector<double> v = ParseNumbers(parts[1], "--light " + spec);
+    if (v.size() != 3)
+    {
+      throw UsageError("--light " + spec + ": expected three comma-separated numbers");
+    }
+    std::copy(v.begin(), v.end(), light.Values);
+    if (parts.size() == 3)
+    {
+      light.Power = ParseNumbers(parts[2], "--light " + spec).at(0);
+    }
+    if (light.Type == "directional" && v[0] == 0 && v[1] == 0 && v[2] == 0)
+    {
+      throw UsageError("--light " + spec + ": the direction is zero");
+    }
+  }
+  else
+  {
+    throw UsageError("unknown light type '" + light.Type + "' (directional, point or uniform)");
+  }
+  if (!(light.Power >= 0))
+  {
+    throw UsageError("--light " + spec + ": the power must be >= 0");
+  }
+  return light;
+}
+
+/// Read a surface or tet mesh. Returns a polydata (to tetrahedralize) or a grid.
+bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
+  vtkSmartPointer<vtkUnstructuredGrid>& grid, std::string& error)
+{
+  std::ifstream probe(path);
+  if (!probe)
+  {
+    error = "cannot open mesh file '" + path + "'";
+    return false;
+  }
+  const std::string ext = Extension(path);
+  MessageCollector messages;
+  vtkSmartPointer<vtkAlgorithm> reader;
+  if (ext == "ply")
+  {
+    auto r = vtkSmartPointer<vtkPLYReader>::New();
+    r->SetFileName(path.c_str());
+    reader = r;
+  }
+  else if (ext == "stl")
+  {
+    auto r = vtkSmartPointer<vtkSTLReader>::New();
+    r->SetFileName(path.c_str());
+    reader = r;
+  }
+  else if (ext == "obj")
+  {
+    auto r = vtkSmartPointer<vtkOBJReader>::New();
+    r->SetFileName(path.c_str());
+    reader = r;
+  }
+  else if (ext == "vtp")
+  {
+    auto r = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+    r->SetFileName(path.c_str());
+    reader = r;
+  }
+  else if (ext == "vtu")
+  {
+    auto r = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+    r->SetFileName(path.c_str());
+    reader = r;
+  }
+  else if (ext == "node" || ext == "ele")
+  {
+    auto r = vtkSmartPointer<vtkTetGenReader>::New();
+    r->SetFileName(path.c_str());
+    reader = r;
+  }
+  else
+  {
+    error = "unknown mesh format '." + ext + "' of '" + path +
+      "' (use .ply, .stl, .obj, .vtp, .vtu, .node or .ele)";
+    return false;
+  }
+  messages.Watch(reader);
+  reader->Update();
+  vtkDataObject* data = reader->GetOutputDataObject(0);
+  if (!messages.Errors.empty())
+  {
+    error = "cannot read '" + path + "': " + messages.Last();
+    return false;
+  }
+  if (auto* poly = vtkPolyData::SafeDownCast(data))
+  {
+    surface = poly;
+  }
+  else if (auto* ug = vtkUnstructuredGrid::SafeDownCast(data))
+  {
+    grid = ug;
+  }
+  if ((surface && surface->GetNumberOfCells() == 0) || (grid && grid->GetNumberOfCells() == 0) ||
+    (!surface && !grid))
+  {
+    error = "'" + path + "' holds no cells";
+    return false;
+  }
+  return true;
+}
+
+bool WriteAtomically(vtkXMLWriter* writer, vtkDataObject* data, const std::string& path,
+  std::string& error)
+{
+  const std::string tmp = path + ".tmp";
+  writer->SetInputData(data);
+  writer->SetFileName(tmp.c_str());
+  writer->SetDataModeToAppended();
+  writer->SetCompressorTypeToZLib();
+  if (writer->Write() == 0)
+  {
+    std::remove(tmp.c_str());
+    error = "cannot write '" + path + "'";
+    return false;
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0)
+  {
+    std::remove(tmp.c_str());
+    error = "cannot rename the temporary file to '" + path + "'";
+    return false;
+  }
+  return true;
+}
+
+bool WriteText(const std::string& path, const std::string& text, std::string& error)
+{
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << text;
+    if (!out)
+    {
+      error = "cannot write '" + path + "'";
+      return false;
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0)
+  {
+    std::remove(tmp.c_str());
+    error = "cannot rename the temporary file to '" + path + "'";
+    return false;
+  }
+  return true;
+}
+
+/// Make sure the directory holding `path` exists (like mkdir -p).
+void EnsureParentDirectory(const std::string& path)
+{
+  const size_t slash = path.find_last_of('/');
+  if (slash == std::string::npos || slash == 0)
+  {
+    return;
+  }
+  std::string dir = path.substr(0, slash);
+  std::string command = "mkdir -p '" + dir + "'";
+  if (std::system(command.c_str()) != 0)
+  {
+    std::cerr << "translucency: warning: cannot create directory '" << dir << "'\n";
+  }
+}
+
+void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& material)
+{
+  if (Extension(material) != "json")
+  {
+    assign->SetMaterialName(material.c_str());
+    return;
+  }
+  std::ifstream in(material);
+  if (!in)
+  {
+    throw translucency::Error("cannot open material file '" + material + "'");
+  }
+  json j;
+  try
+  {
+    in >> j;
+  }
+  catch (const std::exception& e)
+  {
+    throw translucency::Error("material file '" + material + "' is not valid JSON: " + e.what());
+  }
+  auto triple = [&](const char* key, double out[3]) {
+    if (!j.contains(key) || !j[key].is_array() || j[key].size() != 3)
+    {
+      throw translucency::Error("material file '" + material + "' needs \"" + key +
+        "\": [r, g, b] (1/mm)");
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      if (!j[key][c].is_number())
+      {
+        throw translucency::Error(
+          "material file '" + material + "': \"" + key + "\" must hold three numbers");
+      }
+      out[c] = j[key][c].get<double>();
+    }
+  };
+  if (!j.is_object())
+  {
+    throw translucency::Error("material file '" + material +
+      "' must hold a JSON object {\"absorption\": [r, g, b], ...}");
+  }
+  if (j.contains("preset"))
+  {
+    if (!j["preset"].is_string())
+    {
+      throw translucency::Error(
+        "material file '" + material + "': \"preset\" must be a preset name (a string)");
+    }
+    assign->SetMaterialName(j["preset"].get<std::string>().c_str());
+    return;
+  }
+  double muA[3], sigmaS[3];
+  triple("absorption", muA);
+  triple("reduced_scattering", sigmaS);
+  assign->SetMaterialName("");
+  assign->SetAbsorptionCoefficient(muA);
+  assign->SetReducedScatteringCoefficient(sigmaS);
+  if (j.contains("refractive_index") && !j["refractive_index"].is_number())
+  {
+    throw translucency::Error(
+      "material file '" + material + "': \"refractive_index\" must be a number");
+  }
+  assign->SetRefractiveIndex(j.value("refractive_index", 1.3));
+}
+
+double Median(std::vector<double> v)
+{
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+const char* const SceneOptionsHelp = R"(  --mesh FILE              closed triangle surface (.ply .stl .obj .vtp), tet mesh
+                           (.vtu), or TetGen mesh (.node/.ele). Lengths in mm.
+  --target-tets N          tetrahedralize to about N tets (default 200000)
+  --max-tet-volume V       ... or bound the tet volume by V mm^3 instead
+  --quality Q              radius-edge ratio bound for TetGen (default 1.414)
+  --material NAME|FILE     measured preset (default marble; see render --list-materials)
+                           or a JSON file {"absorption": [r,g,b], "reduced_scattering":
+                           [r,g,b], "refractive_index": eta} in 1/mm. A .vtu input that
+                           already has the coefficient arrays keeps them unless given.
+  --light SPEC             may repeat; default directional:0,-1,-1:1 and uniform:0.1
+                           directional:dx,dy,dz[:E]  direction of travel, E W/mm^2 (1)
+                           point:x,y,z[:I]           position mm, intensity W/sr (1)
+                           uniform[:E]               environment, E W/mm^2 (1)
+  --no-shadows             no self-shadowing
+  --uniform-samples N      occlusion rays per point for the uniform light (32)
+)";
+
+bool SceneOptions::Parse(const std::vector<std::string>& args, size_t& i)
+{
+  const std::string& a = args[i];
+  auto value = [&]() -> const std::string& {
+    if (i + 1 >= args.size())
+    {
+      throw UsageError(a + " needs a value");
+    }
+    return args[++i];
+  };
+  auto number = [&]() { return ParseNumbers(value(), a).at(0); };
+  if (a == "--mesh")
+    this->MeshPath = value();
+  else if (a == "--target-tets")
+  {
+    const double n = number();
+    if (!(n >= 1))
+      throw UsageError("--target-tets must be >= 1");
+    this->TargetTets = static_cast<long long>(n);
+    this->TargetGiven = true;
+  }
+  else if (a == "--max-tet-volume")
+  {
+    this->MaxTetVolume = number();
+    if (!(this->MaxTetVolume > 0))
+      throw UsageError("--max-tet-volume must be > 0 (mm^3)");
+  }
+  else if (a == "--quality")
+  {
+    this->Quality = number();
+    if (!(this->Quality >= 1.1))
+      throw UsageError("--quality must be >= 1.1");
+  }
+  else if (a == "--material")
+    this->Material = value();
+  else if (a == "--light")
+    this->Lights.push_back(ParseLight(value()));
+  else if (a == "--no-shadows")
+    this->Shadows = false;
+  else if (a == "--uniform-samples")
+  {
+    const double n = number();
+    if (!(n >= 0))
+      throw UsageError("--uniform-samples must be >= 0");
+    this->UniformSamples = static_cast<int>(n);
+  }
+  else
+    return false;
+  return true;
+}
+
+void SceneOptions::Finish(const std::string& command)
+{
+  if (this->MeshPath.empty())
+  {
+    throw UsageError(command + " needs --mesh FILE");
+  }
+  if (this->Lights.empty())
+  {
+    this->Lights.push_back(ParseLight("directional:0,-1,-1:1"));
+    this->Lights.push_back(ParseLight("uniform:0.1"));
+  }
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(
+  const SceneOptions& options, std::vector<Stage>& stages, double& topologyMs)
+{
+  std::string error;
+  MessageCollector messages;
+
+  // 1. Read.
+  auto start = Clock::now();
+  vtkSmartPointer<vtkPolyData> surface;
+  vtkSmartPointer<vtkUnstructuredGrid> grid;
+  if (!ReadMesh(options.MeshPath, surface, grid, error))
+  {
+    throw translucency::Error(error);
+  }
+  stages.push_back({ "read", Since(start) });
+
+  // 2. Tetrahedralize.
+  if (surface)
+  {
+    start = Clock::now();
+    vtkNew<vtkTetrahedralizeSurface> tetra;
+    messages.Watch(tetra);
+    tetra->SetInputData(surface);
+    tetra->SetQuality(options.Quality);
+    if (options.MaxTetVolume > 0 && !options.TargetGiven)
+      tetra->SetMaxTetVolume(options.MaxTetVolume);
+    else
+      tetra->SetTargetNumberOfTets(options.TargetTets);
+    tetra->Update();
+    if (!messages.Errors.empty())
+      throw translucency::Error("'" + options.MeshPath + "': " + messages.Last());
+    grid = tetra->GetOutput();
+    stages.push_back({ "tetrahedralize", Since(start) });
+  }
+
+  // 3. Coefficients.
+  start = Clock::now();
+  vtkSmartPointer<vtkUnstructuredGrid> withMaterial = grid;
+  const bool hasArrays = grid->GetCellData()->GetArray("AbsorptionCoefficient") &&
+    grid->GetCellData()->GetArray("ReducedScatteringCoefficient") &&
+    grid->GetCellData()->GetArray("RefractiveIndex");
+  if (!options.Material.empty() || !hasArrays)
+  {
+    vtkNew<vtkAssignScatteringCoefficients> assign;
+    messages.Watch(assign);
+    ApplyMaterial(assign, options.Material.empty() ? std::string("marble") : options.Material);
+    assign->SetInputData(grid);
+    assign->Update();
+    if (!messages.Errors.empty())
+      throw translucency::Error(messages.Last());
+    withMaterial = assign->GetOutput();
+  }
+  stages.push_back({ "coefficients", Since(start) });
+
+  // 4. Irradiance.
+  start = Clock::now();
+  vtkNew<vtkSurfaceIrradiance> irradiance;
+  messages.Watch(irradiance);
+  irradiance->SetInputData(withMaterial);
+  irradiance->SetShadows(options.Shadows);
+  irradiance->SetUniformLightSamples(options.UniformSamples);
+  double uniformE = 0.0;
+  for (const Light& l : options.Lights)
+  {
+    if (l.Type == "directional")
+      irradiance->AddDirectionalLight(l.Values[0], l.Values[1], l.Values[2], l.Power);
+    else if (l.Type == "point")
+      irradiance->AddPointLight(l.Values[0], l.Values[1], l.Values[2], l.Power);
+    else
+      uniformE += l.Power;
+  }
+  irradiance->SetUniformLightIrradiance(uniformE);
+  irradiance->Update();
+  if (!messages.Errors.empty())
+    throw translucency::Error(messages.Last());
+  topologyMs = irradiance->GetTopologyTime();
+  stages.push_back({ "irradiance", Since(start) - topologyMs });
+  return irradiance->GetOutput();
+}
+
+void PrintStages(const std::vector<Stage>& stages)
+{
+  std::cout << "\n  stage            time (ms)\n  ---------------- ---------\n";
+  double total = 0.0;
+  for (const Stage& s : stages)
+  {
+    std::cout << "  " << std::left << std::setw(16) << s.Name << " " << std::right << std::setw(9)
+              << std::fixed << std::setprecision(1) << s.Milliseconds << "\n";
+    total += s.Milliseconds;
+  }
+  std::cout << "  " << std::left << std::setw(16) << "total" << " " << std::right << std::setw(9)
+            << total << std::defaultfloat << "\n";
+}
+
+} // namespace translucency_app

@@ -1,0 +1,115 @@
+/**
+ * @file CommandLine.h
+ * @brief What the `translucency` commands share: option parsing for the
+ * scene (mesh, material, lights), building the lit tet mesh, atomic writes,
+ * and error collection from the filters.
+ */
+#pragma once
+
+#include <vtkCallbackCommand.h>
+#include <vtkNew.h>
+#include <vtkSmartPointer.h>
+
+#include <chrono>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+class vtkAssignScatteringCoefficients;
+class vtkDataObject;
+class vtkObject;
+class vtkPolyData;
+class vtkUnstructuredGrid;
+class vtkXMLWriter;
+
+namespace translucency_app
+{
+using Clock = std::chrono::steady_clock;
+
+/// A mistake in the command line (exit code 2).
+struct UsageError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+
+/// One row of the timing table.
+struct Stage
+{
+  std::string Name;
+  double Milliseconds;
+};
+
+double Since(Clock::time_point start);
+double Median(std::vector<double> values);
+std::vector<double> ParseNumbers(const std::string& text, const std::string& what);
+std::string Extension(const std::string& path);
+
+/// Collects vtkErrorMacro text of the filters it watches; prints warnings.
+struct MessageCollector
+{
+  std::string Errors;
+  vtkNew<vtkCallbackCommand> ErrorCallback;
+  vtkNew<vtkCallbackCommand> WarningCallback;
+  vtkNew<vtkCallbackCommand> IgnoreCallback;
+  MessageCollector();
+  void Watch(vtkObject* algorithm);
+  /// The message of the last error, without VTK's "ERROR: In file, line" header.
+  std::string Last() const;
+};
+
+/// A light from --light: type directional|point|uniform, 3 values, power.
+struct Light
+{
+  std::string Type;
+  double Values[3] = { 0, 0, 0 };
+  double Power = 1.0;
+};
+Light ParseLight(const std::string& spec);
+
+/// Options that describe the scene, shared by `render` and `compare`.
+struct SceneOptions
+{
+  std::string MeshPath;
+  std::string Material; ///< preset name or JSON file; empty: keep .vtu arrays or marble
+  long long TargetTets = 200000;
+  bool TargetGiven = false;
+  double MaxTetVolume = 0.0;
+  double Quality = 1.414;
+  std::vector<Light> Lights;
+  bool Shadows = true;
+  int UniformSamples = 32;
+
+  /// If args[i] is a scene option, consume it (and its value) and return true.
+  bool Parse(const std::vector<std::string>& args, size_t& i);
+  /// Defaults and checks once all options are read (`command` names the command).
+  void Finish(const std::string& command);
+};
+
+/// The options' help text, for --help.
+extern const char* const SceneOptionsHelp;
+
+/// Read, tetrahedralize, assign coefficients and compute the irradiance.
+/// Appends timing rows; `topologyMs` gets the topology time spent on the way.
+/// Throws translucency::Error with a message naming the problem.
+vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(
+  const SceneOptions& options, std::vector<Stage>& stages, double& topologyMs);
+
+/// Read a surface (.ply .stl .obj .vtp) or a tet mesh (.vtu .node .ele).
+bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
+  vtkSmartPointer<vtkUnstructuredGrid>& grid, std::string& error);
+
+/// Write `data` with `writer` to a temporary file, then rename it to `path`:
+/// a failure leaves any existing `path` untouched.
+bool WriteAtomically(vtkXMLWriter* writer, vtkDataObject* data, const std::string& path,
+  std::string& error);
+bool WriteText(const std::string& path, const std::string& text, std::string& error);
+/// mkdir -p of the directory holding `path`.
+void EnsureParentDirectory(const std::string& path);
+void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& material);
+void PrintStages(const std::vector<Stage>& stages);
+
+/// `translucency compare` (Compare.cxx) and its help text.
+int Compare(const std::vector<std::string>& args);
+extern const char* const CompareHelp;
+
+} // namespace translucency_app

@@ -1,0 +1,506 @@
+// `translucency compare`: every selected solver on one problem (mesh,
+// material, lights), side by side: a table (stdout and JSON), a radiance
+// picture and a relative-error map per solver on one colour scale, a plot of
+// error against wall time for the iterative solvers, and a .vtm multiblock.
+
+#include "CommandLine.h"
+#include "PipelineRender.h"
+
+#include "Error.h"
+
+#include "vtkOutgoingRadiance.h"
+#include "vtkSolveDiffusion.h"
+
+#include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkIdTypeArray.h>
+#include <vtkInformation.h>
+#include <vtkMultiBlockDataSet.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLMultiBlockDataWriter.h>
+
+#include "vtk_nlohmannjson.h"
+#include VTK_NLOHMANN_JSON(json.hpp)
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+namespace translucency_app
+{
+
+const char* const CompareHelp = R"(
+translucency compare --mesh FILE [scene options] --output DIR [options]
+  --solvers A,B,...        from divergence, fem, quadgraph, grid, montecarlo
+                           (default: divergence,fem)
+  --reference NAME         the solver the others are measured against (default fem;
+                           montecarlo for the ground truth); run even if not listed
+  --grid-spacing H         voxel spacing of the grid solver, mm (default: automatic)
+  --photons N              photon budget of montecarlo (default 1000000)
+  --seed S                 random seed of montecarlo (default 1)
+  --rel-tol T              relative residual of the iterative solvers (default 1e-8)
+  --output DIR             <solver>_radiance.png, <solver>_error.png, error_vs_time.png,
+                           compare.vtm (needs X for the PNGs: xvfb-run -a)
+  --no-png                 skip the pictures and the plot (no X needed)
+  --json FILE              the table as JSON
+  --view, --up, --size, --exposure   as for render
+)";
+
+namespace
+{
+using json = nlohmann::json;
+
+struct SolverResult
+{
+  std::string Name;
+  vtkSmartPointer<vtkUnstructuredGrid> Volume;
+  vtkSmartPointer<vtkPolyData> Surface;
+  json Stats;
+  double WallMs = 0.0;
+};
+
+std::vector<std::string> SplitList(const std::string& text)
+{
+  std::vector<std::string> items;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ','))
+  {
+    if (!item.empty())
+      items.push_back(item);
+  }
+  return items;
+}
+
+/// Per-point relative error |x - r| / max(|r|, floor), floor = 1 % of the
+/// reference's largest value in that channel (so shadowed points, where the
+/// reference is ~0, do not dominate). Returns max and RMS over points and
+/// channels; `perPoint` gets the largest channel error of each point.
+void RelativeError(vtkDataArray* x, vtkDataArray* r, double& maxError, double& rmsError,
+  std::vector<double>* perPoint = nullptr)
+{
+  const vtkIdType n = r->GetNumberOfTuples();
+  double floor[3];
+  for (int c = 0; c < 3; ++c)
+  {
+    double range[2];
+    r->GetRange(range, c);
+    floor[c] = 0.01 * std::max(std::abs(range[0]), std::abs(range[1]));
+    if (floor[c] <= 0)
+      floor[c] = 1e-300;
+  }
+  maxError = 0.0;
+  double sum = 0.0;
+  if (perPoint)
+    perPoint->assign(static_cast<size_t>(n), 0.0);
+  for (vtkIdType i = 0; i < n; ++i)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const double ref = r->GetComponent(i, c);
+      const double e = std::abs(x->GetComponent(i, c) - ref) / std::max(std::abs(ref), floor[c]);
+      maxError = std::max(maxError, e);
+      sum += e * e;
+      if (perPoint)
+        (*perPoint)[i] = std::max((*perPoint)[i], e);
+    }
+  }
+  rmsError = n > 0 ? std::sqrt(sum / (3.0 * n)) : 0.0;
+}
+
+/// The radiance a solver gives on the surface: eq. 3 from its fluence, or the
+/// tallied exitant radiance for Monte Carlo.
+vtkSmartPointer<vtkDataArray> SurfaceRadiance(const SolverResult& result)
+{
+  vtkDataArray* tallied = result.Volume->GetPointData()->GetArray("MonteCarloRadiance");
+  if (!tallied)
+  {
+    return result.Surface->GetPointData()->GetArray("Radiance");
+  }
+  auto* ids = vtkIdTypeArray::SafeDownCast(
+    result.Surface->GetPointData()->GetArray("vtkOriginalPointIds"));
+  auto radiance = vtkSmartPointer<vtkDoubleArray>::New();
+  radiance->SetName("Radiance");
+  radiance->SetNumberOfComponents(3);
+  radiance->SetNumberOfTuples(ids->GetNumberOfTuples());
+  for (vtkIdType k = 0; k < ids->GetNumberOfTuples(); ++k)
+  {
+    double v[3];
+    tallied->GetTuple(ids->GetValue(k), v);
+    radiance->SetTuple(k, v);
+  }
+  return radiance;
+}
+
+SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double relTol,
+  int maxIter, double gridSpacing, long long photons, int seed)
+{
+  MessageCollector messages;
+  vtkNew<vtkSolveDiffusion> solve;
+  messages.Watch(solve);
+  if (!solve->SetSolverByName(name.c_str()))
+    throw UsageError(messages.Last());
+  solve->SetInputData(lit);
+  solve->SetRelTol(relTol);
+  solve->SetMaxIter(maxIter);
+  solve->SetWarmStart(false);
+  solve->SetGridSpacing(gridSpacing);
+  solve->SetNumberOfPhotons(photons);
+  solve->SetSeed(seed);
+  const auto start = Clock::now();
+  solve->Update();
+  if (!messages.Errors.empty())
+    throw translucency::Error(name + ": " + messages.Last());
+  SolverResult result;
+  result.Name = name;
+  result.WallMs = Since(start);
+  result.Volume = solve->GetOutput();
+  vtkNew<vtkOutgoingRadiance> radiance;
+  messages.Watch(radiance);
+  radiance->SetInputData(result.Volume);
+  radiance->Update();
+  if (!messages.Errors.empty())
+    throw translucency::Error(name + ": " + messages.Last());
+  result.Surface = radiance->GetOutput();
+  json& s = result.Stats;
+  s["solver"] = name;
+  s["linear_solver"] = solve->GetLinearSolverUsed();
+  s["unknowns"] = solve->GetNumberOfUnknowns();
+  s["nonzeros"] = solve->GetNumberOfNonZeros();
+  s["memory_bytes"] = solve->GetMemoryBytes();
+  s["setup_ms"] = solve->GetAssemblyTime();
+  s["solve_ms"] = solve->GetSolveTime();
+  s["topology_ms"] = solve->GetTopologyTime();
+  for (int c = 0; c < 3; ++c)
+  {
+    s["iterations"].push_back(solve->GetNumberOfIterations(c));
+    s["relative_residual"].push_back(solve->GetFinalResidual(c));
+    s["converged"].push_back(solve->GetConverged(c));
+  }
+  return result;
+}
+
+/// Error against the reference after k iterations, k = 1, 2, 4, ... until
+/// converged: relative error of boundary fluence against wall time.
+PlotSeries ErrorVersusTime(const std::string& name, vtkUnstructuredGrid* lit,
+  vtkDataArray* referenceFluence, double gridSpacing)
+{
+  PlotSeries series;
+  series.Name = name;
+  for (int k = 1; k <= 8192; k *= 2)
+  {
+    MessageCollector messages;
+    vtkNew<vtkSolveDiffusion> solve;
+    messages.Watch(solve);
+    solve->SetSolverByName(name.c_str());
+    solve->SetInputData(lit);
+    solve->SetRelTol(1e-8);
+    solve->SetMaxIter(k);
+    solve->SetWarmStart(false);
+    solve->SetGridSpacing(gridSpacing);
+    const auto start = Clock::now();
+    // Not converging is the point here: drop the warnings.
+    solve->RemoveAllObservers();
+    solve->Update();
+    const double ms = Since(start);
+    vtkNew<vtkOutgoingRadiance> radiance;
+    radiance->SetInputData(solve->GetOutput());
+    radiance->Update();
+    vtkDataArray* fluence = radiance->GetOutput()->GetPointData()->GetArray("Fluence");
+    if (!fluence)
+      break;
+    double maxError, rmsError;
+    RelativeError(fluence, referenceFluence, maxError, rmsError);
+    series.X.push_back(ms);
+    series.Y.push_back(rmsError);
+    if (solve->GetConverged(0) && solve->GetConverged(1) && solve->GetConverged(2))
+      break;
+  }
+  return series;
+}
+}
+
+int Compare(const std::vector<std::string>& args)
+{
+  SceneOptions scene;
+  RadianceImageOptions image;
+  std::string solverList = "divergence,fem", reference = "fem", outputDir, jsonPath;
+  double gridSpacing = 0.0, relTol = 1e-8;
+  long long photons = 1000000;
+  int seed = 1;
+  bool pictures = true;
+  for (size_t i = 0; i < args.size(); ++i)
+  {
+    const std::string& a = args[i];
+    auto value = [&]() -> const std::string& {
+      if (i + 1 >= args.size())
+        throw UsageError(a + " needs a value");
+      return args[++i];
+    };
+    auto number = [&]() { return ParseNumbers(value(), a).at(0); };
+    if (scene.Parse(args, i))
+      continue;
+    if (a == "--solvers")
+      solverList = value();
+    else if (a == "--reference")
+      reference = value();
+    else if (a == "--grid-spacing")
+    {
+      gridSpacing = number();
+      if (!(gridSpacing > 0))
+        throw UsageError("--grid-spacing must be > 0 mm");
+    }
+    else if (a == "--photons")
+    {
+      const double n = number();
+      if (!(n >= 1))
+        throw UsageError("--photons must be >= 1");
+      photons = static_cast<long long>(n);
+    }
+    else if (a == "--seed")
+      seed = static_cast<int>(number());
+    else if (a == "--rel-tol")
+    {
+      relTol = number();
+      if (!(relTol > 0 && relTol < 1))
+        throw UsageError("--rel-tol must be in (0, 1)");
+    }
+    else if (a == "--output")
+      outputDir = value();
+    else if (a == "--json")
+      jsonPath = value();
+    else if (a == "--no-png")
+      pictures = false;
+    else if (a == "--exposure")
+      image.Exposure = number();
+    else if (a == "--view" || a == "--up")
+    {
+      std::vector<double> v = ParseNumbers(value(), a);
+      if (v.size() != 3 || (v[0] == 0 && v[1] == 0 && v[2] == 0))
+        throw UsageError(a + " needs three numbers, not all zero");
+      std::copy(v.begin(), v.end(), a == "--view" ? image.ViewDirection : image.ViewUp);
+    }
+    else if (a == "--size")
+    {
+      const std::string s = value();
+      if (std::sscanf(s.c_str(), "%dx%d", &image.Width, &image.Height) != 2 || image.Width < 16 ||
+        image.Height < 16)
+        throw UsageError("--size must be WxH, e.g. 800x600");
+    }
+    else
+      throw UsageError("unknown option '" + a + "' (see translucency --help)");
+  }
+  scene.Finish("compare");
+  if (outputDir.empty())
+    throw UsageError("compare needs --output DIR");
+  std::vector<std::string> solvers = SplitList(solverList);
+  if (solvers.empty())
+    throw UsageError("--solvers lists no solver");
+  // Validate every name before any work.
+  {
+    MessageCollector messages;
+    vtkNew<vtkSolveDiffusion> probe;
+    messages.Watch(probe);
+    for (const std::string& name : solvers)
+      if (!probe->SetSolverByName(name.c_str()))
+        throw UsageError(messages.Last());
+    if (!probe->SetSolverByName(reference.c_str()))
+      throw UsageError("--reference: " + messages.Last());
+  }
+  std::vector<std::string> order = { reference };
+  for (const std::string& name : solvers)
+    if (name != reference)
+      order.push_back(name);
+
+  std::vector<Stage> stages;
+  double topologyMs = 0.0;
+  vtkSmartPointer<vtkUnstructuredGrid> lit = BuildLitMesh(scene, stages, topologyMs);
+
+  std::map<std::string, SolverResult> results;
+  for (const std::string& name : order)
+  {
+    std::cerr << "translucency: solving with " << name << "...\n";
+    results[name] = RunSolver(name, lit, relTol, 20000, gridSpacing, photons, seed);
+  }
+  const SolverResult& ref = results[reference];
+  vtkDataArray* refFluence = ref.Surface->GetPointData()->GetArray("Fluence");
+  vtkSmartPointer<vtkDataArray> refRadiance = SurfaceRadiance(ref);
+
+  // Errors against the reference (boundary points, all channels).
+  json table = json::array();
+  double errorScale = 0.0;
+  for (const std::string& name : order)
+  {
+    SolverResult& r = results[name];
+    double fMax, fRms, lMax, lRms;
+    std::vector<double> perPoint;
+    RelativeError(r.Surface->GetPointData()->GetArray("Fluence"), refFluence, fMax, fRms);
+    vtkSmartPointer<vtkDataArray> radiance = SurfaceRadiance(r);
+    RelativeError(radiance, refRadiance, lMax, lRms, &perPoint);
+    vtkNew<vtkDoubleArray> errorArray;
+    errorArray->SetName("RelativeRadianceError");
+    errorArray->SetNumberOfTuples(static_cast<vtkIdType>(perPoint.size()));
+    std::copy(perPoint.begin(), perPoint.end(), errorArray->GetPointer(0));
+    r.Surface->GetPointData()->AddArray(errorArray);
+    if (name != reference && !perPoint.empty())
+    {
+      std::vector<double> sorted = perPoint;
+      std::nth_element(sorted.begin(), sorted.begin() + 99 * (sorted.size() - 1) / 100, sorted.end());
+      errorScale = std::max(errorScale, sorted[99 * (sorted.size() - 1) / 100]);
+    }
+    r.Stats["fluence_relative_error"] = { { "max", fMax }, { "rms", fRms } };
+    r.Stats["radiance_relative_error"] = { { "max", lMax }, { "rms", lRms } };
+    r.Stats["wall_ms"] = r.WallMs;
+    r.Stats["reference"] = reference;
+    if (vtkDataArray* se = r.Volume->GetPointData()->GetArray("FluenceStandardError"))
+    {
+      // Monte Carlo: the mean relative standard error of its boundary fluence.
+      auto* ids = vtkIdTypeArray::SafeDownCast(
+        r.Surface->GetPointData()->GetArray("vtkOriginalPointIds"));
+      vtkDataArray* phi = r.Surface->GetPointData()->GetArray("Fluence");
+      double sum = 0.0;
+      long long count = 0;
+      for (vtkIdType k = 0; k < ids->GetNumberOfTuples(); ++k)
+        for (int c = 0; c < 3; ++c)
+          if (phi->GetComponent(k, c) > 0)
+          {
+            sum += se->GetComponent(ids->GetValue(k), c) / phi->GetComponent(k, c);
+            ++count;
+          }
+      r.Stats["fluence_mean_relative_standard_error"] = count ? sum / count : 0.0;
+    }
+    table.push_back(r.Stats);
+  }
+
+  // Table.
+  std::cout << "mesh: " << lit->GetNumberOfPoints() << " points, " << lit->GetNumberOfCells()
+            << " tets; reference: " << reference << "\n\n";
+  std::cout << "  solver      unknowns      nnz  memory(MB)  setup(ms)  solve(ms)  iters(R)"
+               "  fluence err max/rms   radiance err max/rms\n";
+  for (const json& s : table)
+  {
+    std::cout << "  " << std::left << std::setw(10) << s["solver"].get<std::string>() << std::right
+              << std::setw(10) << s["unknowns"].get<long long>() << std::setw(10)
+              << s["nonzeros"].get<long long>() << std::fixed << std::setprecision(1)
+              << std::setw(11) << s["memory_bytes"].get<double>() / 1048576.0 << std::setw(11)
+              << s["setup_ms"].get<double>() << std::setw(11) << s["solve_ms"].get<double>()
+              << std::setw(10) << s["iterations"][0].get<int>() << std::setprecision(2)
+              << std::setw(10) << 100 * s["fluence_relative_error"]["max"].get<double>() << "%/"
+              << std::setw(6) << 100 * s["fluence_relative_error"]["rms"].get<double>() << "%"
+              << std::setw(11) << 100 * s["radiance_relative_error"]["max"].get<double>() << "%/"
+              << std::setw(6) << 100 * s["radiance_relative_error"]["rms"].get<double>() << "%"
+              << std::defaultfloat;
+    if (s.contains("fluence_mean_relative_standard_error"))
+      std::cout << "  (MC standard error " << std::setprecision(2)
+                << 100 * s["fluence_mean_relative_standard_error"].get<double>() << "%)";
+    std::cout << "\n";
+  }
+
+  // Files.
+  std::string error;
+  EnsureParentDirectory(outputDir + "/compare.vtm");
+  vtkNew<vtkMultiBlockDataSet> blocks;
+  vtkNew<vtkUnstructuredGrid> volume;
+  volume->ShallowCopy(lit);
+  for (const std::string& name : order)
+  {
+    vtkDataArray* phi = results[name].Volume->GetPointData()->GetArray("Fluence");
+    vtkSmartPointer<vtkDataArray> copy = vtk::TakeSmartPointer(phi->NewInstance());
+    copy->DeepCopy(phi);
+    copy->SetName(("Fluence_" + name).c_str());
+    volume->GetPointData()->AddArray(copy);
+  }
+  blocks->SetBlock(0, volume);
+  blocks->GetMetaData(0u)->Set(vtkMultiBlockDataSet::NAME(), "volume");
+  unsigned int block = 1;
+  for (const std::string& name : order)
+  {
+    blocks->SetBlock(block, results[name].Surface);
+    blocks->GetMetaData(block)->Set(vtkMultiBlockDataSet::NAME(), name.c_str());
+    ++block;
+  }
+  // The .vtm refers to a folder of pieces next to it: write both into a
+  // staging folder, then move them into place (a failure leaves old results).
+  {
+    const std::string staging = outputDir + "/.compare-staging";
+    std::system(("rm -rf '" + staging + "'").c_str());
+    EnsureParentDirectory(staging + "/compare.vtm");
+    vtkNew<vtkXMLMultiBlockDataWriter> writer;
+    writer->SetInputData(blocks);
+    writer->SetFileName((staging + "/compare.vtm").c_str());
+    writer->SetDataModeToAppended();
+    writer->SetCompressorTypeToZLib();
+    if (writer->Write() == 0)
+    {
+      std::system(("rm -rf '" + staging + "'").c_str());
+      throw translucency::Error("cannot write '" + outputDir + "/compare.vtm'");
+    }
+    std::system(("rm -rf '" + outputDir + "/compare'").c_str());
+    if (std::rename((staging + "/compare").c_str(), (outputDir + "/compare").c_str()) != 0 ||
+      std::rename((staging + "/compare.vtm").c_str(), (outputDir + "/compare.vtm").c_str()) != 0)
+      throw translucency::Error("cannot move the results into '" + outputDir + "'");
+    std::system(("rm -rf '" + staging + "'").c_str());
+  }
+
+  if (pictures)
+  {
+    // One exposure for every radiance picture: the reference's.
+    vtkNew<vtkPolyData> refSurface;
+    refSurface->ShallowCopy(ref.Surface);
+    const double exposure = ToneMapRadiance(refSurface, image.Exposure);
+    RadianceImageOptions shared = image;
+    shared.Exposure = exposure;
+    if (errorScale <= 0)
+      errorScale = 0.01;
+    for (const std::string& name : order)
+    {
+      SolverResult& r = results[name];
+      vtkNew<vtkPolyData> surface;
+      surface->ShallowCopy(r.Surface);
+      vtkSmartPointer<vtkDataArray> radiance = SurfaceRadiance(r);
+      surface->GetPointData()->AddArray(radiance); // the tallied one for Monte Carlo
+      surface->GetPointData()->RemoveArray("RadianceRGB");
+      if (!WriteRadiancePNG(surface, shared, outputDir + "/" + name + "_radiance.png", error) ||
+        !WriteScalarMapPNG(surface, "RelativeRadianceError", 0.0, errorScale,
+          "radiance error vs " + reference, image, outputDir + "/" + name + "_error.png", error))
+        throw translucency::Error(error);
+    }
+    std::vector<PlotSeries> curves;
+    for (const std::string& name : order)
+      if (name != "montecarlo")
+        curves.push_back(ErrorVersusTime(name, lit, refFluence, gridSpacing));
+    if (!WritePlotPNG(curves, "wall time (ms)", "RMS relative error of boundary fluence",
+          outputDir + "/error_vs_time.png", error))
+      throw translucency::Error(error);
+    json plot;
+    for (const PlotSeries& c : curves)
+      plot[c.Name] = { { "ms", c.X }, { "rms_error", c.Y } };
+    for (json& s : table)
+      if (plot.contains(s["solver"].get<std::string>()))
+        s["error_vs_time"] = plot[s["solver"].get<std::string>()];
+  }
+  if (!jsonPath.empty())
+  {
+    json j;
+    j["mesh"] = scene.MeshPath;
+    j["points"] = lit->GetNumberOfPoints();
+    j["tets"] = lit->GetNumberOfCells();
+    j["reference"] = reference;
+    j["solvers"] = table;
+    EnsureParentDirectory(jsonPath);
+    if (!WriteText(jsonPath, j.dump(2) + "\n", error))
+      throw translucency::Error(error);
+  }
+  return 0;
+}
+
+} // namespace translucency_app
