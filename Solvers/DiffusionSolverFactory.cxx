@@ -2,6 +2,10 @@
 
 #include "DiscreteDivergence.h"
 #include "Error.h"
+#include "FiniteElement.h"
+#include "GridSolver.h"
+#include "MonteCarlo.h"
+#include "QuadGraph.h"
 #include "VertexDiffusionSolver.h"
 
 #include <algorithm>
@@ -12,7 +16,7 @@ namespace translucency
 
 std::vector<std::string> GetDiffusionSolverNames()
 {
-  return { "divergence" };
+  return { "divergence", "fem", "quadgraph", "grid", "montecarlo" };
 }
 
 std::unique_ptr<DiffusionSolver> CreateDiffusionSolver(const std::string& name)
@@ -23,6 +27,22 @@ std::unique_ptr<DiffusionSolver> CreateDiffusionSolver(const std::string& name)
   if (key == "divergence")
   {
     return std::make_unique<VertexDiffusionSolver>(std::make_unique<DiscreteDivergence>());
+  }
+  if (key == "fem")
+  {
+    return std::make_unique<VertexDiffusionSolver>(std::make_unique<FiniteElement>());
+  }
+  if (key == "quadgraph")
+  {
+    return std::make_unique<QuadGraphSolver>();
+  }
+  if (key == "grid")
+  {
+    return std::make_unique<GridSolver>();
+  }
+  if (key == "montecarlo")
+  {
+    return std::make_unique<MonteCarloSolver>();
   }
   std::string known;
   for (const std::string& n : GetDiffusionSolverNames())

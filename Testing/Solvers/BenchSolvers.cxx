@@ -10,8 +10,12 @@
 // (6 tets per cell): 26 -> 105,456 tets, 55 -> 998,250 tets.
 
 #include "ConjugateGradient.h"
+#include "DiffusionSolver.h"
 #include "DiscreteDivergence.h"
+#include "FiniteElement.h"
 #include "LightSources.h"
+#include "MonteCarlo.h"
+#include "QuadGraph.h"
 #include "RayCaster.h"
 #include "TestMeshes.h"
 #include "TetMesh.h"
@@ -105,6 +109,173 @@ void BM_Assemble(benchmark::State& state)
   SetSizeCounters(state, p);
 }
 
+/// The consistent P1 Galerkin assembly ("fem"); same-run baseline:
+/// BM_Assemble (the divergence assembly) on the same mesh.
+void BM_AssembleFem(benchmark::State& state)
+{
+  Problem& p = GetProblem(static_cast<int>(state.range(0)));
+  FiniteElement fem;
+  DiffusionSystem system;
+  fem.Assemble(p.Mesh, p.Material, p.Irradiance, system); // allocate once
+  for (auto _ : state)
+  {
+    fem.Assemble(p.Mesh, p.Material, p.Irradiance, system);
+    benchmark::DoNotOptimize(system.Values[2].data());
+  }
+  SetSizeCounters(state, p);
+  state.counters["boundary_triangles"] = p.Mesh.GetNumberOfBoundaryTriangles();
+}
+
+/// A vertex solver through the common interface (assembly + CG to 1e-6, no
+/// warm start); counters setup_ms and solve_ms from its SolverReport. The
+/// "divergence" case is the same-run baseline of the "fem" case.
+void BM_VertexSolver(benchmark::State& state, const char* name)
+{
+  Problem& p = GetProblem(static_cast<int>(state.range(0)));
+  std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver(name);
+  solver->SetWarmStart(false);
+  DiffusionProblem problem;
+  problem.Mesh = &p.Mesh;
+  problem.Material = &p.Material;
+  problem.Irradiance = &p.Irradiance;
+  std::vector<double> fluence;
+  SolverReport report;
+  double setup = 0.0, solve = 0.0;
+  for (auto _ : state)
+  {
+    solver->Solve(problem, fluence, report);
+    benchmark::DoNotOptimize(fluence.data());
+    setup += report.SetupMilliseconds;
+    solve += report.SolveMilliseconds;
+  }
+  SetSizeCounters(state, p);
+  state.counters["setup_ms"] = setup / static_cast<double>(state.iterations());
+  state.counters["solve_ms"] = solve / static_cast<double>(state.iterations());
+  state.counters["iterations"] =
+    report.Iterations[0] + report.Iterations[1] + report.Iterations[2];
+}
+
+/// The Monte Carlo reference on the same mesh and material, lit from +z by a
+/// directional light, 20,000 photons per channel (60,000 in all); arguments
+/// (cells, threads). Counters: photons per second and per second per thread
+/// (tracing only), setup_ms (walk structure, per-light irradiance, source
+/// table), solve_ms. Same-run baseline: BM_VertexSolver/divergence.
+void BM_MonteCarlo(benchmark::State& state)
+{
+  Problem& p = GetProblem(static_cast<int>(state.range(0)));
+  MonteCarloSolver solver;
+  solver.SetNumberOfPhotons(20000);
+  solver.SetNumberOfThreads(static_cast<int>(state.range(1)));
+  DiffusionProblem problem;
+  problem.Mesh = &p.Mesh;
+  problem.Material = &p.Material;
+  problem.Irradiance = &p.Irradiance;
+  LightSource light;
+  light.Direction = { 0.0, 0.0, -1.0 };
+  problem.Lights = { light };
+  std::vector<double> fluence;
+  SolverReport report;
+  double setup = 0.0, solve = 0.0;
+  for (auto _ : state)
+  {
+    solver.Solve(problem, fluence, report);
+    benchmark::DoNotOptimize(fluence.data());
+    setup += report.SetupMilliseconds;
+    solve += report.SolveMilliseconds;
+  }
+  SetSizeCounters(state, p);
+  const double n = static_cast<double>(state.iterations());
+  state.counters["setup_ms"] = setup / n;
+  state.counters["solve_ms"] = solve / n;
+  state.counters["photons_per_second"] =
+    static_cast<double>(solver.GetNumberOfPhotonsTraced()) / (solve / n * 1e-3);
+  state.counters["photons_per_second_per_thread"] = solver.GetPhotonsPerSecondPerThread();
+  long long steps = 0;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    steps += solver.GetPowerBalance(c).Steps;
+  }
+  state.counters["steps_per_photon"] =
+    static_cast<double>(steps) / static_cast<double>(solver.GetNumberOfPhotonsTraced());
+}
+
+/// The regular-grid solver (polygrid eq. 8-9) through the common interface,
+/// BiCGSTAB to 1e-6, a new solver each time (setup_ms = grid construction +
+/// assembly), no warm start. Arguments (cells, multi-level, spacing): spacing
+/// 0 = automatic (volume / tets)^(1/3), about one node per tet; 1 = (volume /
+/// points)^(1/3), about as many unknowns as the vertex solvers. Same-run
+/// baseline: BM_VertexSolver/divergence on the same mesh.
+void BM_GridSolver(benchmark::State& state)
+{
+  Problem& p = GetProblem(static_cast<int>(state.range(0)));
+  DiffusionProblem problem;
+  problem.Mesh = &p.Mesh;
+  problem.Material = &p.Material;
+  problem.Irradiance = &p.Irradiance;
+  std::vector<double> fluence;
+  SolverReport report;
+  double setup = 0.0, solve = 0.0;
+  for (auto _ : state)
+  {
+    std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver("grid");
+    solver->SetWarmStart(false);
+    solver->SetMultiLevel(state.range(1) != 0);
+    solver->SetGridSpacing(
+      state.range(2) == 0 ? 0.0 : std::cbrt(20.0 * 20.0 * 20.0 / p.Mesh.GetNumberOfPoints()));
+    solver->Solve(problem, fluence, report);
+    benchmark::DoNotOptimize(fluence.data());
+    setup += report.SetupMilliseconds;
+    solve += report.SolveMilliseconds;
+  }
+  SetSizeCounters(state, p);
+  const double n = static_cast<double>(state.iterations());
+  state.counters["setup_ms"] = setup / n;
+  state.counters["solve_ms"] = solve / n;
+  state.counters["unknowns"] = static_cast<double>(report.NumberOfUnknowns);
+  state.counters["grid_nnz"] = static_cast<double>(report.NumberOfNonZeros);
+  state.counters["memory_MB"] = static_cast<double>(report.MemoryBytes) / 1e6;
+  state.counters["iterations"] =
+    report.Iterations[0] + report.Iterations[1] + report.Iterations[2];
+}
+
+/// QuadGraph finite differences (QuadGraph paper eq. 5-6) through the
+/// common interface, BiCGSTAB to 1e-6, a new solver each time (setup_ms =
+/// graph build + assembly; graph_ms = the graph build alone), no warm start;
+/// argument 1 = multi-level initialisation (eq. 10; its coarse levels are
+/// part of graph_ms). Same-run baseline: BM_VertexSolver/divergence.
+void BM_QuadGraph(benchmark::State& state)
+{
+  Problem& p = GetProblem(static_cast<int>(state.range(0)));
+  DiffusionProblem problem;
+  problem.Mesh = &p.Mesh;
+  problem.Material = &p.Material;
+  problem.Irradiance = &p.Irradiance;
+  std::vector<double> fluence;
+  SolverReport report;
+  double setup = 0.0, solve = 0.0, graph = 0.0;
+  for (auto _ : state)
+  {
+    QuadGraphSolver solver;
+    solver.SetWarmStart(false);
+    solver.SetMultiLevel(state.range(1) != 0);
+    solver.Solve(problem, fluence, report);
+    benchmark::DoNotOptimize(fluence.data());
+    setup += report.SetupMilliseconds;
+    solve += report.SolveMilliseconds;
+    graph += solver.GetGraphMilliseconds();
+  }
+  SetSizeCounters(state, p);
+  const double n = static_cast<double>(state.iterations());
+  state.counters["setup_ms"] = setup / n;
+  state.counters["graph_ms"] = graph / n;
+  state.counters["solve_ms"] = solve / n;
+  state.counters["unknowns"] = static_cast<double>(report.NumberOfUnknowns);
+  state.counters["graph_nnz"] = static_cast<double>(report.NumberOfNonZeros);
+  state.counters["memory_MB"] = static_cast<double>(report.MemoryBytes) / 1e6;
+  state.counters["iterations"] =
+    report.Iterations[0] + report.Iterations[1] + report.Iterations[2];
+}
+
 /// Baseline: y = M x with Eigen's (OpenMP) row-major product, one channel.
 void BM_SpMV(benchmark::State& state)
 {
@@ -150,6 +321,41 @@ void Sizes(benchmark::internal::Benchmark* b)
 BENCHMARK(BM_BuildMesh)->Apply(Sizes);
 BENCHMARK(BM_SpMV)->Apply(Sizes);
 BENCHMARK(BM_Assemble)->Apply(Sizes);
+BENCHMARK(BM_AssembleFem)->Apply(Sizes);
+BENCHMARK_CAPTURE(BM_VertexSolver, divergence, "divergence")
+  ->Arg(26)
+  ->Unit(benchmark::kMillisecond)
+  ->UseRealTime()
+  ->Repetitions(5)
+  ->ReportAggregatesOnly(true);
+BENCHMARK_CAPTURE(BM_VertexSolver, fem, "fem")
+  ->Arg(26)
+  ->Unit(benchmark::kMillisecond)
+  ->UseRealTime()
+  ->Repetitions(5)
+  ->ReportAggregatesOnly(true);
+BENCHMARK(BM_MonteCarlo)
+  ->Args({ 26, 1 })
+  ->Args({ 26, 2 })
+  ->Unit(benchmark::kMillisecond)
+  ->UseRealTime()
+  ->Repetitions(5)
+  ->ReportAggregatesOnly(true);
+BENCHMARK(BM_GridSolver)
+  ->Args({ 26, 0, 0 })
+  ->Args({ 26, 1, 0 })
+  ->Args({ 26, 0, 1 })
+  ->Unit(benchmark::kMillisecond)
+  ->UseRealTime()
+  ->Repetitions(5)
+  ->ReportAggregatesOnly(true);
+BENCHMARK(BM_QuadGraph)
+  ->Args({ 26, 0 })
+  ->Args({ 26, 1 })
+  ->Unit(benchmark::kMillisecond)
+  ->UseRealTime()
+  ->Repetitions(5)
+  ->ReportAggregatesOnly(true);
 BENCHMARK(BM_SolveCG)->Apply(Sizes)->Iterations(1);
 
 // Ray casting (RayCaster) on a latitude-longitude sphere of radius 10 mm,

@@ -1,0 +1,161 @@
+/**
+ * @file MonteCarlo.h
+ * @brief The Monte Carlo reference: a volumetric random-walk photon tracer on
+ * the tet mesh, the independent ground truth the diffusion solvers are
+ * compared with (the role photon mapping / path tracing plays in the four
+ * papers).
+ */
+#pragma once
+
+#include "DiffusionSolver.h"
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+namespace translucency
+{
+
+/**
+ * Photons start on the lit boundary, walk from tet to tet through shared
+ * faces in the per-tet medium (mu_a, sigma_s', RefractiveIndex) and leave
+ * through the Fresnel-refracting boundary.
+ *
+ * Sources: the problem's lights (DiffusionProblem::Lights,
+ * UniformIrradiance, Shadows), not its Irradiance array. The irradiance q_l
+ * of each light alone is computed with ComputeBoundaryIrradiance() (same
+ * shadows as the diffusion pipeline); the power entering through boundary
+ * triangle f is S_f times the mean of q_l at its corners (q linear on f: the
+ * total injected power is exactly what the diffusion solvers' boundary
+ * source injects); a triangle is picked with probability proportional to it,
+ * a point in it with density proportional to the linear q_l, and the
+ * direction is the light's, refracted by Snell's law (uniform light: cosine
+ * x F_t by rejection, visible directions only when shadowed). Each photon
+ * carries P_c / N (W), P_c the injected power of channel c.
+ *
+ * Transport: free flights between scattering events with mu_s = sigma_s' /
+ * (1 - g) (g = 0 by default: isotropic scattering with mu_s = sigma_s', the
+ * similarity relation the diffusion model rests on); Henyey-Greenstein phase
+ * function. Absorption is continuous: the weight decays as exp(-mu_a s)
+ * along the path, so the power absorbed on a segment is exactly the weight
+ * lost on it, w (1 - exp(-mu_a s)), and the track-length fluence tally of
+ * the segment is that power / mu_a. Russian roulette below 1e-4 of the
+ * launch weight (survival 1/10, weight x 10). Interior faces are
+ * index-matched (the diffusion model has no interior interface condition);
+ * at a boundary face the photon is reflected with probability R (exact
+ * unpolarised Fresnel reflectance with the tet's eta, total internal
+ * reflection included), otherwise it escapes.
+ *
+ * Tallies (W/mm^2, like the diffusion solvers): fluence per tet by the
+ * track-length estimator (sum of weight x length in the tet / V_t); fluence
+ * per mesh vertex = V_t-weighted mean of its tets' fluence, i.e. the sum of
+ * their track lengths / V_i (this smooths over one ring of tets); radiant
+ * exitance per boundary point (escaping weight shared among the exit
+ * triangle's corners by barycentric weights, / (S_i / 3)), converted to the
+ * radiance along the normal that eq. 3's angular form implies:
+ * L_n = M F_t(1) / (pi UniformTransmittance(eta)) (see Documentation/Solvers.md).
+ *
+ * Statistics: the photons of a channel are split into B batches (default
+ * 32); the standard errors come from the spread of the batch estimates.
+ * Every photon has its own random stream, a function of (seed, channel,
+ * photon index); batches are tallied separately and added in batch order,
+ * so the results depend on (seed, photons, batches) but not on the number
+ * of threads or the scheduling: bit-identical.
+ *
+ * Cost: NumberOfPhotons photons per channel that receives light (3N in
+ * total for white light), OpenMP-parallel over the batches (at most
+ * min(B, threads) threads are busy).
+ */
+class MonteCarloSolver : public DiffusionSolver
+{
+public:
+  std::string GetName() const override { return "montecarlo"; }
+
+  /**
+   * Trace the photons and write fluence (3 per mesh point, W/mm^2). The
+   * report's FluenceStandardError, Radiance and RadianceStandardError are
+   * filled (3 per mesh point; Radiance 0 at interior points); LinearSolver
+   * is "photons". Throws translucency::Error for: no mesh / material, a mesh
+   * without tets, invalid material, NumberOfPhotons <= 0, no light at all
+   * (no Lights and UniformIrradiance 0), an invalid light. Returns false if
+   * the progress callback asked to abort (outputs then unchanged).
+   */
+  bool Solve(const DiffusionProblem& problem, std::vector<double>& fluence,
+    SolverReport& report) override;
+
+  ///@{
+  /// Henyey-Greenstein mean cosine g in (-1, 1), default 0. The scattering
+  /// coefficient is sigma_s' / (1 - g), so sigma_s' stays the reduced one.
+  void SetAnisotropy(double g) { Anisotropy_ = g; }
+  double GetAnisotropy() const { return Anisotropy_; }
+  ///@}
+
+  ///@{
+  /// Number of batches for the standard errors (>= 2, default 32). With
+  /// fewer photons than batches, one photon per batch.
+  void SetNumberOfBatches(int n) { NumberOfBatches_ = n; }
+  int GetNumberOfBatches() const { return NumberOfBatches_; }
+  ///@}
+
+  ///@{
+  /// OpenMP threads (default 0: omp_get_max_threads()). Does not change
+  /// the results.
+  void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+  int GetNumberOfThreads() const { return NumberOfThreads_; }
+  ///@}
+
+  ///@{
+  /// Rays per boundary point of the shadowed uniform light (default 32, as
+  /// vtkSurfaceIrradiance; 0 = unshadowed exact). The problem does not carry
+  /// it: set it to what made the problem's Irradiance.
+  void SetUniformLightSamples(int n) { UniformLightSamples_ = n; }
+  int GetUniformLightSamples() const { return UniformLightSamples_; }
+  ///@}
+
+  /// Power bookkeeping of one channel (W), valid after Solve(). With
+  /// continuous absorption, Injected + RouletteGain = Absorbed + Escaped +
+  /// Lost holds to round-off; RouletteGain has mean 0.
+  struct PowerBalance
+  {
+    double Injected = 0.0;     ///< sum of the launch weights
+    double Absorbed = 0.0;     ///< weight lost along the paths
+    double Escaped = 0.0;      ///< weight that left through the boundary
+    double RouletteGain = 0.0; ///< weight added by survivors minus weight killed
+    double Lost = 0.0;         ///< weight of photons stopped by a safety limit
+    long long Photons = 0;     ///< photons traced
+    long long LostPhotons = 0; ///< photons stopped by a safety limit (should be 0)
+    long long Steps = 0;       ///< free-flight segments (tet crossings + events)
+  };
+  const PowerBalance& GetPowerBalance(int c) const { return Balance_[c]; }
+
+  ///@{
+  /// Tallies of the last Solve(): fluence per tet (3 per tet, W/mm^2) and
+  /// radiant exitance per mesh point (3 per point, W/mm^2, 0 inside), with
+  /// their standard errors.
+  const std::vector<double>& GetTetFluence() const { return TetFluence_; }
+  const std::vector<double>& GetExitance() const { return Exitance_; }
+  const std::vector<double>& GetExitanceStandardError() const { return ExitanceError_; }
+  ///@}
+
+  /// Photons traced in the last Solve() (all channels) and threads used.
+  long long GetNumberOfPhotonsTraced() const { return PhotonsTraced_; }
+  int GetNumberOfThreadsUsed() const { return ThreadsUsed_; }
+  /// Photons per second per thread of the last Solve()'s tracing.
+  double GetPhotonsPerSecondPerThread() const { return Rate_; }
+
+private:
+  double Anisotropy_ = 0.0;
+  int NumberOfBatches_ = 32;
+  int NumberOfThreads_ = 0;
+  int UniformLightSamples_ = 32;
+
+  std::array<PowerBalance, NumberOfChannels> Balance_{};
+  std::vector<double> TetFluence_;
+  std::vector<double> Exitance_;
+  std::vector<double> ExitanceError_;
+  long long PhotonsTraced_ = 0;
+  int ThreadsUsed_ = 0;
+  double Rate_ = 0.0;
+};
+
+} // namespace translucency
