@@ -51,6 +51,8 @@ translucency compare --mesh FILE [scene options] --output DIR [options]
   --output DIR             <solver>_radiance.png, <solver>_error.png, error_vs_time.png,
                            compare.vtm (needs X for the PNGs: xvfb-run -a)
   --no-png                 skip the pictures and the plot (no X needed)
+  --n-squared-law          energy-conserving radiance read-out (eq. 3 / eta^2); use it
+                           when the reference is montecarlo (see Documentation/Solvers.md)
   --json FILE              the table as JSON
   --view, --up, --size, --exposure   as for render
 )";
@@ -142,7 +144,7 @@ vtkSmartPointer<vtkDataArray> SurfaceRadiance(const SolverResult& result)
 }
 
 SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double relTol,
-  int maxIter, double gridSpacing, long long photons, int seed)
+  int maxIter, double gridSpacing, long long photons, int seed, bool nSquaredLaw)
 {
   MessageCollector messages;
   vtkNew<vtkSolveDiffusion> solve;
@@ -167,6 +169,7 @@ SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double
   vtkNew<vtkOutgoingRadiance> radiance;
   messages.Watch(radiance);
   radiance->SetInputData(result.Volume);
+  radiance->SetNSquaredLaw(nSquaredLaw);
   radiance->Update();
   if (!messages.Errors.empty())
     throw translucency::Error(name + ": " + messages.Last());
@@ -237,7 +240,7 @@ int Compare(const std::vector<std::string>& args)
   double gridSpacing = 0.0, relTol = 1e-8;
   long long photons = 1000000;
   int seed = 1;
-  bool pictures = true;
+  bool pictures = true, nSquaredLaw = false;
   for (size_t i = 0; i < args.size(); ++i)
   {
     const std::string& a = args[i];
@@ -280,6 +283,8 @@ int Compare(const std::vector<std::string>& args)
       jsonPath = value();
     else if (a == "--no-png")
       pictures = false;
+    else if (a == "--n-squared-law")
+      nSquaredLaw = true;
     else if (a == "--exposure")
       image.Exposure = number();
     else if (a == "--view" || a == "--up")
@@ -329,7 +334,7 @@ int Compare(const std::vector<std::string>& args)
   for (const std::string& name : order)
   {
     std::cerr << "translucency: solving with " << name << "...\n";
-    results[name] = RunSolver(name, lit, relTol, 20000, gridSpacing, photons, seed);
+    results[name] = RunSolver(name, lit, relTol, 20000, gridSpacing, photons, seed, nSquaredLaw);
   }
   const SolverResult& ref = results[reference];
   vtkDataArray* refFluence = ref.Surface->GetPointData()->GetArray("Fluence");

@@ -66,6 +66,8 @@ translucency render --mesh FILE [scene options] [options]
   --solver NAME            divergence (default), fem, quadgraph, grid, montecarlo
   --rel-tol T              relative residual of iterative solvers (default 1e-6)
   --max-iter N             iteration limit (default 2000)
+  --n-squared-law          divide the radiance by eta^2 (energy-conserving read-out;
+                           TransCut eq. 3 as printed omits it)
   --output PREFIX          write PREFIX.vtu (tet mesh, Fluence, coefficients) and
                            PREFIX.vtp (surface, Radiance, Irradiance, Fluence)
   --png FILE               render the tone-mapped radiance (800x600; needs X,
@@ -128,6 +130,7 @@ int Render(const std::vector<std::string>& args)
   std::string solverName = "divergence", outputPrefix, pngPath, slicePath, jsonPath;
   double relTol = 1e-6;
   int maxIter = 2000;
+  bool nSquaredLaw = false;
   RadianceImageOptions image;
 
   for (size_t i = 0; i < args.size(); ++i)
@@ -154,6 +157,8 @@ int Render(const std::vector<std::string>& args)
       slicePath = value();
     else if (a == "--json")
       jsonPath = value();
+    else if (a == "--n-squared-law")
+      nSquaredLaw = true;
     else if (a == "--list-materials")
     {
       for (const auto& p : translucency::GetMaterialPresets())
@@ -202,6 +207,7 @@ int Render(const std::vector<std::string>& args)
   vtkNew<vtkOutgoingRadiance> radiance;
   messages.Watch(radiance);
   radiance->SetInputData(solved);
+  radiance->SetNSquaredLaw(nSquaredLaw);
   radiance->Update();
   if (!messages.Errors.empty())
     throw translucency::Error(messages.Last());

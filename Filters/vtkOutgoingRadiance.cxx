@@ -111,6 +111,7 @@ int vtkOutgoingRadiance::RequestData(
   vtkDoubleArray* normalsOut = makeArray("Normals");
   const std::vector<double>& normals = mesh.GetPointNormals();
   const bool useView = this->UseViewPoint;
+  const bool nSquared = this->NSquaredLaw;
   const double* view = this->ViewPoint;
   vtkSMPTools::For(0, n, [&](vtkIdType begin, vtkIdType end) {
     for (vtkIdType k = begin; k < end; ++k)
@@ -129,7 +130,7 @@ int vtkOutgoingRadiance::RequestData(
       {
         radiance->SetTypedComponent(k, c,
           translucency::OutgoingRadiance(
-            fluence[3 * i + c], irradiance[3 * i + c], pointEta[i], cosOut));
+            fluence[3 * i + c], irradiance[3 * i + c], pointEta[i], cosOut, nSquared));
         phiOut->SetTypedComponent(k, c, fluence[3 * i + c]);
         qOut->SetTypedComponent(k, c, irradiance[3 * i + c]);
         normalsOut->SetTypedComponent(k, c, nrm[c]);
@@ -156,6 +157,7 @@ void vtkOutgoingRadiance::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "UseViewPoint: " << this->UseViewPoint << "\n";
+  os << indent << "NSquaredLaw: " << this->NSquaredLaw << "\n";
   os << indent << "ViewPoint: " << this->ViewPoint[0] << ", " << this->ViewPoint[1] << ", "
      << this->ViewPoint[2] << "\n";
 }

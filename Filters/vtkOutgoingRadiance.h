@@ -43,6 +43,19 @@ public:
   ///@}
 
   ///@{
+  /**
+   * Divide the radiance by eta^2 (the n^2 law for radiance leaving the
+   * medium). TransCut eq. 3 as printed omits it and then returns eta^2 times
+   * too much light (a non-absorbing object would emit 1.69x the power it
+   * receives at eta = 1.3); the Monte Carlo reference agrees with the
+   * corrected read-out. Default off: the paper's formula.
+   */
+  vtkSetMacro(NSquaredLaw, bool);
+  vtkGetMacro(NSquaredLaw, bool);
+  vtkBooleanMacro(NSquaredLaw, bool);
+  ///@}
+
+  ///@{
   /// Camera position (mm) used when UseViewPoint is on. Default (0, 0, 0).
   vtkSetVector3Macro(ViewPoint, double);
   vtkGetVector3Macro(ViewPoint, double);
@@ -56,6 +69,7 @@ protected:
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   bool UseViewPoint = false;
+  bool NSquaredLaw = false;
   double ViewPoint[3] = { 0.0, 0.0, 0.0 };
 
 private:

@@ -29,7 +29,7 @@ void CheckTetEta(const TetMesh& mesh, const std::vector<double>& tetEta)
 
 } // namespace
 
-double OutgoingRadiance(double phi, double q, double eta, double cosOut)
+double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nSquaredLaw)
 {
   if (!(cosOut > 0.0))
   {
@@ -39,7 +39,11 @@ double OutgoingRadiance(double phi, double q, double eta, double cosOut)
   const double a = Fresnel::MismatchA(eta);
   const double ft = Fresnel::Transmittance(std::min(cosOut, 1.0), eta);
   // TransCut eq. 3: L_o = F_t/(4 pi) [ (1 + 1/A) phi - 4/(1 + Fdr) q ]
-  const double radiance = ft / (4.0 * Pi) * ((1.0 + 1.0 / a) * phi - 4.0 / (1.0 + fdr) * q);
+  double radiance = ft / (4.0 * Pi) * ((1.0 + 1.0 / a) * phi - 4.0 / (1.0 + fdr) * q);
+  if (nSquaredLaw)
+  {
+    radiance /= eta * eta; // radiance from inside to vacuum scales by 1/eta^2
+  }
   return std::max(0.0, radiance);
 }
 

@@ -18,9 +18,14 @@ class TetMesh;
  * @param eta refractive index at the point
  * @param cosOut cosine between the outgoing direction and the outward normal
  *        (<= 0 gives 0: the point is not seen from that side)
+ * @param nSquaredLaw divide by eta^2 (radiance leaving a medium of index eta
+ *        into vacuum, the n^2 law). Eq. 3 as printed omits it, and then does
+ *        not conserve energy: with mu_a = 0 its exitance is eta^2 times the
+ *        power that entered (1.69x at eta = 1.3; see Documentation/Solvers.md).
+ *        Default false (the paper's formula).
  * @return radiance (W/mm^2/sr), clamped below at 0
  */
-double OutgoingRadiance(double phi, double q, double eta, double cosOut);
+double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nSquaredLaw = false);
 
 /**
  * Refractive index seen by each mesh point: the area-weighted mean of the

@@ -710,6 +710,38 @@ class PipelineTest(unittest.TestCase):
         # The output still carries the (unconverged) fluence.
         self.assertEqual(array(pipe.solve.GetOutput(), "Fluence").shape[1], 3)
 
+    def test_j_energy_of_the_readout(self):
+        # With mu_a = 0 every watt that enters leaves. The exitance of eq. 3 is
+        # M = (pi/4) T [(1 + 1/A) phi - 4 q / (1 + Fdr)] with T the hemispherical
+        # transmittance (the integral of F_t cos over the outside hemisphere),
+        # and the discrete balance sum S_i phi_i = sum S_i 4 q_i / (1 - Fdr) gives
+        # emitted / entering = T / (1 - Fdr) for the paper's eq. 3, which is
+        # eta^2 by reciprocity (T / eta^2 = 1 - Fdr, up to the accuracy of the
+        # Fdr fit): eq. 3 as printed creates energy; the n^2 law fixes it.
+        eta = 1.3
+        pipe = Pipeline(sphere_surface(), target_tets=3000, material="",
+                        absorption=(0.0, 0.0, 0.0), scattering=(1.0, 2.0, 3.0), eta=eta)
+        pipe.irradiance.AddDirectionalLight(0.3, -1.0, 0.2, 1.0)
+        pipe.irradiance.SetShadows(0)
+        ratios = {}
+        for law in (False, True):
+            pipe.radiance.SetNSquaredLaw(law)
+            surface = pipe.update(self)
+            phi = array(surface, "Fluence")
+            q = array(surface, "Irradiance")
+            area = point_areas(surface)
+            bracket = (1 + 1 / mismatch_a(eta)) * phi - 4 / (1 + fdr(eta)) * q
+            self.assertTrue(np.all(bracket > 0), "no radiance may be clamped in this check")
+            normal_radiance = array(surface, "Radiance")
+            # L along the normal = F_t(1) M / (pi T): back to exitance.
+            exitance = normal_radiance * np.pi * hemispherical_transmittance(eta) / \
+                fresnel_transmittance(1.0, eta)
+            ratios[law] = (area[:, None] * exitance).sum(axis=0) / (area[:, None] * q).sum(axis=0)
+        t = hemispherical_transmittance(eta)
+        self.assertAllClose(ratios[False], t / (1 - fdr(eta)), 1e-6, msg="eq. 3 exitance / influx")
+        self.assertAllClose(ratios[False], eta ** 2, 0.02, msg="eq. 3 creates eta^2 x the energy")
+        self.assertAllClose(ratios[True], 1.0, 0.02, msg="with the n^2 law, energy is conserved")
+
     def test_g_script_supplied_irradiance(self):
         eta = 1.3
         tetra = translucency.vtkTetrahedralizeSurface()
