@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
-#include <climits>
 #include <cmath>
 #include <numeric>
 #include <sstream>
@@ -1493,6 +1492,7 @@ bool QuadGraphSolver::Solve(
         level.ProlongationNodes.size() + level.RowOffsets.size() + level.ColumnIndices.size()) *
         sizeof(int);
   }
+  bytes += GraphPoints_.size() * sizeof(double) + GraphTets_.size() * sizeof(int); // change check
   report.MemoryBytes = bytes;
   ReportProgress(1.0);
   return true;
