@@ -64,6 +64,8 @@ Scene options (render and compare):
 const char* const RenderHelp = R"(
 translucency render --mesh FILE [scene options] [options]
   --solver NAME            divergence (default), fem, quadgraph, grid, montecarlo
+  --grid-spacing H         voxel spacing of the grid solver, mm (default: automatic)
+  --photons N              photon budget of montecarlo (default 1000000)
   --rel-tol T              relative residual of iterative solvers (default 1e-6)
   --max-iter N             iteration limit (default 2000)
   --n-squared-law          divide the radiance by eta^2 (energy-conserving read-out;
@@ -131,6 +133,8 @@ int Render(const std::vector<std::string>& args)
   double relTol = 1e-6;
   int maxIter = 2000;
   bool nSquaredLaw = false;
+  double gridSpacing = 0.0;
+  long long photons = 1000000;
   RadianceImageOptions image;
 
   for (size_t i = 0; i < args.size(); ++i)
@@ -159,6 +163,19 @@ int Render(const std::vector<std::string>& args)
       jsonPath = value();
     else if (a == "--n-squared-law")
       nSquaredLaw = true;
+    else if (a == "--grid-spacing")
+    {
+      gridSpacing = ParseNumbers(value(), a).at(0);
+      if (!(gridSpacing > 0))
+        throw UsageError("--grid-spacing must be > 0 mm");
+    }
+    else if (a == "--photons")
+    {
+      const double n = ParseNumbers(value(), a).at(0);
+      if (!(n >= 1))
+        throw UsageError("--photons must be >= 1");
+      photons = static_cast<long long>(n);
+    }
     else if (a == "--list-materials")
     {
       for (const auto& p : translucency::GetMaterialPresets())
@@ -193,6 +210,8 @@ int Render(const std::vector<std::string>& args)
   solve->SetInputData(lit);
   solve->SetRelTol(relTol);
   solve->SetMaxIter(maxIter);
+  solve->SetGridSpacing(gridSpacing);
+  solve->SetNumberOfPhotons(photons);
   solve->Update();
   if (!messages.Errors.empty())
     throw translucency::Error(messages.Last());
