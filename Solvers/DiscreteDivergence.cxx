@@ -3,6 +3,7 @@
 #include "Error.h"
 #include "Fresnel.h"
 #include "Radiance.h"
+#include "TetGeometry.h"
 #include "TetMesh.h"
 
 #include <omp.h>
@@ -174,38 +175,9 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
             const double* p1 = points + 3 * static_cast<size_t>(tv[1]);
             const double* p2 = points + 3 * static_cast<size_t>(tv[2]);
             const double* p3 = points + 3 * static_cast<size_t>(tv[3]);
-            const double e1x = p1[0] - p0[0], e1y = p1[1] - p0[1], e1z = p1[2] - p0[2];
-            const double e2x = p2[0] - p0[0], e2y = p2[1] - p0[1], e2z = p2[2] - p0[2];
-            const double e3x = p3[0] - p0[0], e3y = p3[1] - p0[1], e3z = p3[2] - p0[2];
-            // N_a = 2 S_a n_a: twice the area times the unit normal of the face
-            // opposite vertex a, pointing towards a (TransCut eq. 4 notation).
-            const double n1x = e2y * e3z - e2z * e3y, n1y = e2z * e3x - e2x * e3z,
-                         n1z = e2x * e3y - e2y * e3x;
-            const double n2x = e3y * e1z - e3z * e1y, n2y = e3z * e1x - e3x * e1z,
-                         n2z = e3x * e1y - e3y * e1x;
-            const double n3x = e1y * e2z - e1z * e2y, n3y = e1z * e2x - e1x * e2z,
-                         n3z = e1x * e2y - e1y * e2x;
-            // Closed surface: the face area vectors sum to zero.
-            const double n0x = -(n1x + n2x + n3x), n0y = -(n1y + n2y + n3y),
-                         n0z = -(n1z + n2z + n3z);
-            const double sixV = e1x * n1x + e1y * n1y + e1z * n1z; // 6 V_t > 0
-            const double volume = sixV * (1.0 / 6.0);
-            // Geometric edge weights g_ab = w_abt / kappa_t. The faces opposite
-            // a and b meet at the opposite edge kl with interior dihedral angle
-            // theta_kl: n_a.n_b = -cos(theta_kl) and sin(theta_kl) =
-            // 3 V_t |kl| / (2 S_a S_b), so
-            //   -(1/6) |kl| cot(theta_kl) = S_a S_b (n_a.n_b) / (9 V_t)
-            //                             = N_a.N_b / (36 V_t)   (TransCut eq. 10, Sec. 3.3)
-            const double scale = 1.0 / (6.0 * sixV);
-            const double g01 = (n0x * n1x + n0y * n1y + n0z * n1z) * scale;
-            const double g02 = (n0x * n2x + n0y * n2y + n0z * n2z) * scale;
-            const double g03 = (n0x * n3x + n0y * n3y + n0z * n3z) * scale;
-            const double g12 = (n1x * n2x + n1y * n2y + n1z * n2z) * scale;
-            const double g13 = (n1x * n3x + n1y * n3y + n1z * n3z) * scale;
-            const double g23 = (n2x * n3x + n2y * n3y + n2z * n3z) * scale;
-            // -sum_j w_ijt (TransCut Sec. 3.3: w_iit = -(w_ijt + w_ikt + w_ilt)).
-            const double g00 = -(g01 + g02 + g03), g11 = -(g01 + g12 + g13),
-                         g22 = -(g02 + g12 + g23), g33 = -(g03 + g13 + g23);
+            const TetGeometry geometry = ComputeTetGeometry(p0, p1, p2, p3);
+            const double volume = geometry.Volume;
+            const double(&g)[4][4] = geometry.Stiffness; // g_ab = N_a.N_b / (36 V_t)
             // Entry 4a+b of the tet's 16 is (row tv[a], column tv[b]).
             const int* pos = positions + 16 * t;
             const int q00 = pos[0], q01 = pos[1], q02 = pos[2], q03 = pos[3];
@@ -218,14 +190,14 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
               const double four = 4.0 / (3.0 * (mu + sigmaS[3 * t + c])); // 4 kappa_t
               const double mass = volume * mu; // V_t mu_t: the tet's share of V_i mu(x_i), eq. 13
               // TransCut eq. 14: M_ij = 4 w_ij.
-              const double w01 = four * g01, w02 = four * g02, w03 = four * g03;
-              const double w12 = four * g12, w13 = four * g13, w23 = four * g23;
+              const double w01 = four * g[0][1], w02 = four * g[0][2], w03 = four * g[0][3];
+              const double w12 = four * g[1][2], w13 = four * g[1][3], w23 = four * g[2][3];
               double* v = values[c];
               // TransCut eq. 13: M_ii = -4 sum_j w_ij + V_i mu(x_i).
-              v[q00] += four * g00 + mass;
-              v[q11] += four * g11 + mass;
-              v[q22] += four * g22 + mass;
-              v[q33] += four * g33 + mass;
+              v[q00] += four * g[0][0] + mass;
+              v[q11] += four * g[1][1] + mass;
+              v[q22] += four * g[2][2] + mass;
+              v[q33] += four * g[3][3] + mass;
               v[q01] += w01;
               v[q10] += w01;
               v[q02] += w02;

@@ -8,6 +8,7 @@
 #include "Fresnel.h"
 #include "Radiance.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetMesh.h"
 
 #include <Eigen/Dense>
@@ -26,9 +27,7 @@ namespace
 {
 
 using namespace translucency;
-using translucency::testing::CubeMesh;
-using translucency::testing::MeshData;
-using translucency::testing::Uniform01;
+using namespace translucency::testing;
 
 using ColMatrix = Eigen::SparseMatrix<double>;
 
@@ -373,11 +372,6 @@ TEST(DiscreteDivergence, EnergyBalanceWithoutAbsorption)
 /// phi = exp(a.x) on the cube [0, L]^3 with n cells per side, for the
 /// channel materials (mu_a, sigma_s'); |a|^2 = mu_a / kappa makes
 /// div(kappa grad phi) - mu_a phi = 0.
-struct ConvergenceErrors
-{
-  std::array<double, 3> Max, Rms;
-};
-
 ConvergenceErrors ManufacturedErrors(int cells,
   double length,
   const double muA[3],
@@ -391,14 +385,7 @@ ConvergenceErrors ManufacturedErrors(int cells,
     OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigma, eta);
   const double fdr = -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
   const double bigA = (1.0 + fdr) / (1.0 - fdr);
-  std::array<Eigen::Vector3d, 3> a;
-  std::array<double, 3> kappa;
-  for (int c = 0; c < 3; ++c)
-  {
-    kappa[c] = 1.0 / (3.0 * (muA[c] + sigma[c]));
-    a[c] = std::sqrt(muA[c] / kappa[c]) * direction.normalized();
-  }
-  auto exact = [&](int c, const Eigen::Vector3d& x) { return std::exp(a[c].dot(x)); };
+  const ExponentialSolution exact(muA, sigma, direction);
 
   // Robin data q = (1 - Fdr)/4 (phi + 2 A kappa dphi/dn) with the exact
   // outward normal of each box face. A vertex on an edge or corner belongs to
@@ -424,9 +411,7 @@ ConvergenceErrors ManufacturedErrors(int cells,
       const Eigen::Vector3d x(mesh.GetPoint(tri[m]));
       for (int c = 0; c < 3; ++c)
       {
-        const double phi = exact(c, x);
-        const double dphidn = a[c].dot(faceNormal) * phi;
-        q[3 * tri[m] + c] += area * (1.0 - fdr) / 4.0 * (phi + 2.0 * bigA * kappa[c] * dphidn);
+        q[3 * tri[m] + c] += area * exact.RobinData(c, x, faceNormal, fdr, bigA);
       }
       weight[tri[m]] += area;
     }
@@ -444,18 +429,13 @@ ConvergenceErrors ManufacturedErrors(int cells,
   DiffusionSystem system;
   divergence.Assemble(mesh, material, q, system);
   const auto x = Solve(system, 1e-12);
-  ConvergenceErrors errors{};
+  ConvergenceErrors errors;
   for (int c = 0; c < 3; ++c)
   {
-    double sum2 = 0.0;
-    for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
-    {
-      const double e = exact(c, Eigen::Vector3d(mesh.GetPoint(i)));
-      const double rel = std::abs(x[c][i] - e) / e;
-      errors.Max[c] = std::max(errors.Max[c], rel);
-      sum2 += rel * rel;
-    }
-    errors.Rms[c] = std::sqrt(sum2 / mesh.GetNumberOfPoints());
+    RelativeErrors(
+      mesh.GetNumberOfPoints(), [&](int i) { return x[c][i]; },
+      [&](int i) { return exact(c, Eigen::Vector3d(mesh.GetPoint(i))); }, errors.Max[c],
+      errors.Rms[c]);
   }
   return errors;
 }
@@ -464,38 +444,25 @@ TEST(DiscreteDivergence, ConvergenceToManufacturedSolution)
 {
   // Three channels, three absorption lengths (1/|a|): skin1 red (3.7 mm),
   // marble red (8.5 mm) and apple blue (1.9 mm), on a 10 mm cube.
-  const MaterialPreset& skin = FindMaterialPreset("skin1");
-  const MaterialPreset& marble = FindMaterialPreset("marble");
-  const MaterialPreset& apple = FindMaterialPreset("apple");
-  const double muA[3] = { skin.Absorption[0], marble.Absorption[0], apple.Absorption[2] };
-  const double sigma[3] = {
-    skin.ReducedScattering[0], marble.ReducedScattering[0], apple.ReducedScattering[2]
-  };
+  const ChannelMaterials channels = ConvergenceChannels();
   const Eigen::Vector3d direction(1.0, 2.0, 3.0);
   const int levels[] = { 4, 8, 16, 32 };
   std::vector<ConvergenceErrors> errors;
   for (int n : levels)
   {
-    errors.push_back(ManufacturedErrors(n, 10.0, muA, sigma, direction, 1.3));
+    errors.push_back(
+      ManufacturedErrors(n, 10.0, channels.MuA, channels.Sigma, direction, 1.3));
   }
   std::ostringstream report;
   report << std::setprecision(3);
   for (int c = 0; c < 3; ++c)
   {
     report << "channel " << c << ":";
-    for (size_t l = 0; l < errors.size(); ++l)
-    {
-      report << "  n=" << levels[l] << " max " << errors[l].Max[c] << " rms " << errors[l].Rms[c];
-      if (l > 0)
-      {
-        report << " (orders " << std::log2(errors[l - 1].Max[c] / errors[l].Max[c]) << ", "
-               << std::log2(errors[l - 1].Rms[c] / errors[l].Rms[c]) << ")";
-      }
-    }
+    WriteRefinementRow(report, levels, errors, c);
     report << "\n";
     const size_t f = errors.size() - 1;
-    const double rmsOrder = std::log2(errors[f - 1].Rms[c] / errors[f].Rms[c]);
-    const double maxOrder = std::log2(errors[f - 1].Max[c] / errors[f].Max[c]);
+    const double rmsOrder = ConvergenceOrder(errors[f - 1].Rms[c], errors[f].Rms[c]);
+    const double maxOrder = ConvergenceOrder(errors[f - 1].Max[c], errors[f].Max[c]);
     ::testing::Test::RecordProperty(
       "rms_order_channel_" + std::to_string(c), std::to_string(rmsOrder));
     ::testing::Test::RecordProperty(
@@ -545,25 +512,6 @@ TEST(DiscreteDivergence, PointRefractiveIndex)
 }
 
 // ---- input checks ----
-
-template <typename F>
-std::string ErrorMessage(F f)
-{
-  try
-  {
-    f();
-  }
-  catch (const Error& e)
-  {
-    return e.what();
-  }
-  return "";
-}
-
-bool Contains(const std::string& text, const std::string& part)
-{
-  return text.find(part) != std::string::npos;
-}
 
 TEST(DiscreteDivergenceErrors, MaterialAndIrradianceValidation)
 {

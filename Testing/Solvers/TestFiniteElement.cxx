@@ -14,6 +14,7 @@
 #include "LightSources.h"
 #include "Radiance.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetMesh.h"
 #include "VertexDiffusionSolver.h"
 
@@ -42,9 +43,7 @@ namespace
 {
 
 using namespace translucency;
-using translucency::testing::CubeMesh;
-using translucency::testing::MeshData;
-using translucency::testing::Uniform01;
+using namespace translucency::testing;
 
 using ColMatrix = Eigen::SparseMatrix<double>;
 
@@ -510,11 +509,6 @@ TEST(FiniteElement, ParallelEqualsSerial)
 
 // ---- manufactured solution ----
 
-struct ConvergenceErrors
-{
-  std::array<double, 3> Max{}, Rms{};
-};
-
 /// How the manufactured Robin data q, smooth on each box face but
 /// discontinuous across the box edges (the faces' normals differ), becomes
 /// the per-vertex irradiance the solvers take.
@@ -670,34 +664,19 @@ ConvergenceErrors ManufacturedErrors(Discretization& discretization,
   const OpticalProperties material =
     OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigma, eta);
   const double fdr = FdrOf(eta), bigA = AOf(eta);
-  std::array<Eigen::Vector3d, 3> a;
-  std::array<double, 3> kappa;
-  for (int c = 0; c < 3; ++c)
-  {
-    kappa[c] = 1.0 / (3.0 * (muA[c] + sigma[c]));
-    a[c] = std::sqrt(muA[c] / kappa[c]) * direction.normalized();
-  }
-  auto exact = [&](int c, const Eigen::Vector3d& x) { return std::exp(a[c].dot(x)); };
+  const ExponentialSolution exact(muA, sigma, direction);
   auto faceQ = [&](int c, const Eigen::Vector3d& x, const Eigen::Vector3d& normal)
-  {
-    const double phi = exact(c, x);
-    return (1.0 - fdr) / 4.0 * (phi + 2.0 * bigA * kappa[c] * a[c].dot(normal) * phi);
-  };
+  { return exact.RobinData(c, x, normal, fdr, bigA); };
   DiffusionSystem system;
   discretization.Assemble(mesh, material, IrradianceFromFaceData(mesh, data, faceQ), system);
   const auto x = Solve(system, 1e-12);
   ConvergenceErrors errors;
   for (int c = 0; c < 3; ++c)
   {
-    double sum2 = 0.0;
-    for (int i = 0; i < n; ++i)
-    {
-      const double e = exact(c, Eigen::Vector3d(mesh.GetPoint(i)));
-      const double rel = std::abs(x[c][i] - e) / e;
-      errors.Max[c] = std::max(errors.Max[c], rel);
-      sum2 += rel * rel;
-    }
-    errors.Rms[c] = std::sqrt(sum2 / n);
+    RelativeErrors(
+      n, [&](int i) { return x[c][i]; },
+      [&](int i) { return exact(c, Eigen::Vector3d(mesh.GetPoint(i))); }, errors.Max[c],
+      errors.Rms[c]);
   }
   return errors;
 }
@@ -712,13 +691,9 @@ TEST(FiniteElement, ConvergenceToManufacturedSolution)
   // (max order about 1, 0.5-0.8 for the weakly absorbing channel) while the
   // RMS order stays a little under 2; printed for the record (n = 8, 16),
   // with the divergence error at the finest level.
-  const MaterialPreset& skin = FindMaterialPreset("skin1");
-  const MaterialPreset& marble = FindMaterialPreset("marble");
-  const MaterialPreset& apple = FindMaterialPreset("apple");
-  const double muA[3] = { skin.Absorption[0], marble.Absorption[0], apple.Absorption[2] };
-  const double sigma[3] = {
-    skin.ReducedScattering[0], marble.ReducedScattering[0], apple.ReducedScattering[2]
-  };
+  const ChannelMaterials channels = ConvergenceChannels();
+  const double* muA = channels.MuA;
+  const double* sigma = channels.Sigma;
   const Eigen::Vector3d direction(1.0, 2.0, 3.0);
   const int levels[] = { 4, 8, 16, 32 };
   const size_t f = 3;
@@ -745,16 +720,7 @@ TEST(FiniteElement, ConvergenceToManufacturedSolution)
   {
     report << "  " << title << ":";
     const size_t first = errors.size() == projected.size() ? 0 : f - 2; // level of errors[0]
-    for (size_t l = 0; l < errors.size(); ++l)
-    {
-      report << "  n=" << levels[first + l] << " max " << errors[l].Max[c] << " rms "
-             << errors[l].Rms[c];
-      if (l > 0)
-      {
-        report << " (orders " << std::log2(errors[l - 1].Max[c] / errors[l].Max[c]) << ", "
-               << std::log2(errors[l - 1].Rms[c] / errors[l].Rms[c]) << ")";
-      }
-    }
+    WriteRefinementRow(report, levels + first, errors, c);
     report << "\n";
   };
   for (int c = 0; c < 3; ++c)
@@ -764,8 +730,8 @@ TEST(FiniteElement, ConvergenceToManufacturedSolution)
     table("fem, vertex-mean q ", mean, c);
     report << "  n=" << levels[f] << " divergence (vertex-mean q): max " << divergenceFinest.Max[c]
            << " rms " << divergenceFinest.Rms[c] << "\n";
-    const double rmsOrder = std::log2(projected[f - 1].Rms[c] / projected[f].Rms[c]);
-    const double maxOrder = std::log2(projected[f - 1].Max[c] / projected[f].Max[c]);
+    const double rmsOrder = ConvergenceOrder(projected[f - 1].Rms[c], projected[f].Rms[c]);
+    const double maxOrder = ConvergenceOrder(projected[f - 1].Max[c], projected[f].Max[c]);
     ::testing::Test::RecordProperty(
       "fem_rms_order_channel_" + std::to_string(c), std::to_string(rmsOrder));
     ::testing::Test::RecordProperty(
@@ -822,25 +788,6 @@ TEST(FiniteElement, FactoryAndVertexSolver)
 }
 
 // ---- input checks ----
-
-template <typename F>
-std::string ErrorMessage(F f)
-{
-  try
-  {
-    f();
-  }
-  catch (const Error& e)
-  {
-    return e.what();
-  }
-  return "";
-}
-
-bool Contains(const std::string& text, const std::string& part)
-{
-  return text.find(part) != std::string::npos;
-}
 
 TEST(FiniteElementErrors, InvalidInputThrows)
 {

@@ -9,6 +9,7 @@
 #include "Fresnel.h"
 #include "GridSolver.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetLocator.h"
 #include "TetMesh.h"
 
@@ -27,10 +28,7 @@ namespace
 {
 
 using namespace translucency;
-using translucency::testing::BoxMesh;
-using translucency::testing::CubeMesh;
-using translucency::testing::MeshData;
-using translucency::testing::Uniform01;
+using namespace translucency::testing;
 
 TetMesh Build(const MeshData& data)
 {
@@ -111,25 +109,6 @@ DiffusionProblem MakeProblem(const TetMesh& mesh,
   problem.Material = &material;
   problem.Irradiance = &q;
   return problem;
-}
-
-template<typename F>
-std::string ErrorMessage(F f)
-{
-  try
-  {
-    f();
-  }
-  catch (const Error& e)
-  {
-    return e.what();
-  }
-  return "";
-}
-
-bool Contains(const std::string& text, const std::string& part)
-{
-  return text.find(part) != std::string::npos;
 }
 
 // ---- tet locator ----
@@ -261,14 +240,7 @@ GridErrors ManufacturedErrors(double h,
     OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigma, eta);
   const double fdr = Fresnel::DiffuseReflectance(eta);
   const double bigA = (1.0 + fdr) / (1.0 - fdr);
-  std::array<Eigen::Vector3d, 3> a;
-  std::array<double, 3> kappa;
-  for (int c = 0; c < 3; ++c)
-  {
-    kappa[c] = 1.0 / (3.0 * (muA[c] + sigma[c]));
-    a[c] = std::sqrt(muA[c] / kappa[c]) * direction.normalized();
-  }
-  auto exact = [&](int c, const Eigen::Vector3d& x) { return std::exp(a[c].dot(x)); };
+  const ExponentialSolution exact(muA, sigma, direction);
 
   GridSolver solver;
   solver.SetGridSpacing(h);
@@ -302,8 +274,7 @@ GridErrors ManufacturedErrors(double h,
     EXPECT_EQ(faces, 1) << "boundary node " << b << " is not on exactly one face";
     for (int c = 0; c < 3; ++c)
     {
-      const double phi = exact(c, x);
-      nodeQ[3 * b + c] = (1.0 - fdr) / 4.0 * (phi + 2.0 * bigA * kappa[c] * a[c].dot(normal) * phi);
+      nodeQ[3 * b + c] = exact.RobinData(c, x, normal, fdr, bigA);
       EXPECT_GE(nodeQ[3 * b + c], 0.0); // the setup must keep q physical
     }
   }
@@ -317,26 +288,19 @@ GridErrors ManufacturedErrors(double h,
   for (int c = 0; c < 3; ++c)
   {
     EXPECT_TRUE(report.Converged[c]) << "h " << h << " channel " << c;
-    double sum2 = 0.0;
     const Eigen::VectorXd& x = solver.GetNodeFluence()[c];
-    for (int u = 0; u < numInterior + numBoundary; ++u)
-    {
-      const std::array<double, 3> p = solver.GetNodePosition(u);
-      const double e = exact(c, Eigen::Vector3d(p[0], p[1], p[2]));
-      const double rel = std::abs(x[u] - e) / e;
-      errors.NodeMax[c] = std::max(errors.NodeMax[c], rel);
-      sum2 += rel * rel;
-    }
-    errors.NodeRms[c] = std::sqrt(sum2 / (numInterior + numBoundary));
-    sum2 = 0.0;
-    for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
-    {
-      const double e = exact(c, Eigen::Vector3d(mesh.GetPoint(i)));
-      const double rel = std::abs(fluence[3 * i + c] - e) / e;
-      errors.VertexMax[c] = std::max(errors.VertexMax[c], rel);
-      sum2 += rel * rel;
-    }
-    errors.VertexRms[c] = std::sqrt(sum2 / mesh.GetNumberOfPoints());
+    RelativeErrors(
+      numInterior + numBoundary, [&](int u) { return x[u]; },
+      [&](int u)
+      {
+        const std::array<double, 3> p = solver.GetNodePosition(u);
+        return exact(c, Eigen::Vector3d(p[0], p[1], p[2]));
+      },
+      errors.NodeMax[c], errors.NodeRms[c]);
+    RelativeErrors(
+      mesh.GetNumberOfPoints(), [&](int i) { return fluence[3 * i + c]; },
+      [&](int i) { return exact(c, Eigen::Vector3d(mesh.GetPoint(i))); }, errors.VertexMax[c],
+      errors.VertexRms[c]);
   }
   return errors;
 }
@@ -344,13 +308,9 @@ GridErrors ManufacturedErrors(double h,
 TEST(GridSolver, ConvergenceToManufacturedSolution)
 {
   // The channels of TestDiscreteDivergence: skin1 red, marble red, apple blue.
-  const MaterialPreset& skin = FindMaterialPreset("skin1");
-  const MaterialPreset& marble = FindMaterialPreset("marble");
-  const MaterialPreset& apple = FindMaterialPreset("apple");
-  const double muA[3] = { skin.Absorption[0], marble.Absorption[0], apple.Absorption[2] };
-  const double sigma[3] = {
-    skin.ReducedScattering[0], marble.ReducedScattering[0], apple.ReducedScattering[2]
-  };
+  const ChannelMaterials channels = ConvergenceChannels();
+  const double* muA = channels.MuA;
+  const double* sigma = channels.Sigma;
   const Eigen::Vector3d direction(1.0, 2.0, 3.0);
   const double spacings[] = { 0.5, 0.25, 0.125 };
   std::vector<GridErrors> errors;
@@ -361,7 +321,7 @@ TEST(GridSolver, ConvergenceToManufacturedSolution)
   std::ostringstream out;
   out << std::setprecision(3);
   const size_t f = errors.size() - 1;
-  auto order = [](double coarse, double fine) { return std::log2(coarse / fine); };
+  const auto order = ConvergenceOrder;
   for (int c = 0; c < 3; ++c)
   {
     out << "channel " << c << ":\n";
@@ -876,13 +836,9 @@ TEST(GridSolver, RotatedBoxRmsConvergence)
   // all nodes, so the RMS error still falls at first order while the
   // maximum stalls (printed, not asserted).
   const double length[3] = { 4.0, 3.0, 2.5 };
-  const MaterialPreset& skin = FindMaterialPreset("skin1");
-  const MaterialPreset& marble = FindMaterialPreset("marble");
-  const MaterialPreset& apple = FindMaterialPreset("apple");
-  const double muA[3] = { skin.Absorption[0], marble.Absorption[0], apple.Absorption[2] };
-  const double sigma[3] = {
-    skin.ReducedScattering[0], marble.ReducedScattering[0], apple.ReducedScattering[2]
-  };
+  const ChannelMaterials channels = ConvergenceChannels();
+  const double* muA = channels.MuA;
+  const double* sigma = channels.Sigma;
   const double eta = 1.3, fdr = Fresnel::DiffuseReflectance(eta), bigA = Fresnel::MismatchA(eta);
   const Eigen::Matrix3d rotation =
     Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, 3).normalized()).matrix();

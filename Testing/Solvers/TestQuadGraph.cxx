@@ -12,6 +12,7 @@
 #include "Fresnel.h"
 #include "QuadGraph.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetMesh.h"
 
 #include <Eigen/Dense>
@@ -33,9 +34,7 @@ namespace
 {
 
 using namespace translucency;
-using translucency::testing::CubeMesh;
-using translucency::testing::MeshData;
-using translucency::testing::Uniform01;
+using namespace translucency::testing;
 using Vec3 = Eigen::Vector3d;
 using Level = QuadGraphSolver::Level;
 
@@ -601,7 +600,7 @@ std::string OrderTable(const std::vector<int>& levels, const std::vector<Errors>
 {
   std::ostringstream os;
   os << std::setprecision(3);
-  auto order = [](double coarse, double fine) { return std::log2(coarse / fine); };
+  const auto order = ConvergenceOrder;
   for (int c = 0; c < 3; ++c)
   {
     os << "  channel " << c << "\n";
@@ -651,13 +650,9 @@ TEST(QuadGraph, RefinementStudyShowsTheSchemeIsInconsistent)
   // q is given per point from the Robin condition with the exact box
   // normals (area-weighted over the faces at box edges and corners).
   const Vec3 u = Vec3(1.0, 2.0, 3.0).normalized();
-  const MaterialPreset& skin = FindMaterialPreset("skin1");
-  const MaterialPreset& marble = FindMaterialPreset("marble");
-  const MaterialPreset& apple = FindMaterialPreset("apple");
-  const double muA[3] = { skin.Absorption[0], marble.Absorption[0], apple.Absorption[2] };
-  const double sigma[3] = {
-    skin.ReducedScattering[0], marble.ReducedScattering[0], apple.ReducedScattering[2]
-  };
+  const ChannelMaterials channels = ConvergenceChannels();
+  const double* muA = channels.MuA;
+  const double* sigma = channels.Sigma;
   const double zero[3] = { 0.0, 0.0, 0.0 };
   std::array<Vec3, 3> a;
   for (int c = 0; c < 3; ++c)
@@ -1015,25 +1010,6 @@ TEST(QuadGraph, FactoryAndAbort)
   solver->SetProgressCallback(nullptr);
   EXPECT_TRUE(solver->Solve(problem, fluence, report));
   EXPECT_EQ(fluence.size(), 3u * mesh.GetNumberOfPoints());
-}
-
-template <typename F>
-std::string ErrorMessage(F f)
-{
-  try
-  {
-    f();
-  }
-  catch (const Error& e)
-  {
-    return e.what();
-  }
-  return "";
-}
-
-bool Contains(const std::string& text, const std::string& part)
-{
-  return text.find(part) != std::string::npos;
 }
 
 TEST(QuadGraphErrors, BadInputThrows)

@@ -3,6 +3,7 @@
 
 #include "Error.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetMesh.h"
 
 #include <gtest/gtest.h>
@@ -21,34 +22,13 @@ namespace
 {
 
 using namespace translucency;
-using translucency::testing::BoxMesh;
-using translucency::testing::MeshData;
+using namespace translucency::testing;
 
 TetMesh Build(const MeshData& data)
 {
   TetMesh mesh;
   mesh.SetGeometry(data.Points, data.Tets);
   return mesh;
-}
-
-/// Message of the translucency::Error thrown by f ("" if none).
-template <typename F>
-std::string ErrorMessage(F f)
-{
-  try
-  {
-    f();
-  }
-  catch (const Error& e)
-  {
-    return e.what();
-  }
-  return "";
-}
-
-bool Contains(const std::string& text, const std::string& part)
-{
-  return text.find(part) != std::string::npos;
 }
 
 class BoxMeshTest : public ::testing::TestWithParam<double> // jitter
