@@ -314,10 +314,16 @@ void EnsureParentDirectory(const std::string& path)
   }
 }
 
-void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& material)
+void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& material,
+  const std::string& materialIds)
 {
   if (Extension(material) != "json")
   {
+    if (!materialIds.empty())
+    {
+      throw translucency::Error("--material-ids needs --material FILE.json holding a material "
+                                "table {\"materials\": [...]} (got '" + material + "')");
+    }
     assign->SetMaterialName(material.c_str());
     return;
   }
@@ -356,6 +362,24 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
     throw translucency::Error("material file '" + material +
       "' must hold a JSON object {\"absorption\": [r, g, b], ...}");
   }
+  if (j.contains("materials"))
+  {
+    // A material table (Documentation/Materials.md): the filter reads it.
+    if (materialIds.empty())
+    {
+      throw translucency::Error("material table '" + material +
+        "' needs --material-ids ARRAY (the cell array of material ids, e.g. RegionAttribute)");
+    }
+    assign->SetMaterialModeToMaterialIds();
+    assign->SetMaterialTableFileName(material.c_str());
+    assign->SetMaterialIdArrayName(materialIds.c_str());
+    return;
+  }
+  if (!materialIds.empty())
+  {
+    throw translucency::Error("--material-ids needs a material table {\"materials\": [...]}, "
+                              "but '" + material + "' holds a single material");
+  }
   if (j.contains("preset"))
   {
     if (!j["preset"].is_string())
@@ -393,8 +417,12 @@ const char* const SceneOptionsHelp = R"(  --mesh FILE              closed triang
   --quality Q              radius-edge ratio bound for TetGen (default 1.414)
   --material NAME|FILE     measured preset (default marble; see render --list-materials)
                            or a JSON file {"absorption": [r,g,b], "reduced_scattering":
-                           [r,g,b], "refractive_index": eta} in 1/mm. A .vtu input that
-                           already has the coefficient arrays keeps them unless given.
+                           [r,g,b], "refractive_index": eta} in 1/mm, or a material
+                           table {"materials": [...]} (Documentation/Materials.md) used
+                           with --material-ids. A .vtu input that already has the
+                           coefficient arrays keeps them unless given.
+  --material-ids ARRAY     cell array of integer material ids (e.g. RegionAttribute of
+                           a TetGen mesh): each tet gets its entry of the table
   --light SPEC             may repeat; default directional:0,-1,-1:1 and uniform:0.1
                            directional:dx,dy,dz[:E]  direction of travel, E W/mm^2 (1)
                            point:x,y,z[:I]           position mm, intensity W/sr (1)
@@ -438,6 +466,8 @@ bool SceneOptions::Parse(const std::vector<std::string>& args, size_t& i)
   }
   else if (a == "--material")
     this->Material = value();
+  else if (a == "--material-ids")
+    this->MaterialIds = value();
   else if (a == "--light")
     this->Lights.push_back(ParseLight(value()));
   else if (a == "--no-shadows")
@@ -456,6 +486,10 @@ bool SceneOptions::Parse(const std::vector<std::string>& args, size_t& i)
 
 void SceneOptions::Finish(const std::string& command)
 {
+  if (!this->MaterialIds.empty() && this->Material.empty())
+  {
+    throw UsageError("--material-ids needs --material FILE.json (a material table)");
+  }
   if (this->MeshPath.empty())
   {
     throw UsageError(command + " needs --mesh FILE");
@@ -512,7 +546,8 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(
   {
     vtkNew<vtkAssignScatteringCoefficients> assign;
     messages.Watch(assign);
-    ApplyMaterial(assign, options.Material.empty() ? std::string("marble") : options.Material);
+    ApplyMaterial(assign, options.Material.empty() ? std::string("marble") : options.Material,
+      options.MaterialIds);
     assign->SetInputData(grid);
     assign->Update();
     if (!messages.Errors.empty())

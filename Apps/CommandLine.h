@@ -71,6 +71,7 @@ struct SceneOptions
 {
   std::string MeshPath;
   std::string Material; ///< preset name or JSON file; empty: keep .vtu arrays or marble
+  std::string MaterialIds; ///< cell array of material ids (with a JSON material table)
   long long TargetTets = 200000;
   bool TargetGiven = false;
   double MaxTetVolume = 0.0;
@@ -105,7 +106,11 @@ bool WriteAtomically(vtkXMLWriter* writer, vtkDataObject* data, const std::strin
 bool WriteText(const std::string& path, const std::string& text, std::string& error);
 /// mkdir -p of the directory holding `path`.
 void EnsureParentDirectory(const std::string& path);
-void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& material);
+/// Configure `assign` from --material (a preset name, a single-material JSON
+/// file or a JSON material table) and --material-ids (the id array a table
+/// needs). Throws translucency::Error naming the file on bad input.
+void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& material,
+  const std::string& materialIds = std::string());
 void PrintStages(const std::vector<Stage>& stages);
 
 /// `translucency compare` (Compare.cxx) and its help text.

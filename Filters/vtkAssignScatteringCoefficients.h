@@ -11,8 +11,37 @@
  * the values set explicitly. A `vtkOriginalCellIds` array (the input cell
  * ids) is added when the input has none, so later cuts can map back.
  *
+ * MaterialMode chooses how the coefficients vary (Documentation/Materials.md):
+ * - UNIFORM (default): one material everywhere, the preset or the explicit
+ *   values above (the behaviour of earlier versions).
+ * - MATERIAL_IDS: a cell array of integer ids (MaterialIdArrayName, default
+ *   TetGen's `RegionAttribute`) picks each tet's entry of the JSON material
+ *   table MaterialTableFileName (read with vtkMaterialTableReader).
+ * - SPHERICAL_INCLUSION: tets whose centroid lies in the closed ball
+ *   (InclusionCenter, InclusionRadius) get InsideMaterial, the others
+ *   OutsideMaterial.
+ * - LAYERS: skin-like layers by depth below the surface. The depth of a tet
+ *   is the distance from its centroid to the closest boundary triangle of
+ *   the mesh; layer k (added with AddLayer, outermost first) holds depths in
+ *   [sum of the thicknesses before k, that sum + thickness k); tets deeper
+ *   than all layers get the last layer's material.
+ * - VEINS: marble-like veins. With the turbulence
+ *   t(x) = sum_{o < VeinOctaves} 2^-o |N(2^o f x + p)| (N: vtkPerlinNoise,
+ *   amplitude 1, frequency 2^o f in each axis, phase p from VeinSeed),
+ *   s(x) = sin(2 pi (f d.x + VeinTurbulence t(x))) (f = VeinFrequency,
+ *   d = unit VeinDirection) and the vein weight w = (1 - |s|)^VeinSharpness,
+ *   a tet with centroid x gets (1 - w) BaseMaterial + w VeinMaterial (each
+ *   coefficient and eta blended linearly).
+ *
+ * In the procedural modes a material is named by a reference: the name of a
+ * table entry (when MaterialTableFileName is set), else the id of a table
+ * entry written as an integer, else a measured preset name.
+ *
  * @warning An unknown preset name or a negative / non-finite value is an
- * error (the filter returns 0 and says which value).
+ * error (the filter returns 0 and says which value). So are a table error
+ * (see vtkMaterialTableReader), a missing id array, a non-integer id or an
+ * id absent from the table (the message names the tet and the id), an
+ * unknown material reference and LAYERS mode without layers.
  *
  * @sa vtkTetrahedralizeSurface vtkSolveDiffusion
  */
@@ -23,6 +52,8 @@
 #include "vtkUnstructuredGridAlgorithm.h"
 
 #include <string>
+#include <vector> // for the layers
+
 
 class TRANSLUCENCYFILTERS_EXPORT vtkAssignScatteringCoefficients
   : public vtkUnstructuredGridAlgorithm
@@ -70,6 +101,133 @@ public:
   vtkGetMacro(ScaleFactor, double);
   ///@}
 
+  /// How the coefficients vary over the mesh (see the class documentation).
+  enum MaterialModes
+  {
+    UNIFORM = 0,
+    MATERIAL_IDS = 1,
+    SPHERICAL_INCLUSION = 2,
+    LAYERS = 3,
+    VEINS = 4
+  };
+
+  ///@{
+  /// One of MaterialModes. Default UNIFORM.
+  vtkSetClampMacro(MaterialMode, int, UNIFORM, VEINS);
+  vtkGetMacro(MaterialMode, int);
+  void SetMaterialModeToUniform() { this->SetMaterialMode(UNIFORM); }
+  void SetMaterialModeToMaterialIds() { this->SetMaterialMode(MATERIAL_IDS); }
+  void SetMaterialModeToSphericalInclusion() { this->SetMaterialMode(SPHERICAL_INCLUSION); }
+  void SetMaterialModeToLayers() { this->SetMaterialMode(LAYERS); }
+  void SetMaterialModeToVeins() { this->SetMaterialMode(VEINS); }
+  ///@}
+
+  ///@{
+  /**
+   * JSON material table (format: vtkMaterialTableReader,
+   * Documentation/Materials.md). Required by MATERIAL_IDS; optional in the
+   * procedural modes (its names and ids become material references).
+   * Default "" (none). Read at every execution.
+   */
+  vtkSetStdStringFromCharMacro(MaterialTableFileName);
+  vtkGetCharFromStdStringMacro(MaterialTableFileName);
+  ///@}
+
+  ///@{
+  /**
+   * Cell array of integer material ids used by MATERIAL_IDS (any numeric
+   * type, first component, values must be integers). Default
+   * "RegionAttribute" (vtkTetGenReader's region attribute).
+   */
+  vtkSetStdStringFromCharMacro(MaterialIdArrayName);
+  vtkGetCharFromStdStringMacro(MaterialIdArrayName);
+  ///@}
+
+  ///@{
+  /// Centre of the inclusion of SPHERICAL_INCLUSION, mm. Default (0, 0, 0).
+  vtkSetVector3Macro(InclusionCenter, double);
+  vtkGetVector3Macro(InclusionCenter, double);
+  ///@}
+
+  ///@{
+  /// Radius of the inclusion, mm (>= 0). Default 1.
+  vtkSetClampMacro(InclusionRadius, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(InclusionRadius, double);
+  ///@}
+
+  ///@{
+  /// Material reference inside the inclusion. Default "ketchup".
+  vtkSetStdStringFromCharMacro(InsideMaterial);
+  vtkGetCharFromStdStringMacro(InsideMaterial);
+  ///@}
+
+  ///@{
+  /// Material reference outside the inclusion. Default "marble".
+  vtkSetStdStringFromCharMacro(OutsideMaterial);
+  vtkGetCharFromStdStringMacro(OutsideMaterial);
+  ///@}
+
+  ///@{
+  /**
+   * Layers of LAYERS mode, outermost first: a thickness (mm, >= 0) and a
+   * material reference. Default none.
+   */
+  void AddLayer(double thickness, const char* material);
+  void RemoveAllLayers();
+  int GetNumberOfLayers() const { return static_cast<int>(this->LayerMaterials.size()); }
+  ///@}
+
+  ///@{
+  /// VEINS: material between the veins (reference). Default "marble".
+  vtkSetStdStringFromCharMacro(BaseMaterial);
+  vtkGetCharFromStdStringMacro(BaseMaterial);
+  ///@}
+
+  ///@{
+  /// VEINS: material of the vein centres (reference). Default "chicken1".
+  vtkSetStdStringFromCharMacro(VeinMaterial);
+  vtkGetCharFromStdStringMacro(VeinMaterial);
+  ///@}
+
+  ///@{
+  /// VEINS: direction across the vein bands (normalized; not zero). Default (1, 0, 0).
+  vtkSetVector3Macro(VeinDirection, double);
+  vtkGetVector3Macro(VeinDirection, double);
+  ///@}
+
+  ///@{
+  /// VEINS: f, vein bands per mm along VeinDirection and base noise frequency (1/mm, > 0). Default 0.2.
+  vtkSetMacro(VeinFrequency, double);
+  vtkGetMacro(VeinFrequency, double);
+  ///@}
+
+  ///@{
+  /// VEINS: number of noise octaves (1 to 16). Default 4.
+  vtkSetClampMacro(VeinOctaves, int, 1, 16);
+  vtkGetMacro(VeinOctaves, int);
+  ///@}
+
+  ///@{
+  /// VEINS: how far the noise bends the bands (>= 0; 0 gives straight bands). Default 1.
+  vtkSetClampMacro(VeinTurbulence, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(VeinTurbulence, double);
+  ///@}
+
+  ///@{
+  /// VEINS: exponent making the veins thin (>= 1). Default 8.
+  vtkSetClampMacro(VeinSharpness, double, 1.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(VeinSharpness, double);
+  ///@}
+
+  ///@{
+  /**
+   * VEINS: seed of the noise; it sets the phase p = frac(seed * (0.7548776662,
+   * 0.5698402910, 0.4301597090)) of vtkPerlinNoise. Default 0.
+   */
+  vtkSetMacro(VeinSeed, int);
+  vtkGetMacro(VeinSeed, int);
+  ///@}
+
 protected:
   vtkAssignScatteringCoefficients();
   ~vtkAssignScatteringCoefficients() override = default;
@@ -81,6 +239,23 @@ protected:
   double ReducedScatteringCoefficient[3] = { 2.19, 2.62, 3.00 };
   double RefractiveIndex = 1.3;
   double ScaleFactor = 1.0;
+  int MaterialMode = UNIFORM;
+  std::string MaterialTableFileName;
+  std::string MaterialIdArrayName = "RegionAttribute";
+  double InclusionCenter[3] = { 0.0, 0.0, 0.0 };
+  double InclusionRadius = 1.0;
+  std::string InsideMaterial = "ketchup";
+  std::string OutsideMaterial = "marble";
+  std::vector<double> LayerThicknesses;
+  std::vector<std::string> LayerMaterials;
+  std::string BaseMaterial = "marble";
+  std::string VeinMaterial = "chicken1";
+  double VeinDirection[3] = { 1.0, 0.0, 0.0 };
+  double VeinFrequency = 0.2;
+  int VeinOctaves = 4;
+  double VeinTurbulence = 1.0;
+  double VeinSharpness = 8.0;
+  int VeinSeed = 0;
 
 private:
   vtkAssignScatteringCoefficients(const vtkAssignScatteringCoefficients&) = delete;

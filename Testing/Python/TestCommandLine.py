@@ -59,7 +59,8 @@ def find_cli():
 
 
 CLI = find_cli()
-OPTIONS = ("--mesh", "--target-tets", "--max-tet-volume", "--material", "--light", "--output",
+OPTIONS = ("--mesh", "--target-tets", "--max-tet-volume", "--material", "--material-ids",
+           "--light", "--output",
            "--png", "--slice-png", "--json")
 STAGES = ("read", "tetrahedralize", "coefficients", "irradiance", "topology", "assembly", "solve",
           "radiance", "write")

@@ -184,6 +184,53 @@ class PluginTest(unittest.TestCase):
             for proxy in (solve, light, assign, reader):
                 Delete(proxy)
 
+            # Heterogeneous materials: a JSON table picked by RegionAttribute,
+            # then layers by depth (Documentation/Materials.md).
+            import json
+            table = os.path.join(tmp, "table.json")
+            presets = ["marble", "skin1", "ketchup", "apple", "potato"]
+            with open(table, "w") as f:
+                json.dump({"materials": [{"id": 10 + i, "preset": p}
+                                         for i, p in enumerate(presets)]}, f)
+            reader = TetGenReader(FileName=base + ".node")
+            assign = AssignScatteringCoefficients(Input=reader, MaterialMode="Material Ids (table)",
+                                                  MaterialTableFileName=table)
+            mesh = self.fetch(assign)
+            scattering = cell_array(mesh, "ReducedScatteringCoefficient")
+            for c, region in enumerate(cell_array(mesh, "RegionAttribute")):
+                uniform = AssignScatteringCoefficients(Input=reader,
+                                                       MaterialName=presets[int(region) - 10])
+                expected = cell_array(self.fetch(uniform), "ReducedScatteringCoefficient")[0]
+                self.assertTrue(np.array_equal(scattering[c], expected))
+                Delete(uniform)
+            assign.MaterialMode = "Layers by Depth"
+            assign.Layers = ["0.3", "skin1", "1", "marble"]
+            mesh = self.fetch(assign)
+            # The four corner tets have their centroid 0.25 mm deep, the
+            # central tet (the last) 0.5 mm.
+            self.assertEqual(assign.GetProperty("Layers").GetNumberOfElements(), 4)
+            scattering = cell_array(mesh, "ReducedScatteringCoefficient")
+            self.assertTrue(np.array_equal(scattering[:4], [[0.74, 0.88, 1.01]] * 4))
+            self.assertTrue(np.array_equal(scattering[4], [2.19, 2.62, 3.00]))
+            # Veins without turbulence: planar bands across z, weights in [0, 1].
+            assign.MaterialMode = "Marble Veins"
+            assign.VeinDirection = [0, 0, 1]
+            assign.VeinTurbulence = 0.0
+            assign.VeinSharpness = 1.0
+            assign.VeinFrequency = 0.5
+            mesh = self.fetch(assign)
+            centroid_z = []
+            for c in range(5):
+                ids = mesh.GetCell(c).GetPointIds()
+                centroid_z.append(sum(mesh.GetPoint(ids.GetId(k))[2] for k in range(4)) / 4)
+            marble, chicken1 = np.array([2.19, 2.62, 3.00]), np.array([0.15, 0.21, 0.38])
+            for c, zc in enumerate(centroid_z):
+                w = 1 - abs(np.sin(2 * np.pi * 0.5 * zc))
+                self.assertTrue(np.allclose(cell_array(mesh, "ReducedScatteringCoefficient")[c],
+                                            (1 - w) * marble + w * chicken1, rtol=1e-12))
+            for proxy in (assign, reader):
+                Delete(proxy)
+
 
 if __name__ == "__main__":
     result = unittest.main(argv=[sys.argv[0]], exit=False, verbosity=2).result

@@ -1,0 +1,311 @@
+#include "vtkMaterialTableReader.h"
+
+#include "OpticalProperties.h"
+
+#include <vtkDoubleArray.h>
+#include <vtkInformation.h>
+#include <vtkInformationVector.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
+#include <vtkObjectFactory.h>
+#include <vtkStringArray.h>
+#include <vtkTable.h>
+
+#include "vtk_nlohmannjson.h"
+#include VTK_NLOHMANN_JSON(json.hpp)
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+vtkStandardNewMacro(vtkMaterialTableReader);
+
+namespace
+{
+using json = nlohmann::json;
+
+[[noreturn]] void Fail(const std::string& fileName, const std::string& what)
+{
+  throw std::runtime_error("material table '" + fileName + "': " + what);
+}
+
+std::string EntryPrefix(size_t index, const json& entry)
+{
+  std::ostringstream os;
+  os << "entry " << index;
+  if (entry.is_object() && entry.contains("name") && entry["name"].is_string())
+  {
+    os << " (\"" << entry["name"].get<std::string>() << "\")";
+  }
+  return os.str();
+}
+
+/// A non-negative finite number (a JSON number), else a message.
+double NonNegative(const std::string& fileName, const std::string& where, const json& v)
+{
+  if (!v.is_number())
+  {
+    Fail(fileName, where + " must be a number, not " + v.dump());
+  }
+  const double x = v.get<double>();
+  if (!std::isfinite(x) || x < 0.0)
+  {
+    std::ostringstream os;
+    os << where << " must be finite and >= 0, not " << v.dump();
+    Fail(fileName, os.str());
+  }
+  return x;
+}
+} // namespace
+
+//------------------------------------------------------------------------------
+vtkMaterialTableReader::vtkMaterialTableReader()
+{
+  this->SetNumberOfInputPorts(0);
+}
+
+//------------------------------------------------------------------------------
+int vtkMaterialTableReader::CanReadFile(const char* fileName)
+{
+  if (!fileName)
+  {
+    return 0;
+  }
+  const std::string f(fileName);
+  return f.size() > 5 && f.compare(f.size() - 5, 5, ".json") == 0 ? 1 : 0;
+}
+
+//------------------------------------------------------------------------------
+std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMaterialTable(
+  const std::string& fileName)
+{
+  if (fileName.empty())
+  {
+    throw std::runtime_error("material table: no file name given");
+  }
+  std::ifstream in(fileName);
+  if (!in)
+  {
+    Fail(fileName, "cannot open the file");
+  }
+  json root;
+  try
+  {
+    in >> root;
+  }
+  catch (const std::exception& e)
+  {
+    Fail(fileName, std::string("not valid JSON: ") + e.what());
+  }
+  if (!root.is_object() || !root.contains("materials") || !root["materials"].is_array())
+  {
+    Fail(fileName, "must hold a JSON object {\"units\": \"1/mm\", \"materials\": [...]}");
+  }
+  double unitScale = 1.0;
+  if (root.contains("units"))
+  {
+    const json& u = root["units"];
+    const std::string units = u.is_string() ? u.get<std::string>() : u.dump();
+    if (units == "1/mm")
+      unitScale = 1.0;
+    else if (units == "1/cm")
+      unitScale = 0.1;
+    else if (units == "1/m")
+      unitScale = 0.001;
+    else
+      Fail(fileName, "\"units\" must be \"1/mm\", \"1/cm\" or \"1/m\", not " + u.dump());
+  }
+  const json& list = root["materials"];
+  if (list.empty())
+  {
+    Fail(fileName, "\"materials\" is empty");
+  }
+  std::vector<Material> materials;
+  std::set<int> ids;
+  std::set<std::string> names;
+  for (size_t i = 0; i < list.size(); ++i)
+  {
+    const json& e = list[i];
+    const std::string where = EntryPrefix(i, e);
+    if (!e.is_object())
+    {
+      Fail(fileName, where + " must be a JSON object, not " + e.dump());
+    }
+    for (auto it = e.begin(); it != e.end(); ++it)
+    {
+      static const std::set<std::string> known = { "name", "id", "preset", "absorption",
+        "reduced_scattering", "refractive_index" };
+      if (!known.count(it.key()))
+      {
+        Fail(fileName, where + ": unknown field \"" + it.key() + "\"");
+      }
+    }
+    Material m;
+    if (e.contains("name"))
+    {
+      if (!e["name"].is_string() || e["name"].get<std::string>().empty())
+      {
+        Fail(fileName, where + ": \"name\" must be a non-empty string, not " + e["name"].dump());
+      }
+      m.Name = e["name"].get<std::string>();
+    }
+    if (e.contains("id"))
+    {
+      const json& id = e["id"];
+      if (!id.is_number_integer() || id.get<long long>() < 0 ||
+        id.get<long long>() > std::numeric_limits<int>::max())
+      {
+        Fail(fileName, where + ": \"id\" must be an integer >= 0, not " + id.dump());
+      }
+      m.Id = id.get<int>();
+    }
+    if (m.Name.empty() && m.Id < 0 && !e.contains("preset"))
+    {
+      Fail(fileName, where + " needs a \"name\" or an \"id\"");
+    }
+    const bool explicitValues = e.contains("absorption") || e.contains("reduced_scattering") ||
+      e.contains("refractive_index");
+    if (e.contains("preset"))
+    {
+      if (explicitValues)
+      {
+        Fail(fileName,
+          where + " has both \"preset\" and explicit coefficients: give one or the other");
+      }
+      if (!e["preset"].is_string())
+      {
+        Fail(fileName, where + ": \"preset\" must be a preset name (a string), not " +
+            e["preset"].dump());
+      }
+      try
+      {
+        const translucency::MaterialPreset& p =
+          translucency::FindMaterialPreset(e["preset"].get<std::string>());
+        for (int c = 0; c < 3; ++c)
+        {
+          m.Absorption[c] = p.Absorption[c];
+          m.ReducedScattering[c] = p.ReducedScattering[c];
+        }
+        m.RefractiveIndex = p.RefractiveIndex;
+        if (m.Name.empty() && m.Id < 0)
+        {
+          m.Name = p.Name;
+        }
+      }
+      catch (const std::exception& ex)
+      {
+        Fail(fileName, where + ": \"preset\": " + ex.what());
+      }
+    }
+    else
+    {
+      if (!e.contains("absorption") || !e.contains("reduced_scattering"))
+      {
+        Fail(fileName, where + " needs either \"preset\" or both \"absorption\": [r, g, b] and "
+                               "\"reduced_scattering\": [r, g, b]");
+      }
+      auto triple = [&](const char* key, double out[3]) {
+        const json& v = e[key];
+        if (!v.is_array() || v.size() != 3)
+        {
+          Fail(fileName, where + ": \"" + key + "\" must be [r, g, b], not " + v.dump());
+        }
+        for (int c = 0; c < 3; ++c)
+        {
+          out[c] = unitScale *
+            NonNegative(fileName, where + ": \"" + key + "\"[" + std::to_string(c) + "]", v[c]);
+        }
+      };
+      triple("absorption", m.Absorption);
+      triple("reduced_scattering", m.ReducedScattering);
+      for (int c = 0; c < 3; ++c)
+      {
+        if (!(m.Absorption[c] + m.ReducedScattering[c] > 0.0))
+        {
+          Fail(fileName, where + ": absorption + reduced_scattering must be > 0 in channel " +
+              std::to_string(c));
+        }
+      }
+      if (e.contains("refractive_index"))
+      {
+        m.RefractiveIndex = NonNegative(fileName, where + ": \"refractive_index\"",
+          e["refractive_index"]);
+        if (!(m.RefractiveIndex > 0.0))
+        {
+          Fail(fileName, where + ": \"refractive_index\" must be > 0, not " +
+              e["refractive_index"].dump());
+        }
+      }
+    }
+    if (m.Id >= 0 && !ids.insert(m.Id).second)
+    {
+      Fail(fileName, where + ": duplicate \"id\" " + std::to_string(m.Id));
+    }
+    if (e.contains("name") && !names.insert(m.Name).second)
+    {
+      Fail(fileName, where + ": duplicate \"name\" \"" + m.Name + "\"");
+    }
+    materials.push_back(m);
+  }
+  return materials;
+}
+
+//------------------------------------------------------------------------------
+int vtkMaterialTableReader::RequestData(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
+{
+  vtkTable* output = vtkTable::GetData(outputVector);
+  std::vector<Material> materials;
+  try
+  {
+    materials = ReadMaterialTable(this->FileName);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  const vtkIdType n = static_cast<vtkIdType>(materials.size());
+  vtkNew<vtkIntArray> id;
+  id->SetName("Id");
+  id->SetNumberOfTuples(n);
+  vtkNew<vtkStringArray> name;
+  name->SetName("Name");
+  name->SetNumberOfValues(n);
+  vtkNew<vtkDoubleArray> absorption;
+  absorption->SetName("AbsorptionCoefficient");
+  absorption->SetNumberOfComponents(3);
+  absorption->SetNumberOfTuples(n);
+  vtkNew<vtkDoubleArray> scattering;
+  scattering->SetName("ReducedScatteringCoefficient");
+  scattering->SetNumberOfComponents(3);
+  scattering->SetNumberOfTuples(n);
+  vtkNew<vtkDoubleArray> index;
+  index->SetName("RefractiveIndex");
+  index->SetNumberOfTuples(n);
+  for (vtkIdType i = 0; i < n; ++i)
+  {
+    const Material& m = materials[i];
+    id->SetValue(i, m.Id);
+    name->SetValue(i, m.Name);
+    absorption->SetTypedTuple(i, m.Absorption);
+    scattering->SetTypedTuple(i, m.ReducedScattering);
+    index->SetValue(i, m.RefractiveIndex);
+  }
+  output->AddColumn(id);
+  output->AddColumn(name);
+  output->AddColumn(absorption);
+  output->AddColumn(scattering);
+  output->AddColumn(index);
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+void vtkMaterialTableReader::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "FileName: " << this->FileName << "\n";
+}
