@@ -113,6 +113,11 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
   const std::string& materialIds = std::string());
 void PrintStages(const std::vector<Stage>& stages);
 
+struct RadianceImageOptions;
+/// If args[i] is a picture option (--exposure, --view, --up, --size), consume it
+/// (and its value) into `image` and return true.
+bool ParseImageOption(const std::vector<std::string>& args, size_t& i, RadianceImageOptions& image);
+
 /// `translucency compare` (Compare.cxx) and its help text.
 int Compare(const std::vector<std::string>& args);
 extern const char* const CompareHelp;

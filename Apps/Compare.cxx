@@ -250,7 +250,7 @@ int Compare(const std::vector<std::string>& args)
       return args[++i];
     };
     auto number = [&]() { return ParseNumbers(value(), a).at(0); };
-    if (scene.Parse(args, i))
+    if (scene.Parse(args, i) || ParseImageOption(args, i, image))
       continue;
     if (a == "--solvers")
       solverList = value();
@@ -285,22 +285,6 @@ int Compare(const std::vector<std::string>& args)
       pictures = false;
     else if (a == "--n-squared-law")
       nSquaredLaw = true;
-    else if (a == "--exposure")
-      image.Exposure = number();
-    else if (a == "--view" || a == "--up")
-    {
-      std::vector<double> v = ParseNumbers(value(), a);
-      if (v.size() != 3 || (v[0] == 0 && v[1] == 0 && v[2] == 0))
-        throw UsageError(a + " needs three numbers, not all zero");
-      std::copy(v.begin(), v.end(), a == "--view" ? image.ViewDirection : image.ViewUp);
-    }
-    else if (a == "--size")
-    {
-      const std::string s = value();
-      if (std::sscanf(s.c_str(), "%dx%d", &image.Width, &image.Height) != 2 || image.Width < 16 ||
-        image.Height < 16)
-        throw UsageError("--size must be WxH, e.g. 800x600");
-    }
     else
       throw UsageError("unknown option '" + a + "' (see translucency --help)");
   }

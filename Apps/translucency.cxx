@@ -96,36 +96,6 @@ void PrintUsage()
   std::cout << UsageHead << SceneOptionsHelp << RenderHelp << CompareHelp << BenchHelp;
 }
 
-/// Options of the pictures, shared by render's parsing.
-bool ParseImageOption(const std::vector<std::string>& args, size_t& i, RadianceImageOptions& image)
-{
-  const std::string& a = args[i];
-  auto value = [&]() -> const std::string& {
-    if (i + 1 >= args.size())
-      throw UsageError(a + " needs a value");
-    return args[++i];
-  };
-  if (a == "--exposure")
-    image.Exposure = ParseNumbers(value(), a).at(0);
-  else if (a == "--view" || a == "--up")
-  {
-    std::vector<double> v = ParseNumbers(value(), a);
-    if (v.size() != 3 || (v[0] == 0 && v[1] == 0 && v[2] == 0))
-      throw UsageError(a + " needs three numbers, not all zero");
-    std::copy(v.begin(), v.end(), a == "--view" ? image.ViewDirection : image.ViewUp);
-  }
-  else if (a == "--size")
-  {
-    const std::string s = value();
-    if (std::sscanf(s.c_str(), "%dx%d", &image.Width, &image.Height) != 2 || image.Width < 16 ||
-      image.Height < 16 || image.Width > 8192 || image.Height > 8192)
-      throw UsageError("--size must be WxH, e.g. 800x600");
-  }
-  else
-    return false;
-  return true;
-}
-
 int Render(const std::vector<std::string>& args)
 {
   SceneOptions scene;
