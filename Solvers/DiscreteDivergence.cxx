@@ -8,6 +8,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <sstream>
@@ -238,6 +239,162 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
     material.Validate(numTets);
     CheckIrradiance(mesh, irradiance);
     throw Error("DiscreteDivergence: invalid material or irradiance");
+  }
+}
+
+void DiscreteDivergence::UpdateTets(const TetMesh& mesh,
+  const OpticalProperties& material,
+  const std::vector<double>& irradiance,
+  const std::vector<int>& changedTets,
+  DiffusionSystem& system) const
+{
+  const int numPoints = mesh.GetNumberOfPoints();
+  const int numTets = mesh.GetNumberOfTets();
+  const size_t tetCount = static_cast<size_t>(numTets);
+  const size_t nnz = mesh.GetColumnIndices().size();
+  if (system.NumberOfUnknowns != numPoints || system.RowOffsets.size() != mesh.GetRowOffsets().size() ||
+    system.ColumnIndices.size() != nnz || system.Values[0].size() != nnz ||
+    system.Values[1].size() != nnz || system.Values[2].size() != nnz ||
+    system.RightHandSide[0].size() != numPoints)
+  {
+    std::ostringstream os;
+    os << "DiscreteDivergence::UpdateTets: the system (" << system.NumberOfUnknowns
+       << " unknowns, " << system.ColumnIndices.size() << " non-zeros) does not match the mesh ("
+       << numPoints << " points, " << nnz << " non-zeros): call Assemble first";
+    throw Error(os.str());
+  }
+  if (material.AbsorptionCoefficient.size() != 3 * tetCount ||
+    material.ReducedScatteringCoefficient.size() != 3 * tetCount ||
+    material.RefractiveIndex.size() != tetCount)
+  {
+    material.Validate(numTets); // throws, naming the array
+  }
+  if (irradiance.size() != 3 * static_cast<size_t>(numPoints))
+  {
+    CheckIrradiance(mesh, irradiance); // throws
+  }
+  const double* muA = material.AbsorptionCoefficient.data();
+  const double* sigmaS = material.ReducedScatteringCoefficient.data();
+  const double* tetEta = material.RefractiveIndex.data();
+  const int* tets = mesh.GetTets().data();
+
+  // Rows to rebuild: the vertices of the changed tets.
+  std::vector<char> rowFlag(static_cast<size_t>(numPoints), 0);
+  std::vector<int> rows;
+  for (int t : changedTets)
+  {
+    if (t < 0 || t >= numTets)
+    {
+      std::ostringstream os;
+      os << "DiscreteDivergence::UpdateTets: tet id " << t << " is out of range (the mesh has "
+         << numTets << " tets)";
+      throw Error(os.str());
+    }
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      const double a = muA[3 * t + c], s = sigmaS[3 * t + c];
+      if (!(std::isfinite(a) && a >= 0.0 && std::isfinite(s) && s >= 0.0 && a + s > 0.0 &&
+            std::isfinite(tetEta[t]) && tetEta[t] > 0.0))
+      {
+        std::ostringstream os;
+        os << "tet " << t << ", channel " << ChannelNames[c] << ": mu_a = " << a
+           << " 1/mm, sigma_s' = " << s << " 1/mm, eta = " << tetEta[t]
+           << ": need finite mu_a, sigma_s' >= 0 with mu_a + sigma_s' > 0 and eta > 0";
+        throw Error(os.str());
+      }
+    }
+    for (int a = 0; a < 4; ++a)
+    {
+      const int i = tets[4 * static_cast<size_t>(t) + a];
+      if (!rowFlag[i])
+      {
+        rowFlag[i] = 1;
+        rows.push_back(i);
+      }
+    }
+  }
+  if (rows.empty())
+  {
+    return;
+  }
+
+  // Clear the rows; flag every tet that contributes to one of them.
+  const int* rowOffsets = mesh.GetRowOffsets().data();
+  const int* pointTetOffsets = mesh.GetPointTetOffsets().data();
+  const int* pointTets = mesh.GetPointTets().data();
+  std::vector<char> tetFlag(tetCount, 0);
+  for (int i : rows)
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      std::fill(system.Values[c].begin() + rowOffsets[i], system.Values[c].begin() + rowOffsets[i + 1],
+        0.0);
+    }
+    for (int k = pointTetOffsets[i]; k < pointTetOffsets[i + 1]; ++k)
+    {
+      tetFlag[pointTets[k]] = 1;
+    }
+  }
+
+  // Re-sum in the order of the full assembly: the scatter schedule's order
+  // (colours, chunks, tets), which is the order every entry receives its
+  // contributions in Assemble. Same expressions as there (eq. 13-14).
+  const double* points = mesh.GetPoints().data();
+  const int* positions = mesh.GetTetNonZeroPositions().data();
+  for (int t0 : mesh.GetScatterSchedule().Tets)
+  {
+    if (!tetFlag[t0])
+    {
+      continue;
+    }
+    const size_t t = static_cast<size_t>(t0);
+    const int* tv = tets + 4 * t;
+    const TetGeometry geometry = ComputeTetGeometry(points + 3 * static_cast<size_t>(tv[0]),
+      points + 3 * static_cast<size_t>(tv[1]), points + 3 * static_cast<size_t>(tv[2]),
+      points + 3 * static_cast<size_t>(tv[3]));
+    const double volume = geometry.Volume;
+    const double(&g)[4][4] = geometry.Stiffness;
+    const int* pos = positions + 16 * t;
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      const double mu = muA[3 * t + c];
+      const double four = 4.0 / (3.0 * (mu + sigmaS[3 * t + c])); // 4 kappa_t
+      const double mass = volume * mu;                             // eq. 13
+      double* v = system.Values[c].data();
+      for (int a = 0; a < 4; ++a)
+      {
+        if (!rowFlag[tv[a]])
+        {
+          continue;
+        }
+        for (int b = 0; b < 4; ++b)
+        {
+          // eq. 13 (diagonal) and eq. 14 (M_ij = 4 w_ij), as in Assemble.
+          v[pos[4 * a + b]] += a == b ? four * g[a][a] + mass : four * g[a < b ? a : b][a < b ? b : a];
+        }
+      }
+    }
+  }
+
+  // Boundary rows: lumped Robin term and source (eq. 11-13), as in Assemble.
+  const std::vector<double> pointEta = BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
+  const std::vector<double>& boundaryArea = mesh.GetBoundaryAreas();
+  const int* diagonal = mesh.GetDiagonalPositions().data();
+  const double* q = irradiance.data();
+  for (int i : rows)
+  {
+    if (!mesh.IsBoundaryPoint(i))
+    {
+      continue;
+    }
+    const double fdr = Fresnel::DiffuseReflectance(pointEta[i]);
+    const double a = Fresnel::MismatchA(pointEta[i]);
+    const double s = boundaryArea[i];
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      system.Values[c][diagonal[i]] += 2.0 * s / (3.0 * a);
+      system.RightHandSide[c][i] = 8.0 * s * q[3 * static_cast<size_t>(i) + c] / (3.0 * a * (1.0 - fdr));
+    }
   }
 }
 

@@ -25,6 +25,26 @@ public:
   void Assemble(const TetMesh& mesh, const OpticalProperties& material,
     const std::vector<double>& irradiance, DiffusionSystem& system) override;
 
+  /**
+   * Incremental update after the material of some tets changed (painting,
+   * TransCut Sec. 5.2: "we only update the rows corresponding to the vertices
+   * of tetrahedra that are affected"). `system` must come from Assemble() on
+   * the same mesh (same topology and points); `material` is the whole new
+   * material and `irradiance` the one used for that assembly. Only the matrix
+   * rows and right-hand-side entries of the vertices of `changedTets` (tet
+   * ids, duplicates allowed) are rebuilt: each such row is cleared and
+   * re-summed from all tets around its vertex, in the order of the full
+   * assembly (the scatter schedule), then its boundary term is added again,
+   * so the result is bit-identical to Assemble() with the new material.
+   * Serial: cost ~ the tets around the touched vertices plus one pass over
+   * the tet ids and the boundary triangles. Throws translucency::Error on a
+   * system that does not match the mesh, an out-of-range tet id or an invalid
+   * value of a changed tet (named).
+   */
+  void UpdateTets(const TetMesh& mesh, const OpticalProperties& material,
+    const std::vector<double>& irradiance, const std::vector<int>& changedTets,
+    DiffusionSystem& system) const;
+
   /// Unknowns are the vertex fluences: a copy.
   void ToPointFluence(const TetMesh& mesh, const DiffusionSystem& system,
     const std::array<Eigen::VectorXd, NumberOfChannels>& solution,

@@ -22,6 +22,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -107,6 +108,50 @@ void BM_Assemble(benchmark::State& state)
     benchmark::DoNotOptimize(system.Values[2].data());
   }
   SetSizeCounters(state, p);
+}
+
+/// Painting (TransCut Sec. 5.2): about 1 % of the tets, a ball around a point
+/// of the top face (a paint stroke), change their mu_a; UpdateTets rebuilds
+/// only the rows of their vertices. Same-run baseline: BM_Assemble (full
+/// re-assembly) on the same mesh.
+void BM_UpdateTets1Percent(benchmark::State& state)
+{
+  Problem& p = GetProblem(static_cast<int>(state.range(0)));
+  DiscreteDivergence divergence;
+  DiffusionSystem system;
+  divergence.Assemble(p.Mesh, p.Material, p.Irradiance, system);
+  // The 1 % of tets whose centroids are closest to (10, 10, 20).
+  const int numTets = p.Mesh.GetNumberOfTets();
+  std::vector<std::pair<double, int>> distance(numTets);
+  for (int t = 0; t < numTets; ++t)
+  {
+    const int* tv = p.Mesh.GetTet(t);
+    double d2 = 0.0;
+    const double centre[3] = { 10.0, 10.0, 20.0 };
+    for (int d = 0; d < 3; ++d)
+    {
+      const double x = 0.25 * (p.Mesh.GetPoint(tv[0])[d] + p.Mesh.GetPoint(tv[1])[d] +
+                                p.Mesh.GetPoint(tv[2])[d] + p.Mesh.GetPoint(tv[3])[d]);
+      d2 += (x - centre[d]) * (x - centre[d]);
+    }
+    distance[t] = { d2, t };
+  }
+  const int numChanged = numTets / 100;
+  std::nth_element(distance.begin(), distance.begin() + numChanged, distance.end());
+  std::vector<int> changed(numChanged);
+  OpticalProperties material = p.Material;
+  for (int k = 0; k < numChanged; ++k)
+  {
+    changed[k] = distance[k].second;
+    material.AbsorptionCoefficient[3 * changed[k]] *= 10.0;
+  }
+  for (auto _ : state)
+  {
+    divergence.UpdateTets(p.Mesh, material, p.Irradiance, changed, system);
+    benchmark::DoNotOptimize(system.Values[2].data());
+  }
+  SetSizeCounters(state, p);
+  state.counters["changed"] = numChanged;
 }
 
 /// The consistent P1 Galerkin assembly ("fem"); same-run baseline:
@@ -321,6 +366,7 @@ void Sizes(benchmark::internal::Benchmark* b)
 BENCHMARK(BM_BuildMesh)->Apply(Sizes);
 BENCHMARK(BM_SpMV)->Apply(Sizes);
 BENCHMARK(BM_Assemble)->Apply(Sizes);
+BENCHMARK(BM_UpdateTets1Percent)->Apply(Sizes);
 BENCHMARK(BM_AssembleFem)->Apply(Sizes);
 BENCHMARK_CAPTURE(BM_VertexSolver, divergence, "divergence")
   ->Arg(26)
