@@ -5,16 +5,22 @@
 #include "OpticalProperties.h"
 
 #include "vtkAssignScatteringCoefficients.h"
+#include "vtkPaintScatteringCoefficients.h"
+#include "vtkStrokeCut.h"
 #include "vtkSurfaceIrradiance.h"
 #include "vtkTetGenReader.h"
 #include "vtkTetrahedralizeSurface.h"
 
 #include <vtkAlgorithm.h>
 #include <vtkCallbackCommand.h>
+#include <vtkCellArray.h>
 #include <vtkCellData.h>
+#include <vtkDataArray.h>
 #include <vtkExecutive.h>
 #include <vtkOBJReader.h>
 #include <vtkPLYReader.h>
+#include <vtkPlane.h>
+#include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkSTLReader.h>
 #include <vtkUnstructuredGrid.h>
@@ -430,6 +436,22 @@ const char* const SceneOptionsHelp = R"(  --mesh FILE              closed triang
                            uniform[:E]               environment, E W/mm^2 (1)
   --no-shadows             no self-shadowing
   --uniform-samples N      occlusion rays per point for the uniform light (32)
+  --paint FILE.json        paint the coefficients along a 3D stroke (after the material,
+                           before any cut; vtkPaintScatteringCoefficients):
+                           {"points": [[x,y,z], ...] (mm, required), "width": mm (1),
+                            "mode": "set"|"multiply"|"add" ("set"),
+                            "absorption": [r,g,b], "reduced_scattering": [r,g,b]
+                            (target: 1/mm for set/add, factor for multiply; default
+                            ketchup), "strength": 0..1 (1), "channels": [1,1,1]}
+  --cut-plane ox,oy,oz,nx,ny,nz
+                           cut the tet mesh with the plane through o (mm) with normal n:
+                           removes the side n points to (vtkStrokeCut)
+  --cut-stroke FILE.json   cut along a stroke swept along the view direction:
+                           {"points": [[x,y,z], ...] (>= 2, mm), "view_direction":
+                           [dx,dy,dz] (default [0,0,-1]), "inside_out": false}; removes
+                           the left of the stroke as seen along the view direction
+                           (inside_out: the right). Order: tetrahedralize, material,
+                           paint, cut, irradiance, solve.
 )";
 
 bool SceneOptions::Parse(const std::vector<std::string>& args, size_t& i)
@@ -473,6 +495,18 @@ bool SceneOptions::Parse(const std::vector<std::string>& args, size_t& i)
     this->Lights.push_back(ParseLight(value()));
   else if (a == "--no-shadows")
     this->Shadows = false;
+  else if (a == "--cut-plane")
+  {
+    this->CutPlane = ParseNumbers(value(), a);
+    if (this->CutPlane.size() != 6)
+      throw UsageError("--cut-plane needs six comma-separated numbers ox,oy,oz,nx,ny,nz");
+    if (this->CutPlane[3] == 0 && this->CutPlane[4] == 0 && this->CutPlane[5] == 0)
+      throw UsageError("--cut-plane: the normal is zero");
+  }
+  else if (a == "--cut-stroke")
+    this->CutStroke = value();
+  else if (a == "--paint")
+    this->Paint = value();
   else if (a == "--uniform-samples")
   {
     const double n = number();
@@ -495,6 +529,10 @@ void SceneOptions::Finish(const std::string& command)
   {
     throw UsageError(command + " needs --mesh FILE");
   }
+  if (!this->CutPlane.empty() && !this->CutStroke.empty())
+  {
+    throw UsageError("give --cut-plane or --cut-stroke, not both");
+  }
   if (this->Lights.empty())
   {
     this->Lights.push_back(ParseLight("directional:0,-1,-1:1"));
@@ -502,8 +540,165 @@ void SceneOptions::Finish(const std::string& command)
   }
 }
 
-vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(
-  const SceneOptions& options, std::vector<Stage>& stages, double& topologyMs)
+namespace
+{
+/// Read `path` as a JSON object; `what` names the option in messages.
+json ReadJsonObject(const std::string& path, const std::string& what)
+{
+  std::ifstream in(path);
+  if (!in)
+  {
+    throw translucency::Error("cannot open " + what + " file '" + path + "'");
+  }
+  json j;
+  try
+  {
+    in >> j;
+  }
+  catch (const std::exception& e)
+  {
+    throw translucency::Error(what + " file '" + path + "' is not valid JSON: " + e.what());
+  }
+  if (!j.is_object())
+  {
+    throw translucency::Error(what + " file '" + path + "' must hold a JSON object {...}");
+  }
+  return j;
+}
+
+/// A field of three numbers; false if absent.
+bool ReadTriple(const json& j, const char* key, const std::string& path, double out[3])
+{
+  if (!j.contains(key))
+  {
+    return false;
+  }
+  const json& v = j[key];
+  if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() ||
+    !v[2].is_number())
+  {
+    throw translucency::Error(
+      "'" + path + "': \"" + key + "\" must be an array of three numbers");
+  }
+  for (int c = 0; c < 3; ++c)
+  {
+    out[c] = v[c].get<double>();
+    if (!std::isfinite(out[c]))
+    {
+      throw translucency::Error("'" + path + "': \"" + key + "\" must be finite");
+    }
+  }
+  return true;
+}
+
+/// The required "points": [[x,y,z], ...] with at least `minimum` points.
+std::vector<double> ReadStrokePoints(const json& j, const std::string& path, size_t minimum)
+{
+  if (!j.contains("points") || !j["points"].is_array())
+  {
+    throw translucency::Error("'" + path + "' needs \"points\": [[x, y, z], ...] (mm)");
+  }
+  const json& points = j["points"];
+  if (points.size() < minimum)
+  {
+    throw translucency::Error("'" + path + "': \"points\" needs at least " +
+      std::to_string(minimum) + " point" + (minimum > 1 ? "s" : "") + ", got " +
+      std::to_string(points.size()));
+  }
+  std::vector<double> xyz;
+  for (size_t p = 0; p < points.size(); ++p)
+  {
+    const json& q = points[p];
+    if (!q.is_array() || q.size() != 3 || !q[0].is_number() || !q[1].is_number() ||
+      !q[2].is_number() || !std::isfinite(q[0].get<double>()) ||
+      !std::isfinite(q[1].get<double>()) || !std::isfinite(q[2].get<double>()))
+    {
+      throw translucency::Error("'" + path + "': \"points\"[" + std::to_string(p) +
+        "] must be [x, y, z] (three finite numbers)");
+    }
+    for (int c = 0; c < 3; ++c)
+      xyz.push_back(q[c].get<double>());
+  }
+  return xyz;
+}
+
+double ReadNumber(const json& j, const char* key, const std::string& path, double fallback)
+{
+  if (!j.contains(key))
+    return fallback;
+  if (!j[key].is_number() || !std::isfinite(j[key].get<double>()))
+    throw translucency::Error("'" + path + "': \"" + key + "\" must be a number");
+  return j[key].get<double>();
+}
+
+/// Configure `paint` from a --paint JSON file.
+void ApplyPaintFile(vtkPaintScatteringCoefficients* paint, const std::string& path)
+{
+  const json j = ReadJsonObject(path, "paint");
+  const std::vector<double> xyz = ReadStrokePoints(j, path, 1);
+  for (size_t p = 0; p < xyz.size(); p += 3)
+    paint->AddStrokePoint(xyz[p], xyz[p + 1], xyz[p + 2]);
+  const double width = ReadNumber(j, "width", path, 1.0);
+  if (!(width >= 0))
+    throw translucency::Error("'" + path + "': \"width\" must be >= 0 (mm)");
+  paint->SetWidth(width);
+  const double strength = ReadNumber(j, "strength", path, 1.0);
+  if (!(strength >= 0 && strength <= 1))
+    throw translucency::Error("'" + path + "': \"strength\" must be in [0, 1]");
+  paint->SetStrength(strength);
+  if (j.contains("mode"))
+  {
+    const std::string mode = j["mode"].is_string() ? j["mode"].get<std::string>() : "";
+    if (mode == "set")
+      paint->SetModeToSet();
+    else if (mode == "multiply")
+      paint->SetModeToMultiply();
+    else if (mode == "add")
+      paint->SetModeToAdd();
+    else
+      throw translucency::Error(
+        "'" + path + "': \"mode\" must be \"set\", \"multiply\" or \"add\"");
+  }
+  double v[3];
+  if (ReadTriple(j, "absorption", path, v))
+    paint->SetTargetAbsorptionCoefficient(v);
+  if (ReadTriple(j, "reduced_scattering", path, v))
+    paint->SetTargetReducedScatteringCoefficient(v);
+  if (ReadTriple(j, "channels", path, v))
+    paint->SetChannelMask(v[0] != 0, v[1] != 0, v[2] != 0);
+}
+
+/// Configure `cut` from a --cut-stroke JSON file.
+void ApplyStrokeFile(vtkStrokeCut* cut, const std::string& path)
+{
+  const json j = ReadJsonObject(path, "stroke");
+  const std::vector<double> xyz = ReadStrokePoints(j, path, 2);
+  double view[3] = { 0.0, 0.0, -1.0 };
+  ReadTriple(j, "view_direction", path, view);
+  if (view[0] == 0 && view[1] == 0 && view[2] == 0)
+    throw translucency::Error("'" + path + "': \"view_direction\" is zero");
+  if (j.contains("inside_out") && !j["inside_out"].is_boolean())
+    throw translucency::Error("'" + path + "': \"inside_out\" must be true or false");
+  vtkNew<vtkPoints> points;
+  vtkNew<vtkCellArray> lines;
+  const vtkIdType n = static_cast<vtkIdType>(xyz.size() / 3);
+  lines->InsertNextCell(n);
+  for (vtkIdType p = 0; p < n; ++p)
+  {
+    points->InsertNextPoint(&xyz[3 * p]);
+    lines->InsertCellPoint(p);
+  }
+  vtkNew<vtkPolyData> stroke;
+  stroke->SetPoints(points);
+  stroke->SetLines(lines);
+  cut->SetStrokeData(stroke);
+  cut->SetViewDirection(view);
+  cut->SetInsideOut(j.value("inside_out", false));
+}
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
+  std::vector<Stage>& stages, double& topologyMs, EditStats* edits)
 {
   std::string error;
   MessageCollector messages;
@@ -556,8 +751,66 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(
     withMaterial = assign->GetOutput();
   }
   stages.push_back({ "coefficients", Since(start) });
+  EditStats localEdits;
+  EditStats& stats = edits ? *edits : localEdits;
 
-  // 4. Irradiance.
+  // 4. Paint (--paint), on the whole mesh, before any cut.
+  if (!options.Paint.empty())
+  {
+    start = Clock::now();
+    vtkNew<vtkPaintScatteringCoefficients> paint;
+    messages.Watch(paint);
+    ApplyPaintFile(paint, options.Paint);
+    paint->SetInputData(withMaterial);
+    paint->Update();
+    if (!messages.Errors.empty())
+      throw translucency::Error("--paint '" + options.Paint + "': " + messages.Last());
+    withMaterial = paint->GetOutput();
+    vtkDataArray* weight = withMaterial->GetCellData()->GetArray("PaintWeight");
+    stats.Painted = true;
+    stats.PaintedTets = 0;
+    for (vtkIdType c = 0; weight && c < weight->GetNumberOfTuples(); ++c)
+      stats.PaintedTets += weight->GetComponent(c, 0) > 1e-6 ? 1 : 0;
+    stats.PaintMs = Since(start);
+    stages.push_back({ "paint", stats.PaintMs });
+  }
+
+  // 5. Cut (--cut-plane or --cut-stroke).
+  if (!options.CutPlane.empty() || !options.CutStroke.empty())
+  {
+    start = Clock::now();
+    vtkNew<vtkStrokeCut> cut;
+    messages.Watch(cut);
+    vtkNew<vtkPlane> plane;
+    std::string what;
+    if (!options.CutPlane.empty())
+    {
+      plane->SetOrigin(options.CutPlane[0], options.CutPlane[1], options.CutPlane[2]);
+      plane->SetNormal(options.CutPlane[3], options.CutPlane[4], options.CutPlane[5]);
+      cut->SetCutFunction(plane);
+      what = "--cut-plane";
+    }
+    else
+    {
+      ApplyStrokeFile(cut, options.CutStroke);
+      what = "--cut-stroke '" + options.CutStroke + "'";
+    }
+    cut->SetInputData(withMaterial);
+    cut->Update();
+    if (!messages.Errors.empty())
+      throw translucency::Error(what + ": " + messages.Last());
+    if (cut->GetOutput()->GetNumberOfCells() == 0)
+      throw translucency::Error(what + " removes the whole mesh");
+    withMaterial = cut->GetOutput();
+    stats.Cut = true;
+    stats.KeptTets = withMaterial->GetNumberOfCells();
+    stats.MovedVertices = cut->GetNumberOfMovedVertices();
+    stats.BlockedVertices = cut->GetNumberOfBlockedVertices();
+    stats.CutMs = Since(start);
+    stages.push_back({ "cut", stats.CutMs });
+  }
+
+  // 6. Irradiance.
   start = Clock::now();
   vtkNew<vtkSurfaceIrradiance> irradiance;
   messages.Watch(irradiance);

@@ -79,6 +79,9 @@ struct SceneOptions
   std::vector<Light> Lights;
   bool Shadows = true;
   int UniformSamples = 32;
+  std::vector<double> CutPlane; ///< --cut-plane: origin (mm) and normal; empty: no plane cut
+  std::string CutStroke;        ///< --cut-stroke: JSON stroke file; empty: no stroke cut
+  std::string Paint;            ///< --paint: JSON paint file; empty: no painting
 
   /// If args[i] is a scene option, consume it (and its value) and return true.
   bool Parse(const std::vector<std::string>& args, size_t& i);
@@ -89,11 +92,26 @@ struct SceneOptions
 /// The options' help text, for --help.
 extern const char* const SceneOptionsHelp;
 
-/// Read, tetrahedralize, assign coefficients and compute the irradiance.
-/// Appends timing rows; `topologyMs` gets the topology time spent on the way.
-/// Throws translucency::Error with a message naming the problem.
-vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(
-  const SceneOptions& options, std::vector<Stage>& stages, double& topologyMs);
+/// Statistics of the optional --paint and --cut-* edits (for the JSON report).
+struct EditStats
+{
+  bool Painted = false;
+  long long PaintedTets = 0; ///< tets with PaintWeight > 1e-6
+  double PaintMs = 0.0;
+  bool Cut = false;
+  long long KeptTets = 0;
+  long long MovedVertices = 0;
+  long long BlockedVertices = 0;
+  double CutMs = 0.0;
+};
+
+/// Read, tetrahedralize, assign coefficients, paint (--paint), cut
+/// (--cut-plane / --cut-stroke) and compute the irradiance, in that order.
+/// Appends timing rows; `topologyMs` gets the topology time spent on the way;
+/// `edits` (optional) gets the paint and cut statistics.
+/// Throws translucency::Error with a message naming the problem (and the file).
+vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
+  std::vector<Stage>& stages, double& topologyMs, EditStats* edits = nullptr);
 
 /// Read a surface (.ply .stl .obj .vtp) or a tet mesh (.vtu .node .ele).
 bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,

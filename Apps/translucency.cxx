@@ -170,7 +170,8 @@ int Render(const std::vector<std::string>& args)
   std::string error;
   MessageCollector messages;
   double topologyMs = 0.0;
-  vtkSmartPointer<vtkUnstructuredGrid> lit = BuildLitMesh(scene, stages, topologyMs);
+  EditStats edits;
+  vtkSmartPointer<vtkUnstructuredGrid> lit = BuildLitMesh(scene, stages, topologyMs, &edits);
 
   // 5. Solve.
   vtkNew<vtkSolveDiffusion> solve;
@@ -262,6 +263,15 @@ int Render(const std::vector<std::string>& args)
     j["linear_solver"] = solve->GetLinearSolverUsed();
     j["unknowns"] = solve->GetNumberOfUnknowns();
     j["nonzeros"] = solve->GetNumberOfNonZeros();
+    if (edits.Cut)
+    {
+      j["cut"] = { { "tets_kept", edits.KeptTets }, { "vertices_moved", edits.MovedVertices },
+        { "blocked", edits.BlockedVertices }, { "ms", edits.CutMs } };
+    }
+    if (edits.Painted)
+    {
+      j["paint"] = { { "tets_touched", edits.PaintedTets }, { "ms", edits.PaintMs } };
+    }
     for (int c = 0; c < 3; ++c)
     {
       j["channels"][channel[c]] = { { "iterations", solve->GetNumberOfIterations(c) },

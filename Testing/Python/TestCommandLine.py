@@ -20,6 +20,12 @@ How to run (from a build tree; ctest sets the variables itself):
    material, malformed --light, unknown option, bad material file) exits
    non-zero with a message naming the problem, and never replaces an existing
    output file.
+5. --cut-plane, --cut-stroke and --paint: a plane cut through the centre of
+   the sphere keeps exactly the tets with a vertex on the kept side (checked
+   against the input .vtu through vtkOriginalCellIds / vtkOriginalPointIds);
+   --paint gives every tet the Gaussian blend of SET recomputed here (changed
+   near the stroke, bit for bit unchanged far away); bad edit files fail
+   naming the file and the field; the JSON report has "cut" and "paint".
 
 Exits non-zero on failure (unittest).
 """
@@ -61,7 +67,7 @@ def find_cli():
 CLI = find_cli()
 OPTIONS = ("--mesh", "--target-tets", "--max-tet-volume", "--material", "--material-ids",
            "--light", "--output",
-           "--png", "--slice-png", "--json")
+           "--png", "--slice-png", "--json", "--paint", "--cut-plane", "--cut-stroke")
 STAGES = ("read", "tetrahedralize", "coefficients", "irradiance", "topology", "assembly", "solve",
           "radiance", "write")
 
@@ -428,6 +434,159 @@ class CommandLineTest(unittest.TestCase):
         self.assertFalse(os.path.exists(prefix + ".json"))
         self.assertEqual(sorted(p for p in os.listdir(self.dir) if p.startswith("keep")),
                          ["keep.vtu"])
+
+    # ------------------------------------------------------- cut and paint
+
+    def write_json(self, name, content):
+        path = os.path.join(self.dir, name)
+        with open(path, "w") as f:
+            if isinstance(content, str):
+                f.write(content)
+            else:
+                json.dump(content, f)
+        return path
+
+    def test_plane_cut(self):
+        self.assertSucceeded(self.first)
+        source = read(self.prefix + ".vtu")
+        origin, normal = np.array([0.1, 0.2, -0.1]), np.array([1.0, 0.5, 0.25])
+        prefix = os.path.join(self.dir, "planecut")
+        result = self.run_cli("render", "--mesh", self.prefix + ".vtu", "--cut-plane",
+                              ",".join(str(v) for v in list(origin) + list(normal)),
+                              "--output", prefix, "--json", prefix + ".json")
+        self.assertSucceeded(result)
+        cut = read(prefix + ".vtu")
+        p0 = vtk_to_numpy(source.GetPoints().GetData()).astype(float)
+        t0 = vtk_to_numpy(source.GetCells().GetConnectivityArray()).reshape(-1, 4)
+        side0 = (p0 - origin) @ normal  # > 0: the removed side (the normal points to it)
+        expected = np.nonzero((side0[t0] <= 0).any(axis=1))[0]
+        cell_ids = cell_array(cut, "vtkOriginalCellIds")
+        point_ids = point_array(cut, "vtkOriginalPointIds")
+        self.assertEqual(sorted(cell_ids.tolist()), expected.tolist())
+        # The output tets are the original ones, vertex for vertex.
+        t1 = vtk_to_numpy(cut.GetCells().GetConnectivityArray()).reshape(-1, 4)
+        self.assertTrue(np.array_equal(point_ids[t1], t0[cell_ids]))
+        # Points of the kept side stay; moved points stay on the removed side.
+        p1 = vtk_to_numpy(cut.GetPoints().GetData()).astype(float)
+        kept = side0[point_ids] <= 0
+        self.assertTrue(np.array_equal(p1[kept], p0[point_ids[kept]]))
+        self.assertTrue(np.all((p1[~kept] - origin) @ normal >= -1e-9))
+        self.assertTrue(np.all(tet_volumes(cut) > 0))
+        self.assertTrue(np.all(np.isfinite(point_array(cut, "Fluence"))))
+        with open(prefix + ".json") as f:
+            stats = json.load(f)
+        self.assertEqual(stats["tets"], len(expected))
+        self.assertEqual(stats["cut"]["tets_kept"], len(expected))
+        self.assertGreaterEqual(stats["cut"]["vertices_moved"], 0)
+        self.assertGreaterEqual(stats["cut"]["blocked"], 0)
+        self.assertGreaterEqual(stats["cut"]["ms"], 0)
+        self.assertIn("cut", stats["times_ms"])
+        self.assertNotIn("paint", stats)
+        # A plane beyond the sphere removes everything: an error, not an empty result.
+        self.assertFailsNaming(self.run_cli("render", "--mesh", self.prefix + ".vtu",
+                                            "--cut-plane", "-10,0,0,1,0,0"),
+                               "--cut-plane", "whole mesh")
+        self.assertFailsNaming(self.run_cli("render", "--mesh", self.prefix + ".vtu",
+                                            "--cut-plane", "0,0,0,1,0"), "--cut-plane", "six")
+
+    def test_stroke_cut(self):
+        self.assertSucceeded(self.first)
+        counts = []
+        for inside_out in (False, True):
+            stroke = self.write_json("stroke.json", {"points": [[-10, 0.3, 0], [10, 0.3, 0]],
+                                                     "view_direction": [0, 0, -1],
+                                                     "inside_out": inside_out})
+            path = os.path.join(self.dir, "stroke-%d.json" % inside_out)
+            self.assertSucceeded(self.run_cli("render", "--mesh", self.prefix + ".vtu",
+                                              "--cut-stroke", stroke, "--json", path))
+            with open(path) as f:
+                counts.append(json.load(f)["cut"]["tets_kept"])
+        with open(self.json_path) as f:
+            total = json.load(f)["tets"]
+        # Each side keeps part of the mesh; together they cover it (a tet
+        # straddling the cutting surface is kept by both).
+        self.assertLess(max(counts), total)
+        self.assertGreaterEqual(sum(counts), total)
+
+    def test_paint(self):
+        self.assertSucceeded(self.first)
+        source = read(self.prefix + ".vtu")
+        centre, width, target = np.array([3.0, 0.0, 0.0]), 0.5, np.array([1.0, 2.0, 3.0])
+        paint = self.write_json("paint.json", {"points": [centre.tolist()], "width": width,
+                                               "mode": "set", "absorption": target.tolist(),
+                                               "channels": [1, 1, 0]})
+        prefix = os.path.join(self.dir, "painted")
+        self.assertSucceeded(self.run_cli("render", "--mesh", self.prefix + ".vtu", "--paint",
+                                          paint, "--output", prefix, "--json", prefix + ".json"))
+        painted = read(prefix + ".vtu")
+        p = vtk_to_numpy(source.GetPoints().GetData()).astype(float)
+        t = vtk_to_numpy(source.GetCells().GetConnectivityArray()).reshape(-1, 4)
+        d = np.linalg.norm(p[t].mean(axis=1) - centre, axis=1)
+        w = np.exp(-d ** 2 / (2 * width ** 2))
+        before = cell_array(source, "AbsorptionCoefficient")
+        after = cell_array(painted, "AbsorptionCoefficient")
+        expected = before.copy()
+        expected[:, :2] = (1 - w[:, None]) * before[:, :2] + w[:, None] * target[:2]
+        self.assertTrue(np.allclose(after, expected, rtol=1e-9, atol=1e-12))
+        self.assertTrue(np.array_equal(after[:, 2], before[:, 2]))  # masked channel
+        far = d > 10 * width  # w < 2e-22: below the rounding of the old value
+        self.assertTrue(far.any() and (d < width).any())
+        self.assertTrue(np.array_equal(after[far], before[far]))
+        self.assertTrue(np.all(np.abs(after[d < width, 0] - before[d < width, 0]) > 0.1))
+        with open(prefix + ".json") as f:
+            stats = json.load(f)
+        self.assertEqual(stats["paint"]["tets_touched"], int(np.sum(w > 1e-6)))
+        self.assertNotIn("cut", stats)
+        # Paint before cut: the painted values survive the cut of their tets.
+        prefix2 = os.path.join(self.dir, "painted-cut")
+        self.assertSucceeded(self.run_cli("render", "--mesh", self.prefix + ".vtu", "--paint",
+                                          paint, "--cut-plane", "0,0,0,-1,0,0",
+                                          "--output", prefix2))
+        both = read(prefix2 + ".vtu")
+        ids = cell_array(both, "vtkOriginalCellIds")
+        self.assertTrue(np.allclose(cell_array(both, "AbsorptionCoefficient"), after[ids],
+                                    rtol=1e-12))
+
+    def test_bad_edit_files(self):
+        mesh = ("render", "--mesh", self.prefix + ".vtu")
+        self.assertSucceeded(self.first)
+        missing = os.path.join(self.dir, "no-such-paint.json")
+        self.assertFailsNaming(self.run_cli(*mesh, "--paint", missing), "no-such-paint.json")
+        paint_cases = (
+            ("{ not json", "not valid JSON"),
+            ([1, 2], "object"),
+            ({"width": 1}, "points"),
+            ({"points": []}, "points"),
+            ({"points": [[1, 2]]}, "points"),
+            ({"points": [[0, 0, 0]], "width": -1}, "width"),
+            ({"points": [[0, 0, 0]], "width": "wide"}, "width"),
+            ({"points": [[0, 0, 0]], "mode": "paint"}, "mode"),
+            ({"points": [[0, 0, 0]], "absorption": [1, 2]}, "absorption"),
+            ({"points": [[0, 0, 0]], "reduced_scattering": "red"}, "reduced_scattering"),
+            ({"points": [[0, 0, 0]], "strength": 2}, "strength"),
+            ({"points": [[0, 0, 0]], "channels": [1, 1]}, "channels"),
+        )
+        for content, field in paint_cases:
+            with self.subTest(paint=content):
+                path = self.write_json("bad-paint.json", content)
+                self.assertFailsNaming(self.run_cli(*mesh, "--paint", path),
+                                       "bad-paint.json", field)
+        stroke_cases = (
+            ("[", "not valid JSON"),
+            ({"points": [[0, 0, 0]]}, "points"),
+            ({"points": [[0, 0, 0], [1, "a", 0]]}, "points"),
+            ({"points": [[0, 0, 0], [1, 0, 0]], "view_direction": [0, 0, 0]}, "view_direction"),
+            ({"points": [[0, 0, 0], [1, 0, 0]], "view_direction": [0, 1]}, "view_direction"),
+            ({"points": [[0, 0, 0], [1, 0, 0]], "inside_out": "yes"}, "inside_out"),
+        )
+        for content, field in stroke_cases:
+            with self.subTest(stroke=content):
+                path = self.write_json("bad-stroke.json", content)
+                self.assertFailsNaming(self.run_cli(*mesh, "--cut-stroke", path),
+                                       "bad-stroke.json", field)
+        stroke = self.write_json("ok-stroke.json", {"points": [[0, 0, 0], [1, 0, 0]]})
+        self.assertFailsNaming(self.run_cli(*mesh, "--cut-stroke", stroke, "--cut-plane",
+                                            "0,0,0,1,0,0"), "--cut-plane", "--cut-stroke")
 
 
 if __name__ == "__main__":

@@ -1,0 +1,217 @@
+#include "vtkFractureTetMesh.h"
+
+#include "Error.h"
+#include "TetFracture.h"
+#include "TetMesh.h"
+#include "vtkTranslucencyMeshConversion.h"
+
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkCellType.h>
+#include <vtkCompositeDataSet.h>
+#include <vtkDataArray.h>
+#include <vtkFieldData.h>
+#include <vtkIdTypeArray.h>
+#include <vtkInformation.h>
+#include <vtkInformationVector.h>
+#include <vtkIntArray.h>
+#include <vtkMultiBlockDataSet.h>
+#include <vtkNew.h>
+#include <vtkObjectFactory.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkUnstructuredGrid.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+vtkStandardNewMacro(vtkFractureTetMesh);
+
+namespace
+{
+constexpr const char* OriginalPointIdsName = "vtkOriginalPointIds";
+
+/// Copy the arrays of `in` for the entities `kept` into `out`, then add the
+/// id map `name` composed with the input's own map of that name if it has one
+/// (as vtkStrokeCut does).
+void CopyAttributes(vtkDataSetAttributes* in, vtkDataSetAttributes* out,
+  const std::vector<int>& kept, const char* name)
+{
+  vtkDataArray* previous = in->GetArray(name);
+  const vtkIdType n = static_cast<vtkIdType>(kept.size());
+  out->CopyAllocate(in, n);
+  for (vtkIdType k = 0; k < n; ++k)
+  {
+    out->CopyData(in, kept[k], k);
+  }
+  out->RemoveArray(name);
+  vtkNew<vtkIdTypeArray> ids;
+  ids->SetName(name);
+  ids->SetNumberOfTuples(n);
+  for (vtkIdType k = 0; k < n; ++k)
+  {
+    ids->SetValue(k,
+      previous ? static_cast<vtkIdType>(previous->GetComponent(kept[k], 0)) : kept[k]);
+  }
+  out->AddArray(ids);
+}
+
+vtkNew<vtkIntArray> IntField(const char* name, int value)
+{
+  vtkNew<vtkIntArray> array;
+  array->SetName(name);
+  array->SetNumberOfTuples(1);
+  array->SetValue(0, value);
+  return array;
+}
+}
+
+//------------------------------------------------------------------------------
+vtkFractureTetMesh::vtkFractureTetMesh() = default;
+
+//------------------------------------------------------------------------------
+void vtkFractureTetMesh::AddSeedPoint(double x, double y, double z)
+{
+  this->SeedPoints.insert(this->SeedPoints.end(), { x, y, z });
+  this->Modified();
+}
+
+void vtkFractureTetMesh::RemoveAllSeedPoints()
+{
+  if (!this->SeedPoints.empty())
+  {
+    this->SeedPoints.clear();
+    this->Modified();
+  }
+}
+
+void vtkFractureTetMesh::SetRandomSeeds(int count, int seed)
+{
+  count = count < 0 ? 0 : count;
+  if (count != this->NumberOfRandomSeeds || seed != this->RandomSeed)
+  {
+    this->NumberOfRandomSeeds = count;
+    this->RandomSeed = seed;
+    this->Modified();
+  }
+}
+
+//------------------------------------------------------------------------------
+int vtkFractureTetMesh::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkUnstructuredGrid");
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+int vtkFractureTetMesh::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
+  vtkMultiBlockDataSet* output = vtkMultiBlockDataSet::GetData(outputVector);
+  this->NumberOfPieces = 0;
+  if (this->SeedPoints.empty() && this->NumberOfRandomSeeds == 0)
+  {
+    vtkErrorMacro(<< "no seed points: AddSeedPoint or SetRandomSeeds(n > 0, seed) is required");
+    return 0;
+  }
+  if (!input || input->GetNumberOfCells() == 0)
+  {
+    vtkErrorMacro(<< "empty input: nothing to fracture");
+    return 0;
+  }
+  std::string error;
+  auto mesh = vtkTranslucency::AcquireTetMesh(input, error);
+  if (!mesh)
+  {
+    vtkErrorMacro(<< "input is not a tet mesh: " << error);
+    return 0;
+  }
+  this->UpdateProgress(0.1);
+
+  // The core mesh keeps the tets in input order (as vtkStrokeCut relies on).
+  const std::vector<double>& points = mesh->GetPoints();
+  const std::vector<int>& tets = mesh->GetTets();
+  translucency::TetFracture fracture;
+  try
+  {
+    fracture.SetSeeds(this->NumberOfRandomSeeds > 0
+        ? translucency::TetFracture::RandomSeeds(
+            points, tets, this->NumberOfRandomSeeds, static_cast<std::uint32_t>(this->RandomSeed))
+        : this->SeedPoints);
+    fracture.Split(points, tets);
+  }
+  catch (const translucency::Error& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  if (this->CheckAbort())
+  {
+    return 1;
+  }
+  this->UpdateProgress(0.3);
+
+  const int numPieces = fracture.GetNumberOfPieces();
+  output->SetNumberOfBlocks(numPieces);
+  for (int k = 0; k < numPieces; ++k)
+  {
+    const std::vector<int>& piecePoints = fracture.GetPiecePoints(k);
+    const std::vector<int>& connectivity = fracture.GetPieceConnectivity(k);
+    const vtkIdType numPoints = static_cast<vtkIdType>(piecePoints.size());
+    const vtkIdType numTets = static_cast<vtkIdType>(connectivity.size() / 4);
+
+    vtkNew<vtkPoints> pts;
+    pts->SetDataType(input->GetPoints()->GetDataType());
+    pts->SetNumberOfPoints(numPoints);
+    for (vtkIdType j = 0; j < numPoints; ++j)
+    {
+      pts->SetPoint(j, input->GetPoint(piecePoints[j]));
+    }
+    vtkNew<vtkIdTypeArray> offsets;
+    vtkNew<vtkIdTypeArray> ids;
+    offsets->SetNumberOfTuples(numTets + 1);
+    ids->SetNumberOfTuples(4 * numTets);
+    for (vtkIdType t = 0; t <= numTets; ++t)
+    {
+      offsets->SetValue(t, 4 * t);
+    }
+    for (vtkIdType j = 0; j < 4 * numTets; ++j)
+    {
+      ids->SetValue(j, connectivity[j]);
+    }
+    vtkNew<vtkCellArray> cells;
+    cells->SetData(offsets, ids);
+
+    vtkNew<vtkUnstructuredGrid> piece;
+    piece->SetPoints(pts);
+    piece->SetCells(VTK_TETRA, cells);
+    CopyAttributes(input->GetPointData(), piece->GetPointData(), piecePoints, OriginalPointIdsName);
+    CopyAttributes(input->GetCellData(), piece->GetCellData(), fracture.GetPieceTets(k),
+      vtkTranslucency::OriginalCellIdsName);
+    piece->GetFieldData()->PassData(input->GetFieldData());
+    piece->GetFieldData()->AddArray(IntField("FracturePiece", k));
+    piece->GetFieldData()->AddArray(IntField("FractureSeed", fracture.GetPieceSeed(k)));
+
+    output->SetBlock(k, piece);
+    output->GetMetaData(k)->Set(vtkCompositeDataSet::NAME(), "piece_" + std::to_string(k));
+    this->UpdateProgress(0.3 + 0.7 * (k + 1) / numPieces);
+    if (this->CheckAbort())
+    {
+      break;
+    }
+  }
+  this->NumberOfPieces = numPieces;
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+void vtkFractureTetMesh::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "NumberOfSeedPoints: " << this->GetNumberOfSeedPoints() << "\n";
+  os << indent << "NumberOfRandomSeeds: " << this->NumberOfRandomSeeds << "\n";
+  os << indent << "RandomSeed: " << this->RandomSeed << "\n";
+  os << indent << "NumberOfPieces: " << this->NumberOfPieces << "\n";
+}
