@@ -19,11 +19,15 @@
 
 #include "vtkAssignScatteringCoefficients.h"
 #include "vtkOutgoingRadiance.h"
+#include "vtkPaintScatteringCoefficients.h"
+#include "vtkStrokeCut.h"
 #include "vtkSolveDiffusion.h"
 #include "vtkSurfaceIrradiance.h"
 #include "vtkTetrahedralizeSurface.h"
 
+#include <vtkCellData.h>
 #include <vtkDataArray.h>
+#include <vtkPlane.h>
 #include <vtkNew.h>
 #include <vtkOutputWindow.h>
 #include <vtkPointData.h>
@@ -39,6 +43,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iomanip>
 #include <iostream>
@@ -89,6 +94,8 @@ translucency bench [options]
   --tets N1,N2,...         target sizes (default 100000,1000000)
   --runs N                 repetitions per measurement (default 7)
   --json FILE              machine-readable results
+  --edit                   also time a plane cut (+ topology + assembly) and a paint
+                           stroke on ~1 % of the tets (+ incremental row update)
 )";
 
 void PrintUsage()
@@ -292,11 +299,123 @@ int Render(const std::vector<std::string>& args)
   return 0;
 }
 
+/// Cut and paint timings on one lit mesh (medians of `runs`): a plane cut
+/// through the centre with the default relaxation, then the topology rebuild
+/// and the 3-channel re-assembly of the cut mesh; a paint stroke touching
+/// about 1 % of the tets, then the incremental re-assembly of their rows.
+json BenchEdit(vtkUnstructuredGrid* g, int runs)
+{
+  std::vector<double> cutMs, topoMs, asmMs, paintMs, updateMs;
+  vtkIdType kept = 0, touched = 0;
+  double bounds[6];
+  g->GetBounds(bounds);
+  const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
+    0.5 * (bounds[4] + bounds[5]) };
+  auto toCore = [](vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets) {
+    points.resize(3 * grid->GetNumberOfPoints());
+    for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i)
+      grid->GetPoint(i, &points[3 * i]);
+    tets.resize(4 * grid->GetNumberOfCells());
+    const vtkIdType* ids;
+    vtkIdType npts;
+    for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
+    {
+      grid->GetCellPoints(c, npts, ids);
+      for (int k = 0; k < 4; ++k)
+        tets[4 * c + k] = static_cast<int>(ids[k]);
+    }
+  };
+  const translucency::MaterialPreset& marble = translucency::FindMaterialPreset("marble");
+  for (int r = 0; r < runs; ++r)
+  {
+    vtkNew<vtkPlane> plane;
+    plane->SetOrigin(centre);
+    plane->SetNormal(1.0, 0.0, 0.0);
+    vtkNew<vtkStrokeCut> cut;
+    cut->SetInputData(g);
+    cut->SetCutFunction(plane);
+    auto start = Clock::now();
+    cut->Update();
+    cutMs.push_back(Since(start));
+    vtkUnstructuredGrid* out = cut->GetOutput();
+    kept = out->GetNumberOfCells();
+    std::vector<double> points;
+    std::vector<int> tets;
+    toCore(out, points, tets);
+    start = Clock::now();
+    translucency::TetMesh mesh;
+    mesh.SetGeometry(std::move(points), std::move(tets));
+    topoMs.push_back(Since(start));
+    auto material = translucency::OpticalProperties::Uniform(
+      mesh.GetNumberOfTets(), marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
+    std::vector<double> q(3 * static_cast<size_t>(mesh.GetNumberOfPoints()), 0.0);
+    translucency::DiscreteDivergence disc;
+    translucency::DiffusionSystem system;
+    start = Clock::now();
+    disc.Assemble(mesh, material, q, system);
+    asmMs.push_back(Since(start));
+  }
+  // Paint: a stroke point on the top of the object, width giving ~1 % of tets.
+  std::vector<double> points;
+  std::vector<int> tets;
+  toCore(g, points, tets);
+  translucency::TetMesh mesh;
+  mesh.SetGeometry(points, tets);
+  auto material = translucency::OpticalProperties::Uniform(
+    mesh.GetNumberOfTets(), marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
+  std::vector<double> q(3 * static_cast<size_t>(mesh.GetNumberOfPoints()), 0.0);
+  translucency::DiscreteDivergence disc;
+  translucency::DiffusionSystem system;
+  disc.Assemble(mesh, material, q, system);
+  const double diag = std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
+    (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) + (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
+  for (int r = 0; r < runs; ++r)
+  {
+    vtkNew<vtkPaintScatteringCoefficients> paint;
+    paint->SetInputData(g);
+    paint->AddStrokePoint(centre[0], bounds[3], centre[2]);
+    paint->SetWidth(0.024 * diag);
+    auto start = Clock::now();
+    paint->Update();
+    paintMs.push_back(Since(start));
+    vtkDataArray* weight = paint->GetOutput()->GetCellData()->GetArray("PaintWeight");
+    std::vector<int> changed;
+    for (vtkIdType t = 0; t < weight->GetNumberOfTuples(); ++t)
+      if (weight->GetComponent(t, 0) > 1e-6)
+        changed.push_back(static_cast<int>(t));
+    touched = static_cast<vtkIdType>(changed.size());
+    vtkDataArray* muA = paint->GetOutput()->GetCellData()->GetArray("AbsorptionCoefficient");
+    vtkDataArray* sigma = paint->GetOutput()->GetCellData()->GetArray("ReducedScatteringCoefficient");
+    for (int t : changed)
+      for (int c = 0; c < 3; ++c)
+      {
+        material.AbsorptionCoefficient[3 * t + c] = muA->GetComponent(t, c);
+        material.ReducedScatteringCoefficient[3 * t + c] = sigma->GetComponent(t, c);
+      }
+    start = Clock::now();
+    disc.UpdateTets(mesh, material, q, changed, system);
+    updateMs.push_back(Since(start));
+  }
+  const double cut = Median(cutMs), topo = Median(topoMs), as = Median(asmMs);
+  const double paint = Median(paintMs), update = Median(updateMs);
+  std::cout << std::fixed << std::setprecision(1) << "    edit: plane cut " << cut
+            << " ms (kept " << kept << " tets) + topology " << topo << " ms + assembly " << as
+            << " ms = " << cut + topo + as << " ms; paint " << paint << " ms ("
+            << touched << " tets, " << std::setprecision(2)
+            << 100.0 * touched / g->GetNumberOfCells() << " %) + row update " << update
+            << " ms = " << paint + update << " ms\n" << std::defaultfloat;
+  return { { "cut_ms_median", cut }, { "cut_topology_ms_median", topo },
+    { "cut_assembly_ms_median", as }, { "cut_total_ms", cut + topo + as },
+    { "tets_kept", kept }, { "paint_ms_median", paint }, { "paint_update_ms_median", update },
+    { "paint_total_ms", paint + update }, { "tets_painted", touched } };
+}
+
 int Bench(const std::vector<std::string>& args)
 {
   std::string meshPath = "Data/bunny.ply", jsonPath;
   std::vector<double> sizes = { 100000, 1000000 };
   int runs = 7;
+  bool edit = false;
   for (size_t i = 0; i < args.size(); ++i)
   {
     const std::string& a = args[i];
@@ -313,6 +432,8 @@ int Bench(const std::vector<std::string>& args)
       runs = static_cast<int>(ParseNumbers(value(), a).at(0));
     else if (a == "--json")
       jsonPath = value();
+    else if (a == "--edit")
+      edit = true;
     else
       throw UsageError("unknown option '" + a + "' (see translucency --help)");
   }
@@ -425,6 +546,8 @@ int Bench(const std::vector<std::string>& args)
       { "assembly_3ch_ms_median", a }, { "spmv_1ch_ms_median", s },
       { "solve_3ch_ms_median", so }, { "cg_iterations_R", iterations },
       { "assembly_over_spmv", a / s }, { "solve_over_spmv", so / s } });
+    if (edit)
+      results.back()["edit"] = BenchEdit(g, runs);
   }
   if (!jsonPath.empty() && !WriteText(jsonPath, results.dump(2) + "\n", error))
     throw translucency::Error(error);
