@@ -11,6 +11,8 @@
 #include <vtkGenericCell.h>
 #include <vtkGeometryFilter.h>
 #include <vtkIdTypeArray.h>
+#include <vtkImageData.h>
+#include <vtkPointData.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
 #include <vtkNew.h>
@@ -313,10 +315,238 @@ bool AssignVeins(vtkAlgorithm* self, vtkUnstructuredGrid* input, const VeinSetti
   }
   return true;
 }
+
+/// VOLUME: a probed array, its name and whether it is a point array.
+struct VolumeArray
+{
+  vtkDataArray* Array = nullptr;
+  std::string Name;
+  bool OnPoints = false;
+};
+
+/// The point array, else the cell array, `name` of the volume with `components` components.
+VolumeArray FindVolumeArray(vtkImageData* volume, const std::string& name, int components,
+  const char* what)
+{
+  VolumeArray a;
+  a.Name = name;
+  a.Array = volume->GetPointData()->GetArray(name.c_str());
+  a.OnPoints = a.Array != nullptr;
+  if (!a.Array)
+  {
+    a.Array = volume->GetCellData()->GetArray(name.c_str());
+  }
+  if (!a.Array)
+  {
+    throw translucency::Error(std::string("the volume mode needs the point or cell array '") +
+      name + "' (" + what + ") on the volume, which it does not have");
+  }
+  if (a.Array->GetNumberOfComponents() != components)
+  {
+    std::ostringstream os;
+    os << "the volume array '" << name << "' (" << what << ") has "
+       << a.Array->GetNumberOfComponents() << " components, not " << components;
+    throw translucency::Error(os.str());
+  }
+  return a;
+}
+
+/// The voxel of x: structured coordinates ijk and parametric coordinates pc (throws outside).
+void LocateInVolume(vtkImageData* volume, vtkIdType tet, const double x[3], int ijk[3],
+  double pc[3])
+{
+  if (!volume->ComputeStructuredCoordinates(x, ijk, pc))
+  {
+    double b[6];
+    volume->GetBounds(b);
+    std::ostringstream os;
+    os.precision(17);
+    os << "tet " << tet << " has its centroid (" << x[0] << ", " << x[1] << ", " << x[2]
+       << ") outside the volume (bounds [" << b[0] << ", " << b[1] << "] x [" << b[2] << ", "
+       << b[3] << "] x [" << b[4] << ", " << b[5] << "])";
+    throw translucency::Error(os.str());
+  }
+}
+
+/// Point array: trilinear interpolation; cell array: the voxel's value.
+void ProbeVolume(vtkImageData* volume, const VolumeArray& a, const int ijk[3], const double pc[3],
+  double* value)
+{
+  const int nc = a.Array->GetNumberOfComponents();
+  if (!a.OnPoints)
+  {
+    const vtkIdType cell = volume->ComputeCellId(const_cast<int*>(ijk));
+    for (int c = 0; c < nc; ++c)
+    {
+      value[c] = a.Array->GetComponent(cell, c);
+    }
+    return;
+  }
+  const int* extent = volume->GetExtent();
+  std::fill(value, value + nc, 0.0);
+  for (int corner = 0; corner < 8; ++corner)
+  {
+    int p[3];
+    double w = 1.0;
+    for (int axis = 0; axis < 3; ++axis)
+    {
+      const int d = (corner >> axis) & 1;
+      p[axis] = std::min(ijk[axis] + d, extent[2 * axis + 1]);
+      w *= d ? pc[axis] : 1.0 - pc[axis];
+    }
+    if (w == 0.0)
+    {
+      continue; // also skips the corners beyond a flat axis
+    }
+    const vtkIdType id = volume->ComputePointId(p);
+    for (int c = 0; c < nc; ++c)
+    {
+      value[c] += w * a.Array->GetComponent(id, c);
+    }
+  }
+}
+
+/// Point array: the nearest grid point's value; cell array: the voxel's value.
+double NearestInVolume(vtkImageData* volume, const VolumeArray& a, const int ijk[3],
+  const double pc[3])
+{
+  if (!a.OnPoints)
+  {
+    return a.Array->GetComponent(volume->ComputeCellId(const_cast<int*>(ijk)), 0);
+  }
+  const int* extent = volume->GetExtent();
+  int p[3];
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    p[axis] = std::min(ijk[axis] + (pc[axis] >= 0.5 ? 1 : 0), extent[2 * axis + 1]);
+  }
+  return a.Array->GetComponent(volume->ComputePointId(p), 0);
+}
+
+/// Throws, naming the tet, the point and the array, unless all values are finite and >= 0.
+void CheckProbed(vtkIdType tet, const double x[3], const std::string& name, const double v[3])
+{
+  for (int c = 0; c < 3; ++c)
+  {
+    if (!(v[c] >= 0.0) || !std::isfinite(v[c]))
+    {
+      std::ostringstream os;
+      os.precision(17);
+      os << "tet " << tet << " gets the value " << v[c] << " (component " << c
+         << ") from the volume array '" << name << "' at its centroid (" << x[0] << ", " << x[1]
+         << ", " << x[2] << "); it must be finite and >= 0";
+      throw translucency::Error(os.str());
+    }
+  }
+}
+
+/// The settings of VOLUME mode.
+struct VolumeSettings
+{
+  std::string AbsorptionName, ScatteringName, IdName, TableFileName;
+  double Eta;
+};
+
+/// VOLUME: probed coefficients (one palette entry per tet) or table entries by id.
+bool AssignFromVolume(vtkAlgorithm* self, vtkUnstructuredGrid* input, vtkImageData* volume,
+  const VolumeSettings& v, const std::vector<Material>& table, std::vector<Coefficients>& palette,
+  std::vector<int>& which)
+{
+  if (!volume)
+  {
+    throw translucency::Error("the volume mode needs a vtkImageData on the second input port "
+                              "(SetVolumeConnection or SetVolumeData)");
+  }
+  const vtkIdType n = input->GetNumberOfCells();
+  const bool byId = !v.IdName.empty();
+  VolumeArray ids, absorption, scattering;
+  std::map<long long, int> slot; // table id -> palette index
+  if (byId)
+  {
+    if (v.TableFileName.empty())
+    {
+      throw translucency::Error("the volume mode with a material-id array needs a material "
+                                "table file (MaterialTableFileName)");
+    }
+    ids = FindVolumeArray(volume, v.IdName, 1, "material ids");
+    for (const Material& m : table)
+    {
+      if (m.Id >= 0)
+      {
+        slot[m.Id] = static_cast<int>(palette.size());
+        palette.push_back(FromTable(m));
+      }
+    }
+  }
+  else
+  {
+    absorption = FindVolumeArray(volume, v.AbsorptionName, 3, "mu_a, 1/mm");
+    scattering = FindVolumeArray(volume, v.ScatteringName, 3, "sigma_s', 1/mm");
+    palette.resize(static_cast<size_t>(n));
+  }
+  for (vtkIdType i = 0; i < n; ++i)
+  {
+    if (i % 10000 == 0)
+    {
+      self->UpdateProgress(static_cast<double>(i) / static_cast<double>(n));
+      if (self->GetAbortExecute())
+      {
+        return false;
+      }
+    }
+    double x[3], pc[3];
+    int ijk[3];
+    Centroid(input, i, x);
+    LocateInVolume(volume, i, x, ijk, pc);
+    if (byId)
+    {
+      const double id = NearestInVolume(volume, ids, ijk, pc);
+      const double r = std::round(id);
+      auto it = (id == r && std::abs(r) < 9e18) ? slot.find(static_cast<long long>(r)) : slot.end();
+      if (it == slot.end())
+      {
+        std::ostringstream os;
+        os.precision(17);
+        os << "tet " << i << " has material id " << id << " (volume array '" << v.IdName
+           << "' at its centroid (" << x[0] << ", " << x[1] << ", " << x[2] << ")), which "
+           << (id == r ? "is not an id of" : "is not an integer id of") << " the material table '"
+           << v.TableFileName << "'";
+        throw translucency::Error(os.str());
+      }
+      which[i] = it->second;
+    }
+    else
+    {
+      Coefficients& m = palette[i];
+      ProbeVolume(volume, absorption, ijk, pc, m.MuA);
+      CheckProbed(i, x, absorption.Name, m.MuA);
+      ProbeVolume(volume, scattering, ijk, pc, m.SigmaS);
+      CheckProbed(i, x, scattering.Name, m.SigmaS);
+      m.Eta = v.Eta;
+      which[i] = static_cast<int>(i);
+    }
+  }
+  return true;
+}
 } // namespace
 
 //------------------------------------------------------------------------------
-vtkAssignScatteringCoefficients::vtkAssignScatteringCoefficients() = default;
+vtkAssignScatteringCoefficients::vtkAssignScatteringCoefficients()
+{
+  this->SetNumberOfInputPorts(2);
+}
+
+//------------------------------------------------------------------------------
+int vtkAssignScatteringCoefficients::FillInputPortInformation(int port, vtkInformation* info)
+{
+  if (port == 1)
+  {
+    info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
+    info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
+    return 1;
+  }
+  return this->Superclass::FillInputPortInformation(port, info);
+}
 
 //------------------------------------------------------------------------------
 void vtkAssignScatteringCoefficients::AddLayer(double thickness, const char* material)
@@ -386,6 +616,20 @@ int vtkAssignScatteringCoefficients::RequestData(
           double c[3];
           Centroid(input, i, c);
           which[i] = vtkMath::Distance2BetweenPoints(c, this->InclusionCenter) <= r2 ? 1 : 0;
+        }
+      }
+      else if (this->MaterialMode == VOLUME)
+      {
+        VolumeSettings v;
+        v.AbsorptionName = this->VolumeAbsorptionArrayName;
+        v.ScatteringName = this->VolumeScatteringArrayName;
+        v.IdName = this->VolumeMaterialIdArrayName;
+        v.TableFileName = this->MaterialTableFileName;
+        v.Eta = this->RefractiveIndex;
+        if (!AssignFromVolume(this, input, vtkImageData::GetData(inputVector[1]), v, table,
+              palette, which))
+        {
+          return 0;
         }
       }
       else if (this->MaterialMode == VEINS)
@@ -508,4 +752,7 @@ void vtkAssignScatteringCoefficients::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "VeinTurbulence: " << this->VeinTurbulence << "\n";
   os << indent << "VeinSharpness: " << this->VeinSharpness << "\n";
   os << indent << "VeinSeed: " << this->VeinSeed << "\n";
+  os << indent << "VolumeAbsorptionArrayName: " << this->VolumeAbsorptionArrayName << "\n";
+  os << indent << "VolumeScatteringArrayName: " << this->VolumeScatteringArrayName << "\n";
+  os << indent << "VolumeMaterialIdArrayName: " << this->VolumeMaterialIdArrayName << "\n";
 }

@@ -32,6 +32,21 @@
  *   d = unit VeinDirection) and the vein weight w = (1 - |s|)^VeinSharpness,
  *   a tet with centroid x gets (1 - w) BaseMaterial + w VeinMaterial (each
  *   coefficient and eta blended linearly).
+ * - VOLUME: values probed from a vtkImageData connected to the second input
+ *   port (SetVolumeConnection / SetVolumeData), at each tet's centroid x.
+ *   The voxel of x is found with vtkImageData::ComputeStructuredCoordinates
+ *   (so origin, spacing and direction matrix are honoured); x outside the
+ *   image bounds is an error. With VolumeMaterialIdArrayName empty, mu_a and
+ *   sigma_s' come from the 3-component arrays VolumeAbsorptionArrayName /
+ *   VolumeScatteringArrayName (1/mm, before ScaleFactor): a point array is
+ *   interpolated trilinearly from the 8 voxel corners (exact for fields
+ *   linear in x, y, z), a cell array gives the value of the voxel containing
+ *   x; eta is RefractiveIndex. With VolumeMaterialIdArrayName set, that
+ *   array holds integer material ids, taken without interpolation from the
+ *   nearest voxel (point array: the nearest grid point, ties toward the
+ *   higher index; cell array: the voxel containing x) and looked up in the
+ *   material table as in MATERIAL_IDS (the table's entry gives mu_a,
+ *   sigma_s' and eta). Point arrays are looked up before cell arrays.
  *
  * In the procedural modes a material is named by a reference: the name of a
  * table entry (when MaterialTableFileName is set), else the id of a table
@@ -41,7 +56,10 @@
  * error (the filter returns 0 and says which value). So are a table error
  * (see vtkMaterialTableReader), a missing id array, a non-integer id or an
  * id absent from the table (the message names the tet and the id), an
- * unknown material reference and LAYERS mode without layers.
+ * unknown material reference and LAYERS mode without layers. In VOLUME
+ * mode: no volume connected, a missing array or one with the wrong number
+ * of components, a tet centroid outside the volume (the message names the
+ * tet and the point) and a negative or NaN probed value (names the tet).
  *
  * @sa vtkTetrahedralizeSurface vtkSolveDiffusion
  */
@@ -108,18 +126,51 @@ public:
     MATERIAL_IDS = 1,
     SPHERICAL_INCLUSION = 2,
     LAYERS = 3,
-    VEINS = 4
+    VEINS = 4,
+    VOLUME = 5
   };
 
   ///@{
   /// One of MaterialModes. Default UNIFORM.
-  vtkSetClampMacro(MaterialMode, int, UNIFORM, VEINS);
+  vtkSetClampMacro(MaterialMode, int, UNIFORM, VOLUME);
   vtkGetMacro(MaterialMode, int);
   void SetMaterialModeToUniform() { this->SetMaterialMode(UNIFORM); }
   void SetMaterialModeToMaterialIds() { this->SetMaterialMode(MATERIAL_IDS); }
   void SetMaterialModeToSphericalInclusion() { this->SetMaterialMode(SPHERICAL_INCLUSION); }
   void SetMaterialModeToLayers() { this->SetMaterialMode(LAYERS); }
   void SetMaterialModeToVeins() { this->SetMaterialMode(VEINS); }
+  void SetMaterialModeToVolume() { this->SetMaterialMode(VOLUME); }
+  ///@}
+
+  ///@{
+  /**
+   * VOLUME: the vtkImageData probed at the tet centroids (optional second
+   * input port, required in VOLUME mode only).
+   */
+  void SetVolumeConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
+  void SetVolumeData(vtkDataObject* volume) { this->SetInputData(1, volume); }
+  ///@}
+
+  ///@{
+  /// VOLUME: point or cell array of mu_a (3 components, 1/mm). Default "AbsorptionCoefficient".
+  vtkSetStdStringFromCharMacro(VolumeAbsorptionArrayName);
+  vtkGetCharFromStdStringMacro(VolumeAbsorptionArrayName);
+  ///@}
+
+  ///@{
+  /// VOLUME: point or cell array of sigma_s' (3 components, 1/mm). Default "ReducedScatteringCoefficient".
+  vtkSetStdStringFromCharMacro(VolumeScatteringArrayName);
+  vtkGetCharFromStdStringMacro(VolumeScatteringArrayName);
+  ///@}
+
+  ///@{
+  /**
+   * VOLUME: point or cell array of integer material ids (1 component), looked
+   * up in MaterialTableFileName. When set, the two arrays above are not used.
+   * Default "" (probe the coefficients).
+   */
+  vtkSetStdStringFromCharMacro(VolumeMaterialIdArrayName);
+  vtkGetCharFromStdStringMacro(VolumeMaterialIdArrayName);
   ///@}
 
   ///@{
@@ -233,6 +284,7 @@ protected:
   ~vtkAssignScatteringCoefficients() override = default;
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int FillInputPortInformation(int port, vtkInformation* info) override;
 
   std::string MaterialName = "marble";
   double AbsorptionCoefficient[3] = { 0.0021, 0.0041, 0.0071 };
@@ -256,6 +308,9 @@ protected:
   double VeinTurbulence = 1.0;
   double VeinSharpness = 8.0;
   int VeinSeed = 0;
+  std::string VolumeAbsorptionArrayName = "AbsorptionCoefficient";
+  std::string VolumeScatteringArrayName = "ReducedScatteringCoefficient";
+  std::string VolumeMaterialIdArrayName;
 
 private:
   vtkAssignScatteringCoefficients(const vtkAssignScatteringCoefficients&) = delete;

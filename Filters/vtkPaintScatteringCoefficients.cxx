@@ -5,6 +5,8 @@
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
 #include <vtkDoubleArray.h>
+#include <vtkAlgorithm.h>
+#include <vtkAlgorithmOutput.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
 #include <vtkNew.h>
@@ -18,6 +20,36 @@
 #include <vector>
 
 vtkStandardNewMacro(vtkPaintScatteringCoefficients);
+
+//------------------------------------------------------------------------------
+vtkPaintScatteringCoefficients::vtkPaintScatteringCoefficients()
+{
+  this->SetNumberOfInputPorts(2);
+}
+
+//------------------------------------------------------------------------------
+int vtkPaintScatteringCoefficients::FillInputPortInformation(int port, vtkInformation* info)
+{
+  if (port == 1)
+  {
+    info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkUnstructuredGrid");
+    info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
+    return 1;
+  }
+  return this->Superclass::FillInputPortInformation(port, info);
+}
+
+//------------------------------------------------------------------------------
+void vtkPaintScatteringCoefficients::SetOriginalMeshConnection(vtkAlgorithmOutput* output)
+{
+  this->SetInputConnection(1, output);
+}
+
+//------------------------------------------------------------------------------
+void vtkPaintScatteringCoefficients::SetOriginalMeshData(vtkUnstructuredGrid* mesh)
+{
+  this->SetInputData(1, mesh);
+}
 
 //------------------------------------------------------------------------------
 void vtkPaintScatteringCoefficients::AddStrokePoint(double x, double y, double z)
@@ -42,12 +74,63 @@ void vtkPaintScatteringCoefficients::RemoveAllStrokePoints()
 int vtkPaintScatteringCoefficients::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
+  vtkUnstructuredGrid* cut = vtkUnstructuredGrid::GetData(inputVector[0]);
+  vtkUnstructuredGrid* original =
+    this->GetNumberOfInputConnections(1) > 0 ? vtkUnstructuredGrid::GetData(inputVector[1]) : nullptr;
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
+  // The mesh painted: the original uncut mesh when port 1 is connected
+  // (TransCut Sec. 5.2 paints the tets of the original mesh), else port 0.
+  vtkUnstructuredGrid* input = original ? original : cut;
+  if (this->GetNumberOfInputConnections(1) > 0 && !original)
+  {
+    vtkErrorMacro(<< "the OriginalMesh (input port 1) is not a vtkUnstructuredGrid");
+    return 0;
+  }
   if (!input || input->GetNumberOfCells() == 0)
   {
-    vtkErrorMacro(<< "the input mesh is empty (no cells)");
+    vtkErrorMacro(<< (original ? "the OriginalMesh (input port 1) is empty (no cells)"
+                               : "the input mesh is empty (no cells)"));
     return 0;
+  }
+  if (original && cut && cut->GetNumberOfCells() > 0)
+  {
+    // Port 0 (the cut mesh the stroke was drawn on) must map into port 1.
+    const vtkIdType numOriginal = original->GetNumberOfCells();
+    const vtkIdType numCut = cut->GetNumberOfCells();
+    vtkDataArray* ids = cut->GetCellData()->GetArray("vtkOriginalCellIds");
+    if (!ids)
+    {
+      if (numCut != numOriginal)
+      {
+        vtkErrorMacro(<< "the cut mesh (input port 0) has no cell array 'vtkOriginalCellIds' "
+                      << "and " << numCut << " cells, not the " << numOriginal
+                      << " of the OriginalMesh (input port 1): it is not a cut of it");
+        return 0;
+      }
+    }
+    else if (ids->GetNumberOfComponents() != 1 || ids->GetNumberOfTuples() != numCut)
+    {
+      vtkErrorMacro(<< "the cell array 'vtkOriginalCellIds' of the cut mesh (input port 0) has "
+                    << ids->GetNumberOfComponents() << " components and "
+                    << ids->GetNumberOfTuples() << " tuples; 1 component and " << numCut
+                    << " tuples expected");
+      return 0;
+    }
+    else
+    {
+      for (vtkIdType i = 0; i < numCut; ++i)
+      {
+        const double id = ids->GetComponent(i, 0);
+        if (!(id >= 0.0) || !(id < static_cast<double>(numOriginal)) || id != std::floor(id))
+        {
+          vtkErrorMacro(<< "bad vtkOriginalCellIds " << id << " at cell " << i
+                        << " of the cut mesh (input port 0): the OriginalMesh (input port 1) has "
+                        << numOriginal << " tets (valid ids 0.." << numOriginal - 1
+                        << "); is port 1 the mesh that was cut?");
+          return 0;
+        }
+      }
+    }
   }
   const vtkIdType n = input->GetNumberOfCells();
   vtkDataArray* oldArrays[2] = { input->GetCellData()->GetArray(vtkTranslucency::AbsorptionName),
@@ -222,6 +305,8 @@ int vtkPaintScatteringCoefficients::RequestData(
 void vtkPaintScatteringCoefficients::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
+  os << indent << "OriginalMesh: "
+     << (this->GetNumberOfInputConnections(1) > 0 ? "connected" : "(none)") << "\n";
   os << indent << "NumberOfStrokePoints: " << this->GetNumberOfStrokePoints() << "\n";
   os << indent << "Width: " << this->Width << "\n";
   os << indent << "Strength: " << this->Strength << "\n";

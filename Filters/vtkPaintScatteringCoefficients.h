@@ -26,10 +26,24 @@
  * The output is a shallow copy of the input with new (double) arrays of those
  * names and a cell array `PaintWeight` (w_t, 1 component).
  *
- * @warning Painting applies to the tets present in the input. On a cut mesh
- * (which carries `vtkOriginalCellIds`), mapping the new values back to the
- * tets of the original mesh is the caller's job (scatter by those ids).
- * The nearest stroke point is found by brute force (cost: tets x stroke
+ * Painting a cut mesh (SPEC "Paint", TransCut Sec. 5.2: the distances are
+ * computed for each tet of the ORIGINAL mesh): connect the original uncut mesh
+ * to the optional input port 1 ("OriginalMesh", SetOriginalMeshConnection /
+ * SetOriginalMeshData) and the cut mesh the stroke was drawn on to port 0.
+ * The filter then paints the original mesh: the output is a copy of port 1
+ * with the painted arrays, the weights computed from the original tets'
+ * centroids, so tets removed by the cut are painted too when they are near
+ * the stroke. Port 0 is then only checked: its cell array
+ * `vtkOriginalCellIds` (written by vtkStrokeCut, composed over repeated cuts)
+ * must refer to tets of port 1 (integer ids in [0, number of tets of port 1));
+ * otherwise the filter fails with an error naming the first bad id. A port 0
+ * without `vtkOriginalCellIds` is accepted only if it has as many cells as
+ * port 1 (the uncut mesh itself); an empty port 0 (a cut that removed
+ * everything) is accepted. Re-cutting the painted original then gives a cut
+ * mesh whose coefficients are the painted ones. Without port 1 the input
+ * (port 0) is painted as it is.
+ *
+ * @warning The nearest stroke point is found by brute force (cost: tets x stroke
  * points), fine for strokes of up to a few hundred points.
  * No stroke point, a negative or non-finite Width, or a missing / wrongly
  * sized coefficient array is an error naming the problem.
@@ -57,6 +71,16 @@ public:
   void AddStrokePoint(double x, double y, double z);
   void RemoveAllStrokePoints();
   int GetNumberOfStrokePoints() const { return static_cast<int>(this->StrokePoints.size() / 3); }
+  ///@}
+
+  ///@{
+  /**
+   * The original uncut mesh (optional input port 1). When set, it is the
+   * mesh painted and output; port 0 (the cut mesh) is only validated.
+   * Pass nullptr to disconnect.
+   */
+  void SetOriginalMeshConnection(vtkAlgorithmOutput* output);
+  void SetOriginalMeshData(vtkUnstructuredGrid* mesh);
   ///@}
 
   ///@{
@@ -110,9 +134,10 @@ public:
   ///@}
 
 protected:
-  vtkPaintScatteringCoefficients() = default;
+  vtkPaintScatteringCoefficients();
   ~vtkPaintScatteringCoefficients() override = default;
 
+  int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   std::vector<double> StrokePoints;

@@ -9,6 +9,11 @@ How to run (ctest passes the plugin path):
    non-empty tet mesh with vtkOriginalCellIds, and fewer tets than its input
    for a cutter that crosses the mesh; Invert keeps the other side.
 2. Surface Irradiance -> Solve Diffusion after the cut gives a positive Fluence.
+3. A PolyLineSource connected as the optional "Stroke" input overrides the
+   cut function: a straight 2-point stroke swept along ViewDirection (0,0,-1)
+   is a plane, and it keeps exactly the tets of the equivalent Plane cut (the
+   removed side is the left of the stroke looking along the view direction);
+   Surface Irradiance -> Solve Diffusion then solves.
 """
 
 import os
@@ -80,6 +85,53 @@ class CutPluginTest(unittest.TestCase):
         self.cut.CutType.Normal = [0.0, 0.2, 1.0]
         solve = SolveDiffusion(Input=SurfaceIrradiance(Input=self.cut))
         grid = self.fetch(solve)
+        fluence = vtk_to_numpy(grid.GetPointData().GetArray("Fluence"))
+        self.assertEqual(fluence.shape, (grid.GetNumberOfPoints(), 3))
+        self.assertTrue(np.all(np.isfinite(fluence)) and np.all(fluence > 0.0))
+
+    def test_stroke(self):
+        # Stroke going +y at x = X0, looking along -z (screen x right, y up):
+        # its left, x < X0, is removed, i.e. the Plane with normal (-1, 0, 0).
+        x0 = 0.37
+        plane_cut = StrokeCut(Input=self.assign, CutType="Plane")
+        plane_cut.CutType.Origin = [x0, 0.0, 0.0]
+        plane_cut.CutType.Normal = [-1.0, 0.0, 0.0]
+        plane = self.fetch(plane_cut)
+
+        stroke = PolyLineSource(Points=[x0, -10.0, 0.0, x0, 10.0, 0.0])
+        stroke_cut = StrokeCut(Input=self.assign, Stroke=stroke)
+        self.assertEqual(list(stroke_cut.ViewDirection), [0.0, 0.0, -1.0])
+        # The cut function (default Plane here, set far off) must be ignored.
+        stroke_cut.CutType = "Plane"
+        stroke_cut.CutType.Origin = [0.0, 0.0, 3.0]
+        stroke_cut.CutType.Normal = [0.0, 0.0, 1.0]
+        cut = self.fetch(stroke_cut)
+
+        total = self.fetch(self.assign).GetNumberOfCells()
+        self.assertGreater(cut.GetNumberOfCells(), 0)
+        self.assertLess(cut.GetNumberOfCells(), total)
+        ids = lambda g: vtk_to_numpy(g.GetCellData().GetArray("vtkOriginalCellIds"))  # noqa: E731
+        np.testing.assert_array_equal(np.sort(ids(cut)), np.sort(ids(plane)))
+        np.testing.assert_allclose(
+            vtk_to_numpy(cut.GetPoints().GetData()),
+            vtk_to_numpy(plane.GetPoints().GetData()), atol=1e-6)
+        # Looking the other way (view direction (0, 0, 1)) the left of the
+        # stroke is x > X0: the Plane with normal (1, 0, 0).
+        stroke_cut.ViewDirection = [0.0, 0.0, 1.0]
+        flipped = self.fetch(stroke_cut)
+        plane_cut.CutType.Normal = [1.0, 0.0, 0.0]
+        np.testing.assert_array_equal(np.sort(ids(flipped)), np.sort(ids(self.fetch(plane_cut))))
+        stroke_cut.ViewDirection = [0.0, 0.0, -1.0]
+
+        # Disconnecting the stroke falls back on the cut function.
+        stroke_cut.Stroke = []
+        fallback = self.fetch(stroke_cut)
+        self.assertFalse(np.array_equal(np.sort(ids(fallback)), np.sort(ids(cut))))
+        stroke_cut.Stroke = stroke
+
+        solve = SolveDiffusion(Input=SurfaceIrradiance(Input=stroke_cut))
+        grid = self.fetch(solve)
+        self.assertEqual(grid.GetNumberOfCells(), cut.GetNumberOfCells())
         fluence = vtk_to_numpy(grid.GetPointData().GetArray("Fluence"))
         self.assertEqual(fluence.shape, (grid.GetNumberOfPoints(), 3))
         self.assertTrue(np.all(np.isfinite(fluence)) and np.all(fluence > 0.0))

@@ -20,7 +20,12 @@ How to run (from a build tree):
 5. Layers: each tet gets the layer of its analytic centroid depth. Veins:
    without turbulence the analytic band formula; with it, the documented
    formula evaluated here with vtkPerlinNoise; seeds reproduce / differ.
-6. Bad input (missing file, malformed JSON, entry without coefficients,
+6. Volume mode: a vtkImageData with a point field of mu_a, sigma_s' linear in
+   x, y, z is reproduced exactly (trilinear interpolation) at each analytic
+   centroid; a cell field gives the value of the voxel containing it; a
+   material-id volume of two halves (cell ids, and point ids by nearest grid
+   point) + a table gives each tet the entry of its half.
+7. Bad input (missing file, malformed JSON, entry without coefficients,
    unknown preset, negative value, unknown id, ...) is one error message
    naming the file / entry / field / tet, and no crash.
 
@@ -47,6 +52,46 @@ SOURCE_DIR = os.environ.get(
 SHIPPED = os.path.join(SOURCE_DIR, "Data", "materials.json")
 PRESETS = ["apple", "chicken1", "chicken2", "cream", "ketchup", "marble", "potato",
            "skimmilk", "skin1", "skin2", "spectralon", "wholemilk"]
+
+# The volume mode's linear field: value = A + G . x per component.
+VOL_A = ((0.01, 0.02, 0.03), (1.0, 1.5, 2.0))
+VOL_G = (((0.001, 0.002, 0.003), (0.004, 0.0, 0.001), (0.002, 0.001, 0.0)),
+         ((0.1, 0.2, 0.05), (0.3, 0.1, 0.2), (0.0, 0.05, 0.1)))
+
+
+def linear_value(q, x):
+    return tuple(VOL_A[q][c] + sum(VOL_G[q][c][a] * x[a] for a in range(3)) for c in range(3))
+
+
+def image(origin, spacing, dims):
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    volume = vtkImageData()
+    volume.SetOrigin(origin)
+    volume.SetSpacing(spacing)
+    volume.SetDimensions(dims)
+    return volume
+
+
+def add_array(data, name, values, components):
+    array = vtkDoubleArray()
+    array.SetName(name)
+    array.SetNumberOfComponents(components)
+    for v in values:
+        array.InsertNextTuple(v if components > 1 else (v,))
+    data.AddArray(array)
+    return array
+
+
+def linear_volume():
+    """Point arrays of the linear fields on a grid covering the box (spacings not aligned)."""
+    volume = image((-0.5, -0.5, -0.5), (0.7, 0.6, 0.9), (8, 7, 4))
+    pts = [volume.GetPoint(p) for p in range(volume.GetNumberOfPoints())]
+    add_array(volume.GetPointData(), "AbsorptionCoefficient",
+              [linear_value(0, x) for x in pts], 3)
+    add_array(volume.GetPointData(), "ReducedScatteringCoefficient",
+              [linear_value(1, x) for x in pts], 3)
+    return volume
+
 
 # The box mesh: N cubes of edge H along each axis.
 N = (8, 6, 4)
@@ -148,7 +193,9 @@ class MaterialsTest(unittest.TestCase):
         assign = translucency.vtkAssignScatteringCoefficients()
         messages = Messages(assign)
         for key, value in settings.items():
-            if key == "layers":
+            if key == "volume":
+                assign.SetVolumeData(value)
+            elif key == "layers":
                 for thickness, material in value:
                     assign.AddLayer(thickness, material)
             else:
@@ -457,8 +504,127 @@ class MaterialsTest(unittest.TestCase):
         out, errors = self.assign(grid, MaterialMode=1)
         self.assertIn("material table", errors[0])
 
+    # 6. Volume mode.
+    def test_volume_linear_field(self):
+        grid = box_mesh()
+        out, errors = self.assign(grid, MaterialMode=5, volume=linear_volume(),
+                                  RefractiveIndex=1.45, ScaleFactor=2.0)
+        self.assertEqual(errors, [])
+        self.assertEqual(out.GetNumberOfCells(), grid.GetNumberOfCells())
+        for c, x in enumerate(centroids(grid)):
+            mu_a, sigma_s, eta = coefficients(out, c)
+            for q, actual in enumerate((mu_a, sigma_s)):
+                for a, e in zip(actual, linear_value(q, x)):
+                    self.assertAlmostEqual(a, 2.0 * e, delta=1e-12 * max(1.0, abs(e)), msg=c)
+            self.assertEqual(eta, 1.45)
 
-    # 7. The command line: --material TABLE.json --material-ids ARRAY.
+    def test_volume_cell_field(self):
+        grid = box_mesh()
+        volume = image((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (5, 4, 3))  # 4 x 3 x 2 voxels
+        voxels = [(i, j, k) for k in range(2) for j in range(3) for i in range(4)]
+        add_array(volume.GetCellData(), "mua", [(0.01 * i, 0.02 * j, 0.03 * k)
+                                                for i, j, k in voxels], 3)
+        add_array(volume.GetCellData(), "mus", [(1 + i, 2 + j, 3 + k) for i, j, k in voxels], 3)
+        out, errors = self.assign(grid, MaterialMode=5, volume=volume,
+                                  VolumeAbsorptionArrayName="mua", VolumeScatteringArrayName="mus")
+        self.assertEqual(errors, [])
+        for c, x in enumerate(centroids(grid)):
+            i, j, k = (int(math.floor(v)) for v in x)
+            mu_a, sigma_s, eta = coefficients(out, c)
+            self.assertEqual(mu_a, (0.01 * i, 0.02 * j, 0.03 * k), c)
+            self.assertEqual(sigma_s, (1 + i, 2 + j, 3 + k), c)
+            self.assertEqual(eta, 1.3)
+
+    def test_volume_material_ids(self):
+        path = self.write("halves.json", {"materials": [
+            {"id": 1, "preset": "skin1"},
+            {"id": 2, "name": "b", "absorption": [0.01, 0.02, 0.03],
+             "reduced_scattering": [1, 2, 3], "refractive_index": 1.5}]})
+        expected = {1: preset_values("skin1"), 2: ((0.01, 0.02, 0.03), (1.0, 2.0, 3.0), 1.5)}
+        grid = box_mesh()
+        cells = centroids(grid)
+        # Cell ids: the voxels [0, 2] x ... are id 1, [2, 4] x ... id 2 (no centroid has x = 2).
+        volume = image((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (5, 4, 3))
+        add_array(volume.GetCellData(), "Tissue",
+                  [1 if i < 2 else 2 for k in range(2) for j in range(3) for i in range(4)], 1)
+        self.assertFalse(any(x[0] == 2.0 for x in cells))
+        out, errors = self.assign(grid, MaterialMode=5, volume=volume,
+                                  VolumeMaterialIdArrayName="Tissue", MaterialTableFileName=path,
+                                  RefractiveIndex=1.1)
+        self.assertEqual(errors, [])
+        halves = set()
+        for c, x in enumerate(cells):
+            half = 1 if x[0] < 2.0 else 2
+            halves.add(half)
+            self.assertEqual(coefficients(out, c), expected[half], c)
+        self.assertEqual(halves, {1, 2})
+        # Point ids: the nearest grid point (x = 0, 1 -> id 1; 2, 3, 4 -> id 2), no
+        # interpolation; no centroid is half-way between grid points.
+        volume = image((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (5, 4, 3))
+        add_array(volume.GetPointData(), "Tissue",
+                  [1 if i < 2 else 2 for k in range(3) for j in range(4) for i in range(5)], 1)
+        self.assertFalse(any(x[0] % 1.0 == 0.5 for x in cells))
+        out, errors = self.assign(grid, MaterialMode=5, volume=volume,
+                                  VolumeMaterialIdArrayName="Tissue", MaterialTableFileName=path)
+        self.assertEqual(errors, [])
+        for c, x in enumerate(cells):
+            self.assertEqual(coefficients(out, c), expected[1 if round(x[0]) < 2 else 2], c)
+
+    def test_volume_bad_input(self):
+        grid = box_mesh()
+        out, errors = self.assign(grid, MaterialMode=5)
+        self.assertEqual(len(errors), 1, errors)
+        self.assertIn("second input port", errors[0])
+        self.assertEqual(out.GetNumberOfCells(), 0)
+        out, errors = self.assign(grid, MaterialMode=5, volume=linear_volume(),
+                                  VolumeScatteringArrayName="Nope")
+        self.assertEqual(len(errors), 1, errors)
+        self.assertIn("'Nope'", errors[0])
+        volume = linear_volume()
+        add_array(volume.GetPointData(), "one", [0.5] * volume.GetNumberOfPoints(), 1)
+        out, errors = self.assign(grid, MaterialMode=5, volume=volume,
+                                  VolumeAbsorptionArrayName="one")
+        self.assertRegex(errors[0], r"'one'.* 1 components, not 3")
+        # A volume not covering the box: the first tet with its centroid beyond x = 3.
+        small = image((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (4, 4, 3))
+        add_array(small.GetPointData(), "AbsorptionCoefficient",
+                  [(0.1, 0.1, 0.1)] * small.GetNumberOfPoints(), 3)
+        add_array(small.GetPointData(), "ReducedScatteringCoefficient",
+                  [(1, 1, 1)] * small.GetNumberOfPoints(), 3)
+        out, errors = self.assign(grid, MaterialMode=5, volume=small)
+        first = next(c for c, x in enumerate(centroids(grid)) if x[0] > 3.0)
+        x = centroids(grid)[first]
+        self.assertEqual(len(errors), 1, errors)
+        self.assertRegex(errors[0], r"tet %d has its centroid \(%s, %s, %s\) outside the volume"
+                         % ((first,) + tuple(repr(v) for v in x)))
+        self.assertEqual(out.GetNumberOfCells(), 0)
+        # Negative and NaN values at grid point 9 = (1, 1, 0), a corner of the voxel of
+        # tet 0's centroid (0.375, 0.25, 0.125).
+        for bad in (-1000.0, float("nan")):
+            volume = linear_volume()
+            self.assertEqual(volume.ComputeStructuredCoordinates(centroids(grid)[0], [0] * 3,
+                                                                 [0.0] * 3), 1)
+            volume.GetPointData().GetArray("ReducedScatteringCoefficient").SetComponent(9, 1, bad)
+            out, errors = self.assign(grid, MaterialMode=5, volume=volume)
+            self.assertEqual(len(errors), 1, errors)
+            self.assertRegex(errors[0], r"tet 0 gets the value (-|nan).*'ReducedScattering")
+            self.assertEqual(out.GetNumberOfCells(), 0)
+        # Material ids: no table, an id absent from the table, a missing array.
+        volume = image((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (5, 4, 3))
+        add_array(volume.GetCellData(), "Tissue", [1] * 23 + [5], 1)
+        out, errors = self.assign(grid, MaterialMode=5, volume=volume,
+                                  VolumeMaterialIdArrayName="Tissue")
+        self.assertIn("material table", errors[0])
+        path = self.write("one.json", {"materials": [{"id": 1, "preset": "marble"}]})
+        out, errors = self.assign(grid, MaterialMode=5, volume=volume,
+                                  VolumeMaterialIdArrayName="Tissue", MaterialTableFileName=path)
+        self.assertEqual(len(errors), 1, errors)
+        self.assertRegex(errors[0], r"tet \d+ has material id 5 .*'Tissue'.*one.json")
+        out, errors = self.assign(grid, MaterialMode=5, volume=volume,
+                                  VolumeMaterialIdArrayName="Nope", MaterialTableFileName=path)
+        self.assertIn("'Nope'", errors[0])
+
+    # 8. The command line: --material TABLE.json --material-ids ARRAY.
     def test_command_line(self):
         cli = os.environ.get("TRANSLUCENCY_CLI")
         if not cli:

@@ -14,7 +14,13 @@ How to run (from a build tree; ctest sets the variables itself):
 4. Width 0 or Strength 0 change nothing (bit-identical arrays).
 5. Bad input (no stroke points, negative width, no coefficient arrays) is an
    error naming the problem.
-6. Deform (SPEC "Interactions"): a rigid rotation + translation of the points
+6. Painting a cut mesh (SPEC "Paint"): with the cut mesh (translucency
+   vtkStrokeCut, plane) on port 0 and the original on port 1 (OriginalMesh),
+   the output is bit-identical to painting the original directly; a tet
+   removed by the cut but near the stroke is painted; re-cutting the painted
+   original gives coefficients equal to the painted ones via
+   vtkOriginalCellIds; out-of-range ids are an error naming the first bad id.
+7. Deform (SPEC "Interactions"): a rigid rotation + translation of the points
    (vtkTransformFilter) and the same rotation of the light direction give the
    same fluence at every point (rel. 1e-8): the system is re-assembled on the
    moved mesh without re-tetrahedralisation.
@@ -28,7 +34,8 @@ import numpy as np
 
 import translucency
 from TestPipeline import Messages, array, points_of, sphere_surface, tets_of
-from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.vtkCommonDataModel import vtkPlane, vtkUnstructuredGrid
 from vtkmodules.vtkCommonTransforms import vtkTransform
 from vtkmodules.vtkFiltersGeneral import vtkTransformFilter
 
@@ -64,9 +71,11 @@ class PaintTest(unittest.TestCase):
         cls.old_s = array(cls.grid, SCATTERING, cell=True).copy()
 
     def paint(self, stroke, width=1.5, strength=1.0, mode=0, target_a=(0.061, 0.97, 1.45),
-              target_s=(0.18, 0.07, 0.03), mask=(1, 1, 1), grid=None):
+              target_s=(0.18, 0.07, 0.03), mask=(1, 1, 1), grid=None, original=None):
         paint = translucency.vtkPaintScatteringCoefficients()
         paint.SetInputData(grid if grid is not None else self.grid)
+        if original is not None:
+            paint.SetOriginalMeshData(original)
         for p in stroke:
             paint.AddStrokePoint(*p)
         paint.SetWidth(width)
@@ -175,6 +184,111 @@ class PaintTest(unittest.TestCase):
         bare.GetCellData().RemoveArray(ABSORPTION)
         bare.Modified()
         self.update_expecting_error(paint, ABSORPTION)
+
+
+def plane_cut(grid, origin=(0.0, 0.0, 0.0), normal=(1.0, 0.0, 0.0)):
+    """Cut away the side of the plane its normal points to (vtkStrokeCut)."""
+    function = vtkPlane()
+    function.SetOrigin(*origin)
+    function.SetNormal(*normal)
+    cut = translucency.vtkStrokeCut()
+    cut.SetInputData(grid)
+    cut.SetCutFunction(function)
+    messages = Messages(cut)
+    try:
+        cut.Update()
+    finally:
+        messages.remove()
+    assert not messages.errors + messages.pipeline_errors, messages.errors
+    out = vtkUnstructuredGrid()
+    out.ShallowCopy(cut.GetOutput())
+    return out
+
+
+def original_cell_ids(grid):
+    return vtk_to_numpy(grid.GetCellData().GetArray("vtkOriginalCellIds")).astype(np.int64)
+
+
+class PaintCutMeshTest(unittest.TestCase):
+    """Painting on the cross-section of a cut mesh changes the original tets."""
+
+    # The helpers of PaintTest, without re-running its tests.
+    paint = PaintTest.paint
+    update_expecting_error = PaintTest.update_expecting_error
+
+    @classmethod
+    def setUpClass(cls):
+        PaintTest.setUpClass.__func__(cls)
+        cls.cut = plane_cut(cls.grid)
+        cls.ids = original_cell_ids(cls.cut)
+        assert 0 < cls.cut.GetNumberOfCells() < cls.grid.GetNumberOfCells()
+        # A stroke on the cross-section x = 0.
+        cls.stroke = [(0.0, -1.0, 0.0), (0.0, 0.5, 1.0), (0.0, 2.0, 1.5)]
+
+    def test_paints_the_original_bit_identically(self):
+        for mode, ta, ts in ((0, (0.061, 0.97, 1.45), (0.18, 0.07, 0.03)),
+                             (1, (10.0, 2.0, 0.5), (0.5, 1.0, 3.0)),
+                             (2, (0.01, -0.001, 0.0), (1.0, -10.0, 0.5))):
+            direct = self.paint(self.stroke, width=1.5, strength=0.8, mode=mode,
+                                target_a=ta, target_s=ts)
+            via = self.paint(self.stroke, width=1.5, strength=0.8, mode=mode, target_a=ta,
+                             target_s=ts, grid=self.cut, original=self.grid)
+            self.assertEqual(via[3].GetNumberOfCells(), self.grid.GetNumberOfCells())
+            self.assertEqual(via[3].GetNumberOfPoints(), self.grid.GetNumberOfPoints())
+            for a, b in zip(direct[:3], via[:3]):
+                np.testing.assert_array_equal(a, b)
+            self.assertIsNotNone(via[3].GetCellData().GetArray("RefractiveIndex"))
+
+    def test_removed_tet_near_the_stroke_is_painted(self):
+        w, a, s, _ = self.paint(self.stroke, width=1.5, strength=1.0, grid=self.cut,
+                                original=self.grid)
+        removed = np.setdiff1d(np.arange(self.grid.GetNumberOfCells()), self.ids)
+        self.assertGreater(len(removed), 0)
+        self.assertTrue(np.all(self.centroids[removed, 0] > 0.0))
+        near = removed[w[removed] > 0.5]
+        self.assertGreater(len(near), 0, "no removed tet near the stroke was painted")
+        for k in near[:5]:
+            self.assertTrue(np.all(a[k] != self.old_a[k]))
+            self.assertTrue(np.all(s[k] != self.old_s[k]))
+
+    def test_recut_carries_the_painted_values(self):
+        w, a, s, painted = self.paint(self.stroke, width=1.5, strength=1.0, grid=self.cut,
+                                      original=self.grid)
+        recut = plane_cut(painted)
+        ids = original_cell_ids(recut)
+        np.testing.assert_array_equal(ids, self.ids)
+        np.testing.assert_array_equal(array(recut, ABSORPTION, cell=True), a[ids])
+        np.testing.assert_array_equal(array(recut, SCATTERING, cell=True), s[ids])
+        self.assertTrue(np.any(array(recut, ABSORPTION, cell=True) != self.old_a[ids]))
+
+    def test_bad_original_cell_ids(self):
+        n = self.grid.GetNumberOfCells()
+        for bad in (n, -3):
+            broken = vtkUnstructuredGrid()
+            broken.ShallowCopy(self.cut)
+            ids = self.ids.copy()
+            ids[7] = bad
+            vtk_ids = numpy_to_vtk(ids, deep=True)
+            vtk_ids.SetName("vtkOriginalCellIds")
+            broken.GetCellData().AddArray(vtk_ids)
+            paint = translucency.vtkPaintScatteringCoefficients()
+            paint.SetInputData(broken)
+            paint.SetOriginalMeshData(self.grid)
+            paint.AddStrokePoint(0.0, 0.0, 0.0)
+            self.update_expecting_error(paint, "vtkOriginalCellIds", str(bad), "cell 7", str(n))
+        # A mesh that is not a cut of the original (no ids, other size).
+        bare = vtkUnstructuredGrid()
+        bare.ShallowCopy(self.cut)
+        bare.GetCellData().RemoveArray("vtkOriginalCellIds")
+        paint = translucency.vtkPaintScatteringCoefficients()
+        paint.SetInputData(bare)
+        paint.SetOriginalMeshData(self.grid)
+        paint.AddStrokePoint(0.0, 0.0, 0.0)
+        self.update_expecting_error(paint, "vtkOriginalCellIds")
+        # Disconnecting port 1 paints port 0 as before.
+        paint.SetOriginalMeshData(None)
+        w, a, s, out = self.paint(self.stroke, grid=bare)
+        self.assertEqual(out.GetNumberOfCells(), bare.GetNumberOfCells())
 
 
 class DeformTest(unittest.TestCase):
