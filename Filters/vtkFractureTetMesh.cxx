@@ -30,32 +30,9 @@ vtkStandardNewMacro(vtkFractureTetMesh);
 
 namespace
 {
-constexpr const char* OriginalPointIdsName = "vtkOriginalPointIds";
+using vtkTranslucency::CopyAttributes;
+using vtkTranslucency::OriginalPointIdsName;
 
-/// Copy the arrays of `in` for the entities `kept` into `out`, then add the
-/// id map `name` composed with the input's own map of that name if it has one
-/// (as vtkStrokeCut does).
-void CopyAttributes(vtkDataSetAttributes* in, vtkDataSetAttributes* out,
-  const std::vector<int>& kept, const char* name)
-{
-  vtkDataArray* previous = in->GetArray(name);
-  const vtkIdType n = static_cast<vtkIdType>(kept.size());
-  out->CopyAllocate(in, n);
-  for (vtkIdType k = 0; k < n; ++k)
-  {
-    out->CopyData(in, kept[k], k);
-  }
-  out->RemoveArray(name);
-  vtkNew<vtkIdTypeArray> ids;
-  ids->SetName(name);
-  ids->SetNumberOfTuples(n);
-  for (vtkIdType k = 0; k < n; ++k)
-  {
-    ids->SetValue(k,
-      previous ? static_cast<vtkIdType>(previous->GetComponent(kept[k], 0)) : kept[k]);
-  }
-  out->AddArray(ids);
-}
 
 vtkNew<vtkIntArray> IntField(const char* name, int value)
 {

@@ -80,7 +80,7 @@ int vtkOutgoingRadiance::RequestData(
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(n);
   vtkNew<vtkIdTypeArray> originalIds;
-  originalIds->SetName("vtkOriginalPointIds");
+  originalIds->SetName(vtkTranslucency::OriginalPointIdsName);
   originalIds->SetNumberOfTuples(n);
   for (vtkIdType k = 0; k < n; ++k)
   {

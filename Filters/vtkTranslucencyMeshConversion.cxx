@@ -9,6 +9,8 @@
 #include <vtkDataArray.h>
 #include <vtkDataSetAttributes.h>
 #include <vtkDoubleArray.h>
+#include <vtkIdTypeArray.h>
+#include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkSMPTools.h>
@@ -177,6 +179,28 @@ bool ReadRefractiveIndex(vtkUnstructuredGrid* grid, std::vector<double>& values,
     }
   }
   return true;
+}
+
+void CopyAttributes(vtkDataSetAttributes* in, vtkDataSetAttributes* out,
+  const std::vector<int>& kept, const char* name)
+{
+  vtkDataArray* previous = in->GetArray(name);
+  const vtkIdType n = static_cast<vtkIdType>(kept.size());
+  out->CopyAllocate(in, n);
+  for (vtkIdType k = 0; k < n; ++k)
+  {
+    out->CopyData(in, kept[k], k);
+  }
+  out->RemoveArray(name);
+  vtkNew<vtkIdTypeArray> ids;
+  ids->SetName(name);
+  ids->SetNumberOfTuples(n);
+  for (vtkIdType k = 0; k < n; ++k)
+  {
+    ids->SetValue(k,
+      previous ? static_cast<vtkIdType>(previous->GetComponent(kept[k], 0)) : kept[k]);
+  }
+  out->AddArray(ids);
 }
 
 vtkDataArray* NewTripleArray(const char* name, const std::vector<double>& values)

@@ -15,6 +15,7 @@
 #include <vector>
 
 class vtkDataArray;
+class vtkDataSetAttributes;
 class vtkFieldData;
 class vtkPointData;
 class vtkUnstructuredGrid;
@@ -29,6 +30,7 @@ constexpr const char* IrradianceName = "Irradiance";
 constexpr const char* FluenceName = "Fluence";
 constexpr const char* RadianceName = "Radiance";
 constexpr const char* OriginalCellIdsName = "vtkOriginalCellIds";
+constexpr const char* OriginalPointIdsName = "vtkOriginalPointIds";
 
 /// Copy points and tets of `grid` into `mesh` (builds the topology). Fails
 /// if the grid is empty or holds a cell that is not a linear tetrahedron, or
@@ -48,6 +50,13 @@ bool ReadPointArray(vtkUnstructuredGrid* grid, const char* name, int components,
 /// Read the `RefractiveIndex` cell array (1 component, every value finite
 /// and > 0; the message names the first bad tet).
 bool ReadRefractiveIndex(vtkUnstructuredGrid* grid, std::vector<double>& values, std::string& error);
+
+/// Copy the arrays of `in` for the entities `kept` (ids into `in`) into
+/// `out`, then add the id map `name` (vtkOriginalCellIds / PointIds), composed
+/// with the input's own map of that name if it has one, so ids always point
+/// at the original mesh (used by vtkStrokeCut and vtkFractureTetMesh).
+void CopyAttributes(vtkDataSetAttributes* in, vtkDataSetAttributes* out,
+  const std::vector<int>& kept, const char* name);
 
 /// A new vtkDoubleArray named `name` with 3 components holding `values`.
 vtkDataArray* NewTripleArray(const char* name, const std::vector<double>& values);
