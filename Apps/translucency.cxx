@@ -69,6 +69,9 @@ Scene options (render and compare):
 const char* const RenderHelp = R"(
 translucency render --mesh FILE [scene options] [options]
   --solver NAME            divergence (default), fem, quadgraph, grid, montecarlo
+  --linear-solver NAME     linear solver (default: the solver's own); divergence/fem:
+                           cg-jacobi (default), transcut-multires, multigrid-cg, ...;
+                           quadgraph/grid: bicgstab (default), relaxation
   --grid-spacing H         voxel spacing of the grid solver, mm (default: automatic)
   --photons N              photon budget of montecarlo (default 1000000)
   --rel-tol T              relative residual of iterative solvers (default 1e-6)
@@ -107,6 +110,7 @@ int Render(const std::vector<std::string>& args)
 {
   SceneOptions scene;
   std::string solverName = "divergence", outputPrefix, pngPath, slicePath, jsonPath;
+  std::string linearSolver;
   double relTol = 1e-6;
   int maxIter = 2000;
   bool nSquaredLaw = false;
@@ -126,6 +130,8 @@ int Render(const std::vector<std::string>& args)
       continue;
     if (a == "--solver")
       solverName = value();
+    else if (a == "--linear-solver")
+      linearSolver = value();
     else if (a == "--rel-tol")
       relTol = ParseNumbers(value(), a).at(0);
     else if (a == "--max-iter")
@@ -188,6 +194,7 @@ int Render(const std::vector<std::string>& args)
   solve->SetInputData(lit);
   solve->SetRelTol(relTol);
   solve->SetMaxIter(maxIter);
+  solve->SetLinearSolver(linearSolver.c_str());
   solve->SetGridSpacing(gridSpacing);
   solve->SetNumberOfPhotons(photons);
   solve->Update();
@@ -248,7 +255,7 @@ int Render(const std::vector<std::string>& args)
   std::cout << "mesh: " << numPoints << " points, " << numTets << " tets, " << numBoundary
             << " boundary points\n";
   std::cout << "solver: " << solve->GetSolverName() << " (" << solve->GetNumberOfUnknowns()
-            << " unknowns per channel)\n";
+            << " unknowns per channel, linear solver " << solve->GetLinearSolverUsed() << ")\n";
   static const char* channel[3] = { "R", "G", "B" };
   for (int c = 0; c < 3; ++c)
   {

@@ -192,6 +192,27 @@ int vtkSolveDiffusion::RequestData(
 
   try
   {
+    if (this->Solver <= 1 && !this->LinearSolver.empty())
+    {
+      // Vertex discretisations: the name must be one of the linear solvers.
+      std::string key = this->LinearSolver, known;
+      std::transform(key.begin(), key.end(), key.begin(),
+        [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+      bool found = false;
+      for (const auto& name : translucency::GetLinearSolverNames())
+      {
+        found = found || name == key;
+        known += (known.empty() ? "" : ", ") + name;
+      }
+      if (!found)
+      {
+        vtkErrorMacro(<< "unknown LinearSolver '" << this->LinearSolver << "' for the "
+                      << SolverNames[this->Solver] << " solver (this build has: " << known
+                      << "; empty = " << translucency::VertexDiffusionSolver::GetDefaultLinearSolverName()
+                      << ")");
+        return 0;
+      }
+    }
     if (!in.Solver || in.SolverKind != this->Solver)
     {
       in.Solver = translucency::CreateDiffusionSolver(SolverNames[this->Solver]);

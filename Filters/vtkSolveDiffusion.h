@@ -108,7 +108,12 @@ public:
   ///@}
 
   ///@{
-  /// QuadGraph and grid: "bicgstab" (default) or "relaxation".
+  /// Linear solver by name; "" (default) = the chosen solver's default.
+  /// Discrete divergence and FEM: a name of
+  /// translucency::GetLinearSolverNames() ("cg-jacobi" by default,
+  /// "transcut-multires", "multigrid-cg", ...). QuadGraph and grid:
+  /// "bicgstab" (default) or "relaxation". An unknown name makes RequestData
+  /// fail with an error listing the known names.
   vtkSetStdStringFromCharMacro(LinearSolver);
   vtkGetCharFromStdStringMacro(LinearSolver);
   ///@}
@@ -166,7 +171,7 @@ protected:
   double GridSpacing = 0.0;
   vtkTypeInt64 NumberOfPhotons = 1000000;
   int Seed = 1;
-  std::string LinearSolver = "bicgstab";
+  std::string LinearSolver;
   bool MultiLevel = false;
   int NumberOfThreads = 0;
   double TopologyTime = 0.0;

@@ -108,8 +108,11 @@ public:
   ///@}
 
   ///@{
-  /// Linear solver of the non-symmetric discretisations (QuadGraph, grid):
-  /// "bicgstab" (default) or "relaxation" (the papers' Jacobi-style sweeps).
+  /// Linear solver by name; "" (the default) means the solver's own default.
+  /// QuadGraph, grid (non-symmetric): "bicgstab" (default) or "relaxation"
+  /// (the papers' Jacobi-style sweeps). Vertex discretisations (divergence,
+  /// fem): a name of GetLinearSolverNames() (LinearSolver.h), default
+  /// "cg-jacobi".
   void SetLinearSolver(const std::string& name) { LinearSolver_ = name; }
   const std::string& GetLinearSolver() const { return LinearSolver_; }
   ///@}
@@ -133,7 +136,7 @@ protected:
   double GridSpacing_ = 0.0;
   long long NumberOfPhotons_ = 1000000;
   unsigned long long Seed_ = 1;
-  std::string LinearSolver_ = "bicgstab";
+  std::string LinearSolver_;
   bool MultiLevel_ = false;
   std::function<bool(double)> Progress_;
 };

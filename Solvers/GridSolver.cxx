@@ -1538,7 +1538,7 @@ bool GridSolver::SolveLevel(GridLevel& level,
   double progressStart,
   double progressEnd)
 {
-  std::string solverName = LinearSolver_;
+  std::string solverName = LinearSolver_.empty() ? std::string("bicgstab") : LinearSolver_;
   std::transform(solverName.begin(),
     solverName.end(),
     solverName.begin(),
@@ -1626,7 +1626,7 @@ bool GridSolver::SolveImpl(const DiffusionProblem& problem,
 {
   const DynamicThreads dynamic(NumberOfThreads_ <= 0);
   CheckProblem(problem, nodeIrradiance == nullptr);
-  std::string solverName = LinearSolver_;
+  std::string solverName = LinearSolver_.empty() ? std::string("bicgstab") : LinearSolver_;
   std::transform(solverName.begin(),
     solverName.end(),
     solverName.begin(),

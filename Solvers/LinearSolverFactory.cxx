@@ -2,6 +2,7 @@
 
 #include "ConjugateGradient.h"
 #include "Error.h"
+#include "MultiresSolvers.h"
 
 #include <algorithm>
 #include <cctype>
@@ -54,6 +55,8 @@ std::string Lower(std::string s)
 std::vector<std::string> GetLinearSolverNames()
 {
   std::vector<std::string> names{ "cg-jacobi" };
+  names.push_back("transcut-multires");
+  names.push_back("multigrid-cg");
   return names;
 }
 
@@ -63,6 +66,14 @@ std::unique_ptr<LinearSolver> CreateLinearSolver(const std::string& name)
   if (key == "cg-jacobi")
   {
     return std::make_unique<JacobiConjugateGradient>();
+  }
+  if (key == "transcut-multires")
+  {
+    return std::make_unique<TransCutMultiresSolver>();
+  }
+  if (key == "multigrid-cg")
+  {
+    return std::make_unique<MultigridConjugateGradient>();
   }
   std::string known;
   for (const auto& n : GetLinearSolverNames())

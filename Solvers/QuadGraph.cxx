@@ -1208,7 +1208,7 @@ bool QuadGraphSolver::SolveChannel(const DiffusionSystem& system,
     x.setZero(n); // the matrix is regular: phi = 0
     return true;
   }
-  if (Lower(LinearSolver_) == "bicgstab")
+  if (LinearSolver_.empty() || Lower(LinearSolver_) == "bicgstab")
   {
     const QuadGraphOperator matrix(system, channel, numThreads);
     Eigen::BiCGSTAB<QuadGraphOperator, InverseDiagonal> solver;
@@ -1313,7 +1313,7 @@ bool QuadGraphSolver::Solve(
     throw Error("quadgraph: the mesh has no tetrahedra (" + std::to_string(numPoints) +
       " points, 0 tets)");
   }
-  const std::string linearSolver = Lower(LinearSolver_);
+  const std::string linearSolver = LinearSolver_.empty() ? "bicgstab" : Lower(LinearSolver_);
   if (linearSolver != "bicgstab" && linearSolver != "relaxation")
   {
     throw Error("quadgraph: unknown linear solver '" + LinearSolver_ +

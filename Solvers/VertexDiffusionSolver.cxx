@@ -3,6 +3,8 @@
 #include "Error.h"
 #include "TetMesh.h"
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 
 namespace translucency
@@ -22,6 +24,11 @@ VertexDiffusionSolver::VertexDiffusionSolver(std::unique_ptr<Discretization> dis
 {
 }
 
+std::string VertexDiffusionSolver::GetDefaultLinearSolverName()
+{
+  return "cg-jacobi";
+}
+
 void VertexDiffusionSolver::Reset()
 {
   for (auto& x : Solution_)
@@ -30,6 +37,9 @@ void VertexDiffusionSolver::Reset()
   }
   LastMesh_ = nullptr;
   LastPoints_ = -1;
+  LastTets_ = -1;
+  LastNonZeros_ = 0;
+  LinearReady_ = false;
 }
 
 bool VertexDiffusionSolver::Solve(
@@ -42,29 +52,70 @@ bool VertexDiffusionSolver::Solve(
   const TetMesh& mesh = *problem.Mesh;
   report = SolverReport();
   report.Solver = GetName();
-  report.LinearSolver = "cg-jacobi";
+
+  // The linear solver by name (kept while the name stays the same).
+  std::string name = LinearSolver_.empty() ? GetDefaultLinearSolverName() : LinearSolver_;
+  std::transform(name.begin(), name.end(), name.begin(),
+    [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  if (!Linear_ || name != LinearName_)
+  {
+    Linear_ = CreateLinearSolver(name); // throws, listing the known names
+    LinearName_ = name;
+    LinearReady_ = false;
+  }
+  report.LinearSolver = Linear_->GetName();
 
   auto start = std::chrono::steady_clock::now();
+  // Keep the previous values (swap, no copy) to see whether they changed.
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    PreviousValues_[c].swap(System_.Values[c]);
+  }
   Discretization_->Assemble(mesh, *problem.Material, *problem.Irradiance, System_);
-  report.SetupMilliseconds = Since(start);
 
-  // A warm start needs the same unknowns: the same mesh object and size.
-  const bool sameUnknowns = LastMesh_ == &mesh && LastPoints_ == mesh.GetNumberOfPoints();
+  // A warm start needs the same unknowns: the same mesh object and size;
+  // the same tets and pattern size, or the linear solver is set up anew.
+  const bool sameUnknowns = LastMesh_ == &mesh && LastPoints_ == mesh.GetNumberOfPoints() &&
+    LastTets_ == mesh.GetNumberOfTets() && LastNonZeros_ == System_.ColumnIndices.size();
   if (!sameUnknowns)
   {
     Reset();
   }
+  Linear_->SetRelTol(RelTol_);
+  Linear_->SetMaxIter(MaxIter_);
+  Linear_->SetProgressCallback([this](double f) { return ReportProgress(f); });
+  if (!LinearReady_)
+  {
+    // New solver object or new mesh: rebuild everything (hierarchy, factor).
+    Linear_->Setup(System_, &mesh, true);
+  }
+  else
+  {
+    bool valuesChanged = false;
+    for (int c = 0; c < NumberOfChannels && !valuesChanged; ++c)
+    {
+      valuesChanged = System_.Values[c] != PreviousValues_[c];
+    }
+    if (valuesChanged)
+    {
+      Linear_->Setup(System_, &mesh, false); // same pattern, new values
+    }
+    // Otherwise only the right-hand side changed (relight): no Setup.
+  }
+  LinearReady_ = true;
+  report.SetupMilliseconds = Since(start);
+
   start = std::chrono::steady_clock::now();
-  Solver_.SetRelTol(RelTol_);
-  Solver_.SetMaxIter(MaxIter_);
-  Solver_.SetProgressCallback([this](double f) { return ReportProgress(f); });
-  if (!Solver_.Solve(System_, Solution_, WarmStart_ && sameUnknowns))
+  std::array<LinearSolveStats, NumberOfChannels> stats;
+  if (!Linear_->Solve(System_, Solution_, WarmStart_ && sameUnknowns, stats))
   {
     Reset();
     return false;
   }
   LastMesh_ = &mesh;
   LastPoints_ = mesh.GetNumberOfPoints();
+  LastTets_ = mesh.GetNumberOfTets();
+  LastNonZeros_ = System_.ColumnIndices.size();
   report.SolveMilliseconds = Since(start);
 
   report.NumberOfUnknowns = System_.NumberOfUnknowns;
@@ -72,12 +123,13 @@ bool VertexDiffusionSolver::Solve(
   report.MemoryBytes = System_.RowOffsets.size() * sizeof(int) +
     System_.ColumnIndices.size() * sizeof(int) +
     NumberOfChannels * System_.ColumnIndices.size() * sizeof(double) +
-    2 * NumberOfChannels * static_cast<std::size_t>(System_.NumberOfUnknowns) * sizeof(double);
+    2 * NumberOfChannels * static_cast<std::size_t>(System_.NumberOfUnknowns) * sizeof(double) +
+    Linear_->GetMemoryBytes();
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    report.Iterations[c] = Solver_.GetNumIterations(c);
-    report.Residual[c] = Solver_.GetFinalNorm(c);
-    report.Converged[c] = Solver_.GetConverged(c);
+    report.Iterations[c] = stats[c].Iterations;
+    report.Residual[c] = stats[c].RelativeResidual;
+    report.Converged[c] = stats[c].Converged;
   }
   Discretization_->ToPointFluence(mesh, System_, Solution_, fluence);
   return true;
