@@ -459,8 +459,9 @@ std::size_t MultiresHierarchy::GetMemoryBytes() const
 // ---------------------------------------------------------------------------
 
 void CoarseOperator::Build(const MultiresHierarchy::Level& level, const CsrPattern& fine,
-  int coarseSize, Kind kind, int threads)
+  const CsrPattern& coarseGraph, Kind kind, int threads)
 {
+  const int coarseSize = coarseGraph.Size;
   Level_ = &level;
   Fine_ = &fine;
   Kind_ = kind;
@@ -480,7 +481,7 @@ void CoarseOperator::Build(const MultiresHierarchy::Level& level, const CsrPatte
   }
   const auto& po = level.InterpolationOffsets;
   const auto& pc = level.InterpolationColumns;
-  if (kind == Kind::Galerkin)
+  if (kind != Kind::Injection)
   {
     // P^T in CSR.
     TransposeOffsets_.assign(coarseSize + 1, 0);
@@ -505,35 +506,52 @@ void CoarseOperator::Build(const MultiresHierarchy::Level& level, const CsrPatte
       }
     }
   }
-  std::vector<std::vector<int>> rows(coarseSize);
-#pragma omp parallel for num_threads(nt) schedule(dynamic, 256)
-  for (int a = 0; a < coarseSize; ++a)
+  if (kind == Kind::SparseGalerkin)
   {
-    std::vector<int>& row = rows[a];
-    auto addFineRow = [&](int i)
+    Pattern_ = coarseGraph;
+    return;
+  }
+  std::vector<std::vector<int>> rows(coarseSize);
+#pragma omp parallel num_threads(nt)
+  {
+    // Per-thread marker: deduplicate while collecting, sort the row after.
+    std::vector<char> seen(coarseSize, 0);
+#pragma omp for schedule(dynamic, 256)
+    for (int a = 0; a < coarseSize; ++a)
     {
-      for (int k = fine.Offsets[i]; k < fine.Offsets[i + 1]; ++k)
+      std::vector<int>& row = rows[a];
+      auto addFineRow = [&](int i)
       {
-        const int j = fine.Columns[k];
-        for (int p = po[j]; p < po[j + 1]; ++p)
+        for (int k = fine.Offsets[i]; k < fine.Offsets[i + 1]; ++k)
         {
-          row.push_back(pc[p]);
+          const int j = fine.Columns[k];
+          for (int p = po[j]; p < po[j + 1]; ++p)
+          {
+            if (!seen[pc[p]])
+            {
+              seen[pc[p]] = 1;
+              row.push_back(pc[p]);
+            }
+          }
+        }
+      };
+      if (kind == Kind::Injection)
+      {
+        addFineRow(FineIds_[a]);
+      }
+      else
+      {
+        for (int t = TransposeOffsets_[a]; t < TransposeOffsets_[a + 1]; ++t)
+        {
+          addFineRow(TransposeRows_[t]);
         }
       }
-    };
-    if (kind == Kind::Injection)
-    {
-      addFineRow(FineIds_[a]);
-    }
-    else
-    {
-      for (int t = TransposeOffsets_[a]; t < TransposeOffsets_[a + 1]; ++t)
+      for (int b : row)
       {
-        addFineRow(TransposeRows_[t]);
+        seen[b] = 0;
       }
+      std::sort(row.begin(), row.end());
     }
-    std::sort(row.begin(), row.end());
-    row.erase(std::unique(row.begin(), row.end()), row.end());
   }
   ToCsr(rows, Pattern_);
 }
@@ -549,7 +567,11 @@ void CoarseOperator::Compute(
   const auto& pw = Level_->InterpolationWeights;
 #pragma omp parallel num_threads(nt)
   {
+    // position[b] >= 0: slot of column b in the coarse row; <= -2: scratch
+    // slot -(position + 2) of an entry outside the pattern (SparseGalerkin).
     std::vector<int> position(nc, -1);
+    std::vector<double> scratch;
+    std::vector<int> scratchColumns;
 #pragma omp for schedule(dynamic, 256)
     for (int a = 0; a < nc; ++a)
     {
@@ -574,7 +596,22 @@ void CoarseOperator::Compute(
           const double v2 = scale * fineValues[2][s];
           for (int p = po[j]; p < po[j + 1]; ++p)
           {
-            double* out = coarse + 3 * static_cast<std::size_t>(position[pc[p]]);
+            int& slot = position[pc[p]];
+            double* out;
+            if (slot >= 0)
+            {
+              out = coarse + 3 * static_cast<std::size_t>(slot);
+            }
+            else
+            {
+              if (slot == -1)
+              {
+                slot = -2 - static_cast<int>(scratchColumns.size());
+                scratchColumns.push_back(pc[p]);
+                scratch.insert(scratch.end(), { 0.0, 0.0, 0.0 });
+              }
+              out = scratch.data() + 3 * static_cast<std::size_t>(-2 - slot);
+            }
             const double w = pw[p];
             out[0] += v0 * w;
             out[1] += v1 * w;
@@ -592,6 +629,21 @@ void CoarseOperator::Compute(
         {
           addFineRow(TransposeRows_[t], TransposeWeights_[t]);
         }
+      }
+      if (!scratchColumns.empty())
+      {
+        // SparseGalerkin: entries outside G^{l+1} go to the diagonal as |a_ab|.
+        double* diagonal = coarse + 3 * static_cast<std::size_t>(position[a]);
+        for (std::size_t e = 0; e < scratchColumns.size(); ++e)
+        {
+          for (int c = 0; c < 3; ++c)
+          {
+            diagonal[c] += std::abs(scratch[3 * e + c]);
+          }
+          position[scratchColumns[e]] = -1;
+        }
+        scratch.clear();
+        scratchColumns.clear();
       }
       for (int q = begin; q < end; ++q)
       {

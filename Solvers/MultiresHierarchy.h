@@ -122,12 +122,18 @@ public:
   enum class Kind
   {
     Injection, ///< TransCut eq. 17 (non-symmetric)
-    Galerkin   ///< P^T A P (symmetric if A is)
+    Galerkin,  ///< P^T A P (symmetric if A is)
+    /// P^T A P restricted to the hierarchy's coarse graph G^{l+1} (Sec.
+    /// 4.1.2): every entry (a, b) outside it is dropped and |a_ab| added to
+    /// the diagonal a_aa (so the result stays SPD if A is: the change is a
+    /// sum of positive semi-definite rank-one terms).
+    SparseGalerkin
   };
 
-  /// Pattern of R A P, where A has pattern `fine` (that of level l).
-  void Build(const MultiresHierarchy::Level& level, const CsrPattern& fine, int coarseSize,
-    Kind kind, int threads);
+  /// Pattern of R A P, where A has pattern `fine` (that of level l);
+  /// `coarseGraph` is G^{l+1} (used by SparseGalerkin only).
+  void Build(const MultiresHierarchy::Level& level, const CsrPattern& fine,
+    const CsrPattern& coarseGraph, Kind kind, int threads);
 
   /**
    * Coarse values from fine values, three channels at once: channel c of

@@ -442,7 +442,9 @@ void MultigridConjugateGradient::BuildOperators()
   {
     // Galerkin coarse operators P^T A P (beyond the paper, Sec. 4.2 remark).
     Operators_[l].Build(Hierarchy_.GetLevel(l), *Internal_->Levels[l].Pattern,
-      Hierarchy_.GetLevel(l + 1).Graph.Size, CoarseOperator::Kind::Galerkin, Threads_);
+      Hierarchy_.GetLevel(l + 1).Graph,
+      SparseGalerkin_ ? CoarseOperator::Kind::SparseGalerkin : CoarseOperator::Kind::Galerkin,
+      Threads_);
     Internal_->Levels[l + 1].Pattern = &Operators_[l].GetPattern();
     // P^T for the restriction.
     const auto& h = Hierarchy_.GetLevel(l);
@@ -799,7 +801,7 @@ void TransCutMultiresSolver::BuildOperators()
   {
     const CsrPattern& fine = l == 0 ? Hierarchy_.GetLevel(0).Graph : Operators_[l - 1].GetPattern();
     // Eq. 17: substitute eq. 16 into eq. 15 for the retained rows.
-    Operators_[l].Build(Hierarchy_.GetLevel(l), fine, Hierarchy_.GetLevel(l + 1).Graph.Size,
+    Operators_[l].Build(Hierarchy_.GetLevel(l), fine, Hierarchy_.GetLevel(l + 1).Graph,
       CoarseOperator::Kind::Injection, Threads_);
   }
   Internal_->Values.assign(Operators_.size(), {});

@@ -479,18 +479,22 @@ double RelativeError(const Eigen::VectorXd& x, const Eigen::VectorXd& reference)
 TEST(MultiresSolvers, CoarseOperatorsMatchSparseProducts)
 {
   Problem p(CubeMesh(8, 4.0, 0.3, 11), 12);
-  MultigridConjugateGradient mg;
+  MultigridConjugateGradient mg, sparse;
   TransCutMultiresSolver tc;
   mg.SetCoarsestSize(20);
   tc.SetCoarsestSize(20);
+  sparse.SetCoarsestSize(20);
+  sparse.SetSparseGalerkin(true);
   mg.Setup(p.System, &p.Mesh, true);
   tc.Setup(p.System, &p.Mesh, true);
+  sparse.Setup(p.System, &p.Mesh, true);
   const auto& h = mg.GetHierarchy();
   ASSERT_GE(h.GetNumberOfLevels(), 3);
   for (int c = 0; c < 3; ++c)
   {
     Eigen::SparseMatrix<double, Eigen::RowMajor> galerkin = p.System.Matrix(c);
     Eigen::SparseMatrix<double, Eigen::RowMajor> injected = p.System.Matrix(c);
+    Eigen::MatrixXd lumped = Eigen::MatrixXd(p.System.Matrix(c));
     for (int l = 0; l + 1 < h.GetNumberOfLevels(); ++l)
     {
       const auto P = Interpolation(h, l);
@@ -505,6 +509,28 @@ TEST(MultiresSolvers, CoarseOperatorsMatchSparseProducts)
       Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(dense);
       EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0) << "P^T A P not positive definite, level "
                                                    << l + 1;
+      // Sparse Galerkin: P^T A P on the coarse graph, the rest lumped as |a_ab|.
+      {
+        const Eigen::MatrixXd Pd = Eigen::MatrixXd(P);
+        Eigen::MatrixXd full = Pd.transpose() * lumped * Pd;
+        const CsrPattern& g = h.GetLevel(l + 1).Graph;
+        for (int a = 0; a < g.Size; ++a)
+        {
+          for (int b = 0; b < g.Size; ++b)
+          {
+            if (!Adjacent(g, a, b))
+            {
+              full(a, a) += std::abs(full(a, b));
+              full(a, b) = 0.0;
+            }
+          }
+        }
+        lumped = full;
+        const Eigen::MatrixXd got = sparse.GetCoarseMatrix(l + 1, c);
+        EXPECT_LT((got - lumped).norm(), 1e-12 * lumped.norm()) << "sparse Galerkin, level " << l + 1;
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigSparse(got);
+        EXPECT_GT(eigSparse.eigenvalues().minCoeff(), 0.0);
+      }
       // Eq. 17: rows of the retained vertices of A P.
       const auto& ids = h.GetLevel(l).CoarseIds;
       std::vector<Eigen::Triplet<double>> s;
@@ -550,6 +576,14 @@ TEST_P(SolverNames, MatchCholeskyOnRandomMeshesAndMaterials)
     auto solver = CreateLinearSolver(GetParam());
     EXPECT_EQ(solver->GetName(), GetParam());
     solver->SetRelTol(1e-10);
+    if (test.Fem)
+    {
+      // Also the option: sparse Galerkin coarse operators (on one case).
+      if (auto* mg = dynamic_cast<MultigridConjugateGradient*>(solver.get()))
+      {
+        mg->SetSparseGalerkin(true);
+      }
+    }
     if (auto* m = dynamic_cast<MultiresLinearSolverBase*>(solver.get()))
     {
       m->SetCoarsestSize(40); // several levels even on these small meshes
