@@ -8,6 +8,7 @@
 // Every error is printed as "translucency: error: ..." and the exit code is 1
 // (2 for a usage error).
 
+#include "BenchLinearSolvers.h"
 #include "CommandLine.h"
 #include "PipelineRender.h"
 
@@ -103,7 +104,8 @@ translucency bench [options]
 
 void PrintUsage()
 {
-  std::cout << UsageHead << SceneOptionsHelp << RenderHelp << CompareHelp << BenchHelp;
+  std::cout << UsageHead << SceneOptionsHelp << RenderHelp << CompareHelp << BenchHelp
+            << BenchLinearSolversHelp;
 }
 
 int Render(const std::vector<std::string>& args)
@@ -461,18 +463,13 @@ int Bench(const std::vector<std::string>& args)
                "spmv(ms) asm/spmv  solve(ms) iters(R) solve/spmv\n";
   for (double target : sizes)
   {
-    MessageCollector messages;
+    vtkSmartPointer<vtkUnstructuredGrid> tetrahedralized;
+    std::vector<double> points;
+    std::vector<int> tets;
+    const double tetgenMs = TetrahedralizeForBench(surface, target, tetrahedralized, points, tets);
     auto start = Clock::now();
-    vtkNew<vtkTetrahedralizeSurface> tetra;
-    messages.Watch(tetra);
-    tetra->SetInputData(surface);
-    tetra->SetTargetNumberOfTets(static_cast<vtkIdType>(target));
-    tetra->Update();
-    if (!messages.Errors.empty())
-      throw translucency::Error(messages.Last());
-    const double tetgenMs = Since(start);
     vtkNew<vtkAssignScatteringCoefficients> assign;
-    assign->SetInputConnection(tetra->GetOutputPort());
+    assign->SetInputData(tetrahedralized);
     vtkNew<vtkSurfaceIrradiance> light;
     light->SetInputConnection(assign->GetOutputPort());
     light->AddDirectionalLight(0, -1, -1, 1.0);
@@ -481,19 +478,6 @@ int Bench(const std::vector<std::string>& args)
     light->Update();
     vtkUnstructuredGrid* g = light->GetOutput();
 
-    // Core types, as vtkSolveDiffusion builds them.
-    std::vector<double> points(3 * g->GetNumberOfPoints());
-    for (vtkIdType i = 0; i < g->GetNumberOfPoints(); ++i)
-      g->GetPoint(i, &points[3 * i]);
-    std::vector<int> tets(4 * g->GetNumberOfCells());
-    const vtkIdType* ids;
-    vtkIdType npts;
-    for (vtkIdType c = 0; c < g->GetNumberOfCells(); ++c)
-    {
-      g->GetCellPoints(c, npts, ids);
-      for (int k = 0; k < 4; ++k)
-        tets[4 * c + k] = static_cast<int>(ids[k]);
-    }
     translucency::OpticalProperties material;
     const translucency::MaterialPreset& marble = translucency::FindMaterialPreset("marble");
     material = translucency::OpticalProperties::Uniform(static_cast<int>(g->GetNumberOfCells()),
@@ -586,7 +570,9 @@ int main(int argc, char* argv[])
     if (command == "compare")
       return translucency_app::Compare(args);
     if (command == "bench")
-      return Bench(args);
+      return std::find(args.begin(), args.end(), "--linear-solvers") != args.end()
+        ? BenchLinearSolvers(args)
+        : Bench(args);
     throw UsageError("unknown command '" + command + "' (render, compare or bench)");
   }
   catch (const UsageError& e)

@@ -3,6 +3,13 @@
 #include "ConjugateGradient.h"
 #include "Error.h"
 #include "MultiresSolvers.h"
+#include "IncompleteCholeskySolver.h"
+#ifdef TRANSLUCENCY_HAVE_CHOLMOD
+#include "CholmodSolver.h"
+#endif
+#ifdef TRANSLUCENCY_HAVE_HYPRE
+#include "HypreSolver.h"
+#endif
 
 #include <algorithm>
 #include <cctype>
@@ -57,6 +64,14 @@ std::vector<std::string> GetLinearSolverNames()
   std::vector<std::string> names{ "cg-jacobi" };
   names.push_back("transcut-multires");
   names.push_back("multigrid-cg");
+  // Peers (optional libraries only when this build found them).
+  names.push_back("cg-ichol");
+#ifdef TRANSLUCENCY_HAVE_CHOLMOD
+  names.push_back("cholmod");
+#endif
+#ifdef TRANSLUCENCY_HAVE_HYPRE
+  names.push_back("hypre-amg");
+#endif
   return names;
 }
 
@@ -75,10 +90,33 @@ std::unique_ptr<LinearSolver> CreateLinearSolver(const std::string& name)
   {
     return std::make_unique<MultigridConjugateGradient>();
   }
+  if (key == "cg-ichol")
+  {
+    return std::make_unique<IncompleteCholeskySolver>();
+  }
+#ifdef TRANSLUCENCY_HAVE_CHOLMOD
+  if (key == "cholmod")
+  {
+    return std::make_unique<CholmodSolver>();
+  }
+#endif
+#ifdef TRANSLUCENCY_HAVE_HYPRE
+  if (key == "hypre-amg")
+  {
+    return std::make_unique<HypreSolver>();
+  }
+#endif
   std::string known;
   for (const auto& n : GetLinearSolverNames())
   {
     known += (known.empty() ? "" : ", ") + n;
+  }
+  if (key == "cholmod" || key == "hypre-amg")
+  {
+    throw Error("linear solver '" + name + "' is not in this build (CMake did not find " +
+      (key == "cholmod" ? std::string("CHOLMOD: install libsuitesparse-dev")
+                        : std::string("hypre: install libhypre-dev")) +
+      " and reconfigure; this build has: " + known + ")");
   }
   throw Error("unknown linear solver '" + name + "' (this build has: " + known + ")");
 }

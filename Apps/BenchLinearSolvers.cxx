@@ -1,0 +1,903 @@
+// translucency bench --linear-solvers: every linear solver side by side on
+// the bunny (Documentation/Performance.md, "Linear solvers").
+//
+// Per mesh size: topology, 3-channel assembly, one SpMV against the memory-
+// bandwidth bound (bytes moved / a STREAM-triad bandwidth measured in the same
+// run), a reference solution to a relative residual of 1e-10 (Jacobi-CG,
+// restarted until the true residual is below it), then for each solver:
+// set-up (pattern changed, and values only), a cold solve from zero and a
+// warm solve after a 10-degree light rotation, each at the loosest tolerance
+// of a fixed ladder that gives <= 1 % relative L2 error of the boundary
+// fluence in every channel; and for the default solver "cut -> new fluence".
+
+#include "BenchLinearSolvers.h"
+#include "CommandLine.h"
+#include "HypreMPI.h"
+
+#include "ConjugateGradient.h"
+#include "DiscreteDivergence.h"
+#include "Error.h"
+#include "LightSources.h"
+#include "LinearSolver.h"
+#include "OpticalProperties.h"
+#include "Radiance.h"
+#include "TetCut.h"
+#include "TetMesh.h"
+
+#include "vtkTetrahedralizeSurface.h"
+
+#include <vtkNew.h>
+#include <vtkPolyData.h>
+#include <vtkUnstructuredGrid.h>
+
+#include "vtk_nlohmannjson.h"
+#include VTK_NLOHMANN_JSON(json.hpp)
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <set>
+#include <sstream>
+
+namespace translucency_app
+{
+using json = nlohmann::json;
+using Solution = std::array<Eigen::VectorXd, translucency::NumberOfChannels>;
+using Stats = std::array<translucency::LinearSolveStats, translucency::NumberOfChannels>;
+
+const char* const BenchLinearSolversHelp = R"(
+translucency bench --linear-solvers [N1,N2,...] [options]
+                           every linear solver of this build (or the named ones) on
+                           the bunny, marble, one directional light: set-up, cold solve
+                           and warm solve (10-degree light rotation) to 1 % relative
+                           L2 error of the boundary fluence, SpMV-equivalents, the
+                           SpMV bandwidth bound, cut -> new fluence (default solver)
+  --mesh FILE, --tets N1,..., --runs N (default 5), --json FILE  as for bench
+  --plot FILE.png          error of the boundary fluence vs solve time per solver
+                           (writes FILE.csv, plotted by scripts/plot_linear_solvers.py)
+  --hypre-ranks N          also run hypre-amg on N MPI ranks through mpiexec and
+                           translucency-hypre-mpi (default 2; 0 or 1: skip)
+  --no-cut                 skip the cut -> new fluence figure
+)";
+
+double TetrahedralizeForBench(vtkPolyData* surface, double targetTets,
+  vtkSmartPointer<vtkUnstructuredGrid>& grid, std::vector<double>& points, std::vector<int>& tets)
+{
+  MessageCollector messages;
+  const auto start = Clock::now();
+  vtkNew<vtkTetrahedralizeSurface> tetra;
+  messages.Watch(tetra);
+  tetra->SetInputData(surface);
+  tetra->SetTargetNumberOfTets(static_cast<vtkIdType>(targetTets));
+  tetra->Update();
+  if (!messages.Errors.empty())
+    throw translucency::Error(messages.Last());
+  const double ms = Since(start);
+  grid = tetra->GetOutput();
+  points.resize(3 * grid->GetNumberOfPoints());
+  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i)
+    grid->GetPoint(i, &points[3 * i]);
+  tets.resize(4 * grid->GetNumberOfCells());
+  const vtkIdType* ids;
+  vtkIdType npts;
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
+  {
+    grid->GetCellPoints(c, npts, ids);
+    for (int k = 0; k < 4; ++k)
+      tets[4 * c + k] = static_cast<int>(ids[k]);
+  }
+  return ms;
+}
+
+namespace
+{
+
+/// Relative tolerances tried, loosest first: the bench uses the first one
+/// whose solution has <= 1 % boundary-fluence error in every channel.
+const double ToleranceLadder[] = { 0.5, 0.3, 0.2, 0.1, 0.05, 0.03, 0.02, 0.01, 5e-3, 3e-3, 2e-3,
+  1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7, 1e-8 };
+constexpr double TargetError = 0.01;
+constexpr double ReferenceTolerance = 1e-10;
+constexpr int BenchMaxIter = 20000;
+
+bool IsPeer(const std::string& name)
+{
+  static const std::set<std::string> peers = { "cg-jacobi", "cg-ichol", "cholmod", "hypre-amg",
+    "hypre-amg-2ranks" };
+  return peers.count(name) > 0 || name.rfind("hypre-amg-", 0) == 0;
+}
+
+/// max over channels of ||x_B - ref_B|| / ||ref_B|| over the boundary points B.
+double BoundaryError(const Solution& x, const Solution& ref, const std::vector<int>& boundary)
+{
+  double worst = 0.0;
+  for (int c = 0; c < 3; ++c)
+  {
+    double d2 = 0.0, r2 = 0.0;
+    for (int i : boundary)
+    {
+      const double d = x[c][i] - ref[c][i];
+      d2 += d * d;
+      r2 += ref[c][i] * ref[c][i];
+    }
+    worst = std::max(worst, r2 > 0 ? std::sqrt(d2 / r2) : std::sqrt(d2));
+  }
+  return worst;
+}
+
+double TrueResidual(const translucency::DiffusionSystem& s, const Solution& x)
+{
+  double worst = 0.0;
+  for (int c = 0; c < 3; ++c)
+  {
+    const double b = s.RightHandSide[c].norm();
+    if (b > 0)
+      worst = std::max(worst, (s.RightHandSide[c] - s.Matrix(c) * x[c]).norm() / b);
+  }
+  return worst;
+}
+
+/// Jacobi-CG to a true relative residual <= 1e-10 in every channel
+/// (restarted from its result while the recurrence residual drifted).
+Solution Reference(const translucency::DiffusionSystem& s, double& residual)
+{
+  translucency::ConjugateGradient cg;
+  cg.SetRelTol(ReferenceTolerance);
+  cg.SetMaxIter(200000);
+  Solution x;
+  cg.Solve(s, x, false);
+  residual = TrueResidual(s, x);
+  for (int restart = 0; restart < 5 && residual > ReferenceTolerance; ++restart)
+  {
+    cg.SetRelTol(0.5 * cg.GetRelTol());
+    cg.Solve(s, x, true);
+    residual = TrueResidual(s, x);
+  }
+  return x;
+}
+
+/// Directional light along `direction` (unit), irradiance 1 W/mm^2, shadows.
+std::vector<double> Irradiance(const translucency::TetMesh& mesh,
+  const translucency::OpticalProperties& material, const double direction[3])
+{
+  translucency::LightSource light;
+  light.Direction = { direction[0], direction[1], direction[2] };
+  std::vector<double> q;
+  translucency::ComputeBoundaryIrradiance(mesh,
+    translucency::PointRefractiveIndex(mesh, material.RefractiveIndex), { light }, 0.0, 0, true, q);
+  return q;
+}
+
+/// STREAM triad a = b + s c over 3 x 2^24 doubles (400 MB) on all threads;
+/// bandwidth in GB/s (STREAM's convention: 24 bytes per element), median.
+double TriadBandwidth(int runs)
+{
+  const std::int64_t n = std::int64_t(1) << 24;
+  std::unique_ptr<double[]> a(new double[n]), b(new double[n]), c(new double[n]);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i)
+  {
+    a[i] = 0.0;
+    b[i] = 1.0;
+    c[i] = 2.0;
+  }
+  std::vector<double> gbs;
+  for (int r = 0; r < std::max(runs, 3); ++r)
+  {
+    const auto start = Clock::now();
+    const double s = 0.5 + r;
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i)
+      a[i] = b[i] + s * c[i];
+    const double ms = Since(start);
+    gbs.push_back(24.0 * n / (ms * 1e6));
+  }
+  volatile double sink = a[n / 2];
+  (void)sink;
+  return Median(gbs);
+}
+
+struct Timed
+{
+  double Ms = 0.0;
+  Solution X;
+  Stats S{};
+};
+
+Timed TimedSolve(translucency::LinearSolver& solver, const translucency::DiffusionSystem& s,
+  const Solution* guess)
+{
+  Timed t;
+  if (guess)
+    t.X = *guess;
+  const auto start = Clock::now();
+  solver.Solve(s, t.X, guess != nullptr, t.S);
+  t.Ms = Since(start);
+  return t;
+}
+
+/// One point of the error-vs-time curve.
+struct CurvePoint
+{
+  double Tolerance, Ms, Error, SpMV;
+};
+
+/// Solve at each ladder tolerance (once) until the error is <= 1 % (and,
+/// with `curve`, on to 1e-5 error for the plot). Returns the index of the
+/// loosest tolerance reaching 1 % (or -1), and fills the probe results.
+int Calibrate(translucency::LinearSolver& solver, const translucency::DiffusionSystem& s,
+  const Solution& ref, const std::vector<int>& boundary, const Solution* guess,
+  std::vector<CurvePoint>* curve, std::vector<CurvePoint>& probes)
+{
+  int chosen = -1;
+  const int count = static_cast<int>(sizeof(ToleranceLadder) / sizeof(double));
+  for (int k = 0; k < count; ++k)
+  {
+    solver.SetRelTol(ToleranceLadder[k]);
+    const Timed t = TimedSolve(solver, s, guess);
+    const double error = BoundaryError(t.X, ref, boundary);
+    double spmv = 0.0;
+    bool direct = true;
+    for (const auto& st : t.S)
+    {
+      spmv += st.SpMVEquivalents;
+      direct = direct && st.Iterations == 0 && st.RelativeResidual < 1e-12;
+    }
+    probes.push_back({ ToleranceLadder[k], t.Ms, error, spmv });
+    if (curve)
+      curve->push_back(probes.back());
+    if (chosen < 0 && error <= TargetError)
+      chosen = k;
+    if (direct && guess == nullptr)
+    {
+      // A direct solve does not depend on the tolerance.
+      return chosen;
+    }
+    if (chosen >= 0 && (!curve || error < 1e-5))
+      break;
+  }
+  return chosen;
+}
+
+struct SolverRow
+{
+  std::string Name;
+  double SetupMs = 0, ValuesSetupMs = 0, ColdMs = 0, WarmMs = 0;
+  double ColdTol = 0, WarmTol = 0, ColdError = 0, WarmError = 0;
+  double ColdLooserError = -1, WarmLooserError = -1; ///< error one ladder step looser (-1: none)
+  double ColdSpMV = 0, WarmSpMV = 0;
+  std::array<int, 3> ColdIters{}, WarmIters{};
+  bool ColdReached = false, WarmReached = false;
+  double MemoryBytes = 0;
+};
+
+json RowJson(const SolverRow& r, double topologyMs)
+{
+  return { { "solver", r.Name }, { "peer", IsPeer(r.Name) }, { "setup_ms", r.SetupMs },
+    { "setup_with_topology_ms", r.SetupMs + topologyMs },
+    { "values_only_setup_ms", r.ValuesSetupMs }, { "cold_ms", r.ColdMs },
+    { "cold_tolerance", r.ColdTol }, { "cold_error", r.ColdError },
+    { "cold_error_one_step_looser", r.ColdLooserError }, { "cold_reached_1pct", r.ColdReached },
+    { "cold_iterations", r.ColdIters }, { "cold_spmv_equivalents", r.ColdSpMV },
+    { "warm_ms", r.WarmMs }, { "warm_tolerance", r.WarmTol }, { "warm_error", r.WarmError },
+    { "warm_error_one_step_looser", r.WarmLooserError }, { "warm_reached_1pct", r.WarmReached },
+    { "warm_iterations", r.WarmIters }, { "warm_spmv_equivalents", r.WarmSpMV },
+    { "memory_bytes", r.MemoryBytes } };
+}
+
+/// Everything of one mesh size the solvers share.
+struct Problem
+{
+  translucency::TetMesh Mesh;
+  translucency::OpticalProperties Material;
+  translucency::DiffusionSystem System; ///< right-hand side of light 0
+  Solution Rhs0, Rhs1;                  ///< light 0 and the 10-degree rotated light
+  Solution Ref0, Ref1;
+  double Dir0[3], Dir1[3];
+};
+
+SolverRow BenchSolver(const std::string& name, Problem& p, int runs,
+  std::vector<CurvePoint>& curve, Solution& coldSolution)
+{
+  SolverRow row;
+  row.Name = name;
+  auto solver = translucency::CreateLinearSolver(name);
+  solver->SetMaxIter(BenchMaxIter);
+  const std::vector<int>& boundary = p.Mesh.GetBoundaryPoints();
+  std::vector<double> setup, values;
+  // Untimed first set-up: library initialisation (MPI_Init for hypre), page
+  // faults of first allocations.
+  solver->Setup(p.System, &p.Mesh, true);
+  for (int r = 0; r < runs; ++r)
+  {
+    auto start = Clock::now();
+    solver->Setup(p.System, &p.Mesh, true);
+    setup.push_back(Since(start));
+    start = Clock::now();
+    solver->Setup(p.System, &p.Mesh, false);
+    values.push_back(Since(start));
+  }
+  row.SetupMs = Median(setup);
+  row.ValuesSetupMs = Median(values);
+  row.MemoryBytes = static_cast<double>(solver->GetMemoryBytes());
+
+  // Cold: calibrate, then time at the chosen tolerance.
+  p.System.RightHandSide = p.Rhs0;
+  std::vector<CurvePoint> probes;
+  int k = Calibrate(*solver, p.System, p.Ref0, boundary, nullptr, &curve, probes);
+  row.ColdReached = k >= 0;
+  if (k < 0)
+    k = static_cast<int>(probes.size()) - 1;
+  row.ColdTol = ToleranceLadder[k];
+  row.ColdLooserError = k > 0 && k < static_cast<int>(probes.size()) ? probes[k - 1].Error : -1;
+  solver->SetRelTol(row.ColdTol);
+  std::vector<double> cold;
+  Timed t;
+  for (int r = 0; r < runs; ++r)
+  {
+    t = TimedSolve(*solver, p.System, nullptr);
+    cold.push_back(t.Ms);
+  }
+  row.ColdMs = Median(cold);
+  row.ColdError = BoundaryError(t.X, p.Ref0, boundary);
+  for (int c = 0; c < 3; ++c)
+  {
+    row.ColdIters[c] = t.S[c].Iterations;
+    row.ColdSpMV += t.S[c].SpMVEquivalents;
+  }
+  coldSolution = t.X;
+
+  // Warm: the light turned 10 degrees, starting from the cold solution.
+  p.System.RightHandSide = p.Rhs1;
+  probes.clear();
+  k = Calibrate(*solver, p.System, p.Ref1, boundary, &coldSolution, nullptr, probes);
+  row.WarmReached = k >= 0;
+  if (k < 0)
+    k = static_cast<int>(probes.size()) - 1;
+  row.WarmTol = ToleranceLadder[k];
+  row.WarmLooserError = k > 0 ? probes[k - 1].Error : -1;
+  solver->SetRelTol(row.WarmTol);
+  std::vector<double> warm;
+  for (int r = 0; r < runs; ++r)
+  {
+    t = TimedSolve(*solver, p.System, &coldSolution);
+    warm.push_back(t.Ms);
+  }
+  row.WarmMs = Median(warm);
+  row.WarmError = BoundaryError(t.X, p.Ref1, boundary);
+  for (int c = 0; c < 3; ++c)
+  {
+    row.WarmIters[c] = t.S[c].Iterations;
+    row.WarmSpMV += t.S[c].SpMVEquivalents;
+  }
+  p.System.RightHandSide = p.Rhs0;
+  return row;
+}
+
+std::string Quoted(const std::string& s)
+{
+  return "'" + s + "'";
+}
+
+std::string TempPath(const std::string& tag)
+{
+  const char* dir = std::getenv("TMPDIR");
+  std::ostringstream os;
+  os << (dir && *dir ? dir : "/tmp") << "/translucency-bench-" << getpid() << "-" << tag;
+  return os.str();
+}
+
+std::string ExecutableDirectory()
+{
+  char buffer[4096];
+  const ssize_t len = readlink("/proc/self/exe", buffer, sizeof(buffer) - 1);
+  if (len <= 0)
+    return ".";
+  std::string path(buffer, static_cast<size_t>(len));
+  return path.substr(0, path.find_last_of('/'));
+}
+
+template <typename T>
+void WriteRaw(std::ofstream& out, const T* data, std::size_t count)
+{
+  out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(count * sizeof(T)));
+}
+
+template <typename T>
+bool ReadRaw(std::ifstream& in, T* data, std::size_t count)
+{
+  in.read(reinterpret_cast<char*>(data), static_cast<std::streamsize>(count * sizeof(T)));
+  return static_cast<bool>(in);
+}
+
+/// hypre-amg on `ranks` MPI ranks (translucency-hypre-mpi under mpiexec) at
+/// the tolerances the in-process run chose. Throws on failure.
+SolverRow BenchHypreRanks(Problem& p, int ranks, int runs, const SolverRow& oneRank)
+{
+  const std::string exe = ExecutableDirectory() + "/translucency-hypre-mpi";
+  if (access(exe.c_str(), X_OK) != 0)
+    throw translucency::Error("--hypre-ranks: " + exe + " not found (built with hypre only)");
+  const std::string in = TempPath("hypre-in.bin"), out = TempPath("hypre-out.bin"),
+                    log = TempPath("hypre.log");
+  const translucency::DiffusionSystem& s = p.System;
+  const std::int32_t n = s.NumberOfUnknowns;
+  {
+    std::ofstream f(in, std::ios::binary | std::ios::trunc);
+    WriteRaw(f, HypreInputMagic, 8);
+    const std::int64_t nnz = static_cast<std::int64_t>(s.ColumnIndices.size());
+    const std::int32_t r = runs, maxIter = BenchMaxIter;
+    WriteRaw(f, &n, 1);
+    WriteRaw(f, &nnz, 1);
+    WriteRaw(f, &r, 1);
+    WriteRaw(f, &maxIter, 1);
+    WriteRaw(f, &oneRank.ColdTol, 1);
+    WriteRaw(f, &oneRank.WarmTol, 1);
+    WriteRaw(f, s.RowOffsets.data(), s.RowOffsets.size());
+    WriteRaw(f, s.ColumnIndices.data(), s.ColumnIndices.size());
+    for (int c = 0; c < 3; ++c)
+      WriteRaw(f, s.Values[c].data(), s.Values[c].size());
+    for (const Solution* rhs : { &p.Rhs0, &p.Rhs1 })
+      for (int c = 0; c < 3; ++c)
+        WriteRaw(f, (*rhs)[c].data(), n);
+    if (!f)
+      throw translucency::Error("--hypre-ranks: cannot write " + in);
+  }
+  std::ostringstream cmd;
+  // OMP_NUM_THREADS=1: the ranks are the parallelism (Debian's hypre has no
+  // OpenMP anyway); --allow-run-as-root: Open MPI refuses root otherwise.
+  // The in-process hypre-amg made this process an Open MPI singleton, whose
+  // OMPI_* / PMIX_* variables would make mpiexec's children join it: drop them.
+  cmd << "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\|OPAL_[^=]*\\|ORTE_[^=]*\\)=.*/\\1/p'); "
+         "do unset $v; done; ";
+  cmd << "OMP_NUM_THREADS=1 mpiexec --allow-run-as-root --oversubscribe -n " << ranks << " "
+      << Quoted(exe) << " " << Quoted(in) << " " << Quoted(out) << " > " << Quoted(log)
+      << " 2>&1";
+  const int status = std::system(cmd.str().c_str());
+  std::remove(in.c_str());
+  std::ifstream f(out, std::ios::binary);
+  if (status != 0 || !f)
+  {
+    std::ifstream l(log);
+    std::stringstream text;
+    text << l.rdbuf();
+    std::remove(log.c_str());
+    std::remove(out.c_str());
+    throw translucency::Error("--hypre-ranks: '" + cmd.str() + "' failed (status " +
+      std::to_string(status) + "): " + text.str());
+  }
+  std::remove(log.c_str());
+  char magic[8];
+  std::int32_t header[2];
+  double times[3];
+  SolverRow row;
+  row.Name = "hypre-amg-" + std::to_string(ranks) + "ranks";
+  bool ok = ReadRaw(f, magic, 8) && std::memcmp(magic, HypreOutputMagic, 8) == 0 &&
+    ReadRaw(f, header, 2) && header[0] == n && ReadRaw(f, times, 3);
+  double work[3] = { 0, 0, 0 };
+  for (int c = 0; ok && c < 3; ++c)
+  {
+    std::int32_t iters[2];
+    double d[3];
+    ok = ReadRaw(f, iters, 2) && ReadRaw(f, d, 3);
+    row.ColdIters[c] = iters[0];
+    row.WarmIters[c] = iters[1];
+    work[c] = d[2];
+    row.ColdSpMV += 1.0 + iters[0] * d[2];
+    row.WarmSpMV += 1.0 + iters[1] * d[2];
+  }
+  Solution cold, warm;
+  for (Solution* x : { &cold, &warm })
+    for (int c = 0; ok && c < 3; ++c)
+    {
+      (*x)[c].resize(n);
+      ok = ReadRaw(f, (*x)[c].data(), n);
+    }
+  f.close();
+  std::remove(out.c_str());
+  if (!ok)
+    throw translucency::Error("--hypre-ranks: bad result file from " + exe);
+  row.SetupMs = times[0];
+  row.ValuesSetupMs = times[0];
+  row.ColdMs = times[1];
+  row.WarmMs = times[2];
+  row.ColdTol = oneRank.ColdTol;
+  row.WarmTol = oneRank.WarmTol;
+  const std::vector<int>& boundary = p.Mesh.GetBoundaryPoints();
+  row.ColdError = BoundaryError(cold, p.Ref0, boundary);
+  row.WarmError = BoundaryError(warm, p.Ref1, boundary);
+  row.ColdReached = row.ColdError <= TargetError;
+  row.WarmReached = row.WarmError <= TargetError;
+  return row;
+}
+
+/// Plane cut through the centre (normal +x, Solvers/TetCut), then topology,
+/// irradiance, assembly, Setup(patternChanged = true) and a solve warm-started
+/// from the kept vertices' fluence, with `solverName`. The tolerance is the
+/// loosest of the ladder giving <= 1 % boundary error on the cut mesh (found
+/// in an untimed first pass against a 1e-10 reference of the cut mesh).
+json BenchCut(const std::string& solverName, const Problem& p, const Solution& previous, int runs)
+{
+  const std::vector<double>& points = p.Mesh.GetPoints();
+  const std::vector<int>& tets = p.Mesh.GetTets();
+  double lo = std::numeric_limits<double>::max(), hi = -lo;
+  for (size_t i = 0; i < points.size(); i += 3)
+  {
+    lo = std::min(lo, points[i]);
+    hi = std::max(hi, points[i]);
+  }
+  const double cx = 0.5 * (lo + hi);
+  std::vector<double> cutMs, topoMs, lightMs, setupMs, asmMs, solveMs, totalMs;
+  Solution x, ref;
+  translucency::TetMesh mesh;
+  translucency::DiffusionSystem system;
+  int kept = 0, iterations = 0;
+  double tolerance = 0.0, residual = 0.0, looser = -1.0;
+  bool reached = false;
+  for (int r = -1; r < runs; ++r) // r = -1: untimed calibration pass
+  {
+    auto solver = translucency::CreateLinearSolver(solverName);
+    solver->SetRelTol(tolerance);
+    solver->SetMaxIter(BenchMaxIter);
+    const auto begin = Clock::now();
+    auto start = begin;
+    std::vector<double> side(points.size() / 3);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < static_cast<std::int64_t>(side.size()); ++i)
+      side[i] = points[3 * i] - cx;
+    translucency::TetCut cut;
+    cut.Cut(points, tets, side, [cx](const double* y) { return y[0] - cx; });
+    cutMs.push_back(Since(start));
+    start = Clock::now();
+    mesh.SetGeometry(cut.GetPoints(), cut.GetTets());
+    topoMs.push_back(Since(start));
+    kept = mesh.GetNumberOfTets();
+    const translucency::MaterialPreset& marble = translucency::FindMaterialPreset("marble");
+    const auto material = translucency::OpticalProperties::Uniform(
+      kept, marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
+    start = Clock::now();
+    const std::vector<double> q = Irradiance(mesh, material, p.Dir0);
+    lightMs.push_back(Since(start));
+    start = Clock::now();
+    translucency::DiscreteDivergence().Assemble(mesh, material, q, system);
+    asmMs.push_back(Since(start));
+    start = Clock::now();
+    solver->Setup(system, &mesh, true);
+    setupMs.push_back(Since(start));
+    // Warm start: the fluence the kept vertices had before the cut.
+    const std::vector<int>& keptPoints = cut.GetKeptPoints();
+    Solution guess;
+    for (int c = 0; c < 3; ++c)
+    {
+      guess[c].resize(mesh.GetNumberOfPoints());
+      for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
+        guess[c][i] = previous[c][keptPoints[i]];
+    }
+    if (r < 0)
+    {
+      ref = Reference(system, residual);
+      std::vector<CurvePoint> probes;
+      int k = Calibrate(*solver, system, ref, mesh.GetBoundaryPoints(), &guess, nullptr, probes);
+      reached = k >= 0;
+      if (k < 0)
+        k = static_cast<int>(probes.size()) - 1;
+      tolerance = ToleranceLadder[k];
+      looser = k > 0 ? probes[k - 1].Error : -1.0;
+      cutMs.clear();
+      topoMs.clear();
+      lightMs.clear();
+      asmMs.clear();
+      setupMs.clear();
+      continue;
+    }
+    x = guess;
+    Stats stats;
+    start = Clock::now();
+    solver->Solve(system, x, true, stats);
+    solveMs.push_back(Since(start));
+    totalMs.push_back(Since(begin));
+    iterations = stats[0].Iterations;
+  }
+  const double error = BoundaryError(x, ref, mesh.GetBoundaryPoints());
+  const double cut = Median(cutMs), topo = Median(topoMs), light = Median(lightMs);
+  const double setup = Median(setupMs), as = Median(asmMs), solve = Median(solveMs);
+  std::cout << std::fixed << std::setprecision(1) << "  cut -> new fluence (" << solverName
+            << ", tolerance " << std::setprecision(3) << tolerance << std::setprecision(1)
+            << ", warm from the kept vertices): plane cut " << cut << " + topology " << topo
+            << " + irradiance " << light << " + assembly " << as << " + setup " << setup
+            << " + solve " << solve << " = " << Median(totalMs) << " ms (" << kept
+            << " tets kept, R iterations " << iterations << ", boundary error "
+            << std::setprecision(2) << 100.0 * error << " %); without the irradiance "
+            << std::setprecision(1) << cut + topo + as + setup + solve << " ms\n"
+            << std::defaultfloat;
+  return { { "solver", solverName }, { "tolerance", tolerance }, { "cut_ms", cut },
+    { "topology_ms", topo }, { "irradiance_ms", light }, { "assembly_ms", as },
+    { "setup_ms", setup }, { "solve_ms", solve }, { "total_ms", Median(totalMs) },
+    { "total_without_irradiance_ms", cut + topo + as + setup + solve }, { "tets_kept", kept },
+    { "iterations_R", iterations }, { "error", error }, { "reached_1pct", reached },
+    { "error_one_step_looser", looser }, { "reference_residual", residual } };
+}
+
+void PrintRows(const std::vector<SolverRow>& rows, double topologyMs)
+{
+  // Ratios against the best peer of this size (setup + cold; warm).
+  double bestCold = std::numeric_limits<double>::infinity(), bestWarm = bestCold;
+  std::string bestColdName, bestWarmName;
+  for (const SolverRow& r : rows)
+  {
+    if (!IsPeer(r.Name))
+      continue;
+    if (r.ColdReached && r.SetupMs + r.ColdMs < bestCold)
+    {
+      bestCold = r.SetupMs + r.ColdMs;
+      bestColdName = r.Name;
+    }
+    if (r.WarmReached && r.WarmMs < bestWarm)
+    {
+      bestWarm = r.WarmMs;
+      bestWarmName = r.Name;
+    }
+  }
+  std::cout << "  " << std::left << std::setw(18) << "solver" << std::right << std::setw(10)
+            << "setup" << std::setw(10) << "values" << std::setw(9) << "cold" << std::setw(8)
+            << "tol" << std::setw(15) << "iters R/G/B" << std::setw(8) << "SpMVs" << std::setw(7)
+            << "err%" << std::setw(9) << "warm" << std::setw(8) << "tol" << std::setw(15)
+            << "iters R/G/B" << std::setw(8) << "SpMVs" << std::setw(7) << "err%"
+            << std::setw(12) << "setup+cold" << std::setw(8) << "/best" << std::setw(8)
+            << "warm/b" << "\n";
+  for (const SolverRow& r : rows)
+  {
+    auto iters = [](const std::array<int, 3>& i) {
+      return std::to_string(i[0]) + "/" + std::to_string(i[1]) + "/" + std::to_string(i[2]);
+    };
+    std::ostringstream tolC, tolW;
+    tolC << std::setprecision(2) << r.ColdTol;
+    tolW << std::setprecision(2) << r.WarmTol;
+    std::cout << std::fixed << "  " << std::left << std::setw(18) << r.Name << std::right
+              << std::setprecision(1) << std::setw(10) << r.SetupMs + topologyMs << std::setw(10)
+              << r.ValuesSetupMs << std::setw(9) << r.ColdMs << std::setw(8) << tolC.str()
+              << std::setw(15) << iters(r.ColdIters) << std::setw(8) << r.ColdSpMV
+              << std::setprecision(2) << std::setw(7) << 100 * r.ColdError
+              << (r.ColdReached ? "" : "!") << std::setprecision(1) << std::setw(9) << r.WarmMs
+              << std::setw(8) << tolW.str() << std::setw(15) << iters(r.WarmIters) << std::setw(8)
+              << r.WarmSpMV << std::setprecision(2) << std::setw(7) << 100 * r.WarmError
+              << (r.WarmReached ? "" : "!") << std::setprecision(1) << std::setw(12)
+              << r.SetupMs + r.ColdMs << std::setprecision(2) << std::setw(8)
+              << (r.SetupMs + r.ColdMs) / bestCold << std::setw(8) << r.WarmMs / bestWarm << "\n"
+              << std::defaultfloat;
+  }
+  std::cout << "  (ms, medians; setup includes the topology; values = Setup with the pattern "
+               "kept; SpMVs = work in SpMV-equivalents, 3 channels; ratios against the best "
+               "peer: "
+            << bestColdName << " for setup+cold, " << bestWarmName << " for warm; ! = 1 % not "
+            << "reached)\n";
+}
+
+} // namespace
+
+int BenchLinearSolvers(const std::vector<std::string>& args)
+{
+  std::string meshPath = "Data/bunny.ply", jsonPath, plotPath;
+  std::vector<double> sizes = { 100000, 500000, 1000000 };
+  std::vector<std::string> names;
+  int runs = 5, hypreRanks = 2;
+  bool doCut = true;
+  for (size_t i = 0; i < args.size(); ++i)
+  {
+    const std::string& a = args[i];
+    auto value = [&]() -> const std::string& {
+      if (i + 1 >= args.size())
+        throw UsageError(a + " needs a value");
+      return args[++i];
+    };
+    if (a == "--linear-solvers")
+    {
+      if (i + 1 < args.size() && args[i + 1].rfind("--", 0) != 0)
+      {
+        std::stringstream ss(args[++i]);
+        std::string item;
+        while (std::getline(ss, item, ','))
+          if (!item.empty())
+            names.push_back(item);
+      }
+    }
+    else if (a == "--mesh")
+      meshPath = value();
+    else if (a == "--tets")
+      sizes = ParseNumbers(value(), a);
+    else if (a == "--runs")
+      runs = static_cast<int>(ParseNumbers(value(), a).at(0));
+    else if (a == "--json")
+      jsonPath = value();
+    else if (a == "--plot")
+      plotPath = value();
+    else if (a == "--hypre-ranks")
+      hypreRanks = static_cast<int>(ParseNumbers(value(), a).at(0));
+    else if (a == "--no-cut")
+      doCut = false;
+    else
+      throw UsageError("unknown option '" + a + "' of bench --linear-solvers (see translucency --help)");
+  }
+  if (runs < 1)
+    throw UsageError("--runs must be >= 1");
+  const std::vector<std::string> available = translucency::GetLinearSolverNames();
+  if (names.empty())
+    names = available;
+  for (std::string& n : names)
+    n = translucency::CreateLinearSolver(n)->GetName(); // validates, canonical spelling
+  const std::string defaultSolver = available.front();
+
+  std::string error;
+  vtkSmartPointer<vtkPolyData> surface;
+  vtkSmartPointer<vtkUnstructuredGrid> grid;
+  if (!ReadMesh(meshPath, surface, grid, error))
+    throw translucency::Error(error);
+  if (!surface)
+    throw translucency::Error("bench needs a surface mesh (.ply, .stl, .obj, .vtp)");
+
+  const double bandwidth = TriadBandwidth(runs);
+  std::cout << "threads: " << omp_get_max_threads() << ", runs per figure: " << runs
+            << " (medians); STREAM-triad bandwidth " << std::fixed << std::setprecision(2)
+            << bandwidth << " GB/s\n" << std::defaultfloat;
+  json results = json::array();
+  std::vector<std::string> csv = { "tets,solver,tolerance,solve_ms,error,spmv_equivalents" };
+  for (double target : sizes)
+  {
+    Problem p;
+    std::vector<double> points;
+    std::vector<int> tets;
+    const double tetgenMs = TetrahedralizeForBench(surface, target, grid, points, tets);
+    std::vector<double> topo;
+    for (int r = 0; r < runs; ++r)
+    {
+      const auto start = Clock::now();
+      p.Mesh.SetGeometry(points, tets);
+      topo.push_back(Since(start));
+    }
+    const double topologyMs = Median(topo);
+    const translucency::MaterialPreset& marble = translucency::FindMaterialPreset("marble");
+    p.Material = translucency::OpticalProperties::Uniform(p.Mesh.GetNumberOfTets(),
+      marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
+    // Light 0 travels along (0, -1, -1) / sqrt(2) (as in `bench`); light 1
+    // is light 0 turned 10 degrees about the x axis.
+    const double s2 = std::sqrt(0.5), t10 = 10.0 * M_PI / 180.0;
+    p.Dir0[0] = 0.0;
+    p.Dir0[1] = -s2;
+    p.Dir0[2] = -s2;
+    p.Dir1[0] = 0.0;
+    p.Dir1[1] = -s2 * std::cos(t10) + s2 * std::sin(t10);
+    p.Dir1[2] = -s2 * std::sin(t10) - s2 * std::cos(t10);
+    const std::vector<double> q0 = Irradiance(p.Mesh, p.Material, p.Dir0);
+    const std::vector<double> q1 = Irradiance(p.Mesh, p.Material, p.Dir1);
+    translucency::DiscreteDivergence disc;
+    std::vector<double> assembly;
+    for (int r = 0; r < runs; ++r)
+    {
+      const auto start = Clock::now();
+      disc.Assemble(p.Mesh, p.Material, q0, p.System);
+      assembly.push_back(Since(start));
+    }
+    const double assemblyMs = Median(assembly);
+    p.Rhs0 = p.System.RightHandSide;
+    {
+      translucency::DiffusionSystem rotated;
+      disc.Assemble(p.Mesh, p.Material, q1, rotated);
+      p.Rhs1 = rotated.RightHandSide;
+    }
+    // One SpMV (red channel) and its bandwidth bound.
+    const int n = p.System.NumberOfUnknowns;
+    const double nnz = static_cast<double>(p.System.ColumnIndices.size());
+    Eigen::VectorXd x = Eigen::VectorXd::Ones(n), y(n);
+    std::vector<double> spmv;
+    for (int r = 0; r < std::max(runs, 5); ++r)
+    {
+      const auto start = Clock::now();
+      y.noalias() = p.System.Matrix(0) * x;
+      spmv.push_back(Since(start));
+    }
+    const double spmvMs = Median(spmv);
+    // Values (8 B) and column indices (4 B) per nonzero, row offsets (4 B),
+    // x read once and y written once (8 B each) per row: the minimum traffic.
+    const double spmvBytes = 12.0 * nnz + 4.0 * (n + 1) + 16.0 * n;
+    const double boundMs = spmvBytes / (bandwidth * 1e6);
+    double res0 = 0.0, res1 = 0.0;
+    p.System.RightHandSide = p.Rhs1;
+    p.Ref1 = Reference(p.System, res1);
+    p.System.RightHandSide = p.Rhs0;
+    p.Ref0 = Reference(p.System, res0);
+
+    std::cout << "\nbunny, target " << static_cast<long>(target) << ": " << p.Mesh.GetNumberOfTets()
+              << " tets, " << n << " unknowns, " << static_cast<long>(nnz) << " nonzeros; TetGen "
+              << std::fixed << std::setprecision(0) << tetgenMs << " ms (excluded); topology "
+              << std::setprecision(1) << topologyMs << " ms; 3-channel assembly " << assemblyMs
+              << " ms; one SpMV " << std::setprecision(3) << spmvMs << " ms (bandwidth bound "
+              << boundMs << " ms); reference residual " << std::scientific << std::setprecision(1)
+              << std::max(res0, res1) << "\n" << std::defaultfloat;
+
+    std::vector<SolverRow> rows;
+    json curveJson = json::array();
+    Solution defaultCold;
+    for (const std::string& name : names)
+    {
+      std::vector<CurvePoint> curve;
+      Solution cold;
+      rows.push_back(BenchSolver(name, p, runs, curve, cold));
+      if (name == defaultSolver)
+        defaultCold = cold;
+      for (const CurvePoint& c : curve)
+      {
+        std::ostringstream line;
+        line << p.Mesh.GetNumberOfTets() << "," << name << "," << c.Tolerance << "," << c.Ms
+             << "," << c.Error << "," << c.SpMV;
+        csv.push_back(line.str());
+        curveJson.push_back({ { "solver", name }, { "tolerance", c.Tolerance },
+          { "solve_ms", c.Ms }, { "error", c.Error }, { "spmv_equivalents", c.SpMV } });
+      }
+      if (name == "hypre-amg" && hypreRanks >= 2)
+        rows.push_back(BenchHypreRanks(p, hypreRanks, runs, rows.back()));
+    }
+    PrintRows(rows, topologyMs);
+    json entry = { { "target_tets", target }, { "tets", p.Mesh.GetNumberOfTets() },
+      { "unknowns", n }, { "nonzeros", nnz }, { "tetgen_ms", tetgenMs },
+      { "topology_ms", topologyMs }, { "assembly_3ch_ms", assemblyMs },
+      { "spmv_1ch_ms", spmvMs }, { "spmv_bytes", spmvBytes },
+      { "spmv_bandwidth_bound_ms", boundMs }, { "stream_triad_gbs", bandwidth },
+      { "reference_residual", std::max(res0, res1) }, { "target_error", TargetError },
+      { "default_solver", defaultSolver }, { "curve", curveJson } };
+    for (const SolverRow& r : rows)
+      entry["solvers"].push_back(RowJson(r, topologyMs));
+    if (doCut)
+    {
+      if (defaultCold[0].size() == 0)
+      {
+        // The default solver was not in the list: solve once for the warm start.
+        auto solver = translucency::CreateLinearSolver(defaultSolver);
+        solver->SetRelTol(1e-3);
+        solver->Setup(p.System, &p.Mesh, true);
+        Stats stats;
+        solver->Solve(p.System, defaultCold, false, stats);
+      }
+      entry["cut"] = BenchCut(defaultSolver, p, defaultCold, runs);
+    }
+    results.push_back(entry);
+  }
+  if (!jsonPath.empty())
+  {
+    EnsureParentDirectory(jsonPath);
+    if (!WriteText(jsonPath, results.dump(2) + "\n", error))
+      throw translucency::Error(error);
+  }
+  if (!plotPath.empty())
+  {
+    EnsureParentDirectory(plotPath);
+    const std::string csvPath = plotPath.substr(0, plotPath.find_last_of('.')) + ".csv";
+    std::string text;
+    for (const std::string& line : csv)
+      text += line + "\n";
+    if (!WriteText(csvPath, text, error))
+      throw translucency::Error(error);
+    const std::string script =
+      std::string(TRANSLUCENCY_SOURCE_DIR) + "/scripts/plot_linear_solvers.py";
+    const std::string cmd = std::string(TRANSLUCENCY_PYTHON) + " " + Quoted(script) + " " +
+      Quoted(csvPath) + " " + Quoted(plotPath);
+    if (std::system(cmd.c_str()) != 0)
+      std::cerr << "translucency: warning: plotting failed (needs python3-matplotlib); the data "
+                   "is in "
+                << csvPath << ", plot it with: " << cmd << "\n";
+    else
+      std::cout << "wrote " << plotPath << " (data " << csvPath << ")\n";
+  }
+  return 0;
+}
+
+} // namespace translucency_app

@@ -1,0 +1,302 @@
+#include "HypreSolver.h"
+
+#include "Error.h"
+#include "LinearSolverCommon.h"
+
+#include <HYPRE.h>
+#include <HYPRE_parcsr_ls.h>
+#include <_hypre_parcsr_ls.h>
+
+#include <cstdlib>
+#include <mutex>
+#include <numeric>
+#include <sstream>
+#include <vector>
+
+namespace translucency
+{
+
+namespace
+{
+
+bool HypreInitialisedHere = false;
+bool MPIInitialisedHere = false;
+
+void FinaliseAtExit()
+{
+  if (HypreInitialisedHere)
+  {
+    HYPRE_Finalize();
+  }
+  int finalised = 0;
+  MPI_Finalized(&finalised);
+  if (MPIInitialisedHere && !finalised)
+  {
+    MPI_Finalize();
+  }
+}
+
+void Check(HYPRE_Int code, const char* what)
+{
+  if (code != 0)
+  {
+    char message[256] = { 0 };
+    HYPRE_DescribeError(code, message);
+    HYPRE_ClearAllErrors();
+    std::ostringstream os;
+    os << "hypre-amg: " << what << " failed (hypre error " << code << ": " << message << ")";
+    throw Error(os.str());
+  }
+}
+
+} // namespace
+
+void EnsureHypreInitialized()
+{
+  static std::once_flag once;
+  std::call_once(once, [] {
+    int initialised = 0;
+    MPI_Initialized(&initialised);
+    if (!initialised)
+    {
+      int provided = 0;
+      if (MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
+      {
+        throw Error("hypre-amg: MPI_Init failed (is Open MPI installed and usable?)");
+      }
+      MPIInitialisedHere = true;
+    }
+    HYPRE_Init();
+    HypreInitialisedHere = true;
+    std::atexit(FinaliseAtExit);
+  });
+}
+
+struct HypreBoomerAMGPCG::Handles
+{
+  HYPRE_IJMatrix A = nullptr;
+  HYPRE_IJVector B = nullptr, X = nullptr;
+  HYPRE_Solver PCG = nullptr, AMG = nullptr;
+  std::vector<HYPRE_BigInt> Rows;
+};
+
+HypreBoomerAMGPCG::HypreBoomerAMGPCG(MPI_Comm comm)
+  : Comm_(comm)
+  , H_(std::make_unique<Handles>())
+{
+  EnsureHypreInitialized();
+}
+
+HypreBoomerAMGPCG::~HypreBoomerAMGPCG()
+{
+  Free();
+}
+
+void HypreBoomerAMGPCG::Free()
+{
+  if (H_->PCG)
+    HYPRE_ParCSRPCGDestroy(H_->PCG);
+  if (H_->AMG)
+    HYPRE_BoomerAMGDestroy(H_->AMG);
+  if (H_->A)
+    HYPRE_IJMatrixDestroy(H_->A);
+  if (H_->B)
+    HYPRE_IJVectorDestroy(H_->B);
+  if (H_->X)
+    HYPRE_IJVectorDestroy(H_->X);
+  *H_ = Handles();
+}
+
+void HypreBoomerAMGPCG::Setup(
+  int rowBegin, int rowEnd, const int* rowOffsets, const int* columns, const double* values)
+{
+  Free();
+  RowBegin_ = rowBegin;
+  RowEnd_ = rowEnd;
+  const int rows = rowEnd - rowBegin;
+  Handles& h = *H_;
+  // hypre's ranges are inclusive; an empty local block is [begin, begin - 1].
+  Check(HYPRE_IJMatrixCreate(Comm_, rowBegin, rowEnd - 1, rowBegin, rowEnd - 1, &h.A),
+    "matrix creation");
+  Check(HYPRE_IJMatrixSetObjectType(h.A, HYPRE_PARCSR), "matrix type");
+  std::vector<HYPRE_Int> diag(rows, 0), offd(rows, 0), sizes(rows);
+  h.Rows.resize(rows);
+  for (int i = 0; i < rows; ++i)
+  {
+    h.Rows[i] = rowBegin + i;
+    sizes[i] = rowOffsets[i + 1] - rowOffsets[i];
+    for (int k = rowOffsets[i]; k < rowOffsets[i + 1]; ++k)
+    {
+      (columns[k] >= rowBegin && columns[k] < rowEnd ? diag[i] : offd[i])++;
+    }
+  }
+  Check(HYPRE_IJMatrixSetDiagOffdSizes(h.A, diag.data(), offd.data()), "matrix sizes");
+  Check(HYPRE_IJMatrixInitialize(h.A), "matrix initialisation");
+  const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
+  std::vector<HYPRE_BigInt> cols(columns, columns + nnz);
+  Check(HYPRE_IJMatrixSetValues(h.A, rows, sizes.data(), h.Rows.data(), cols.data(), values),
+    "setting the matrix values");
+  Check(HYPRE_IJMatrixAssemble(h.A), "matrix assembly");
+  for (HYPRE_IJVector* v : { &h.B, &h.X })
+  {
+    Check(HYPRE_IJVectorCreate(Comm_, rowBegin, rowEnd - 1, v), "vector creation");
+    Check(HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR), "vector type");
+    Check(HYPRE_IJVectorInitialize(*v), "vector initialisation");
+    Check(HYPRE_IJVectorAssemble(*v), "vector assembly");
+  }
+  HYPRE_ParCSRMatrix a;
+  HYPRE_ParVector b, x;
+  HYPRE_IJMatrixGetObject(h.A, reinterpret_cast<void**>(&a));
+  HYPRE_IJVectorGetObject(h.B, reinterpret_cast<void**>(&b));
+  HYPRE_IJVectorGetObject(h.X, reinterpret_cast<void**>(&x));
+
+  Check(HYPRE_BoomerAMGCreate(&h.AMG), "BoomerAMG creation");
+  HYPRE_BoomerAMGSetPrintLevel(h.AMG, 0);
+  HYPRE_BoomerAMGSetCoarsenType(h.AMG, 10);     // HMIS
+  HYPRE_BoomerAMGSetInterpType(h.AMG, 6);       // extended+i
+  HYPRE_BoomerAMGSetPMaxElmts(h.AMG, 4);        // interpolation truncation
+  HYPRE_BoomerAMGSetStrongThreshold(h.AMG, 0.5); // 3-D recommendation
+  HYPRE_BoomerAMGSetRelaxType(h.AMG, 8);        // l1-scaled hybrid symmetric Gauss-Seidel
+  HYPRE_BoomerAMGSetNumSweeps(h.AMG, 1);
+  HYPRE_BoomerAMGSetTol(h.AMG, 0.0);
+  HYPRE_BoomerAMGSetMaxIter(h.AMG, 1); // one V-cycle per application
+  Check(HYPRE_ParCSRPCGCreate(Comm_, &h.PCG), "PCG creation");
+  HYPRE_PCGSetTwoNorm(h.PCG, 1);
+  HYPRE_PCGSetPrintLevel(h.PCG, 0);
+  HYPRE_PCGSetLogging(h.PCG, 1);
+  HYPRE_PCGSetPrecond(h.PCG, reinterpret_cast<HYPRE_PtrToSolverFcn>(HYPRE_BoomerAMGSolve),
+    reinterpret_cast<HYPRE_PtrToSolverFcn>(HYPRE_BoomerAMGSetup), h.AMG);
+  Check(HYPRE_ParCSRPCGSetup(h.PCG, a, b, x), "BoomerAMG set-up");
+
+  // Work and memory of the hierarchy (summed over the ranks).
+  auto* amg = reinterpret_cast<hypre_ParAMGData*>(h.AMG);
+  Levels_ = hypre_ParAMGDataNumLevels(amg);
+  double local[3] = { 0.0, 0.0, 0.0 }; // nnz(A_0), sum nnz(A_l), sum nnz(P_l)
+  auto nonZeros = [](hypre_ParCSRMatrix* m) {
+    return static_cast<double>(hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixDiag(m)) +
+      hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixOffd(m)));
+  };
+  for (int l = 0; l < Levels_; ++l)
+  {
+    const double nz = nonZeros(hypre_ParAMGDataAArray(amg)[l]);
+    if (l == 0)
+      local[0] = nz;
+    local[1] += nz;
+    if (l + 1 < Levels_ && hypre_ParAMGDataPArray(amg)[l])
+      local[2] += nonZeros(hypre_ParAMGDataPArray(amg)[l]);
+  }
+  double total[3];
+  MPI_Allreduce(local, total, 3, MPI_DOUBLE, MPI_SUM, Comm_);
+  OperatorComplexity_ = total[0] > 0 ? total[1] / total[0] : 0.0;
+  IterationWork_ = total[0] > 0 ? 1.0 + (3.0 * total[1] + 2.0 * total[2]) / total[0] : 0.0;
+  MemoryBytes_ = static_cast<std::size_t>((local[1] - local[0] + local[2]) * 12.0);
+}
+
+int HypreBoomerAMGPCG::Solve(
+  const double* bLocal, double* xLocal, bool guess, double relTol, int maxIter, double& relRes)
+{
+  Handles& h = *H_;
+  if (!h.PCG)
+  {
+    throw Error("hypre-amg: Solve() called before Setup()");
+  }
+  const int rows = RowEnd_ - RowBegin_;
+  std::vector<double> zero;
+  if (!guess)
+    zero.assign(rows, 0.0);
+  Check(HYPRE_IJVectorSetValues(h.B, rows, h.Rows.data(), bLocal), "setting the right-hand side");
+  Check(HYPRE_IJVectorSetValues(h.X, rows, h.Rows.data(), guess ? xLocal : zero.data()),
+    "setting the initial guess");
+  HYPRE_ParCSRMatrix a;
+  HYPRE_ParVector b, x;
+  HYPRE_IJMatrixGetObject(h.A, reinterpret_cast<void**>(&a));
+  HYPRE_IJVectorGetObject(h.B, reinterpret_cast<void**>(&b));
+  HYPRE_IJVectorGetObject(h.X, reinterpret_cast<void**>(&x));
+  HYPRE_PCGSetTol(h.PCG, relTol);
+  HYPRE_PCGSetMaxIter(h.PCG, maxIter);
+  const HYPRE_Int code = HYPRE_ParCSRPCGSolve(h.PCG, a, b, x);
+  // Not converging within maxIter is reported as an error code by hypre: it
+  // is not an error here (the caller reads the residual).
+  if (code != 0 && !HYPRE_CheckError(code, HYPRE_ERROR_CONV))
+  {
+    Check(code, "PCG solve");
+  }
+  HYPRE_ClearAllErrors();
+  HYPRE_Int iterations = 0;
+  HYPRE_Real residual = 0.0;
+  HYPRE_ParCSRPCGGetNumIterations(h.PCG, &iterations);
+  HYPRE_ParCSRPCGGetFinalRelativeResidualNorm(h.PCG, &residual);
+  Check(HYPRE_IJVectorGetValues(h.X, rows, h.Rows.data(), xLocal), "reading the solution");
+  relRes = residual;
+  return iterations;
+}
+
+HypreSolver::HypreSolver() = default;
+HypreSolver::~HypreSolver() = default;
+
+void HypreSolver::Setup(const DiffusionSystem& system, const TetMesh*, bool)
+{
+  CheckLinearSystem(system, "hypre-amg");
+  const int n = system.NumberOfUnknowns;
+  NumberOfUnknowns_ = -1;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    if (!Channels_[c])
+      Channels_[c] = std::make_unique<HypreBoomerAMGPCG>(MPI_COMM_SELF);
+    Channels_[c]->Setup(0, n, system.RowOffsets.data(), system.ColumnIndices.data(),
+      system.Values[c].data());
+  }
+  NumberOfUnknowns_ = n;
+  NonZeros_ = system.ColumnIndices.size();
+}
+
+bool HypreSolver::Solve(const DiffusionSystem& system,
+  std::array<Eigen::VectorXd, NumberOfChannels>& x, bool warmStart,
+  std::array<LinearSolveStats, NumberOfChannels>& stats)
+{
+  CheckLinearSystem(system, "hypre-amg");
+  if (NumberOfUnknowns_ != system.NumberOfUnknowns || NonZeros_ != system.ColumnIndices.size())
+  {
+    throw Error("hypre-amg: Solve() called without a Setup() for this system");
+  }
+  const int n = system.NumberOfUnknowns;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    stats[c] = LinearSolveStats();
+    if (!ReportProgress(static_cast<double>(c) / NumberOfChannels))
+    {
+      return false;
+    }
+    const Eigen::VectorXd& b = system.RightHandSide[c];
+    const bool guess = warmStart && x[c].size() == n;
+    if (!guess)
+      x[c].setZero(n);
+    if (b.squaredNorm() == 0.0)
+    {
+      x[c].setZero(n);
+      stats[c].Converged = true;
+      continue;
+    }
+    double residual = 0.0;
+    const int iterations =
+      Channels_[c]->Solve(b.data(), x[c].data(), guess, RelTol_, MaxIter_, residual);
+    stats[c].Iterations = iterations;
+    stats[c].RelativeResidual = residual;
+    stats[c].Converged = residual <= RelTol_;
+    // The initial residual, then per iteration one SpMV and one V-cycle.
+    stats[c].SpMVEquivalents = 1.0 + iterations * Channels_[c]->GetSpMVEquivalentsPerIteration();
+  }
+  ReportProgress(1.0);
+  return true;
+}
+
+std::size_t HypreSolver::GetMemoryBytes() const
+{
+  std::size_t bytes = 0;
+  for (const auto& ch : Channels_)
+    if (ch)
+      bytes += ch->GetMemoryBytes();
+  return bytes;
+}
+
+} // namespace translucency

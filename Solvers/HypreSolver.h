@@ -1,0 +1,107 @@
+/**
+ * @file HypreSolver.h
+ * @brief The "hypre-amg" linear solver: hypre's BoomerAMG algebraic
+ * multigrid as the preconditioner of hypre's PCG, a peer the bench compares
+ * against. HypreBoomerAMGPCG is the single-matrix building block, usable on
+ * any MPI communicator (the bench's 2-rank run, translucency-hypre-mpi, uses
+ * it on MPI_COMM_WORLD); HypreSolver runs three of them in-process on
+ * MPI_COMM_SELF.
+ */
+#pragma once
+
+#include "LinearSolver.h"
+
+#include <mpi.h>
+
+#include <memory>
+
+namespace translucency
+{
+
+/// MPI_Init if nobody has initialised MPI yet (the in-process solver runs on
+/// MPI_COMM_SELF; ParaView's VTK may already have initialised it), and
+/// HYPRE_Init; both are finalised at exit if this call initialised them.
+void EnsureHypreInitialized();
+
+/**
+ * One SPD matrix distributed by rows over `comm` (this rank holds rows
+ * [rowBegin, rowEnd)) with BoomerAMG-preconditioned PCG. BoomerAMG settings
+ * (hypre's recommendations for 3-D diffusion): HMIS coarsening, extended+i
+ * interpolation with at most 4 entries per row, strength threshold 0.5,
+ * one sweep of l1-scaled hybrid symmetric Gauss-Seidel down and up (a
+ * symmetric cycle, as PCG needs), one V-cycle per preconditioner
+ * application. PCG stops on the 2-norm: ||b - Ax|| <= tol ||b||.
+ */
+class HypreBoomerAMGPCG
+{
+public:
+  explicit HypreBoomerAMGPCG(MPI_Comm comm);
+  ~HypreBoomerAMGPCG();
+  HypreBoomerAMGPCG(const HypreBoomerAMGPCG&) = delete;
+  HypreBoomerAMGPCG& operator=(const HypreBoomerAMGPCG&) = delete;
+
+  /**
+   * The local rows: rowOffsets has rowEnd - rowBegin + 1 entries (from 0),
+   * columns are global indices. Builds the hypre matrix and the AMG
+   * hierarchy (from scratch: BoomerAMG has no values-only set-up).
+   */
+  void Setup(int rowBegin, int rowEnd, const int* rowOffsets, const int* columns,
+    const double* values);
+
+  /**
+   * Solve for the local part b (rowEnd - rowBegin values) into x; x is the
+   * initial guess if `guess`, else zero. Returns the PCG iterations;
+   * relativeResidual gets ||b - Ax|| / ||b||.
+   */
+  int Solve(const double* b, double* x, bool guess, double relTol, int maxIter,
+    double& relativeResidual);
+
+  /// Work of one PCG iteration in SpMVs with the fine matrix: 1 + the
+  /// V-cycle's (3 sum_l nnz(A_l) + 2 sum_l nnz(P_l)) / nnz(A_0) (two
+  /// smoothing sweeps and one residual per level, restriction and
+  /// interpolation), summed over all ranks.
+  double GetSpMVEquivalentsPerIteration() const { return IterationWork_; }
+  /// sum_l nnz(A_l) / nnz(A_0) of the hierarchy.
+  double GetOperatorComplexity() const { return OperatorComplexity_; }
+  int GetNumberOfLevels() const { return Levels_; }
+  std::size_t GetMemoryBytes() const { return MemoryBytes_; }
+
+private:
+  void Free();
+
+  MPI_Comm Comm_;
+  struct Handles;
+  std::unique_ptr<Handles> H_;
+  int RowBegin_ = 0, RowEnd_ = 0;
+  double IterationWork_ = 0.0;
+  double OperatorComplexity_ = 0.0;
+  int Levels_ = 0;
+  std::size_t MemoryBytes_ = 0;
+};
+
+/**
+ * Three HypreBoomerAMGPCG (one per channel) on MPI_COMM_SELF. Setup()
+ * rebuilds the hypre matrices and hierarchies whether or not the pattern
+ * changed (BoomerAMG's set-up depends on the values). Debian's hypre is
+ * built without OpenMP, so this runs on one core; see the bench's 2-rank
+ * figure for MPI parallelism.
+ */
+class HypreSolver : public LinearSolver
+{
+public:
+  HypreSolver();
+  ~HypreSolver() override;
+
+  std::string GetName() const override { return "hypre-amg"; }
+  void Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged) override;
+  bool Solve(const DiffusionSystem& system, std::array<Eigen::VectorXd, NumberOfChannels>& x,
+    bool warmStart, std::array<LinearSolveStats, NumberOfChannels>& stats) override;
+  std::size_t GetMemoryBytes() const override;
+
+private:
+  std::array<std::unique_ptr<HypreBoomerAMGPCG>, NumberOfChannels> Channels_;
+  int NumberOfUnknowns_ = -1;
+  std::size_t NonZeros_ = 0;
+};
+
+} // namespace translucency

@@ -1,0 +1,55 @@
+#!/usr/bin/env python3
+"""Relative L2 error of the boundary fluence vs solve time per linear solver
+(TransCut Fig. 7 style), from the CSV `translucency bench --linear-solvers
+--plot FILE.png` writes (columns tets,solver,tolerance,solve_ms,error,
+spmv_equivalents; one row per tolerance of the bench's ladder, cold solves
+from zero). One panel per mesh size; solvers without multiresolution dashed.
+
+usage: plot_linear_solvers.py DATA.csv OUT.png
+"""
+import csv
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def main(argv):
+    if len(argv) != 3:
+        sys.stderr.write(__doc__)
+        return 2
+    rows = list(csv.DictReader(open(argv[1])))
+    if not rows:
+        sys.stderr.write("plot_linear_solvers: no data in %s\n" % argv[1])
+        return 1
+    sizes = sorted({int(r["tets"]) for r in rows})
+    fig, axes = plt.subplots(1, len(sizes), figsize=(5.5 * len(sizes), 4.5), squeeze=False)
+    for ax, tets in zip(axes[0], sizes):
+        solvers = []
+        for r in rows:
+            if int(r["tets"]) == tets and r["solver"] not in solvers:
+                solvers.append(r["solver"])
+        for name in solvers:
+            pts = sorted((float(r["solve_ms"]), float(r["error"])) for r in rows
+                         if int(r["tets"]) == tets and r["solver"] == name)
+            multires = "multires" in name or "multigrid" in name
+            ax.loglog([p[0] for p in pts], [max(p[1], 1e-12) for p in pts],
+                      "-o" if multires else "--s", markersize=3, label=name)
+        ax.axhline(0.01, color="grey", linewidth=0.8, linestyle=":")
+        ax.set_xlabel("solve time, 3 channels (ms)")
+        ax.set_ylabel("relative L2 error of the boundary fluence")
+        ax.set_title("bunny, %d tets" % tets)
+        ax.grid(True, which="both", linewidth=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    tmp = argv[2] + ".tmp.png"
+    fig.savefig(tmp, dpi=110)
+    os.replace(tmp, argv[2])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
