@@ -482,6 +482,7 @@ TEST(MultiresSolvers, CoarseOperatorsMatchSparseProducts)
   MultigridConjugateGradient mg, sparse;
   TransCutMultiresSolver tc;
   mg.SetCoarsestSize(20);
+  mg.SetExactGalerkinLevels(-1); // every level exact P^T A P
   tc.SetCoarsestSize(20);
   sparse.SetCoarsestSize(20);
   sparse.SetSparseGalerkin(true);
