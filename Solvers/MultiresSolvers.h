@@ -105,8 +105,9 @@ public:
    * coarse graph with the dropped entries added to the diagonal as |a_ab|
    * (sparser, still SPD). Exact Galerkin grows denser with every level (a
    * 3-ring pattern of a 3-ring pattern...); see Multiresolution.md for the
-   * measurements behind the default. n < 0 = all exact. Takes effect at the
-   * next Setup with patternChanged.
+   * measurements behind the default. n < 0 = all exact (default: fewer
+   * V-cycles outweigh the denser coarse levels). Takes effect at the next
+   * Setup with patternChanged.
    */
   void SetExactGalerkinLevels(int n) { ExactGalerkinLevels_ = n; }
   int GetExactGalerkinLevels() const { return ExactGalerkinLevels_; }
@@ -129,7 +130,7 @@ private:
   std::unique_ptr<Internals> Internal_;
   int Degree_ = 1;
   double Fraction_ = 0.3;
-  int ExactGalerkinLevels_ = 1;
+  int ExactGalerkinLevels_ = -1;
 };
 
 /// "transcut-multires": the paper's coarse-to-fine scheme (Sec. 4.2).
