@@ -480,7 +480,6 @@ void MultigridConjugateGradient::ComputeValues(const DiffusionSystem& system)
 {
   auto& levels = Internal_->Levels;
   const int L = static_cast<int>(levels.size());
-  const double nnz0 = std::max<double>(1.0, static_cast<double>(system.ColumnIndices.size()));
   Internal_->VCycleFlops = 0.0;
   for (int l = 0; l < L; ++l)
   {
@@ -613,7 +612,6 @@ void MultigridConjugateGradient::ComputeValues(const DiffusionSystem& system)
     Internal_->VCycleFlops += 2.0 * Degree_ * static_cast<double>(nnz) +
       2.0 * lev.TRows.size() + 2.0 * Degree_ * 4.0 * n + 2.0 * n;
   }
-  (void)nnz0;
 }
 
 void MultigridConjugateGradient::ApplyPreconditioner(
