@@ -443,7 +443,8 @@ void MultigridConjugateGradient::BuildOperators()
     // Galerkin coarse operators P^T A P (beyond the paper, Sec. 4.2 remark).
     Operators_[l].Build(Hierarchy_.GetLevel(l), *Internal_->Levels[l].Pattern,
       Hierarchy_.GetLevel(l + 1).Graph,
-      SparseGalerkin_ ? CoarseOperator::Kind::SparseGalerkin : CoarseOperator::Kind::Galerkin,
+      ExactGalerkinLevels_ >= 0 && l >= ExactGalerkinLevels_ ? CoarseOperator::Kind::SparseGalerkin
+                                                       : CoarseOperator::Kind::Galerkin,
       Threads_);
     Internal_->Levels[l + 1].Pattern = &Operators_[l].GetPattern();
     // P^T for the restriction.
@@ -479,7 +480,6 @@ void MultigridConjugateGradient::ComputeValues(const DiffusionSystem& system)
 {
   auto& levels = Internal_->Levels;
   const int L = static_cast<int>(levels.size());
-  const double nnz0 = std::max<double>(1.0, static_cast<double>(system.ColumnIndices.size()));
   Internal_->VCycleFlops = 0.0;
   for (int l = 0; l < L; ++l)
   {
@@ -559,17 +559,24 @@ void MultigridConjugateGradient::ComputeValues(const DiffusionSystem& system)
     // Chebyshev interval: largest eigenvalue of D^-1 A by 15 power steps
     // (x 1.1), capped by the Gershgorin bound max_i sum_j |A_ij| / A_ii.
     std::array<double, NC> gershgorin{};
-    for (int i = 0; i < n; ++i)
     {
-      for (int c = 0; c < NC; ++c)
+      double g0 = 0.0, g1 = 0.0, g2 = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : g0, g1, g2)
+      for (int i = 0; i < n; ++i)
       {
-        double s = 0.0;
+        double s[NC] = { 0.0, 0.0, 0.0 };
         for (int k = p.Offsets[i]; k < p.Offsets[i + 1]; ++k)
         {
-          s += std::abs(values[c][static_cast<std::size_t>(k) * stride]);
+          for (int c = 0; c < NC; ++c)
+          {
+            s[c] += std::abs(values[c][static_cast<std::size_t>(k) * stride]);
+          }
         }
-        gershgorin[c] = std::max(gershgorin[c], s * lev.InverseDiagonal[3 * i + c]);
+        g0 = std::max(g0, s[0] * lev.InverseDiagonal[3 * static_cast<long long>(i)]);
+        g1 = std::max(g1, s[1] * lev.InverseDiagonal[3 * static_cast<long long>(i) + 1]);
+        g2 = std::max(g2, s[2] * lev.InverseDiagonal[3 * static_cast<long long>(i) + 2]);
       }
+      gershgorin = { g0, g1, g2 };
     }
     Eigen::VectorXd v(3 * static_cast<long long>(n)), w(v.size());
     for (long long i = 0; i < v.size(); ++i)
@@ -605,7 +612,6 @@ void MultigridConjugateGradient::ComputeValues(const DiffusionSystem& system)
     Internal_->VCycleFlops += 2.0 * Degree_ * static_cast<double>(nnz) +
       2.0 * lev.TRows.size() + 2.0 * Degree_ * 4.0 * n + 2.0 * n;
   }
-  (void)nnz0;
 }
 
 void MultigridConjugateGradient::ApplyPreconditioner(

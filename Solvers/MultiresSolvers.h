@@ -100,14 +100,19 @@ public:
   /// eigenvalue estimate of D^-1 A (default 0.3).
   void SetSmootherFraction(double f) { Fraction_ = f; }
   /**
-   * Coarse operators: exact Galerkin P^T A P (false) or P^T A P restricted
-   * to the hierarchy's coarse graph with the dropped entries added to the
-   * diagonal as |a_ab| (true; sparser, still SPD). Takes effect at the next
-   * Setup with patternChanged. Default false (exact
-   * Galerkin converges in far fewer iterations).
+   * Coarse operators: the first n (levels 1..n) are the exact Galerkin
+   * product P^T A P, the deeper ones P^T A P restricted to the hierarchy's
+   * coarse graph with the dropped entries added to the diagonal as |a_ab|
+   * (sparser, still SPD). Exact Galerkin grows denser with every level (a
+   * 3-ring pattern of a 3-ring pattern...); see Multiresolution.md for the
+   * measurements behind the default. n < 0 = all exact (default: fewer
+   * V-cycles outweigh the denser coarse levels). Takes effect at the next
+   * Setup with patternChanged.
    */
-  void SetSparseGalerkin(bool on) { SparseGalerkin_ = on; }
-  bool GetSparseGalerkin() const { return SparseGalerkin_; }
+  void SetExactGalerkinLevels(int n) { ExactGalerkinLevels_ = n; }
+  int GetExactGalerkinLevels() const { return ExactGalerkinLevels_; }
+  /// Shorthand: true = SetExactGalerkinLevels(0), false = all exact.
+  void SetSparseGalerkin(bool on) { ExactGalerkinLevels_ = on ? 0 : -1; }
 
   /// The Galerkin operator P^T A P of level l >= 1, channel c (double values).
   Eigen::SparseMatrix<double, Eigen::RowMajor, int> GetCoarseMatrix(int l, int c) const;
@@ -125,7 +130,7 @@ private:
   std::unique_ptr<Internals> Internal_;
   int Degree_ = 1;
   double Fraction_ = 0.3;
-  bool SparseGalerkin_ = false;
+  int ExactGalerkinLevels_ = -1;
 };
 
 /// "transcut-multires": the paper's coarse-to-fine scheme (Sec. 4.2).

@@ -482,6 +482,7 @@ TEST(MultiresSolvers, CoarseOperatorsMatchSparseProducts)
   MultigridConjugateGradient mg, sparse;
   TransCutMultiresSolver tc;
   mg.SetCoarsestSize(20);
+  mg.SetExactGalerkinLevels(-1); // every level exact P^T A P
   tc.SetCoarsestSize(20);
   sparse.SetCoarsestSize(20);
   sparse.SetSparseGalerkin(true);
@@ -576,12 +577,17 @@ TEST_P(SolverNames, MatchCholeskyOnRandomMeshesAndMaterials)
     auto solver = CreateLinearSolver(GetParam());
     EXPECT_EQ(solver->GetName(), GetParam());
     solver->SetRelTol(1e-10);
-    if (test.Fem)
+    if (auto* mg = dynamic_cast<MultigridConjugateGradient*>(solver.get()))
     {
-      // Also the option: sparse Galerkin coarse operators (on one case).
-      if (auto* mg = dynamic_cast<MultigridConjugateGradient*>(solver.get()))
+      // Also the options: sparse Galerkin on every coarse level (fem case)
+      // or below the first one (two pieces).
+      if (test.Fem)
       {
         mg->SetSparseGalerkin(true);
+      }
+      else if (test.Seed == 27)
+      {
+        mg->SetExactGalerkinLevels(1);
       }
     }
     if (auto* m = dynamic_cast<MultiresLinearSolverBase*>(solver.get()))
