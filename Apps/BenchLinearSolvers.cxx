@@ -822,7 +822,7 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
               << std::setprecision(1) << topologyMs << " ms; 3-channel assembly " << assemblyMs
               << " ms; one SpMV " << std::setprecision(3) << spmvMs << " ms (bandwidth bound "
               << boundMs << " ms); reference residual " << std::scientific << std::setprecision(1)
-              << std::max(res0, res1) << "\n" << std::defaultfloat;
+              << std::max(res0, res1) << "\n" << std::defaultfloat << std::flush;
 
     std::vector<SolverRow> rows;
     json curveJson = json::array();
@@ -847,6 +847,7 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
         rows.push_back(BenchHypreRanks(p, hypreRanks, runs, rows.back()));
     }
     PrintRows(rows, topologyMs);
+    std::cout << std::flush;
     json entry = { { "target_tets", target }, { "tets", p.Mesh.GetNumberOfTets() },
       { "unknowns", n }, { "nonzeros", nnz }, { "tetgen_ms", tetgenMs },
       { "topology_ms", topologyMs }, { "assembly_3ch_ms", assemblyMs },
