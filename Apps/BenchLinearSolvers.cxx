@@ -208,6 +208,16 @@ double TriadBandwidth(int runs)
   return Median(gbs);
 }
 
+/// The 1-minute load average (/proc/loadavg; -1 if unreadable): timings
+/// taken while it exceeds the number of cores are inflated.
+double LoadAverage()
+{
+  std::ifstream in("/proc/loadavg");
+  double load = -1.0;
+  in >> load;
+  return in ? load : -1.0;
+}
+
 struct Timed
 {
   double Ms = 0.0;
@@ -748,7 +758,8 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
   const double bandwidth = TriadBandwidth(runs);
   std::cout << "threads: " << omp_get_max_threads() << ", runs per figure: " << runs
             << " (medians); STREAM-triad bandwidth " << std::fixed << std::setprecision(2)
-            << bandwidth << " GB/s\n" << std::defaultfloat;
+            << bandwidth << " GB/s; load average " << LoadAverage()
+            << " (times are inflated when it exceeds the cores)\n" << std::defaultfloat;
   json results = json::array();
   std::vector<std::string> csv = { "tets,solver,tolerance,solve_ms,error,spmv_equivalents" };
   for (double target : sizes)
@@ -854,7 +865,8 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
       { "spmv_1ch_ms", spmvMs }, { "spmv_bytes", spmvBytes },
       { "spmv_bandwidth_bound_ms", boundMs }, { "stream_triad_gbs", bandwidth },
       { "reference_residual", std::max(res0, res1) }, { "target_error", TargetError },
-      { "default_solver", defaultSolver }, { "curve", curveJson } };
+      { "default_solver", defaultSolver }, { "load_average_1min", LoadAverage() },
+      { "curve", curveJson } };
     for (const SolverRow& r : rows)
       entry["solvers"].push_back(RowJson(r, topologyMs));
     if (doCut)
