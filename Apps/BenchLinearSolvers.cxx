@@ -208,6 +208,16 @@ double TriadBandwidth(int runs)
   return Median(gbs);
 }
 
+/// The 1-minute load average (/proc/loadavg; -1 if unreadable): timings
+/// taken while it exceeds the number of cores are inflated.
+double LoadAverage()
+{
+  std::ifstream in("/proc/loadavg");
+  double load = -1.0;
+  in >> load;
+  return in ? load : -1.0;
+}
+
 struct Timed
 {
   double Ms = 0.0;
@@ -748,7 +758,8 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
   const double bandwidth = TriadBandwidth(runs);
   std::cout << "threads: " << omp_get_max_threads() << ", runs per figure: " << runs
             << " (medians); STREAM-triad bandwidth " << std::fixed << std::setprecision(2)
-            << bandwidth << " GB/s\n" << std::defaultfloat;
+            << bandwidth << " GB/s; load average " << LoadAverage()
+            << " (times are inflated when it exceeds the cores)\n" << std::defaultfloat;
   json results = json::array();
   std::vector<std::string> csv = { "tets,solver,tolerance,solve_ms,error,spmv_equivalents" };
   for (double target : sizes)
@@ -822,9 +833,10 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
               << std::setprecision(1) << topologyMs << " ms; 3-channel assembly " << assemblyMs
               << " ms; one SpMV " << std::setprecision(3) << spmvMs << " ms (bandwidth bound "
               << boundMs << " ms); reference residual " << std::scientific << std::setprecision(1)
-              << std::max(res0, res1) << "\n" << std::defaultfloat;
+              << std::max(res0, res1) << "\n" << std::defaultfloat << std::flush;
 
     std::vector<SolverRow> rows;
+    std::string hypreRanksError;
     json curveJson = json::array();
     Solution defaultCold;
     for (const std::string& name : names)
@@ -844,18 +856,34 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
           { "solve_ms", c.Ms }, { "error", c.Error }, { "spmv_equivalents", c.SpMV } });
       }
       if (name == "hypre-amg" && hypreRanks >= 2)
-        rows.push_back(BenchHypreRanks(p, hypreRanks, runs, rows.back()));
+      {
+        // A missing or broken mpiexec costs the multi-rank row, not the bench.
+        try
+        {
+          rows.push_back(BenchHypreRanks(p, hypreRanks, runs, rows.back()));
+        }
+        catch (const translucency::Error& e)
+        {
+          hypreRanksError = e.what();
+          std::cerr << "translucency: warning: no " << hypreRanks << "-rank hypre figure: "
+                    << e.what() << "\n";
+        }
+      }
     }
     PrintRows(rows, topologyMs);
+    std::cout << std::flush;
     json entry = { { "target_tets", target }, { "tets", p.Mesh.GetNumberOfTets() },
       { "unknowns", n }, { "nonzeros", nnz }, { "tetgen_ms", tetgenMs },
       { "topology_ms", topologyMs }, { "assembly_3ch_ms", assemblyMs },
       { "spmv_1ch_ms", spmvMs }, { "spmv_bytes", spmvBytes },
       { "spmv_bandwidth_bound_ms", boundMs }, { "stream_triad_gbs", bandwidth },
       { "reference_residual", std::max(res0, res1) }, { "target_error", TargetError },
-      { "default_solver", defaultSolver }, { "curve", curveJson } };
+      { "default_solver", defaultSolver }, { "load_average_1min", LoadAverage() },
+      { "curve", curveJson } };
     for (const SolverRow& r : rows)
       entry["solvers"].push_back(RowJson(r, topologyMs));
+    if (!hypreRanksError.empty())
+      entry["hypre_ranks_error"] = hypreRanksError;
     if (doCut)
     {
       if (defaultCold[0].size() == 0)

@@ -59,6 +59,10 @@ void EnsureHypreInitialized()
     MPI_Initialized(&initialised);
     if (!initialised)
     {
+      // An Open MPI singleton normally starts a helper daemon (orted, through
+      // the ssh/rsh launcher): not needed on MPI_COMM_SELF, and MPI_Init
+      // aborts the whole process when that fails. Users may still override.
+      setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
       int provided = 0;
       if (MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
       {

@@ -113,9 +113,12 @@ std::unique_ptr<LinearSolver> CreateLinearSolver(const std::string& name)
   }
   if (key == "cholmod" || key == "hypre-amg")
   {
-    throw Error("linear solver '" + name + "' is not in this build (CMake did not find " +
-      (key == "cholmod" ? std::string("CHOLMOD: install libsuitesparse-dev")
-                        : std::string("hypre: install libhypre-dev")) +
+    throw Error("linear solver '" + name + "' is not in this build (" +
+      (key == "cholmod"
+          ? std::string("TRANSLUCENCY_USE_CHOLMOD was off or CMake did not find CHOLMOD: "
+                        "install libsuitesparse-dev")
+          : std::string("TRANSLUCENCY_USE_HYPRE was off or CMake did not find hypre: "
+                        "install libhypre-dev")) +
       " and reconfigure; this build has: " + known + ")");
   }
   throw Error("unknown linear solver '" + name + "' (this build has: " + known + ")");

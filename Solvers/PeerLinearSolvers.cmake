@@ -35,6 +35,8 @@ if (TRANSLUCENCY_USE_CHOLMOD)
       "(Debian: apt-get install libsuitesparse-dev libopenblas0-pthread; "
       "or -DTRANSLUCENCY_USE_CHOLMOD=OFF to silence this)")
   endif ()
+else ()
+  message(STATUS "Linear solver 'cholmod' disabled (TRANSLUCENCY_USE_CHOLMOD=OFF)")
 endif ()
 
 option(TRANSLUCENCY_USE_HYPRE "Build the 'hypre-amg' linear solver (hypre BoomerAMG-PCG)" ON)
@@ -57,4 +59,6 @@ if (TRANSLUCENCY_USE_HYPRE)
     message(STATUS "Linear solver 'hypre-amg' NOT built: HYPRE.h / libHYPRE / MPI not found "
       "(Debian: apt-get install libhypre-dev; or -DTRANSLUCENCY_USE_HYPRE=OFF to silence this)")
   endif ()
+else ()
+  message(STATUS "Linear solver 'hypre-amg' disabled (TRANSLUCENCY_USE_HYPRE=OFF)")
 endif ()

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Relative L2 error of the boundary fluence vs solve time per linear solver
-(TransCut Fig. 7 style), from the CSV `translucency bench --linear-solvers
+(TransCut Fig. 7 style; second row: against the work in SpMV-equivalents,
+which machine load does not disturb), from the CSV `translucency bench --linear-solvers
 --plot FILE.png` writes (columns tets,solver,tolerance,solve_ms,error,
 spmv_equivalents; one row per tolerance of the bench's ladder, cold solves
 from zero). One panel per mesh size; solvers without multiresolution dashed.
@@ -26,24 +27,33 @@ def main(argv):
         sys.stderr.write("plot_linear_solvers: no data in %s\n" % argv[1])
         return 1
     sizes = sorted({int(r["tets"]) for r in rows})
-    fig, axes = plt.subplots(1, len(sizes), figsize=(5.5 * len(sizes), 4.5), squeeze=False)
-    for ax, tets in zip(axes[0], sizes):
+    floor = 1e-7
+    fig, axes = plt.subplots(2, len(sizes), figsize=(5.5 * len(sizes), 9), squeeze=False)
+    for col, tets in enumerate(sizes):
         solvers = []
         for r in rows:
             if int(r["tets"]) == tets and r["solver"] not in solvers:
                 solvers.append(r["solver"])
-        for name in solvers:
-            pts = sorted((float(r["solve_ms"]), float(r["error"])) for r in rows
-                         if int(r["tets"]) == tets and r["solver"] == name)
-            multires = "multires" in name or "multigrid" in name
-            ax.loglog([p[0] for p in pts], [max(p[1], 1e-12) for p in pts],
-                      "-o" if multires else "--s", markersize=3, label=name)
-        ax.axhline(0.01, color="grey", linewidth=0.8, linestyle=":")
-        ax.set_xlabel("solve time, 3 channels (ms)")
-        ax.set_ylabel("relative L2 error of the boundary fluence")
-        ax.set_title("bunny, %d tets" % tets)
-        ax.grid(True, which="both", linewidth=0.3)
-        ax.legend(fontsize=8)
+        for row, (key, label) in enumerate((("solve_ms", "solve time, 3 channels (ms)"),
+                                            ("spmv_equivalents",
+                                             "work, 3 channels (SpMV-equivalents)"))):
+            ax = axes[row][col]
+            for name in solvers:
+                # In ladder order (tolerance decreasing): work grows along the line.
+                pts = sorted(((float(r["tolerance"]), float(r[key]), float(r["error"]))
+                              for r in rows if int(r["tets"]) == tets and r["solver"] == name),
+                             reverse=True)
+                multires = "multires" in name or "multigrid" in name
+                ax.loglog([p[1] for p in pts], [max(p[2], floor) for p in pts],
+                          "-o" if multires else "--s", markersize=3, label=name)
+            ax.axhline(0.01, color="grey", linewidth=0.8, linestyle=":")
+            ax.set_ylim(floor / 2, 1.0)
+            ax.set_xlabel(label)
+            ax.set_ylabel("relative L2 error of the boundary fluence")
+            ax.set_title("bunny, %d tets (errors < %g drawn at %g)" % (tets, floor, floor),
+                         fontsize=9)
+            ax.grid(True, which="both", linewidth=0.3)
+            ax.legend(fontsize=8)
     fig.tight_layout()
     tmp = argv[2] + ".tmp.png"
     fig.savefig(tmp, dpi=110)
