@@ -27,6 +27,7 @@
 
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
+#include <vtkFieldData.h>
 #include <vtkPlane.h>
 #include <vtkNew.h>
 #include <vtkOutputWindow.h>
@@ -378,11 +379,11 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
     auto start = Clock::now();
     paint->Update();
     paintMs.push_back(Since(start));
-    vtkDataArray* weight = paint->GetOutput()->GetCellData()->GetArray("PaintWeight");
+    // The tets whose coefficients changed, as listed by the paint filter.
+    vtkDataArray* painted = paint->GetOutput()->GetFieldData()->GetArray("PaintedCellIds");
     std::vector<int> changed;
-    for (vtkIdType t = 0; t < weight->GetNumberOfTuples(); ++t)
-      if (weight->GetComponent(t, 0) > 1e-6)
-        changed.push_back(static_cast<int>(t));
+    for (vtkIdType k = 0; painted && k < painted->GetNumberOfTuples(); ++k)
+      changed.push_back(static_cast<int>(painted->GetComponent(k, 0)));
     touched = static_cast<vtkIdType>(changed.size());
     vtkDataArray* muA = paint->GetOutput()->GetCellData()->GetArray("AbsorptionCoefficient");
     vtkDataArray* sigma = paint->GetOutput()->GetCellData()->GetArray("ReducedScatteringCoefficient");

@@ -242,7 +242,7 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
   }
 }
 
-void DiscreteDivergence::UpdateTets(const TetMesh& mesh,
+bool DiscreteDivergence::UpdateTets(const TetMesh& mesh,
   const OpticalProperties& material,
   const std::vector<double>& irradiance,
   const std::vector<int>& changedTets,
@@ -315,7 +315,7 @@ void DiscreteDivergence::UpdateTets(const TetMesh& mesh,
   }
   if (rows.empty())
   {
-    return;
+    return true;
   }
 
   // Clear the rows; flag every tet that contributes to one of them.
@@ -396,6 +396,7 @@ void DiscreteDivergence::UpdateTets(const TetMesh& mesh,
       system.RightHandSide[c][i] = 8.0 * s * q[3 * static_cast<size_t>(i) + c] / (3.0 * a * (1.0 - fdr));
     }
   }
+  return true;
 }
 
 void DiscreteDivergence::ToPointFluence(const TetMesh& mesh,

@@ -30,6 +30,14 @@ void VertexDiffusionSolver::Reset()
   }
   LastMesh_ = nullptr;
   LastPoints_ = -1;
+  HasChangedTets_ = false;
+  ChangedTets_.clear();
+}
+
+void VertexDiffusionSolver::SetChangedTets(std::vector<int> changedTets)
+{
+  ChangedTets_ = std::move(changedTets);
+  HasChangedTets_ = true;
 }
 
 bool VertexDiffusionSolver::Solve(
@@ -45,7 +53,21 @@ bool VertexDiffusionSolver::Solve(
   report.LinearSolver = "cg-jacobi";
 
   auto start = std::chrono::steady_clock::now();
-  Discretization_->Assemble(mesh, *problem.Material, *problem.Irradiance, System_);
+  // Painting: rebuild only the rows of the changed tets' vertices (TransCut
+  // Sec. 5.2) when the system of the last successful solve is of this mesh.
+  // The request is one-shot, also when the update throws.
+  const bool requested = HasChangedTets_;
+  std::vector<int> changedTets;
+  changedTets.swap(ChangedTets_);
+  HasChangedTets_ = false;
+  const bool incremental = requested && LastMesh_ == &mesh &&
+    LastPoints_ == mesh.GetNumberOfPoints() &&
+    Discretization_->UpdateTets(mesh, *problem.Material, *problem.Irradiance, changedTets, System_);
+  if (!incremental)
+  {
+    Discretization_->Assemble(mesh, *problem.Material, *problem.Irradiance, System_);
+  }
+  report.Assembly = incremental ? "incremental" : "full";
   report.SetupMilliseconds = Since(start);
 
   // A warm start needs the same unknowns: the same mesh object and size.

@@ -24,6 +24,19 @@ public:
     SolverReport& report) override;
   void Reset() override;
 
+  /**
+   * Painting (TransCut Sec. 5.2): the next Solve() only rebuilds the rows of
+   * the vertices of `changedTets` (tet ids) instead of assembling the whole
+   * system, and warm-starts from the previous solution. The caller
+   * guarantees that, compared with the previous successful Solve(), only the
+   * material of these tets changed (same mesh object, same points, same
+   * irradiance). Falls back to a full assembly (SolverReport::Assembly
+   * tells which was done) if there was no previous successful Solve() on this
+   * mesh or the discretisation has no incremental update. One-shot: cleared
+   * by the next Solve() or Reset().
+   */
+  void SetChangedTets(std::vector<int> changedTets);
+
   /// The discretisation (e.g. to set its number of threads).
   Discretization& GetDiscretization() { return *Discretization_; }
   /// The system of the last Solve (valid until the next one).
@@ -36,6 +49,8 @@ private:
   std::array<Eigen::VectorXd, NumberOfChannels> Solution_;
   const TetMesh* LastMesh_ = nullptr;
   int LastPoints_ = -1;
+  bool HasChangedTets_ = false;
+  std::vector<int> ChangedTets_;
 };
 
 } // namespace translucency
