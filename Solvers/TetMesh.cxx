@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <climits>
 #include <cmath>
 #include <cstdint>
@@ -287,6 +288,16 @@ void CheckTetIds(const std::vector<int>& tets, int numPoints)
 
 } // namespace
 
+namespace
+{
+/// Process-wide unique geometry revisions (never 0).
+std::uint64_t NextGeometryRevision()
+{
+  static std::atomic<std::uint64_t> counter{ 0 };
+  return ++counter;
+}
+}
+
 void TetMesh::SetGeometry(std::vector<double> points, std::vector<int> tets)
 {
   CheckPointsFinite(points);
@@ -299,6 +310,7 @@ void TetMesh::SetGeometry(std::vector<double> points, std::vector<int> tets)
   mesh.ComputeTetVolumes(true);
   mesh.BuildTopology();
   mesh.ComputeMeasures();
+  mesh.GeometryRevision_ = NextGeometryRevision();
   *this = std::move(mesh);
 }
 
@@ -324,6 +336,7 @@ void TetMesh::UpdatePoints(const std::vector<double>& points)
     throw;
   }
   ComputeMeasures();
+  GeometryRevision_ = NextGeometryRevision();
 }
 
 void TetMesh::ComputeTetVolumes(bool allowReorient)

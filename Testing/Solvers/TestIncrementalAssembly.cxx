@@ -4,6 +4,7 @@
 
 #include "DiffusionSolver.h"
 #include "DiscreteDivergence.h"
+#include "FiniteElement.h"
 #include "VertexDiffusionSolver.h"
 #include "Error.h"
 #include "TestMeshes.h"
@@ -270,6 +271,50 @@ TEST(IncrementalAssembly, FemFallsBackToFullAssembly)
   vertex->SetChangedTets({ 0 });
   ASSERT_TRUE(solver->Solve(problem, fluence, report));
   EXPECT_EQ(report.Assembly, "full");
+}
+
+
+// The per-tet geometry cache (TetGeometryCache): a re-assembly from the cache
+// gives the bits of an assembly that computes the geometry (a new object), and
+// moving the points (UpdatePoints) or resetting the geometry of the same mesh
+// object invalidates it.
+TEST(IncrementalAssembly, GeometryCacheFollowsTheMesh)
+{
+  Scene s = MakeScene(6, 4);
+  DiscreteDivergence cachedDivergence;
+  FiniteElement cachedFem;
+  auto check = [&](const char* when) {
+    SCOPED_TRACE(when);
+    DiffusionSystem a, b;
+    cachedDivergence.Assemble(s.Mesh, s.Material, s.Irradiance, a); // may use the cache
+    DiscreteDivergence fresh;
+    fresh.Assemble(s.Mesh, s.Material, s.Irradiance, b); // computes the geometry
+    ExpectIdentical(a, b);
+    cachedFem.Assemble(s.Mesh, s.Material, s.Irradiance, a);
+    FiniteElement freshFem;
+    freshFem.Assemble(s.Mesh, s.Material, s.Irradiance, b);
+    ExpectIdentical(a, b);
+  };
+  check("first assembly (fills the cache)");
+  check("second assembly (from the cache)");
+  // Move the points: same topology, new geometry.
+  std::vector<double> moved = s.Mesh.GetPoints();
+  for (size_t k = 0; k < moved.size(); ++k)
+  {
+    moved[k] = 1.25 * moved[k] + 0.01 * static_cast<double>(k % 7);
+  }
+  const std::uint64_t before = s.Mesh.GetGeometryRevision();
+  s.Mesh.UpdatePoints(moved);
+  EXPECT_NE(s.Mesh.GetGeometryRevision(), before);
+  check("after UpdatePoints");
+  // Same object, same sizes, other geometry through SetGeometry.
+  std::vector<double> points = s.Mesh.GetPoints();
+  for (double& x : points)
+  {
+    x *= 0.5;
+  }
+  s.Mesh.SetGeometry(points, s.Mesh.GetTets());
+  check("after SetGeometry");
 }
 
 } // namespace
