@@ -14,7 +14,9 @@ How to run (ctest does this):
 3. The Volume material mode: a Wavelet image with linear coefficient fields
    (Calculator) on the optional Volume input gives the fields at the tet
    centroids (trilinear probe of a linear field is exact).
-4. Reads a small TetGen mesh written here with the TetGenReader proxy, both
+4. Paint Scattering Coefficients (its CutoffWeight) and Solve Diffusion's
+   incremental assembly after a paint (IncrementalAssembly).
+5. Reads a small TetGen mesh written here with the TetGenReader proxy, both
    directly and through OpenDataFile (the plugin's reader factory hint).
 
 Exits non-zero on failure (unittest). No rendering.
@@ -152,6 +154,41 @@ class PluginTest(unittest.TestCase):
             self.assertEqual(servermanager.Fetch(assign).GetNumberOfCells(), 0)
         finally:
             for proxy in (assign, scattering, absorption, wavelet):
+                Delete(proxy)
+
+    def test_paint_then_incremental_solve(self):
+        # The Paint proxy (CutoffWeight reaches the filter: weights vanish
+        # beyond the cut-off radius, none with CutoffWeight 0) and a second
+        # solve that rebuilds only the painted rows (IncrementalAssembly).
+        paint = PaintScatteringCoefficients(Input=self.irradiance, StrokePoints=[3.5, 0.0, 0.0],
+                                            Width=0.3)
+        solve = SolveDiffusion(Input=paint, RelTol=1e-12)
+        try:
+            grid = self.fetch(paint)
+            weights = cell_array(grid, "PaintWeight")
+            self.assertGreater(np.count_nonzero(weights == 0.0), 10)
+            self.assertGreater(np.count_nonzero(weights > 0.2), 0)
+            paint.CutoffWeight = 0.0
+            self.assertTrue(np.all(cell_array(self.fetch(paint), "PaintWeight") > 0.0))
+            paint.CutoffWeight = 1e-6
+            paint.Strength = 0.0
+            self.fetch(solve)
+            import translucency  # noqa: F401  (Python wrappers of the filters)
+            vtk_solve = solve.GetClientSideObject()
+            self.assertEqual(vtk_solve.GetLastAssembly(), "full")
+            paint.Strength = 1.0
+            paint.Width = 0.2
+            phi = point_array(self.fetch(solve), "Fluence").copy()
+            self.assertEqual(vtk_solve.GetLastAssembly(), "incremental")
+            self.assertGreater(vtk_solve.GetNumberOfChangedTets(), 0)
+            solve.IncrementalAssembly = 0
+            solve.RelTol = 1e-13  # forces a re-execution
+            self.assertEqual(solve.GetProperty("IncrementalAssembly").GetElement(0), 0)
+            full = point_array(self.fetch(solve), "Fluence")
+            self.assertEqual(vtk_solve.GetLastAssembly(), "full")
+            self.assertTrue(np.allclose(phi, full, rtol=1e-7, atol=0))
+        finally:
+            for proxy in (solve, paint):
                 Delete(proxy)
 
     def test_lights_are_linear(self):
