@@ -30,6 +30,7 @@ void VertexDiffusionSolver::Reset()
   }
   LastMesh_ = nullptr;
   LastPoints_ = -1;
+  LastRevision_ = 0;
   HasChangedTets_ = false;
   ChangedTets_.clear();
 }
@@ -61,7 +62,7 @@ bool VertexDiffusionSolver::Solve(
   changedTets.swap(ChangedTets_);
   HasChangedTets_ = false;
   const bool incremental = requested && LastMesh_ == &mesh &&
-    LastPoints_ == mesh.GetNumberOfPoints() &&
+    LastPoints_ == mesh.GetNumberOfPoints() && LastRevision_ == mesh.GetGeometryRevision() &&
     Discretization_->UpdateTets(mesh, *problem.Material, *problem.Irradiance, changedTets, System_);
   if (!incremental)
   {
@@ -87,6 +88,7 @@ bool VertexDiffusionSolver::Solve(
   }
   LastMesh_ = &mesh;
   LastPoints_ = mesh.GetNumberOfPoints();
+  LastRevision_ = mesh.GetGeometryRevision();
   report.SolveMilliseconds = Since(start);
 
   report.NumberOfUnknowns = System_.NumberOfUnknowns;

@@ -10,6 +10,8 @@
 #include "DiffusionSolver.h"
 #include "Discretization.h"
 
+#include <cstdint>
+
 namespace translucency
 {
 
@@ -29,10 +31,11 @@ public:
    * the vertices of `changedTets` (tet ids) instead of assembling the whole
    * system, and warm-starts from the previous solution. The caller
    * guarantees that, compared with the previous successful Solve(), only the
-   * material of these tets changed (same mesh object, same points, same
-   * irradiance). Falls back to a full assembly (SolverReport::Assembly
-   * tells which was done) if there was no previous successful Solve() on this
-   * mesh or the discretisation has no incremental update. One-shot: cleared
+   * material of these tets changed (same irradiance). Falls back to a full
+   * assembly (SolverReport::Assembly tells which was done) if there was no
+   * previous successful Solve() on this mesh object with its current geometry
+   * (TetMesh::GetGeometryRevision) or the discretisation has no incremental
+   * update. One-shot: cleared
    * by the next Solve() or Reset().
    */
   void SetChangedTets(std::vector<int> changedTets);
@@ -49,6 +52,7 @@ private:
   std::array<Eigen::VectorXd, NumberOfChannels> Solution_;
   const TetMesh* LastMesh_ = nullptr;
   int LastPoints_ = -1;
+  std::uint64_t LastRevision_ = 0; ///< TetMesh::GetGeometryRevision of the last solve
   bool HasChangedTets_ = false;
   std::vector<int> ChangedTets_;
 };

@@ -239,6 +239,17 @@ TEST(IncrementalAssembly, SolverUpdatesOnlyTheChangedRows)
   // systems is far below 1e4.
   EXPECT_LT(maxDiff, 1e-6 * maxRef);
 
+  // Moved points on the same mesh object (deformation): full assembly.
+  std::vector<double> moved = s.Mesh.GetPoints();
+  for (double& x : moved)
+  {
+    x *= 1.1;
+  }
+  s.Mesh.UpdatePoints(moved);
+  vertex->SetChangedTets({ 0 });
+  ASSERT_TRUE(solver->Solve(problem, fluence, report));
+  EXPECT_EQ(report.Assembly, "full");
+
   // A request without a previous solve on that mesh: another mesh object
   // (as after a cut) falls back to a full assembly.
   Scene other = MakeScene(7, 9);
