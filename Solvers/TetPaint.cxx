@@ -278,8 +278,9 @@ void TetPaint::Paint(const PointT* points, std::int64_t numberOfPoints, const Id
         double d2;
         if (cutoff)
         {
-          if (c[0] < boxLo[0] || c[0] > boxHi[0] || c[1] < boxLo[1] || c[1] > boxHi[1] ||
-            c[2] < boxLo[2] || c[2] > boxHi[2])
+          // Written so that a NaN centroid (NaN points) is outside too.
+          if (!(c[0] >= boxLo[0] && c[0] <= boxHi[0] && c[1] >= boxLo[1] && c[1] <= boxHi[1] &&
+                c[2] >= boxLo[2] && c[2] <= boxHi[2]))
           {
             if (weights)
             {

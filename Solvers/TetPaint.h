@@ -31,7 +31,8 @@
  * then x' is clamped to >= 0. If a channel of a cell would end with
  * mu_a + sigma_s' = 0, that channel keeps its old values (counted in
  * GetNumberOfKeptChannels()). Cells with w = 0 and masked channels keep their
- * values bit for bit, so Width = 0 or Strength = 0 change nothing.
+ * values bit for bit, so Width = 0 or Strength = 0 change nothing. A cell
+ * whose centroid is not finite (NaN or infinite points) gets w = 0.
  *
  * Parallel over cells with OpenMP; the result (values, weights, the list of
  * changed cells) does not depend on the number of threads.

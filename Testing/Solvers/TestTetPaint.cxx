@@ -335,6 +335,34 @@ TEST_F(TetPaintTest, FloatPointsAnd64BitIdsGiveTheSameResult)
   ExpectSame(expected, Result{ a, s, w, paint.GetChangedCells() });
 }
 
+TEST_F(TetPaintTest, NonFinitePointsGiveZeroWeight)
+{
+  MeshData mesh = Mesh;
+  const int bad = mesh.Tets[4 * 200];
+  mesh.Points[3 * bad] = std::nan("");
+  for (double cutoff : { 1e-6, 0.0 })
+  {
+    Settings p;
+    p.Stroke = Stroke(20, 8);
+    p.Width = 3.0;
+    p.Cutoff = cutoff;
+    const Result r = RunPaint(mesh, A0, S0, p, 2);
+    int touching = 0;
+    for (int t = 0; t < mesh.NumberOfTets(); ++t)
+    {
+      const int* tv = &mesh.Tets[4 * t];
+      if (tv[0] == bad || tv[1] == bad || tv[2] == bad || tv[3] == bad)
+      {
+        ++touching;
+        EXPECT_EQ(r.W[t], 0.0) << "tet " << t;
+        EXPECT_EQ(r.A[3 * t], A0[3 * t]);
+      }
+    }
+    EXPECT_GT(touching, 0);
+    EXPECT_GT(r.Changed.size(), 100u); // the other tets are painted
+  }
+}
+
 TEST_F(TetPaintTest, BadInputIsNamed)
 {
   auto expectError = [&](TetPaint& paint, std::vector<int> tets, const char* fragment) {
