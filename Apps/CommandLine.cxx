@@ -442,7 +442,9 @@ const char* const SceneOptionsHelp = R"(  --mesh FILE              closed triang
                             "mode": "set"|"multiply"|"add" ("set"),
                             "absorption": [r,g,b], "reduced_scattering": [r,g,b]
                             (target: 1/mm for set/add, factor for multiply; default
-                            ketchup), "strength": 0..1 (1), "channels": [1,1,1]}
+                            ketchup), "strength": 0..1 (1), "channels": [1,1,1],
+                            "cutoff_weight": 0..1 (1e-6: no paint where the weight
+                            is below it; 0 = exact Gaussian everywhere)}
   --cut-plane ox,oy,oz,nx,ny,nz
                            cut the tet mesh with the plane through o (mm) with normal n:
                            removes the side n points to (vtkStrokeCut)
@@ -646,6 +648,10 @@ void ApplyPaintFile(vtkPaintScatteringCoefficients* paint, const std::string& pa
   if (!(strength >= 0 && strength <= 1))
     throw translucency::Error("'" + path + "': \"strength\" must be in [0, 1]");
   paint->SetStrength(strength);
+  const double cutoff = ReadNumber(j, "cutoff_weight", path, 1e-6);
+  if (!(cutoff >= 0 && cutoff <= 1))
+    throw translucency::Error("'" + path + "': \"cutoff_weight\" must be in [0, 1]");
+  paint->SetCutoffWeight(cutoff);
   if (j.contains("mode"))
   {
     const std::string mode = j["mode"].is_string() ? j["mode"].get<std::string>() : "";

@@ -2,7 +2,18 @@
 
 #include "vtkTranslucencyMeshConversion.h"
 
+#include "TetPaint.h"
+#include "Error.h"
+
+#include <vtkCellArray.h>
 #include <vtkCellData.h>
+#include <vtkFieldData.h>
+#include <vtkFloatArray.h>
+#include <vtkIdTypeArray.h>
+#include <vtkPoints.h>
+#include <vtkSmartPointer.h>
+#include <vtkTypeInt32Array.h>
+#include <vtkTypeInt64Array.h>
 #include <vtkDataArray.h>
 #include <vtkDoubleArray.h>
 #include <vtkAlgorithm.h>
@@ -14,9 +25,9 @@
 #include <vtkSMPTools.h>
 #include <vtkUnstructuredGrid.h>
 
-#include <atomic>
+#include <algorithm>
 #include <cmath>
-#include <limits>
+#include <cstring>
 #include <vector>
 
 vtkStandardNewMacro(vtkPaintScatteringCoefficients);
@@ -173,129 +184,117 @@ int vtkPaintScatteringCoefficients::RequestData(
     }
   }
 
-  vtkNew<vtkDoubleArray> absorption;
-  absorption->SetName(vtkTranslucency::AbsorptionName);
-  absorption->SetNumberOfComponents(3);
-  absorption->SetNumberOfTuples(n);
-  vtkNew<vtkDoubleArray> scattering;
-  scattering->SetName(vtkTranslucency::ScatteringName);
-  scattering->SetNumberOfComponents(3);
-  scattering->SetNumberOfTuples(n);
+  // New double arrays, copies of the old ones (one memcpy for double input),
+  // painted in place by the core.
+  vtkNew<vtkDoubleArray> newArrays[2];
+  for (int k = 0; k < 2; ++k)
+  {
+    newArrays[k]->SetName(names[k]);
+    newArrays[k]->SetNumberOfComponents(3);
+    newArrays[k]->SetNumberOfTuples(n);
+    double* dst = newArrays[k]->GetPointer(0);
+    if (vtkDoubleArray* src = vtkDoubleArray::FastDownCast(oldArrays[k]))
+    {
+      std::memcpy(dst, src->GetPointer(0), sizeof(double) * 3 * static_cast<size_t>(n));
+    }
+    else
+    {
+      vtkDataArray* from = oldArrays[k];
+      vtkSMPTools::For(0, n, [from, dst](vtkIdType begin, vtkIdType end) {
+        for (vtkIdType i = begin; i < end; ++i)
+        {
+          from->GetTuple(i, dst + 3 * i);
+        }
+      });
+    }
+  }
   vtkNew<vtkDoubleArray> weights;
   weights->SetName("PaintWeight");
   weights->SetNumberOfComponents(1);
   weights->SetNumberOfTuples(n);
 
-  const bool paints = this->Width > 0.0 && this->Strength > 0.0;
-  const double twoSigma2 = 2.0 * this->Width * this->Width;
-  const double* stroke = this->StrokePoints.data();
-  const size_t numStroke = this->StrokePoints.size() / 3;
-  std::atomic<vtkIdType> kept(0);
-  // Tet centroids (mean of the vertices), serially: the cell access of
-  // vtkUnstructuredGrid may use shared scratch space.
-  std::vector<double> centroids;
-  if (paints)
+  // The paint itself (TransCut Sec. 5.2) is in the core: translucency::TetPaint.
+  translucency::TetPaint painter;
+  painter.SetStrokePoints(this->StrokePoints);
+  painter.SetWidth(this->Width);
+  painter.SetStrength(this->Strength);
+  painter.SetCutoffWeight(this->CutoffWeight);
+  painter.SetMode(static_cast<translucency::TetPaint::Mode>(this->Mode));
+  painter.SetTargetAbsorption({ { this->TargetAbsorptionCoefficient[0],
+    this->TargetAbsorptionCoefficient[1], this->TargetAbsorptionCoefficient[2] } });
+  painter.SetTargetScattering({ { this->TargetReducedScatteringCoefficient[0],
+    this->TargetReducedScatteringCoefficient[1], this->TargetReducedScatteringCoefficient[2] } });
+  painter.SetChannelMask(
+    { { this->ChannelMask[0] != 0, this->ChannelMask[1] != 0, this->ChannelMask[2] != 0 } });
+  try
   {
-    centroids.assign(3 * static_cast<size_t>(n), 0.0);
-    for (vtkIdType i = 0; i < n; ++i)
+    // Raw views of the points (float or double) and cells (32 or 64-bit ids).
+    vtkSmartPointer<vtkDoubleArray> converted;
+    vtkDataArray* pointData = input->GetPoints() ? input->GetPoints()->GetData() : nullptr;
+    const vtkIdType numPoints = input->GetNumberOfPoints();
+    vtkFloatArray* floatPoints = vtkFloatArray::FastDownCast(pointData);
+    vtkDoubleArray* doublePoints = vtkDoubleArray::FastDownCast(pointData);
+    if (pointData && !floatPoints && !doublePoints)
     {
-      vtkIdType npts;
-      const vtkIdType* pts;
-      input->GetCellPoints(i, npts, pts);
-      double* c = centroids.data() + 3 * i;
-      for (vtkIdType k = 0; k < npts; ++k)
+      converted = vtkSmartPointer<vtkDoubleArray>::New();
+      converted->DeepCopy(pointData);
+      doublePoints = converted;
+    }
+    vtkCellArray* cells = input->GetCells();
+    if (!cells || (!floatPoints && !doublePoints))
+    {
+      vtkErrorMacro(<< "the input mesh has no points or no cells");
+      return 0;
+    }
+    double* a = newArrays[0]->GetPointer(0);
+    double* s = newArrays[1]->GetPointer(0);
+    double* w = weights->GetPointer(0);
+    auto paint = [&](auto* offsets, auto* connectivity) {
+      if (floatPoints)
       {
-        double x[3];
-        input->GetPoint(pts[k], x);
-        for (int a = 0; a < 3; ++a)
-        {
-          c[a] += x[a] / static_cast<double>(npts);
-        }
+        painter.Paint(floatPoints->GetPointer(0), numPoints, offsets, connectivity, n, a, s, w);
       }
+      else
+      {
+        painter.Paint(doublePoints->GetPointer(0), numPoints, offsets, connectivity, n, a, s, w);
+      }
+    };
+    if (cells->IsStorage64Bit())
+    {
+      paint(reinterpret_cast<const long long*>(cells->GetOffsetsArray64()->GetPointer(0)),
+        reinterpret_cast<const long long*>(cells->GetConnectivityArray64()->GetPointer(0)));
+    }
+    else
+    {
+      paint(reinterpret_cast<const int*>(cells->GetOffsetsArray32()->GetPointer(0)),
+        reinterpret_cast<const int*>(cells->GetConnectivityArray32()->GetPointer(0)));
     }
   }
-  vtkSMPTools::For(0, n, [&](vtkIdType begin, vtkIdType end) {
-    double old[2][3], now[2][3];
-    vtkIdType local = 0;
-    for (vtkIdType i = begin; i < end; ++i)
-    {
-      oldArrays[0]->GetTuple(i, old[0]);
-      oldArrays[1]->GetTuple(i, old[1]);
-      double w = 0.0;
-      if (paints)
-      {
-        const double* c = centroids.data() + 3 * i;
-        double d2 = std::numeric_limits<double>::infinity();
-        for (size_t s = 0; s < numStroke; ++s)
-        {
-          const double* p = stroke + 3 * s;
-          const double dx = c[0] - p[0], dy = c[1] - p[1], dz = c[2] - p[2];
-          const double e = dx * dx + dy * dy + dz * dz;
-          d2 = e < d2 ? e : d2;
-        }
-        // TransCut Sec. 5.2: influence from the closest stroke point and a Gaussian.
-        w = this->Strength * std::exp(-d2 / twoSigma2);
-      }
-      for (int k = 0; k < 2; ++k)
-      {
-        for (int c = 0; c < 3; ++c)
-        {
-          now[k][c] = old[k][c];
-        }
-      }
-      if (w > 0.0)
-      {
-        const double* target[2] = { this->TargetAbsorptionCoefficient,
-          this->TargetReducedScatteringCoefficient };
-        for (int c = 0; c < 3; ++c)
-        {
-          if (!this->ChannelMask[c])
-          {
-            continue;
-          }
-          double v[2];
-          for (int k = 0; k < 2; ++k)
-          {
-            const double t = target[k][c];
-            switch (this->Mode)
-            {
-              case SET:
-                v[k] = (1.0 - w) * old[k][c] + w * t;
-                break;
-              case MULTIPLY:
-                v[k] = old[k][c] * (1.0 + w * (t - 1.0));
-                break;
-              default:
-                v[k] = old[k][c] + w * t;
-                break;
-            }
-            v[k] = v[k] > 0.0 ? v[k] : 0.0;
-          }
-          if (v[0] + v[1] > 0.0)
-          {
-            now[0][c] = v[0];
-            now[1][c] = v[1];
-          }
-          else
-          {
-            ++local;
-          }
-        }
-      }
-      absorption->SetTypedTuple(i, now[0]);
-      scattering->SetTypedTuple(i, now[1]);
-      weights->SetValue(i, w);
-    }
-    kept += local;
-  });
+  catch (const translucency::Error& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+
+  // The ids of the cells whose coefficients changed (for incremental updates).
+  const std::vector<int>& changed = painter.GetChangedCells();
+  vtkNew<vtkIdTypeArray> changedIds;
+  changedIds->SetName("PaintedCellIds");
+  changedIds->SetNumberOfTuples(static_cast<vtkIdType>(changed.size()));
+  std::copy(changed.begin(), changed.end(), changedIds->GetPointer(0));
 
   output->ShallowCopy(input);
-  output->GetCellData()->AddArray(absorption);
-  output->GetCellData()->AddArray(scattering);
+  output->GetCellData()->AddArray(newArrays[0]);
+  output->GetCellData()->AddArray(newArrays[1]);
   output->GetCellData()->AddArray(weights);
-  if (kept > 0)
+  vtkNew<vtkFieldData> fieldData;
+  fieldData->ShallowCopy(input->GetFieldData());
+  fieldData->AddArray(changedIds);
+  output->SetFieldData(fieldData);
+  if (painter.GetNumberOfKeptChannels() > 0)
   {
-    vtkWarningMacro(<< kept.load() << " tet channel(s) would have had mu_a + sigma_s' = 0 "
+    vtkWarningMacro(<< painter.GetNumberOfKeptChannels()
+                    << " tet channel(s) would have had mu_a + sigma_s' = 0 "
                     << "and kept their old values");
   }
   return 1;
@@ -310,6 +309,7 @@ void vtkPaintScatteringCoefficients::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfStrokePoints: " << this->GetNumberOfStrokePoints() << "\n";
   os << indent << "Width: " << this->Width << "\n";
   os << indent << "Strength: " << this->Strength << "\n";
+  os << indent << "CutoffWeight: " << this->CutoffWeight << "\n";
   os << indent << "Mode: " << this->Mode << "\n";
   os << indent << "TargetAbsorptionCoefficient: " << this->TargetAbsorptionCoefficient[0] << ", "
      << this->TargetAbsorptionCoefficient[1] << ", " << this->TargetAbsorptionCoefficient[2]

@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cstring>
 
 vtkStandardNewMacro(vtkSolveDiffusion);
 
@@ -38,7 +39,48 @@ struct vtkSolveDiffusion::Internals
   std::unique_ptr<translucency::DiffusionSolver> Solver;
   int SolverKind = -1;
   translucency::SolverReport Report;
+  /// Material and irradiance of the last successful vertex solve (for the
+  /// incremental update after a paint); HaveLast is false when not valid.
+  bool HaveLast = false;
+  translucency::OpticalProperties LastMaterial;
+  std::vector<double> LastIrradiance;
+  vtkIdType ChangedTets = -1;
+
+  void ForgetLast()
+  {
+    HaveLast = false;
+    LastMaterial = translucency::OpticalProperties();
+    LastIrradiance.clear();
+  }
 };
+
+namespace
+{
+/// Ids of the tets whose mu_a, sigma_s' or eta differ between a and b (same
+/// sizes), stopping once more than `limit` are found.
+std::vector<int> ChangedTets(
+  const translucency::OpticalProperties& a, const translucency::OpticalProperties& b, size_t limit)
+{
+  std::vector<int> changed;
+  const size_t n = a.RefractiveIndex.size();
+  const double* a0 = a.AbsorptionCoefficient.data();
+  const double* a1 = b.AbsorptionCoefficient.data();
+  const double* s0 = a.ReducedScatteringCoefficient.data();
+  const double* s1 = b.ReducedScatteringCoefficient.data();
+  for (size_t t = 0; t < n && changed.size() <= limit; ++t)
+  {
+    // Compared as bits (memcmp): a NaN that stays a NaN is no change, and a
+    // value that changes in any way is one.
+    if (std::memcmp(a0 + 3 * t, a1 + 3 * t, 3 * sizeof(double)) != 0 ||
+      std::memcmp(s0 + 3 * t, s1 + 3 * t, 3 * sizeof(double)) != 0 ||
+      std::memcmp(&a.RefractiveIndex[t], &b.RefractiveIndex[t], sizeof(double)) != 0)
+    {
+      changed.push_back(static_cast<int>(t));
+    }
+  }
+  return changed;
+}
+}
 
 //------------------------------------------------------------------------------
 vtkSolveDiffusion::vtkSolveDiffusion()
@@ -92,6 +134,16 @@ bool vtkSolveDiffusion::GetConverged(int channel) const
 const char* vtkSolveDiffusion::GetLinearSolverUsed() const
 {
   return this->Internal->Report.LinearSolver.c_str();
+}
+
+const char* vtkSolveDiffusion::GetLastAssembly() const
+{
+  return this->Internal->Report.Assembly.c_str();
+}
+
+vtkIdType vtkSolveDiffusion::GetNumberOfChangedTets() const
+{
+  return this->Internal->ChangedTets;
 }
 
 vtkTypeInt64 vtkSolveDiffusion::GetNumberOfUnknowns() const
@@ -217,15 +269,43 @@ int vtkSolveDiffusion::RequestData(
     {
       in.Solver = translucency::CreateDiffusionSolver(SolverNames[this->Solver]);
       in.SolverKind = this->Solver;
+      in.ForgetLast();
     }
     if (mesh != in.Mesh)
     {
       in.Solver->Reset(); // a new geometry: the previous solution is no start point
       in.Mesh = mesh;
+      in.ForgetLast();
     }
     translucency::DiffusionSolver& solver = *in.Solver;
-    if (auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver))
+    auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver);
+    in.ChangedTets = -1;
+    if (vertex)
     {
+      // Incremental assembly after a paint (TransCut Sec. 5.2): same mesh
+      // (topology and points: the shared TetMesh is keyed by both), same
+      // irradiance, only some tets' coefficients changed since the last
+      // successful solve. The changed tets are found by comparing with the
+      // coefficients cached from that solve (whatever changed them).
+      const size_t numTets = material.RefractiveIndex.size();
+      const size_t limit = static_cast<size_t>(this->MaximumChangedFraction * numTets);
+      if (this->IncrementalAssembly && in.HaveLast &&
+        in.LastMaterial.RefractiveIndex.size() == numTets &&
+        in.LastMaterial.AbsorptionCoefficient.size() == material.AbsorptionCoefficient.size() &&
+        in.LastMaterial.ReducedScatteringCoefficient.size() ==
+          material.ReducedScatteringCoefficient.size() &&
+        in.LastIrradiance.size() == irradiance.size() &&
+        std::memcmp(in.LastIrradiance.data(), irradiance.data(),
+          irradiance.size() * sizeof(double)) == 0)
+      {
+        std::vector<int> changed = ChangedTets(in.LastMaterial, material, limit);
+        if (changed.size() <= limit)
+        {
+          in.ChangedTets = static_cast<vtkIdType>(changed.size());
+          vertex->SetChangedTets(std::move(changed));
+        }
+      }
+      in.ForgetLast(); // until this solve succeeds
       if (auto* divergence =
             dynamic_cast<translucency::DiscreteDivergence*>(&vertex->GetDiscretization()))
       {
@@ -255,6 +335,12 @@ int vtkSolveDiffusion::RequestData(
     if (!solver.Solve(problem, fluence, in.Report))
     {
       return 0; // aborted by the user
+    }
+    if (vertex && this->IncrementalAssembly)
+    {
+      in.LastMaterial = std::move(material);
+      in.LastIrradiance = std::move(irradiance);
+      in.HaveLast = true;
     }
     this->AssemblyTime = in.Report.SetupMilliseconds;
     this->SolveTime = in.Report.SolveMilliseconds;
@@ -287,6 +373,11 @@ int vtkSolveDiffusion::RequestData(
   }
   catch (const translucency::Error& e)
   {
+    in.ForgetLast();
+    if (in.Solver)
+    {
+      in.Solver->Reset();
+    }
     vtkErrorMacro(<< e.what());
     return 0;
   }
@@ -308,4 +399,6 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LinearSolver: " << this->LinearSolver << "\n";
   os << indent << "MultiLevel: " << this->MultiLevel << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
+  os << indent << "IncrementalAssembly: " << this->IncrementalAssembly << "\n";
+  os << indent << "MaximumChangedFraction: " << this->MaximumChangedFraction << "\n";
 }

@@ -25,6 +25,19 @@
  * WarmStart on, an iterative solve starts from the previous solution when the
  * unknowns are unchanged (relighting, painting).
  *
+ * Incremental assembly after a paint (TransCut Sec. 5.2; divergence and fem
+ * solvers, IncrementalAssembly on): the filter keeps a copy of the
+ * coefficients and the irradiance of its last successful solve (7 doubles
+ * per tet and 3 per point). When the next input has the same mesh (same
+ * topology and points), the same irradiance, and at most
+ * MaximumChangedFraction of the tets have a different mu_a, sigma_s' or eta
+ * (compared bit for bit with that copy, so any upstream change is seen, not
+ * only vtkPaintScatteringCoefficients'), only the matrix rows of the vertices
+ * of the changed tets are rebuilt (the result equals a full assembly), and the
+ * solve warm-starts from the previous fluence. GetLastAssembly() tells which
+ * path was taken ("incremental" or "full"). Discretisations without an
+ * incremental update (fem) always assemble in full.
+ *
  * @warning A solve that does not reach RelTol within MaxIter iterations is
  * not an error: the filter warns with the channel, iterations and residual,
  * and GetConverged(channel) returns false.
@@ -132,6 +145,31 @@ public:
   ///@}
 
   ///@{
+  /// Rebuild only the rows of the tets whose coefficients changed since the
+  /// last solve (see the class documentation). Default on.
+  vtkSetMacro(IncrementalAssembly, bool);
+  vtkGetMacro(IncrementalAssembly, bool);
+  vtkBooleanMacro(IncrementalAssembly, bool);
+  ///@}
+
+  ///@{
+  /// Largest fraction of changed tets for which the update is incremental
+  /// (the row update is serial; beyond this a parallel full assembly is
+  /// faster). Default 0.05.
+  vtkSetClampMacro(MaximumChangedFraction, double, 0.0, 1.0);
+  vtkGetMacro(MaximumChangedFraction, double);
+  ///@}
+
+  /// How the last vertex solve (divergence, fem) built its system: "full" or
+  /// "incremental"; empty for the other solvers and before the first solve.
+  const char* GetLastAssembly() const;
+
+  /// Tets found changed for the last incremental update (-1 if the filter
+  /// did not look: no cached coefficients, new mesh, other irradiance, too
+  /// many changes, or IncrementalAssembly off).
+  vtkIdType GetNumberOfChangedTets() const;
+
+  ///@{
   /// Statistics of the last solve, per channel c in 0..2 (R, G, B).
   int GetNumberOfIterations(int channel) const;
   double GetFinalResidual(int channel) const;
@@ -174,6 +212,8 @@ protected:
   std::string LinearSolver;
   bool MultiLevel = false;
   int NumberOfThreads = 0;
+  bool IncrementalAssembly = true;
+  double MaximumChangedFraction = 0.05;
   double TopologyTime = 0.0;
   double AssemblyTime = 0.0;
   double SolveTime = 0.0;

@@ -43,6 +43,10 @@ struct SolverReport
 {
   std::string Solver;             ///< name, e.g. "divergence"
   std::string LinearSolver;       ///< e.g. "cg-jacobi", "bicgstab", "relaxation"
+  /// Vertex discretisations: "full" (Assemble) or "incremental" (only the
+  /// rows of changed tets rebuilt, VertexDiffusionSolver::SetChangedTets);
+  /// empty for the other solvers.
+  std::string Assembly;
   long long NumberOfUnknowns = 0; ///< per channel
   long long NumberOfNonZeros = 0; ///< per channel matrix (0 for Monte Carlo)
   std::size_t MemoryBytes = 0;    ///< system (matrix, vectors) or tallies

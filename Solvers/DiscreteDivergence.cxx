@@ -5,6 +5,7 @@
 #include "Radiance.h"
 #include "TetGeometry.h"
 #include "TetMesh.h"
+#include "VertexAssembly.h"
 
 #include <omp.h>
 
@@ -15,44 +16,6 @@
 
 namespace translucency
 {
-
-namespace
-{
-
-const char* const ChannelNames[NumberOfChannels] = { "R", "G", "B" };
-
-/// Throws if the irradiance has the wrong size or a value that is not finite
-/// and >= 0 (serial; Assemble checks the values in parallel first and calls
-/// this for the message).
-void CheckIrradiance(const TetMesh& mesh, const std::vector<double>& irradiance)
-{
-  const size_t expected = 3 * static_cast<size_t>(mesh.GetNumberOfPoints());
-  if (irradiance.size() != expected)
-  {
-    std::ostringstream os;
-    os << "Irradiance has " << irradiance.size() << " values but the mesh has "
-       << mesh.GetNumberOfPoints() << " points (" << expected << " values expected, 3 per point)";
-    throw Error(os.str());
-  }
-  const long long n = static_cast<long long>(expected);
-  long long first = LLONG_MAX;
-  for (long long k = 0; k < n && first == LLONG_MAX; ++k)
-  {
-    if (!(std::isfinite(irradiance[k]) && irradiance[k] >= 0.0))
-    {
-      first = k;
-    }
-  }
-  if (first != LLONG_MAX)
-  {
-    std::ostringstream os;
-    os << "Irradiance of point " << first / 3 << ", channel " << ChannelNames[first % 3] << " is "
-       << irradiance[first] << " W/mm^2: must be finite and >= 0";
-    throw Error(os.str());
-  }
-}
-
-} // namespace
 
 void DiscreteDivergence::Assemble(const TetMesh& mesh,
   const OpticalProperties& material,
@@ -74,166 +37,80 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
   }
 
   // Boundary points only (a few percent of the points). The values are
-  // checked below; an invalid eta here only gives values that are not used.
+  // checked in AssembleVertexSystem; an invalid eta here only gives values
+  // that are not used.
   const std::vector<double> pointEta = BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
 
-  const size_t nnz = mesh.GetColumnIndices().size();
-  system.NumberOfUnknowns = numPoints;
-  system.RowOffsets = mesh.GetRowOffsets();
-  system.ColumnIndices.resize(nnz); // filled in parallel below
-  for (int c = 0; c < NumberOfChannels; ++c)
-  {
-    system.Values[c].resize(nnz);
-    system.RightHandSide[c].resize(numPoints);
-  }
-
+  ResizeVertexSystem(mesh, system);
   const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
-  const TetMesh::ScatterSchedule& schedule = mesh.GetScatterSchedule();
-  const int numColours = schedule.GetNumberOfColours();
-  const double* points = mesh.GetPoints().data();
-  const int* tets = mesh.GetTets().data();
-  const int* positions = mesh.GetTetNonZeroPositions().data();
   const double* muA = material.AbsorptionCoefficient.data();
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
-  const double* tetEta = material.RefractiveIndex.data();
   const double* q = irradiance.data();
-  double* values[NumberOfChannels] = {
-    system.Values[0].data(), system.Values[1].data(), system.Values[2].data()
-  };
-  double* rhs[NumberOfChannels] = {
-    system.RightHandSide[0].data(), system.RightHandSide[1].data(), system.RightHandSide[2].data()
-  };
-  const long long numValues = static_cast<long long>(nnz);
-  const long long numMaterialValues = static_cast<long long>(3 * tetCount);
-  const long long numIrradianceValues = static_cast<long long>(irradiance.size());
-  const int* meshColumns = mesh.GetColumnIndices().data();
-  int* columns = system.ColumnIndices.data();
+  double* values[NumberOfChannels] = { system.Values[0].data(), system.Values[1].data(),
+    system.Values[2].data() };
+  double* rhs[NumberOfChannels] = { system.RightHandSide[0].data(),
+    system.RightHandSide[1].data(), system.RightHandSide[2].data() };
   const std::vector<int>& boundaryPoints = mesh.GetBoundaryPoints();
   const std::vector<double>& boundaryArea = mesh.GetBoundaryAreas();
   const int* diagonal = mesh.GetDiagonalPositions().data();
-  const int* pointTetOffsets = mesh.GetPointTetOffsets().data();
   const int numBoundary = static_cast<int>(boundaryPoints.size());
 
-  // One parallel region (fork/join and barriers are what costs on a busy
-  // machine): check values, clear, scatter the tets colour by colour, add
-  // the boundary terms.
-  int invalid = 0;
-#pragma omp parallel num_threads(numThreads)
-  {
-#pragma omp for schedule(static) reduction(| : invalid)
-    for (long long k = 0; k < numMaterialValues; ++k)
+  auto prepare = []() {};
+  auto tetKernel = [&](size_t t, const int*, const int* pos, const TetGeometry& geometry) {
+    const double volume = geometry.Volume;
+    const double(&g)[4][4] = geometry.Stiffness; // g_ab = N_a.N_b / (36 V_t)
+    // Entry 4a+b of the tet's 16 is (row tv[a], column tv[b]).
+    const int q00 = pos[0], q01 = pos[1], q02 = pos[2], q03 = pos[3];
+    const int q10 = pos[4], q11 = pos[5], q12 = pos[6], q13 = pos[7];
+    const int q20 = pos[8], q21 = pos[9], q22 = pos[10], q23 = pos[11];
+    const int q30 = pos[12], q31 = pos[13], q32 = pos[14], q33 = pos[15];
+    for (int c = 0; c < NumberOfChannels; ++c)
     {
-      const double a = muA[k], s = sigmaS[k];
-      const bool ok = std::isfinite(a) && a >= 0.0 && std::isfinite(s) && s >= 0.0 && a + s > 0.0 &&
-        std::isfinite(tetEta[k / 3]) && tetEta[k / 3] > 0.0;
-      invalid |= ok ? 0 : 1;
+      const double mu = muA[3 * t + c];
+      const double four = 4.0 / (3.0 * (mu + sigmaS[3 * t + c])); // 4 kappa_t
+      const double mass = volume * mu; // V_t mu_t: the tet's share of V_i mu(x_i), eq. 13
+      // TransCut eq. 14: M_ij = 4 w_ij.
+      const double w01 = four * g[0][1], w02 = four * g[0][2], w03 = four * g[0][3];
+      const double w12 = four * g[1][2], w13 = four * g[1][3], w23 = four * g[2][3];
+      double* v = values[c];
+      // TransCut eq. 13: M_ii = -4 sum_j w_ij + V_i mu(x_i).
+      v[q00] += four * g[0][0] + mass;
+      v[q11] += four * g[1][1] + mass;
+      v[q22] += four * g[2][2] + mass;
+      v[q33] += four * g[3][3] + mass;
+      v[q01] += w01;
+      v[q10] += w01;
+      v[q02] += w02;
+      v[q20] += w02;
+      v[q03] += w03;
+      v[q30] += w03;
+      v[q12] += w12;
+      v[q21] += w12;
+      v[q13] += w13;
+      v[q31] += w13;
+      v[q23] += w23;
+      v[q32] += w23;
     }
-#pragma omp for schedule(static) reduction(| : invalid)
-    for (long long k = 0; k < numIrradianceValues; ++k)
-    {
-      invalid |= (std::isfinite(q[k]) && q[k] >= 0.0) ? 0 : 1;
-    }
-    // After the implicit barrier every thread sees the same flag.
-    if (!invalid)
-    {
+  };
+  auto finish = [&]() {
+    // Boundary rows: lumped Robin term and source (TransCut eq. 11-13).
 #pragma omp for schedule(static)
-      for (long long k = 0; k < numValues; ++k)
+    for (int k = 0; k < numBoundary; ++k)
+    {
+      const int i = boundaryPoints[k];
+      const double fdr = Fresnel::DiffuseReflectance(pointEta[i]);
+      const double a = Fresnel::MismatchA(pointEta[i]);
+      const double s = boundaryArea[i];
+      for (int c = 0; c < NumberOfChannels; ++c)
       {
-        columns[k] = meshColumns[k];
-        values[0][k] = 0.0;
-        values[1][k] = 0.0;
-        values[2][k] = 0.0;
-      }
-      // Right-hand sides, and identity rows for points used by no tet (the
-      // tet loop below never touches those diagonals: no barrier needed).
-#pragma omp for schedule(static) nowait
-      for (int i = 0; i < numPoints; ++i)
-      {
-        const bool orphan = pointTetOffsets[i + 1] == pointTetOffsets[i];
-        for (int c = 0; c < NumberOfChannels; ++c)
-        {
-          rhs[c][i] = 0.0;
-          if (orphan)
-          {
-            values[c][diagonal[i]] = 1.0;
-          }
-        }
-      }
-
-      // Tets: colour classes in turn; within a class, vertex-disjoint chunks in
-      // parallel, each chunk's tets in order (deterministic summation order).
-      for (int colour = 0; colour < numColours; ++colour)
-      {
-#pragma omp for schedule(dynamic, 1)
-        for (int chunk = schedule.ColourOffsets[colour]; chunk < schedule.ColourOffsets[colour + 1];
-             ++chunk)
-        {
-          for (int s = schedule.ChunkOffsets[chunk]; s < schedule.ChunkOffsets[chunk + 1]; ++s)
-          {
-            const size_t t = static_cast<size_t>(schedule.Tets[s]);
-            const int* tv = tets + 4 * t;
-            const double* p0 = points + 3 * static_cast<size_t>(tv[0]);
-            const double* p1 = points + 3 * static_cast<size_t>(tv[1]);
-            const double* p2 = points + 3 * static_cast<size_t>(tv[2]);
-            const double* p3 = points + 3 * static_cast<size_t>(tv[3]);
-            const TetGeometry geometry = ComputeTetGeometry(p0, p1, p2, p3);
-            const double volume = geometry.Volume;
-            const double(&g)[4][4] = geometry.Stiffness; // g_ab = N_a.N_b / (36 V_t)
-            // Entry 4a+b of the tet's 16 is (row tv[a], column tv[b]).
-            const int* pos = positions + 16 * t;
-            const int q00 = pos[0], q01 = pos[1], q02 = pos[2], q03 = pos[3];
-            const int q10 = pos[4], q11 = pos[5], q12 = pos[6], q13 = pos[7];
-            const int q20 = pos[8], q21 = pos[9], q22 = pos[10], q23 = pos[11];
-            const int q30 = pos[12], q31 = pos[13], q32 = pos[14], q33 = pos[15];
-            for (int c = 0; c < NumberOfChannels; ++c)
-            {
-              const double mu = muA[3 * t + c];
-              const double four = 4.0 / (3.0 * (mu + sigmaS[3 * t + c])); // 4 kappa_t
-              const double mass = volume * mu; // V_t mu_t: the tet's share of V_i mu(x_i), eq. 13
-              // TransCut eq. 14: M_ij = 4 w_ij.
-              const double w01 = four * g[0][1], w02 = four * g[0][2], w03 = four * g[0][3];
-              const double w12 = four * g[1][2], w13 = four * g[1][3], w23 = four * g[2][3];
-              double* v = values[c];
-              // TransCut eq. 13: M_ii = -4 sum_j w_ij + V_i mu(x_i).
-              v[q00] += four * g[0][0] + mass;
-              v[q11] += four * g[1][1] + mass;
-              v[q22] += four * g[2][2] + mass;
-              v[q33] += four * g[3][3] + mass;
-              v[q01] += w01;
-              v[q10] += w01;
-              v[q02] += w02;
-              v[q20] += w02;
-              v[q03] += w03;
-              v[q30] += w03;
-              v[q12] += w12;
-              v[q21] += w12;
-              v[q13] += w13;
-              v[q31] += w13;
-              v[q23] += w23;
-              v[q32] += w23;
-            }
-          }
-        }
-      }
-
-      // Boundary rows: lumped Robin term and source (TransCut eq. 11-13).
-#pragma omp for schedule(static)
-      for (int k = 0; k < numBoundary; ++k)
-      {
-        const int i = boundaryPoints[k];
-        const double fdr = Fresnel::DiffuseReflectance(pointEta[i]);
-        const double a = Fresnel::MismatchA(pointEta[i]);
-        const double s = boundaryArea[i];
-        for (int c = 0; c < NumberOfChannels; ++c)
-        {
-          values[c][diagonal[i]] += 2.0 * s / (3.0 * a); // TransCut eq. 13, boundary case
-          rhs[c][i] =
-            8.0 * s * q[3 * static_cast<size_t>(i) + c] / (3.0 * a * (1.0 - fdr)); // eq. 12
-        }
+        values[c][diagonal[i]] += 2.0 * s / (3.0 * a); // TransCut eq. 13, boundary case
+        rhs[c][i] =
+          8.0 * s * q[3 * static_cast<size_t>(i) + c] / (3.0 * a * (1.0 - fdr)); // eq. 12
       }
     }
-  }
-  if (invalid)
+  };
+  if (!AssembleVertexSystem(
+        mesh, material, irradiance, system, numThreads, GeometryCache_, prepare, tetKernel, finish))
   {
     // Serial re-checks that name the culprit.
     material.Validate(numTets);
@@ -242,7 +119,7 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
   }
 }
 
-void DiscreteDivergence::UpdateTets(const TetMesh& mesh,
+bool DiscreteDivergence::UpdateTets(const TetMesh& mesh,
   const OpticalProperties& material,
   const std::vector<double>& irradiance,
   const std::vector<int>& changedTets,
@@ -297,7 +174,7 @@ void DiscreteDivergence::UpdateTets(const TetMesh& mesh,
             std::isfinite(tetEta[t]) && tetEta[t] > 0.0))
       {
         std::ostringstream os;
-        os << "tet " << t << ", channel " << ChannelNames[c] << ": mu_a = " << a
+        os << "tet " << t << ", channel " << ChannelName(c) << ": mu_a = " << a
            << " 1/mm, sigma_s' = " << s << " 1/mm, eta = " << tetEta[t]
            << ": need finite mu_a, sigma_s' >= 0 with mu_a + sigma_s' > 0 and eta > 0";
         throw Error(os.str());
@@ -315,7 +192,7 @@ void DiscreteDivergence::UpdateTets(const TetMesh& mesh,
   }
   if (rows.empty())
   {
-    return;
+    return true;
   }
 
   // Clear the rows; flag every tet that contributes to one of them.
@@ -341,6 +218,7 @@ void DiscreteDivergence::UpdateTets(const TetMesh& mesh,
   // contributions in Assemble. Same expressions as there (eq. 13-14).
   const double* points = mesh.GetPoints().data();
   const int* positions = mesh.GetTetNonZeroPositions().data();
+  const bool cached = GeometryCache_.IsValidFor(mesh);
   for (int t0 : mesh.GetScatterSchedule().Tets)
   {
     if (!tetFlag[t0])
@@ -349,9 +227,12 @@ void DiscreteDivergence::UpdateTets(const TetMesh& mesh,
     }
     const size_t t = static_cast<size_t>(t0);
     const int* tv = tets + 4 * t;
-    const TetGeometry geometry = ComputeTetGeometry(points + 3 * static_cast<size_t>(tv[0]),
-      points + 3 * static_cast<size_t>(tv[1]), points + 3 * static_cast<size_t>(tv[2]),
-      points + 3 * static_cast<size_t>(tv[3]));
+    // The cached geometry has the bits ComputeTetGeometry gives.
+    const TetGeometry geometry = cached ? GeometryCache_.Get(t)
+                                        : ComputeTetGeometry(points + 3 * static_cast<size_t>(tv[0]),
+                                            points + 3 * static_cast<size_t>(tv[1]),
+                                            points + 3 * static_cast<size_t>(tv[2]),
+                                            points + 3 * static_cast<size_t>(tv[3]));
     const double volume = geometry.Volume;
     const double(&g)[4][4] = geometry.Stiffness;
     const int* pos = positions + 16 * t;
@@ -396,6 +277,7 @@ void DiscreteDivergence::UpdateTets(const TetMesh& mesh,
       system.RightHandSide[c][i] = 8.0 * s * q[3 * static_cast<size_t>(i) + c] / (3.0 * a * (1.0 - fdr));
     }
   }
+  return true;
 }
 
 void DiscreteDivergence::ToPointFluence(const TetMesh& mesh,
@@ -409,7 +291,7 @@ void DiscreteDivergence::ToPointFluence(const TetMesh& mesh,
     if (solution[c].size() != numPoints || system.NumberOfUnknowns != numPoints)
     {
       std::ostringstream os;
-      os << "solution of channel " << ChannelNames[c] << " has " << solution[c].size()
+      os << "solution of channel " << ChannelName(c) << " has " << solution[c].size()
          << " values but the mesh has " << numPoints << " points";
       throw Error(os.str());
     }

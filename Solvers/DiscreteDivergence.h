@@ -7,6 +7,7 @@
 #pragma once
 
 #include "Discretization.h"
+#include "TetGeometry.h"
 
 namespace translucency
 {
@@ -39,11 +40,11 @@ public:
    * Serial: cost ~ the tets around the touched vertices plus one pass over
    * the tet ids and the boundary triangles. Throws translucency::Error on a
    * system that does not match the mesh, an out-of-range tet id or an invalid
-   * value of a changed tet (named).
+   * value of a changed tet (named). Returns true (it is implemented).
    */
-  void UpdateTets(const TetMesh& mesh, const OpticalProperties& material,
+  bool UpdateTets(const TetMesh& mesh, const OpticalProperties& material,
     const std::vector<double>& irradiance, const std::vector<int>& changedTets,
-    DiffusionSystem& system) const;
+    DiffusionSystem& system) const override;
 
   /// Unknowns are the vertex fluences: a copy.
   void ToPointFluence(const TetMesh& mesh, const DiffusionSystem& system,
@@ -56,6 +57,9 @@ public:
 
 private:
   int NumberOfThreads_ = 0;
+  /// V_t and g_ab per tet, reused while the mesh geometry is the same
+  /// (7 doubles per tet: 56 MB at 1M tets).
+  TetGeometryCache GeometryCache_;
 };
 
 } // namespace translucency

@@ -34,6 +34,21 @@ public:
   virtual void Assemble(const TetMesh& mesh, const OpticalProperties& material,
     const std::vector<double>& irradiance, DiffusionSystem& system) = 0;
 
+  /**
+   * Incremental update after the material of some tets changed (painting,
+   * TransCut Sec. 5.2): rebuild only the rows of the vertices of
+   * `changedTets` of a `system` assembled by Assemble() on the same mesh with
+   * the same irradiance; `material` is the whole new material. Returns false
+   * (and leaves `system` alone) if the discretisation has no incremental
+   * update: then call Assemble(). Default: false.
+   */
+  virtual bool UpdateTets(const TetMesh& /*mesh*/, const OpticalProperties& /*material*/,
+    const std::vector<double>& /*irradiance*/, const std::vector<int>& /*changedTets*/,
+    DiffusionSystem& /*system*/) const
+  {
+    return false;
+  }
+
   /// Map the per-channel solutions to fluence phi, 3 values per mesh point
   /// (W/mm^2).
   virtual void ToPointFluence(const TetMesh& mesh, const DiffusionSystem& system,

@@ -10,6 +10,7 @@
 #pragma once
 
 #include "Discretization.h"
+#include "TetGeometry.h"
 
 namespace translucency
 {
@@ -83,6 +84,8 @@ private:
   /// (first triangle per tet or -1; next triangle of the same tet or -1).
   std::vector<int> TriangleHead_;
   std::vector<int> TriangleNext_;
+  /// V_t and g_ab per tet, reused while the mesh geometry is the same.
+  TetGeometryCache GeometryCache_;
 };
 
 } // namespace translucency

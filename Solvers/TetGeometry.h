@@ -1,11 +1,17 @@
 /**
  * @file TetGeometry.h
  * @brief Per-tet geometry kernel shared by the assembly loops of
- * DiscreteDivergence and FiniteElement.
+ * DiscreteDivergence and FiniteElement, and its per-mesh cache.
  *
  * Private header of the Solvers library (not installed, not part of its API).
  */
 #pragma once
+
+#include "TetMesh.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
 
 namespace translucency
 {
@@ -18,6 +24,21 @@ struct TetGeometry
   /// g_ab = N_a.N_b / (36 V_t) (mm), symmetric, rows summing to 0.
   double Stiffness[4][4];
 };
+
+/// The geometry from V_t and the six off-diagonal g_ab: the diagonal is
+/// g_aa = -sum_b g_ab (rows sum to 0; TransCut Sec. 3.3: w_iit = -(w_ijt +
+/// w_ikt + w_ilt); for the FEM, sum_a grad(beta_a) = 0). Used by
+/// ComputeTetGeometry and by the per-tet geometry cache, so both give the
+/// same bits.
+inline TetGeometry MakeTetGeometry(double volume, double g01, double g02, double g03, double g12,
+  double g13, double g23)
+{
+  const double g00 = -(g01 + g02 + g03), g11 = -(g01 + g12 + g13), g22 = -(g02 + g12 + g23),
+               g33 = -(g03 + g13 + g23);
+  return TetGeometry{ volume,
+    { { g00, g01, g02, g03 }, { g01, g11, g12, g13 }, { g02, g12, g22, g23 },
+      { g03, g13, g23, g33 } } };
+}
 
 /// Computes the volume and the geometric stiffness g_ab of the tet (p0, p1,
 /// p2, p3), each a pointer to 3 coordinates (mm). Inline: it is the inner
@@ -54,13 +75,67 @@ inline TetGeometry ComputeTetGeometry(
   const double g12 = (n1x * n2x + n1y * n2y + n1z * n2z) * scale;
   const double g13 = (n1x * n3x + n1y * n3y + n1z * n3z) * scale;
   const double g23 = (n2x * n3x + n2y * n3y + n2z * n3z) * scale;
-  // Rows sum to 0: g_aa = -sum_b g_ab (TransCut Sec. 3.3: w_iit = -(w_ijt +
-  // w_ikt + w_ilt); for the FEM, sum_a grad(beta_a) = 0).
-  const double g00 = -(g01 + g02 + g03), g11 = -(g01 + g12 + g13), g22 = -(g02 + g12 + g23),
-               g33 = -(g03 + g13 + g23);
-  return TetGeometry{ sixV * (1.0 / 6.0),
-    { { g00, g01, g02, g03 }, { g01, g11, g12, g13 }, { g02, g12, g22, g23 },
-      { g03, g13, g23, g33 } } };
+  return MakeTetGeometry(sixV * (1.0 / 6.0), g01, g02, g03, g12, g13, g23);
 }
+
+/**
+ * V_t and the six off-diagonal g_ab of every tet (7 doubles per tet), kept
+ * between assemblies of the same geometry (TetMesh::GetGeometryRevision()):
+ * they do not depend on the coefficients, so a re-assembly after a material
+ * or light change only multiplies them by the coefficients and scatters.
+ * The values are those ComputeTetGeometry returns, so an assembly from the
+ * cache has the same bits as one that computes the geometry.
+ */
+class TetGeometryCache
+{
+public:
+  static constexpr int Stride = 7;
+
+  /// True if the cache holds the geometry of this mesh's current points.
+  bool IsValidFor(const TetMesh& mesh) const
+  {
+    return Revision_ != 0 && Revision_ == mesh.GetGeometryRevision() &&
+      Values_.size() == Stride * static_cast<size_t>(mesh.GetNumberOfTets());
+  }
+
+  /// The geometry of tet t (the cache must be valid).
+  TetGeometry Get(size_t t) const
+  {
+    const double* o = Values_.data() + Stride * t;
+    return MakeTetGeometry(o[0], o[1], o[2], o[3], o[4], o[5], o[6]);
+  }
+
+  /// Computes the geometry of tet t of the mesh and stores it (during a fill).
+  TetGeometry ComputeAndStore(const double* points, const int* tv, size_t t)
+  {
+    const TetGeometry g = ComputeTetGeometry(points + 3 * static_cast<size_t>(tv[0]),
+      points + 3 * static_cast<size_t>(tv[1]), points + 3 * static_cast<size_t>(tv[2]),
+      points + 3 * static_cast<size_t>(tv[3]));
+    double* o = Values_.data() + Stride * t;
+    o[0] = g.Volume;
+    o[1] = g.Stiffness[0][1];
+    o[2] = g.Stiffness[0][2];
+    o[3] = g.Stiffness[0][3];
+    o[4] = g.Stiffness[1][2];
+    o[5] = g.Stiffness[1][3];
+    o[6] = g.Stiffness[2][3];
+    return g;
+  }
+
+  /// Start a fill for this mesh (invalid until EndFill).
+  void BeginFill(const TetMesh& mesh)
+  {
+    Revision_ = 0;
+    Values_.resize(Stride * static_cast<size_t>(mesh.GetNumberOfTets()));
+  }
+  void EndFill(const TetMesh& mesh) { Revision_ = mesh.GetGeometryRevision(); }
+
+  /// Bytes held.
+  size_t GetMemoryBytes() const { return Values_.capacity() * sizeof(double); }
+
+private:
+  std::uint64_t Revision_ = 0;
+  std::vector<double> Values_;
+};
 
 } // namespace translucency

@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
 #include <climits>
 #include <cmath>
 #include <cstdint>
@@ -287,6 +288,16 @@ void CheckTetIds(const std::vector<int>& tets, int numPoints)
 
 } // namespace
 
+namespace
+{
+/// Process-wide unique geometry revisions (never 0).
+std::uint64_t NextGeometryRevision()
+{
+  static std::atomic<std::uint64_t> counter{ 0 };
+  return ++counter;
+}
+}
+
 void TetMesh::SetGeometry(std::vector<double> points, std::vector<int> tets)
 {
   CheckPointsFinite(points);
@@ -299,6 +310,7 @@ void TetMesh::SetGeometry(std::vector<double> points, std::vector<int> tets)
   mesh.ComputeTetVolumes(true);
   mesh.BuildTopology();
   mesh.ComputeMeasures();
+  mesh.GeometryRevision_ = NextGeometryRevision();
   *this = std::move(mesh);
 }
 
@@ -324,6 +336,7 @@ void TetMesh::UpdatePoints(const std::vector<double>& points)
     throw;
   }
   ComputeMeasures();
+  GeometryRevision_ = NextGeometryRevision();
 }
 
 void TetMesh::ComputeTetVolumes(bool allowReorient)
@@ -420,13 +433,22 @@ void TetMesh::BuildTopology()
   std::vector<std::vector<int>> columnsPerThread(maxThreads);
   std::vector<int> firstPointOfThread(maxThreads, -1);
   std::vector<int> rowCount(numPoints, 0);
+  DiagonalPositions_.resize(numPoints);
+  TetNonZeros_.resize(16 * static_cast<size_t>(numTets));
 
-  // 2. Boundary faces and the adjacency rows (sorted, unique, diagonal included).
+  // 2. Boundary faces and the adjacency rows (sorted, unique, diagonal
+  //    included), and the positions of the local matrix entries within the
+  //    rows: row v fills entries 4a+b of the tets where v is local vertex a
+  //    (each (t, a) is written once) with the rank of column tv[b] in row v;
+  //    step 3 adds the row offsets.
 #pragma omp parallel
   {
     const int tid = omp_get_thread_num();
     std::vector<FaceEntry> faces;
     std::vector<int> row;
+    // mark[u] == v: u is already in row v; rank[u]: its rank in the row.
+    std::vector<int> mark(static_cast<size_t>(numPoints), -1);
+    std::vector<int> rank(static_cast<size_t>(numPoints), 0);
     auto& boundary = boundaryPerThread[tid];
     auto& columns = columnsPerThread[tid];
 #pragma omp for schedule(static)
@@ -439,11 +461,19 @@ void TetMesh::BuildTopology()
       faces.clear();
       row.clear();
       row.push_back(v);
+      mark[v] = v;
       for (int k = PointTetOffsets_[v]; k < PointTetOffsets_[v + 1]; ++k)
       {
         const int t = PointTets_[k];
         const int* tv = &Tets_[4 * static_cast<size_t>(t)];
-        row.insert(row.end(), tv, tv + 4);
+        for (int b = 0; b < 4; ++b)
+        {
+          if (mark[tv[b]] != v)
+          {
+            mark[tv[b]] = v;
+            row.push_back(tv[b]);
+          }
+        }
         for (int f = 0; f < 4; ++f)
         {
           const int* fv = FaceVertices[f];
@@ -479,8 +509,23 @@ void TetMesh::BuildTopology()
         }
         s = e;
       }
-      std::sort(row.begin(), row.end());
-      row.erase(std::unique(row.begin(), row.end()), row.end());
+      std::sort(row.begin(), row.end()); // unique already
+      for (size_t k = 0; k < row.size(); ++k)
+      {
+        rank[row[k]] = static_cast<int>(k);
+      }
+      DiagonalPositions_[v] = rank[v];
+      for (int k = PointTetOffsets_[v]; k < PointTetOffsets_[v + 1]; ++k)
+      {
+        const int t = PointTets_[k];
+        const int* tv = &Tets_[4 * static_cast<size_t>(t)];
+        const int a = tv[0] == v ? 0 : tv[1] == v ? 1 : tv[2] == v ? 2 : 3;
+        int* positions = &TetNonZeros_[16 * static_cast<size_t>(t) + 4 * a];
+        for (int b = 0; b < 4; ++b)
+        {
+          positions[b] = rank[tv[b]];
+        }
+      }
       rowCount[v] = static_cast<int>(row.size());
       columns.insert(columns.end(), row.begin(), row.end());
     }
@@ -570,8 +615,6 @@ void TetMesh::BuildTopology()
     RowOffsets_[i + 1] = static_cast<int>(next);
   }
   ColumnIndices_.resize(RowOffsets_[numPoints]);
-  DiagonalPositions_.resize(numPoints);
-  TetNonZeros_.resize(16 * static_cast<size_t>(numTets));
 #pragma omp parallel
   {
     const int tid = omp_get_thread_num();
@@ -583,15 +626,13 @@ void TetMesh::BuildTopology()
     }
     std::vector<int>().swap(columnsPerThread[tid]);
 #pragma omp barrier
-    // 4. Positions of the local matrix entries: row v fills entries 4a+b of
-    //    the tets where v is local vertex a (each (t, a) is written once).
+    // 4. Positions of the local matrix entries in the CSR value array: the
+    //    ranks within row v (step 2) plus the row's offset.
 #pragma omp for schedule(static)
     for (int v = 0; v < numPoints; ++v)
     {
-      const int* rowBegin = ColumnIndices_.data() + RowOffsets_[v];
-      const int* rowEnd = ColumnIndices_.data() + RowOffsets_[v + 1];
-      DiagonalPositions_[v] =
-        static_cast<int>(std::lower_bound(rowBegin, rowEnd, v) - ColumnIndices_.data());
+      const int offset = RowOffsets_[v];
+      DiagonalPositions_[v] += offset;
       for (int k = PointTetOffsets_[v]; k < PointTetOffsets_[v + 1]; ++k)
       {
         const int t = PointTets_[k];
@@ -600,8 +641,7 @@ void TetMesh::BuildTopology()
         int* positions = &TetNonZeros_[16 * static_cast<size_t>(t) + 4 * a];
         for (int b = 0; b < 4; ++b)
         {
-          positions[b] =
-            static_cast<int>(std::lower_bound(rowBegin, rowEnd, tv[b]) - ColumnIndices_.data());
+          positions[b] += offset;
         }
       }
     }

@@ -48,6 +48,13 @@ public:
    */
   void UpdatePoints(const std::vector<double>& points);
 
+  /**
+   * A number that identifies the current points and tets: a new, process-wide
+   * unique value after every SetGeometry() and UpdatePoints() (0 before the
+   * first). Copies of a mesh share it. Assemblers key their per-tet caches on it.
+   */
+  std::uint64_t GetGeometryRevision() const { return GeometryRevision_; }
+
   int GetNumberOfPoints() const { return static_cast<int>(Points_.size() / 3); }
   int GetNumberOfTets() const { return static_cast<int>(Tets_.size() / 4); }
   const std::vector<double>& GetPoints() const { return Points_; }
@@ -152,6 +159,7 @@ private:
   std::vector<int> PointTetOffsets_;
   std::vector<int> PointTets_;
   ScatterSchedule Schedule_;
+  std::uint64_t GeometryRevision_ = 0;
 };
 
 } // namespace translucency

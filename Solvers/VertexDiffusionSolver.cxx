@@ -40,6 +40,15 @@ void VertexDiffusionSolver::Reset()
   LastTets_ = -1;
   LastNonZeros_ = 0;
   LinearReady_ = false;
+  LastRevision_ = 0;
+  HasChangedTets_ = false;
+  ChangedTets_.clear();
+}
+
+void VertexDiffusionSolver::SetChangedTets(std::vector<int> changedTets)
+{
+  ChangedTets_ = std::move(changedTets);
+  HasChangedTets_ = true;
 }
 
 bool VertexDiffusionSolver::Solve(
@@ -66,12 +75,28 @@ bool VertexDiffusionSolver::Solve(
   report.LinearSolver = Linear_->GetName();
 
   auto start = std::chrono::steady_clock::now();
-  // Keep the previous values (swap, no copy) to see whether they changed.
-  for (int c = 0; c < NumberOfChannels; ++c)
+  // Painting: rebuild only the rows of the changed tets' vertices (TransCut
+  // Sec. 5.2) when the system of the last successful solve is of this mesh
+  // with its current geometry. The request is one-shot, also when the update
+  // throws.
+  const bool requested = HasChangedTets_;
+  std::vector<int> changedTets;
+  changedTets.swap(ChangedTets_);
+  HasChangedTets_ = false;
+  const bool sameGeometry = LastMesh_ == &mesh && LastPoints_ == mesh.GetNumberOfPoints() &&
+    LastTets_ == mesh.GetNumberOfTets() && LastRevision_ == mesh.GetGeometryRevision();
+  const bool incremental = requested && sameGeometry && LinearReady_ &&
+    Discretization_->UpdateTets(mesh, *problem.Material, *problem.Irradiance, changedTets, System_);
+  if (!incremental)
   {
-    PreviousValues_[c].swap(System_.Values[c]);
+    // Keep the previous values (swap, no copy) to see whether they changed.
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      PreviousValues_[c].swap(System_.Values[c]);
+    }
+    Discretization_->Assemble(mesh, *problem.Material, *problem.Irradiance, System_);
   }
-  Discretization_->Assemble(mesh, *problem.Material, *problem.Irradiance, System_);
+  report.Assembly = incremental ? "incremental" : "full";
 
   // A warm start needs the same unknowns: the same mesh object and size;
   // the same tets and pattern size, or the linear solver is set up anew.
@@ -84,15 +109,16 @@ bool VertexDiffusionSolver::Solve(
   Linear_->SetRelTol(RelTol_);
   Linear_->SetMaxIter(MaxIter_);
   Linear_->SetProgressCallback([this](double f) { return ReportProgress(f); });
-  if (!LinearReady_)
+  if (!LinearReady_ || !sameGeometry)
   {
-    // New solver object or new mesh: rebuild everything (hierarchy, factor).
+    // New solver object, new mesh or moved points (the hierarchy's eq. 16
+    // weights depend on edge lengths): rebuild everything.
     Linear_->Setup(System_, &mesh, true);
   }
   else
   {
-    bool valuesChanged = false;
-    for (int c = 0; c < NumberOfChannels && !valuesChanged; ++c)
+    bool valuesChanged = incremental && !changedTets.empty();
+    for (int c = 0; !incremental && c < NumberOfChannels && !valuesChanged; ++c)
     {
       valuesChanged = System_.Values[c] != PreviousValues_[c];
     }
@@ -116,6 +142,7 @@ bool VertexDiffusionSolver::Solve(
   LastPoints_ = mesh.GetNumberOfPoints();
   LastTets_ = mesh.GetNumberOfTets();
   LastNonZeros_ = System_.ColumnIndices.size();
+  LastRevision_ = mesh.GetGeometryRevision();
   report.SolveMilliseconds = Since(start);
 
   report.NumberOfUnknowns = System_.NumberOfUnknowns;

@@ -18,6 +18,8 @@
 #include "Discretization.h"
 #include "LinearSolver.h"
 
+#include <cstdint>
+
 namespace translucency
 {
 
@@ -31,6 +33,20 @@ public:
   bool Solve(const DiffusionProblem& problem, std::vector<double>& fluence,
     SolverReport& report) override;
   void Reset() override;
+
+  /**
+   * Painting (TransCut Sec. 5.2): the next Solve() only rebuilds the rows of
+   * the vertices of `changedTets` (tet ids) instead of assembling the whole
+   * system, and warm-starts from the previous solution. The caller
+   * guarantees that, compared with the previous successful Solve(), only the
+   * material of these tets changed (same irradiance). Falls back to a full
+   * assembly (SolverReport::Assembly tells which was done) if there was no
+   * previous successful Solve() on this mesh object with its current geometry
+   * (TetMesh::GetGeometryRevision) or the discretisation has no incremental
+   * update. One-shot: cleared
+   * by the next Solve() or Reset().
+   */
+  void SetChangedTets(std::vector<int> changedTets);
 
   /// The discretisation (e.g. to set its number of threads).
   Discretization& GetDiscretization() { return *Discretization_; }
@@ -55,6 +71,9 @@ private:
   int LastPoints_ = -1;
   int LastTets_ = -1;
   std::size_t LastNonZeros_ = 0;
+  std::uint64_t LastRevision_ = 0; ///< TetMesh::GetGeometryRevision of the last solve
+  bool HasChangedTets_ = false;
+  std::vector<int> ChangedTets_;
 };
 
 } // namespace translucency

@@ -523,6 +523,8 @@ class CommandLineTest(unittest.TestCase):
         t = vtk_to_numpy(source.GetCells().GetConnectivityArray()).reshape(-1, 4)
         d = np.linalg.norm(p[t].mean(axis=1) - centre, axis=1)
         w = np.exp(-d ** 2 / (2 * width ** 2))
+        # The documented cut-off (default weight 1e-6): w(R) = 1e-6.
+        w[d ** 2 > 2 * width ** 2 * np.log(1e6)] = 0.0
         before = cell_array(source, "AbsorptionCoefficient")
         after = cell_array(painted, "AbsorptionCoefficient")
         expected = before.copy()
@@ -565,6 +567,7 @@ class CommandLineTest(unittest.TestCase):
             ({"points": [[0, 0, 0]], "reduced_scattering": "red"}, "reduced_scattering"),
             ({"points": [[0, 0, 0]], "strength": 2}, "strength"),
             ({"points": [[0, 0, 0]], "channels": [1, 1]}, "channels"),
+            ({"points": [[0, 0, 0]], "cutoff_weight": -0.5}, "cutoff_weight"),
         )
         for content, field in paint_cases:
             with self.subTest(paint=content):

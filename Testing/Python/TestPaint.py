@@ -6,7 +6,11 @@ How to run (from a build tree; ctest sets the variables itself):
     PYTHONPATH=<build>/lib/python3.11/site-packages /usr/bin/python3 TestPaint.py
 
 1. The PaintWeight array is Strength exp(-d^2 / (2 Width^2)) with d the distance
-   from each tet centroid to the nearest stroke point, both computed here.
+   from each tet centroid to the nearest stroke point, both computed here, and
+   0 beyond the documented cut-off radius R = Width sqrt(2 ln(Strength /
+   CutoffWeight)) (CutoffWeight 0: the exact Gaussian everywhere); the
+   field-data array PaintedCellIds lists exactly the tets whose coefficients
+   changed.
 2. SET, MULTIPLY and ADD give the formulas of the class documentation, computed
    here from the weights; SET with strength 1 gives exactly the target at a tet
    whose centroid is the stroke point.
@@ -71,7 +75,8 @@ class PaintTest(unittest.TestCase):
         cls.old_s = array(cls.grid, SCATTERING, cell=True).copy()
 
     def paint(self, stroke, width=1.5, strength=1.0, mode=0, target_a=(0.061, 0.97, 1.45),
-              target_s=(0.18, 0.07, 0.03), mask=(1, 1, 1), grid=None, original=None):
+              target_s=(0.18, 0.07, 0.03), mask=(1, 1, 1), grid=None, original=None,
+              cutoff=None):
         paint = translucency.vtkPaintScatteringCoefficients()
         paint.SetInputData(grid if grid is not None else self.grid)
         if original is not None:
@@ -84,6 +89,8 @@ class PaintTest(unittest.TestCase):
         paint.SetTargetAbsorptionCoefficient(target_a)
         paint.SetTargetReducedScatteringCoefficient(target_s)
         paint.SetChannelMask(mask)
+        if cutoff is not None:
+            paint.SetCutoffWeight(cutoff)
         messages = Messages(paint)
         try:
             paint.Update()
@@ -94,9 +101,14 @@ class PaintTest(unittest.TestCase):
         return (array(out, "PaintWeight", cell=True), array(out, ABSORPTION, cell=True),
                 array(out, SCATTERING, cell=True), out)
 
-    def expected_weights(self, stroke, width, strength):
+    def expected_weights(self, stroke, width, strength, cutoff=1e-6):
         d2 = ((self.centroids[:, None, :] - np.asarray(stroke)[None, :, :]) ** 2).sum(axis=2)
-        return strength * np.exp(-d2.min(axis=1) / (2.0 * width ** 2))
+        d2 = d2.min(axis=1)
+        w = strength * np.exp(-d2 / (2.0 * width ** 2))
+        if cutoff > 0.0:
+            # The documented cut-off radius: w(R) = cutoff.
+            w[d2 > 2.0 * width ** 2 * np.log(strength / cutoff)] = 0.0
+        return w
 
     def test_weights_follow_the_gaussian(self):
         stroke = [(4.0, 0.0, 0.0), (3.0, 2.5, 0.0), (2.0, 3.5, 1.0)]
@@ -105,6 +117,19 @@ class PaintTest(unittest.TestCase):
         np.testing.assert_allclose(w, expected, rtol=1e-12, atol=1e-300)
         self.assertGreater(np.count_nonzero(w > 0.3), 5)
         self.assertGreater(np.count_nonzero(w < 1e-3), len(w) // 4)
+        # A narrower stroke: many tets lie beyond the cut-off radius.
+        w1, _, _, _ = self.paint(stroke, width=0.8, strength=0.7)
+        np.testing.assert_allclose(w1, self.expected_weights(stroke, 0.8, 0.7),
+                                   rtol=1e-12, atol=1e-300)
+        self.assertGreater(np.count_nonzero(w1 == 0.0), len(w1) // 10)
+        changed = np.flatnonzero(np.any((a != self.old_a) | (s != self.old_s), axis=1))
+        ids = vtk_to_numpy(out.GetFieldData().GetArray("PaintedCellIds"))
+        np.testing.assert_array_equal(ids, changed)
+        # CutoffWeight 0: the exact Gaussian at every tet.
+        w0, _, _, _ = self.paint(stroke, width=1.5, strength=0.7, cutoff=0.0)
+        np.testing.assert_allclose(w0, self.expected_weights(stroke, 1.5, 0.7, cutoff=0.0),
+                                   rtol=1e-12, atol=1e-300)
+        self.assertEqual(np.count_nonzero(w0 == 0.0), 0)
         # The other arrays pass through (shallow copy).
         self.assertIsNotNone(out.GetCellData().GetArray("RefractiveIndex"))
         self.assertEqual(out.GetNumberOfPoints(), self.grid.GetNumberOfPoints())

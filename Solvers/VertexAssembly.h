@@ -1,0 +1,214 @@
+/**
+ * @file VertexAssembly.h
+ * @brief The part of the vertex assemblies (DiscreteDivergence,
+ * FiniteElement) they have in common: input checks, the system set-up on the
+ * mesh's CSR pattern, the per-tet geometry cache and the deterministic
+ * parallel scatter over tets.
+ *
+ * Private header of the Solvers library (not installed, not part of its API).
+ */
+#pragma once
+
+#include "DiffusionSystem.h"
+#include "Error.h"
+#include "OpticalProperties.h"
+#include "TetGeometry.h"
+#include "TetMesh.h"
+
+#include <omp.h>
+
+#include <cmath>
+#include <cstdint>
+#include <sstream>
+#include <vector>
+
+namespace translucency
+{
+
+/// "R", "G", "B".
+inline const char* ChannelName(int c)
+{
+  static const char* const names[NumberOfChannels] = { "R", "G", "B" };
+  return names[c];
+}
+
+/// Throws if the irradiance has the wrong size or a value that is not finite
+/// and >= 0, naming the first bad point and channel (serial).
+inline void CheckIrradiance(const TetMesh& mesh, const std::vector<double>& irradiance)
+{
+  const size_t expected = 3 * static_cast<size_t>(mesh.GetNumberOfPoints());
+  if (irradiance.size() != expected)
+  {
+    std::ostringstream os;
+    os << "Irradiance has " << irradiance.size() << " values but the mesh has "
+       << mesh.GetNumberOfPoints() << " points (" << expected << " values expected, 3 per point)";
+    throw Error(os.str());
+  }
+  for (size_t k = 0; k < expected; ++k)
+  {
+    if (!(std::isfinite(irradiance[k]) && irradiance[k] >= 0.0))
+    {
+      std::ostringstream os;
+      os << "Irradiance of point " << k / 3 << ", channel " << ChannelName(static_cast<int>(k % 3))
+         << " is " << irradiance[k] << " W/mm^2: must be finite and >= 0";
+      throw Error(os.str());
+    }
+  }
+}
+
+/// Size `system` for the mesh's CSR pattern (values and right-hand sides
+/// are filled by AssembleVertexSystem).
+inline void ResizeVertexSystem(const TetMesh& mesh, DiffusionSystem& system)
+{
+  const size_t nnz = mesh.GetColumnIndices().size();
+  system.NumberOfUnknowns = mesh.GetNumberOfPoints();
+  system.RowOffsets = mesh.GetRowOffsets();
+  system.ColumnIndices.resize(nnz);
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    system.Values[c].resize(nnz);
+    system.RightHandSide[c].resize(mesh.GetNumberOfPoints());
+  }
+}
+
+/**
+ * Assemble a vertex system on the mesh's CSR pattern: sizes `system`
+ * (ResizeVertexSystem: a caller may size it first to take pointers into it),
+ * then one OpenMP parallel region that
+ *  1. checks every material value (finite mu_a, sigma_s' >= 0 with
+ *     mu_a + sigma_s' > 0, finite eta > 0) and irradiance value (finite,
+ *     >= 0); if one is invalid it returns false with `system` sized but not
+ *     filled (the caller re-checks serially to name it);
+ *  2. copies the column indices, clears the values and right-hand sides and
+ *     puts identity rows at points used by no tet;
+ *  3. runs `prepare()` (orphaned OpenMP work-sharing allowed; a barrier
+ *     precedes and follows it);
+ *  4. calls `tetKernel(t, tv, positions, geometry)` for every tet: tv its 4
+ *     vertex ids, positions its 16 CSR positions (entry 4a+b = row tv[a],
+ *     column tv[b]), geometry its volume and g_ab (from `cache` when valid
+ *     for this geometry, else computed and stored there). Tets are processed
+ *     in the mesh's scatter schedule (colour classes of vertex-disjoint
+ *     chunks, each chunk's tets in order), so the kernel may add to the rows
+ *     of its tet's vertices without races and every entry sums its
+ *     contributions in the same order for any number of threads;
+ *  5. runs `finish()` (orphaned OpenMP work-sharing allowed).
+ * The caller has checked the sizes of `material` and `irradiance`.
+ */
+template <typename Prepare, typename TetKernel, typename Finish>
+bool AssembleVertexSystem(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<double>& irradiance, DiffusionSystem& system, int numThreads,
+  TetGeometryCache& cache, Prepare&& prepare, TetKernel&& tetKernel, Finish&& finish)
+{
+  const int numPoints = mesh.GetNumberOfPoints();
+  const int numTets = mesh.GetNumberOfTets();
+  const size_t nnz = mesh.GetColumnIndices().size();
+  ResizeVertexSystem(mesh, system);
+  const bool fill = !cache.IsValidFor(mesh);
+  if (fill)
+  {
+    cache.BeginFill(mesh);
+  }
+
+  const TetMesh::ScatterSchedule& schedule = mesh.GetScatterSchedule();
+  const int numColours = schedule.GetNumberOfColours();
+  const double* points = mesh.GetPoints().data();
+  const int* tets = mesh.GetTets().data();
+  const int* positions = mesh.GetTetNonZeroPositions().data();
+  const double* muA = material.AbsorptionCoefficient.data();
+  const double* sigmaS = material.ReducedScatteringCoefficient.data();
+  const double* tetEta = material.RefractiveIndex.data();
+  const double* q = irradiance.data();
+  double* values[NumberOfChannels] = { system.Values[0].data(), system.Values[1].data(),
+    system.Values[2].data() };
+  double* rhs[NumberOfChannels] = { system.RightHandSide[0].data(),
+    system.RightHandSide[1].data(), system.RightHandSide[2].data() };
+  const long long numValues = static_cast<long long>(nnz);
+  const long long numIrradianceValues = static_cast<long long>(irradiance.size());
+  const int* meshColumns = mesh.GetColumnIndices().data();
+  int* columns = system.ColumnIndices.data();
+  const int* diagonal = mesh.GetDiagonalPositions().data();
+  const int* pointTetOffsets = mesh.GetPointTetOffsets().data();
+
+  // One parallel region (fork/join and barriers are what costs on a busy
+  // machine).
+  int invalid = 0;
+#pragma omp parallel num_threads(numThreads)
+  {
+    // 1. Values, per tet (no division in the index).
+#pragma omp for schedule(static) reduction(| : invalid)
+    for (int t = 0; t < numTets; ++t)
+    {
+      const double eta = tetEta[t];
+      bool ok = std::isfinite(eta) && eta > 0.0;
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        const double a = muA[3 * static_cast<size_t>(t) + c];
+        const double s = sigmaS[3 * static_cast<size_t>(t) + c];
+        ok = ok && std::isfinite(a) && a >= 0.0 && std::isfinite(s) && s >= 0.0 && a + s > 0.0;
+      }
+      invalid |= ok ? 0 : 1;
+    }
+#pragma omp for schedule(static) reduction(| : invalid)
+    for (long long k = 0; k < numIrradianceValues; ++k)
+    {
+      invalid |= (std::isfinite(q[k]) && q[k] >= 0.0) ? 0 : 1;
+    }
+    // After the implicit barrier every thread sees the same flag.
+    if (!invalid)
+    {
+      // 2. Pattern, cleared values; right-hand sides and identity rows for
+      // points used by no tet (the tets never touch those diagonals).
+#pragma omp for schedule(static)
+      for (long long k = 0; k < numValues; ++k)
+      {
+        columns[k] = meshColumns[k];
+        values[0][k] = 0.0;
+        values[1][k] = 0.0;
+        values[2][k] = 0.0;
+      }
+#pragma omp for schedule(static)
+      for (int i = 0; i < numPoints; ++i)
+      {
+        const bool orphan = pointTetOffsets[i + 1] == pointTetOffsets[i];
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          rhs[c][i] = 0.0;
+          if (orphan)
+          {
+            values[c][diagonal[i]] = 1.0;
+          }
+        }
+      }
+      // 3.
+      prepare();
+#pragma omp barrier
+      // 4. Tets: colour classes in turn; within a class, vertex-disjoint
+      // chunks in parallel, each chunk's tets in order.
+      for (int colour = 0; colour < numColours; ++colour)
+      {
+#pragma omp for schedule(dynamic, 1)
+        for (int chunk = schedule.ColourOffsets[colour]; chunk < schedule.ColourOffsets[colour + 1];
+             ++chunk)
+        {
+          for (int s = schedule.ChunkOffsets[chunk]; s < schedule.ChunkOffsets[chunk + 1]; ++s)
+          {
+            const size_t t = static_cast<size_t>(schedule.Tets[s]);
+            const int* tv = tets + 4 * t;
+            const TetGeometry geometry =
+              fill ? cache.ComputeAndStore(points, tv, t) : cache.Get(t);
+            tetKernel(t, tv, positions + 16 * t, geometry);
+          }
+        }
+      }
+      // 5.
+      finish();
+    }
+  }
+  if (!invalid && fill)
+  {
+    cache.EndFill(mesh);
+  }
+  return !invalid;
+}
+
+} // namespace translucency

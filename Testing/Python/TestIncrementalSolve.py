@@ -1,0 +1,154 @@
+#!/usr/bin/env python3
+"""Tests of the incremental assembly of vtkSolveDiffusion after a paint.
+
+How to run (from a build tree; ctest sets the variables itself):
+
+    PYTHONPATH=<build>/lib/python3.11/site-packages /usr/bin/python3 TestIncrementalSolve.py
+
+1. Lights -> paint -> solve: the first solve assembles in full; after a paint
+   stroke (same mesh, same irradiance) the solve reports "incremental", found
+   exactly the tets the paint filter lists in PaintedCellIds, and its fluence
+   equals a from-scratch solve by a new filter (both to RelTol 1e-12).
+2. Coefficients changed by hand (not by the paint filter) are detected too.
+3. Falls back to a full assembly: another light (other irradiance), a cut
+   (topology change), too many changed tets (beyond MaximumChangedFraction),
+   IncrementalAssembly off.
+
+Exits non-zero on failure (unittest).
+"""
+
+import unittest
+
+import numpy as np
+
+import translucency
+from TestPaint import ABSORPTION, marble_mesh, plane_cut
+from TestPipeline import Messages, array
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
+
+
+def run(*algorithms):
+    """Update the last algorithm; fail on any error or warning."""
+    messages = Messages(*algorithms)
+    try:
+        algorithms[-1].Update()
+    finally:
+        messages.remove()
+    assert not messages.errors + messages.pipeline_errors + messages.warnings, (
+        messages.errors + messages.warnings)
+
+
+def new_solver():
+    solve = translucency.vtkSolveDiffusion()
+    solve.SetRelTol(1e-12)
+    solve.SetMaxIter(20000)
+    return solve
+
+
+class IncrementalSolveTest(unittest.TestCase):
+
+    def setUp(self):
+        self.grid = marble_mesh(3000)
+        self.lights = translucency.vtkSurfaceIrradiance()
+        self.lights.SetInputData(self.grid)
+        self.lights.SetShadows(False)
+        self.lights.SetUniformLightIrradiance(0.0)
+        self.lights.SetUniformLightSamples(0)
+        self.lights.AddDirectionalLight(0.3, -1.0, -0.5, 1.0)
+        self.paint = translucency.vtkPaintScatteringCoefficients()
+        self.paint.SetInputConnection(self.lights.GetOutputPort())
+        self.paint.AddStrokePoint(3.0, 2.0, 0.0)
+        self.paint.AddStrokePoint(2.0, 3.5, 1.0)
+        self.paint.SetWidth(0.25)
+        self.paint.SetStrength(0.0)  # nothing painted yet
+        self.solve = new_solver()
+        self.solve.SetInputConnection(self.paint.GetOutputPort())
+
+    def reference(self, grid):
+        """Fluence of a from-scratch solve by a new filter."""
+        copy = vtkUnstructuredGrid()
+        copy.ShallowCopy(grid)
+        solve = new_solver()
+        solve.SetInputData(copy)
+        run(solve)
+        self.assertEqual(solve.GetLastAssembly(), "full")
+        return array(solve.GetOutput(), "Fluence")
+
+    def test_paint_then_solve_is_incremental(self):
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetLastAssembly(), "full")
+        cold = self.solve.GetNumberOfIterations(0)
+        self.paint.SetStrength(1.0)
+        self.paint.SetTargetAbsorptionCoefficient(0.5, 0.5, 0.5)
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetLastAssembly(), "incremental")
+        painted = vtk_to_numpy(self.paint.GetOutput().GetFieldData().GetArray("PaintedCellIds"))
+        n = self.grid.GetNumberOfCells()
+        self.assertGreater(len(painted), 10)
+        self.assertLess(len(painted), 0.05 * n)
+        self.assertEqual(self.solve.GetNumberOfChangedTets(), len(painted))
+        # Warm start from the previous fluence.
+        self.assertLess(self.solve.GetNumberOfIterations(0), cold)
+        for c in range(3):
+            self.assertTrue(self.solve.GetConverged(c))
+        phi = array(self.solve.GetOutput(), "Fluence")
+        expected = self.reference(self.paint.GetOutput())
+        # The painted tets change the fluence by far more than the tolerance.
+        before = self.reference(self.lights.GetOutput())
+        self.assertGreater(np.max(np.abs(before - expected)), 1e-3 * np.max(expected))
+        np.testing.assert_allclose(phi, expected, rtol=1e-7, atol=1e-9 * np.max(expected))
+
+    def test_any_coefficient_change_is_detected(self):
+        run(self.lights, self.paint, self.solve)
+        edited = vtkUnstructuredGrid()
+        edited.ShallowCopy(self.paint.GetOutput())
+        a = array(edited, ABSORPTION, cell=True).copy()
+        a[[5, 17, 400]] *= 3.0
+        vtk_a = numpy_to_vtk(a, deep=True)
+        vtk_a.SetName(ABSORPTION)
+        edited.GetCellData().AddArray(vtk_a)
+        self.solve.SetInputData(edited)
+        run(self.solve)
+        self.assertEqual(self.solve.GetLastAssembly(), "incremental")
+        self.assertEqual(self.solve.GetNumberOfChangedTets(), 3)
+        np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
+                                   self.reference(edited), rtol=1e-7)
+
+    def test_falls_back_to_full_assembly(self):
+        run(self.lights, self.paint, self.solve)
+        # Another light: other irradiance.
+        self.lights.AddDirectionalLight(1.0, 0.0, 0.0, 0.5)
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetLastAssembly(), "full")
+        self.assertEqual(self.solve.GetNumberOfChangedTets(), -1)
+        # Nothing changed: incremental with no changed tet.
+        self.solve.Modified()
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetLastAssembly(), "incremental")
+        self.assertEqual(self.solve.GetNumberOfChangedTets(), 0)
+        # A wide stroke changes most tets: beyond MaximumChangedFraction.
+        self.paint.SetStrength(1.0)
+        self.paint.SetWidth(20.0)
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetLastAssembly(), "full")
+        np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
+                                   self.reference(self.paint.GetOutput()), rtol=1e-7)
+        # IncrementalAssembly off.
+        self.solve.IncrementalAssemblyOff()
+        self.paint.SetWidth(0.5)
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetLastAssembly(), "full")
+        # A cut: new topology.
+        self.solve.IncrementalAssemblyOn()
+        cut = plane_cut(self.paint.GetOutput())
+        self.solve.SetInputData(cut)
+        run(self.solve)
+        self.assertEqual(self.solve.GetLastAssembly(), "full")
+        self.assertLess(cut.GetNumberOfCells(), self.grid.GetNumberOfCells())
+        np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
+                                   self.reference(cut), rtol=1e-7)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
