@@ -138,6 +138,8 @@ bool ParseImageOption(const std::vector<std::string>& args, size_t& i, RadianceI
 
 /// `translucency compare` (Compare.cxx) and its help text.
 int Compare(const std::vector<std::string>& args);
+/// `translucency radiosity` (Radiosity.cxx).
+int Radiosity(const std::vector<std::string>& args);
 extern const char* const CompareHelp;
 
 } // namespace translucency_app

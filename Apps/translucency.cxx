@@ -3,6 +3,7 @@
 //   translucency render --mesh FILE [options]    surface/tet mesh -> fluence -> radiance -> PNG
 //   translucency compare --mesh FILE [options]   every solver on one problem, side by side
 //   translucency bench [options]                 assembly/solve medians at several mesh sizes
+//   translucency radiosity --scene FILE.json --output PREFIX   translucent radiosity (Radiosity.cxx)
 //   translucency --help
 //
 // Every error is printed as "translucency: error: ..." and the exit code is 1
@@ -62,6 +63,7 @@ Commands:
            light it, solve the diffusion equation, write the results.
   compare  Run several solvers on the same problem and lay the results side by side.
   bench    Median assembly and solve times at several mesh sizes.
+  radiosity  Translucent radiosity of a scene file (run it without options for its help).
 
 Scene options (render and compare):
 )";
@@ -580,7 +582,9 @@ int main(int argc, char* argv[])
       return translucency_app::Compare(args);
     if (command == "bench")
       return Bench(args);
-    throw UsageError("unknown command '" + command + "' (render, compare or bench)");
+    if (command == "radiosity")
+      return translucency_app::Radiosity(args);
+    throw UsageError("unknown command '" + command + "' (render, compare, bench or radiosity)");
   }
   catch (const UsageError& e)
   {

@@ -24,18 +24,24 @@ class TetMesh;
 /// - Point: radiant intensity I (W/sr) at Position (mm).
 /// - Uniform: irradiance E (W/mm^2) an unoccluded flat surface receives from
 ///   uniform incident radiance L = E / pi from every direction.
+/// - Spot: a point light at Position whose radiant intensity (W/sr) is
+///   Power * cos(alpha)^SpotExponent inside the cone of half-angle SpotCutoff
+///   (degrees) around Direction (alpha the angle to the axis) and 0 outside.
 struct LightSource
 {
   enum class Kind
   {
     Directional,
     Point,
-    Uniform
+    Uniform,
+    Spot
   };
   Kind Type = Kind::Directional;
   std::array<double, 3> Direction{ 0.0, 0.0, -1.0 };
   std::array<double, 3> Position{ 0.0, 0.0, 0.0 };
   std::array<double, 3> Power{ 1.0, 1.0, 1.0 }; ///< E or I per channel (see above)
+  double SpotCutoff = 30.0;  ///< Spot only: cone half-angle (degrees, in (0, 180])
+  double SpotExponent = 0.0; ///< Spot only: fall-off exponent (>= 0) inside the cone
 };
 
 /**
