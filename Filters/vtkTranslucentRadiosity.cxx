@@ -385,7 +385,7 @@ int vtkTranslucentRadiosity::RequestData(
         return 1;
       }
     }
-    scene->Build();
+    scene->Build(false); // the BVH only if the geometry changed (below)
   }
   catch (const translucency::Error& e)
   {
@@ -402,6 +402,7 @@ int vtkTranslucentRadiosity::RequestData(
   {
     if (!sameGeometry)
     {
+      scene->BuildRayCaster();
       translucency::FormFactorComputer computer;
       computer.SetRaysPerPatch(this->RaysPerPatch);
       computer.SetThreshold(this->FormFactorThreshold);

@@ -235,7 +235,7 @@ void RadiosityScene::SetAlbedo(int k, std::vector<double> albedo)
   Objects_[k].Albedo = std::move(albedo);
 }
 
-void RadiosityScene::Build()
+void RadiosityScene::Build(bool buildRayCaster)
 {
   if (Objects_.empty())
   {
@@ -307,7 +307,14 @@ void RadiosityScene::Build()
   }
   Diagonal_ = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
     (hi[2] - lo[2]) * (hi[2] - lo[2]));
-  Caster_.Build(Points_, Triangles_);
+  if (buildRayCaster)
+  {
+    Caster_.Build(Points_, Triangles_);
+  }
+  else
+  {
+    Caster_ = RayCaster();
+  }
 }
 
 void RadiosityScene::CheckLights(const std::vector<LightSource>& lights) const

@@ -82,8 +82,14 @@ public:
    */
   void SetAlbedo(int k, std::vector<double> albedo);
 
-  /// Gather the patches and build the ray caster. Call after the last Add*.
-  void Build();
+  /**
+   * Gather the patches and (buildRayCaster) build the ray caster. Call after
+   * the last Add*. Without the ray caster (call BuildRayCaster() later) the
+   * patches can be compared with another scene's cheaply.
+   */
+  void Build(bool buildRayCaster = true);
+  /// Build the BVH over the patches (after Build(false)).
+  void BuildRayCaster() { Caster_.Build(Points_, Triangles_); }
 
   int GetNumberOfObjects() const { return static_cast<int>(Objects_.size()); }
   const RadiosityObject& GetObject(int k) const { return Objects_[k]; }

@@ -177,6 +177,15 @@ void TranslucentRadiosity::Solve(const std::vector<LightSource>& lights, Radiosi
 {
   CheckReady();
   result = RadiosityResult();
+  for (auto& op : Operators_)
+  {
+    if (auto* diffusion = dynamic_cast<DiffusionSubsurface*>(op.get()))
+    {
+      // The diffusion solves need not be much more accurate than the
+      // radiosity iteration: 1 % of its tolerance (5e-5 by default).
+      diffusion->SetRelTol(std::min(1e-4, 0.01 * RelTol_));
+    }
+  }
   const int numPatches = Scene_->GetNumberOfPatches();
   const size_t n = 3 * static_cast<size_t>(numPatches);
 

@@ -60,7 +60,8 @@ public:
   void SetMaxDistance(double d) { MaxDistance_ = d; }
   ///@}
 
-  /// Relative change at which the iteration stops (default 0.005, the paper's 0.5 %).
+  /// Relative change at which the iteration stops (default 0.005, the paper's
+  /// 0.5 %). The diffusion S solves use min(1e-4, RelTol / 100) (set at Setup()).
   void SetRelTol(double tol) { RelTol_ = tol; }
   double GetRelTol() const { return RelTol_; }
   /// Iteration limit (default 200).
