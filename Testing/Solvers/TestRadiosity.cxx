@@ -428,6 +428,44 @@ TEST(Radiosity, IterationConvergesMonotonically)
   EXPECT_GT(d2, 0.0);
 }
 
+TEST(Radiosity, ParallelLoopsMatchOneThread)
+{
+  // Direct light, profile S (Dijkstra, evaluation) and a whole solve: the
+  // same numbers with one thread and with the default team.
+  TranslucentScene s;
+  MakeTranslucentScene(s, 0.05, 1.0, 64);
+  auto run = [&](std::vector<double>& E, std::vector<double>& profileOut,
+               std::vector<double>& B) {
+    std::vector<double> q;
+    s.Scene.ComputeDirectIrradiance({ PointLight(8, 8, 8) }, true, E, q);
+    ProfileSubsurface profile;
+    profile.SetVoxelSize(0.5);
+    profile.Setup(s.Scene, s.Block);
+    const int begin = s.Scene.GetPatchOffset(s.Block);
+    std::vector<double> local(q.begin() + 3 * begin, q.end());
+    profile.Apply(local, profileOut);
+    TranslucentRadiosity solver;
+    solver.SetScene(&s.Scene);
+    solver.SetFormFactors(&s.F);
+    RadiosityResult result;
+    solver.Solve({ PointLight(8, 8, 8) }, result);
+    B = result.Combined;
+  };
+  std::vector<double> e1, p1, b1, e2, p2, b2;
+  run(e1, p1, b1);
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  run(e2, p2, b2);
+  omp_set_num_threads(threads);
+  EXPECT_EQ(e1, e2);
+  EXPECT_EQ(p1, p2);
+  ASSERT_EQ(b1.size(), b2.size());
+  for (size_t k = 0; k < b1.size(); ++k)
+  {
+    EXPECT_NEAR(b1[k], b2[k], 1e-9 * std::abs(b1[k]) + 1e-15); // CG sums may differ in the last bits
+  }
+}
+
 TEST(Radiosity, DiffusionOperatorConservesEnergy)
 {
   // mu_a = 0: every watt that enters leaves (the exitance of the discrete
