@@ -46,10 +46,6 @@
 namespace translucency_app
 {
 
-namespace
-{
-using json = nlohmann::json;
-
 const char* const RadiosityHelp = R"(
 translucency radiosity --scene FILE.json --output PREFIX [options]
   Inter-reflection between translucent and opaque diffuse objects (translucent
@@ -64,6 +60,7 @@ translucency radiosity --scene FILE.json --output PREFIX [options]
   --json FILE              report: patches, iterations, residuals, times, memory
   --iteration jacobi|gauss-seidel  (default: the scene's, else gauss-seidel)
   --rel-tol X              relative change to stop at (default 0.005)
+  --linear-solver NAME     linear solver of the diffusion S (default cg-jacobi)
   --rays N                 rays per patch of the form factors (default 256)
   --cell-size MM           patch size of every built-in box (overrides the scene)
   --heuristics             also the paper's Sec. 6.3 heuristics (arrays
@@ -71,6 +68,11 @@ translucency radiosity --scene FILE.json --output PREFIX [options]
   --bench N                then N relights (light moved) and N translucency
                            changes (coefficients x 0.5 / x 2), medians in the JSON
 )";
+
+namespace
+{
+using json = nlohmann::json;
+
 
 /// Per-point RGB of `array` (cell data interpolated to the points), times
 /// `exposure`, sRGB-encoded.
@@ -217,7 +219,7 @@ double MedianOf(std::vector<double> v)
 
 int Radiosity(const std::vector<std::string>& args)
 {
-  std::string scenePath, prefix, png, jsonPath, sOperator, iteration;
+  std::string scenePath, prefix, png, jsonPath, sOperator, iteration, linearSolver;
   double relTol = -1.0, cellSize = 0.0;
   int rays = -1, bench = 0;
   bool heuristics = false;
@@ -246,6 +248,8 @@ int Radiosity(const std::vector<std::string>& args)
       jsonPath = value("--json");
     else if (a == "--s-operator")
       sOperator = value("--s-operator");
+    else if (a == "--linear-solver")
+      linearSolver = value("--linear-solver");
     else if (a == "--iteration")
       iteration = value("--iteration");
     else if (a == "--rel-tol")
@@ -286,6 +290,8 @@ int Radiosity(const std::vector<std::string>& args)
     s.RelTol = relTol;
   if (rays > 0)
     s.RaysPerPatch = rays;
+  if (!linearSolver.empty())
+    s.LinearSolver = linearSolver;
   if (s.SOperator != "diffusion" && s.SOperator != "profile")
     throw translucency::Error("scene '" + scenePath + "': s_operator must be diffusion or profile");
 
@@ -305,6 +311,7 @@ int Radiosity(const std::vector<std::string>& args)
   radiosity->SetVoxelSize(s.VoxelSize);
   radiosity->SetMaxDistance(s.MaxDistance);
   radiosity->SetComputeHeuristics(heuristics);
+  radiosity->SetLinearSolver(s.LinearSolver.c_str());
   auto addLights = [&](const std::vector<translucency::LightSource>& lights) {
     radiosity->RemoveAllLights();
     for (const auto& l : lights)
@@ -334,7 +341,7 @@ int Radiosity(const std::vector<std::string>& args)
   stages.push_back({ "radiosity filter total", firstMs });
 
   json report = { { "scene", scenePath }, { "s_operator", s.SOperator },
-    { "iteration", s.Iteration }, { "patches", radiosity->GetNumberOfPatches() },
+    { "iteration", s.Iteration }, { "linear_solver", s.LinearSolver }, { "patches", radiosity->GetNumberOfPatches() },
     { "rays_per_patch", s.RaysPerPatch }, { "iterations", radiosity->GetNumberOfIterations() },
     { "converged", radiosity->GetConverged() }, { "rel_tol", s.RelTol },
     { "form_factor_ms", radiosity->GetFormFactorTime() },

@@ -435,6 +435,7 @@ LoadedScene LoadScene(const std::string& path, double cellSizeOverride)
     s.MaxIter = static_cast<int>(Number(r, "max_iter", s.MaxIter, ctx));
     s.SOperator = r.value("s_operator", s.SOperator);
     s.Iteration = r.value("iteration", s.Iteration);
+    s.LinearSolver = r.value("linear_solver", s.LinearSolver);
     s.FormFactorThreshold = Number(r, "form_factor_threshold", s.FormFactorThreshold, ctx);
     s.VoxelSize = Number(r, "voxel_size", s.VoxelSize, ctx);
     s.MaxDistance = Number(r, "max_distance", s.MaxDistance, ctx);

@@ -36,6 +36,7 @@ struct SceneSettings
   int MaxIter = 200;
   std::string SOperator = "diffusion";
   std::string Iteration = "gauss-seidel";
+  std::string LinearSolver = "cg-jacobi";
   double FormFactorThreshold = 0.0;
   double VoxelSize = 0.0;
   double MaxDistance = 0.0;

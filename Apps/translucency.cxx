@@ -63,7 +63,7 @@ Commands:
            light it, solve the diffusion equation, write the results.
   compare  Run several solvers on the same problem and lay the results side by side.
   bench    Median assembly and solve times at several mesh sizes.
-  radiosity  Translucent radiosity of a scene file (run it without options for its help).
+  radiosity  Translucent radiosity of a scene of several objects (JSON scene file).
 
 Scene options (render and compare):
 )";
@@ -102,7 +102,8 @@ translucency bench [options]
 
 void PrintUsage()
 {
-  std::cout << UsageHead << SceneOptionsHelp << RenderHelp << CompareHelp << BenchHelp;
+  std::cout << UsageHead << SceneOptionsHelp << RenderHelp << CompareHelp << BenchHelp
+            << translucency_app::RadiosityHelp;
 }
 
 int Render(const std::vector<std::string>& args)

@@ -62,6 +62,7 @@ struct vtkTranslucentRadiosity::Internals
   int Rays = -1;
   double Threshold = -1.0;
   int Method = -1;
+  std::string LinearSolver;
   double VoxelSize = -1.0, MaxDistance = -1.0;
   translucency::RadiosityResult Result;
   double FormFactorTime = 0.0, SetupTime = 0.0;
@@ -450,7 +451,7 @@ int vtkTranslucentRadiosity::RequestData(
 
     // 3. Solve.
     if (!in.Solver || in.Method != this->SubsurfaceMethod || in.VoxelSize != this->VoxelSize ||
-      in.MaxDistance != this->MaxDistance)
+      in.MaxDistance != this->MaxDistance || in.LinearSolver != this->LinearSolver)
     {
       in.Solver = std::make_unique<translucency::TranslucentRadiosity>();
       in.Solver->SetScene(in.Scene.get());
@@ -458,6 +459,7 @@ int vtkTranslucentRadiosity::RequestData(
       in.Solver->SetSubsurfaceMethod(
         this->SubsurfaceMethod == SUBSURFACE_PROFILE ? "profile" : "diffusion");
       in.Solver->SetVoxelSize(this->VoxelSize);
+      in.Solver->SetLinearSolver(this->LinearSolver);
       in.Solver->SetMaxDistance(this->MaxDistance);
       auto start = std::chrono::steady_clock::now();
       in.Solver->Setup();
@@ -465,6 +467,7 @@ int vtkTranslucentRadiosity::RequestData(
       in.Method = this->SubsurfaceMethod;
       in.VoxelSize = this->VoxelSize;
       in.MaxDistance = this->MaxDistance;
+      in.LinearSolver = this->LinearSolver;
     }
     in.Solver->SetRelTol(this->RelTol);
     in.Solver->SetMaxIter(this->MaxIter);
@@ -542,6 +545,7 @@ void vtkTranslucentRadiosity::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "FormFactorThreshold: " << this->FormFactorThreshold << "\n";
   os << indent << "VoxelSize: " << this->VoxelSize << "\n";
   os << indent << "MaxDistance: " << this->MaxDistance << "\n";
+  os << indent << "LinearSolver: " << this->LinearSolver << "\n";
   os << indent << "Shadows: " << this->Shadows << "\n";
   os << indent << "ComputeHeuristics: " << this->ComputeHeuristics << "\n";
   os << indent << "Lights: " << this->Internal->Lights.size() << "\n";

@@ -42,6 +42,7 @@
 #include "vtkDataObjectAlgorithm.h"
 
 #include <memory>
+#include <string>
 
 class TRANSLUCENCYFILTERS_EXPORT vtkTranslucentRadiosity : public vtkDataObjectAlgorithm
 {
@@ -103,6 +104,13 @@ public:
   vtkGetMacro(VoxelSize, double);
   vtkSetClampMacro(MaxDistance, double, 0.0, VTK_DOUBLE_MAX);
   vtkGetMacro(MaxDistance, double);
+  ///@}
+
+  ///@{
+  /// Diffusion S: linear solver of the diffusion systems (a name of
+  /// translucency::GetLinearSolverNames()). Default "cg-jacobi".
+  vtkSetStdStringFromCharMacro(LinearSolver);
+  vtkGetCharFromStdStringMacro(LinearSolver);
   ///@}
 
   ///@{
@@ -180,6 +188,7 @@ protected:
   double MaxDistance = 0.0;
   bool Shadows = true;
   bool ComputeHeuristics = false;
+  std::string LinearSolver = "cg-jacobi";
   int LightType = 0;
   double LightPosition[3] = { 0.0, 0.0, 100.0 };
   double LightDirection[3] = { 0.0, 0.0, -1.0 };

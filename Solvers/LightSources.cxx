@@ -116,11 +116,7 @@ double HemisphereDirection(const double n[3], int k, int count, double rotation,
   return cosTheta;
 }
 
-namespace
-{
-
-/// Throw translucency::Error for a light that cannot be evaluated.
-void CheckLight(const LightSource& light, size_t index)
+void ValidateLight(const LightSource& light, size_t index)
 {
   std::ostringstream msg;
   msg << "light " << index << ": ";
@@ -164,7 +160,6 @@ void CheckLight(const LightSource& light, size_t index)
   }
 }
 
-} // namespace
 
 bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& pointEta,
   const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
@@ -204,7 +199,7 @@ bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& p
   }
   for (size_t l = 0; l < lights.size(); ++l)
   {
-    CheckLight(lights[l], l);
+    ValidateLight(lights[l], l);
   }
 
   q.assign(3 * static_cast<size_t>(numPoints), 0.0);

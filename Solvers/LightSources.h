@@ -10,6 +10,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <functional>
 #include <vector>
 
@@ -54,6 +55,15 @@ struct LightSource
  */
 bool DirectIrradiance(const LightSource& light, const double x[3], const double n[3], double eta,
   double q[3], double toLight[3], double& distance);
+
+/**
+ * Throw translucency::Error, naming the light by `index`, for a light that
+ * cannot be evaluated: a uniform light (pass it as uniformIrradiance), a
+ * negative or non-finite power, a zero or non-finite direction (directional,
+ * spot), a non-finite position (point, spot), a spot cone outside (0, 180]
+ * degrees or a negative exponent.
+ */
+void ValidateLight(const LightSource& light, size_t index);
 
 /**
  * Cosine-weighted direction number k of `count` on the hemisphere around n

@@ -327,48 +327,12 @@ void RadiosityScene::CheckLights(const std::vector<LightSource>& lights) const
       throw Error("light " + std::to_string(l) +
         ": uniform (environment) lights are not supported by the radiosity solver");
     }
-    // Validate power, direction and cone with the boundary-irradiance checks.
-    double q[3], w[3], distance;
-    for (int c = 0; c < 3; ++c)
-    {
-      if (!(light.Power[c] >= 0.0) || !std::isfinite(light.Power[c]))
-      {
-        std::ostringstream os;
-        os << "light " << l << ": power " << light.Power[c] << " in channel " << c
-           << ": must be finite and >= 0";
-        throw Error(os.str());
-      }
-    }
-    if (light.Type != LightSource::Kind::Point)
-    {
-      const double len2 = light.Direction[0] * light.Direction[0] +
-        light.Direction[1] * light.Direction[1] + light.Direction[2] * light.Direction[2];
-      if (!(len2 > 0.0) || !std::isfinite(len2))
-      {
-        throw Error("light " + std::to_string(l) + ": zero or non-finite direction");
-      }
-    }
-    if (light.Type == LightSource::Kind::Spot &&
-      !(light.SpotCutoff > 0.0 && light.SpotCutoff <= 180.0 && light.SpotExponent >= 0.0 &&
-        std::isfinite(light.SpotExponent)))
-    {
-      std::ostringstream os;
-      os << "light " << l << ": spot cut-off " << light.SpotCutoff << " degrees, exponent "
-         << light.SpotExponent << ": need 0 < cut-off <= 180 and exponent >= 0";
-      throw Error(os.str());
-    }
-    (void)q;
-    (void)w;
-    (void)distance;
+    ValidateLight(light, l); // power, direction, position, cone
     if (light.Type == LightSource::Kind::Directional)
     {
       continue;
     }
     const double* x = light.Position.data();
-    if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
-    {
-      throw Error("light " + std::to_string(l) + ": non-finite position");
-    }
     // Parity test against each closed object: an irrational-ish direction
     // avoids rays through shared edges.
     const double dir[3] = { 0.5773502691896258 + 0.0123, 0.5773502691896258 - 0.0311,

@@ -14,6 +14,22 @@
 namespace translucency
 {
 
+void DiffusionSubsurface::SetLinearSolver(const std::string& name)
+{
+  auto solver = CreateLinearSolver(name); // throws for an unknown name
+  LinearSolverName_ = solver->GetName();
+  Solver_.reset();
+}
+
+void DiffusionSubsurface::SetRelTol(double tol)
+{
+  RelTol_ = tol;
+  if (Solver_)
+  {
+    Solver_->SetRelTol(tol);
+  }
+}
+
 void DiffusionSubsurface::Setup(const RadiosityScene& scene, int object)
 {
   const RadiosityObject& obj = scene.GetObject(object);
@@ -52,6 +68,13 @@ void DiffusionSubsurface::Setup(const RadiosityScene& scene, int object)
       x.resize(0);
     }
   }
+  const bool newSolver = !Solver_;
+  if (newSolver)
+  {
+    Solver_ = CreateLinearSolver(LinearSolverName_);
+  }
+  Solver_->SetRelTol(RelTol_);
+  Solver_->Setup(System_, &mesh, newSolver || !sameMesh);
 }
 
 void DiffusionSubsurface::Apply(const std::vector<double>& q, std::vector<double>& radiosity)
@@ -109,11 +132,11 @@ void DiffusionSubsurface::Apply(const std::vector<double>& q, std::vector<double
   {
     Eigen::setNbThreads(1);
   }
-  Solver_.Solve(System_, Solution_, WarmStart_);
+  Solver_->Solve(System_, Solution_, WarmStart_, Stats_);
   Eigen::setNbThreads(threads);
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    TotalIterations_ += Solver_.GetNumIterations(c);
+    TotalIterations_ += Stats_[c].Iterations;
   }
   // 4. Vertex exitance from the discrete energy balance; 5. patch mean.
   radiosity.assign(3 * static_cast<std::size_t>(numPatches), 0.0);
@@ -134,7 +157,8 @@ void DiffusionSubsurface::Apply(const std::vector<double>& q, std::vector<double
 
 std::size_t DiffusionSubsurface::GetMemoryBytes() const
 {
-  std::size_t bytes = System_.RowOffsets.size() * sizeof(int) +
+  std::size_t bytes = (Solver_ ? Solver_->GetMemoryBytes() : 0) +
+    System_.RowOffsets.size() * sizeof(int) +
     System_.ColumnIndices.size() * sizeof(int) + (HalfOverA_.size() + QFactor_.size()) * sizeof(double);
   for (int c = 0; c < NumberOfChannels; ++c)
   {

@@ -7,9 +7,9 @@
  */
 #pragma once
 
-#include "ConjugateGradient.h"
 #include "DiffusionSystem.h"
 #include "DiscreteDivergence.h"
+#include "LinearSolver.h"
 
 #include <array>
 #include <memory>
@@ -55,8 +55,11 @@ public:
  *     that sum_v (S_v / 3) q_v = sum_t A_t q_t (same power);
  *  2. right-hand side b = beta .* q_v, beta obtained once from an assembly
  *     with q = 1 (the matrix does not depend on q);
- *  3. conjugate gradient, warm-started from the previous apply (relative
- *     tolerance SetRelTol, default 1e-6);
+ *  3. a LinearSolver (the seam of the vertex discretisations; default
+ *     "cg-jacobi", SetLinearSolver), warm-started from the previous apply
+ *     (relative tolerance SetRelTol, default 1e-6); Setup() of the linear
+ *     solver runs once per material (a direct solver factors once and then
+ *     only substitutes per apply);
  *  4. vertex exitance from the discrete energy balance of the lumped
  *     boundary term (Documentation/Radiosity.md):
  *     M_v = phi_v / (2 A_v) - q_v (1 - Fdr_v) / (1 + Fdr_v),
@@ -75,19 +78,26 @@ public:
   void Apply(const std::vector<double>& q, std::vector<double>& radiosity) override;
   std::size_t GetMemoryBytes() const override;
 
-  /// Relative residual of the CG solves (default 1e-6).
-  void SetRelTol(double tol) { Solver_.SetRelTol(tol); }
+  /// Linear solver by name (CreateLinearSolver; default "cg-jacobi"). Takes
+  /// effect at the next Setup(). Throws translucency::Error for an unknown name.
+  void SetLinearSolver(const std::string& name);
+  const std::string& GetLinearSolver() const { return LinearSolverName_; }
+  /// Relative residual of the linear solves (default 1e-6).
+  void SetRelTol(double tol);
   /// Warm start from the previous apply (default on).
   void SetWarmStart(bool on) { WarmStart_ = on; }
-  /// CG iterations of the last apply (channel R, G, B) and in total.
-  int GetLastIterations(int c) const { return Solver_.GetNumIterations(c); }
+  /// Iterations of the last apply (channel R, G, B) and in total.
+  int GetLastIterations(int c) const { return Stats_[c].Iterations; }
   long long GetTotalIterations() const { return TotalIterations_; }
 
 private:
   const TetMesh* Mesh_ = nullptr;
   DiscreteDivergence Discretization_;
   DiffusionSystem System_;
-  ConjugateGradient Solver_;
+  std::string LinearSolverName_ = "cg-jacobi";
+  std::unique_ptr<LinearSolver> Solver_;
+  double RelTol_ = 1e-6;
+  std::array<LinearSolveStats, NumberOfChannels> Stats_{};
   std::array<Eigen::VectorXd, NumberOfChannels> Solution_;
   std::array<Eigen::VectorXd, NumberOfChannels> Beta_;
   std::vector<double> HalfOverA_;  ///< 1 / (2 A_v) per point (0 inside)

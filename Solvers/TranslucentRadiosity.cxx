@@ -38,6 +38,17 @@ void TranslucentRadiosity::SetSubsurfaceMethod(const std::string& name)
   Method_ = lower;
 }
 
+void TranslucentRadiosity::SetLinearSolver(const std::string& name)
+{
+  DiffusionSubsurface probe;
+  probe.SetLinearSolver(name); // throws for an unknown name
+  if (probe.GetLinearSolver() != LinearSolver_)
+  {
+    Ready_ = false;
+  }
+  LinearSolver_ = probe.GetLinearSolver();
+}
+
 std::unique_ptr<SubsurfaceOperator> TranslucentRadiosity::MakeOperator() const
 {
   if (Method_ == "profile")
@@ -47,7 +58,10 @@ std::unique_ptr<SubsurfaceOperator> TranslucentRadiosity::MakeOperator() const
     op->SetMaxDistance(MaxDistance_);
     return op;
   }
-  return std::make_unique<DiffusionSubsurface>();
+  auto op = std::make_unique<DiffusionSubsurface>();
+  op->SetLinearSolver(LinearSolver_);
+  op->SetRelTol(std::min(1e-4, 0.01 * RelTol_));
+  return op;
 }
 
 void TranslucentRadiosity::Setup()
@@ -73,6 +87,14 @@ void TranslucentRadiosity::Setup()
     }
   }
   const int numPatches = Scene_->GetNumberOfPatches();
+  TranslucentAlbedo_.assign(3 * static_cast<size_t>(numPatches), 0.0);
+  for (int k = 0; k < Scene_->GetNumberOfObjects(); ++k)
+  {
+    if (Scene_->GetObject(k).Translucent)
+    {
+      ComputeTranslucentAlbedo(k);
+    }
+  }
   Transmittance_.assign(numPatches, 1.0);
   for (int p = 0; p < numPatches; ++p)
   {
@@ -99,6 +121,7 @@ void TranslucentRadiosity::UpdateMaterial(int object)
     throw Error("UpdateMaterial: object " + std::to_string(object) + " is not translucent");
   }
   Operators_[object]->Setup(*Scene_, object);
+  ComputeTranslucentAlbedo(object);
   for (int p = Scene_->GetPatchOffset(object); p < Scene_->GetPatchOffset(object + 1); ++p)
   {
     Transmittance_[p] = Fresnel::UniformTransmittance(Scene_->GetPatchEta()[p]);
@@ -307,31 +330,47 @@ void TranslucentRadiosity::Solve(const std::vector<LightSource>& lights, Radiosi
   result.Combined = std::move(B);
 }
 
-std::vector<double> TranslucentRadiosity::GetDiffuseAlbedo() const
+void TranslucentRadiosity::ComputeTranslucentAlbedo(int k)
 {
+  const RadiosityObject& object = Scene_->GetObject(k);
+  const int begin = Scene_->GetPatchOffset(k), end = Scene_->GetPatchOffset(k + 1);
+  TranslucentAlbedo_.resize(3 * static_cast<size_t>(Scene_->GetNumberOfPatches()), 0.0);
+  // One T_u and R_d per tet material value (the quadrature of T_u is not free).
+  double lastEta = -1.0, tu = 0.0;
+  for (int p = begin; p < end; ++p)
+  {
+    const int tet = object.Mesh->GetBoundaryTriangleTets()[p - begin];
+    const double eta = object.Material.RefractiveIndex[tet];
+    if (eta != lastEta)
+    {
+      tu = Fresnel::UniformTransmittance(eta);
+      lastEta = eta;
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      TranslucentAlbedo_[3 * p + c] = tu *
+        DipoleTotalReflectance(object.Material.AbsorptionCoefficient[3 * tet + c],
+          object.Material.ReducedScatteringCoefficient[3 * tet + c], eta);
+    }
+  }
+}
+
+std::vector<double> TranslucentRadiosity::GetDiffuseAlbedo()
+{
+  CheckReady();
   std::vector<double> albedo(3 * static_cast<size_t>(Scene_->GetNumberOfPatches()), 0.0);
   for (int k = 0; k < Scene_->GetNumberOfObjects(); ++k)
   {
     const RadiosityObject& object = Scene_->GetObject(k);
     const int begin = Scene_->GetPatchOffset(k), end = Scene_->GetPatchOffset(k + 1);
-    for (int p = begin; p < end; ++p)
+    if (object.Translucent)
     {
-      for (int c = 0; c < 3; ++c)
-      {
-        if (!object.Translucent)
-        {
-          albedo[3 * p + c] = object.Albedo[3 * (p - begin) + c];
-        }
-        else
-        {
-          const int tet = object.Mesh->GetBoundaryTriangleTets()[p - begin];
-          const double eta = object.Material.RefractiveIndex[tet];
-          const double tu = Fresnel::UniformTransmittance(eta);
-          albedo[3 * p + c] = tu *
-            DipoleTotalReflectance(object.Material.AbsorptionCoefficient[3 * tet + c],
-              object.Material.ReducedScatteringCoefficient[3 * tet + c], eta);
-        }
-      }
+      std::copy(TranslucentAlbedo_.begin() + 3 * begin, TranslucentAlbedo_.begin() + 3 * end,
+        albedo.begin() + 3 * begin);
+    }
+    else
+    {
+      std::copy(object.Albedo.begin(), object.Albedo.end(), albedo.begin() + 3 * begin);
     }
   }
   return albedo;

@@ -52,6 +52,10 @@ public:
   void SetSubsurfaceMethod(const std::string& name);
   const std::string& GetSubsurfaceMethod() const { return Method_; }
 
+  /// Diffusion S only: linear solver of the diffusion systems (a name of
+  /// GetLinearSolverNames(); default "cg-jacobi"). Takes effect at Setup().
+  void SetLinearSolver(const std::string& name);
+
   ///@{
   /// Profile S only: voxel size (mm, 0 = automatic: 1/40 of the object's
   /// largest side) and cut-off distance max_d (mm, 0 = automatic: where the
@@ -115,7 +119,7 @@ public:
    * translucent patches T_u(eta) * DipoleTotalReflectance() of the tet that
    * owns the patch.
    */
-  std::vector<double> GetDiffuseAlbedo() const;
+  std::vector<double> GetDiffuseAlbedo();
 
   /// Bytes of the S operators (per object, summed).
   std::size_t GetSubsurfaceMemoryBytes() const;
@@ -131,10 +135,12 @@ private:
   std::unique_ptr<SubsurfaceOperator> MakeOperator() const;
   double Norm(const std::vector<double>& v) const;
   void CheckReady();
+  void ComputeTranslucentAlbedo(int k);
 
   RadiosityScene* Scene_ = nullptr;
   const FormFactorMatrix* F_ = nullptr;
   std::string Method_ = "diffusion";
+  std::string LinearSolver_ = "cg-jacobi";
   double VoxelSize_ = 0.0;
   double MaxDistance_ = 0.0;
   double RelTol_ = 0.005;
@@ -144,6 +150,7 @@ private:
   bool Ready_ = false;
   std::vector<std::unique_ptr<SubsurfaceOperator>> Operators_;
   std::vector<double> Transmittance_; ///< T_u(eta) per patch (1 for opaque)
+  std::vector<double> TranslucentAlbedo_; ///< stand-in albedo of translucent patches (3 each)
   std::vector<double> SE_;            ///< S E of the last Solve()
   std::vector<double> E_;             ///< incident E of the last Solve()
   double SetupMilliseconds_ = 0.0;
