@@ -41,6 +41,14 @@ double MillisecondsSince(std::chrono::steady_clock::time_point start)
     .count();
 }
 
+/// One leaf of the input: what it is and where its patches go.
+struct Leaf
+{
+  vtkSmartPointer<vtkCompositeDataIterator> Where;
+  vtkSmartPointer<vtkPolyData> Output;
+  int Object = -1;
+};
+
 bool SameMaterial(const translucency::OpticalProperties& a, const translucency::OpticalProperties& b)
 {
   return a.AbsorptionCoefficient == b.AbsorptionCoefficient &&
@@ -66,6 +74,11 @@ struct vtkTranslucentRadiosity::Internals
   double VoxelSize = -1.0, MaxDistance = -1.0;
   translucency::RadiosityResult Result;
   double FormFactorTime = 0.0, SetupTime = 0.0;
+  // The input of the last successful execution: the composite and every leaf
+  // with their modification times. Unchanged (only lights or solver settings
+  // changed): the scene is not gathered again.
+  std::vector<std::pair<vtkDataObject*, vtkMTimeType>> Signature;
+  std::vector<Leaf> Leaves;
 };
 
 vtkTranslucentRadiosity::vtkTranslucentRadiosity()
@@ -191,13 +204,6 @@ int vtkTranslucentRadiosity::RequestDataObject(
 
 namespace
 {
-/// One leaf of the input: what it is and where its patches go.
-struct Leaf
-{
-  vtkSmartPointer<vtkCompositeDataIterator> Where;
-  vtkSmartPointer<vtkPolyData> Output;
-  int Object = -1;
-};
 
 std::string LeafName(vtkCompositeDataIterator* it, int index)
 {
@@ -233,220 +239,251 @@ int vtkTranslucentRadiosity::RequestData(
   in.FormFactorTime = 0.0;
   in.SetupTime = 0.0;
 
-  // 1. Leaves -> scene objects.
-  auto scene = std::make_unique<translucency::RadiosityScene>();
-  std::vector<Leaf> leaves;
-  std::vector<translucency::OpticalProperties> materials;
-  std::vector<std::vector<double>> albedos;
-  // Names: the NAME of each partitioned data set of a collection (a
-  // collection's iterator does not carry them), else the iterator's metadata.
-  std::map<vtkDataObject*, std::string> names;
-  if (auto* pdc = vtkPartitionedDataSetCollection::SafeDownCast(input))
+  // The input's signature: is anything but the lights and settings new?
+  std::vector<std::pair<vtkDataObject*, vtkMTimeType>> signature;
+  signature.emplace_back(input, input->GetMTime());
   {
-    for (unsigned int i = 0; i < pdc->GetNumberOfPartitionedDataSets(); ++i)
+    vtkSmartPointer<vtkCompositeDataIterator> leafIt;
+    leafIt.TakeReference(input->NewIterator());
+    for (leafIt->InitTraversal(); !leafIt->IsDoneWithTraversal(); leafIt->GoToNextItem())
     {
-      if (!pdc->HasMetaData(i) || !pdc->GetMetaData(i)->Has(vtkCompositeDataSet::NAME()))
-      {
-        continue;
-      }
-      const unsigned int parts = pdc->GetNumberOfPartitions(i);
-      for (unsigned int j = 0; j < parts; ++j)
-      {
-        std::string name = pdc->GetMetaData(i)->Get(vtkCompositeDataSet::NAME());
-        if (parts > 1)
-        {
-          name += " " + std::to_string(j);
-        }
-        names[pdc->GetPartitionAsDataObject(i, j)] = name;
-      }
+      vtkDataObject* data = leafIt->GetCurrentDataObject();
+      signature.emplace_back(data, data ? data->GetMTime() : 0);
     }
   }
-  vtkSmartPointer<vtkCompositeDataIterator> it;
-  it.TakeReference(input->NewIterator());
-  int index = 0;
-  try
+  const bool sameInput = in.Scene && signature == in.Signature &&
+    in.Rays == this->RaysPerPatch && in.Threshold == this->FormFactorThreshold;
+  in.Signature.clear(); // set again on success
+  std::vector<Leaf> leaves;
+  if (sameInput)
   {
-    for (it->InitTraversal(); !it->IsDoneWithTraversal(); it->GoToNextItem(), ++index)
+    leaves = in.Leaves;
+  }
+  else
+  {
+    // 1. Leaves -> scene objects.
+    auto scene = std::make_unique<translucency::RadiosityScene>();
+    std::vector<translucency::OpticalProperties> materials;
+    std::vector<std::vector<double>> albedos;
+    // Names: the NAME of each partitioned data set of a collection (a
+    // collection's iterator does not carry them), else the iterator's metadata.
+    std::map<vtkDataObject*, std::string> names;
+    if (auto* pdc = vtkPartitionedDataSetCollection::SafeDownCast(input))
     {
-      vtkDataObject* data = it->GetCurrentDataObject();
-      const auto named = names.find(data);
-      const std::string name = named != names.end() ? named->second : LeafName(it, index);
-      Leaf leaf;
-      leaf.Where.TakeReference(input->NewIterator());
-      leaf.Where->InitTraversal();
-      while (leaf.Where->GetCurrentFlatIndex() != it->GetCurrentFlatIndex())
+      for (unsigned int i = 0; i < pdc->GetNumberOfPartitionedDataSets(); ++i)
       {
-        leaf.Where->GoToNextItem();
-      }
-      if (auto* grid = vtkUnstructuredGrid::SafeDownCast(data))
-      {
-        std::string error;
-        auto mesh = vtkTranslucency::AcquireTetMesh(grid, error);
-        if (!mesh)
+        if (!pdc->HasMetaData(i) || !pdc->GetMetaData(i)->Has(vtkCompositeDataSet::NAME()))
         {
-          vtkErrorMacro(<< name << ": " << error);
-          return 0;
+          continue;
         }
-        translucency::OpticalProperties material;
-        if (!grid->GetCellData()->GetArray(vtkTranslucency::AbsorptionName) &&
-          !grid->GetCellData()->GetArray(vtkTranslucency::ScatteringName))
+        const unsigned int parts = pdc->GetNumberOfPartitions(i);
+        for (unsigned int j = 0; j < parts; ++j)
         {
-          vtkErrorMacro(<< name << ": translucent object without coefficients (cell arrays "
-                        << vtkTranslucency::AbsorptionName << ", "
-                        << vtkTranslucency::ScatteringName << ", "
-                        << vtkTranslucency::RefractiveIndexName << ")");
-          return 0;
-        }
-        if (!vtkTranslucency::ToOpticalProperties(grid, material, error))
-        {
-          vtkErrorMacro(<< name << ": " << error);
-          return 0;
-        }
-        leaf.Object = scene->AddTranslucent(name, mesh, material);
-        materials.push_back(material);
-        albedos.emplace_back();
-        // Output: the boundary surface (the patches).
-        vtkNew<vtkPolyData> surface;
-        vtkNew<vtkPoints> points;
-        points->SetDataTypeToDouble();
-        points->SetNumberOfPoints(mesh->GetNumberOfPoints());
-        for (int p = 0; p < mesh->GetNumberOfPoints(); ++p)
-        {
-          points->SetPoint(p, mesh->GetPoint(p));
-        }
-        surface->SetPoints(points);
-        vtkNew<vtkCellArray> polys;
-        const std::vector<int>& tris = mesh->GetBoundaryTriangles();
-        for (size_t t = 0; t < tris.size(); t += 3)
-        {
-          const vtkIdType ids[3] = { tris[t], tris[t + 1], tris[t + 2] };
-          polys->InsertNextCell(3, ids);
-        }
-        surface->SetPolys(polys);
-        vtkNew<vtkIdTypeArray> owners;
-        owners->SetName(vtkTranslucency::OriginalCellIdsName);
-        for (int tet : mesh->GetBoundaryTriangleTets())
-        {
-          owners->InsertNextValue(tet);
-        }
-        surface->GetCellData()->AddArray(owners);
-        leaf.Output = surface;
-      }
-      else if (auto* poly = vtkPolyData::SafeDownCast(data))
-      {
-        vtkDataArray* albedoArray = poly->GetCellData()->GetArray("Albedo");
-        if (!albedoArray || albedoArray->GetNumberOfComponents() != 3)
-        {
-          vtkErrorMacro(<< name << ": an opaque surface needs the cell array Albedo with 3 "
-                                   "components (R, G, B in [0, 1])");
-          return 0;
-        }
-        std::vector<double> points(3 * poly->GetNumberOfPoints());
-        for (vtkIdType p = 0; p < poly->GetNumberOfPoints(); ++p)
-        {
-          poly->GetPoint(p, &points[3 * p]);
-        }
-        std::vector<int> triangles;
-        std::vector<double> albedo;
-        for (vtkIdType c = 0; c < poly->GetNumberOfCells(); ++c)
-        {
-          vtkIdType npts;
-          const vtkIdType* pts;
-          poly->GetCellPoints(c, npts, pts);
-          if (npts != 3 || poly->GetCellType(c) != VTK_TRIANGLE)
+          std::string name = pdc->GetMetaData(i)->Get(vtkCompositeDataSet::NAME());
+          if (parts > 1)
           {
-            vtkErrorMacro(<< name << ": cell " << c
-                          << " is not a triangle (triangulate the surface first)");
+            name += " " + std::to_string(j);
+          }
+          names[pdc->GetPartitionAsDataObject(i, j)] = name;
+        }
+      }
+    }
+    vtkSmartPointer<vtkCompositeDataIterator> it;
+    it.TakeReference(input->NewIterator());
+    int index = 0;
+    try
+    {
+      for (it->InitTraversal(); !it->IsDoneWithTraversal(); it->GoToNextItem(), ++index)
+      {
+        vtkDataObject* data = it->GetCurrentDataObject();
+        const auto named = names.find(data);
+        const std::string name = named != names.end() ? named->second : LeafName(it, index);
+        Leaf leaf;
+        leaf.Where.TakeReference(input->NewIterator());
+        leaf.Where->InitTraversal();
+        while (leaf.Where->GetCurrentFlatIndex() != it->GetCurrentFlatIndex())
+        {
+          leaf.Where->GoToNextItem();
+        }
+        if (auto* grid = vtkUnstructuredGrid::SafeDownCast(data))
+        {
+          std::string error;
+          auto mesh = vtkTranslucency::AcquireTetMesh(grid, error);
+          if (!mesh)
+          {
+            vtkErrorMacro(<< name << ": " << error);
             return 0;
           }
-          triangles.insert(triangles.end(), { static_cast<int>(pts[0]), static_cast<int>(pts[1]),
-                                              static_cast<int>(pts[2]) });
-          for (int k = 0; k < 3; ++k)
+          translucency::OpticalProperties material;
+          if (!grid->GetCellData()->GetArray(vtkTranslucency::AbsorptionName) &&
+            !grid->GetCellData()->GetArray(vtkTranslucency::ScatteringName))
           {
-            albedo.push_back(albedoArray->GetComponent(c, k));
+            vtkErrorMacro(<< name << ": translucent object without coefficients (cell arrays "
+                          << vtkTranslucency::AbsorptionName << ", "
+                          << vtkTranslucency::ScatteringName << ", "
+                          << vtkTranslucency::RefractiveIndexName << ")");
+            return 0;
           }
+          if (!vtkTranslucency::ToOpticalProperties(grid, material, error))
+          {
+            vtkErrorMacro(<< name << ": " << error);
+            return 0;
+          }
+          leaf.Object = scene->AddTranslucent(name, mesh, material);
+          materials.push_back(material);
+          albedos.emplace_back();
+          // Output: the boundary surface (the patches).
+          vtkNew<vtkPolyData> surface;
+          vtkNew<vtkPoints> points;
+          points->SetDataTypeToDouble();
+          points->SetNumberOfPoints(mesh->GetNumberOfPoints());
+          for (int p = 0; p < mesh->GetNumberOfPoints(); ++p)
+          {
+            points->SetPoint(p, mesh->GetPoint(p));
+          }
+          surface->SetPoints(points);
+          vtkNew<vtkCellArray> polys;
+          const std::vector<int>& tris = mesh->GetBoundaryTriangles();
+          for (size_t t = 0; t < tris.size(); t += 3)
+          {
+            const vtkIdType ids[3] = { tris[t], tris[t + 1], tris[t + 2] };
+            polys->InsertNextCell(3, ids);
+          }
+          surface->SetPolys(polys);
+          vtkNew<vtkIdTypeArray> owners;
+          owners->SetName(vtkTranslucency::OriginalCellIdsName);
+          for (int tet : mesh->GetBoundaryTriangleTets())
+          {
+            owners->InsertNextValue(tet);
+          }
+          surface->GetCellData()->AddArray(owners);
+          leaf.Output = surface;
         }
-        albedos.push_back(albedo);
-        materials.emplace_back();
-        leaf.Object = scene->AddOpaque(name, points, triangles, albedo);
-        vtkNew<vtkPolyData> copy;
-        copy->ShallowCopy(poly);
-        leaf.Output = copy;
+        else if (auto* poly = vtkPolyData::SafeDownCast(data))
+        {
+          vtkDataArray* albedoArray = poly->GetCellData()->GetArray("Albedo");
+          if (!albedoArray || albedoArray->GetNumberOfComponents() != 3)
+          {
+            vtkErrorMacro(<< name << ": an opaque surface needs the cell array Albedo with 3 "
+                                     "components (R, G, B in [0, 1])");
+            return 0;
+          }
+          std::vector<double> points(3 * poly->GetNumberOfPoints());
+          for (vtkIdType p = 0; p < poly->GetNumberOfPoints(); ++p)
+          {
+            poly->GetPoint(p, &points[3 * p]);
+          }
+          std::vector<int> triangles;
+          std::vector<double> albedo;
+          for (vtkIdType c = 0; c < poly->GetNumberOfCells(); ++c)
+          {
+            vtkIdType npts;
+            const vtkIdType* pts;
+            poly->GetCellPoints(c, npts, pts);
+            if (npts != 3 || poly->GetCellType(c) != VTK_TRIANGLE)
+            {
+              vtkErrorMacro(<< name << ": cell " << c
+                            << " is not a triangle (triangulate the surface first)");
+              return 0;
+            }
+            triangles.insert(triangles.end(), { static_cast<int>(pts[0]), static_cast<int>(pts[1]),
+                                                static_cast<int>(pts[2]) });
+            for (int k = 0; k < 3; ++k)
+            {
+              albedo.push_back(albedoArray->GetComponent(c, k));
+            }
+          }
+          albedos.push_back(albedo);
+          materials.emplace_back();
+          leaf.Object = scene->AddOpaque(name, points, triangles, albedo);
+          vtkNew<vtkPolyData> copy;
+          copy->ShallowCopy(poly);
+          leaf.Output = copy;
+        }
+        else
+        {
+          vtkErrorMacro(<< name << ": a " << (data ? data->GetClassName() : "null")
+                        << " is neither a tet mesh (vtkUnstructuredGrid) nor a surface "
+                           "(vtkPolyData)");
+          return 0;
+        }
+        leaves.push_back(leaf);
+        if (this->CheckAbort())
+        {
+          return 1;
+        }
+      }
+      scene->Build(false); // the BVH only if the geometry changed (below)
+    }
+    catch (const translucency::Error& e)
+    {
+      vtkErrorMacro(<< e.what());
+      return 0;
+    }
+    this->UpdateProgress(0.05);
+
+    // 2. Form factors, kept while the geometry and the ray settings are unchanged.
+    const bool sameGeometry = in.Scene && in.Points == scene->GetPoints() &&
+      in.Triangles == scene->GetTriangles() && in.Rays == this->RaysPerPatch &&
+      in.Threshold == this->FormFactorThreshold;
+    try
+    {
+      if (!sameGeometry)
+      {
+        scene->BuildRayCaster();
+        translucency::FormFactorComputer computer;
+        computer.SetRaysPerPatch(this->RaysPerPatch);
+        computer.SetThreshold(this->FormFactorThreshold);
+        computer.SetProgressCallback([this](double f) {
+          this->UpdateProgress(0.05 + 0.6 * f);
+          return !this->CheckAbort();
+        });
+        auto start = std::chrono::steady_clock::now();
+        if (!computer.Compute(*scene, in.F))
+        {
+          in.Scene.reset();
+          return 1; // aborted
+        }
+        in.FormFactorTime = MillisecondsSince(start);
+        in.Points = scene->GetPoints();
+        in.Triangles = scene->GetTriangles();
+        in.Rays = this->RaysPerPatch;
+        in.Threshold = this->FormFactorThreshold;
+        in.Scene = std::move(scene);
+        in.Solver.reset();
       }
       else
       {
-        vtkErrorMacro(<< name << ": a " << (data ? data->GetClassName() : "null")
-                      << " is neither a tet mesh (vtkUnstructuredGrid) nor a surface "
-                         "(vtkPolyData)");
-        return 0;
-      }
-      leaves.push_back(leaf);
-      if (this->CheckAbort())
-      {
-        return 1;
-      }
-    }
-    scene->Build(false); // the BVH only if the geometry changed (below)
-  }
-  catch (const translucency::Error& e)
-  {
-    vtkErrorMacro(<< e.what());
-    return 0;
-  }
-  this->UpdateProgress(0.05);
-
-  // 2. Form factors, kept while the geometry and the ray settings are unchanged.
-  const bool sameGeometry = in.Scene && in.Points == scene->GetPoints() &&
-    in.Triangles == scene->GetTriangles() && in.Rays == this->RaysPerPatch &&
-    in.Threshold == this->FormFactorThreshold;
-  try
-  {
-    if (!sameGeometry)
-    {
-      scene->BuildRayCaster();
-      translucency::FormFactorComputer computer;
-      computer.SetRaysPerPatch(this->RaysPerPatch);
-      computer.SetThreshold(this->FormFactorThreshold);
-      computer.SetProgressCallback([this](double f) {
-        this->UpdateProgress(0.05 + 0.6 * f);
-        return !this->CheckAbort();
-      });
-      auto start = std::chrono::steady_clock::now();
-      if (!computer.Compute(*scene, in.F))
-      {
-        in.Scene.reset();
-        return 1; // aborted
-      }
-      in.FormFactorTime = MillisecondsSince(start);
-      in.Points = scene->GetPoints();
-      in.Triangles = scene->GetTriangles();
-      in.Rays = this->RaysPerPatch;
-      in.Threshold = this->FormFactorThreshold;
-      in.Scene = std::move(scene);
-      in.Solver.reset();
-    }
-    else
-    {
-      // Same geometry: update albedos and materials in the kept scene.
-      for (int k = 0; k < in.Scene->GetNumberOfObjects(); ++k)
-      {
-        const auto& object = in.Scene->GetObject(k);
-        if (!object.Translucent && object.Albedo != albedos[k])
+        // Same geometry: update albedos and materials in the kept scene.
+        for (int k = 0; k < in.Scene->GetNumberOfObjects(); ++k)
         {
-          in.Scene->SetAlbedo(k, albedos[k]);
-        }
-        else if (object.Translucent && !SameMaterial(object.Material, materials[k]))
-        {
-          in.Scene->SetMaterial(k, materials[k]);
-          if (in.Solver)
+          const auto& object = in.Scene->GetObject(k);
+          if (!object.Translucent && object.Albedo != albedos[k])
           {
-            auto start = std::chrono::steady_clock::now();
-            in.Solver->UpdateMaterial(k);
-            in.SetupTime += MillisecondsSince(start);
+            in.Scene->SetAlbedo(k, albedos[k]);
+          }
+          else if (object.Translucent && !SameMaterial(object.Material, materials[k]))
+          {
+            in.Scene->SetMaterial(k, materials[k]);
+            if (in.Solver)
+            {
+              auto start = std::chrono::steady_clock::now();
+              in.Solver->UpdateMaterial(k);
+              in.SetupTime += MillisecondsSince(start);
+            }
           }
         }
       }
     }
+    catch (const translucency::Error& e)
+    {
+      vtkErrorMacro(<< e.what());
+      return 0;
+    }
+    in.Leaves = leaves;
+  }
+  try
+  {
     this->UpdateProgress(0.65);
 
     // 3. Solve.
@@ -512,8 +549,12 @@ int vtkTranslucentRadiosity::RequestData(
 
   // 4. Per-patch cell arrays on the output leaves.
   const translucency::RadiosityResult& r = in.Result;
-  for (const Leaf& leaf : leaves)
+  for (const Leaf& cached : leaves)
   {
+    // A new output object per execution (the cached leaf keeps no arrays).
+    Leaf leaf = cached;
+    leaf.Output = vtkSmartPointer<vtkPolyData>::New();
+    leaf.Output->ShallowCopy(cached.Output);
     const int begin = in.Scene->GetPatchOffset(leaf.Object);
     const int count = in.Scene->GetPatchOffset(leaf.Object + 1) - begin;
     AddTriple(leaf.Output, "DirectIrradiance", r.DirectIrradiance, begin, count);
@@ -528,6 +569,7 @@ int vtkTranslucentRadiosity::RequestData(
     }
     output->SetDataSet(leaf.Where, leaf.Output);
   }
+  in.Signature = signature;
   this->UpdateProgress(1.0);
   return 1;
 }

@@ -168,7 +168,9 @@ class TestRadiosity(unittest.TestCase):
                 data = make_collection(self.room, self.cube)
             else:
                 data = vtkMultiBlockDataSet()
-                data.SetBlock(0, self.room)
+                room = vtkPolyData()
+                room.DeepCopy(self.room)  # its albedo is changed below
+                data.SetBlock(0, room)
                 data.SetBlock(1, self.cube)
             f = radiosity_filter(data)
             messages = Messages(f)
@@ -210,6 +212,24 @@ class TestRadiosity(unittest.TestCase):
         f.Update()
         self.assertEqual(f.GetFormFactorTime(), 0.0)
         self.assertGreater(f.GetFormFactorMemory(), 0)
+        # ... and gives what a fresh filter gives (the kept scene is not stale).
+        fresh = radiosity_filter(data)
+        fresh.RemoveAllLights()
+        fresh.AddPointLight(L / 2 + 2, L / 2, L - 1, 400, 400, 400)
+        fresh.Update()
+        for a, b in zip(leaves(f.GetOutputDataObject(0)), leaves(fresh.GetOutputDataObject(0))):
+            np.testing.assert_allclose(cell_array(a, "Radiosity"), cell_array(b, "Radiosity"),
+                                       rtol=1e-3, atol=1e-6 * cell_array(b, "Radiosity").max())
+        # A changed albedo (array modified) is seen.
+        before = cell_array(leaves(f.GetOutputDataObject(0))[0], "Radiosity").sum()
+        room_albedo = data.GetBlock(0).GetCellData().GetArray("Albedo")
+        for c in range(room_albedo.GetNumberOfTuples()):
+            room_albedo.SetTuple3(c, 0.3, 0.3, 0.3)
+        room_albedo.Modified()
+        f.Modified()  # a composite input does not see its leaves' arrays change
+        f.Update()
+        self.assertEqual(f.GetFormFactorTime(), 0.0)
+        self.assertLess(cell_array(leaves(f.GetOutputDataObject(0))[0], "Radiosity").sum(), before)
 
     def test_bad_input(self):
         room = vtkPolyData()
