@@ -27,7 +27,9 @@
  *
  * The form factors are computed by ray casting (FormFactorComputer) and kept
  * while the geometry of the scene is unchanged, so relighting and changing
- * coefficients re-run only the iteration (and the S set-up).
+ * coefficients re-run only the iteration (and the S set-up). While the input
+ * (the composite and each leaf, by modification time) is unchanged, the
+ * scene is not even gathered again: a relight costs the solve only.
  *
  * @warning A light inside a closed object, an albedo outside [0, 1], a
  * translucent mesh without coefficients or a non-triangle cell is an error
