@@ -4,6 +4,7 @@
 
 #include "Error.h"
 #include "FormFactors.h"
+#include "LinearSolver.h"
 #include "RadiosityScene.h"
 #include "TetMesh.h"
 #include "TranslucentRadiosity.h"
@@ -235,6 +236,15 @@ int vtkTranslucentRadiosity::RequestData(
     return 0;
   }
   Internals& in = *this->Internal;
+  try
+  {
+    translucency::CreateLinearSolver(this->LinearSolver); // a bad name fails before the work
+  }
+  catch (const translucency::Error& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
   output->CopyStructure(input);
   in.FormFactorTime = 0.0;
   in.SetupTime = 0.0;

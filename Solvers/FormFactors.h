@@ -47,7 +47,9 @@ struct FormFactorMatrix
  * Computes FormFactorMatrix by casting, from every patch i, N rays from
  * uniformly distributed points of the patch in cosine-weighted directions
  * over its front hemisphere (stratified: a sqrt(N) x sqrt(N) grid of jittered
- * cells in the unit square mapped to the disk, concentric map, then lifted).
+ * cells in the unit square mapped to the disk, concentric map, then lifted;
+ * the pattern is rotated about the normal by a random angle per patch so
+ * that neighbouring patches do not share directions).
  * F_ij = (number of rays whose first hit is the front of patch j) / N: an
  * unbiased estimate of the patch-to-patch form factor
  * (1/A_i) int_Ai int_Aj cos cos V / (pi r^2), with standard error
