@@ -138,6 +138,9 @@ bool ParseImageOption(const std::vector<std::string>& args, size_t& i, RadianceI
 
 /// `translucency compare` (Compare.cxx) and its help text.
 int Compare(const std::vector<std::string>& args);
+/// `translucency radiosity` (Radiosity.cxx) and its help text.
+int Radiosity(const std::vector<std::string>& args);
+extern const char* const RadiosityHelp;
 extern const char* const CompareHelp;
 
 } // namespace translucency_app

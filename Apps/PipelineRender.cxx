@@ -57,6 +57,8 @@ void PlaceCamera(vtkRenderer* renderer, const double bounds[6], const RadianceIm
   camera->Zoom(1.3);
 }
 
+}
+
 bool Snapshot(vtkRenderWindow* window, const std::string& fileName, std::string& error)
 {
   window->Render();
@@ -83,7 +85,6 @@ bool Snapshot(vtkRenderWindow* window, const std::string& fileName, std::string&
     return false;
   }
   return true;
-}
 }
 
 double ToneMapRadiance(vtkPolyData* surface, double exposure)

@@ -9,6 +9,7 @@
 #include <vector>
 
 class vtkPolyData;
+class vtkRenderWindow;
 class vtkUnstructuredGrid;
 
 namespace translucency_app
@@ -67,5 +68,9 @@ struct PlotSeries
  */
 bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTitle,
   const std::string& yTitle, const std::string& fileName, std::string& error);
+
+/// Render `window` and write it to a PNG through a temporary file renamed
+/// into place. Returns false with `error` set.
+bool Snapshot(vtkRenderWindow* window, const std::string& fileName, std::string& error);
 
 } // namespace translucency_app

@@ -3,6 +3,7 @@
 //   translucency render --mesh FILE [options]    surface/tet mesh -> fluence -> radiance -> PNG
 //   translucency compare --mesh FILE [options]   every solver on one problem, side by side
 //   translucency bench [options]                 assembly/solve medians at several mesh sizes
+//   translucency radiosity --scene FILE.json --output PREFIX   translucent radiosity (Radiosity.cxx)
 //   translucency --help
 //
 // Every error is printed as "translucency: error: ..." and the exit code is 1
@@ -64,6 +65,7 @@ Commands:
            light it, solve the diffusion equation, write the results.
   compare  Run several solvers on the same problem and lay the results side by side.
   bench    Median assembly and solve times at several mesh sizes.
+  radiosity  Translucent radiosity of a scene of several objects (JSON scene file).
 
 Scene options (render and compare):
 )";
@@ -106,7 +108,7 @@ translucency bench [options]
 void PrintUsage()
 {
   std::cout << UsageHead << SceneOptionsHelp << RenderHelp << CompareHelp << BenchHelp
-            << BenchLinearSolversHelp;
+            << BenchLinearSolversHelp << translucency_app::RadiosityHelp;
 }
 
 int Render(const std::vector<std::string>& args)
@@ -594,7 +596,9 @@ int main(int argc, char* argv[])
       return std::find(args.begin(), args.end(), "--linear-solvers") != args.end()
         ? BenchLinearSolvers(args)
         : Bench(args);
-    throw UsageError("unknown command '" + command + "' (render, compare or bench)");
+    if (command == "radiosity")
+      return translucency_app::Radiosity(args);
+    throw UsageError("unknown command '" + command + "' (render, compare, bench or radiosity)");
   }
   catch (const UsageError& e)
   {

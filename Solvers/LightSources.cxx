@@ -44,6 +44,25 @@ bool DirectIrradiance(const LightSource& light, const double x[3], const double 
       toLight[k] /= distance;
     }
     scale = 1.0 / d2; // inverse-square fall-off of a point source
+    if (light.Type == LightSource::Kind::Spot)
+    {
+      // Cone of the spot light: cos(alpha) between the axis and the direction
+      // of travel from the light to x.
+      const double axisLength = std::sqrt(light.Direction[0] * light.Direction[0] +
+        light.Direction[1] * light.Direction[1] + light.Direction[2] * light.Direction[2]);
+      const double cosAlpha = -(toLight[0] * light.Direction[0] +
+                                toLight[1] * light.Direction[1] + toLight[2] * light.Direction[2]) /
+        axisLength;
+      if (cosAlpha < std::cos(light.SpotCutoff * 3.14159265358979323846 / 180.0))
+      {
+        q[0] = q[1] = q[2] = 0.0;
+        return false;
+      }
+      if (light.SpotExponent > 0.0)
+      {
+        scale *= std::pow(std::max(cosAlpha, 0.0), light.SpotExponent);
+      }
+    }
   }
   const double cosIn = n[0] * toLight[0] + n[1] * toLight[1] + n[2] * toLight[2];
   if (cosIn <= 0.0)
@@ -97,11 +116,7 @@ double HemisphereDirection(const double n[3], int k, int count, double rotation,
   return cosTheta;
 }
 
-namespace
-{
-
-/// Throw translucency::Error for a light that cannot be evaluated.
-void CheckLight(const LightSource& light, size_t index)
+void ValidateLight(const LightSource& light, size_t index)
 {
   std::ostringstream msg;
   msg << "light " << index << ": ";
@@ -119,25 +134,32 @@ void CheckLight(const LightSource& light, size_t index)
       throw Error(msg.str());
     }
   }
-  if (light.Type == LightSource::Kind::Directional)
+  if (light.Type == LightSource::Kind::Directional || light.Type == LightSource::Kind::Spot)
   {
     const double len2 = light.Direction[0] * light.Direction[0] +
       light.Direction[1] * light.Direction[1] + light.Direction[2] * light.Direction[2];
     if (!(len2 > 0.0) || !std::isfinite(len2))
     {
-      msg << "a directional light has a zero or non-finite direction";
+      msg << "a directional or spot light has a zero or non-finite direction";
       throw Error(msg.str());
     }
   }
-  else if (!std::isfinite(light.Position[0]) || !std::isfinite(light.Position[1]) ||
-    !std::isfinite(light.Position[2]))
+  if (light.Type == LightSource::Kind::Spot &&
+    !(light.SpotCutoff > 0.0 && light.SpotCutoff <= 180.0 && light.SpotExponent >= 0.0 &&
+      std::isfinite(light.SpotExponent)))
   {
-    msg << "a point light has a non-finite position";
+    msg << "spot cut-off " << light.SpotCutoff << " degrees and exponent " << light.SpotExponent
+        << ": need 0 < cut-off <= 180 and a finite exponent >= 0";
+    throw Error(msg.str());
+  }
+  if (light.Type != LightSource::Kind::Directional && (!std::isfinite(light.Position[0]) || !std::isfinite(light.Position[1]) ||
+    !std::isfinite(light.Position[2])))
+  {
+    msg << "a point or spot light has a non-finite position";
     throw Error(msg.str());
   }
 }
 
-} // namespace
 
 bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& pointEta,
   const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
@@ -177,7 +199,7 @@ bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& p
   }
   for (size_t l = 0; l < lights.size(); ++l)
   {
-    CheckLight(lights[l], l);
+    ValidateLight(lights[l], l);
   }
 
   q.assign(3 * static_cast<size_t>(numPoints), 0.0);

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <functional>
 #include <vector>
 
@@ -24,18 +25,24 @@ class TetMesh;
 /// - Point: radiant intensity I (W/sr) at Position (mm).
 /// - Uniform: irradiance E (W/mm^2) an unoccluded flat surface receives from
 ///   uniform incident radiance L = E / pi from every direction.
+/// - Spot: a point light at Position whose radiant intensity (W/sr) is
+///   Power * cos(alpha)^SpotExponent inside the cone of half-angle SpotCutoff
+///   (degrees) around Direction (alpha the angle to the axis) and 0 outside.
 struct LightSource
 {
   enum class Kind
   {
     Directional,
     Point,
-    Uniform
+    Uniform,
+    Spot
   };
   Kind Type = Kind::Directional;
   std::array<double, 3> Direction{ 0.0, 0.0, -1.0 };
   std::array<double, 3> Position{ 0.0, 0.0, 0.0 };
   std::array<double, 3> Power{ 1.0, 1.0, 1.0 }; ///< E or I per channel (see above)
+  double SpotCutoff = 30.0;  ///< Spot only: cone half-angle (degrees, in (0, 180])
+  double SpotExponent = 0.0; ///< Spot only: fall-off exponent (>= 0) inside the cone
 };
 
 /**
@@ -48,6 +55,15 @@ struct LightSource
  */
 bool DirectIrradiance(const LightSource& light, const double x[3], const double n[3], double eta,
   double q[3], double toLight[3], double& distance);
+
+/**
+ * Throw translucency::Error, naming the light by `index`, for a light that
+ * cannot be evaluated: a uniform light (pass it as uniformIrradiance), a
+ * negative or non-finite power, a zero or non-finite direction (directional,
+ * spot), a non-finite position (point, spot), a spot cone outside (0, 180]
+ * degrees or a negative exponent.
+ */
+void ValidateLight(const LightSource& light, size_t index);
 
 /**
  * Cosine-weighted direction number k of `count` on the hemisphere around n

@@ -782,6 +782,11 @@ bool MonteCarloSolver::Solve(
   }
   for (std::size_t l = 0; l < problem.Lights.size(); ++l)
   {
+    if (problem.Lights[l].Type == LightSource::Kind::Spot)
+    {
+      throw Error("montecarlo: light " + std::to_string(l) +
+        " is a spot light: the Monte Carlo reference supports directional and point lights");
+    }
     if (problem.Lights[l].Type == LightSource::Kind::Uniform)
     {
       throw Error("montecarlo: light " + std::to_string(l) +

@@ -1,0 +1,460 @@
+// translucency radiosity: a scene of translucent and opaque diffuse objects,
+// B = (I - S F)^-1 S E (translucent-radiosity paper, eq. 14), the paper's
+// Fig. 6 four-panel picture, per-object .vtp files and a JSON report (with
+// optional relight / translucency-change timings, --bench N).
+
+#include "CommandLine.h"
+#include "PipelineRender.h"
+#include "SceneFile.h"
+
+#include "Error.h"
+
+#include "vtkTranslucentRadiosity.h"
+
+#include <vtkActor.h>
+#include <vtkCamera.h>
+#include <vtkCellData.h>
+#include <vtkCellDataToPointData.h>
+#include <vtkCompositeDataIterator.h>
+#include <vtkCompositeDataSet.h>
+#include <vtkDataArray.h>
+#include <vtkInformation.h>
+#include <vtkNew.h>
+#include <vtkPartitionedDataSet.h>
+#include <vtkPartitionedDataSetCollection.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkProperty.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkTextActor.h>
+#include <vtkTextProperty.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLPolyDataWriter.h>
+
+#include "vtk_nlohmannjson.h"
+#include VTK_NLOHMANN_JSON(json.hpp)
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <string>
+#include <vector>
+
+namespace translucency_app
+{
+
+const char* const RadiosityHelp = R"(
+translucency radiosity --scene FILE.json --output PREFIX [options]
+  Inter-reflection between translucent and opaque diffuse objects (translucent
+  radiosity, B = (I - S F)^-1 S E). Writes PREFIX_<k>.vtp per object (cell
+  arrays DirectIrradiance, DirectRadiosity, SubsurfaceRadiosity,
+  InterReflectionRadiosity, Radiosity). Scene format: Documentation/Radiosity.md.
+  --png FILE               the four panels of the paper's Fig. 6: direct,
+                           subsurface only (first bounce), inter-reflection
+                           only, combined (needs X: run under xvfb-run -a)
+  --s-operator diffusion|profile   S by our diffusion solve (default) or the
+                           paper's dipole profile over optical paths
+  --json FILE              report: patches, iterations, residuals, times, memory
+  --iteration jacobi|gauss-seidel  (default: the scene's, else gauss-seidel)
+  --rel-tol X              relative change to stop at (default 0.005)
+  --linear-solver NAME     linear solver of the diffusion S (default cg-jacobi)
+  --rays N                 rays per patch of the form factors (default 256)
+  --cell-size MM           patch size of every built-in box (overrides the scene)
+  --heuristics             also the paper's Sec. 6.3 heuristics (arrays
+                           HeuristicRadiosity1/2)
+  --bench N                then N relights (light moved) and N translucency
+                           changes (coefficients x 0.5 / x 2), medians in the JSON
+)";
+
+namespace
+{
+using json = nlohmann::json;
+
+
+/// Per-point RGB of `array` (cell data interpolated to the points), times
+/// `exposure`, sRGB-encoded.
+void Colourise(vtkPolyData* poly, const char* array, double exposure)
+{
+  vtkDataArray* values = poly->GetPointData()->GetArray(array);
+  vtkNew<vtkUnsignedCharArray> rgb;
+  rgb->SetName("RGB");
+  rgb->SetNumberOfComponents(3);
+  rgb->SetNumberOfTuples(poly->GetNumberOfPoints());
+  for (vtkIdType i = 0; i < poly->GetNumberOfPoints(); ++i)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      double v = std::min(1.0, std::max(0.0, exposure * values->GetComponent(i, c)));
+      v = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+      rgb->SetComponent(i, c, std::round(255.0 * v));
+    }
+  }
+  poly->GetPointData()->AddArray(rgb);
+}
+
+std::vector<vtkSmartPointer<vtkPolyData>> Leaves(vtkDataObject* data)
+{
+  std::vector<vtkSmartPointer<vtkPolyData>> out;
+  auto* composite = vtkCompositeDataSet::SafeDownCast(data);
+  vtkSmartPointer<vtkCompositeDataIterator> it;
+  it.TakeReference(composite->NewIterator());
+  for (it->InitTraversal(); !it->IsDoneWithTraversal(); it->GoToNextItem())
+  {
+    if (auto* poly = vtkPolyData::SafeDownCast(it->GetCurrentDataObject()))
+    {
+      out.push_back(poly);
+    }
+  }
+  return out;
+}
+
+bool WriteFourPanels(vtkDataObject* result, const SceneCamera& camera, const std::string& file,
+  std::string& error)
+{
+  const char* arrays[4] = { "DirectRadiosity", "SubsurfaceRadiosity", "InterReflectionRadiosity",
+    "Radiosity" };
+  const char* titles[4] = { "direct", "subsurface only (first bounce)", "inter-reflection only",
+    "combined" };
+  // Smooth: cell values to the points, per object.
+  std::vector<vtkSmartPointer<vtkPolyData>> smooth;
+  for (const auto& leaf : Leaves(result))
+  {
+    vtkNew<vtkCellDataToPointData> toPoints;
+    toPoints->SetInputData(leaf);
+    toPoints->PassCellDataOff();
+    toPoints->Update();
+    smooth.push_back(vtkPolyData::SafeDownCast(toPoints->GetOutput()));
+  }
+  // One exposure for the four panels: the 99th percentile of the brightest
+  // channel of the combined radiosity maps to 0.9.
+  std::vector<double> peaks;
+  for (const auto& poly : smooth)
+  {
+    vtkDataArray* b = poly->GetPointData()->GetArray("Radiosity");
+    for (vtkIdType i = 0; i < b->GetNumberOfTuples(); ++i)
+    {
+      peaks.push_back(std::max({ b->GetComponent(i, 0), b->GetComponent(i, 1), b->GetComponent(i, 2) }));
+    }
+  }
+  std::sort(peaks.begin(), peaks.end());
+  const double p99 = peaks.empty() ? 1.0 : peaks[static_cast<size_t>(0.99 * (peaks.size() - 1))];
+  const double exposure = p99 > 0.0 ? 0.9 / p99 : 1.0;
+
+  const int size = 400;
+  vtkNew<vtkRenderWindow> window;
+  window->SetOffScreenRendering(1);
+  window->SetMultiSamples(0);
+  window->SetSize(4 * size, size);
+  double bounds[6] = { 1e300, -1e300, 1e300, -1e300, 1e300, -1e300 };
+  for (const auto& poly : smooth)
+  {
+    double b[6];
+    poly->GetBounds(b);
+    for (int d = 0; d < 3; ++d)
+    {
+      bounds[2 * d] = std::min(bounds[2 * d], b[2 * d]);
+      bounds[2 * d + 1] = std::max(bounds[2 * d + 1], b[2 * d + 1]);
+    }
+  }
+  for (int panel = 0; panel < 4; ++panel)
+  {
+    vtkNew<vtkRenderer> renderer;
+    renderer->SetViewport(0.25 * panel, 0.0, 0.25 * (panel + 1), 1.0);
+    renderer->SetBackground(0.0, 0.0, 0.0);
+    for (const auto& poly : smooth)
+    {
+      vtkNew<vtkPolyData> copy;
+      copy->ShallowCopy(poly);
+      Colourise(copy, arrays[panel], exposure);
+      vtkNew<vtkPolyDataMapper> mapper;
+      mapper->SetInputData(copy);
+      mapper->SetScalarModeToUsePointFieldData();
+      mapper->SelectColorArray("RGB");
+      mapper->SetColorModeToDirectScalars();
+      mapper->ScalarVisibilityOn();
+      vtkNew<vtkActor> actor;
+      actor->SetMapper(mapper);
+      actor->GetProperty()->LightingOff(); // the radiosity is the appearance
+      renderer->AddActor(actor);
+    }
+    vtkCamera* cam = renderer->GetActiveCamera();
+    const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
+      0.5 * (bounds[4] + bounds[5]) };
+    if (camera.Position.size() == 3)
+    {
+      cam->SetPosition(camera.Position.data());
+      cam->SetFocalPoint(camera.FocalPoint.data());
+      cam->SetViewUp(camera.ViewUp.data());
+      cam->SetViewAngle(camera.ViewAngle);
+      renderer->ResetCameraClippingRange();
+    }
+    else
+    {
+      cam->SetFocalPoint(centre);
+      cam->SetPosition(centre[0], centre[1] - 1.0, centre[2]);
+      cam->SetViewUp(0.0, 0.0, 1.0);
+      renderer->ResetCamera(bounds);
+    }
+    vtkNew<vtkTextActor> title;
+    title->SetInput(titles[panel]);
+    title->GetTextProperty()->SetFontSize(16);
+    title->GetTextProperty()->SetColor(1.0, 1.0, 1.0);
+    title->GetPositionCoordinate()->SetCoordinateSystemToNormalizedViewport();
+    title->SetPosition(0.03, 0.03);
+    renderer->AddActor2D(title);
+    window->AddRenderer(renderer);
+  }
+  return Snapshot(window, file, error);
+}
+
+double MedianOf(std::vector<double> v)
+{
+  return v.empty() ? 0.0 : Median(std::move(v));
+}
+
+} // namespace
+
+int Radiosity(const std::vector<std::string>& args)
+{
+  std::string scenePath, prefix, png, jsonPath, sOperator, iteration, linearSolver;
+  double relTol = -1.0, cellSize = 0.0;
+  int rays = -1, bench = 0;
+  bool heuristics = false;
+  for (size_t i = 0; i < args.size(); ++i)
+  {
+    auto value = [&](const char* name) {
+      if (i + 1 >= args.size())
+        throw UsageError(std::string(name) + " needs a value");
+      return args[++i];
+    };
+    auto number = [&](const char* name) {
+      const std::string text = value(name);
+      const std::vector<double> v = ParseNumbers(text, name);
+      if (v.size() != 1)
+        throw UsageError(std::string(name) + " needs one number");
+      return v[0];
+    };
+    const std::string& a = args[i];
+    if (a == "--scene")
+      scenePath = value("--scene");
+    else if (a == "--output")
+      prefix = value("--output");
+    else if (a == "--png")
+      png = value("--png");
+    else if (a == "--json")
+      jsonPath = value("--json");
+    else if (a == "--s-operator")
+      sOperator = value("--s-operator");
+    else if (a == "--linear-solver")
+      linearSolver = value("--linear-solver");
+    else if (a == "--iteration")
+      iteration = value("--iteration");
+    else if (a == "--rel-tol")
+      relTol = number("--rel-tol");
+    else if (a == "--rays")
+      rays = static_cast<int>(number("--rays"));
+    else if (a == "--cell-size")
+      cellSize = number("--cell-size");
+    else if (a == "--bench")
+      bench = static_cast<int>(number("--bench"));
+    else if (a == "--heuristics")
+      heuristics = true;
+    else
+      throw UsageError("radiosity: unknown option '" + a + "'" + RadiosityHelp);
+  }
+  if (scenePath.empty() || prefix.empty())
+  {
+    throw UsageError(std::string("radiosity needs --scene FILE.json and --output PREFIX") +
+      RadiosityHelp);
+  }
+  if (!sOperator.empty() && sOperator != "diffusion" && sOperator != "profile")
+    throw UsageError("--s-operator must be diffusion or profile, not '" + sOperator + "'");
+  if (!iteration.empty() && iteration != "jacobi" && iteration != "gauss-seidel")
+    throw UsageError("--iteration must be jacobi or gauss-seidel, not '" + iteration + "'");
+  if (rays == 0 || rays < -1 || bench < 0 || cellSize < 0.0 || (relTol != -1.0 && !(relTol > 0.0)))
+    throw UsageError("--rays, --bench, --cell-size and --rel-tol must be positive");
+
+  std::vector<Stage> stages;
+  auto start = Clock::now();
+  LoadedScene scene = LoadScene(scenePath, cellSize);
+  stages.push_back({ "scene (read, tetrahedralize)", Since(start) });
+  SceneSettings& s = scene.Settings;
+  if (!sOperator.empty())
+    s.SOperator = sOperator;
+  if (!iteration.empty())
+    s.Iteration = iteration;
+  if (relTol > 0.0)
+    s.RelTol = relTol;
+  if (rays > 0)
+    s.RaysPerPatch = rays;
+  if (!linearSolver.empty())
+    s.LinearSolver = linearSolver;
+  if (s.SOperator != "diffusion" && s.SOperator != "profile")
+    throw translucency::Error("scene '" + scenePath + "': s_operator must be diffusion or profile");
+
+  MessageCollector messages;
+  vtkNew<vtkTranslucentRadiosity> radiosity;
+  messages.Watch(radiosity);
+  radiosity->SetInputData(scene.Objects);
+  radiosity->SetSubsurfaceMethod(s.SOperator == "profile"
+      ? vtkTranslucentRadiosity::SUBSURFACE_PROFILE
+      : vtkTranslucentRadiosity::SUBSURFACE_DIFFUSION);
+  radiosity->SetIteration(s.Iteration == "jacobi" ? vtkTranslucentRadiosity::ITERATION_JACOBI
+                                                  : vtkTranslucentRadiosity::ITERATION_GAUSS_SEIDEL);
+  radiosity->SetRelTol(s.RelTol);
+  radiosity->SetMaxIter(s.MaxIter);
+  radiosity->SetRaysPerPatch(s.RaysPerPatch);
+  radiosity->SetFormFactorThreshold(s.FormFactorThreshold);
+  radiosity->SetVoxelSize(s.VoxelSize);
+  radiosity->SetMaxDistance(s.MaxDistance);
+  radiosity->SetComputeHeuristics(heuristics);
+  radiosity->SetLinearSolver(s.LinearSolver.c_str());
+  auto addLights = [&](const std::vector<translucency::LightSource>& lights) {
+    radiosity->RemoveAllLights();
+    for (const auto& l : lights)
+    {
+      if (l.Type == translucency::LightSource::Kind::Point)
+        radiosity->AddPointLight(
+          l.Position[0], l.Position[1], l.Position[2], l.Power[0], l.Power[1], l.Power[2]);
+      else if (l.Type == translucency::LightSource::Kind::Directional)
+        radiosity->AddDirectionalLight(
+          l.Direction[0], l.Direction[1], l.Direction[2], l.Power[0], l.Power[1], l.Power[2]);
+      else
+        radiosity->AddSpotLight(l.Position[0], l.Position[1], l.Position[2], l.Direction[0],
+          l.Direction[1], l.Direction[2], l.SpotCutoff, l.SpotExponent, l.Power[0], l.Power[1],
+          l.Power[2]);
+    }
+  };
+  addLights(scene.Lights);
+  start = Clock::now();
+  radiosity->Update();
+  if (!messages.Errors.empty())
+    throw translucency::Error("scene '" + scenePath + "': " + messages.Last());
+  const double firstMs = Since(start);
+  stages.push_back({ "form factors", radiosity->GetFormFactorTime() });
+  stages.push_back({ "S set-up", radiosity->GetSetupTime() });
+  stages.push_back({ "direct light + S E", radiosity->GetDirectTime() });
+  stages.push_back({ "iteration", radiosity->GetSolveTime() });
+  stages.push_back({ "radiosity filter total", firstMs });
+
+  json report = { { "scene", scenePath }, { "s_operator", s.SOperator },
+    { "iteration", s.Iteration }, { "linear_solver", s.LinearSolver }, { "patches", radiosity->GetNumberOfPatches() },
+    { "rays_per_patch", s.RaysPerPatch }, { "iterations", radiosity->GetNumberOfIterations() },
+    { "converged", radiosity->GetConverged() }, { "rel_tol", s.RelTol },
+    { "form_factor_ms", radiosity->GetFormFactorTime() },
+    { "form_factor_bytes", radiosity->GetFormFactorMemory() },
+    { "subsurface_setup_ms", radiosity->GetSetupTime() },
+    { "subsurface_bytes", radiosity->GetSubsurfaceMemory() },
+    { "direct_ms", radiosity->GetDirectTime() }, { "solve_ms", radiosity->GetSolveTime() },
+    { "filter_total_ms", firstMs } };
+
+  // Outputs: one .vtp per object.
+  vtkSmartPointer<vtkDataObject> result = radiosity->GetOutputDataObject(0);
+  {
+    std::string error;
+    start = Clock::now();
+    const auto leaves = Leaves(result);
+    EnsureParentDirectory(prefix + "_0.vtp");
+    for (size_t k = 0; k < leaves.size(); ++k)
+    {
+      vtkNew<vtkXMLPolyDataWriter> writer;
+      const std::string file = prefix + "_" + std::to_string(k) + ".vtp";
+      if (!WriteAtomically(writer, leaves[k], file, error))
+        throw translucency::Error(error);
+    }
+    stages.push_back({ "write", Since(start) });
+    if (!png.empty())
+    {
+      start = Clock::now();
+      EnsureParentDirectory(png);
+      vtkSmartPointer<vtkDataObject> copy;
+      copy.TakeReference(result->NewInstance());
+      copy->ShallowCopy(result);
+      if (!WriteFourPanels(copy, scene.Camera, png, error))
+        throw translucency::Error(error);
+      stages.push_back({ "png", Since(start) });
+    }
+  }
+
+  if (bench > 0)
+  {
+    // Relight: move the first light a little each time (form factors and S
+    // are kept; warm-started diffusion solves).
+    std::vector<double> relightTotal, relightCore, changeTotal, changeCore;
+    std::vector<int> relightIterations, changeIterations;
+    for (int r = 0; r < bench; ++r)
+    {
+      std::vector<translucency::LightSource> lights = scene.Lights;
+      lights[0].Position[0] += (r % 2 ? -1.0 : 1.0) * 0.02 * (r + 1);
+      addLights(lights);
+      start = Clock::now();
+      radiosity->Update();
+      relightTotal.push_back(Since(start));
+      relightCore.push_back(radiosity->GetDirectTime() + radiosity->GetSolveTime());
+      relightIterations.push_back(radiosity->GetNumberOfIterations());
+    }
+    addLights(scene.Lights);
+    // Translucency change: scale the coefficients of every translucent object.
+    bool anyTranslucent = false;
+    for (int r = 0; r < bench; ++r)
+    {
+      const double factor = r % 2 ? 2.0 : 0.5;
+      for (unsigned int k = 0; k < scene.Objects->GetNumberOfPartitionedDataSets(); ++k)
+      {
+        if (!scene.Translucent[k])
+          continue;
+        anyTranslucent = true;
+        auto* grid = vtkUnstructuredGrid::SafeDownCast(scene.Objects->GetPartition(k, 0));
+        for (const char* name : { "AbsorptionCoefficient", "ReducedScatteringCoefficient" })
+        {
+          vtkDataArray* a = grid->GetCellData()->GetArray(name);
+          for (vtkIdType t = 0; t < a->GetNumberOfTuples(); ++t)
+            for (int c = 0; c < 3; ++c)
+              a->SetComponent(t, c, a->GetComponent(t, c) * factor);
+          a->Modified();
+        }
+        grid->Modified();
+      }
+      if (!anyTranslucent)
+        break;
+      radiosity->Modified();
+      start = Clock::now();
+      radiosity->Update();
+      changeTotal.push_back(Since(start));
+      changeCore.push_back(
+        radiosity->GetSetupTime() + radiosity->GetDirectTime() + radiosity->GetSolveTime());
+      changeIterations.push_back(radiosity->GetNumberOfIterations());
+    }
+    if (!messages.Errors.empty())
+      throw translucency::Error(messages.Last());
+    report["bench"] = { { "repeats", bench },
+      { "relight_filter_ms_median", MedianOf(relightTotal) },
+      { "relight_core_ms_median", MedianOf(relightCore) },
+      { "relight_iterations", relightIterations },
+      { "translucency_change_filter_ms_median", MedianOf(changeTotal) },
+      { "translucency_change_core_ms_median", MedianOf(changeCore) },
+      { "translucency_change_iterations", changeIterations } };
+    std::cout << "relight: median " << MedianOf(relightTotal) << " ms (filter), "
+              << MedianOf(relightCore) << " ms (direct light + iteration)\n"
+              << "translucency change: median " << MedianOf(changeTotal) << " ms (filter), "
+              << MedianOf(changeCore) << " ms (S set-up + direct + iteration)\n";
+  }
+
+  std::cout << radiosity->GetNumberOfPatches() << " patches, " << radiosity->GetNumberOfIterations()
+            << " iterations (" << (radiosity->GetConverged() ? "converged" : "NOT converged")
+            << "), F " << radiosity->GetFormFactorMemory() / 1048576.0 << " MiB, S "
+            << radiosity->GetSubsurfaceMemory() / 1048576.0 << " MiB\n";
+  PrintStages(stages);
+  if (!jsonPath.empty())
+  {
+    std::string error;
+    if (!WriteText(jsonPath, report.dump(2) + "\n", error))
+      throw translucency::Error(error);
+  }
+  return 0;
+}
+
+} // namespace translucency_app
