@@ -81,6 +81,13 @@ void MultiresHierarchy::IndependentSet(const CsrPattern& graph, std::vector<char
   }
   std::vector<char> pickNow(n, 0);
   const int nt = Threads(threads);
+  // The codes of this level, hashed once (Sec. 4.1.1).
+  std::vector<std::uint64_t> codes(n);
+#pragma omp parallel for num_threads(nt) schedule(static)
+  for (int i = 0; i < n; ++i)
+  {
+    codes[i] = Code(i, level);
+  }
   while (!active.empty())
   {
     const long long m = static_cast<long long>(active.size());
@@ -91,12 +98,12 @@ void MultiresHierarchy::IndependentSet(const CsrPattern& graph, std::vector<char
     for (long long a = 0; a < m; ++a)
     {
       const int i = active[a];
-      const std::uint64_t hi = Code(i, level);
+      const std::uint64_t hi = codes[i];
       bool smallest = true;
       for (int k = graph.Offsets[i]; k < graph.Offsets[i + 1] && smallest; ++k)
       {
         const int j = graph.Columns[k];
-        if (j != i && inQ[j] && Code(j, level) < hi)
+        if (j != i && inQ[j] && codes[j] < hi)
         {
           smallest = false;
         }

@@ -369,6 +369,7 @@ void MultiresLinearSolverBase::Setup(
   Unknowns_ = n;
   NonZeros_ = system.ColumnIndices.size();
   Ready_ = true;
+  ++Setups_;
 }
 
 void MultiresLinearSolverBase::CheckSystem(const DiffusionSystem& system) const

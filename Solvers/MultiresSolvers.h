@@ -57,6 +57,8 @@ public:
   double GetCoarseValuesMilliseconds() const { return ValuesMs_; }
   /// How many times the hierarchy was (re)built (Setup with patternChanged).
   int GetNumberOfHierarchyBuilds() const { return Builds_; }
+  /// How many times Setup ran (builds and values-only set-ups).
+  int GetNumberOfSetups() const { return Setups_; }
 
   void Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged) override;
 
@@ -79,6 +81,7 @@ protected:
   bool Ready_ = false;
   double HierarchyMs_ = 0.0, ValuesMs_ = 0.0;
   int Builds_ = 0;
+  int Setups_ = 0;
 };
 
 /// "multigrid-cg": CG preconditioned by a V-cycle on the TransCut hierarchy.

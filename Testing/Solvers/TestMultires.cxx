@@ -12,6 +12,7 @@
 #include "TestMeshes.h"
 #include "TestProblems.h"
 #include "TetMesh.h"
+#include "VertexDiffusionSolver.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
@@ -726,6 +727,91 @@ TEST_P(SolverNames, TinyMeshesAndBadInput)
 
 INSTANTIATE_TEST_SUITE_P(Multires, SolverNames,
   ::testing::Values("transcut-multires", "multigrid-cg"));
+
+TEST(MultiresSolvers, VertexSolverKeepsTheHierarchy)
+{
+  // VertexDiffusionSolver: no Setup for a relight, a values-only Setup for a
+  // paint, a new hierarchy for a new mesh; the result always equals Cholesky.
+  const auto data = CubeMesh(12, 4.0, 0.3, 81); // > 1000 points: several levels
+  TetMesh mesh;
+  mesh.SetGeometry(data.Points, data.Tets);
+  auto material = RandomMaterial(mesh.GetNumberOfTets(), 82);
+  auto q = RandomIrradiance(mesh, 83);
+  auto solver = CreateDiffusionSolver("divergence");
+  EXPECT_EQ(solver->GetLinearSolver(), "");
+  solver->SetLinearSolver("Multigrid-CG");
+  solver->SetRelTol(1e-10);
+  DiffusionProblem problem;
+  problem.Mesh = &mesh;
+  problem.Material = &material;
+  problem.Irradiance = &q;
+  std::vector<double> fluence;
+  SolverReport report;
+  auto check = [&](const TetMesh& m)
+  {
+    DiffusionSystem system;
+    DiscreteDivergence().Assemble(m, *problem.Material, *problem.Irradiance, system);
+    const auto reference = Cholesky(system);
+    for (int i = 0; i < m.GetNumberOfPoints(); ++i)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        EXPECT_NEAR(fluence[3 * i + c], reference[c][i], 1e-7 * reference[c].cwiseAbs().maxCoeff());
+      }
+    }
+  };
+  ASSERT_TRUE(solver->Solve(problem, fluence, report));
+  EXPECT_EQ(report.LinearSolver, "multigrid-cg");
+  auto& vertex = dynamic_cast<VertexDiffusionSolver&>(*solver);
+  auto* mg = dynamic_cast<MultigridConjugateGradient*>(vertex.GetLinearSolverObject());
+  ASSERT_NE(mg, nullptr);
+  EXPECT_EQ(mg->GetNumberOfHierarchyBuilds(), 1);
+  EXPECT_EQ(mg->GetNumberOfSetups(), 1);
+  check(mesh);
+  const int coldIterations = report.Iterations[0];
+  // Relight: no Setup, warm start.
+  q = RandomIrradiance(mesh, 84, 1.02);
+  ASSERT_TRUE(solver->Solve(problem, fluence, report));
+  EXPECT_EQ(mg->GetNumberOfSetups(), 1);
+  check(mesh);
+  // Relight with a tiny change: warm start needs fewer iterations.
+  for (double& v : q)
+  {
+    v *= 1.001;
+  }
+  ASSERT_TRUE(solver->Solve(problem, fluence, report));
+  EXPECT_LT(report.Iterations[0], coldIterations);
+  // Paint: values-only Setup, same hierarchy.
+  material.AbsorptionCoefficient[0] *= 3.0;
+  ASSERT_TRUE(solver->Solve(problem, fluence, report));
+  EXPECT_EQ(mg->GetNumberOfSetups(), 2);
+  EXPECT_EQ(mg->GetNumberOfHierarchyBuilds(), 1);
+  check(mesh);
+  // Another mesh: a new hierarchy.
+  const auto data2 = CubeMesh(7, 4.0, 0.3, 85);
+  TetMesh mesh2;
+  mesh2.SetGeometry(data2.Points, data2.Tets);
+  auto material2 = RandomMaterial(mesh2.GetNumberOfTets(), 86);
+  auto q2 = RandomIrradiance(mesh2, 87);
+  problem.Mesh = &mesh2;
+  problem.Material = &material2;
+  problem.Irradiance = &q2;
+  ASSERT_TRUE(solver->Solve(problem, fluence, report));
+  EXPECT_EQ(mg->GetNumberOfHierarchyBuilds(), 2);
+  check(mesh2);
+  // Another name: another solver object; an unknown name lists the known.
+  solver->SetLinearSolver("transcut-multires");
+  ASSERT_TRUE(solver->Solve(problem, fluence, report));
+  EXPECT_EQ(report.LinearSolver, "transcut-multires");
+  check(mesh2);
+  solver->SetLinearSolver("");
+  ASSERT_TRUE(solver->Solve(problem, fluence, report));
+  EXPECT_EQ(report.LinearSolver, VertexDiffusionSolver::GetDefaultLinearSolverName());
+  solver->SetLinearSolver("amg");
+  EXPECT_TRUE(translucency::testing::Contains(
+    translucency::testing::ErrorMessage([&] { solver->Solve(problem, fluence, report); }),
+    "multigrid-cg"));
+}
 
 TEST(MultiresSolvers, FactoryNames)
 {
