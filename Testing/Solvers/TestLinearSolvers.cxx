@@ -182,6 +182,13 @@ TEST_P(LinearSolverTest, WarmStartAfterASmallLightChangeNeedsFewerIterations)
   {
     GTEST_SKIP() << GetParam() << " is a direct solver";
   }
+  if (stats[0].Iterations == 1)
+  {
+    // multigrid-cg on a mesh below its coarsest-level size is one exact
+    // (LDLT) application: nothing for a guess to save. TestMultires checks
+    // its warm start on a mesh with a real hierarchy.
+    GTEST_SKIP() << GetParam() << " solves this small problem exactly in one iteration";
+  }
   // Same matrix, new light: only the right-hand sides change.
   DiffusionSystem rotated;
   DiscreteDivergence().Assemble(p.Mesh, p.Material, LightAt(p, 20.5), rotated);
