@@ -140,4 +140,8 @@ bool ParseImageOption(const std::vector<std::string>& args, size_t& i, RadianceI
 int Compare(const std::vector<std::string>& args);
 extern const char* const CompareHelp;
 
+/// `translucency acquire` (Acquire.cxx): inverse diffusion, and its help text.
+int Acquire(const std::vector<std::string>& args);
+extern const char* const AcquireHelp;
+
 } // namespace translucency_app

@@ -62,6 +62,7 @@ Commands:
            light it, solve the diffusion equation, write the results.
   compare  Run several solvers on the same problem and lay the results side by side.
   bench    Median assembly and solve times at several mesh sizes.
+  acquire  Recover kappa and mu_a from measured radiance (inverse diffusion).
 
 Scene options (render and compare):
 )";
@@ -100,7 +101,8 @@ translucency bench [options]
 
 void PrintUsage()
 {
-  std::cout << UsageHead << SceneOptionsHelp << RenderHelp << CompareHelp << BenchHelp;
+  std::cout << UsageHead << SceneOptionsHelp << RenderHelp << CompareHelp << BenchHelp
+            << AcquireHelp;
 }
 
 int Render(const std::vector<std::string>& args)
@@ -580,7 +582,9 @@ int main(int argc, char* argv[])
       return translucency_app::Compare(args);
     if (command == "bench")
       return Bench(args);
-    throw UsageError("unknown command '" + command + "' (render, compare or bench)");
+    if (command == "acquire")
+      return translucency_app::Acquire(args);
+    throw UsageError("unknown command '" + command + "' (render, compare, bench or acquire)");
   }
   catch (const UsageError& e)
   {

@@ -10,6 +10,7 @@ packages=(
   libtet1.5-dev libeigen3-dev libglew-dev
   googletest libgtest-dev libbenchmark-dev
   xvfb xauth
+  libsuitesparse-dev
 )
 
 missing=()
