@@ -103,7 +103,7 @@ vtkDataArray* NewTriple(const std::string& name, const std::vector<double>& valu
 vtkSmartPointer<vtkUnstructuredGrid> ReadGrid(const std::string& path)
 {
   vtkNew<vtkXMLUnstructuredGridReader> reader;
-  if (Extension(path) != ".vtu" || !reader->CanReadFile(path.c_str()))
+  if (Extension(path) != "vtu" || !reader->CanReadFile(path.c_str()))
   {
     throw translucency::Error(path + ": not a readable .vtu file");
   }
@@ -128,7 +128,7 @@ void AttachPatterns(vtkUnstructuredGrid* sample, const std::string& patterns)
     for (vtkIdType k = 0; k < dir->GetNumberOfFiles(); ++k)
     {
       const std::string name = dir->GetFile(k);
-      if (Extension(name) == ".vtu")
+      if (Extension(name) == "vtu")
       {
         files.push_back(patterns + "/" + name);
       }
@@ -203,7 +203,7 @@ struct Synthetic
 vtkSmartPointer<vtkDataSet> ReadTruth(const std::string& path)
 {
   const std::string ext = Extension(path);
-  if (ext == ".vti")
+  if (ext == "vti")
   {
     vtkNew<vtkXMLImageDataReader> reader;
     if (!reader->CanReadFile(path.c_str()))
@@ -214,7 +214,7 @@ vtkSmartPointer<vtkDataSet> ReadTruth(const std::string& path)
     out->ShallowCopy(reader->GetOutput());
     return out;
   }
-  if (ext == ".vtu")
+  if (ext == "vtu")
   {
     return ReadGrid(path);
   }
@@ -529,7 +529,7 @@ double Correlation(const std::vector<double>& x, const std::vector<double>& y)
     sxx += (x[i] - mx) * (x[i] - mx);
     syy += (y[i] - my) * (y[i] - my);
   }
-  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
+  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : std::nan("");
 }
 
 int ParseCount(const std::string& text, const std::string& what)
@@ -677,8 +677,15 @@ int Acquire(const std::vector<std::string>& args)
   MessageCollector messages;
   messages.Watch(inverse);
   vtkNew<vtkCallbackCommand> progress;
-  progress->SetCallback([](vtkObject* caller, unsigned long, void*, void*) {
+  int lastPercent = -1;
+  progress->SetClientData(&lastPercent);
+  progress->SetCallback([](vtkObject* caller, unsigned long, void* client, void*) {
     const double f = static_cast<vtkAlgorithm*>(caller)->GetProgress();
+    int& last = *static_cast<int*>(client);
+    const int percent = static_cast<int>(100 * f + 0.5);
+    if (percent == last)
+      return;
+    last = percent;
     const int width = 40, done = static_cast<int>(f * width + 0.5);
     std::cerr << "\racquire [" << std::string(done, '#') << std::string(width - done, '.') << "] "
               << static_cast<int>(100 * f + 0.5) << "%" << std::flush;
@@ -803,8 +810,11 @@ int Acquire(const std::vector<std::string>& args)
         tm.push_back(syn.Mu[3 * v + 1]);
         rm.push_back(mu[3 * v + 1]);
       }
-      depths.push_back({ { "layer", k }, { "kappa_correlation_G", Correlation(tk, rk) },
-        { "mua_correlation_G", Correlation(tm, rm) } });
+      // null where the truth is constant on the layer (no correlation defined).
+      const double ck = Correlation(tk, rk), cm = Correlation(tm, rm);
+      depths.push_back({ { "layer", k },
+        { "kappa_correlation_G", std::isfinite(ck) ? json(ck) : json(nullptr) },
+        { "mua_correlation_G", std::isfinite(cm) ? json(cm) : json(nullptr) } });
     }
     report["truth_correlation_by_depth"] = depths;
     report["grid"] = { syn.N[0], syn.N[1], syn.N[2] };
@@ -834,7 +844,6 @@ int Acquire(const std::vector<std::string>& args)
           "normalised objective", outputPrefix + "_objective.png", plotError))
       std::cerr << "translucency: warning: objective plot not written: " << plotError << "\n";
   }
-  stages.push_back({ "total", Since(start) });
   json timing = json::array();
   for (const Stage& s : stages)
     timing.push_back({ { "stage", s.Name }, { "ms", s.Milliseconds } });

@@ -117,7 +117,7 @@ int vtkInverseDiffusion::RequestData(
   if (numIrradiance != numRadiance)
   {
     vtkErrorMacro(<< "the input has " << numIrradiance << " illumination patterns (Irradiance_<k>) but "
-                  << numRadiance << " measurements (Radiance_<k>): one of each per pattern");
+                  << numRadiance << " measurements (Radiance_<k>); one of each per pattern");
     return 0;
   }
   std::vector<std::vector<double>> irradiance(numIrradiance), radiance(numIrradiance);

@@ -361,7 +361,7 @@ public:
       p = pNew;
       history.push_back({ Channel_.Index, stage, it, current->Objective, current->Data, g.norm(),
         bestStep, evaluations });
-      if (homogeneous && (f0 - current->Objective) <= 1e-10 * f0)
+      if (homogeneous && (f0 - current->Objective) <= 1e-6 * f0)
       {
         return "homogeneous fit converged";
       }
