@@ -30,6 +30,24 @@ using DirectSolver = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::L
 #endif
 } // namespace
 
+// OpenBLAS thread control, resolved at run time if OpenBLAS is the BLAS in use.
+extern "C" void openblas_set_num_threads(int) __attribute__((weak));
+extern "C" int openblas_get_num_threads() __attribute__((weak));
+
+int DiffusionForwardModel::SetBlasThreads(int n)
+{
+  int previous = 0;
+  if (openblas_get_num_threads)
+  {
+    previous = openblas_get_num_threads();
+  }
+  if (openblas_set_num_threads && n > 0)
+  {
+    openblas_set_num_threads(n);
+  }
+  return previous;
+}
+
 struct DiffusionForwardModel::Factor::Impl
 {
   DirectSolver Solver;
@@ -52,6 +70,15 @@ bool DiffusionForwardModel::Factor::IsValid() const
 }
 
 void DiffusionForwardModel::Factor::Solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x) const
+{
+  if (!IsValid())
+  {
+    throw Error("DiffusionForwardModel::Factor::Solve: the system is not factorised");
+  }
+  x = Impl_->Solver.solve(rhs);
+}
+
+void DiffusionForwardModel::Factor::Solve(const Eigen::MatrixXd& rhs, Eigen::MatrixXd& x) const
 {
   if (!IsValid())
   {
@@ -334,8 +361,8 @@ void DiffusionForwardModel::Factorize(const double* kappa, const double* mu, Fac
   impl.Valid = true;
 }
 
-void DiffusionForwardModel::AccumulateGradient(const Eigen::VectorXd& adjoint,
-  const Eigen::VectorXd& phi, double* gKappa, double* gMu) const
+void DiffusionForwardModel::AccumulateGradient(const Eigen::Ref<const Eigen::VectorXd>& adjoint,
+  const Eigen::Ref<const Eigen::VectorXd>& phi, double* gKappa, double* gMu) const
 {
   const int numTets = Mesh_.GetNumberOfTets();
   for (int t = 0; t < numTets; ++t)

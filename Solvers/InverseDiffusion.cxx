@@ -31,7 +31,7 @@ double Seconds(std::chrono::steady_clock::time_point start)
 struct InverseDiffusion::Channel
 {
   int Index = 0;
-  std::vector<Eigen::VectorXd> Source;   ///< b_m (TransCut eq. 12)
+  Eigen::MatrixXd Source;                ///< column m: b_m (TransCut eq. 12)
   std::vector<std::vector<int>> Points;  ///< observed point ids of pattern m
   std::vector<Eigen::VectorXd> Offset;   ///< per observed point: L_meas + beta q
   double SumMeasuredSquared = 0.0;       ///< sum_m sum_i L_mi^2
@@ -42,7 +42,7 @@ struct InverseDiffusion::Channel
 struct InverseDiffusion::Workspace
 {
   DiffusionForwardModel::Factor Factor;
-  std::vector<Eigen::VectorXd> Phi;
+  Eigen::MatrixXd Phi; ///< column m: the fluence of pattern m
   std::vector<double> Kappa, Mu;
   double Objective = Infinity;
   double Data = 0.0;
@@ -84,18 +84,18 @@ public:
     }
     Model_.Factorize(kappa.data(), mu.data(), ws.Factor);
     const Eigen::VectorXd& alpha = Model_.GetReadOutFluenceWeights();
-    const int numPatterns = static_cast<int>(Channel_.Source.size());
-    ws.Phi.resize(numPatterns);
+    const int numPatterns = static_cast<int>(Channel_.Source.cols());
+    // The M forward solves with one factorisation, as one blocked solve.
+    ws.Factor.Solve(Channel_.Source, ws.Phi);
     double data = 0.0;
     for (int m = 0; m < numPatterns; ++m)
     {
-      ws.Factor.Solve(Channel_.Source[m], ws.Phi[m]);
       const std::vector<int>& pts = Channel_.Points[m];
       const Eigen::VectorXd& offset = Channel_.Offset[m];
       for (size_t k = 0; k < pts.size(); ++k)
       {
         // r = L_meas - L^R, L^R = alpha phi - beta q (TransCut eq. 3).
-        const double r = offset[k] - alpha[pts[k]] * ws.Phi[m][pts[k]];
+        const double r = offset[k] - alpha[pts[k]] * ws.Phi(pts[k], m);
         data += r * r; // paper Sec. 4.2, f_m
       }
     }
@@ -118,25 +118,28 @@ public:
     gMu.assign(NumElements_, 0.0);
     const Eigen::VectorXd& alpha = Model_.GetReadOutFluenceWeights();
     const int n = Model_.GetNumberOfPoints();
-    Eigen::VectorXd source(n), adjoint(n);
-    for (size_t m = 0; m < Channel_.Source.size(); ++m)
+    const int numPatterns = static_cast<int>(Channel_.Source.cols());
+    Eigen::MatrixXd source = Eigen::MatrixXd::Zero(n, numPatterns), adjoint;
+    for (int m = 0; m < numPatterns; ++m)
     {
       // Adjoint source dF/dphi = -2 alpha r on the observed points: the
       // discrete form of the virtual illumination of paper eq. 6.
-      source.setZero();
       const std::vector<int>& pts = Channel_.Points[m];
       const Eigen::VectorXd& offset = Channel_.Offset[m];
       for (size_t k = 0; k < pts.size(); ++k)
       {
         const int i = pts[k];
-        const double r = offset[k] - alpha[i] * ws.Phi[m][i];
-        source[i] = -2.0 * Channel_.DataScale * alpha[i] * r;
+        const double r = offset[k] - alpha[i] * ws.Phi(i, m);
+        source(i, m) = -2.0 * Channel_.DataScale * alpha[i] * r;
       }
-      // Adjoint equation (paper eq. 5-6): M lambda = dF/dphi, with the same
-      // SPD matrix as the forward problem (M = M^T).
-      ws.Factor.Solve(source, adjoint);
+    }
+    // Adjoint equation (paper eq. 5-6): M lambda = dF/dphi, with the same
+    // SPD matrix as the forward problem (M = M^T): M solves, one blocked solve.
+    ws.Factor.Solve(source, adjoint);
+    for (int m = 0; m < numPatterns; ++m)
+    {
       // Paper eq. 7, discrete: dF/dp = -lambda^T (dM/dp) phi.
-      Model_.AccumulateGradient(adjoint, ws.Phi[m], gKappa.data(), gMu.data());
+      Model_.AccumulateGradient(adjoint.col(m), ws.Phi.col(m), gKappa.data(), gMu.data());
     }
     // Regulariser: d/dkappa of lambda sum (k_e - k_f)^2 / d_ef^2 (the discrete
     // -2 lambda Laplacian(kappa) of Appendix A).
@@ -361,7 +364,7 @@ public:
       p = pNew;
       history.push_back({ Channel_.Index, stage, it, current->Objective, current->Data, g.norm(),
         bestStep, evaluations });
-      if (homogeneous && (f0 - current->Objective) <= 1e-6 * f0)
+      if (homogeneous && (f0 - current->Objective) <= Owner_.HomogeneousTolerance_ * f0)
       {
         return "homogeneous fit converged";
       }
@@ -387,6 +390,7 @@ InverseDiffusion::Channel InverseDiffusion::BuildChannel(int c) const
   ch.Index = c;
   const Eigen::VectorXd& beta = Model_.GetReadOutIrradianceWeights();
   const int n = Model_.GetNumberOfPoints();
+  ch.Source.resize(n, static_cast<Eigen::Index>(Irradiance_.size()));
   for (size_t m = 0; m < Irradiance_.size(); ++m)
   {
     Eigen::VectorXd q(n);
@@ -394,7 +398,7 @@ InverseDiffusion::Channel InverseDiffusion::BuildChannel(int c) const
     {
       q[i] = Irradiance_[m][3 * i + c];
     }
-    ch.Source.push_back(Model_.Source(q));
+    ch.Source.col(m) = Model_.Source(q);
     ch.Points.push_back(Observed_[m]);
     Eigen::VectorXd offset(Observed_[m].size());
     for (size_t k = 0; k < Observed_[m].size(); ++k)
@@ -653,6 +657,9 @@ InverseDiffusionResult InverseDiffusion::Run()
   std::array<std::string, 3> errors;
 
   const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
+  // One BLAS thread per channel thread while the channels run in parallel.
+  const int channelThreads = std::min(3, std::max(1, numThreads));
+  const int blasThreads = channelThreads > 1 ? DiffusionForwardModel::SetBlasThreads(1) : 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(std::min(3, std::max(1, numThreads)))
   for (int c = 0; c < 3; ++c)
   {
@@ -744,6 +751,10 @@ InverseDiffusionResult InverseDiffusion::Run()
       errors[c] = e.what();
     }
   }
+  if (blasThreads > 0)
+  {
+    DiffusionForwardModel::SetBlasThreads(blasThreads);
+  }
   for (int c = 0; c < 3; ++c)
   {
     if (!errors[c].empty())
@@ -798,19 +809,24 @@ std::vector<std::vector<double>> InverseDiffusion::PredictRadiance(
       }
       DiffusionForwardModel::Factor factor;
       model.Factorize(k.data(), u.data(), factor);
-      Eigen::VectorXd q(n), phi;
-      for (size_t m = 0; m < irradiance.size(); ++m)
+      const int numPatterns = static_cast<int>(irradiance.size());
+      Eigen::MatrixXd q(n, numPatterns), b(n, numPatterns), phi;
+      for (int m = 0; m < numPatterns; ++m)
       {
         for (int i = 0; i < n; ++i)
         {
-          q[i] = irradiance[m][3 * i + c];
+          q(i, m) = irradiance[m][3 * i + c];
         }
-        factor.Solve(model.Source(q), phi);
+        b.col(m) = model.Source(q.col(m));
+      }
+      factor.Solve(b, phi); // all patterns in one blocked solve
+      for (int m = 0; m < numPatterns; ++m)
+      {
         for (int i = 0; i < n; ++i)
         {
           if (alpha[i] != 0.0)
           {
-            radiance[m][3 * i + c] = alpha[i] * phi[i] - beta[i] * q[i]; // TransCut eq. 3
+            radiance[m][3 * i + c] = alpha[i] * phi(i, m) - beta[i] * q(i, m); // TransCut eq. 3
           }
         }
       }

@@ -109,6 +109,9 @@ public:
   bool GetHomogeneousFit() const { return HomogeneousFit_; }
   /// Iteration limit of the homogeneous fit. Default 30.
   void SetHomogeneousMaxIter(int n) { HomogeneousMaxIter_ = n; }
+  /// The homogeneous fit stops when an iteration lowers F by less than this
+  /// fraction. Default 1e-4.
+  void SetHomogeneousTolerance(double tol) { HomogeneousTolerance_ = tol; }
   ///@}
   /**
    * Start from these per-element values instead (3 per element each: kappa
@@ -117,7 +120,7 @@ public:
    */
   void SetInitialParameters(std::vector<double> kappa, std::vector<double> mu);
   ///@{
-  /// Golden-section stop: bracket width < tol x step. Default 0.1.
+  /// Golden-section stop: bracket width < tol x step. Default 0.25.
   void SetLineSearchTolerance(double tol) { LineSearchTolerance_ = tol; }
   ///@}
   /// OpenMP threads over the channels (0 = default). Default 0.
@@ -166,8 +169,9 @@ private:
   std::array<double, 3> InitialSigmaS_{ { 1.0, 1.0, 1.0 } };
   bool HomogeneousFit_ = true;
   int HomogeneousMaxIter_ = 30;
+  double HomogeneousTolerance_ = 1e-4;
   std::vector<double> InitialKappa_, InitialMuPerElement_;
-  double LineSearchTolerance_ = 0.1;
+  double LineSearchTolerance_ = 0.25;
   int NumberOfThreads_ = 0;
   std::function<bool(double)> Progress_;
 };
