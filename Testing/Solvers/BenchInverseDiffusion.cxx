@@ -43,6 +43,8 @@ InverseProblem& GetInverseProblem(int nx)
   if (p)
     return *p;
   p = std::make_unique<InverseProblem>();
+  // One BLAS thread, as InverseDiffusion::Run uses per channel thread.
+  DiffusionForwardModel::SetBlasThreads(1);
   const int nz = std::max(1, nx / 4);
   const double origin[3] = { 0, 0, 0 }, size[3] = { 0.25 * nx, 0.25 * nx, 0.25 * nz };
   std::vector<double> points;
