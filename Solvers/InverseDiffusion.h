@@ -110,7 +110,7 @@ public:
   /// Iteration limit of the homogeneous fit. Default 30.
   void SetHomogeneousMaxIter(int n) { HomogeneousMaxIter_ = n; }
   /// The homogeneous fit stops when an iteration lowers F by less than this
-  /// fraction. Default 1e-4.
+  /// fraction. Default 1e-2 (an initialisation need not be precise).
   void SetHomogeneousTolerance(double tol) { HomogeneousTolerance_ = tol; }
   ///@}
   /**
@@ -169,7 +169,7 @@ private:
   std::array<double, 3> InitialSigmaS_{ { 1.0, 1.0, 1.0 } };
   bool HomogeneousFit_ = true;
   int HomogeneousMaxIter_ = 30;
-  double HomogeneousTolerance_ = 1e-4;
+  double HomogeneousTolerance_ = 1e-2;
   std::vector<double> InitialKappa_, InitialMuPerElement_;
   double LineSearchTolerance_ = 0.25;
   int NumberOfThreads_ = 0;
