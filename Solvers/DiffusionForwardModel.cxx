@@ -15,6 +15,7 @@
 #include <array>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 namespace translucency
 {
@@ -213,7 +214,8 @@ DiffusionForwardModel::DiffusionForwardModel(const TetMesh& mesh, std::vector<in
       }
     }
     std::sort(faces.begin(), faces.end());
-    std::vector<std::pair<int, int>> pairs;
+    // (e, f, area of the shared triangle) for every face between two elements.
+    std::vector<std::tuple<int, int, double>> shared;
     for (size_t k = 0; k + 1 < faces.size(); ++k)
     {
       const auto& a = faces[k];
@@ -223,17 +225,35 @@ DiffusionForwardModel::DiffusionForwardModel(const TetMesh& mesh, std::vector<in
         const int ea = TetElement_[a[3]], eb = TetElement_[b[3]];
         if (ea != eb)
         {
-          pairs.emplace_back(std::min(ea, eb), std::max(ea, eb));
+          const double* p0 = pts + 3 * a[0];
+          const double* p1 = pts + 3 * a[1];
+          const double* p2 = pts + 3 * a[2];
+          const double u[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
+          const double v[3] = { p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2] };
+          const double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2],
+                       cz = u[0] * v[1] - u[1] * v[0];
+          shared.emplace_back(
+            std::min(ea, eb), std::max(ea, eb), 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz));
         }
       }
     }
-    std::sort(pairs.begin(), pairs.end());
-    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-    Neighbours_.reserve(2 * pairs.size());
-    for (const auto& p : pairs)
+    std::sort(shared.begin(), shared.end());
+    for (size_t k = 0; k < shared.size();)
     {
-      Neighbours_.push_back(p.first);
-      Neighbours_.push_back(p.second);
+      const int e = std::get<0>(shared[k]), f = std::get<1>(shared[k]);
+      double area = 0.0;
+      for (; k < shared.size() && std::get<0>(shared[k]) == e && std::get<1>(shared[k]) == f; ++k)
+      {
+        area += std::get<2>(shared[k]);
+      }
+      const double dx = ElementCentroid_[3 * e] - ElementCentroid_[3 * f];
+      const double dy = ElementCentroid_[3 * e + 1] - ElementCentroid_[3 * f + 1];
+      const double dz = ElementCentroid_[3 * e + 2] - ElementCentroid_[3 * f + 2];
+      Neighbours_.push_back(e);
+      Neighbours_.push_back(f);
+      // Finite-volume weight A_ef / d_ef: sum_pairs w (k_e - k_f)^2 approximates
+      // the integral of |grad kappa|^2 over the volume (mm), whatever the grid size.
+      NeighbourWeights_.push_back(area / std::sqrt(dx * dx + dy * dy + dz * dz));
     }
   }
 

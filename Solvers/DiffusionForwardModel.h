@@ -59,11 +59,14 @@ public:
   const std::vector<double>& GetElementVolumes() const { return ElementVolume_; }
 
   /**
-   * Pairs of neighbouring elements (sharing a tet face across the element
+   * Pairs of neighbouring elements (sharing tet faces across the element
    * boundary), each unordered pair once: 2 ids per pair. Used by the
    * gradient regulariser.
    */
   const std::vector<int>& GetElementNeighbours() const { return Neighbours_; }
+  /// Per pair: A_ef / d_ef (mm), the shared face area over the distance of the
+  /// element centroids (finite-volume weight of |grad kappa|^2).
+  const std::vector<double>& GetElementNeighbourWeights() const { return NeighbourWeights_; }
 
   /// Read-out L_i = alpha_i phi_i - beta_i q_i at boundary point i (0 inside),
   /// from TransCut eq. 3 at normal exit: alpha = F_t(1)/(4 pi) (1 + 1/A),
@@ -140,6 +143,7 @@ private:
   std::vector<double> ElementCentroid_;
   std::vector<double> ElementVolume_;
   std::vector<int> Neighbours_;
+  std::vector<double> NeighbourWeights_;
   Eigen::VectorXd BoundaryDiagonal_; ///< 2 S_i / (3 A)
   Eigen::VectorXd SourceScale_;      ///< 8 S_i / (3 A (1 - Fdr))
   Eigen::VectorXd Alpha_, Beta_;

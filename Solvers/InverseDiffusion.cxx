@@ -144,27 +144,20 @@ public:
     // Regulariser: d/dkappa of lambda sum (k_e - k_f)^2 / d_ef^2 (the discrete
     // -2 lambda Laplacian(kappa) of Appendix A).
     const std::vector<int>& pairs = Model_.GetElementNeighbours();
-    const std::vector<double>& centroid = Model_.GetElementCentroids();
+    const std::vector<double>& weights = Model_.GetElementNeighbourWeights();
     const double lambda = Owner_.Lambda_;
     if (lambda != 0.0)
     {
       for (size_t p = 0; p < pairs.size(); p += 2)
       {
         const int e = pairs[p], f = pairs[p + 1];
-        const double w = 1.0 / SquaredDistance(centroid, e, f);
+        const double w = weights[p / 2];
         const double g = 2.0 * lambda * w * (ws.Kappa[e] - ws.Kappa[f]);
         gKappa[e] += g;
         gKappa[f] -= g;
       }
     }
     GradientSeconds += Seconds(start);
-  }
-
-  static double SquaredDistance(const std::vector<double>& c, int e, int f)
-  {
-    const double dx = c[3 * e] - c[3 * f], dy = c[3 * e + 1] - c[3 * f + 1],
-                 dz = c[3 * e + 2] - c[3 * f + 2];
-    return dx * dx + dy * dy + dz * dz;
   }
 
   /// Parameters from the optimisation variables: x = (log kappa, log mu),
@@ -526,14 +519,15 @@ void InverseDiffusion::SetInitialParameters(std::vector<double> kappa, std::vect
 double InverseDiffusion::Roughness(const std::vector<double>& kappa) const
 {
   const std::vector<int>& pairs = Model_.GetElementNeighbours();
-  const std::vector<double>& centroid = Model_.GetElementCentroids();
+  const std::vector<double>& weights = Model_.GetElementNeighbourWeights();
   double r = 0.0;
   for (size_t p = 0; p < pairs.size(); p += 2)
   {
     const int e = pairs[p], f = pairs[p + 1];
     const double dk = kappa[e] - kappa[f];
-    // paper Sec. 4.2: sum_x |grad kappa(x)|^2 by one-sided differences.
-    r += dk * dk / Optimiser::SquaredDistance(centroid, e, f);
+    // paper Sec. 4.2: |grad kappa|^2 over the volume, finite-volume form
+    // sum over element faces of (A_ef / d_ef) (kappa_e - kappa_f)^2.
+    r += weights[p / 2] * dk * dk;
   }
   return r;
 }

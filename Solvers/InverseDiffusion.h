@@ -9,10 +9,11 @@
  * by the sum of the squared measurements so that lambda and the stopping
  * threshold do not depend on the radiance units):
  *   F = sum_m sum_{i observed in m} (L_mi - L^R_mi)^2 / sum_m sum_i L_mi^2
- *       + lambda * sum_{neighbouring elements e,f} (kappa_e - kappa_f)^2 / d_ef^2
+ *       + lambda * sum_{neighbouring elements e,f} (A_ef / d_ef) (kappa_e - kappa_f)^2
  * with L^R = alpha phi - beta q the read-out of the forward solution (TransCut
- * eq. 3 at normal exit) and d_ef the distance of the element centroids (the
- * discrete sum_x |grad kappa|^2 of the paper, by one-sided differences).
+ * eq. 3 at normal exit), A_ef the area of the faces the elements share and
+ * d_ef the distance of their centroids (the finite-volume form of the
+ * integral of |grad kappa|^2, the paper's sum_x |grad kappa(x)|^2).
  * Unknowns: log kappa_e and log mu_e (positivity kept by construction).
  * See Documentation/InverseDiffusion.md for the derivation and the choices.
  */
@@ -140,7 +141,7 @@ public:
   double Objective(int channel, const std::vector<double>& kappa, const std::vector<double>& mu,
     std::vector<double>* gKappa = nullptr, std::vector<double>* gMu = nullptr) const;
 
-  /// The regulariser sum_{e,f} (kappa_e - kappa_f)^2 / d_ef^2 of one channel's kappa.
+  /// The regulariser sum_{e,f} (A_ef / d_ef) (kappa_e - kappa_f)^2 of one channel's kappa (mm).
   double Roughness(const std::vector<double>& kappa) const;
 
   /**

@@ -146,6 +146,14 @@ TEST(InverseDiffusion, ForwardModelMatchesDiscreteDivergence)
   const int nx = 3, ny = 2, nz = 2;
   const size_t pairs = (nx - 1) * ny * nz + nx * (ny - 1) * nz + nx * ny * (nz - 1);
   EXPECT_EQ(block.Model->GetElementNeighbours().size(), 2 * pairs);
+  // Regulariser weights A_ef / d_ef: voxels 0.5 x 0.5 x 0.4 mm; x and y
+  // neighbours share a 0.5 x 0.4 face at 0.5 mm, z neighbours 0.5 x 0.5 at 0.4 mm.
+  double sum = 0.0;
+  for (double w : block.Model->GetElementNeighbourWeights())
+    sum += w;
+  const double expected = ((nx - 1) * ny * nz + nx * (ny - 1) * nz) * (0.5 * 0.4 / 0.5) +
+    nx * ny * (nz - 1) * (0.5 * 0.5 / 0.4);
+  EXPECT_NEAR(sum, expected, 1e-12 * expected);
 }
 
 // Adjoint gradient (paper eq. 5-7, discrete form) against central finite
