@@ -516,6 +516,10 @@ bool WriteSliceMosaic(const Synthetic& s, const std::vector<double>& kappa,
 
 double Correlation(const std::vector<double>& x, const std::vector<double>& y)
 {
+  // Undefined (NaN) when either side is constant.
+  if (x.empty() || *std::min_element(x.begin(), x.end()) == *std::max_element(x.begin(), x.end()) ||
+    *std::min_element(y.begin(), y.end()) == *std::max_element(y.begin(), y.end()))
+    return std::nan("");
   const double n = static_cast<double>(x.size());
   double mx = 0, my = 0, sxy = 0, sxx = 0, syy = 0;
   for (size_t i = 0; i < x.size(); ++i)
