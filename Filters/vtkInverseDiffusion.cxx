@@ -102,7 +102,6 @@ int vtkInverseDiffusion::RequestData(
     return 0;
   }
   const int numTets = mesh->GetNumberOfTets();
-  const int numPoints = mesh->GetNumberOfPoints();
 
   // Measurements: Irradiance_<k>, Radiance_<k>, ObservedMask[_<k>].
   vtkPointData* pd = input->GetPointData();
@@ -292,7 +291,6 @@ int vtkInverseDiffusion::RequestData(
       vtkTranslucency::NewTripleArray(Indexed("FittedRadiance", static_cast<int>(k)).c_str(),
         fitted[k]));
   }
-  (void)numPoints;
 
   // History table.
   const char* names[] = { "Channel", "Stage", "Iteration", "Objective", "DataTerm", "GradientNorm",
