@@ -143,4 +143,8 @@ int Radiosity(const std::vector<std::string>& args);
 extern const char* const RadiosityHelp;
 extern const char* const CompareHelp;
 
+/// `translucency acquire` (Acquire.cxx): inverse diffusion, and its help text.
+int Acquire(const std::vector<std::string>& args);
+extern const char* const AcquireHelp;
+
 } // namespace translucency_app

@@ -66,6 +66,7 @@ Commands:
   compare  Run several solvers on the same problem and lay the results side by side.
   bench    Median assembly and solve times at several mesh sizes.
   radiosity  Translucent radiosity of a scene of several objects (JSON scene file).
+  acquire  Recover kappa and mu_a from measured radiance (inverse diffusion).
 
 Scene options (render and compare):
 )";
@@ -108,7 +109,7 @@ translucency bench [options]
 void PrintUsage()
 {
   std::cout << UsageHead << SceneOptionsHelp << RenderHelp << CompareHelp << BenchHelp
-            << BenchLinearSolversHelp << translucency_app::RadiosityHelp;
+            << BenchLinearSolversHelp << translucency_app::RadiosityHelp << AcquireHelp;
 }
 
 int Render(const std::vector<std::string>& args)
@@ -598,7 +599,10 @@ int main(int argc, char* argv[])
         : Bench(args);
     if (command == "radiosity")
       return translucency_app::Radiosity(args);
-    throw UsageError("unknown command '" + command + "' (render, compare, bench or radiosity)");
+    if (command == "acquire")
+      return translucency_app::Acquire(args);
+    throw UsageError(
+      "unknown command '" + command + "' (render, compare, bench, radiosity or acquire)");
   }
   catch (const UsageError& e)
   {

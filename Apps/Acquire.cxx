@@ -1,0 +1,875 @@
+// `translucency acquire`: inverse diffusion (polygrid paper Sec. 4) from
+// measurement files, or from synthetic measurements of a known volume.
+#include "CommandLine.h"
+#include "PipelineRender.h"
+
+#include "DiffusionForwardModel.h"
+#include "Error.h"
+#include "InverseDiffusion.h"
+#include "TetMesh.h"
+#include "vtkInverseDiffusion.h"
+
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkCommand.h>
+#include <vtkDataArray.h>
+#include <vtkDirectory.h>
+#include <vtkDoubleArray.h>
+#include <vtkImageData.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
+#include <vtkPNGWriter.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkProbeFilter.h>
+#include <vtkTable.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLImageDataReader.h>
+#include <vtkXMLUnstructuredGridReader.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+#include "vtk_nlohmannjson.h"
+#include VTK_NLOHMANN_JSON(json.hpp)
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <random>
+#include <sstream>
+
+namespace translucency_app
+{
+
+const char* const AcquireHelp = R"(
+translucency acquire --sample FILE --patterns DIR|FILE --output PREFIX [options]
+translucency acquire --synthetic-truth FILE --grid NXxNYxNZ --patterns RxC --output PREFIX [options]
+  Inverse diffusion (polygrid paper Sec. 4): recover per-element kappa and mu_a
+  whose forward diffusion reproduces measured radiance under M light patterns.
+  --sample FILE            tet mesh (.vtu), optional RefractiveIndex cell array
+  --patterns FILE          .vtu on the same points with Irradiance_<k>, Radiance_<k>
+                           (3 components each, k = 0..M-1) and optional
+                           ObservedMask_<k> or ObservedMask point arrays
+  --patterns DIR           one .vtu per pattern (sorted by name), each with
+                           Irradiance, Radiance and optional ObservedMask
+  --element-array NAME     cell array grouping tets that share parameters
+                           (default: VoxelId if present, else one per tet)
+  --output PREFIX          writes PREFIX.vtu (recovered material), PNGs
+                           (synthetic mode) and PREFIX_objective.png
+  --lambda L               regulariser weight (default 1e-5)
+  --max-iter N             CG iterations per channel (default 100)
+  --threshold T            stop when misfit < T x sum of measured L^2 (default 1e-4)
+  --initial-mua R,G,B      homogeneous initial guess, 1/mm (default 0.01)
+  --initial-sigmas R,G,B   homogeneous initial guess, 1/mm (default 1)
+  --json FILE              timings and results
+  --no-png                 skip the pictures
+ Synthetic mode (measurements made here from a known volume, no camera):
+  --synthetic-truth FILE   .vti or .vtu with AbsorptionCoefficient and
+                           ReducedScatteringCoefficient (3 components, cell or
+                           point data; optional RefractiveIndex, else 1.3);
+                           its bounds are the sample block
+  --grid NXxNYxNZ          voxels of the block (parameters per voxel)
+  --patterns RxC           lit face z = zmin split into RxC regions lit one at a time
+  --setup back|front       back: measure the face z = zmax; front: measure the
+                           unlit points of the lit face (default back)
+  --noise SIGMA            Gaussian noise, SIGMA x the pattern's maximum radiance
+  --seed N                 noise seed (default 1)
+  Also writes PREFIX_measurements.vtu (reusable with --sample/--patterns),
+  PREFIX_radiance.png and PREFIX_slices.png.
+)";
+
+namespace
+{
+using json = nlohmann::json;
+
+std::string Indexed(const char* base, size_t k)
+{
+  return std::string(base) + "_" + std::to_string(k);
+}
+
+/// A new 3-component double array (caller owns the reference).
+vtkDataArray* NewTriple(const std::string& name, const std::vector<double>& values)
+{
+  vtkDoubleArray* a = vtkDoubleArray::New();
+  a->SetName(name.c_str());
+  a->SetNumberOfComponents(3);
+  a->SetNumberOfTuples(static_cast<vtkIdType>(values.size() / 3));
+  std::copy(values.begin(), values.end(), a->GetPointer(0));
+  return a;
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> ReadGrid(const std::string& path)
+{
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  if (Extension(path) != "vtu" || !reader->CanReadFile(path.c_str()))
+  {
+    throw translucency::Error(path + ": not a readable .vtu file");
+  }
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  grid->ShallowCopy(reader->GetOutput());
+  if (grid->GetNumberOfPoints() == 0)
+  {
+    throw translucency::Error(path + ": no points");
+  }
+  return grid;
+}
+
+/// Copy the measurement arrays of --patterns onto `sample`.
+void AttachPatterns(vtkUnstructuredGrid* sample, const std::string& patterns)
+{
+  vtkNew<vtkDirectory> dir;
+  if (dir->Open(patterns.c_str()))
+  {
+    std::vector<std::string> files;
+    for (vtkIdType k = 0; k < dir->GetNumberOfFiles(); ++k)
+    {
+      const std::string name = dir->GetFile(k);
+      if (Extension(name) == "vtu")
+      {
+        files.push_back(patterns + "/" + name);
+      }
+    }
+    std::sort(files.begin(), files.end());
+    if (files.empty())
+    {
+      throw translucency::Error(patterns + ": no .vtu file in the directory");
+    }
+    for (size_t k = 0; k < files.size(); ++k)
+    {
+      auto grid = ReadGrid(files[k]);
+      if (grid->GetNumberOfPoints() != sample->GetNumberOfPoints())
+      {
+        throw translucency::Error(files[k] + ": " + std::to_string(grid->GetNumberOfPoints()) +
+          " points but the sample has " + std::to_string(sample->GetNumberOfPoints()));
+      }
+      for (const char* name : { "Irradiance", "Radiance", "ObservedMask" })
+      {
+        vtkDataArray* a = grid->GetPointData()->GetArray(name);
+        if (!a)
+        {
+          if (std::string(name) == "ObservedMask")
+            continue;
+          throw translucency::Error(files[k] + ": no '" + name + "' point array");
+        }
+        vtkSmartPointer<vtkDataArray> copy;
+        copy.TakeReference(a->NewInstance());
+        copy->DeepCopy(a);
+        copy->SetName(Indexed(name, k).c_str());
+        sample->GetPointData()->AddArray(copy);
+      }
+    }
+    return;
+  }
+  auto grid = ReadGrid(patterns);
+  if (grid->GetNumberOfPoints() != sample->GetNumberOfPoints())
+  {
+    throw translucency::Error(patterns + ": " + std::to_string(grid->GetNumberOfPoints()) +
+      " points but the sample has " + std::to_string(sample->GetNumberOfPoints()));
+  }
+  vtkPointData* pd = grid->GetPointData();
+  int copied = 0;
+  for (int a = 0; a < pd->GetNumberOfArrays(); ++a)
+  {
+    const char* name = pd->GetArrayName(a);
+    const std::string n = name ? name : "";
+    if (n.rfind("Irradiance_", 0) == 0 || n.rfind("Radiance_", 0) == 0 ||
+      n.rfind("ObservedMask", 0) == 0)
+    {
+      sample->GetPointData()->AddArray(pd->GetArray(a));
+      ++copied;
+    }
+  }
+  if (copied == 0)
+  {
+    throw translucency::Error(patterns + ": no Irradiance_<k> / Radiance_<k> point arrays");
+  }
+}
+
+/// The synthetic problem: block mesh, truth per voxel, measurements.
+struct Synthetic
+{
+  int N[3] = { 0, 0, 0 };
+  double Origin[3], Size[3];
+  std::vector<double> Kappa, Mu; ///< truth, 3 per voxel
+  std::vector<std::vector<double>> Irradiance, Radiance;
+  std::vector<std::vector<unsigned char>> Observed;
+  translucency::AcquisitionSetup Setup = translucency::AcquisitionSetup::Back;
+};
+
+vtkSmartPointer<vtkDataSet> ReadTruth(const std::string& path)
+{
+  const std::string ext = Extension(path);
+  if (ext == "vti")
+  {
+    vtkNew<vtkXMLImageDataReader> reader;
+    if (!reader->CanReadFile(path.c_str()))
+      throw translucency::Error(path + ": not a readable .vti file");
+    reader->SetFileName(path.c_str());
+    reader->Update();
+    auto out = vtkSmartPointer<vtkImageData>::New();
+    out->ShallowCopy(reader->GetOutput());
+    return out;
+  }
+  if (ext == "vtu")
+  {
+    return ReadGrid(path);
+  }
+  throw translucency::Error(path + ": the synthetic truth must be .vti or .vtu");
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> BuildSynthetic(const std::string& truthPath, const int grid[3],
+  int rows, int cols, double noise, unsigned seed, Synthetic& s)
+{
+  vtkSmartPointer<vtkDataSet> truth = ReadTruth(truthPath);
+  double b[6];
+  truth->GetBounds(b);
+  for (int d = 0; d < 3; ++d)
+  {
+    s.N[d] = grid[d];
+    s.Origin[d] = b[2 * d];
+    s.Size[d] = b[2 * d + 1] - b[2 * d];
+    if (!(s.Size[d] > 0.0))
+      throw translucency::Error(truthPath + ": the truth volume is flat (bounds " +
+        std::to_string(b[2 * d]) + " .. " + std::to_string(b[2 * d + 1]) + ")");
+  }
+  std::vector<double> points;
+  std::vector<int> tets, element;
+  translucency::BuildGridBlock(grid[0], grid[1], grid[2], s.Origin, s.Size, points, tets, element);
+  const int numVoxels = grid[0] * grid[1] * grid[2];
+
+  // Voxel centres, probed in the truth (cell or point data).
+  vtkNew<vtkPolyData> centres;
+  vtkNew<vtkPoints> centrePoints;
+  for (int k = 0; k < grid[2]; ++k)
+    for (int j = 0; j < grid[1]; ++j)
+      for (int i = 0; i < grid[0]; ++i)
+        centrePoints->InsertNextPoint(s.Origin[0] + s.Size[0] * (i + 0.5) / grid[0],
+          s.Origin[1] + s.Size[1] * (j + 0.5) / grid[1], s.Origin[2] + s.Size[2] * (k + 0.5) / grid[2]);
+  centres->SetPoints(centrePoints);
+  vtkNew<vtkProbeFilter> probe;
+  probe->SetInputData(centres);
+  probe->SetSourceData(truth);
+  probe->Update();
+  vtkPointData* sampled = probe->GetOutput()->GetPointData();
+  vtkDataArray* mu = sampled->GetArray("AbsorptionCoefficient");
+  vtkDataArray* sigma = sampled->GetArray("ReducedScatteringCoefficient");
+  vtkDataArray* eta = sampled->GetArray("RefractiveIndex");
+  if (!mu || !sigma || mu->GetNumberOfComponents() != 3 || sigma->GetNumberOfComponents() != 3)
+    throw translucency::Error(truthPath + ": needs AbsorptionCoefficient and "
+                                          "ReducedScatteringCoefficient arrays with 3 components");
+  s.Kappa.resize(3 * numVoxels);
+  s.Mu.resize(3 * numVoxels);
+  std::vector<double> voxelEta(numVoxels, 1.3);
+  for (int v = 0; v < numVoxels; ++v)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const double m = mu->GetComponent(v, c), sg = sigma->GetComponent(v, c);
+      if (!(std::isfinite(m) && m > 0.0 && std::isfinite(sg) && sg >= 0.0))
+      {
+        std::ostringstream os;
+        os << truthPath << ": at voxel " << v << " (centre " << centrePoints->GetPoint(v)[0] << ", "
+           << centrePoints->GetPoint(v)[1] << ", " << centrePoints->GetPoint(v)[2]
+           << "), channel " << c << ": mu_a = " << m << ", sigma_s' = " << sg
+           << " (need mu_a > 0, sigma_s' >= 0)";
+        throw translucency::Error(os.str());
+      }
+      s.Mu[3 * v + c] = m;
+      s.Kappa[3 * v + c] = 1.0 / (3.0 * (m + sg));
+    }
+    if (eta)
+      voxelEta[v] = eta->GetComponent(v, 0);
+  }
+
+  // The tet mesh.
+  auto mesh = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  vtkNew<vtkPoints> pts;
+  pts->SetDataTypeToDouble();
+  pts->SetNumberOfPoints(static_cast<vtkIdType>(points.size() / 3));
+  for (size_t i = 0; i < points.size() / 3; ++i)
+    pts->SetPoint(static_cast<vtkIdType>(i), &points[3 * i]);
+  mesh->SetPoints(pts);
+  vtkNew<vtkCellArray> cells;
+  for (size_t t = 0; t < tets.size() / 4; ++t)
+  {
+    const vtkIdType ids[4] = { tets[4 * t], tets[4 * t + 1], tets[4 * t + 2], tets[4 * t + 3] };
+    cells->InsertNextCell(4, ids);
+  }
+  mesh->SetCells(VTK_TETRA, cells);
+  vtkNew<vtkIntArray> voxelIds;
+  voxelIds->SetName("VoxelId");
+  vtkNew<vtkDoubleArray> tetEta;
+  tetEta->SetName("RefractiveIndex");
+  for (int e : element)
+  {
+    voxelIds->InsertNextValue(e);
+    tetEta->InsertNextValue(voxelEta[e]);
+  }
+  mesh->GetCellData()->AddArray(voxelIds);
+  mesh->GetCellData()->AddArray(tetEta);
+
+  // Measurements (paper Sec. 4.1 setups), from the forward model.
+  translucency::TetMesh core;
+  core.SetGeometry(points, tets);
+  std::vector<double> etaPerTet(element.size());
+  for (size_t t = 0; t < element.size(); ++t)
+    etaPerTet[t] = voxelEta[element[t]];
+  translucency::DiffusionForwardModel model(core, element, numVoxels, etaPerTet);
+  translucency::MakeBlockPatterns(points, rows, cols, s.Setup, 1.0, s.Irradiance, s.Observed);
+  s.Radiance = translucency::InverseDiffusion::PredictRadiance(model, s.Kappa, s.Mu, s.Irradiance);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (size_t m = 0; m < s.Radiance.size(); ++m)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      double peak = 0.0;
+      for (size_t i = 0; i < s.Observed[m].size(); ++i)
+        if (s.Observed[m][i])
+          peak = std::max(peak, std::abs(s.Radiance[m][3 * i + c]));
+      for (size_t i = 0; i < s.Observed[m].size(); ++i)
+        if (s.Observed[m][i] && noise > 0.0)
+          s.Radiance[m][3 * i + c] += noise * peak * gauss(rng);
+    }
+  }
+  for (size_t m = 0; m < s.Irradiance.size(); ++m)
+  {
+    vtkSmartPointer<vtkDataArray> q, l;
+    q.TakeReference(NewTriple(Indexed("Irradiance", m), s.Irradiance[m]));
+    l.TakeReference(NewTriple(Indexed("Radiance", m), s.Radiance[m]));
+    vtkNew<vtkUnsignedCharArray> obs;
+    obs->SetName(Indexed("ObservedMask", m).c_str());
+    for (unsigned char o : s.Observed[m])
+      obs->InsertNextValue(o);
+    mesh->GetPointData()->AddArray(q);
+    mesh->GetPointData()->AddArray(l);
+    mesh->GetPointData()->AddArray(obs);
+  }
+  return mesh;
+}
+
+/// RGB colour ramp (dark blue - blue - green - yellow - white) at t in [0, 1].
+void Ramp(double t, unsigned char rgb[3])
+{
+  static const double stops[5][3] = { { 0.05, 0.03, 0.25 }, { 0.15, 0.35, 0.85 },
+    { 0.2, 0.75, 0.4 }, { 0.95, 0.85, 0.2 }, { 1.0, 1.0, 0.95 } };
+  t = std::min(1.0, std::max(0.0, std::isfinite(t) ? t : 0.0)) * 4.0;
+  const int k = std::min(3, static_cast<int>(t));
+  const double f = t - k;
+  for (int c = 0; c < 3; ++c)
+    rgb[c] = static_cast<unsigned char>(255.0 * ((1 - f) * stops[k][c] + f * stops[k + 1][c]));
+}
+
+/// A picture made of tiles of scalar maps (no rendering: written directly).
+struct Mosaic
+{
+  int Width, Height;
+  std::vector<unsigned char> Pixels; ///< RGB, row 0 at the top
+  Mosaic(int w, int h)
+    : Width(w)
+    , Height(h)
+    , Pixels(3 * static_cast<size_t>(w) * h, 255)
+  {
+  }
+  /// Draw an nx x ny map (value(i, j), NaN = not observed: grey) scaled by
+  /// `scale` pixels, top-left corner (x0, y0); j grows upwards.
+  template <class F>
+  void Tile(int x0, int y0, int nx, int ny, int scale, double lo, double hi, F value)
+  {
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+      {
+        const double v = value(i, j);
+        unsigned char rgb[3] = { 128, 128, 128 };
+        if (std::isfinite(v))
+          Ramp(hi > lo ? (v - lo) / (hi - lo) : 0.5, rgb);
+        for (int dy = 0; dy < scale; ++dy)
+          for (int dx = 0; dx < scale; ++dx)
+          {
+            const int x = x0 + i * scale + dx, y = y0 + (ny - 1 - j) * scale + dy;
+            if (x < 0 || y < 0 || x >= Width || y >= Height)
+              continue;
+            unsigned char* p = &Pixels[3 * (static_cast<size_t>(y) * Width + x)];
+            p[0] = rgb[0];
+            p[1] = rgb[1];
+            p[2] = rgb[2];
+          }
+      }
+  }
+  bool Write(const std::string& path, std::string& error) const
+  {
+    vtkNew<vtkImageData> image;
+    image->SetDimensions(Width, Height, 1);
+    vtkNew<vtkUnsignedCharArray> rgb;
+    rgb->SetNumberOfComponents(3);
+    rgb->SetNumberOfTuples(static_cast<vtkIdType>(Width) * Height);
+    for (int y = 0; y < Height; ++y) // VTK images start at the bottom row
+      std::copy(&Pixels[3 * static_cast<size_t>(Height - 1 - y) * Width],
+        &Pixels[3 * static_cast<size_t>(Height - y) * Width],
+        rgb->GetPointer(3 * static_cast<vtkIdType>(y) * Width));
+    image->GetPointData()->SetScalars(rgb);
+    const std::string tmp = path + ".tmp.png";
+    vtkNew<vtkPNGWriter> writer;
+    writer->SetFileName(tmp.c_str());
+    writer->SetInputData(image);
+    writer->Write();
+    if (writer->GetErrorCode() != 0 || std::rename(tmp.c_str(), path.c_str()) != 0)
+    {
+      std::remove(tmp.c_str());
+      error = "cannot write " + path;
+      return false;
+    }
+    return true;
+  }
+};
+
+int TileScale(int n)
+{
+  return std::max(1, std::min(16, 160 / std::max(1, n)));
+}
+
+/// Measured | fitted radiance (G channel) on the observed face, per pattern.
+bool WriteRadianceMosaic(const Synthetic& s, const std::vector<std::vector<double>>& fitted,
+  int cols, const std::string& path, std::string& error)
+{
+  const int px = s.N[0] + 1, py = s.N[1] + 1;
+  const int k = s.Setup == translucency::AcquisitionSetup::Back ? s.N[2] : 0;
+  const int scale = TileScale(std::max(px, py));
+  const int tileW = px * scale, tileH = py * scale, gap = 6;
+  const int numPatterns = static_cast<int>(s.Radiance.size());
+  const int rows = (numPatterns + cols - 1) / cols;
+  Mosaic mosaic(cols * (2 * tileW + 3 * gap), rows * (tileH + gap) + gap);
+  for (int m = 0; m < numPatterns; ++m)
+  {
+    double hi = 0.0;
+    for (size_t i = 0; i < s.Observed[m].size(); ++i)
+      if (s.Observed[m][i])
+        hi = std::max(hi, s.Radiance[m][3 * i + 1]);
+    const int x0 = (m % cols) * (2 * tileW + 3 * gap) + gap, y0 = (m / cols) * (tileH + gap) + gap;
+    for (int which = 0; which < 2; ++which)
+    {
+      const std::vector<double>& l = which == 0 ? s.Radiance[m] : fitted[m];
+      mosaic.Tile(x0 + which * (tileW + gap), y0, px, py, scale, 0.0, hi, [&](int i, int j) {
+        const size_t id = i + static_cast<size_t>(px) * (j + static_cast<size_t>(py) * k);
+        return s.Observed[m][id] ? l[3 * id + 1] : std::nan("");
+      });
+    }
+  }
+  return mosaic.Write(path, error);
+}
+
+/// Layers under the observed face, nearest first (several depths).
+std::vector<int> SliceLayers(const Synthetic& s)
+{
+  std::vector<int> layers;
+  const int nz = s.N[2];
+  const int step = std::max(1, nz / 4);
+  for (int d = 0; d < nz && layers.size() < 4; d += step)
+    layers.push_back(s.Setup == translucency::AcquisitionSetup::Back ? nz - 1 - d : d);
+  return layers;
+}
+
+/// Recovered | true kappa and recovered | true mu_a (G) on layers at several
+/// depths below the observed face (paper Fig. 14 style), one row per depth.
+bool WriteSliceMosaic(const Synthetic& s, const std::vector<double>& kappa,
+  const std::vector<double>& mu, const std::string& path, std::string& error)
+{
+  const int nx = s.N[0], ny = s.N[1];
+  const int scale = TileScale(std::max(nx, ny));
+  const int tileW = nx * scale, tileH = ny * scale, gap = 6;
+  const std::vector<int> layers = SliceLayers(s);
+  Mosaic mosaic(4 * (tileW + gap) + 2 * gap, static_cast<int>(layers.size()) * (tileH + gap) + gap);
+  double range[2][2];
+  for (int q = 0; q < 2; ++q)
+  {
+    const std::vector<double>& a = q == 0 ? kappa : mu;
+    const std::vector<double>& t = q == 0 ? s.Kappa : s.Mu;
+    range[q][0] = 1e300;
+    range[q][1] = -1e300;
+    for (size_t v = 0; v < a.size() / 3; ++v)
+      for (double x : { a[3 * v + 1], t[3 * v + 1] })
+      {
+        range[q][0] = std::min(range[q][0], x);
+        range[q][1] = std::max(range[q][1], x);
+      }
+  }
+  for (size_t r = 0; r < layers.size(); ++r)
+  {
+    const int k = layers[r];
+    for (int col = 0; col < 4; ++col)
+    {
+      const int q = col / 2;
+      const std::vector<double>& a =
+        col == 0 ? kappa : col == 1 ? s.Kappa : col == 2 ? mu : s.Mu;
+      const int x0 = col * (tileW + gap) + gap + (col >= 2 ? gap : 0);
+      const int y0 = static_cast<int>(r) * (tileH + gap) + gap;
+      mosaic.Tile(x0, y0, nx, ny, scale, range[q][0], range[q][1],
+        [&](int i, int j) { return a[3 * (i + static_cast<size_t>(nx) * (j + static_cast<size_t>(ny) * k)) + 1]; });
+    }
+  }
+  return mosaic.Write(path, error);
+}
+
+double Correlation(const std::vector<double>& x, const std::vector<double>& y)
+{
+  // Undefined (NaN) when either side is constant.
+  if (x.empty() || *std::min_element(x.begin(), x.end()) == *std::max_element(x.begin(), x.end()) ||
+    *std::min_element(y.begin(), y.end()) == *std::max_element(y.begin(), y.end()))
+    return std::nan("");
+  const double n = static_cast<double>(x.size());
+  double mx = 0, my = 0, sxy = 0, sxx = 0, syy = 0;
+  for (size_t i = 0; i < x.size(); ++i)
+  {
+    mx += x[i] / n;
+    my += y[i] / n;
+  }
+  for (size_t i = 0; i < x.size(); ++i)
+  {
+    sxy += (x[i] - mx) * (y[i] - my);
+    sxx += (x[i] - mx) * (x[i] - mx);
+    syy += (y[i] - my) * (y[i] - my);
+  }
+  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : std::nan("");
+}
+
+int ParseCount(const std::string& text, const std::string& what)
+{
+  char* end = nullptr;
+  const long v = std::strtol(text.c_str(), &end, 10);
+  if (!end || *end != '\0' || v < 1 || v > 100000)
+    throw UsageError(what + ": '" + text + "' is not a positive integer");
+  return static_cast<int>(v);
+}
+
+/// "AxBxC" -> numbers (2 or 3 of them).
+std::vector<int> ParseDims(const std::string& text, const std::string& what, size_t count)
+{
+  std::vector<int> dims;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, 'x'))
+    dims.push_back(ParseCount(item, what));
+  if (dims.size() != count)
+    throw UsageError(what + ": '" + text + "' should be " + (count == 3 ? "NXxNYxNZ" : "RxC"));
+  return dims;
+}
+} // namespace
+
+int Acquire(const std::vector<std::string>& args)
+{
+  std::string samplePath, patternsArg, outputPrefix, jsonPath, truthPath, gridArg, elementArray;
+  std::string setupName = "back";
+  double lambda = 1e-5, threshold = 1e-4, noise = 0.0;
+  int maxIter = 100;
+  unsigned seed = 1;
+  bool png = true;
+  std::vector<double> initialMu = { 0.01, 0.01, 0.01 }, initialSigma = { 1.0, 1.0, 1.0 };
+  for (size_t i = 0; i < args.size(); ++i)
+  {
+    const std::string& a = args[i];
+    auto value = [&]() -> const std::string& {
+      if (i + 1 >= args.size())
+        throw UsageError(a + " needs a value");
+      return args[++i];
+    };
+    auto number = [&]() { return ParseNumbers(value(), a).at(0); };
+    if (a == "--sample")
+      samplePath = value();
+    else if (a == "--patterns")
+      patternsArg = value();
+    else if (a == "--output")
+      outputPrefix = value();
+    else if (a == "--json")
+      jsonPath = value();
+    else if (a == "--lambda")
+      lambda = number();
+    else if (a == "--threshold")
+      threshold = number();
+    else if (a == "--max-iter")
+      maxIter = static_cast<int>(number());
+    else if (a == "--element-array")
+      elementArray = value();
+    else if (a == "--initial-mua")
+      initialMu = ParseNumbers(value(), a);
+    else if (a == "--initial-sigmas")
+      initialSigma = ParseNumbers(value(), a);
+    else if (a == "--synthetic-truth")
+      truthPath = value();
+    else if (a == "--grid")
+      gridArg = value();
+    else if (a == "--setup")
+      setupName = value();
+    else if (a == "--noise")
+      noise = number();
+    else if (a == "--seed")
+      seed = static_cast<unsigned>(number());
+    else if (a == "--no-png")
+      png = false;
+    else
+      throw UsageError("acquire: unknown option '" + a + "'");
+  }
+  if (outputPrefix.empty())
+    throw UsageError("acquire: --output PREFIX is required");
+  if (!(lambda >= 0.0))
+    throw UsageError("acquire: --lambda must be >= 0");
+  if (maxIter < 0)
+    throw UsageError("acquire: --max-iter must be >= 0");
+  if (!(noise >= 0.0))
+    throw UsageError("acquire: --noise must be >= 0");
+  if (initialMu.size() == 1)
+    initialMu.assign(3, initialMu[0]);
+  if (initialSigma.size() == 1)
+    initialSigma.assign(3, initialSigma[0]);
+  if (initialMu.size() != 3 || initialSigma.size() != 3)
+    throw UsageError("acquire: --initial-mua and --initial-sigmas take 1 or 3 values");
+  const bool synthetic = !truthPath.empty();
+  if (patternsArg.empty())
+    throw UsageError("acquire: --patterns is required");
+  if (!synthetic && samplePath.empty())
+    throw UsageError("acquire: --sample FILE (or --synthetic-truth FILE) is required");
+  if (synthetic && gridArg.empty())
+    throw UsageError("acquire: --synthetic-truth needs --grid NXxNYxNZ");
+  EnsureParentDirectory(outputPrefix + ".vtu");
+
+  const auto start = Clock::now();
+  std::vector<Stage> stages;
+  Synthetic syn;
+  int patternCols = 1;
+  vtkSmartPointer<vtkUnstructuredGrid> input;
+  if (synthetic)
+  {
+    const std::vector<int> grid = ParseDims(gridArg, "--grid", 3);
+    const std::vector<int> rc = ParseDims(patternsArg, "--patterns (synthetic mode)", 2);
+    patternCols = rc[1];
+    if (setupName == "back")
+      syn.Setup = translucency::AcquisitionSetup::Back;
+    else if (setupName == "front")
+      syn.Setup = translucency::AcquisitionSetup::Front;
+    else
+      throw UsageError("acquire: --setup must be back or front");
+    const int dims[3] = { grid[0], grid[1], grid[2] };
+    input = BuildSynthetic(truthPath, dims, rc[0], rc[1], noise, seed, syn);
+    if (elementArray.empty())
+      elementArray = "VoxelId";
+    vtkNew<vtkXMLUnstructuredGridWriter> writer;
+    std::string error;
+    if (!WriteAtomically(writer, input, outputPrefix + "_measurements.vtu", error))
+      throw translucency::Error(error);
+    stages.push_back({ "synthetic measurements", Since(start) });
+  }
+  else
+  {
+    input = ReadGrid(samplePath);
+    AttachPatterns(input, patternsArg);
+    if (elementArray.empty() && input->GetCellData()->GetArray("VoxelId"))
+      elementArray = "VoxelId";
+    stages.push_back({ "read", Since(start) });
+  }
+
+  vtkNew<vtkInverseDiffusion> inverse;
+  inverse->SetInputData(input);
+  inverse->SetLambda(lambda);
+  inverse->SetMaxIterations(maxIter);
+  inverse->SetRelativeThreshold(threshold);
+  inverse->SetInitialAbsorption(initialMu.data());
+  inverse->SetInitialReducedScattering(initialSigma.data());
+  inverse->SetElementArrayName(elementArray.c_str());
+  MessageCollector messages;
+  messages.Watch(inverse);
+  vtkNew<vtkCallbackCommand> progress;
+  int lastPercent = -1;
+  progress->SetClientData(&lastPercent);
+  progress->SetCallback([](vtkObject* caller, unsigned long, void* client, void*) {
+    const double f = static_cast<vtkAlgorithm*>(caller)->GetProgress();
+    int& last = *static_cast<int*>(client);
+    const int percent = static_cast<int>(100 * f + 0.5);
+    if (percent == last)
+      return;
+    last = percent;
+    const int width = 40, done = static_cast<int>(f * width + 0.5);
+    std::cerr << "\racquire [" << std::string(done, '#') << std::string(width - done, '.') << "] "
+              << static_cast<int>(100 * f + 0.5) << "%" << std::flush;
+  });
+  inverse->AddObserver(vtkCommand::ProgressEvent, progress);
+  const auto fitStart = Clock::now();
+  inverse->Update();
+  std::cerr << "\n";
+  if (!messages.Errors.empty())
+    throw translucency::Error(messages.Last());
+  const double fitMs = Since(fitStart);
+  stages.push_back({ "inverse diffusion", fitMs });
+  vtkUnstructuredGrid* result = inverse->GetOutput();
+  vtkTable* history = vtkTable::SafeDownCast(inverse->GetHistoryOutput());
+
+  std::string error;
+  {
+    vtkNew<vtkXMLUnstructuredGridWriter> writer;
+    if (!WriteAtomically(writer, result, outputPrefix + ".vtu", error))
+      throw translucency::Error(error);
+  }
+
+  // Summary: misfit of the fitted radiance on the observed points.
+  vtkPointData* pd = result->GetPointData();
+  double num = 0.0, den = 0.0;
+  int numPatterns = 0;
+  while (pd->GetArray(Indexed("Radiance", numPatterns).c_str()))
+    ++numPatterns;
+  for (int m = 0; m < numPatterns; ++m)
+  {
+    vtkDataArray* l = pd->GetArray(Indexed("Radiance", m).c_str());
+    vtkDataArray* f = pd->GetArray(Indexed("FittedRadiance", m).c_str());
+    vtkDataArray* mask = pd->GetArray(Indexed("ObservedMask", m).c_str());
+    if (!mask)
+      mask = pd->GetArray("ObservedMask");
+    if (!l || !f)
+      continue;
+    for (vtkIdType i = 0; i < l->GetNumberOfTuples(); ++i)
+    {
+      if (mask ? mask->GetComponent(i, 0) == 0.0 : f->GetComponent(i, 1) == 0.0)
+        continue;
+      for (int c = 0; c < 3; ++c)
+      {
+        const double d = f->GetComponent(i, c) - l->GetComponent(i, c);
+        num += d * d;
+        den += l->GetComponent(i, c) * l->GetComponent(i, c);
+      }
+    }
+  }
+  json report;
+  report["command"] = "acquire";
+  report["mode"] = synthetic ? "synthetic" : "files";
+  report["patterns"] = numPatterns;
+  report["lambda"] = lambda;
+  report["max_iter"] = maxIter;
+  report["factorization"] = translucency::DiffusionForwardModel::GetFactorizationName();
+  report["points"] = result->GetNumberOfPoints();
+  report["tets"] = result->GetNumberOfCells();
+  report["fit_relative_rms"] = den > 0 ? std::sqrt(num / den) : 0.0;
+  report["seconds_fit"] = fitMs / 1000.0;
+  report["evaluations"] = inverse->GetNumberOfEvaluations();
+  report["gradients"] = inverse->GetNumberOfGradients();
+  const double perEvaluation =
+    inverse->GetNumberOfEvaluations() > 0 ? inverse->GetEvaluationSeconds() / inverse->GetNumberOfEvaluations() : 0.0;
+  const double perAdjoint =
+    inverse->GetNumberOfGradients() > 0 ? inverse->GetGradientSeconds() / inverse->GetNumberOfGradients() : 0.0;
+  report["seconds_per_forward_pass"] = perEvaluation;
+  report["seconds_per_adjoint_pass"] = perAdjoint;
+  // A gradient = one forward pass (factorisation + M solves) + one adjoint pass (M solves).
+  report["seconds_per_gradient"] = perEvaluation + perAdjoint;
+  json channels = json::array();
+  std::vector<PlotSeries> series(3);
+  const char* channelNames[3] = { "R", "G", "B" };
+  for (int c = 0; c < 3; ++c)
+  {
+    series[c].Name = std::string("objective ") + channelNames[c];
+    json rows = json::array();
+    for (vtkIdType r = 0; history && r < history->GetNumberOfRows(); ++r)
+    {
+      if (history->GetValueByName(r, "Channel").ToInt() != c)
+        continue;
+      const double objective = history->GetValueByName(r, "Objective").ToDouble();
+      series[c].X.push_back(static_cast<double>(series[c].X.size()));
+      series[c].Y.push_back(objective);
+      rows.push_back({ { "stage", history->GetValueByName(r, "Stage").ToInt() == 0 ? "homogeneous" : "heterogeneous" },
+        { "iteration", history->GetValueByName(r, "Iteration").ToInt() },
+        { "objective", objective },
+        { "gradient_norm", history->GetValueByName(r, "GradientNorm").ToDouble() },
+        { "step", history->GetValueByName(r, "Step").ToDouble() },
+        { "evaluations", history->GetValueByName(r, "Evaluations").ToInt() } });
+    }
+    json ch;
+    ch["channel"] = channelNames[c];
+    ch["final_objective"] = series[c].Y.empty() ? 0.0 : series[c].Y.back();
+    ch["converged"] = !series[c].Y.empty() && series[c].Y.back() < threshold;
+    ch["history"] = rows;
+    channels.push_back(ch);
+  }
+  report["channels"] = channels;
+
+  if (synthetic)
+  {
+    // Recovered per voxel (every tet of a voxel holds its values).
+    const int numVoxels = syn.N[0] * syn.N[1] * syn.N[2];
+    vtkDataArray* kappaArray = result->GetCellData()->GetArray("DiffusionCoefficient");
+    vtkDataArray* muArray = result->GetCellData()->GetArray("AbsorptionCoefficient");
+    std::vector<double> kappa(3 * numVoxels), mu(3 * numVoxels);
+    for (int v = 0; v < numVoxels; ++v)
+      for (int c = 0; c < 3; ++c)
+      {
+        kappa[3 * v + c] = kappaArray->GetComponent(6 * v, c);
+        mu[3 * v + c] = muArray->GetComponent(6 * v, c);
+      }
+    json depths = json::array();
+    for (int k : SliceLayers(syn))
+    {
+      std::vector<double> tk, rk, tm, rm;
+      for (int v = k * syn.N[0] * syn.N[1]; v < (k + 1) * syn.N[0] * syn.N[1]; ++v)
+      {
+        tk.push_back(syn.Kappa[3 * v + 1]);
+        rk.push_back(kappa[3 * v + 1]);
+        tm.push_back(syn.Mu[3 * v + 1]);
+        rm.push_back(mu[3 * v + 1]);
+      }
+      // null where the truth is constant on the layer (no correlation defined).
+      const double ck = Correlation(tk, rk), cm = Correlation(tm, rm);
+      depths.push_back({ { "layer", k },
+        { "kappa_correlation_G", std::isfinite(ck) ? json(ck) : json(nullptr) },
+        { "mua_correlation_G", std::isfinite(cm) ? json(cm) : json(nullptr) } });
+    }
+    report["truth_correlation_by_depth"] = depths;
+    report["grid"] = { syn.N[0], syn.N[1], syn.N[2] };
+    report["setup"] = setupName;
+    report["noise"] = noise;
+    if (png)
+    {
+      std::vector<std::vector<double>> fitted(numPatterns);
+      for (int m = 0; m < numPatterns; ++m)
+      {
+        vtkDataArray* f = pd->GetArray(Indexed("FittedRadiance", m).c_str());
+        fitted[m].resize(3 * f->GetNumberOfTuples());
+        for (vtkIdType i = 0; i < f->GetNumberOfTuples(); ++i)
+          for (int c = 0; c < 3; ++c)
+            fitted[m][3 * i + c] = f->GetComponent(i, c);
+      }
+      if (!WriteRadianceMosaic(syn, fitted, patternCols, outputPrefix + "_radiance.png", error) ||
+        !WriteSliceMosaic(syn, kappa, mu, outputPrefix + "_slices.png", error))
+        throw translucency::Error(error);
+    }
+  }
+  if (png)
+  {
+    // Needs an X server (xvfb-run): a failure only warns.
+    std::string plotError;
+    if (!WritePlotPNG(series, "iteration (homogeneous fit, then heterogeneous)",
+          "normalised objective", outputPrefix + "_objective.png", plotError))
+      std::cerr << "translucency: warning: objective plot not written: " << plotError << "\n";
+  }
+  json timing = json::array();
+  for (const Stage& s : stages)
+    timing.push_back({ { "stage", s.Name }, { "ms", s.Milliseconds } });
+  report["timing"] = timing;
+  if (!jsonPath.empty())
+  {
+    EnsureParentDirectory(jsonPath);
+    if (!WriteText(jsonPath, report.dump(2) + "\n", error))
+      throw translucency::Error(error);
+  }
+  std::cout << "acquire: " << numPatterns << " patterns, " << result->GetNumberOfCells()
+            << " tets; fitted radiance relative RMS " << report["fit_relative_rms"].get<double>()
+            << "; " << inverse->GetNumberOfEvaluations() << " forward passes, "
+            << inverse->GetNumberOfGradients() << " adjoint passes\n";
+  for (int c = 0; c < 3; ++c)
+    std::cout << "  channel " << channelNames[c] << ": objective "
+              << channels[c]["final_objective"].get<double>()
+              << (channels[c]["converged"].get<bool>() ? " (below threshold)" : " (not below threshold)")
+              << "\n";
+  PrintStages(stages);
+  std::cout << "wrote " << outputPrefix << ".vtu\n";
+  return 0;
+}
+
+} // namespace translucency_app
