@@ -85,18 +85,7 @@ double TetrahedralizeForBench(vtkPolyData* surface, double targetTets,
     throw translucency::Error(messages.Last());
   const double ms = Since(start);
   grid = tetra->GetOutput();
-  points.resize(3 * grid->GetNumberOfPoints());
-  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i)
-    grid->GetPoint(i, &points[3 * i]);
-  tets.resize(4 * grid->GetNumberOfCells());
-  const vtkIdType* ids;
-  vtkIdType npts;
-  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
-  {
-    grid->GetCellPoints(c, npts, ids);
-    for (int k = 0; k < 4; ++k)
-      tets[4 * c + k] = static_cast<int>(ids[k]);
-  }
+  GridToCoreArrays(grid, points, tets);
   return ms;
 }
 

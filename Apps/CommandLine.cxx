@@ -284,6 +284,22 @@ bool WriteAtomically(vtkXMLWriter* writer, vtkDataObject* data, const std::strin
   return true;
 }
 
+void GridToCoreArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets)
+{
+  points.resize(3 * grid->GetNumberOfPoints());
+  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i)
+    grid->GetPoint(i, &points[3 * i]);
+  tets.resize(4 * grid->GetNumberOfCells());
+  const vtkIdType* ids;
+  vtkIdType npts;
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
+  {
+    grid->GetCellPoints(c, npts, ids);
+    for (int k = 0; k < 4; ++k)
+      tets[4 * c + k] = static_cast<int>(ids[k]);
+  }
+}
+
 bool WriteText(const std::string& path, const std::string& text, std::string& error)
 {
   const std::string tmp = path + ".tmp";

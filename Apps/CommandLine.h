@@ -122,6 +122,9 @@ bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
 bool WriteAtomically(vtkXMLWriter* writer, vtkDataObject* data, const std::string& path,
   std::string& error);
 bool WriteText(const std::string& path, const std::string& text, std::string& error);
+/// The points (x, y, z per point) and tets (4 point ids per cell) of a
+/// tetrahedral grid as the Solvers/ core takes them.
+void GridToCoreArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets);
 /// mkdir -p of the directory holding `path`.
 void EnsureParentDirectory(const std::string& path);
 /// Configure `assign` from --material (a preset name, a single-material JSON

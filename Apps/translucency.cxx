@@ -324,20 +324,6 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
   g->GetBounds(bounds);
   const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
     0.5 * (bounds[4] + bounds[5]) };
-  auto toCore = [](vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets) {
-    points.resize(3 * grid->GetNumberOfPoints());
-    for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i)
-      grid->GetPoint(i, &points[3 * i]);
-    tets.resize(4 * grid->GetNumberOfCells());
-    const vtkIdType* ids;
-    vtkIdType npts;
-    for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
-    {
-      grid->GetCellPoints(c, npts, ids);
-      for (int k = 0; k < 4; ++k)
-        tets[4 * c + k] = static_cast<int>(ids[k]);
-    }
-  };
   const translucency::MaterialPreset& marble = translucency::FindMaterialPreset("marble");
   for (int r = 0; r < runs; ++r)
   {
@@ -354,7 +340,7 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
     kept = out->GetNumberOfCells();
     std::vector<double> points;
     std::vector<int> tets;
-    toCore(out, points, tets);
+    GridToCoreArrays(out, points, tets);
     start = Clock::now();
     translucency::TetMesh mesh;
     mesh.SetGeometry(std::move(points), std::move(tets));
@@ -371,7 +357,7 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
   // Paint: a stroke point on the top of the object, width giving ~1 % of tets.
   std::vector<double> points;
   std::vector<int> tets;
-  toCore(g, points, tets);
+  GridToCoreArrays(g, points, tets);
   translucency::TetMesh mesh;
   mesh.SetGeometry(points, tets);
   auto material = translucency::OpticalProperties::Uniform(
