@@ -121,7 +121,7 @@ public:
    */
   void SetInitialParameters(std::vector<double> kappa, std::vector<double> mu);
   ///@{
-  /// Golden-section stop: bracket width < tol x step. Default 0.25.
+  /// Golden-section stop: bracket width < tol x step. Default 0.5.
   void SetLineSearchTolerance(double tol) { LineSearchTolerance_ = tol; }
   ///@}
   /// OpenMP threads over the channels (0 = default). Default 0.
@@ -172,7 +172,7 @@ private:
   int HomogeneousMaxIter_ = 30;
   double HomogeneousTolerance_ = 1e-2;
   std::vector<double> InitialKappa_, InitialMuPerElement_;
-  double LineSearchTolerance_ = 0.25;
+  double LineSearchTolerance_ = 0.5;
   int NumberOfThreads_ = 0;
   std::function<bool(double)> Progress_;
 };
