@@ -651,10 +651,14 @@ InverseDiffusionResult InverseDiffusion::Run()
   std::array<std::string, 3> errors;
 
   const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
-  // One BLAS thread per channel thread while the channels run in parallel.
-  const int channelThreads = std::min(3, std::max(1, numThreads));
+  // One thread per channel as soon as there are 2 cores or more: the channels
+  // need different numbers of forward passes, and 3 channels on 2 threads
+  // leave one thread idle while the other runs its second channel; 3 threads
+  // on 2 cores share the cores until the end. One BLAS thread per channel
+  // thread while the channels run in parallel.
+  const int channelThreads = numThreads > 1 ? 3 : 1;
   const int blasThreads = channelThreads > 1 ? DiffusionForwardModel::SetBlasThreads(1) : 0;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(std::min(3, std::max(1, numThreads)))
+#pragma omp parallel for schedule(dynamic, 1) num_threads(channelThreads)
   for (int c = 0; c < 3; ++c)
   {
     try
