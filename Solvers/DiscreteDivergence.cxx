@@ -285,26 +285,7 @@ void DiscreteDivergence::ToPointFluence(const TetMesh& mesh,
   const std::array<Eigen::VectorXd, NumberOfChannels>& solution,
   std::vector<double>& fluence) const
 {
-  const int numPoints = mesh.GetNumberOfPoints();
-  for (int c = 0; c < NumberOfChannels; ++c)
-  {
-    if (solution[c].size() != numPoints || system.NumberOfUnknowns != numPoints)
-    {
-      std::ostringstream os;
-      os << "solution of channel " << ChannelName(c) << " has " << solution[c].size()
-         << " values but the mesh has " << numPoints << " points";
-      throw Error(os.str());
-    }
-  }
-  fluence.resize(3 * static_cast<size_t>(numPoints));
-#pragma omp parallel for schedule(static)
-  for (int i = 0; i < numPoints; ++i)
-  {
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      fluence[3 * static_cast<size_t>(i) + c] = solution[c][i];
-    }
-  }
+  VertexSolutionToPointFluence("DiscreteDivergence", mesh, system, solution, fluence);
 }
 
 } // namespace translucency

@@ -211,4 +211,32 @@ bool AssembleVertexSystem(const TetMesh& mesh, const OpticalProperties& material
   return !invalid;
 }
 
+/// Vertex unknowns are the mesh points: copy the three channels' solutions
+/// into fluence (3 values per point), checking their sizes.
+inline void VertexSolutionToPointFluence(const char* who, const TetMesh& mesh,
+  const DiffusionSystem& system, const std::array<Eigen::VectorXd, NumberOfChannels>& solution,
+  std::vector<double>& fluence)
+{
+  const int numPoints = mesh.GetNumberOfPoints();
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    if (solution[c].size() != numPoints || system.NumberOfUnknowns != numPoints)
+    {
+      std::ostringstream os;
+      os << who << ": solution of channel " << ChannelName(c) << " has " << solution[c].size()
+         << " values but the mesh has " << numPoints << " points";
+      throw Error(os.str());
+    }
+  }
+  fluence.resize(3 * static_cast<size_t>(numPoints));
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < numPoints; ++i)
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      fluence[3 * static_cast<size_t>(i) + c] = solution[c][i];
+    }
+  }
+}
+
 } // namespace translucency
