@@ -63,6 +63,12 @@ translucency acquire --synthetic-truth FILE --grid NXxNYxNZ --patterns RxC --out
   --threshold T            stop when misfit < T x sum of measured L^2 (default 1e-4)
   --initial-mua R,G,B      homogeneous initial guess, 1/mm (default 0.01)
   --initial-sigmas R,G,B   homogeneous initial guess, 1/mm (default 1)
+  --homogeneous-fit gauss-newton|cg
+                           how the initial homogeneous pair is fitted: Levenberg-
+                           Marquardt on tangent solves (default) or the paper's CG
+  --line-search-start gauss-newton|previous
+                           trial step of each golden-section search: the Gauss-
+                           Newton minimiser along d (default) or the previous step
   --json FILE              timings and results
   --no-png                 skip the pictures
  Synthetic mode (measurements made here from a known volume, no camera):
@@ -562,6 +568,8 @@ std::vector<int> ParseDims(const std::string& text, const std::string& what, siz
 int Acquire(const std::vector<std::string>& args)
 {
   std::string samplePath, patternsArg, outputPrefix, jsonPath, truthPath, gridArg, elementArray;
+  int homogeneousMethod = vtkInverseDiffusion::GAUSS_NEWTON;
+  bool gaussNewtonLineSearch = true;
   std::string setupName = "back";
   double lambda = 1e-5, threshold = 1e-4, noise = 0.0;
   int maxIter = 100;
@@ -597,6 +605,21 @@ int Acquire(const std::vector<std::string>& args)
       initialMu = ParseNumbers(value(), a);
     else if (a == "--initial-sigmas")
       initialSigma = ParseNumbers(value(), a);
+    else if (a == "--line-search-start")
+    {
+      const std::string m = value();
+      if (m != "gauss-newton" && m != "previous")
+        throw translucency::Error("--line-search-start: '" + m + "' is not gauss-newton or previous");
+      gaussNewtonLineSearch = m == "gauss-newton";
+    }
+    else if (a == "--homogeneous-fit")
+    {
+      const std::string m = value();
+      if (m != "gauss-newton" && m != "cg")
+        throw translucency::Error("--homogeneous-fit: '" + m + "' is not gauss-newton or cg");
+      homogeneousMethod = m == "cg" ? vtkInverseDiffusion::CONJUGATE_GRADIENT
+                                    : vtkInverseDiffusion::GAUSS_NEWTON;
+    }
     else if (a == "--synthetic-truth")
       truthPath = value();
     else if (a == "--grid")
@@ -677,6 +700,8 @@ int Acquire(const std::vector<std::string>& args)
   inverse->SetRelativeThreshold(threshold);
   inverse->SetInitialAbsorption(initialMu.data());
   inverse->SetInitialReducedScattering(initialSigma.data());
+  inverse->SetHomogeneousMethod(homogeneousMethod);
+  inverse->SetGaussNewtonLineSearch(gaussNewtonLineSearch);
   inverse->SetElementArrayName(elementArray.c_str());
   MessageCollector messages;
   messages.Watch(inverse);
@@ -752,6 +777,12 @@ int Acquire(const std::vector<std::string>& args)
   report["seconds_fit"] = fitMs / 1000.0;
   report["evaluations"] = inverse->GetNumberOfEvaluations();
   report["gradients"] = inverse->GetNumberOfGradients();
+  report["tangents"] = inverse->GetNumberOfTangents();
+  report["seconds_per_tangent_pass"] =
+    inverse->GetNumberOfTangents() > 0 ? inverse->GetTangentSeconds() / inverse->GetNumberOfTangents() : 0.0;
+  report["homogeneous_fit"] =
+    homogeneousMethod == vtkInverseDiffusion::CONJUGATE_GRADIENT ? "cg" : "gauss-newton";
+  report["line_search_start"] = gaussNewtonLineSearch ? "gauss-newton" : "previous";
   const double perEvaluation =
     inverse->GetNumberOfEvaluations() > 0 ? inverse->GetEvaluationSeconds() / inverse->GetNumberOfEvaluations() : 0.0;
   const double perAdjoint =
@@ -861,7 +892,8 @@ int Acquire(const std::vector<std::string>& args)
   std::cout << "acquire: " << numPatterns << " patterns, " << result->GetNumberOfCells()
             << " tets; fitted radiance relative RMS " << report["fit_relative_rms"].get<double>()
             << "; " << inverse->GetNumberOfEvaluations() << " forward passes, "
-            << inverse->GetNumberOfGradients() << " adjoint passes\n";
+            << inverse->GetNumberOfGradients() << " adjoint passes, "
+            << inverse->GetNumberOfTangents() << " tangent passes\n";
   for (int c = 0; c < 3; ++c)
     std::cout << "  channel " << channelNames[c] << ": objective "
               << channels[c]["final_objective"].get<double>()

@@ -45,6 +45,9 @@ void vtkInverseDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "InitialReducedScattering: " << this->InitialReducedScattering[0] << " "
      << this->InitialReducedScattering[1] << " " << this->InitialReducedScattering[2] << "\n";
   os << indent << "HomogeneousFit: " << this->HomogeneousFit << "\n";
+  os << indent << "HomogeneousMethod: "
+     << (this->HomogeneousMethod == GAUSS_NEWTON ? "GaussNewton" : "ConjugateGradient") << "\n";
+  os << indent << "GaussNewtonLineSearch: " << this->GaussNewtonLineSearch << "\n";
   os << indent << "ElementArrayName: " << this->ElementArrayName << "\n";
   os << indent << "DefaultRefractiveIndex: " << this->DefaultRefractiveIndex << "\n";
 }
@@ -216,6 +219,10 @@ int vtkInverseDiffusion::RequestData(
     inverse.SetInitialReducedScattering({ this->InitialReducedScattering[0],
       this->InitialReducedScattering[1], this->InitialReducedScattering[2] });
     inverse.SetHomogeneousFit(this->HomogeneousFit);
+    inverse.SetHomogeneousMethod(this->HomogeneousMethod == GAUSS_NEWTON
+        ? translucency::InverseDiffusion::HomogeneousMethod::GaussNewton
+        : translucency::InverseDiffusion::HomogeneousMethod::ConjugateGradient);
+    inverse.SetGaussNewtonLineSearch(this->GaussNewtonLineSearch);
     // Called from one worker thread (OpenMP thread 0, which is this thread).
     inverse.SetProgressCallback([this](double f) {
       this->UpdateProgress(0.02 + 0.9 * f);
@@ -238,6 +245,8 @@ int vtkInverseDiffusion::RequestData(
   this->NumberOfGradients = result.Gradients;
   this->EvaluationSeconds = result.EvaluationSeconds;
   this->GradientSeconds = result.GradientSeconds;
+  this->NumberOfTangents = result.Tangents;
+  this->TangentSeconds = result.TangentSeconds;
 
   // Output mesh.
   output->ShallowCopy(input);

@@ -80,6 +80,21 @@ public:
   vtkSetMacro(HomogeneousFit, bool);
   vtkGetMacro(HomogeneousFit, bool);
   vtkBooleanMacro(HomogeneousFit, bool);
+  /// How the homogeneous pair is fitted: GAUSS_NEWTON (default,
+  /// Levenberg-Marquardt on tangent solves) or CONJUGATE_GRADIENT (the
+  /// paper's CG with golden-section line search).
+  enum HomogeneousMethods
+  {
+    GAUSS_NEWTON = 0,
+    CONJUGATE_GRADIENT = 1
+  };
+  vtkSetClampMacro(HomogeneousMethod, int, GAUSS_NEWTON, CONJUGATE_GRADIENT);
+  vtkGetMacro(HomogeneousMethod, int);
+  /// Start each golden-section bracket at the Gauss-Newton minimiser along
+  /// the search direction (one tangent pass per iteration). Default on.
+  vtkSetMacro(GaussNewtonLineSearch, bool);
+  vtkGetMacro(GaussNewtonLineSearch, bool);
+  vtkBooleanMacro(GaussNewtonLineSearch, bool);
   ///@}
 
   ///@{
@@ -101,6 +116,9 @@ public:
   vtkGetMacro(NumberOfGradients, int);
   vtkGetMacro(EvaluationSeconds, double);
   vtkGetMacro(GradientSeconds, double);
+  /// Tangent passes (Gauss-Newton steps: one blocked back-solve each).
+  vtkGetMacro(NumberOfTangents, int);
+  vtkGetMacro(TangentSeconds, double);
   ///@}
 
   /// The iteration history (output port 1).
@@ -120,12 +138,16 @@ protected:
   double InitialAbsorption[3] = { 0.01, 0.01, 0.01 };
   double InitialReducedScattering[3] = { 1.0, 1.0, 1.0 };
   bool HomogeneousFit = true;
+  int HomogeneousMethod = GAUSS_NEWTON;
+  bool GaussNewtonLineSearch = true;
   std::string ElementArrayName;
   double DefaultRefractiveIndex = 1.3;
   int NumberOfEvaluations = 0;
   int NumberOfGradients = 0;
   double EvaluationSeconds = 0.0;
   double GradientSeconds = 0.0;
+  int NumberOfTangents = 0;
+  double TangentSeconds = 0.0;
 
 private:
   vtkInverseDiffusion(const vtkInverseDiffusion&) = delete;

@@ -308,6 +308,28 @@ Eigen::SparseMatrix<double> DiffusionForwardModel::Matrix(const double* kappa, c
       throw Error(os.str());
     }
   }
+  return Assemble(kappa, mu, true);
+}
+
+Eigen::SparseMatrix<double> DiffusionForwardModel::DerivativeMatrix(
+  const double* dKappa, const double* dMu) const
+{
+  for (int e = 0; e < NumberOfElements_; ++e)
+  {
+    if (!(std::isfinite(dKappa[e]) && std::isfinite(dMu[e])))
+    {
+      std::ostringstream os;
+      os << "DiffusionForwardModel::DerivativeMatrix: element " << e << " has direction ("
+         << dKappa[e] << ", " << dMu[e] << "): must be finite";
+      throw Error(os.str());
+    }
+  }
+  return Assemble(dKappa, dMu, false);
+}
+
+Eigen::SparseMatrix<double> DiffusionForwardModel::Assemble(
+  const double* kappa, const double* mu, bool boundary) const
+{
   const int n = Mesh_.GetNumberOfPoints();
   const std::vector<int>& offsets = Mesh_.GetRowOffsets();
   const std::vector<int>& columns = Mesh_.GetColumnIndices();
@@ -347,7 +369,7 @@ Eigen::SparseMatrix<double> DiffusionForwardModel::Matrix(const double* kappa, c
   }
   const int* diagonal = Mesh_.GetDiagonalPositions().data();
   const int* pointTetOffsets = Mesh_.GetPointTetOffsets().data();
-  for (int i = 0; i < n; ++i)
+  for (int i = 0; boundary && i < n; ++i)
   {
     v[diagonal[i]] += BoundaryDiagonal_[i]; // TransCut eq. 13, boundary case
     if (pointTetOffsets[i + 1] == pointTetOffsets[i])

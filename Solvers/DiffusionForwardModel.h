@@ -114,6 +114,15 @@ public:
   Eigen::SparseMatrix<double> Matrix(const double* kappa, const double* mu) const;
 
   /**
+   * The directional derivative of M: sum_e dKappa_e dM/dkappa_e + dMu_e
+   * dM/dmu_e (M is linear in the parameters, so this is M(dKappa, dMu)
+   * without the boundary term; directions may be negative or zero). Used for
+   * tangent solves dphi = -M^-1 (dM) phi (Gauss-Newton steps of
+   * InverseDiffusion). Throws on a non-finite direction, naming the element.
+   */
+  Eigen::SparseMatrix<double> DerivativeMatrix(const double* dKappa, const double* dMu) const;
+
+  /**
    * Adds -lambda^T (dM/dkappa_e) phi to gKappa[e] and -lambda^T (dM/dmu_e)
    * phi to gMu[e] for every element (the adjoint gradient of a functional of
    * phi, where M lambda = dF/dphi).
@@ -136,6 +145,10 @@ public:
   static int SetBlasThreads(int n);
 
 private:
+  /// M(kappa, mu) on the mesh pattern, with or without the boundary term
+  /// and the identity rows of unused points.
+  Eigen::SparseMatrix<double> Assemble(const double* kappa, const double* mu, bool boundary) const;
+
   const TetMesh& Mesh_;
   std::vector<int> TetElement_;
   int NumberOfElements_ = 0;

@@ -3,6 +3,7 @@
 #include "Error.h"
 #include "TetMesh.h"
 
+#include <Eigen/Cholesky>
 #include <omp.h>
 
 #include <algorithm>
@@ -63,8 +64,10 @@ public:
 
   int Evaluations = 0;
   int Gradients = 0;
+  int Tangents = 0;
   double EvaluationSeconds = 0.0;
   double GradientSeconds = 0.0;
+  double TangentSeconds = 0.0;
 
   /// Forward pass at the given parameters into ws (F = inf if not finite).
   void Evaluate(const std::vector<double>& kappa, const std::vector<double>& mu, Workspace& ws)
@@ -198,6 +201,198 @@ public:
   }
 
   /**
+   * Linearisation of the scaled residual e = sqrt(DataScale) (L_meas - L)
+   * at ws (F_data = |e|^2) along parameter directions k (dKappa_k, dMu_k per
+   * element, in parameter units): J_k = de/ds = sqrt(DataScale) alpha
+   * M^-1 (dM_k phi), since M phi = b gives dphi/ds = -M^-1 (dM_k phi) and
+   * L = alpha phi - beta q (TransCut eq. 3). One blocked back-solve with
+   * the factor of ws for all directions and patterns (a tangent solve costs
+   * what the adjoint pass costs, not a factorisation).
+   */
+  void Linearise(const Workspace& ws, const std::vector<std::vector<double>>& dKappa,
+    const std::vector<std::vector<double>>& dMu, Eigen::VectorXd& e, Eigen::MatrixXd& J)
+  {
+    const auto start = std::chrono::steady_clock::now();
+    const Eigen::VectorXd& alpha = Model_.GetReadOutFluenceWeights();
+    const int numPatterns = static_cast<int>(Channel_.Source.cols());
+    const int numDirections = static_cast<int>(dKappa.size());
+    Eigen::MatrixXd rhs(ws.Phi.rows(), numDirections * numPatterns), tangent;
+    for (int k = 0; k < numDirections; ++k)
+    {
+      const Eigen::SparseMatrix<double> dM = Model_.DerivativeMatrix(dKappa[k].data(), dMu[k].data());
+      rhs.middleCols(k * numPatterns, numPatterns) = dM * ws.Phi;
+    }
+    ws.Factor.Solve(rhs, tangent);
+    int rows = 0;
+    for (int m = 0; m < numPatterns; ++m)
+    {
+      rows += static_cast<int>(Channel_.Points[m].size());
+    }
+    const double scale = std::sqrt(Channel_.DataScale);
+    e.resize(rows);
+    J.resize(rows, numDirections);
+    int row = 0;
+    for (int m = 0; m < numPatterns; ++m)
+    {
+      const std::vector<int>& pts = Channel_.Points[m];
+      const Eigen::VectorXd& offset = Channel_.Offset[m];
+      for (size_t k = 0; k < pts.size(); ++k, ++row)
+      {
+        const int i = pts[k];
+        e[row] = scale * (offset[k] - alpha[i] * ws.Phi(i, m));
+        for (int d = 0; d < numDirections; ++d)
+        {
+          J(row, d) = scale * alpha[i] * tangent(i, d * numPatterns + m);
+        }
+      }
+    }
+    ++Tangents;
+    TangentSeconds += Seconds(start);
+  }
+
+  /**
+   * Homogeneous fit of h = (log kappa, log mu) by Levenberg-Marquardt on the
+   * linearised residual (our choice; the paper, Sec. 4.2, uses its CG
+   * procedure for these two unknowns, available as
+   * HomogeneousMethod::ConjugateGradient): per iteration one tangent solve
+   * (J, two directions) and, per trial, one forward pass. `current` holds
+   * the forward pass at h on entry and at the final h on return.
+   */
+  std::string FitHomogeneous(Eigen::VectorXd& h, int maxIter, double threshold,
+    std::unique_ptr<Workspace>& current, std::vector<InverseDiffusionIteration>& history,
+    const std::function<bool(int)>& tick, int& iterations, bool& converged)
+  {
+    auto trial = std::make_unique<Workspace>();
+    std::vector<double> kappa, mu;
+    std::vector<std::vector<double>> dKappa(2), dMu(2);
+    Eigen::VectorXd e;
+    Eigen::MatrixXd J;
+    auto linearise = [&]() {
+      // d/dlog kappa = kappa dM/dkappa, d/dlog mu = mu dM/dmu (every element).
+      dKappa[0] = current->Kappa;
+      dMu[0].assign(NumElements_, 0.0);
+      dKappa[1].assign(NumElements_, 0.0);
+      dMu[1] = current->Mu;
+      Linearise(*current, dKappa, dMu, e, J);
+    };
+    iterations = 0;
+    converged = false;
+    linearise();
+    // dF/dh = 2 J^T e (the regulariser is 0 and flat for a homogeneous kappa).
+    Eigen::Vector2d g = 2.0 * J.transpose() * e;
+    history.push_back(
+      { Channel_.Index, "homogeneous", 0, current->Objective, current->Data, g.norm(), 0.0, 1 });
+    double damping = 1e-3;
+    for (int it = 1; it <= maxIter; ++it)
+    {
+      if (current->Objective < threshold)
+      {
+        converged = true;
+        return "objective below threshold";
+      }
+      if (!tick(it))
+      {
+        return "aborted";
+      }
+      const Eigen::Matrix2d A = J.transpose() * J;
+      const Eigen::Vector2d b = -(J.transpose() * e);
+      const double f0 = current->Objective;
+      int evaluations = 0;
+      bool accepted = false;
+      Eigen::Vector2d step = Eigen::Vector2d::Zero();
+      for (int attempt = 0; attempt < 12 && !accepted; ++attempt)
+      {
+        // (J^T J + nu diag(J^T J)) delta = -J^T e, at most a factor e per
+        // scalar per step.
+        Eigen::Matrix2d damped = A;
+        damped.diagonal() *= 1.0 + damping;
+        step = damped.ldlt().solve(b);
+        const double largest = step.cwiseAbs().maxCoeff();
+        if (!std::isfinite(largest))
+        {
+          break;
+        }
+        if (largest > 1.0)
+        {
+          step /= largest;
+        }
+        Expand(h + step, true, kappa, mu);
+        try
+        {
+          Evaluate(kappa, mu, *trial);
+        }
+        catch (const Error&)
+        {
+          trial->Objective = Infinity;
+        }
+        ++evaluations;
+        if (trial->Objective < f0)
+        {
+          std::swap(current, trial);
+          h += step;
+          damping = std::max(1e-7, 0.1 * damping);
+          accepted = true;
+        }
+        else
+        {
+          damping *= 10.0;
+        }
+      }
+      if (!accepted)
+      {
+        return "homogeneous fit found no decrease";
+      }
+      iterations = it;
+      linearise();
+      g = 2.0 * J.transpose() * e;
+      history.push_back({ Channel_.Index, "homogeneous", it, current->Objective, current->Data,
+        g.norm(), step.norm(), evaluations });
+      if ((f0 - current->Objective) <= Owner_.HomogeneousTolerance_ * f0)
+      {
+        return "homogeneous fit converged";
+      }
+    }
+    if (current->Objective < threshold)
+    {
+      converged = true;
+      return "objective below threshold";
+    }
+    return "iteration limit";
+  }
+
+  /**
+   * Gauss-Newton estimate of the minimiser of F(x + s d) (heterogeneous
+   * stage): s = -F'(0) / F''(0), F'(0) = g.d exactly (adjoint gradient),
+   * F''(0) ~ 2 |J_d|^2 (tangent solve along d) + the regulariser's
+   * 2 lambda sum w (dkappa_e - dkappa_f)^2. 0 if not a usable estimate.
+   */
+  double GaussNewtonStep(const Workspace& ws, const Eigen::VectorXd& g, const Eigen::VectorXd& d)
+  {
+    std::vector<std::vector<double>> dKappa(1), dMu(1);
+    dKappa[0].resize(NumElements_);
+    dMu[0].resize(NumElements_);
+    for (int e = 0; e < NumElements_; ++e)
+    {
+      dKappa[0][e] = ws.Kappa[e] * d[e]; // chain rule through exp
+      dMu[0][e] = ws.Mu[e] * d[NumElements_ + e];
+    }
+    Eigen::VectorXd e;
+    Eigen::MatrixXd J;
+    Linearise(ws, dKappa, dMu, e, J);
+    double curvature = 2.0 * J.col(0).squaredNorm();
+    const std::vector<int>& pairs = Model_.GetElementNeighbours();
+    const std::vector<double>& weights = Model_.GetElementNeighbourWeights();
+    for (size_t p = 0; Owner_.Lambda_ != 0.0 && p < pairs.size(); p += 2)
+    {
+      const double diff = dKappa[0][pairs[p]] - dKappa[0][pairs[p + 1]];
+      curvature += 2.0 * Owner_.Lambda_ * weights[p / 2] * diff * diff;
+    }
+    const double slope = g.dot(d);
+    const double step = -slope / curvature;
+    return std::isfinite(step) && step > 0.0 ? step : 0.0;
+  }
+
+  /**
    * Paper Table I from x. `current` holds the forward pass at x on entry and
    * the one at the final x on return. Rows go to history. Returns the stop
    * reason; `converged` says whether F < threshold.
@@ -261,12 +456,22 @@ public:
       };
       const double dMax = d.cwiseAbs().maxCoeff();
       double s0 = lastMove > 0.0 ? lastMove / d.norm() : 0.5 / dMax;
+      // Our choice (not in Table I): start the bracket at the Gauss-Newton
+      // minimiser along d (a tangent solve, ~ the cost of an adjoint pass).
+      const double sGaussNewton =
+        !homogeneous && Owner_.GaussNewtonLineSearch_ ? GaussNewtonStep(*current, g, d) : 0.0;
+      if (sGaussNewton > 0.0)
+      {
+        s0 = sGaussNewton;
+      }
       s0 = std::min(s0, 1.0 / dMax); // at most a factor e per parameter on the first try
-      // Bracket a < b < c with f(b) < f(a), f(b) <= f(c).
+      // Bracket a < b < c with f(b) < f(a), f(b) <= f(c). From a
+      // Gauss-Newton b the first c is b / 0.618 (b at the golden point of
+      // [0, c], the minimum expected near b); otherwise golden expansion.
       double a = 0.0, b = s0, c = 0.0, fa = f0, fb = f(s0), fc = 0.0;
       if (fb < fa)
       {
-        c = b + 1.618034 * (b - a);
+        c = b + (sGaussNewton > 0.0 ? 0.618034 : 1.618034) * (b - a);
         fc = f(c);
         for (int k = 0; k < 30 && fc < fb; ++k)
         {
@@ -641,7 +846,8 @@ InverseDiffusionResult InverseDiffusion::Run()
   result.Absorption.assign(3 * static_cast<size_t>(numElements), 0.0);
   std::array<std::vector<InverseDiffusionIteration>, 3> history;
   std::array<int, 3> evaluations{}, gradients{};
-  std::array<double, 3> evaluationSeconds{}, gradientSeconds{};
+  std::array<double, 3> evaluationSeconds{}, gradientSeconds{}, tangentSeconds{};
+  std::array<int, 3> tangents{};
   std::array<std::atomic<double>, 3> fraction;
   for (auto& f : fraction)
   {
@@ -712,15 +918,30 @@ InverseDiffusionResult InverseDiffusion::Run()
             throw Error("the objective is not finite at the initial values");
           }
           int homogeneousIterations = 0;
-          opt.Minimise(h, true, HomogeneousMaxIter_, threshold, current, history[c],
-            [&](int it) { return tick(0.1 * it / HomogeneousMaxIter_); }, homogeneousIterations,
-            converged);
+          auto homogeneousTick = [&](int it) { return tick(0.1 * it / HomogeneousMaxIter_); };
+          if (HomogeneousMethod_ == HomogeneousMethod::GaussNewton)
+          {
+            opt.FitHomogeneous(h, HomogeneousMaxIter_, threshold, current, history[c],
+              homogeneousTick, homogeneousIterations, converged);
+          }
+          else
+          {
+            opt.Minimise(h, true, HomogeneousMaxIter_, threshold, current, history[c],
+              homogeneousTick, homogeneousIterations, converged);
+          }
         }
         x.head(numElements).setConstant(h[0]);
         x.tail(numElements).setConstant(h[1]);
       }
-      opt.Expand(x, false, kappa, mu);
-      opt.Evaluate(kappa, mu, *current);
+      // After a homogeneous fit `current` already holds the forward pass at x
+      // (the same parameters, broadcast): no second factorisation.
+      const bool reused = std::isfinite(current->Objective) && !current->Kappa.empty();
+      if (!reused)
+      {
+        opt.Expand(x, false, kappa, mu);
+        opt.Evaluate(kappa, mu, *current);
+      }
+      const size_t firstHeterogeneousRow = history[c].size();
       if (!std::isfinite(current->Objective))
       {
         throw Error("the objective is not finite at the initial values");
@@ -728,6 +949,10 @@ InverseDiffusionResult InverseDiffusion::Run()
       result.StopReason[c] = opt.Minimise(x, false, MaxIter_, threshold, current, history[c],
         [&](int it) { return tick(0.1 + 0.9 * it / std::max(1, MaxIter_)); }, iterations,
         converged);
+      if (reused && history[c].size() > firstHeterogeneousRow)
+      {
+        history[c][firstHeterogeneousRow].Evaluations = 0; // no new forward pass
+      }
       tick(1.0);
       opt.Expand(x, false, kappa, mu);
       for (int e = 0; e < numElements; ++e)
@@ -743,6 +968,8 @@ InverseDiffusionResult InverseDiffusion::Run()
       gradients[c] = opt.Gradients;
       evaluationSeconds[c] = opt.EvaluationSeconds;
       gradientSeconds[c] = opt.GradientSeconds;
+      tangents[c] = opt.Tangents;
+      tangentSeconds[c] = opt.TangentSeconds;
     }
     catch (const std::exception& e)
     {
@@ -764,6 +991,8 @@ InverseDiffusionResult InverseDiffusion::Run()
     result.Gradients += gradients[c];
     result.EvaluationSeconds += evaluationSeconds[c];
     result.GradientSeconds += gradientSeconds[c];
+    result.Tangents += tangents[c];
+    result.TangentSeconds += tangentSeconds[c];
   }
   result.Aborted = aborted;
   return result;

@@ -57,6 +57,8 @@ struct InverseDiffusionResult
   int Gradients = 0;        ///< adjoint passes (M solves + accumulation), all channels
   double EvaluationSeconds = 0.0; ///< summed over channels (thread time)
   double GradientSeconds = 0.0;   ///< adjoint passes only, summed over channels
+  int Tangents = 0;               ///< tangent passes (blocked back-solves), all channels
+  double TangentSeconds = 0.0;    ///< tangent passes, summed over channels
   bool Aborted = false;
 };
 
@@ -113,6 +115,16 @@ public:
   /// The homogeneous fit stops when an iteration lowers F by less than this
   /// fraction. Default 1e-2 (an initialisation need not be precise).
   void SetHomogeneousTolerance(double tol) { HomogeneousTolerance_ = tol; }
+  /// How the two homogeneous scalars are fitted: Levenberg-Marquardt on
+  /// tangent solves (default; our choice, Documentation/InverseDiffusion.md)
+  /// or the paper's CG with golden-section line search (Sec. 4.2).
+  enum class HomogeneousMethod
+  {
+    GaussNewton,
+    ConjugateGradient
+  };
+  void SetHomogeneousMethod(HomogeneousMethod m) { HomogeneousMethod_ = m; }
+  HomogeneousMethod GetHomogeneousMethod() const { return HomogeneousMethod_; }
   ///@}
   /**
    * Start from these per-element values instead (3 per element each: kappa
@@ -123,6 +135,11 @@ public:
   ///@{
   /// Golden-section stop: bracket width < tol x step. Default 0.5.
   void SetLineSearchTolerance(double tol) { LineSearchTolerance_ = tol; }
+  /// Start each golden-section bracket at the Gauss-Newton minimiser along
+  /// the search direction (one tangent solve per iteration) instead of the
+  /// previous step's length. Default on.
+  void SetGaussNewtonLineSearch(bool on) { GaussNewtonLineSearch_ = on; }
+  bool GetGaussNewtonLineSearch() const { return GaussNewtonLineSearch_; }
   ///@}
   /// OpenMP threads over the channels (0 = default). Default 0.
   void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
@@ -171,6 +188,8 @@ private:
   bool HomogeneousFit_ = true;
   int HomogeneousMaxIter_ = 30;
   double HomogeneousTolerance_ = 1e-2;
+  HomogeneousMethod HomogeneousMethod_ = HomogeneousMethod::GaussNewton;
+  bool GaussNewtonLineSearch_ = true;
   std::vector<double> InitialKappa_, InitialMuPerElement_;
   double LineSearchTolerance_ = 0.5;
   int NumberOfThreads_ = 0;

@@ -121,7 +121,8 @@ class TestAcquire(unittest.TestCase):
     def test_1_help(self):
         out = run("--help").stdout
         for option in ("acquire", "--sample", "--patterns", "--output", "--lambda", "--max-iter",
-                       "--json", "--synthetic-truth", "--grid", "--setup", "--noise"):
+                       "--json", "--synthetic-truth", "--grid", "--setup", "--noise",
+                       "--homogeneous-fit", "--line-search-start"):
             self.assertIn(option, out)
 
     def test_2_synthetic(self):
@@ -264,6 +265,10 @@ class TestAcquire(unittest.TestCase):
                        "channel G: mu_a = -1")
         expect_failure(["--sample", os.path.join(self.dir, "nothing.vtu"), "--patterns", path],
                        "nothing.vtu")
+        expect_failure(["--sample", path, "--patterns", path, "--homogeneous-fit", "newton"],
+                       "'newton' is not gauss-newton or cg")
+        expect_failure(["--sample", path, "--patterns", path, "--line-search-start", "x"],
+                       "'x' is not gauss-newton or previous")
         r = run("acquire", "--synthetic-truth", self.truth, "--grid", "8x0x3", "--patterns", "2x2",
                 "--output", output)
         self.assertEqual(r.returncode, 2)
