@@ -200,6 +200,39 @@ public:
     return g;
   }
 
+  /// Forward pass at the optimisation variables x; +inf where the
+  /// factorisation fails (e.g. far out along a search direction).
+  void EvaluateAt(const Eigen::VectorXd& x, bool homogeneous, Workspace& ws)
+  {
+    Expand(x, homogeneous, Scratch_[0], Scratch_[1]);
+    try
+    {
+      Evaluate(Scratch_[0], Scratch_[1], ws);
+    }
+    catch (const Error&)
+    {
+      ws.Objective = Infinity;
+    }
+  }
+
+  /// The checks at the top of each optimiser iteration: "" to go on, else
+  /// the stop reason (objective below the threshold, or the progress
+  /// callback `tick`, if given, asked to abort).
+  static std::string CheckStop(const Workspace& ws, int it, double threshold,
+    const std::function<bool(int)>& tick, bool& converged)
+  {
+    if (ws.Objective < threshold)
+    {
+      converged = true;
+      return "objective below threshold";
+    }
+    if (tick && !tick(it))
+    {
+      return "aborted";
+    }
+    return "";
+  }
+
   /**
    * Linearisation of the scaled residual e = sqrt(DataScale) (L_meas - L)
    * at ws (F_data = |e|^2) along parameter directions k (dKappa_k, dMu_k per
@@ -263,7 +296,6 @@ public:
     const std::function<bool(int)>& tick, int& iterations, bool& converged)
   {
     auto trial = std::make_unique<Workspace>();
-    std::vector<double> kappa, mu;
     std::vector<std::vector<double>> dKappa(2), dMu(2);
     Eigen::VectorXd e;
     Eigen::MatrixXd J;
@@ -285,14 +317,10 @@ public:
     double damping = 1e-3;
     for (int it = 1; it <= maxIter; ++it)
     {
-      if (current->Objective < threshold)
+      const std::string stop = CheckStop(*current, it, threshold, tick, converged);
+      if (!stop.empty())
       {
-        converged = true;
-        return "objective below threshold";
-      }
-      if (!tick(it))
-      {
-        return "aborted";
+        return stop;
       }
       const Eigen::Matrix2d A = J.transpose() * J;
       const Eigen::Vector2d b = -(J.transpose() * e);
@@ -316,15 +344,7 @@ public:
         {
           step /= largest;
         }
-        Expand(h + step, true, kappa, mu);
-        try
-        {
-          Evaluate(kappa, mu, *trial);
-        }
-        catch (const Error&)
-        {
-          trial->Objective = Infinity;
-        }
+        EvaluateAt(h + step, true, *trial);
         ++evaluations;
         if (trial->Objective < f0)
         {
@@ -352,12 +372,8 @@ public:
         return "homogeneous fit converged";
       }
     }
-    if (current->Objective < threshold)
-    {
-      converged = true;
-      return "objective below threshold";
-    }
-    return "iteration limit";
+    const std::string stop = CheckStop(*current, 0, threshold, nullptr, converged);
+    return stop.empty() ? "iteration limit" : stop;
   }
 
   /**
@@ -403,7 +419,6 @@ public:
   {
     const char* stage = homogeneous ? "homogeneous" : "heterogeneous";
     auto trial = std::make_unique<Workspace>();
-    std::vector<double> kappa, mu;
     iterations = 0;
     converged = false;
     Eigen::VectorXd g = ReducedGradient(*current, homogeneous);
@@ -414,14 +429,10 @@ public:
     bool retried = false;
     for (int it = 1; it <= maxIter; ++it)
     {
-      if (current->Objective < threshold)
+      const std::string stop = CheckStop(*current, it, threshold, tick, converged);
+      if (!stop.empty())
       {
-        converged = true;
-        return "objective below threshold";
-      }
-      if (!tick(it))
-      {
-        return "aborted";
+        return stop;
       }
       if (g.norm() == 0.0)
       {
@@ -436,15 +447,7 @@ public:
       double bestStep = 0.0;
       int evaluations = 0;
       auto f = [&](double s) -> double {
-        Expand(x + s * d, homogeneous, kappa, mu);
-        try
-        {
-          Evaluate(kappa, mu, *trial);
-        }
-        catch (const Error&)
-        {
-          trial->Objective = Infinity; // e.g. a factorisation failing far out
-        }
+        EvaluateAt(x + s * d, homogeneous, *trial);
         ++evaluations;
         const double value = trial->Objective;
         if (value < current->Objective)
@@ -567,12 +570,8 @@ public:
         return "homogeneous fit converged";
       }
     }
-    if (current->Objective < threshold)
-    {
-      converged = true;
-      return "objective below threshold";
-    }
-    return "iteration limit";
+    const std::string stop = CheckStop(*current, 0, threshold, nullptr, converged);
+    return stop.empty() ? "iteration limit" : stop;
   }
 
 private:
@@ -580,6 +579,7 @@ private:
   const DiffusionForwardModel& Model_;
   const Channel& Channel_;
   int NumElements_;
+  std::vector<double> Scratch_[2]; ///< kappa, mu of EvaluateAt
 };
 
 InverseDiffusion::Channel InverseDiffusion::BuildChannel(int c) const

@@ -289,6 +289,24 @@ void InclusionTruth(const Block& block, std::vector<double>& kappa, std::vector<
     }
   }
 }
+
+/// The 8x10x4 inclusion block, back-lit by 4x4 patterns, and its noise-free
+/// measurements.
+struct InclusionProblem
+{
+  Block Block_{ 8, 10, 4, 4.0, 5.0, 2.0 };
+  std::vector<double> Kappa, Mu;
+  std::vector<std::vector<double>> Patterns;
+  std::vector<std::vector<unsigned char>> Observed;
+  std::vector<std::vector<double>> Radiance;
+  InclusionProblem()
+  {
+    InclusionTruth(Block_, Kappa, Mu);
+    MakeBlockPatterns(
+      Block_.Mesh.GetPoints(), 4, 4, AcquisitionSetup::Back, 1.0, Patterns, Observed);
+    Radiance = InverseDiffusion::PredictRadiance(*Block_.Model, Kappa, Mu, Patterns);
+  }
+};
 } // namespace
 
 // The Gauss-Newton homogeneous fit linearises through tangent solves
@@ -300,20 +318,14 @@ void InclusionTruth(const Block& block, std::vector<double>& kappa, std::vector<
 // fewer forward passes.
 TEST(InverseDiffusion, GaussNewtonHomogeneousFitAgreesWithConjugateGradient)
 {
-  Block block(8, 10, 4, 4.0, 5.0, 2.0);
-  std::vector<double> kappa, mu;
-  InclusionTruth(block, kappa, mu);
-  std::vector<std::vector<double>> patterns;
-  std::vector<std::vector<unsigned char>> observed;
-  MakeBlockPatterns(block.Mesh.GetPoints(), 4, 4, AcquisitionSetup::Back, 1.0, patterns, observed);
-  const auto radiance = InverseDiffusion::PredictRadiance(*block.Model, kappa, mu, patterns);
+  const InclusionProblem problem;
   InverseDiffusionResult results[2];
   using Method = InverseDiffusion::HomogeneousMethod;
   const Method methods[2] = { Method::GaussNewton, Method::ConjugateGradient };
   for (int k = 0; k < 2; ++k)
   {
-    InverseDiffusion inverse(*block.Model);
-    inverse.SetMeasurements(patterns, radiance, observed);
+    InverseDiffusion inverse(*problem.Block_.Model);
+    inverse.SetMeasurements(problem.Patterns, problem.Radiance, problem.Observed);
     inverse.SetHomogeneousMethod(methods[k]);
     inverse.SetHomogeneousMaxIter(100);
     inverse.SetHomogeneousTolerance(1e-9);
@@ -406,24 +418,18 @@ TEST(InverseDiffusion, HeterogeneousBlockReproducesHeldOutPatterns)
 // fixed iteration budget from the same start).
 TEST(InverseDiffusion, LargerLambdaGivesSmootherKappa)
 {
-  Block block(8, 10, 4, 4.0, 5.0, 2.0);
-  std::vector<double> kappa, mu;
-  InclusionTruth(block, kappa, mu);
-  std::vector<std::vector<double>> patterns;
-  std::vector<std::vector<unsigned char>> observed;
-  MakeBlockPatterns(block.Mesh.GetPoints(), 4, 4, AcquisitionSetup::Back, 1.0, patterns, observed);
-  const auto radiance = InverseDiffusion::PredictRadiance(*block.Model, kappa, mu, patterns);
+  const InclusionProblem problem;
   double previous = std::numeric_limits<double>::infinity();
   for (double lambda : { 0.0, 1e-3, 1e-1 })
   {
-    InverseDiffusion inverse(*block.Model);
-    inverse.SetMeasurements(patterns, radiance, observed);
+    InverseDiffusion inverse(*problem.Block_.Model);
+    inverse.SetMeasurements(problem.Patterns, problem.Radiance, problem.Observed);
     inverse.SetLambda(lambda);
     inverse.SetRelativeThreshold(0.0);
     inverse.SetMaxIter(15);
     const InverseDiffusionResult result = inverse.Run();
-    std::vector<double> k(block.Elements());
-    for (int e = 0; e < block.Elements(); ++e)
+    std::vector<double> k(problem.Block_.Elements());
+    for (int e = 0; e < problem.Block_.Elements(); ++e)
       k[e] = result.Kappa[3 * e + 1];
     const double roughness = inverse.Roughness(k);
     std::cout << "lambda " << lambda << ": roughness of kappa (G) " << roughness << "\n";
