@@ -2,7 +2,10 @@
 
 #include "Error.h"
 
+#include <omp.h>
+
 #include <algorithm>
+#include <exception>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -19,6 +22,8 @@ constexpr int NumberOfBins = 16;
 /// Below this depth splits follow the surface area heuristic; deeper, the
 /// median split bounds the remaining depth by log2 of the triangle count.
 constexpr int SahDepthLimit = 64;
+/// Ranges of at least this many triangles build their halves as OpenMP tasks.
+constexpr int ParallelGrain = 8192;
 
 /**
  * Moller-Trumbore with the edges e1 = b - a, e2 = c - a already formed.
@@ -140,13 +145,52 @@ void RayCaster::Build(const std::vector<double>& points, const std::vector<int>&
   BuildState state;
   state.Boxes.resize(6 * static_cast<size_t>(numTriangles));
   state.Centroids.resize(3 * static_cast<size_t>(numTriangles));
-  double scene[6];
-  EmptyBox(scene);
+  // Boxes and centroids in parallel; the first bad triangle (in input
+  // order) is then named by a serial check of it.
+  double lo[3] = { std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+    std::numeric_limits<double>::infinity() };
+  double hi[3] = { -lo[0], -lo[1], -lo[2] };
   double maxAbs = 0.0;
+  int firstBad = numTriangles;
+#pragma omp parallel for schedule(static) reduction(min : lo[:3], firstBad) \
+  reduction(max : hi[:3], maxAbs)
   for (int f = 0; f < numTriangles; ++f)
   {
     double* box = &state.Boxes[6 * static_cast<size_t>(f)];
     EmptyBox(box);
+    bool bad = false;
+    for (int v = 0; v < 3 && !bad; ++v)
+    {
+      const int id = triangles[3 * static_cast<size_t>(f) + v];
+      if (id < 0 || id >= numPoints)
+      {
+        bad = true;
+        break;
+      }
+      const double* x = &points[3 * static_cast<size_t>(id)];
+      for (int k = 0; k < 3; ++k)
+      {
+        bad = bad || !std::isfinite(x[k]);
+        box[k] = std::min(box[k], x[k]);
+        box[k + 3] = std::max(box[k + 3], x[k]);
+        maxAbs = std::max(maxAbs, std::abs(x[k]));
+      }
+    }
+    if (bad)
+    {
+      firstBad = std::min(firstBad, f);
+      continue;
+    }
+    for (int k = 0; k < 3; ++k)
+    {
+      state.Centroids[3 * static_cast<size_t>(f) + k] = 0.5 * (box[k] + box[k + 3]);
+      lo[k] = std::min(lo[k], box[k]);
+      hi[k] = std::max(hi[k], box[k + 3]);
+    }
+  }
+  if (firstBad < numTriangles)
+  {
+    const int f = firstBad;
     for (int v = 0; v < 3; ++v)
     {
       const int id = triangles[3 * static_cast<size_t>(f) + v];
@@ -158,26 +202,16 @@ void RayCaster::Build(const std::vector<double>& points, const std::vector<int>&
         throw Error(msg.str());
       }
       const double* x = &points[3 * static_cast<size_t>(id)];
-      for (int k = 0; k < 3; ++k)
+      if (!(std::isfinite(x[0]) && std::isfinite(x[1]) && std::isfinite(x[2])))
       {
-        if (!std::isfinite(x[k]))
-        {
-          std::ostringstream msg;
-          msg << "RayCaster: triangle " << f << " uses point " << id
-              << " whose coordinates are not finite";
-          throw Error(msg.str());
-        }
-        box[k] = std::min(box[k], x[k]);
-        box[k + 3] = std::max(box[k + 3], x[k]);
-        maxAbs = std::max(maxAbs, std::abs(x[k]));
+        std::ostringstream msg;
+        msg << "RayCaster: triangle " << f << " uses point " << id
+            << " whose coordinates are not finite";
+        throw Error(msg.str());
       }
     }
-    for (int k = 0; k < 3; ++k)
-    {
-      state.Centroids[3 * static_cast<size_t>(f) + k] = 0.5 * (box[k] + box[k + 3]);
-    }
-    GrowBox(scene, box);
   }
+  const double scene[6] = { lo[0], lo[1], lo[2], hi[0], hi[1], hi[2] };
   if (numTriangles == 0)
   {
     return;
@@ -197,7 +231,23 @@ void RayCaster::Build(const std::vector<double>& points, const std::vector<int>&
   try
   {
     double box[6];
-    Root_ = BuildSubtree(state, 0, numTriangles, 1, box);
+    std::exception_ptr error;
+#pragma omp parallel if (numTriangles >= ParallelGrain)
+#pragma omp single
+    {
+      try
+      {
+        Root_ = BuildSubtree(state, Nodes_, Depth_, 0, numTriangles, 1, box);
+      }
+      catch (...)
+      {
+        error = std::current_exception();
+      }
+    }
+    if (error)
+    {
+      std::rethrow_exception(error);
+    }
     for (int k = 0; k < 3; ++k)
     {
       RootBounds_[k] = box[k] - state.Pad;
@@ -232,10 +282,10 @@ void RayCaster::Build(const std::vector<double>& points, const std::vector<int>&
 }
 
 //------------------------------------------------------------------------------
-RayCaster::Child RayCaster::BuildSubtree(
-  BuildState& state, int begin, int end, int depth, double box[6])
+RayCaster::Child RayCaster::BuildSubtree(BuildState& state, std::vector<Node>& nodes,
+  int& maxDepth, int begin, int end, int depth, double box[6])
 {
-  Depth_ = std::max(Depth_, depth);
+  maxDepth = std::max(maxDepth, depth);
   if (depth > MaxDepth)
   {
     throw Error("RayCaster: internal error: tree deeper than the traversal stack");
@@ -370,12 +420,63 @@ RayCaster::Child RayCaster::BuildSubtree(
 
   // The node before its subtrees (depth-first order): the left child's node,
   // if any, is the next one.
-  const int index = static_cast<int>(Nodes_.size());
-  Nodes_.emplace_back();
+  const int index = static_cast<int>(nodes.size());
+  nodes.emplace_back();
   double childBox[2][6];
-  const Child left = BuildSubtree(state, begin, mid, depth + 1, childBox[0]);
-  const Child right = BuildSubtree(state, mid, end, depth + 1, childBox[1]);
-  Node& node = Nodes_[index];
+  Child left, right;
+  if (count >= ParallelGrain && omp_in_parallel())
+  {
+    // The halves are disjoint ranges of state.Order: build them as tasks
+    // into their own vectors, then splice them after this node (left, then
+    // right: the serial depth-first order), shifting their interior refs.
+    std::vector<Node> sub[2];
+    int subDepth[2] = { depth, depth };
+    std::exception_ptr error[2];
+    Child* out[2] = { &left, &right };
+    const int from[2] = { begin, mid }, to[2] = { mid, end };
+    for (int h = 0; h < 2; ++h)
+    {
+#pragma omp task default(none) firstprivate(h, depth) shared(state, sub, subDepth, error, out, from, to, childBox)
+      {
+        try
+        {
+          *out[h] = BuildSubtree(state, sub[h], subDepth[h], from[h], to[h], depth + 1, childBox[h]);
+        }
+        catch (...)
+        {
+          error[h] = std::current_exception();
+        }
+      }
+    }
+#pragma omp taskwait
+    for (int h = 0; h < 2; ++h)
+    {
+      if (error[h])
+      {
+        std::rethrow_exception(error[h]);
+      }
+    }
+    for (int h = 0; h < 2; ++h)
+    {
+      const int offset = static_cast<int>(nodes.size());
+      for (Node& n : sub[h])
+      {
+        for (Child& c : n.Children)
+        {
+          c.Ref += c.Count == 0 ? offset : 0;
+        }
+      }
+      out[h]->Ref += out[h]->Count == 0 ? offset : 0;
+      nodes.insert(nodes.end(), sub[h].begin(), sub[h].end());
+      maxDepth = std::max(maxDepth, subDepth[h]);
+    }
+  }
+  else
+  {
+    left = BuildSubtree(state, nodes, maxDepth, begin, mid, depth + 1, childBox[0]);
+    right = BuildSubtree(state, nodes, maxDepth, mid, end, depth + 1, childBox[1]);
+  }
+  Node& node = nodes[index];
   node.Children[0] = left;
   node.Children[1] = right;
   for (int c = 0; c < 2; ++c)

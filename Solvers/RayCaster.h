@@ -126,7 +126,12 @@ private:
   };
 
   struct BuildState;
-  Child BuildSubtree(BuildState& state, int begin, int end, int depth, double box[6]);
+  /// Builds the subtree of state.Order[begin, end) into `nodes` (depth-first
+  /// order, node indices local to `nodes`); large ranges build their two
+  /// halves as OpenMP tasks into separate vectors that are then spliced, so
+  /// the tree is the serial one whatever the number of threads.
+  static Child BuildSubtree(BuildState& state, std::vector<Node>& nodes, int& maxDepth, int begin,
+    int end, int depth, double box[6]);
 
   /// Shared traversal; AnyHit stops at the first hit.
   template <bool AnyHit>

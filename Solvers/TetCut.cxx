@@ -2,7 +2,10 @@
 
 #include "Error.h"
 
+#include <omp.h>
+
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <string>
 
@@ -28,6 +31,44 @@ double Dot(const double* a, const double* b)
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 constexpr double Pi = 3.14159265358979323846;
+
+/// Indices k with flag[k] != 0, ascending (a parallel stream compaction:
+/// per-thread counts, an exclusive scan, then each thread writes its block).
+std::vector<int> Compact(const std::vector<char>& flag)
+{
+  const std::int64_t n = static_cast<std::int64_t>(flag.size());
+  std::vector<std::int64_t> counts(static_cast<std::size_t>(omp_get_max_threads()) + 1, 0);
+  std::vector<int> out;
+#pragma omp parallel
+  {
+    const int threads = omp_get_num_threads(), tid = omp_get_thread_num();
+    const std::int64_t begin = n * tid / threads, end = n * (tid + 1) / threads;
+    std::int64_t count = 0;
+    for (std::int64_t k = begin; k < end; ++k)
+    {
+      count += flag[k] != 0;
+    }
+    counts[tid + 1] = count;
+#pragma omp barrier
+#pragma omp single
+    {
+      for (int t = 0; t < threads; ++t)
+      {
+        counts[t + 1] += counts[t];
+      }
+      out.resize(counts[threads]);
+    }
+    std::int64_t at = counts[tid];
+    for (std::int64_t k = begin; k < end; ++k)
+    {
+      if (flag[k])
+      {
+        out[at++] = static_cast<int>(k);
+      }
+    }
+  }
+  return out;
+}
 }
 
 //------------------------------------------------------------------------------
@@ -43,6 +84,13 @@ double TetCut::SignedVolume(const double* a, const double* b, const double* c, c
 
 //------------------------------------------------------------------------------
 double TetCut::MinimumDihedralAngle(
+  const double* a, const double* b, const double* c, const double* d)
+{
+  return std::acos(LargestDihedralCosine(a, b, c, d)) * 180.0 / Pi;
+}
+
+//------------------------------------------------------------------------------
+double TetCut::LargestDihedralCosine(
   const double* a, const double* b, const double* c, const double* d)
 {
   const double* p[4] = { a, b, c, d };
@@ -62,7 +110,7 @@ double TetCut::MinimumDihedralAngle(
     const double len = std::sqrt(Dot(n[k], n[k]));
     if (len == 0.0)
     {
-      return 0.0;
+      return 1.0; // a degenerate face: angle 0
     }
     for (int j = 0; j < 3; ++j)
     {
@@ -70,17 +118,16 @@ double TetCut::MinimumDihedralAngle(
     }
   }
   // The dihedral angle at the edge shared by faces k and l is pi minus the
-  // angle between their outward normals.
-  double smallest = 180.0;
+  // angle between their outward normals: its cosine is -n_k.n_l.
+  double largest = -1.0;
   for (int k = 0; k < 4; ++k)
   {
     for (int l = k + 1; l < 4; ++l)
     {
-      const double cosine = std::max(-1.0, std::min(1.0, -Dot(n[k], n[l])));
-      smallest = std::min(smallest, std::acos(cosine) * 180.0 / Pi);
+      largest = std::max(largest, std::min(1.0, -Dot(n[k], n[l])));
     }
   }
-  return smallest;
+  return largest;
 }
 
 //------------------------------------------------------------------------------
@@ -108,87 +155,134 @@ void TetCut::Cut(const std::vector<double>& points, const std::vector<int>& tets
   Tets_.clear();
   Movable_ = Moved_ = Blocked_ = Sweeps_ = 0;
 
-  // 1. Delete the tets with all four vertices on the removed side.
-  std::vector<int> newId(numPoints, -1);
-  for (int t = 0; t < numTets; ++t)
+  // 1. Delete the tets with all four vertices on the removed side (in
+  // parallel; the first bad id, in tet order, is reported).
+  std::vector<char> keepTet(numTets), keepPoint(numPoints, 0);
+  std::int64_t firstBad = numTets;
+#pragma omp parallel for schedule(static) reduction(min : firstBad)
+  for (std::int64_t t = 0; t < numTets; ++t)
   {
-    const int* v = &tets[4 * static_cast<std::size_t>(t)];
-    bool removed = true;
+    const int* v = &tets[4 * t];
+    bool removed = true, valid = true;
+    for (int a = 0; a < 4; ++a)
+    {
+      valid = valid && v[a] >= 0 && v[a] < numPoints;
+      removed = removed && valid && side[v[a]] > 0.0;
+    }
+    keepTet[t] = valid && !removed;
+    if (!valid)
+    {
+      firstBad = std::min(firstBad, t);
+    }
+  }
+  if (firstBad < numTets)
+  {
+    const int* v = &tets[4 * firstBad];
+    int bad = v[0];
     for (int a = 0; a < 4; ++a)
     {
       if (v[a] < 0 || v[a] >= numPoints)
       {
-        throw Error("TetCut: tet " + std::to_string(t) + " has point id " +
-          std::to_string(v[a]) + " out of range [0, " + std::to_string(numPoints) + ")");
+        bad = v[a];
+        break;
       }
-      removed = removed && side[v[a]] > 0.0;
     }
-    if (!removed)
+    throw Error("TetCut: tet " + std::to_string(firstBad) + " has point id " +
+      std::to_string(bad) + " out of range [0, " + std::to_string(numPoints) + ")");
+  }
+#pragma omp parallel for schedule(static)
+  for (std::int64_t t = 0; t < numTets; ++t)
+  {
+    if (keepTet[t])
     {
-      KeptTets_.push_back(t);
       for (int a = 0; a < 4; ++a)
       {
-        newId[v[a]] = 0;
+#pragma omp atomic write
+        keepPoint[tets[4 * t + a]] = 1;
       }
     }
   }
-  // 2. Drop the orphan vertices and renumber.
-  for (int i = 0; i < numPoints; ++i)
-  {
-    if (newId[i] == 0)
-    {
-      newId[i] = static_cast<int>(KeptPoints_.size());
-      KeptPoints_.push_back(i);
-    }
-  }
+  KeptTets_ = Compact(keepTet);
+  // 2. Drop the orphan vertices and renumber (ids in input order).
+  KeptPoints_ = Compact(keepPoint);
   const int n = static_cast<int>(KeptPoints_.size());
+  const int m = static_cast<int>(KeptTets_.size());
+  std::vector<int> newId(numPoints);
   Points_.resize(3 * static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static)
   for (int k = 0; k < n; ++k)
   {
-    std::copy_n(&points[3 * static_cast<std::size_t>(KeptPoints_[k])], 3, &Points_[3 * k]);
+    newId[KeptPoints_[k]] = k;
+    std::copy_n(&points[3 * static_cast<std::size_t>(KeptPoints_[k])], 3, &Points_[3 * static_cast<std::size_t>(k)]);
   }
-  Tets_.reserve(4 * KeptTets_.size());
-  for (int t : KeptTets_)
+  Tets_.resize(4 * static_cast<std::size_t>(m));
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < m; ++k)
   {
+    const int* v = &tets[4 * static_cast<std::size_t>(KeptTets_[k])];
     for (int a = 0; a < 4; ++a)
     {
-      Tets_.push_back(newId[tets[4 * static_cast<std::size_t>(t) + a]]);
+      Tets_[4 * static_cast<std::size_t>(k) + a] = newId[v[a]];
     }
   }
-  const int m = static_cast<int>(KeptTets_.size());
 
   // 3. Relax the remaining vertices of the removed side (paper Sec. 5.1).
-  std::vector<int> movable;
+  std::vector<char> isMovable(n);
+#pragma omp parallel for schedule(static)
   for (int k = 0; k < n; ++k)
   {
-    if (side[KeptPoints_[k]] > 0.0)
-    {
-      movable.push_back(k);
-    }
+    isMovable[k] = side[KeptPoints_[k]] > 0.0;
   }
+  const std::vector<int> movable = Compact(isMovable);
   Movable_ = static_cast<int>(movable.size());
   if (m == 0 || Iterations_ <= 0 || movable.empty())
   {
     return;
   }
-  // Point -> tets of the cut mesh (CSR).
-  std::vector<int> offsets(n + 1, 0);
-  for (int v : Tets_)
+  // The tets a movable vertex belongs to all straddle the cut (kept, with a
+  // vertex on the removed side): only those are needed, in kept order.
+  std::vector<char> isStraddling(m);
+#pragma omp parallel for schedule(static)
+  for (int t = 0; t < m; ++t)
   {
-    ++offsets[v + 1];
+    const int* v = &Tets_[4 * static_cast<std::size_t>(t)];
+    isStraddling[t] = isMovable[v[0]] || isMovable[v[1]] || isMovable[v[2]] || isMovable[v[3]];
   }
-  for (int k = 0; k < n; ++k)
+  const std::vector<int> straddling = Compact(isStraddling);
+  // Movable vertex -> its tets (CSR over the movable vertices, tets ascending).
+  std::vector<int> movableId(n, -1);
+  for (std::size_t j = 0; j < movable.size(); ++j)
   {
-    offsets[k + 1] += offsets[k];
+    movableId[movable[j]] = static_cast<int>(j);
   }
-  std::vector<int> incident(offsets[n]);
+  std::vector<int> offsets(movable.size() + 1, 0);
+  for (int t : straddling)
+  {
+    for (int a = 0; a < 4; ++a)
+    {
+      const int j = movableId[Tets_[4 * static_cast<std::size_t>(t) + a]];
+      if (j >= 0)
+      {
+        ++offsets[j + 1];
+      }
+    }
+  }
+  for (std::size_t j = 0; j < movable.size(); ++j)
+  {
+    offsets[j + 1] += offsets[j];
+  }
+  std::vector<int> incident(offsets.back());
   {
     std::vector<int> fill(offsets.begin(), offsets.end() - 1);
-    for (int t = 0; t < m; ++t)
+    for (int t : straddling)
     {
       for (int a = 0; a < 4; ++a)
       {
-        incident[fill[Tets_[4 * t + a]]++] = t;
+        const int j = movableId[Tets_[4 * static_cast<std::size_t>(t) + a]];
+        if (j >= 0)
+        {
+          incident[fill[j]++] = t;
+        }
       }
     }
   }
@@ -199,11 +293,11 @@ void TetCut::Cut(const std::vector<double>& points, const std::vector<int>& tets
   {
     const int i = movable[j];
     const std::size_t begin = ring.size();
-    for (int e = offsets[i]; e < offsets[i + 1]; ++e)
+    for (int e = offsets[j]; e < offsets[j + 1]; ++e)
     {
       for (int a = 0; a < 4; ++a)
       {
-        const int w = Tets_[4 * incident[e] + a];
+        const int w = Tets_[4 * static_cast<std::size_t>(incident[e]) + a];
         if (w != i)
         {
           ring.push_back(w);
@@ -215,6 +309,7 @@ void TetCut::Cut(const std::vector<double>& points, const std::vector<int>& tets
     ringOffsets[j + 1] = static_cast<int>(ring.size());
   }
 
+  const double minDihedralCosine = std::cos(MinDihedral_ * Pi / 180.0);
   std::vector<char> everMoved(movable.size(), 0);
   auto P = [this](int k) { return &Points_[3 * static_cast<std::size_t>(k)]; };
   for (int sweep = 0; sweep < Iterations_; ++sweep)
@@ -244,19 +339,21 @@ void TetCut::Cut(const std::vector<double>& points, const std::vector<int>& tets
       {
         continue; // at the mean already: nothing to do, not blocked
       }
-      // Never cross the cutting surface.
+      // Never cross the cutting surface. Angles are compared by their
+      // cosines (acos is decreasing): the smallest dihedral angle has the
+      // largest cosine.
       bool accept = F(trial) >= 0.0;
-      for (int e = offsets[i]; accept && e < offsets[i + 1]; ++e)
+      for (int e = offsets[j]; accept && e < offsets[j + 1]; ++e)
       {
-        const int* v = &Tets_[4 * incident[e]];
-        const double before =
-          MinimumDihedralAngle(P(v[0]), P(v[1]), P(v[2]), P(v[3]));
+        const int* v = &Tets_[4 * static_cast<std::size_t>(incident[e])];
         std::copy_n(trial, 3, x);
         const double volume = SignedVolume(P(v[0]), P(v[1]), P(v[2]), P(v[3]));
         const double after =
-          volume > 0.0 ? MinimumDihedralAngle(P(v[0]), P(v[1]), P(v[2]), P(v[3])) : 0.0;
+          volume > 0.0 ? LargestDihedralCosine(P(v[0]), P(v[1]), P(v[2]), P(v[3])) : 1.0;
         std::copy_n(old, 3, x);
-        accept = volume > 0.0 && (after >= MinDihedral_ || after >= before);
+        accept = volume > 0.0 &&
+          (after <= minDihedralCosine ||
+            after <= LargestDihedralCosine(P(v[0]), P(v[1]), P(v[2]), P(v[3])));
       }
       if (accept)
       {

@@ -75,6 +75,9 @@ public:
   /// Smallest of the six dihedral angles of a tet (degrees).
   static double MinimumDihedralAngle(
     const double* a, const double* b, const double* c, const double* d);
+  /// Cosine of the smallest dihedral angle of a tet (the largest of the six
+  /// cosines; 1 for a degenerate tet).
+  static double LargestDihedralCosine(const double* a, const double* b, const double* c, const double* d);
 
 private:
   double Rho_ = 0.1;

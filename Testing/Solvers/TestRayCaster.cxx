@@ -330,6 +330,42 @@ TEST(RayCaster, SphereAgreesWithBruteForce)
   EXPECT_LT(hits, 3900);
 }
 
+// The build splits large ranges into OpenMP tasks and splices their nodes:
+// the tree must be the serial one (same nodes, depth and answers) for any
+// number of threads. 33,000 triangles: several levels above the task grain.
+TEST(RayCaster, ParallelBuildEqualsSerial)
+{
+  const double center[3] = { 0.0, 0.0, 0.0 };
+  const Surface sphere = UVSphere(120, 140, 1.0, center);
+  ASSERT_GT(sphere.NumberOfTriangles(), 4 * 8192);
+  const int saved = omp_get_max_threads();
+  RayCaster casters[2];
+  omp_set_num_threads(1);
+  casters[0].Build(sphere.Points, sphere.Triangles);
+  omp_set_num_threads(2);
+  casters[1].Build(sphere.Points, sphere.Triangles);
+  omp_set_num_threads(saved);
+  EXPECT_EQ(casters[0].GetNumberOfNodes(), casters[1].GetNumberOfNodes());
+  EXPECT_EQ(casters[0].GetDepth(), casters[1].GetDepth());
+  std::mt19937_64 rng(5);
+  const std::vector<Ray> rays = RandomRays(3000, -2.0, 2.0, 3.0, rng);
+  int hits = 0;
+  for (const Ray& ray : rays)
+  {
+    double t[2] = { -1.0, -1.0 };
+    int tri[2] = { -1, -1 };
+    bool hit[2];
+    for (int k = 0; k < 2; ++k)
+      hit[k] = casters[k].FirstHit(ray.Origin, ray.Direction, ray.TMax, t[k], tri[k]);
+    ASSERT_EQ(hit[0], hit[1]);
+    EXPECT_EQ(t[0], t[1]);
+    EXPECT_EQ(tri[0], tri[1]);
+    hits += hit[0];
+  }
+  EXPECT_GT(hits, 500); // not vacuous
+  ExpectAgreement(sphere, casters[1], rays);
+}
+
 TEST(RayCaster, TriangleSoupAgreesWithBruteForce)
 {
   std::mt19937_64 rng(11);

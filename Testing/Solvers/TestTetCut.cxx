@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -281,6 +283,44 @@ TEST(TetCut, RandomPlanesAndSpheresKeepTheInvariants)
   // The checks above are not vacuous: vertices moved, and some were blocked.
   EXPECT_GT(moved, 50);
   EXPECT_GT(blocked, 0);
+}
+
+// Classification and compaction run on OpenMP threads: the output (kept
+// tets and points, renumbered tets, relaxed coordinates, counts) is the
+// same for 1 and 2 threads, and the kept tets are exactly the tets with a
+// vertex on the kept side (F <= 0), in input order.
+TEST(TetCut, ParallelEqualsSerial)
+{
+  const MeshData mesh = OrientedBox(12, 11, 10, 0.3, 17);
+  const double o[3] = { 6.1, 5.3, 4.9 }, n[3] = { 0.7, -0.4, 0.3 };
+  const TetCut::SideFunction F = Plane(o, n);
+  std::vector<double> side(mesh.NumberOfPoints());
+  for (int i = 0; i < mesh.NumberOfPoints(); ++i)
+    side[i] = F(&mesh.Points[3 * i]);
+  std::vector<int> expectedTets;
+  for (int t = 0; t < mesh.NumberOfTets(); ++t)
+  {
+    bool removed = true;
+    for (int a = 0; a < 4; ++a)
+      removed = removed && side[mesh.Tets[4 * t + a]] > 0.0;
+    if (!removed)
+      expectedTets.push_back(t);
+  }
+  const int saved = omp_get_max_threads();
+  TetCut cuts[2];
+  for (int k = 0; k < 2; ++k)
+  {
+    omp_set_num_threads(k + 1);
+    cuts[k].Cut(mesh.Points, mesh.Tets, side, F);
+  }
+  omp_set_num_threads(saved);
+  EXPECT_EQ(cuts[0].GetKeptTets(), expectedTets);
+  EXPECT_EQ(cuts[1].GetKeptTets(), expectedTets);
+  EXPECT_EQ(cuts[0].GetKeptPoints(), cuts[1].GetKeptPoints());
+  EXPECT_EQ(cuts[0].GetTets(), cuts[1].GetTets());
+  EXPECT_EQ(cuts[0].GetPoints(), cuts[1].GetPoints());
+  EXPECT_EQ(cuts[0].GetNumberOfMovedVertices(), cuts[1].GetNumberOfMovedVertices());
+  EXPECT_GT(cuts[1].GetNumberOfMovedVertices(), 0);
 }
 
 TEST(TetCut, NoRelaxationMovesNothing)
