@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -55,7 +56,7 @@ struct AggregationMultigridSolver::Internals
     std::vector<float> Single;
     /// 1 / sum_j |a_ij| per vertex and channel (interleaved).
     Eigen::VectorXd InverseL1;
-    mutable Eigen::VectorXd B, X, R, D, T;
+    mutable Eigen::VectorXd B, X, R, D, T, Saved, Sum;
   };
   std::vector<Level> Levels;
   std::array<Eigen::SimplicialLDLT<ColMatrix>, NC> Coarsest;
@@ -345,6 +346,7 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
   const int L = static_cast<int>(levels.size());
   Internal_->VCycleFlops = 0.0;
   const int degree = std::max(1, Degree_);
+  std::vector<double> levelFlops(L, 0.0);
   for (int l = 0; l < L; ++l)
   {
     auto& lev = levels[l];
@@ -392,7 +394,7 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
     }
     auto value = [&](std::size_t k, int c)
     { return l == 0 ? system.Values[c][k] : lev.Values[3 * k + c]; };
-    for (auto* v : { &lev.B, &lev.X, &lev.R, &lev.D, &lev.T })
+    for (auto* v : { &lev.B, &lev.X, &lev.R, &lev.D, &lev.T, &lev.Saved, &lev.Sum })
     {
       v->setZero(3 * static_cast<long long>(n));
     }
@@ -432,7 +434,7 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
         Internal_->CoarsestFactorNonZeros =
           static_cast<std::size_t>(ldlt.matrixL().nestedExpression().nonZeros());
       }
-      Internal_->VCycleFlops += 2.0 * Internal_->CoarsestFactorNonZeros + 2.0 * n;
+      levelFlops[l] = 2.0 * Internal_->CoarsestFactorNonZeros + 2.0 * n;
       continue;
     }
     // Single-precision values and the l1 diagonal 1 / sum_j |a_ij|, checking
@@ -484,8 +486,22 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
     }
     // Multiply-adds per channel of one visit: 2 * degree products with A,
     // restriction and prolongation, ~4 vector operations per Chebyshev step.
-    Internal_->VCycleFlops +=
-      2.0 * degree * static_cast<double>(nnz) + 2.0 * n + 2.0 * degree * 4.0 * n;
+    levelFlops[l] = 2.0 * degree * static_cast<double>(nnz) + 2.0 * n + 2.0 * degree * 4.0 * n;
+  }
+  // Visits of each level per cycle on level 0 (W-cycle: gamma per visit of
+  // the finer level, plus gamma - 1 residuals there).
+  double visits = 1.0;
+  for (int l = 0; l < L; ++l)
+  {
+    Internal_->VCycleFlops += visits * levelFlops[l];
+    const int gamma = l + 1 < L - 1 ? std::max(1, CycleIndex_) : 1;
+    if (l + 1 < L)
+    {
+      Internal_->VCycleFlops += visits * (gamma - 1) *
+        (static_cast<double>(levels[l + 1].Pattern.Columns.size()) +
+          2.0 * levels[l + 1].Pattern.Size);
+    }
+    visits *= gamma;
   }
 }
 
@@ -548,8 +564,8 @@ void AggregationMultigridSolver::ApplyPreconditioner(
     }
   };
 
-  levels[0].B = rhs;
-  for (int l = 0; l < L; ++l)
+  // One cycle on level l: X_l ~ A_l^-1 B_l.
+  std::function<void(int)> cycle = [&](int l)
   {
     const auto& lev = levels[l];
     if (l == L - 1)
@@ -568,7 +584,7 @@ void AggregationMultigridSolver::ApplyPreconditioner(
           lev.X[3 * static_cast<long long>(i) + c] = xc[i];
         }
       }
-      break;
+      return;
     }
     // Pre-smoothing from zero, residual, restriction b_c = P^T r (sums over
     // the aggregates).
@@ -594,25 +610,49 @@ void AggregationMultigridSolver::ApplyPreconditioner(
       cb[3 * static_cast<std::size_t>(a) + 1] = s1;
       cb[3 * static_cast<std::size_t>(a) + 2] = s2;
     }
-  }
-  for (int l = L - 2; l >= 0; --l)
-  {
-    // Coarse correction x += s P x_c, post-smoothing.
-    const auto& lev = levels[l];
-    const int n = lev.Pattern.Size;
-    const double* xc = levels[l + 1].X.data();
-    double* x = lev.X.data();
-    const int* agg = lev.Aggregate.data();
-#pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; ++i)
+    // Coarse problem: one cycle, or (levels below level 0 that are not the
+    // coarsest) `gamma` cycles as a stationary iteration from zero (W-cycle
+    // for gamma = 2: still a fixed symmetric operator, so CG stays valid).
+    const int gamma = l + 1 < L - 1 ? std::max(1, CycleIndex_) : 1;
+    if (gamma == 1)
     {
-      const double* c = xc + 3 * static_cast<std::size_t>(agg[i]);
-      x[3 * static_cast<std::size_t>(i)] += scale * c[0];
-      x[3 * static_cast<std::size_t>(i) + 1] += scale * c[1];
-      x[3 * static_cast<std::size_t>(i) + 2] += scale * c[2];
+      cycle(l + 1);
+    }
+    else
+    {
+      coarse.Saved = coarse.B;
+      coarse.Sum.setZero(coarse.B.size());
+      for (int g = 0; g < gamma; ++g)
+      {
+        if (g > 0)
+        {
+          MultiplyFloat(coarse.Pattern, coarse.Single.data(), coarse.Sum.data(), coarse.T.data());
+          coarse.B = coarse.Saved - coarse.T;
+        }
+        cycle(l + 1);
+        coarse.Sum += coarse.X;
+      }
+      coarse.X = coarse.Sum;
+    }
+    // Coarse correction x += s P x_c, post-smoothing.
+    {
+      const int n = lev.Pattern.Size;
+      const double* xc = coarse.X.data();
+      double* x = lev.X.data();
+      const int* agg = lev.Aggregate.data();
+#pragma omp parallel for schedule(static)
+      for (int i = 0; i < n; ++i)
+      {
+        const double* c = xc + 3 * static_cast<std::size_t>(agg[i]);
+        x[3 * static_cast<std::size_t>(i)] += scale * c[0];
+        x[3 * static_cast<std::size_t>(i) + 1] += scale * c[1];
+        x[3 * static_cast<std::size_t>(i) + 2] += scale * c[2];
+      }
     }
     smooth(lev, false);
-  }
+  };
+  levels[0].B = rhs;
+  cycle(0);
   out = levels[0].X;
 }
 

@@ -264,10 +264,11 @@ TEST(AggregationMultigrid, MatchesCholeskyOnRandomMeshesAndMaterials)
     bool Fem;
     int Degree;
     double Scale;
+    int Cycle;
   };
-  std::vector<Case> cases{ { CubeMesh(10, 5.0, 0.3, 21), 22, false, 1, 1.5 },
-    { tt::BoxMesh(14, 6, 5, 8.0, 3.0, 2.5, 0.25, 23), 24, false, 2, 1.0 },
-    { CubeMesh(8, 2.0, 0.2, 25), 26, true, 3, 1.8 }, { TwoPieces(6), 27, false, 1, 1.5 } };
+  std::vector<Case> cases{ { CubeMesh(10, 5.0, 0.3, 21), 22, false, 1, 1.5, 2 },
+    { tt::BoxMesh(14, 6, 5, 8.0, 3.0, 2.5, 0.25, 23), 24, false, 2, 1.0, 1 },
+    { CubeMesh(8, 2.0, 0.2, 25), 26, true, 3, 1.8, 3 }, { TwoPieces(6), 27, false, 1, 1.5, 1 } };
   for (const auto& test : cases)
   {
     Problem p(test.Data, test.Seed, test.Fem);
@@ -275,6 +276,7 @@ TEST(AggregationMultigrid, MatchesCholeskyOnRandomMeshesAndMaterials)
     auto solver = MakeSolver();
     solver->SetSmootherDegree(test.Degree);
     solver->SetCoarseCorrectionScale(test.Scale);
+    solver->SetCycleIndex(test.Cycle);
     solver->SetRelTol(1e-10);
     solver->Setup(p.System, &p.Mesh, true);
     EXPECT_GE(solver->GetNumberOfLevels(), 2);
@@ -301,6 +303,7 @@ TEST(AggregationMultigrid, PreconditionerIsSymmetricPositive)
   {
     auto solver = MakeSolver(20);
     solver->SetSmootherDegree(degree);
+    solver->SetCycleIndex(degree == 1 ? 2 : 1); // W- and V-cycle
     solver->Setup(p.System, &p.Mesh, true);
     const int n = p.System.NumberOfUnknowns;
     std::mt19937_64 rng(5);
