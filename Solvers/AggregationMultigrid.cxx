@@ -126,7 +126,7 @@ void AggregationMultigridSolver::BuildHierarchy(
   // aggregation need both).
   {
     long long badRow = -1, badColumn = 0;
-#pragma omp parallel for num_threads(nt) schedule(static) reduction(max : badRow)
+#pragma omp parallel for num_threads(nt) schedule(static) reduction(max : badRow) if(n0 > ParallelThreshold)
     for (int i = 0; i < n0; ++i)
     {
       bool diagonal = false, ok = system.RowOffsets[i + 1] >= system.RowOffsets[i];
@@ -169,7 +169,7 @@ void AggregationMultigridSolver::BuildHierarchy(
     l0.Pattern.Offsets = system.RowOffsets;
     l0.Pattern.Columns = system.ColumnIndices;
     l0.MeshIds.resize(n0);
-#pragma omp parallel for num_threads(nt) schedule(static)
+#pragma omp parallel for num_threads(nt) schedule(static) if(n0 > ParallelThreshold)
     for (int i = 0; i < n0; ++i)
     {
       l0.MeshIds[i] = i;
@@ -189,7 +189,8 @@ void AggregationMultigridSolver::BuildHierarchy(
     // set of G^l picked by the hashed random codes (maximal: every dropped
     // vertex has a retained neighbour).
     std::vector<char> retained;
-    MultiresHierarchy::IndependentSet(g, std::vector<char>(n, 1), l, retained, nt);
+    MultiresHierarchy::IndependentSet(
+      g, std::vector<char>(n, 1), l, retained, n > ParallelThreshold ? nt : 1);
     std::vector<int> coarseId(n, -1);
     int nc = 0;
     for (int i = 0; i < n; ++i)
@@ -208,7 +209,7 @@ void AggregationMultigridSolver::BuildHierarchy(
     // i.e. the nearest one (ties: the smaller coarse id).
     fine.Aggregate.assign(n, -1);
     const std::vector<int>& meshIds = fine.MeshIds;
-#pragma omp parallel for num_threads(nt) schedule(static)
+#pragma omp parallel for num_threads(nt) schedule(static) if(n > ParallelThreshold)
     for (int i = 0; i < n; ++i)
     {
       if (retained[i])
@@ -263,7 +264,7 @@ void AggregationMultigridSolver::BuildHierarchy(
     coarse.MeshIds.resize(nc);
     std::vector<std::vector<int>> rows(nc);
     const int* agg = fine.Aggregate.data();
-#pragma omp parallel num_threads(nt)
+#pragma omp parallel num_threads(nt) if(nc > ParallelThreshold)
     {
       std::vector<int> mark(nc, -1);
 #pragma omp for schedule(dynamic, 512)
@@ -297,7 +298,7 @@ void AggregationMultigridSolver::BuildHierarchy(
     }
     coarse.Pattern.Columns.resize(coarse.Pattern.Offsets.back());
     fine.CoarseSlot.resize(g.Columns.size());
-#pragma omp parallel num_threads(nt)
+#pragma omp parallel num_threads(nt) if(nc > ParallelThreshold)
     {
       std::vector<int> slot(nc, -1);
 #pragma omp for schedule(dynamic, 512)
@@ -366,7 +367,7 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
       const double* f2 = l == 1 ? system.Values[2].data() : nullptr;
       const double* fv = fine.Values.data();
       double* cv = lev.Values.data();
-#pragma omp parallel for schedule(dynamic, 256)
+#pragma omp parallel for schedule(dynamic, 256) if(n > ParallelThreshold)
       for (int a = 0; a < n; ++a)
       {
         for (int m = fine.MemberOffsets[a]; m < fine.MemberOffsets[a + 1]; ++m)
@@ -442,7 +443,7 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
     lev.Single.resize(3 * nnz);
     lev.InverseL1.resize(3 * static_cast<long long>(n));
     long long badRow = -1;
-#pragma omp parallel for schedule(static) reduction(max : badRow)
+#pragma omp parallel for schedule(static) reduction(max : badRow) if(n > ParallelThreshold)
     for (int i = 0; i < n; ++i)
     {
       double s[NC] = { 0.0, 0.0, 0.0 };
@@ -528,7 +529,7 @@ void AggregationMultigridSolver::ApplyPreconditioner(
     const double* B = lev.B.data();
     if (zeroStart)
     {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(m > ParallelThreshold)
       for (long long k = 0; k < m; ++k)
       {
         D[k] = inv[k] * B[k] / theta;
@@ -539,7 +540,7 @@ void AggregationMultigridSolver::ApplyPreconditioner(
     else
     {
       MultiplyFloat(lev.Pattern, lev.Single.data(), X, T);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(m > ParallelThreshold)
       for (long long k = 0; k < m; ++k)
       {
         R[k] = B[k] - T[k];
@@ -554,7 +555,7 @@ void AggregationMultigridSolver::ApplyPreconditioner(
       const double rhoNew = 1.0 / (2.0 * sigma - rho);
       const double a = rhoNew * rho, b = 2.0 * rhoNew / delta;
       rho = rhoNew;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(m > ParallelThreshold)
       for (long long k = 0; k < m; ++k)
       {
         R[k] -= T[k];
@@ -595,7 +596,7 @@ void AggregationMultigridSolver::ApplyPreconditioner(
     const int nc = coarse.Pattern.Size;
     const double* R = lev.R.data();
     double* cb = coarse.B.data();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(nc > ParallelThreshold)
     for (int a = 0; a < nc; ++a)
     {
       double s0 = 0.0, s1 = 0.0, s2 = 0.0;
@@ -640,7 +641,7 @@ void AggregationMultigridSolver::ApplyPreconditioner(
       const double* xc = coarse.X.data();
       double* x = lev.X.data();
       const int* agg = lev.Aggregate.data();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
       for (int i = 0; i < n; ++i)
       {
         const double* c = xc + 3 * static_cast<std::size_t>(agg[i]);

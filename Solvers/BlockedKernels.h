@@ -29,6 +29,11 @@ namespace blocked
 constexpr int NC = NumberOfChannels;
 static_assert(NC == 3, "the blocked kernels assume three channels");
 
+/// Loops over fewer rows than this run on one thread: on small (coarse)
+/// levels a parallel region costs more than the work, and much more when
+/// the cores are shared with other processes. Results do not depend on it.
+constexpr long long ParallelThreshold = 8192;
+
 /// y = A x for the three channels of the level-0 system (one pass over the
 /// pattern; x and y interleaved, 3 values per vertex).
 inline void MultiplySystem(const DiffusionSystem& s, const double* x, double* y)
@@ -39,7 +44,7 @@ inline void MultiplySystem(const DiffusionSystem& s, const double* x, double* y)
   const double* v0 = s.Values[0].data();
   const double* v1 = s.Values[1].data();
   const double* v2 = s.Values[2].data();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
   for (int i = 0; i < n; ++i)
   {
     double a0 = 0.0, a1 = 0.0, a2 = 0.0;
@@ -62,7 +67,7 @@ inline void MultiplyFloat(const CsrPattern& p, const float* v, const double* x, 
   const int n = p.Size;
   const int* ro = p.Offsets.data();
   const int* ci = p.Columns.data();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
   for (int i = 0; i < n; ++i)
   {
     double a0 = 0.0, a1 = 0.0, a2 = 0.0;
@@ -100,7 +105,7 @@ inline std::array<double, NC> Dot3(const Eigen::VectorXd& a, const Eigen::Vector
     return { s0, s1, s2 };
   }
   std::vector<double> partial(3 * static_cast<std::size_t>(chunks));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(chunks > 2)
   for (long long q = 0; q < chunks; ++q)
   {
     double s0 = 0.0, s1 = 0.0, s2 = 0.0;
@@ -131,7 +136,7 @@ inline void Interleave(const std::array<Eigen::VectorXd, NC>& in, Eigen::VectorX
 {
   const long long n = in[0].size();
   out.resize(3 * n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
   for (long long i = 0; i < n; ++i)
   {
     for (int c = 0; c < NC; ++c)
@@ -148,7 +153,7 @@ inline void Deinterleave(const Eigen::VectorXd& in, std::array<Eigen::VectorXd, 
   {
     out[c].resize(n);
   }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
   for (long long i = 0; i < n; ++i)
   {
     for (int c = 0; c < NC; ++c)
@@ -220,7 +225,7 @@ inline bool BlockedPCG(const DiffusionSystem& system, Precondition precondition,
     {
       alpha[c] = active[c] && pq[c] != 0.0 ? rz[c] / pq[c] : 0.0;
     }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
     for (long long i = 0; i < static_cast<long long>(n); ++i)
     {
       for (int c = 0; c < NC; ++c)
@@ -264,7 +269,7 @@ inline bool BlockedPCG(const DiffusionSystem& system, Precondition precondition,
         rz[c] = rzNew[c];
       }
     }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
     for (long long i = 0; i < static_cast<long long>(n); ++i)
     {
       for (int c = 0; c < NC; ++c)
