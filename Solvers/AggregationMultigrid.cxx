@@ -395,9 +395,13 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
     }
     auto value = [&](std::size_t k, int c)
     { return l == 0 ? system.Values[c][k] : lev.Values[3 * k + c]; };
+    // Work vectors (every cycle writes them before reading them).
     for (auto* v : { &lev.B, &lev.X, &lev.R, &lev.D, &lev.T, &lev.Saved, &lev.Sum })
     {
-      v->setZero(3 * static_cast<long long>(n));
+      if (v->size() != 3 * static_cast<long long>(n))
+      {
+        v->setZero(3 * static_cast<long long>(n));
+      }
     }
     if (l == L - 1)
     {
