@@ -14,6 +14,7 @@
 #include "CommandLine.h"
 #include "HypreMPI.h"
 
+#include "AggregationMultigrid.h"
 #include "ConjugateGradient.h"
 #include "DiscreteDivergence.h"
 #include "Error.h"
@@ -330,6 +331,14 @@ SolverRow BenchSolver(const std::string& name, Problem& p, int runs,
   row.SetupMs = Median(setup);
   row.ValuesSetupMs = Median(values);
   row.MemoryBytes = static_cast<double>(solver->GetMemoryBytes());
+  if (const auto* agg = dynamic_cast<const translucency::AggregationMultigridSolver*>(solver.get()))
+  {
+    std::cout << "  " << name << " hierarchy: " << agg->GetNumberOfLevels() << " levels (";
+    for (int l = 0; l < agg->GetNumberOfLevels(); ++l)
+      std::cout << (l ? " / " : "") << agg->GetLevelSize(l);
+    std::cout << " vertices), operator complexity " << std::fixed << std::setprecision(2)
+              << agg->GetOperatorComplexity() << std::defaultfloat << "\n";
+  }
 
   // Cold: calibrate, then time at the chosen tolerance.
   p.System.RightHandSide = p.Rhs0;

@@ -362,11 +362,24 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
       const auto& fine = levels[l - 1];
       const CsrPattern& fp = fine.Pattern;
       lev.Values.assign(3 * nnz, 0.0);
-      const double* f0 = l == 1 ? system.Values[0].data() : nullptr;
-      const double* f1 = l == 1 ? system.Values[1].data() : nullptr;
-      const double* f2 = l == 1 ? system.Values[2].data() : nullptr;
-      const double* fv = fine.Values.data();
+      // Fine values: channel c of non-zero k is f[c][k * fs].
+      const double* f[NC];
+      std::size_t fs = 3;
+      if (l == 1)
+      {
+        f[0] = system.Values[0].data();
+        f[1] = system.Values[1].data();
+        f[2] = system.Values[2].data();
+        fs = 1;
+      }
+      else
+      {
+        f[0] = fine.Values.data();
+        f[1] = f[0] + 1;
+        f[2] = f[0] + 2;
+      }
       double* cv = lev.Values.data();
+      const int* slots = fine.CoarseSlot.data();
 #pragma omp parallel for schedule(dynamic, 256) if(n > ParallelThreshold)
       for (int a = 0; a < n; ++a)
       {
@@ -375,20 +388,11 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
           const int i = fine.Members[m];
           for (int k = fp.Offsets[i]; k < fp.Offsets[i + 1]; ++k)
           {
-            double* out = cv + 3 * static_cast<std::size_t>(fine.CoarseSlot[k]);
-            if (f0)
-            {
-              out[0] += f0[k];
-              out[1] += f1[k];
-              out[2] += f2[k];
-            }
-            else
-            {
-              const double* in = fv + 3 * static_cast<std::size_t>(k);
-              out[0] += in[0];
-              out[1] += in[1];
-              out[2] += in[2];
-            }
+            double* out = cv + 3 * static_cast<std::size_t>(slots[k]);
+            const std::size_t q = static_cast<std::size_t>(k) * fs;
+            out[0] += f[0][q];
+            out[1] += f[1][q];
+            out[2] += f[2][q];
           }
         }
       }
@@ -447,25 +451,49 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
     lev.Single.resize(3 * nnz);
     lev.InverseL1.resize(3 * static_cast<long long>(n));
     long long badRow = -1;
+    const double* v[NC];
+    std::size_t vs = 3;
+    if (l == 0)
+    {
+      v[0] = system.Values[0].data();
+      v[1] = system.Values[1].data();
+      v[2] = system.Values[2].data();
+      vs = 1;
+    }
+    else
+    {
+      v[0] = lev.Values.data();
+      v[1] = v[0] + 1;
+      v[2] = v[0] + 2;
+    }
+    float* single = lev.Single.data();
 #pragma omp parallel for schedule(static) reduction(max : badRow) if(n > ParallelThreshold)
     for (int i = 0; i < n; ++i)
     {
-      double s[NC] = { 0.0, 0.0, 0.0 };
+      double s0 = 0.0, s1 = 0.0, s2 = 0.0;
       bool ok = true;
       for (int k = p.Offsets[i]; k < p.Offsets[i + 1]; ++k)
       {
-        for (int c = 0; c < NC; ++c)
+        const std::size_t q = static_cast<std::size_t>(k) * vs;
+        const double a0 = v[0][q], a1 = v[1][q], a2 = v[2][q];
+        float* out = single + 3 * static_cast<std::size_t>(k);
+        out[0] = static_cast<float>(a0);
+        out[1] = static_cast<float>(a1);
+        out[2] = static_cast<float>(a2);
+        s0 += std::abs(a0);
+        s1 += std::abs(a1);
+        s2 += std::abs(a2);
+        if (p.Columns[k] == i)
         {
-          const double v = value(static_cast<std::size_t>(k), c);
-          lev.Single[3 * static_cast<std::size_t>(k) + c] = static_cast<float>(v);
-          s[c] += std::abs(v);
-          ok = ok && std::isfinite(v) && (p.Columns[k] != i || v > 0.0);
+          ok = a0 > 0.0 && a1 > 0.0 && a2 > 0.0;
         }
       }
-      for (int c = 0; c < NC; ++c)
-      {
-        lev.InverseL1[3 * static_cast<long long>(i) + c] = s[c] > 0.0 ? 1.0 / s[c] : 0.0;
-      }
+      // A NaN or infinite entry makes its row's sum of |a_ij| non-finite.
+      ok = ok && std::isfinite(s0) && std::isfinite(s1) && std::isfinite(s2);
+      double* inv = lev.InverseL1.data() + 3 * static_cast<std::size_t>(i);
+      inv[0] = s0 > 0.0 ? 1.0 / s0 : 0.0;
+      inv[1] = s1 > 0.0 ? 1.0 / s1 : 0.0;
+      inv[2] = s2 > 0.0 ? 1.0 / s2 : 0.0;
       if (!ok)
       {
         badRow = std::max<long long>(badRow, i);
