@@ -882,7 +882,7 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
       { "spmv_1ch_ms", spmvMs }, { "spmv_bytes", spmvBytes },
       { "spmv_bandwidth_bound_ms", boundMs }, { "stream_triad_gbs", bandwidth },
       { "reference_residual", std::max(res0, res1) }, { "target_error", TargetError },
-      { "default_solver", defaultSolver }, { "load_average_1min", LoadAverage() },
+      { "default_solver", defaultSolver }, { "cut_solver", cutSolver }, { "load_average_1min", LoadAverage() },
       { "curve", curveJson } };
     for (const SolverRow& r : rows)
       entry["solvers"].push_back(RowJson(r, topologyMs));
