@@ -125,7 +125,7 @@ void AggregationMultigridSolver::BuildHierarchy(
   // Column indices in range and a diagonal in every row (the smoother and the
   // aggregation need both).
   {
-    long long badRow = -1, badColumn = 0;
+    long long badRow = -1;
 #pragma omp parallel for num_threads(nt) schedule(static) reduction(max : badRow) if(n0 > ParallelThreshold)
     for (int i = 0; i < n0; ++i)
     {
@@ -143,7 +143,6 @@ void AggregationMultigridSolver::BuildHierarchy(
     }
     if (badRow >= 0)
     {
-      (void)badColumn;
       std::ostringstream os;
       os << GetName() << ": row " << badRow
          << " of the system has a column out of range, decreasing offsets or no diagonal entry";
@@ -623,10 +622,10 @@ void AggregationMultigridSolver::ApplyPreconditioner(
     // the aggregates).
     smooth(lev, true);
     MultiplyFloat(lev.Pattern, lev.Single.data(), lev.X.data(), lev.T.data());
-    lev.R = lev.B - lev.T;
     const auto& coarse = levels[l + 1];
     const int nc = coarse.Pattern.Size;
-    const double* R = lev.R.data();
+    const double* B = lev.B.data();
+    const double* T = lev.T.data();
     double* cb = coarse.B.data();
 #pragma omp parallel for schedule(static) if(nc > ParallelThreshold)
     for (int a = 0; a < nc; ++a)
@@ -634,10 +633,11 @@ void AggregationMultigridSolver::ApplyPreconditioner(
       double s0 = 0.0, s1 = 0.0, s2 = 0.0;
       for (int m = lev.MemberOffsets[a]; m < lev.MemberOffsets[a + 1]; ++m)
       {
-        const double* r = R + 3 * static_cast<std::size_t>(lev.Members[m]);
-        s0 += r[0];
-        s1 += r[1];
-        s2 += r[2];
+        // r = b - A x of the member, summed without storing r.
+        const std::size_t q = 3 * static_cast<std::size_t>(lev.Members[m]);
+        s0 += B[q] - T[q];
+        s1 += B[q + 1] - T[q + 1];
+        s2 += B[q + 2] - T[q + 2];
       }
       cb[3 * static_cast<std::size_t>(a)] = s0;
       cb[3 * static_cast<std::size_t>(a) + 1] = s1;

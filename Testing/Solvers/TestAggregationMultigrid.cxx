@@ -533,6 +533,12 @@ TEST(AggregationMultigrid, BadInput)
   other.Values[0][other.RowOffsets[7]] = std::nan("");
   message = tt::ErrorMessage([&] { solver->Setup(other, &p.Mesh, true); });
   EXPECT_TRUE(tt::Contains(message, "row 7")) << message;
+  // A column index out of range (row 9) when the pattern is new.
+  other = p.System;
+  other.ColumnIndices[other.RowOffsets[9]] = p.System.NumberOfUnknowns + 5;
+  message = tt::ErrorMessage([&] { solver->Setup(other, &p.Mesh, true); });
+  EXPECT_TRUE(tt::Contains(message, "row 9")) << message;
+  EXPECT_TRUE(tt::Contains(message, "out of range")) << message;
   // A mesh that does not match the system.
   Problem small(CubeMesh(2, 1.0), 61);
   message = tt::ErrorMessage([&] { solver->Setup(p.System, &small.Mesh, true); });
