@@ -75,7 +75,8 @@ const char* const RenderHelp = R"(
 translucency render --mesh FILE [scene options] [options]
   --solver NAME            divergence (default), fem, quadgraph, grid, montecarlo
   --linear-solver NAME     linear solver (default: the solver's own); divergence/fem:
-                           cg-jacobi (default), transcut-multires, multigrid-cg, ...;
+                           cg-jacobi (default), transcut-multires, multigrid-cg,
+                           multigrid-agg, ...;
                            quadgraph/grid: bicgstab (default), relaxation
   --grid-spacing H         voxel spacing of the grid solver, mm (default: automatic)
   --photons N              photon budget of montecarlo (default 1000000)

@@ -1,5 +1,6 @@
 #include "LinearSolver.h"
 
+#include "AggregationMultigrid.h"
 #include "ConjugateGradient.h"
 #include "Error.h"
 #include "MultiresSolvers.h"
@@ -64,6 +65,7 @@ std::vector<std::string> GetLinearSolverNames()
   std::vector<std::string> names{ "cg-jacobi" };
   names.push_back("transcut-multires");
   names.push_back("multigrid-cg");
+  names.push_back("multigrid-agg");
   // Peers (optional libraries only when this build found them).
   names.push_back("cg-ichol");
 #ifdef TRANSLUCENCY_HAVE_CHOLMOD
@@ -89,6 +91,10 @@ std::unique_ptr<LinearSolver> CreateLinearSolver(const std::string& name)
   if (key == "multigrid-cg")
   {
     return std::make_unique<MultigridConjugateGradient>();
+  }
+  if (key == "multigrid-agg")
+  {
+    return std::make_unique<AggregationMultigridSolver>();
   }
   if (key == "cg-ichol")
   {

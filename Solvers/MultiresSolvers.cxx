@@ -1,5 +1,6 @@
 #include "MultiresSolvers.h"
 
+#include "BlockedKernels.h"
 #include "Error.h"
 #include "TetMesh.h"
 
@@ -20,79 +21,12 @@ namespace
 {
 
 using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
-constexpr int NC = NumberOfChannels;
-static_assert(NC == 3, "the blocked kernels assume three channels");
+using namespace blocked;
 
 double Since(std::chrono::steady_clock::time_point start)
 {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
     .count();
-}
-
-/// y = A x for the three channels of the level-0 system (one pass over the
-/// pattern; x and y interleaved, 3 values per vertex).
-void MultiplySystem(const DiffusionSystem& s, const double* x, double* y)
-{
-  const int n = s.NumberOfUnknowns;
-  const int* ro = s.RowOffsets.data();
-  const int* ci = s.ColumnIndices.data();
-  const double* v0 = s.Values[0].data();
-  const double* v1 = s.Values[1].data();
-  const double* v2 = s.Values[2].data();
-#pragma omp parallel for schedule(static)
-  for (int i = 0; i < n; ++i)
-  {
-    double a0 = 0.0, a1 = 0.0, a2 = 0.0;
-    for (int k = ro[i]; k < ro[i + 1]; ++k)
-    {
-      const double* xj = x + 3 * static_cast<std::size_t>(ci[k]);
-      a0 += v0[k] * xj[0];
-      a1 += v1[k] * xj[1];
-      a2 += v2[k] * xj[2];
-    }
-    y[3 * static_cast<std::size_t>(i)] = a0;
-    y[3 * static_cast<std::size_t>(i) + 1] = a1;
-    y[3 * static_cast<std::size_t>(i) + 2] = a2;
-  }
-}
-
-/// y = A x with interleaved single-precision values (3 per non-zero).
-void MultiplyFloat(const CsrPattern& p, const float* v, const double* x, double* y)
-{
-  const int n = p.Size;
-  const int* ro = p.Offsets.data();
-  const int* ci = p.Columns.data();
-#pragma omp parallel for schedule(static)
-  for (int i = 0; i < n; ++i)
-  {
-    double a0 = 0.0, a1 = 0.0, a2 = 0.0;
-    for (int k = ro[i]; k < ro[i + 1]; ++k)
-    {
-      const double* xj = x + 3 * static_cast<std::size_t>(ci[k]);
-      const float* vk = v + 3 * static_cast<std::size_t>(k);
-      a0 += vk[0] * xj[0];
-      a1 += vk[1] * xj[1];
-      a2 += vk[2] * xj[2];
-    }
-    y[3 * static_cast<std::size_t>(i)] = a0;
-    y[3 * static_cast<std::size_t>(i) + 1] = a1;
-    y[3 * static_cast<std::size_t>(i) + 2] = a2;
-  }
-}
-
-/// Per-channel dot products of interleaved vectors.
-std::array<double, NC> Dot3(const Eigen::VectorXd& a, const Eigen::VectorXd& b)
-{
-  const long long n = a.size() / 3;
-  double s0 = 0.0, s1 = 0.0, s2 = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s0, s1, s2)
-  for (long long i = 0; i < n; ++i)
-  {
-    s0 += a[3 * i] * b[3 * i];
-    s1 += a[3 * i + 1] * b[3 * i + 1];
-    s2 += a[3 * i + 2] * b[3 * i + 2];
-  }
-  return { s0, s1, s2 };
 }
 
 /// x_fine += P x_coarse (eq. 16), three channels.
@@ -116,38 +50,6 @@ void Prolongate(const MultiresHierarchy::Level& level, const double* xc, double*
     xf[3 * static_cast<std::size_t>(i)] += a0;
     xf[3 * static_cast<std::size_t>(i) + 1] += a1;
     xf[3 * static_cast<std::size_t>(i) + 2] += a2;
-  }
-}
-
-/// Interleave / de-interleave between Eigen channel vectors and one vector.
-void Interleave(const std::array<Eigen::VectorXd, NC>& in, Eigen::VectorXd& out)
-{
-  const long long n = in[0].size();
-  out.resize(3 * n);
-#pragma omp parallel for schedule(static)
-  for (long long i = 0; i < n; ++i)
-  {
-    for (int c = 0; c < NC; ++c)
-    {
-      out[3 * i + c] = in[c][i];
-    }
-  }
-}
-
-void Deinterleave(const Eigen::VectorXd& in, std::array<Eigen::VectorXd, NC>& out)
-{
-  const long long n = in.size() / 3;
-  for (int c = 0; c < NC; ++c)
-  {
-    out[c].resize(n);
-  }
-#pragma omp parallel for schedule(static)
-  for (long long i = 0; i < n; ++i)
-  {
-    for (int c = 0; c < NC; ++c)
-    {
-      out[c][i] = in[3 * i + c];
-    }
   }
 }
 
@@ -179,140 +81,6 @@ void InverseDiagonal(const CsrPattern& p, const std::array<const double*, NC>& v
   }
 }
 
-/**
- * Conjugate gradient on the three channels at once (per-channel scalars,
- * one blocked SpMV and one blocked preconditioner application per
- * iteration). Channels that converge are frozen. Returns false if aborted.
- * flopsPerIteration: multiply-adds per channel of one iteration.
- */
-template <typename Precondition>
-bool BlockedPCG(const DiffusionSystem& system, Precondition precondition, Eigen::VectorXd& x,
-  double tol, int maxIter, std::array<LinearSolveStats, NC>& stats, double flopsPerIteration,
-  const std::function<bool(double)>& progress)
-{
-  const int n = system.NumberOfUnknowns;
-  const double nnz = std::max<double>(1.0, static_cast<double>(system.ColumnIndices.size()));
-  Eigen::VectorXd b;
-  Interleave(system.RightHandSide, b);
-  Eigen::VectorXd r(3 * static_cast<long long>(n)), z(r.size()), p(r.size()), q(r.size());
-  MultiplySystem(system, x.data(), q.data());
-  r = b - q;
-  const auto bb = Dot3(b, b);
-  std::array<bool, NC> active;
-  std::array<double, NC> normB, rz{};
-  auto rr = Dot3(r, r);
-  for (int c = 0; c < NC; ++c)
-  {
-    normB[c] = std::sqrt(bb[c]);
-    stats[c] = LinearSolveStats();
-    stats[c].SpMVEquivalents = 1.0 + 4.0 * n / nnz; // initial residual
-    if (normB[c] == 0.0)
-    {
-      // SPD: the solution is exactly zero.
-      for (int i = 0; i < n; ++i)
-      {
-        x[3 * static_cast<long long>(i) + c] = 0.0;
-      }
-      active[c] = false;
-      stats[c].Converged = true;
-      continue;
-    }
-    stats[c].RelativeResidual = std::sqrt(rr[c]) / normB[c];
-    active[c] = !(stats[c].RelativeResidual <= tol);
-    stats[c].Converged = !active[c];
-  }
-  auto anyActive = [&]() { return active[0] || active[1] || active[2]; };
-  if (anyActive())
-  {
-    precondition(r, z);
-    p = z;
-    rz = Dot3(r, z);
-  }
-  for (int it = 0; it < maxIter && anyActive(); ++it)
-  {
-    if (progress && !progress(static_cast<double>(it) / maxIter))
-    {
-      return false;
-    }
-    MultiplySystem(system, p.data(), q.data());
-    const auto pq = Dot3(p, q);
-    std::array<double, NC> alpha{};
-    for (int c = 0; c < NC; ++c)
-    {
-      alpha[c] = active[c] && pq[c] != 0.0 ? rz[c] / pq[c] : 0.0;
-    }
-#pragma omp parallel for schedule(static)
-    for (long long i = 0; i < static_cast<long long>(n); ++i)
-    {
-      for (int c = 0; c < NC; ++c)
-      {
-        x[3 * i + c] += alpha[c] * p[3 * i + c];
-        r[3 * i + c] -= alpha[c] * q[3 * i + c];
-      }
-    }
-    rr = Dot3(r, r);
-    for (int c = 0; c < NC; ++c)
-    {
-      if (!active[c])
-      {
-        continue;
-      }
-      ++stats[c].Iterations;
-      stats[c].SpMVEquivalents += flopsPerIteration / nnz;
-      stats[c].RelativeResidual = std::sqrt(rr[c]) / normB[c];
-      if (stats[c].RelativeResidual <= tol)
-      {
-        active[c] = false;
-        stats[c].Converged = true;
-      }
-      else if (!(pq[c] > 0.0) || !std::isfinite(stats[c].RelativeResidual))
-      {
-        active[c] = false; // breakdown: not SPD, report not converged
-      }
-    }
-    if (!anyActive())
-    {
-      break;
-    }
-    precondition(r, z);
-    const auto rzNew = Dot3(r, z);
-    std::array<double, NC> beta{};
-    for (int c = 0; c < NC; ++c)
-    {
-      beta[c] = active[c] && rz[c] != 0.0 ? rzNew[c] / rz[c] : 0.0;
-      if (active[c])
-      {
-        rz[c] = rzNew[c];
-      }
-    }
-#pragma omp parallel for schedule(static)
-    for (long long i = 0; i < static_cast<long long>(n); ++i)
-    {
-      for (int c = 0; c < NC; ++c)
-      {
-        if (active[c])
-        {
-          p[3 * i + c] = z[3 * i + c] + beta[c] * p[3 * i + c];
-        }
-      }
-    }
-  }
-  if (progress)
-  {
-    progress(1.0);
-  }
-  return true;
-}
-
-/// Level-0 Jacobi preconditioner z = D^-1 r.
-struct JacobiApply
-{
-  const Eigen::VectorXd* InverseDiagonal;
-  void operator()(const Eigen::VectorXd& r, Eigen::VectorXd& z) const
-  {
-    z = r.cwiseProduct(*InverseDiagonal);
-  }
-};
 
 } // namespace
 

@@ -28,7 +28,7 @@ from TestPipeline import Messages, Pipeline, array, sphere_surface  # noqa: E402
 
 import translucency  # noqa: E402
 
-BASE_NAMES = ("cg-jacobi", "transcut-multires", "multigrid-cg")
+BASE_NAMES = ("cg-jacobi", "transcut-multires", "multigrid-cg", "multigrid-agg")
 
 
 class LinearSolverTest(unittest.TestCase):
