@@ -75,29 +75,8 @@ AggregationMultigridSolver::~AggregationMultigridSolver() = default;
 void AggregationMultigridSolver::Setup(
   const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged)
 {
-  if (!mesh)
-  {
-    throw Error(GetName() + ": needs the mesh of the unknowns (vertex graph and positions)");
-  }
+  blocked::CheckSystemOnMesh(GetName(), system, mesh);
   const int n = system.NumberOfUnknowns;
-  if (n < 1 || mesh->GetNumberOfPoints() != n ||
-    system.RowOffsets.size() != static_cast<std::size_t>(n) + 1 || system.RowOffsets.front() != 0 ||
-    static_cast<std::size_t>(system.RowOffsets.back()) != system.ColumnIndices.size())
-  {
-    std::ostringstream os;
-    os << GetName() << ": the system (" << n << " unknowns, " << system.RowOffsets.size()
-       << " row offsets) does not match the mesh (" << mesh->GetNumberOfPoints() << " points)";
-    throw Error(os.str());
-  }
-  for (int c = 0; c < NC; ++c)
-  {
-    if (system.Values[c].size() != system.ColumnIndices.size())
-    {
-      throw Error(GetName() + ": channel " + std::to_string(c) + " has " +
-        std::to_string(system.Values[c].size()) + " values for " +
-        std::to_string(system.ColumnIndices.size()) + " non-zeros");
-    }
-  }
   const bool rebuild =
     patternChanged || !Ready_ || Unknowns_ != n || NonZeros_ != system.ColumnIndices.size();
   Ready_ = false;
@@ -602,20 +581,7 @@ void AggregationMultigridSolver::ApplyPreconditioner(
     const auto& lev = levels[l];
     if (l == L - 1)
     {
-      const int n = lev.Pattern.Size;
-      Eigen::VectorXd bc(n);
-      for (int c = 0; c < NC; ++c)
-      {
-        for (int i = 0; i < n; ++i)
-        {
-          bc[i] = lev.B[3 * static_cast<long long>(i) + c];
-        }
-        const Eigen::VectorXd xc = Internal_->Coarsest[c].solve(bc);
-        for (int i = 0; i < n; ++i)
-        {
-          lev.X[3 * static_cast<long long>(i) + c] = xc[i];
-        }
-      }
+      SolveInterleaved(Internal_->Coarsest.data(), lev.Pattern.Size, lev.B.data(), lev.X.data());
       return;
     }
     // Pre-smoothing from zero, residual, restriction b_c = P^T r (sums over

@@ -12,6 +12,8 @@
 #include "DiffusionSystem.h"
 #include "LinearSolver.h"
 #include "MultiresHierarchy.h"
+#include "Error.h"
+#include "TetMesh.h"
 
 #include <omp.h>
 
@@ -19,6 +21,8 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <sstream>
+#include <string>
 #include <vector>
 
 namespace translucency
@@ -33,6 +37,62 @@ static_assert(NC == 3, "the blocked kernels assume three channels");
 /// levels a parallel region costs more than the work, and much more when
 /// the cores are shared with other processes. Results do not depend on it.
 constexpr long long ParallelThreshold = 8192;
+
+/**
+ * Throws translucency::Error (naming `solver`) unless `system` is a CSR
+ * system on the points of `mesh` with one value per non-zero in every
+ * channel. The multiresolution solvers need the mesh (graph, positions).
+ */
+inline void CheckSystemOnMesh(
+  const std::string& solver, const DiffusionSystem& system, const TetMesh* mesh)
+{
+  if (!mesh)
+  {
+    throw Error(solver + ": needs the mesh of the unknowns (vertex graph and positions)");
+  }
+  const int n = system.NumberOfUnknowns;
+  if (n < 1 || mesh->GetNumberOfPoints() != n ||
+    system.RowOffsets.size() != static_cast<std::size_t>(n) + 1 || system.RowOffsets.front() != 0 ||
+    static_cast<std::size_t>(system.RowOffsets.back()) != system.ColumnIndices.size())
+  {
+    std::ostringstream os;
+    os << solver << ": the system (" << n << " unknowns, " << system.RowOffsets.size()
+       << " row offsets) does not match the mesh (" << mesh->GetNumberOfPoints() << " points)";
+    throw Error(os.str());
+  }
+  for (int c = 0; c < NC; ++c)
+  {
+    if (system.Values[c].size() != system.ColumnIndices.size())
+    {
+      throw Error(solver + ": channel " + std::to_string(c) + " has " +
+        std::to_string(system.Values[c].size()) + " values for " +
+        std::to_string(system.ColumnIndices.size()) + " non-zeros");
+    }
+  }
+}
+
+/**
+ * The coarsest level of the multigrid solvers: x = A_c^-1 b for each channel
+ * c with its own factorisation factors[c], on interleaved vectors of n
+ * unknowns (value 3 i + c).
+ */
+template <typename Factorisation>
+inline void SolveInterleaved(const Factorisation* factors, int n, const double* b, double* x)
+{
+  Eigen::VectorXd bc(n);
+  for (int c = 0; c < NC; ++c)
+  {
+    for (int i = 0; i < n; ++i)
+    {
+      bc[i] = b[3 * static_cast<long long>(i) + c];
+    }
+    const Eigen::VectorXd xc = factors[c].solve(bc);
+    for (int i = 0; i < n; ++i)
+    {
+      x[3 * static_cast<long long>(i) + c] = xc[i];
+    }
+  }
+}
 
 /// y = A x for the three channels of the level-0 system (one pass over the
 /// pattern; x and y interleaved, 3 values per vertex).

@@ -12,6 +12,7 @@
 #include "LinearSolver.h"
 #include "TestMeshes.h"
 #include "TestProblems.h"
+#include "TestRandomProblems.h"
 #include "TetMesh.h"
 
 #include <Eigen/Dense>
@@ -30,58 +31,10 @@ using namespace translucency;
 using translucency::testing::CubeMesh;
 using translucency::testing::MeshData;
 using translucency::testing::Uniform01;
+using translucency::testing::RandomIrradiance;
+using translucency::testing::RandomMaterial;
+using translucency::testing::TwoPieces;
 namespace tt = translucency::testing;
-
-/// Random heterogeneous material: per-tet mu_a, sigma_s' spanning two decades.
-OpticalProperties RandomMaterial(int numTets, std::uint64_t seed)
-{
-  std::mt19937_64 rng(seed);
-  OpticalProperties m;
-  m.AbsorptionCoefficient.resize(3 * numTets);
-  m.ReducedScatteringCoefficient.resize(3 * numTets);
-  m.RefractiveIndex.assign(numTets, 1.3);
-  for (int t = 0; t < numTets; ++t)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      m.AbsorptionCoefficient[3 * t + c] = 0.002 * std::pow(100.0, Uniform01(rng));
-      m.ReducedScatteringCoefficient[3 * t + c] = 0.2 * std::pow(100.0, Uniform01(rng));
-    }
-  }
-  return m;
-}
-
-std::vector<double> RandomIrradiance(const TetMesh& mesh, std::uint64_t seed)
-{
-  std::mt19937_64 rng(seed);
-  std::vector<double> q(3 * mesh.GetNumberOfPoints(), 0.0);
-  for (int i : mesh.GetBoundaryPoints())
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      q[3 * i + c] = Uniform01(rng);
-    }
-  }
-  return q;
-}
-
-MeshData TwoPieces(int n)
-{
-  MeshData a = CubeMesh(n, 3.0, 0.2, 5);
-  MeshData b = CubeMesh(n, 3.0, 0.2, 6);
-  const int offset = a.NumberOfPoints();
-  for (std::size_t k = 0; k < b.Points.size(); k += 3)
-  {
-    a.Points.push_back(b.Points[k] + 10.0);
-    a.Points.push_back(b.Points[k + 1]);
-    a.Points.push_back(b.Points[k + 2]);
-  }
-  for (int v : b.Tets)
-  {
-    a.Tets.push_back(v + offset);
-  }
-  return a;
-}
 
 struct Problem
 {

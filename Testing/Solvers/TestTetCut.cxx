@@ -106,15 +106,42 @@ MeshData OrientedBox(int nx, int ny, int nz, double jitter, std::uint64_t seed)
   return mesh;
 }
 
-/// Cut `mesh` with F and check every invariant; returns the cut.
-TetCut CutAndCheck(const MeshData& mesh, const TetCut::SideFunction& F, double bound,
-  int iterations = 10, double rho = 0.1)
+/// The tets not entirely on the removed side (side > 0 at all four
+/// vertices), in input order: what a cut must keep.
+std::vector<int> NotRemovedTets(const MeshData& mesh, const std::vector<double>& side)
+{
+  std::vector<int> kept;
+  for (int t = 0; t < mesh.NumberOfTets(); ++t)
+  {
+    bool removed = true;
+    for (int a = 0; a < 4; ++a)
+    {
+      removed = removed && side[mesh.Tets[4 * t + a]] > 0.0;
+    }
+    if (!removed)
+    {
+      kept.push_back(t);
+    }
+  }
+  return kept;
+}
+
+/// F at every mesh point (the side values TetCut::Cut takes).
+std::vector<double> SideValues(const MeshData& mesh, const TetCut::SideFunction& F)
 {
   std::vector<double> side(mesh.NumberOfPoints());
   for (int i = 0; i < mesh.NumberOfPoints(); ++i)
   {
     side[i] = F(&mesh.Points[3 * i]);
   }
+  return side;
+}
+
+/// Cut `mesh` with F and check every invariant; returns the cut.
+TetCut CutAndCheck(const MeshData& mesh, const TetCut::SideFunction& F, double bound,
+  int iterations = 10, double rho = 0.1)
+{
+  const std::vector<double> side = SideValues(mesh, F);
   TetCut cut;
   cut.SetMinimumDihedralAngle(bound);
   cut.SetNumberOfIterations(iterations);
@@ -129,19 +156,7 @@ TetCut CutAndCheck(const MeshData& mesh, const TetCut::SideFunction& F, double b
   EXPECT_EQ(points.size(), 3 * keptPoints.size());
 
   // Exactly the tets not entirely on the removed side are kept, in order.
-  std::vector<int> expectedTets;
-  for (int t = 0; t < mesh.NumberOfTets(); ++t)
-  {
-    bool removed = true;
-    for (int a = 0; a < 4; ++a)
-    {
-      removed = removed && side[mesh.Tets[4 * t + a]] > 0.0;
-    }
-    if (!removed)
-    {
-      expectedTets.push_back(t);
-    }
-  }
+  const std::vector<int> expectedTets = NotRemovedTets(mesh, side);
   EXPECT_EQ(keptTets, expectedTets);
   EXPECT_TRUE(std::is_sorted(keptPoints.begin(), keptPoints.end()));
 
@@ -294,18 +309,8 @@ TEST(TetCut, ParallelEqualsSerial)
   const MeshData mesh = OrientedBox(12, 11, 10, 0.3, 17);
   const double o[3] = { 6.1, 5.3, 4.9 }, n[3] = { 0.7, -0.4, 0.3 };
   const TetCut::SideFunction F = Plane(o, n);
-  std::vector<double> side(mesh.NumberOfPoints());
-  for (int i = 0; i < mesh.NumberOfPoints(); ++i)
-    side[i] = F(&mesh.Points[3 * i]);
-  std::vector<int> expectedTets;
-  for (int t = 0; t < mesh.NumberOfTets(); ++t)
-  {
-    bool removed = true;
-    for (int a = 0; a < 4; ++a)
-      removed = removed && side[mesh.Tets[4 * t + a]] > 0.0;
-    if (!removed)
-      expectedTets.push_back(t);
-  }
+  const std::vector<double> side = SideValues(mesh, F);
+  const std::vector<int> expectedTets = NotRemovedTets(mesh, side);
   const int saved = omp_get_max_threads();
   TetCut cuts[2];
   for (int k = 0; k < 2; ++k)
