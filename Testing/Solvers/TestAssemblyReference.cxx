@@ -247,6 +247,25 @@ TEST(DivergenceReference, EqualsIndependentScatterReference)
     DiffusionSystem again;
     divergence.Assemble(mesh, material, q, again); // from the cache
     ExpectBitIdentical(system, again);
+    // M is exactly symmetric (each pair of mirror entries sums the same
+    // contributions in the same order).
+    for (int c = 0; c < 3; ++c)
+    {
+      for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
+      {
+        for (int k = system.RowOffsets[i]; k < system.RowOffsets[i + 1]; ++k)
+        {
+          const int j = system.ColumnIndices[k];
+          const auto begin = system.ColumnIndices.begin() + system.RowOffsets[j];
+          const auto end = system.ColumnIndices.begin() + system.RowOffsets[j + 1];
+          const auto it = std::lower_bound(begin, end, i);
+          ASSERT_TRUE(it != end && *it == i);
+          ASSERT_EQ(system.Values[c][k],
+            system.Values[c][static_cast<size_t>(it - system.ColumnIndices.begin())])
+            << "channel " << c << " entry (" << i << ", " << j << ")";
+        }
+      }
+    }
     // Stiffness rows sum to zero: with mu_a = 0 and no boundary term the
     // diagonal is exactly minus the off-diagonal sum.
     for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
