@@ -140,7 +140,7 @@ private:
   void BuildTopology();
   /// V_i, boundary triangle areas, S_i and point normals.
   void ComputeMeasures();
-  /// TetNonZeros_ (from the rows) and the scatter schedule.
+  /// TetNonZeros_ from the CSR rows (parallel over the points).
   void BuildTetNonZeroPositions();
   void BuildScatterSchedule();
 
