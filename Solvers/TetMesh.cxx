@@ -392,31 +392,9 @@ void TetMesh::BuildTopology()
 {
   const int numPoints = GetNumberOfPoints();
   const int numTets = GetNumberOfTets();
-
-  // 1. Point -> tets incidence (counting sort; tets ascending in each list).
-  PointTetOffsets_.assign(static_cast<size_t>(numPoints) + 1, 0);
-  for (int id : Tets_)
-  {
-    ++PointTetOffsets_[id + 1];
-  }
-  for (int i = 0; i < numPoints; ++i)
-  {
-    PointTetOffsets_[i + 1] += PointTetOffsets_[i];
-  }
-  PointTets_.resize(Tets_.size());
-  {
-    std::vector<int> cursor(PointTetOffsets_.begin(), PointTetOffsets_.end() - 1);
-    for (int t = 0; t < numTets; ++t)
-    {
-      for (int a = 0; a < 4; ++a)
-      {
-        PointTets_[cursor[Tets_[4 * static_cast<size_t>(t) + a]]++] = t;
-      }
-    }
-  }
-
   const int maxThreads = omp_get_max_threads();
-  // Face keys are grouped by their smallest vertex: each vertex v sorts the
+
+  // Face keys are grouped by their smallest vertex: vertex v matches the
   // faces of its tets in which it is the smallest id. Threads own contiguous
   // vertex ranges (static schedule), so concatenating their outputs in thread
   // order gives a result independent of the thread count.
@@ -434,21 +412,82 @@ void TetMesh::BuildTopology()
   std::vector<int> firstPointOfThread(maxThreads, -1);
   std::vector<int> rowCount(numPoints, 0);
   DiagonalPositions_.resize(numPoints);
-  TetNonZeros_.resize(16 * static_cast<size_t>(numTets));
+  PointTetOffsets_.assign(static_cast<size_t>(numPoints) + 1, 0);
+  PointTets_.resize(Tets_.size());
+  // counts[tid * numPoints + i]: incidences of point i in the tets of
+  // thread tid's static range.
+  std::vector<int> counts(static_cast<size_t>(maxThreads) * numPoints);
 
-  // 2. Boundary faces and the adjacency rows (sorted, unique, diagonal
-  //    included), and the positions of the local matrix entries within the
-  //    rows: row v fills entries 4a+b of the tets where v is local vertex a
-  //    (each (t, a) is written once) with the rank of column tv[b] in row v;
-  //    step 3 adds the row offsets.
 #pragma omp parallel
   {
     const int tid = omp_get_thread_num();
-    std::vector<FaceEntry> faces;
+    const int numThreads = omp_get_num_threads();
+
+    // 1. Point -> tets incidence, tets ascending in each list: a counting
+    //    sort in which each thread counts, then places, the tets of its own
+    //    contiguous range (thread ranges in increasing order).
+    int* count = &counts[static_cast<size_t>(tid) * numPoints];
+    std::fill(count, count + numPoints, 0);
+    const int tetBegin = static_cast<int>(static_cast<long long>(numTets) * tid / numThreads);
+    const int tetEnd = static_cast<int>(static_cast<long long>(numTets) * (tid + 1) / numThreads);
+    for (size_t k = 4 * static_cast<size_t>(tetBegin); k < 4 * static_cast<size_t>(tetEnd); ++k)
+    {
+      ++count[Tets_[k]];
+    }
+#pragma omp barrier
+#pragma omp for schedule(static)
+    for (int i = 0; i < numPoints; ++i)
+    {
+      int total = 0;
+      for (int s = 0; s < numThreads; ++s)
+      {
+        total += counts[static_cast<size_t>(s) * numPoints + i];
+      }
+      PointTetOffsets_[i + 1] = total;
+    }
+#pragma omp single
+    for (int i = 0; i < numPoints; ++i)
+    {
+      PointTetOffsets_[i + 1] += PointTetOffsets_[i];
+    }
+    // Cursor of thread tid for point i: the list start plus the incidences
+    // of the lower threads.
+#pragma omp for schedule(static)
+    for (int i = 0; i < numPoints; ++i)
+    {
+      int cursor = PointTetOffsets_[i];
+      for (int s = 0; s < numThreads; ++s)
+      {
+        const int c = counts[static_cast<size_t>(s) * numPoints + i];
+        counts[static_cast<size_t>(s) * numPoints + i] = cursor;
+        cursor += c;
+      }
+    }
+    for (int t = tetBegin; t < tetEnd; ++t)
+    {
+      for (int a = 0; a < 4; ++a)
+      {
+        PointTets_[count[Tets_[4 * static_cast<size_t>(t) + a]]++] = t;
+      }
+    }
+#pragma omp barrier
+
+    // 2. Boundary faces and the adjacency rows (sorted, unique, diagonal
+    //    included). The faces of v (v their smallest vertex) are matched by
+    //    their two other vertices (lo, hi) through short lists headed at lo,
+    //    no sort; a face seen once is on the boundary.
+    struct FaceMatch
+    {
+      int Hi, Tet, Face, Count, Next;
+    };
+    std::vector<FaceMatch> matches;
+    std::vector<int> touched;
+    std::vector<FaceEntry> boundaryFaces;
     std::vector<int> row;
-    // mark[u] == v: u is already in row v; rank[u]: its rank in the row.
+    // mark[u] == v: u is already in row v; head[u]: first face (v, u, .)
+    // of the current v, -1 if none.
     std::vector<int> mark(static_cast<size_t>(numPoints), -1);
-    std::vector<int> rank(static_cast<size_t>(numPoints), 0);
+    std::vector<int> head(static_cast<size_t>(numPoints), -1);
     auto& boundary = boundaryPerThread[tid];
     auto& columns = columnsPerThread[tid];
 #pragma omp for schedule(static)
@@ -458,76 +497,98 @@ void TetMesh::BuildTopology()
       {
         firstPointOfThread[tid] = v;
       }
-      faces.clear();
-      row.clear();
-      row.push_back(v);
+      matches.clear();
+      touched.clear();
+      const int tetBegin = PointTetOffsets_[v], tetEnd = PointTetOffsets_[v + 1];
+      // Row of v: every vertex of its tets once (marker array, branch-free:
+      // always store, advance only for a vertex not yet in the row).
+      if (row.size() < 4 * static_cast<size_t>(tetEnd - tetBegin) + 1)
+      {
+        row.resize(4 * static_cast<size_t>(tetEnd - tetBegin) + 1);
+      }
+      int length = 1;
+      row[0] = v;
       mark[v] = v;
-      for (int k = PointTetOffsets_[v]; k < PointTetOffsets_[v + 1]; ++k)
+      for (int k = tetBegin; k < tetEnd; ++k)
       {
         const int t = PointTets_[k];
         const int* tv = &Tets_[4 * static_cast<size_t>(t)];
         for (int b = 0; b < 4; ++b)
         {
-          if (mark[tv[b]] != v)
-          {
-            mark[tv[b]] = v;
-            row.push_back(tv[b]);
-          }
+          const int u = tv[b];
+          row[length] = u;
+          length += mark[u] != v ? 1 : 0;
+          mark[u] = v;
         }
+        // Faces of t with v as their smallest vertex: all three faces through
+        // v if v is the smallest vertex of t, the face opposite the smallest
+        // vertex if v is the second smallest, none otherwise.
+        const int smaller = (tv[0] < v) + (tv[1] < v) + (tv[2] < v) + (tv[3] < v);
+        if (smaller > 1)
+        {
+          continue;
+        }
+        const int a = tv[0] == v ? 0 : (tv[1] == v ? 1 : (tv[2] == v ? 2 : 3));
         for (int f = 0; f < 4; ++f)
         {
+          // Face f is opposite local vertex f; it contains v iff f != a, and
+          // v is its smallest vertex iff the smaller vertex, if any, is tv[f].
+          if (f == a || (smaller == 1 && tv[f] > v))
+          {
+            continue;
+          }
           const int* fv = FaceVertices[f];
-          const int a = tv[fv[0]], b = tv[fv[1]], c = tv[fv[2]];
-          if (a != v && b != v && c != v)
+          const int x = tv[fv[0]], y = tv[fv[1]], z = tv[fv[2]];
+          const int o1 = x == v ? y : x;
+          const int o2 = z == v ? y : z;
+          const int lo = std::min(o1, o2), hi = std::max(o1, o2);
+          int m = head[lo];
+          while (m >= 0 && matches[m].Hi != hi)
           {
-            continue; // face opposite v
+            m = matches[m].Next;
           }
-          if (std::min({ a, b, c }) != v)
+          if (m >= 0)
           {
-            continue; // handled by its smallest vertex
+            ++matches[m].Count;
+            continue;
           }
-          const int o1 = a == v ? b : a;
-          const int o2 = c == v ? b : c;
-          faces.push_back({ std::min(o1, o2), std::max(o1, o2), t, f });
+          if (head[lo] < 0)
+          {
+            touched.push_back(lo);
+          }
+          matches.push_back({ hi, t, f, 1, head[lo] });
+          head[lo] = static_cast<int>(matches.size()) - 1;
         }
       }
-      std::sort(faces.begin(), faces.end());
-      for (size_t s = 0; s < faces.size();)
+      // Boundary faces of v in (lo, hi) order (as a sort of all faces would
+      // give); reset the list heads.
+      boundaryFaces.clear();
+      for (int lo : touched)
       {
-        size_t e = s + 1;
-        while (e < faces.size() && faces[e].Lo == faces[s].Lo && faces[e].Hi == faces[s].Hi)
+        for (int m = head[lo]; m >= 0; m = matches[m].Next)
         {
-          ++e;
+          if (matches[m].Count == 1)
+          {
+            boundaryFaces.push_back({ lo, matches[m].Hi, matches[m].Tet, matches[m].Face });
+          }
+          else if (matches[m].Count > 2 && firstNonManifold[tid] == INT_MAX)
+          {
+            firstNonManifold[tid] = v;
+          }
         }
-        if (e - s == 1)
-        {
-          boundary.emplace_back(faces[s].Tet, faces[s].Face);
-        }
-        else if (e - s > 2 && firstNonManifold[tid] == INT_MAX)
-        {
-          firstNonManifold[tid] = v;
-        }
-        s = e;
+        head[lo] = -1;
       }
-      std::sort(row.begin(), row.end()); // unique already
-      for (size_t k = 0; k < row.size(); ++k)
+      std::sort(boundaryFaces.begin(), boundaryFaces.end());
+      for (const FaceEntry& e : boundaryFaces)
       {
-        rank[row[k]] = static_cast<int>(k);
+        boundary.emplace_back(e.Tet, e.Face);
       }
-      DiagonalPositions_[v] = rank[v];
-      for (int k = PointTetOffsets_[v]; k < PointTetOffsets_[v + 1]; ++k)
-      {
-        const int t = PointTets_[k];
-        const int* tv = &Tets_[4 * static_cast<size_t>(t)];
-        const int a = tv[0] == v ? 0 : tv[1] == v ? 1 : tv[2] == v ? 2 : 3;
-        int* positions = &TetNonZeros_[16 * static_cast<size_t>(t) + 4 * a];
-        for (int b = 0; b < 4; ++b)
-        {
-          positions[b] = rank[tv[b]];
-        }
-      }
-      rowCount[v] = static_cast<int>(row.size());
-      columns.insert(columns.end(), row.begin(), row.end());
+      int* const rowBegin = row.data();
+      int* const rowEnd = rowBegin + length;
+      std::sort(rowBegin, rowEnd); // unique already
+      DiagonalPositions_[v] = static_cast<int>(std::lower_bound(rowBegin, rowEnd, v) - rowBegin);
+      rowCount[v] = length;
+      columns.insert(columns.end(), rowBegin, rowEnd);
     }
   }
 
@@ -625,14 +686,34 @@ void TetMesh::BuildTopology()
         ColumnIndices_.begin() + RowOffsets_[firstPointOfThread[tid]]);
     }
     std::vector<int>().swap(columnsPerThread[tid]);
-#pragma omp barrier
-    // 4. Positions of the local matrix entries in the CSR value array: the
-    //    ranks within row v (step 2) plus the row's offset.
 #pragma omp for schedule(static)
     for (int v = 0; v < numPoints; ++v)
     {
-      const int offset = RowOffsets_[v];
-      DiagonalPositions_[v] += offset;
+      DiagonalPositions_[v] += RowOffsets_[v];
+    }
+  }
+
+  BuildTetNonZeroPositions();
+  BuildScatterSchedule();
+}
+
+void TetMesh::BuildTetNonZeroPositions()
+{
+  const int numPoints = GetNumberOfPoints();
+  const int numTets = GetNumberOfTets();
+  TetNonZeros_.resize(16 * static_cast<size_t>(numTets));
+  // Row v fills entries 4a+b of the tets where v is local vertex a (each
+  // (t, a) is written once) with the position of column tv[b] in row v.
+#pragma omp parallel
+  {
+    std::vector<int> rank(static_cast<size_t>(numPoints));
+#pragma omp for schedule(static)
+    for (int v = 0; v < numPoints; ++v)
+    {
+      for (int k = RowOffsets_[v]; k < RowOffsets_[v + 1]; ++k)
+      {
+        rank[ColumnIndices_[k]] = k;
+      }
       for (int k = PointTetOffsets_[v]; k < PointTetOffsets_[v + 1]; ++k)
       {
         const int t = PointTets_[k];
@@ -641,13 +722,11 @@ void TetMesh::BuildTopology()
         int* positions = &TetNonZeros_[16 * static_cast<size_t>(t) + 4 * a];
         for (int b = 0; b < 4; ++b)
         {
-          positions[b] += offset;
+          positions[b] = rank[tv[b]];
         }
       }
     }
   }
-
-  BuildScatterSchedule();
 }
 
 void TetMesh::BuildScatterSchedule()

@@ -116,9 +116,9 @@ public:
     /// All tet ids, colour by colour, chunk by chunk.
     std::vector<int> Tets;
     /// Chunk k is Tets[ChunkOffsets[k], ChunkOffsets[k+1]).
-    std::vector<int> ChunkOffsets;
+    std::vector<int> ChunkOffsets = { 0 };
     /// Colour c is chunks [ColourOffsets[c], ColourOffsets[c+1]).
-    std::vector<int> ColourOffsets;
+    std::vector<int> ColourOffsets = { 0 };
     int GetNumberOfColours() const { return static_cast<int>(ColourOffsets.size()) - 1; }
   };
   const ScatterSchedule& GetScatterSchedule() const { return Schedule_; }
@@ -140,6 +140,8 @@ private:
   void BuildTopology();
   /// V_i, boundary triangle areas, S_i and point normals.
   void ComputeMeasures();
+  /// TetNonZeros_ from the CSR rows (parallel over the points).
+  void BuildTetNonZeroPositions();
   void BuildScatterSchedule();
 
   std::vector<double> Points_;
@@ -154,10 +156,10 @@ private:
   std::vector<double> PointNormals_;
   std::vector<int> RowOffsets_;
   std::vector<int> ColumnIndices_;
-  std::vector<int> TetNonZeros_;
   std::vector<int> DiagonalPositions_;
   std::vector<int> PointTetOffsets_;
   std::vector<int> PointTets_;
+  std::vector<int> TetNonZeros_;
   ScatterSchedule Schedule_;
   std::uint64_t GeometryRevision_ = 0;
 };

@@ -75,10 +75,11 @@ inline void ResizeVertexSystem(const TetMesh& mesh, DiffusionSystem& system)
  * Assemble a vertex system on the mesh's CSR pattern: sizes `system`
  * (ResizeVertexSystem: a caller may size it first to take pointers into it),
  * then one OpenMP parallel region that
- *  1. checks every material value (finite mu_a, sigma_s' >= 0 with
- *     mu_a + sigma_s' > 0, finite eta > 0) and irradiance value (finite,
- *     >= 0); if one is invalid it returns false with `system` sized but not
- *     filled (the caller re-checks serially to name it);
+ *  1. checks every irradiance value (finite, >= 0), and in step 4 every
+ *     material value (finite mu_a, sigma_s' >= 0 with mu_a + sigma_s' > 0,
+ *     finite eta > 0; the kernel is not called for an invalid tet); if one
+ *     is invalid it returns false with `system` not meaningful (the caller
+ *     re-checks serially to name it);
  *  2. copies the column indices, clears the values and right-hand sides and
  *     puts identity rows at points used by no tet;
  *  3. runs `prepare()` (orphaned OpenMP work-sharing allowed; a barrier
@@ -132,22 +133,11 @@ bool AssembleVertexSystem(const TetMesh& mesh, const OpticalProperties& material
   // One parallel region (fork/join and barriers are what costs on a busy
   // machine).
   int invalid = 0;
+  int materialInvalid = 0;
 #pragma omp parallel num_threads(numThreads)
   {
-    // 1. Values, per tet (no division in the index).
-#pragma omp for schedule(static) reduction(| : invalid)
-    for (int t = 0; t < numTets; ++t)
-    {
-      const double eta = tetEta[t];
-      bool ok = std::isfinite(eta) && eta > 0.0;
-      for (int c = 0; c < NumberOfChannels; ++c)
-      {
-        const double a = muA[3 * static_cast<size_t>(t) + c];
-        const double s = sigmaS[3 * static_cast<size_t>(t) + c];
-        ok = ok && std::isfinite(a) && a >= 0.0 && std::isfinite(s) && s >= 0.0 && a + s > 0.0;
-      }
-      invalid |= ok ? 0 : 1;
-    }
+    // 1. Irradiance values (the material values are checked in the tet
+    // loop, step 4, which reads them anyway).
 #pragma omp for schedule(static) reduction(| : invalid)
     for (long long k = 0; k < numIrradianceValues; ++k)
     {
@@ -186,13 +176,30 @@ bool AssembleVertexSystem(const TetMesh& mesh, const OpticalProperties& material
       // chunks in parallel, each chunk's tets in order.
       for (int colour = 0; colour < numColours; ++colour)
       {
-#pragma omp for schedule(dynamic, 1)
+#pragma omp for schedule(dynamic, 1) reduction(| : materialInvalid)
         for (int chunk = schedule.ColourOffsets[colour]; chunk < schedule.ColourOffsets[colour + 1];
              ++chunk)
         {
           for (int s = schedule.ChunkOffsets[chunk]; s < schedule.ChunkOffsets[chunk + 1]; ++s)
           {
             const size_t t = static_cast<size_t>(schedule.Tets[s]);
+            // Material values of the tet: finite mu_a, sigma_s' >= 0 with
+            // mu_a + sigma_s' > 0, finite eta > 0; an invalid tet is skipped
+            // and flagged (the caller throws).
+            const double eta = tetEta[t];
+            bool ok = std::isfinite(eta) && eta > 0.0;
+            for (int c = 0; c < NumberOfChannels; ++c)
+            {
+              const double a = muA[3 * t + c];
+              const double sig = sigmaS[3 * t + c];
+              ok = ok && std::isfinite(a) && a >= 0.0 && std::isfinite(sig) && sig >= 0.0 &&
+                a + sig > 0.0;
+            }
+            if (!ok)
+            {
+              materialInvalid = 1;
+              continue;
+            }
             const int* tv = tets + 4 * t;
             const TetGeometry geometry =
               fill ? cache.ComputeAndStore(points, tv, t) : cache.Get(t);
@@ -204,6 +211,7 @@ bool AssembleVertexSystem(const TetMesh& mesh, const OpticalProperties& material
       finish();
     }
   }
+  invalid |= materialInvalid;
   if (!invalid && fill)
   {
     cache.EndFill(mesh);
