@@ -657,23 +657,7 @@ void AggregationMultigridSolver::ApplyPreconditioner(
 
 void AggregationMultigridSolver::CheckSystem(const DiffusionSystem& system) const
 {
-  if (!Ready_)
-  {
-    throw Error(GetName() + ": Solve() before Setup()");
-  }
-  bool ok = system.NumberOfUnknowns == Unknowns_ && system.ColumnIndices.size() == NonZeros_;
-  for (int c = 0; c < NC && ok; ++c)
-  {
-    ok = system.RightHandSide[c].size() == Unknowns_ && system.Values[c].size() == NonZeros_;
-  }
-  if (!ok)
-  {
-    std::ostringstream os;
-    os << GetName() << ": the system (" << system.NumberOfUnknowns << " unknowns, "
-       << system.ColumnIndices.size() << " non-zeros) does not match the last Setup ("
-       << Unknowns_ << ", " << NonZeros_ << ") or its right-hand sides have the wrong size";
-    throw Error(os.str());
-  }
+  blocked::CheckSolveMatchesSetup(GetName(), system, Ready_, Unknowns_, NonZeros_);
 }
 
 bool AggregationMultigridSolver::Solve(const DiffusionSystem& system,

@@ -39,6 +39,35 @@ static_assert(NC == 3, "the blocked kernels assume three channels");
 constexpr long long ParallelThreshold = 8192;
 
 /**
+ * Throws translucency::Error (naming `solver`) unless the solver is set up
+ * (`ready`) for a system of this size and `system` has right-hand sides and
+ * values of the sizes of the last Setup.
+ */
+inline void CheckSolveMatchesSetup(const std::string& solver, const DiffusionSystem& system,
+  bool ready, std::size_t unknowns, std::size_t nonZeros)
+{
+  if (!ready)
+  {
+    throw Error(solver + ": Solve() before Setup()");
+  }
+  bool ok = static_cast<std::size_t>(system.NumberOfUnknowns) == unknowns &&
+    system.ColumnIndices.size() == nonZeros;
+  for (int c = 0; c < NC && ok; ++c)
+  {
+    ok = static_cast<std::size_t>(system.RightHandSide[c].size()) == unknowns &&
+      system.Values[c].size() == nonZeros;
+  }
+  if (!ok)
+  {
+    std::ostringstream os;
+    os << solver << ": the system (" << system.NumberOfUnknowns << " unknowns, "
+       << system.ColumnIndices.size() << " non-zeros) does not match the last Setup ("
+       << unknowns << ", " << nonZeros << ") or its right-hand sides have the wrong size";
+    throw Error(os.str());
+  }
+}
+
+/**
  * Throws translucency::Error (naming `solver`) unless `system` is a CSR
  * system on the points of `mesh` with one value per non-zero in every
  * channel. The multiresolution solvers need the mesh (graph, positions).

@@ -36,39 +36,9 @@ using translucency::testing::RandomMaterial;
 using translucency::testing::TwoPieces;
 namespace tt = translucency::testing;
 
-struct Problem
-{
-  TetMesh Mesh;
-  OpticalProperties Material;
-  DiffusionSystem System;
-  Problem(const MeshData& data, std::uint64_t seed, bool fem = false)
-  {
-    Mesh.SetGeometry(data.Points, data.Tets);
-    Material = RandomMaterial(Mesh.GetNumberOfTets(), seed);
-    const auto q = RandomIrradiance(Mesh, seed + 1);
-    if (fem)
-    {
-      FiniteElement().Assemble(Mesh, Material, q, System);
-    }
-    else
-    {
-      DiscreteDivergence().Assemble(Mesh, Material, q, System);
-    }
-  }
-};
+using Problem = translucency::testing::RandomProblem;
 
-std::array<Eigen::VectorXd, 3> Cholesky(const DiffusionSystem& system)
-{
-  std::array<Eigen::VectorXd, 3> x;
-  for (int c = 0; c < 3; ++c)
-  {
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(
-      Eigen::SparseMatrix<double>(system.Matrix(c)));
-    EXPECT_EQ(ldlt.info(), Eigen::Success);
-    x[c] = ldlt.solve(system.RightHandSide[c]);
-  }
-  return x;
-}
+using translucency::testing::Cholesky;
 
 double RelativeError(const Eigen::VectorXd& x, const Eigen::VectorXd& reference)
 {

@@ -42,18 +42,7 @@ bool Adjacent(const CsrPattern& g, int i, int j)
     g.Columns.begin() + g.Offsets[i], g.Columns.begin() + g.Offsets[i + 1], j);
 }
 
-std::array<Eigen::VectorXd, 3> Cholesky(const DiffusionSystem& system)
-{
-  std::array<Eigen::VectorXd, 3> x;
-  for (int c = 0; c < 3; ++c)
-  {
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(
-      Eigen::SparseMatrix<double>(system.Matrix(c)));
-    EXPECT_EQ(ldlt.info(), Eigen::Success);
-    x[c] = ldlt.solve(system.RightHandSide[c]);
-  }
-  return x;
-}
+using translucency::testing::Cholesky;
 
 /// Eq. 16 as an Eigen matrix.
 Eigen::SparseMatrix<double, Eigen::RowMajor> Interpolation(
@@ -402,27 +391,7 @@ TEST(MultiresHierarchy, TinyAndDisconnectedGraphs)
   }
 }
 
-/// A problem on a jittered cube with a random heterogeneous material.
-struct Problem
-{
-  TetMesh Mesh;
-  OpticalProperties Material;
-  DiffusionSystem System;
-  Problem(const MeshData& data, std::uint64_t seed, bool fem = false)
-  {
-    Mesh.SetGeometry(data.Points, data.Tets);
-    Material = RandomMaterial(Mesh.GetNumberOfTets(), seed);
-    const auto q = RandomIrradiance(Mesh, seed + 1);
-    if (fem)
-    {
-      FiniteElement().Assemble(Mesh, Material, q, System);
-    }
-    else
-    {
-      DiscreteDivergence().Assemble(Mesh, Material, q, System);
-    }
-  }
-};
+using Problem = translucency::testing::RandomProblem;
 
 double RelativeError(const Eigen::VectorXd& x, const Eigen::VectorXd& reference)
 {

@@ -2,14 +2,22 @@
  * @file TestRandomProblems.h
  * @brief Random heterogeneous problems shared by the multiresolution and
  * multigrid solver tests (no VTK): per-tet materials spanning two decades,
- * random boundary irradiance, and a mesh in two disconnected pieces.
+ * random boundary irradiance, a mesh in two disconnected pieces, and an
+ * assembled problem made of them.
  */
 #pragma once
 
+#include "DiffusionSystem.h"
+#include "DiscreteDivergence.h"
+#include "FiniteElement.h"
 #include "OpticalProperties.h"
 #include "TestMeshes.h"
 #include "TetMesh.h"
 
+#include <Eigen/SparseCholesky>
+#include <gtest/gtest.h>
+
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -74,6 +82,44 @@ inline MeshData TwoPieces(int n)
     a.Tets.push_back(v + offset);
   }
   return a;
+}
+
+/// A mesh with a random heterogeneous material and random boundary
+/// irradiance, assembled by the discrete divergence (or the FEM).
+struct RandomProblem
+{
+  TetMesh Mesh;
+  OpticalProperties Material;
+  DiffusionSystem System;
+  RandomProblem(const MeshData& data, std::uint64_t seed, bool fem = false)
+  {
+    Mesh.SetGeometry(data.Points, data.Tets);
+    Material = RandomMaterial(Mesh.GetNumberOfTets(), seed);
+    const auto q = RandomIrradiance(Mesh, seed + 1);
+    if (fem)
+    {
+      FiniteElement().Assemble(Mesh, Material, q, System);
+    }
+    else
+    {
+      DiscreteDivergence().Assemble(Mesh, Material, q, System);
+    }
+  }
+};
+
+/// The three channels' solutions by a sparse LDL^T factorisation (the
+/// direct reference of the iterative solvers' tests).
+inline std::array<Eigen::VectorXd, 3> Cholesky(const DiffusionSystem& system)
+{
+  std::array<Eigen::VectorXd, 3> x;
+  for (int c = 0; c < 3; ++c)
+  {
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(
+      Eigen::SparseMatrix<double>(system.Matrix(c)));
+    EXPECT_EQ(ldlt.info(), Eigen::Success);
+    x[c] = ldlt.solve(system.RightHandSide[c]);
+  }
+  return x;
 }
 
 } // namespace testing
