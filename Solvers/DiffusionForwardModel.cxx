@@ -5,6 +5,7 @@
 #include "Radiance.h"
 #include "TetGeometry.h"
 #include "TetMesh.h"
+#include "VertexAssembly.h"
 
 #ifdef TRANSLUCENCY_HAVE_CHOLMOD
 #include <Eigen/CholmodSupport>
@@ -350,22 +351,11 @@ Eigen::SparseMatrix<double> DiffusionForwardModel::Assemble(
     const double mass = Mesh_.GetTetVolume(t) * mu[e]; // eq. 13: V_i mu(x_i), per tet share
     const double* s = &TetStiffness_[10 * static_cast<size_t>(t)];
     const int* pos = positions + 16 * static_cast<size_t>(t);
-    v[pos[0]] += four * s[0] + mass;
-    v[pos[5]] += four * s[1] + mass;
-    v[pos[10]] += four * s[2] + mass;
-    v[pos[15]] += four * s[3] + mass;
-    v[pos[1]] += four * s[4];
-    v[pos[4]] += four * s[4];
-    v[pos[2]] += four * s[5];
-    v[pos[8]] += four * s[5];
-    v[pos[3]] += four * s[6];
-    v[pos[12]] += four * s[6];
-    v[pos[6]] += four * s[7];
-    v[pos[9]] += four * s[7];
-    v[pos[7]] += four * s[8];
-    v[pos[13]] += four * s[8];
-    v[pos[11]] += four * s[9];
-    v[pos[14]] += four * s[9];
+    const double diag[4] = { four * s[0] + mass, four * s[1] + mass, four * s[2] + mass,
+      four * s[3] + mass };
+    const double off[6] = { four * s[4], four * s[5], four * s[6], four * s[7], four * s[8],
+      four * s[9] };
+    ScatterTetMatrix(v, pos, diag, off);
   }
   const int* diagonal = Mesh_.GetDiagonalPositions().data();
   const int* pointTetOffsets = Mesh_.GetPointTetOffsets().data();

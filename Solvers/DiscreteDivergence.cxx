@@ -59,11 +59,6 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
   auto tetKernel = [&](size_t t, const int*, const int* pos, const TetGeometry& geometry) {
     const double volume = geometry.Volume;
     const double(&g)[4][4] = geometry.Stiffness; // g_ab = N_a.N_b / (36 V_t)
-    // Entry 4a+b of the tet's 16 is (row tv[a], column tv[b]).
-    const int q00 = pos[0], q01 = pos[1], q02 = pos[2], q03 = pos[3];
-    const int q10 = pos[4], q11 = pos[5], q12 = pos[6], q13 = pos[7];
-    const int q20 = pos[8], q21 = pos[9], q22 = pos[10], q23 = pos[11];
-    const int q30 = pos[12], q31 = pos[13], q32 = pos[14], q33 = pos[15];
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       const double mu = muA[3 * t + c];
@@ -72,24 +67,11 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
       // TransCut eq. 14: M_ij = 4 w_ij.
       const double w01 = four * g[0][1], w02 = four * g[0][2], w03 = four * g[0][3];
       const double w12 = four * g[1][2], w13 = four * g[1][3], w23 = four * g[2][3];
-      double* v = values[c];
       // TransCut eq. 13: M_ii = -4 sum_j w_ij + V_i mu(x_i).
-      v[q00] += four * g[0][0] + mass;
-      v[q11] += four * g[1][1] + mass;
-      v[q22] += four * g[2][2] + mass;
-      v[q33] += four * g[3][3] + mass;
-      v[q01] += w01;
-      v[q10] += w01;
-      v[q02] += w02;
-      v[q20] += w02;
-      v[q03] += w03;
-      v[q30] += w03;
-      v[q12] += w12;
-      v[q21] += w12;
-      v[q13] += w13;
-      v[q31] += w13;
-      v[q23] += w23;
-      v[q32] += w23;
+      const double diag[4] = { four * g[0][0] + mass, four * g[1][1] + mass,
+        four * g[2][2] + mass, four * g[3][3] + mass };
+      const double off[6] = { w01, w02, w03, w12, w13, w23 };
+      ScatterTetMatrix(values[c], pos, diag, off);
     }
   };
   auto finish = [&]() {

@@ -92,10 +92,6 @@ void FiniteElement::Assemble(const TetMesh& mesh,
   auto tetKernel = [&](size_t t, const int* tv, const int* pos, const TetGeometry& geometry) {
     const double volume = geometry.Volume;
     const double(&g)[4][4] = geometry.Stiffness; // g_ab = N_a.N_b / (36 V_t)
-    const int q00 = pos[0], q01 = pos[1], q02 = pos[2], q03 = pos[3];
-    const int q10 = pos[4], q11 = pos[5], q12 = pos[6], q13 = pos[7];
-    const int q20 = pos[8], q21 = pos[9], q22 = pos[10], q23 = pos[11];
-    const int q30 = pos[12], q31 = pos[13], q32 = pos[14], q33 = pos[15];
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       const double mu = muA[3 * t + c];
@@ -108,23 +104,10 @@ void FiniteElement::Assemble(const TetMesh& mesh,
                    w03 = four * g[0][3] + mass;
       const double w12 = four * g[1][2] + mass, w13 = four * g[1][3] + mass,
                    w23 = four * g[2][3] + mass;
-      double* v = values[c];
-      v[q00] += four * g[0][0] + mass2;
-      v[q11] += four * g[1][1] + mass2;
-      v[q22] += four * g[2][2] + mass2;
-      v[q33] += four * g[3][3] + mass2;
-      v[q01] += w01;
-      v[q10] += w01;
-      v[q02] += w02;
-      v[q20] += w02;
-      v[q03] += w03;
-      v[q30] += w03;
-      v[q12] += w12;
-      v[q21] += w12;
-      v[q13] += w13;
-      v[q31] += w13;
-      v[q23] += w23;
-      v[q32] += w23;
+      const double diag[4] = { four * g[0][0] + mass2, four * g[1][1] + mass2,
+        four * g[2][2] + mass2, four * g[3][3] + mass2 };
+      const double off[6] = { w01, w02, w03, w12, w13, w23 };
+      ScatterTetMatrix(values[c], pos, diag, off);
     }
     // The tet's boundary triangles: consistent Robin mass and load, with A
     // and Fdr of this tet's refractive index (TransCut eq. 2).

@@ -56,6 +56,32 @@ inline void CheckIrradiance(const TetMesh& mesh, const std::vector<double>& irra
   }
 }
 
+/**
+ * Adds a tet's symmetric 4x4 matrix to the CSR values `v`: diag[a] at entry
+ * (a, a), off = (01, 02, 03, 12, 13, 23) at (a, b) and (b, a). `pos` holds
+ * the tet's 16 entry positions, entry 4a + b = (row tv[a], column tv[b])
+ * (TetMesh::GetTetNonZeroPositions).
+ */
+inline void ScatterTetMatrix(double* v, const int* pos, const double diag[4], const double off[6])
+{
+  v[pos[0]] += diag[0];
+  v[pos[5]] += diag[1];
+  v[pos[10]] += diag[2];
+  v[pos[15]] += diag[3];
+  v[pos[1]] += off[0];
+  v[pos[4]] += off[0];
+  v[pos[2]] += off[1];
+  v[pos[8]] += off[1];
+  v[pos[3]] += off[2];
+  v[pos[12]] += off[2];
+  v[pos[6]] += off[3];
+  v[pos[9]] += off[3];
+  v[pos[7]] += off[4];
+  v[pos[13]] += off[4];
+  v[pos[11]] += off[5];
+  v[pos[14]] += off[5];
+}
+
 /// Size `system` for the mesh's CSR pattern (values and right-hand sides
 /// are filled by AssembleVertexSystem).
 inline void ResizeVertexSystem(const TetMesh& mesh, DiffusionSystem& system)
