@@ -55,14 +55,38 @@ struct AggregationMultigridSolver::Internals
     /// Single-precision values for smoothing and residuals (interleaved).
     std::vector<float> Single;
     /// 1 / sum_j |a_ij| per vertex and channel (interleaved).
-    Eigen::VectorXd InverseL1;
-    mutable Eigen::VectorXd B, X, R, D, T, Saved, Sum;
+    std::vector<float> InverseL1;
+    /// Work vectors of the cycle, single precision, interleaved: right-hand
+    /// side B (levels >= 1; level 0 reads CG's residual), iterate X, output
+    /// buffer Y of the fused post-smoothing (swapped with X), residual R;
+    /// D, T only for smoother degrees >= 2; Saved, Sum for the W-cycle.
+    mutable std::vector<float> B, X, Y, R, D, T, Saved, Sum;
   };
   std::vector<Level> Levels;
   std::array<Eigen::SimplicialLDLT<ColMatrix>, NC> Coarsest;
   ColMatrix CoarsestTemplate; ///< pattern of the coarsest level (values rewritten)
   std::size_t CoarsestFactorNonZeros = 0;
   double VCycleFlops = 0.0; ///< multiply-adds per channel of one V-cycle
+  mutable blocked::FusedPCGWorkspace Work; ///< CG vectors, kept between solves
+
+  // The cycle (single-precision vectors; see ApplyPreconditioner).
+  struct Cycle;
+  /// Visit of level l: out ~ A_l^-1 b (one cycle); returns b.out per
+  /// channel if `dot` (chunked, deterministic), else zeros.
+  template <typename TB, typename TO>
+  std::array<double, NC> Visit(int l, const TB* b, TO* out, bool dot, const Cycle& cy) const;
+  /// X = Chebyshev smoothing of A x = b from x = 0.
+  template <typename TB>
+  void PreSmooth(const Level& lev, const TB* b, const Cycle& cy) const;
+  /// out = Chebyshev smoothing from X (fused single pass for degree 1).
+  template <typename TB, typename TO>
+  std::array<double, NC> PostSmooth(
+    const Level& lev, const TB* b, TO* out, bool dot, const Cycle& cy) const;
+  /// Chebyshev steps 2..degree on X, R, D.
+  void ChebyshevSteps(const Level& lev, const Cycle& cy) const;
+  /// out = b - A x (single-precision values of level `lev`; b == nullptr: A x).
+  template <typename TB>
+  void Residual(const Level& lev, const TB* b, const float* x, float* out) const;
 };
 
 AggregationMultigridSolver::AggregationMultigridSolver()
@@ -377,13 +401,11 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
     }
     auto value = [&](std::size_t k, int c)
     { return l == 0 ? system.Values[c][k] : lev.Values[3 * k + c]; };
-    // Work vectors (every cycle writes them before reading them).
-    for (auto* v : { &lev.B, &lev.X, &lev.R, &lev.D, &lev.T, &lev.Saved, &lev.Sum })
+    // Work vectors (every cycle writes them before reading them; D and T
+    // are sized by the cycle if the smoother degree is >= 2).
+    for (auto* v : { &lev.B, &lev.X, &lev.Y, &lev.R, &lev.Saved, &lev.Sum })
     {
-      if (v->size() != 3 * static_cast<long long>(n))
-      {
-        v->setZero(3 * static_cast<long long>(n));
-      }
+      v->resize(3 * static_cast<std::size_t>(n));
     }
     if (l == L - 1)
     {
@@ -427,7 +449,7 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
     // Single-precision values and the l1 diagonal 1 / sum_j |a_ij|, checking
     // that every diagonal entry is positive and every entry finite.
     lev.Single.resize(3 * nnz);
-    lev.InverseL1.resize(3 * static_cast<long long>(n));
+    lev.InverseL1.resize(3 * static_cast<std::size_t>(n));
     long long badRow = -1;
     const double* v[NC];
     std::size_t vs = 3;
@@ -468,10 +490,10 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
       }
       // A NaN or infinite entry makes its row's sum of |a_ij| non-finite.
       ok = ok && std::isfinite(s0) && std::isfinite(s1) && std::isfinite(s2);
-      double* inv = lev.InverseL1.data() + 3 * static_cast<std::size_t>(i);
-      inv[0] = s0 > 0.0 ? 1.0 / s0 : 0.0;
-      inv[1] = s1 > 0.0 ? 1.0 / s1 : 0.0;
-      inv[2] = s2 > 0.0 ? 1.0 / s2 : 0.0;
+      float* inv = lev.InverseL1.data() + 3 * static_cast<std::size_t>(i);
+      inv[0] = s0 > 0.0 ? static_cast<float>(1.0 / s0) : 0.0f;
+      inv[1] = s1 > 0.0 ? static_cast<float>(1.0 / s1) : 0.0f;
+      inv[2] = s2 > 0.0 ? static_cast<float>(1.0 / s2) : 0.0f;
       if (!ok)
       {
         badRow = std::max<long long>(badRow, i);
@@ -516,143 +538,300 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
   }
 }
 
-void AggregationMultigridSolver::ApplyPreconditioner(
-  const Eigen::VectorXd& rhs, Eigen::VectorXd& out) const
+/// Constants of one cycle (from the solver's options at the time of the call).
+struct AggregationMultigridSolver::Internals::Cycle
 {
-  auto& levels = Internal_->Levels;
-  const int L = static_cast<int>(levels.size());
-  const int degree = std::max(1, Degree_);
-  const double fraction = std::min(std::max(Fraction_, 1e-3), 0.99);
-  const double scale = CorrectionScale_;
-  // Chebyshev on D_l1^-1 A over [fraction, 1]: by Gershgorin the spectrum of
-  // D_l1^-1 A lies in (0, 1] (|a_ii| + sum_{j != i} |a_ij| = d_i).
-  const double theta = 0.5 * (1.0 + fraction), delta = 0.5 * (1.0 - fraction);
-  const double sigma = theta / delta;
-  auto smooth = [&](const Internals::Level& lev, bool zeroStart)
-  {
-    const long long m = 3 * static_cast<long long>(lev.Pattern.Size);
-    const double* inv = lev.InverseL1.data();
-    double* X = lev.X.data();
-    double* R = lev.R.data();
-    double* D = lev.D.data();
-    double* T = lev.T.data();
-    const double* B = lev.B.data();
-    if (zeroStart)
-    {
-#pragma omp parallel for schedule(static) if(m > ParallelThreshold)
-      for (long long k = 0; k < m; ++k)
-      {
-        D[k] = inv[k] * B[k] / theta;
-        X[k] = D[k];
-        R[k] = B[k];
-      }
-    }
-    else
-    {
-      MultiplyFloat(lev.Pattern, lev.Single.data(), X, T);
-#pragma omp parallel for schedule(static) if(m > ParallelThreshold)
-      for (long long k = 0; k < m; ++k)
-      {
-        R[k] = B[k] - T[k];
-        D[k] = inv[k] * R[k] / theta;
-        X[k] += D[k];
-      }
-    }
-    double rho = 1.0 / sigma;
-    for (int step = 2; step <= degree; ++step)
-    {
-      MultiplyFloat(lev.Pattern, lev.Single.data(), D, T);
-      const double rhoNew = 1.0 / (2.0 * sigma - rho);
-      const double a = rhoNew * rho, b = 2.0 * rhoNew / delta;
-      rho = rhoNew;
-#pragma omp parallel for schedule(static) if(m > ParallelThreshold)
-      for (long long k = 0; k < m; ++k)
-      {
-        R[k] -= T[k];
-        D[k] = a * D[k] + b * inv[k] * R[k];
-        X[k] += D[k];
-      }
-    }
-  };
+  int Degree;
+  /// Chebyshev interval [fraction, 1] of D_l1^-1 A: centre, half-width.
+  double Theta, Delta;
+  double Scale;
+  int CycleIndex;
+};
 
-  // One cycle on level l: X_l ~ A_l^-1 B_l.
-  std::function<void(int)> cycle = [&](int l)
+template <typename TB>
+void AggregationMultigridSolver::Internals::PreSmooth(
+  const Level& lev, const TB* b, const Cycle& cy) const
+{
+  const long long m = 3 * static_cast<long long>(lev.Pattern.Size);
+  const float* inv = lev.InverseL1.data();
+  float* X = lev.X.data();
+  const double w = 1.0 / cy.Theta;
+  // First Chebyshev step from zero: x = D^-1 b / theta (no residual needed).
+#pragma omp parallel for schedule(static) if(m > 3 * ParallelThreshold)
+  for (long long k = 0; k < m; ++k)
   {
-    const auto& lev = levels[l];
-    if (l == L - 1)
+    X[k] = static_cast<float>(w * inv[k] * static_cast<double>(b[k]));
+  }
+  if (cy.Degree >= 2)
+  {
+    // R = b, D = X; then the Chebyshev recurrence.
+    lev.R.resize(m);
+    lev.D.resize(m);
+    float* R = lev.R.data();
+    float* D = lev.D.data();
+#pragma omp parallel for schedule(static) if(m > 3 * ParallelThreshold)
+    for (long long k = 0; k < m; ++k)
     {
-      SolveInterleaved(Internal_->Coarsest.data(), lev.Pattern.Size, lev.B.data(), lev.X.data());
-      return;
+      R[k] = static_cast<float>(b[k]);
+      D[k] = X[k];
     }
-    // Pre-smoothing from zero, residual, restriction b_c = P^T r (sums over
-    // the aggregates).
-    smooth(lev, true);
-    MultiplyFloat(lev.Pattern, lev.Single.data(), lev.X.data(), lev.T.data());
-    const auto& coarse = levels[l + 1];
+    ChebyshevSteps(lev, cy);
+  }
+}
+
+void AggregationMultigridSolver::Internals::ChebyshevSteps(const Level& lev, const Cycle& cy) const
+{
+  const int n = lev.Pattern.Size;
+  const long long m = 3 * static_cast<long long>(n);
+  const float* inv = lev.InverseL1.data();
+  float* X = lev.X.data();
+  float* R = lev.R.data();
+  float* D = lev.D.data();
+  lev.T.resize(m);
+  float* T = lev.T.data();
+  const double sigma = cy.Theta / cy.Delta;
+  double rho = 1.0 / sigma;
+  for (int step = 2; step <= cy.Degree; ++step)
+  {
+    Residual(lev, static_cast<const float*>(nullptr), D, T); // T = A D
+    const double rhoNew = 1.0 / (2.0 * sigma - rho);
+    const double a = rhoNew * rho, bc = 2.0 * rhoNew / cy.Delta;
+    rho = rhoNew;
+#pragma omp parallel for schedule(static) if(m > 3 * ParallelThreshold)
+    for (long long k = 0; k < m; ++k)
+    {
+      const double r = static_cast<double>(R[k]) - T[k];
+      const double d = a * D[k] + bc * inv[k] * r;
+      R[k] = static_cast<float>(r);
+      D[k] = static_cast<float>(d);
+      X[k] = static_cast<float>(X[k] + d);
+    }
+  }
+}
+
+template <typename TB>
+void AggregationMultigridSolver::Internals::Residual(
+  const Level& lev, const TB* b, const float* x, float* out) const
+{
+  const int n = lev.Pattern.Size;
+  const int* ro = lev.Pattern.Offsets.data();
+  const int* ci = lev.Pattern.Columns.data();
+  const float* v = lev.Single.data();
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
+  for (int i = 0; i < n; ++i)
+  {
+    double ax[3];
+    FloatRow(ro, ci, v, x, i, ax);
+    const std::size_t q = 3 * static_cast<std::size_t>(i);
+    for (int c = 0; c < NC; ++c)
+    {
+      // b == nullptr: out = A x.
+      out[q + c] = static_cast<float>(b ? static_cast<double>(b[q + c]) - ax[c] : ax[c]);
+    }
+  }
+}
+
+template <typename TB, typename TO>
+std::array<double, NC> AggregationMultigridSolver::Internals::PostSmooth(
+  const Level& lev, const TB* b, TO* out, bool dot, const Cycle& cy) const
+{
+  const int n = lev.Pattern.Size;
+  const float* inv = lev.InverseL1.data();
+  const double w = 1.0 / cy.Theta;
+  float* X = lev.X.data();
+  if (cy.Degree == 1)
+  {
+    // One fused pass: out = x + D^-1 (b - A x) / theta, row by row (x is only
+    // read, so no residual or update vectors are stored), and b.out.
+    const int* ro = lev.Pattern.Offsets.data();
+    const int* ci = lev.Pattern.Columns.data();
+    const float* v = lev.Single.data();
+    return ChunkedSums<NC>(n,
+      [&](long long begin, long long end, double* sums)
+      {
+        double s[NC] = { 0.0, 0.0, 0.0 };
+        for (long long i = begin; i < end; ++i)
+        {
+          double ax[3];
+          FloatRow(ro, ci, v, static_cast<const float*>(X), static_cast<int>(i), ax);
+          const std::size_t q = 3 * static_cast<std::size_t>(i);
+          for (int c = 0; c < NC; ++c)
+          {
+            const double bi = static_cast<double>(b[q + c]);
+            const TO o =
+              static_cast<TO>(static_cast<double>(X[q + c]) + w * inv[q + c] * (bi - ax[c]));
+            out[q + c] = o;
+            s[c] += bi * static_cast<double>(o);
+          }
+        }
+        if (dot)
+        {
+          for (int c = 0; c < NC; ++c)
+          {
+            sums[c] += s[c];
+          }
+        }
+      });
+  }
+  // Degree >= 2: R = b - A X, D = D^-1 R / theta, X += D, the recurrence,
+  // then out = X.
+  const long long m = 3 * static_cast<long long>(n);
+  lev.R.resize(m);
+  lev.D.resize(m);
+  float* R = lev.R.data();
+  float* D = lev.D.data();
+  Residual(lev, b, X, R);
+#pragma omp parallel for schedule(static) if(m > 3 * ParallelThreshold)
+  for (long long k = 0; k < m; ++k)
+  {
+    const double d = w * inv[k] * static_cast<double>(R[k]);
+    D[k] = static_cast<float>(d);
+    X[k] = static_cast<float>(X[k] + d);
+  }
+  ChebyshevSteps(lev, cy);
+  return ChunkedSums<NC>(n,
+    [&](long long begin, long long end, double* sums)
+    {
+      double s[NC] = { 0.0, 0.0, 0.0 };
+      for (long long k = 3 * begin; k < 3 * end; ++k)
+      {
+        out[k] = static_cast<TO>(X[k]);
+        s[k % 3] += static_cast<double>(b[k]) * static_cast<double>(X[k]);
+      }
+      if (dot)
+      {
+        for (int c = 0; c < NC; ++c)
+        {
+          sums[c] += s[c];
+        }
+      }
+    });
+}
+
+template <typename TB, typename TO>
+std::array<double, NC> AggregationMultigridSolver::Internals::Visit(
+  int l, const TB* b, TO* out, bool dot, const Cycle& cy) const
+{
+  const int L = static_cast<int>(Levels.size());
+  const Level& lev = Levels[l];
+  if (l == L - 1)
+  {
+    SolveInterleaved(Coarsest.data(), lev.Pattern.Size, b, out);
+    // A one-level hierarchy (a tiny system) is solved directly; CG still
+    // needs b.out.
+    std::array<double, NC> sums{};
+    if (dot)
+    {
+      const long long m = 3 * static_cast<long long>(lev.Pattern.Size);
+      for (long long k = 0; k < m; ++k)
+      {
+        sums[k % 3] += static_cast<double>(b[k]) * static_cast<double>(out[k]);
+      }
+    }
+    return sums;
+  }
+  // Pre-smoothing from zero, residual, restriction b_c = P^T r (sums over
+  // the aggregates).
+  PreSmooth(lev, b, cy);
+  Residual(lev, b, static_cast<const float*>(lev.X.data()), lev.R.data());
+  const Level& coarse = Levels[l + 1];
+  {
     const int nc = coarse.Pattern.Size;
-    const double* B = lev.B.data();
-    const double* T = lev.T.data();
-    double* cb = coarse.B.data();
+    const float* R = lev.R.data();
+    float* cb = coarse.B.data();
 #pragma omp parallel for schedule(static) if(nc > ParallelThreshold)
     for (int a = 0; a < nc; ++a)
     {
       double s0 = 0.0, s1 = 0.0, s2 = 0.0;
       for (int m = lev.MemberOffsets[a]; m < lev.MemberOffsets[a + 1]; ++m)
       {
-        // r = b - A x of the member, summed without storing r.
         const std::size_t q = 3 * static_cast<std::size_t>(lev.Members[m]);
-        s0 += B[q] - T[q];
-        s1 += B[q + 1] - T[q + 1];
-        s2 += B[q + 2] - T[q + 2];
+        s0 += R[q];
+        s1 += R[q + 1];
+        s2 += R[q + 2];
       }
-      cb[3 * static_cast<std::size_t>(a)] = s0;
-      cb[3 * static_cast<std::size_t>(a) + 1] = s1;
-      cb[3 * static_cast<std::size_t>(a) + 2] = s2;
+      cb[3 * static_cast<std::size_t>(a)] = static_cast<float>(s0);
+      cb[3 * static_cast<std::size_t>(a) + 1] = static_cast<float>(s1);
+      cb[3 * static_cast<std::size_t>(a) + 2] = static_cast<float>(s2);
     }
-    // Coarse problem: one cycle, or (levels below level 0 that are not the
-    // coarsest) `gamma` cycles as a stationary iteration from zero (W-cycle
-    // for gamma = 2: still a fixed symmetric operator, so CG stays valid).
-    const int gamma = l + 1 < L - 1 ? std::max(1, CycleIndex_) : 1;
-    if (gamma == 1)
-    {
-      cycle(l + 1);
-    }
-    else
-    {
-      coarse.Saved = coarse.B;
-      coarse.Sum.setZero(coarse.B.size());
-      for (int g = 0; g < gamma; ++g)
-      {
-        if (g > 0)
-        {
-          MultiplyFloat(coarse.Pattern, coarse.Single.data(), coarse.Sum.data(), coarse.T.data());
-          coarse.B = coarse.Saved - coarse.T;
-        }
-        cycle(l + 1);
-        coarse.Sum += coarse.X;
-      }
-      coarse.X = coarse.Sum;
-    }
-    // Coarse correction x += s P x_c, post-smoothing.
-    {
-      const int n = lev.Pattern.Size;
-      const double* xc = coarse.X.data();
-      double* x = lev.X.data();
-      const int* agg = lev.Aggregate.data();
-#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
-      for (int i = 0; i < n; ++i)
-      {
-        const double* c = xc + 3 * static_cast<std::size_t>(agg[i]);
-        x[3 * static_cast<std::size_t>(i)] += scale * c[0];
-        x[3 * static_cast<std::size_t>(i) + 1] += scale * c[1];
-        x[3 * static_cast<std::size_t>(i) + 2] += scale * c[2];
-      }
-    }
-    smooth(lev, false);
+  }
+  // Coarse problem: one cycle, or (levels below level 0 that are not the
+  // coarsest) `gamma` cycles as a stationary iteration from zero (W-cycle
+  // for gamma = 2: still a fixed symmetric operator, so CG stays valid):
+  // x_c = sum of the corrections, each from the residual b_c - A_c x_c.
+  const int gamma = l + 1 < L - 1 ? std::max(1, cy.CycleIndex) : 1;
+  auto visitCoarse = [&]()
+  {
+    Visit(l + 1, static_cast<const float*>(coarse.B.data()), coarse.Y.data(), false, cy);
+    coarse.X.swap(coarse.Y);
   };
-  levels[0].B = rhs;
-  cycle(0);
-  out = levels[0].X;
+  for (int g = 0; g < gamma; ++g)
+  {
+    if (g > 0)
+    {
+      Residual(coarse, static_cast<const float*>(coarse.Saved.data()),
+        static_cast<const float*>(coarse.Sum.data()), coarse.B.data());
+    }
+    visitCoarse();
+    if (g > 0)
+    {
+      float* xc = coarse.X.data();
+      const float* sum = coarse.Sum.data();
+      const long long mc = static_cast<long long>(coarse.X.size());
+#pragma omp parallel for schedule(static) if(mc > 3 * ParallelThreshold)
+      for (long long k = 0; k < mc; ++k)
+      {
+        xc[k] += sum[k];
+      }
+    }
+    if (g == 0 && gamma > 1)
+    {
+      coarse.Saved.swap(coarse.B); // keep b_c
+    }
+    if (g + 1 < gamma)
+    {
+      coarse.Sum.swap(coarse.X);
+    }
+  }
+  // Coarse correction x += s P x_c, post-smoothing into out.
+  {
+    const int n = lev.Pattern.Size;
+    const float* xc = coarse.X.data();
+    float* x = lev.X.data();
+    const int* agg = lev.Aggregate.data();
+    const double scale = cy.Scale;
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
+    for (int i = 0; i < n; ++i)
+    {
+      const float* c = xc + 3 * static_cast<std::size_t>(agg[i]);
+      float* xi = x + 3 * static_cast<std::size_t>(i);
+      xi[0] = static_cast<float>(xi[0] + scale * c[0]);
+      xi[1] = static_cast<float>(xi[1] + scale * c[1]);
+      xi[2] = static_cast<float>(xi[2] + scale * c[2]);
+    }
+  }
+  return PostSmooth(lev, b, out, dot, cy);
+}
+
+std::array<double, NC> AggregationMultigridSolver::Precondition(const double* r, double* z) const
+{
+  Internals::Cycle cy;
+  cy.Degree = std::max(1, Degree_);
+  const double fraction = std::min(std::max(Fraction_, 1e-3), 0.99);
+  // Chebyshev on D_l1^-1 A over [fraction, 1]: by Gershgorin the spectrum of
+  // D_l1^-1 A lies in (0, 1] (|a_ii| + sum_{j != i} |a_ij| = d_i).
+  cy.Theta = 0.5 * (1.0 + fraction);
+  cy.Delta = 0.5 * (1.0 - fraction);
+  cy.Scale = CorrectionScale_;
+  cy.CycleIndex = CycleIndex_;
+  return Internal_->Visit(0, r, z, true, cy);
+}
+
+void AggregationMultigridSolver::ApplyPreconditioner(
+  const Eigen::VectorXd& rhs, Eigen::VectorXd& out) const
+{
+  out.resize(rhs.size());
+  Precondition(rhs.data(), out.data());
 }
 
 void AggregationMultigridSolver::CheckSystem(const DiffusionSystem& system) const
@@ -666,18 +845,18 @@ bool AggregationMultigridSolver::Solve(const DiffusionSystem& system,
 {
   CheckSystem(system);
   const int n = system.NumberOfUnknowns;
-  Eigen::VectorXd xi = Eigen::VectorXd::Zero(3 * static_cast<long long>(n));
-  if (warmStart && x[0].size() == n && x[1].size() == n && x[2].size() == n)
-  {
-    Interleave(x, xi);
-  }
   const double flops =
     static_cast<double>(system.ColumnIndices.size()) + 5.0 * n + Internal_->VCycleFlops;
-  const bool done = BlockedPCG(
-    system, [this](const Eigen::VectorXd& r, Eigen::VectorXd& z) { ApplyPreconditioner(r, z); },
-    xi, RelTol_, MaxIter_, stats, flops, Progress_);
-  Deinterleave(xi, x);
-  return done;
+  const float* single = UsesSinglePrecisionProduct() ? Internal_->Levels[0].Single.data() : nullptr;
+  return FusedBlockedPCG(
+    system, single, [this](const double* r, double* z) { return Precondition(r, z); }, x,
+    warmStart, RelTol_, MaxIter_, stats, flops, Progress_, Internal_->Work);
+}
+
+bool AggregationMultigridSolver::UsesSinglePrecisionProduct() const
+{
+  return RelTol_ >= SingleProductTol_ && !Internal_->Levels.empty() &&
+    !Internal_->Levels[0].Single.empty();
 }
 
 int AggregationMultigridSolver::GetNumberOfLevels() const
@@ -746,9 +925,13 @@ std::size_t AggregationMultigridSolver::GetMemoryBytes() const
                lev.Aggregate.size() + lev.MemberOffsets.size() + lev.Members.size() +
                lev.CoarseSlot.size()) *
         sizeof(int) +
-      lev.Values.size() * sizeof(double) + lev.Single.size() * sizeof(float) +
-      6 * lev.InverseL1.size() * sizeof(double);
+      lev.Values.size() * sizeof(double) +
+      (lev.Single.size() + lev.InverseL1.size() + lev.B.size() + lev.X.size() + lev.Y.size() +
+        lev.R.size() + lev.D.size() + lev.T.size() + lev.Saved.size() + lev.Sum.size()) *
+        sizeof(float);
   }
+  const auto& w = Internal_->Work;
+  bytes += (w.R.size() + w.Z.size() + w.P.size() + w.Q.size()) * sizeof(double);
   bytes += NC * Internal_->CoarsestFactorNonZeros * (sizeof(double) + sizeof(int));
   return bytes;
 }

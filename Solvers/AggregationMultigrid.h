@@ -78,6 +78,19 @@ public:
   /// piecewise-constant prolongation; see Multiresolution.md).
   void SetCycleIndex(int gamma) { CycleIndex_ = gamma; }
   int GetCycleIndex() const { return CycleIndex_; }
+  /// CG's own products with the level-0 matrix (the initial residual and one
+  /// product per iteration) use its single-precision copy (interleaved, 42 MB
+  /// per product instead of 74 MB at 1M tets) when RelTol >= this tolerance
+  /// (default 1e-5), and the double values for tighter tolerances. With the
+  /// single copy A_f, CG solves A_f x = b: the relative residual it reports
+  /// is that of A_f, and b - A x differs from it by (A - A_f) x, about 1e-7
+  /// |A| |x| (see Multiresolution.md for the measured floor). 0: always
+  /// single, infinity: always double.
+  void SetSinglePrecisionProductTolerance(double tol) { SingleProductTol_ = tol; }
+  double GetSinglePrecisionProductTolerance() const { return SingleProductTol_; }
+  /// Whether the next Solve uses the single-precision product (RelTol and a
+  /// hierarchy with more than one level; a one-level hierarchy has no copy).
+  bool UsesSinglePrecisionProduct() const;
   /// OpenMP threads of the hierarchy build (0 = OpenMP's default).
   void SetNumberOfThreads(int n) { Threads_ = n; }
 
@@ -105,10 +118,13 @@ public:
   int GetNumberOfSetups() const { return Setups_; }
 
   /// One V-cycle z = B r on the three channels (interleaved, 3 values per
-  /// vertex) — the preconditioner, exposed for tests.
+  /// vertex) — the preconditioner, exposed for tests. The cycle works on
+  /// single-precision vectors (r and z are double).
   void ApplyPreconditioner(const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
 
 private:
+  /// z = B r (3n values each); returns r.z per channel (deterministic sums).
+  std::array<double, NumberOfChannels> Precondition(const double* r, double* z) const;
   void BuildHierarchy(const DiffusionSystem& system, const std::vector<double>& points);
   void ComputeValues(const DiffusionSystem& system);
   void CheckSystem(const DiffusionSystem& system) const;
@@ -120,6 +136,7 @@ private:
   int Degree_ = 1;
   double Fraction_ = 0.3;
   double CorrectionScale_ = 1.5;
+  double SingleProductTol_ = 1e-5;
   int CycleIndex_ = 2;
   int Threads_ = 0;
   int Unknowns_ = -1;

@@ -23,6 +23,7 @@
 #include <functional>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace translucency
@@ -105,8 +106,8 @@ inline void CheckSystemOnMesh(
  * c with its own factorisation factors[c], on interleaved vectors of n
  * unknowns (value 3 i + c).
  */
-template <typename Factorisation>
-inline void SolveInterleaved(const Factorisation* factors, int n, const double* b, double* x)
+template <typename Factorisation, typename TB, typename TX>
+inline void SolveInterleaved(const Factorisation* factors, int n, const TB* b, TX* x)
 {
   Eigen::VectorXd bc(n);
   for (int c = 0; c < NC; ++c)
@@ -118,7 +119,7 @@ inline void SolveInterleaved(const Factorisation* factors, int n, const double* 
     const Eigen::VectorXd xc = factors[c].solve(bc);
     for (int i = 0; i < n; ++i)
     {
-      x[3 * static_cast<long long>(i) + c] = xc[i];
+      x[3 * static_cast<long long>(i) + c] = static_cast<TX>(xc[i]);
     }
   }
 }
@@ -172,6 +173,62 @@ inline void MultiplyFloat(const CsrPattern& p, const float* v, const double* x, 
     y[3 * static_cast<std::size_t>(i) + 1] = a1;
     y[3 * static_cast<std::size_t>(i) + 2] = a2;
   }
+}
+
+/// Row i of A x with interleaved single-precision values v (3 per non-zero)
+/// and an interleaved x of any precision, accumulated in double.
+template <typename T>
+inline void FloatRow(const int* ro, const int* ci, const float* v, const T* x, int i, double* a)
+{
+  double a0 = 0.0, a1 = 0.0, a2 = 0.0;
+  for (int k = ro[i]; k < ro[i + 1]; ++k)
+  {
+    const T* xj = x + 3 * static_cast<std::size_t>(ci[k]);
+    const float* vk = v + 3 * static_cast<std::size_t>(k);
+    a0 += static_cast<double>(vk[0]) * static_cast<double>(xj[0]);
+    a1 += static_cast<double>(vk[1]) * static_cast<double>(xj[1]);
+    a2 += static_cast<double>(vk[2]) * static_cast<double>(xj[2]);
+  }
+  a[0] = a0;
+  a[1] = a1;
+  a[2] = a2;
+}
+
+/// Vertices per chunk of the deterministic sums (Dot3, ChunkedSums).
+constexpr long long SumChunk = 4096;
+
+/**
+ * Runs body(begin, end, sums) on the vertex ranges of fixed chunks of
+ * SumChunk vertices covering [0, n) (in parallel over the chunks when
+ * n > ParallelThreshold); body adds its chunk's S partial sums to sums
+ * (zero on entry). The chunks' sums are then added in chunk order, so the
+ * result does not depend on the number of threads. Lets a pass over the
+ * vectors compute its dot products on the fly (fused kernels).
+ */
+template <int S, typename Body>
+inline std::array<double, S> ChunkedSums(long long n, const Body& body)
+{
+  const long long chunks = (n + SumChunk - 1) / SumChunk;
+  std::array<double, S> total{};
+  if (chunks <= 1)
+  {
+    body(0LL, n, total.data());
+    return total;
+  }
+  std::vector<double> partial(S * static_cast<std::size_t>(chunks), 0.0);
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
+  for (long long q = 0; q < chunks; ++q)
+  {
+    body(q * SumChunk, std::min(n, (q + 1) * SumChunk), partial.data() + S * q);
+  }
+  for (long long q = 0; q < chunks; ++q)
+  {
+    for (int c = 0; c < S; ++c)
+    {
+      total[c] += partial[S * q + c];
+    }
+  }
+  return total;
 }
 
 /// Per-channel dot products of interleaved vectors, summed over fixed chunks
@@ -366,6 +423,281 @@ inline bool BlockedPCG(const DiffusionSystem& system, Precondition precondition,
         if (active[c])
         {
           p[3 * i + c] = z[3 * i + c] + beta[c] * p[3 * i + c];
+        }
+      }
+    }
+  }
+  if (progress)
+  {
+    progress(1.0);
+  }
+  return true;
+}
+
+/// Work vectors of FusedBlockedPCG, kept by the solver between solves (a
+/// fresh 4.4 MB vector per solve at 180k unknowns costs its page faults).
+struct FusedPCGWorkspace
+{
+  Eigen::VectorXd R, Z, P, Q;
+};
+
+/// Row i of the level-0 matrix times an interleaved x: double values (three
+/// arrays) or, if `single` is given, its interleaved single-precision copy.
+template <bool Single, typename T>
+inline void SystemRow(const DiffusionSystem& s, const float* single, const T* x, int i, double* a)
+{
+  if constexpr (Single)
+  {
+    FloatRow(s.RowOffsets.data(), s.ColumnIndices.data(), single, x, i, a);
+  }
+  else
+  {
+    const int* ro = s.RowOffsets.data();
+    const int* ci = s.ColumnIndices.data();
+    const double* v0 = s.Values[0].data();
+    const double* v1 = s.Values[1].data();
+    const double* v2 = s.Values[2].data();
+    double a0 = 0.0, a1 = 0.0, a2 = 0.0;
+    for (int k = ro[i]; k < ro[i + 1]; ++k)
+    {
+      const T* xj = x + 3 * static_cast<std::size_t>(ci[k]);
+      a0 += v0[k] * xj[0];
+      a1 += v1[k] * xj[1];
+      a2 += v2[k] * xj[2];
+    }
+    a[0] = a0;
+    a[1] = a1;
+    a[2] = a2;
+  }
+}
+
+/**
+ * BlockedPCG with fused passes over the vectors (the same iteration and the
+ * same per-channel scalars; each dot product is computed, in the chunked
+ * deterministic order of Dot3, inside the pass that produces its operand):
+ *
+ * - initial residual r = b - A x together with b.b and r.r, reading b and x
+ *   from the channel arrays (no interleaved copies; from x = 0 no product);
+ * - q = A p together with p.q;
+ * - x += alpha p, r -= alpha q together with r.r; x stays in the caller's
+ *   three channel arrays (it is only streamed, never gathered);
+ * - precondition(r, z) returns r.z (it computes it in its last pass);
+ * - p = z + beta p (the first p is z itself: the buffers are swapped).
+ *
+ * single: interleaved single-precision values of the level-0 matrix (3 per
+ * non-zero) for the products of CG itself, or nullptr for the double values.
+ * With single values CG solves the rounded system A_f x = b, so RelTol is
+ * reached for A_f: use it only for tolerances well above the rounding
+ * (the caller's rule). warm: start from x (else from 0; x is resized).
+ * Work vectors in `w`. Returns false if aborted.
+ */
+template <typename Precondition>
+inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
+  Precondition precondition, std::array<Eigen::VectorXd, NC>& x, bool warm, double tol,
+  int maxIter, std::array<LinearSolveStats, NC>& stats, double flopsPerIteration,
+  const std::function<bool(double)>& progress, FusedPCGWorkspace& w)
+{
+  const int n = system.NumberOfUnknowns;
+  const long long n3 = 3 * static_cast<long long>(n);
+  const double nnz = std::max<double>(1.0, static_cast<double>(system.ColumnIndices.size()));
+  for (auto* v : { &w.R, &w.Z, &w.P, &w.Q })
+  {
+    if (v->size() != n3)
+    {
+      v->resize(n3);
+    }
+  }
+  for (int c = 0; c < NC; ++c)
+  {
+    if (!warm || x[c].size() != n)
+    {
+      warm = false;
+    }
+  }
+  if (!warm)
+  {
+    for (int c = 0; c < NC; ++c)
+    {
+      x[c].setZero(n);
+    }
+  }
+  double* r = w.R.data();
+  double* q = w.Q.data();
+  // Initial residual with b.b and r.r (sums 0-2: b.b, 3-5: r.r).
+  const double* bc[NC] = { system.RightHandSide[0].data(), system.RightHandSide[1].data(),
+    system.RightHandSide[2].data() };
+  const double* xc[NC] = { x[0].data(), x[1].data(), x[2].data() };
+  auto initial = [&](auto singleTag)
+  {
+    constexpr bool S = decltype(singleTag)::value;
+    return ChunkedSums<6>(n,
+      [&](long long begin, long long end, double* sums)
+      {
+        double local[6] = { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 };
+        for (long long i = begin; i < end; ++i)
+        {
+          double ax[3] = { 0.0, 0.0, 0.0 };
+          if (warm)
+          {
+            // Row i of A x with x in the channel arrays.
+            const int* ro = system.RowOffsets.data();
+            const int* ci = system.ColumnIndices.data();
+            for (int k = ro[i]; k < ro[i + 1]; ++k)
+            {
+              const int j = ci[k];
+              for (int c = 0; c < NC; ++c)
+              {
+                const double a = S ? static_cast<double>(single[3 * static_cast<std::size_t>(k) + c])
+                                   : system.Values[c][k];
+                ax[c] += a * xc[c][j];
+              }
+            }
+          }
+          for (int c = 0; c < NC; ++c)
+          {
+            const double b = bc[c][i];
+            const double ri = b - ax[c];
+            r[3 * i + c] = ri;
+            local[c] += b * b;
+            local[3 + c] += ri * ri;
+          }
+        }
+        for (int c = 0; c < 6; ++c)
+        {
+          sums[c] += local[c];
+        }
+      });
+  };
+  const std::array<double, 6> start =
+    single ? initial(std::true_type()) : initial(std::false_type());
+  std::array<bool, NC> active;
+  std::array<double, NC> normB, rz{};
+  for (int c = 0; c < NC; ++c)
+  {
+    normB[c] = std::sqrt(start[c]);
+    stats[c] = LinearSolveStats();
+    stats[c].SpMVEquivalents = (warm ? 1.0 : 0.0) + 4.0 * n / nnz; // initial residual
+    if (normB[c] == 0.0)
+    {
+      // SPD: the solution is exactly zero.
+      x[c].setZero();
+      active[c] = false;
+      stats[c].Converged = true;
+      continue;
+    }
+    stats[c].RelativeResidual = std::sqrt(start[3 + c]) / normB[c];
+    active[c] = !(stats[c].RelativeResidual <= tol);
+    stats[c].Converged = !active[c];
+  }
+  auto anyActive = [&]() { return active[0] || active[1] || active[2]; };
+  if (anyActive())
+  {
+    rz = precondition(static_cast<const double*>(r), w.Z.data());
+    w.P.swap(w.Z); // p = z
+  }
+  auto product = [&](auto singleTag)
+  {
+    constexpr bool S = decltype(singleTag)::value;
+    const double* p = w.P.data();
+    return ChunkedSums<3>(n,
+      [&](long long begin, long long end, double* sums)
+      {
+        double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+        for (long long i = begin; i < end; ++i)
+        {
+          double* qi = q + 3 * i;
+          SystemRow<S>(system, single, p, static_cast<int>(i), qi);
+          s0 += p[3 * i] * qi[0];
+          s1 += p[3 * i + 1] * qi[1];
+          s2 += p[3 * i + 2] * qi[2];
+        }
+        sums[0] += s0;
+        sums[1] += s1;
+        sums[2] += s2;
+      });
+  };
+  for (int it = 0; it < maxIter && anyActive(); ++it)
+  {
+    if (progress && !progress(static_cast<double>(it) / maxIter))
+    {
+      return false;
+    }
+    const auto pq = single ? product(std::true_type()) : product(std::false_type());
+    std::array<double, NC> alpha{};
+    for (int c = 0; c < NC; ++c)
+    {
+      alpha[c] = active[c] && pq[c] != 0.0 ? rz[c] / pq[c] : 0.0;
+    }
+    const double* p = w.P.data();
+    double* x0 = x[0].data();
+    double* x1 = x[1].data();
+    double* x2 = x[2].data();
+    const auto rr = ChunkedSums<3>(n,
+      [&](long long begin, long long end, double* sums)
+      {
+        double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+        for (long long i = begin; i < end; ++i)
+        {
+          x0[i] += alpha[0] * p[3 * i];
+          x1[i] += alpha[1] * p[3 * i + 1];
+          x2[i] += alpha[2] * p[3 * i + 2];
+          const double r0 = r[3 * i] - alpha[0] * q[3 * i];
+          const double r1 = r[3 * i + 1] - alpha[1] * q[3 * i + 1];
+          const double r2 = r[3 * i + 2] - alpha[2] * q[3 * i + 2];
+          r[3 * i] = r0;
+          r[3 * i + 1] = r1;
+          r[3 * i + 2] = r2;
+          s0 += r0 * r0;
+          s1 += r1 * r1;
+          s2 += r2 * r2;
+        }
+        sums[0] += s0;
+        sums[1] += s1;
+        sums[2] += s2;
+      });
+    for (int c = 0; c < NC; ++c)
+    {
+      if (!active[c])
+      {
+        continue;
+      }
+      ++stats[c].Iterations;
+      stats[c].SpMVEquivalents += flopsPerIteration / nnz;
+      stats[c].RelativeResidual = std::sqrt(rr[c]) / normB[c];
+      if (stats[c].RelativeResidual <= tol)
+      {
+        active[c] = false;
+        stats[c].Converged = true;
+      }
+      else if (!(pq[c] > 0.0) || !std::isfinite(stats[c].RelativeResidual))
+      {
+        active[c] = false; // breakdown: not SPD, report not converged
+      }
+    }
+    if (!anyActive())
+    {
+      break;
+    }
+    const auto rzNew = precondition(static_cast<const double*>(r), w.Z.data());
+    std::array<double, NC> beta{};
+    for (int c = 0; c < NC; ++c)
+    {
+      beta[c] = active[c] && rz[c] != 0.0 ? rzNew[c] / rz[c] : 0.0;
+      if (active[c])
+      {
+        rz[c] = rzNew[c];
+      }
+    }
+    double* pw = w.P.data();
+    const double* z = w.Z.data();
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
+    for (long long i = 0; i < static_cast<long long>(n); ++i)
+    {
+      for (int c = 0; c < NC; ++c)
+      {
+        if (active[c])
+        {
+          pw[3 * i + c] = z[3 * i + c] + beta[c] * pw[3 * i + c];
         }
       }
     }

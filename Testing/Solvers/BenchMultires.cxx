@@ -1,6 +1,6 @@
 // Benchmarks of the linear solvers of the vertex discretisations
-// (cg-jacobi, transcut-multires, multigrid-cg) on the three channels of one
-// system: hierarchy/set-up, values-only set-up, cold solve to a relative
+// (cg-jacobi, transcut-multires, multigrid-cg, multigrid-agg) on the three
+// channels of one system: hierarchy/set-up, values-only set-up, cold solve to a relative
 // residual of 0.03 (about 1 % boundary-fluence error) and 1e-6, and a warm
 // solve after a 10-degree rotation of the directional light. Part of the
 // BenchSolvers executable (run by hand, not a ctest test):
@@ -17,6 +17,7 @@
 // relative L2 error of the boundary fluence (all channels) against a 1e-10
 // solution.
 
+#include "AggregationMultigrid.h"
 #include "DiscreteDivergence.h"
 #include "LightSources.h"
 #include "LinearSolver.h"
@@ -185,6 +186,12 @@ void BM_LinearSetup(benchmark::State& state, const char* name, bool pattern)
     state.counters["op_complexity"] = m->GetOperatorComplexity();
     state.counters["MB"] = solver->GetMemoryBytes() / 1e6;
   }
+  if (auto* m = dynamic_cast<AggregationMultigridSolver*>(solver.get()))
+  {
+    state.counters["levels"] = m->GetNumberOfLevels();
+    state.counters["op_complexity"] = m->GetOperatorComplexity();
+    state.counters["MB"] = solver->GetMemoryBytes() / 1e6;
+  }
 }
 
 /// Cold solve (from zero) of the three channels to `tol`.
@@ -261,5 +268,14 @@ BENCHMARK_CAPTURE(BM_LinearCold, multigrid_cg_1e_6, "multigrid-cg", 1e-6)->Apply
 BENCHMARK_CAPTURE(BM_LinearWarm, cg_jacobi_0_03, "cg-jacobi", 0.03)->Apply(LinearSizes);
 BENCHMARK_CAPTURE(BM_LinearWarm, transcut_0_03, "transcut-multires", 0.03)->Apply(LinearSizes);
 BENCHMARK_CAPTURE(BM_LinearWarm, multigrid_cg_0_03, "multigrid-cg", 0.03)->Apply(LinearSizes);
+// multigrid-agg at the tolerances of its 1 % boundary-fluence operating
+// point (Multiresolution.md): cold 0.05, warm relight 0.1; and 1e-6.
+BENCHMARK_CAPTURE(BM_LinearSetup, multigrid_agg_build, "multigrid-agg", true)
+  ->Apply(LinearSizes);
+BENCHMARK_CAPTURE(BM_LinearSetup, multigrid_agg_values, "multigrid-agg", false)
+  ->Apply(LinearSizes);
+BENCHMARK_CAPTURE(BM_LinearCold, multigrid_agg_0_05, "multigrid-agg", 0.05)->Apply(LinearSizes);
+BENCHMARK_CAPTURE(BM_LinearCold, multigrid_agg_1e_6, "multigrid-agg", 1e-6)->Apply(LinearSizes);
+BENCHMARK_CAPTURE(BM_LinearWarm, multigrid_agg_0_1, "multigrid-agg", 0.1)->Apply(LinearSizes);
 
 } // namespace

@@ -217,6 +217,50 @@ TEST(AggregationMultigrid, MatchesCholeskyOnRandomMeshesAndMaterials)
   }
 }
 
+// Loose tolerances use the single-precision copy of the level-0 matrix for
+// CG's own products: the solver then solves the rounded system A_f x = b. The
+// true residual b - A x (double matrix, computed here with Eigen) must still
+// meet the tolerance up to the rounding of A_f (|A - A_f| <= 2^-24 |A| per
+// entry, so |(A - A_f) x| <= 6e-8 |A| |x|, far below the tolerances where the
+// copy is used); tight tolerances keep the double product.
+TEST(AggregationMultigrid, SinglePrecisionProductMeetsTheTrueResidual)
+{
+  Problem p(CubeMesh(12, 5.0, 0.3, 51), 52);
+  const auto reference = Cholesky(p.System);
+  for (double tol : { 0.1, 0.03, 1e-3, 1e-4 })
+  {
+    auto solver = MakeSolver();
+    solver->SetRelTol(tol);
+    solver->Setup(p.System, &p.Mesh, true);
+    ASSERT_GE(solver->GetNumberOfLevels(), 2);
+    EXPECT_TRUE(solver->UsesSinglePrecisionProduct()) << tol;
+    std::array<Eigen::VectorXd, 3> x;
+    std::array<LinearSolveStats, 3> stats;
+    ASSERT_TRUE(solver->Solve(p.System, x, false, stats));
+    for (int c = 0; c < 3; ++c)
+    {
+      ASSERT_TRUE(stats[c].Converged);
+      const Eigen::SparseMatrix<double, Eigen::RowMajor> a = p.System.Matrix(c);
+      const Eigen::VectorXd& b = p.System.RightHandSide[c];
+      const double trueResidual = (b - a * x[c]).norm() / b.norm();
+      // |A| |x| / |b| bounds how much the rounding of A can move the residual.
+      Eigen::SparseMatrix<double, Eigen::RowMajor> absA = a.cwiseAbs();
+      const double rounding = 6e-8 * (absA * x[c].cwiseAbs()).norm() / b.norm();
+      EXPECT_LE(trueResidual, tol + rounding) << "tol " << tol << " channel " << c;
+      EXPECT_NEAR(trueResidual, stats[c].RelativeResidual, rounding) << "tol " << tol;
+      // The solution error is bounded by the condition number times the
+      // residual; on this mesh it is well below the residual tolerance.
+      EXPECT_LT(RelativeError(x[c], reference[c]), 10.0 * tol) << "tol " << tol;
+    }
+  }
+  auto tight = MakeSolver();
+  tight->SetRelTol(1e-8);
+  tight->Setup(p.System, &p.Mesh, true);
+  EXPECT_FALSE(tight->UsesSinglePrecisionProduct());
+  tight->SetSinglePrecisionProductTolerance(0.0); // always single
+  EXPECT_TRUE(tight->UsesSinglePrecisionProduct());
+}
+
 // The V-cycle is a symmetric positive definite operator (needed by CG):
 // u.B v = v.B u and v.B v > 0 for random vectors, per channel.
 TEST(AggregationMultigrid, PreconditionerIsSymmetricPositive)
