@@ -473,21 +473,25 @@ void TetMesh::BuildTopology()
 #pragma omp barrier
 
     // 2. Boundary faces and the adjacency rows (sorted, unique, diagonal
-    //    included). The faces of v (v their smallest vertex) are matched by
-    //    their two other vertices (lo, hi) through short lists headed at lo,
-    //    no sort; a face seen once is on the boundary.
-    struct FaceMatch
+    //    included). The faces of v are those in which v is the smallest
+    //    vertex: keyed by their two other vertices (lo, hi), collected
+    //    branch-free while the row is gathered, then counted in a small
+    //    (row length)^2 table indexed by the ranks of lo and hi in the sorted
+    //    row; a face seen once is on the boundary, more than twice is an
+    //    error. (The comparisons of vertex ids are unpredictable, so the code
+    //    selects and masks instead of branching.)
+    struct FaceCandidate
     {
-      int Hi, Tet, Face, Count, Next;
+      int Lo, Hi, Tet, Opposite;
     };
-    std::vector<FaceMatch> matches;
-    std::vector<int> touched;
+    std::vector<FaceCandidate> candidates;
     std::vector<FaceEntry> boundaryFaces;
     std::vector<int> row;
-    // mark[u] == v: u is already in row v; head[u]: first face (v, u, .)
-    // of the current v, -1 if none.
+    // mark[u] == v: u is already in row v; rank[u]: index of u in the sorted
+    // row of the current v; counts: the face table, zero between vertices.
     std::vector<int> mark(static_cast<size_t>(numPoints), -1);
-    std::vector<int> head(static_cast<size_t>(numPoints), -1);
+    std::vector<int> rank(static_cast<size_t>(numPoints));
+    std::vector<std::uint16_t> counts;
     auto& boundary = boundaryPerThread[tid];
     auto& columns = columnsPerThread[tid];
 #pragma omp for schedule(static)
@@ -497,18 +501,23 @@ void TetMesh::BuildTopology()
       {
         firstPointOfThread[tid] = v;
       }
-      matches.clear();
-      touched.clear();
       const int tetBegin = PointTetOffsets_[v], tetEnd = PointTetOffsets_[v + 1];
       // Row of v: every vertex of its tets once (marker array, branch-free:
       // always store, advance only for a vertex not yet in the row).
-      if (row.size() < 4 * static_cast<size_t>(tetEnd - tetBegin) + 1)
+      const size_t numTetsOfV = static_cast<size_t>(tetEnd - tetBegin);
+      if (row.size() < 4 * numTetsOfV + 1)
       {
-        row.resize(4 * static_cast<size_t>(tetEnd - tetBegin) + 1);
+        row.resize(4 * numTetsOfV + 1);
+      }
+      // Up to 3 faces per tet, plus one slot for the masked writes.
+      if (candidates.size() < 3 * numTetsOfV + 1)
+      {
+        candidates.resize(3 * numTetsOfV + 1);
       }
       int length = 1;
       row[0] = v;
       mark[v] = v;
+      int numCandidates = 0;
       for (int k = tetBegin; k < tetEnd; ++k)
       {
         const int t = PointTets_[k];
@@ -520,73 +529,70 @@ void TetMesh::BuildTopology()
           length += mark[u] != v ? 1 : 0;
           mark[u] = v;
         }
-        // Faces of t with v as their smallest vertex: all three faces through
-        // v if v is the smallest vertex of t, the face opposite the smallest
-        // vertex if v is the second smallest, none otherwise.
-        const int smaller = (tv[0] < v) + (tv[1] < v) + (tv[2] < v) + (tv[3] < v);
-        if (smaller > 1)
+        // Sorted vertices s0 < s1 < s2 < s3 (sorting network). If v = s0, its
+        // faces are (s1, s2), (s1, s3), (s2, s3), opposite s3, s2, s1; if
+        // v = s1, the face (s2, s3) opposite s0; otherwise none.
+        int s0 = std::min(tv[0], tv[1]), s1 = std::max(tv[0], tv[1]);
+        int s2 = std::min(tv[2], tv[3]), s3 = std::max(tv[2], tv[3]);
+        const int lowest = std::min(s0, s2), highest = std::max(s1, s3);
+        const int m1 = std::max(s0, s2), m2 = std::min(s1, s3);
+        s0 = lowest;
+        s1 = std::min(m1, m2);
+        s2 = std::max(m1, m2);
+        s3 = highest;
+        const int first = v == s0 ? 1 : 0;
+        const int second = v == s1 ? 1 : 0;
+        candidates[numCandidates] = { s2, s3, t, first ? s1 : s0 };
+        numCandidates += first | second;
+        candidates[numCandidates] = { s1, s2, t, s3 };
+        numCandidates += first;
+        candidates[numCandidates] = { s1, s3, t, s2 };
+        numCandidates += first;
+      }
+      int* const rowBegin = row.data();
+      int* const rowEnd = rowBegin + length;
+      std::sort(rowBegin, rowEnd); // unique already
+      for (int k = 0; k < length; ++k)
+      {
+        rank[rowBegin[k]] = k;
+      }
+      const size_t tableSize = static_cast<size_t>(length) * static_cast<size_t>(length);
+      if (counts.size() < tableSize)
+      {
+        counts.assign(tableSize, 0);
+      }
+      for (int c = 0; c < numCandidates; ++c)
+      {
+        const FaceCandidate& f = candidates[c];
+        ++counts[static_cast<size_t>(rank[f.Lo]) * length + rank[f.Hi]];
+      }
+      // Read and reset the table: the first candidate of a key sees its
+      // count, later ones see 0.
+      boundaryFaces.clear();
+      for (int c = 0; c < numCandidates; ++c)
+      {
+        const FaceCandidate& f = candidates[c];
+        std::uint16_t& count = counts[static_cast<size_t>(rank[f.Lo]) * length + rank[f.Hi]];
+        if (count == 1)
         {
-          continue;
+          const int* tv = &Tets_[4 * static_cast<size_t>(f.Tet)];
+          const int face = tv[0] == f.Opposite ? 0 : (tv[1] == f.Opposite ? 1 : (tv[2] == f.Opposite ? 2 : 3));
+          boundaryFaces.push_back({ f.Lo, f.Hi, f.Tet, face });
         }
-        const int a = tv[0] == v ? 0 : (tv[1] == v ? 1 : (tv[2] == v ? 2 : 3));
-        for (int f = 0; f < 4; ++f)
+        else if (count > 2 && firstNonManifold[tid] == INT_MAX)
         {
-          // Face f is opposite local vertex f; it contains v iff f != a, and
-          // v is its smallest vertex iff the smaller vertex, if any, is tv[f].
-          if (f == a || (smaller == 1 && tv[f] > v))
-          {
-            continue;
-          }
-          const int* fv = FaceVertices[f];
-          const int x = tv[fv[0]], y = tv[fv[1]], z = tv[fv[2]];
-          const int o1 = x == v ? y : x;
-          const int o2 = z == v ? y : z;
-          const int lo = std::min(o1, o2), hi = std::max(o1, o2);
-          int m = head[lo];
-          while (m >= 0 && matches[m].Hi != hi)
-          {
-            m = matches[m].Next;
-          }
-          if (m >= 0)
-          {
-            ++matches[m].Count;
-            continue;
-          }
-          if (head[lo] < 0)
-          {
-            touched.push_back(lo);
-          }
-          matches.push_back({ hi, t, f, 1, head[lo] });
-          head[lo] = static_cast<int>(matches.size()) - 1;
+          firstNonManifold[tid] = v;
         }
+        count = 0;
       }
       // Boundary faces of v in (lo, hi) order (as a sort of all faces would
-      // give); reset the list heads.
-      boundaryFaces.clear();
-      for (int lo : touched)
-      {
-        for (int m = head[lo]; m >= 0; m = matches[m].Next)
-        {
-          if (matches[m].Count == 1)
-          {
-            boundaryFaces.push_back({ lo, matches[m].Hi, matches[m].Tet, matches[m].Face });
-          }
-          else if (matches[m].Count > 2 && firstNonManifold[tid] == INT_MAX)
-          {
-            firstNonManifold[tid] = v;
-          }
-        }
-        head[lo] = -1;
-      }
+      // give).
       std::sort(boundaryFaces.begin(), boundaryFaces.end());
       for (const FaceEntry& e : boundaryFaces)
       {
         boundary.emplace_back(e.Tet, e.Face);
       }
-      int* const rowBegin = row.data();
-      int* const rowEnd = rowBegin + length;
-      std::sort(rowBegin, rowEnd); // unique already
-      DiagonalPositions_[v] = static_cast<int>(std::lower_bound(rowBegin, rowEnd, v) - rowBegin);
+      DiagonalPositions_[v] = rank[v];
       rowCount[v] = length;
       columns.insert(columns.end(), rowBegin, rowEnd);
     }
