@@ -264,15 +264,22 @@ void AggregationMultigridSolver::BuildHierarchy(
     coarse.Pattern.Size = nc;
     coarse.Pattern.Offsets.assign(nc + 1, 0);
     coarse.MeshIds.resize(nc);
-    std::vector<std::vector<int>> rows(nc);
+    // Rows are gathered into one buffer per thread (no allocation per row):
+    // row a is rowBuffer[rowThread[a]][rowStart[a] ...] (Offsets[a + 1] long).
     const int* agg = fine.Aggregate.data();
-#pragma omp parallel num_threads(nt) if(nc > ParallelThreshold)
+    const int rowThreads = nc > ParallelThreshold ? nt : 1;
+    std::vector<std::vector<int>> rowBuffer(rowThreads);
+    std::vector<int> rowStart(nc), rowThread(nc);
+#pragma omp parallel num_threads(rowThreads)
     {
+      const int tid = omp_get_thread_num();
+      std::vector<int>& buffer = rowBuffer[tid];
+      buffer.reserve(g.Columns.size() / rowThreads / 4 + 16);
       std::vector<int> mark(nc, -1);
 #pragma omp for schedule(dynamic, 512)
       for (int a = 0; a < nc; ++a)
       {
-        std::vector<int>& row = rows[a];
+        const std::size_t start = buffer.size();
         for (int m = fine.MemberOffsets[a]; m < fine.MemberOffsets[a + 1]; ++m)
         {
           const int i = fine.Members[m];
@@ -286,12 +293,14 @@ void AggregationMultigridSolver::BuildHierarchy(
             if (mark[b] != a)
             {
               mark[b] = a;
-              row.push_back(b);
+              buffer.push_back(b);
             }
           }
         }
-        std::sort(row.begin(), row.end());
-        coarse.Pattern.Offsets[a + 1] = static_cast<int>(row.size());
+        std::sort(buffer.begin() + start, buffer.end());
+        rowStart[a] = static_cast<int>(start);
+        rowThread[a] = tid;
+        coarse.Pattern.Offsets[a + 1] = static_cast<int>(buffer.size() - start);
       }
     }
     for (int a = 0; a < nc; ++a)
@@ -307,11 +316,12 @@ void AggregationMultigridSolver::BuildHierarchy(
       for (int a = 0; a < nc; ++a)
       {
         const int begin = coarse.Pattern.Offsets[a];
-        std::vector<int>& row = rows[a];
-        for (std::size_t q = 0; q < row.size(); ++q)
+        const int length = coarse.Pattern.Offsets[a + 1] - begin;
+        const int* row = rowBuffer[rowThread[a]].data() + rowStart[a];
+        for (int q = 0; q < length; ++q)
         {
           coarse.Pattern.Columns[begin + q] = row[q];
-          slot[row[q]] = begin + static_cast<int>(q);
+          slot[row[q]] = begin + q;
         }
         for (int m = fine.MemberOffsets[a]; m < fine.MemberOffsets[a + 1]; ++m)
         {
@@ -321,7 +331,6 @@ void AggregationMultigridSolver::BuildHierarchy(
             fine.CoarseSlot[k] = slot[agg[g.Columns[k]]];
           }
         }
-        std::vector<int>().swap(row);
       }
     }
     levels.push_back(std::move(coarse));
