@@ -124,57 +124,6 @@ inline void SolveInterleaved(const Factorisation* factors, int n, const TB* b, T
   }
 }
 
-/// y = A x for the three channels of the level-0 system (one pass over the
-/// pattern; x and y interleaved, 3 values per vertex).
-inline void MultiplySystem(const DiffusionSystem& s, const double* x, double* y)
-{
-  const int n = s.NumberOfUnknowns;
-  const int* ro = s.RowOffsets.data();
-  const int* ci = s.ColumnIndices.data();
-  const double* v0 = s.Values[0].data();
-  const double* v1 = s.Values[1].data();
-  const double* v2 = s.Values[2].data();
-#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
-  for (int i = 0; i < n; ++i)
-  {
-    double a0 = 0.0, a1 = 0.0, a2 = 0.0;
-    for (int k = ro[i]; k < ro[i + 1]; ++k)
-    {
-      const double* xj = x + 3 * static_cast<std::size_t>(ci[k]);
-      a0 += v0[k] * xj[0];
-      a1 += v1[k] * xj[1];
-      a2 += v2[k] * xj[2];
-    }
-    y[3 * static_cast<std::size_t>(i)] = a0;
-    y[3 * static_cast<std::size_t>(i) + 1] = a1;
-    y[3 * static_cast<std::size_t>(i) + 2] = a2;
-  }
-}
-
-/// y = A x with interleaved single-precision values (3 per non-zero).
-inline void MultiplyFloat(const CsrPattern& p, const float* v, const double* x, double* y)
-{
-  const int n = p.Size;
-  const int* ro = p.Offsets.data();
-  const int* ci = p.Columns.data();
-#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
-  for (int i = 0; i < n; ++i)
-  {
-    double a0 = 0.0, a1 = 0.0, a2 = 0.0;
-    for (int k = ro[i]; k < ro[i + 1]; ++k)
-    {
-      const double* xj = x + 3 * static_cast<std::size_t>(ci[k]);
-      const float* vk = v + 3 * static_cast<std::size_t>(k);
-      a0 += vk[0] * xj[0];
-      a1 += vk[1] * xj[1];
-      a2 += vk[2] * xj[2];
-    }
-    y[3 * static_cast<std::size_t>(i)] = a0;
-    y[3 * static_cast<std::size_t>(i) + 1] = a1;
-    y[3 * static_cast<std::size_t>(i) + 2] = a2;
-  }
-}
-
 /// Row i of A x with interleaved single-precision values v (3 per non-zero)
 /// and an interleaved x of any precision, accumulated in double.
 template <typename T>
@@ -192,6 +141,59 @@ inline void FloatRow(const int* ro, const int* ci, const float* v, const T* x, i
   a[0] = a0;
   a[1] = a1;
   a[2] = a2;
+}
+
+/// Row i of the level-0 matrix times an interleaved x: double values (three
+/// arrays) or, if `single` is given, its interleaved single-precision copy.
+template <bool Single, typename T>
+inline void SystemRow(const DiffusionSystem& s, const float* single, const T* x, int i, double* a)
+{
+  if constexpr (Single)
+  {
+    FloatRow(s.RowOffsets.data(), s.ColumnIndices.data(), single, x, i, a);
+  }
+  else
+  {
+    const int* ro = s.RowOffsets.data();
+    const int* ci = s.ColumnIndices.data();
+    const double* v0 = s.Values[0].data();
+    const double* v1 = s.Values[1].data();
+    const double* v2 = s.Values[2].data();
+    double a0 = 0.0, a1 = 0.0, a2 = 0.0;
+    for (int k = ro[i]; k < ro[i + 1]; ++k)
+    {
+      const T* xj = x + 3 * static_cast<std::size_t>(ci[k]);
+      a0 += v0[k] * xj[0];
+      a1 += v1[k] * xj[1];
+      a2 += v2[k] * xj[2];
+    }
+    a[0] = a0;
+    a[1] = a1;
+    a[2] = a2;
+  }
+}
+
+/// y = A x for the three channels of the level-0 system (one pass over the
+/// pattern; x and y interleaved, 3 values per vertex).
+inline void MultiplySystem(const DiffusionSystem& s, const double* x, double* y)
+{
+  const int n = s.NumberOfUnknowns;
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
+  for (int i = 0; i < n; ++i)
+  {
+    SystemRow<false>(s, nullptr, x, i, y + 3 * static_cast<std::size_t>(i));
+  }
+}
+
+/// y = A x with interleaved single-precision values (3 per non-zero).
+inline void MultiplyFloat(const CsrPattern& p, const float* v, const double* x, double* y)
+{
+  const int n = p.Size;
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
+  for (int i = 0; i < n; ++i)
+  {
+    FloatRow(p.Offsets.data(), p.Columns.data(), v, x, i, y + 3 * static_cast<std::size_t>(i));
+  }
 }
 
 /// Vertices per chunk of the deterministic sums (Dot3, ChunkedSums).
@@ -309,6 +311,91 @@ inline void Deinterleave(const Eigen::VectorXd& in, std::array<Eigen::VectorXd, 
   }
 }
 
+/// Per-channel start of the blocked CG loops from b.b and r.r of the
+/// initial residual: the norms of b, the stats (initialSpMV SpMV-equivalents
+/// so far) and which channels still iterate. Returns the channels with b = 0,
+/// whose solution is exactly 0 (SPD) and which the caller zeroes.
+inline std::array<bool, NC> StartChannels(const std::array<double, NC>& bb,
+  const std::array<double, NC>& rr, double tol, double initialSpMV, std::array<double, NC>& normB,
+  std::array<bool, NC>& active, std::array<LinearSolveStats, NC>& stats)
+{
+  std::array<bool, NC> zero{};
+  for (int c = 0; c < NC; ++c)
+  {
+    normB[c] = std::sqrt(bb[c]);
+    stats[c] = LinearSolveStats();
+    stats[c].SpMVEquivalents = initialSpMV;
+    if (normB[c] == 0.0)
+    {
+      zero[c] = true;
+      active[c] = false;
+      stats[c].Converged = true;
+      continue;
+    }
+    stats[c].RelativeResidual = std::sqrt(rr[c]) / normB[c];
+    active[c] = !(stats[c].RelativeResidual <= tol);
+    stats[c].Converged = !active[c];
+  }
+  return zero;
+}
+
+/// Per-channel end of a CG iteration: counts it for the active channels,
+/// freezes those that reached tol (converged) or broke down (p.A p <= 0 or
+/// a non-finite residual: not SPD, not converged).
+inline void UpdateChannels(const std::array<double, NC>& pq, const std::array<double, NC>& rr,
+  const std::array<double, NC>& normB, double tol, double spmvPerIteration,
+  std::array<bool, NC>& active, std::array<LinearSolveStats, NC>& stats)
+{
+  for (int c = 0; c < NC; ++c)
+  {
+    if (!active[c])
+    {
+      continue;
+    }
+    ++stats[c].Iterations;
+    stats[c].SpMVEquivalents += spmvPerIteration;
+    stats[c].RelativeResidual = std::sqrt(rr[c]) / normB[c];
+    if (stats[c].RelativeResidual <= tol)
+    {
+      active[c] = false;
+      stats[c].Converged = true;
+    }
+    else if (!(pq[c] > 0.0) || !std::isfinite(stats[c].RelativeResidual))
+    {
+      active[c] = false;
+    }
+  }
+}
+
+/// CG step lengths alpha = r.z / p.A p of the active channels.
+inline std::array<double, NC> StepLengths(const std::array<bool, NC>& active,
+  const std::array<double, NC>& rz, const std::array<double, NC>& pq)
+{
+  std::array<double, NC> alpha{};
+  for (int c = 0; c < NC; ++c)
+  {
+    alpha[c] = active[c] && pq[c] != 0.0 ? rz[c] / pq[c] : 0.0;
+  }
+  return alpha;
+}
+
+/// CG beta = r.z (new) / r.z (old) of the active channels; rz takes the new
+/// values.
+inline std::array<double, NC> NextBeta(const std::array<bool, NC>& active,
+  std::array<double, NC>& rz, const std::array<double, NC>& rzNew)
+{
+  std::array<double, NC> beta{};
+  for (int c = 0; c < NC; ++c)
+  {
+    beta[c] = active[c] && rz[c] != 0.0 ? rzNew[c] / rz[c] : 0.0;
+    if (active[c])
+    {
+      rz[c] = rzNew[c];
+    }
+  }
+  return beta;
+}
+
 /**
  * Conjugate gradient on the three channels at once (per-channel scalars,
  * one blocked SpMV and one blocked preconditioner application per
@@ -331,25 +418,13 @@ inline bool BlockedPCG(const DiffusionSystem& system, Precondition precondition,
   std::array<bool, NC> active;
   std::array<double, NC> normB, rz{};
   auto rr = Dot3(r, r);
+  const auto zero = StartChannels(bb, rr, tol, 1.0 + 4.0 * n / nnz, normB, active, stats);
   for (int c = 0; c < NC; ++c)
   {
-    normB[c] = std::sqrt(bb[c]);
-    stats[c] = LinearSolveStats();
-    stats[c].SpMVEquivalents = 1.0 + 4.0 * n / nnz; // initial residual
-    if (normB[c] == 0.0)
+    for (int i = 0; zero[c] && i < n; ++i)
     {
-      // SPD: the solution is exactly zero.
-      for (int i = 0; i < n; ++i)
-      {
-        x[3 * static_cast<long long>(i) + c] = 0.0;
-      }
-      active[c] = false;
-      stats[c].Converged = true;
-      continue;
+      x[3 * static_cast<long long>(i) + c] = 0.0;
     }
-    stats[c].RelativeResidual = std::sqrt(rr[c]) / normB[c];
-    active[c] = !(stats[c].RelativeResidual <= tol);
-    stats[c].Converged = !active[c];
   }
   auto anyActive = [&]() { return active[0] || active[1] || active[2]; };
   if (anyActive())
@@ -366,11 +441,7 @@ inline bool BlockedPCG(const DiffusionSystem& system, Precondition precondition,
     }
     MultiplySystem(system, p.data(), q.data());
     const auto pq = Dot3(p, q);
-    std::array<double, NC> alpha{};
-    for (int c = 0; c < NC; ++c)
-    {
-      alpha[c] = active[c] && pq[c] != 0.0 ? rz[c] / pq[c] : 0.0;
-    }
+    const std::array<double, NC> alpha = StepLengths(active, rz, pq);
 #pragma omp parallel for schedule(static) if(n > ParallelThreshold)
     for (long long i = 0; i < static_cast<long long>(n); ++i)
     {
@@ -381,40 +452,14 @@ inline bool BlockedPCG(const DiffusionSystem& system, Precondition precondition,
       }
     }
     rr = Dot3(r, r);
-    for (int c = 0; c < NC; ++c)
-    {
-      if (!active[c])
-      {
-        continue;
-      }
-      ++stats[c].Iterations;
-      stats[c].SpMVEquivalents += flopsPerIteration / nnz;
-      stats[c].RelativeResidual = std::sqrt(rr[c]) / normB[c];
-      if (stats[c].RelativeResidual <= tol)
-      {
-        active[c] = false;
-        stats[c].Converged = true;
-      }
-      else if (!(pq[c] > 0.0) || !std::isfinite(stats[c].RelativeResidual))
-      {
-        active[c] = false; // breakdown: not SPD, report not converged
-      }
-    }
+    UpdateChannels(pq, rr, normB, tol, flopsPerIteration / nnz, active, stats);
     if (!anyActive())
     {
       break;
     }
     precondition(r, z);
     const auto rzNew = Dot3(r, z);
-    std::array<double, NC> beta{};
-    for (int c = 0; c < NC; ++c)
-    {
-      beta[c] = active[c] && rz[c] != 0.0 ? rzNew[c] / rz[c] : 0.0;
-      if (active[c])
-      {
-        rz[c] = rzNew[c];
-      }
-    }
+    const std::array<double, NC> beta = NextBeta(active, rz, rzNew);
 #pragma omp parallel for schedule(static) if(n > ParallelThreshold)
     for (long long i = 0; i < static_cast<long long>(n); ++i)
     {
@@ -440,36 +485,6 @@ struct FusedPCGWorkspace
 {
   Eigen::VectorXd R, Z, P, Q;
 };
-
-/// Row i of the level-0 matrix times an interleaved x: double values (three
-/// arrays) or, if `single` is given, its interleaved single-precision copy.
-template <bool Single, typename T>
-inline void SystemRow(const DiffusionSystem& s, const float* single, const T* x, int i, double* a)
-{
-  if constexpr (Single)
-  {
-    FloatRow(s.RowOffsets.data(), s.ColumnIndices.data(), single, x, i, a);
-  }
-  else
-  {
-    const int* ro = s.RowOffsets.data();
-    const int* ci = s.ColumnIndices.data();
-    const double* v0 = s.Values[0].data();
-    const double* v1 = s.Values[1].data();
-    const double* v2 = s.Values[2].data();
-    double a0 = 0.0, a1 = 0.0, a2 = 0.0;
-    for (int k = ro[i]; k < ro[i + 1]; ++k)
-    {
-      const T* xj = x + 3 * static_cast<std::size_t>(ci[k]);
-      a0 += v0[k] * xj[0];
-      a1 += v1[k] * xj[1];
-      a2 += v2[k] * xj[2];
-    }
-    a[0] = a0;
-    a[1] = a1;
-    a[2] = a2;
-  }
-}
 
 /**
  * BlockedPCG with fused passes over the vectors (the same iteration and the
@@ -572,22 +587,15 @@ inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
     single ? initial(std::true_type()) : initial(std::false_type());
   std::array<bool, NC> active;
   std::array<double, NC> normB, rz{};
+  const auto zero = StartChannels({ start[0], start[1], start[2] },
+    { start[3], start[4], start[5] }, tol, (warm ? 1.0 : 0.0) + 4.0 * n / nnz, normB, active,
+    stats);
   for (int c = 0; c < NC; ++c)
   {
-    normB[c] = std::sqrt(start[c]);
-    stats[c] = LinearSolveStats();
-    stats[c].SpMVEquivalents = (warm ? 1.0 : 0.0) + 4.0 * n / nnz; // initial residual
-    if (normB[c] == 0.0)
+    if (zero[c])
     {
-      // SPD: the solution is exactly zero.
       x[c].setZero();
-      active[c] = false;
-      stats[c].Converged = true;
-      continue;
     }
-    stats[c].RelativeResidual = std::sqrt(start[3 + c]) / normB[c];
-    active[c] = !(stats[c].RelativeResidual <= tol);
-    stats[c].Converged = !active[c];
   }
   auto anyActive = [&]() { return active[0] || active[1] || active[2]; };
   if (anyActive())
@@ -623,11 +631,7 @@ inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
       return false;
     }
     const auto pq = single ? product(std::true_type()) : product(std::false_type());
-    std::array<double, NC> alpha{};
-    for (int c = 0; c < NC; ++c)
-    {
-      alpha[c] = active[c] && pq[c] != 0.0 ? rz[c] / pq[c] : 0.0;
-    }
+    const std::array<double, NC> alpha = StepLengths(active, rz, pq);
     const double* p = w.P.data();
     double* x0 = x[0].data();
     double* x1 = x[1].data();
@@ -655,39 +659,13 @@ inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
         sums[1] += s1;
         sums[2] += s2;
       });
-    for (int c = 0; c < NC; ++c)
-    {
-      if (!active[c])
-      {
-        continue;
-      }
-      ++stats[c].Iterations;
-      stats[c].SpMVEquivalents += flopsPerIteration / nnz;
-      stats[c].RelativeResidual = std::sqrt(rr[c]) / normB[c];
-      if (stats[c].RelativeResidual <= tol)
-      {
-        active[c] = false;
-        stats[c].Converged = true;
-      }
-      else if (!(pq[c] > 0.0) || !std::isfinite(stats[c].RelativeResidual))
-      {
-        active[c] = false; // breakdown: not SPD, report not converged
-      }
-    }
+    UpdateChannels(pq, rr, normB, tol, flopsPerIteration / nnz, active, stats);
     if (!anyActive())
     {
       break;
     }
     const auto rzNew = precondition(static_cast<const double*>(r), w.Z.data());
-    std::array<double, NC> beta{};
-    for (int c = 0; c < NC; ++c)
-    {
-      beta[c] = active[c] && rz[c] != 0.0 ? rzNew[c] / rz[c] : 0.0;
-      if (active[c])
-      {
-        rz[c] = rzNew[c];
-      }
-    }
+    const std::array<double, NC> beta = NextBeta(active, rz, rzNew);
     double* pw = w.P.data();
     const double* z = w.Z.data();
 #pragma omp parallel for schedule(static) if(n > ParallelThreshold)
