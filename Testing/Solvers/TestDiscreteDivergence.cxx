@@ -539,6 +539,28 @@ TEST(DiscreteDivergenceErrors, MaterialAndIrradianceValidation)
   message = assemble(bad, q);
   EXPECT_TRUE(Contains(message, "RefractiveIndex of tet 9")) << message;
 
+  // Infinities (the parallel pre-check compares against DBL_MAX).
+  bad = good;
+  bad.AbsorptionCoefficient[3 * 21 + 0] = std::numeric_limits<double>::infinity();
+  message = assemble(bad, q);
+  EXPECT_TRUE(Contains(message, "AbsorptionCoefficient of tet 21, channel R")) << message;
+  bad = good;
+  bad.ReducedScatteringCoefficient[3 * 22 + 1] = std::numeric_limits<double>::infinity();
+  message = assemble(bad, q);
+  EXPECT_TRUE(Contains(message, "ReducedScatteringCoefficient of tet 22, channel G")) << message;
+  bad = good;
+  bad.RefractiveIndex[23] = std::numeric_limits<double>::infinity();
+  message = assemble(bad, q);
+  EXPECT_TRUE(Contains(message, "RefractiveIndex of tet 23")) << message;
+  bad = good;
+  bad.RefractiveIndex[24] = std::numeric_limits<double>::quiet_NaN();
+  message = assemble(bad, q);
+  EXPECT_TRUE(Contains(message, "RefractiveIndex of tet 24")) << message;
+  // The largest finite values are valid.
+  bad = good;
+  bad.AbsorptionCoefficient[3 * 25 + 2] = std::numeric_limits<double>::max();
+  EXPECT_EQ(assemble(bad, q), "");
+
   bad = good;
   bad.AbsorptionCoefficient[3 * 3] = 0.0;
   bad.ReducedScatteringCoefficient[3 * 3] = 0.0;
@@ -555,6 +577,14 @@ TEST(DiscreteDivergenceErrors, MaterialAndIrradianceValidation)
   badQ[3 * 5 + 0] = -1.0;
   message = assemble(good, badQ);
   EXPECT_TRUE(Contains(message, "Irradiance of point 5, channel R")) << message;
+  badQ = q;
+  badQ[3 * 6 + 1] = std::numeric_limits<double>::quiet_NaN();
+  message = assemble(good, badQ);
+  EXPECT_TRUE(Contains(message, "Irradiance of point 6, channel G")) << message;
+  badQ = q;
+  badQ[3 * 7 + 2] = std::numeric_limits<double>::infinity();
+  message = assemble(good, badQ);
+  EXPECT_TRUE(Contains(message, "Irradiance of point 7, channel B")) << message;
   badQ = q;
   badQ.resize(7);
   message = assemble(good, badQ);
