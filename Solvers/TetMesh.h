@@ -104,9 +104,13 @@ public:
 
   /**
    * Schedule for a deterministic parallel scatter over tets (used by the
-   * assembly). The tets, taken in Z-order of their centroids, are cut into
-   * chunks of consecutive tets; the chunks are greedily coloured so that two
-   * chunks of the same colour share no vertex. Processing the colours one
+   * assembly). The tets, taken in their id order, are cut into chunks of
+   * consecutive tets; the chunks are greedily coloured so that two chunks of
+   * the same colour share no vertex. If that needs more than 64 colours (a
+   * tet order scattered in space), the tets are taken in Z-order of their
+   * centroids instead. Id order streams through the per-tet arrays the
+   * scatter reads; put a mesh in spatial order (ComputeSpatialOrder) for a
+   * fast assembly. Processing the colours one
    * after the other, the chunks of one colour in parallel and the tets of a
    * chunk in order, every matrix entry receives its contributions in the
    * same order whatever the number of threads.

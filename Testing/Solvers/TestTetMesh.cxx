@@ -15,6 +15,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <random>
 #include <set>
 #include <string>
 
@@ -256,6 +257,133 @@ TEST_P(BoxMeshTest, ScatterScheduleColoursAreVertexDisjoint)
 }
 
 INSTANTIATE_TEST_SUITE_P(Jitter, BoxMeshTest, ::testing::Values(0.0, 0.2));
+
+namespace
+{
+/// Number of colours, and whether two chunks of one colour share a point.
+int CheckColours(const TetMesh& mesh, bool& disjoint)
+{
+  const TetMesh::ScatterSchedule& s = mesh.GetScatterSchedule();
+  disjoint = true;
+  std::vector<int> owner(mesh.GetNumberOfPoints());
+  for (int c = 0; c < s.GetNumberOfColours(); ++c)
+  {
+    std::fill(owner.begin(), owner.end(), -1);
+    for (int k = s.ColourOffsets[c]; k < s.ColourOffsets[c + 1]; ++k)
+    {
+      for (int m = s.ChunkOffsets[k]; m < s.ChunkOffsets[k + 1]; ++m)
+      {
+        const int* tv = mesh.GetTet(s.Tets[m]);
+        for (int a = 0; a < 4; ++a)
+        {
+          disjoint = disjoint && (owner[tv[a]] == -1 || owner[tv[a]] == k);
+          owner[tv[a]] = k;
+        }
+      }
+    }
+  }
+  return s.GetNumberOfColours();
+}
+} // namespace
+
+// The scatter walks a spatially ordered mesh in its own tet order (the
+// per-tet arrays are indexed by tet id), also after a cut, which keeps the
+// order but changes the bounding box and so the Morton curve; a mesh whose
+// tet order is scattered in space falls back to the Morton curve.
+TEST(TetMesh, ScatterScheduleFollowsTheTetOrderOfASpatiallyOrderedMesh)
+{
+  const MeshData box = BoxMesh(24, 20, 18, 3.0, 2.0, 2.0, 0.2, 12);
+  std::vector<int> pointOrder, tetOrder;
+  TetMesh::ComputeSpatialOrder(box.Points, box.Tets, pointOrder, tetOrder);
+  const MeshData ordered = translucency::testing::Permute(box, pointOrder, tetOrder);
+  // Keep the tets with a vertex left of x = 1.1 (as TetCut does: order kept,
+  // points renumbered in order).
+  MeshData cut;
+  std::vector<int> newId(ordered.NumberOfPoints(), -1);
+  for (int t = 0; t < ordered.NumberOfTets(); ++t)
+  {
+    const int* tv = &ordered.Tets[4 * static_cast<size_t>(t)];
+    bool keep = false;
+    for (int a = 0; a < 4; ++a)
+    {
+      keep = keep || ordered.Points[3 * static_cast<size_t>(tv[a])] < 1.1;
+    }
+    if (keep)
+    {
+      for (int a = 0; a < 4; ++a)
+      {
+        newId[tv[a]] = 0;
+      }
+    }
+  }
+  int next = 0;
+  for (int i = 0; i < ordered.NumberOfPoints(); ++i)
+  {
+    if (newId[i] == 0)
+    {
+      newId[i] = next++;
+      cut.Points.insert(cut.Points.end(), &ordered.Points[3 * static_cast<size_t>(i)],
+        &ordered.Points[3 * static_cast<size_t>(i)] + 3);
+    }
+  }
+  for (int t = 0; t < ordered.NumberOfTets(); ++t)
+  {
+    const int* tv = &ordered.Tets[4 * static_cast<size_t>(t)];
+    if (newId[tv[0]] >= 0 && newId[tv[1]] >= 0 && newId[tv[2]] >= 0 && newId[tv[3]] >= 0)
+    {
+      for (int a = 0; a < 4; ++a)
+      {
+        cut.Tets.push_back(newId[tv[a]]);
+      }
+    }
+  }
+  ASSERT_LT(cut.NumberOfTets(), ordered.NumberOfTets());
+  ASSERT_GT(cut.NumberOfTets(), ordered.NumberOfTets() / 4);
+  for (const MeshData* data : std::array<const MeshData*, 2>{ &ordered, &cut })
+  {
+    const TetMesh mesh = Build(*data);
+    const TetMesh::ScatterSchedule& s = mesh.GetScatterSchedule();
+    bool disjoint = false;
+    const int colours = CheckColours(mesh, disjoint);
+    EXPECT_TRUE(disjoint);
+    EXPECT_GT(colours, 1);
+    EXPECT_LE(colours, 64);
+    // Every chunk is a run of consecutive tet ids.
+    for (size_t k = 0; k + 1 < s.ChunkOffsets.size(); ++k)
+    {
+      for (int m = s.ChunkOffsets[k] + 1; m < s.ChunkOffsets[k + 1]; ++m)
+      {
+        ASSERT_EQ(s.Tets[m], s.Tets[m - 1] + 1) << "chunk " << k;
+      }
+    }
+  }
+
+  // The same box with its tets shuffled: chunks of consecutive ids would
+  // touch the whole box and all conflict (one colour per chunk); the
+  // schedule takes the Morton curve instead.
+  MeshData shuffled = ordered;
+  std::vector<int> perm(ordered.NumberOfTets());
+  std::iota(perm.begin(), perm.end(), 0);
+  std::mt19937 rng(5);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  for (size_t t = 0; t < perm.size(); ++t)
+  {
+    std::copy_n(&ordered.Tets[4 * static_cast<size_t>(perm[t])], 4, &shuffled.Tets[4 * t]);
+  }
+  const TetMesh mesh = Build(shuffled);
+  const int numChunks = static_cast<int>(mesh.GetScatterSchedule().ChunkOffsets.size()) - 1;
+  ASSERT_GT(numChunks, 64); // enough chunks for the in-order colouring to exceed 64
+  bool disjoint = false;
+  const int colours = CheckColours(mesh, disjoint);
+  EXPECT_TRUE(disjoint);
+  EXPECT_LE(colours, 64);
+  std::vector<int> all = mesh.GetScatterSchedule().Tets;
+  std::sort(all.begin(), all.end());
+  for (int t = 0; t < mesh.GetNumberOfTets(); ++t)
+  {
+    ASSERT_EQ(all[t], t);
+  }
+}
 
 TEST(TetMesh, UpdatePointsRescalesMeasures)
 {
