@@ -539,23 +539,28 @@ TEST(DiscreteDivergenceErrors, MaterialAndIrradianceValidation)
   message = assemble(bad, q);
   EXPECT_TRUE(Contains(message, "RefractiveIndex of tet 9")) << message;
 
-  // Infinities (the parallel pre-check compares against DBL_MAX).
-  bad = good;
-  bad.AbsorptionCoefficient[3 * 21 + 0] = std::numeric_limits<double>::infinity();
-  message = assemble(bad, q);
-  EXPECT_TRUE(Contains(message, "AbsorptionCoefficient of tet 21, channel R")) << message;
-  bad = good;
-  bad.ReducedScatteringCoefficient[3 * 22 + 1] = std::numeric_limits<double>::infinity();
-  message = assemble(bad, q);
-  EXPECT_TRUE(Contains(message, "ReducedScatteringCoefficient of tet 22, channel G")) << message;
-  bad = good;
-  bad.RefractiveIndex[23] = std::numeric_limits<double>::infinity();
-  message = assemble(bad, q);
-  EXPECT_TRUE(Contains(message, "RefractiveIndex of tet 23")) << message;
-  bad = good;
-  bad.RefractiveIndex[24] = std::numeric_limits<double>::quiet_NaN();
-  message = assemble(bad, q);
-  EXPECT_TRUE(Contains(message, "RefractiveIndex of tet 24")) << message;
+  // Infinities and NaN (the parallel pre-check compares against DBL_MAX).
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const struct
+  {
+    std::vector<double> OpticalProperties::*Array;
+    size_t Index;
+    double Value;
+    const char* Named;
+  } cases[] = {
+    { &OpticalProperties::AbsorptionCoefficient, 3 * 21 + 0, inf, "AbsorptionCoefficient of tet 21, channel R" },
+    { &OpticalProperties::ReducedScatteringCoefficient, 3 * 22 + 1, inf, "ReducedScatteringCoefficient of tet 22, channel G" },
+    { &OpticalProperties::RefractiveIndex, 23, inf, "RefractiveIndex of tet 23" },
+    { &OpticalProperties::RefractiveIndex, 24, nan, "RefractiveIndex of tet 24" },
+  };
+  for (const auto& bc : cases)
+  {
+    bad = good;
+    (bad.*bc.Array)[bc.Index] = bc.Value;
+    message = assemble(bad, q);
+    EXPECT_TRUE(Contains(message, bc.Named)) << message;
+  }
   // The largest finite values are valid.
   bad = good;
   bad.AbsorptionCoefficient[3 * 25 + 2] = std::numeric_limits<double>::max();
