@@ -396,6 +396,24 @@ inline std::array<double, NC> NextBeta(const std::array<bool, NC>& active,
   return beta;
 }
 
+/// CG search directions p = z + beta p of the active channels (blocked
+/// vectors of n unknowns).
+inline void UpdateDirections(double* p, const double* z, const std::array<double, NC>& beta,
+  const std::array<bool, NC>& active, long long n)
+{
+#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
+  for (long long i = 0; i < n; ++i)
+  {
+    for (int c = 0; c < NC; ++c)
+    {
+      if (active[c])
+      {
+        p[3 * i + c] = z[3 * i + c] + beta[c] * p[3 * i + c];
+      }
+    }
+  }
+}
+
 /**
  * Conjugate gradient on the three channels at once (per-channel scalars,
  * one blocked SpMV and one blocked preconditioner application per
@@ -459,18 +477,7 @@ inline bool BlockedPCG(const DiffusionSystem& system, Precondition precondition,
     }
     precondition(r, z);
     const auto rzNew = Dot3(r, z);
-    const std::array<double, NC> beta = NextBeta(active, rz, rzNew);
-#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
-    for (long long i = 0; i < static_cast<long long>(n); ++i)
-    {
-      for (int c = 0; c < NC; ++c)
-      {
-        if (active[c])
-        {
-          p[3 * i + c] = z[3 * i + c] + beta[c] * p[3 * i + c];
-        }
-      }
-    }
+    UpdateDirections(p.data(), z.data(), NextBeta(active, rz, rzNew), active, n);
   }
   if (progress)
   {
@@ -665,20 +672,7 @@ inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
       break;
     }
     const auto rzNew = precondition(static_cast<const double*>(r), w.Z.data());
-    const std::array<double, NC> beta = NextBeta(active, rz, rzNew);
-    double* pw = w.P.data();
-    const double* z = w.Z.data();
-#pragma omp parallel for schedule(static) if(n > ParallelThreshold)
-    for (long long i = 0; i < static_cast<long long>(n); ++i)
-    {
-      for (int c = 0; c < NC; ++c)
-      {
-        if (active[c])
-        {
-          pw[3 * i + c] = z[3 * i + c] + beta[c] * pw[3 * i + c];
-        }
-      }
-    }
+    UpdateDirections(w.P.data(), w.Z.data(), NextBeta(active, rz, rzNew), active, n);
   }
   if (progress)
   {

@@ -233,8 +233,8 @@ bool AssembleVertexSystem(const TetMesh& mesh, const OpticalProperties& material
             if (s + PrefetchDistance < chunkEnd)
             {
               // The rows a tet PrefetchDistance ahead will add to (their
-              // diagonal entries' cache lines): the scatter is bound by the
-              // latency of these misses, not by bandwidth.
+              // diagonal entries' cache lines): part of the scatter's time
+              // is waiting on these misses, far below the bandwidth.
               const int* ahead =
                 positions + 16 * static_cast<size_t>(schedule.Tets[s + PrefetchDistance]);
               for (int c = 0; c < NumberOfChannels; ++c)
