@@ -36,15 +36,11 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
     CheckIrradiance(mesh, irradiance); // throws
   }
 
-  // Boundary points only (a few percent of the points). The values are
-  // checked in AssembleVertexSystem; an invalid eta here only gives values
-  // that are not used.
-  const std::vector<double> pointEta = BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
-
   ResizeVertexSystem(mesh, system);
   const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
   const double* muA = material.AbsorptionCoefficient.data();
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
+  const double* tetEta = material.RefractiveIndex.data();
   const double* q = irradiance.data();
   double* values[NumberOfChannels] = { system.Values[0].data(), system.Values[1].data(),
     system.Values[2].data() };
@@ -80,8 +76,11 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
     for (int k = 0; k < numBoundary; ++k)
     {
       const int i = boundaryPoints[k];
-      const double fdr = Fresnel::DiffuseReflectance(pointEta[i]);
-      const double a = Fresnel::MismatchA(pointEta[i]);
+      // Area-weighted eta of the boundary triangles around i (the material
+      // was checked in AssembleVertexSystem).
+      const double eta = BoundaryPointRefractiveIndexAt(mesh, tetEta, k);
+      const double fdr = Fresnel::DiffuseReflectance(eta);
+      const double a = Fresnel::MismatchA(eta);
       const double s = boundaryArea[i];
       for (int c = 0; c < NumberOfChannels; ++c)
       {

@@ -51,23 +51,13 @@ std::vector<double> BoundaryPointRefractiveIndex(const TetMesh& mesh,
   const std::vector<double>& tetEta)
 {
   CheckTetEta(mesh, tetEta);
-  const int numPoints = mesh.GetNumberOfPoints();
-  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
-  const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
-  const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
-  const std::vector<double>& pointAreas = mesh.GetBoundaryAreas();
-  std::vector<double> eta(numPoints, 0.0);
-  for (size_t f = 0; f < owners.size(); ++f)
+  std::vector<double> eta(mesh.GetNumberOfPoints(), 0.0);
+  const std::vector<int>& boundaryPoints = mesh.GetBoundaryPoints();
+  const long long numBoundary = static_cast<long long>(boundaryPoints.size());
+#pragma omp parallel for schedule(static)
+  for (long long k = 0; k < numBoundary; ++k)
   {
-    const double weighted = areas[f] * tetEta[owners[f]];
-    for (int m = 0; m < 3; ++m)
-    {
-      eta[triangles[3 * f + m]] += weighted;
-    }
-  }
-  for (int i : mesh.GetBoundaryPoints())
-  {
-    eta[i] /= pointAreas[i];
+    eta[boundaryPoints[k]] = BoundaryPointRefractiveIndexAt(mesh, tetEta.data(), k);
   }
   return eta;
 }

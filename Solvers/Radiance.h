@@ -4,12 +4,13 @@
  */
 #pragma once
 
+#include "TetMesh.h"
+
+#include <cstddef>
 #include <vector>
 
 namespace translucency
 {
-
-class TetMesh;
 
 /**
  * L_o = F_t(w_o)/(4 pi) [ (1 + 1/A) phi - 4/(1 + Fdr) q ]   (TransCut eq. 3)
@@ -42,5 +43,25 @@ std::vector<double> PointRefractiveIndex(const TetMesh& mesh, const std::vector<
  */
 std::vector<double> BoundaryPointRefractiveIndex(
   const TetMesh& mesh, const std::vector<double>& tetEta);
+
+/**
+ * The value BoundaryPointRefractiveIndex gives boundary point
+ * mesh.GetBoundaryPoints()[k] (same bits): the area-weighted mean eta of
+ * the tets owning its boundary triangles. `tetEta` has one value per tet.
+ * For loops over the boundary points that need no per-point array.
+ */
+inline double BoundaryPointRefractiveIndexAt(const TetMesh& mesh, const double* tetEta, size_t k)
+{
+  const int* offsets = mesh.GetBoundaryPointTriangleOffsets().data();
+  const int* triangles = mesh.GetBoundaryPointTriangles().data();
+  const int* owners = mesh.GetBoundaryTriangleTets().data();
+  const double* areas = mesh.GetBoundaryTriangleAreas().data();
+  double sum = 0.0;
+  for (int m = offsets[k]; m < offsets[k + 1]; ++m)
+  {
+    sum += areas[triangles[m]] * tetEta[owners[triangles[m]]];
+  }
+  return sum / mesh.GetBoundaryAreas()[mesh.GetBoundaryPoints()[k]];
+}
 
 } // namespace translucency

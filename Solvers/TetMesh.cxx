@@ -888,10 +888,13 @@ void TetMesh::ComputeMeasures()
     }
   }
   BoundaryPoints_.clear();
+  // Boundary point index of each point (-1 inside), for the incidence below.
+  std::vector<int> boundaryIndex(numPoints, -1);
   for (int i = 0; i < numPoints; ++i)
   {
     if (BoundaryArea_[i] > 0.0)
     {
+      boundaryIndex[i] = static_cast<int>(BoundaryPoints_.size());
       BoundaryPoints_.push_back(i);
       double* n = &PointNormals_[3 * static_cast<size_t>(i)];
       const double length = std::sqrt(Dot(n, n));
@@ -900,6 +903,34 @@ void TetMesh::ComputeMeasures()
         n[0] /= length;
         n[1] /= length;
         n[2] /= length;
+      }
+    }
+  }
+
+  // Boundary point-triangle incidence (counting sort by point: each point's
+  // triangles in increasing id order). A triangle of zero area still lists
+  // its points that have another triangle.
+  const size_t numBoundary = BoundaryPoints_.size();
+  BoundaryPointTriangleOffsets_.assign(numBoundary + 1, 0);
+  for (int id : BoundaryTriangles_)
+  {
+    if (boundaryIndex[id] >= 0)
+    {
+      ++BoundaryPointTriangleOffsets_[boundaryIndex[id] + 1];
+    }
+  }
+  std::partial_sum(BoundaryPointTriangleOffsets_.begin(), BoundaryPointTriangleOffsets_.end(),
+    BoundaryPointTriangleOffsets_.begin());
+  BoundaryPointTriangles_.resize(BoundaryPointTriangleOffsets_.back());
+  std::vector<int> cursor(BoundaryPointTriangleOffsets_.begin(), BoundaryPointTriangleOffsets_.end() - 1);
+  for (int f = 0; f < numTriangles; ++f)
+  {
+    for (int m = 0; m < 3; ++m)
+    {
+      const int k = boundaryIndex[BoundaryTriangles_[3 * static_cast<size_t>(f) + m]];
+      if (k >= 0)
+      {
+        BoundaryPointTriangles_[cursor[k]++] = f;
       }
     }
   }

@@ -81,6 +81,16 @@ public:
 
   /// Sorted ids of the points on the boundary.
   const std::vector<int>& GetBoundaryPoints() const { return BoundaryPoints_; }
+  /// The boundary triangles around each boundary point, in increasing id
+  /// order: those of GetBoundaryPoints()[k] are
+  /// GetBoundaryPointTriangles()[offsets[k], offsets[k+1]) with offsets =
+  /// GetBoundaryPointTriangleOffsets(). Lets a per-point sum over the
+  /// triangles run in parallel with the bits of the serial triangle loop.
+  const std::vector<int>& GetBoundaryPointTriangleOffsets() const
+  {
+    return BoundaryPointTriangleOffsets_;
+  }
+  const std::vector<int>& GetBoundaryPointTriangles() const { return BoundaryPointTriangles_; }
   bool IsBoundaryPoint(int i) const { return BoundaryArea_[i] > 0.0; }
   /// V_i: sum of volumes of tets containing point i (mm^3).
   const std::vector<double>& GetVertexVolumes() const { return VertexVolume_; }
@@ -142,7 +152,8 @@ private:
   void ComputeTetVolumes(bool allowReorient);
   /// Point-tet incidence, boundary triangles, CSR pattern, scatter schedule.
   void BuildTopology();
-  /// V_i, boundary triangle areas, S_i and point normals.
+  /// V_i, boundary triangle areas, S_i, point normals and the boundary
+  /// point-triangle incidence.
   void ComputeMeasures();
   /// TetNonZeros_ from the CSR rows (parallel over the points).
   void BuildTetNonZeroPositions();
@@ -155,6 +166,8 @@ private:
   std::vector<int> BoundaryTriangleTets_;
   std::vector<double> BoundaryTriangleAreas_;
   std::vector<int> BoundaryPoints_;
+  std::vector<int> BoundaryPointTriangleOffsets_;
+  std::vector<int> BoundaryPointTriangles_;
   std::vector<double> VertexVolume_;
   std::vector<double> BoundaryArea_;
   std::vector<double> PointNormals_;

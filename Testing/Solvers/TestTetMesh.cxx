@@ -2,6 +2,7 @@
 // and measure is known in closed form, and the input checks.
 
 #include "Error.h"
+#include "Radiance.h"
 #include "TestMeshes.h"
 #include "TestProblems.h"
 #include "TetMesh.h"
@@ -265,6 +266,56 @@ TEST_P(BoxMeshTest, ScatterScheduleColoursAreVertexDisjoint)
   bool disjoint = false;
   EXPECT_GT(CheckColours(mesh, disjoint), 1);
   EXPECT_TRUE(disjoint);
+}
+
+// Each boundary point lists exactly the boundary triangles that have it, in
+// increasing id order; the refractive index summed over those lists in
+// parallel has the bits of the serial loop over the triangles.
+TEST_P(BoxMeshTest, BoundaryPointTrianglesAndRefractiveIndex)
+{
+  const MeshData data = BoxMesh(7, 5, 6, 2.0, 1.0, 1.5, GetParam(), 3);
+  const TetMesh mesh = Build(data);
+  const std::vector<int>& points = mesh.GetBoundaryPoints();
+  const std::vector<int>& offsets = mesh.GetBoundaryPointTriangleOffsets();
+  const std::vector<int>& list = mesh.GetBoundaryPointTriangles();
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  ASSERT_EQ(offsets.size(), points.size() + 1);
+  std::vector<std::vector<int>> expected(mesh.GetNumberOfPoints());
+  for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+  {
+    for (int m = 0; m < 3; ++m)
+    {
+      expected[triangles[3 * f + m]].push_back(f);
+    }
+  }
+  for (size_t k = 0; k < points.size(); ++k)
+  {
+    const std::vector<int> got(list.begin() + offsets[k], list.begin() + offsets[k + 1]);
+    EXPECT_EQ(got, expected[points[k]]) << "boundary point " << points[k];
+  }
+
+  // Serial reference: eta_i = sum_f S_f eta_t(f) / S_i over the triangles.
+  std::mt19937_64 rng(11);
+  std::vector<double> tetEta(mesh.GetNumberOfTets());
+  for (double& e : tetEta)
+  {
+    e = 1.0 + Uniform01(rng);
+  }
+  std::vector<double> reference(mesh.GetNumberOfPoints(), 0.0);
+  for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+  {
+    for (int m = 0; m < 3; ++m)
+    {
+      reference[triangles[3 * f + m]] +=
+        mesh.GetBoundaryTriangleAreas()[f] * tetEta[mesh.GetBoundaryTriangleTets()[f]];
+    }
+  }
+  const std::vector<double> eta = BoundaryPointRefractiveIndex(mesh, tetEta);
+  for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    const double want = mesh.IsBoundaryPoint(i) ? reference[i] / mesh.GetBoundaryAreas()[i] : 0.0;
+    ASSERT_EQ(eta[i], want) << "point " << i;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Jitter, BoxMeshTest, ::testing::Values(0.0, 0.2));
