@@ -239,7 +239,9 @@ bool DiscreteDivergence::UpdateTets(const TetMesh& mesh,
   }
 
   // Boundary rows: lumped Robin term and source (eq. 11-13), as in Assemble.
-  const std::vector<double> pointEta = BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
+  // Only the rebuilt rows' eta (a whole-mesh array cost more than a small
+  // stroke); the same bits as in Assemble.
+  const std::vector<int>& boundaryPoints = mesh.GetBoundaryPoints();
   const std::vector<double>& boundaryArea = mesh.GetBoundaryAreas();
   const int* diagonal = mesh.GetDiagonalPositions().data();
   const double* q = irradiance.data();
@@ -249,8 +251,11 @@ bool DiscreteDivergence::UpdateTets(const TetMesh& mesh,
     {
       continue;
     }
-    const double fdr = Fresnel::DiffuseReflectance(pointEta[i]);
-    const double a = Fresnel::MismatchA(pointEta[i]);
+    const size_t k = static_cast<size_t>(
+      std::lower_bound(boundaryPoints.begin(), boundaryPoints.end(), i) - boundaryPoints.begin());
+    const double eta = BoundaryPointRefractiveIndexAt(mesh, tetEta, k);
+    const double fdr = Fresnel::DiffuseReflectance(eta);
+    const double a = Fresnel::MismatchA(eta);
     const double s = boundaryArea[i];
     for (int c = 0; c < NumberOfChannels; ++c)
     {
