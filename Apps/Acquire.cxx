@@ -682,7 +682,7 @@ int Acquire(const std::vector<std::string>& args)
     std::string error;
     if (!WriteAtomically(writer, input, outputPrefix + "_measurements.vtu", error))
       throw translucency::Error(error);
-    stages.push_back({ "synthetic measurements", Since(start) });
+    stages.push_back({ "synthetic measurements", MillisecondsSince(start) });
   }
   else
   {
@@ -690,7 +690,7 @@ int Acquire(const std::vector<std::string>& args)
     AttachPatterns(input, patternsArg);
     if (elementArray.empty() && input->GetCellData()->GetArray("VoxelId"))
       elementArray = "VoxelId";
-    stages.push_back({ "read", Since(start) });
+    stages.push_back({ "read", MillisecondsSince(start) });
   }
 
   vtkNew<vtkInverseDiffusion> inverse;
@@ -725,7 +725,7 @@ int Acquire(const std::vector<std::string>& args)
   std::cerr << "\n";
   if (!messages.Errors.empty())
     throw translucency::Error(messages.Last());
-  const double fitMs = Since(fitStart);
+  const double fitMs = MillisecondsSince(fitStart);
   stages.push_back({ "inverse diffusion", fitMs });
   vtkUnstructuredGrid* result = inverse->GetOutput();
   vtkTable* history = vtkTable::SafeDownCast(inverse->GetHistoryOutput());

@@ -84,7 +84,7 @@ double TetrahedralizeForBench(vtkPolyData* surface, double targetTets,
   tetra->Update();
   if (!messages.Errors.empty())
     throw translucency::Error(messages.Last());
-  const double ms = Since(start);
+  const double ms = MillisecondsSince(start);
   grid = tetra->GetOutput();
   GridToCoreArrays(grid, points, tets);
   return ms;
@@ -190,7 +190,7 @@ double TriadBandwidth(int runs)
 #pragma omp parallel for schedule(static)
     for (std::int64_t i = 0; i < n; ++i)
       a[i] = b[i] + s * c[i];
-    const double ms = Since(start);
+    const double ms = MillisecondsSince(start);
     gbs.push_back(24.0 * n / (ms * 1e6));
   }
   volatile double sink = a[n / 2];
@@ -223,7 +223,7 @@ Timed TimedSolve(translucency::LinearSolver& solver, const translucency::Diffusi
     t.X = *guess;
   const auto start = Clock::now();
   solver.Solve(s, t.X, guess != nullptr, t.S);
-  t.Ms = Since(start);
+  t.Ms = MillisecondsSince(start);
   return t;
 }
 
@@ -323,10 +323,10 @@ SolverRow BenchSolver(const std::string& name, Problem& p, int runs,
   {
     auto start = Clock::now();
     solver->Setup(p.System, &p.Mesh, true);
-    setup.push_back(Since(start));
+    setup.push_back(MillisecondsSince(start));
     start = Clock::now();
     solver->Setup(p.System, &p.Mesh, false);
-    values.push_back(Since(start));
+    values.push_back(MillisecondsSince(start));
   }
   row.SetupMs = Median(setup);
   row.ValuesSetupMs = Median(values);
@@ -565,23 +565,23 @@ json BenchCut(const std::string& solverName, const Problem& p, const Solution& p
       side[i] = points[3 * i] - cx;
     translucency::TetCut cut;
     cut.Cut(points, tets, side, [cx](const double* y) { return y[0] - cx; });
-    cutMs.push_back(Since(start));
+    cutMs.push_back(MillisecondsSince(start));
     start = Clock::now();
     mesh.SetGeometry(cut.GetPoints(), cut.GetTets());
-    topoMs.push_back(Since(start));
+    topoMs.push_back(MillisecondsSince(start));
     kept = mesh.GetNumberOfTets();
     const translucency::MaterialPreset& marble = translucency::FindMaterialPreset("marble");
     const auto material = translucency::OpticalProperties::Uniform(
       kept, marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
     start = Clock::now();
     const std::vector<double> q = Irradiance(mesh, material, p.Dir0);
-    lightMs.push_back(Since(start));
+    lightMs.push_back(MillisecondsSince(start));
     start = Clock::now();
     translucency::DiscreteDivergence().Assemble(mesh, material, q, system);
-    asmMs.push_back(Since(start));
+    asmMs.push_back(MillisecondsSince(start));
     start = Clock::now();
     solver->Setup(system, &mesh, true);
-    setupMs.push_back(Since(start));
+    setupMs.push_back(MillisecondsSince(start));
     // Warm start: the fluence the kept vertices had before the cut.
     const std::vector<int>& keptPoints = cut.GetKeptPoints();
     Solution guess;
@@ -612,8 +612,8 @@ json BenchCut(const std::string& solverName, const Problem& p, const Solution& p
     Stats stats;
     start = Clock::now();
     solver->Solve(system, x, true, stats);
-    solveMs.push_back(Since(start));
-    totalMs.push_back(Since(begin));
+    solveMs.push_back(MillisecondsSince(start));
+    totalMs.push_back(MillisecondsSince(begin));
     iterations = stats[0].Iterations;
   }
   const double error = BoundaryError(x, ref, mesh.GetBoundaryPoints());
@@ -777,7 +777,7 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
     {
       const auto start = Clock::now();
       p.Mesh.SetGeometry(points, tets);
-      topo.push_back(Since(start));
+      topo.push_back(MillisecondsSince(start));
     }
     const double topologyMs = Median(topo);
     const translucency::MaterialPreset& marble = translucency::FindMaterialPreset("marble");
@@ -800,7 +800,7 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
     {
       const auto start = Clock::now();
       disc.Assemble(p.Mesh, p.Material, q0, p.System);
-      assembly.push_back(Since(start));
+      assembly.push_back(MillisecondsSince(start));
     }
     const double assemblyMs = Median(assembly);
     p.Rhs0 = p.System.RightHandSide;
@@ -818,7 +818,7 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
     {
       const auto start = Clock::now();
       y.noalias() = p.System.Matrix(0) * x;
-      spmv.push_back(Since(start));
+      spmv.push_back(MillisecondsSince(start));
     }
     const double spmvMs = Median(spmv);
     // Values (8 B) and column indices (4 B) per nonzero, row offsets (4 B),

@@ -3,6 +3,7 @@
 
 #include "Error.h"
 #include "OpticalProperties.h"
+#include "Strings.h"
 
 #include "vtkAssignScatteringCoefficients.h"
 #include "vtkPaintScatteringCoefficients.h"
@@ -46,11 +47,6 @@ using json = nlohmann::json;
 
 
 
-double Since(Clock::time_point start)
-{
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
 std::vector<double> ParseNumbers(const std::string& text, const std::string& what)
 {
   std::vector<double> values;
@@ -79,7 +75,7 @@ std::string Extension(const std::string& path)
 {
   const size_t dot = path.find_last_of('.');
   std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
-  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+  ext = translucency::ToLower(ext);
   return ext;
 }
 
@@ -733,7 +729,7 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   {
     throw translucency::Error(error);
   }
-  stages.push_back({ "read", Since(start) });
+  stages.push_back({ "read", MillisecondsSince(start) });
 
   // 2. Tetrahedralize.
   if (surface)
@@ -751,7 +747,7 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
     if (!messages.Errors.empty())
       throw translucency::Error("'" + options.MeshPath + "': " + messages.Last());
     grid = tetra->GetOutput();
-    stages.push_back({ "tetrahedralize", Since(start) });
+    stages.push_back({ "tetrahedralize", MillisecondsSince(start) });
   }
 
   // 3. Coefficients.
@@ -772,7 +768,7 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
       throw translucency::Error(messages.Last());
     withMaterial = assign->GetOutput();
   }
-  stages.push_back({ "coefficients", Since(start) });
+  stages.push_back({ "coefficients", MillisecondsSince(start) });
   EditStats localEdits;
   EditStats& stats = edits ? *edits : localEdits;
 
@@ -793,7 +789,7 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
     stats.PaintedTets = 0;
     for (vtkIdType c = 0; weight && c < weight->GetNumberOfTuples(); ++c)
       stats.PaintedTets += weight->GetComponent(c, 0) > 1e-6 ? 1 : 0;
-    stats.PaintMs = Since(start);
+    stats.PaintMs = MillisecondsSince(start);
     stages.push_back({ "paint", stats.PaintMs });
   }
 
@@ -828,7 +824,7 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
     stats.KeptTets = withMaterial->GetNumberOfCells();
     stats.MovedVertices = cut->GetNumberOfMovedVertices();
     stats.BlockedVertices = cut->GetNumberOfBlockedVertices();
-    stats.CutMs = Since(start);
+    stats.CutMs = MillisecondsSince(start);
     stages.push_back({ "cut", stats.CutMs });
   }
 
@@ -854,7 +850,7 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   if (!messages.Errors.empty())
     throw translucency::Error(messages.Last());
   topologyMs = irradiance->GetTopologyTime();
-  stages.push_back({ "irradiance", Since(start) - topologyMs });
+  stages.push_back({ "irradiance", MillisecondsSince(start) - topologyMs });
   return irradiance->GetOutput();
 }
 

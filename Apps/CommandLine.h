@@ -10,8 +10,9 @@
 #include <vtkNew.h>
 #include <vtkSmartPointer.h>
 
-#include <chrono>
 #include <stdexcept>
+#include "Timer.h"
+
 #include <string>
 #include <vector>
 
@@ -24,7 +25,8 @@ class vtkXMLWriter;
 
 namespace translucency_app
 {
-using Clock = std::chrono::steady_clock;
+using translucency::Clock;
+using translucency::MillisecondsSince;
 
 /// A mistake in the command line (exit code 2).
 struct UsageError : std::runtime_error
@@ -39,7 +41,6 @@ struct Stage
   double Milliseconds;
 };
 
-double Since(Clock::time_point start);
 double Median(std::vector<double> values);
 std::vector<double> ParseNumbers(const std::string& text, const std::string& what);
 std::string Extension(const std::string& path);

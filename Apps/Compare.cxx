@@ -164,7 +164,7 @@ SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double
     throw translucency::Error(name + ": " + messages.Last());
   SolverResult result;
   result.Name = name;
-  result.WallMs = Since(start);
+  result.WallMs = MillisecondsSince(start);
   result.Volume = solve->GetOutput();
   vtkNew<vtkOutgoingRadiance> radiance;
   messages.Watch(radiance);
@@ -214,7 +214,7 @@ PlotSeries ErrorVersusTime(const std::string& name, vtkUnstructuredGrid* lit,
     // Not converging is the point here: drop the warnings.
     solve->RemoveAllObservers();
     solve->Update();
-    const double ms = Since(start);
+    const double ms = MillisecondsSince(start);
     vtkNew<vtkOutgoingRadiance> radiance;
     radiance->SetInputData(solve->GetOutput());
     radiance->Update();

@@ -280,7 +280,7 @@ int Radiosity(const std::vector<std::string>& args)
   std::vector<Stage> stages;
   auto start = Clock::now();
   LoadedScene scene = LoadScene(scenePath, cellSize);
-  stages.push_back({ "scene (read, tetrahedralize)", Since(start) });
+  stages.push_back({ "scene (read, tetrahedralize)", MillisecondsSince(start) });
   SceneSettings& s = scene.Settings;
   if (!sOperator.empty())
     s.SOperator = sOperator;
@@ -333,7 +333,7 @@ int Radiosity(const std::vector<std::string>& args)
   radiosity->Update();
   if (!messages.Errors.empty())
     throw translucency::Error("scene '" + scenePath + "': " + messages.Last());
-  const double firstMs = Since(start);
+  const double firstMs = MillisecondsSince(start);
   stages.push_back({ "form factors", radiosity->GetFormFactorTime() });
   stages.push_back({ "S set-up", radiosity->GetSetupTime() });
   stages.push_back({ "direct light + S E", radiosity->GetDirectTime() });
@@ -365,7 +365,7 @@ int Radiosity(const std::vector<std::string>& args)
       if (!WriteAtomically(writer, leaves[k], file, error))
         throw translucency::Error(error);
     }
-    stages.push_back({ "write", Since(start) });
+    stages.push_back({ "write", MillisecondsSince(start) });
     if (!png.empty())
     {
       start = Clock::now();
@@ -375,7 +375,7 @@ int Radiosity(const std::vector<std::string>& args)
       copy->ShallowCopy(result);
       if (!WriteFourPanels(copy, scene.Camera, png, error))
         throw translucency::Error(error);
-      stages.push_back({ "png", Since(start) });
+      stages.push_back({ "png", MillisecondsSince(start) });
     }
   }
 
@@ -392,7 +392,7 @@ int Radiosity(const std::vector<std::string>& args)
       addLights(lights);
       start = Clock::now();
       radiosity->Update();
-      relightTotal.push_back(Since(start));
+      relightTotal.push_back(MillisecondsSince(start));
       relightCore.push_back(radiosity->GetDirectTime() + radiosity->GetSolveTime());
       relightIterations.push_back(radiosity->GetNumberOfIterations());
     }
@@ -423,7 +423,7 @@ int Radiosity(const std::vector<std::string>& args)
       radiosity->Modified();
       start = Clock::now();
       radiosity->Update();
-      changeTotal.push_back(Since(start));
+      changeTotal.push_back(MillisecondsSince(start));
       changeCore.push_back(
         radiosity->GetSetupTime() + radiosity->GetDirectTime() + radiosity->GetSolveTime());
       changeIterations.push_back(radiosity->GetNumberOfIterations());

@@ -223,7 +223,7 @@ int Render(const std::vector<std::string>& args)
   if (!messages.Errors.empty())
     throw translucency::Error(messages.Last());
   vtkPolyData* outSurface = radiance->GetOutput();
-  stages.push_back({ "radiance", Since(start) });
+  stages.push_back({ "radiance", MillisecondsSince(start) });
 
   // 7. Outputs.
   if (!outputPrefix.empty())
@@ -235,7 +235,7 @@ int Render(const std::vector<std::string>& args)
     if (!WriteAtomically(gridWriter, solved, outputPrefix + ".vtu", error) ||
       !WriteAtomically(surfaceWriter, outSurface, outputPrefix + ".vtp", error))
       throw translucency::Error(error);
-    stages.push_back({ "write", Since(start) });
+    stages.push_back({ "write", MillisecondsSince(start) });
   }
   if (!pngPath.empty() || !slicePath.empty())
   {
@@ -252,7 +252,7 @@ int Render(const std::vector<std::string>& args)
       if (!WriteFluenceSlicePNG(solved, image, slicePath, error))
         throw translucency::Error(error);
     }
-    stages.push_back({ "render", Since(start) });
+    stages.push_back({ "render", MillisecondsSince(start) });
   }
 
   // 8. Report.
@@ -336,7 +336,7 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
     cut->SetCutFunction(plane);
     auto start = Clock::now();
     cut->Update();
-    cutMs.push_back(Since(start));
+    cutMs.push_back(MillisecondsSince(start));
     vtkUnstructuredGrid* out = cut->GetOutput();
     kept = out->GetNumberOfCells();
     std::vector<double> points;
@@ -345,7 +345,7 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
     start = Clock::now();
     translucency::TetMesh mesh;
     mesh.SetGeometry(std::move(points), std::move(tets));
-    topoMs.push_back(Since(start));
+    topoMs.push_back(MillisecondsSince(start));
     auto material = translucency::OpticalProperties::Uniform(
       mesh.GetNumberOfTets(), marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
     std::vector<double> q(3 * static_cast<size_t>(mesh.GetNumberOfPoints()), 0.0);
@@ -353,7 +353,7 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
     translucency::DiffusionSystem system;
     start = Clock::now();
     disc.Assemble(mesh, material, q, system);
-    asmMs.push_back(Since(start));
+    asmMs.push_back(MillisecondsSince(start));
   }
   // Paint: a stroke point on the top of the object, width giving ~1 % of tets.
   std::vector<double> points;
@@ -377,7 +377,7 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
     paint->SetWidth(0.024 * diag);
     auto start = Clock::now();
     paint->Update();
-    paintMs.push_back(Since(start));
+    paintMs.push_back(MillisecondsSince(start));
     // The tets whose coefficients changed, as listed by the paint filter.
     vtkDataArray* painted = paint->GetOutput()->GetFieldData()->GetArray("PaintedCellIds");
     std::vector<int> changed;
@@ -394,7 +394,7 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
       }
     start = Clock::now();
     disc.UpdateTets(mesh, material, q, changed, system);
-    updateMs.push_back(Since(start));
+    updateMs.push_back(MillisecondsSince(start));
     // Same-run baselines: the same paint with no cut-off (every tet weighted,
     // as before the cut-off existed) and a full 3-channel assembly.
     vtkNew<vtkPaintScatteringCoefficients> exact;
@@ -404,11 +404,11 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
     exact->SetCutoffWeight(0.0);
     start = Clock::now();
     exact->Update();
-    paintExactMs.push_back(Since(start));
+    paintExactMs.push_back(MillisecondsSince(start));
     translucency::DiffusionSystem full;
     start = Clock::now();
     disc.Assemble(mesh, material, q, full);
-    fullAsmMs.push_back(Since(start));
+    fullAsmMs.push_back(MillisecondsSince(start));
   }
   const double cut = Median(cutMs), topo = Median(topoMs), as = Median(asmMs);
   const double paint = Median(paintMs), update = Median(updateMs);
@@ -505,7 +505,7 @@ int Bench(const std::vector<std::string>& args)
     {
       start = Clock::now();
       mesh.SetGeometry(points, tets);
-      topo.push_back(Since(start));
+      topo.push_back(MillisecondsSince(start));
     }
     translucency::DiscreteDivergence disc;
     translucency::DiffusionSystem system;
@@ -513,14 +513,14 @@ int Bench(const std::vector<std::string>& args)
     {
       start = Clock::now();
       disc.Assemble(mesh, material, q, system);
-      assembly.push_back(Since(start));
+      assembly.push_back(MillisecondsSince(start));
     }
     Eigen::VectorXd x = Eigen::VectorXd::Ones(system.NumberOfUnknowns), y(system.NumberOfUnknowns);
     for (int r = 0; r < runs; ++r)
     {
       start = Clock::now();
       y.noalias() = system.Matrix(0) * x;
-      spmv.push_back(Since(start));
+      spmv.push_back(MillisecondsSince(start));
     }
     translucency::ConjugateGradient cg;
     cg.SetRelTol(1e-6);
@@ -530,7 +530,7 @@ int Bench(const std::vector<std::string>& args)
       std::array<Eigen::VectorXd, 3> solution;
       start = Clock::now();
       cg.Solve(system, solution, false);
-      solveTimes.push_back(Since(start));
+      solveTimes.push_back(MillisecondsSince(start));
       iterations = cg.GetNumIterations(0);
     }
     const double a = Median(assembly), s = Median(spmv), so = Median(solveTimes);

@@ -1,8 +1,9 @@
 #include "vtkSolveDiffusion.h"
 
-#include "DiffusionSolver.h"
+#include "DiffusionSolverFactory.h"
 #include "DiscreteDivergence.h"
 #include "Error.h"
+#include "Strings.h"
 #include "TetMesh.h"
 #include "VertexDiffusionSolver.h"
 #include "vtkTranslucencyMeshConversion.h"
@@ -95,8 +96,7 @@ vtkSolveDiffusion::~vtkSolveDiffusion() = default;
 bool vtkSolveDiffusion::SetSolverByName(const char* name)
 {
   std::string key = name ? name : "";
-  std::transform(key.begin(), key.end(), key.begin(),
-    [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  key = translucency::ToLower(key);
   for (int k = SOLVER_DIVERGENCE; k <= SOLVER_MONTECARLO; ++k)
   {
     if (key == SolverNames[k])
@@ -248,8 +248,7 @@ int vtkSolveDiffusion::RequestData(
     {
       // Vertex discretisations: the name must be one of the linear solvers.
       std::string key = this->LinearSolver, known;
-      std::transform(key.begin(), key.end(), key.begin(),
-        [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+      key = translucency::ToLower(key);
       bool found = false;
       for (const auto& name : translucency::GetLinearSolverNames())
       {

@@ -4,6 +4,7 @@
 #include "LightSources.h"
 #include "Radiance.h"
 #include "TetMesh.h"
+#include "Timer.h"
 #include "vtkTranslucencyMeshConversion.h"
 
 #include <vtkCellData.h>
@@ -17,7 +18,6 @@
 #include <vtkPointData.h>
 #include <vtkUnstructuredGrid.h>
 
-#include <chrono>
 #include <cmath>
 #include <vector>
 
@@ -113,10 +113,10 @@ int vtkSurfaceIrradiance::RequestData(
 
   std::string error;
   bool built = false;
-  const auto start = std::chrono::steady_clock::now();
+  const translucency::Timer timer;
   this->Internal->Mesh = vtkTranslucency::AcquireTetMesh(input, error, &built);
   this->TopologyTime = built
-    ? std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count()
+    ? timer.GetMilliseconds()
     : 0.0;
   std::vector<double> tetEta;
   if (!this->Internal->Mesh || !vtkTranslucency::ReadRefractiveIndex(input, tetEta, error))

@@ -1,0 +1,1180 @@
+#include "MonteCarlo.h"
+
+#include "Error.h"
+#include "Fresnel.h"
+#include "LightSources.h"
+#include "Radiance.h"
+#include "RayCaster.h"
+#include "TetMesh.h"
+#include "Timer.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+
+namespace translucency
+{
+
+namespace
+{
+
+constexpr double Pi = 3.14159265358979323846;
+
+/// Launch weight fraction below which Russian roulette is played, and the
+/// survival probability (survivors are multiplied by its inverse).
+constexpr double RouletteThreshold = 1e-4;
+constexpr double RouletteSurvival = 0.1;
+/// Safety limits of one photon: consecutive zero-length segments (a photon
+/// stuck on an edge by rounding) and segments in all (a photon trapped by
+/// total internal reflection in a non-scattering, non-absorbing region).
+constexpr int MaxZeroSteps = 1000;
+constexpr long long MaxSteps = 10000000;
+/// Photons between two abort checks / progress reports.
+constexpr long long Chunk = 256;
+
+/// SplitMix64 finaliser: a bijective 64-bit mix.
+inline std::uint64_t Mix64(std::uint64_t z)
+{
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+/**
+ * xoshiro256** (Blackman and Vigna), one stream per photon: the state is
+ * filled by SplitMix64 from a key that hashes (seed, channel, photon index),
+ * so a photon's random numbers do not depend on which thread or batch traces
+ * it.
+ */
+class PhotonRandom
+{
+public:
+  PhotonRandom(std::uint64_t seed, int channel, long long photon)
+  {
+    std::uint64_t key = Mix64(Mix64(seed + 0x9E3779B97F4A7C15ULL) ^
+      ((static_cast<std::uint64_t>(photon) << 2) | static_cast<std::uint64_t>(channel)));
+    for (auto& s : S_)
+    {
+      key += 0x9E3779B97F4A7C15ULL;
+      s = Mix64(key);
+    }
+  }
+
+  std::uint64_t Next()
+  {
+    const std::uint64_t result = Rotl(S_[1] * 5, 7) * 9;
+    const std::uint64_t t = S_[1] << 17;
+    S_[2] ^= S_[0];
+    S_[3] ^= S_[1];
+    S_[1] ^= S_[2];
+    S_[0] ^= S_[3];
+    S_[2] ^= t;
+    S_[3] = Rotl(S_[3], 45);
+    return result;
+  }
+  /// Uniform in [0, 1).
+  double Uniform() { return static_cast<double>(Next() >> 11) * 0x1.0p-53; }
+  /// Uniform in (0, 1) (safe for log).
+  double OpenUniform() { return (static_cast<double>(Next() >> 11) + 0.5) * 0x1.0p-53; }
+
+private:
+  static std::uint64_t Rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+  std::uint64_t S_[4];
+};
+
+inline double Dot(const double* a, const double* b)
+{
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+inline void Normalize(double* a)
+{
+  const double len = std::sqrt(Dot(a, a));
+  a[0] /= len;
+  a[1] /= len;
+  a[2] /= len;
+}
+
+/// Everything a step reads of a tet, in one place (2.5 cache lines):
+/// barycentric planes lambda_f(x) = G[f] . x + E[f] (the barycentric
+/// coordinate of vertex f: 0 on the face opposite f, local face f, and 1 at
+/// vertex f; G[f] points from face f into the tet), the neighbours and the
+/// coefficients of the channel being traced.
+struct TetCell
+{
+  double G[4][3];
+  double E[4];
+  double MuS = 0.0; ///< scattering coefficient sigma_s' / (1 - g) (1/mm)
+  double MuA = 0.0; ///< absorption coefficient (1/mm)
+  /// Per local face: 4 * neighbour + neighbour's local face across it, or
+  /// -1 - (boundary triangle index) on the boundary.
+  int Next[4];
+};
+
+/// What the walk needs of the mesh.
+struct WalkMesh
+{
+  std::vector<TetCell> Cells;
+  /// Next of every tet, as a flat array while building.
+  std::vector<int> Next;
+  /// Per boundary triangle: 4 * owner tet + local face.
+  std::vector<int> TriangleFace;
+
+  std::size_t Bytes() const
+  {
+    return Cells.size() * sizeof(TetCell) + TriangleFace.size() * sizeof(int);
+  }
+
+  void Build(const TetMesh& mesh)
+  {
+    const int numTets = mesh.GetNumberOfTets();
+    const int numPoints = mesh.GetNumberOfPoints();
+    Cells.resize(numTets);
+#pragma omp parallel for schedule(static)
+    for (int t = 0; t < numTets; ++t)
+    {
+      const int* v = mesh.GetTet(t);
+      const double* p0 = mesh.GetPoint(v[0]);
+      double j[3][3]; // columns p1 - p0, p2 - p0, p3 - p0
+      for (int a = 0; a < 3; ++a)
+      {
+        const double* p = mesh.GetPoint(v[a + 1]);
+        for (int k = 0; k < 3; ++k)
+        {
+          j[k][a] = p[k] - p0[k];
+        }
+      }
+      // Rows of J^-1 = gradients of lambda_1..3 (adjugate / determinant).
+      const double det = j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1]) -
+        j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0]) +
+        j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0]);
+      TetCell& pl = Cells[t];
+      for (int a = 0; a < 3; ++a)
+      {
+        const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+        // Row a of the inverse: cross product of columns a1 and a2 / det.
+        pl.G[a + 1][0] = (j[1][a1] * j[2][a2] - j[2][a1] * j[1][a2]) / det;
+        pl.G[a + 1][1] = (j[2][a1] * j[0][a2] - j[0][a1] * j[2][a2]) / det;
+        pl.G[a + 1][2] = (j[0][a1] * j[1][a2] - j[1][a1] * j[0][a2]) / det;
+      }
+      for (int k = 0; k < 3; ++k)
+      {
+        pl.G[0][k] = -(pl.G[1][k] + pl.G[2][k] + pl.G[3][k]);
+      }
+      for (int f = 0; f < 4; ++f)
+      {
+        // lambda_f vanishes on the three other vertices: E from their mean.
+        double sum = 0.0;
+        for (int a = 0; a < 4; ++a)
+        {
+          if (a != f)
+          {
+            sum += Dot(pl.G[f], mesh.GetPoint(v[a]));
+          }
+        }
+        pl.E[f] = -sum / 3.0;
+      }
+    }
+
+    // Face adjacency: faces bucketed by their smallest vertex, matched by
+    // the other two inside each bucket.
+    struct Face
+    {
+      int B, C, Code;
+    };
+    std::vector<int> offsets(static_cast<std::size_t>(numPoints) + 1, 0);
+    auto key = [&](int t, int f, int& a, int& b, int& c) {
+      const int* v = mesh.GetTet(t);
+      int w[3], n = 0;
+      for (int k = 0; k < 4; ++k)
+      {
+        if (k != f)
+        {
+          w[n++] = v[k];
+        }
+      }
+      std::sort(w, w + 3);
+      a = w[0];
+      b = w[1];
+      c = w[2];
+    };
+    for (int t = 0; t < numTets; ++t)
+    {
+      for (int f = 0; f < 4; ++f)
+      {
+        int a, b, c;
+        key(t, f, a, b, c);
+        ++offsets[a + 1];
+      }
+    }
+    for (int i = 0; i < numPoints; ++i)
+    {
+      offsets[i + 1] += offsets[i];
+    }
+    std::vector<Face> faces(offsets.back());
+    std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+    for (int t = 0; t < numTets; ++t)
+    {
+      for (int f = 0; f < 4; ++f)
+      {
+        int a, b, c;
+        key(t, f, a, b, c);
+        faces[fill[a]++] = Face{ b, c, 4 * t + f };
+      }
+    }
+    const int unset = std::numeric_limits<int>::min();
+    Next.assign(4 * static_cast<std::size_t>(numTets), unset);
+    for (int i = 0; i < numPoints; ++i)
+    {
+      auto first = faces.begin() + offsets[i], last = faces.begin() + offsets[i + 1];
+      std::sort(first, last, [](const Face& x, const Face& y) {
+        return x.B != y.B ? x.B < y.B : (x.C != y.C ? x.C < y.C : x.Code < y.Code);
+      });
+      for (auto it = first; it != last;)
+      {
+        auto next = it + 1;
+        if (next != last && next->B == it->B && next->C == it->C)
+        {
+          Next[it->Code] = next->Code;
+          Next[next->Code] = it->Code;
+          it += 2; // TetMesh rejects faces shared by more than two tets
+        }
+        else
+        {
+          ++it;
+        }
+      }
+    }
+    const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+    const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
+    const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+    TriangleFace.assign(numTriangles, -1);
+    for (int k = 0; k < numTriangles; ++k)
+    {
+      const int t = owners[k];
+      const int* v = mesh.GetTet(t);
+      for (int f = 0; f < 4; ++f)
+      {
+        const int* tri = &triangles[3 * static_cast<std::size_t>(k)];
+        if (v[f] != tri[0] && v[f] != tri[1] && v[f] != tri[2])
+        {
+          Next[4 * static_cast<std::size_t>(t) + f] = -1 - k;
+          TriangleFace[k] = 4 * t + f;
+        }
+      }
+    }
+    for (std::size_t k = 0; k < Next.size(); ++k)
+    {
+      if (Next[k] == unset)
+      {
+        throw Error("montecarlo: inconsistent mesh topology: face " + std::to_string(k % 4) +
+          " of tet " + std::to_string(k / 4) + " has no neighbour and no boundary triangle");
+      }
+      Cells[k / 4].Next[k % 4] = Next[k];
+    }
+    std::vector<int>().swap(Next);
+    for (int k = 0; k < numTriangles; ++k)
+    {
+      if (TriangleFace[k] < 0)
+      {
+        throw Error("montecarlo: inconsistent mesh topology: boundary triangle " +
+          std::to_string(k) + " is not a face of its tet");
+      }
+    }
+  }
+};
+
+/// One light as the photons see it: a direction rule and its own q.
+struct LaunchLight
+{
+  LightSource::Kind Type = LightSource::Kind::Directional;
+  double Direction[3] = { 0.0, 0.0, -1.0 }; ///< unit, direction of travel
+  double Position[3] = { 0.0, 0.0, 0.0 };
+  std::vector<double> Q; ///< its q, 3 per mesh point (W/mm^2)
+};
+
+/// Where the photons of one channel start: (light, triangle) pairs with
+/// their power and its cumulative sum.
+struct ChannelSource
+{
+  std::vector<int> Light;
+  std::vector<int> Triangle;
+  std::vector<double> Cumulative; ///< W, increasing, last = Power
+  double Power = 0.0;             ///< W
+};
+
+void AddBalance(MonteCarloSolver::PowerBalance& to, const MonteCarloSolver::PowerBalance& from)
+{
+  to.Injected += from.Injected;
+  to.Absorbed += from.Absorbed;
+  to.Escaped += from.Escaped;
+  to.RouletteGain += from.RouletteGain;
+  to.Lost += from.Lost;
+  to.Photons += from.Photons;
+  to.LostPhotons += from.LostPhotons;
+  to.Steps += from.Steps;
+}
+
+/// Tallies of one batch (one thread's scratch while it traces the batch;
+/// aligned so that two threads' tallies never share a cache line).
+struct alignas(128) BatchTally
+{
+  std::vector<double> Track; ///< per tet: sum of weight x length (W mm)
+  std::vector<double> Exit;  ///< per point: escaped weight (W)
+  MonteCarloSolver::PowerBalance Balance;
+  long long Begin = 0, End = 0;
+
+  void Reset(int numTets, int numPoints)
+  {
+    Track.assign(numTets, 0.0);
+    Exit.assign(numPoints, 0.0);
+    Balance = MonteCarloSolver::PowerBalance();
+  }
+};
+
+/// The random walk of one channel (read-only during the tracing).
+struct Tracer
+{
+  const TetMesh* Mesh = nullptr;
+  const WalkMesh* Walk = nullptr;
+  const ChannelSource* Source = nullptr;
+  const std::vector<LaunchLight>* Lights = nullptr;
+  const RayCaster* Caster = nullptr; ///< non-null: the uniform light is shadowed
+  const std::vector<double>* Eta = nullptr; ///< per tet
+  double Anisotropy = 0.0; ///< Henyey-Greenstein g
+  double Weight = 0.0; ///< launch weight P / N (W)
+  double RayOffset = 0.0, RayReach = 0.0;
+  /// Bound of F_t over the outside hemisphere for every eta of the mesh
+  /// (the uniform light's rejection sampling).
+  double MaxUniformTransmittance = 1.0;
+  std::uint64_t Seed = 1;
+  int Channel = 0;
+
+  /// Cosine-weighted unit direction about the unit vector n.
+  static void CosineDirection(const double* n, PhotonRandom& rng, double* w)
+  {
+    double t[3];
+    if (std::abs(n[0]) < 0.9)
+    {
+      t[0] = 0.0;
+      t[1] = -n[2];
+      t[2] = n[1];
+    }
+    else
+    {
+      t[0] = n[2];
+      t[1] = 0.0;
+      t[2] = -n[0];
+    }
+    Normalize(t);
+    const double b[3] = { n[1] * t[2] - n[2] * t[1], n[2] * t[0] - n[0] * t[2],
+      n[0] * t[1] - n[1] * t[0] };
+    const double u = rng.Uniform(), phi = 2.0 * Pi * rng.Uniform();
+    const double r = std::sqrt(u), cosTheta = std::sqrt(1.0 - u);
+    const double a = r * std::cos(phi), c = r * std::sin(phi);
+    for (int k = 0; k < 3; ++k)
+    {
+      w[k] = a * t[k] + c * b[k] + cosTheta * n[k];
+    }
+    Normalize(w);
+  }
+
+  /// Start a photon: position x, direction d, tet, entry face.
+  void Launch(PhotonRandom& rng, double* x, double* d, int& tet, int& face) const
+  {
+    const ChannelSource& src = *Source;
+    const double target = rng.Uniform() * src.Power;
+    std::size_t e = static_cast<std::size_t>(
+      std::upper_bound(src.Cumulative.begin(), src.Cumulative.end(), target) -
+      src.Cumulative.begin());
+    e = std::min(e, src.Cumulative.size() - 1);
+    const LaunchLight& light = (*Lights)[src.Light[e]];
+    const int tri = src.Triangle[e];
+    const int* v = &Mesh->GetBoundaryTriangles()[3 * static_cast<std::size_t>(tri)];
+    // A point with density proportional to the linear q: pick corner k with
+    // probability q_k / sum q, then lambda_k ~ Beta(2, 2) (the median of
+    // three uniforms) and the rest of the weight split uniformly.
+    double q[3], qSum = 0.0;
+    for (int k = 0; k < 3; ++k)
+    {
+      q[k] = light.Q[3 * static_cast<std::size_t>(v[k]) + Channel];
+      qSum += q[k];
+    }
+    const double pick = rng.Uniform() * qSum;
+    const int k = pick < q[0] ? 0 : (pick < q[0] + q[1] ? 1 : 2);
+    double u1 = rng.Uniform(), u2 = rng.Uniform(), u3 = rng.Uniform();
+    const double median = std::max(std::min(u1, u2), std::min(std::max(u1, u2), u3));
+    const double split = rng.Uniform();
+    double lambda[3];
+    lambda[k] = median;
+    lambda[(k + 1) % 3] = (1.0 - median) * split;
+    lambda[(k + 2) % 3] = (1.0 - median) * (1.0 - split);
+    for (int a = 0; a < 3; ++a)
+    {
+      x[a] = 0.0;
+    }
+    for (int m = 0; m < 3; ++m)
+    {
+      const double* p = Mesh->GetPoint(v[m]);
+      for (int a = 0; a < 3; ++a)
+      {
+        x[a] += lambda[m] * p[a];
+      }
+    }
+    const int code = Walk->TriangleFace[tri];
+    tet = code >> 2;
+    face = code & 3;
+    const double* g = Walk->Cells[tet].G[face];
+    double n[3] = { -g[0], -g[1], -g[2] }; // outward unit normal of the triangle
+    Normalize(n);
+    const double eta = (*Eta)[tet];
+
+    // Incoming direction of travel (outside the medium).
+    double in[3];
+    if (light.Type == LightSource::Kind::Directional)
+    {
+      std::copy(light.Direction, light.Direction + 3, in);
+    }
+    else if (light.Type == LightSource::Kind::Point)
+    {
+      for (int a = 0; a < 3; ++a)
+      {
+        in[a] = x[a] - light.Position[a];
+      }
+      Normalize(in);
+    }
+    else
+    {
+      // Uniform light: towards-light direction w cosine-weighted on the
+      // outside hemisphere, accepted with probability F_t / max F_t (and
+      // only if unoccluded when shadowed): density ~ cos F_t (V).
+      double w[3] = { n[0], n[1], n[2] };
+      for (int attempt = 0; attempt < 1000; ++attempt)
+      {
+        CosineDirection(n, rng, w);
+        const double accept = Fresnel::Transmittance(std::min(1.0, Dot(w, n)), eta) /
+          MaxUniformTransmittance;
+        if (rng.Uniform() >= accept)
+        {
+          continue;
+        }
+        if (Caster)
+        {
+          const double origin[3] = { x[0] + RayOffset * (n[0] + w[0]),
+            x[1] + RayOffset * (n[1] + w[1]), x[2] + RayOffset * (n[2] + w[2]) };
+          if (Caster->Occluded(origin, w, RayReach))
+          {
+            continue;
+          }
+        }
+        break;
+      }
+      for (int a = 0; a < 3; ++a)
+      {
+        in[a] = -w[a];
+      }
+    }
+    // Snell refraction into the medium about the triangle's normal.
+    const double cosI = -Dot(in, n);
+    const double sinT2 = (1.0 - cosI * cosI) / (eta * eta);
+    if (cosI <= 1e-12 || sinT2 >= 1.0)
+    {
+      // The light is behind this triangle (or cannot enter it): its q comes
+      // from the vertex normals, which differ from the triangle's at edges
+      // and silhouettes. Launch diffusely (cosine-weighted inwards).
+      const double inward[3] = { -n[0], -n[1], -n[2] };
+      CosineDirection(inward, rng, d);
+      return;
+    }
+    const double cosT = std::sqrt(1.0 - sinT2);
+    for (int a = 0; a < 3; ++a)
+    {
+      d[a] = in[a] / eta + (cosI / eta - cosT) * n[a];
+    }
+    Normalize(d);
+  }
+
+  /// Henyey-Greenstein scattering of the unit direction d.
+  void Scatter(PhotonRandom& rng, double* d) const
+  {
+    double cosTheta;
+    const double u = rng.Uniform();
+    const double g = Anisotropy;
+    if (g == 0.0)
+    {
+      cosTheta = 2.0 * u - 1.0;
+    }
+    else
+    {
+      const double s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
+      cosTheta = std::clamp((1.0 + g * g - s * s) / (2.0 * g), -1.0, 1.0);
+    }
+    const double sinTheta = std::sqrt(std::max(0.0, 1.0 - cosTheta * cosTheta));
+    const double phi = 2.0 * Pi * rng.Uniform();
+    const double cosPhi = std::cos(phi), sinPhi = std::sin(phi);
+    double out[3];
+    if (std::abs(d[2]) > 0.99999)
+    {
+      out[0] = sinTheta * cosPhi;
+      out[1] = sinTheta * sinPhi;
+      out[2] = (d[2] > 0.0 ? 1.0 : -1.0) * cosTheta;
+    }
+    else
+    {
+      const double r = std::sqrt(1.0 - d[2] * d[2]);
+      out[0] = sinTheta * (d[0] * d[2] * cosPhi - d[1] * sinPhi) / r + d[0] * cosTheta;
+      out[1] = sinTheta * (d[1] * d[2] * cosPhi + d[0] * sinPhi) / r + d[1] * cosTheta;
+      out[2] = -sinTheta * cosPhi * r + d[2] * cosTheta;
+    }
+    std::copy(out, out + 3, d);
+    Normalize(d);
+  }
+
+  /// Russian roulette on a low weight; false if the photon died.
+  static bool Roulette(PhotonRandom& rng, double threshold, double& w,
+    MonteCarloSolver::PowerBalance& balance)
+  {
+    if (w >= threshold)
+    {
+      return true;
+    }
+    if (rng.Uniform() < RouletteSurvival)
+    {
+      const double survivor = w / RouletteSurvival;
+      balance.RouletteGain += survivor - w;
+      w = survivor;
+      return true;
+    }
+    balance.RouletteGain -= w;
+    w = 0.0;
+    return false;
+  }
+
+  /// Trace photon number `index` of this channel into the batch tally.
+  void Trace(long long index, BatchTally& tally) const
+  {
+    PhotonRandom rng(Seed, Channel, index);
+    double x[3], d[3];
+    int t, entry;
+    Launch(rng, x, d, t, entry);
+    double w = Weight;
+    // Local copy: updated every step, added to the batch at the end.
+    MonteCarloSolver::PowerBalance balance;
+    balance.Injected += w;
+    ++balance.Photons;
+    const double threshold = RouletteThreshold * Weight;
+    double tau = -std::log(rng.OpenUniform()); // optical depth to the next scattering
+    int zeroSteps = 0;
+    const int* tets = Mesh->GetTets().data();
+    for (long long step = 0;; ++step)
+    {
+      if (step >= MaxSteps)
+      {
+        balance.Lost += w;
+        ++balance.LostPhotons;
+        break;
+      }
+      const TetCell& pl = Walk->Cells[t];
+      // Exit face: the nearest face the ray moves towards (not the one it
+      // just came in through, unless nothing else is left by rounding).
+      // Distances lambda_f / (-G_f . d) compared without dividing:
+      // a/b < c/e  <=>  a e < c b for positive b, e.
+      double gd[4];
+      gd[1] = Dot(pl.G[1], d);
+      gd[2] = Dot(pl.G[2], d);
+      gd[3] = Dot(pl.G[3], d);
+      gd[0] = -(gd[1] + gd[2] + gd[3]); // the gradients sum to 0
+      double bestLambda = 1.0, bestRate = 0.0; // distance bestLambda / bestRate
+      int exitFace = -1;
+      for (int pass = 0; pass < 2 && exitFace < 0; ++pass)
+      {
+        for (int f = 0; f < 4; ++f)
+        {
+          if ((f == entry) != (pass == 1) || !(gd[f] < 0.0))
+          {
+            continue;
+          }
+          const double lambda = std::max(0.0, Dot(pl.G[f], x) + pl.E[f]);
+          if (exitFace < 0 || lambda * bestRate < bestLambda * -gd[f])
+          {
+            bestLambda = lambda;
+            bestRate = -gd[f];
+            exitFace = f;
+          }
+        }
+      }
+      const double exitDistance = exitFace < 0 ? std::numeric_limits<double>::infinity()
+                                               : bestLambda / bestRate;
+      const double muS = pl.MuS, muA = pl.MuA;
+      const double scatterDistance =
+        muS > 0.0 ? tau / muS : std::numeric_limits<double>::infinity();
+      const bool scatters = scatterDistance < exitDistance;
+      if (!scatters && exitFace < 0)
+      {
+        balance.Lost += w; // no way out of the tet (rounding): give up
+        ++balance.LostPhotons;
+        break;
+      }
+      const double length = scatters ? scatterDistance : exitDistance;
+      // Continuous absorption: the weight lost on the segment is absorbed
+      // there; its track-length fluence integral is that / mu_a.
+      if (muA > 0.0)
+      {
+        const double absorbed = -w * std::expm1(-muA * length);
+        tally.Track[t] += absorbed / muA;
+        balance.Absorbed += absorbed;
+        w -= absorbed;
+      }
+      else
+      {
+        tally.Track[t] += w * length;
+      }
+      for (int a = 0; a < 3; ++a)
+      {
+        x[a] += length * d[a];
+      }
+      ++balance.Steps;
+      if (scatters)
+      {
+        Scatter(rng, d);
+        tau = -std::log(rng.OpenUniform());
+        entry = -1;
+        zeroSteps = 0;
+        if (!Roulette(rng, threshold, w, balance))
+        {
+          break;
+        }
+        continue;
+      }
+      tau = std::max(0.0, tau - muS * length);
+      if (length > 0.0)
+      {
+        zeroSteps = 0;
+      }
+      else if (++zeroSteps > MaxZeroSteps)
+      {
+        balance.Lost += w;
+        ++balance.LostPhotons;
+        break;
+      }
+      const int code = pl.Next[exitFace];
+      if (code >= 0)
+      {
+        t = code >> 2; // index-matched interior face: walk on
+        entry = code & 3;
+        continue;
+      }
+      // Boundary face: Fresnel reflection or escape.
+      double n[3] = { -pl.G[exitFace][0], -pl.G[exitFace][1], -pl.G[exitFace][2] };
+      Normalize(n);
+      const double cosI = std::min(1.0, Dot(d, n));
+      const double eta = (*Eta)[t];
+      const double sinT2 = eta * eta * std::max(0.0, 1.0 - cosI * cosI);
+      // Reflectance(cos outside, eta) equals the reflectance seen from inside
+      // at the matching angle (reciprocity); sin_t >= 1 is total reflection.
+      const double reflectance =
+        sinT2 >= 1.0 ? 1.0 : Fresnel::Reflectance(std::sqrt(1.0 - sinT2), eta);
+      if (reflectance >= 1.0 || rng.Uniform() < reflectance)
+      {
+        const double dn = Dot(d, n);
+        for (int a = 0; a < 3; ++a)
+        {
+          d[a] -= 2.0 * dn * n[a];
+        }
+        entry = exitFace;
+        if (!Roulette(rng, threshold, w, balance))
+        {
+          break;
+        }
+        continue;
+      }
+      // Escape: share the weight among the triangle's corners by their
+      // barycentric coordinates at the exit point.
+      double lambda[4], sum = 0.0;
+      for (int a = 0; a < 4; ++a)
+      {
+        lambda[a] = a == exitFace ? 0.0 : std::max(0.0, Dot(pl.G[a], x) + pl.E[a]);
+        sum += lambda[a];
+      }
+      for (int a = 0; a < 4; ++a)
+      {
+        if (a != exitFace)
+        {
+          const double share = sum > 0.0 ? lambda[a] / sum : 1.0 / 3.0;
+          tally.Exit[tets[4 * static_cast<std::size_t>(t) + a]] += w * share;
+        }
+      }
+      balance.Escaped += w;
+      break;
+    }
+    AddBalance(tally.Balance, balance);
+  }
+};
+
+} // namespace
+
+bool MonteCarloSolver::Solve(
+  const DiffusionProblem& problem, std::vector<double>& fluence, SolverReport& report)
+{
+  // ---- Input checks (before any work).
+  if (!problem.Mesh || !problem.Material)
+  {
+    throw Error("montecarlo: the problem needs a mesh and a material");
+  }
+  const TetMesh& mesh = *problem.Mesh;
+  const int numTets = mesh.GetNumberOfTets();
+  const int numPoints = mesh.GetNumberOfPoints();
+  if (numTets == 0)
+  {
+    throw Error("montecarlo: the mesh has no tets");
+  }
+  const OpticalProperties& material = *problem.Material;
+  material.Validate(numTets);
+  if (NumberOfPhotons_ <= 0)
+  {
+    throw Error("montecarlo: number of photons " + std::to_string(NumberOfPhotons_) +
+      ": must be > 0");
+  }
+  if (NumberOfBatches_ < 2)
+  {
+    throw Error("montecarlo: number of batches " + std::to_string(NumberOfBatches_) +
+      ": must be >= 2 (the standard errors come from the batches)");
+  }
+  if (!(Anisotropy_ > -1.0 && Anisotropy_ < 1.0))
+  {
+    std::ostringstream msg;
+    msg << "montecarlo: anisotropy g = " << Anisotropy_ << ": must be in (-1, 1)";
+    throw Error(msg.str());
+  }
+  if (NumberOfThreads_ < 0)
+  {
+    throw Error("montecarlo: number of threads " + std::to_string(NumberOfThreads_) +
+      ": must be >= 0 (0: OpenMP default)");
+  }
+  if (UniformLightSamples_ < 0)
+  {
+    throw Error("montecarlo: uniform light samples " + std::to_string(UniformLightSamples_) +
+      ": must be >= 0");
+  }
+  if (!(problem.UniformIrradiance >= 0.0) || !std::isfinite(problem.UniformIrradiance))
+  {
+    std::ostringstream msg;
+    msg << "montecarlo: uniform irradiance " << problem.UniformIrradiance
+        << " W/mm^2: must be finite and >= 0";
+    throw Error(msg.str());
+  }
+  if (problem.Lights.empty() && problem.UniformIrradiance == 0.0)
+  {
+    throw Error("montecarlo: the problem has no light (no Lights and UniformIrradiance 0): the "
+                "Monte Carlo reference launches its photons from the lights, not from the "
+                "Irradiance array");
+  }
+  for (std::size_t l = 0; l < problem.Lights.size(); ++l)
+  {
+    if (problem.Lights[l].Type == LightSource::Kind::Spot)
+    {
+      throw Error("montecarlo: light " + std::to_string(l) +
+        " is a spot light: the Monte Carlo reference supports directional and point lights");
+    }
+    if (problem.Lights[l].Type == LightSource::Kind::Uniform)
+    {
+      throw Error("montecarlo: light " + std::to_string(l) +
+        " is uniform: pass a uniform light as DiffusionProblem::UniformIrradiance");
+    }
+  }
+
+  // ---- Set-up: walk structure, per-light irradiance, source tables.
+  auto start = Clock::now();
+  if (!ReportProgress(0.0))
+  {
+    return false;
+  }
+  const std::vector<double> pointEta =
+    BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
+
+  std::vector<LaunchLight> lights;
+  bool aborted = false;
+  auto abortCheck = [this, &aborted]() {
+    aborted = aborted || !ReportProgress(0.0);
+    return aborted;
+  };
+  for (std::size_t l = 0; l < problem.Lights.size(); ++l)
+  {
+    const LightSource& source = problem.Lights[l];
+    LaunchLight light;
+    light.Type = source.Type;
+    for (int a = 0; a < 3; ++a)
+    {
+      light.Direction[a] = source.Direction[a];
+      light.Position[a] = source.Position[a];
+    }
+    // Checks the light and computes its q alone.
+    try
+    {
+      if (!ComputeBoundaryIrradiance(
+            mesh, pointEta, { source }, 0.0, 0, problem.Shadows, light.Q, abortCheck))
+      {
+        return false;
+      }
+    }
+    catch (const Error& e)
+    {
+      throw Error("montecarlo: light " + std::to_string(l) + " of the problem: " + e.what());
+    }
+    if (light.Type == LightSource::Kind::Directional)
+    {
+      Normalize(light.Direction);
+    }
+    lights.push_back(std::move(light));
+  }
+  if (problem.UniformIrradiance > 0.0)
+  {
+    LaunchLight light;
+    light.Type = LightSource::Kind::Uniform;
+    if (!ComputeBoundaryIrradiance(mesh, pointEta, {}, problem.UniformIrradiance,
+          UniformLightSamples_, problem.Shadows, light.Q, abortCheck))
+    {
+      return false;
+    }
+    lights.push_back(std::move(light));
+  }
+
+  WalkMesh walk;
+  walk.Build(mesh);
+
+  // The shadowed uniform light launches along unoccluded directions only.
+  const bool uniformShadowed =
+    problem.UniformIrradiance > 0.0 && problem.Shadows && UniformLightSamples_ > 0;
+  RayCaster caster;
+  double lo[3], hi[3];
+  for (int a = 0; a < 3; ++a)
+  {
+    lo[a] = std::numeric_limits<double>::infinity();
+    hi[a] = -lo[a];
+  }
+  for (int i = 0; i < numPoints; ++i)
+  {
+    for (int a = 0; a < 3; ++a)
+    {
+      lo[a] = std::min(lo[a], mesh.GetPoint(i)[a]);
+      hi[a] = std::max(hi[a], mesh.GetPoint(i)[a]);
+    }
+  }
+  const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
+    (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  if (uniformShadowed)
+  {
+    caster.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
+  }
+
+  // Power through each boundary triangle: S_f x mean of the linear q
+  // (the integral of q over f; the diffusion solvers' lumped load, S_i q_i / 3
+  // per corner, sums to the same total).
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
+  const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+  std::array<ChannelSource, NumberOfChannels> sources;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    ChannelSource& src = sources[c];
+    double total = 0.0;
+    for (std::size_t l = 0; l < lights.size(); ++l)
+    {
+      const std::vector<double>& q = lights[l].Q;
+      for (int f = 0; f < numTriangles; ++f)
+      {
+        const int* v = &triangles[3 * static_cast<std::size_t>(f)];
+        const double power = areas[f] *
+          (q[3 * static_cast<std::size_t>(v[0]) + c] + q[3 * static_cast<std::size_t>(v[1]) + c] +
+            q[3 * static_cast<std::size_t>(v[2]) + c]) /
+          3.0;
+        if (power > 0.0)
+        {
+          total += power;
+          src.Light.push_back(static_cast<int>(l));
+          src.Triangle.push_back(f);
+          src.Cumulative.push_back(total);
+        }
+      }
+    }
+    src.Power = total;
+  }
+  // Max over the outside hemisphere of F_t (the uniform light's rejection
+  // bound), per distinct eta would be exact; F_t is largest at normal
+  // incidence for an unpolarised smooth interface, checked on a grid.
+  auto maxTransmittance = [](double eta) {
+    double best = Fresnel::Transmittance(1.0, eta);
+    for (int k = 0; k <= 1024; ++k)
+    {
+      best = std::max(best, Fresnel::Transmittance(k / 1024.0, eta));
+    }
+    return best;
+  };
+  double maxFt = 0.0;
+  {
+    std::vector<double> etas(material.RefractiveIndex);
+    std::sort(etas.begin(), etas.end());
+    etas.erase(std::unique(etas.begin(), etas.end()), etas.end());
+    if (etas.size() <= 64)
+    {
+      for (double eta : etas)
+      {
+        maxFt = std::max(maxFt, maxTransmittance(eta));
+      }
+    }
+    else
+    {
+      maxFt = 1.0; // correct for any eta, only slower to accept
+    }
+  }
+  const double setupMs = MillisecondsSince(start);
+
+  // ---- Tracing.
+  start = Clock::now();
+  const long long numPhotons = NumberOfPhotons_;
+  const int threads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
+  int litChannels = 0;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    litChannels += sources[c].Power > 0.0 ? 1 : 0;
+  }
+  const double totalPhotons = static_cast<double>(numPhotons) * std::max(1, litChannels);
+  std::atomic<long long> done(0);
+  std::atomic<bool> stop(false);
+
+  const std::vector<int>& pointTetOffsets = mesh.GetPointTetOffsets();
+  const std::vector<int>& pointTets = mesh.GetPointTets();
+  const std::vector<double>& tetVolumes = mesh.GetTetVolumes();
+  const std::vector<double>& vertexVolumes = mesh.GetVertexVolumes();
+  const std::vector<double>& boundaryAreas = mesh.GetBoundaryAreas();
+
+  std::vector<double> tetFluence(3 * static_cast<std::size_t>(numTets), 0.0);
+  std::vector<double> pointFluence(3 * static_cast<std::size_t>(numPoints), 0.0);
+  std::vector<double> pointFluenceError(3 * static_cast<std::size_t>(numPoints), 0.0);
+  std::vector<double> exitance(3 * static_cast<std::size_t>(numPoints), 0.0);
+  std::vector<double> exitanceError(3 * static_cast<std::size_t>(numPoints), 0.0);
+  std::array<PowerBalance, NumberOfChannels> balances{};
+
+  const int numBatches =
+    static_cast<int>(std::min<long long>(NumberOfBatches_, numPhotons));
+  const int slots = std::min(threads, numBatches);
+  std::vector<BatchTally> tallies(slots);
+  // Sums over the batches b (photons n_b, tallies T_b): A1 = sum T_b and
+  // A2 = sum T_b^2 / n_b, per tet (A1 only) and per point.
+  std::vector<double> tetSum(numTets), fluenceA1(numPoints), fluenceA2(numPoints),
+    exitA1(numPoints), exitA2(numPoints);
+  const std::size_t tallyBytes =
+    static_cast<std::size_t>(slots) * (numTets + static_cast<std::size_t>(numPoints)) *
+      sizeof(double) +
+    (tetSum.size() + 4 * static_cast<std::size_t>(numPoints)) * sizeof(double) +
+    (tetFluence.size() + 4 * pointFluence.size()) * sizeof(double);
+
+  for (int c = 0; c < NumberOfChannels && !stop; ++c)
+  {
+    if (!(sources[c].Power > 0.0))
+    {
+      continue; // dark channel: everything stays 0
+    }
+    Tracer tracer;
+    tracer.Mesh = &mesh;
+    tracer.Walk = &walk;
+    tracer.Source = &sources[c];
+    tracer.Lights = &lights;
+    tracer.Caster = uniformShadowed ? &caster : nullptr;
+    tracer.Eta = &material.RefractiveIndex;
+    tracer.Anisotropy = Anisotropy_;
+    tracer.Weight = sources[c].Power / static_cast<double>(numPhotons);
+    tracer.RayOffset = 1e-5 * diag; // as ComputeBoundaryIrradiance
+    tracer.RayReach = 2.0 * diag;
+    tracer.MaxUniformTransmittance = maxFt;
+    tracer.Seed = Seed_;
+    tracer.Channel = c;
+    for (int t = 0; t < numTets; ++t)
+    {
+      TetCell& cell = walk.Cells[t];
+      cell.MuS = material.ReducedScatteringCoefficient[3 * static_cast<std::size_t>(t) + c] /
+        (1.0 - Anisotropy_);
+      cell.MuA = material.AbsorptionCoefficient[3 * static_cast<std::size_t>(t) + c];
+    }
+    std::fill(tetSum.begin(), tetSum.end(), 0.0);
+    std::fill(fluenceA1.begin(), fluenceA1.end(), 0.0);
+    std::fill(fluenceA2.begin(), fluenceA2.end(), 0.0);
+    std::fill(exitA1.begin(), exitA1.end(), 0.0);
+    std::fill(exitA2.begin(), exitA2.end(), 0.0);
+
+    for (int first = 0; first < numBatches && !stop; first += slots)
+    {
+      const int count = std::min(slots, numBatches - first);
+      // One batch per thread; only thread 0 (the calling thread) reports.
+#pragma omp parallel for num_threads(count) schedule(static, 1)
+      for (int k = 0; k < count; ++k)
+      {
+        BatchTally& tally = tallies[k];
+        tally.Reset(numTets, numPoints);
+        const long long b = first + k;
+        tally.Begin = b * numPhotons / numBatches;
+        tally.End = (b + 1) * numPhotons / numBatches;
+        for (long long p = tally.Begin; p < tally.End && !stop.load(std::memory_order_relaxed);
+             p += Chunk)
+        {
+          const long long end = std::min(tally.End, p + Chunk);
+          for (long long i = p; i < end; ++i)
+          {
+            tracer.Trace(i, tally);
+          }
+          const long long total = done.fetch_add(end - p) + (end - p);
+          if (omp_get_thread_num() == 0 && !ReportProgress(total / totalPhotons))
+          {
+            stop = true;
+          }
+        }
+      }
+      if (stop)
+      {
+        break;
+      }
+      // Add the batches in batch order (deterministic for any thread count);
+      // in parallel only when it pays for a thread team.
+      const bool parallelSum = static_cast<long long>(count) * (numTets + numPoints) > 1000000;
+#pragma omp parallel for num_threads(threads) schedule(static) if (parallelSum)
+      for (int t = 0; t < numTets; ++t)
+      {
+        for (int k = 0; k < count; ++k)
+        {
+          tetSum[t] += tallies[k].Track[t];
+        }
+      }
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1024) if (parallelSum)
+      for (int i = 0; i < numPoints; ++i)
+      {
+        for (int k = 0; k < count; ++k)
+        {
+          const BatchTally& tally = tallies[k];
+          const double n = static_cast<double>(tally.End - tally.Begin);
+          double track = 0.0;
+          for (int j = pointTetOffsets[i]; j < pointTetOffsets[i + 1]; ++j)
+          {
+            track += tally.Track[pointTets[j]];
+          }
+          fluenceA1[i] += track;
+          fluenceA2[i] += track * track / n;
+          const double out = tally.Exit[i];
+          exitA1[i] += out;
+          exitA2[i] += out * out / n;
+        }
+      }
+      for (int k = 0; k < count; ++k)
+      {
+        AddBalance(balances[c], tallies[k].Balance);
+      }
+    }
+    if (stop)
+    {
+      break;
+    }
+
+    // Batch estimates X_b = T_b N / (n_b D) (D = V_i or S_i / 3): the mean is
+    // A1 / D and the variance of the mean (sum n_b X_b^2 - N X^2) /
+    // ((B - 1) N) = (N A2 - A1^2) / ((B - 1) D^2).
+    const double n = static_cast<double>(numPhotons);
+    const double dof = numBatches - 1;
+    for (int t = 0; t < numTets; ++t)
+    {
+      tetFluence[3 * static_cast<std::size_t>(t) + c] = tetSum[t] / tetVolumes[t];
+    }
+    auto standardError = [&](double a1, double a2, double measure) {
+      if (numBatches < 2)
+      {
+        return std::numeric_limits<double>::quiet_NaN(); // one photon: undefined
+      }
+      return std::sqrt(std::max(0.0, n * a2 - a1 * a1) / dof) / measure;
+    };
+    for (int i = 0; i < numPoints; ++i)
+    {
+      const std::size_t ic = 3 * static_cast<std::size_t>(i) + c;
+      if (vertexVolumes[i] > 0.0)
+      {
+        pointFluence[ic] = fluenceA1[i] / vertexVolumes[i];
+        pointFluenceError[ic] = standardError(fluenceA1[i], fluenceA2[i], vertexVolumes[i]);
+      }
+      if (boundaryAreas[i] > 0.0)
+      {
+        const double s = boundaryAreas[i] / 3.0;
+        exitance[ic] = exitA1[i] / s;
+        exitanceError[ic] = standardError(exitA1[i], exitA2[i], s);
+      }
+    }
+  }
+  if (stop)
+  {
+    return false;
+  }
+  const double solveMs = MillisecondsSince(start);
+
+  // ---- Outputs.
+  // Radiance along the normal implied by eq. 3's angular form: L_o(w) =
+  // C F_t(w) (TransCut eq. 3), so M = int L_o cos dw = C pi
+  // UniformTransmittance(eta) and L_n = M F_t(1) / (pi UniformTransmittance).
+  std::vector<double> radiance(exitance.size(), 0.0), radianceError(exitance.size(), 0.0);
+  for (int i : mesh.GetBoundaryPoints())
+  {
+    const double eta = pointEta[i];
+    const double toRadiance =
+      Fresnel::Transmittance(1.0, eta) / (Pi * Fresnel::UniformTransmittance(eta));
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      const std::size_t ic = 3 * static_cast<std::size_t>(i) + c;
+      radiance[ic] = exitance[ic] * toRadiance;
+      radianceError[ic] = exitanceError[ic] * toRadiance;
+    }
+  }
+
+  long long traced = 0;
+  for (const PowerBalance& b : balances)
+  {
+    traced += b.Photons;
+  }
+  Balance_ = balances;
+  TetFluence_ = std::move(tetFluence);
+  Exitance_ = std::move(exitance);
+  ExitanceError_ = std::move(exitanceError);
+  PhotonsTraced_ = traced;
+  ThreadsUsed_ = slots;
+  Rate_ = solveMs > 0.0 ? traced / (solveMs * 1e-3) / slots : 0.0;
+
+  report = SolverReport();
+  report.Solver = GetName();
+  report.LinearSolver = "photons";
+  report.NumberOfUnknowns = numTets; // tally cells per channel
+  report.NumberOfNonZeros = 0;
+  report.MemoryBytes = tallyBytes + walk.Bytes();
+  for (const LaunchLight& light : lights)
+  {
+    report.MemoryBytes += light.Q.size() * sizeof(double);
+  }
+  for (const ChannelSource& src : sources)
+  {
+    report.MemoryBytes += src.Cumulative.size() * (sizeof(double) + 2 * sizeof(int));
+  }
+  report.SetupMilliseconds = setupMs;
+  report.SolveMilliseconds = solveMs;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    report.Iterations[c] = 0;
+    report.Residual[c] = 0.0;
+    report.Converged[c] = true;
+  }
+  report.FluenceStandardError = std::move(pointFluenceError);
+  report.Radiance = std::move(radiance);
+  report.RadianceStandardError = std::move(radianceError);
+  fluence = std::move(pointFluence);
+  ReportProgress(1.0);
+  return true;
+}
+
+} // namespace translucency
