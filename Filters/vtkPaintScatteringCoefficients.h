@@ -48,7 +48,7 @@
  * mesh whose coefficients are the painted ones. Without port 1 the input
  * (port 0) is painted as it is.
  *
- * The computation is translucency::TetPaint (Solvers/TetPaint.h): OpenMP,
+ * The computation is translucency::TetPaint (Solvers/Editing/TetPaint.h): OpenMP,
  * cells outside the stroke's bounding box inflated by R are skipped after a
  * centroid and a box test, the nearest stroke point of the others is looked
  * up in a uniform grid over the stroke points.

@@ -4,6 +4,7 @@
 #include "Fresnel.h"
 #include "Strings.h"
 #include "TetMesh.h"
+#include "TriangleGeometry.h"
 #include "Timer.h"
 
 #include <Eigen/Cholesky>
@@ -92,32 +93,6 @@ std::string FormatBytes(double bytes)
   return os.str();
 }
 
-/// 64-bit hash of the mesh coordinates (bit patterns) and tets.
-std::uint64_t HashMesh(const TetMesh& mesh)
-{
-  std::uint64_t h = 0xcbf29ce484222325ULL;
-  auto mix = [&h](std::uint64_t v)
-  {
-    h ^= v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
-    h *= 0x100000001b3ULL;
-  };
-  for (double x : mesh.GetPoints())
-  {
-    std::uint64_t bits;
-    std::memcpy(&bits, &x, sizeof bits);
-    mix(bits);
-  }
-  const std::vector<int>& tets = mesh.GetTets();
-  for (size_t k = 0; k + 1 < tets.size(); k += 2)
-  {
-    mix(static_cast<std::uint32_t>(tets[k]) |
-      static_cast<std::uint64_t>(static_cast<std::uint32_t>(tets[k + 1])) << 32);
-  }
-  mix(mesh.GetNumberOfPoints());
-  mix(mesh.GetNumberOfTets());
-  return h;
-}
-
 /// Bounding box of the points used by tets: min x, y, z, max x, y, z.
 void TetBounds(const TetMesh& mesh, double bounds[6])
 {
@@ -145,57 +120,6 @@ void GridCounts(const double bounds[6], double h, double counts[3])
     // The slack keeps an extent of exactly n h at n nodes despite rounding.
     counts[d] = std::max(1.0, std::ceil((bounds[d + 3] - bounds[d]) / h - 1e-9));
   }
-}
-
-/// Closest point to p on triangle (a, b, c) (Ericson, Real-Time Collision
-/// Detection, 5.1.5).
-void ClosestPointOnTriangle(const Eigen::Vector3d& p,
-  const Eigen::Vector3d& a,
-  const Eigen::Vector3d& b,
-  const Eigen::Vector3d& c,
-  Eigen::Vector3d& out)
-{
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0)
-  {
-    out = a;
-    return;
-  }
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3)
-  {
-    out = b;
-    return;
-  }
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0)
-  {
-    out = a + d1 / (d1 - d3) * ab;
-    return;
-  }
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6)
-  {
-    out = c;
-    return;
-  }
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0)
-  {
-    out = a + d2 / (d2 - d6) * ac;
-    return;
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-  {
-    out = b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
-    return;
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  out = a + ab * (vb * denom) + ac * (vc * denom);
 }
 
 /// Barycentric weights of p (on or near the plane of a, b, c), clamped to
@@ -660,7 +584,7 @@ void GridSolver::Reset()
 {
   Levels_.clear();
   Mesh_ = nullptr;
-  GeometryHash_ = 0;
+  GeometryRevision_ = 0;
   RequestedSpacing_ = -1.0;
   HasMultiLevel_ = false;
   HaveSolution_ = false;
@@ -860,8 +784,8 @@ void GridSolver::PrepareGrid(const TetMesh& mesh)
 {
   const DynamicThreads dynamic(NumberOfThreads_ <= 0);
   const double h = ComputeSpacing(mesh); // throws for an empty mesh or a bad spacing
-  const std::uint64_t hash = HashMesh(mesh);
-  const bool sameGeometry = !Levels_.empty() && Mesh_ == &mesh && GeometryHash_ == hash &&
+  const std::uint64_t revision = mesh.GetGeometryRevision();
+  const bool sameGeometry = !Levels_.empty() && Mesh_ == &mesh && GeometryRevision_ == revision &&
     RequestedSpacing_ == GridSpacing_;
   if (sameGeometry && (HasMultiLevel_ || !MultiLevel_))
   {
@@ -916,7 +840,7 @@ void GridSolver::PrepareGrid(const TetMesh& mesh)
     }
     RayFallbacks_ = fallbacks;
     Mesh_ = &mesh;
-    GeometryHash_ = hash;
+    GeometryRevision_ = revision;
     RequestedSpacing_ = GridSpacing_;
   }
   if (MultiLevel_ && !HasMultiLevel_)
@@ -1073,8 +997,9 @@ int GridSolver::BuildLevel(const TetMesh& mesh, GridLevel& level) const
           double best = std::numeric_limits<double>::infinity();
           for (int f = 0; f < numTriangles; ++f)
           {
-            Eigen::Vector3d q;
-            ClosestPointOnTriangle(p, vertex(f, 0), vertex(f, 1), vertex(f, 2), q);
+            double weights[3];
+            const Eigen::Vector3d q =
+              ClosestPointOnTriangle(p, vertex(f, 0), vertex(f, 1), vertex(f, 2), weights);
             const double dist = (q - p).squaredNorm();
             if (dist < best)
             {

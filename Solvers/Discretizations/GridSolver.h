@@ -158,8 +158,9 @@ struct GridLevel
  * keeps at least 512, at most 6 coarse levels.
  *
  * Warm start: when the grid is unchanged (same mesh object, same coordinates
- * and tets by hash, same spacing) the previous fine solution is the initial
- * guess; it takes precedence over the multi-level initialisation.
+ * and tets, i.e. the same TetMesh::GetGeometryRevision(), same spacing) the
+ * previous fine solution is the initial guess; it takes precedence over the
+ * multi-level initialisation.
  *
  * Fluence at the mesh points: EvaluateGrid at each point.
  *
@@ -312,7 +313,7 @@ private:
   TetLocator Locator_;
   RayCaster Caster_;
   const TetMesh* Mesh_ = nullptr;
-  std::uint64_t GeometryHash_ = 0;
+  std::uint64_t GeometryRevision_ = 0; ///< TetMesh::GetGeometryRevision() of the grid
   double RequestedSpacing_ = -1.0;
   bool HasMultiLevel_ = false;
   bool HaveSolution_ = false;

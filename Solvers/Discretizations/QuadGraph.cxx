@@ -2,8 +2,10 @@
 
 #include "Error.h"
 #include "Fresnel.h"
+#include "SpatialOrder.h"
 #include "Strings.h"
 #include "TetMesh.h"
+#include "TriangleGeometry.h"
 #include "Timer.h"
 
 #include <Eigen/Dense>
@@ -222,88 +224,6 @@ inline Vec3 At(const std::vector<double>& xyz, int i)
 {
   const size_t k = 3 * static_cast<size_t>(i);
   return Vec3(xyz[k], xyz[k + 1], xyz[k + 2]);
-}
-
-/// Spread the low 21 bits of x to every third bit.
-std::uint64_t SpreadBits(std::uint64_t x)
-{
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
-  return x;
-}
-
-/// The first n of the given positions (3 each) sorted along a Morton curve
-/// of their bounding cube (ties by index).
-std::vector<int> MortonOrder(const std::vector<double>& positions, int n)
-{
-  double lo[3] = { HUGE_VAL, HUGE_VAL, HUGE_VAL }, hi[3] = { -HUGE_VAL, -HUGE_VAL, -HUGE_VAL };
-  for (int i = 0; i < n; ++i)
-  {
-    for (int d = 0; d < 3; ++d)
-    {
-      lo[d] = std::min(lo[d], positions[3 * static_cast<size_t>(i) + d]);
-      hi[d] = std::max(hi[d], positions[3 * static_cast<size_t>(i) + d]);
-    }
-  }
-  const double extent = std::max({ hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2] });
-  const double scale = extent > 0.0 ? ((1u << 21) - 1) / extent : 0.0;
-  std::vector<std::pair<std::uint64_t, int>> keys(n);
-  for (int i = 0; i < n; ++i)
-  {
-    std::uint64_t code = 0;
-    for (int d = 0; d < 3; ++d)
-    {
-      const double q = std::clamp(
-        (positions[3 * static_cast<size_t>(i) + d] - lo[d]) * scale, 0.0, double((1u << 21) - 1));
-      code |= SpreadBits(static_cast<std::uint64_t>(q)) << d;
-    }
-    keys[i] = { code, i };
-  }
-  std::sort(keys.begin(), keys.end());
-  std::vector<int> order(n);
-  for (int i = 0; i < n; ++i)
-  {
-    order[i] = keys[i].second;
-  }
-  return order;
-}
-
-/// Closest point of triangle (a, b, c) to p, as barycentric weights.
-Vec3 ClosestBarycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c)
-{
-  // Barycentric coordinates of the projection onto the plane.
-  const Vec3 n = (b - a).cross(c - a);
-  const double n2 = n.squaredNorm();
-  const Vec3 bary((b - p).cross(c - p).dot(n) / n2, (c - p).cross(a - p).dot(n) / n2,
-    (a - p).cross(b - p).dot(n) / n2);
-  if (bary.minCoeff() >= 0.0)
-  {
-    return bary / bary.sum();
-  }
-  // Outside: nearest point on the three edges.
-  const Vec3* v[3] = { &a, &b, &c };
-  double best = HUGE_VAL;
-  Vec3 result(1.0, 0.0, 0.0);
-  for (int e = 0; e < 3; ++e)
-  {
-    const Vec3& p0 = *v[e];
-    const Vec3& p1 = *v[(e + 1) % 3];
-    const Vec3 edge = p1 - p0;
-    const double t = std::clamp((p - p0).dot(edge) / edge.squaredNorm(), 0.0, 1.0);
-    const double dist = (p0 + t * edge - p).squaredNorm();
-    if (dist < best)
-    {
-      best = dist;
-      result.setZero();
-      result[e] = 1.0 - t;
-      result[(e + 1) % 3] = t;
-    }
-  }
-  return result;
 }
 
 /// Matrix pattern from sorted links: each row is its links with the diagonal
@@ -755,11 +675,9 @@ void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
     }
     fine.SurfaceCells[f] = cell;
     g.SurfaceTriangles[f] = f;
-    const Vec3 w = ClosestBarycentric(foot, p0, p1, p2);
-    for (int m = 0; m < 3; ++m)
-    {
-      g.SurfaceWeights[3 * static_cast<size_t>(f) + m] = w[m];
-    }
+    // The foot lies in the face's plane; its closest point is itself
+    // unless it falls outside the triangle.
+    ClosestPointOnTriangle(foot, p0, p1, p2, &g.SurfaceWeights[3 * static_cast<size_t>(f)]);
   }
 
   // 5. Links: four per cell (the cell or surface node across each face of
@@ -944,7 +862,7 @@ void QuadGraphSolver::BuildCoarseLevels(int numThreads)
     }
     Level coarse;
     // Groups of GroupSize consecutive cells in Morton order.
-    const std::vector<int> order = MortonOrder(fine.Positions, nf);
+    const std::vector<int> order = MortonOrder(fine.Positions.data(), static_cast<size_t>(nf));
     const int nc = (nf + GroupSize - 1) / GroupSize;
     coarse.NumberOfCells = nc;
     coarse.FineParents.resize(fine.GetNumberOfNodes());

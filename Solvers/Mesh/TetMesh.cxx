@@ -1,6 +1,7 @@
 #include "TetMesh.h"
 
 #include "Error.h"
+#include "SpatialOrder.h"
 
 #include <omp.h>
 
@@ -32,9 +33,6 @@ int ScatterChunkSize(int numTets)
   return std::clamp(numTets / 256, 256, 8192);
 }
 
-/// Bits per axis of the Morton codes.
-constexpr int MortonBits = 21;
-
 inline void Sub(const double* a, const double* b, double* r)
 {
   r[0] = a[0] - b[0];
@@ -63,88 +61,6 @@ inline double SignedVolume(const double* p0, const double* p1, const double* p2,
   Sub(p3, p0, e3);
   Cross(e2, e3, c);
   return Dot(e1, c) / 6.0;
-}
-
-/// Spread the low 21 bits of v so that two zero bits separate each bit.
-inline std::uint64_t SpreadBits(std::uint64_t v)
-{
-  std::uint64_t x = v & 0x1fffffULL;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
-  return x;
-}
-
-/// Quantises coordinates in a bounding cube to 21-bit Morton codes.
-struct MortonEncoder
-{
-  double Origin[3] = { 0.0, 0.0, 0.0 };
-  double Scale = 0.0;
-
-  explicit MortonEncoder(const std::vector<double>& points)
-  {
-    const size_t n = points.size() / 3;
-    if (n == 0)
-    {
-      return;
-    }
-    double lo[3] = { points[0], points[1], points[2] };
-    double hi[3] = { points[0], points[1], points[2] };
-    for (size_t i = 1; i < n; ++i)
-    {
-      for (int d = 0; d < 3; ++d)
-      {
-        lo[d] = std::min(lo[d], points[3 * i + d]);
-        hi[d] = std::max(hi[d], points[3 * i + d]);
-      }
-    }
-    const double extent = std::max({ hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2] });
-    for (int d = 0; d < 3; ++d)
-    {
-      Origin[d] = lo[d];
-    }
-    // One cube for the three axes keeps the curve isotropic.
-    Scale = extent > 0.0 ? ((1u << MortonBits) - 1) / extent : 0.0;
-  }
-
-  std::uint64_t operator()(const double* x) const
-  {
-    std::uint64_t code = 0;
-    for (int d = 0; d < 3; ++d)
-    {
-      double q = (x[d] - Origin[d]) * Scale;
-      q = std::clamp(q, 0.0, static_cast<double>((1u << MortonBits) - 1));
-      code |= SpreadBits(static_cast<std::uint64_t>(q)) << d;
-    }
-    return code;
-  }
-};
-
-/// Ids sorted by code, ties by id (a deterministic total order).
-std::vector<int> SortByCode(const std::vector<std::uint64_t>& codes)
-{
-  const int n = static_cast<int>(codes.size());
-  std::vector<int> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  if (std::is_sorted(codes.begin(), codes.end()))
-  {
-    return order;
-  }
-  std::vector<std::pair<std::uint64_t, int>> keyed(n);
-#pragma omp parallel for schedule(static)
-  for (int k = 0; k < n; ++k)
-  {
-    keyed[k] = { codes[k], k };
-  }
-  std::sort(keyed.begin(), keyed.end());
-#pragma omp parallel for schedule(static)
-  for (int k = 0; k < n; ++k)
-  {
-    order[k] = keyed[k].second;
-  }
-  return order;
 }
 
 /// Morton codes of the tet centroids (tets assumed validated).

@@ -85,7 +85,7 @@ def fresnel_transmittance(cos_i, eta):
 
     Written with angles (Rs = sin^2(i - t) / sin^2(i + t),
     Rp = tan^2(i - t) / tan^2(i + t)), a different form from the one in
-    Solvers/Fresnel.cxx; normal incidence uses the limit ((eta - 1)/(eta + 1))^2.
+    Solvers/Physics/Fresnel.cxx; normal incidence uses the limit ((eta - 1)/(eta + 1))^2.
     """
     cos_i = np.clip(np.asarray(cos_i, dtype=float), 0.0, 1.0)
     theta_i = np.arccos(cos_i)
