@@ -463,6 +463,50 @@ std::string ShortLineMessage(const TetGenTextFile& file, std::size_t expected,
     std::to_string(expected) + " are expected (" + layout + ").";
 }
 
+/**
+ * Reads data line @a index (0-based) of the @a count records of a table:
+ * reports progress every ProgressInterval lines (false with @a aborted set
+ * when the user aborts), names a truncated file or a line with fewer than
+ * @a columns values, and, when @a warnedExtra is given, warns once per file
+ * about extra values.
+ */
+bool NextRecord(TetGenTextFile& file, const char* record, vtkIdType index, vtkIdType count,
+                long long headerLine, std::size_t columns, const std::string& layout,
+                const ProgressFunction& progress, bool& aborted, vtkObject* self,
+                bool* warnedExtra, std::string& error)
+{
+  if (index % ProgressInterval == 0 && index > 0 &&
+      !progress(static_cast<double>(index) / static_cast<double>(count)))
+  {
+    aborted = true;
+    return false;
+  }
+  if (!file.NextDataLine(error))
+  {
+    if (error.empty())
+    {
+      error = TruncatedMessage(file, record, index, count, headerLine);
+    }
+    return false;
+  }
+  const std::size_t found = file.GetTokens().size();
+  if (found < columns)
+  {
+    error = ShortLineMessage(file, columns, layout);
+    return false;
+  }
+  if (warnedExtra && found > columns && !*warnedExtra)
+  {
+    *warnedExtra = true;
+    vtkWarningWithObjectMacro(self, << file.Where() << ": " << found
+                                    << " values were found but " << columns << " are expected ("
+                                    << layout
+                                    << "); the extra values are ignored here and on any "
+                                       "later line of this file.");
+  }
+  return true;
+}
+
 std::string Columns(std::size_t count, const char* name)
 {
   return count == 0 ? std::string()
@@ -529,34 +573,10 @@ bool ReadNodes(TetGenTextFile& file, NodeTable& nodes, const ProgressFunction& p
   bool warnedExtra = false;
   for (vtkIdType i = 0; i < nodes.Count; ++i)
   {
-    if (i % ProgressInterval == 0 && i > 0 &&
-        !progress(static_cast<double>(i) / static_cast<double>(nodes.Count)))
+    if (!NextRecord(file, "node", i, nodes.Count, headerLine, columns, layout, progress,
+                    aborted, self, &warnedExtra, error))
     {
-      aborted = true;
       return false;
-    }
-    if (!file.NextDataLine(error))
-    {
-      if (error.empty())
-      {
-        error = TruncatedMessage(file, "node", i, nodes.Count, headerLine);
-      }
-      return false;
-    }
-    const std::vector<std::string_view>& tokens = file.GetTokens();
-    if (tokens.size() < columns)
-    {
-      error = ShortLineMessage(file, columns, layout);
-      return false;
-    }
-    if (tokens.size() > columns && !warnedExtra)
-    {
-      warnedExtra = true;
-      vtkWarningWithObjectMacro(self, << file.Where() << ": " << tokens.size()
-                                      << " values were found but " << columns << " are expected ("
-                                      << layout
-                                      << "); the extra values are ignored here and on any "
-                                         "later line of this file.");
     }
 
     long long id = 0;
@@ -593,7 +613,7 @@ bool ReadNodes(TetGenTextFile& file, NodeTable& nodes, const ProgressFunction& p
       }
       if (!std::isfinite(xyz[k]))
       {
-        error = file.Where() + ": " + axes[k] + label + " is " + Quote(tokens[1 + k]) +
+        error = file.Where() + ": " + axes[k] + label + " is " + Quote(file.GetTokens()[1 + k]) +
           ", which is not a finite number.";
         return false;
       }
@@ -713,34 +733,10 @@ bool ReadElements(TetGenTextFile& file, const NodeTable& nodes, const std::strin
   bool warnedExtra = false;
   for (vtkIdType i = 0; i < elements.Count; ++i)
   {
-    if (i % ProgressInterval == 0 && i > 0 &&
-        !progress(static_cast<double>(i) / static_cast<double>(elements.Count)))
+    if (!NextRecord(file, "tetrahedron", i, elements.Count, headerLine, columns, layout, progress,
+                    aborted, self, &warnedExtra, error))
     {
-      aborted = true;
       return false;
-    }
-    if (!file.NextDataLine(error))
-    {
-      if (error.empty())
-      {
-        error = TruncatedMessage(file, "tetrahedron", i, elements.Count, headerLine);
-      }
-      return false;
-    }
-    const std::vector<std::string_view>& tokens = file.GetTokens();
-    if (tokens.size() < columns)
-    {
-      error = ShortLineMessage(file, columns, layout);
-      return false;
-    }
-    if (tokens.size() > columns && !warnedExtra)
-    {
-      warnedExtra = true;
-      vtkWarningWithObjectMacro(self, << file.Where() << ": " << tokens.size()
-                                      << " values were found but " << columns << " are expected ("
-                                      << layout
-                                      << "); the extra values are ignored here and on any "
-                                         "later line of this file.");
     }
 
     long long id = 0;
@@ -820,23 +816,9 @@ bool ReadFaces(TetGenTextFile& file, const NodeTable& nodes, const std::string& 
 
   for (vtkIdType i = 0; i < faces.Count; ++i)
   {
-    if (i % ProgressInterval == 0 && i > 0 &&
-        !progress(static_cast<double>(i) / static_cast<double>(faces.Count)))
+    if (!NextRecord(file, "face", i, faces.Count, headerLine, columns, layout, progress,
+                    aborted, nullptr, nullptr, error))
     {
-      aborted = true;
-      return false;
-    }
-    if (!file.NextDataLine(error))
-    {
-      if (error.empty())
-      {
-        error = TruncatedMessage(file, "face", i, faces.Count, headerLine);
-      }
-      return false;
-    }
-    if (file.GetTokens().size() < columns)
-    {
-      error = ShortLineMessage(file, columns, layout);
       return false;
     }
     long long id = 0;

@@ -22,19 +22,8 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
   const std::vector<double>& irradiance,
   DiffusionSystem& system)
 {
-  const int numPoints = mesh.GetNumberOfPoints();
   const int numTets = mesh.GetNumberOfTets();
-  const size_t tetCount = static_cast<size_t>(numTets);
-  if (material.AbsorptionCoefficient.size() != 3 * tetCount ||
-    material.ReducedScatteringCoefficient.size() != 3 * tetCount ||
-    material.RefractiveIndex.size() != tetCount)
-  {
-    material.Validate(numTets); // throws, naming the array
-  }
-  if (irradiance.size() != 3 * static_cast<size_t>(numPoints))
-  {
-    CheckIrradiance(mesh, irradiance); // throws
-  }
+  CheckAssemblySizes(mesh, material, irradiance);
 
   ResizeVertexSystem(mesh, system);
   const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
@@ -42,10 +31,9 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
   const double* tetEta = material.RefractiveIndex.data();
   const double* q = irradiance.data();
-  double* values[NumberOfChannels] = { system.Values[0].data(), system.Values[1].data(),
-    system.Values[2].data() };
-  double* rhs[NumberOfChannels] = { system.RightHandSide[0].data(),
-    system.RightHandSide[1].data(), system.RightHandSide[2].data() };
+  const ChannelPointers channels(system);
+  double* const* values = channels.Values;
+  double* const* rhs = channels.RightHandSide;
   const std::vector<int>& boundaryPoints = mesh.GetBoundaryPoints();
   const std::vector<double>& boundaryArea = mesh.GetBoundaryAreas();
   const int* diagonal = mesh.GetDiagonalPositions().data();
@@ -121,16 +109,7 @@ bool DiscreteDivergence::UpdateTets(const TetMesh& mesh,
        << numPoints << " points, " << nnz << " non-zeros): call Assemble first";
     throw Error(os.str());
   }
-  if (material.AbsorptionCoefficient.size() != 3 * tetCount ||
-    material.ReducedScatteringCoefficient.size() != 3 * tetCount ||
-    material.RefractiveIndex.size() != tetCount)
-  {
-    material.Validate(numTets); // throws, naming the array
-  }
-  if (irradiance.size() != 3 * static_cast<size_t>(numPoints))
-  {
-    CheckIrradiance(mesh, irradiance); // throws
-  }
+  CheckAssemblySizes(mesh, material, irradiance);
   const double* muA = material.AbsorptionCoefficient.data();
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
   const double* tetEta = material.RefractiveIndex.data();

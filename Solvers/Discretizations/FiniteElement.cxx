@@ -30,23 +30,13 @@ void FiniteElement::Assemble(const TetMesh& mesh,
   const std::vector<double>& irradiance,
   DiffusionSystem& system)
 {
-  const int numPoints = mesh.GetNumberOfPoints();
   const int numTets = mesh.GetNumberOfTets();
   const size_t tetCount = static_cast<size_t>(numTets);
   if (numTets == 0)
   {
     throw Error("FiniteElement: the mesh has no tetrahedra");
   }
-  if (material.AbsorptionCoefficient.size() != 3 * tetCount ||
-    material.ReducedScatteringCoefficient.size() != 3 * tetCount ||
-    material.RefractiveIndex.size() != tetCount)
-  {
-    material.Validate(numTets); // throws, naming the array
-  }
-  if (irradiance.size() != 3 * static_cast<size_t>(numPoints))
-  {
-    CheckIrradiance(mesh, irradiance); // throws
-  }
+  CheckAssemblySizes(mesh, material, irradiance);
 
   ResizeVertexSystem(mesh, system);
   const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
@@ -54,10 +44,9 @@ void FiniteElement::Assemble(const TetMesh& mesh,
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
   const double* tetEta = material.RefractiveIndex.data();
   const double* q = irradiance.data();
-  double* values[NumberOfChannels] = { system.Values[0].data(), system.Values[1].data(),
-    system.Values[2].data() };
-  double* rhs[NumberOfChannels] = { system.RightHandSide[0].data(),
-    system.RightHandSide[1].data(), system.RightHandSide[2].data() };
+  const ChannelPointers channels(system);
+  double* const* values = channels.Values;
+  double* const* rhs = channels.RightHandSide;
   const int* triangles = mesh.GetBoundaryTriangles().data();
   const int* triangleTets = mesh.GetBoundaryTriangleTets().data();
   const double* triangleAreas = mesh.GetBoundaryTriangleAreas().data();

@@ -57,6 +57,42 @@ inline void CheckIrradiance(const TetMesh& mesh, const std::vector<double>& irra
   }
 }
 
+/// Throws, naming the array, if the material or the irradiance does not
+/// have one value set per tet / point (the cheap size check every assembly
+/// starts with; the values themselves are checked during the assembly).
+inline void CheckAssemblySizes(
+  const TetMesh& mesh, const OpticalProperties& material, const std::vector<double>& irradiance)
+{
+  const size_t tetCount = static_cast<size_t>(mesh.GetNumberOfTets());
+  if (material.AbsorptionCoefficient.size() != 3 * tetCount ||
+    material.ReducedScatteringCoefficient.size() != 3 * tetCount ||
+    material.RefractiveIndex.size() != tetCount)
+  {
+    material.Validate(mesh.GetNumberOfTets()); // throws, naming the array
+  }
+  if (irradiance.size() != 3 * static_cast<size_t>(mesh.GetNumberOfPoints()))
+  {
+    CheckIrradiance(mesh, irradiance); // throws
+  }
+}
+
+/// Raw pointers to the three channels' matrix values and right-hand sides
+/// of a sized system (for the assembly kernels).
+struct ChannelPointers
+{
+  double* Values[NumberOfChannels];
+  double* RightHandSide[NumberOfChannels];
+
+  explicit ChannelPointers(DiffusionSystem& system)
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      Values[c] = system.Values[c].data();
+      RightHandSide[c] = system.RightHandSide[c].data();
+    }
+  }
+};
+
 /**
  * Adds a tet's symmetric 4x4 matrix to the CSR values `v`: diag[a] at entry
  * (a, a), off = (01, 02, 03, 12, 13, 23) at (a, b) and (b, a). `pos` holds
@@ -152,10 +188,9 @@ bool AssembleVertexSystem(const TetMesh& mesh, const OpticalProperties& material
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
   const double* tetEta = material.RefractiveIndex.data();
   const double* q = irradiance.data();
-  double* values[NumberOfChannels] = { system.Values[0].data(), system.Values[1].data(),
-    system.Values[2].data() };
-  double* rhs[NumberOfChannels] = { system.RightHandSide[0].data(),
-    system.RightHandSide[1].data(), system.RightHandSide[2].data() };
+  const ChannelPointers channels(system);
+  double* const* values = channels.Values;
+  double* const* rhs = channels.RightHandSide;
   const long long numValues = static_cast<long long>(nnz);
   const long long numIrradianceValues = static_cast<long long>(irradiance.size());
   const long long numCoefficientValues = 3 * static_cast<long long>(numTets);

@@ -15,6 +15,7 @@
 #include "Radiance.h"
 #include "TestMeshes.h"
 #include "TestProblems.h"
+#include "TestReferenceAssembly.h"
 #include "TetMesh.h"
 #include "VertexDiffusionSolver.h"
 
@@ -155,23 +156,9 @@ Reference AssembleReference(const TetMesh& mesh,
   for (int t = 0; t < mesh.GetNumberOfTets(); ++t)
   {
     const int* tv = mesh.GetTet(t);
-    Eigen::Vector3d p[4];
-    for (int a = 0; a < 4; ++a)
-    {
-      p[a] = Eigen::Vector3d(mesh.GetPoint(tv[a]));
-    }
-    Eigen::Matrix3d edges;
-    edges.col(0) = p[1] - p[0];
-    edges.col(1) = p[2] - p[0];
-    edges.col(2) = p[3] - p[0];
-    const double volume = std::abs(edges.determinant()) / 6.0;
-    const Eigen::Matrix3d inverse = edges.inverse();
-    Eigen::Vector3d grad[4];
-    for (int a = 1; a < 4; ++a)
-    {
-      grad[a] = inverse.row(a - 1).transpose();
-    }
-    grad[0] = -(grad[1] + grad[2] + grad[3]);
+    const P1Tet tet = P1TetOf(mesh, t);
+    const double volume = tet.Volume;
+    const Eigen::Vector3d* grad = tet.Grad;
     for (int c = 0; c < 3; ++c)
     {
       const double mu = material.AbsorptionCoefficient[3 * t + c];
@@ -231,21 +218,6 @@ Reference AssembleReference(const TetMesh& mesh,
     ref.LumpedBoundary[c] = toMatrix(lumpedBoundary[c]);
   }
   return ref;
-}
-
-/// Solve the three channels with a tight tolerance; checks convergence.
-std::array<Eigen::VectorXd, 3> Solve(const DiffusionSystem& system, double tol = 1e-12)
-{
-  ConjugateGradient cg;
-  cg.SetRelTol(tol);
-  cg.SetMaxIter(20000);
-  std::array<Eigen::VectorXd, 3> x;
-  EXPECT_TRUE(cg.Solve(system, x));
-  for (int c = 0; c < 3; ++c)
-  {
-    EXPECT_TRUE(cg.GetConverged(c)) << "channel " << c << ": " << cg.GetFinalNorm(c);
-  }
-  return x;
 }
 
 class FiniteElementAssembly : public ::testing::TestWithParam<int> // mesh seed
