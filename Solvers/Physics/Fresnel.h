@@ -15,7 +15,7 @@ namespace Fresnel
 {
 
 /// Diffuse Fresnel reflectance Fdr(eta) = -1.440/eta^2 + 0.710/eta + 0.668 +
-/// 0.0636 eta (SPEC "The physics"; TransCut eq. 2). eta is the relative
+/// 0.0636 eta (Jensen et al. 2001 fit; TransCut, eq. 2). eta is the relative
 /// refractive index of the medium (> 0, dimensionless).
 double DiffuseReflectance(double eta);
 
