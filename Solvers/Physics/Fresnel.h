@@ -3,7 +3,7 @@
  * @brief Fresnel helpers for a smooth dielectric boundary (outside: index 1).
  *
  * Implements the quantities of the diffusive-source boundary condition
- * (TransCut paper, eq. 2-3; Jensen et al. 2001): the diffuse Fresnel
+ * (TransCut, eq. 2-3; Jensen et al. 2001): the diffuse Fresnel
  * reflectance Fdr, the boundary mismatch term A and the Fresnel transmittance
  * F_t.
  */
