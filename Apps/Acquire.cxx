@@ -1,4 +1,4 @@
-// `translucency acquire`: inverse diffusion (polygrid paper Sec. 4) from
+// `translucency acquire`: inverse diffusion (Polygrid, Sec. 4) from
 // measurement files, or from synthetic measurements of a known volume.
 #include "CommandLine.h"
 #include "PipelineRender.h"

@@ -1,5 +1,5 @@
 // translucency radiosity: a scene of translucent and opaque diffuse objects,
-// B = (I - S F)^-1 S E (translucent-radiosity paper, eq. 14), the paper's
+// B = (I - S F)^-1 S E (TranslucentRadiosity, eq. 14), the paper's
 // Fig. 6 four-panel picture, per-object .vtp files and a JSON report (with
 // optional relight / translucency-change timings, --bench N).
 

@@ -1,7 +1,7 @@
 /**
  * @class   vtkFractureTetMesh
  * @brief   Split a tet mesh into pieces, the Voronoi cells of seed points
- * (SPEC "Interactions", Fracture).
+ * (Documentation/Pipeline.md, "Interactions": Fracture).
  *
  * Each tet goes to the seed nearest its centroid (a tie goes to the seed added
  * first); see translucency::TetFracture. Seeds are given with AddSeedPoint(),

@@ -1,7 +1,7 @@
 /**
  * @class   vtkInverseDiffusion
  * @brief   Acquire per-element kappa and mu_a from illumination patterns and
- *          measured outgoing radiance (inverse diffusion, polygrid paper Sec. 4).
+ *          measured outgoing radiance (inverse diffusion, Polygrid, Sec. 4).
  *
  * Input: a tetrahedral vtkUnstructuredGrid (any tet mesh, or a block built by
  * translucency::BuildGridBlock) holding, for each measurement k = 0, 1, ...,

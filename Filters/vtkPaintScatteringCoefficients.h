@@ -31,7 +31,7 @@
  * array `PaintedCellIds` (vtkIdTypeArray, ascending): the ids of the output
  * cells whose coefficients changed (for incremental updates downstream).
  *
- * Painting a cut mesh (SPEC "Paint", TransCut Sec. 5.2: the distances are
+ * Painting a cut mesh (TransCut, Sec. 5.2: the distances are
  * computed for each tet of the ORIGINAL mesh): connect the original uncut mesh
  * to the optional input port 1 ("OriginalMesh", SetOriginalMeshConnection /
  * SetOriginalMeshData) and the cut mesh the stroke was drawn on to port 0.

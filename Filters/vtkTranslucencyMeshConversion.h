@@ -22,7 +22,7 @@ class vtkUnstructuredGrid;
 
 namespace vtkTranslucency
 {
-/// Array names of the data contract (SPEC "Data contract").
+/// Array names of the data contract (Documentation/Pipeline.md, "Data contract and units").
 constexpr const char* AbsorptionName = "AbsorptionCoefficient";
 constexpr const char* ScatteringName = "ReducedScatteringCoefficient";
 constexpr const char* RefractiveIndexName = "RefractiveIndex";

@@ -1,7 +1,7 @@
 /**
  * @class   vtkTranslucentRadiosity
  * @brief   Inter-reflection between translucent and diffuse objects:
- *          B = (I - S F)^-1 S E (translucent-radiosity paper, eq. 14).
+ *          B = (I - S F)^-1 S E (TranslucentRadiosity, eq. 14).
  *
  * Input: a vtkPartitionedDataSetCollection or a vtkMultiBlockDataSet whose
  * leaves are

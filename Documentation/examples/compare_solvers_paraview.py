@@ -9,8 +9,9 @@ How to run, from the repository root after `make build`:
 1. Load the plugin; build Sphere -> Triangulate -> Tetrahedralize Surface ->
    Assign Scattering Coefficients -> Surface Irradiance.
 2. Branch into two Solve Diffusion filters: the FEM reference and the solver
-   to compare (default: the TransCut discrete divergence). In the GUI, the
-   "Solver" drop-down of Solve Diffusion is the same choice.
+   to compare (default: the TransCut discrete divergence). The Solver
+   property takes the core's names (divergence, fem, quadgraph, grid,
+   montecarlo, as the CLI's --solver); in the GUI it is the "Solver" drop-down.
 3. Append the second solver's Fluence to the first (Append Attributes) and
    compute the relative difference with a Python Calculator; print its range.
    In the GUI, colour the result by "RelativeDifference".
@@ -22,7 +23,6 @@ from paraview.simple import *  # noqa: F401,F403
 
 plugin = sys.argv[1]
 other = sys.argv[2] if len(sys.argv) > 2 else "divergence"
-solver_index = {"divergence": 0, "fem": 1, "quadgraph": 2, "grid": 3, "montecarlo": 4}[other]
 LoadPlugin(plugin, ns=globals())
 
 # 1.
@@ -33,8 +33,8 @@ lit = SurfaceIrradiance(Input=marble, DirectionalLights=[0.0, -1.0, 0.0, 1.0],
                         UniformLightIrradiance=0.0)
 
 # 2.
-reference = SolveDiffusion(Input=lit, Solver=1, RelTol=1e-8)
-compared = SolveDiffusion(Input=lit, Solver=solver_index, RelTol=1e-8, NumberOfPhotons=200000)
+reference = SolveDiffusion(Input=lit, Solver="fem", RelTol=1e-8)
+compared = SolveDiffusion(Input=lit, Solver=other, RelTol=1e-8, NumberOfPhotons=200000)
 
 # 3.
 renamed = PassArrays(Input=compared, PointDataArrays=["Fluence"])

@@ -1,9 +1,10 @@
 /**
  * @file GridSolver.h
- * @brief Regular-grid finite differences (polygrid paper, eq. 8-9, Sec. 5.3;
- * SPEC solver 4): a voxel grid of spacing h embedded automatically in the
- * tetrahedral mesh, boundary nodes on the surface, Stam's 7-point stencil,
- * BiCGSTAB or coloured relaxation, optional coarse-to-fine initialisation.
+ * @brief Regular-grid finite differences (Polygrid, eq. 8-9, Sec. 5.3; the
+ * "grid" solver of Documentation/Solvers.md): a voxel grid of spacing h
+ * embedded automatically in the tetrahedral mesh, boundary nodes on the
+ * surface, Stam's 7-point stencil, BiCGSTAB or coloured relaxation, optional
+ * coarse-to-fine initialisation.
  */
 #pragma once
 

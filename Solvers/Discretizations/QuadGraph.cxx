@@ -302,7 +302,7 @@ struct LevelCoefficients
 };
 
 /**
- * The level's system (QuadGraph paper, eq. 5-6), rows parallel (each row
+ * The level's system (QuadGraph, eq. 5-6), rows parallel (each row
  * writes only its own entries: the result does not depend on threads).
  */
 void AssembleLevel(const QuadGraphSolver::Level& level,

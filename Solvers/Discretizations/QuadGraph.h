@@ -2,7 +2,7 @@
  * @file QuadGraph.h
  * @brief Finite differences on the dual graph of the tetrahedral mesh: the
  * QuadGraph of Wang et al., "Real-time rendering of heterogeneous translucent
- * objects with arbitrary shapes" (QuadGraph paper, Sec. 4, eq. 5-10).
+ * objects with arbitrary shapes" (QuadGraph, Sec. 4, eq. 5-10).
  *
  * Construction (paper Sec. 4.1): every tet with two or three boundary faces
  * is split at its centroid into four tets (one per face), so that every tet

@@ -1,6 +1,6 @@
 /**
  * @file StrokeSurface.h
- * @brief The cutting surface swept by a screen stroke (TransCut paper, Sec. 5.1).
+ * @brief The cutting surface swept by a screen stroke (TransCut, Sec. 5.1).
  *
  * A polyline stroke (world coordinates, mm) and a view direction d sweep a
  * ruled surface: every point of the stroke extended along d. Evaluate(x)

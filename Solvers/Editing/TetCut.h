@@ -1,6 +1,6 @@
 /**
  * @file TetCut.h
- * @brief Cut a tet mesh with a signed side function (TransCut paper, Sec. 5.1).
+ * @brief Cut a tet mesh with a signed side function (TransCut, Sec. 5.1).
  *
  * The caller gives the mesh (points, mm, and positively oriented tets) and a
  * side function F: F(x) > 0 is the removed side, F(x) <= 0 is kept, F = 0 is

@@ -1,7 +1,7 @@
 /**
  * @file TetFracture.h
  * @brief Split a tet mesh into pieces: the Voronoi cells of seed points
- * (SPEC "Interactions", Fracture).
+ * (Documentation/Pipeline.md, "Interactions": Fracture).
  *
  * Each tet goes to the seed nearest its centroid (Euclidean distance, mm; a
  * tie goes to the seed with the smaller index). Every non-empty Voronoi cell

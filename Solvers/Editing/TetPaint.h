@@ -1,7 +1,7 @@
 /**
  * @file TetPaint.h
  * @brief Paint the optical coefficients of a tet mesh along a 3D stroke
- * (TransCut paper, Sec. 5.2).
+ * (TransCut, Sec. 5.2).
  *
  * Every cell t gets the influence weight
  *

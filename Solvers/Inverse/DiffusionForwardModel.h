@@ -1,6 +1,6 @@
 /**
  * @file DiffusionForwardModel.h
- * @brief The forward model of the inverse diffusion problem (polygrid paper
+ * @brief The forward model of the inverse diffusion problem (Polygrid,
  * Sec. 4): for one colour channel and per-element diffusion coefficient kappa
  * and absorption mu_a, the SPD discrete-divergence system M(kappa, mu) phi = b
  * (TransCut Sec. 3, eq. 10-14; the same matrix as DiscreteDivergence), its

@@ -1,7 +1,7 @@
 /**
  * @file InverseDiffusion.h
  * @brief Acquisition of a heterogeneous material from measurements: inverse
- * diffusion with the adjoint method (polygrid paper, Sec. 4, Table I,
+ * diffusion with the adjoint method (Polygrid, Sec. 4, Table I,
  * Appendix A), on the discrete-divergence forward model
  * (DiffusionForwardModel), per colour channel.
  *

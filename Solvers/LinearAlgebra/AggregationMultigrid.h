@@ -2,7 +2,7 @@
  * @file AggregationMultigrid.h
  * @brief "multigrid-agg": conjugate gradient preconditioned by an
  * aggregation V-cycle whose coarse vertices are chosen exactly as in the
- * TransCut hierarchy (TransCut paper, Sec. 4.1.1: parallel independent sets
+ * TransCut hierarchy (TransCut, Sec. 4.1.1: parallel independent sets
  * from hashed random codes with the vertex index in the low bits), built to
  * be cheap to set up (see Documentation/Multiresolution.md):
  *

@@ -1,6 +1,6 @@
 /**
  * @file MultiresHierarchy.h
- * @brief The TransCut multiresolution graph hierarchy (TransCut paper,
+ * @brief The TransCut multiresolution graph hierarchy (TransCut,
  * Sec. 4.1-4.2): progressively coarser vertex graphs G^l = (P^l, E^l) of a
  * tet mesh, the interpolation of eq. 16 between consecutive levels, and the
  * coarse operators built from it (the paper's eq. 17, "substitute eq. 16

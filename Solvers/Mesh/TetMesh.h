@@ -8,7 +8,7 @@
  *    outward normals, with the tet that owns each of them;
  *  - the boundary points and, for each point, V_i (sum of the volumes of the
  *    tets around i, mm^3) and S_i (sum of the areas of the boundary triangles
- *    around i, mm^2) (TransCut paper, Sec. 3.2: |Upsilon| ~ V_i/4, Voronoi
+ *    around i, mm^2) (TransCut, Sec. 3.2: |Upsilon| ~ V_i/4, Voronoi
  *    boundary area ~ S_i/3);
  *  - the vertex adjacency as a CSR pattern including the diagonal, and for
  *    every tet the 16 positions of its local matrix entries in that pattern,

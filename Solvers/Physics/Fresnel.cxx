@@ -66,7 +66,7 @@ const GaussLegendre& Quadrature()
 
 double DiffuseReflectance(double eta)
 {
-  // SPEC "The physics"; Jensen et al. 2001 fit, used by TransCut eq. 2.
+  // Jensen et al. 2001 fit, used by TransCut, eq. 2.
   return -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
 }
 

@@ -3,7 +3,7 @@
  * @brief Fresnel helpers for a smooth dielectric boundary (outside: index 1).
  *
  * Implements the quantities of the diffusive-source boundary condition
- * (TransCut paper, eq. 2-3; Jensen et al. 2001): the diffuse Fresnel
+ * (TransCut, eq. 2-3; Jensen et al. 2001): the diffuse Fresnel
  * reflectance Fdr, the boundary mismatch term A and the Fresnel transmittance
  * F_t.
  */
@@ -15,7 +15,7 @@ namespace Fresnel
 {
 
 /// Diffuse Fresnel reflectance Fdr(eta) = -1.440/eta^2 + 0.710/eta + 0.668 +
-/// 0.0636 eta (SPEC "The physics"; TransCut eq. 2). eta is the relative
+/// 0.0636 eta (Jensen et al. 2001 fit; TransCut, eq. 2). eta is the relative
 /// refractive index of the medium (> 0, dimensionless).
 double DiffuseReflectance(double eta);
 

@@ -1,7 +1,7 @@
 /**
  * @file LightSources.h
- * @brief Boundary irradiance q from simple light sources (SPEC "The physics":
- * q(x) = integral of L_i (n . w_i) F_t(w_i) dw_i; TransCut eq. 2).
+ * @brief Boundary irradiance q from simple light sources (TransCut, eq. 2:
+ * q(x) = integral of L_i (n . w_i) F_t(w_i) dw_i).
  *
  * DirectIrradiance() and HemisphereDirection() give the unoccluded
  * contribution and the direction to test; ComputeBoundaryIrradiance() adds

@@ -14,7 +14,7 @@ namespace translucency
 constexpr int NumberOfChannels = 3;
 
 /**
- * Per-tet optical coefficients (SPEC "The physics"). Arrays are owned here.
+ * Per-tet optical coefficients (TransCut, eq. 1). Arrays are owned here.
  * AbsorptionCoefficient and ReducedScatteringCoefficient hold 3 values per
  * tet (R, G, B, 1/mm); RefractiveIndex holds 1 value per tet (dimensionless).
  */
@@ -42,7 +42,7 @@ struct OpticalProperties
   }
 };
 
-/// A named measured material (Jensen et al. 2001; SPEC "The physics").
+/// A named measured material (Jensen et al. 2001; Documentation/Materials.md).
 struct MaterialPreset
 {
   std::string Name;

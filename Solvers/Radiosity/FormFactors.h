@@ -1,7 +1,7 @@
 /**
  * @file FormFactors.h
  * @brief Sparse form-factor matrix of a radiosity scene by Monte Carlo ray
- * casting with visibility (translucent-radiosity paper, Sec. 5.1 computes the
+ * casting with visibility (TranslucentRadiosity, Sec. 5.1 computes the
  * same matrix with hemicubes; we cast rays through our BVH instead).
  */
 #pragma once

@@ -1,7 +1,7 @@
 /**
  * @file ProfileSubsurface.h
  * @brief The paper's S operator: a 1D scattering profile over the shortest
- * optical path inside the object (translucent-radiosity paper, Sec. 4, 5.2,
+ * optical path inside the object (TranslucentRadiosity, Sec. 4, 5.2,
  * eq. 8 and the heterogeneity heuristic eq. 16).
  */
 #pragma once

@@ -1,6 +1,6 @@
 /**
  * @file RadiosityScene.h
- * @brief The scene of translucent radiosity (translucent-radiosity paper,
+ * @brief The scene of translucent radiosity (TranslucentRadiosity,
  * Sec. 3): several objects, translucent tet meshes and opaque diffuse
  * surfaces, cut into patches (triangles), with one ray caster over all of
  * them for shadows and form-factor visibility.

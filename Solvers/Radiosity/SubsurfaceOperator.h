@@ -1,9 +1,9 @@
 /**
  * @file SubsurfaceOperator.h
  * @brief The subsurface scattering operator S of translucent radiosity
- * (translucent-radiosity paper, eq. 7-9 and 14) for one translucent object,
- * and its matrix-free version by a diffusion solve (ours, SPEC "Beyond one
- * object").
+ * (TranslucentRadiosity, eq. 7-9 and 14) for one translucent object, and
+ * its matrix-free version by a diffusion solve (ours: Documentation/Radiosity.md,
+ * "S by a diffusion solve").
  */
 #pragma once
 

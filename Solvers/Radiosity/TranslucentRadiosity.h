@@ -1,6 +1,6 @@
 /**
  * @file TranslucentRadiosity.h
- * @brief B = (I - S F)^-1 S E (translucent-radiosity paper, eq. 14) for a
+ * @brief B = (I - S F)^-1 S E (TranslucentRadiosity, eq. 14) for a
  * scene of translucent and opaque diffuse objects, by Jacobi or block
  * Gauss-Seidel iteration, with the two heuristics of the paper's Sec. 6.3.
  */

@@ -14,7 +14,7 @@ How to run (from a build tree; ctest sets the variables itself):
 3. The written .vtu is itself a valid --mesh input (no new tetrahedralization);
    --material accepts a preset or a JSON file, and the values reach the output;
    --max-tet-volume bounds every tet's volume; with mu_a = 0 and an unoccluded
-   uniform light the fluence is 4 q / (1 - Fdr) (the physics of SPEC, through
+   uniform light the fluence is 4 q / (1 - Fdr) (TransCut, eq. 1-2, through
    the command line).
 4. Bad input (missing file, open or self-intersecting surface, unknown
    material, malformed --light, unknown option, bad material file) exits
@@ -252,7 +252,7 @@ class CommandLineTest(unittest.TestCase):
         for name in ("Radiance", "Irradiance", "Fluence"):
             self.assertEqual(surface.GetPointData().GetArray(name).GetNumberOfComponents(), 3)
         self.assertTrue(np.all(point_array(grid, "Fluence") > 0))
-        # Default material: marble (SPEC).
+        # Default material: marble (Documentation/Materials.md, "Measured presets").
         self.assertTrue(np.allclose(cell_array(grid, "AbsorptionCoefficient"),
                                     [0.0021, 0.0041, 0.0071], rtol=1e-12))
         # No temporary files left behind.

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Tests of vtkFractureTetMesh (SPEC "Interactions", Fracture: Voronoi pieces of seed points).
+"""Tests of vtkFractureTetMesh (Documentation/Pipeline.md, "Interactions", Fracture:
+Voronoi pieces of seed points).
 
 How to run (from a build tree; ctest sets the variables itself):
 

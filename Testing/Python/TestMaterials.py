@@ -218,7 +218,7 @@ class MaterialsTest(unittest.TestCase):
                 table.GetColumnByName("ReducedScatteringCoefficient").GetTuple3(r), sigma_s, name)
             self.assertEqual(table.GetColumnByName("RefractiveIndex").GetValue(r), eta, name)
             self.assertEqual(table.GetColumnByName("Id").GetValue(r), r + 1)
-        # Two values straight from SPEC.md.
+        # Two values straight from Jensen et al. 2001 (Materials.md, "Measured presets").
         marble = names.index("marble")
         self.assertEqual(table.GetColumnByName("ReducedScatteringCoefficient").GetTuple3(marble),
                          (2.19, 2.62, 3.00))

@@ -18,13 +18,13 @@ How to run (from a build tree; ctest sets the variables itself):
 4. Width 0 or Strength 0 change nothing (bit-identical arrays).
 5. Bad input (no stroke points, negative width, no coefficient arrays) is an
    error naming the problem.
-6. Painting a cut mesh (SPEC "Paint"): with the cut mesh (translucency
+6. Painting a cut mesh (TransCut, Sec. 5.2): with the cut mesh (translucency
    vtkStrokeCut, plane) on port 0 and the original on port 1 (OriginalMesh),
    the output is bit-identical to painting the original directly; a tet
    removed by the cut but near the stroke is painted; re-cutting the painted
    original gives coefficients equal to the painted ones via
    vtkOriginalCellIds; out-of-range ids are an error naming the first bad id.
-7. Deform (SPEC "Interactions"): a rigid rotation + translation of the points
+7. Deform (Documentation/Pipeline.md, "Interactions"): a rigid rotation + translation of the points
    (vtkTransformFilter) and the same rotation of the light direction give the
    same fluence at every point (rel. 1e-8): the system is re-assembled on the
    moved mesh without re-tetrahedralisation.

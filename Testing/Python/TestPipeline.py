@@ -8,7 +8,7 @@ How to run (from a build tree; ctest sets the variables itself):
 1. `import translucency` gives every class of the project at top level.
 2. The whole pipeline, built from ordinary VTK sources (vtkSphereSource,
    vtkCubeSource -> vtkTriangleFilter -> vtkCleanPolyData) and the project's
-   filters, produces every array of the data contract (SPEC "Data contract")
+   filters, produces every array of the data contract (Documentation/Pipeline.md)
    with the right number of components and values.
 3. Physics, each checked against a value computed here and not by the filters:
    a. mu_a = 0 and a uniform light without occlusion make q uniform on the
@@ -59,7 +59,7 @@ from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter
 from vtkmodules.vtkFiltersModeling import vtkLinearSubdivisionFilter
 from vtkmodules.vtkFiltersSources import vtkCubeSource, vtkSphereSource
 
-# Measured presets of SPEC "The physics" (Jensen et al. 2001, 1/mm).
+# Measured presets (Jensen et al. 2001, 1/mm; Documentation/Materials.md).
 MARBLE_SIGMA_S = (2.19, 2.62, 3.00)
 MARBLE_MU_A = (0.0021, 0.0041, 0.0071)
 MARBLE_ETA = 1.3
@@ -72,7 +72,7 @@ PRESET_NAMES = ("apple", "chicken1", "chicken2", "cream", "ketchup", "marble", "
 # Optics, written here from the textbook formulas (not from Solvers/).
 
 def fdr(eta):
-    """Diffuse Fresnel reflectance, the fit of SPEC "The physics"."""
+    """Diffuse Fresnel reflectance, the fit of Jensen et al. 2001 (TransCut, eq. 2)."""
     return -1.440 / eta ** 2 + 0.710 / eta + 0.668 + 0.0636 * eta
 
 
@@ -356,7 +356,7 @@ class PipelineTest(unittest.TestCase):
         self.assertGreater(np.min(np.abs(volumes)), 0.0)
         self.assertAlmostEqual(np.sum(np.abs(volumes)) / enclosed_volume, 1.0, places=9)
 
-        # Cell arrays: the marble preset of SPEC, and the original ids.
+        # Cell arrays: the marble preset (Materials.md), and the original ids.
         self.assertEqual(grid.GetCellData().GetArray("AbsorptionCoefficient").GetNumberOfComponents(), 3)
         self.assertEqual(
             grid.GetCellData().GetArray("ReducedScatteringCoefficient").GetNumberOfComponents(), 3)

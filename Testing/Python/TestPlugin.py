@@ -85,7 +85,7 @@ class PluginTest(unittest.TestCase):
                                  ("RefractiveIndex", 1), ("vtkOriginalCellIds", 1)):
             self.assertEqual(grid.GetCellData().GetArray(name).GetNumberOfComponents(), components,
                              name)
-        # The XML's defaults: marble (SPEC: mu_a = (0.0021, 0.0041, 0.0071) 1/mm, eta 1.3).
+        # The XML's defaults: marble (Materials.md: mu_a = (0.0021, 0.0041, 0.0071) 1/mm, eta 1.3).
         self.assertTrue(np.allclose(cell_array(grid, "AbsorptionCoefficient"),
                                     [0.0021, 0.0041, 0.0071], rtol=1e-12))
         self.assertTrue(np.allclose(cell_array(grid, "RefractiveIndex"), 1.3, rtol=1e-12))

@@ -301,7 +301,7 @@ void BM_GridSolver(benchmark::State& state)
     report.Iterations[0] + report.Iterations[1] + report.Iterations[2];
 }
 
-/// QuadGraph finite differences (QuadGraph paper eq. 5-6) through the
+/// QuadGraph finite differences (QuadGraph, eq. 5-6) through the
 /// common interface, BiCGSTAB to 1e-6, a new solver each time (setup_ms =
 /// graph build + assembly; graph_ms = the graph build alone), no warm start;
 /// argument 1 = multi-level initialisation (eq. 10; its coarse levels are

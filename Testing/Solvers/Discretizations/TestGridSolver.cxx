@@ -1,4 +1,4 @@
-// The regular-grid solver (polygrid paper eq. 8-9, Sec. 5.3): the tet
+// The regular-grid solver (Polygrid, eq. 8-9, Sec. 5.3): the tet
 // locator against brute force, an exact constant solution, a manufactured
 // solution with measured convergence orders, the geometry of a grid-aligned
 // block, BiCGSTAB against relaxation, multi-level initialisation, warm start,

@@ -1,4 +1,4 @@
-// QuadGraph finite differences on the tet dual graph (QuadGraph paper,
+// QuadGraph finite differences on the tet dual graph (QuadGraph,
 // Sec. 4, eq. 5-10) against independent expectations: the graph rebuilt here
 // from the split mesh by brute force, the system rows re-derived from
 // eq. 5-6, exact constant solutions, an exact identity showing why eq. 5 is

@@ -1,4 +1,4 @@
-// Benchmarks of the inverse diffusion (polygrid paper Sec. 4) on grid blocks
+// Benchmarks of the inverse diffusion (Polygrid, Sec. 4) on grid blocks
 // of NX x NX x NX/4 voxels (6 tets each), 16 back-lit patterns (4x4), one
 // channel. Linked into BenchSolvers (its main):
 //   BenchSolvers --benchmark_filter=Inverse

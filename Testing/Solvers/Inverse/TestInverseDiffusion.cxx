@@ -1,4 +1,4 @@
-// Tests of the inverse diffusion (polygrid paper Sec. 4): the forward model
+// Tests of the inverse diffusion (Polygrid, Sec. 4): the forward model
 // against DiscreteDivergence, the adjoint gradient against central finite
 // differences, recovery of homogeneous and heterogeneous synthetic blocks,
 // the regulariser and the input checks.

@@ -1,4 +1,4 @@
-// Translucent radiosity (translucent-radiosity paper, eq. 14): form factors
+// Translucent radiosity (TranslucentRadiosity, eq. 14): form factors
 // against analytic values and identities (reciprocity, closed-box row sums,
 // invisibility), the all-opaque scene against classical radiosity solved
 // directly with Eigen, convergence and the spectral radius of S F, the
