@@ -146,7 +146,7 @@ private:
     const std::string& who, const std::string& name, double value, const std::string& rule)
   {
     std::ostringstream os;
-    os.precision(17);
+    os.precision(15); // -0.1 reads -0.1; enough digits to see 1.0000001
     os << who << ": option " << ToLower(name) << " = " << value << " is invalid: " << rule;
     throw Error(os.str());
   }
