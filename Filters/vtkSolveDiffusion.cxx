@@ -1,10 +1,12 @@
 #include "vtkSolveDiffusion.h"
 
+#include "DiffusionFrontEnd.h"
 #include "DiffusionSolverFactory.h"
 #include "DiscreteDivergence.h"
 #include "Error.h"
 #include "Strings.h"
 #include "TetMesh.h"
+#include "Timer.h"
 #include "VertexDiffusionSolver.h"
 #include "vtkTranslucencyMeshConversion.h"
 
@@ -17,71 +19,25 @@
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
-#include <cctype>
-#include <chrono>
-#include <cstring>
 
 vtkStandardNewMacro(vtkSolveDiffusion);
 
 namespace
 {
-const char* const SolverNames[] = { "divergence", "fem", "quadgraph", "grid", "montecarlo" };
-
-double MillisecondsSince(std::chrono::steady_clock::time_point start)
+/// The registry entry of a SOLVER_* constant (the constants are indices
+/// into the registry; TestSolveDiffusionRegistry checks the order).
+const translucency::DiffusionSolverRegistry::Entry& SolverEntry(int solver)
 {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-    .count();
+  return translucency::GetDiffusionSolverRegistry().GetEntries().at(static_cast<size_t>(solver));
 }
 }
 
 struct vtkSolveDiffusion::Internals
 {
-  std::shared_ptr<const translucency::TetMesh> Mesh;
-  std::unique_ptr<translucency::DiffusionSolver> Solver;
-  int SolverKind = -1;
+  /// The solver, the changed-tet detection and the warm-start bookkeeping.
+  translucency::DiffusionFrontEnd FrontEnd;
   translucency::SolverReport Report;
-  /// Material and irradiance of the last successful vertex solve (for the
-  /// incremental update after a paint); HaveLast is false when not valid.
-  bool HaveLast = false;
-  translucency::OpticalProperties LastMaterial;
-  std::vector<double> LastIrradiance;
-  vtkIdType ChangedTets = -1;
-
-  void ForgetLast()
-  {
-    HaveLast = false;
-    LastMaterial = translucency::OpticalProperties();
-    LastIrradiance.clear();
-  }
 };
-
-namespace
-{
-/// Ids of the tets whose mu_a, sigma_s' or eta differ between a and b (same
-/// sizes), stopping once more than `limit` are found.
-std::vector<int> ChangedTets(
-  const translucency::OpticalProperties& a, const translucency::OpticalProperties& b, size_t limit)
-{
-  std::vector<int> changed;
-  const size_t n = a.RefractiveIndex.size();
-  const double* a0 = a.AbsorptionCoefficient.data();
-  const double* a1 = b.AbsorptionCoefficient.data();
-  const double* s0 = a.ReducedScatteringCoefficient.data();
-  const double* s1 = b.ReducedScatteringCoefficient.data();
-  for (size_t t = 0; t < n && changed.size() <= limit; ++t)
-  {
-    // Compared as bits (memcmp): a NaN that stays a NaN is no change, and a
-    // value that changes in any way is one.
-    if (std::memcmp(a0 + 3 * t, a1 + 3 * t, 3 * sizeof(double)) != 0 ||
-      std::memcmp(s0 + 3 * t, s1 + 3 * t, 3 * sizeof(double)) != 0 ||
-      std::memcmp(&a.RefractiveIndex[t], &b.RefractiveIndex[t], sizeof(double)) != 0)
-    {
-      changed.push_back(static_cast<int>(t));
-    }
-  }
-  return changed;
-}
-}
 
 //------------------------------------------------------------------------------
 vtkSolveDiffusion::vtkSolveDiffusion()
@@ -95,24 +51,23 @@ vtkSolveDiffusion::~vtkSolveDiffusion() = default;
 //------------------------------------------------------------------------------
 bool vtkSolveDiffusion::SetSolverByName(const char* name)
 {
-  std::string key = name ? name : "";
-  key = translucency::ToLower(key);
-  for (int k = SOLVER_DIVERGENCE; k <= SOLVER_MONTECARLO; ++k)
+  const auto& registry = translucency::GetDiffusionSolverRegistry();
+  try
   {
-    if (key == SolverNames[k])
-    {
-      this->SetSolver(k);
-      return true;
-    }
+    const auto& entry = registry.Get(name ? name : "");
+    this->SetSolver(static_cast<int>(&entry - registry.GetEntries().data()));
+    return true;
   }
-  vtkErrorMacro(<< "unknown solver '" << (name ? name : "")
-                << "' (known solvers: divergence, fem, quadgraph, grid, montecarlo)");
-  return false;
+  catch (const translucency::Error& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return false;
+  }
 }
 
 const char* vtkSolveDiffusion::GetSolverName() const
 {
-  return SolverNames[this->Solver];
+  return SolverEntry(this->Solver).Name.c_str();
 }
 
 //------------------------------------------------------------------------------
@@ -143,7 +98,7 @@ const char* vtkSolveDiffusion::GetLastAssembly() const
 
 vtkIdType vtkSolveDiffusion::GetNumberOfChangedTets() const
 {
-  return this->Internal->ChangedTets;
+  return static_cast<vtkIdType>(this->Internal->FrontEnd.GetNumberOfChangedTets());
 }
 
 vtkTypeInt64 vtkSolveDiffusion::GetNumberOfUnknowns() const
@@ -214,18 +169,19 @@ int vtkSolveDiffusion::RequestData(
   this->TopologyTime = this->AssemblyTime = this->SolveTime = 0.0;
   in.Report = translucency::SolverReport();
 
-  auto start = std::chrono::steady_clock::now();
+  // Convert: the shared mesh, the material, the irradiance and the lights.
+  auto start = translucency::Clock::now();
   bool built = false;
   auto mesh = vtkTranslucency::AcquireTetMesh(input, error, &built);
   if (!mesh)
   {
-    in.Mesh.reset();
+    in.FrontEnd.Reset();
     vtkErrorMacro(<< error);
     return 0;
   }
   if (built)
   {
-    this->TopologyTime = MillisecondsSince(start);
+    this->TopologyTime = translucency::MillisecondsSince(start);
   }
   this->UpdateProgress(0.05);
 
@@ -241,70 +197,37 @@ int vtkSolveDiffusion::RequestData(
     vtkErrorMacro(<< error);
     return 0;
   }
+  translucency::DiffusionProblem light;
+  ReadLights(input, light);
 
   try
   {
-    if (this->Solver <= 1 && !this->LinearSolver.empty())
+    // Validate: a vertex solver's linear solver must be one of this build's.
+    const auto& entry = SolverEntry(this->Solver);
+    if (entry.Properties.UnknownsAtVertices && !this->LinearSolver.empty())
     {
-      // Vertex discretisations: the name must be one of the linear solvers.
-      std::string key = this->LinearSolver, known;
-      key = translucency::ToLower(key);
-      bool found = false;
-      for (const auto& name : translucency::GetLinearSolverNames())
-      {
-        found = found || name == key;
-        known += (known.empty() ? "" : ", ") + name;
-      }
-      if (!found)
+      const std::vector<std::string> names = translucency::GetLinearSolverNames();
+      if (std::find(names.begin(), names.end(), translucency::ToLower(this->LinearSolver)) ==
+        names.end())
       {
         vtkErrorMacro(<< "unknown LinearSolver '" << this->LinearSolver << "' for the "
-                      << SolverNames[this->Solver] << " solver (this build has: " << known
-                      << "; empty = " << translucency::VertexDiffusionSolver::GetDefaultLinearSolverName()
+                      << entry.Name << " solver (this build has: "
+                      << translucency::JoinNames(names) << "; empty = "
+                      << translucency::VertexDiffusionSolver::GetDefaultLinearSolverName()
                       << ")");
         return 0;
       }
     }
-    if (!in.Solver || in.SolverKind != this->Solver)
+
+    // The core: the front end keeps the solver, detects the changed tets
+    // and warm-starts; the settings go through the options hook.
+    translucency::DiffusionFrontEnd& frontEnd = in.FrontEnd;
+    frontEnd.SetSolver(entry.Name);
+    frontEnd.SetIncrementalAssembly(this->IncrementalAssembly);
+    frontEnd.SetMaximumChangedFraction(this->MaximumChangedFraction);
+    translucency::DiffusionSolver& solver = frontEnd.GetSolver();
+    if (auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver))
     {
-      in.Solver = translucency::CreateDiffusionSolver(SolverNames[this->Solver]);
-      in.SolverKind = this->Solver;
-      in.ForgetLast();
-    }
-    if (mesh != in.Mesh)
-    {
-      in.Solver->Reset(); // a new geometry: the previous solution is no start point
-      in.Mesh = mesh;
-      in.ForgetLast();
-    }
-    translucency::DiffusionSolver& solver = *in.Solver;
-    auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver);
-    in.ChangedTets = -1;
-    if (vertex)
-    {
-      // Incremental assembly after a paint (TransCut Sec. 5.2): same mesh
-      // (topology and points: the shared TetMesh is keyed by both), same
-      // irradiance, only some tets' coefficients changed since the last
-      // successful solve. The changed tets are found by comparing with the
-      // coefficients cached from that solve (whatever changed them).
-      const size_t numTets = material.RefractiveIndex.size();
-      const size_t limit = static_cast<size_t>(this->MaximumChangedFraction * numTets);
-      if (this->IncrementalAssembly && in.HaveLast &&
-        in.LastMaterial.RefractiveIndex.size() == numTets &&
-        in.LastMaterial.AbsorptionCoefficient.size() == material.AbsorptionCoefficient.size() &&
-        in.LastMaterial.ReducedScatteringCoefficient.size() ==
-          material.ReducedScatteringCoefficient.size() &&
-        in.LastIrradiance.size() == irradiance.size() &&
-        std::memcmp(in.LastIrradiance.data(), irradiance.data(),
-          irradiance.size() * sizeof(double)) == 0)
-      {
-        std::vector<int> changed = ChangedTets(in.LastMaterial, material, limit);
-        if (changed.size() <= limit)
-        {
-          in.ChangedTets = static_cast<vtkIdType>(changed.size());
-          vertex->SetChangedTets(std::move(changed));
-        }
-      }
-      in.ForgetLast(); // until this solve succeeds
       if (auto* divergence =
             dynamic_cast<translucency::DiscreteDivergence*>(&vertex->GetDiscretization()))
       {
@@ -314,32 +237,24 @@ int vtkSolveDiffusion::RequestData(
     solver.SetRelTol(this->RelTol);
     solver.SetMaxIter(this->MaxIter);
     solver.SetWarmStart(this->WarmStart);
-    solver.SetGridSpacing(this->GridSpacing);
-    solver.SetNumberOfPhotons(this->NumberOfPhotons);
-    solver.SetSeed(this->Seed);
     solver.SetLinearSolver(this->LinearSolver);
-    solver.SetMultiLevel(this->MultiLevel);
+    // Every solver-specific property; the selected solver reads its own and
+    // leaves the others unused (they do not apply to it).
+    solver.SetOptions(translucency::SolverOptions{
+      { translucency::DiffusionOption::GridSpacing, this->GridSpacing },
+      { translucency::DiffusionOption::MultiLevel, this->MultiLevel ? 1.0 : 0.0 },
+      { translucency::DiffusionOption::Photons, static_cast<double>(this->NumberOfPhotons) },
+      { translucency::DiffusionOption::Seed, static_cast<double>(this->Seed) } });
     solver.SetProgressCallback([this](double fraction) {
       this->UpdateProgress(0.05 + 0.9 * fraction);
       return !this->CheckAbort();
     });
 
-    translucency::DiffusionProblem problem;
-    problem.Mesh = mesh.get();
-    problem.Material = &material;
-    problem.Irradiance = &irradiance;
-    ReadLights(input, problem);
-
     std::vector<double> fluence;
-    if (!solver.Solve(problem, fluence, in.Report))
+    if (!frontEnd.Solve(mesh, std::move(material), std::move(irradiance), light, fluence,
+          in.Report))
     {
       return 0; // aborted by the user
-    }
-    if (vertex && this->IncrementalAssembly)
-    {
-      in.LastMaterial = std::move(material);
-      in.LastIrradiance = std::move(irradiance);
-      in.HaveLast = true;
     }
     this->AssemblyTime = in.Report.SetupMilliseconds;
     this->SolveTime = in.Report.SolveMilliseconds;
@@ -356,6 +271,7 @@ int vtkSolveDiffusion::RequestData(
       }
     }
 
+    // Attach.
     output->ShallowCopy(input);
     auto attach = [output](const char* name, const std::vector<double>& values) {
       if (values.size() == 3 * static_cast<size_t>(output->GetNumberOfPoints()))
@@ -372,11 +288,7 @@ int vtkSolveDiffusion::RequestData(
   }
   catch (const translucency::Error& e)
   {
-    in.ForgetLast();
-    if (in.Solver)
-    {
-      in.Solver->Reset();
-    }
+    in.FrontEnd.Reset(); // no warm start nor incremental update from a failed solve
     vtkErrorMacro(<< e.what());
     return 0;
   }

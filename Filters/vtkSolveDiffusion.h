@@ -26,7 +26,8 @@
  * unknowns are unchanged (relighting, painting).
  *
  * Incremental assembly after a paint (TransCut Sec. 5.2; divergence and fem
- * solvers, IncrementalAssembly on): the filter keeps a copy of the
+ * solvers, IncrementalAssembly on; done by translucency::DiffusionFrontEnd,
+ * which the filter calls): the front end keeps the
  * coefficients and the irradiance of its last successful solve (7 doubles
  * per tet and 3 per point). When the next input has the same mesh (same
  * topology and points), the same irradiance, and at most
@@ -60,6 +61,9 @@ public:
   vtkTypeMacro(vtkSolveDiffusion, vtkUnstructuredGridAlgorithm);
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
+  /// Indices into translucency::GetDiffusionSolverRegistry() (the one table
+  /// of the solvers; a test checks that the orders agree). Scripts use them
+  /// with SetSolver(int): keep their values.
   enum Solvers
   {
     SOLVER_DIVERGENCE = 0,
@@ -76,10 +80,9 @@ public:
   ///@}
 
   /**
-   * Select the solver by name: "divergence", "fem", "quadgraph", "grid" or
-   * "montecarlo" (case-insensitive). An unknown name is an error (reported
-   * with the list of names); the solver is then left unchanged and false
-   * is returned.
+   * Select the solver by name, one of translucency::GetDiffusionSolverNames()
+   * (case-insensitive). An unknown name is an error (reported with the list
+   * of names); the solver is then left unchanged and false is returned.
    */
   bool SetSolverByName(const char* name);
 
@@ -108,6 +111,11 @@ public:
 
   ///@{
   /// Grid solver: voxel spacing h (mm). Default 0 = chosen from the mesh.
+  /// This and the other solver-specific settings (MultiLevel,
+  /// NumberOfPhotons, Seed) reach the solver through its options hook
+  /// (translucency::DiffusionSolver::SetOptions): the selected solver reads
+  /// its own, the others are ignored; an invalid value makes RequestData
+  /// fail with an error naming it.
   vtkSetMacro(GridSpacing, double);
   vtkGetMacro(GridSpacing, double);
   ///@}

@@ -1,12 +1,18 @@
 /**
  * @file DiffusionSolverFactory.h
- * @brief Every diffusion solver by name. The interface (DiffusionSolver.h)
- * sits below its implementations in Discretizations/ and Diffusion/; this
- * factory sits above them all.
+ * @brief Every diffusion solver by name: the one table of the family
+ * (Registry.h). The interface (DiffusionSolver.h) sits below its
+ * implementations in Discretizations/ and Diffusion/; this table sits above
+ * them all. The factory, vtkSolveDiffusion (SetSolverByName, its error
+ * messages and its SOLVER_* constants, whose order is tested against this
+ * one) and the help texts read it, so a new solver is added here once
+ * (and to the plugin XML's enumeration, which a test compares with
+ * GetDiffusionSolverNames()).
  */
 #pragma once
 
 #include "DiffusionSolver.h"
+#include "Registry.h"
 
 #include <memory>
 #include <string>
@@ -14,6 +20,29 @@
 
 namespace translucency
 {
+
+/// What callers may need to know about a solver without creating one.
+struct DiffusionSolverTraits
+{
+  /// SetLinearSolver chooses among several linear solvers (all but Monte Carlo).
+  bool HasLinearSolverChoice = false;
+  /// The result is random: it depends on a seed and has a standard error.
+  bool IsStochastic = false;
+  /// The unknowns are the mesh vertices (VertexDiffusionSolver): incremental
+  /// assembly after a paint (SetChangedTets) applies.
+  bool UnknownsAtVertices = false;
+  /// The options its SetOptions reads (DiffusionOption names).
+  std::vector<std::string> Options;
+};
+
+using DiffusionSolverRegistry = Registry<DiffusionSolver, DiffusionSolverTraits>;
+
+/**
+ * The table, in listing order (the first is the default): "divergence",
+ * "fem", "quadgraph", "grid", "montecarlo". vtkSolveDiffusion's SOLVER_*
+ * constants are indices into it.
+ */
+const DiffusionSolverRegistry& GetDiffusionSolverRegistry();
 
 /// Names accepted by CreateDiffusionSolver, in the order they are listed.
 std::vector<std::string> GetDiffusionSolverNames();
@@ -23,5 +52,18 @@ std::vector<std::string> GetDiffusionSolverNames();
  * naming the unknown name and listing the known ones.
  */
 std::unique_ptr<DiffusionSolver> CreateDiffusionSolver(const std::string& name);
+
+/// "  name    one line of help" per solver, for --help texts.
+std::string GetDiffusionSolverHelp(const std::string& indent = "  ");
+
+/// Every option name some solver reads (sorted, no duplicates).
+std::vector<std::string> GetDiffusionSolverOptionNames();
+
+/**
+ * Throws translucency::Error if `options` has a name that no solver reads
+ * (a typo: "unknown solver option 'gridspacing' (known options: ...)").
+ * Values are checked by the solver that reads them (SetOptions).
+ */
+void CheckDiffusionSolverOptions(const SolverOptions& options);
 
 } // namespace translucency

@@ -84,6 +84,26 @@ public:
     SolverReport& report) override;
 
   ///@{
+  /// Photon budget per lit channel (> 0, default 1e6) and random seed
+  /// (default 1). Options DiffusionOption::Photons ("photons") and
+  /// DiffusionOption::Seed ("seed").
+  void SetNumberOfPhotons(long long n) { NumberOfPhotons_ = n; }
+  long long GetNumberOfPhotons() const { return NumberOfPhotons_; }
+  void SetSeed(unsigned long long seed) { Seed_ = seed; }
+  unsigned long long GetSeed() const { return Seed_; }
+  ///@}
+
+  /// Reads "photons" (integer >= 1) and "seed" (integer >= 0), see
+  /// DiffusionSolver::SetOptions.
+  void SetOptions(const SolverOptions& options) override
+  {
+    options.ReadInteger(GetName(), DiffusionOption::Photons, 1.0,
+      "the number of photons must be an integer >= 1", NumberOfPhotons_);
+    options.ReadInteger(GetName(), DiffusionOption::Seed, 0.0,
+      "the seed must be an integer >= 0", Seed_);
+  }
+
+  ///@{
   /// Henyey-Greenstein mean cosine g in (-1, 1), default 0. The scattering
   /// coefficient is sigma_s' / (1 - g), so sigma_s' stays the reduced one.
   void SetAnisotropy(double g) { Anisotropy_ = g; }
@@ -144,6 +164,8 @@ public:
   double GetPhotonsPerSecondPerThread() const { return Rate_; }
 
 private:
+  long long NumberOfPhotons_ = 1000000;
+  unsigned long long Seed_ = 1;
   double Anisotropy_ = 0.0;
   int NumberOfBatches_ = 32;
   int NumberOfThreads_ = 0;

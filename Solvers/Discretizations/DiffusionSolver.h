@@ -10,6 +10,7 @@
 
 #include "LightSources.h"
 #include "OpticalProperties.h"
+#include "SolverOptions.h"
 
 #include <array>
 #include <cstddef>
@@ -63,6 +64,15 @@ struct SolverReport
   std::vector<double> RadianceStandardError;
 };
 
+/// The names of the solver-specific options (DiffusionSolver::SetOptions).
+namespace DiffusionOption
+{
+constexpr const char* GridSpacing = "grid-spacing"; ///< GridSolver: h (mm), 0 = automatic
+constexpr const char* MultiLevel = "multilevel";    ///< GridSolver, QuadGraphSolver: 0 or 1
+constexpr const char* Photons = "photons";          ///< MonteCarloSolver: photon budget
+constexpr const char* Seed = "seed";                ///< MonteCarloSolver: random seed
+}
+
 class DiffusionSolver
 {
 public:
@@ -97,21 +107,6 @@ public:
   bool GetWarmStart() const { return WarmStart_; }
 
   ///@{
-  /// Regular-grid solver: voxel spacing h (mm, > 0). Default 0 = automatic
-  /// (the solver picks it from the mesh). Others ignore it.
-  void SetGridSpacing(double h) { GridSpacing_ = h; }
-  double GetGridSpacing() const { return GridSpacing_; }
-  ///@}
-
-  ///@{
-  /// Monte Carlo: photon budget (> 0, default 1e6) and seed (default 1).
-  void SetNumberOfPhotons(long long n) { NumberOfPhotons_ = n; }
-  long long GetNumberOfPhotons() const { return NumberOfPhotons_; }
-  void SetSeed(unsigned long long seed) { Seed_ = seed; }
-  unsigned long long GetSeed() const { return Seed_; }
-  ///@}
-
-  ///@{
   /// Linear solver by name; "" (the default) means the solver's own default.
   /// QuadGraph, grid (non-symmetric): "bicgstab" (default) or "relaxation"
   /// (the papers' Jacobi-style sweeps). Vertex discretisations (divergence,
@@ -121,12 +116,31 @@ public:
   const std::string& GetLinearSolver() const { return LinearSolver_; }
   ///@}
 
-  ///@{
-  /// Coarse-to-fine initialisation where the solver has one (QuadGraph
-  /// eq. 10, grid 8-children averaging). Default off.
-  void SetMultiLevel(bool on) { MultiLevel_ = on; }
-  bool GetMultiLevel() const { return MultiLevel_; }
-  ///@}
+  /**
+   * Solver-specific settings by name, the one hook for callers that only
+   * hold a DiffusionSolver (model: PETSc's KSPSetFromOptions_<type>). Each
+   * solver reads the options it knows, checks them and applies them; the
+   * concrete classes also have typed setters. The options (defaults in the
+   * solver's header):
+   *  - "grid-spacing" (GridSolver): voxel spacing h in mm, > 0, or 0 =
+   *    automatic;
+   *  - "multilevel" (GridSolver, QuadGraphSolver): coarse-to-fine
+   *    initialisation, 0 or 1;
+   *  - "photons", "seed" (MonteCarloSolver): photon budget >= 1, random seed
+   *    >= 0 (integers).
+   *
+   * Decision: a value this solver reads but refuses throws
+   * translucency::Error naming the solver, the option and the value (the
+   * options read before it are applied). An option this solver does not
+   * read is NOT an error here: it stays unused in `options`
+   * (SolverOptions::GetUnused()), for the caller to report, because a
+   * front end such as vtkSolveDiffusion forwards every setting to
+   * whichever solver is selected (the grid spacing of a divergence solve
+   * is ignored, as it always was). A name that no solver reads is refused
+   * by CheckDiffusionSolverOptions() (DiffusionSolverFactory.h), which
+   * knows them all. The base reads none.
+   */
+  virtual void SetOptions(const SolverOptions& options) { (void)options; }
 
   /// Called with the fraction done in [0, 1]; returning false aborts.
   void SetProgressCallback(std::function<bool(double)> callback) { Progress_ = std::move(callback); }
@@ -137,11 +151,7 @@ protected:
   double RelTol_ = 1e-6;
   int MaxIter_ = 2000;
   bool WarmStart_ = true;
-  double GridSpacing_ = 0.0;
-  long long NumberOfPhotons_ = 1000000;
-  unsigned long long Seed_ = 1;
   std::string LinearSolver_;
-  bool MultiLevel_ = false;
   std::function<bool(double)> Progress_;
 };
 

@@ -207,6 +207,29 @@ public:
   void Reset() override;
 
   ///@{
+  /// Voxel spacing h (mm, > 0). Default 0 = automatic (ComputeSpacing picks
+  /// it from the mesh). Option DiffusionOption::GridSpacing ("grid-spacing").
+  void SetGridSpacing(double h) { GridSpacing_ = h; }
+  double GetGridSpacing() const { return GridSpacing_; }
+  ///@}
+
+  ///@{
+  /// Coarse-to-fine initialisation (Polygrid Sec. 5.3, 8-children
+  /// averaging; see the class comment). Default off. Option
+  /// DiffusionOption::MultiLevel ("multilevel").
+  void SetMultiLevel(bool on) { MultiLevel_ = on; }
+  bool GetMultiLevel() const { return MultiLevel_; }
+  ///@}
+
+  /// Reads "grid-spacing" (>= 0) and "multilevel" (see DiffusionSolver::SetOptions).
+  void SetOptions(const SolverOptions& options) override
+  {
+    options.ReadNumber(GetName(), DiffusionOption::GridSpacing, 0.0,
+      "the voxel spacing must be > 0 mm (or 0 for automatic)", GridSpacing_);
+    options.ReadFlag(GetName(), DiffusionOption::MultiLevel, MultiLevel_);
+  }
+
+  ///@{
   /// Memory the grid may use (bytes; default 4 GiB). Must be > 0.
   void SetMemoryLimit(std::size_t bytes) { MemoryLimit_ = bytes; }
   std::size_t GetMemoryLimit() const { return MemoryLimit_; }
@@ -290,6 +313,8 @@ public:
   std::array<double, NumberOfChannels> EvaluateGrid(const double x[3]) const;
 
 private:
+  double GridSpacing_ = 0.0;
+  bool MultiLevel_ = false;
   bool SolveImpl(const DiffusionProblem& problem,
     const std::vector<double>* nodeIrradiance,
     std::vector<double>& fluence,

@@ -77,6 +77,19 @@ public:
   /// Drop the graph and the warm-start solution.
   void Reset() override;
 
+  ///@{
+  /// Multi-level initialisation (QuadGraph eq. 10, see the class comment).
+  /// Default off. Option DiffusionOption::MultiLevel ("multilevel").
+  void SetMultiLevel(bool on) { MultiLevel_ = on; }
+  bool GetMultiLevel() const { return MultiLevel_; }
+  ///@}
+
+  /// Reads "multilevel" (see DiffusionSolver::SetOptions).
+  void SetOptions(const SolverOptions& options) override
+  {
+    options.ReadFlag(GetName(), DiffusionOption::MultiLevel, MultiLevel_);
+  }
+
   /// OpenMP threads for the graph build, assembly, the matrix products of
   /// both linear solvers and the vertex map (0 = OpenMP default). Default 0.
   /// Products and sweeps use one thread below 32,768 unknowns. Results do not
@@ -155,6 +168,7 @@ public:
   double GetGraphMilliseconds() const { return GraphMilliseconds_; }
 
 private:
+  bool MultiLevel_ = false;
   /// Per-channel coefficients of the nodes (defined in the .cxx).
   struct Coefficients;
 

@@ -697,7 +697,7 @@ TEST(MonteCarlo, FactoryProgressAndAbort)
   problem.Mesh = &mesh;
   problem.Material = &material;
   problem.Lights = { Directional(0.0, 0.0, -1.0, 1.0, 1.0, 1.0) };
-  solver->SetNumberOfPhotons(5000);
+  solver->SetOptions(SolverOptions{ { DiffusionOption::Photons, 5000 } });
   std::vector<double> progress;
   solver->SetProgressCallback([&progress](double f) {
     progress.push_back(f);

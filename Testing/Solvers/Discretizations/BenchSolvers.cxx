@@ -282,9 +282,10 @@ void BM_GridSolver(benchmark::State& state)
   {
     std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver("grid");
     solver->SetWarmStart(false);
-    solver->SetMultiLevel(state.range(1) != 0);
-    solver->SetGridSpacing(
-      state.range(2) == 0 ? 0.0 : std::cbrt(20.0 * 20.0 * 20.0 / p.Mesh.GetNumberOfPoints()));
+    solver->SetOptions(SolverOptions{
+      { DiffusionOption::MultiLevel, state.range(1) != 0 ? 1.0 : 0.0 },
+      { DiffusionOption::GridSpacing,
+        state.range(2) == 0 ? 0.0 : std::cbrt(20.0 * 20.0 * 20.0 / p.Mesh.GetNumberOfPoints()) } });
     solver->Solve(problem, fluence, report);
     benchmark::DoNotOptimize(fluence.data());
     setup += report.SetupMilliseconds;

@@ -1,0 +1,198 @@
+// DiffusionFrontEnd: the changed-tet detection after a paint (TransCut
+// Sec. 5.2) and the warm-start bookkeeping that vtkSolveDiffusion delegates.
+#include "DiffusionFrontEnd.h"
+#include "DiffusionSolverFactory.h"
+#include "TestMeshes.h"
+#include "TestProblems.h"
+#include "TestRandomProblems.h"
+#include "TetMesh.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+
+using namespace translucency;
+using translucency::testing::ErrorMessage;
+
+namespace
+{
+
+struct Scene
+{
+  std::shared_ptr<const TetMesh> Mesh;
+  OpticalProperties Material;
+  std::vector<double> Irradiance;
+};
+
+Scene MakeScene(int cells)
+{
+  auto mesh = std::make_shared<TetMesh>();
+  const translucency::testing::MeshData data = translucency::testing::CubeMesh(cells, 5.0, 0.2, 3);
+  mesh->SetGeometry(data.Points, data.Tets);
+  Scene s;
+  s.Material = translucency::testing::RandomMaterial(mesh->GetNumberOfTets(), 11);
+  s.Irradiance = translucency::testing::RandomIrradiance(*mesh, 12);
+  s.Mesh = mesh;
+  return s;
+}
+
+/// Paints tets first, first + stride, ... (n of them): new sigma_s' and eta.
+std::vector<int> Paint(OpticalProperties& m, int first, int stride, int n)
+{
+  std::vector<int> painted;
+  for (int k = 0; k < n; ++k)
+  {
+    const int t = first + k * stride;
+    for (int c = 0; c < 3; ++c)
+    {
+      m.ReducedScatteringCoefficient[3 * t + c] *= 1.5;
+    }
+    m.RefractiveIndex[t] = 1.45;
+    painted.push_back(t);
+  }
+  return painted;
+}
+
+double MaxRelativeDifference(const std::vector<double>& a, const std::vector<double>& b)
+{
+  double maxRef = 0.0, maxDiff = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k)
+  {
+    maxRef = std::max(maxRef, std::abs(b[k]));
+    maxDiff = std::max(maxDiff, std::abs(a[k] - b[k]));
+  }
+  return maxDiff / maxRef;
+}
+
+} // namespace
+
+TEST(DiffusionFrontEnd, FindChangedTetsComparesBits)
+{
+  Scene s = MakeScene(3);
+  OpticalProperties painted = s.Material;
+  const std::vector<int> changed = Paint(painted, 2, 7, 4);
+  EXPECT_EQ(DiffusionFrontEnd::FindChangedTets(s.Material, painted, 100), changed);
+  EXPECT_TRUE(DiffusionFrontEnd::FindChangedTets(s.Material, s.Material, 100).empty());
+  // It stops once more than the limit are found.
+  EXPECT_EQ(DiffusionFrontEnd::FindChangedTets(s.Material, painted, 1).size(), 2u);
+  // A NaN that stays a NaN is no change; -0 for +0 is one.
+  OpticalProperties a = s.Material, b = s.Material;
+  a.AbsorptionCoefficient[4] = b.AbsorptionCoefficient[4] =
+    std::numeric_limits<double>::quiet_NaN();
+  b.ReducedScatteringCoefficient[3 * 5] = -0.0;
+  a.ReducedScatteringCoefficient[3 * 5] = 0.0;
+  EXPECT_EQ(DiffusionFrontEnd::FindChangedTets(a, b, 100), std::vector<int>{ 5 });
+}
+
+TEST(DiffusionFrontEnd, PaintIsIncrementalAndEqualsAFullAssembly)
+{
+  Scene s = MakeScene(6); // 1296 tets
+  const double tol = 1e-11;
+  DiffusionFrontEnd front;
+  EXPECT_EQ(front.GetSolverName(), "divergence");
+  front.GetSolver().SetRelTol(tol);
+  std::vector<double> fluence;
+  SolverReport report;
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, fluence, report));
+  EXPECT_EQ(report.Assembly, "full");
+  EXPECT_EQ(front.GetNumberOfChangedTets(), -1); // nothing cached yet
+  const int cold = report.Iterations[0];
+
+  // A stroke over 1 % of the tets: found, incremental, warm.
+  OpticalProperties painted = s.Material;
+  const std::vector<int> changed = Paint(painted, 10, 97, 13);
+  ASSERT_TRUE(front.Solve(s.Mesh, painted, s.Irradiance, {}, fluence, report));
+  EXPECT_EQ(report.Assembly, "incremental");
+  EXPECT_EQ(front.GetNumberOfChangedTets(), static_cast<long long>(changed.size()));
+  EXPECT_LT(report.Iterations[0], cold);
+
+  // The same fluence as a full assembly from scratch, to the solver tolerance.
+  const std::unique_ptr<DiffusionSolver> fresh = CreateDiffusionSolver("divergence");
+  fresh->SetRelTol(tol);
+  DiffusionProblem problem;
+  problem.Mesh = s.Mesh.get();
+  problem.Material = &painted;
+  problem.Irradiance = &s.Irradiance;
+  std::vector<double> reference;
+  SolverReport freshReport;
+  ASSERT_TRUE(fresh->Solve(problem, reference, freshReport));
+  EXPECT_EQ(freshReport.Assembly, "full");
+  ASSERT_EQ(reference.size(), fluence.size());
+  EXPECT_LT(MaxRelativeDifference(fluence, reference), 1e-7);
+
+  // Nothing changed: incremental with no changed tet.
+  ASSERT_TRUE(front.Solve(s.Mesh, painted, s.Irradiance, {}, fluence, report));
+  EXPECT_EQ(report.Assembly, "incremental");
+  EXPECT_EQ(front.GetNumberOfChangedTets(), 0);
+
+  // Beyond MaximumChangedFraction (5 %): a full assembly, the same result.
+  OpticalProperties wide = painted;
+  Paint(wide, 0, 3, 200); // 15 % of the tets
+  ASSERT_TRUE(front.Solve(s.Mesh, wide, s.Irradiance, {}, fluence, report));
+  EXPECT_EQ(report.Assembly, "full");
+  EXPECT_EQ(front.GetNumberOfChangedTets(), -1);
+  problem.Material = &wide;
+  ASSERT_TRUE(fresh->Solve(problem, reference, freshReport));
+  EXPECT_LT(MaxRelativeDifference(fluence, reference), 1e-7);
+  // ... unless the fraction allows it.
+  front.SetMaximumChangedFraction(0.5);
+  OpticalProperties wider = wide;
+  Paint(wider, 1, 3, 200);
+  ASSERT_TRUE(front.Solve(s.Mesh, wider, s.Irradiance, {}, fluence, report));
+  EXPECT_EQ(report.Assembly, "incremental");
+  EXPECT_EQ(front.GetNumberOfChangedTets(), 200);
+
+  // Another irradiance (relight): full.
+  std::vector<double> relit = s.Irradiance;
+  relit[3 * s.Mesh->GetBoundaryPoints()[0]] += 0.5;
+  ASSERT_TRUE(front.Solve(s.Mesh, wider, relit, {}, fluence, report));
+  EXPECT_EQ(front.GetNumberOfChangedTets(), -1);
+  EXPECT_EQ(report.Assembly, "full");
+
+  // Another mesh object (a cut, even with the same geometry): full, cold.
+  Scene other = MakeScene(6);
+  ASSERT_TRUE(front.Solve(other.Mesh, wider, relit, {}, fluence, report));
+  EXPECT_EQ(front.GetNumberOfChangedTets(), -1);
+  EXPECT_EQ(report.Assembly, "full");
+
+  // IncrementalAssembly off: never looks.
+  front.SetIncrementalAssembly(false);
+  ASSERT_TRUE(front.Solve(other.Mesh, wider, relit, {}, fluence, report));
+  ASSERT_TRUE(front.Solve(other.Mesh, wider, relit, {}, fluence, report));
+  EXPECT_EQ(front.GetNumberOfChangedTets(), -1);
+  EXPECT_EQ(report.Assembly, "full");
+}
+
+TEST(DiffusionFrontEnd, SolverByNameAndNoIncrementalForOtherSolvers)
+{
+  Scene s = MakeScene(3);
+  DiffusionFrontEnd front;
+  front.GetSolver().SetRelTol(1e-9);
+  front.SetSolver("DIVERGENCE"); // the same solver: its settings are kept
+  EXPECT_EQ(front.GetSolver().GetRelTol(), 1e-9);
+  EXPECT_EQ(ErrorMessage([&] { front.SetSolver("voxels"); }),
+    "unknown solver 'voxels' (known solvers: divergence, fem, quadgraph, grid, montecarlo)");
+  EXPECT_EQ(front.GetSolverName(), "divergence");
+
+  front.SetSolver("quadgraph"); // a new solver, default settings
+  EXPECT_EQ(front.GetSolver().GetName(), "quadgraph");
+  EXPECT_EQ(front.GetSolver().GetRelTol(), 1e-6);
+  std::vector<double> fluence;
+  SolverReport report;
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, fluence, report));
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, fluence, report));
+  EXPECT_EQ(front.GetNumberOfChangedTets(), -1);
+  EXPECT_EQ(report.Assembly, "");
+
+  // An error forgets the cache: the next solve is full.
+  front.SetSolver("divergence");
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, fluence, report));
+  EXPECT_FALSE(ErrorMessage([&] {
+    front.Solve(s.Mesh, s.Material, std::vector<double>(3), {}, fluence, report);
+  }).empty());
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, fluence, report));
+  EXPECT_EQ(front.GetNumberOfChangedTets(), -1);
+  EXPECT_EQ(report.Assembly, "full");
+}
