@@ -245,17 +245,7 @@ int Compare(CompareOptions& o)
   std::vector<std::string> solvers = SplitList(solverList);
   if (solvers.empty())
     throw UsageError("--solvers lists no solver");
-  // Validate every name before any work.
-  {
-    MessageCollector messages;
-    vtkNew<vtkSolveDiffusion> probe;
-    messages.Watch(probe);
-    for (const std::string& name : solvers)
-      if (!probe->SetSolverByName(name.c_str()))
-        throw UsageError(messages.Last());
-    if (!probe->SetSolverByName(reference.c_str()))
-      throw UsageError("--reference: " + messages.Last());
-  }
+  // The names were checked while parsing (DiffusionSolverCheck).
   std::vector<std::string> order = { reference };
   for (const std::string& name : solvers)
     if (name != reference)

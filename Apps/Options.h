@@ -17,7 +17,6 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
-#include <sstream>
 #include <string>
 #include <vector>
 
