@@ -11,8 +11,10 @@
 // fluence in every channel; and "cut -> new fluence" (with multigrid-agg).
 
 #include "BenchLinearSolvers.h"
-#include "CommandLine.h"
 #include "HypreMPI.h"
+#include "MeshIO.h"
+#include "Process.h"
+#include "Utilities.h"
 
 #include "AggregationMultigrid.h"
 #include "ConjugateGradient.h"
@@ -56,21 +58,6 @@ namespace translucency_app
 using json = nlohmann::json;
 using Solution = std::array<Eigen::VectorXd, translucency::NumberOfChannels>;
 using Stats = std::array<translucency::LinearSolveStats, translucency::NumberOfChannels>;
-
-const char* const BenchLinearSolversHelp = R"(
-translucency bench --linear-solvers [N1,N2,...] [options]
-                           every linear solver of this build (or the named ones) on
-                           the bunny, marble, one directional light: set-up, cold solve
-                           and warm solve (10-degree light rotation) to 1 % relative
-                           L2 error of the boundary fluence, SpMV-equivalents, the
-                           SpMV bandwidth bound, cut -> new fluence (multigrid-agg)
-  --mesh FILE, --tets N1,..., --runs N (default 5), --json FILE  as for bench
-  --plot FILE.png          error of the boundary fluence vs solve time per solver
-                           (writes FILE.csv, plotted by scripts/plot_linear_solvers.py)
-  --hypre-ranks N          also run hypre-amg on N MPI ranks through mpiexec and
-                           translucency-hypre-mpi (default 2; 0 or 1: skip)
-  --no-cut                 skip the cut -> new fluence figure
-)";
 
 double TetrahedralizeForBench(vtkPolyData* surface, double targetTets,
   vtkSmartPointer<vtkUnstructuredGrid>& grid, std::vector<double>& points, std::vector<int>& tets)
@@ -393,11 +380,6 @@ SolverRow BenchSolver(const std::string& name, Problem& p, int runs,
   return row;
 }
 
-std::string Quoted(const std::string& s)
-{
-  return "'" + s + "'";
-}
-
 std::string TempPath(const std::string& tag)
 {
   const char* dir = std::getenv("TMPDIR");
@@ -461,17 +443,16 @@ SolverRow BenchHypreRanks(Problem& p, int ranks, int runs, const SolverRow& oneR
     if (!f)
       throw translucency::Error("--hypre-ranks: cannot write " + in);
   }
-  std::ostringstream cmd;
   // OMP_NUM_THREADS=1: the ranks are the parallelism (Debian's hypre has no
   // OpenMP anyway); --allow-run-as-root: Open MPI refuses root otherwise.
   // The in-process hypre-amg made this process an Open MPI singleton, whose
   // OMPI_* / PMIX_* variables would make mpiexec's children join it: drop them.
-  cmd << "for v in $(env | sed -n 's/^\\(OMPI_[^=]*\\|PMIX_[^=]*\\|OPAL_[^=]*\\|ORTE_[^=]*\\)=.*/\\1/p'); "
-         "do unset $v; done; ";
-  cmd << "OMP_NUM_THREADS=1 mpiexec --allow-run-as-root --oversubscribe -n " << ranks << " "
-      << Quoted(exe) << " " << Quoted(in) << " " << Quoted(out) << " > " << Quoted(log)
-      << " 2>&1";
-  const int status = std::system(cmd.str().c_str());
+  const std::vector<std::string> cmd = { "mpiexec", "--allow-run-as-root", "--oversubscribe",
+    "-n", std::to_string(ranks), exe, in, out };
+  const std::vector<std::string> env = FilteredEnvironment(
+    { "OMPI_", "PMIX_", "OPAL_", "ORTE_", "OMP_NUM_THREADS=" }, { "OMP_NUM_THREADS=1" });
+  std::string spawnError;
+  const int status = RunProgram(cmd, env, log, spawnError);
   std::remove(in.c_str());
   std::ifstream f(out, std::ios::binary);
   if (status != 0 || !f)
@@ -481,8 +462,8 @@ SolverRow BenchHypreRanks(Problem& p, int ranks, int runs, const SolverRow& oneR
     text << l.rdbuf();
     std::remove(log.c_str());
     std::remove(out.c_str());
-    throw translucency::Error("--hypre-ranks: '" + cmd.str() + "' failed (status " +
-      std::to_string(status) + "): " + text.str());
+    throw translucency::Error("--hypre-ranks: '" + CommandText(cmd) + "' failed (status " +
+      std::to_string(status) + "): " + (spawnError.empty() ? text.str() : spawnError));
   }
   std::remove(log.c_str());
   char magic[8];
@@ -693,51 +674,15 @@ void PrintRows(const std::vector<SolverRow>& rows, double topologyMs)
 
 } // namespace
 
-int BenchLinearSolvers(const std::vector<std::string>& args)
+int BenchLinearSolvers(const LinearSolverBenchOptions& options)
 {
-  std::string meshPath = "Data/bunny.ply", jsonPath, plotPath;
-  std::vector<double> sizes = { 100000, 500000, 1000000 };
-  std::vector<std::string> names;
-  int runs = 5, hypreRanks = 2;
-  bool doCut = true;
-  for (size_t i = 0; i < args.size(); ++i)
-  {
-    const std::string& a = args[i];
-    auto value = [&]() -> const std::string& {
-      if (i + 1 >= args.size())
-        throw UsageError(a + " needs a value");
-      return args[++i];
-    };
-    if (a == "--linear-solvers")
-    {
-      if (i + 1 < args.size() && args[i + 1].rfind("--", 0) != 0)
-      {
-        std::stringstream ss(args[++i]);
-        std::string item;
-        while (std::getline(ss, item, ','))
-          if (!item.empty())
-            names.push_back(item);
-      }
-    }
-    else if (a == "--mesh")
-      meshPath = value();
-    else if (a == "--tets")
-      sizes = ParseNumbers(value(), a);
-    else if (a == "--runs")
-      runs = static_cast<int>(ParseNumbers(value(), a).at(0));
-    else if (a == "--json")
-      jsonPath = value();
-    else if (a == "--plot")
-      plotPath = value();
-    else if (a == "--hypre-ranks")
-      hypreRanks = static_cast<int>(ParseNumbers(value(), a).at(0));
-    else if (a == "--no-cut")
-      doCut = false;
-    else
-      throw UsageError("unknown option '" + a + "' of bench --linear-solvers (see translucency --help)");
-  }
-  if (runs < 1)
-    throw UsageError("--runs must be >= 1");
+  const std::string& meshPath = options.MeshPath;
+  const std::string& jsonPath = options.JsonPath;
+  const std::string& plotPath = options.PlotPath;
+  const std::vector<double>& sizes = options.Tets;
+  std::vector<std::string> names = options.Names;
+  const int runs = options.Runs, hypreRanks = options.HypreRanks;
+  const bool doCut = options.DoCut;
   const std::vector<std::string> available = translucency::GetLinearSolverNames();
   if (names.empty())
     names = available;
@@ -920,12 +865,12 @@ int BenchLinearSolvers(const std::vector<std::string>& args)
       throw translucency::Error(error);
     const std::string script =
       std::string(TRANSLUCENCY_SOURCE_DIR) + "/scripts/plot_linear_solvers.py";
-    const std::string cmd = std::string(TRANSLUCENCY_PYTHON) + " " + Quoted(script) + " " +
-      Quoted(csvPath) + " " + Quoted(plotPath);
-    if (std::system(cmd.c_str()) != 0)
-      std::cerr << "translucency: warning: plotting failed (needs python3-matplotlib); the data "
-                   "is in "
-                << csvPath << ", plot it with: " << cmd << "\n";
+    const std::vector<std::string> cmd = { TRANSLUCENCY_PYTHON, script, csvPath, plotPath };
+    std::string spawnError;
+    if (RunProgram(cmd, FilteredEnvironment({}), "", spawnError) != 0)
+      std::cerr << "translucency: warning: plotting failed (needs python3-matplotlib"
+                << (spawnError.empty() ? "" : "; " + spawnError) << "); the data is in "
+                << csvPath << ", plot it with: " << CommandText(cmd) << "\n";
     else
       std::cout << "wrote " << plotPath << " (data " << csvPath << ")\n";
   }

@@ -25,10 +25,20 @@ namespace translucency_app
 double TetrahedralizeForBench(vtkPolyData* surface, double targetTets,
   vtkSmartPointer<vtkUnstructuredGrid>& grid, std::vector<double>& points, std::vector<int>& tets);
 
-/// `translucency bench --linear-solvers ...` (args without "bench").
-int BenchLinearSolvers(const std::vector<std::string>& args);
+/// The options of `translucency bench --linear-solvers` (declared in BenchCommand.cxx).
+struct LinearSolverBenchOptions
+{
+  std::vector<std::string> Names; ///< solvers to run; empty: every one of the build
+  std::string MeshPath = "Data/bunny.ply";
+  std::vector<double> Tets = { 100000, 500000, 1000000 };
+  int Runs = 5;
+  std::string JsonPath;
+  std::string PlotPath; ///< error vs time picture (and its .csv); empty: none
+  int HypreRanks = 2;   ///< ranks of the multi-rank hypre-amg row; < 2: none
+  bool DoCut = true;    ///< the cut -> new fluence figure
+};
 
-/// Its help text.
-extern const char* const BenchLinearSolversHelp;
+/// `translucency bench --linear-solvers ...`.
+int BenchLinearSolvers(const LinearSolverBenchOptions& options);
 
 } // namespace translucency_app

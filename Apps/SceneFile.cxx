@@ -1,6 +1,8 @@
 #include "SceneFile.h"
 
-#include "CommandLine.h"
+#include "JsonInputs.h"
+#include "MeshIO.h"
+#include "Utilities.h"
 
 #include "Error.h"
 #include "RadiosityScene.h"

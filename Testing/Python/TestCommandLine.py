@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Tests of the `translucency` command line (Apps/translucency.cxx).
+"""Tests of the `translucency` command line (Apps/translucency.cxx and Apps/*Command.cxx).
 
 How to run (from a build tree; ctest sets the variables itself):
 

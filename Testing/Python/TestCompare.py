@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Tests of `translucency compare` (Apps/Compare.cxx).
+"""Tests of `translucency compare` (Apps/CompareCommand.cxx).
 
 How to run (ctest sets the variables itself):
 

@@ -1,6 +1,6 @@
 // `translucency acquire`: inverse diffusion (Polygrid, Sec. 4) from
 // measurement files, or from synthetic measurements of a known volume.
-#include "CommandLine.h"
+#include "Options.h"
 #include "PipelineRender.h"
 
 #include "DiffusionForwardModel.h"
@@ -37,54 +37,12 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <random>
 #include <sstream>
 
 namespace translucency_app
 {
-
-const char* const AcquireHelp = R"(
-translucency acquire --sample FILE --patterns DIR|FILE --output PREFIX [options]
-translucency acquire --synthetic-truth FILE --grid NXxNYxNZ --patterns RxC --output PREFIX [options]
-  Inverse diffusion (polygrid paper Sec. 4): recover per-element kappa and mu_a
-  whose forward diffusion reproduces measured radiance under M light patterns.
-  --sample FILE            tet mesh (.vtu), optional RefractiveIndex cell array
-  --patterns FILE          .vtu on the same points with Irradiance_<k>, Radiance_<k>
-                           (3 components each, k = 0..M-1) and optional
-                           ObservedMask_<k> or ObservedMask point arrays
-  --patterns DIR           one .vtu per pattern (sorted by name), each with
-                           Irradiance, Radiance and optional ObservedMask
-  --element-array NAME     cell array grouping tets that share parameters
-                           (default: VoxelId if present, else one per tet)
-  --output PREFIX          writes PREFIX.vtu (recovered material), PNGs
-                           (synthetic mode) and PREFIX_objective.png
-  --lambda L               regulariser weight (default 1e-5)
-  --max-iter N             CG iterations per channel (default 100)
-  --threshold T            stop when misfit < T x sum of measured L^2 (default 1e-4)
-  --initial-mua R,G,B      homogeneous initial guess, 1/mm (default 0.01)
-  --initial-sigmas R,G,B   homogeneous initial guess, 1/mm (default 1)
-  --homogeneous-fit gauss-newton|cg
-                           how the initial homogeneous pair is fitted: Levenberg-
-                           Marquardt on tangent solves (default) or the paper's CG
-  --line-search-start gauss-newton|previous
-                           trial step of each golden-section search: the Gauss-
-                           Newton minimiser along d (default) or the previous step
-  --json FILE              timings and results
-  --no-png                 skip the pictures
- Synthetic mode (measurements made here from a known volume, no camera):
-  --synthetic-truth FILE   .vti or .vtu with AbsorptionCoefficient and
-                           ReducedScatteringCoefficient (3 components, cell or
-                           point data; optional RefractiveIndex, else 1.3);
-                           its bounds are the sample block
-  --grid NXxNYxNZ          voxels of the block (parameters per voxel)
-  --patterns RxC           lit face z = zmin split into RxC regions lit one at a time
-  --setup back|front       back: measure the face z = zmax; front: measure the
-                           unlit points of the lit face (default back)
-  --noise SIGMA            Gaussian noise, SIGMA x the pattern's maximum radiance
-  --seed N                 noise seed (default 1)
-  Also writes PREFIX_measurements.vtu (reusable with --sample/--patterns),
-  PREFIX_radiance.png and PREFIX_slices.png.
-)";
 
 namespace
 {
@@ -563,86 +521,33 @@ std::vector<int> ParseDims(const std::string& text, const std::string& what, siz
     throw UsageError(what + ": '" + text + "' should be " + (count == 3 ? "NXxNYxNZ" : "RxC"));
   return dims;
 }
-} // namespace
-
-int Acquire(const std::vector<std::string>& args)
+struct AcquireOptions
 {
-  std::string samplePath, patternsArg, outputPrefix, jsonPath, truthPath, gridArg, elementArray;
-  int homogeneousMethod = vtkInverseDiffusion::GAUSS_NEWTON;
-  bool gaussNewtonLineSearch = true;
-  std::string setupName = "back";
-  double lambda = 1e-5, threshold = 1e-4, noise = 0.0;
-  int maxIter = 100;
-  unsigned seed = 1;
-  bool png = true;
-  std::vector<double> initialMu = { 0.01, 0.01, 0.01 }, initialSigma = { 1.0, 1.0, 1.0 };
-  for (size_t i = 0; i < args.size(); ++i)
-  {
-    const std::string& a = args[i];
-    auto value = [&]() -> const std::string& {
-      if (i + 1 >= args.size())
-        throw UsageError(a + " needs a value");
-      return args[++i];
-    };
-    auto number = [&]() { return ParseNumbers(value(), a).at(0); };
-    if (a == "--sample")
-      samplePath = value();
-    else if (a == "--patterns")
-      patternsArg = value();
-    else if (a == "--output")
-      outputPrefix = value();
-    else if (a == "--json")
-      jsonPath = value();
-    else if (a == "--lambda")
-      lambda = number();
-    else if (a == "--threshold")
-      threshold = number();
-    else if (a == "--max-iter")
-      maxIter = static_cast<int>(number());
-    else if (a == "--element-array")
-      elementArray = value();
-    else if (a == "--initial-mua")
-      initialMu = ParseNumbers(value(), a);
-    else if (a == "--initial-sigmas")
-      initialSigma = ParseNumbers(value(), a);
-    else if (a == "--line-search-start")
-    {
-      const std::string m = value();
-      if (m != "gauss-newton" && m != "previous")
-        throw translucency::Error("--line-search-start: '" + m + "' is not gauss-newton or previous");
-      gaussNewtonLineSearch = m == "gauss-newton";
-    }
-    else if (a == "--homogeneous-fit")
-    {
-      const std::string m = value();
-      if (m != "gauss-newton" && m != "cg")
-        throw translucency::Error("--homogeneous-fit: '" + m + "' is not gauss-newton or cg");
-      homogeneousMethod = m == "cg" ? vtkInverseDiffusion::CONJUGATE_GRADIENT
-                                    : vtkInverseDiffusion::GAUSS_NEWTON;
-    }
-    else if (a == "--synthetic-truth")
-      truthPath = value();
-    else if (a == "--grid")
-      gridArg = value();
-    else if (a == "--setup")
-      setupName = value();
-    else if (a == "--noise")
-      noise = number();
-    else if (a == "--seed")
-      seed = static_cast<unsigned>(number());
-    else if (a == "--no-png")
-      png = false;
-    else
-      throw UsageError("acquire: unknown option '" + a + "'");
-  }
-  if (outputPrefix.empty())
-    throw UsageError("acquire: --output PREFIX is required");
-  if (!(lambda >= 0.0))
-    throw UsageError("acquire: --lambda must be >= 0");
-  if (maxIter < 0)
-    throw UsageError("acquire: --max-iter must be >= 0");
-  if (!(noise >= 0.0))
-    throw UsageError("acquire: --noise must be >= 0");
+  std::string SamplePath, PatternsArg, OutputPrefix, JsonPath, TruthPath, GridArg, ElementArray;
+  std::string HomogeneousFit = "gauss-newton";
+  std::string LineSearchStart = "gauss-newton";
+  std::string SetupName = "back";
+  double Lambda = 1e-5, Threshold = 1e-4, Noise = 0.0;
+  int MaxIter = 100;
+  unsigned Seed = 1;
+  bool NoPng = false;
+  std::vector<double> InitialMu = { 0.01 }, InitialSigma = { 1.0 };
+};
+
+int Acquire(const AcquireOptions& o)
+{
+  const std::string &samplePath = o.SamplePath, &patternsArg = o.PatternsArg,
+                    &outputPrefix = o.OutputPrefix, &jsonPath = o.JsonPath,
+                    &truthPath = o.TruthPath, &gridArg = o.GridArg, &setupName = o.SetupName;
+  std::string elementArray = o.ElementArray;
+  const int homogeneousMethod = o.HomogeneousFit == "cg" ? vtkInverseDiffusion::CONJUGATE_GRADIENT
+                                                         : vtkInverseDiffusion::GAUSS_NEWTON;
+  const bool gaussNewtonLineSearch = o.LineSearchStart == "gauss-newton";
+  const double lambda = o.Lambda, threshold = o.Threshold, noise = o.Noise;
+  const int maxIter = o.MaxIter;
+  const unsigned seed = o.Seed;
+  const bool png = !o.NoPng;
+  std::vector<double> initialMu = o.InitialMu, initialSigma = o.InitialSigma;
   if (initialMu.size() == 1)
     initialMu.assign(3, initialMu[0]);
   if (initialSigma.size() == 1)
@@ -902,6 +807,99 @@ int Acquire(const std::vector<std::string>& args)
   PrintStages(stages);
   std::cout << "wrote " << outputPrefix << ".vtu\n";
   return 0;
+}
+
+} // namespace
+
+Command AddAcquireCommand(CLI::App& app)
+{
+  auto o = std::make_shared<AcquireOptions>();
+  CLI::App* c = app.add_subcommand("acquire",
+    "Recover kappa and mu_a from measured radiance (inverse diffusion).\n\n"
+    "Polygrid Sec. 4: per-element kappa and mu_a whose forward diffusion\n"
+    "reproduces the measured radiance under M light patterns. Synthetic mode\n"
+    "(--synthetic-truth) makes the measurements from a known volume and also\n"
+    "writes PREFIX_measurements.vtu (reusable with --sample/--patterns),\n"
+    "PREFIX_radiance.png and PREFIX_slices.png."
+    "\n\nusage: translucency acquire --sample FILE --patterns DIR|FILE --output PREFIX [options]\n"
+           "   or: translucency acquire --synthetic-truth FILE --grid NXxNYxNZ --patterns RxC "
+           "--output PREFIX [options]");
+  c->add_option("--sample", o->SamplePath, "tet mesh (.vtu), optional RefractiveIndex cell array")
+    ->type_name("FILE");
+  c->add_option("--patterns", o->PatternsArg,
+     "FILE: .vtu on the same points with Irradiance_<k>, Radiance_<k>\n"
+     "(3 components each, k = 0..M-1) and optional\n"
+     "ObservedMask_<k> or ObservedMask point arrays;\n"
+     "DIR: one .vtu per pattern (sorted by name), each with\n"
+     "Irradiance, Radiance and optional ObservedMask;\n"
+     "RxC (synthetic mode): lit face z = zmin split into RxC\n"
+     "regions lit one at a time")
+    ->type_name("DIR|FILE|RxC")
+    ->required();
+  c->add_option("--element-array", o->ElementArray,
+     "cell array grouping tets that share parameters\n"
+     "(default: VoxelId if present, else one per tet)")
+    ->type_name("NAME");
+  c->add_option("--output", o->OutputPrefix,
+     "writes PREFIX.vtu (recovered material), PNGs\n"
+     "(synthetic mode) and PREFIX_objective.png")
+    ->type_name("PREFIX")
+    ->required();
+  AddNumber(c, "--lambda", o->Lambda, "regulariser weight", "L", [](double l) { return l >= 0; },
+    "acquire: --lambda must be >= 0");
+  AddNumber(c, "--max-iter", o->MaxIter, "CG iterations per channel", "N",
+    [](double n) { return n >= 0; }, "acquire: --max-iter must be >= 0");
+  AddNumber(c, "--threshold", o->Threshold, "stop when misfit < T x sum of measured L^2", "T");
+  AddNumberList(c, "--initial-mua", o->InitialMu, "homogeneous initial guess, 1/mm (1 or 3 values)",
+    "R,G,B");
+  AddNumberList(c, "--initial-sigmas", o->InitialSigma,
+    "homogeneous initial guess, 1/mm (1 or 3 values)", "R,G,B");
+  c->add_option("--homogeneous-fit", o->HomogeneousFit,
+     "how the initial homogeneous pair is fitted: Levenberg-\n"
+     "Marquardt on tangent solves or the paper's CG")
+    ->type_name("gauss-newton|cg")
+    ->capture_default_str()
+    ->check(OneOf("--homogeneous-fit", { "gauss-newton", "cg" }));
+  c->add_option("--line-search-start", o->LineSearchStart,
+     "trial step of each golden-section search: the Gauss-\n"
+     "Newton minimiser along d or the previous step")
+    ->type_name("gauss-newton|previous")
+    ->capture_default_str()
+    ->check(OneOf("--line-search-start", { "gauss-newton", "previous" }));
+  c->add_option("--json", o->JsonPath, "timings and results")->type_name("FILE");
+  c->add_flag("--no-png", o->NoPng, "skip the pictures");
+  // Synthetic mode: measurements made here from a known volume, no camera;
+  // also writes PREFIX_measurements.vtu (reusable with --sample/--patterns),
+  // PREFIX_radiance.png and PREFIX_slices.png (see the description).
+  const std::string synthetic = "Synthetic mode (measurements made here from a known volume)";
+  c->add_option("--synthetic-truth", o->TruthPath,
+     ".vti or .vtu with AbsorptionCoefficient and\n"
+     "ReducedScatteringCoefficient (3 components, cell or\n"
+     "point data; optional RefractiveIndex, else 1.3);\n"
+     "its bounds are the sample block")
+    ->type_name("FILE")
+    ->group(synthetic);
+  c->add_option("--grid", o->GridArg, "voxels of the block (parameters per voxel)")
+    ->type_name("NXxNYxNZ")
+    ->check(CLI::Validator(
+      [](std::string& text) {
+        ParseDims(text, "--grid", 3);
+        return std::string();
+      },
+      ""))
+    ->group(synthetic);
+  c->add_option("--setup", o->SetupName,
+     "back: measure the face z = zmax; front: measure the\n"
+     "unlit points of the lit face")
+    ->type_name("back|front")
+    ->capture_default_str()
+    ->check(OneOf("--setup", { "back", "front" }))
+    ->group(synthetic);
+  AddNumber(c, "--noise", o->Noise, "Gaussian noise, SIGMA x the pattern's maximum radiance",
+    "SIGMA", [](double n) { return n >= 0; }, "acquire: --noise must be >= 0")
+    ->group(synthetic);
+  AddNumber(c, "--seed", o->Seed, "noise seed", "N")->group(synthetic);
+  return { c, [o]() { return Acquire(*o); } };
 }
 
 } // namespace translucency_app

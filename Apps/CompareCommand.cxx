@@ -3,10 +3,13 @@
 // picture and a relative-error map per solver on one colour scale, a plot of
 // error against wall time for the iterative solvers, and a .vtm multiblock.
 
-#include "CommandLine.h"
+#include "Options.h"
 #include "PipelineRender.h"
+#include "Scene.h"
 
+#include "DiffusionSolverFactory.h"
 #include "Error.h"
+#include "Strings.h"
 
 #include "vtkOutgoingRadiance.h"
 #include "vtkSolveDiffusion.h"
@@ -29,37 +32,32 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <sstream>
 
 namespace translucency_app
 {
 
-const char* const CompareHelp = R"(
-translucency compare --mesh FILE [scene options] --output DIR [options]
-  --solvers A,B,...        from divergence, fem, quadgraph, grid, montecarlo
-                           (default: divergence,fem)
-  --reference NAME         the solver the others are measured against (default fem;
-                           montecarlo for the ground truth); run even if not listed
-  --grid-spacing H         voxel spacing of the grid solver, mm (default: automatic)
-  --photons N              photon budget of montecarlo (default 1000000)
-  --seed S                 random seed of montecarlo (default 1)
-  --rel-tol T              relative residual of the iterative solvers (default 1e-8)
-  --output DIR             <solver>_radiance.png, <solver>_error.png, error_vs_time.png,
-                           compare.vtm (needs X for the PNGs: xvfb-run -a)
-  --no-png                 skip the pictures and the plot (no X needed)
-  --n-squared-law          energy-conserving radiance read-out (eq. 3 / eta^2); use it
-                           when the reference is montecarlo (see Documentation/Solvers.md)
-  --json FILE              the table as JSON
-  --view, --up, --size, --exposure   as for render
-)";
-
 namespace
 {
 using json = nlohmann::json;
+
+struct CompareOptions
+{
+  SceneOptions Scene;
+  RadianceImageOptions Image;
+  std::string SolverList = "divergence,fem";
+  std::string Reference = "fem";
+  std::string OutputDir, JsonPath;
+  double GridSpacing = 0.0, RelTol = 1e-8;
+  long long Photons = 1000000;
+  int Seed = 1;
+  bool NoPictures = false, NSquaredLaw = false;
+};
 
 struct SolverResult
 {
@@ -230,81 +228,24 @@ PlotSeries ErrorVersusTime(const std::string& name, vtkUnstructuredGrid* lit,
   }
   return series;
 }
-}
 
-int Compare(const std::vector<std::string>& args)
+int Compare(CompareOptions& o)
 {
-  SceneOptions scene;
-  RadianceImageOptions image;
-  std::string solverList = "divergence,fem", reference = "fem", outputDir, jsonPath;
-  double gridSpacing = 0.0, relTol = 1e-8;
-  long long photons = 1000000;
-  int seed = 1;
-  bool pictures = true, nSquaredLaw = false;
-  for (size_t i = 0; i < args.size(); ++i)
-  {
-    const std::string& a = args[i];
-    auto value = [&]() -> const std::string& {
-      if (i + 1 >= args.size())
-        throw UsageError(a + " needs a value");
-      return args[++i];
-    };
-    auto number = [&]() { return ParseNumbers(value(), a).at(0); };
-    if (scene.Parse(args, i) || ParseImageOption(args, i, image))
-      continue;
-    if (a == "--solvers")
-      solverList = value();
-    else if (a == "--reference")
-      reference = value();
-    else if (a == "--grid-spacing")
-    {
-      gridSpacing = number();
-      if (!(gridSpacing > 0))
-        throw UsageError("--grid-spacing must be > 0 mm");
-    }
-    else if (a == "--photons")
-    {
-      const double n = number();
-      if (!(n >= 1))
-        throw UsageError("--photons must be >= 1");
-      photons = static_cast<long long>(n);
-    }
-    else if (a == "--seed")
-      seed = static_cast<int>(number());
-    else if (a == "--rel-tol")
-    {
-      relTol = number();
-      if (!(relTol > 0 && relTol < 1))
-        throw UsageError("--rel-tol must be in (0, 1)");
-    }
-    else if (a == "--output")
-      outputDir = value();
-    else if (a == "--json")
-      jsonPath = value();
-    else if (a == "--no-png")
-      pictures = false;
-    else if (a == "--n-squared-law")
-      nSquaredLaw = true;
-    else
-      throw UsageError("unknown option '" + a + "' (see translucency --help)");
-  }
+  SceneOptions& scene = o.Scene;
+  const RadianceImageOptions& image = o.Image;
+  const std::string &solverList = o.SolverList, &reference = o.Reference,
+                    &outputDir = o.OutputDir, &jsonPath = o.JsonPath;
+  const double gridSpacing = o.GridSpacing, relTol = o.RelTol;
+  const long long photons = o.Photons;
+  const int seed = o.Seed;
+  const bool pictures = !o.NoPictures, nSquaredLaw = o.NSquaredLaw;
   scene.Finish("compare");
   if (outputDir.empty())
     throw UsageError("compare needs --output DIR");
   std::vector<std::string> solvers = SplitList(solverList);
   if (solvers.empty())
     throw UsageError("--solvers lists no solver");
-  // Validate every name before any work.
-  {
-    MessageCollector messages;
-    vtkNew<vtkSolveDiffusion> probe;
-    messages.Watch(probe);
-    for (const std::string& name : solvers)
-      if (!probe->SetSolverByName(name.c_str()))
-        throw UsageError(messages.Last());
-    if (!probe->SetSolverByName(reference.c_str()))
-      throw UsageError("--reference: " + messages.Last());
-  }
+  // The names were checked while parsing (DiffusionSolverCheck).
   std::vector<std::string> order = { reference };
   for (const std::string& name : solvers)
     if (name != reference)
@@ -419,25 +360,40 @@ int Compare(const std::vector<std::string>& args)
   }
   // The .vtm refers to a folder of pieces next to it: write both into a
   // staging folder, then move them into place (a failure leaves old results).
+  // Removed: only what this command writes (the staging folder it made, its
+  // pieces, and the previous run's pieces folder that the new one replaces).
   {
-    const std::string staging = outputDir + "/.compare-staging";
-    std::system(("rm -rf '" + staging + "'").c_str());
-    EnsureParentDirectory(staging + "/compare.vtm");
+    namespace fs = std::filesystem;
+    const fs::path dir(outputDir), staging = dir / ".compare-staging";
+    std::error_code ec;
+    fs::remove_all(staging / "compare", ec);
+    fs::remove(staging / "compare.vtm", ec);
+    fs::create_directories(staging, ec);
+    const auto removeStaging = [&]() {
+      fs::remove_all(staging / "compare", ec);
+      fs::remove(staging / "compare.vtm", ec);
+      fs::remove(staging, ec); // only if empty: nothing else of the user's goes
+    };
     vtkNew<vtkXMLMultiBlockDataWriter> writer;
     writer->SetInputData(blocks);
-    writer->SetFileName((staging + "/compare.vtm").c_str());
+    writer->SetFileName((staging / "compare.vtm").c_str());
     writer->SetDataModeToAppended();
     writer->SetCompressorTypeToZLib();
     if (writer->Write() == 0)
     {
-      std::system(("rm -rf '" + staging + "'").c_str());
+      removeStaging();
       throw translucency::Error("cannot write '" + outputDir + "/compare.vtm'");
     }
-    std::system(("rm -rf '" + outputDir + "/compare'").c_str());
-    if (std::rename((staging + "/compare").c_str(), (outputDir + "/compare").c_str()) != 0 ||
-      std::rename((staging + "/compare.vtm").c_str(), (outputDir + "/compare.vtm").c_str()) != 0)
-      throw translucency::Error("cannot move the results into '" + outputDir + "'");
-    std::system(("rm -rf '" + staging + "'").c_str());
+    fs::remove_all(dir / "compare", ec);
+    fs::rename(staging / "compare", dir / "compare", ec);
+    if (!ec)
+      fs::rename(staging / "compare.vtm", dir / "compare.vtm", ec);
+    if (ec)
+    {
+      removeStaging();
+      throw translucency::Error("cannot move the results into '" + outputDir + "': " + ec.message());
+    }
+    removeStaging();
   }
 
   if (pictures)
@@ -490,6 +446,42 @@ int Compare(const std::vector<std::string>& args)
       throw translucency::Error(error);
   }
   return 0;
+}
+
+} // namespace
+
+Command AddCompareCommand(CLI::App& app)
+{
+  auto o = std::make_shared<CompareOptions>();
+  CLI::App* c =
+    app.add_subcommand("compare", "Run several solvers on the same problem and lay the results side by side."
+    "\n\nusage: translucency compare --mesh FILE [scene options] --output DIR [options]");
+  AddSceneOptions(c, o->Scene);
+  c->add_option("--solvers", o->SolverList, "from " + WrapNames(translucency::GetDiffusionSolverNames()))
+    ->type_name("A,B,...")
+    ->capture_default_str()
+    ->check(DiffusionSolverCheck("--solvers"));
+  c->add_option("--reference", o->Reference,
+     "the solver the others are measured against (montecarlo\n"
+     "for the ground truth); run even if not listed")
+    ->type_name("NAME")
+    ->capture_default_str()
+    ->check(DiffusionSolverCheck("--reference"));
+  AddGridAndPhotonOptions(c, o->GridSpacing, o->Photons);
+  AddNumber(c, "--seed", o->Seed, "random seed of montecarlo", "S");
+  AddNumber(c, "--rel-tol", o->RelTol, "relative residual of the iterative solvers", "T",
+    [](double t) { return t > 0 && t < 1; }, "--rel-tol must be in (0, 1)");
+  c->add_option("--output", o->OutputDir,
+     "<solver>_radiance.png, <solver>_error.png, error_vs_time.png,\n"
+     "compare.vtm (needs X for the PNGs: xvfb-run -a)")
+    ->type_name("DIR");
+  c->add_flag("--no-png", o->NoPictures, "skip the pictures and the plot (no X needed)");
+  c->add_flag("--n-squared-law", o->NSquaredLaw,
+    "energy-conserving radiance read-out (eq. 3 / eta^2); use it\n"
+    "when the reference is montecarlo (see Documentation/Solvers.md)");
+  c->add_option("--json", o->JsonPath, "the table as JSON")->type_name("FILE");
+  AddImageOptions(c, o->Image);
+  return { c, [o]() { return Compare(*o); } };
 }
 
 } // namespace translucency_app

@@ -3,11 +3,13 @@
 // Fig. 6 four-panel picture, per-object .vtp files and a JSON report (with
 // optional relight / translucency-change timings, --bench N).
 
-#include "CommandLine.h"
+#include "Options.h"
 #include "PipelineRender.h"
 #include "SceneFile.h"
 
 #include "Error.h"
+#include "LinearSolver.h"
+#include "Strings.h"
 
 #include "vtkTranslucentRadiosity.h"
 
@@ -40,34 +42,12 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace translucency_app
 {
-
-const char* const RadiosityHelp = R"(
-translucency radiosity --scene FILE.json --output PREFIX [options]
-  Inter-reflection between translucent and opaque diffuse objects (translucent
-  radiosity, B = (I - S F)^-1 S E). Writes PREFIX_<k>.vtp per object (cell
-  arrays DirectIrradiance, DirectRadiosity, SubsurfaceRadiosity,
-  InterReflectionRadiosity, Radiosity). Scene format: Documentation/Radiosity.md.
-  --png FILE               the four panels of the paper's Fig. 6: direct,
-                           subsurface only (first bounce), inter-reflection
-                           only, combined (needs X: run under xvfb-run -a)
-  --s-operator diffusion|profile   S by our diffusion solve (default) or the
-                           paper's dipole profile over optical paths
-  --json FILE              report: patches, iterations, residuals, times, memory
-  --iteration jacobi|gauss-seidel  (default: the scene's, else gauss-seidel)
-  --rel-tol X              relative change to stop at (default 0.005)
-  --linear-solver NAME     linear solver of the diffusion S (default cg-jacobi)
-  --rays N                 rays per patch of the form factors (default 256)
-  --cell-size MM           patch size of every built-in box (overrides the scene)
-  --heuristics             also the paper's Sec. 6.3 heuristics (arrays
-                           HeuristicRadiosity1/2)
-  --bench N                then N relights (light moved) and N translucency
-                           changes (coefficients x 0.5 / x 2), medians in the JSON
-)";
 
 namespace
 {
@@ -215,68 +195,24 @@ double MedianOf(std::vector<double> v)
   return v.empty() ? 0.0 : Median(std::move(v));
 }
 
-} // namespace
-
-int Radiosity(const std::vector<std::string>& args)
+struct RadiosityOptions
 {
-  std::string scenePath, prefix, png, jsonPath, sOperator, iteration, linearSolver;
-  double relTol = -1.0, cellSize = 0.0;
-  int rays = -1, bench = 0;
-  bool heuristics = false;
-  for (size_t i = 0; i < args.size(); ++i)
-  {
-    auto value = [&](const char* name) {
-      if (i + 1 >= args.size())
-        throw UsageError(std::string(name) + " needs a value");
-      return args[++i];
-    };
-    auto number = [&](const char* name) {
-      const std::string text = value(name);
-      const std::vector<double> v = ParseNumbers(text, name);
-      if (v.size() != 1)
-        throw UsageError(std::string(name) + " needs one number");
-      return v[0];
-    };
-    const std::string& a = args[i];
-    if (a == "--scene")
-      scenePath = value("--scene");
-    else if (a == "--output")
-      prefix = value("--output");
-    else if (a == "--png")
-      png = value("--png");
-    else if (a == "--json")
-      jsonPath = value("--json");
-    else if (a == "--s-operator")
-      sOperator = value("--s-operator");
-    else if (a == "--linear-solver")
-      linearSolver = value("--linear-solver");
-    else if (a == "--iteration")
-      iteration = value("--iteration");
-    else if (a == "--rel-tol")
-      relTol = number("--rel-tol");
-    else if (a == "--rays")
-      rays = static_cast<int>(number("--rays"));
-    else if (a == "--cell-size")
-      cellSize = number("--cell-size");
-    else if (a == "--bench")
-      bench = static_cast<int>(number("--bench"));
-    else if (a == "--heuristics")
-      heuristics = true;
-    else
-      throw UsageError("radiosity: unknown option '" + a + "'" + RadiosityHelp);
-  }
-  if (scenePath.empty() || prefix.empty())
-  {
-    throw UsageError(std::string("radiosity needs --scene FILE.json and --output PREFIX") +
-      RadiosityHelp);
-  }
-  if (!sOperator.empty() && sOperator != "diffusion" && sOperator != "profile")
-    throw UsageError("--s-operator must be diffusion or profile, not '" + sOperator + "'");
-  if (!iteration.empty() && iteration != "jacobi" && iteration != "gauss-seidel")
-    throw UsageError("--iteration must be jacobi or gauss-seidel, not '" + iteration + "'");
-  if (rays == 0 || rays < -1 || bench < 0 || cellSize < 0.0 || (relTol != -1.0 && !(relTol > 0.0)))
-    throw UsageError("--rays, --bench, --cell-size and --rel-tol must be positive");
+  std::string ScenePath, Prefix, Png, JsonPath, SOperator, Iteration, LinearSolver;
+  double RelTol = -1.0;   ///< -1: the scene's
+  double CellSize = 0.0;  ///< 0: the scene's
+  int Rays = -1;          ///< -1: the scene's
+  int Bench = 0;
+  bool Heuristics = false;
+};
 
+int Radiosity(const RadiosityOptions& o)
+{
+  const std::string &scenePath = o.ScenePath, &prefix = o.Prefix, &png = o.Png,
+                    &jsonPath = o.JsonPath, &sOperator = o.SOperator,
+                    &iteration = o.Iteration, &linearSolver = o.LinearSolver;
+  const double relTol = o.RelTol, cellSize = o.CellSize;
+  const int rays = o.Rays, bench = o.Bench;
+  const bool heuristics = o.Heuristics;
   std::vector<Stage> stages;
   auto start = Clock::now();
   LoadedScene scene = LoadScene(scenePath, cellSize);
@@ -455,6 +391,63 @@ int Radiosity(const std::vector<std::string>& args)
       throw translucency::Error(error);
   }
   return 0;
+}
+
+} // namespace
+
+Command AddRadiosityCommand(CLI::App& app)
+{
+  auto o = std::make_shared<RadiosityOptions>();
+  CLI::App* c = app.add_subcommand("radiosity",
+    "Translucent radiosity of a scene of several objects (JSON scene file).\n\n"
+    "Inter-reflection between translucent and opaque diffuse objects,\n"
+    "B = (I - S F)^-1 S E. Writes PREFIX_<k>.vtp per object (cell arrays\n"
+    "DirectIrradiance, DirectRadiosity, SubsurfaceRadiosity,\n"
+    "InterReflectionRadiosity, Radiosity). Scene format: Documentation/Radiosity.md."
+    "\n\nusage: translucency radiosity --scene FILE.json --output PREFIX [options]");
+  c->add_option("--scene", o->ScenePath, "the scene (objects, materials, lights, camera)")
+    ->type_name("FILE.json")
+    ->required();
+  c->add_option("--output", o->Prefix, "writes PREFIX_<k>.vtp, one per object")
+    ->type_name("PREFIX")
+    ->required();
+  c->add_option("--png", o->Png,
+     "the four panels of the paper's Fig. 6: direct,\n"
+     "subsurface only (first bounce), inter-reflection\n"
+     "only, combined (needs X: run under xvfb-run -a)")
+    ->type_name("FILE");
+  c->add_option("--s-operator", o->SOperator,
+     "S by our diffusion solve (default) or the\n"
+     "paper's dipole profile over optical paths")
+    ->type_name("diffusion|profile")
+    ->check(OneOf("--s-operator", { "diffusion", "profile" }));
+  c->add_option("--json", o->JsonPath, "report: patches, iterations, residuals, times, memory")
+    ->type_name("FILE");
+  c->add_option("--iteration", o->Iteration, "default: the scene's, else gauss-seidel")
+    ->type_name("jacobi|gauss-seidel")
+    ->check(OneOf("--iteration", { "jacobi", "gauss-seidel" }));
+  const auto positive = [](double x) { return x > 0; };
+  const std::string mustBePositive = "--rays, --bench, --cell-size and --rel-tol must be positive";
+  AddNumber(c, "--rel-tol", o->RelTol, "relative change to stop at (default: the scene's,\nelse 0.005)", "X",
+    positive, mustBePositive)
+    ->default_str("");
+  c->add_option("--linear-solver", o->LinearSolver,
+     "linear solver of the diffusion S (default: the scene's,\nelse cg-jacobi): " +
+       WrapNames(translucency::GetLinearSolverNames(), 40))
+    ->type_name("NAME");
+  AddNumber(c, "--rays", o->Rays, "rays per patch of the form factors (default: the\nscene's, else 256)", "N",
+    positive, mustBePositive)
+    ->default_str("");
+  AddNumber(c, "--cell-size", o->CellSize, "patch size of every built-in box (overrides the scene)",
+    "MM", positive, mustBePositive)
+    ->default_str("");
+  c->add_flag("--heuristics", o->Heuristics,
+    "also the paper's Sec. 6.3 heuristics (arrays\nHeuristicRadiosity1/2)");
+  AddNumber(c, "--bench", o->Bench,
+    "then N relights (light moved) and N translucency\n"
+    "changes (coefficients x 0.5 / x 2), medians in the JSON",
+    "N", [](double n) { return n >= 0; }, mustBePositive);
+  return { c, [o]() { return Radiosity(*o); } };
 }
 
 } // namespace translucency_app

@@ -1,0 +1,354 @@
+// `translucency bench`: median topology, assembly, SpMV and solve times at
+// several mesh sizes (optionally cut and paint timings, --edit), or, with
+// --linear-solvers, every linear solver side by side (BenchLinearSolvers.cxx).
+
+#include "BenchLinearSolvers.h"
+#include "MeshIO.h"
+#include "Options.h"
+
+#include "ConjugateGradient.h"
+#include "DiscreteDivergence.h"
+#include "Error.h"
+#include "LinearSolver.h"
+#include "OpticalProperties.h"
+#include "Strings.h"
+#include "TetMesh.h"
+
+#include "vtkAssignScatteringCoefficients.h"
+#include "vtkPaintScatteringCoefficients.h"
+#include "vtkStrokeCut.h"
+#include "vtkSurfaceIrradiance.h"
+
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkFieldData.h>
+#include <vtkNew.h>
+#include <vtkPlane.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+
+#include "vtk_nlohmannjson.h"
+#include VTK_NLOHMANN_JSON(json.hpp)
+
+#include <omp.h>
+
+#include <array>
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace translucency_app
+{
+namespace
+{
+using json = nlohmann::json;
+
+/// The options of the plain bench.
+struct BenchOptions
+{
+  std::string MeshPath;
+  std::vector<double> Tets;
+  int Runs = 7;
+  std::string JsonPath;
+  bool Edit = false;
+};
+
+/// Cut and paint timings on one lit mesh (medians of `runs`): a plane cut
+/// through the centre with the default relaxation, then the topology rebuild
+/// and the 3-channel re-assembly of the cut mesh; a paint stroke touching
+/// about 1 % of the tets, then the incremental re-assembly of their rows.
+json BenchEdit(vtkUnstructuredGrid* g, int runs)
+{
+  std::vector<double> cutMs, topoMs, asmMs, paintMs, updateMs, paintExactMs, fullAsmMs;
+  vtkIdType kept = 0, touched = 0;
+  double bounds[6];
+  g->GetBounds(bounds);
+  const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
+    0.5 * (bounds[4] + bounds[5]) };
+  const translucency::MaterialPreset& marble = translucency::FindMaterialPreset("marble");
+  for (int r = 0; r < runs; ++r)
+  {
+    vtkNew<vtkPlane> plane;
+    plane->SetOrigin(centre);
+    plane->SetNormal(1.0, 0.0, 0.0);
+    vtkNew<vtkStrokeCut> cut;
+    cut->SetInputData(g);
+    cut->SetCutFunction(plane);
+    auto start = Clock::now();
+    cut->Update();
+    cutMs.push_back(MillisecondsSince(start));
+    vtkUnstructuredGrid* out = cut->GetOutput();
+    kept = out->GetNumberOfCells();
+    std::vector<double> points;
+    std::vector<int> tets;
+    GridToCoreArrays(out, points, tets);
+    start = Clock::now();
+    translucency::TetMesh mesh;
+    mesh.SetGeometry(std::move(points), std::move(tets));
+    topoMs.push_back(MillisecondsSince(start));
+    auto material = translucency::OpticalProperties::Uniform(
+      mesh.GetNumberOfTets(), marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
+    std::vector<double> q(3 * static_cast<size_t>(mesh.GetNumberOfPoints()), 0.0);
+    translucency::DiscreteDivergence disc;
+    translucency::DiffusionSystem system;
+    start = Clock::now();
+    disc.Assemble(mesh, material, q, system);
+    asmMs.push_back(MillisecondsSince(start));
+  }
+  // Paint: a stroke point on the top of the object, width giving ~1 % of tets.
+  std::vector<double> points;
+  std::vector<int> tets;
+  GridToCoreArrays(g, points, tets);
+  translucency::TetMesh mesh;
+  mesh.SetGeometry(points, tets);
+  auto material = translucency::OpticalProperties::Uniform(
+    mesh.GetNumberOfTets(), marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
+  std::vector<double> q(3 * static_cast<size_t>(mesh.GetNumberOfPoints()), 0.0);
+  translucency::DiscreteDivergence disc;
+  translucency::DiffusionSystem system;
+  disc.Assemble(mesh, material, q, system);
+  const double diag = std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
+    (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) + (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
+  for (int r = 0; r < runs; ++r)
+  {
+    vtkNew<vtkPaintScatteringCoefficients> paint;
+    paint->SetInputData(g);
+    paint->AddStrokePoint(centre[0], bounds[3], centre[2]);
+    paint->SetWidth(0.024 * diag);
+    auto start = Clock::now();
+    paint->Update();
+    paintMs.push_back(MillisecondsSince(start));
+    // The tets whose coefficients changed, as listed by the paint filter.
+    vtkDataArray* painted = paint->GetOutput()->GetFieldData()->GetArray("PaintedCellIds");
+    std::vector<int> changed;
+    for (vtkIdType k = 0; painted && k < painted->GetNumberOfTuples(); ++k)
+      changed.push_back(static_cast<int>(painted->GetComponent(k, 0)));
+    touched = static_cast<vtkIdType>(changed.size());
+    vtkDataArray* muA = paint->GetOutput()->GetCellData()->GetArray("AbsorptionCoefficient");
+    vtkDataArray* sigma = paint->GetOutput()->GetCellData()->GetArray("ReducedScatteringCoefficient");
+    for (int t : changed)
+      for (int c = 0; c < 3; ++c)
+      {
+        material.AbsorptionCoefficient[3 * t + c] = muA->GetComponent(t, c);
+        material.ReducedScatteringCoefficient[3 * t + c] = sigma->GetComponent(t, c);
+      }
+    start = Clock::now();
+    disc.UpdateTets(mesh, material, q, changed, system);
+    updateMs.push_back(MillisecondsSince(start));
+    // Same-run baselines: the same paint with no cut-off (every tet weighted,
+    // as before the cut-off existed) and a full 3-channel assembly.
+    vtkNew<vtkPaintScatteringCoefficients> exact;
+    exact->SetInputData(g);
+    exact->AddStrokePoint(centre[0], bounds[3], centre[2]);
+    exact->SetWidth(0.024 * diag);
+    exact->SetCutoffWeight(0.0);
+    start = Clock::now();
+    exact->Update();
+    paintExactMs.push_back(MillisecondsSince(start));
+    translucency::DiffusionSystem full;
+    start = Clock::now();
+    disc.Assemble(mesh, material, q, full);
+    fullAsmMs.push_back(MillisecondsSince(start));
+  }
+  const double cut = Median(cutMs), topo = Median(topoMs), as = Median(asmMs);
+  const double paint = Median(paintMs), update = Median(updateMs);
+  std::cout << std::fixed << std::setprecision(1) << "    edit: plane cut " << cut
+            << " ms (kept " << kept << " tets) + topology " << topo << " ms + assembly " << as
+            << " ms = " << cut + topo + as << " ms; paint " << paint << " ms ("
+            << touched << " tets, " << std::setprecision(2)
+            << 100.0 * touched / g->GetNumberOfCells() << " %) + row update " << update
+            << " ms = " << paint + update << " ms\n"
+            << "    same-run baselines: paint without cut-off " << Median(paintExactMs)
+            << " ms, full assembly " << Median(fullAsmMs) << " ms (paint total / full assembly "
+            << std::setprecision(2) << (paint + update) / Median(fullAsmMs) << ")\n"
+            << std::defaultfloat;
+  return { { "cut_ms_median", cut }, { "cut_topology_ms_median", topo },
+    { "cut_assembly_ms_median", as }, { "cut_total_ms", cut + topo + as },
+    { "tets_kept", kept }, { "paint_ms_median", paint }, { "paint_update_ms_median", update },
+    { "paint_total_ms", paint + update }, { "tets_painted", touched },
+    { "paint_no_cutoff_ms_median", Median(paintExactMs) },
+    { "full_assembly_ms_median", Median(fullAsmMs) } };
+}
+
+int Bench(const BenchOptions& o)
+{
+    const std::string& meshPath = o.MeshPath;
+  const std::vector<double>& sizes = o.Tets;
+  const int runs = o.Runs;
+  std::string error;
+  vtkSmartPointer<vtkPolyData> surface;
+  vtkSmartPointer<vtkUnstructuredGrid> grid;
+  if (!ReadMesh(meshPath, surface, grid, error))
+    throw translucency::Error(error);
+  if (!surface)
+    throw translucency::Error("bench needs a surface mesh (.ply, .stl, .obj, .vtp)");
+
+  json results = json::array();
+  std::cout << "threads: " << omp_get_max_threads() << ", runs per figure: " << runs
+            << " (medians)\n\n";
+  std::cout << "  target     tets   points     nnz  tetgen(ms) topology(ms) assembly(ms) "
+               "spmv(ms) asm/spmv  solve(ms) iters(R) solve/spmv\n";
+  for (double target : sizes)
+  {
+    vtkSmartPointer<vtkUnstructuredGrid> tetrahedralized;
+    std::vector<double> points;
+    std::vector<int> tets;
+    const double tetgenMs = TetrahedralizeForBench(surface, target, tetrahedralized, points, tets);
+    auto start = Clock::now();
+    vtkNew<vtkAssignScatteringCoefficients> assign;
+    assign->SetInputData(tetrahedralized);
+    vtkNew<vtkSurfaceIrradiance> light;
+    light->SetInputConnection(assign->GetOutputPort());
+    light->AddDirectionalLight(0, -1, -1, 1.0);
+    light->SetUniformLightIrradiance(0.1);
+    light->SetUniformLightSamples(0);
+    light->Update();
+    vtkUnstructuredGrid* g = light->GetOutput();
+
+    translucency::OpticalProperties material;
+    const translucency::MaterialPreset& marble = translucency::FindMaterialPreset("marble");
+    material = translucency::OpticalProperties::Uniform(static_cast<int>(g->GetNumberOfCells()),
+      marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
+    std::vector<double> q(3 * g->GetNumberOfPoints());
+    vtkDataArray* qa = g->GetPointData()->GetArray("Irradiance");
+    for (vtkIdType i = 0; i < g->GetNumberOfPoints(); ++i)
+      for (int c = 0; c < 3; ++c)
+        q[3 * i + c] = qa->GetComponent(i, c);
+
+    std::vector<double> topo, assembly, spmv, solveTimes;
+    translucency::TetMesh mesh;
+    for (int r = 0; r < runs; ++r)
+    {
+      start = Clock::now();
+      mesh.SetGeometry(points, tets);
+      topo.push_back(MillisecondsSince(start));
+    }
+    translucency::DiscreteDivergence disc;
+    translucency::DiffusionSystem system;
+    for (int r = 0; r < runs; ++r)
+    {
+      start = Clock::now();
+      disc.Assemble(mesh, material, q, system);
+      assembly.push_back(MillisecondsSince(start));
+    }
+    Eigen::VectorXd x = Eigen::VectorXd::Ones(system.NumberOfUnknowns), y(system.NumberOfUnknowns);
+    for (int r = 0; r < runs; ++r)
+    {
+      start = Clock::now();
+      y.noalias() = system.Matrix(0) * x;
+      spmv.push_back(MillisecondsSince(start));
+    }
+    translucency::ConjugateGradient cg;
+    cg.SetRelTol(1e-6);
+    int iterations = 0;
+    for (int r = 0; r < runs; ++r)
+    {
+      std::array<Eigen::VectorXd, 3> solution;
+      start = Clock::now();
+      cg.Solve(system, solution, false);
+      solveTimes.push_back(MillisecondsSince(start));
+      iterations = cg.GetNumIterations(0);
+    }
+    const double a = Median(assembly), s = Median(spmv), so = Median(solveTimes);
+    std::cout << std::fixed << std::setprecision(2) << "  " << std::setw(7)
+              << static_cast<long>(target) << " " << std::setw(8) << mesh.GetNumberOfTets() << " "
+              << std::setw(8) << mesh.GetNumberOfPoints() << " " << std::setw(8)
+              << mesh.GetNumberOfNonZeros() << " " << std::setw(10) << tetgenMs << " "
+              << std::setw(12) << Median(topo) << " " << std::setw(12) << a << " " << std::setw(8)
+              << s << " " << std::setw(8) << a / s << " " << std::setw(10) << so << " "
+              << std::setw(8) << iterations << " " << std::setw(10) << so / s << "\n"
+              << std::defaultfloat;
+    results.push_back({ { "target_tets", target }, { "tets", mesh.GetNumberOfTets() },
+      { "points", mesh.GetNumberOfPoints() }, { "nonzeros", mesh.GetNumberOfNonZeros() },
+      { "tetgen_ms", tetgenMs }, { "topology_ms_median", Median(topo) },
+      { "assembly_3ch_ms_median", a }, { "spmv_1ch_ms_median", s },
+      { "solve_3ch_ms_median", so }, { "cg_iterations_R", iterations },
+      { "assembly_over_spmv", a / s }, { "solve_over_spmv", so / s } });
+    if (o.Edit)
+      results.back()["edit"] = BenchEdit(g, runs);
+  }
+  if (!o.JsonPath.empty() && !WriteText(o.JsonPath, results.dump(2) + "\n", error))
+    throw translucency::Error(error);
+  return 0;
+}
+
+} // namespace
+
+Command AddBenchCommand(CLI::App& app)
+{
+  // One subcommand, two benches: the plain one and --linear-solvers, which
+  // share --mesh, --tets, --runs and --json (with their own defaults).
+  auto linear = std::make_shared<LinearSolverBenchOptions>();
+  auto plain = std::make_shared<BenchOptions>();
+  auto tets = std::make_shared<std::vector<double>>();
+  auto runs = std::make_shared<int>(0);
+  auto solvers = std::make_shared<std::vector<std::string>>();
+  CLI::App* c = app.add_subcommand("bench", "Median assembly and solve times at several mesh sizes."
+    "\n\nusage: translucency bench [options]\n   or: translucency bench --linear-solvers [N1,N2,...] [options]");
+  c->add_option("--mesh", linear->MeshPath, "surface to tetrahedralize")
+    ->type_name("FILE")
+    ->capture_default_str();
+  AddNumberList(c, "--tets", *tets, "target sizes (default 100000,1000000; with\n--linear-solvers 100000,500000,1000000)", "N1,N2,...");
+  AddNumber(c, "--runs", *runs, "repetitions per measurement (default 7; with\n--linear-solvers 5)", "N",
+    [](double n) { return n >= 1; }, "--runs must be >= 1")
+    ->default_str("");
+  c->add_option("--json", linear->JsonPath, "machine-readable results")->type_name("FILE");
+  CLI::Option* edit = c->add_flag("--edit", plain->Edit,
+    "also time a plane cut (+ topology + assembly) and a paint\n"
+    "stroke on ~1 % of the tets (+ incremental row update)");
+  const std::string group = "Linear solvers (bench --linear-solvers)";
+  CLI::Option* linearSolvers =
+    c->add_option("--linear-solvers", *solvers,
+       "every linear solver of this build (or the named ones of\n" +
+         WrapNames(translucency::GetLinearSolverNames()) +
+         ")\non the bunny, marble, one directional light: set-up, cold solve\n"
+         "and warm solve (10-degree light rotation) to 1 % relative\n"
+         "L2 error of the boundary fluence, SpMV-equivalents, the\n"
+         "SpMV bandwidth bound, cut -> new fluence (multigrid-agg)")
+      ->type_name("[N1,N2,...]")
+      ->expected(0, 1)
+      ->delimiter(',')
+      ->group(group);
+  CLI::Option* plot = c->add_option("--plot", linear->PlotPath,
+                        "error of the boundary fluence vs solve time per solver\n"
+                        "(writes FILE.csv, plotted by scripts/plot_linear_solvers.py)")
+                        ->type_name("FILE.png")
+                        ->group(group);
+  CLI::Option* ranks = AddNumber(c, "--hypre-ranks", linear->HypreRanks,
+    "also run hypre-amg on N MPI ranks through mpiexec and\n"
+    "translucency-hypre-mpi (0 or 1: skip)",
+    "N")->group(group);
+  CLI::Option* noCut =
+    c->add_flag_callback("--no-cut", [linear]() { linear->DoCut = false; },
+       "skip the cut -> new fluence figure")
+      ->group(group);
+  edit->excludes(linearSolvers);
+  for (CLI::Option* only : { plot, ranks, noCut })
+    only->needs(linearSolvers);
+  return { c, [=]() {
+            if (linearSolvers->count() > 0)
+            {
+              for (const std::string& name : *solvers)
+                if (!name.empty())
+                  linear->Names.push_back(name);
+              if (!tets->empty())
+                linear->Tets = *tets;
+              if (*runs > 0)
+                linear->Runs = *runs;
+              return BenchLinearSolvers(*linear);
+            }
+            plain->MeshPath = linear->MeshPath;
+            plain->JsonPath = linear->JsonPath;
+            plain->Tets = tets->empty() ? std::vector<double>{ 100000, 1000000 } : *tets;
+            if (*runs > 0)
+              plain->Runs = *runs;
+            return Bench(*plain);
+          } };
+}
+
+} // namespace translucency_app

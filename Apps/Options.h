@@ -1,0 +1,106 @@
+/**
+ * @file Options.h
+ * @brief How the `translucency` commands declare their options (CLI11): a
+ * command is a subcommand of the one CLI::App plus the function that runs it;
+ * number and choice options are declared with their check in one call; the
+ * option groups several commands share (scene, picture, solver) are declared
+ * by one function each. The help text is generated from these declarations.
+ *
+ * Checks that fail throw UsageError with a one-line message naming the
+ * option (exit code 2), so the message is the same whether the check is a
+ * validator (run while parsing) or a check across options after parsing.
+ */
+#pragma once
+
+#include "Utilities.h"
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace translucency_app
+{
+struct RadianceImageOptions;
+struct SceneOptions;
+
+/// One command: its subcommand of the CLI::App and what runs it (exit code)
+/// once the command line is parsed.
+struct Command
+{
+  CLI::App* App = nullptr;
+  std::function<int()> Run;
+};
+
+/// The commands (one file each: RenderCommand.cxx, CompareCommand.cxx,
+/// BenchCommand.cxx, RadiosityCommand.cxx, AcquireCommand.cxx).
+Command AddRenderCommand(CLI::App& app);
+Command AddCompareCommand(CLI::App& app);
+Command AddBenchCommand(CLI::App& app);
+Command AddRadiosityCommand(CLI::App& app);
+Command AddAcquireCommand(CLI::App& app);
+
+/// A validator: the value is one finite number (else ParseNumbers' message
+/// naming `option`) and, if `valid` is given, valid(x) holds (else UsageError(failure)).
+CLI::Validator NumberCheck(const std::string& option, std::function<bool(double)> valid = nullptr,
+  const std::string& failure = std::string());
+
+/// A validator: the value is one of `choices` (else UsageError
+/// "<option>: 'x' is not a, b or c").
+CLI::Validator OneOf(const std::string& option, const std::vector<std::string>& choices);
+
+/// "a, b or c".
+std::string JoinOr(const std::vector<std::string>& names);
+
+/// `names` joined by ", " in lines of at most `width` characters (for help text).
+std::string WrapNames(const std::vector<std::string>& names, size_t width = 60);
+
+/// Shortest round-trip text of a default value (1e-6, not 1e-06 or 0.000001).
+std::string DefaultText(double value);
+
+/// A one-number option into `target` (double or an integer type: the text is
+/// read as a double, so 1e6 is a valid count), its current value shown as the
+/// default, checked by NumberCheck(name, valid, failure).
+template <class T>
+CLI::Option* AddNumber(CLI::App* app, const std::string& name, T& target, const std::string& help,
+  const std::string& typeName, std::function<bool(double)> valid = nullptr,
+  const std::string& failure = std::string())
+{
+  T* value = &target;
+  return app
+    ->add_option_function<std::string>(
+      name,
+      [value, name](const std::string& text) {
+        *value = static_cast<T>(ParseNumbers(text, name).at(0));
+      },
+      help)
+    ->type_name(typeName)
+    ->default_str(DefaultText(static_cast<double>(target)))
+    ->check(NumberCheck(name, std::move(valid), failure));
+}
+
+/// A comma-separated list of numbers into `target`, with `count` numbers if
+/// count > 0 (else UsageError(failure)).
+CLI::Option* AddNumberList(CLI::App* app, const std::string& name, std::vector<double>& target,
+  const std::string& help, const std::string& typeName, size_t count = 0,
+  const std::string& failure = std::string());
+
+/// The scene options of render and compare (group "Scene options"): --mesh,
+/// --target-tets, --max-tet-volume, --quality, --material, --material-ids,
+/// --light, --no-shadows, --uniform-samples, --paint, --cut-plane, --cut-stroke.
+void AddSceneOptions(CLI::App* command, SceneOptions& scene);
+
+/// The picture options of render and compare (group "Picture options"):
+/// --view, --up, --size, --exposure.
+void AddImageOptions(CLI::App* command, RadianceImageOptions& image);
+
+/// The solver options of render and compare with the same meaning and
+/// default: --grid-spacing (grid) and --photons (montecarlo).
+void AddGridAndPhotonOptions(CLI::App* command, double& gridSpacing, long long& photons);
+
+/// A validator: the value (or each of a comma-separated list) names a
+/// diffusion solver of translucency::GetDiffusionSolverNames(), any case.
+CLI::Validator DiffusionSolverCheck(const std::string& option);
+
+} // namespace translucency_app

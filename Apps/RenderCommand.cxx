@@ -1,0 +1,250 @@
+// `translucency render`: a surface (or tet mesh) -> tet mesh -> material ->
+// lights -> diffusion solve -> radiance -> files, pictures and a report.
+
+#include "Options.h"
+#include "PipelineRender.h"
+#include "Scene.h"
+
+#include "DiffusionSolverFactory.h"
+#include "Error.h"
+#include "LinearSolver.h"
+#include "OpticalProperties.h"
+#include "Strings.h"
+
+#include "vtkOutgoingRadiance.h"
+#include "vtkSolveDiffusion.h"
+
+#include <vtkNew.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLPolyDataWriter.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+#include "vtk_nlohmannjson.h"
+#include VTK_NLOHMANN_JSON(json.hpp)
+
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace translucency_app
+{
+namespace
+{
+using json = nlohmann::json;
+
+struct RenderOptions
+{
+  SceneOptions Scene;
+  RadianceImageOptions Image;
+  std::string SolverName = "divergence";
+  std::string LinearSolver;
+  std::string OutputPrefix, PngPath, SlicePath, JsonPath;
+  double RelTol = 1e-6;
+  int MaxIter = 2000;
+  bool NSquaredLaw = false;
+  double GridSpacing = 0.0;
+  long long Photons = 1000000;
+  bool ListMaterials = false;
+};
+
+void ListMaterials()
+{
+  for (const auto& p : translucency::GetMaterialPresets())
+  {
+    std::cout << std::left << std::setw(12) << p.Name << " sigma_s' = (" << p.ReducedScattering[0]
+              << ", " << p.ReducedScattering[1] << ", " << p.ReducedScattering[2]
+              << ") 1/mm, mu_a = (" << p.Absorption[0] << ", " << p.Absorption[1] << ", "
+              << p.Absorption[2] << ") 1/mm, eta = " << p.RefractiveIndex << "\n";
+  }
+}
+
+int Render(RenderOptions& o)
+{
+  if (o.ListMaterials)
+  {
+    ListMaterials();
+    return 0;
+  }
+  SceneOptions& scene = o.Scene;
+  scene.Finish("render");
+  const std::string &solverName = o.SolverName, &linearSolver = o.LinearSolver;
+  const std::string &outputPrefix = o.OutputPrefix, &pngPath = o.PngPath,
+                    &slicePath = o.SlicePath, &jsonPath = o.JsonPath;
+  const RadianceImageOptions& image = o.Image;
+
+  std::vector<Stage> stages;
+  std::string error;
+  MessageCollector messages;
+  double topologyMs = 0.0;
+  EditStats edits;
+  vtkSmartPointer<vtkUnstructuredGrid> lit = BuildLitMesh(scene, stages, topologyMs, &edits);
+
+  // 5. Solve.
+  vtkNew<vtkSolveDiffusion> solve;
+  messages.Watch(solve);
+  if (!solve->SetSolverByName(solverName.c_str()))
+    throw UsageError(messages.Last());
+  solve->SetInputData(lit);
+  solve->SetRelTol(o.RelTol);
+  solve->SetMaxIter(o.MaxIter);
+  solve->SetLinearSolver(linearSolver.c_str());
+  solve->SetGridSpacing(o.GridSpacing);
+  solve->SetNumberOfPhotons(o.Photons);
+  solve->Update();
+  if (!messages.Errors.empty())
+    throw translucency::Error(messages.Last());
+  // The topology is built once, by the first filter that needs it.
+  stages.push_back({ "topology", topologyMs + solve->GetTopologyTime() });
+  stages.push_back({ "assembly", solve->GetAssemblyTime() });
+  stages.push_back({ "solve", solve->GetSolveTime() });
+  vtkUnstructuredGrid* solved = solve->GetOutput();
+
+  // 6. Radiance.
+  auto start = Clock::now();
+  vtkNew<vtkOutgoingRadiance> radiance;
+  messages.Watch(radiance);
+  radiance->SetInputData(solved);
+  radiance->SetNSquaredLaw(o.NSquaredLaw);
+  radiance->Update();
+  if (!messages.Errors.empty())
+    throw translucency::Error(messages.Last());
+  vtkPolyData* outSurface = radiance->GetOutput();
+  stages.push_back({ "radiance", MillisecondsSince(start) });
+
+  // 7. Outputs.
+  if (!outputPrefix.empty())
+  {
+    start = Clock::now();
+    EnsureParentDirectory(outputPrefix + ".vtu");
+    vtkNew<vtkXMLUnstructuredGridWriter> gridWriter;
+    vtkNew<vtkXMLPolyDataWriter> surfaceWriter;
+    if (!WriteAtomically(gridWriter, solved, outputPrefix + ".vtu", error) ||
+      !WriteAtomically(surfaceWriter, outSurface, outputPrefix + ".vtp", error))
+      throw translucency::Error(error);
+    stages.push_back({ "write", MillisecondsSince(start) });
+  }
+  if (!pngPath.empty() || !slicePath.empty())
+  {
+    start = Clock::now();
+    if (!pngPath.empty())
+    {
+      EnsureParentDirectory(pngPath);
+      if (!WriteRadiancePNG(outSurface, image, pngPath, error))
+        throw translucency::Error(error);
+    }
+    if (!slicePath.empty())
+    {
+      EnsureParentDirectory(slicePath);
+      if (!WriteFluenceSlicePNG(solved, image, slicePath, error))
+        throw translucency::Error(error);
+    }
+    stages.push_back({ "render", MillisecondsSince(start) });
+  }
+
+  // 8. Report.
+  const vtkIdType numPoints = solved->GetNumberOfPoints();
+  const vtkIdType numTets = solved->GetNumberOfCells();
+  const vtkIdType numBoundary = outSurface->GetNumberOfPoints();
+  std::cout << "mesh: " << numPoints << " points, " << numTets << " tets, " << numBoundary
+            << " boundary points\n";
+  std::cout << "solver: " << solve->GetSolverName() << " (" << solve->GetNumberOfUnknowns()
+            << " unknowns per channel, linear solver " << solve->GetLinearSolverUsed() << ")\n";
+  static const char* channel[3] = { "R", "G", "B" };
+  for (int c = 0; c < 3; ++c)
+  {
+    std::cout << "  channel " << channel[c] << ": " << solve->GetNumberOfIterations(c)
+              << " iterations, relative residual " << std::scientific << std::setprecision(2)
+              << solve->GetFinalResidual(c) << std::defaultfloat
+              << (solve->GetConverged(c) ? "" : " (NOT converged)") << "\n";
+  }
+  PrintStages(stages);
+
+  if (!jsonPath.empty())
+  {
+    json j;
+    j["mesh"] = scene.MeshPath;
+    j["points"] = numPoints;
+    j["tets"] = numTets;
+    j["boundary_points"] = numBoundary;
+    j["solver"] = solve->GetSolverName();
+    j["linear_solver"] = solve->GetLinearSolverUsed();
+    j["unknowns"] = solve->GetNumberOfUnknowns();
+    j["nonzeros"] = solve->GetNumberOfNonZeros();
+    if (edits.Cut)
+    {
+      j["cut"] = { { "tets_kept", edits.KeptTets }, { "vertices_moved", edits.MovedVertices },
+        { "blocked", edits.BlockedVertices }, { "ms", edits.CutMs } };
+    }
+    if (edits.Painted)
+    {
+      j["paint"] = { { "tets_touched", edits.PaintedTets }, { "ms", edits.PaintMs } };
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      j["channels"][channel[c]] = { { "iterations", solve->GetNumberOfIterations(c) },
+        { "relative_residual", solve->GetFinalResidual(c) },
+        { "converged", solve->GetConverged(c) } };
+    }
+    double total = 0.0;
+    for (const Stage& s : stages)
+    {
+      j["times_ms"][s.Name] = s.Milliseconds;
+      total += s.Milliseconds;
+    }
+    j["times_ms"]["total"] = total;
+    EnsureParentDirectory(jsonPath);
+    if (!WriteText(jsonPath, j.dump(2) + "\n", error))
+      throw translucency::Error(error);
+  }
+  return 0;
+}
+
+} // namespace
+
+Command AddRenderCommand(CLI::App& app)
+{
+  auto o = std::make_shared<RenderOptions>();
+  CLI::App* c = app.add_subcommand("render",
+    "Tetrahedralize a surface (or read a tet mesh), assign a material,\n"
+    "light it, solve the diffusion equation, write the results."
+    "\n\nusage: translucency render --mesh FILE [scene options] [options]");
+  AddSceneOptions(c, o->Scene);
+  c->add_option("--solver", o->SolverName,
+     WrapNames(translucency::GetDiffusionSolverNames()))
+    ->type_name("NAME")
+    ->capture_default_str()
+    ->check(DiffusionSolverCheck("--solver"));
+  c->add_option("--linear-solver", o->LinearSolver,
+     "linear solver (default: the solver's own); divergence/fem:\n" +
+       WrapNames(translucency::GetLinearSolverNames()) +
+       "\n(the first is the default); quadgraph/grid: bicgstab\n(default), relaxation")
+    ->type_name("NAME");
+  AddGridAndPhotonOptions(c, o->GridSpacing, o->Photons);
+  AddNumber(c, "--rel-tol", o->RelTol, "relative residual of iterative solvers", "T",
+    [](double t) { return t > 0 && t < 1; }, "--rel-tol must be in (0, 1)");
+  AddNumber(c, "--max-iter", o->MaxIter, "iteration limit", "N", [](double n) { return n >= 1; },
+    "--max-iter must be >= 1");
+  c->add_flag("--n-squared-law", o->NSquaredLaw,
+    "divide the radiance by eta^2 (energy-conserving read-out;\n"
+    "TransCut eq. 3 as printed omits it)");
+  c->add_option("--output", o->OutputPrefix,
+     "write PREFIX.vtu (tet mesh, Fluence, coefficients) and\n"
+     "PREFIX.vtp (surface, Radiance, Irradiance, Fluence)")
+    ->type_name("PREFIX");
+  c->add_option("--png", o->PngPath,
+     "render the tone-mapped radiance (needs X,\ne.g. run under xvfb-run -a)")
+    ->type_name("FILE");
+  c->add_option("--slice-png", o->SlicePath,
+     "render a fluence slice through the centre with a colour bar")
+    ->type_name("FILE");
+  AddImageOptions(c, o->Image);
+  c->add_option("--json", o->JsonPath, "machine-readable statistics")->type_name("FILE");
+  c->add_flag("--list-materials", o->ListMaterials, "print the measured presets and exit");
+  return { c, [o]() { return Render(*o); } };
+}
+
+} // namespace translucency_app

@@ -1,0 +1,244 @@
+#include "Scene.h"
+#include "JsonInputs.h"
+#include "MeshIO.h"
+
+#include "Error.h"
+
+#include "vtkAssignScatteringCoefficients.h"
+#include "vtkPaintScatteringCoefficients.h"
+#include "vtkStrokeCut.h"
+#include "vtkSurfaceIrradiance.h"
+#include "vtkTetrahedralizeSurface.h"
+
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkNew.h>
+#include <vtkPlane.h>
+#include <vtkPolyData.h>
+#include <vtkUnstructuredGrid.h>
+
+#include <algorithm>
+#include <sstream>
+
+namespace translucency_app
+{
+
+Light ParseLight(const std::string& spec)
+{
+  Light light;
+  std::vector<std::string> parts;
+  std::stringstream ss(spec);
+  std::string part;
+  while (std::getline(ss, part, ':'))
+  {
+    parts.push_back(part);
+  }
+  if (parts.empty())
+  {
+    throw UsageError("empty --light");
+  }
+  light.Type = parts[0];
+  if (light.Type == "uniform")
+  {
+    if (parts.size() > 2)
+    {
+      throw UsageError("--light uniform[:E] takes at most one value: '" + spec + "'");
+    }
+    if (parts.size() == 2)
+    {
+      light.Power = ParseNumbers(parts[1], "--light " + spec).at(0);
+    }
+  }
+  else if (light.Type == "directional" || light.Type == "point")
+  {
+    if (parts.size() < 2 || parts.size() > 3)
+    {
+      throw UsageError("--light " + light.Type + " needs x,y,z[:power]: '" + spec + "'");
+    }
+    std::vector<double> v = ParseNumbers(parts[1], "--light " + spec);
+    if (v.size() != 3)
+    {
+      throw UsageError("--light " + spec + ": expected three comma-separated numbers");
+    }
+    std::copy(v.begin(), v.end(), light.Values);
+    if (parts.size() == 3)
+    {
+      light.Power = ParseNumbers(parts[2], "--light " + spec).at(0);
+    }
+    if (light.Type == "directional" && v[0] == 0 && v[1] == 0 && v[2] == 0)
+    {
+      throw UsageError("--light " + spec + ": the direction is zero");
+    }
+  }
+  else
+  {
+    throw UsageError("unknown light type '" + light.Type + "' (directional, point or uniform)");
+  }
+  if (!(light.Power >= 0))
+  {
+    throw UsageError("--light " + spec + ": the power must be >= 0");
+  }
+  return light;
+}
+
+void SceneOptions::Finish(const std::string& command)
+{
+  if (!this->MaterialIds.empty() && this->Material.empty())
+  {
+    throw UsageError("--material-ids needs --material FILE.json (a material table)");
+  }
+  if (this->MeshPath.empty())
+  {
+    throw UsageError(command + " needs --mesh FILE");
+  }
+  if (!this->CutPlane.empty() && !this->CutStroke.empty())
+  {
+    throw UsageError("give --cut-plane or --cut-stroke, not both");
+  }
+  if (this->Lights.empty())
+  {
+    this->Lights.push_back(ParseLight("directional:0,-1,-1:1"));
+    this->Lights.push_back(ParseLight("uniform:0.1"));
+  }
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
+  std::vector<Stage>& stages, double& topologyMs, EditStats* edits)
+{
+  std::string error;
+  MessageCollector messages;
+
+  // 1. Read.
+  auto start = Clock::now();
+  vtkSmartPointer<vtkPolyData> surface;
+  vtkSmartPointer<vtkUnstructuredGrid> grid;
+  if (!ReadMesh(options.MeshPath, surface, grid, error))
+  {
+    throw translucency::Error(error);
+  }
+  stages.push_back({ "read", MillisecondsSince(start) });
+
+  // 2. Tetrahedralize.
+  if (surface)
+  {
+    start = Clock::now();
+    vtkNew<vtkTetrahedralizeSurface> tetra;
+    messages.Watch(tetra);
+    tetra->SetInputData(surface);
+    tetra->SetQuality(options.Quality);
+    if (options.MaxTetVolume > 0 && !options.TargetGiven)
+      tetra->SetMaxTetVolume(options.MaxTetVolume);
+    else
+      tetra->SetTargetNumberOfTets(options.TargetTets);
+    tetra->Update();
+    if (!messages.Errors.empty())
+      throw translucency::Error("'" + options.MeshPath + "': " + messages.Last());
+    grid = tetra->GetOutput();
+    stages.push_back({ "tetrahedralize", MillisecondsSince(start) });
+  }
+
+  // 3. Coefficients.
+  start = Clock::now();
+  vtkSmartPointer<vtkUnstructuredGrid> withMaterial = grid;
+  const bool hasArrays = grid->GetCellData()->GetArray("AbsorptionCoefficient") &&
+    grid->GetCellData()->GetArray("ReducedScatteringCoefficient") &&
+    grid->GetCellData()->GetArray("RefractiveIndex");
+  if (!options.Material.empty() || !hasArrays)
+  {
+    vtkNew<vtkAssignScatteringCoefficients> assign;
+    messages.Watch(assign);
+    ApplyMaterial(assign, options.Material.empty() ? std::string("marble") : options.Material,
+      options.MaterialIds);
+    assign->SetInputData(grid);
+    assign->Update();
+    if (!messages.Errors.empty())
+      throw translucency::Error(messages.Last());
+    withMaterial = assign->GetOutput();
+  }
+  stages.push_back({ "coefficients", MillisecondsSince(start) });
+  EditStats localEdits;
+  EditStats& stats = edits ? *edits : localEdits;
+
+  // 4. Paint (--paint), on the whole mesh, before any cut.
+  if (!options.Paint.empty())
+  {
+    start = Clock::now();
+    vtkNew<vtkPaintScatteringCoefficients> paint;
+    messages.Watch(paint);
+    ApplyPaintFile(paint, options.Paint);
+    paint->SetInputData(withMaterial);
+    paint->Update();
+    if (!messages.Errors.empty())
+      throw translucency::Error("--paint '" + options.Paint + "': " + messages.Last());
+    withMaterial = paint->GetOutput();
+    vtkDataArray* weight = withMaterial->GetCellData()->GetArray("PaintWeight");
+    stats.Painted = true;
+    stats.PaintedTets = 0;
+    for (vtkIdType c = 0; weight && c < weight->GetNumberOfTuples(); ++c)
+      stats.PaintedTets += weight->GetComponent(c, 0) > 1e-6 ? 1 : 0;
+    stats.PaintMs = MillisecondsSince(start);
+    stages.push_back({ "paint", stats.PaintMs });
+  }
+
+  // 5. Cut (--cut-plane or --cut-stroke).
+  if (!options.CutPlane.empty() || !options.CutStroke.empty())
+  {
+    start = Clock::now();
+    vtkNew<vtkStrokeCut> cut;
+    messages.Watch(cut);
+    vtkNew<vtkPlane> plane;
+    std::string what;
+    if (!options.CutPlane.empty())
+    {
+      plane->SetOrigin(options.CutPlane[0], options.CutPlane[1], options.CutPlane[2]);
+      plane->SetNormal(options.CutPlane[3], options.CutPlane[4], options.CutPlane[5]);
+      cut->SetCutFunction(plane);
+      what = "--cut-plane";
+    }
+    else
+    {
+      ApplyStrokeFile(cut, options.CutStroke);
+      what = "--cut-stroke '" + options.CutStroke + "'";
+    }
+    cut->SetInputData(withMaterial);
+    cut->Update();
+    if (!messages.Errors.empty())
+      throw translucency::Error(what + ": " + messages.Last());
+    if (cut->GetOutput()->GetNumberOfCells() == 0)
+      throw translucency::Error(what + " removes the whole mesh");
+    withMaterial = cut->GetOutput();
+    stats.Cut = true;
+    stats.KeptTets = withMaterial->GetNumberOfCells();
+    stats.MovedVertices = cut->GetNumberOfMovedVertices();
+    stats.BlockedVertices = cut->GetNumberOfBlockedVertices();
+    stats.CutMs = MillisecondsSince(start);
+    stages.push_back({ "cut", stats.CutMs });
+  }
+
+  // 6. Irradiance.
+  start = Clock::now();
+  vtkNew<vtkSurfaceIrradiance> irradiance;
+  messages.Watch(irradiance);
+  irradiance->SetInputData(withMaterial);
+  irradiance->SetShadows(options.Shadows);
+  irradiance->SetUniformLightSamples(options.UniformSamples);
+  double uniformE = 0.0;
+  for (const Light& l : options.Lights)
+  {
+    if (l.Type == "directional")
+      irradiance->AddDirectionalLight(l.Values[0], l.Values[1], l.Values[2], l.Power);
+    else if (l.Type == "point")
+      irradiance->AddPointLight(l.Values[0], l.Values[1], l.Values[2], l.Power);
+    else
+      uniformE += l.Power;
+  }
+  irradiance->SetUniformLightIrradiance(uniformE);
+  irradiance->Update();
+  if (!messages.Errors.empty())
+    throw translucency::Error(messages.Last());
+  topologyMs = irradiance->GetTopologyTime();
+  stages.push_back({ "irradiance", MillisecondsSince(start) - topologyMs });
+  return irradiance->GetOutput();
+}
+
+} // namespace translucency_app

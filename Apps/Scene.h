@@ -1,0 +1,74 @@
+/**
+ * @file Scene.h
+ * @brief The scene shared by `render` and `compare`: what the scene options
+ * describe (mesh, tetrahedralisation, material, edits, lights) and the
+ * pipeline that turns it into a lit tet mesh.
+ */
+#pragma once
+
+#include "Utilities.h"
+
+#include <vtkSmartPointer.h>
+
+#include <string>
+#include <vector>
+
+class vtkUnstructuredGrid;
+
+namespace translucency_app
+{
+
+/// A light from --light: type directional|point|uniform, 3 values, power.
+struct Light
+{
+  std::string Type;
+  double Values[3] = { 0, 0, 0 };
+  double Power = 1.0;
+};
+/// Parse a --light SPEC; a UsageError naming --light and the fault otherwise.
+Light ParseLight(const std::string& spec);
+
+/// What the scene options (Options.h, AddSceneOptions) set.
+struct SceneOptions
+{
+  std::string MeshPath;
+  std::string Material; ///< preset name or JSON file; empty: keep .vtu arrays or marble
+  std::string MaterialIds; ///< cell array of material ids (with a JSON material table)
+  long long TargetTets = 200000;
+  bool TargetGiven = false;
+  double MaxTetVolume = 0.0; ///< mm^3; 0: use TargetTets
+  double Quality = 1.414;
+  std::vector<Light> Lights;
+  bool Shadows = true;
+  int UniformSamples = 32;
+  std::vector<double> CutPlane; ///< --cut-plane: origin (mm) and normal; empty: no plane cut
+  std::string CutStroke;        ///< --cut-stroke: JSON stroke file; empty: no stroke cut
+  std::string Paint;            ///< --paint: JSON paint file; empty: no painting
+
+  /// Checks across options and the default lights, once all options are
+  /// read (`command` names the command in messages).
+  void Finish(const std::string& command);
+};
+
+/// Statistics of the optional --paint and --cut-* edits (for the JSON report).
+struct EditStats
+{
+  bool Painted = false;
+  long long PaintedTets = 0; ///< tets with PaintWeight > 1e-6
+  double PaintMs = 0.0;
+  bool Cut = false;
+  long long KeptTets = 0;
+  long long MovedVertices = 0;
+  long long BlockedVertices = 0;
+  double CutMs = 0.0;
+};
+
+/// Read, tetrahedralize, assign coefficients, paint (--paint), cut
+/// (--cut-plane / --cut-stroke) and compute the irradiance, in that order.
+/// Appends timing rows; `topologyMs` gets the topology time spent on the way;
+/// `edits` (optional) gets the paint and cut statistics.
+/// Throws translucency::Error with a message naming the problem (and the file).
+vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
+  std::vector<Stage>& stages, double& topologyMs, EditStats* edits = nullptr);
+
+} // namespace translucency_app
