@@ -9,6 +9,7 @@
 
 #include "DiffusionSolver.h"
 #include "DiffusionSystem.h"
+#include "LinearSolver.h"
 #include "RayCaster.h"
 #include "TetLocator.h"
 
@@ -309,6 +310,8 @@ private:
   int Threads(long long work) const;
 
   std::vector<GridLevel> Levels_;
+  /// The linear solver of the last Solve (registry, non-symmetric entries).
+  std::unique_ptr<ChannelLinearSolver> Linear_;
   TetLocator Locator_;
   RayCaster Caster_;
   const TetMesh* Mesh_ = nullptr;

@@ -126,14 +126,15 @@ bool RelaxationSolver::GaussSeidel(const DiffusionSystem& system,
   bool aborted = false;
   while (res > RelTol_ && it < MaxIter_)
   {
-    for (const std::vector<int>& colour : *Colours_)
+    for (int k = 0; k < NumberOfColours_; ++k)
     {
+      const std::vector<int>& colour = Colours_[k];
       const int* ids = colour.data();
       const int count = static_cast<int>(colour.size());
 #pragma omp parallel for schedule(static) num_threads(threads)
-      for (int k = 0; k < count; ++k)
+      for (int m = 0; m < count; ++m)
       {
-        const int i = ids[k];
+        const int i = ids[m];
         double sum = rhs[i], diagonal = 1.0;
         for (int e = offsets[i]; e < offsets[i + 1]; ++e)
         {

@@ -27,9 +27,13 @@ class RelaxationSolver : public ChannelLinearSolver
 public:
   std::string GetName() const override { return "relaxation"; }
 
-  /// Rows of each colour, swept in this order; null (default) = Jacobi.
-  /// The vector must live while Solve runs.
-  void SetColours(const std::vector<std::vector<int>>* colours) { Colours_ = colours; }
+  /// The rows of each of `count` colours, swept in this order; null
+  /// (default) = Jacobi. The array must live while Solve runs.
+  void SetColours(const std::vector<int>* colours, int count)
+  {
+    Colours_ = colours;
+    NumberOfColours_ = colours ? count : 0;
+  }
 
 protected:
   bool Iterate(const DiffusionSystem& system, int c, Eigen::VectorXd& x, double bNorm,
@@ -41,7 +45,8 @@ private:
   bool GaussSeidel(const DiffusionSystem& system, int c, Eigen::VectorXd& x, double bNorm,
     LinearSolveStats& stats, const std::function<bool(int)>& progress, int threads) const;
 
-  const std::vector<std::vector<int>>* Colours_ = nullptr;
+  const std::vector<int>* Colours_ = nullptr;
+  int NumberOfColours_ = 0;
 };
 
 } // namespace translucency
