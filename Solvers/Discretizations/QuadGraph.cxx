@@ -1,6 +1,7 @@
 #include "QuadGraph.h"
 
 #include "Error.h"
+#include "BiCGSTAB.h"
 #include "Fresnel.h"
 #include "TetMesh.h"
 #include "Timer.h"
@@ -38,6 +39,10 @@ const char* const ChannelNames[NumberOfChannels] = { "R", "G", "B" };
 
 /// Local face k of a tet is the face opposite its vertex k.
 const int FaceVertices[4][3] = { { 1, 2, 3 }, { 0, 2, 3 }, { 0, 1, 3 }, { 0, 1, 2 } };
+
+/// BiCGSTAB restarts every this many iterations (it converges in about half
+/// the iterations on these systems than without restarts).
+constexpr int BiCGSTABRestart = 250;
 
 /// Coarsening stops at this many cells (multi-level initialisation).
 constexpr int CoarsestCells = 1000;
@@ -1009,6 +1014,10 @@ bool QuadGraphSolver::SolveChannel(const DiffusionSystem& system,
   linear.SetRelTol(RelTol_);
   linear.SetMaxIter(MaxIter_);
   linear.SetNumberOfThreads(system.NumberOfUnknowns >= ParallelRows ? numThreads : 1);
+  if (auto* bicgstab = dynamic_cast<BiCGSTABSolver*>(&linear))
+  {
+    bicgstab->SetRestartInterval(BiCGSTABRestart);
+  }
   linear.SetProgressCallback([this](double fraction) { return ReportProgress(fraction); });
   LinearSolveStats stats;
   const bool done =

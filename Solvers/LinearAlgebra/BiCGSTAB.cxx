@@ -170,6 +170,10 @@ bool BiCGSTABSolver::Iterate(const DiffusionSystem& system,
         aborted = true;
         break;
       }
+      if (RestartInterval_ > 0 && it % RestartInterval_ == 0)
+      {
+        break; // restart from the true residual with a new shadow residual
+      }
     }
     if (aborted)
     {
