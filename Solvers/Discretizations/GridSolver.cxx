@@ -2,7 +2,7 @@
 
 #include "Error.h"
 #include "Fresnel.h"
-#include "Strings.h"
+#include "Relaxation.h"
 #include "TetMesh.h"
 #include "TriangleGeometry.h"
 #include "Timer.h"
@@ -50,8 +50,6 @@ constexpr double BytesPerUnknown = 400.0;
 constexpr int CoarsenAbove = 4096;
 constexpr int MinCoarseUnknowns = 512;
 constexpr int MaxCoarseLevels = 6;
-/// Rows per block of the deterministic residual sums.
-constexpr int ResidualBlock = 4096;
 
 /**
  * While alive, lets OpenMP give parallel regions fewer threads than asked
@@ -296,236 +294,6 @@ void EvaluateLevel(const GridLevel& level, const double x[3], double out[NumberO
       return;
     }
   }
-}
-
-/// Sum of f(i) over [0, n) in fixed blocks: the same rounding for any
-/// number of threads.
-template<typename F>
-double BlockedSum(int n, int threads, F f)
-{
-  const int numBlocks = (n + ResidualBlock - 1) / ResidualBlock;
-  std::vector<double> partial(static_cast<size_t>(numBlocks), 0.0);
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (int block = 0; block < numBlocks; ++block)
-  {
-    double sum = 0.0;
-    const int end = std::min(n, (block + 1) * ResidualBlock);
-    for (int i = block * ResidualBlock; i < end; ++i)
-    {
-      sum += f(i);
-    }
-    partial[block] = sum;
-  }
-  double total = 0.0;
-  for (double v : partial)
-  {
-    total += v;
-  }
-  return total;
-}
-
-/// ||b - M x|| with a summation order independent of the thread count.
-double ResidualNorm(const DiffusionSystem& system, int c, const Eigen::VectorXd& x, int threads)
-{
-  const int* offsets = system.RowOffsets.data();
-  const int* columns = system.ColumnIndices.data();
-  const double* values = system.Values[c].data();
-  const double* b = system.RightHandSide[c].data();
-  const double* xv = x.data();
-  return std::sqrt(BlockedSum(system.NumberOfUnknowns,
-    threads,
-    [&](int i)
-    {
-      double r = b[i];
-      for (int k = offsets[i]; k < offsets[i + 1]; ++k)
-      {
-        r -= values[k] * xv[columns[k]];
-      }
-      return r * r;
-    }));
-}
-
-/**
- * For each fixed block of ResidualBlock rows, f(begin, end) returns K partial
- * sums; the blocks run in parallel, their sums are added in block order, so
- * the totals do not depend on the number of threads.
- */
-template<int K, typename F>
-std::array<double, K> BlockLoop(int n, int threads, F f)
-{
-  const int numBlocks = (n + ResidualBlock - 1) / ResidualBlock;
-  std::vector<std::array<double, K>> partial(static_cast<size_t>(numBlocks));
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (int block = 0; block < numBlocks; ++block)
-  {
-    partial[block] = f(block * ResidualBlock, std::min(n, (block + 1) * ResidualBlock));
-  }
-  std::array<double, K> total{};
-  for (const std::array<double, K>& p : partial)
-  {
-    for (int k = 0; k < K; ++k)
-    {
-      total[k] += p[k];
-    }
-  }
-  return total;
-}
-
-/**
- * BiCGSTAB (van der Vorst 1992) with the diagonal (Jacobi) preconditioner
- * applied on the right, as Eigen's BiCGSTAB, with the vector updates fused
- * into the products (5 parallel loops per iteration) and deterministic
- * block sums, so that the result does not depend on the number of threads.
- * Restarts (r0 = r) when r0 . r underflows, and from the true residual when
- * the recurrence claims a convergence that the true residual does not
- * confirm. Returns the iterations; relative is the final ||b - M x|| / ||b||.
- */
-int BiCGSTAB(const DiffusionSystem& system,
-  int c,
-  Eigen::VectorXd& x,
-  double tol,
-  int maxIter,
-  int threads,
-  double& relative)
-{
-  const int n = system.NumberOfUnknowns;
-  const int* offsets = system.RowOffsets.data();
-  const int* columns = system.ColumnIndices.data();
-  const double* values = system.Values[c].data();
-  const double* b = system.RightHandSide[c].data();
-  std::vector<double> inverseDiagonal(static_cast<size_t>(n));
-  std::vector<double> r(n), r0(n), p(n), v(n), y(n), z(n), sv(n), t(n);
-  double* xv = x.data();
-  const auto bNorm2 = BlockLoop<1>(n,
-    threads,
-    [&](int begin, int end)
-    {
-      double sum = 0.0;
-      for (int i = begin; i < end; ++i)
-      {
-        double d = 0.0;
-        for (int k = offsets[i]; k < offsets[i + 1]; ++k)
-        {
-          d = columns[k] == i ? values[k] : d;
-        }
-        inverseDiagonal[i] = d != 0.0 ? 1.0 / d : 1.0;
-        sum += b[i] * b[i];
-      }
-      return std::array<double, 1>{ sum };
-    })[0];
-  auto row = [&](int i, const double* u)
-  {
-    double sum = 0.0;
-    for (int k = offsets[i]; k < offsets[i + 1]; ++k)
-    {
-      sum += values[k] * u[columns[k]];
-    }
-    return sum;
-  };
-  // r = r0 = b - M x; returns ||r||^2.
-  auto restart = [&]()
-  {
-    return BlockLoop<1>(n,
-      threads,
-      [&](int begin, int end)
-      {
-        double sum = 0.0;
-        for (int i = begin; i < end; ++i)
-        {
-          r[i] = r0[i] = b[i] - row(i, xv);
-          sum += r[i] * r[i];
-        }
-        return std::array<double, 1>{ sum };
-      })[0];
-  };
-  const double tol2 = tol * tol * bNorm2;
-  const double eps2 =
-    std::numeric_limits<double>::epsilon() * std::numeric_limits<double>::epsilon();
-  int it = 0;
-  double rNorm2 = restart();
-  while (rNorm2 > tol2 && it < maxIter && std::isfinite(rNorm2))
-  {
-    double r0Norm2 = rNorm2, rho = rNorm2, rhoOld = 1.0, alpha = 1.0, w = 1.0;
-    std::fill(v.begin(), v.end(), 0.0);
-    std::fill(p.begin(), p.end(), 0.0);
-    while (rNorm2 > tol2 && it < maxIter)
-    {
-      if (std::abs(rho) < eps2 * r0Norm2)
-      {
-        rho = r0Norm2 = restart(); // r0 . r underflowed: new shadow residual
-      }
-      const double beta = (rho / rhoOld) * (alpha / w);
-#pragma omp parallel for schedule(static) num_threads(threads)
-      for (int i = 0; i < n; ++i)
-      {
-        p[i] = r[i] + beta * (p[i] - w * v[i]);
-        y[i] = inverseDiagonal[i] * p[i];
-      }
-      // v = M y and r0 . v.
-      const double r0v = BlockLoop<1>(n,
-        threads,
-        [&](int begin, int end)
-        {
-          double sum = 0.0;
-          for (int i = begin; i < end; ++i)
-          {
-            v[i] = row(i, y.data());
-            sum += r0[i] * v[i];
-          }
-          return std::array<double, 1>{ sum };
-        })[0];
-      alpha = rho / r0v;
-#pragma omp parallel for schedule(static) num_threads(threads)
-      for (int i = 0; i < n; ++i)
-      {
-        sv[i] = r[i] - alpha * v[i];
-        z[i] = inverseDiagonal[i] * sv[i];
-      }
-      // t = M z, t . t and t . s.
-      const auto tDots = BlockLoop<2>(n,
-        threads,
-        [&](int begin, int end)
-        {
-          std::array<double, 2> sum{};
-          for (int i = begin; i < end; ++i)
-          {
-            t[i] = row(i, z.data());
-            sum[0] += t[i] * t[i];
-            sum[1] += t[i] * sv[i];
-          }
-          return sum;
-        });
-      w = tDots[0] > 0.0 ? tDots[1] / tDots[0] : 0.0;
-      // x += alpha y + w z, r = s - w t, ||r||^2 and the next r0 . r.
-      const auto rDots = BlockLoop<2>(n,
-        threads,
-        [&](int begin, int end)
-        {
-          std::array<double, 2> sum{};
-          for (int i = begin; i < end; ++i)
-          {
-            xv[i] += alpha * y[i] + w * z[i];
-            r[i] = sv[i] - w * t[i];
-            sum[0] += r[i] * r[i];
-            sum[1] += r0[i] * r[i];
-          }
-          return sum;
-        });
-      rNorm2 = rDots[0];
-      rhoOld = rho;
-      rho = rDots[1];
-      ++it;
-      if (!std::isfinite(rNorm2))
-      {
-        break;
-      }
-    }
-    // The recurrence residual drifts from the true one: check it, and go on
-    // from the true residual if it is not small enough.
-    rNorm2 = restart();
-  }
-  relative = std::sqrt(rNorm2 / bNorm2);
-  return it;
 }
 
 } // namespace
@@ -1458,82 +1226,28 @@ bool GridSolver::SolveLevel(GridLevel& level,
   double progressStart,
   double progressEnd)
 {
-  std::string solverName = LinearSolver_.empty() ? std::string("bicgstab") : LinearSolver_;
-  solverName = ToLower(solverName);
-  const int n = level.NumberOfUnknowns();
-  const DiffusionSystem& system = level.System;
-  const int threads = Threads(n);
+  // The solver of the registry (LinearSolver.h) chosen in SolveImpl; the
+  // relaxation sweeps the level's colours (Gauss-Seidel).
+  ChannelLinearSolver& linear = *Linear_;
+  linear.SetRelTol(RelTol_);
+  linear.SetMaxIter(MaxIter_);
+  linear.SetNumberOfThreads(Threads(level.NumberOfUnknowns()));
+  if (auto* relaxation = dynamic_cast<RelaxationSolver*>(&linear))
+  {
+    relaxation->SetColours(level.Colours, static_cast<int>(std::size(level.Colours)));
+  }
+  linear.SetProgressCallback([this, progressStart, progressEnd](double fraction)
+    { return ReportProgress(progressStart + (progressEnd - progressStart) * fraction); });
+  std::array<LinearSolveStats, NumberOfChannels> stats;
+  const bool done = linear.Solve(level.System, level.Solution, guess, stats);
+  linear.SetProgressCallback(nullptr);
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    if (!ReportProgress(progressStart + (progressEnd - progressStart) * c / NumberOfChannels))
-    {
-      return false;
-    }
-    Eigen::VectorXd& x = level.Solution[c];
-    if (!guess || x.size() != n)
-    {
-      x.setZero(n);
-    }
-    const Eigen::VectorXd& b = system.RightHandSide[c];
-    const double bNorm = b.norm();
-    iterations[c] = 0;
-    if (bNorm == 0.0)
-    {
-      x.setZero(n); // M is non-singular
-      residual[c] = 0.0;
-      converged[c] = true;
-      continue;
-    }
-    if (solverName == "bicgstab")
-    {
-      iterations[c] = BiCGSTAB(system, c, x, RelTol_, MaxIter_, threads, residual[c]);
-      converged[c] = residual[c] <= RelTol_;
-    }
-    else
-    {
-      // Red-black Gauss-Seidel: the update of polygrid Sec. 5.2
-      // phi_i <- (b_i - sum_j m_ij phi_j) / m_ii on one parity, then the other.
-      const int* offsets = system.RowOffsets.data();
-      const int* columns = system.ColumnIndices.data();
-      const double* values = system.Values[c].data();
-      const double* rhs = b.data();
-      double* xv = x.data();
-      double res = ResidualNorm(system, c, x, threads) / bNorm;
-      int it = 0;
-      while (res > RelTol_ && it < MaxIter_)
-      {
-        for (const std::vector<int>& colour : level.Colours)
-        {
-          const int* ids = colour.data();
-          const int count = static_cast<int>(colour.size());
-#pragma omp parallel for schedule(static) num_threads(threads)
-          for (int k = 0; k < count; ++k)
-          {
-            const int i = ids[k];
-            double sum = rhs[i], diagonal = 1.0;
-            for (int e = offsets[i]; e < offsets[i + 1]; ++e)
-            {
-              if (columns[e] == i)
-              {
-                diagonal = values[e];
-              }
-              else
-              {
-                sum -= values[e] * xv[columns[e]];
-              }
-            }
-            xv[i] = sum / diagonal;
-          }
-        }
-        ++it;
-        res = ResidualNorm(system, c, x, threads) / bNorm;
-      }
-      iterations[c] = it;
-      residual[c] = res;
-      converged[c] = res <= RelTol_;
-    }
+    iterations[c] = stats[c].Iterations;
+    residual[c] = stats[c].RelativeResidual;
+    converged[c] = stats[c].Converged;
   }
-  return true;
+  return done;
 }
 
 bool GridSolver::SolveImpl(const DiffusionProblem& problem,
@@ -1543,13 +1257,10 @@ bool GridSolver::SolveImpl(const DiffusionProblem& problem,
 {
   const DynamicThreads dynamic(NumberOfThreads_ <= 0);
   CheckProblem(problem, nodeIrradiance == nullptr);
-  std::string solverName = LinearSolver_.empty() ? std::string("bicgstab") : LinearSolver_;
-  solverName = ToLower(solverName);
-  if (solverName != "bicgstab" && solverName != "relaxation")
-  {
-    throw Error(
-      "grid: unknown linear solver '" + LinearSolver_ + "' (known: bicgstab, relaxation)");
-  }
+  // The linear solver from the registry's non-symmetric entries (throws
+  // "grid: unknown linear solver 'x' (known: bicgstab, relaxation)").
+  Linear_ = CreateNonSymmetricLinearSolver(LinearSolver_, "grid");
+  const std::string solverName = Linear_->GetName();
   const TetMesh& mesh = *problem.Mesh;
   const OpticalProperties& material = *problem.Material;
   report = SolverReport();
@@ -1753,7 +1464,7 @@ bool GridSolver::SolveImpl(const DiffusionProblem& problem,
     bytes += level.MemoryBytes();
   }
   // Work vectors of the linear solver (BiCGSTAB: 9; relaxation: none).
-  if (solverName == "bicgstab")
+  if (GetLinearSolverRegistry().Get(solverName).Properties.Krylov == "bicgstab")
   {
     bytes += 9 * static_cast<std::size_t>(fine.NumberOfUnknowns()) * sizeof(double);
   }

@@ -10,6 +10,7 @@
 
 #include "DiffusionSolver.h"
 #include "DiffusionSystem.h"
+#include "LinearSolver.h"
 #include "RayCaster.h"
 #include "TetLocator.h"
 
@@ -336,6 +337,8 @@ private:
   int Threads(long long work) const;
 
   std::vector<GridLevel> Levels_;
+  /// The linear solver of the last Solve (registry, non-symmetric entries).
+  std::unique_ptr<ChannelLinearSolver> Linear_;
   TetLocator Locator_;
   RayCaster Caster_;
   const TetMesh* Mesh_ = nullptr;

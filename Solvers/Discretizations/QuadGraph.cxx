@@ -1,200 +1,31 @@
 #include "QuadGraph.h"
 
+#include "BiCGSTAB.h"
 #include "Error.h"
 #include "Fresnel.h"
 #include "SpatialOrder.h"
-#include "Strings.h"
 #include "TetMesh.h"
-#include "TriangleGeometry.h"
 #include "Timer.h"
+#include "TriangleGeometry.h"
 
 #include <Eigen/Dense>
-#include <Eigen/IterativeLinearSolvers>
 
 #include <omp.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <numeric>
 #include <sstream>
 
-// ---- The channel matrix as a matrix-free operator for Eigen's BiCGSTAB ----
-//
-// Eigen's own sparse product runs on Eigen's global thread count from 20,000
-// nonzeros on, a parallel region per product; this operator runs the product
-// on the solver's threads, and only from ParallelRows unknowns on (small
-// systems and loaded machines pay more for the fork/join than the product
-// costs). Each row sums in CSR order: the result does not depend on threads.
-
 namespace translucency
 {
-namespace
-{
-class QuadGraphOperator;
-}
-}
 
-namespace Eigen
-{
-namespace internal
-{
-template <>
-struct traits<translucency::QuadGraphOperator> : public traits<SparseMatrix<double>>
-{
-};
-}
-}
-
-namespace translucency
-{
 namespace
 {
 
-/// Relaxation sweeps and operator products run on several threads from this
-/// many unknowns on (below, a parallel region costs more than the work).
+/// Relaxation sweeps and BiCGSTAB run on several threads from this many
+/// unknowns on (below, a parallel region costs more than the work).
 constexpr int ParallelRows = 32768;
-
-class QuadGraphOperator : public Eigen::EigenBase<QuadGraphOperator>
-{
-public:
-  using Scalar = double;
-  using RealScalar = double;
-  using StorageIndex = int;
-  enum
-  {
-    ColsAtCompileTime = Eigen::Dynamic,
-    MaxColsAtCompileTime = Eigen::Dynamic,
-    IsRowMajor = false
-  };
-
-  QuadGraphOperator(const DiffusionSystem& system, int channel, int numThreads)
-    : Rows(system.RowOffsets.data())
-    , Columns(system.ColumnIndices.data())
-    , Values(system.Values[channel].data())
-    , Size(system.NumberOfUnknowns)
-    , NumThreads(numThreads)
-    , Parallel(system.NumberOfUnknowns >= ParallelRows && numThreads > 1)
-  {
-  }
-
-  Eigen::Index rows() const { return Size; }
-  Eigen::Index cols() const { return Size; }
-
-  template <typename Rhs>
-  Eigen::Product<QuadGraphOperator, Rhs, Eigen::AliasFreeProduct> operator*(
-    const Eigen::MatrixBase<Rhs>& x) const
-  {
-    return Eigen::Product<QuadGraphOperator, Rhs, Eigen::AliasFreeProduct>(*this, x.derived());
-  }
-
-  /// y += alpha M x.
-  void MultiplyAdd(const double* x, double alpha, double* y) const
-  {
-#pragma omp parallel for schedule(static) num_threads(NumThreads) if (Parallel)
-    for (int i = 0; i < Size; ++i)
-    {
-      double sum = 0.0;
-      for (int k = Rows[i]; k < Rows[i + 1]; ++k)
-      {
-        sum += Values[k] * x[Columns[k]];
-      }
-      y[i] += alpha * sum;
-    }
-  }
-
-  /// The diagonal entries.
-  Eigen::VectorXd Diagonal() const
-  {
-    Eigen::VectorXd d = Eigen::VectorXd::Zero(Size);
-    for (int i = 0; i < Size; ++i)
-    {
-      for (int k = Rows[i]; k < Rows[i + 1]; ++k)
-      {
-        if (Columns[k] == i)
-        {
-          d[i] = Values[k];
-        }
-      }
-    }
-    return d;
-  }
-
-private:
-  const int* Rows;
-  const int* Columns;
-  const double* Values;
-  int Size;
-  int NumThreads;
-  bool Parallel;
-};
-
-/// The diagonal (Jacobi) preconditioner for QuadGraphOperator, as Eigen's
-/// DiagonalPreconditioner (which needs a sparse matrix to read).
-class InverseDiagonal
-{
-public:
-  template <typename MatrixType>
-  InverseDiagonal& analyzePattern(const MatrixType&)
-  {
-    return *this;
-  }
-  InverseDiagonal& factorize(const QuadGraphOperator& op)
-  {
-    Inverse_ = op.Diagonal();
-    Ok_ = true;
-    for (Eigen::Index i = 0; i < Inverse_.size(); ++i)
-    {
-      Ok_ = Ok_ && Inverse_[i] != 0.0 && std::isfinite(Inverse_[i]);
-      Inverse_[i] = Inverse_[i] != 0.0 ? 1.0 / Inverse_[i] : 1.0;
-    }
-    return *this;
-  }
-  InverseDiagonal& compute(const QuadGraphOperator& op) { return factorize(op); }
-  template <typename Rhs>
-  auto solve(const Eigen::MatrixBase<Rhs>& b) const
-  {
-    return Inverse_.cwiseProduct(b.derived());
-  }
-  Eigen::ComputationInfo info() const { return Ok_ ? Eigen::Success : Eigen::NumericalIssue; }
-
-private:
-  Eigen::VectorXd Inverse_;
-  bool Ok_ = false;
-};
-
-} // namespace
-} // namespace translucency
-
-namespace Eigen
-{
-namespace internal
-{
-/// dst += alpha M rhs for QuadGraphOperator (how Eigen evaluates M * x).
-template <typename Rhs>
-struct generic_product_impl<translucency::QuadGraphOperator, Rhs, SparseShape, DenseShape,
-  GemvProduct>
-  : generic_product_impl_base<translucency::QuadGraphOperator, Rhs,
-      generic_product_impl<translucency::QuadGraphOperator, Rhs>>
-{
-  using Scalar = typename Product<translucency::QuadGraphOperator, Rhs>::Scalar;
-
-  template <typename Dest>
-  static void scaleAndAddTo(
-    Dest& dst, const translucency::QuadGraphOperator& lhs, const Rhs& rhs, const Scalar& alpha)
-  {
-    const Ref<const VectorXd> x(rhs);
-    lhs.MultiplyAdd(x.data(), alpha, dst.data());
-  }
-};
-}
-}
-
-namespace translucency
-{
-
-namespace
-{
 
 using Vec3 = Eigen::Vector3d;
 
@@ -203,12 +34,9 @@ const char* const ChannelNames[NumberOfChannels] = { "R", "G", "B" };
 /// Local face k of a tet is the face opposite its vertex k.
 const int FaceVertices[4][3] = { { 1, 2, 3 }, { 0, 2, 3 }, { 0, 1, 3 }, { 0, 1, 2 } };
 
-/// Rows per block of the deterministic reductions (independent of threads).
-constexpr int ReductionBlock = 2048;
-
-/// Iterations of one BiCGSTAB call between two progress reports (the next
-/// call restarts from the current iterate).
-constexpr int BiCGSTABChunk = 250;
+/// BiCGSTAB restarts every this many iterations (it converges in about half
+/// the iterations on these systems than without restarts).
+constexpr int BiCGSTABRestart = 250;
 
 /// Coarsening stops at this many cells (multi-level initialisation).
 constexpr int CoarsestCells = 1000;
@@ -370,17 +198,6 @@ void AssembleLevel(const QuadGraphSolver::Level& level,
   }
 }
 
-/// Relative residual ||b - Mx|| / ||b|| with a summation order fixed by
-/// blocks of rows (the same for any number of threads).
-double BlockNorm(const std::vector<double>& blockSums)
-{
-  double sum = 0.0;
-  for (double s : blockSums)
-  {
-    sum += s;
-  }
-  return std::sqrt(sum);
-}
 
 /// Restrict a level's coefficients to the next coarser level: volume-weighted
 /// means of kappa and mu_a over each group of cells, area-weighted means of A
@@ -1099,109 +916,27 @@ bool QuadGraphSolver::SolveChannel(const DiffusionSystem& system,
   double progressSpan,
   int numThreads) const
 {
-  const int n = system.NumberOfUnknowns;
-  const Eigen::VectorXd& b = system.RightHandSide[channel];
-  iterations = 0;
-  residual = 0.0;
-  converged = true;
-  if (x.size() != n)
+  // The solver of the registry (LinearSolver.h) chosen in Solve: BiCGSTAB
+  // or the relaxation of eq. 8-9 (Jacobi sweeps x <- x + D^-1 (b - M x),
+  // which are eq. 8 for inner rows and eq. 9 for surface rows, with the
+  // 1 - Fdr of eq. 6). x is the guess (zero if it has the wrong size).
+  ChannelLinearSolver& linear = *Linear_;
+  linear.SetRelTol(RelTol_);
+  linear.SetMaxIter(MaxIter_);
+  linear.SetNumberOfThreads(system.NumberOfUnknowns >= ParallelRows ? numThreads : 1);
+  if (auto* bicgstab = dynamic_cast<BiCGSTABSolver*>(&linear))
   {
-    x.setZero(n);
+    bicgstab->SetRestartInterval(BiCGSTABRestart);
   }
-  const double bNorm = b.norm();
-  if (bNorm == 0.0)
-  {
-    x.setZero(n); // the matrix is regular: phi = 0
-    return true;
-  }
-  if (LinearSolver_.empty() || ToLower(LinearSolver_) == "bicgstab")
-  {
-    const QuadGraphOperator matrix(system, channel, numThreads);
-    Eigen::BiCGSTAB<QuadGraphOperator, InverseDiagonal> solver;
-    solver.setTolerance(RelTol_);
-    solver.compute(matrix);
-    if (solver.info() != Eigen::Success)
-    {
-      throw Error("quadgraph: the diagonal preconditioner of channel " +
-        std::string(ChannelNames[channel]) + " could not be built");
-    }
-    // Chunks of iterations with a progress report in between; each call
-    // restarts BiCGSTAB from the current iterate.
-    while (true)
-    {
-      solver.setMaxIterations(std::min(BiCGSTABChunk, MaxIter_ - iterations));
-      const Eigen::VectorXd guess = x;
-      x = solver.solveWithGuess(b, guess);
-      iterations += static_cast<int>(solver.iterations());
-      residual = solver.error();
-      converged = solver.info() == Eigen::Success;
-      if (converged || iterations >= MaxIter_ || solver.iterations() == 0)
-      {
-        break;
-      }
-      if (!ReportProgress(progressBase + progressSpan * iterations / MaxIter_))
-      {
-        return false;
-      }
-    }
-    return true;
-  }
-
-  // Relaxation (paper eq. 8-9): Jacobi sweeps x <- x + D^-1 (b - M x), which
-  // is eq. 8 for inner rows and eq. 9 for surface rows (with the 1 - Fdr of
-  // eq. 6). Rows in fixed blocks: the residual sum has the same order for
-  // any number of threads.
-  const int* rows = system.RowOffsets.data();
-  const int* cols = system.ColumnIndices.data();
-  const double* values = system.Values[channel].data();
-  Eigen::VectorXd inverseDiagonal(n);
-  for (int i = 0; i < n; ++i)
-  {
-    for (int k = rows[i]; k < rows[i + 1]; ++k)
-    {
-      if (cols[k] == i)
-      {
-        inverseDiagonal[i] = 1.0 / values[k];
-      }
-    }
-  }
-  const int numBlocks = (n + ReductionBlock - 1) / ReductionBlock;
-  std::vector<double> blockSums(numBlocks);
-  Eigen::VectorXd next(n);
-  const bool parallel = n >= ParallelRows && numThreads > 1;
-  while (true)
-  {
-#pragma omp parallel for schedule(static) num_threads(numThreads) if (parallel)
-    for (int block = 0; block < numBlocks; ++block)
-    {
-      double sum = 0.0;
-      const int end = std::min(n, (block + 1) * ReductionBlock);
-      for (int i = block * ReductionBlock; i < end; ++i)
-      {
-        double r = b[i];
-        for (int k = rows[i]; k < rows[i + 1]; ++k)
-        {
-          r -= values[k] * x[cols[k]];
-        }
-        next[i] = x[i] + inverseDiagonal[i] * r;
-        sum += r * r;
-      }
-      blockSums[block] = sum;
-    }
-    residual = BlockNorm(blockSums) / bNorm; // of x, before the update
-    converged = residual <= RelTol_;
-    if (converged || iterations >= MaxIter_ || !std::isfinite(residual))
-    {
-      return true;
-    }
-    x.swap(next);
-    ++iterations;
-    if (iterations % 64 == 0 &&
-      !ReportProgress(progressBase + progressSpan * iterations / MaxIter_))
-    {
-      return false;
-    }
-  }
+  linear.SetProgressCallback([this](double fraction) { return ReportProgress(fraction); });
+  LinearSolveStats stats;
+  const bool done =
+    linear.SolveChannel(system, channel, x, true, stats, progressBase, progressSpan);
+  linear.SetProgressCallback(nullptr);
+  iterations = stats.Iterations;
+  residual = stats.RelativeResidual;
+  converged = stats.Converged;
+  return done;
 }
 
 bool QuadGraphSolver::Solve(
@@ -1219,12 +954,10 @@ bool QuadGraphSolver::Solve(
     throw Error("quadgraph: the mesh has no tetrahedra (" + std::to_string(numPoints) +
       " points, 0 tets)");
   }
-  const std::string linearSolver = LinearSolver_.empty() ? "bicgstab" : ToLower(LinearSolver_);
-  if (linearSolver != "bicgstab" && linearSolver != "relaxation")
-  {
-    throw Error("quadgraph: unknown linear solver '" + LinearSolver_ +
-      "' (known: bicgstab, relaxation)");
-  }
+  // The linear solver from the registry's non-symmetric entries (throws
+  // "quadgraph: unknown linear solver 'x' (known: bicgstab, relaxation)").
+  Linear_ = CreateNonSymmetricLinearSolver(LinearSolver_, "quadgraph");
+  const std::string linearSolver = Linear_->GetName();
   if (!(RelTol_ > 0.0) || !std::isfinite(RelTol_))
   {
     std::ostringstream os;

@@ -48,6 +48,7 @@
 
 #include "DiffusionSolver.h"
 #include "DiffusionSystem.h"
+#include "LinearSolver.h"
 
 #include <array>
 #include <string>
@@ -183,6 +184,8 @@ private:
     double progressSpan, int numThreads) const;
 
   Graph Graph_;
+  /// The linear solver of the last Solve (registry, non-symmetric entries).
+  std::unique_ptr<ChannelLinearSolver> Linear_;
   DiffusionSystem System_;
   std::array<Eigen::VectorXd, NumberOfChannels> Solution_;
   /// What the graph was built from (to detect a changed mesh).

@@ -90,27 +90,25 @@ AggregationMultigridSolver::AggregationMultigridSolver()
 
 AggregationMultigridSolver::~AggregationMultigridSolver() = default;
 
-void AggregationMultigridSolver::Setup(
-  const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged)
+void AggregationMultigridSolver::CheckSetup(
+  const DiffusionSystem& system, const TetMesh* mesh) const
 {
   blocked::CheckSystemOnMesh(GetName(), system, mesh);
-  const int n = system.NumberOfUnknowns;
-  const bool rebuild =
-    patternChanged || !Ready_ || Unknowns_ != n || NonZeros_ != system.ColumnIndices.size();
-  Ready_ = false;
-  if (rebuild)
-  {
-    const auto start = Clock::now();
-    BuildHierarchy(system, mesh->GetPoints());
-    HierarchyMs_ = MillisecondsSince(start);
-    ++Builds_;
-  }
+}
+
+void AggregationMultigridSolver::SetupStructure(const DiffusionSystem& system, const TetMesh* mesh)
+{
+  const auto start = Clock::now();
+  BuildHierarchy(system, mesh->GetPoints());
+  HierarchyMs_ = MillisecondsSince(start);
+  ++Builds_;
+}
+
+void AggregationMultigridSolver::SetupValues(const DiffusionSystem& system, const TetMesh*)
+{
   const auto start = Clock::now();
   ComputeValues(system);
   ValuesMs_ = MillisecondsSince(start);
-  Unknowns_ = n;
-  NonZeros_ = system.ColumnIndices.size();
-  Ready_ = true;
   ++Setups_;
 }
 

@@ -47,7 +47,6 @@ public:
   ~AggregationMultigridSolver() override;
 
   std::string GetName() const override { return "multigrid-agg"; }
-  void Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged) override;
   bool Solve(const DiffusionSystem& system, std::array<Eigen::VectorXd, NumberOfChannels>& x,
     bool warmStart, std::array<LinearSolveStats, NumberOfChannels>& stats) override;
   std::size_t GetMemoryBytes() const override;
@@ -92,7 +91,11 @@ public:
   /// hierarchy with more than one level; a one-level hierarchy has no copy).
   bool UsesSinglePrecisionProduct() const;
   /// OpenMP threads of the hierarchy build (0 = OpenMP's default).
-  void SetNumberOfThreads(int n) { Threads_ = n; }
+  void SetNumberOfThreads(int n) override
+  {
+    LinearSolver::SetNumberOfThreads(n);
+    Threads_ = n;
+  }
 
   ///@{
   /// The hierarchy of the last Setup.
@@ -122,6 +125,14 @@ public:
   /// single-precision vectors (r and z are double).
   void ApplyPreconditioner(const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
 
+protected:
+  /// The system must live on `mesh` (the aggregation reads its positions).
+  void CheckSetup(const DiffusionSystem& system, const TetMesh* mesh) const override;
+  /// Builds the aggregation hierarchy (patterns of every level).
+  void SetupStructure(const DiffusionSystem& system, const TetMesh* mesh) override;
+  /// Recomputes the Galerkin values and the smoothers.
+  void SetupValues(const DiffusionSystem& system, const TetMesh* mesh) override;
+
 private:
   /// z = B r (3n values each); returns r.z per channel (deterministic sums).
   std::array<double, NumberOfChannels> Precondition(const double* r, double* z) const;
@@ -139,9 +150,6 @@ private:
   double SingleProductTol_ = 1e-5;
   int CycleIndex_ = 2;
   int Threads_ = 0;
-  int Unknowns_ = -1;
-  std::size_t NonZeros_ = 0;
-  bool Ready_ = false;
   double HierarchyMs_ = 0.0, ValuesMs_ = 0.0;
   int Builds_ = 0, Setups_ = 0;
 };

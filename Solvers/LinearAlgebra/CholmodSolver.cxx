@@ -15,8 +15,6 @@ struct CholmodSolver::Internals
 {
   cholmod_common Common;
   std::array<cholmod_factor*, NumberOfChannels> Factor{};
-  int NumberOfUnknowns = -1;
-  std::size_t NonZeros = 0;
   double FactorNonZeros = 0.0; ///< nnz(L) of the analysis (the same for every channel)
 
   Internals()
@@ -86,17 +84,12 @@ CholmodSolver::CholmodSolver()
 
 CholmodSolver::~CholmodSolver() = default;
 
-void CholmodSolver::Setup(const DiffusionSystem& system, const TetMesh*, bool patternChanged)
+void CholmodSolver::SetupStructure(const DiffusionSystem& system, const TetMesh*)
 {
-  CheckLinearSystem(system, "cholmod");
   Internals& in = *Internals_;
-  const bool analyse = patternChanged || !in.Factor[0] ||
-    in.NumberOfUnknowns != system.NumberOfUnknowns || in.NonZeros != system.ColumnIndices.size();
-  if (analyse)
   {
     // Symbolic analysis once for the shared pattern, copied per channel.
     in.FreeFactors();
-    in.NumberOfUnknowns = -1;
     cholmod_sparse a = Wrap(system, 0);
     in.Factor[0] = cholmod_analyze(&a, &in.Common);
     if (!in.Factor[0])
@@ -112,6 +105,11 @@ void CholmodSolver::Setup(const DiffusionSystem& system, const TetMesh*, bool pa
       in.Factor[c] = cholmod_copy_factor(in.Factor[0], &in.Common);
     }
   }
+}
+
+void CholmodSolver::SetupValues(const DiffusionSystem& system, const TetMesh*)
+{
+  Internals& in = *Internals_;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     cholmod_sparse a = Wrap(system, c);
@@ -133,8 +131,6 @@ void CholmodSolver::Setup(const DiffusionSystem& system, const TetMesh*, bool pa
       throw Error(os.str());
     }
   }
-  in.NumberOfUnknowns = system.NumberOfUnknowns;
-  in.NonZeros = system.ColumnIndices.size();
 }
 
 bool CholmodSolver::Solve(const DiffusionSystem& system,
@@ -143,8 +139,7 @@ bool CholmodSolver::Solve(const DiffusionSystem& system,
 {
   Internals& in = *Internals_;
   CheckLinearSystem(system, "cholmod");
-  if (!in.Factor[0] || in.NumberOfUnknowns != system.NumberOfUnknowns ||
-    in.NonZeros != system.ColumnIndices.size())
+  if (!IsSetUpFor(system) || !in.Factor[0])
   {
     throw Error("cholmod: Solve() called without a Setup() for this system");
   }

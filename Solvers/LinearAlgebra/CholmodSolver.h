@@ -29,13 +29,18 @@ public:
   ~CholmodSolver() override;
 
   std::string GetName() const override { return "cholmod"; }
-  void Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged) override;
   bool Solve(const DiffusionSystem& system, std::array<Eigen::VectorXd, NumberOfChannels>& x,
     bool warmStart, std::array<LinearSolveStats, NumberOfChannels>& stats) override;
   std::size_t GetMemoryBytes() const override;
 
   /// Nonzeros of the Cholesky factor of channel c (0 before Setup()).
   double GetFactorNonZeros(int c) const;
+
+protected:
+  /// Symbolic analysis (ordering, factor pattern) of the shared pattern.
+  void SetupStructure(const DiffusionSystem& system, const TetMesh* mesh) override;
+  /// Numeric factorisation of each channel.
+  void SetupValues(const DiffusionSystem& system, const TetMesh* mesh) override;
 
 private:
   struct Internals;

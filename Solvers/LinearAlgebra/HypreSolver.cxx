@@ -238,11 +238,9 @@ int HypreBoomerAMGPCG::Solve(
 HypreSolver::HypreSolver() = default;
 HypreSolver::~HypreSolver() = default;
 
-void HypreSolver::Setup(const DiffusionSystem& system, const TetMesh*, bool)
+void HypreSolver::SetupValues(const DiffusionSystem& system, const TetMesh*)
 {
-  CheckLinearSystem(system, "hypre-amg");
   const int n = system.NumberOfUnknowns;
-  NumberOfUnknowns_ = -1;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     if (!Channels_[c])
@@ -250,8 +248,6 @@ void HypreSolver::Setup(const DiffusionSystem& system, const TetMesh*, bool)
     Channels_[c]->Setup(0, n, system.RowOffsets.data(), system.ColumnIndices.data(),
       system.Values[c].data());
   }
-  NumberOfUnknowns_ = n;
-  NonZeros_ = system.ColumnIndices.size();
 }
 
 bool HypreSolver::Solve(const DiffusionSystem& system,
@@ -259,7 +255,7 @@ bool HypreSolver::Solve(const DiffusionSystem& system,
   std::array<LinearSolveStats, NumberOfChannels>& stats)
 {
   CheckLinearSystem(system, "hypre-amg");
-  if (NumberOfUnknowns_ != system.NumberOfUnknowns || NonZeros_ != system.ColumnIndices.size())
+  if (!IsSetUpFor(system))
   {
     throw Error("hypre-amg: Solve() called without a Setup() for this system");
   }

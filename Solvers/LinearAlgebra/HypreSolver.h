@@ -93,15 +93,17 @@ public:
   ~HypreSolver() override;
 
   std::string GetName() const override { return "hypre-amg"; }
-  void Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged) override;
   bool Solve(const DiffusionSystem& system, std::array<Eigen::VectorXd, NumberOfChannels>& x,
     bool warmStart, std::array<LinearSolveStats, NumberOfChannels>& stats) override;
   std::size_t GetMemoryBytes() const override;
 
+protected:
+  /// Everything (hypre matrices and BoomerAMG hierarchies): BoomerAMG's
+  /// set-up depends on the values, so there is no structure-only part.
+  void SetupValues(const DiffusionSystem& system, const TetMesh* mesh) override;
+
 private:
   std::array<std::unique_ptr<HypreBoomerAMGPCG>, NumberOfChannels> Channels_;
-  int NumberOfUnknowns_ = -1;
-  std::size_t NonZeros_ = 0;
 };
 
 } // namespace translucency

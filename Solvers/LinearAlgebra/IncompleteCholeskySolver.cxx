@@ -16,9 +16,6 @@ using ICholPreconditioner = Eigen::IncompleteCholesky<double, Eigen::Lower, Eige
 struct IncompleteCholeskySolver::Internals
 {
   std::array<ICholPreconditioner, NumberOfChannels> Factor;
-  bool Analysed = false;
-  int NumberOfUnknowns = -1;
-  std::size_t NonZeros = 0;
 };
 
 IncompleteCholeskySolver::IncompleteCholeskySolver()
@@ -28,26 +25,35 @@ IncompleteCholeskySolver::IncompleteCholeskySolver()
 
 IncompleteCholeskySolver::~IncompleteCholeskySolver() = default;
 
-void IncompleteCholeskySolver::Setup(const DiffusionSystem& system, const TetMesh*, bool patternChanged)
+namespace
 {
-  CheckLinearSystem(system, "cg-ichol");
-  Internals& in = *Internals_;
-  const bool analyse = patternChanged || !in.Analysed ||
-    in.NumberOfUnknowns != system.NumberOfUnknowns || in.NonZeros != system.ColumnIndices.size();
+/// The matrix is symmetric, so its CSR arrays are also its CSC arrays: a
+/// column-major map of them is the same matrix, which is what
+/// IncompleteCholesky reads.
+Eigen::Map<const Eigen::SparseMatrix<double, Eigen::ColMajor, int>> ColumnMajor(
+  const DiffusionSystem& system, int c)
+{
+  return Eigen::Map<const Eigen::SparseMatrix<double, Eigen::ColMajor, int>>(
+    system.NumberOfUnknowns, system.NumberOfUnknowns,
+    static_cast<int>(system.ColumnIndices.size()), system.RowOffsets.data(),
+    system.ColumnIndices.data(), system.Values[c].data());
+}
+} // namespace
+
+void IncompleteCholeskySolver::SetupStructure(const DiffusionSystem& system, const TetMesh*)
+{
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    // The matrix is symmetric, so its CSR arrays are also its CSC arrays:
-    // a column-major map of them is the same matrix, which is what
-    // IncompleteCholesky reads.
-    const Eigen::Map<const Eigen::SparseMatrix<double, Eigen::ColMajor, int>> a(
-      system.NumberOfUnknowns, system.NumberOfUnknowns,
-      static_cast<int>(system.ColumnIndices.size()), system.RowOffsets.data(),
-      system.ColumnIndices.data(), system.Values[c].data());
-    if (analyse)
-    {
-      in.Factor[c].analyzePattern(a);
-    }
-    in.Factor[c].factorize(a);
+    Internals_->Factor[c].analyzePattern(ColumnMajor(system, c));
+  }
+}
+
+void IncompleteCholeskySolver::SetupValues(const DiffusionSystem& system, const TetMesh*)
+{
+  Internals& in = *Internals_;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    in.Factor[c].factorize(ColumnMajor(system, c));
     if (in.Factor[c].info() != Eigen::Success)
     {
       std::ostringstream os;
@@ -56,9 +62,6 @@ void IncompleteCholeskySolver::Setup(const DiffusionSystem& system, const TetMes
       throw Error(os.str());
     }
   }
-  in.Analysed = true;
-  in.NumberOfUnknowns = system.NumberOfUnknowns;
-  in.NonZeros = system.ColumnIndices.size();
 }
 
 bool IncompleteCholeskySolver::Solve(const DiffusionSystem& system,
@@ -67,8 +70,7 @@ bool IncompleteCholeskySolver::Solve(const DiffusionSystem& system,
 {
   Internals& in = *Internals_;
   CheckLinearSystem(system, "cg-ichol");
-  if (!in.Analysed || in.NumberOfUnknowns != system.NumberOfUnknowns ||
-    in.NonZeros != system.ColumnIndices.size())
+  if (!IsSetUpFor(system))
   {
     throw Error("cg-ichol: Solve() called without a Setup() for this system");
   }
@@ -136,7 +138,7 @@ bool IncompleteCholeskySolver::Solve(const DiffusionSystem& system,
 std::size_t IncompleteCholeskySolver::GetMemoryBytes() const
 {
   std::size_t bytes = 0;
-  if (Internals_->Analysed)
+  if (Ready_)
   {
     for (const auto& f : Internals_->Factor)
     {

@@ -27,10 +27,15 @@ public:
   ~IncompleteCholeskySolver() override;
 
   std::string GetName() const override { return "cg-ichol"; }
-  void Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged) override;
   bool Solve(const DiffusionSystem& system, std::array<Eigen::VectorXd, NumberOfChannels>& x,
     bool warmStart, std::array<LinearSolveStats, NumberOfChannels>& stats) override;
   std::size_t GetMemoryBytes() const override;
+
+protected:
+  /// The AMD ordering and pattern of the factor (analyzePattern).
+  void SetupStructure(const DiffusionSystem& system, const TetMesh* mesh) override;
+  /// The numeric factorisation of each channel.
+  void SetupValues(const DiffusionSystem& system, const TetMesh* mesh) override;
 
 private:
   struct Internals;

@@ -7,14 +7,21 @@
  * CHOLMOD, hypre BoomerAMG). Every solver works on the three channels of one
  * DiffusionSystem (shared pattern, one value array per channel).
  *
+ * The non-symmetric discretisations (QuadGraph, grid) pick theirs from the
+ * same registry: BiCGSTAB with the Jacobi preconditioner and the papers'
+ * relaxation sweeps (ChannelLinearSolver, which also solves one channel).
+ *
  * Life cycle: Setup() whenever the matrix changes (the flag says whether the
  * pattern, i.e. the topology, changed too, so a solver can keep symbolic work
  * or the structure of its hierarchy while only values change); Solve() for
  * every new right-hand side (relighting), optionally from the previous x.
+ * Setup() decides once, here, between a rebuild (SetupStructure, then
+ * SetupValues) and a values-only set-up (SetupValues), as PETSc's PCSetUp.
  */
 #pragma once
 
 #include "DiffusionSystem.h"
+#include "Registry.h"
 
 #include <array>
 #include <functional>
@@ -52,8 +59,13 @@ public:
    * vertex graph and positions; matrix-only solvers ignore it; it may be
    * null for those). patternChanged = false promises that only Values changed
    * since the last Setup (same unknowns, same pattern).
+   *
+   * Checks the system (CheckSetup), then rebuilds (SetupStructure and
+   * SetupValues) when the pattern changed, on the first call, after a failed
+   * Setup or when the number of unknowns or nonzeros differs from the last
+   * Setup; otherwise only SetupValues runs.
    */
-  virtual void Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged) = 0;
+  void Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged);
 
   /**
    * Solve the three channels of `system` (the one given to Setup, with its
@@ -75,23 +87,126 @@ public:
   /// Fraction done in [0, 1]; returning false aborts the solve.
   void SetProgressCallback(std::function<bool(double)> callback) { Progress_ = std::move(callback); }
 
+  /// OpenMP threads of the solver's own loops (default 0: OpenMP's default).
+  /// Solvers whose loops run on Eigen's or a library's threads ignore it.
+  virtual void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+  int GetNumberOfThreads() const { return NumberOfThreads_; }
+
   /// Bytes held beyond the system itself (factor, hierarchy, preconditioner).
   virtual std::size_t GetMemoryBytes() const { return 0; }
 
 protected:
   bool ReportProgress(double fraction) const { return !Progress_ || Progress_(fraction); }
 
+  /// Throws translucency::Error unless Setup() can work on `system` (and
+  /// `mesh`). Default: CheckLinearSystem with GetName() as the prefix.
+  virtual void CheckSetup(const DiffusionSystem& system, const TetMesh* mesh) const;
+  /// The pattern-dependent part of Setup (symbolic analysis, hierarchy);
+  /// runs before SetupValues when Setup decided to rebuild. Default: nothing.
+  virtual void SetupStructure(const DiffusionSystem&, const TetMesh*) {}
+  /// The value-dependent part of Setup (numeric factorisation, coarse
+  /// values); runs on every Setup. Default: nothing.
+  virtual void SetupValues(const DiffusionSystem&, const TetMesh*) {}
+  /// Whether the last Setup succeeded for a system of this size.
+  bool IsSetUpFor(const DiffusionSystem& system) const
+  {
+    return Ready_ && Unknowns_ == system.NumberOfUnknowns &&
+      NonZeros_ == system.ColumnIndices.size();
+  }
+
   double RelTol_ = 1e-6;
   int MaxIter_ = 2000;
+  int NumberOfThreads_ = 0;
   std::function<bool(double)> Progress_;
+  ///@{
+  /// State of the last Setup (IsSetUpFor); Ready_ is false until a Setup
+  /// succeeds and again while one runs.
+  bool Ready_ = false;
+  int Unknowns_ = -1;
+  std::size_t NonZeros_ = 0;
+  ///@}
 };
 
-/// The linear solver called `name` (case-insensitive). Throws
-/// translucency::Error naming the known solvers if it is unknown or was not
-/// built (optional libraries).
+/**
+ * A solver that works channel by channel (the non-symmetric entries of the
+ * registry, "bicgstab" and "relaxation"): Solve() runs SolveChannel on the
+ * three channels; the discretisations that interleave channels and levels
+ * (QuadGraph's multi-level initialisation) call SolveChannel directly. No
+ * Setup() is needed: each solve reads the current values.
+ */
+class ChannelLinearSolver : public LinearSolver
+{
+public:
+  bool Solve(const DiffusionSystem& system, std::array<Eigen::VectorXd, NumberOfChannels>& x,
+    bool warmStart, std::array<LinearSolveStats, NumberOfChannels>& stats) override;
+
+  /**
+   * Solve channel c from x (the guess when warmStart and x has the right
+   * size, else zero). A zero right-hand side gives x = 0, converged, 0
+   * iterations. During the iterations the progress callback receives
+   * progressBase + progressSpan * iterations / MaxIter. Returns false if it
+   * aborted.
+   */
+  bool SolveChannel(const DiffusionSystem& system, int c, Eigen::VectorXd& x, bool warmStart,
+    LinearSolveStats& stats, double progressBase = 0.0, double progressSpan = 0.0);
+
+protected:
+  void CheckSetup(const DiffusionSystem&, const TetMesh*) const override {}
+  /// The iterations on channel c from x (b != 0); `progress(iterations)`
+  /// returns false to abort, and then so does Iterate.
+  virtual bool Iterate(const DiffusionSystem& system, int c, Eigen::VectorXd& x, double bNorm,
+    LinearSolveStats& stats, const std::function<bool(int)>& progress) = 0;
+};
+
+/// What the registry says about a linear solver.
+struct LinearSolverTraits
+{
+  /// The Krylov method: "cg", "bicgstab", or "none" (direct, relaxation).
+  std::string Krylov;
+  /// The preconditioner (or the whole method when Krylov is "none"):
+  /// "jacobi", "ichol", "multires", "aggregation", "boomeramg", "direct",
+  /// "relaxation".
+  std::string Preconditioner;
+  /// Needs a symmetric positive definite matrix (the systems of the vertex
+  /// discretisations); false for the solvers of the non-symmetric QuadGraph
+  /// and grid systems, which are ChannelLinearSolver.
+  bool NeedsSymmetricPositiveDefinite = true;
+  /// Setup() needs the mesh the unknowns live on (multiresolution hierarchy).
+  bool NeedsMesh = false;
+  /// The optional library it needs ("" = always built), e.g. "CHOLMOD".
+  std::string Library;
+  /// Whether this build has it (false: optional library not found; the
+  /// entry is listed so that its name gives a specific error).
+  bool Built = true;
+  /// How to get the library when it is not built (for the error message).
+  std::string Remedy;
+};
+
+using LinearSolverRegistry = Registry<LinearSolver, LinearSolverTraits>;
+
+/// Every linear solver this code knows, built or not (Traits::Built), the
+/// default "cg-jacobi" first.
+const LinearSolverRegistry& GetLinearSolverRegistry();
+
+/// The solver of symmetric positive definite systems called `name`
+/// (case-insensitive). Throws translucency::Error naming the known solvers
+/// if it is unknown, not built (optional libraries) or for non-symmetric
+/// systems only.
 std::unique_ptr<LinearSolver> CreateLinearSolver(const std::string& name);
 
-/// Names of the linear solvers this build has, the default first.
+/// Names of the solvers of symmetric positive definite systems this build
+/// has (the vertex discretisations' and radiosity's choice), default first.
 std::vector<std::string> GetLinearSolverNames();
+
+/// Names of the solvers of non-symmetric systems (QuadGraph, grid), the
+/// default "bicgstab" first.
+std::vector<std::string> GetNonSymmetricLinearSolverNames();
+
+/// The solver of non-symmetric systems called `name` (case-insensitive; ""
+/// is "bicgstab"). Throws translucency::Error prefixed with `who` ("grid:")
+/// naming the known ones, e.g. "unknown linear solver 'x' (known: bicgstab,
+/// relaxation)".
+std::unique_ptr<ChannelLinearSolver> CreateNonSymmetricLinearSolver(
+  const std::string& name, const std::string& who);
 
 } // namespace translucency

@@ -1,11 +1,19 @@
+/**
+ * @file LinearSolverFactory.cxx
+ * @brief The linear-solver registry: one entry per name (factory, traits,
+ * help); CreateLinearSolver, GetLinearSolverNames and their non-symmetric
+ * counterparts are views of it.
+ */
 #include "LinearSolver.h"
 
 #include "AggregationMultigrid.h"
+#include "BiCGSTAB.h"
 #include "ConjugateGradient.h"
 #include "Error.h"
 #include "MultiresSolvers.h"
 #include "Strings.h"
 #include "IncompleteCholeskySolver.h"
+#include "Relaxation.h"
 #ifdef TRANSLUCENCY_HAVE_CHOLMOD
 #include "CholmodSolver.h"
 #endif
@@ -28,8 +36,6 @@ class JacobiConjugateGradient : public LinearSolver
 public:
   std::string GetName() const override { return "cg-jacobi"; }
 
-  void Setup(const DiffusionSystem&, const TetMesh*, bool) override {}
-
   bool Solve(const DiffusionSystem& system, std::array<Eigen::VectorXd, NumberOfChannels>& x,
     bool warmStart, std::array<LinearSolveStats, NumberOfChannels>& stats) override
   {
@@ -48,80 +54,145 @@ public:
     return done;
   }
 
+protected:
+  // No set-up: the preconditioner is built per solve; ConjugateGradient
+  // checks the system itself.
+  void CheckSetup(const DiffusionSystem&, const TetMesh*) const override {}
+
 private:
   ConjugateGradient CG_;
 };
 
+/// An entry whose factory makes a T.
+template <typename T>
+LinearSolverRegistry::Entry Make(
+  const std::string& name, LinearSolverTraits traits, const std::string& help)
+{
+  return { name, [] { return std::unique_ptr<LinearSolver>(std::make_unique<T>()); },
+    std::move(traits), help };
+}
+
+/// An entry of an optional library this build lacks: listed (so that its
+/// name gives a specific error), never created.
+LinearSolverRegistry::Entry Missing(
+  const std::string& name, LinearSolverTraits traits, const std::string& help)
+{
+  traits.Built = false;
+  return { name, []() -> std::unique_ptr<LinearSolver> { return nullptr; }, std::move(traits),
+    help };
+}
+
+LinearSolverRegistry MakeRegistry()
+{
+  LinearSolverRegistry r("linear solver");
+  // Symmetric positive definite systems (divergence, FEM, radiosity).
+  r.Add(Make<JacobiConjugateGradient>("cg-jacobi", { "cg", "jacobi" },
+    "CG with the diagonal preconditioner (Eigen), the default"));
+  r.Add(Make<TransCutMultiresSolver>("transcut-multires",
+    { "none", "multires", true, true },
+    "the TransCut multiresolution hierarchy as a solver (TransCut, Sec. 4)"));
+  r.Add(Make<MultigridConjugateGradient>("multigrid-cg", { "cg", "multires", true, true },
+    "CG preconditioned by a V-cycle on the TransCut hierarchy"));
+  r.Add(Make<AggregationMultigridSolver>("multigrid-agg", { "cg", "aggregation", true, true },
+    "CG preconditioned by an aggregation multigrid W-cycle"));
+  r.Add(Make<IncompleteCholeskySolver>("cg-ichol", { "cg", "ichol" },
+    "CG with Eigen's incomplete Cholesky (AMD ordering)"));
+  const LinearSolverTraits cholmod{ "none", "direct", true, false, "CHOLMOD", true,
+    "TRANSLUCENCY_USE_CHOLMOD was off or CMake did not find CHOLMOD: install libsuitesparse-dev" };
+  const std::string cholmodHelp = "sparse Cholesky factorisation (CHOLMOD), a direct solver";
+#ifdef TRANSLUCENCY_HAVE_CHOLMOD
+  r.Add(Make<CholmodSolver>("cholmod", cholmod, cholmodHelp));
+#else
+  r.Add(Missing("cholmod", cholmod, cholmodHelp));
+#endif
+  const LinearSolverTraits hypre{ "cg", "boomeramg", true, false, "hypre", true,
+    "TRANSLUCENCY_USE_HYPRE was off or CMake did not find hypre: install libhypre-dev" };
+  const std::string hypreHelp = "CG preconditioned by hypre's BoomerAMG";
+#ifdef TRANSLUCENCY_HAVE_HYPRE
+  r.Add(Make<HypreSolver>("hypre-amg", hypre, hypreHelp));
+#else
+  r.Add(Missing("hypre-amg", hypre, hypreHelp));
+#endif
+  // Non-symmetric systems (QuadGraph, grid).
+  r.Add(Make<BiCGSTABSolver>("bicgstab", { "bicgstab", "jacobi", false },
+    "BiCGSTAB with the diagonal preconditioner, for non-symmetric systems (default there)"));
+  r.Add(Make<RelaxationSolver>("relaxation", { "none", "relaxation", false },
+    "the papers' relaxation sweeps (QuadGraph, eq. 8-9; Polygrid, Sec. 5.2)"));
+  return r;
+}
+
+/// Names of the built entries with the given symmetry requirement.
+std::vector<std::string> NamesOf(bool symmetric)
+{
+  std::vector<std::string> names;
+  for (const auto& entry : GetLinearSolverRegistry().GetEntries())
+  {
+    if (entry.Properties.Built && entry.Properties.NeedsSymmetricPositiveDefinite == symmetric)
+    {
+      names.push_back(entry.Name);
+    }
+  }
+  return names;
+}
+
 } // namespace
+
+const LinearSolverRegistry& GetLinearSolverRegistry()
+{
+  static const LinearSolverRegistry registry = MakeRegistry();
+  return registry;
+}
 
 std::vector<std::string> GetLinearSolverNames()
 {
-  std::vector<std::string> names{ "cg-jacobi" };
-  names.push_back("transcut-multires");
-  names.push_back("multigrid-cg");
-  names.push_back("multigrid-agg");
-  // Peers (optional libraries only when this build found them).
-  names.push_back("cg-ichol");
-#ifdef TRANSLUCENCY_HAVE_CHOLMOD
-  names.push_back("cholmod");
-#endif
-#ifdef TRANSLUCENCY_HAVE_HYPRE
-  names.push_back("hypre-amg");
-#endif
-  return names;
+  return NamesOf(true);
+}
+
+std::vector<std::string> GetNonSymmetricLinearSolverNames()
+{
+  return NamesOf(false);
 }
 
 std::unique_ptr<LinearSolver> CreateLinearSolver(const std::string& name)
 {
-  const std::string key = ToLower(name);
-  if (key == "cg-jacobi")
+  const auto* entry = GetLinearSolverRegistry().Find(name);
+  const std::string known = JoinNames(GetLinearSolverNames());
+  if (entry && !entry->Properties.Built)
   {
-    return std::make_unique<JacobiConjugateGradient>();
-  }
-  if (key == "transcut-multires")
-  {
-    return std::make_unique<TransCutMultiresSolver>();
-  }
-  if (key == "multigrid-cg")
-  {
-    return std::make_unique<MultigridConjugateGradient>();
-  }
-  if (key == "multigrid-agg")
-  {
-    return std::make_unique<AggregationMultigridSolver>();
-  }
-  if (key == "cg-ichol")
-  {
-    return std::make_unique<IncompleteCholeskySolver>();
-  }
-#ifdef TRANSLUCENCY_HAVE_CHOLMOD
-  if (key == "cholmod")
-  {
-    return std::make_unique<CholmodSolver>();
-  }
-#endif
-#ifdef TRANSLUCENCY_HAVE_HYPRE
-  if (key == "hypre-amg")
-  {
-    return std::make_unique<HypreSolver>();
-  }
-#endif
-  std::string known;
-  for (const auto& n : GetLinearSolverNames())
-  {
-    known += (known.empty() ? "" : ", ") + n;
-  }
-  if (key == "cholmod" || key == "hypre-amg")
-  {
-    throw Error("linear solver '" + name + "' is not in this build (" +
-      (key == "cholmod"
-          ? std::string("TRANSLUCENCY_USE_CHOLMOD was off or CMake did not find CHOLMOD: "
-                        "install libsuitesparse-dev")
-          : std::string("TRANSLUCENCY_USE_HYPRE was off or CMake did not find hypre: "
-                        "install libhypre-dev")) +
+    throw Error("linear solver '" + name + "' is not in this build (" + entry->Properties.Remedy +
       " and reconfigure; this build has: " + known + ")");
   }
-  throw Error("unknown linear solver '" + name + "' (this build has: " + known + ")");
+  if (!entry || !entry->Properties.NeedsSymmetricPositiveDefinite)
+  {
+    throw Error("unknown linear solver '" + name + "' (this build has: " + known + ")");
+  }
+  return entry->Create();
+}
+
+std::unique_ptr<ChannelLinearSolver> CreateNonSymmetricLinearSolver(
+  const std::string& name, const std::string& who)
+{
+  const std::string key = name.empty() ? std::string("bicgstab") : name;
+  const auto* entry = GetLinearSolverRegistry().Find(key);
+  const std::string known = JoinNames(GetNonSymmetricLinearSolverNames());
+  if (entry && entry->Properties.Built && entry->Properties.NeedsSymmetricPositiveDefinite)
+  {
+    throw Error(who + ": linear solver '" + name + "' needs a symmetric positive definite matrix; " +
+      "this system is not symmetric (known: " + known + ")");
+  }
+  if (!entry || !entry->Properties.Built)
+  {
+    throw Error(who + ": unknown linear solver '" + name + "' (known: " + known + ")");
+  }
+  std::unique_ptr<LinearSolver> solver = entry->Create();
+  auto* channel = dynamic_cast<ChannelLinearSolver*>(solver.get());
+  if (!channel)
+  {
+    throw Error("linear solver '" + entry->Name +
+      "': an entry for non-symmetric systems must be a ChannelLinearSolver");
+  }
+  solver.release();
+  return std::unique_ptr<ChannelLinearSolver>(channel);
 }
 
 } // namespace translucency

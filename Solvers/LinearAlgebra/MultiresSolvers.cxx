@@ -81,36 +81,33 @@ void InverseDiagonal(const CsrPattern& p, const std::array<const double*, NC>& v
 // ---------------------------------------------------------------------------
 // Common set-up
 
-void MultiresLinearSolverBase::Setup(
-  const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged)
+void MultiresLinearSolverBase::CheckSetup(const DiffusionSystem& system, const TetMesh* mesh) const
 {
   blocked::CheckSystemOnMesh(GetName(), system, mesh);
-  const int n = system.NumberOfUnknowns;
-  const bool rebuild =
-    patternChanged || !Ready_ || Unknowns_ != n || NonZeros_ != system.ColumnIndices.size();
-  Ready_ = false;
-  if (rebuild)
+}
+
+void MultiresLinearSolverBase::SetupStructure(const DiffusionSystem& system, const TetMesh* mesh)
+{
+  const auto start = Clock::now();
+  if (system.RowOffsets == mesh->GetRowOffsets() &&
+    system.ColumnIndices == mesh->GetColumnIndices())
   {
-    const auto start = Clock::now();
-    if (system.RowOffsets == mesh->GetRowOffsets() &&
-      system.ColumnIndices == mesh->GetColumnIndices())
-    {
-      Hierarchy_.Build(*mesh);
-    }
-    else
-    {
-      Hierarchy_.Build(mesh->GetPoints(), system.RowOffsets, system.ColumnIndices);
-    }
-    BuildOperators();
-    HierarchyMs_ = MillisecondsSince(start);
-    ++Builds_;
+    Hierarchy_.Build(*mesh);
   }
+  else
+  {
+    Hierarchy_.Build(mesh->GetPoints(), system.RowOffsets, system.ColumnIndices);
+  }
+  BuildOperators();
+  HierarchyMs_ = MillisecondsSince(start);
+  ++Builds_;
+}
+
+void MultiresLinearSolverBase::SetupValues(const DiffusionSystem& system, const TetMesh*)
+{
   const auto start = Clock::now();
   ComputeValues(system);
   ValuesMs_ = MillisecondsSince(start);
-  Unknowns_ = n;
-  NonZeros_ = system.ColumnIndices.size();
-  Ready_ = true;
   ++Setups_;
 }
 

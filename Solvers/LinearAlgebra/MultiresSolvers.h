@@ -44,8 +44,9 @@ public:
   void SetCoarsestSize(int n) { Hierarchy_.SetCoarsestSize(n); }
   ///@}
   /// OpenMP threads of the hierarchy build (0 = default, 1 = serial).
-  void SetNumberOfThreads(int n)
+  void SetNumberOfThreads(int n) override
   {
+    LinearSolver::SetNumberOfThreads(n);
     Threads_ = n;
     Hierarchy_.SetNumberOfThreads(n);
   }
@@ -60,12 +61,16 @@ public:
   /// How many times Setup ran (builds and values-only set-ups).
   int GetNumberOfSetups() const { return Setups_; }
 
-  void Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged) override;
-
   /// Non-zeros of the coarse operator of level l >= 1 divided by those of level 0.
   double GetOperatorComplexity() const;
 
 protected:
+  /// The system must live on `mesh` (its vertex graph and positions).
+  void CheckSetup(const DiffusionSystem& system, const TetMesh* mesh) const override;
+  /// Builds the hierarchy and the coarse operators' patterns.
+  void SetupStructure(const DiffusionSystem& system, const TetMesh* mesh) override;
+  /// Recomputes the coarse values.
+  void SetupValues(const DiffusionSystem& system, const TetMesh* mesh) override;
   /// Build the coarse operators' patterns (after a hierarchy build).
   virtual void BuildOperators() = 0;
   /// Recompute coarse values from the system's current values.
@@ -76,9 +81,6 @@ protected:
   MultiresHierarchy Hierarchy_;
   std::vector<CoarseOperator> Operators_; ///< level l -> l + 1
   int Threads_ = 0;
-  int Unknowns_ = -1;
-  std::size_t NonZeros_ = 0;
-  bool Ready_ = false;
   double HierarchyMs_ = 0.0, ValuesMs_ = 0.0;
   int Builds_ = 0;
   int Setups_ = 0;

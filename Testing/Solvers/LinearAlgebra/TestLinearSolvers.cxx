@@ -5,6 +5,7 @@
 // eq. 10-14, DiscreteDivergence::Assemble) of random jittered box meshes with
 // heterogeneous random materials.
 
+#include "AggregationMultigrid.h"
 #include "DiscreteDivergence.h"
 #include "Error.h"
 #include "LightSources.h"
@@ -329,6 +330,107 @@ TEST(LinearSolverFactory, DirectSolversNeedSetup)
     const std::string message = tt::ErrorMessage([&] { solver->Solve(p.System, x, false, stats); });
     EXPECT_TRUE(tt::Contains(message, "Setup")) << name << ": " << message;
   }
+}
+
+// The registry (LinearSolver.h): every entry names its Krylov method and
+// preconditioner and has a line of help; the two views split it by symmetry.
+TEST(LinearSolverRegistry, TraitsAndViews)
+{
+  const LinearSolverRegistry& registry = GetLinearSolverRegistry();
+  std::vector<std::string> symmetric, nonSymmetric;
+  for (const auto& entry : registry.GetEntries())
+  {
+    EXPECT_FALSE(entry.Properties.Krylov.empty()) << entry.Name;
+    EXPECT_FALSE(entry.Properties.Preconditioner.empty()) << entry.Name;
+    EXPECT_FALSE(entry.Help.empty()) << entry.Name;
+    EXPECT_EQ(entry.Properties.Built, entry.Properties.Library.empty() || Has(entry.Name) ||
+        !entry.Properties.NeedsSymmetricPositiveDefinite)
+      << entry.Name;
+    if (entry.Properties.Built)
+    {
+      EXPECT_EQ(entry.Create()->GetName(), entry.Name);
+      (entry.Properties.NeedsSymmetricPositiveDefinite ? symmetric : nonSymmetric)
+        .push_back(entry.Name);
+    }
+  }
+  EXPECT_EQ(registry.GetNames().front(), "cg-jacobi");
+  EXPECT_EQ(symmetric, GetLinearSolverNames());
+  EXPECT_EQ(nonSymmetric, (std::vector<std::string>{ "bicgstab", "relaxation" }));
+  EXPECT_EQ(nonSymmetric, GetNonSymmetricLinearSolverNames());
+  EXPECT_EQ(registry.Get("bicgstab").Properties.Krylov, "bicgstab");
+  EXPECT_EQ(registry.Get("bicgstab").Properties.Preconditioner, "jacobi");
+  EXPECT_EQ(registry.Get("multigrid-agg").Properties.Krylov, "cg");
+  EXPECT_TRUE(registry.Get("multigrid-agg").Properties.NeedsMesh);
+}
+
+TEST(LinearSolverRegistry, EachFamilyRejectsTheOthersNames)
+{
+  EXPECT_EQ(CreateNonSymmetricLinearSolver("", "grid")->GetName(), "bicgstab");
+  EXPECT_EQ(CreateNonSymmetricLinearSolver("Relaxation", "grid")->GetName(), "relaxation");
+  std::string message =
+    tt::ErrorMessage([] { CreateNonSymmetricLinearSolver("multigrid-cg", "quadgraph"); });
+  EXPECT_TRUE(tt::Contains(message, "quadgraph: linear solver 'multigrid-cg'")) << message;
+  EXPECT_TRUE(tt::Contains(message, "symmetric positive definite")) << message;
+  EXPECT_TRUE(tt::Contains(message, "(known: bicgstab, relaxation)")) << message;
+  message = tt::ErrorMessage([] { CreateNonSymmetricLinearSolver("gmres", "grid"); });
+  EXPECT_EQ(message, "grid: unknown linear solver 'gmres' (known: bicgstab, relaxation)");
+  message = tt::ErrorMessage([] { CreateLinearSolver("bicgstab"); });
+  EXPECT_TRUE(tt::Contains(message, "unknown linear solver 'bicgstab'")) << message;
+  EXPECT_TRUE(tt::Contains(message, "cg-jacobi")) << message;
+}
+
+// BiCGSTAB and the relaxation also solve the symmetric systems; the two
+// give the direct solution (the relaxation of QuadGraph is Jacobi).
+TEST(LinearSolverRegistry, NonSymmetricSolversReachTheDirectSolution)
+{
+  Problem p;
+  MakeProblem(p, 3, 3, 3, 21);
+  const auto reference = ReferenceSolution(p.System, "");
+  for (const std::string name : GetNonSymmetricLinearSolverNames())
+  {
+    auto solver = CreateNonSymmetricLinearSolver(name, "test");
+    solver->SetRelTol(1e-10);
+    solver->SetMaxIter(100000);
+    std::array<Eigen::VectorXd, 3> x;
+    std::array<LinearSolveStats, 3> stats;
+    solver->Setup(p.System, nullptr, true);
+    ASSERT_TRUE(solver->Solve(p.System, x, false, stats)) << name;
+    for (int c = 0; c < 3; ++c)
+    {
+      EXPECT_TRUE(stats[c].Converged) << name << " channel " << c;
+      EXPECT_LE(stats[c].RelativeResidual, 1e-10) << name;
+      EXPECT_LT(RelativeDifference(x[c], reference[c]), 1e-6) << name << " channel " << c;
+    }
+  }
+}
+
+// LinearSolver::Setup decides once for every solver: rebuild on the first
+// call, when the pattern changed or the size differs, else values only.
+TEST(LinearSolverSetup, RebuildsOnlyWhenThePatternOrTheSizeChanged)
+{
+  Problem a, b;
+  MakeProblem(a, 3, 3, 3, 31);
+  MakeProblem(b, 4, 3, 3, 32);
+  AggregationMultigridSolver solver;
+  solver.Setup(a.System, &a.Mesh, false); // first call: rebuild
+  EXPECT_EQ(solver.GetNumberOfHierarchyBuilds(), 1);
+  solver.Setup(a.System, &a.Mesh, false); // values only
+  EXPECT_EQ(solver.GetNumberOfHierarchyBuilds(), 1);
+  solver.Setup(a.System, &a.Mesh, true); // pattern changed
+  EXPECT_EQ(solver.GetNumberOfHierarchyBuilds(), 2);
+  solver.Setup(b.System, &b.Mesh, false); // another size despite the flag
+  EXPECT_EQ(solver.GetNumberOfHierarchyBuilds(), 3);
+  EXPECT_EQ(solver.GetNumberOfSetups(), 4);
+  // A system the checks reject leaves the last set-up as it was.
+  EXPECT_THROW(solver.Setup(b.System, &a.Mesh, false), Error); // the wrong mesh
+  std::array<Eigen::VectorXd, 3> x;
+  std::array<LinearSolveStats, 3> stats;
+  EXPECT_TRUE(solver.Solve(b.System, x, false, stats));
+  solver.Setup(b.System, &b.Mesh, false);
+  EXPECT_EQ(solver.GetNumberOfHierarchyBuilds(), 3);
+  // Solving another system than the set-up one is an error naming Setup.
+  EXPECT_TRUE(tt::Contains(
+    tt::ErrorMessage([&] { solver.Solve(a.System, x, false, stats); }), "Setup"));
 }
 
 } // namespace

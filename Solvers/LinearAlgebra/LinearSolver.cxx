@@ -1,0 +1,77 @@
+#include "LinearSolver.h"
+
+#include "LinearSolverCommon.h"
+
+namespace translucency
+{
+
+// ---- LinearSolver ----
+
+void LinearSolver::CheckSetup(const DiffusionSystem& system, const TetMesh*) const
+{
+  CheckLinearSystem(system, GetName());
+}
+
+void LinearSolver::Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged)
+{
+  CheckSetup(system, mesh);
+  // Rebuild unless the caller promises the same pattern and the last Setup
+  // succeeded for a system of this size (model: PETSc's PCSetUp).
+  const bool rebuild = patternChanged || !IsSetUpFor(system);
+  Ready_ = false; // a Setup that throws leaves the solver not ready
+  if (rebuild)
+  {
+    SetupStructure(system, mesh);
+  }
+  SetupValues(system, mesh);
+  Unknowns_ = system.NumberOfUnknowns;
+  NonZeros_ = system.ColumnIndices.size();
+  Ready_ = true;
+}
+
+// ---- ChannelLinearSolver ----
+
+bool ChannelLinearSolver::Solve(const DiffusionSystem& system,
+  std::array<Eigen::VectorXd, NumberOfChannels>& x,
+  bool warmStart,
+  std::array<LinearSolveStats, NumberOfChannels>& stats)
+{
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    const double base = static_cast<double>(c) / NumberOfChannels;
+    if (!ReportProgress(base) ||
+      !SolveChannel(system, c, x[c], warmStart, stats[c], base, 1.0 / NumberOfChannels))
+    {
+      return false;
+    }
+  }
+  return true;
+}
+
+bool ChannelLinearSolver::SolveChannel(const DiffusionSystem& system,
+  int c,
+  Eigen::VectorXd& x,
+  bool warmStart,
+  LinearSolveStats& stats,
+  double progressBase,
+  double progressSpan)
+{
+  const int n = system.NumberOfUnknowns;
+  stats = LinearSolveStats();
+  if (!warmStart || x.size() != n)
+  {
+    x.setZero(n);
+  }
+  const double bNorm = system.RightHandSide[c].norm();
+  if (bNorm == 0.0)
+  {
+    x.setZero(n); // the matrix is regular: x = 0
+    stats.Converged = true;
+    return true;
+  }
+  const auto progress = [&](int iterations)
+  { return ReportProgress(progressBase + progressSpan * iterations / MaxIter_); };
+  return Iterate(system, c, x, bNorm, stats, progress);
+}
+
+} // namespace translucency
