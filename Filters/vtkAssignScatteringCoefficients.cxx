@@ -1,7 +1,7 @@
 #include "vtkAssignScatteringCoefficients.h"
 
 #include "Error.h"
-#include "OpticalProperties.h"
+#include "MaterialFields.h"
 #include "vtkMaterialTableReader.h"
 #include "vtkTranslucencyMeshConversion.h"
 
@@ -16,7 +16,6 @@
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
 #include <vtkNew.h>
-#include <vtkMath.h>
 #include <vtkObjectFactory.h>
 #include <vtkPerlinNoise.h>
 #include <vtkPolyData.h>
@@ -25,176 +24,80 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
-#include <map>
 #include <sstream>
 
 vtkStandardNewMacro(vtkAssignScatteringCoefficients);
 
 namespace
 {
-using Material = vtkMaterialTableReader::Material;
+using translucency::MaterialCoefficients;
+using translucency::MaterialField;
+using translucency::Point3;
 
-/// One material's coefficients: mu_a, sigma_s' (R, G, B, 1/mm) and eta.
-struct Coefficients
+/// The centroids (mean of the points) of the cells, mm.
+std::vector<Point3> Centroids(vtkUnstructuredGrid* grid)
 {
-  double MuA[3];
-  double SigmaS[3];
-  double Eta;
-};
-
-/// Centroid (mean of the points) of cell i, mm.
-void Centroid(vtkUnstructuredGrid* grid, vtkIdType i, double c[3])
-{
-  vtkIdType npts;
-  const vtkIdType* pts;
-  grid->GetCellPoints(i, npts, pts);
-  c[0] = c[1] = c[2] = 0.0;
-  for (vtkIdType k = 0; k < npts; ++k)
+  const vtkIdType n = grid->GetNumberOfCells();
+  std::vector<Point3> centroids(static_cast<size_t>(n));
+  for (vtkIdType i = 0; i < n; ++i)
   {
-    double x[3];
-    grid->GetPoint(pts[k], x);
-    for (int a = 0; a < 3; ++a)
+    vtkIdType npts;
+    const vtkIdType* pts;
+    grid->GetCellPoints(i, npts, pts);
+    Point3& c = centroids[i];
+    c = { 0.0, 0.0, 0.0 };
+    for (vtkIdType k = 0; k < npts; ++k)
     {
-      c[a] += x[a] / static_cast<double>(npts);
-    }
-  }
-}
-
-Coefficients FromTable(const Material& m)
-{
-  Coefficients c;
-  for (int k = 0; k < 3; ++k)
-  {
-    c.MuA[k] = m.Absorption[k];
-    c.SigmaS[k] = m.ReducedScattering[k];
-  }
-  c.Eta = m.RefractiveIndex;
-  return c;
-}
-
-/// A material reference: a table name, else a table id, else a preset.
-Coefficients ResolveMaterial(const std::string& ref, const std::vector<Material>& table)
-{
-  for (const Material& m : table)
-  {
-    if (!m.Name.empty() && m.Name == ref)
-    {
-      return FromTable(m);
-    }
-  }
-  char* end = nullptr;
-  const long id = std::strtol(ref.c_str(), &end, 10);
-  if (!ref.empty() && end && *end == '\0')
-  {
-    for (const Material& m : table)
-    {
-      if (m.Id == id)
+      double x[3];
+      grid->GetPoint(pts[k], x);
+      for (int a = 0; a < 3; ++a)
       {
-        return FromTable(m);
+        c[a] += x[a] / static_cast<double>(npts);
       }
     }
   }
-  try
-  {
-    const translucency::MaterialPreset& p = translucency::FindMaterialPreset(ref);
-    Coefficients c;
-    for (int k = 0; k < 3; ++k)
-    {
-      c.MuA[k] = p.Absorption[k];
-      c.SigmaS[k] = p.ReducedScattering[k];
-    }
-    c.Eta = p.RefractiveIndex;
-    return c;
-  }
-  catch (const std::exception& e)
-  {
-    throw translucency::Error("unknown material '" + ref + "': " +
-      (table.empty() ? std::string("no material table is set and ")
-                     : std::string("not a name or id of the material table and ")) +
-      e.what());
-  }
-}
-/// The preset or explicit values of UNIFORM mode (throws on an unknown preset).
-Coefficients UniformMaterial(const std::string& materialName, const double muA[3],
-  const double sigmaS[3], double eta)
-{
-  Coefficients m;
-  if (!materialName.empty())
-  {
-    const translucency::MaterialPreset& preset =
-      translucency::FindMaterialPreset(materialName);
-    for (int c = 0; c < 3; ++c)
-    {
-      m.MuA[c] = preset.Absorption[c];
-      m.SigmaS[c] = preset.ReducedScattering[c];
-    }
-    m.Eta = preset.RefractiveIndex;
-  }
-  else
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      m.MuA[c] = muA[c];
-      m.SigmaS[c] = sigmaS[c];
-    }
-    m.Eta = eta;
-  }
-  return m;
+  return centroids;
 }
 
-/// MATERIAL_IDS: one palette entry per table id, and each tet's palette index.
-void AssignByIds(vtkUnstructuredGrid* input, const std::vector<Material>& table,
-  const std::string& arrayName, const std::string& tableFileName,
-  std::vector<Coefficients>& palette, std::vector<int>& which)
+/// The material table of the file (none for ""), in the core's types.
+translucency::MaterialTable ReadTable(const std::string& fileName)
 {
-  vtkDataArray* ids = input->GetCellData()->GetArray(arrayName.c_str());
-  if (!ids)
+  translucency::MaterialTable table;
+  table.FileName = fileName;
+  if (fileName.empty())
   {
-    throw translucency::Error("the material-id mode needs the cell array '" +
-      arrayName + "' of material ids, which the input does not have");
+    return table;
   }
-  std::map<long long, int> slot; // table id -> palette index
-  for (const Material& m : table)
+  for (const vtkMaterialTableReader::Material& m :
+    vtkMaterialTableReader::ReadMaterialTable(fileName))
   {
-    if (m.Id >= 0)
-    {
-      slot[m.Id] = static_cast<int>(palette.size());
-      palette.push_back(FromTable(m));
-    }
+    translucency::MaterialTableEntry e;
+    e.Id = m.Id;
+    e.Name = m.Name;
+    std::copy(m.Absorption, m.Absorption + 3, e.Coefficients.Absorption.begin());
+    std::copy(m.ReducedScattering, m.ReducedScattering + 3,
+      e.Coefficients.ReducedScattering.begin());
+    e.Coefficients.RefractiveIndex = m.RefractiveIndex;
+    table.Entries.push_back(e);
   }
-  const vtkIdType n = input->GetNumberOfCells();
-  for (vtkIdType i = 0; i < n; ++i)
-  {
-    const double v = ids->GetComponent(i, 0);
-    const double r = std::round(v);
-    auto it = (v == r && std::abs(r) < 9e18) ? slot.find(static_cast<long long>(r)) : slot.end();
-    if (it == slot.end())
-    {
-      std::ostringstream os;
-      os << "tet " << i << " has material id " << v << " (array '" << arrayName
-         << "'), which " << (v == r ? "is not an id of" : "is not an integer id of")
-         << " the material table '" << tableFileName << "'";
-      throw translucency::Error(os.str());
-    }
-    which[i] = it->second;
-  }
+  return table;
 }
 
-/// LAYERS: each tet's layer index from its centroid depth; false if aborted.
-bool AssignByDepth(vtkAlgorithm* self, vtkUnstructuredGrid* input,
-  const std::vector<double>& thicknesses, std::vector<int>& which)
+/// The first component of a cell or point array, as doubles.
+std::vector<double> Component0(vtkDataArray* array)
 {
-  for (double t : thicknesses)
+  std::vector<double> values(static_cast<size_t>(array->GetNumberOfTuples()));
+  for (vtkIdType i = 0; i < array->GetNumberOfTuples(); ++i)
   {
-    if (!(t >= 0.0) || !std::isfinite(t))
-    {
-      std::ostringstream os;
-      os << "layer thickness " << t << " mm must be finite and >= 0";
-      throw translucency::Error(os.str());
-    }
+    values[i] = array->GetComponent(i, 0);
   }
-  // The boundary triangles of the tet mesh and a locator on them.
+  return values;
+}
+
+/// The distance (mm) from each centroid to the closest boundary triangle of the mesh.
+bool DepthsBelowSurface(vtkAlgorithm* self, vtkUnstructuredGrid* input,
+  const std::vector<Point3>& centroids, std::vector<double>& depths)
+{
   vtkNew<vtkGeometryFilter> boundary;
   boundary->SetInputData(input);
   boundary->Update();
@@ -207,9 +110,9 @@ bool AssignByDepth(vtkAlgorithm* self, vtkUnstructuredGrid* input,
   locator->SetDataSet(surface);
   locator->BuildLocator();
   vtkNew<vtkGenericCell> cell;
-  const vtkIdType n = input->GetNumberOfCells();
-  const int last = static_cast<int>(thicknesses.size()) - 1;
-  for (vtkIdType i = 0; i < n; ++i)
+  const size_t n = centroids.size();
+  depths.resize(n);
+  for (size_t i = 0; i < n; ++i)
   {
     if (i % 10000 == 0)
     {
@@ -219,99 +122,11 @@ bool AssignByDepth(vtkAlgorithm* self, vtkUnstructuredGrid* input,
         return false;
       }
     }
-    double c[3], closest[3], dist2;
+    double c[3] = { centroids[i][0], centroids[i][1], centroids[i][2] }, closest[3], dist2;
     vtkIdType cellId;
     int subId;
-    Centroid(input, i, c);
     locator->FindClosestPoint(c, closest, cell, cellId, subId, dist2);
-    const double depth = std::sqrt(dist2);
-    int k = 0;
-    double bottom = thicknesses[0];
-    while (k < last && depth >= bottom)
-    {
-      ++k;
-      bottom += thicknesses[k];
-    }
-    which[i] = k;
-  }
-  return true;
-}
-
-/// The settings of VEINS mode (see the class documentation).
-struct VeinSettings
-{
-  Coefficients Base, Vein;
-  double Direction[3];
-  double Frequency;
-  int Octaves;
-  double Turbulence;
-  double Sharpness;
-  int Seed;
-};
-
-/// VEINS: one palette entry per tet, the blend of the two materials.
-bool AssignVeins(vtkAlgorithm* self, vtkUnstructuredGrid* input, const VeinSettings& v,
-  std::vector<Coefficients>& palette, std::vector<int>& which)
-{
-  double d[3] = { v.Direction[0], v.Direction[1], v.Direction[2] };
-  if (!(vtkMath::Normalize(d) > 0.0) || !std::isfinite(d[0] + d[1] + d[2]))
-  {
-    throw translucency::Error("the vein direction must be a non-zero vector");
-  }
-  if (!(v.Frequency > 0.0) || !std::isfinite(v.Frequency))
-  {
-    std::ostringstream os;
-    os << "the vein frequency must be > 0 (1/mm), not " << v.Frequency;
-    throw translucency::Error(os.str());
-  }
-  // Phase from the seed: the R3 low-discrepancy sequence, in [0, 1).
-  const double golden[3] = { 0.7548776662466927, 0.5698402909980532, 0.4301597090019468 };
-  vtkNew<vtkPerlinNoise> noise;
-  noise->SetAmplitude(1.0);
-  double phase[3];
-  for (int a = 0; a < 3; ++a)
-  {
-    const double p = static_cast<double>(v.Seed) * golden[a];
-    phase[a] = p - std::floor(p);
-  }
-  noise->SetPhase(phase);
-  const vtkIdType n = input->GetNumberOfCells();
-  palette.resize(static_cast<size_t>(n));
-  for (vtkIdType i = 0; i < n; ++i)
-  {
-    if (i % 10000 == 0)
-    {
-      self->UpdateProgress(static_cast<double>(i) / static_cast<double>(n));
-      if (self->GetAbortExecute())
-      {
-        return false;
-      }
-    }
-    double x[3];
-    Centroid(input, i, x);
-    double turbulence = 0.0;
-    if (v.Turbulence > 0.0)
-    {
-      double scale = 1.0;
-      for (int o = 0; o < v.Octaves; ++o)
-      {
-        const double f = scale * v.Frequency;
-        noise->SetFrequency(f, f, f);
-        turbulence += std::abs(noise->EvaluateFunction(x)) / scale;
-        scale *= 2.0;
-      }
-    }
-    const double s =
-      std::sin(2.0 * vtkMath::Pi() * (v.Frequency * vtkMath::Dot(d, x) + v.Turbulence * turbulence));
-    const double w = std::pow(1.0 - std::abs(s), v.Sharpness);
-    Coefficients& m = palette[i];
-    for (int c = 0; c < 3; ++c)
-    {
-      m.MuA[c] = (1.0 - w) * v.Base.MuA[c] + w * v.Vein.MuA[c];
-      m.SigmaS[c] = (1.0 - w) * v.Base.SigmaS[c] + w * v.Vein.SigmaS[c];
-    }
-    m.Eta = (1.0 - w) * v.Base.Eta + w * v.Vein.Eta;
-    which[i] = static_cast<int>(i);
+    depths[i] = std::sqrt(dist2);
   }
   return true;
 }
@@ -352,9 +167,9 @@ VolumeArray FindVolumeArray(vtkImageData* volume, const std::string& name, int c
 }
 
 /// The voxel of x: structured coordinates ijk and parametric coordinates pc (throws outside).
-void LocateInVolume(vtkImageData* volume, vtkIdType tet, const double x[3], int ijk[3],
-  double pc[3])
+void LocateInVolume(vtkImageData* volume, vtkIdType tet, const Point3& c, int ijk[3], double pc[3])
 {
+  double x[3] = { c[0], c[1], c[2] };
   if (!volume->ComputeStructuredCoordinates(x, ijk, pc))
   {
     double b[6];
@@ -368,7 +183,11 @@ void LocateInVolume(vtkImageData* volume, vtkIdType tet, const double x[3], int 
   }
 }
 
-/// Point array: trilinear interpolation; cell array: the voxel's value.
+/**
+ * Point array: trilinear interpolation; cell array: the voxel's value.
+ * (vtkProbeFilter does this too, but interpolates image data in single
+ * precision: errors of 1e-7, where this is exact for linear fields.)
+ */
 void ProbeVolume(vtkImageData* volume, const VolumeArray& a, const int ijk[3], const double pc[3],
   double* value)
 {
@@ -423,68 +242,38 @@ double NearestInVolume(vtkImageData* volume, const VolumeArray& a, const int ijk
   return a.Array->GetComponent(volume->ComputePointId(p), 0);
 }
 
-/// Throws, naming the tet, the point and the array, unless all values are finite and >= 0.
-void CheckProbed(vtkIdType tet, const double x[3], const std::string& name, const double v[3])
-{
-  for (int c = 0; c < 3; ++c)
-  {
-    if (!(v[c] >= 0.0) || !std::isfinite(v[c]))
-    {
-      std::ostringstream os;
-      os.precision(17);
-      os << "tet " << tet << " gets the value " << v[c] << " (component " << c
-         << ") from the volume array '" << name << "' at its centroid (" << x[0] << ", " << x[1]
-         << ", " << x[2] << "); it must be finite and >= 0";
-      throw translucency::Error(os.str());
-    }
-  }
-}
-
-/// The settings of VOLUME mode.
-struct VolumeSettings
-{
-  std::string AbsorptionName, ScatteringName, IdName, TableFileName;
-  double Eta;
-};
-
 /// VOLUME: probed coefficients (one palette entry per tet) or table entries by id.
-bool AssignFromVolume(vtkAlgorithm* self, vtkUnstructuredGrid* input, vtkImageData* volume,
-  const VolumeSettings& v, const std::vector<Material>& table, std::vector<Coefficients>& palette,
-  std::vector<int>& which)
+bool FieldFromVolume(vtkAlgorithm* self, vtkImageData* volume,
+  const std::vector<Point3>& centroids, const std::string& absorptionName,
+  const std::string& scatteringName, const std::string& idName, double eta,
+  const translucency::MaterialTable& table, MaterialField& field)
 {
   if (!volume)
   {
     throw translucency::Error("the volume mode needs a vtkImageData on the second input port "
                               "(SetVolumeConnection or SetVolumeData)");
   }
-  const vtkIdType n = input->GetNumberOfCells();
-  const bool byId = !v.IdName.empty();
+  const size_t n = centroids.size();
+  const bool byId = !idName.empty();
   VolumeArray ids, absorption, scattering;
-  std::map<long long, int> slot; // table id -> palette index
   if (byId)
   {
-    if (v.TableFileName.empty())
+    if (table.FileName.empty())
     {
       throw translucency::Error("the volume mode with a material-id array needs a material "
                                 "table file (MaterialTableFileName)");
     }
-    ids = FindVolumeArray(volume, v.IdName, 1, "material ids");
-    for (const Material& m : table)
-    {
-      if (m.Id >= 0)
-      {
-        slot[m.Id] = static_cast<int>(palette.size());
-        palette.push_back(FromTable(m));
-      }
-    }
+    ids = FindVolumeArray(volume, idName, 1, "material ids");
   }
   else
   {
-    absorption = FindVolumeArray(volume, v.AbsorptionName, 3, "mu_a, 1/mm");
-    scattering = FindVolumeArray(volume, v.ScatteringName, 3, "sigma_s', 1/mm");
-    palette.resize(static_cast<size_t>(n));
+    absorption = FindVolumeArray(volume, absorptionName, 3, "mu_a, 1/mm");
+    scattering = FindVolumeArray(volume, scatteringName, 3, "sigma_s', 1/mm");
+    field.Palette.resize(n);
+    field.Which.resize(n);
   }
-  for (vtkIdType i = 0; i < n; ++i)
+  std::vector<double> idValues(byId ? n : 0);
+  for (size_t i = 0; i < n; ++i)
   {
     if (i % 10000 == 0)
     {
@@ -494,37 +283,35 @@ bool AssignFromVolume(vtkAlgorithm* self, vtkUnstructuredGrid* input, vtkImageDa
         return false;
       }
     }
-    double x[3], pc[3];
+    double pc[3];
     int ijk[3];
-    Centroid(input, i, x);
-    LocateInVolume(volume, i, x, ijk, pc);
+    LocateInVolume(volume, static_cast<vtkIdType>(i), centroids[i], ijk, pc);
     if (byId)
     {
-      const double id = NearestInVolume(volume, ids, ijk, pc);
-      const double r = std::round(id);
-      auto it = (id == r && std::abs(r) < 9e18) ? slot.find(static_cast<long long>(r)) : slot.end();
-      if (it == slot.end())
-      {
-        std::ostringstream os;
-        os.precision(17);
-        os << "tet " << i << " has material id " << id << " (volume array '" << v.IdName
-           << "' at its centroid (" << x[0] << ", " << x[1] << ", " << x[2] << ")), which "
-           << (id == r ? "is not an id of" : "is not an integer id of") << " the material table '"
-           << v.TableFileName << "'";
-        throw translucency::Error(os.str());
-      }
-      which[i] = it->second;
+      idValues[i] = NearestInVolume(volume, ids, ijk, pc);
     }
     else
     {
-      Coefficients& m = palette[i];
-      ProbeVolume(volume, absorption, ijk, pc, m.MuA);
-      CheckProbed(i, x, absorption.Name, m.MuA);
-      ProbeVolume(volume, scattering, ijk, pc, m.SigmaS);
-      CheckProbed(i, x, scattering.Name, m.SigmaS);
-      m.Eta = v.Eta;
-      which[i] = static_cast<int>(i);
+      MaterialCoefficients& m = field.Palette[i];
+      ProbeVolume(volume, absorption, ijk, pc, m.Absorption.data());
+      translucency::CheckProbedValues(static_cast<int>(i), centroids[i], absorption.Name, m.Absorption);
+      ProbeVolume(volume, scattering, ijk, pc, m.ReducedScattering.data());
+      translucency::CheckProbedValues(
+        static_cast<int>(i), centroids[i], scattering.Name, m.ReducedScattering);
+      m.RefractiveIndex = eta;
+      field.Which[i] = static_cast<int>(i);
     }
+  }
+  if (byId)
+  {
+    field = translucency::MaterialsFromIds(idValues, table, [&](int tet, double id) {
+      const Point3& x = centroids[tet];
+      std::ostringstream os;
+      os.precision(17);
+      os << "tet " << tet << " has material id " << id << " (volume array '" << idName
+         << "' at its centroid (" << x[0] << ", " << x[1] << ", " << x[2] << "))";
+      return os.str();
+    });
   }
   return true;
 }
@@ -568,6 +355,112 @@ void vtkAssignScatteringCoefficients::RemoveAllLayers()
 }
 
 //------------------------------------------------------------------------------
+bool vtkAssignScatteringCoefficients::ComputeMaterials(
+  vtkUnstructuredGrid* input, vtkImageData* volume, translucency::MaterialField& field)
+{
+  const int n = static_cast<int>(input->GetNumberOfCells());
+  if (this->MaterialMode == UNIFORM)
+  {
+    MaterialCoefficients m;
+    if (!this->MaterialName.empty())
+    {
+      m = MaterialCoefficients::FromPreset(this->MaterialName);
+    }
+    else
+    {
+      std::copy(this->AbsorptionCoefficient, this->AbsorptionCoefficient + 3, m.Absorption.begin());
+      std::copy(this->ReducedScatteringCoefficient, this->ReducedScatteringCoefficient + 3,
+        m.ReducedScattering.begin());
+      m.RefractiveIndex = this->RefractiveIndex;
+    }
+    field = MaterialField::Uniform(n, m);
+    return true;
+  }
+  const translucency::MaterialTable table = ReadTable(this->MaterialTableFileName);
+  if (this->MaterialMode == MATERIAL_IDS)
+  {
+    if (this->MaterialTableFileName.empty())
+    {
+      throw translucency::Error("the material-id mode needs a material table file "
+                                "(MaterialTableFileName)");
+    }
+    vtkDataArray* ids = input->GetCellData()->GetArray(this->MaterialIdArrayName.c_str());
+    if (!ids)
+    {
+      throw translucency::Error("the material-id mode needs the cell array '" +
+        this->MaterialIdArrayName + "' of material ids, which the input does not have");
+    }
+    field = translucency::MaterialsFromIds(Component0(ids), table, [&](int tet, double id) {
+      std::ostringstream os;
+      os << "tet " << tet << " has material id " << id << " (array '"
+         << this->MaterialIdArrayName << "')";
+      return os.str();
+    });
+    return true;
+  }
+  const std::vector<Point3> centroids = Centroids(input);
+  if (this->MaterialMode == SPHERICAL_INCLUSION)
+  {
+    const MaterialCoefficients outside = table.Resolve(this->OutsideMaterial);
+    const MaterialCoefficients inside = table.Resolve(this->InsideMaterial);
+    field = translucency::SphericalInclusion(centroids,
+      { this->InclusionCenter[0], this->InclusionCenter[1], this->InclusionCenter[2] },
+      this->InclusionRadius, inside, outside);
+    return true;
+  }
+  if (this->MaterialMode == VOLUME)
+  {
+    return FieldFromVolume(this, volume, centroids, this->VolumeAbsorptionArrayName,
+      this->VolumeScatteringArrayName, this->VolumeMaterialIdArrayName, this->RefractiveIndex,
+      table, field);
+  }
+  if (this->MaterialMode == VEINS)
+  {
+    translucency::VeinsField veins;
+    const MaterialCoefficients base = table.Resolve(this->BaseMaterial);
+    veins.SetMaterials(base, table.Resolve(this->VeinMaterial));
+    veins.SetDirection({ this->VeinDirection[0], this->VeinDirection[1], this->VeinDirection[2] });
+    veins.SetFrequency(this->VeinFrequency);
+    veins.SetOctaves(this->VeinOctaves);
+    veins.SetTurbulence(this->VeinTurbulence);
+    veins.SetSharpness(this->VeinSharpness);
+    veins.SetProgressCallback([this](double fraction) {
+      this->UpdateProgress(fraction);
+      return !this->GetAbortExecute();
+    });
+    vtkNew<vtkPerlinNoise> noise;
+    noise->SetAmplitude(1.0);
+    Point3 phase = translucency::VeinsField::Phase(this->VeinSeed);
+    noise->SetPhase(phase.data());
+    return veins.Evaluate(centroids,
+      [&noise](const Point3& x, double frequency) {
+        noise->SetFrequency(frequency, frequency, frequency);
+        double p[3] = { x[0], x[1], x[2] };
+        return noise->EvaluateFunction(p);
+      },
+      field);
+  }
+  // LAYERS
+  if (this->LayerMaterials.empty())
+  {
+    throw translucency::Error("the layered mode needs at least one layer (AddLayer)");
+  }
+  std::vector<MaterialCoefficients> materials;
+  for (const std::string& m : this->LayerMaterials)
+  {
+    materials.push_back(table.Resolve(m));
+  }
+  translucency::ValidateLayerThicknesses(this->LayerThicknesses);
+  std::vector<double> depths;
+  if (!DepthsBelowSurface(this, input, centroids, depths))
+  {
+    return false;
+  }
+  field = translucency::Layers(depths, this->LayerThicknesses, materials);
+  return true;
+}
+
+//------------------------------------------------------------------------------
 int vtkAssignScatteringCoefficients::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
@@ -578,102 +471,16 @@ int vtkAssignScatteringCoefficients::RequestData(
     vtkErrorMacro(<< "the input mesh is empty (no cells)");
     return 0;
   }
-  const vtkIdType n = input->GetNumberOfCells();
   // Each tet gets one entry of a small palette of materials.
-  std::vector<Coefficients> palette;
-  std::vector<int> which(static_cast<size_t>(n), 0);
+  MaterialField field;
   try
   {
-    if (this->MaterialMode == UNIFORM)
+    if (!this->ComputeMaterials(input, vtkImageData::GetData(inputVector[1]), field))
     {
-      palette.push_back(UniformMaterial(this->MaterialName, this->AbsorptionCoefficient,
-        this->ReducedScatteringCoefficient, this->RefractiveIndex));
+      return 0; // aborted
     }
-    else
-    {
-      std::vector<vtkMaterialTableReader::Material> table;
-      if (!this->MaterialTableFileName.empty())
-      {
-        table = vtkMaterialTableReader::ReadMaterialTable(this->MaterialTableFileName);
-      }
-      else if (this->MaterialMode == MATERIAL_IDS)
-      {
-        throw translucency::Error("the material-id mode needs a material table file "
-                                  "(MaterialTableFileName)");
-      }
-      if (this->MaterialMode == MATERIAL_IDS)
-      {
-        AssignByIds(input, table, this->MaterialIdArrayName, this->MaterialTableFileName, palette,
-          which);
-      }
-      else if (this->MaterialMode == SPHERICAL_INCLUSION)
-      {
-        palette.push_back(ResolveMaterial(this->OutsideMaterial, table));
-        palette.push_back(ResolveMaterial(this->InsideMaterial, table));
-        const double r2 = this->InclusionRadius * this->InclusionRadius;
-        for (vtkIdType i = 0; i < n; ++i)
-        {
-          double c[3];
-          Centroid(input, i, c);
-          which[i] = vtkMath::Distance2BetweenPoints(c, this->InclusionCenter) <= r2 ? 1 : 0;
-        }
-      }
-      else if (this->MaterialMode == VOLUME)
-      {
-        VolumeSettings v;
-        v.AbsorptionName = this->VolumeAbsorptionArrayName;
-        v.ScatteringName = this->VolumeScatteringArrayName;
-        v.IdName = this->VolumeMaterialIdArrayName;
-        v.TableFileName = this->MaterialTableFileName;
-        v.Eta = this->RefractiveIndex;
-        if (!AssignFromVolume(this, input, vtkImageData::GetData(inputVector[1]), v, table,
-              palette, which))
-        {
-          return 0;
-        }
-      }
-      else if (this->MaterialMode == VEINS)
-      {
-        VeinSettings v;
-        v.Base = ResolveMaterial(this->BaseMaterial, table);
-        v.Vein = ResolveMaterial(this->VeinMaterial, table);
-        std::copy(this->VeinDirection, this->VeinDirection + 3, v.Direction);
-        v.Frequency = this->VeinFrequency;
-        v.Octaves = this->VeinOctaves;
-        v.Turbulence = this->VeinTurbulence;
-        v.Sharpness = this->VeinSharpness;
-        v.Seed = this->VeinSeed;
-        if (!AssignVeins(this, input, v, palette, which))
-        {
-          return 0;
-        }
-      }
-      else
-      {
-        if (this->LayerMaterials.empty())
-        {
-          throw translucency::Error("the layered mode needs at least one layer (AddLayer)");
-        }
-        for (const std::string& m : this->LayerMaterials)
-        {
-          palette.push_back(ResolveMaterial(m, table));
-        }
-        if (!AssignByDepth(this, input, this->LayerThicknesses, which))
-        {
-          return 0;
-        }
-      }
-    }
-    for (Coefficients& m : palette)
-    {
-      for (int c = 0; c < 3; ++c)
-      {
-        m.MuA[c] *= this->ScaleFactor;
-        m.SigmaS[c] *= this->ScaleFactor;
-      }
-      // Validate with the core's rules on a one-tet material (names the value).
-      translucency::OpticalProperties::Uniform(1, m.MuA, m.SigmaS, m.Eta).Validate(1);
-    }
+    field.Scale(this->ScaleFactor);
+    field.Validate();
   }
   catch (const std::exception& e)
   {
@@ -681,6 +488,7 @@ int vtkAssignScatteringCoefficients::RequestData(
     return 0;
   }
 
+  const vtkIdType n = input->GetNumberOfCells();
   output->ShallowCopy(input);
   vtkNew<vtkDoubleArray> absorption;
   absorption->SetName(vtkTranslucency::AbsorptionName);
@@ -696,10 +504,10 @@ int vtkAssignScatteringCoefficients::RequestData(
   index->SetNumberOfTuples(n);
   for (vtkIdType i = 0; i < n; ++i)
   {
-    const Coefficients& m = palette[which[i]];
-    absorption->SetTypedTuple(i, m.MuA);
-    scattering->SetTypedTuple(i, m.SigmaS);
-    index->SetValue(i, m.Eta);
+    const MaterialCoefficients& m = field.At(static_cast<int>(i));
+    absorption->SetTypedTuple(i, m.Absorption.data());
+    scattering->SetTypedTuple(i, m.ReducedScattering.data());
+    index->SetValue(i, m.RefractiveIndex);
   }
   output->GetCellData()->AddArray(absorption);
   output->GetCellData()->AddArray(scattering);

@@ -72,6 +72,13 @@
 #include <string>
 #include <vector> // for the layers
 
+class vtkImageData;
+class vtkUnstructuredGrid;
+namespace translucency
+{
+struct MaterialField;
+}
+
 
 class TRANSLUCENCYFILTERS_EXPORT vtkAssignScatteringCoefficients
   : public vtkUnstructuredGridAlgorithm
@@ -284,6 +291,14 @@ protected:
   ~vtkAssignScatteringCoefficients() override = default;
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  /**
+   * The materials of MaterialMode on the tets of input (volume: the second
+   * input, may be null). Throws translucency::Error on bad settings; returns
+   * false when aborted.
+   */
+  bool ComputeMaterials(
+    vtkUnstructuredGrid* input, vtkImageData* volume, translucency::MaterialField& field);
   int FillInputPortInformation(int port, vtkInformation* info) override;
 
   std::string MaterialName = "marble";

@@ -137,7 +137,6 @@ int vtkFractureTetMesh::RequestData(
     const std::vector<int>& piecePoints = fracture.GetPiecePoints(k);
     const std::vector<int>& connectivity = fracture.GetPieceConnectivity(k);
     const vtkIdType numPoints = static_cast<vtkIdType>(piecePoints.size());
-    const vtkIdType numTets = static_cast<vtkIdType>(connectivity.size() / 4);
 
     vtkNew<vtkPoints> pts;
     pts->SetDataType(input->GetPoints()->GetDataType());
@@ -146,24 +145,9 @@ int vtkFractureTetMesh::RequestData(
     {
       pts->SetPoint(j, input->GetPoint(piecePoints[j]));
     }
-    vtkNew<vtkIdTypeArray> offsets;
-    vtkNew<vtkIdTypeArray> ids;
-    offsets->SetNumberOfTuples(numTets + 1);
-    ids->SetNumberOfTuples(4 * numTets);
-    for (vtkIdType t = 0; t <= numTets; ++t)
-    {
-      offsets->SetValue(t, 4 * t);
-    }
-    for (vtkIdType j = 0; j < 4 * numTets; ++j)
-    {
-      ids->SetValue(j, connectivity[j]);
-    }
-    vtkNew<vtkCellArray> cells;
-    cells->SetData(offsets, ids);
-
     vtkNew<vtkUnstructuredGrid> piece;
     piece->SetPoints(pts);
-    piece->SetCells(VTK_TETRA, cells);
+    vtkTranslucency::SetTets(piece, connectivity);
     CopyAttributes(input->GetPointData(), piece->GetPointData(), piecePoints, OriginalPointIdsName);
     CopyAttributes(input->GetCellData(), piece->GetCellData(), fracture.GetPieceTets(k),
       vtkTranslucency::OriginalCellIdsName);

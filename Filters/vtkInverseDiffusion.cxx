@@ -22,7 +22,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <sstream>
 
 vtkStandardNewMacro(vtkInverseDiffusion);
@@ -179,21 +178,12 @@ int vtkInverseDiffusion::RequestData(
                     << "' is not a 1-component cell array of the input");
       return 0;
     }
-    std::map<long long, int> dense; // element values -> 0..E-1, in increasing order
+    std::vector<long long> labels(numTets);
     for (int t = 0; t < numTets; ++t)
     {
-      dense.emplace(static_cast<long long>(ids->GetTuple1(t)), 0);
+      labels[t] = static_cast<long long>(ids->GetTuple1(t));
     }
-    int next = 0;
-    for (auto& entry : dense)
-    {
-      entry.second = next++;
-    }
-    for (int t = 0; t < numTets; ++t)
-    {
-      tetElement[t] = dense[static_cast<long long>(ids->GetTuple1(t))];
-    }
-    numElements = next;
+    tetElement = translucency::DiffusionForwardModel::DenseElements(labels, numElements);
   }
   else
   {

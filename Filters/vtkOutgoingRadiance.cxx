@@ -1,5 +1,6 @@
 #include "vtkOutgoingRadiance.h"
 
+#include "Error.h"
 #include "Radiance.h"
 #include "TetMesh.h"
 #include "vtkTranslucencyMeshConversion.h"
@@ -17,8 +18,6 @@
 #include <vtkPolyData.h>
 #include <vtkSMPTools.h>
 #include <vtkUnstructuredGrid.h>
-
-#include <cmath>
 
 vtkStandardNewMacro(vtkOutgoingRadiance);
 
@@ -71,6 +70,18 @@ int vtkOutgoingRadiance::RequestData(
     return 0;
   }
   const std::vector<double> pointEta = translucency::PointRefractiveIndex(mesh, tetEta);
+  // Radiance at the boundary points (TransCut eq. 3), OpenMP-parallel in the core.
+  std::vector<double> values;
+  try
+  {
+    values = translucency::BoundaryRadiance(mesh, fluence, irradiance, pointEta,
+      this->UseViewPoint ? this->ViewPoint : nullptr, this->NSquaredLaw);
+  }
+  catch (const translucency::Error& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
 
   // Compact surface: boundary points only.
   const std::vector<int>& boundary = mesh.GetBoundaryPoints();
@@ -110,30 +121,16 @@ int vtkOutgoingRadiance::RequestData(
   vtkDoubleArray* qOut = makeArray(vtkTranslucency::IrradianceName);
   vtkDoubleArray* normalsOut = makeArray("Normals");
   const std::vector<double>& normals = mesh.GetPointNormals();
-  const bool useView = this->UseViewPoint;
-  const bool nSquared = this->NSquaredLaw;
-  const double* view = this->ViewPoint;
   vtkSMPTools::For(0, n, [&](vtkIdType begin, vtkIdType end) {
     for (vtkIdType k = begin; k < end; ++k)
     {
       const size_t i = static_cast<size_t>(boundary[k]);
-      const double* nrm = &normals[3 * i];
-      double cosOut = 1.0;
-      if (useView)
-      {
-        const double* x = mesh.GetPoint(static_cast<int>(i));
-        double d[3] = { view[0] - x[0], view[1] - x[1], view[2] - x[2] };
-        const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
-      }
       for (int c = 0; c < 3; ++c)
       {
-        radiance->SetTypedComponent(k, c,
-          translucency::OutgoingRadiance(
-            fluence[3 * i + c], irradiance[3 * i + c], pointEta[i], cosOut, nSquared));
+        radiance->SetTypedComponent(k, c, values[3 * k + c]);
         phiOut->SetTypedComponent(k, c, fluence[3 * i + c]);
         qOut->SetTypedComponent(k, c, irradiance[3 * i + c]);
-        normalsOut->SetTypedComponent(k, c, nrm[c]);
+        normalsOut->SetTypedComponent(k, c, normals[3 * i + c]);
       }
     }
   });

@@ -4,6 +4,7 @@
 #include "StrokeSurface.h"
 #include "TetCut.h"
 #include "TetMesh.h"
+#include "Timer.h"
 #include "vtkTranslucencyMeshConversion.h"
 
 #include <vtkCellArray.h>
@@ -23,7 +24,6 @@
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
-#include <chrono>
 #include <string>
 #include <vector>
 
@@ -87,7 +87,7 @@ int vtkStrokeCut::RequestData(
   this->NumberOfMovableVertices = this->NumberOfMovedVertices = 0;
   this->NumberOfBlockedVertices = 0;
   this->CutTime = 0.0;
-  const auto start = std::chrono::steady_clock::now();
+  const translucency::Timer timer;
 
   vtkPolyData* stroke = inputVector[1]->GetNumberOfInformationObjects() > 0
     ? vtkPolyData::GetData(inputVector[1], 0)
@@ -190,24 +190,9 @@ int vtkStrokeCut::RequestData(
   {
     pts->SetPoint(k, &outPoints[3 * k]);
   }
-  const std::vector<int>& tets = cut.GetTets();
-  const vtkIdType numTets = static_cast<vtkIdType>(tets.size() / 4);
-  vtkNew<vtkIdTypeArray> offsets;
-  vtkNew<vtkIdTypeArray> connectivity;
-  offsets->SetNumberOfTuples(numTets + 1);
-  connectivity->SetNumberOfTuples(4 * numTets);
-  for (vtkIdType t = 0; t <= numTets; ++t)
-  {
-    offsets->SetValue(t, 4 * t);
-  }
-  for (vtkIdType k = 0; k < 4 * numTets; ++k)
-  {
-    connectivity->SetValue(k, tets[k]);
-  }
-  vtkNew<vtkCellArray> cells;
-  cells->SetData(offsets, connectivity);
+  const vtkIdType numTets = static_cast<vtkIdType>(cut.GetTets().size() / 4);
   output->SetPoints(pts);
-  output->SetCells(VTK_TETRA, cells);
+  vtkTranslucency::SetTets(output, cut.GetTets());
 
   // Attributes, with the id maps to the original mesh.
   CopyAttributes(input->GetPointData(), output->GetPointData(), cut.GetKeptPoints(),
@@ -216,8 +201,7 @@ int vtkStrokeCut::RequestData(
     vtkTranslucency::OriginalCellIdsName);
   output->GetFieldData()->PassData(input->GetFieldData());
 
-  this->CutTime =
-    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  this->CutTime = timer.GetMilliseconds();
   if (numTets == 0)
   {
     vtkWarningMacro(<< "the cut removed the whole mesh: the output is empty");

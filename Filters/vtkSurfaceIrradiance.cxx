@@ -18,7 +18,6 @@
 #include <vtkPointData.h>
 #include <vtkUnstructuredGrid.h>
 
-#include <cmath>
 #include <vector>
 
 vtkStandardNewMacro(vtkSurfaceIrradiance);
@@ -97,19 +96,7 @@ int vtkSurfaceIrradiance::RequestData(
 
   std::vector<translucency::LightSource> lights = this->Internal->Directional;
   lights.insert(lights.end(), this->Internal->Point.begin(), this->Internal->Point.end());
-  for (const auto& light : lights)
-  {
-    const bool badDirection = light.Type == translucency::LightSource::Kind::Directional &&
-      !(light.Direction[0] * light.Direction[0] + light.Direction[1] * light.Direction[1] +
-          light.Direction[2] * light.Direction[2] >
-        0.0);
-    if (badDirection || !(light.Power[0] >= 0.0) || !std::isfinite(light.Power[0]))
-    {
-      vtkErrorMacro(<< (badDirection ? "a directional light has a zero or non-finite direction"
-                                     : "a light has a negative or non-finite power"));
-      return 0;
-    }
-  }
+  // The lights are validated by the core (translucency::ValidateLight).
 
   std::string error;
   bool built = false;

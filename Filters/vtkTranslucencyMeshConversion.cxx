@@ -181,6 +181,27 @@ bool ReadRefractiveIndex(vtkUnstructuredGrid* grid, std::vector<double>& values,
   return true;
 }
 
+void SetTets(vtkUnstructuredGrid* grid, const std::vector<int>& tets)
+{
+  const vtkIdType numTets = static_cast<vtkIdType>(tets.size() / 4);
+  vtkNew<vtkIdTypeArray> offsets;
+  vtkNew<vtkIdTypeArray> connectivity;
+  offsets->SetNumberOfTuples(numTets + 1);
+  connectivity->SetNumberOfTuples(4 * numTets);
+  for (vtkIdType t = 0; t <= numTets; ++t)
+  {
+    offsets->SetValue(t, 4 * t);
+  }
+  for (vtkIdType k = 0; k < 4 * numTets; ++k)
+  {
+    connectivity->SetValue(k, tets[k]);
+  }
+  vtkNew<vtkCellArray> cells;
+  cells->SetData(offsets, connectivity);
+  grid->SetCells(VTK_TETRA, cells);
+}
+
+//------------------------------------------------------------------------------
 void CopyAttributes(vtkDataSetAttributes* in, vtkDataSetAttributes* out,
   const std::vector<int>& kept, const char* name)
 {

@@ -58,6 +58,9 @@ bool ReadRefractiveIndex(vtkUnstructuredGrid* grid, std::vector<double>& values,
 void CopyAttributes(vtkDataSetAttributes* in, vtkDataSetAttributes* out,
   const std::vector<int>& kept, const char* name);
 
+/// Set the cells of `grid` to the tets `tets` (4 point ids each, VTK_TETRA).
+void SetTets(vtkUnstructuredGrid* grid, const std::vector<int>& tets);
+
 /// A new vtkDoubleArray named `name` with 3 components holding `values`.
 vtkDataArray* NewTripleArray(const char* name, const std::vector<double>& values);
 

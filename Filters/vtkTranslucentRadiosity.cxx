@@ -3,9 +3,9 @@
 #include "vtkTranslucencyMeshConversion.h"
 
 #include "Error.h"
-#include "FormFactors.h"
 #include "LinearSolver.h"
 #include "RadiosityScene.h"
+#include "RadiositySession.h"
 #include "TetMesh.h"
 #include "TranslucentRadiosity.h"
 
@@ -28,53 +28,26 @@
 #include <vtkSmartPointer.h>
 #include <vtkUnstructuredGrid.h>
 
-#include <chrono>
 #include <map>
 #include <sstream>
 
 vtkStandardNewMacro(vtkTranslucentRadiosity);
 
-namespace
-{
-double MillisecondsSince(std::chrono::steady_clock::time_point start)
-{
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-    .count();
-}
-
-/// One leaf of the input: what it is and where its patches go.
-struct Leaf
+/// One leaf of the input: where it is and its output (the patches).
+struct vtkTranslucentRadiosity::Leaf
 {
   vtkSmartPointer<vtkCompositeDataIterator> Where;
   vtkSmartPointer<vtkPolyData> Output;
-  int Object = -1;
+  int Object = -1; ///< index in the radiosity scene
 };
-
-bool SameMaterial(const translucency::OpticalProperties& a, const translucency::OpticalProperties& b)
-{
-  return a.AbsorptionCoefficient == b.AbsorptionCoefficient &&
-    a.ReducedScatteringCoefficient == b.ReducedScatteringCoefficient &&
-    a.RefractiveIndex == b.RefractiveIndex;
-}
-}
 
 struct vtkTranslucentRadiosity::Internals
 {
   std::vector<translucency::LightSource> Lights;
-  // Kept while the geometry is unchanged: scene, form factors, solver (warm
-  // starts, cached optical distances).
-  std::unique_ptr<translucency::RadiosityScene> Scene;
-  translucency::FormFactorMatrix F;
-  std::unique_ptr<translucency::TranslucentRadiosity> Solver;
-  std::vector<double> Points;
-  std::vector<int> Triangles;
-  int Rays = -1;
-  double Threshold = -1.0;
-  int Method = -1;
-  std::string LinearSolver;
-  double VoxelSize = -1.0, MaxDistance = -1.0;
+  // Scene, form factors and solver (warm starts, cached optical distances),
+  // kept while the geometry and the settings are unchanged.
+  translucency::RadiositySession Session;
   translucency::RadiosityResult Result;
-  double FormFactorTime = 0.0, SetupTime = 0.0;
   // The input of the last successful execution: the composite and every leaf
   // with their modification times. Unchanged (only lights or solver settings
   // changed): the scene is not gathered again.
@@ -140,7 +113,8 @@ int vtkTranslucentRadiosity::GetNumberOfLights() const
 
 int vtkTranslucentRadiosity::GetNumberOfPatches() const
 {
-  return this->Internal->Scene ? this->Internal->Scene->GetNumberOfPatches() : 0;
+  const translucency::RadiosityScene* scene = this->Internal->Session.GetScene();
+  return scene ? scene->GetNumberOfPatches() : 0;
 }
 int vtkTranslucentRadiosity::GetNumberOfIterations() const
 {
@@ -152,11 +126,11 @@ bool vtkTranslucentRadiosity::GetConverged() const
 }
 double vtkTranslucentRadiosity::GetFormFactorTime() const
 {
-  return this->Internal->FormFactorTime;
+  return this->Internal->Session.GetFormFactorMilliseconds();
 }
 double vtkTranslucentRadiosity::GetSetupTime() const
 {
-  return this->Internal->SetupTime;
+  return this->Internal->Session.GetSetupMilliseconds();
 }
 double vtkTranslucentRadiosity::GetDirectTime() const
 {
@@ -168,13 +142,12 @@ double vtkTranslucentRadiosity::GetSolveTime() const
 }
 vtkTypeInt64 vtkTranslucentRadiosity::GetFormFactorMemory() const
 {
-  return static_cast<vtkTypeInt64>(this->Internal->F.MemoryBytes());
+  return static_cast<vtkTypeInt64>(this->Internal->Session.GetFormFactors().MemoryBytes());
 }
 vtkTypeInt64 vtkTranslucentRadiosity::GetSubsurfaceMemory() const
 {
-  return this->Internal->Solver
-    ? static_cast<vtkTypeInt64>(this->Internal->Solver->GetSubsurfaceMemoryBytes())
-    : 0;
+  const translucency::TranslucentRadiosity* solver = this->Internal->Session.GetKeptSolver();
+  return solver ? static_cast<vtkTypeInt64>(solver->GetSubsurfaceMemoryBytes()) : 0;
 }
 
 int vtkTranslucentRadiosity::FillInputPortInformation(int, vtkInformation* info)
@@ -206,6 +179,52 @@ int vtkTranslucentRadiosity::RequestDataObject(
 namespace
 {
 
+/// The input's signature: the composite and every leaf with their modification times.
+std::vector<std::pair<vtkDataObject*, vtkMTimeType>> InputSignature(vtkCompositeDataSet* input)
+{
+  std::vector<std::pair<vtkDataObject*, vtkMTimeType>> signature;
+  signature.emplace_back(input, input->GetMTime());
+  vtkSmartPointer<vtkCompositeDataIterator> it;
+  it.TakeReference(input->NewIterator());
+  for (it->InitTraversal(); !it->IsDoneWithTraversal(); it->GoToNextItem())
+  {
+    vtkDataObject* data = it->GetCurrentDataObject();
+    signature.emplace_back(data, data ? data->GetMTime() : 0);
+  }
+  return signature;
+}
+
+/// The NAME of each partitioned data set of a collection (a collection's
+/// iterator does not carry them), with the partition number when it has several.
+std::map<vtkDataObject*, std::string> CollectionNames(vtkCompositeDataSet* input)
+{
+  std::map<vtkDataObject*, std::string> names;
+  auto* pdc = vtkPartitionedDataSetCollection::SafeDownCast(input);
+  if (!pdc)
+  {
+    return names;
+  }
+  for (unsigned int i = 0; i < pdc->GetNumberOfPartitionedDataSets(); ++i)
+  {
+    if (!pdc->HasMetaData(i) || !pdc->GetMetaData(i)->Has(vtkCompositeDataSet::NAME()))
+    {
+      continue;
+    }
+    const unsigned int parts = pdc->GetNumberOfPartitions(i);
+    for (unsigned int j = 0; j < parts; ++j)
+    {
+      std::string name = pdc->GetMetaData(i)->Get(vtkCompositeDataSet::NAME());
+      if (parts > 1)
+      {
+        name += " " + std::to_string(j);
+      }
+      names[pdc->GetPartitionAsDataObject(i, j)] = name;
+    }
+  }
+  return names;
+}
+
+/// The name of a leaf: the iterator's NAME metadata, else "block <index>".
 std::string LeafName(vtkCompositeDataIterator* it, int index)
 {
   if (it->HasCurrentMetaData() && it->GetCurrentMetaData()->Has(vtkCompositeDataSet::NAME()))
@@ -213,6 +232,102 @@ std::string LeafName(vtkCompositeDataIterator* it, int index)
     return it->GetCurrentMetaData()->Get(vtkCompositeDataSet::NAME());
   }
   return "block " + std::to_string(index);
+}
+
+/// The boundary surface of a tet mesh (its patches) with the owner tet of each triangle.
+vtkSmartPointer<vtkPolyData> BoundarySurface(const translucency::TetMesh& mesh)
+{
+  auto surface = vtkSmartPointer<vtkPolyData>::New();
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(mesh.GetNumberOfPoints());
+  for (int p = 0; p < mesh.GetNumberOfPoints(); ++p)
+  {
+    points->SetPoint(p, mesh.GetPoint(p));
+  }
+  surface->SetPoints(points);
+  vtkNew<vtkCellArray> polys;
+  const std::vector<int>& tris = mesh.GetBoundaryTriangles();
+  for (size_t t = 0; t < tris.size(); t += 3)
+  {
+    const vtkIdType ids[3] = { tris[t], tris[t + 1], tris[t + 2] };
+    polys->InsertNextCell(3, ids);
+  }
+  surface->SetPolys(polys);
+  vtkNew<vtkIdTypeArray> owners;
+  owners->SetName(vtkTranslucency::OriginalCellIdsName);
+  for (int tet : mesh.GetBoundaryTriangleTets())
+  {
+    owners->InsertNextValue(tet);
+  }
+  surface->GetCellData()->AddArray(owners);
+  return surface;
+}
+
+/// A tet mesh with coefficients -> a translucent object; returns its output surface.
+vtkSmartPointer<vtkPolyData> AddTranslucentLeaf(translucency::RadiosityScene& scene,
+  const std::string& name, vtkUnstructuredGrid* grid, int& object)
+{
+  std::string error;
+  auto mesh = vtkTranslucency::AcquireTetMesh(grid, error);
+  if (!mesh)
+  {
+    throw translucency::Error(name + ": " + error);
+  }
+  if (!grid->GetCellData()->GetArray(vtkTranslucency::AbsorptionName) &&
+    !grid->GetCellData()->GetArray(vtkTranslucency::ScatteringName))
+  {
+    throw translucency::Error(name + ": translucent object without coefficients (cell arrays " +
+      vtkTranslucency::AbsorptionName + ", " + vtkTranslucency::ScatteringName + ", " +
+      vtkTranslucency::RefractiveIndexName + ")");
+  }
+  translucency::OpticalProperties material;
+  if (!vtkTranslucency::ToOpticalProperties(grid, material, error))
+  {
+    throw translucency::Error(name + ": " + error);
+  }
+  object = scene.AddTranslucent(name, mesh, material);
+  return BoundarySurface(*mesh);
+}
+
+/// A triangle surface with an Albedo cell array -> an opaque object; returns its output.
+vtkSmartPointer<vtkPolyData> AddOpaqueLeaf(
+  translucency::RadiosityScene& scene, const std::string& name, vtkPolyData* poly, int& object)
+{
+  vtkDataArray* albedoArray = poly->GetCellData()->GetArray("Albedo");
+  if (!albedoArray || albedoArray->GetNumberOfComponents() != 3)
+  {
+    throw translucency::Error(name + ": an opaque surface needs the cell array Albedo with 3 "
+                                     "components (R, G, B in [0, 1])");
+  }
+  std::vector<double> points(3 * poly->GetNumberOfPoints());
+  for (vtkIdType p = 0; p < poly->GetNumberOfPoints(); ++p)
+  {
+    poly->GetPoint(p, &points[3 * p]);
+  }
+  std::vector<int> triangles;
+  std::vector<double> albedo;
+  for (vtkIdType c = 0; c < poly->GetNumberOfCells(); ++c)
+  {
+    vtkIdType npts;
+    const vtkIdType* pts;
+    poly->GetCellPoints(c, npts, pts);
+    if (npts != 3 || poly->GetCellType(c) != VTK_TRIANGLE)
+    {
+      throw translucency::Error(name + ": cell " + std::to_string(c) +
+        " is not a triangle (triangulate the surface first)");
+    }
+    triangles.insert(triangles.end(),
+      { static_cast<int>(pts[0]), static_cast<int>(pts[1]), static_cast<int>(pts[2]) });
+    for (int k = 0; k < 3; ++k)
+    {
+      albedo.push_back(albedoArray->GetComponent(c, k));
+    }
+  }
+  object = scene.AddOpaque(name, points, triangles, albedo);
+  auto copy = vtkSmartPointer<vtkPolyData>::New();
+  copy->ShallowCopy(poly);
+  return copy;
 }
 
 void AddTriple(vtkPolyData* poly, const char* name, const std::vector<double>& values, int begin,
@@ -223,8 +338,126 @@ void AddTriple(vtkPolyData* poly, const char* name, const std::vector<double>& v
   array.TakeReference(vtkTranslucency::NewTripleArray(name, part));
   poly->GetCellData()->AddArray(array);
 }
+} // namespace
+
+//------------------------------------------------------------------------------
+bool vtkTranslucentRadiosity::GatherScene(
+  vtkCompositeDataSet* input, translucency::RadiosityScene& scene, std::vector<Leaf>& leaves)
+{
+  const std::map<vtkDataObject*, std::string> names = CollectionNames(input);
+  vtkSmartPointer<vtkCompositeDataIterator> it;
+  it.TakeReference(input->NewIterator());
+  int index = 0;
+  for (it->InitTraversal(); !it->IsDoneWithTraversal(); it->GoToNextItem(), ++index)
+  {
+    vtkDataObject* data = it->GetCurrentDataObject();
+    const auto named = names.find(data);
+    const std::string name = named != names.end() ? named->second : LeafName(it, index);
+    Leaf leaf;
+    leaf.Where.TakeReference(input->NewIterator());
+    leaf.Where->InitTraversal();
+    while (leaf.Where->GetCurrentFlatIndex() != it->GetCurrentFlatIndex())
+    {
+      leaf.Where->GoToNextItem();
+    }
+    if (auto* grid = vtkUnstructuredGrid::SafeDownCast(data))
+    {
+      leaf.Output = AddTranslucentLeaf(scene, name, grid, leaf.Object);
+    }
+    else if (auto* poly = vtkPolyData::SafeDownCast(data))
+    {
+      leaf.Output = AddOpaqueLeaf(scene, name, poly, leaf.Object);
+    }
+    else
+    {
+      throw translucency::Error(name + ": a " + (data ? data->GetClassName() : "null") +
+        " is neither a tet mesh (vtkUnstructuredGrid) nor a surface (vtkPolyData)");
+    }
+    leaves.push_back(leaf);
+    if (this->CheckAbort())
+    {
+      return false;
+    }
+  }
+  scene.Build(false); // the BVH only if the geometry changed (RadiositySession)
+  return true;
 }
 
+//------------------------------------------------------------------------------
+std::vector<translucency::LightSource> vtkTranslucentRadiosity::GetLights() const
+{
+  std::vector<translucency::LightSource> lights = this->Internal->Lights;
+  if (lights.empty())
+  {
+    translucency::LightSource light;
+    light.Type = this->LightType == 1 ? translucency::LightSource::Kind::Directional
+      : this->LightType == 2          ? translucency::LightSource::Kind::Spot
+                                      : translucency::LightSource::Kind::Point;
+    light.Position = { this->LightPosition[0], this->LightPosition[1], this->LightPosition[2] };
+    light.Direction = { this->LightDirection[0], this->LightDirection[1], this->LightDirection[2] };
+    light.Power = { this->LightPower[0], this->LightPower[1], this->LightPower[2] };
+    light.SpotCutoff = this->LightCutoff;
+    lights.push_back(light);
+  }
+  return lights;
+}
+
+//------------------------------------------------------------------------------
+translucency::TranslucentRadiosity& vtkTranslucentRadiosity::Solve()
+{
+  Internals& in = *this->Internal;
+  translucency::SubsurfaceSettings settings;
+  settings.Method = this->SubsurfaceMethod == SUBSURFACE_PROFILE ? "profile" : "diffusion";
+  settings.VoxelSize = this->VoxelSize;
+  settings.MaxDistance = this->MaxDistance;
+  settings.LinearSolver = this->LinearSolver;
+  translucency::TranslucentRadiosity& solver = in.Session.GetSolver(settings);
+  solver.SetRelTol(this->RelTol);
+  solver.SetMaxIter(this->MaxIter);
+  solver.SetShadows(this->Shadows);
+  solver.SetIteration(this->Iteration == ITERATION_JACOBI
+      ? translucency::TranslucentRadiosity::Iteration::Jacobi
+      : translucency::TranslucentRadiosity::Iteration::GaussSeidel);
+  solver.Solve(this->GetLights(), in.Result);
+  if (!in.Result.Converged)
+  {
+    vtkWarningMacro(<< "radiosity did not converge in " << in.Result.Iterations
+                    << " iterations (last relative change "
+                    << (in.Result.ResidualHistory.empty() ? 0.0 : in.Result.ResidualHistory.back())
+                    << ", RelTol " << this->RelTol << ")");
+  }
+  return solver;
+}
+
+//------------------------------------------------------------------------------
+void vtkTranslucentRadiosity::AttachOutputs(vtkCompositeDataSet* output,
+  const std::vector<Leaf>& leaves, const std::vector<double>& h1, const std::vector<double>& h2)
+{
+  const translucency::RadiosityResult& r = this->Internal->Result;
+  const translucency::RadiosityScene& scene = *this->Internal->Session.GetScene();
+  for (const Leaf& cached : leaves)
+  {
+    // A new output object per execution (the cached leaf keeps no arrays).
+    Leaf leaf = cached;
+    leaf.Output = vtkSmartPointer<vtkPolyData>::New();
+    leaf.Output->ShallowCopy(cached.Output);
+    const int begin = scene.GetPatchOffset(leaf.Object);
+    const int count = scene.GetPatchOffset(leaf.Object + 1) - begin;
+    AddTriple(leaf.Output, "DirectIrradiance", r.DirectIrradiance, begin, count);
+    AddTriple(leaf.Output, "DirectRadiosity", r.Direct, begin, count);
+    AddTriple(leaf.Output, "SubsurfaceRadiosity", r.FirstBounce, begin, count);
+    AddTriple(leaf.Output, "InterReflectionRadiosity", r.InterReflection, begin, count);
+    AddTriple(leaf.Output, "Radiosity", r.Combined, begin, count);
+    if (this->ComputeHeuristics)
+    {
+      AddTriple(leaf.Output, "HeuristicRadiosity1", h1, begin, count);
+      AddTriple(leaf.Output, "HeuristicRadiosity2", h2, begin, count);
+    }
+    output->SetDataSet(leaf.Where, leaf.Output);
+  }
+}
+
+//------------------------------------------------------------------------------
 int vtkTranslucentRadiosity::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
@@ -239,347 +472,56 @@ int vtkTranslucentRadiosity::RequestData(
   try
   {
     translucency::CreateLinearSolver(this->LinearSolver); // a bad name fails before the work
-  }
-  catch (const translucency::Error& e)
-  {
-    vtkErrorMacro(<< e.what());
-    return 0;
-  }
-  output->CopyStructure(input);
-  in.FormFactorTime = 0.0;
-  in.SetupTime = 0.0;
+    output->CopyStructure(input);
+    translucency::RadiositySession& session = in.Session;
+    session.ResetTimes();
+    session.SetRaysPerPatch(this->RaysPerPatch);
+    session.SetFormFactorThreshold(this->FormFactorThreshold);
+    session.SetProgressCallback([this](double f) {
+      this->UpdateProgress(0.05 + 0.6 * f);
+      return !this->CheckAbort();
+    });
 
-  // The input's signature: is anything but the lights and settings new?
-  std::vector<std::pair<vtkDataObject*, vtkMTimeType>> signature;
-  signature.emplace_back(input, input->GetMTime());
-  {
-    vtkSmartPointer<vtkCompositeDataIterator> leafIt;
-    leafIt.TakeReference(input->NewIterator());
-    for (leafIt->InitTraversal(); !leafIt->IsDoneWithTraversal(); leafIt->GoToNextItem())
+    // 1. Leaves -> scene objects, unless only the lights or solver settings changed.
+    const auto signature = InputSignature(input);
+    const bool sameInput = signature == in.Signature && session.HasValidFormFactors();
+    in.Signature.clear(); // set again on success
+    if (!sameInput)
     {
-      vtkDataObject* data = leafIt->GetCurrentDataObject();
-      signature.emplace_back(data, data ? data->GetMTime() : 0);
-    }
-  }
-  const bool sameInput = in.Scene && signature == in.Signature &&
-    in.Rays == this->RaysPerPatch && in.Threshold == this->FormFactorThreshold;
-  in.Signature.clear(); // set again on success
-  std::vector<Leaf> leaves;
-  if (sameInput)
-  {
-    leaves = in.Leaves;
-  }
-  else
-  {
-    // 1. Leaves -> scene objects.
-    auto scene = std::make_unique<translucency::RadiosityScene>();
-    std::vector<translucency::OpticalProperties> materials;
-    std::vector<std::vector<double>> albedos;
-    // Names: the NAME of each partitioned data set of a collection (a
-    // collection's iterator does not carry them), else the iterator's metadata.
-    std::map<vtkDataObject*, std::string> names;
-    if (auto* pdc = vtkPartitionedDataSetCollection::SafeDownCast(input))
-    {
-      for (unsigned int i = 0; i < pdc->GetNumberOfPartitionedDataSets(); ++i)
+      auto scene = std::make_unique<translucency::RadiosityScene>();
+      std::vector<Leaf> leaves;
+      if (!this->GatherScene(input, *scene, leaves))
       {
-        if (!pdc->HasMetaData(i) || !pdc->GetMetaData(i)->Has(vtkCompositeDataSet::NAME()))
-        {
-          continue;
-        }
-        const unsigned int parts = pdc->GetNumberOfPartitions(i);
-        for (unsigned int j = 0; j < parts; ++j)
-        {
-          std::string name = pdc->GetMetaData(i)->Get(vtkCompositeDataSet::NAME());
-          if (parts > 1)
-          {
-            name += " " + std::to_string(j);
-          }
-          names[pdc->GetPartitionAsDataObject(i, j)] = name;
-        }
+        return 1; // aborted
       }
-    }
-    vtkSmartPointer<vtkCompositeDataIterator> it;
-    it.TakeReference(input->NewIterator());
-    int index = 0;
-    try
-    {
-      for (it->InitTraversal(); !it->IsDoneWithTraversal(); it->GoToNextItem(), ++index)
+      this->UpdateProgress(0.05);
+      // 2. Form factors, kept while the geometry and the ray settings are unchanged.
+      if (!session.UpdateScene(std::move(scene)))
       {
-        vtkDataObject* data = it->GetCurrentDataObject();
-        const auto named = names.find(data);
-        const std::string name = named != names.end() ? named->second : LeafName(it, index);
-        Leaf leaf;
-        leaf.Where.TakeReference(input->NewIterator());
-        leaf.Where->InitTraversal();
-        while (leaf.Where->GetCurrentFlatIndex() != it->GetCurrentFlatIndex())
-        {
-          leaf.Where->GoToNextItem();
-        }
-        if (auto* grid = vtkUnstructuredGrid::SafeDownCast(data))
-        {
-          std::string error;
-          auto mesh = vtkTranslucency::AcquireTetMesh(grid, error);
-          if (!mesh)
-          {
-            vtkErrorMacro(<< name << ": " << error);
-            return 0;
-          }
-          translucency::OpticalProperties material;
-          if (!grid->GetCellData()->GetArray(vtkTranslucency::AbsorptionName) &&
-            !grid->GetCellData()->GetArray(vtkTranslucency::ScatteringName))
-          {
-            vtkErrorMacro(<< name << ": translucent object without coefficients (cell arrays "
-                          << vtkTranslucency::AbsorptionName << ", "
-                          << vtkTranslucency::ScatteringName << ", "
-                          << vtkTranslucency::RefractiveIndexName << ")");
-            return 0;
-          }
-          if (!vtkTranslucency::ToOpticalProperties(grid, material, error))
-          {
-            vtkErrorMacro(<< name << ": " << error);
-            return 0;
-          }
-          leaf.Object = scene->AddTranslucent(name, mesh, material);
-          materials.push_back(material);
-          albedos.emplace_back();
-          // Output: the boundary surface (the patches).
-          vtkNew<vtkPolyData> surface;
-          vtkNew<vtkPoints> points;
-          points->SetDataTypeToDouble();
-          points->SetNumberOfPoints(mesh->GetNumberOfPoints());
-          for (int p = 0; p < mesh->GetNumberOfPoints(); ++p)
-          {
-            points->SetPoint(p, mesh->GetPoint(p));
-          }
-          surface->SetPoints(points);
-          vtkNew<vtkCellArray> polys;
-          const std::vector<int>& tris = mesh->GetBoundaryTriangles();
-          for (size_t t = 0; t < tris.size(); t += 3)
-          {
-            const vtkIdType ids[3] = { tris[t], tris[t + 1], tris[t + 2] };
-            polys->InsertNextCell(3, ids);
-          }
-          surface->SetPolys(polys);
-          vtkNew<vtkIdTypeArray> owners;
-          owners->SetName(vtkTranslucency::OriginalCellIdsName);
-          for (int tet : mesh->GetBoundaryTriangleTets())
-          {
-            owners->InsertNextValue(tet);
-          }
-          surface->GetCellData()->AddArray(owners);
-          leaf.Output = surface;
-        }
-        else if (auto* poly = vtkPolyData::SafeDownCast(data))
-        {
-          vtkDataArray* albedoArray = poly->GetCellData()->GetArray("Albedo");
-          if (!albedoArray || albedoArray->GetNumberOfComponents() != 3)
-          {
-            vtkErrorMacro(<< name << ": an opaque surface needs the cell array Albedo with 3 "
-                                     "components (R, G, B in [0, 1])");
-            return 0;
-          }
-          std::vector<double> points(3 * poly->GetNumberOfPoints());
-          for (vtkIdType p = 0; p < poly->GetNumberOfPoints(); ++p)
-          {
-            poly->GetPoint(p, &points[3 * p]);
-          }
-          std::vector<int> triangles;
-          std::vector<double> albedo;
-          for (vtkIdType c = 0; c < poly->GetNumberOfCells(); ++c)
-          {
-            vtkIdType npts;
-            const vtkIdType* pts;
-            poly->GetCellPoints(c, npts, pts);
-            if (npts != 3 || poly->GetCellType(c) != VTK_TRIANGLE)
-            {
-              vtkErrorMacro(<< name << ": cell " << c
-                            << " is not a triangle (triangulate the surface first)");
-              return 0;
-            }
-            triangles.insert(triangles.end(), { static_cast<int>(pts[0]), static_cast<int>(pts[1]),
-                                                static_cast<int>(pts[2]) });
-            for (int k = 0; k < 3; ++k)
-            {
-              albedo.push_back(albedoArray->GetComponent(c, k));
-            }
-          }
-          albedos.push_back(albedo);
-          materials.emplace_back();
-          leaf.Object = scene->AddOpaque(name, points, triangles, albedo);
-          vtkNew<vtkPolyData> copy;
-          copy->ShallowCopy(poly);
-          leaf.Output = copy;
-        }
-        else
-        {
-          vtkErrorMacro(<< name << ": a " << (data ? data->GetClassName() : "null")
-                        << " is neither a tet mesh (vtkUnstructuredGrid) nor a surface "
-                           "(vtkPolyData)");
-          return 0;
-        }
-        leaves.push_back(leaf);
-        if (this->CheckAbort())
-        {
-          return 1;
-        }
+        return 1; // aborted
       }
-      scene->Build(false); // the BVH only if the geometry changed (below)
+      in.Leaves = leaves;
     }
-    catch (const translucency::Error& e)
-    {
-      vtkErrorMacro(<< e.what());
-      return 0;
-    }
-    this->UpdateProgress(0.05);
-
-    // 2. Form factors, kept while the geometry and the ray settings are unchanged.
-    const bool sameGeometry = in.Scene && in.Points == scene->GetPoints() &&
-      in.Triangles == scene->GetTriangles() && in.Rays == this->RaysPerPatch &&
-      in.Threshold == this->FormFactorThreshold;
-    try
-    {
-      if (!sameGeometry)
-      {
-        scene->BuildRayCaster();
-        translucency::FormFactorComputer computer;
-        computer.SetRaysPerPatch(this->RaysPerPatch);
-        computer.SetThreshold(this->FormFactorThreshold);
-        computer.SetProgressCallback([this](double f) {
-          this->UpdateProgress(0.05 + 0.6 * f);
-          return !this->CheckAbort();
-        });
-        auto start = std::chrono::steady_clock::now();
-        if (!computer.Compute(*scene, in.F))
-        {
-          in.Scene.reset();
-          return 1; // aborted
-        }
-        in.FormFactorTime = MillisecondsSince(start);
-        in.Points = scene->GetPoints();
-        in.Triangles = scene->GetTriangles();
-        in.Rays = this->RaysPerPatch;
-        in.Threshold = this->FormFactorThreshold;
-        in.Scene = std::move(scene);
-        in.Solver.reset();
-      }
-      else
-      {
-        // Same geometry: update albedos and materials in the kept scene.
-        for (int k = 0; k < in.Scene->GetNumberOfObjects(); ++k)
-        {
-          const auto& object = in.Scene->GetObject(k);
-          if (!object.Translucent && object.Albedo != albedos[k])
-          {
-            in.Scene->SetAlbedo(k, albedos[k]);
-          }
-          else if (object.Translucent && !SameMaterial(object.Material, materials[k]))
-          {
-            in.Scene->SetMaterial(k, materials[k]);
-            if (in.Solver)
-            {
-              auto start = std::chrono::steady_clock::now();
-              in.Solver->UpdateMaterial(k);
-              in.SetupTime += MillisecondsSince(start);
-            }
-          }
-        }
-      }
-    }
-    catch (const translucency::Error& e)
-    {
-      vtkErrorMacro(<< e.what());
-      return 0;
-    }
-    in.Leaves = leaves;
-  }
-  try
-  {
     this->UpdateProgress(0.65);
 
     // 3. Solve.
-    if (!in.Solver || in.Method != this->SubsurfaceMethod || in.VoxelSize != this->VoxelSize ||
-      in.MaxDistance != this->MaxDistance || in.LinearSolver != this->LinearSolver)
+    translucency::TranslucentRadiosity& solver = this->Solve();
+    std::vector<double> h1, h2;
+    if (this->ComputeHeuristics)
     {
-      in.Solver = std::make_unique<translucency::TranslucentRadiosity>();
-      in.Solver->SetScene(in.Scene.get());
-      in.Solver->SetFormFactors(&in.F);
-      in.Solver->SetSubsurfaceMethod(
-        this->SubsurfaceMethod == SUBSURFACE_PROFILE ? "profile" : "diffusion");
-      in.Solver->SetVoxelSize(this->VoxelSize);
-      in.Solver->SetLinearSolver(this->LinearSolver);
-      in.Solver->SetMaxDistance(this->MaxDistance);
-      auto start = std::chrono::steady_clock::now();
-      in.Solver->Setup();
-      in.SetupTime += MillisecondsSince(start);
-      in.Method = this->SubsurfaceMethod;
-      in.VoxelSize = this->VoxelSize;
-      in.MaxDistance = this->MaxDistance;
-      in.LinearSolver = this->LinearSolver;
+      solver.SolveHeuristics(h1, h2);
     }
-    in.Solver->SetRelTol(this->RelTol);
-    in.Solver->SetMaxIter(this->MaxIter);
-    in.Solver->SetShadows(this->Shadows);
-    in.Solver->SetIteration(this->Iteration == ITERATION_JACOBI
-        ? translucency::TranslucentRadiosity::Iteration::Jacobi
-        : translucency::TranslucentRadiosity::Iteration::GaussSeidel);
-    std::vector<translucency::LightSource> lights = in.Lights;
-    if (lights.empty())
-    {
-      translucency::LightSource light;
-      light.Type = this->LightType == 1 ? translucency::LightSource::Kind::Directional
-        : this->LightType == 2          ? translucency::LightSource::Kind::Spot
-                                        : translucency::LightSource::Kind::Point;
-      light.Position = { this->LightPosition[0], this->LightPosition[1], this->LightPosition[2] };
-      light.Direction = { this->LightDirection[0], this->LightDirection[1],
-        this->LightDirection[2] };
-      light.Power = { this->LightPower[0], this->LightPower[1], this->LightPower[2] };
-      light.SpotCutoff = this->LightCutoff;
-      lights.push_back(light);
-    }
-    in.Solver->Solve(lights, in.Result);
+    this->UpdateProgress(0.95);
+
+    // 4. Per-patch cell arrays on the output leaves.
+    this->AttachOutputs(output, in.Leaves, h1, h2);
+    in.Signature = signature;
   }
   catch (const translucency::Error& e)
   {
     vtkErrorMacro(<< e.what());
     return 0;
   }
-  if (!in.Result.Converged)
-  {
-    vtkWarningMacro(<< "radiosity did not converge in " << in.Result.Iterations
-                    << " iterations (last relative change "
-                    << (in.Result.ResidualHistory.empty() ? 0.0 : in.Result.ResidualHistory.back())
-                    << ", RelTol " << this->RelTol << ")");
-  }
-  std::vector<double> h1, h2;
-  if (this->ComputeHeuristics)
-  {
-    in.Solver->SolveHeuristics(h1, h2);
-  }
-  this->UpdateProgress(0.95);
-
-  // 4. Per-patch cell arrays on the output leaves.
-  const translucency::RadiosityResult& r = in.Result;
-  for (const Leaf& cached : leaves)
-  {
-    // A new output object per execution (the cached leaf keeps no arrays).
-    Leaf leaf = cached;
-    leaf.Output = vtkSmartPointer<vtkPolyData>::New();
-    leaf.Output->ShallowCopy(cached.Output);
-    const int begin = in.Scene->GetPatchOffset(leaf.Object);
-    const int count = in.Scene->GetPatchOffset(leaf.Object + 1) - begin;
-    AddTriple(leaf.Output, "DirectIrradiance", r.DirectIrradiance, begin, count);
-    AddTriple(leaf.Output, "DirectRadiosity", r.Direct, begin, count);
-    AddTriple(leaf.Output, "SubsurfaceRadiosity", r.FirstBounce, begin, count);
-    AddTriple(leaf.Output, "InterReflectionRadiosity", r.InterReflection, begin, count);
-    AddTriple(leaf.Output, "Radiosity", r.Combined, begin, count);
-    if (this->ComputeHeuristics)
-    {
-      AddTriple(leaf.Output, "HeuristicRadiosity1", h1, begin, count);
-      AddTriple(leaf.Output, "HeuristicRadiosity2", h2, begin, count);
-    }
-    output->SetDataSet(leaf.Where, leaf.Output);
-  }
-  in.Signature = signature;
   this->UpdateProgress(1.0);
   return 1;
 }

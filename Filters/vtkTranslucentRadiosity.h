@@ -45,6 +45,15 @@
 
 #include <memory>
 #include <string>
+#include <vector> // for the steps of RequestData
+
+class vtkCompositeDataSet;
+namespace translucency
+{
+struct LightSource;
+class RadiosityScene;
+class TranslucentRadiosity;
+}
 
 class TRANSLUCENCYFILTERS_EXPORT vtkTranslucentRadiosity : public vtkDataObjectAlgorithm
 {
@@ -201,8 +210,23 @@ private:
   vtkTranslucentRadiosity(const vtkTranslucentRadiosity&) = delete;
   void operator=(const vtkTranslucentRadiosity&) = delete;
 
+  struct Leaf;
   struct Internals;
   std::unique_ptr<Internals> Internal;
+
+  ///@{
+  /// The steps of RequestData (each throws translucency::Error on bad input).
+  /// Leaves -> scene objects and output surfaces; false when aborted.
+  bool GatherScene(
+    vtkCompositeDataSet* input, translucency::RadiosityScene& scene, std::vector<Leaf>& leaves);
+  /// The lights added, else the one light of the Light* settings.
+  std::vector<translucency::LightSource> GetLights() const;
+  /// Configure the kept (or a new) solver and solve into the result.
+  translucency::TranslucentRadiosity& Solve();
+  /// The per-patch results as cell arrays on new output leaves.
+  void AttachOutputs(vtkCompositeDataSet* output, const std::vector<Leaf>& leaves,
+    const std::vector<double>& h1, const std::vector<double>& h2);
+  ///@}
 };
 
 #endif

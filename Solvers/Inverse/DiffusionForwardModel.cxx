@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <sstream>
 #include <tuple>
 
@@ -96,6 +97,28 @@ std::string DiffusionForwardModel::GetFactorizationName()
 #else
   return "eigen-simplicial-ldlt";
 #endif
+}
+
+std::vector<int> DiffusionForwardModel::DenseElements(
+  const std::vector<long long>& labels, int& numElements)
+{
+  std::map<long long, int> dense; // labels -> 0..E-1, in increasing order
+  for (long long label : labels)
+  {
+    dense.emplace(label, 0);
+  }
+  int next = 0;
+  for (auto& entry : dense)
+  {
+    entry.second = next++;
+  }
+  std::vector<int> elements(labels.size());
+  for (size_t t = 0; t < labels.size(); ++t)
+  {
+    elements[t] = dense[labels[t]];
+  }
+  numElements = next;
+  return elements;
 }
 
 DiffusionForwardModel::DiffusionForwardModel(const TetMesh& mesh, std::vector<int> tetElement,

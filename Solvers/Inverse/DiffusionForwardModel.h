@@ -45,6 +45,13 @@ public:
    */
   DiffusionForwardModel(const TetMesh& mesh, std::vector<int> tetElement, int numElements,
     const std::vector<double>& tetEta);
+
+  /**
+   * Element ids 0..E-1 from arbitrary integer labels per tet (a region or
+   * voxel id array): the distinct labels in increasing order get 0, 1, ...
+   * Returns the element of each tet; numElements receives E.
+   */
+  static std::vector<int> DenseElements(const std::vector<long long>& labels, int& numElements);
   ~DiffusionForwardModel();
   DiffusionForwardModel(const DiffusionForwardModel&) = delete;
   DiffusionForwardModel& operator=(const DiffusionForwardModel&) = delete;

@@ -130,7 +130,8 @@ void ValidateLight(const LightSource& light, size_t index)
   {
     if (!(light.Power[c] >= 0.0) || !std::isfinite(light.Power[c]))
     {
-      msg << "power " << light.Power[c] << " in channel " << c << ": must be finite and >= 0";
+      msg << "power " << light.Power[c] << " in channel " << c
+          << " is negative or not finite: it must be finite and >= 0";
       throw Error(msg.str());
     }
   }

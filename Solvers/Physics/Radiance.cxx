@@ -62,6 +62,46 @@ std::vector<double> BoundaryPointRefractiveIndex(const TetMesh& mesh,
   return eta;
 }
 
+std::vector<double> BoundaryRadiance(const TetMesh& mesh, const std::vector<double>& fluence,
+  const std::vector<double>& irradiance, const std::vector<double>& pointEta,
+  const double* viewPoint, bool nSquaredLaw)
+{
+  const size_t numPoints = static_cast<size_t>(mesh.GetNumberOfPoints());
+  if (fluence.size() != 3 * numPoints || irradiance.size() != 3 * numPoints ||
+    pointEta.size() != numPoints)
+  {
+    std::ostringstream os;
+    os << "BoundaryRadiance: the mesh has " << numPoints << " points but fluence has "
+       << fluence.size() << " values, irradiance " << irradiance.size() << " and eta "
+       << pointEta.size() << " (3, 3 and 1 per point expected)";
+    throw Error(os.str());
+  }
+  const std::vector<int>& boundary = mesh.GetBoundaryPoints();
+  const std::vector<double>& normals = mesh.GetPointNormals();
+  const long long n = static_cast<long long>(boundary.size());
+  std::vector<double> radiance(3 * boundary.size());
+#pragma omp parallel for schedule(static)
+  for (long long k = 0; k < n; ++k)
+  {
+    const size_t i = static_cast<size_t>(boundary[k]);
+    const double* nrm = &normals[3 * i];
+    double cosOut = 1.0;
+    if (viewPoint)
+    {
+      const double* x = mesh.GetPoint(static_cast<int>(i));
+      const double d[3] = { viewPoint[0] - x[0], viewPoint[1] - x[1], viewPoint[2] - x[2] };
+      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      radiance[3 * k + c] = OutgoingRadiance(
+        fluence[3 * i + c], irradiance[3 * i + c], pointEta[i], cosOut, nSquaredLaw);
+    }
+  }
+  return radiance;
+}
+
 std::vector<double> PointRefractiveIndex(const TetMesh& mesh, const std::vector<double>& tetEta)
 {
   std::vector<double> eta = BoundaryPointRefractiveIndex(mesh, tetEta);

@@ -29,6 +29,22 @@ namespace translucency
 double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nSquaredLaw = false);
 
 /**
+ * OutgoingRadiance() at every boundary point of the mesh, in the order of
+ * mesh.GetBoundaryPoints(): 3 values (R, G, B, W/mm^2/sr) per boundary point.
+ * @param fluence, irradiance 3 values per mesh point (W/mm^2)
+ * @param pointEta refractive index per mesh point (PointRefractiveIndex())
+ * @param viewPoint null: every point seen along its normal (cosOut = 1);
+ *        else seen from this point (mm): cosOut is the cosine between the
+ *        point normal and the direction to it (0 at the view point itself)
+ * @param nSquaredLaw see OutgoingRadiance()
+ * OpenMP-parallel over the points (each value independent: same bits at any
+ * thread count). Throws translucency::Error on wrong array sizes.
+ */
+std::vector<double> BoundaryRadiance(const TetMesh& mesh, const std::vector<double>& fluence,
+  const std::vector<double>& irradiance, const std::vector<double>& pointEta,
+  const double* viewPoint, bool nSquaredLaw = false);
+
+/**
  * Refractive index seen by each mesh point: the area-weighted mean of the
  * RefractiveIndex of the tets owning the boundary triangles around it
  * (interior points get the mean over their tets; points used by no tet get 1).

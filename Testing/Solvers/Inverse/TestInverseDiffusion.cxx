@@ -535,3 +535,14 @@ TEST(InverseDiffusion, BadInput)
     },
     "element 5, channel G: kappa = -0.3");
 }
+
+TEST(InverseDiffusion, DenseElementsNumberLabelsInIncreasingOrder)
+{
+  int count = -1;
+  const std::vector<int> elements =
+    DiffusionForwardModel::DenseElements({ 40, -3, 7, 40, 7, 1000000000000LL }, count);
+  EXPECT_EQ(count, 4);
+  EXPECT_EQ(elements, (std::vector<int>{ 2, 0, 1, 2, 1, 3 }));
+  EXPECT_TRUE(DiffusionForwardModel::DenseElements({}, count).empty());
+  EXPECT_EQ(count, 0);
+}

@@ -11,6 +11,7 @@
 #include "Fresnel.h"
 #include "ProfileSubsurface.h"
 #include "RadiosityScene.h"
+#include "RadiositySession.h"
 #include "Radiance.h"
 #include "TestMeshes.h"
 #include "TetMesh.h"
@@ -897,6 +898,86 @@ TEST(Radiosity, SpotLightCone)
   const double far[3] = { 7, 0, 0 }; // 35 deg: outside
   EXPECT_FALSE(DirectIrradiance(spot, far, n, 1.0, q, w, d));
   EXPECT_EQ(q[0], 0.0);
+}
+
+
+// ---- RadiositySession: what is kept between runs
+
+/// A room with a translucent cube, gathered like the filter does (Build(false)).
+std::unique_ptr<RadiosityScene> SessionScene(
+  const std::shared_ptr<TetMesh>& mesh, double sigmaS, double wall = -1.0)
+{
+  auto scene = std::make_unique<RadiosityScene>();
+  AddRoom(*scene, 5.0);
+  if (wall >= 0.0)
+  {
+    RadiosityObject room = scene->GetObject(0);
+    scene = std::make_unique<RadiosityScene>();
+    scene->AddOpaque("room", room.Points, room.Triangles,
+      std::vector<double>(room.Albedo.size(), wall));
+  }
+  scene->AddTranslucent("cube", mesh, Material(mesh->GetNumberOfTets(), 0.05, sigmaS));
+  scene->Build(false);
+  return scene;
+}
+
+TEST(Radiosity, SessionKeepsFormFactorsAndUpdatesMaterials)
+{
+  const double origin[3] = { 3, 3, 0 };
+  auto mesh = Cube(3, 3.0, origin);
+  const std::vector<LightSource> lights = { PointLight(5, 5, 9) };
+  RadiositySession session;
+  session.SetRaysPerPatch(32);
+  EXPECT_FALSE(session.HasValidFormFactors());
+  EXPECT_THROW(session.GetSolver(SubsurfaceSettings()), Error);
+  ASSERT_TRUE(session.UpdateScene(SessionScene(mesh, 1.0)));
+  EXPECT_TRUE(session.HasValidFormFactors());
+  const RadiosityScene* kept = session.GetScene();
+  RadiosityResult first;
+  session.GetSolver(SubsurfaceSettings()).Solve(lights, first);
+  const TranslucentRadiosity* solver = session.GetKeptSolver();
+
+  // Same patches, new material and wall albedo: the scene, F and solver are kept and updated.
+  session.ResetTimes();
+  ASSERT_TRUE(session.UpdateScene(SessionScene(mesh, 2.0, 0.3)));
+  EXPECT_EQ(session.GetScene(), kept);
+  EXPECT_EQ(session.GetFormFactorMilliseconds(), 0.0);
+  EXPECT_EQ(session.GetKeptSolver(), solver);
+  EXPECT_EQ(kept->GetObject(1).Material.ReducedScatteringCoefficient[0], 2.0);
+  EXPECT_EQ(kept->GetObject(0).Albedo[0], 0.3);
+  RadiosityResult updated, fresh;
+  session.GetSolver(SubsurfaceSettings()).Solve(lights, updated);
+  // A session started on the changed scene gives the same radiosity.
+  RadiositySession other;
+  other.SetRaysPerPatch(32);
+  ASSERT_TRUE(other.UpdateScene(SessionScene(mesh, 2.0, 0.3)));
+  other.GetSolver(SubsurfaceSettings()).Solve(lights, fresh);
+  ASSERT_EQ(updated.Combined.size(), fresh.Combined.size());
+  for (size_t i = 0; i < fresh.Combined.size(); ++i)
+  {
+    EXPECT_NEAR(updated.Combined[i], fresh.Combined[i], 1e-3 * std::abs(fresh.Combined[i]) + 1e-12);
+  }
+
+  // New ray settings: new form factors and a new solver; new subsurface settings: a new solver.
+  session.SetRaysPerPatch(16);
+  EXPECT_FALSE(session.HasValidFormFactors());
+  ASSERT_TRUE(session.UpdateScene(SessionScene(mesh, 2.0, 0.3)));
+  EXPECT_NE(session.GetScene(), kept);
+  EXPECT_EQ(session.GetKeptSolver(), nullptr);
+  SubsurfaceSettings profile;
+  profile.Method = "profile";
+  TranslucentRadiosity& a = session.GetSolver(SubsurfaceSettings());
+  TranslucentRadiosity& b = session.GetSolver(profile);
+  EXPECT_EQ(b.GetSubsurfaceMethod(), "profile");
+  EXPECT_EQ(&session.GetSolver(profile), &b);
+  (void)a;
+
+  // Stopped by the progress callback: nothing kept.
+  session.SetRaysPerPatch(8);
+  session.SetProgressCallback([](double) { return false; });
+  EXPECT_FALSE(session.UpdateScene(SessionScene(mesh, 2.0)));
+  EXPECT_EQ(session.GetScene(), nullptr);
+  EXPECT_FALSE(session.HasValidFormFactors());
 }
 
 } // namespace
