@@ -39,6 +39,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -311,8 +312,7 @@ Command AddBenchCommand(CLI::App& app)
          "L2 error of the boundary fluence, SpMV-equivalents, the\n"
          "SpMV bandwidth bound, cut -> new fluence (multigrid-agg)")
       ->type_name("[N1,N2,...]")
-      ->expected(0, 1)
-      ->delimiter(',')
+      ->expected(0, 1) // one optional value; the comma list is split below
       ->group(group);
   CLI::Option* plot = c->add_option("--plot", linear->PlotPath,
                         "error of the boundary fluence vs solve time per solver\n"
@@ -333,9 +333,14 @@ Command AddBenchCommand(CLI::App& app)
   return { c, [=]() {
             if (linearSolvers->count() > 0)
             {
-              for (const std::string& name : *solvers)
-                if (!name.empty())
-                  linear->Names.push_back(name);
+              for (const std::string& list : *solvers)
+              {
+                std::stringstream names(list);
+                std::string name;
+                while (std::getline(names, name, ','))
+                  if (!name.empty())
+                    linear->Names.push_back(name);
+              }
               if (!tets->empty())
                 linear->Tets = *tets;
               if (*runs > 0)

@@ -48,7 +48,7 @@ class BenchLinearSolvers(unittest.TestCase):
         cls.tmp = tempfile.TemporaryDirectory()
         cls.json_path = os.path.join(cls.tmp.name, "bench.json")
         cls.png_path = os.path.join(cls.tmp.name, "curve.png")
-        mesh = os.path.join(cls.tmp.name, "sphere.stl")
+        mesh = cls.mesh = os.path.join(cls.tmp.name, "sphere.stl")
         sphere = vtkSphereSource()
         sphere.SetRadius(10.0)
         sphere.SetThetaResolution(16)
@@ -137,6 +137,19 @@ class BenchLinearSolvers(unittest.TestCase):
         self.assertEqual(r.returncode, 1)
         self.assertIn("no-such-solver", r.stderr)
         self.assertIn("cg-jacobi", r.stderr)
+
+    def test_named_solvers_as_a_comma_list(self):
+        # The README's form: only the named solvers, in the given order.
+        json_path = os.path.join(self.tmp.name, "named.json")
+        r = subprocess.run([CLI, "bench", "--linear-solvers", "multigrid-agg,cg-jacobi",
+                            "--mesh", self.mesh, "--tets", "3000", "--runs", "1", "--no-cut",
+                            "--json", json_path],
+                           capture_output=True, text=True, timeout=300)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(json_path) as f:
+            sizes = json.load(f)
+        self.assertEqual([row["solver"] for row in sizes[0]["solvers"]],
+                         ["multigrid-agg", "cg-jacobi"])
 
 
 if __name__ == "__main__":
