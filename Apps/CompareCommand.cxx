@@ -420,8 +420,9 @@ int Compare(CompareOptions& o)
         throw translucency::Error(error);
     }
     std::vector<PlotSeries> curves;
+    // A stochastic solver has no error-vs-tolerance curve.
     for (const std::string& name : order)
-      if (name != "montecarlo")
+      if (!translucency::GetDiffusionSolverRegistry().Get(name).Properties.IsStochastic)
         curves.push_back(ErrorVersusTime(name, lit, refFluence, gridSpacing));
     if (!WritePlotPNG(curves, "wall time (ms)", "RMS relative error of boundary fluence",
           outputDir + "/error_vs_time.png", error))

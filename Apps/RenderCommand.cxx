@@ -40,7 +40,7 @@ struct RenderOptions
 {
   SceneOptions Scene;
   RadianceImageOptions Image;
-  std::string SolverName = "divergence";
+  std::string SolverName = translucency::GetDiffusionSolverNames().front(); ///< the default
   std::string LinearSolver;
   std::string OutputPrefix, PngPath, SlicePath, JsonPath;
   double RelTol = 1e-6;
@@ -221,7 +221,8 @@ Command AddRenderCommand(CLI::App& app)
   c->add_option("--linear-solver", o->LinearSolver,
      "linear solver (default: the solver's own); divergence/fem:\n" +
        WrapNames(translucency::GetLinearSolverNames()) +
-       "\n(the first is the default); quadgraph/grid: bicgstab\n(default), relaxation")
+       "\n(the first is the default); quadgraph/grid:\n" +
+       WrapNames(translucency::GetNonSymmetricLinearSolverNames()) + " (the first is the default)")
     ->type_name("NAME");
   AddGridAndPhotonOptions(c, o->GridSpacing, o->Photons);
   AddNumber(c, "--rel-tol", o->RelTol, "relative residual of iterative solvers", "T",

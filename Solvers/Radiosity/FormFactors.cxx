@@ -105,9 +105,17 @@ bool FormFactorComputer::Compute(const RadiosityScene& scene, FormFactorMatrix& 
   std::atomic<bool> aborted(false);
   std::atomic<int> done(0);
 
+  // The callback runs on the calling thread only (thread 0): once before the
+  // loop, so an abort is seen even if the other threads take every row, then
+  // every 256 rows thread 0 computes.
+  if (Progress_ && !Progress_(0.0))
+  {
+    return false;
+  }
 #pragma omp parallel
   {
     std::vector<int> hits;
+    int rowsOfThisThread = 0;
 #pragma omp for schedule(dynamic, 16)
     for (int i = 0; i < numPatches; ++i)
     {
@@ -115,7 +123,7 @@ bool FormFactorComputer::Compute(const RadiosityScene& scene, FormFactorMatrix& 
       {
         continue;
       }
-      if (Progress_ && omp_get_thread_num() == 0 && i % 256 == 0 &&
+      if (Progress_ && omp_get_thread_num() == 0 && ++rowsOfThisThread % 256 == 0 &&
         !Progress_(static_cast<double>(done.load()) / numPatches))
       {
         aborted.store(true);
