@@ -7,6 +7,7 @@
 #include "RayCaster.h"
 #include "TetMesh.h"
 #include "Timer.h"
+#include "TriangleGeometry.h"
 
 #include <omp.h>
 
@@ -358,22 +359,8 @@ struct Tracer
   /// Cosine-weighted unit direction about the unit vector n.
   static void CosineDirection(const double* n, PhotonRandom& rng, double* w)
   {
-    double t[3];
-    if (std::abs(n[0]) < 0.9)
-    {
-      t[0] = 0.0;
-      t[1] = -n[2];
-      t[2] = n[1];
-    }
-    else
-    {
-      t[0] = n[2];
-      t[1] = 0.0;
-      t[2] = -n[0];
-    }
-    Normalize(t);
-    const double b[3] = { n[1] * t[2] - n[2] * t[1], n[2] * t[0] - n[0] * t[2],
-      n[0] * t[1] - n[1] * t[0] };
+    double t[3], b[3];
+    OrthonormalFrame(n, t, b);
     const double u = rng.Uniform(), phi = 2.0 * Pi * rng.Uniform();
     const double r = std::sqrt(u), cosTheta = std::sqrt(1.0 - u);
     const double a = r * std::cos(phi), c = r * std::sin(phi);

@@ -7,6 +7,8 @@
 
 #include <Eigen/Core>
 
+#include <cmath>
+
 namespace translucency
 {
 
@@ -71,6 +73,36 @@ inline Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& p, const Ei
   const double v = vb * denom, u = vc * denom;
   weights(1.0 - v - u, v, u);
   return a + ab * v + ac * u;
+}
+
+/**
+ * An orthonormal frame (t, b, n) about the unit vector n: t is n x (1, 0, 0)
+ * or, when n is close to the x axis, n x (0, 1, 0) (up to sign), normalised;
+ * b = n x t. Used to turn hemisphere samples about a normal into directions
+ * (light occlusion, form factors, Monte Carlo emission).
+ */
+inline void OrthonormalFrame(const double n[3], double t[3], double b[3])
+{
+  if (std::abs(n[0]) < 0.9)
+  {
+    t[0] = 0.0;
+    t[1] = -n[2];
+    t[2] = n[1];
+  }
+  else
+  {
+    t[0] = n[2];
+    t[1] = 0.0;
+    t[2] = -n[0];
+  }
+  const double length = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+  for (int d = 0; d < 3; ++d)
+  {
+    t[d] /= length;
+  }
+  b[0] = n[1] * t[2] - n[2] * t[1];
+  b[1] = n[2] * t[0] - n[0] * t[2];
+  b[2] = n[0] * t[1] - n[1] * t[0];
 }
 
 } // namespace translucency

@@ -4,6 +4,7 @@
 #include "Fresnel.h"
 #include "RayCaster.h"
 #include "TetMesh.h"
+#include "TriangleGeometry.h"
 
 #include <omp.h>
 
@@ -81,27 +82,8 @@ bool DirectIrradiance(const LightSource& light, const double x[3], const double 
 
 double HemisphereDirection(const double n[3], int k, int count, double rotation, double w[3])
 {
-  // Orthonormal frame (t, b, n).
-  double t[3];
-  if (std::abs(n[0]) < 0.9)
-  {
-    t[0] = 0.0;
-    t[1] = -n[2];
-    t[2] = n[1];
-  }
-  else
-  {
-    t[0] = n[2];
-    t[1] = 0.0;
-    t[2] = -n[0];
-  }
-  const double tl = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
-  for (double& v : t)
-  {
-    v /= tl;
-  }
-  const double b[3] = { n[1] * t[2] - n[2] * t[1], n[2] * t[0] - n[0] * t[2],
-    n[0] * t[1] - n[1] * t[0] };
+  double t[3], b[3];
+  OrthonormalFrame(n, t, b);
   // Cosine-weighted: r = sqrt(u) on the unit disk, lifted to the hemisphere.
   const double golden = 2.399963229728653; // pi (3 - sqrt 5)
   const double u = (k + 0.5) / count;

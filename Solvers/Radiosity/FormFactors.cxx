@@ -4,6 +4,7 @@
 #include "RadiosityScene.h"
 #include "RayCaster.h"
 #include "Timer.h"
+#include "TriangleGeometry.h"
 
 #include <omp.h>
 
@@ -133,27 +134,8 @@ bool FormFactorComputer::Compute(const RadiosityScene& scene, FormFactorMatrix& 
       const double* b = &points[3 * static_cast<std::size_t>(triangles[3 * i + 1])];
       const double* c = &points[3 * static_cast<std::size_t>(triangles[3 * i + 2])];
       const double* nrm = &normals[3 * static_cast<std::size_t>(i)];
-      // Orthonormal frame (t, s, n).
-      double t[3];
-      if (std::abs(nrm[0]) < 0.9)
-      {
-        t[0] = 0.0;
-        t[1] = -nrm[2];
-        t[2] = nrm[1];
-      }
-      else
-      {
-        t[0] = nrm[2];
-        t[1] = 0.0;
-        t[2] = -nrm[0];
-      }
-      const double tl = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
-      for (double& v : t)
-      {
-        v /= tl;
-      }
-      const double s[3] = { nrm[1] * t[2] - nrm[2] * t[1], nrm[2] * t[0] - nrm[0] * t[2],
-        nrm[0] * t[1] - nrm[1] * t[0] };
+      double t[3], s[3]; // orthonormal frame (t, s, n)
+      OrthonormalFrame(nrm, t, s);
       hits.clear();
       const std::uint64_t key = Mix(Seed_ * 0x632be59bd9b4e019ULL + static_cast<std::uint64_t>(i));
       // A random rotation of the stratified pattern about the normal per

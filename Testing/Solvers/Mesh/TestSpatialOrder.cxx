@@ -3,6 +3,7 @@
 #include "SpatialOrder.h"
 #include "TriangleGeometry.h"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <random>
@@ -57,5 +58,29 @@ TEST(TriangleGeometry, ClosestPointMatchesDenseSamplingAndItsWeights)
       }
     EXPECT_LE((q - p).norm(), best + 1e-12);
     EXPECT_GE((q - p).norm(), best - 0.01);
+  }
+}
+
+TEST(TriangleGeometry, OrthonormalFrameIsRightHandedAndOrthonormal)
+{
+  std::mt19937 rng(11);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (int trial = 0; trial < 500; ++trial)
+  {
+    Eigen::Vector3d n(g(rng), g(rng), g(rng));
+    if (trial == 0)
+    {
+      n = Eigen::Vector3d(1, 0, 0); // the branch for normals near the x axis
+    }
+    n.normalize();
+    double t[3], b[3];
+    OrthonormalFrame(n.data(), t, b);
+    const Eigen::Vector3d T(t), B(b);
+    EXPECT_NEAR(T.norm(), 1.0, 1e-14);
+    EXPECT_NEAR(B.norm(), 1.0, 1e-14);
+    EXPECT_NEAR(T.dot(n), 0.0, 1e-14);
+    EXPECT_NEAR(B.dot(n), 0.0, 1e-14);
+    EXPECT_NEAR(T.dot(B), 0.0, 1e-14);
+    EXPECT_LT((T.cross(B) - n).norm(), 1e-14); // (t, b, n) right-handed
   }
 }
