@@ -1,5 +1,7 @@
 #include "vtkTetrahedralizeSurface.h"
 
+#include "Error.h"
+#include "SurfaceIntersections.h"
 #include "TetMesh.h"
 
 #include <vtkCellArray.h>
@@ -305,8 +307,41 @@ void FillTetGenInput(const Surface& surface, tetgenio& in)
 /// surface, instead of throwing its error code. So that error, the one a
 /// user is most likely to hit, is detected beforehand with TetGen's -d
 /// switch, which only reports the intersecting triangles and returns.
+///
+/// TetGen's -d pass can itself take minutes on a surface whose triangles
+/// cross many others (a file whose vertices were shifted by one line), so an
+/// edge piercing a triangle is looked for first through a BVH
+/// (translucency::FindEdgeCrossing, O(E log T)); -d then finds the rest
+/// (coplanar overlaps, contacts at vertices).
 bool CheckSelfIntersections(const Surface& surface, std::string& error)
 {
+  {
+    std::vector<int> triangles(3 * surface.Triangles.size());
+    for (size_t t = 0; t < surface.Triangles.size(); ++t)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        triangles[3 * t + k] = static_cast<int>(surface.Triangles[t][k]);
+      }
+    }
+    translucency::EdgeCrossing crossing;
+    try
+    {
+      if (translucency::FindEdgeCrossing(surface.Points, triangles, crossing))
+      {
+        error = "the surface intersects itself: the edge " +
+          FormatPoint(&surface.Points[3 * crossing.EdgePoints[0]]) + "-" +
+          FormatPoint(&surface.Points[3 * crossing.EdgePoints[1]]) + " crosses triangle " +
+          std::to_string(crossing.Triangle) + " at " + FormatPoint(crossing.Point);
+        return false;
+      }
+    }
+    catch (const translucency::Error& e)
+    {
+      error = e.what();
+      return false;
+    }
+  }
   tetgenio in, out;
   FillTetGenInput(surface, in);
   char switches[] = "dQ";
