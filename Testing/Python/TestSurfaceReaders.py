@@ -521,6 +521,11 @@ class SurfaceReaderTest(unittest.TestCase):
             "face.obj": (tet.replace("f 2 3 4", "f 2 3 40"), "refers to vertex 40"),
             # Read fine, rejected by vtkTetrahedralizeSurface before VTK's cleaning.
             "huge.obj": (tet.replace("v 0 1 0", "v 0 1e200 0"), "magnitude"),
+            # Found by scripts/mutate_surfaces.py: a duplicated 'v' line shifts
+            # every vertex by one, a surface crossing itself everywhere, on
+            # which TetGen's -d pass ran for minutes (a hang at the CLI).
+            "shifted.obj": (self.bytes_of("obj").replace(b"\nv ", b"\nv 1 2 3\nv ", 1),
+                            "intersects itself"),
         }
         for name, (content, message) in cases.items():
             path = self.write(name, content)
@@ -529,6 +534,7 @@ class SurfaceReaderTest(unittest.TestCase):
                     [CLI, "render", "--mesh", path, "--target-tets", "500", "--output", prefix,
                      "--json", prefix + ".json"],
                     capture_output=True, text=True, timeout=60)
+                # The bad file is refused within seconds, not after TetGen's minutes.
                 self.assertEqual(result.returncode, 1, result.stderr)
                 self.assertIn(message, result.stderr)
                 self.assertIn(path, result.stderr)
