@@ -1,13 +1,11 @@
 #include "MeshIO.h"
 #include "Utilities.h"
 
+#include "vtkSurfaceReader.h"
 #include "vtkTetGenReader.h"
 
 #include <vtkAlgorithm.h>
-#include <vtkOBJReader.h>
-#include <vtkPLYReader.h>
 #include <vtkPolyData.h>
-#include <vtkSTLReader.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLUnstructuredGridReader.h>
@@ -30,21 +28,10 @@ bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
   const std::string ext = Extension(path);
   MessageCollector messages;
   vtkSmartPointer<vtkAlgorithm> reader;
-  if (ext == "ply")
+  if (ext == "ply" || ext == "stl" || ext == "obj")
   {
-    auto r = vtkSmartPointer<vtkPLYReader>::New();
-    r->SetFileName(path.c_str());
-    reader = r;
-  }
-  else if (ext == "stl")
-  {
-    auto r = vtkSmartPointer<vtkSTLReader>::New();
-    r->SetFileName(path.c_str());
-    reader = r;
-  }
-  else if (ext == "obj")
-  {
-    auto r = vtkSmartPointer<vtkOBJReader>::New();
+    // Our own reader: VTK 9.2's PLY/STL/OBJ readers crash or hang on damaged files.
+    auto r = vtkSmartPointer<vtkSurfaceReader>::New();
     r->SetFileName(path.c_str());
     reader = r;
   }
@@ -77,7 +64,9 @@ bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
   vtkDataObject* data = reader->GetOutputDataObject(0);
   if (!messages.Errors.empty())
   {
-    error = "cannot read '" + path + "': " + messages.Last();
+    // vtkSurfaceReader's messages already start with the file's name.
+    const std::string last = messages.Last();
+    error = last.rfind("'" + path + "'", 0) == 0 ? last : "cannot read '" + path + "': " + last;
     return false;
   }
   if (auto* poly = vtkPolyData::SafeDownCast(data))

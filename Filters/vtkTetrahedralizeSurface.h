@@ -10,7 +10,9 @@
  * order, which makes the downstream assembly and solves cache-friendly.
  *
  * The input is checked before TetGen sees it; the error names the problem:
- * empty input, a non-triangle cell, a degenerate (zero-area) triangle, an
+ * a non-finite coordinate or one of magnitude MaxCoordinate (1e15 mm) or
+ * more, a point id out of range or an inconsistent cell array (these first,
+ * before any VTK filter touches the data), empty input, a non-triangle cell, a degenerate (zero-area) triangle, an
  * edge used by one triangle (the surface is open; the count and the first
  * edge's position are given) or by more than two (non-manifold), a flat
  * surface enclosing no volume, and triangles crossing each other
@@ -38,6 +40,11 @@ public:
   static vtkTetrahedralizeSurface* New();
   vtkTypeMacro(vtkTetrahedralizeSurface, vtkUnstructuredGridAlgorithm);
   void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  /// The largest coordinate magnitude accepted (mm): 1e15 mm (a million km)
+  /// is far beyond any object while leaving TetGen's predicates and the
+  /// squared lengths of the checks far from overflow.
+  static constexpr double MaxCoordinate = 1e15;
 
   ///@{
   /**

@@ -858,6 +858,31 @@ class PipelineTest(unittest.TestCase):
         overlapping.AddInputData(sphere_surface(2.0, (1.0, 0.0, 0.0), 12))
         overlapping.Update()
         cases["self-intersecting"] = (overlapping.GetOutput(), ["intersects itself"])
+        # Coordinates and point ids that crashed vtkStaticCleanPolyData before
+        # the checks ran (from damaged STL/PLY/OBJ/VTP files): now checked first.
+        tet_coords = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+        tet_faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)]
+        for label, value, fragments in (
+                ("infinite coordinate", float("inf"), ["point 2", "non-finite", "y"]),
+                ("nan coordinate", float("nan"), ["point 2", "non-finite"]),
+                ("huge coordinate", 1e200, ["point 2", "1e+200", "magnitude"]),
+                ("coordinate at the limit", -1e15, ["point 2", "magnitude"])):
+            coords = list(tet_coords)
+            coords[2] = (0, value, 0)
+            surface = make_polydata(coords, tet_faces)
+            points = vtkPoints()
+            points.SetDataTypeToDouble()  # float would round 1e200 to inf
+            for p in coords:
+                points.InsertNextPoint(*p)
+            surface.SetPoints(points)
+            cases[label] = (surface, fragments)
+        for label, bad_id, fragments in (
+                ("negative point id", -1, ["cell 3", "point id -1", "out of range"]),
+                ("point id out of range", 4, ["cell 3", "point id 4", "[0, 4)"]),
+                ("huge point id", 2**62, ["cell 3", "out of range"])):
+            faces = list(tet_faces)
+            faces[3] = (0, 3, bad_id)
+            cases[label] = (make_polydata(tet_coords, faces), fragments)
         for name, (surface, fragments) in cases.items():
             with self.subTest(case=name):
                 tetra = translucency.vtkTetrahedralizeSurface()

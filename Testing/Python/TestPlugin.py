@@ -18,6 +18,9 @@ How to run (ctest does this):
    incremental assembly after a paint (IncrementalAssembly).
 5. Reads a small TetGen mesh written here with the TetGenReader proxy, both
    directly and through OpenDataFile (the plugin's reader factory hint).
+6. Reads Data/bunny.ply with the TranslucencySurfaceReader proxy and, with the
+   plugin loaded, still through OpenDataFile; a damaged copy gives an error,
+   not a crash.
 
 Exits non-zero on failure (unittest). No rendering.
 """
@@ -40,6 +43,7 @@ LoadPlugin(PLUGIN, ns=globals())
 Tetrahedralize = TetrahedralizeSurface
 
 from vtkmodules.util.numpy_support import vtk_to_numpy  # noqa: E402
+from vtkmodules.vtkCommonCore import vtkObject  # noqa: E402
 import numpy as np  # noqa: E402
 
 VTK_TETRA = 10
@@ -308,6 +312,40 @@ class PluginTest(unittest.TestCase):
             for proxy in (assign, reader):
                 Delete(proxy)
 
+
+
+    def test_surface_reader(self):
+        bunny = os.path.join(os.environ.get("TRANSLUCENCY_SOURCE_DIR",
+                                            os.path.join(os.path.dirname(__file__), "..", "..")),
+                             "Data", "bunny.ply")
+        reader = TranslucencySurfaceReader(FileName=bunny)
+        ours = self.fetch(reader)
+        self.assertEqual(ours.GetNumberOfPoints(), 1839)
+        self.assertEqual(ours.GetNumberOfPolys(), 3674)
+        opened = OpenDataFile(bunny)
+        self.assertIsNotNone(opened, "no reader for .ply files with the plugin loaded")
+        theirs = self.fetch(opened)
+        self.assertTrue(np.array_equal(vtk_to_numpy(ours.GetPoints().GetData()),
+                                       vtk_to_numpy(theirs.GetPoints().GetData())))
+        # The surface goes through the chain.
+        tetra = Tetrahedralize(Input=reader, TargetNumberOfTets=5000)
+        self.assertGreater(self.fetch(tetra).GetNumberOfCells(), 1000)
+        Delete(tetra)
+        Delete(opened)
+        Delete(reader)
+        with tempfile.TemporaryDirectory(prefix="translucency-plugin-") as tmp:
+            bad = os.path.join(tmp, "bad.ply")
+            with open(bunny, "rb") as f:
+                data = f.read()
+            with open(bad, "wb") as f:
+                f.write(data.replace(b"element vertex 1839", b"element vertex 900000000"))
+            reader = TranslucencySurfaceReader(FileName=bad)
+            vtkObject.GlobalWarningDisplayOff()
+            try:
+                self.assertEqual(self.fetch(reader).GetNumberOfPoints(), 0)
+            finally:
+                vtkObject.GlobalWarningDisplayOn()
+            Delete(reader)
 
 if __name__ == "__main__":
     result = unittest.main(argv=[sys.argv[0]], exit=False, verbosity=2).result

@@ -3,19 +3,23 @@
 // box seen from inside; input validation; the parallel queries against the
 // serial ones. Then ComputeBoundaryIrradiance, which casts the shadow rays:
 // shadows of one box on another, the unoccluded uniform light, and its
-// OpenMP loop against one thread.
+// OpenMP loop against one thread. Last, FindEdgeCrossing (the quick
+// self-intersection check built on the caster).
 
 #include "Error.h"
 #include "Fresnel.h"
 #include "LightSources.h"
 #include "RayCaster.h"
+#include "SurfaceIntersections.h"
 #include "TestMeshes.h"
 #include "TetMesh.h"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -750,6 +754,80 @@ TEST(RayCasterIrradiance, AbortAndInvalidInput)
   std::vector<double> badEta = pointEta;
   badEta[mesh.GetBoundaryPoints()[3]] = 0.0;
   EXPECT_THROW(ComputeBoundaryIrradiance(mesh, badEta, lights, 0.0, 0, true, q), Error);
+}
+
+//------------------------------------------------------------------------------
+// FindEdgeCrossing: the quick self-intersection check of vtkTetrahedralizeSurface.
+
+TEST(FindEdgeCrossing, ClosedSphereHasNone)
+{
+  const double center[3] = { 0.5, -1.0, 2.0 };
+  const Surface sphere = UVSphere(30, 40, 3.0, center);
+  EdgeCrossing crossing;
+  EXPECT_FALSE(FindEdgeCrossing(sphere.Points, sphere.Triangles, crossing));
+}
+
+TEST(FindEdgeCrossing, OverlappingSpheresCross)
+{
+  const double c0[3] = { 0, 0, 0 }, c1[3] = { 1.0, 0.1, 0.05 };
+  Surface both = UVSphere(12, 16, 1.0, c0);
+  const Surface other = UVSphere(12, 16, 1.0, c1);
+  const int offset = static_cast<int>(both.Points.size() / 3);
+  both.Points.insert(both.Points.end(), other.Points.begin(), other.Points.end());
+  for (int id : other.Triangles)
+  {
+    both.Triangles.push_back(id + offset);
+  }
+  EdgeCrossing crossing;
+  ASSERT_TRUE(FindEdgeCrossing(both.Points, both.Triangles, crossing));
+  // The point lies on the edge and in the plane of the crossed triangle,
+  // which contains neither end of the edge.
+  const int a = crossing.EdgePoints[0], b = crossing.EdgePoints[1];
+  const int* tri = &both.Triangles[3 * crossing.Triangle];
+  for (int k = 0; k < 3; ++k)
+  {
+    EXPECT_NE(tri[k], a);
+    EXPECT_NE(tri[k], b);
+  }
+  const Eigen::Map<const Eigen::Vector3d> pa(&both.Points[3 * a]), pb(&both.Points[3 * b]),
+    p0(&both.Points[3 * tri[0]]), p1(&both.Points[3 * tri[1]]), p2(&both.Points[3 * tri[2]]);
+  const Eigen::Map<const Eigen::Vector3d> x(crossing.Point);
+  EXPECT_NEAR((x - pa).cross(pb - pa).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((x - p0).dot((p1 - p0).cross(p2 - p0).normalized()), 0.0, 1e-12);
+  EXPECT_GT((x - pa).norm(), 0.0);
+  EXPECT_LT((x - pa).norm(), (pb - pa).norm());
+}
+
+TEST(FindEdgeCrossing, ShiftedVerticesSameAnswerOnAnyThreadCount)
+{
+  // The vertices shifted by one (a line inserted in an OBJ file): the same
+  // topology over scrambled positions, crossing everywhere (TetGen's -d
+  // pass took minutes on such a bunny).
+  const double center[3] = { 0, 0, 0 };
+  Surface s = UVSphere(40, 50, 1.0, center);
+  std::rotate(s.Points.begin(), s.Points.begin() + 3, s.Points.end());
+  const int saved = omp_get_max_threads();
+  EdgeCrossing serial, parallel;
+  omp_set_num_threads(1);
+  ASSERT_TRUE(FindEdgeCrossing(s.Points, s.Triangles, serial));
+  omp_set_num_threads(std::max(2, saved));
+  ASSERT_TRUE(FindEdgeCrossing(s.Points, s.Triangles, parallel));
+  omp_set_num_threads(saved);
+  EXPECT_EQ(serial.EdgePoints[0], parallel.EdgePoints[0]);
+  EXPECT_EQ(serial.EdgePoints[1], parallel.EdgePoints[1]);
+  EXPECT_EQ(serial.Triangle, parallel.Triangle);
+  for (int k = 0; k < 3; ++k)
+  {
+    EXPECT_EQ(serial.Point[k], parallel.Point[k]);
+  }
+}
+
+TEST(FindEdgeCrossing, BadIdThrows)
+{
+  const std::vector<double> points = { 0, 0, 0, 1, 0, 0, 0, 1, 0 };
+  EdgeCrossing crossing;
+  EXPECT_THROW(FindEdgeCrossing(points, { 0, 1, 3 }, crossing), Error);
+  EXPECT_THROW(FindEdgeCrossing(points, { 0, -1, 2 }, crossing), Error);
 }
 
 } // namespace
