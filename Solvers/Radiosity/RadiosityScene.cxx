@@ -447,9 +447,9 @@ void RadiosityScene::BoxSurface(const double lo[3], const double hi[3], double c
     4.0 * (counts[0] * counts[1] + counts[1] * counts[2] + counts[0] * counts[2]);
   {
     std::ostringstream what;
-    what << "box surface: cell size " << FormatNumber(cellSize) << " mm on a box of "
-         << FormatNumber(hi[0] - lo[0]) << " x " << FormatNumber(hi[1] - lo[1]) << " x "
-         << FormatNumber(hi[2] - lo[2]) << " mm gives " << FormatNumber(patches) << " patches";
+    what << "box surface: " << FormatNumber(patches) << " patches (cell size "
+         << FormatNumber(cellSize) << " mm on a box of " << FormatNumber(hi[0] - lo[0]) << " x "
+         << FormatNumber(hi[1] - lo[1]) << " x " << FormatNumber(hi[2] - lo[2]) << " mm)";
     CheckMemory(what.str(), patches * 1024.0, memoryLimit, "use a larger cell_size");
     if (!(patches * 3.0 < static_cast<double>(std::numeric_limits<int>::max())))
     {
