@@ -83,6 +83,18 @@ def base_case(command, work):
         out + ".json"]
 
 
+def to_json_value(text):
+    """The hostile text as a JSON number if it is one (huge integers stay
+    exact, 1e309 is read as inf and written as Infinity), else as a string."""
+    try:
+        return json.loads(text)
+    except ValueError:
+        try:
+            return float(text)
+        except ValueError:
+            return text
+
+
 def scene(changes):
     s = {"cell_size": 5.0,
          "objects": [{"name": "room", "type": "box", "min": [0, 0, 0], "max": [20, 20, 20],
@@ -92,7 +104,7 @@ def scene(changes):
          "lights": [{"type": "point", "position": [10, 10, 15], "power": 100}],
          "radiosity": {"rays_per_patch": 16, "max_iter": 20}}
     for key, value in changes.items():
-        number = json.loads(value) if re.fullmatch(r"-?[0-9.eE+-]+", value or "x") else value
+        number = to_json_value(value)
         if key in ("rays_per_patch", "max_iter"):
             s["radiosity"][key] = number
         elif key == "power":
