@@ -579,6 +579,14 @@ int Acquire(const AcquireOptions& o)
       // building anything.
       const double points = (grid[0] + 1.0) * (grid[1] + 1.0) * (grid[2] + 1.0);
       const double patterns = static_cast<double>(rc[0]) * rc[1];
+      if (patterns > 4096)
+      {
+        // Each pattern is a forward and an adjoint solve per iteration.
+        throw UsageError("acquire: --patterns " + patternsArg + " gives " +
+          translucency::FormatNumber(patterns) +
+          " patterns; at most 4096 are supported (each is a forward and an adjoint solve per "
+          "iteration)");
+      }
       const double bytes =
         translucency::EstimateGridBlockMemory(grid[0], grid[1], grid[2]) + patterns * points * 72.0;
       try

@@ -147,6 +147,27 @@ class BadNumbers(unittest.TestCase):
         self.assertNotIn("is not a number", p.stderr)
         self.assertEqual(p.returncode, 0, p.stderr)
 
+    def test_scaled_model_warns(self):
+        # A 10 mm cube scaled by 1e6: tets ~1e6 x the mean free path, the
+        # boundary fluence is unresolved and eq. 3 clamps Radiance to 0
+        # everywhere: a warning must name the scale.
+        scaled = os.path.join(self.dir, "cube_scaled.obj")
+        with open(scaled, "w") as f:
+            for line in CUBE_OBJ.splitlines():
+                if line.startswith("v "):
+                    line = "v " + " ".join(str(float(x) * 1e6) for x in line.split()[1:])
+                f.write(line + "\n")
+        prefix = os.path.join(self.dir, "scaled")
+        p, _ = self.run_cli(["render", "--mesh", scaled, "--target-tets", "300",
+                             "--output", prefix], timeout=60)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertIn("Radiance is 0 at every boundary point", p.stderr)
+        self.assertIn("is the model in mm?", p.stderr)
+        # The unscaled cube gives no such warning.
+        args, _ = self.render()
+        p, _ = self.run_cli(args, timeout=60)
+        self.assertNotIn("Radiance is 0", p.stderr)
+
     def test_memory_limit_override(self):
         # 2e4 tets are ~8 MB by the estimate: refused at 1 MiB, accepted at 0.5 GiB.
         args, outputs = self.render("--memory-limit", "0.0009765625", "--target-tets", "20000")
@@ -185,12 +206,15 @@ class BadNumbers(unittest.TestCase):
         truth = os.path.join(self.dir, "truth.vti")
         with open(truth, "w") as f:
             f.write("{}")
-        for grid, patterns in [("200x200x200", "4x4"), ("10x10x10", "1000x1000")]:
+        for grid, patterns, needles in [
+            ("200x200x200", "4x4", ["--grid 200x200x200", "--memory-limit"]),
+            ("10x10x10", "1000x1000", ["--patterns 1000x1000", "1e+06 patterns", "4096"]),
+            ("40x40x40", "64x64", ["--grid 40x40x40", "--patterns 64x64", "--memory-limit"]),
+        ]:
             with self.subTest(grid=grid, patterns=patterns):
                 self.expect_refused(["acquire", "--synthetic-truth", truth, "--grid", grid,
                                      "--patterns", patterns, "--output", prefix],
-                                    "--grid " + grid, "--patterns " + patterns,
-                                    "--memory-limit", outputs=[prefix + ".vtu"])
+                                    *needles, outputs=[prefix + ".vtu"])
 
 
 if __name__ == "__main__":
