@@ -573,6 +573,33 @@ int Acquire(const AcquireOptions& o)
     const std::vector<int> grid = ParseDims(gridArg, "--grid", 3);
     const std::vector<int> rc = ParseDims(patternsArg, "--patterns (synthetic mode)", 2);
     patternCols = rc[1];
+    {
+      // Every pattern keeps its measured, forward and adjoint fields (3
+      // channels) at every point of the block: refuse what cannot fit before
+      // building anything.
+      const double points = (grid[0] + 1.0) * (grid[1] + 1.0) * (grid[2] + 1.0);
+      const double patterns = static_cast<double>(rc[0]) * rc[1];
+      if (patterns > 4096)
+      {
+        // Each pattern is a forward and an adjoint solve per iteration.
+        throw UsageError("acquire: --patterns " + patternsArg + " gives " +
+          translucency::FormatNumber(patterns) +
+          " patterns; at most 4096 are supported (each is a forward and an adjoint solve per "
+          "iteration)");
+      }
+      const double bytes =
+        translucency::EstimateGridBlockMemory(grid[0], grid[1], grid[2]) + patterns * points * 72.0;
+      try
+      {
+        translucency::CheckMemory("acquire: --grid " + gridArg + " with --patterns " +
+            patternsArg + " (" + translucency::FormatNumber(patterns) + " patterns)",
+          bytes, translucency::GetDefaultMemoryLimit(), "use a coarser --grid or fewer --patterns");
+      }
+      catch (const translucency::Error& e)
+      {
+        throw UsageError(e.what());
+      }
+    }
     if (setupName == "back")
       syn.Setup = translucency::AcquisitionSetup::Back;
     else if (setupName == "front")

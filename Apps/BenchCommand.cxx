@@ -294,9 +294,19 @@ Command AddBenchCommand(CLI::App& app)
   c->add_option("--mesh", linear->MeshPath, "surface to tetrahedralize")
     ->type_name("FILE")
     ->capture_default_str();
-  AddNumberList(c, "--tets", *tets, "target sizes (default 100000,1000000; with\n--linear-solvers 100000,500000,1000000)", "N1,N2,...");
+  AddNumberList(c, "--tets", *tets, "target sizes (default 100000,1000000; with\n--linear-solvers 100000,500000,1000000)", "N1,N2,...")
+    ->check(CLI::Validator(
+      [](std::string& text) {
+        for (double n : ParseNumbers(text, "--tets"))
+        {
+          if (ToNumber<long long>(n, "--tets") < 1)
+            throw UsageError("--tets: every size must be >= 1, not " + DefaultText(n));
+        }
+        return std::string();
+      },
+      ""));
   AddNumber(c, "--runs", *runs, "repetitions per measurement (default 7; with\n--linear-solvers 5)", "N",
-    [](double n) { return n >= 1; }, "--runs must be >= 1")
+    [](double n) { return n >= 1 && n <= 1000; }, "--runs must be from 1 to 1000")
     ->default_str("");
   c->add_option("--json", linear->JsonPath, "machine-readable results")->type_name("FILE");
   CLI::Option* edit = c->add_flag("--edit", plain->Edit,

@@ -150,6 +150,25 @@ CLI::Option* AddNumberList(CLI::App* app, const std::string& name, std::vector<d
   return option;
 }
 
+void AddMemoryLimitOption(CLI::App* command)
+{
+  command
+    ->add_option_function<std::string>(
+      "--memory-limit",
+      [](const std::string& text) {
+        const double gib = ParseNumbers(text, "--memory-limit").at(0);
+        translucency::SetDefaultMemoryLimit(static_cast<std::size_t>(gib * 1073741824.0));
+      },
+      "refuse problems whose estimated memory exceeds this,\n"
+      "GiB (grid, tets, patches, form factors, acquisition\n"
+      "grids, photon and ray budgets)")
+    ->type_name("GiB")
+    ->default_str(DefaultText(static_cast<double>(translucency::GetDefaultMemoryLimit()) /
+      1073741824.0))
+    ->check(NumberCheck("--memory-limit", [](double g) { return g >= 1.0 / 1024 && g <= 1 << 24; },
+      "--memory-limit must be from 0.0009765625 (1 MiB) to 16777216 GiB"));
+}
+
 void AddSceneOptions(CLI::App* command, SceneOptions& scene)
 {
   const std::string group = "Scene options";
@@ -204,8 +223,8 @@ void AddSceneOptions(CLI::App* command, SceneOptions& scene)
   command->add_flag_callback("--no-shadows", [s]() { s->Shadows = false; }, "no self-shadowing")
     ->group(group);
   AddNumber(command, "--uniform-samples", scene.UniformSamples,
-    "occlusion rays per point for the uniform light", "N", [](double n) { return n >= 0; },
-    "--uniform-samples must be >= 0")
+    "occlusion rays per point for the uniform light", "N",
+    [](double n) { return n >= 0 && n <= 4096; }, "--uniform-samples must be from 0 to 4096")
     ->group(group);
   command
     ->add_option("--paint", scene.Paint,

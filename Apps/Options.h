@@ -14,10 +14,13 @@
 
 #include "Utilities.h"
 
+#include "ResourceLimits.h"
+
 #include <CLI/CLI.hpp>
 
 #include <functional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace translucency_app
@@ -46,6 +49,28 @@ Command AddAcquireCommand(CLI::App& app);
 CLI::Validator NumberCheck(const std::string& option, std::function<bool(double)> valid = nullptr,
   const std::string& failure = std::string());
 
+/// `value` as T: a double as is; an integer type only if `value` is a whole
+/// number in its range (else UsageError naming `option` and the value).
+template <class T>
+T ToNumber(double value, const std::string& option)
+{
+  if constexpr (std::is_integral<T>::value)
+  {
+    try
+    {
+      return translucency::CheckedInteger<T>(value, option);
+    }
+    catch (const translucency::Error& e)
+    {
+      throw UsageError(e.what());
+    }
+  }
+  else
+  {
+    return static_cast<T>(value);
+  }
+}
+
 /// A validator: the value is one of `choices` (else UsageError
 /// "<option>: 'x' is not a, b or c").
 CLI::Validator OneOf(const std::string& option, const std::vector<std::string>& choices);
@@ -61,24 +86,44 @@ std::string DefaultText(double value);
 
 /// A one-number option into `target` (double or an integer type: the text is
 /// read as a double, so 1e6 is a valid count), its current value shown as the
-/// default, checked by NumberCheck(name, valid, failure).
+/// default, checked by NumberCheck(name, valid, failure). For an integer
+/// target the value must first be a whole number in the type's range (else
+/// UsageError "<name>: <value> is not a whole number from <min> to <max>"):
+/// a cast of 1e30 to an integer is undefined behaviour.
 template <class T>
 CLI::Option* AddNumber(CLI::App* app, const std::string& name, T& target, const std::string& help,
   const std::string& typeName, std::function<bool(double)> valid = nullptr,
   const std::string& failure = std::string())
 {
   T* value = &target;
-  return app
-    ->add_option_function<std::string>(
-      name,
-      [value, name](const std::string& text) {
-        *value = static_cast<T>(ParseNumbers(text, name).at(0));
+  CLI::Option* option =
+    app
+      ->add_option_function<std::string>(
+        name,
+        [value, name](const std::string& text) {
+          *value = ToNumber<T>(ParseNumbers(text, name).at(0), name);
+        },
+        help)
+      ->type_name(typeName)
+      ->default_str(DefaultText(static_cast<double>(target)));
+  if (std::is_integral<T>::value)
+  {
+    option->check(CLI::Validator(
+      [name](std::string& text) {
+        const std::vector<double> v = ParseNumbers(text, name);
+        if (v.size() == 1)
+        {
+          ToNumber<T>(v[0], name);
+        }
+        return std::string();
       },
-      help)
-    ->type_name(typeName)
-    ->default_str(DefaultText(static_cast<double>(target)))
-    ->check(NumberCheck(name, std::move(valid), failure));
+      ""));
+  }
+  return option->check(NumberCheck(name, std::move(valid), failure));
 }
+
+/// --memory-limit GiB on `command`: translucency::SetDefaultMemoryLimit for the run.
+void AddMemoryLimitOption(CLI::App* command);
 
 /// A comma-separated list of numbers into `target`, with `count` numbers if
 /// count > 0 (else UsageError(failure)).

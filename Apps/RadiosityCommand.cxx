@@ -446,7 +446,7 @@ Command AddRadiosityCommand(CLI::App& app)
   AddNumber(c, "--bench", o->Bench,
     "then N relights (light moved) and N translucency\n"
     "changes (coefficients x 0.5 / x 2), medians in the JSON",
-    "N", [](double n) { return n >= 0; }, mustBePositive);
+    "N", [](double n) { return n >= 0 && n <= 1000; }, "--bench must be from 0 to 1000");
   return { c, [o]() { return Radiosity(*o); } };
 }
 

@@ -1,5 +1,7 @@
 #include "SceneFile.h"
 
+#include "ResourceLimits.h"
+
 #include "JsonInputs.h"
 #include "MeshIO.h"
 #include "Utilities.h"
@@ -79,6 +81,22 @@ std::vector<double> Numbers(const json& j, const char* key, size_t count, const 
 double Number(const json& j, const char* key, double fallback, const Context& ctx)
 {
   return j.contains(key) ? Numbers(j, key, 1, ctx)[0] : fallback;
+}
+
+/// An integer field: a whole number from `min` to T's maximum (a cast of
+/// 1e300 to int is undefined behaviour), else an error naming the key and value.
+template <class T>
+T Count(const json& j, const char* key, double fallback, T min, const Context& ctx)
+{
+  const double value = Number(j, key, fallback, ctx);
+  try
+  {
+    return translucency::CheckedInteger<T>(value, std::string("\"") + key + "\"", min);
+  }
+  catch (const translucency::Error& e)
+  {
+    ctx.Fail(e.what());
+  }
 }
 
 /// RGB from a number (grey) or an array of 3.
@@ -204,7 +222,7 @@ vtkSmartPointer<vtkUnstructuredGrid> Tetrahedralize(
   else
   {
     tetra->SetTargetNumberOfTets(
-      static_cast<vtkIdType>(Number(object, "target_tets", 20000.0, ctx)));
+      Count<vtkIdType>(object, "target_tets", 20000.0, 1, ctx));
   }
   tetra->Update();
   if (!messages.Errors.empty())
@@ -432,9 +450,9 @@ LoadedScene LoadScene(const std::string& path, double cellSizeOverride)
     const json& r = j["radiosity"];
     ctx.Where = "radiosity";
     SceneSettings& s = scene.Settings;
-    s.RaysPerPatch = static_cast<int>(Number(r, "rays_per_patch", s.RaysPerPatch, ctx));
+    s.RaysPerPatch = Count<int>(r, "rays_per_patch", s.RaysPerPatch, 1, ctx);
     s.RelTol = Number(r, "rel_tol", s.RelTol, ctx);
-    s.MaxIter = static_cast<int>(Number(r, "max_iter", s.MaxIter, ctx));
+    s.MaxIter = Count<int>(r, "max_iter", s.MaxIter, 1, ctx);
     s.SOperator = r.value("s_operator", s.SOperator);
     s.Iteration = r.value("iteration", s.Iteration);
     s.LinearSolver = r.value("linear_solver", s.LinearSolver);

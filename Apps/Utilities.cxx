@@ -8,8 +8,10 @@
 #include <vtkXMLWriter.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -47,19 +49,23 @@ std::vector<double> ParseNumbers(const std::string& text, const std::string& wha
   std::string item;
   while (std::getline(ss, item, ','))
   {
-    try
-    {
-      size_t used = 0;
-      values.push_back(std::stod(item, &used));
-      if (used != item.size() || !std::isfinite(values.back()))
-      {
-        throw std::invalid_argument(item);
-      }
-    }
-    catch (const std::exception&)
+    // strtod, not std::stod: stod throws out_of_range for denormals (1e-320),
+    // which are valid (if tiny) numbers; an overflow gives +-HUGE_VAL.
+    const char* begin = item.c_str();
+    char* end = nullptr;
+    const double value = item.empty() || std::isspace(static_cast<unsigned char>(item[0]))
+      ? std::nan("")
+      : std::strtod(begin, &end);
+    if (item.empty() || end != begin + item.size() || std::isnan(value))
     {
       throw UsageError("'" + item + "' in " + what + " is not a number");
     }
+    if (!std::isfinite(value))
+    {
+      throw UsageError("'" + item + "' in " + what + " is not a finite number (the largest is " +
+        "about 1.8e308)");
+    }
+    values.push_back(value);
   }
   return values;
 }
@@ -100,7 +106,14 @@ void MessageCollector::Watch(vtkObject* object)
 std::string MessageCollector::Last() const
 {
   std::string text = this->Errors;
-  const size_t pos = text.rfind("): ");
+  // The last message starts after its "ERROR: In file, line N\nvtkX (0x..): "
+  // header; the message itself may contain "): ".
+  const size_t header = text.rfind("ERROR: In ");
+  if (header != std::string::npos)
+  {
+    text = text.substr(header);
+  }
+  const size_t pos = header != std::string::npos ? text.find("): ") : text.rfind("): ");
   if (pos != std::string::npos)
   {
     text = text.substr(pos + 3);

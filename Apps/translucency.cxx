@@ -72,6 +72,8 @@ int main(int argc, char* argv[])
   std::vector<Command> commands = { AddRenderCommand(app), AddCompareCommand(app),
     AddBenchCommand(app), AddRadiosityCommand(app), AddAcquireCommand(app) };
   for (const Command& c : commands)
+    AddMemoryLimitOption(c.App);
+  for (const Command& c : commands)
     c.App->get_help_ptr()->group(""); // works, but not listed: every --help prints all
   std::string helpTopic;
   CLI::App* help = app.add_subcommand("help", "Print the options of every command, or of one.");

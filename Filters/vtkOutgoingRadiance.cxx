@@ -1,5 +1,7 @@
 #include "vtkOutgoingRadiance.h"
 
+#include "ResourceLimits.h"
+
 #include "Error.h"
 #include "Radiance.h"
 #include "TetMesh.h"
@@ -18,6 +20,9 @@
 #include <vtkPolyData.h>
 #include <vtkSMPTools.h>
 #include <vtkUnstructuredGrid.h>
+
+#include <algorithm>
+#include <cmath>
 
 vtkStandardNewMacro(vtkOutgoingRadiance);
 
@@ -81,6 +86,35 @@ int vtkOutgoingRadiance::RequestData(
   {
     vtkErrorMacro(<< e.what());
     return 0;
+  }
+  {
+    // Light enters but no radiance leaves anywhere: eq. 3 went negative (and
+    // was clamped to 0) at every point. Seen when the tets are far larger than
+    // the transport mean free path (a model in the wrong unit or scaled by
+    // 1e6..1e9): the boundary fluence is not resolved. Say so, naming the scale.
+    double maxIrradiance = 0.0, maxRadiance = 0.0;
+    for (int i : mesh.GetBoundaryPoints())
+      for (int c = 0; c < 3; ++c)
+        maxIrradiance = std::max(maxIrradiance, irradiance[3 * static_cast<size_t>(i) + c]);
+    for (double v : values)
+      maxRadiance = std::max(maxRadiance, v);
+    if (maxIrradiance > 0.0 && maxRadiance == 0.0)
+    {
+      double bounds[6];
+      input->GetBounds(bounds);
+      const double diagonal = std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
+        (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) +
+        (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
+      const double spacing =
+        diagonal / std::cbrt(std::max<double>(1.0, static_cast<double>(mesh.GetNumberOfTets())));
+      vtkWarningMacro(<< "Radiance is 0 at every boundary point although light enters (irradiance "
+                      << "up to " << maxIrradiance << " W/mm^2): the model is "
+                      << translucency::FormatNumber(diagonal) << " mm across with tets of about "
+                      << translucency::FormatNumber(spacing)
+                      << " mm, far coarser than the light's mean free path (~1/sigma_s', about "
+                         "1 mm for the measured materials), so the fluence at the surface is "
+                         "not resolved: is the model in mm? (else use much smaller tets)");
+    }
   }
 
   // Compact surface: boundary points only.

@@ -1,6 +1,7 @@
 #include "vtkTetrahedralizeSurface.h"
 
 #include "Error.h"
+#include "ResourceLimits.h"
 #include "SurfaceIntersections.h"
 #include "TetMesh.h"
 
@@ -21,6 +22,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -193,7 +195,7 @@ bool CheckSurface(vtkPolyData* input, Surface& surface, double& volume, std::str
     if (!(area > minArea))
     {
       error = "triangle " + std::to_string(cellId) + " is degenerate (area " +
-        std::to_string(area) + " mm^2) at " + FormatPoint(a);
+        translucency::FormatNumber(area) + " mm^2) at " + FormatPoint(a);
       return false;
     }
     volume += (a[0] * n[0] + a[1] * n[1] + a[2] * n[2]) / 6.0; // divergence theorem
@@ -463,6 +465,38 @@ int vtkTetrahedralizeSurface::RequestData(
   }
   this->UpdateProgress(0.05);
 
+  // Size guard: estimate the tet count before TetGen allocates it.
+  {
+    const double tets = this->TargetNumberOfTets > 0
+      ? static_cast<double>(this->TargetNumberOfTets)
+      : (this->MaxTetVolume > 0 ? volume / this->MaxTetVolume : 0.0);
+    const std::size_t limit = this->MemoryLimit > 0
+      ? static_cast<std::size_t>(std::min(this->MemoryLimit * 1073741824.0, 1.8e19))
+      : translucency::GetDefaultMemoryLimit();
+    std::ostringstream what;
+    what << "about " << translucency::FormatNumber(tets) << " tets ("
+         << (this->TargetNumberOfTets > 0
+                ? "TargetNumberOfTets"
+                : "enclosed volume " + translucency::FormatNumber(volume) +
+                  " mm^3 / MaxTetVolume " + translucency::FormatNumber(this->MaxTetVolume) +
+                  " mm^3")
+         << ")";
+    try
+    {
+      translucency::CheckMemory(what.str(), tets * 400.0, limit,
+        "ask for fewer tets (a smaller target or a larger maximum volume; filter: MemoryLimit GiB)");
+      if (tets * 4.0 >= static_cast<double>(std::numeric_limits<int>::max()))
+      {
+        throw translucency::Error(what.str() + " are more than the 32-bit indices hold");
+      }
+    }
+    catch (const translucency::Error& e)
+    {
+      vtkErrorMacro(<< e.what());
+      return 0;
+    }
+  }
+
   auto switchesFor = [this](double maxVolume) {
     std::ostringstream os;
     os.precision(17);
@@ -584,5 +618,6 @@ void vtkTetrahedralizeSurface::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Quality: " << this->Quality << "\n";
   os << indent << "MaxTetVolume: " << this->MaxTetVolume << "\n";
   os << indent << "TargetNumberOfTets: " << this->TargetNumberOfTets << "\n";
+  os << indent << "MemoryLimit: " << this->MemoryLimit << " GiB\n";
   os << indent << "SpatialReordering: " << this->SpatialReordering << "\n";
 }

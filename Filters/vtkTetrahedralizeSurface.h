@@ -75,6 +75,18 @@ public:
 
   ///@{
   /**
+   * Memory limit in GiB (default 0: translucency::GetDefaultMemoryLimit(),
+   * 8 GiB unless changed, e.g. by the CLI's --memory-limit). Before TetGen
+   * runs, the tet count is estimated (TargetNumberOfTets, or the enclosed
+   * volume / MaxTetVolume) at ~400 bytes per tet; above the limit the filter
+   * fails with a message stating the count, the bytes and this override.
+   */
+  vtkSetClampMacro(MemoryLimit, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(MemoryLimit, double);
+  ///@}
+
+  ///@{
+  /**
    * Reorder points and tets along a Morton curve (default on).
    */
   vtkSetMacro(SpatialReordering, bool);
@@ -92,6 +104,7 @@ protected:
   double Quality = 1.414;
   double MaxTetVolume = 0.0;
   vtkIdType TargetNumberOfTets = 0;
+  double MemoryLimit = 0.0;
   bool SpatialReordering = true;
 
 private:

@@ -1,4 +1,5 @@
 #include "DiffusionFrontEnd.h"
+#include "ResourceLimits.h"
 
 #include "DiffusionSolverFactory.h"
 #include "Strings.h"
@@ -120,6 +121,13 @@ bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProper
   try
   {
     solved = Solver_->Solve(problem, fluence, report);
+    if (solved)
+    {
+      // Never hand on a NaN/inf fluence as a result (e.g. a light power of
+      // 1e300 overflows the right-hand side).
+      RequireFinite(irradiance, "the boundary irradiance", OverflowCause());
+      RequireFinite(fluence, "Fluence (" + SolverName_ + " solver)", OverflowCause());
+    }
   }
   catch (...)
   {

@@ -727,6 +727,12 @@ bool MonteCarloSolver::Solve(
     throw Error("montecarlo: number of photons " + std::to_string(NumberOfPhotons_) +
       ": must be > 0");
   }
+  if (NumberOfPhotons_ > MaxPhotons_)
+  {
+    throw Error("montecarlo: " + std::to_string(NumberOfPhotons_) +
+      " photons per channel (--photons) are above the budget of " + std::to_string(MaxPhotons_) +
+      " (hours of tracing): use fewer photons (or raise the budget with MonteCarlo::SetMaxPhotons)");
+  }
   if (NumberOfBatches_ < 2)
   {
     throw Error("montecarlo: number of batches " + std::to_string(NumberOfBatches_) +

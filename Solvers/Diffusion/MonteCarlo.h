@@ -93,6 +93,12 @@ public:
   unsigned long long GetSeed() const { return Seed_; }
   ///@}
 
+  /// The time guard: photons per channel above this budget (default 2^32,
+  /// ~4.3e9: hours of tracing) are refused by Solve with an Error naming the
+  /// count and this override.
+  void SetMaxPhotons(long long n) { MaxPhotons_ = n; }
+  long long GetMaxPhotons() const { return MaxPhotons_; }
+
   /// Reads "photons" (integer >= 1) and "seed" (integer >= 0), see
   /// DiffusionSolver::SetOptions.
   void SetOptions(const SolverOptions& options) override
@@ -165,6 +171,7 @@ public:
 
 private:
   long long NumberOfPhotons_ = 1000000;
+  long long MaxPhotons_ = 4294967296LL;
   unsigned long long Seed_ = 1;
   double Anisotropy_ = 0.0;
   int NumberOfBatches_ = 32;

@@ -1,4 +1,5 @@
 #include "GridSolver.h"
+#include "ResourceLimits.h"
 
 #include "Error.h"
 #include "Fresnel.h"
@@ -74,22 +75,6 @@ public:
 private:
   int Previous_;
 };
-
-std::string FormatBytes(double bytes)
-{
-  std::ostringstream os;
-  os << std::setprecision(3);
-  if (bytes >= 1024.0 * 1024.0 * 1024.0)
-  {
-    os << bytes / (1024.0 * 1024.0 * 1024.0) << " GiB";
-  }
-  else
-  {
-    os << bytes / (1024.0 * 1024.0) << " MiB";
-  }
-  os << " (" << std::setprecision(4) << bytes << " bytes)";
-  return os.str();
-}
 
 /// Bounding box of the points used by tets: min x, y, z, max x, y, z.
 void TetBounds(const TetMesh& mesh, double bounds[6])
@@ -575,7 +560,7 @@ void GridSolver::PrepareGrid(const TetMesh& mesh)
     {
       os << " and at most " << INT_MAX / 8 << " grid nodes are supported";
     }
-    os << ": use a larger spacing (or raise the limit with SetMemoryLimit)";
+    os << ": use a larger spacing (or " << MemoryLimitOverride() << ")";
     throw Error(os.str());
   }
 

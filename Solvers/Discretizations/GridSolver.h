@@ -8,6 +8,8 @@
  */
 #pragma once
 
+#include "ResourceLimits.h"
+
 #include "DiffusionSolver.h"
 #include "DiffusionSystem.h"
 #include "LinearSolver.h"
@@ -168,7 +170,7 @@ struct GridLevel
  *
  * Memory: before allocating, the grid's needs are estimated (4 bytes per grid
  * node of the box, ~400 per unknown, +1/7 with multi-level); above
- * SetMemoryLimit (default 4 GiB) Solve throws an Error stating the bytes.
+ * SetMemoryLimit (default GetDefaultMemoryLimit(), 8 GiB; ResourceLimits.h) Solve throws an Error stating the bytes.
  *
  * Threads: results are bit-identical for any number of threads. By default
  * loops use at most one thread per 50,000 unknowns and let OpenMP reduce
@@ -348,7 +350,7 @@ private:
   bool HaveSolution_ = false;
   int RayFallbacks_ = 0;
   std::array<int, NumberOfChannels> CoarseIterations_{};
-  std::size_t MemoryLimit_ = std::size_t(4) << 30;
+  std::size_t MemoryLimit_ = GetDefaultMemoryLimit();
   int NumberOfThreads_ = 0;
 };
 

@@ -1067,8 +1067,14 @@ std::vector<std::vector<double>> InverseDiffusion::PredictRadiance(
   return radiance;
 }
 
+double EstimateGridBlockMemory(double nx, double ny, double nz)
+{
+  return 6.0 * nx * ny * nz * 500.0 + (nx + 1.0) * (ny + 1.0) * (nz + 1.0) * 200.0;
+}
+
 void BuildGridBlock(int nx, int ny, int nz, const double origin[3], const double size[3],
-  std::vector<double>& points, std::vector<int>& tets, std::vector<int>& tetElement)
+  std::vector<double>& points, std::vector<int>& tets, std::vector<int>& tetElement,
+  std::size_t memoryLimit)
 {
   if (nx < 1 || ny < 1 || nz < 1)
   {
@@ -1081,6 +1087,18 @@ void BuildGridBlock(int nx, int ny, int nz, const double origin[3], const double
     if (!(std::isfinite(size[d]) && size[d] > 0.0 && std::isfinite(origin[d])))
     {
       throw Error("BuildGridBlock: the block size must be finite and > 0");
+    }
+  }
+  {
+    const double voxels = static_cast<double>(nx) * ny * nz;
+    std::ostringstream what;
+    what << "BuildGridBlock: a grid of " << nx << "x" << ny << "x" << nz << " voxels ("
+         << FormatNumber(6.0 * voxels) << " tets)";
+    CheckMemory(what.str(), EstimateGridBlockMemory(nx, ny, nz), memoryLimit,
+      "use fewer voxels");
+    if (6.0 * voxels * 4.0 >= static_cast<double>(std::numeric_limits<int>::max()))
+    {
+      throw Error(what.str() + " has more tets than the 32-bit indices hold: use fewer voxels");
     }
   }
   const int px = nx + 1, py = ny + 1, pz = nz + 1;

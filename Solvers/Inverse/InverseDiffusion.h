@@ -19,6 +19,8 @@
  */
 #pragma once
 
+#include "ResourceLimits.h"
+
 #include "DiffusionForwardModel.h"
 
 #include <array>
@@ -202,9 +204,19 @@ private:
  * over [origin, origin + size] (mm), each voxel split into 6 tets (Kuhn
  * subdivision along its main diagonal: conforming). tetElement[t] is the
  * voxel id i + nx (j + ny k) of tet t.
+ *
+ * Memory: before allocating, the block and the inverse solve on it are
+ * estimated at EstimateGridBlockMemory bytes; above `memoryLimit` (default
+ * GetDefaultMemoryLimit(), 8 GiB) an Error states the bytes and the override.
  */
 void BuildGridBlock(int nx, int ny, int nz, const double origin[3], const double size[3],
-  std::vector<double>& points, std::vector<int>& tets, std::vector<int>& tetElement);
+  std::vector<double>& points, std::vector<int>& tets, std::vector<int>& tetElement,
+  std::size_t memoryLimit = GetDefaultMemoryLimit());
+
+/// Bytes the block of nx x ny x nz voxels and an inverse solve on it need
+/// (6 tets per voxel at ~500 bytes each: connectivity, FE system, multigrid,
+/// adjoint fields; ~200 bytes per point), as a double (no overflow).
+double EstimateGridBlockMemory(double nx, double ny, double nz);
 
 /// The acquisition setups of paper Sec. 4.1 (Fig. 3).
 enum class AcquisitionSetup

@@ -1,5 +1,7 @@
 #include "ConjugateGradient.h"
 
+#include <cmath>
+
 #include "Error.h"
 
 #include <Eigen/IterativeLinearSolvers>
@@ -95,7 +97,8 @@ bool ConjugateGradient::Solve(const DiffusionSystem& system,
     }
     Iterations_[c] = static_cast<int>(solver.iterations());
     FinalNorm_[c] = solver.error();
-    Converged_[c] = solver.info() == Eigen::Success;
+    Converged_[c] = solver.info() == Eigen::Success && std::isfinite(FinalNorm_[c]) &&
+      x[c].allFinite(); // never converged on a NaN/inf residual
   }
   if (Progress_)
   {

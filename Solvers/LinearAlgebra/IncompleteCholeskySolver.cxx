@@ -123,7 +123,9 @@ bool IncompleteCholeskySolver::Solve(const DiffusionSystem& system,
     }
     stats[c].Iterations = iterations;
     stats[c].RelativeResidual = std::sqrt(r2 / b.squaredNorm());
-    stats[c].Converged = r2 <= threshold;
+    // Never converged on a NaN/inf residual (inf <= inf for an overflowed b).
+    stats[c].Converged =
+      r2 <= threshold && std::isfinite(r2) && std::isfinite(threshold) && x[c].allFinite();
     // The initial residual, then per iteration one SpMV and one solve with
     // L and L^T (the first before the loop, none after the last), which use
     // each of the nnz(L) entries once: 2 nnz(L) / nnz(M) SpMV-equivalents.

@@ -1,5 +1,7 @@
 #include "LinearSolver.h"
 
+#include <cmath>
+
 #include "LinearSolverCommon.h"
 
 namespace translucency
@@ -71,7 +73,12 @@ bool ChannelLinearSolver::SolveChannel(const DiffusionSystem& system,
   }
   const auto progress = [&](int iterations)
   { return ReportProgress(progressBase + progressSpan * iterations / MaxIter_); };
-  return Iterate(system, c, x, bNorm, stats, progress);
+  const bool completed = Iterate(system, c, x, bNorm, stats, progress);
+  if (!std::isfinite(bNorm) || !std::isfinite(stats.RelativeResidual) || !x.allFinite())
+  {
+    stats.Converged = false; // never report convergence on a NaN/inf residual or solution
+  }
+  return completed;
 }
 
 } // namespace translucency

@@ -1,4 +1,5 @@
 #include "LightSources.h"
+#include "ResourceLimits.h"
 
 #include "Error.h"
 #include "Fresnel.h"
@@ -179,6 +180,14 @@ bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& p
     std::ostringstream msg;
     msg << "boundary irradiance: " << uniformSamples << " uniform light samples: must be >= 0";
     throw Error(msg.str());
+  }
+  if (shadows && uniformIrradiance > 0.0 &&
+    static_cast<double>(boundary.size()) * uniformSamples > 8589934592.0)
+  {
+    throw Error("boundary irradiance: " + std::to_string(uniformSamples) +
+      " uniform light samples x " + std::to_string(boundary.size()) + " boundary points = " +
+      FormatNumber(static_cast<double>(boundary.size()) * uniformSamples) +
+      " shadow rays, above the budget of 8.6e9 rays: use fewer samples (--uniform-samples)");
   }
   for (size_t l = 0; l < lights.size(); ++l)
   {

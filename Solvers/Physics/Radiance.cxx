@@ -1,4 +1,5 @@
 #include "Radiance.h"
+#include "ResourceLimits.h"
 
 #include "Error.h"
 #include "Fresnel.h"
@@ -99,6 +100,7 @@ std::vector<double> BoundaryRadiance(const TetMesh& mesh, const std::vector<doub
         fluence[3 * i + c], irradiance[3 * i + c], pointEta[i], cosOut, nSquaredLaw);
     }
   }
+  RequireFinite(radiance, "Radiance", OverflowCause());
   return radiance;
 }
 

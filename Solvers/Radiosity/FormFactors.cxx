@@ -89,8 +89,25 @@ bool FormFactorComputer::Compute(const RadiosityScene& scene, FormFactorMatrix& 
     os << "form factors: threshold " << Threshold_ << " must be finite and >= 0";
     throw Error(os.str());
   }
-  const auto start = Clock::now();
   const int numPatches = scene.GetNumberOfPatches();
+  {
+    const double rays = static_cast<double>(numPatches) * RaysPerPatch_;
+    if (rays > MaxRays_)
+    {
+      throw Error("form factors: " + std::to_string(numPatches) + " patches x " +
+        std::to_string(RaysPerPatch_) + " rays per patch = " + FormatNumber(rays) +
+        " rays, above the budget of " + FormatNumber(MaxRays_) +
+        " rays: use fewer rays per patch (rays_per_patch, --rays) or larger patches (or raise the "
+        "budget with FormFactorComputer::SetMaxRays)");
+    }
+    const double entries =
+      static_cast<double>(numPatches) * std::min<double>(RaysPerPatch_, numPatches);
+    CheckMemory("form factors: " + std::to_string(numPatches) + " patches x " +
+        std::to_string(RaysPerPatch_) + " rays per patch (up to " + FormatNumber(entries) +
+        " entries)",
+      entries * 12.0 + numPatches * 64.0, MemoryLimit_, "use fewer rays per patch or larger patches");
+  }
+  const auto start = Clock::now();
   const std::vector<double>& points = scene.GetPoints();
   const std::vector<int>& triangles = scene.GetTriangles();
   const std::vector<double>& normals = scene.GetNormals();

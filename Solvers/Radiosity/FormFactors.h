@@ -6,6 +6,8 @@
  */
 #pragma once
 
+#include "ResourceLimits.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -78,6 +80,18 @@ public:
   /// Entries F_ij < threshold are dropped (>= 0). Default 0 (keep every hit).
   void SetThreshold(double t) { Threshold_ = t; }
   double GetThreshold() const { return Threshold_; }
+  /**
+   * Budget of rays per Compute (patches x rays per patch), default 2^33
+   * (~8.6e9 rays, minutes on a workstation): above it Compute throws an Error
+   * naming the product and this override (the time guard; memory is bounded
+   * by the memory limit below).
+   */
+  void SetMaxRays(double rays) { MaxRays_ = rays; }
+  double GetMaxRays() const { return MaxRays_; }
+  /// Bytes F may take at most (patches x min(rays, patches) entries, 12 bytes
+  /// each); default GetDefaultMemoryLimit() (8 GiB).
+  void SetMemoryLimit(std::size_t bytes) { MemoryLimit_ = bytes; }
+  std::size_t GetMemoryLimit() const { return MemoryLimit_; }
   /// Seed of the ray directions. Default 1.
   void SetSeed(std::uint64_t seed) { Seed_ = seed; }
   /// Called with the fraction done; returning false aborts (Compute returns false).
@@ -102,6 +116,8 @@ public:
 
 private:
   int RaysPerPatch_ = 256;
+  double MaxRays_ = 8589934592.0;
+  std::size_t MemoryLimit_ = GetDefaultMemoryLimit();
   double Threshold_ = 0.0;
   std::uint64_t Seed_ = 1;
   std::function<bool(double)> Progress_;

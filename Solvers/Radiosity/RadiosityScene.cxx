@@ -425,11 +425,11 @@ void RadiosityScene::ComputeDirectIrradiance(const std::vector<LightSource>& lig
 
 void RadiosityScene::BoxSurface(const double lo[3], const double hi[3], double cellSize,
   bool inward, int skipFace, std::vector<double>& points, std::vector<int>& triangles,
-  std::vector<int>* faceIds)
+  std::vector<int>* faceIds, std::size_t memoryLimit)
 {
-  if (!(cellSize > 0.0))
+  if (!(cellSize > 0.0) || !std::isfinite(cellSize))
   {
-    throw Error("box surface: cell size must be > 0");
+    throw Error("box surface: cell size must be finite and > 0, not " + FormatNumber(cellSize));
   }
   for (int d = 0; d < 3; ++d)
   {
@@ -438,10 +438,28 @@ void RadiosityScene::BoxSurface(const double lo[3], const double hi[3], double c
       throw Error("box surface: every side must have a positive length");
     }
   }
+  double counts[3];
+  for (int d = 0; d < 3; ++d)
+  {
+    counts[d] = std::max(1.0, std::round((hi[d] - lo[d]) / cellSize)); // inf for an overflow
+  }
+  const double patches =
+    4.0 * (counts[0] * counts[1] + counts[1] * counts[2] + counts[0] * counts[2]);
+  {
+    std::ostringstream what;
+    what << "box surface: " << FormatNumber(patches) << " patches (cell size "
+         << FormatNumber(cellSize) << " mm on a box of " << FormatNumber(hi[0] - lo[0]) << " x "
+         << FormatNumber(hi[1] - lo[1]) << " x " << FormatNumber(hi[2] - lo[2]) << " mm)";
+    CheckMemory(what.str(), patches * 1024.0, memoryLimit, "use a larger cell_size");
+    if (!(patches * 3.0 < static_cast<double>(std::numeric_limits<int>::max())))
+    {
+      throw Error(what.str() + ", more than the 32-bit indices hold: use a larger cell_size");
+    }
+  }
   int cells[3];
   for (int d = 0; d < 3; ++d)
   {
-    cells[d] = std::max(1, static_cast<int>(std::lround((hi[d] - lo[d]) / cellSize)));
+    cells[d] = static_cast<int>(counts[d]);
   }
   // Shared grid points on the surface: index every lattice point once.
   std::map<std::array<int, 3>, int> ids;

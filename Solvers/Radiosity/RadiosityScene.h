@@ -7,6 +7,8 @@
  */
 #pragma once
 
+#include "ResourceLimits.h"
+
 #include "LightSources.h"
 #include "OpticalProperties.h"
 #include "RayCaster.h"
@@ -144,10 +146,15 @@ public:
    * walls of a room), else outward (a block). skipFace (-1 for none) leaves
    * one face out: 0/1 = x min/max, 2/3 = y min/max, 4/5 = z min/max (an open
    * box). faceIds (optional) receives the face number of each triangle.
+   *
+   * Memory: the patch count is computed before anything is allocated; at
+   * ~1 KB per patch (geometry, BVH, form-factor rows, radiosity vectors)
+   * above `memoryLimit` (default GetDefaultMemoryLimit(), 8 GiB) an Error
+   * states the patches, the bytes and the override.
    */
   static void BoxSurface(const double lo[3], const double hi[3], double cellSize, bool inward,
     int skipFace, std::vector<double>& points, std::vector<int>& triangles,
-    std::vector<int>* faceIds = nullptr);
+    std::vector<int>* faceIds = nullptr, std::size_t memoryLimit = GetDefaultMemoryLimit());
 
 private:
   void ValidateMaterial(const RadiosityObject& object) const;

@@ -1,4 +1,5 @@
 #include "TranslucentRadiosity.h"
+#include "ResourceLimits.h"
 
 #include "Error.h"
 #include "Fresnel.h"
@@ -298,6 +299,13 @@ void TranslucentRadiosity::Solve(const std::vector<LightSource>& lights, Radiosi
       diff[k] = B[k] - Bold[k];
     }
     const double norm = Norm(B);
+    if (!std::isfinite(norm))
+    {
+      // A NaN norm would read as "no change" below: never converge on it.
+      RequireFinite(B, "radiosity B (iteration " + std::to_string(it + 1) + ")", OverflowCause());
+      throw Error("radiosity B overflows (its norm is " + FormatNumber(norm) + " at iteration " +
+        std::to_string(it + 1) + ")" + OverflowCause());
+    }
     const double change = norm > 0.0 ? Norm(diff) / norm : 0.0;
     result.ResidualHistory.push_back(change);
     result.Iterations = it + 1;

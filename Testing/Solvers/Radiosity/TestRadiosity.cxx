@@ -981,3 +981,33 @@ TEST(Radiosity, SessionKeepsFormFactorsAndUpdatesMaterials)
 }
 
 } // namespace
+
+// Issue 21: the patch count of a box is estimated before anything is
+// allocated; a cell size of 1e-3 mm (or a 1.5e13 mm box) is refused with a
+// message naming the count and the override, and a larger limit lifts it.
+TEST(RadiosityScene, BoxSurfaceRefusesTooManyPatches)
+{
+  using namespace translucency;
+  std::vector<double> points;
+  std::vector<int> triangles;
+  const double lo[3] = { 0, 0, 0 }, hi[3] = { 20, 20, 20 }, huge[3] = { 1.5e13, 1.5e13, 1.5e13 };
+  try
+  {
+    RadiosityScene::BoxSurface(lo, hi, 1e-3, true, -1, points, triangles);
+    FAIL() << "no error for 4.8e9 patches";
+  }
+  catch (const Error& e)
+  {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("cell size 0.001 mm"), std::string::npos) << m;
+    EXPECT_NE(m.find("4.8e+09 patches"), std::string::npos) << m;
+    EXPECT_NE(m.find("--memory-limit"), std::string::npos) << m;
+  }
+  EXPECT_TRUE(points.empty());
+  EXPECT_THROW(RadiosityScene::BoxSurface(lo, huge, 2.0, true, -1, points, triangles), Error);
+  // 4800 patches (~4.8 MB): refused under a 1 MiB limit, built under the default.
+  EXPECT_THROW(
+    RadiosityScene::BoxSurface(lo, hi, 1.0, true, -1, points, triangles, nullptr, 1 << 20), Error);
+  RadiosityScene::BoxSurface(lo, hi, 1.0, true, -1, points, triangles);
+  EXPECT_EQ(triangles.size(), 3u * 4800u);
+}
