@@ -2,6 +2,7 @@
 #include "Utilities.h"
 
 #include "Error.h"
+#include "Strings.h"
 
 #include "vtkAssignScatteringCoefficients.h"
 #include "vtkPaintScatteringCoefficients.h"
@@ -17,11 +18,37 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 #include <vector>
 
 namespace translucency_app
 {
 using json = nlohmann::json;
+
+namespace
+{
+/// Parse the JSON text of `in`; `what` names the file in messages. Nesting
+/// deeper than translucency::MaxJsonNesting is refused before parsing.
+json ParseJsonFile(std::istream& in, const std::string& what)
+{
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  if (translucency::JsonNestingDepth(text) > translucency::MaxJsonNesting)
+  {
+    throw translucency::Error(what + " nests arrays/objects deeper than " +
+      std::to_string(translucency::MaxJsonNesting) + " levels");
+  }
+  try
+  {
+    return json::parse(text);
+  }
+  catch (const std::exception& e)
+  {
+    throw translucency::Error(what + " is not valid JSON: " + translucency::Abbreviate(e.what(), 160));
+  }
+}
+} // namespace
 
 void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& material,
   const std::string& materialIds)
@@ -41,15 +68,7 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
   {
     throw translucency::Error("cannot open material file '" + material + "'");
   }
-  json j;
-  try
-  {
-    in >> j;
-  }
-  catch (const std::exception& e)
-  {
-    throw translucency::Error("material file '" + material + "' is not valid JSON: " + e.what());
-  }
+  const json j = ParseJsonFile(in, "material file '" + material + "'");
   auto triple = [&](const char* key, double out[3]) {
     if (!j.contains(key) || !j[key].is_array() || j[key].size() != 3)
     {
@@ -123,15 +142,7 @@ json ReadJsonObject(const std::string& path, const std::string& what)
   {
     throw translucency::Error("cannot open " + what + " file '" + path + "'");
   }
-  json j;
-  try
-  {
-    in >> j;
-  }
-  catch (const std::exception& e)
-  {
-    throw translucency::Error(what + " file '" + path + "' is not valid JSON: " + e.what());
-  }
+  json j = ParseJsonFile(in, what + " file '" + path + "'");
   if (!j.is_object())
   {
     throw translucency::Error(what + " file '" + path + "' must hold a JSON object {...}");

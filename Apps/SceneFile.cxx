@@ -5,6 +5,7 @@
 #include "Utilities.h"
 
 #include "Error.h"
+#include "Strings.h"
 #include "RadiosityScene.h"
 
 #include "vtkAssignScatteringCoefficients.h"
@@ -27,6 +28,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 #include <map>
 
 namespace translucency_app
@@ -228,14 +230,22 @@ LoadedScene LoadScene(const std::string& path, double cellSizeOverride)
   {
     ctx.Fail("cannot open the scene file");
   }
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  if (translucency::JsonNestingDepth(text) > translucency::MaxJsonNesting)
+  {
+    ctx.Fail("arrays/objects nested deeper than " + std::to_string(translucency::MaxJsonNesting) +
+      " levels");
+  }
   json j;
   try
   {
-    in >> j;
+    j = json::parse(text);
   }
   catch (const std::exception& e)
   {
-    ctx.Fail(std::string("not valid JSON: ") + e.what());
+    ctx.Fail(std::string("not valid JSON: ") + translucency::Abbreviate(e.what(), 160));
   }
   if (!j.is_object() || !j.contains("objects") || !j["objects"].is_array() ||
     j["objects"].empty())
@@ -252,7 +262,7 @@ LoadedScene LoadScene(const std::string& path, double cellSizeOverride)
     const std::string name =
       object.contains("name") && object["name"].is_string() ? object["name"].get<std::string>()
                                                             : "object " + std::to_string(index);
-    ctx.Where = "object " + std::to_string(index) + " '" + name + "'";
+    ctx.Where = "object " + std::to_string(index) + " '" + translucency::Abbreviate(name) + "'";
     if (!object.is_object())
     {
       ctx.Fail("every object must be a JSON object");
