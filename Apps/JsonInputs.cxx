@@ -36,7 +36,7 @@ json ParseJsonFile(std::istream& in, const std::string& what)
   const std::string text = buffer.str();
   if (translucency::JsonNestingDepth(text) > translucency::MaxJsonNesting)
   {
-    throw translucency::Error(what + " nests arrays/objects deeper than " +
+    throw translucency::Error(what + ": arrays/objects nested deeper than " +
       std::to_string(translucency::MaxJsonNesting) + " levels");
   }
   try

@@ -7,6 +7,11 @@
 #include "Strings.h"
 
 #include <vtkAlgorithm.h>
+#include <vtkCellArray.h>
+#include <vtkCellArrayIterator.h>
+#include <vtkCellType.h>
+#include <vtkCellTypes.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkOBJReader.h>
 #include <vtkPLYReader.h>
 #include <vtkPolyData.h>
@@ -83,11 +88,12 @@ private:
   /// An integer attribute in [lo, hi]; `fallback` if absent and not required.
   double Integer(const Tag& t, const std::string& key, double lo, double hi, bool required,
     double fallback = 0.0) const;
-  bool NextTag(size_t& pos, Tag& tag, bool& closing, bool& selfClosing);
-  void CheckDataArray(const Tag& t, size_t contentBegin, size_t contentEnd, double tuples);
+  bool NextTag(size_t& pos, Tag& tag, bool& closing, bool& selfClosing, size_t* tagStart = nullptr);
+  void CheckDataArray(const Tag& t, const std::string* content, double tuples);
   void CheckHeader(const Tag& t, const std::vector<uint64_t>& header, bool compressed,
     double expectedBytes, double availableBytes);
-  std::vector<unsigned char> DecodeBase64(size_t begin, size_t end, size_t maxBytes) const;
+  std::vector<unsigned char> DecodeBase64(
+    const std::string& text, size_t begin, size_t end, size_t maxBytes) const;
   uint64_t Word(const unsigned char* p) const;
 
   std::string Path;
@@ -139,7 +145,7 @@ double XmlChecker::Integer(
   return static_cast<double>(v);
 }
 
-bool XmlChecker::NextTag(size_t& pos, Tag& tag, bool& closing, bool& selfClosing)
+bool XmlChecker::NextTag(size_t& pos, Tag& tag, bool& closing, bool& selfClosing, size_t* tagStart)
 {
   const std::string& s = this->Text;
   while (true)
@@ -165,6 +171,8 @@ bool XmlChecker::NextTag(size_t& pos, Tag& tag, bool& closing, bool& selfClosing
     }
     break;
   }
+  if (tagStart)
+    *tagStart = pos;
   size_t i = pos + 1;
   closing = i < s.size() && s[i] == '/';
   if (closing)
@@ -221,7 +229,8 @@ bool XmlChecker::NextTag(size_t& pos, Tag& tag, bool& closing, bool& selfClosing
   }
 }
 
-std::vector<unsigned char> XmlChecker::DecodeBase64(size_t begin, size_t end, size_t maxBytes) const
+std::vector<unsigned char> XmlChecker::DecodeBase64(
+  const std::string& text, size_t begin, size_t end, size_t maxBytes) const
 {
   static const std::string alphabet =
     "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -230,7 +239,7 @@ std::vector<unsigned char> XmlChecker::DecodeBase64(size_t begin, size_t end, si
   int bits = 0;
   for (size_t i = begin; i < end && out.size() < maxBytes; ++i)
   {
-    const char c = this->Text[i];
+    const char c = text[i];
     if (std::isspace(static_cast<unsigned char>(c)))
       continue;
     if (c == '=')
@@ -315,7 +324,7 @@ void XmlChecker::CheckHeader(const Tag& t, const std::vector<uint64_t>& header, 
   }
 }
 
-void XmlChecker::CheckDataArray(const Tag& t, size_t contentBegin, size_t contentEnd, double tuples)
+void XmlChecker::CheckDataArray(const Tag& t, const std::string* content, double tuples)
 {
   static const std::map<std::string, int> sizes = { { "Int8", 1 }, { "UInt8", 1 }, { "Int16", 2 },
     { "UInt16", 2 }, { "Int32", 4 }, { "UInt32", 4 }, { "Int64", 8 }, { "UInt64", 8 },
@@ -340,13 +349,13 @@ void XmlChecker::CheckDataArray(const Tag& t, size_t contentBegin, size_t conten
   const bool compressed = !this->Compressor.empty();
   if (format == "ascii")
   {
-    if (contentBegin == std::string::npos)
+    if (!content)
       return;
     double count = 0;
     bool inToken = false;
-    for (size_t i = contentBegin; i < contentEnd; ++i)
+    for (const char ch : *content)
     {
-      const bool space = std::isspace(static_cast<unsigned char>(this->Text[i]));
+      const bool space = std::isspace(static_cast<unsigned char>(ch));
       if (!space && !inToken)
         ++count;
       inToken = !space;
@@ -362,10 +371,10 @@ void XmlChecker::CheckDataArray(const Tag& t, size_t contentBegin, size_t conten
   }
   if (format == "binary")
   {
-    if (contentBegin == std::string::npos)
+    if (!content)
       this->Fail(this->Element(t) + " format=\"binary\" holds no data");
-    const double available = 0.75 * static_cast<double>(contentEnd - contentBegin);
-    std::vector<unsigned char> head = this->DecodeBase64(contentBegin, contentEnd,
+    const double available = 0.75 * static_cast<double>(content->size());
+    std::vector<unsigned char> head = this->DecodeBase64(*content, 0, content->size(),
       static_cast<size_t>(3 * this->HeaderBytes));
     if (head.size() < static_cast<size_t>((compressed ? 3 : 1) * this->HeaderBytes))
       this->Fail(this->Element(t) + " format=\"binary\": the data header is truncated");
@@ -379,7 +388,7 @@ void XmlChecker::CheckDataArray(const Tag& t, size_t contentBegin, size_t conten
       const uint64_t blocks = this->Word(head.data());
       if (static_cast<double>(blocks) > available / this->HeaderBytes)
         this->Fail(this->Element(t) + " claims more compressed blocks than the file holds");
-      head = this->DecodeBase64(contentBegin, contentEnd,
+      head = this->DecodeBase64(*content, 0, content->size(),
         static_cast<size_t>((3 + blocks) * this->HeaderBytes));
       if (head.size() < (3 + blocks) * this->HeaderBytes)
         this->Fail(this->Element(t) + " format=\"binary\": the block header is truncated");
@@ -432,14 +441,33 @@ void XmlChecker::Run(const std::string& expectedType)
   std::vector<std::string> stack{ "VTKFile" };
   double points = -1.0, cells = -1.0;
   bool sawPiece = false;
+  // The open <DataArray>: its tag, the tuples it must hold, its character data
+  // (the text directly inside it, around any <InformationKey> children).
+  Tag array;
+  double arrayTuples = -1.0;
+  std::string arrayText;
+  size_t arrayDepth = 0; // stack size with the open <DataArray> on top; 0: none
+  size_t textBegin = pos;
   while (true)
   {
-    if (!this->NextTag(pos, tag, closing, selfClosing))
+    size_t tagStart = 0;
+    if (!this->NextTag(pos, tag, closing, selfClosing, &tagStart))
       this->Fail("the file ends inside <" + stack.back() + "> (truncated?)");
+    if (arrayDepth != 0 && stack.size() == arrayDepth && tagStart > textBegin)
+    {
+      arrayText.append(s, textBegin, tagStart - textBegin);
+    }
+    textBegin = pos;
     if (closing)
     {
       if (stack.empty() || stack.back() != tag.Name)
         this->Fail("</" + tag.Name + "> does not close <" + (stack.empty() ? "" : stack.back()) + ">");
+      if (arrayDepth != 0 && stack.size() == arrayDepth)
+      {
+        this->CheckDataArray(array, &arrayText, arrayTuples);
+        arrayDepth = 0;
+        arrayText.clear();
+      }
       stack.pop_back();
       if (stack.empty())
         break;
@@ -457,6 +485,8 @@ void XmlChecker::Run(const std::string& expectedType)
       this->AppendedBegin = marker + 1;
       break; // the rest is data
     }
+    if (stack.size() >= static_cast<size_t>(MaxElementDepth))
+      this->Fail("XML elements nested deeper than " + std::to_string(MaxElementDepth));
     if (tag.Name == "Piece")
     {
       sawPiece = true;
@@ -494,15 +524,13 @@ void XmlChecker::Run(const std::string& expectedType)
         }
       }
     }
-    if (stack.size() >= static_cast<size_t>(MaxElementDepth))
-      this->Fail("XML elements nested deeper than " + std::to_string(MaxElementDepth));
-    if (tag.Name == "DataArray")
+    if (tag.Name == "DataArray" && arrayDepth == 0)
     {
       if (!sawPiece && std::find(stack.begin(), stack.end(), "FieldData") == stack.end())
         this->Fail("<DataArray> outside a <Piece>");
       // The tuples this array must hold, where the format fixes it.
       double tuples = -1.0;
-      const std::string section = stack.back();
+      const std::string& section = stack.back();
       const std::string name = tag.Get("Name");
       if (section == "Points" || section == "PointData")
         tuples = points;
@@ -510,21 +538,16 @@ void XmlChecker::Run(const std::string& expectedType)
         tuples = cells;
       else if (section == "Cells" && (name == "offsets" || name == "types"))
         tuples = cells;
-      size_t contentBegin = std::string::npos, contentEnd = std::string::npos;
-      if (!selfClosing)
+      if (selfClosing)
       {
-        contentBegin = pos;
-        contentEnd = s.find("</DataArray", pos);
-        if (contentEnd == std::string::npos)
-          this->Fail(this->Element(tag) + " is not closed (truncated?)");
-        const size_t nested = s.find('<', pos);
-        if (nested < contentEnd)
-          this->Fail(this->Element(tag) + " holds an element; it must hold only data");
-        pos = contentEnd;
+        this->CheckDataArray(tag, nullptr, tuples);
+        continue;
       }
-      this->CheckDataArray(tag, contentBegin, contentEnd, tuples);
-      if (!selfClosing)
-        stack.push_back(tag.Name);
+      array = tag;
+      arrayTuples = tuples;
+      arrayText.clear();
+      stack.push_back(tag.Name);
+      arrayDepth = stack.size();
       continue;
     }
     if (!selfClosing)
@@ -570,7 +593,7 @@ void XmlChecker::Run(const std::string& expectedType)
     else
     {
       available = 0.75 * static_cast<double>(s.size() - begin);
-      std::vector<unsigned char> head = this->DecodeBase64(begin, s.size(), 3 * hb);
+      std::vector<unsigned char> head = this->DecodeBase64(s, begin, s.size(), 3 * hb);
       if (head.size() < (compressed ? 3 : 1) * hb)
         this->Fail(this->Element(p.Array) + ": the data header is truncated");
       header.push_back(this->Word(head.data()));
@@ -578,7 +601,7 @@ void XmlChecker::Run(const std::string& expectedType)
       {
         if (static_cast<double>(header[0]) > available / hb)
           this->Fail(this->Element(p.Array) + " claims more compressed blocks than the file holds");
-        head = this->DecodeBase64(begin, s.size(), (3 + header[0]) * hb);
+        head = this->DecodeBase64(s, begin, s.size(), (3 + header[0]) * hb);
         if (head.size() < (3 + header[0]) * hb)
           this->Fail(this->Element(p.Array) + ": the block header is truncated");
         for (size_t k = 1; k < 3 + header[0]; ++k)
@@ -610,6 +633,66 @@ void CheckVtkXmlFile(const std::string& path)
   XmlChecker(path, text).Run(type);
 }
 
+
+namespace
+{
+/// The cells of a grid read from `path`: every one a VTK_TETRA of four point
+/// ids in range, every point finite. The filters check the same
+/// (vtkTranslucency::ToTetMesh); here the message names the file.
+void CheckTetGrid(vtkUnstructuredGrid* grid, const std::string& path)
+{
+  const vtkIdType numPoints = grid->GetNumberOfPoints();
+  const vtkIdType numCells = grid->GetNumberOfCells();
+  auto fail = [&](const std::string& what) { throw translucency::Error("'" + path + "': " + what); };
+  for (vtkIdType i = 0; i < numPoints; ++i)
+  {
+    double p[3];
+    grid->GetPoint(i, p);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+    {
+      std::ostringstream os;
+      os << "point " << i << " has a non-finite coordinate (" << p[0] << ", " << p[1] << ", "
+         << p[2] << ")";
+      fail(os.str());
+    }
+  }
+  vtkUnsignedCharArray* types = grid->GetCellTypesArray();
+  vtkCellArray* cells = grid->GetCells();
+  if (!types || !cells || types->GetNumberOfTuples() < numCells ||
+    cells->GetNumberOfCells() < numCells)
+  {
+    fail("the cell arrays (connectivity, offsets, types) disagree with NumberOfCells");
+  }
+  auto it = vtk::TakeSmartPointer(cells->NewIterator());
+  vtkIdType npts;
+  const vtkIdType* ids;
+  for (vtkIdType c = 0; c < numCells; ++c)
+  {
+    std::ostringstream os;
+    if (types->GetValue(c) != VTK_TETRA)
+    {
+      os << "cell " << c << " is a " << vtkCellTypes::GetClassNameFromTypeId(types->GetValue(c))
+         << ", not a linear tetrahedron (VTK type 10)";
+      fail(os.str());
+    }
+    it->GetCellAtId(c, npts, ids);
+    if (npts != 4)
+    {
+      os << "cell " << c << " is a tetrahedron with " << npts << " point ids; a tetrahedron has 4";
+      fail(os.str());
+    }
+    for (int k = 0; k < 4; ++k)
+    {
+      if (ids[k] < 0 || ids[k] >= numPoints)
+      {
+        os << "cell " << c << " uses point id " << ids[k] << ", outside [0, " << numPoints - 1
+           << "]";
+        fail(os.str());
+      }
+    }
+  }
+}
+} // namespace
 
 /// Read a surface or tet mesh. Returns a polydata (to tetrahedralize) or a grid.
 bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
@@ -693,6 +776,15 @@ bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
   else if (auto* ug = vtkUnstructuredGrid::SafeDownCast(data))
   {
     grid = ug;
+    try
+    {
+      CheckTetGrid(grid, path);
+    }
+    catch (const translucency::Error& e)
+    {
+      error = e.what();
+      return false;
+    }
   }
   if ((surface && surface->GetNumberOfCells() == 0) || (grid && grid->GetNumberOfCells() == 0) ||
     (!surface && !grid))

@@ -185,7 +185,12 @@ OutputBatch::~OutputBatch()
 {
   for (const std::string& path : this->Targets)
   {
-    std::remove((path + ".part").c_str());
+    // Only a file (a directory of that name is not ours).
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(path + ".part", ec))
+    {
+      std::filesystem::remove(path + ".part", ec);
+    }
   }
 }
 
