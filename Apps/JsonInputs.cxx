@@ -27,6 +27,11 @@ using json = nlohmann::json;
 
 namespace
 {
+/// The largest coefficient (1/mm) or refractive index a material file may
+/// give: a mean free path of 1 nm. 1e308 passed the core's checks and gave a
+/// NaN fluence.
+constexpr double MaxCoefficient = 1e6;
+
 /// Parse the JSON text of `in`; `what` names the file in messages. Nesting
 /// deeper than translucency::MaxJsonNesting is refused before parsing.
 json ParseJsonFile(std::istream& in, const std::string& what)
@@ -83,6 +88,13 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
           "material file '" + material + "': \"" + key + "\" must hold three numbers");
       }
       out[c] = j[key][c].get<double>();
+      if (!std::isfinite(out[c]) || out[c] < 0.0 || out[c] > MaxCoefficient)
+      {
+        std::ostringstream os;
+        os << "material file '" << material << "': \"" << key << "\"[" << c
+           << "] must be in [0, " << MaxCoefficient << "] 1/mm, not " << out[c];
+        throw translucency::Error(os.str());
+      }
     }
   };
   if (!j.is_object())
@@ -129,7 +141,15 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
     throw translucency::Error(
       "material file '" + material + "': \"refractive_index\" must be a number");
   }
-  assign->SetRefractiveIndex(j.value("refractive_index", 1.3));
+  const double eta = j.value("refractive_index", 1.3);
+  if (!(eta > 0.0 && eta <= MaxCoefficient))
+  {
+    std::ostringstream os;
+    os << "material file '" << material << "': \"refractive_index\" must be in (0, "
+       << MaxCoefficient << "], not " << eta;
+    throw translucency::Error(os.str());
+  }
+  assign->SetRefractiveIndex(eta);
 }
 
 namespace

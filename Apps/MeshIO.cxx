@@ -692,6 +692,51 @@ void CheckTetGrid(vtkUnstructuredGrid* grid, const std::string& path)
     }
   }
 }
+
+/// The cells of a surface read from `path`: point ids in range (vtkStaticCleanPolyData
+/// crashed on one out of range), points finite.
+void CheckSurface(vtkPolyData* surface, const std::string& path)
+{
+  const vtkIdType numPoints = surface->GetNumberOfPoints();
+  for (vtkIdType i = 0; i < numPoints; ++i)
+  {
+    double p[3];
+    surface->GetPoint(i, p);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+    {
+      std::ostringstream os;
+      os << "point " << i << " has a non-finite coordinate (" << p[0] << ", " << p[1] << ", "
+         << p[2] << ")";
+      throw translucency::Error("'" + path + "': " + os.str());
+    }
+  }
+  const std::pair<const char*, vtkCellArray*> arrays[4] = { { "vertex", surface->GetVerts() },
+    { "line", surface->GetLines() }, { "polygon", surface->GetPolys() },
+    { "strip", surface->GetStrips() } };
+  for (const auto& kind : arrays)
+  {
+    if (!kind.second)
+      continue;
+    auto it = vtk::TakeSmartPointer(kind.second->NewIterator());
+    vtkIdType npts;
+    const vtkIdType* ids;
+    vtkIdType c = 0;
+    for (it->GoToFirstCell(); !it->IsDoneWithTraversal(); it->GoToNextCell(), ++c)
+    {
+      it->GetCurrentCell(npts, ids);
+      for (vtkIdType k = 0; k < npts; ++k)
+      {
+        if (ids[k] < 0 || ids[k] >= numPoints)
+        {
+          std::ostringstream os;
+          os << kind.first << " " << c << " uses point id " << ids[k] << ", outside [0, "
+             << numPoints - 1 << "]";
+          throw translucency::Error("'" + path + "': " + os.str());
+        }
+      }
+    }
+  }
+}
 } // namespace
 
 /// Read a surface or tet mesh. Returns a polydata (to tetrahedralize) or a grid.
@@ -772,6 +817,15 @@ bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
   if (auto* poly = vtkPolyData::SafeDownCast(data))
   {
     surface = poly;
+    try
+    {
+      CheckSurface(surface, path);
+    }
+    catch (const translucency::Error& e)
+    {
+      error = e.what();
+      return false;
+    }
   }
   else if (auto* ug = vtkUnstructuredGrid::SafeDownCast(data))
   {

@@ -50,6 +50,12 @@ struct Context
   }
 };
 
+/// The largest magnitude of a number in a scene file: lengths (mm), powers
+/// and albedos alike. 1e308 once overflowed the ray caster's bounds (a crash).
+constexpr double MaxSceneNumber = 1e6;
+/// The most patches one box may have (its faces at `cell_size`).
+constexpr double MaxBoxPatches = 1e6;
+
 std::vector<double> Numbers(const json& j, const char* key, size_t count, const Context& ctx)
 {
   if (!j.contains(key))
@@ -72,6 +78,11 @@ std::vector<double> Numbers(const json& j, const char* key, size_t count, const 
     if (!x.is_number() || !std::isfinite(x.get<double>()))
     {
       ctx.Fail(std::string("\"") + key + "\" must hold finite numbers");
+    }
+    if (std::abs(x.get<double>()) > MaxSceneNumber)
+    {
+      ctx.Fail(std::string("\"") + key + "\" holds " + translucency::Abbreviate(x.dump()) +
+        ", beyond +-1e6 (lengths in mm, powers in W)");
     }
     out.push_back(x.get<double>());
   }
@@ -280,6 +291,20 @@ LoadedScene LoadScene(const std::string& path, double cellSizeOverride)
       const int open = object.contains("open_face")
         ? FaceId(object["open_face"].get<std::string>(), ctx)
         : -1;
+      if (cell > 0.0)
+      {
+        double d[3], patches = 0.0;
+        for (int k = 0; k < 3; ++k)
+          d[k] = std::ceil(std::abs(hi[k] - lo[k]) / cell);
+        patches = 2.0 * (d[0] * d[1] + d[1] * d[2] + d[0] * d[2]);
+        if (patches > MaxBoxPatches)
+        {
+          std::ostringstream os;
+          os << "the box would have about " << patches << " patches at cell_size " << cell
+             << " mm (at most " << MaxBoxPatches << "): raise cell_size";
+          ctx.Fail(os.str());
+        }
+      }
       std::vector<double> points;
       std::vector<int> triangles, faces;
       try

@@ -59,10 +59,10 @@ double NonNegative(const std::string& fileName, const std::string& where, const 
     Fail(fileName, where + " must be a number, not " + Short(v));
   }
   const double x = v.get<double>();
-  if (!std::isfinite(x) || x < 0.0)
+  if (!std::isfinite(x) || x < 0.0 || x > 1e6)
   {
     std::ostringstream os;
-    os << where << " must be finite and >= 0, not " << Short(v);
+    os << where << " must be finite, >= 0 and <= 1e6, not " << Short(v);
     Fail(fileName, os.str());
   }
   return x;

@@ -346,7 +346,8 @@ def non_finite_output(prefix, kind):
     return None
 
 
-def run_case(cli, workdir, index, kind, base, args_of, data):
+def run_case(cli, workdir, index, kind, base, args_of, content, case_seed):
+    data = mutate(kind, content, random.Random(case_seed))
     case_dir = os.path.join(workdir, "case_%05d" % index)
     os.makedirs(case_dir, exist_ok=True)
     path = os.path.join(case_dir, os.path.basename(base))
@@ -391,11 +392,13 @@ def main():
         bases = write_bases(workdir)
         kinds = sorted(bases)
         contents = {p: open(p, "rb").read() for entries in bases.values() for p, _ in entries}
+        # Each case mutates with a generator of its own (seeded from --seed), in
+        # the worker: the same case is the same whatever the order of the runs.
         cases = []
         for index in range(options.cases):
             kind = kinds[index % len(kinds)]
             base, args_of = rng.choice(bases[kind])
-            cases.append((index, kind, base, args_of, mutate(kind, contents[base], rng)))
+            cases.append((index, kind, base, args_of, contents[base], rng.getrandbits(64)))
         counts = {k: {} for k in kinds}
         bad = []
         with concurrent.futures.ThreadPoolExecutor(options.jobs) as pool:

@@ -242,11 +242,23 @@ class BadMeshInputs(unittest.TestCase):
                                               'NumberOfComponents="0"', 1),
              ["NumberOfComponents", "out of range"]),
             ("vtp_as_vtu", vtu_text(), ["<VTKFile>", "PolyData"]),
+            # Mutation loop, seed 2 case 75: vtkStaticCleanPolyData crashed (SIGSEGV).
+            ("vtp_id_out_of_range", self.polygon_id(sphere, 4194316),
+             ["polygon 0 uses point id 4194316"]),
         ]
         for case, text, needles in catalogue:
             with self.subTest(case=case):
                 path = self.write(case + ".vtp", text)
                 self.expect_error(case, ["render", "--mesh", path], path, *needles)
+
+    @staticmethod
+    def polygon_id(sphere, new_id):
+        """The ascii sphere with the first id of its first polygon replaced."""
+        start = sphere.index('Name="connectivity"', sphere.index("<Polys>"))
+        body = sphere.index(">", start) + 1
+        rest = sphere[body:].lstrip()
+        first = rest.split()[0]
+        return sphere[:body] + " " + str(new_id) + rest[len(first):]
 
     def vtk_sphere_ascii(self):
         from vtkmodules.vtkFiltersSources import vtkSphereSource
@@ -361,6 +373,14 @@ class BadMeshInputs(unittest.TestCase):
              ["nested deeper than 64"]),
             ("stroke_deep", "stroke.json", deep_json(100000, "points"), ["--cut-stroke"],
              ["nested deeper than 64"]),
+            # Mutation loop, seed 2 case 35: exit 0 with a NaN fluence.
+            ("material_1e308", "material.json",
+             '{"absorption": [0.01, 1e308, 0.03], "reduced_scattering": [1, 1, 1]}',
+             ["--material"], ['"absorption"[1] must be in [0, 1e+06] 1/mm']),
+            ("table_1e308", "table.json",
+             '{"materials": [{"name": "a", "id": 0, "absorption": [1e308, 0, 0], '
+             '"reduced_scattering": [1, 1, 1]}]}', ["--material-ids", "Ids", "--material"],
+             ['"absorption"[0] must be finite, >= 0 and <= 1e6']),
             ("material_not_json", "material.json", '{"absorption": [1, 2,', ["--material"],
              ["not valid JSON"]),
         ]
@@ -369,6 +389,32 @@ class BadMeshInputs(unittest.TestCase):
                 path = self.write(case + "_" + name, text)
                 args = ["render", "--mesh", mesh] + option + [path]
                 self.expect_error(case, args, path, *needles)
+
+    def test_scene_huge_number(self):
+        # Mutation loop, seed 2 case 38: the ray caster crashed (SIGSEGV) on a
+        # box up to z = 1e308.
+        scene = {"cell_size": 6, "objects": [
+            {"name": "room", "type": "box", "min": [0, 0, 0], "max": [30, 30, 1e308],
+             "inward": True, "open_face": "-y"},
+            {"name": "block", "type": "box", "translucent": True, "min": [10, 10, 0.05],
+             "max": [18, 18, 8], "material": "marble", "max_tet_volume": 8}],
+            "lights": [{"type": "point", "position": [15, 15, 28], "power": [500, 500, 500]}]}
+        path = self.write("scene_huge.json", json.dumps(scene))
+        proc = subprocess.run([CLI, "radiosity", "--scene", path, "--output",
+                               os.path.join(self.dir, "scene_huge_out")],
+                              capture_output=True, timeout=TIME_LIMIT)
+        stderr = proc.stderr.decode("utf-8", "replace")
+        self.assertGreater(proc.returncode, 0, stderr)
+        self.assertIn(path, stderr)
+        self.assertIn("'room': \"max\" holds 1e+308, beyond +-1e6", stderr)
+        scene["objects"][0]["max"] = [30, 30, 1e5]
+        path = self.write("scene_many_patches.json", json.dumps(scene))
+        proc = subprocess.run([CLI, "radiosity", "--scene", path, "--output",
+                               os.path.join(self.dir, "scene_huge_out")],
+                              capture_output=True, timeout=TIME_LIMIT)
+        stderr = proc.stderr.decode("utf-8", "replace")
+        self.assertGreater(proc.returncode, 0, stderr)
+        self.assertIn("patches", stderr)
 
     def test_scene_deep(self):
         path = self.write("scene_deep.json", deep_json(100000, "objects"))
