@@ -407,14 +407,16 @@ class BadMeshInputs(unittest.TestCase):
         self.assertGreater(proc.returncode, 0, stderr)
         self.assertIn(path, stderr)
         self.assertIn("'room': \"max\" holds 1e+308, beyond +-1e6", stderr)
-        scene["objects"][0]["max"] = [30, 30, 1e5]
-        path = self.write("scene_many_patches.json", json.dumps(scene))
+        scene["objects"][0]["max"] = [1e5, 1e5, 30]
+        scene["objects"][0]["albedo"] = [0.5, 0.5, 0.5]
+        path = self.write("scene_big_box.json", json.dumps(scene))
         proc = subprocess.run([CLI, "radiosity", "--scene", path, "--output",
                                os.path.join(self.dir, "scene_huge_out")],
                               capture_output=True, timeout=TIME_LIMIT)
         stderr = proc.stderr.decode("utf-8", "replace")
         self.assertGreater(proc.returncode, 0, stderr)
-        self.assertIn("patches", stderr)
+        self.assertIn("'room': the box would have about 5.55911e+08 patches at cell_size 6 mm",
+                      stderr)
 
     def test_scene_deep(self):
         path = self.write("scene_deep.json", deep_json(100000, "objects"))
