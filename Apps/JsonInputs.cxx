@@ -27,8 +27,8 @@ using json = nlohmann::json;
 
 namespace
 {
-/// The largest coefficient (1/mm) or refractive index a material file may
-/// give: a mean free path of 1 nm. 1e308 passed the core's checks and gave a
+/// The largest coefficient (1/mm) a material file may give: a mean free
+/// path of 1 nm. 1e308 passed the core's checks and gave a
 /// NaN fluence.
 constexpr double MaxCoefficient = 1e6;
 
@@ -142,11 +142,12 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
       "material file '" + material + "': \"refractive_index\" must be a number");
   }
   const double eta = j.value("refractive_index", 1.3);
-  if (!(eta > 0.0 && eta <= MaxCoefficient))
+  // [0.1, 10]: 1e-320 passed the core's "> 0" and gave a NaN fluence.
+  if (!(eta >= 0.1 && eta <= 10.0))
   {
     std::ostringstream os;
-    os << "material file '" << material << "': \"refractive_index\" must be in (0, "
-       << MaxCoefficient << "], not " << eta;
+    os << "material file '" << material << "': \"refractive_index\" must be in [0.1, 10], not "
+       << eta;
     throw translucency::Error(os.str());
   }
   assign->SetRefractiveIndex(eta);
@@ -190,6 +191,15 @@ bool ReadTriple(const json& j, const char* key, const std::string& path, double 
     if (!std::isfinite(out[c]))
     {
       throw translucency::Error("'" + path + "': \"" + key + "\" must be finite");
+    }
+    // Coefficients (1/mm), factors, directions: 1e308 as a paint target gave a
+    // NaN fluence.
+    if (std::abs(out[c]) > MaxCoefficient)
+    {
+      std::ostringstream os;
+      os << "'" << path << "': \"" << key << "\"[" << c << "] must be within +-"
+         << MaxCoefficient << ", not " << out[c];
+      throw translucency::Error(os.str());
     }
   }
   return true;

@@ -249,9 +249,10 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
       {
         m.RefractiveIndex = NonNegative(fileName, where + ": \"refractive_index\"",
           e["refractive_index"]);
-        if (!(m.RefractiveIndex > 0.0))
+        // [0.1, 10]: 1e-320 passed "> 0" and gave a NaN fluence.
+        if (!(m.RefractiveIndex >= 0.1 && m.RefractiveIndex <= 10.0))
         {
-          Fail(fileName, where + ": \"refractive_index\" must be > 0, not " +
+          Fail(fileName, where + ": \"refractive_index\" must be in [0.1, 10], not " +
               Short(e["refractive_index"]));
         }
       }

@@ -381,6 +381,21 @@ class BadMeshInputs(unittest.TestCase):
              '{"materials": [{"name": "a", "id": 0, "absorption": [1e308, 0, 0], '
              '"reduced_scattering": [1, 1, 1]}]}', ["--material-ids", "Ids", "--material"],
              ['"absorption"[0] must be finite, >= 0 and <= 1e6']),
+            # Mutation loop, seed 1 cases 364 and 1632: exit 0 with a NaN fluence.
+            ("material_eta_denormal", "material.json",
+             '{"absorption": [0.01, 0.02, 0.03], "reduced_scattering": [1, 1, 1], '
+             '"refractive_index": 1e-320}', ["--material"],
+             ['"refractive_index" must be in [0.1, 10]']),
+            ("table_eta_denormal", "table.json",
+             '{"materials": [{"name": "a", "id": 0, "absorption": [0, 0, 0], '
+             '"reduced_scattering": [1, 1, 1], "refractive_index": 1e-320}]}',
+             ["--material-ids", "Ids", "--material"],
+             ['"refractive_index" must be in [0.1, 10]']),
+            # Mutation loop, seed 1 case 2620: exit 0 with a NaN fluence.
+            ("paint_1e308", "paint.json",
+             '{"points": [[0, 0, 10], [10, 10, 10]], "width": 2, "mode": "set", '
+             '"absorption": [1e308, 0.2, 0.3], "reduced_scattering": [2, 2, 2]}', ["--paint"],
+             ['"absorption"[0] must be within +-1e+06']),
             ("material_not_json", "material.json", '{"absorption": [1, 2,', ["--material"],
              ["not valid JSON"]),
         ]
