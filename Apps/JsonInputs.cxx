@@ -88,11 +88,13 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
           "material file '" + material + "': \"" + key + "\" must hold three numbers");
       }
       out[c] = j[key][c].get<double>();
-      if (!std::isfinite(out[c]) || out[c] < 0.0 || out[c] > MaxCoefficient)
+      // Only the upper bound here: vtkAssignScatteringCoefficients reports a
+      // negative value, naming its array.
+      if (out[c] > MaxCoefficient)
       {
         std::ostringstream os;
         os << "material file '" << material << "': \"" << key << "\"[" << c
-           << "] must be in [0, " << MaxCoefficient << "] 1/mm, not " << out[c];
+           << "] must be at most " << MaxCoefficient << " 1/mm, not " << out[c];
         throw translucency::Error(os.str());
       }
     }
