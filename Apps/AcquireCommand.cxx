@@ -1,5 +1,6 @@
 // `translucency acquire`: inverse diffusion (Polygrid, Sec. 4) from
 // measurement files, or from synthetic measurements of a known volume.
+#include "MeshIO.h"
 #include "Options.h"
 #include "PipelineRender.h"
 
@@ -71,6 +72,7 @@ vtkSmartPointer<vtkUnstructuredGrid> ReadGrid(const std::string& path)
   {
     throw translucency::Error(path + ": not a readable .vtu file");
   }
+  CheckVtkXmlFile(path);
   reader->SetFileName(path.c_str());
   reader->Update();
   auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
@@ -172,6 +174,7 @@ vtkSmartPointer<vtkDataSet> ReadTruth(const std::string& path)
     vtkNew<vtkXMLImageDataReader> reader;
     if (!reader->CanReadFile(path.c_str()))
       throw translucency::Error(path + ": not a readable .vti file");
+    CheckVtkXmlFile(path);
     reader->SetFileName(path.c_str());
     reader->Update();
     auto out = vtkSmartPointer<vtkImageData>::New();

@@ -2,6 +2,7 @@
 #include "Utilities.h"
 
 #include "Error.h"
+#include "Strings.h"
 
 #include "vtkAssignScatteringCoefficients.h"
 #include "vtkPaintScatteringCoefficients.h"
@@ -17,11 +18,42 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 #include <vector>
 
 namespace translucency_app
 {
 using json = nlohmann::json;
+
+namespace
+{
+/// The largest coefficient (1/mm) a material file may give: a mean free
+/// path of 1 nm. 1e308 passed the core's checks and gave a
+/// NaN fluence.
+constexpr double MaxCoefficient = 1e6;
+
+/// Parse the JSON text of `in`; `what` names the file in messages. Nesting
+/// deeper than translucency::MaxJsonNesting is refused before parsing.
+json ParseJsonFile(std::istream& in, const std::string& what)
+{
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  if (translucency::JsonNestingDepth(text) > translucency::MaxJsonNesting)
+  {
+    throw translucency::Error(what + ": arrays/objects nested deeper than " +
+      std::to_string(translucency::MaxJsonNesting) + " levels");
+  }
+  try
+  {
+    return json::parse(text);
+  }
+  catch (const std::exception& e)
+  {
+    throw translucency::Error(what + " is not valid JSON: " + translucency::Abbreviate(e.what(), 160));
+  }
+}
+} // namespace
 
 void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& material,
   const std::string& materialIds)
@@ -41,15 +73,7 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
   {
     throw translucency::Error("cannot open material file '" + material + "'");
   }
-  json j;
-  try
-  {
-    in >> j;
-  }
-  catch (const std::exception& e)
-  {
-    throw translucency::Error("material file '" + material + "' is not valid JSON: " + e.what());
-  }
+  const json j = ParseJsonFile(in, "material file '" + material + "'");
   auto triple = [&](const char* key, double out[3]) {
     if (!j.contains(key) || !j[key].is_array() || j[key].size() != 3)
     {
@@ -64,6 +88,15 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
           "material file '" + material + "': \"" + key + "\" must hold three numbers");
       }
       out[c] = j[key][c].get<double>();
+      // Only the upper bound here: vtkAssignScatteringCoefficients reports a
+      // negative value, naming its array.
+      if (out[c] > MaxCoefficient)
+      {
+        std::ostringstream os;
+        os << "material file '" << material << "': \"" << key << "\"[" << c
+           << "] must be at most " << MaxCoefficient << " 1/mm, not " << out[c];
+        throw translucency::Error(os.str());
+      }
     }
   };
   if (!j.is_object())
@@ -110,7 +143,16 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
     throw translucency::Error(
       "material file '" + material + "': \"refractive_index\" must be a number");
   }
-  assign->SetRefractiveIndex(j.value("refractive_index", 1.3));
+  const double eta = j.value("refractive_index", 1.3);
+  // [0.1, 10]: 1e-320 passed the core's "> 0" and gave a NaN fluence.
+  if (!(eta >= 0.1 && eta <= 10.0))
+  {
+    std::ostringstream os;
+    os << "material file '" << material << "': \"refractive_index\" must be in [0.1, 10], not "
+       << eta;
+    throw translucency::Error(os.str());
+  }
+  assign->SetRefractiveIndex(eta);
 }
 
 namespace
@@ -123,15 +165,7 @@ json ReadJsonObject(const std::string& path, const std::string& what)
   {
     throw translucency::Error("cannot open " + what + " file '" + path + "'");
   }
-  json j;
-  try
-  {
-    in >> j;
-  }
-  catch (const std::exception& e)
-  {
-    throw translucency::Error(what + " file '" + path + "' is not valid JSON: " + e.what());
-  }
+  json j = ParseJsonFile(in, what + " file '" + path + "'");
   if (!j.is_object())
   {
     throw translucency::Error(what + " file '" + path + "' must hold a JSON object {...}");
@@ -159,6 +193,15 @@ bool ReadTriple(const json& j, const char* key, const std::string& path, double 
     if (!std::isfinite(out[c]))
     {
       throw translucency::Error("'" + path + "': \"" + key + "\" must be finite");
+    }
+    // Coefficients (1/mm), factors, directions: 1e308 as a paint target gave a
+    // NaN fluence.
+    if (std::abs(out[c]) > MaxCoefficient)
+    {
+      std::ostringstream os;
+      os << "'" << path << "': \"" << key << "\"[" << c << "] must be within +-"
+         << MaxCoefficient << ", not " << out[c];
+      throw translucency::Error(os.str());
     }
   }
   return true;

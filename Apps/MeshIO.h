@@ -21,6 +21,17 @@ namespace translucency_app
 bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
   vtkSmartPointer<vtkUnstructuredGrid>& grid, std::string& error);
 
+/// Check a VTK XML file (.vtu .vtp .vti) before a VTK reader sees it: the
+/// <VTKFile> header (type for the extension, byte_order, header_type,
+/// compressor), the <Piece> counts (integers in [0, 2^31-1]), and every
+/// <DataArray> (type, NumberOfComponents in [1, 1024], NumberOfTuples, format)
+/// against its data: the number of ascii values, the size in the header of
+/// inline binary or appended data against the tuples x components x type size
+/// the attributes ask for, and against the bytes the file holds. VTK 9.2's
+/// readers hang, abort or crash on such inconsistencies. Throws
+/// translucency::Error naming the file, the element and the attribute.
+void CheckVtkXmlFile(const std::string& path);
+
 /// The points (x, y, z per point) and tets (4 point ids per cell) of a
 /// tetrahedral grid as the Solvers/ core takes them.
 void GridToCoreArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets);

@@ -287,8 +287,10 @@ int Radiosity(const RadiosityOptions& o)
     { "direct_ms", radiosity->GetDirectTime() }, { "solve_ms", radiosity->GetSolveTime() },
     { "filter_total_ms", firstMs } };
 
-  // Outputs: one .vtp per object.
+  // Outputs: one .vtp per object, the PNG and the JSON report, all new or
+  // all old (OutputBatch), committed after the report.
   vtkSmartPointer<vtkDataObject> result = radiosity->GetOutputDataObject(0);
+  OutputBatch outputs;
   {
     std::string error;
     start = Clock::now();
@@ -298,7 +300,7 @@ int Radiosity(const RadiosityOptions& o)
     {
       vtkNew<vtkXMLPolyDataWriter> writer;
       const std::string file = prefix + "_" + std::to_string(k) + ".vtp";
-      if (!WriteAtomically(writer, leaves[k], file, error))
+      if (!outputs.Write(writer, leaves[k], file, error))
         throw translucency::Error(error);
     }
     stages.push_back({ "write", MillisecondsSince(start) });
@@ -309,7 +311,7 @@ int Radiosity(const RadiosityOptions& o)
       vtkSmartPointer<vtkDataObject> copy;
       copy.TakeReference(result->NewInstance());
       copy->ShallowCopy(result);
-      if (!WriteFourPanels(copy, scene.Camera, png, error))
+      if (!WriteFourPanels(copy, scene.Camera, outputs.Add(png), error))
         throw translucency::Error(error);
       stages.push_back({ "png", MillisecondsSince(start) });
     }
@@ -387,9 +389,12 @@ int Radiosity(const RadiosityOptions& o)
   if (!jsonPath.empty())
   {
     std::string error;
-    if (!WriteText(jsonPath, report.dump(2) + "\n", error))
+    if (!outputs.WriteText(jsonPath, report.dump(2) + "\n", error))
       throw translucency::Error(error);
   }
+  std::string commitError;
+  if (!outputs.Commit(commitError))
+    throw translucency::Error(commitError);
   return 0;
 }
 

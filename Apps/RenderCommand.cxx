@@ -115,15 +115,16 @@ int Render(RenderOptions& o)
   vtkPolyData* outSurface = radiance->GetOutput();
   stages.push_back({ "radiance", MillisecondsSince(start) });
 
-  // 7. Outputs.
+  // 7. Outputs: all new or all old (OutputBatch), committed after the report.
+  OutputBatch outputs;
   if (!outputPrefix.empty())
   {
     start = Clock::now();
     EnsureParentDirectory(outputPrefix + ".vtu");
     vtkNew<vtkXMLUnstructuredGridWriter> gridWriter;
     vtkNew<vtkXMLPolyDataWriter> surfaceWriter;
-    if (!WriteAtomically(gridWriter, solved, outputPrefix + ".vtu", error) ||
-      !WriteAtomically(surfaceWriter, outSurface, outputPrefix + ".vtp", error))
+    if (!outputs.Write(gridWriter, solved, outputPrefix + ".vtu", error) ||
+      !outputs.Write(surfaceWriter, outSurface, outputPrefix + ".vtp", error))
       throw translucency::Error(error);
     stages.push_back({ "write", MillisecondsSince(start) });
   }
@@ -133,13 +134,13 @@ int Render(RenderOptions& o)
     if (!pngPath.empty())
     {
       EnsureParentDirectory(pngPath);
-      if (!WriteRadiancePNG(outSurface, image, pngPath, error))
+      if (!WriteRadiancePNG(outSurface, image, outputs.Add(pngPath), error))
         throw translucency::Error(error);
     }
     if (!slicePath.empty())
     {
       EnsureParentDirectory(slicePath);
-      if (!WriteFluenceSlicePNG(solved, image, slicePath, error))
+      if (!WriteFluenceSlicePNG(solved, image, outputs.Add(slicePath), error))
         throw translucency::Error(error);
     }
     stages.push_back({ "render", MillisecondsSince(start) });
@@ -197,9 +198,11 @@ int Render(RenderOptions& o)
     }
     j["times_ms"]["total"] = total;
     EnsureParentDirectory(jsonPath);
-    if (!WriteText(jsonPath, j.dump(2) + "\n", error))
+    if (!outputs.WriteText(jsonPath, j.dump(2) + "\n", error))
       throw translucency::Error(error);
   }
+  if (!outputs.Commit(error))
+    throw translucency::Error(error);
   return 0;
 }
 

@@ -7,6 +7,7 @@
 #include "Utilities.h"
 
 #include "Error.h"
+#include "Strings.h"
 #include "RadiosityScene.h"
 
 #include "vtkAssignScatteringCoefficients.h"
@@ -29,6 +30,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 #include <map>
 
 namespace translucency_app
@@ -49,6 +51,12 @@ struct Context
       ": " + what);
   }
 };
+
+/// The largest magnitude of a number in a scene file: lengths (mm), powers
+/// and albedos alike. 1e308 once overflowed the ray caster's bounds (a crash).
+constexpr double MaxSceneNumber = 1e6;
+/// The most patches one box may have (its faces at `cell_size`).
+constexpr double MaxBoxPatches = 1e6;
 
 std::vector<double> Numbers(const json& j, const char* key, size_t count, const Context& ctx)
 {
@@ -72,6 +80,11 @@ std::vector<double> Numbers(const json& j, const char* key, size_t count, const 
     if (!x.is_number() || !std::isfinite(x.get<double>()))
     {
       ctx.Fail(std::string("\"") + key + "\" must hold finite numbers");
+    }
+    if (std::abs(x.get<double>()) > MaxSceneNumber)
+    {
+      ctx.Fail(std::string("\"") + key + "\" holds " + translucency::Abbreviate(x.dump()) +
+        ", beyond +-1e6 (lengths in mm, powers in W)");
     }
     out.push_back(x.get<double>());
   }
@@ -246,14 +259,22 @@ LoadedScene LoadScene(const std::string& path, double cellSizeOverride)
   {
     ctx.Fail("cannot open the scene file");
   }
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  if (translucency::JsonNestingDepth(text) > translucency::MaxJsonNesting)
+  {
+    ctx.Fail("arrays/objects nested deeper than " + std::to_string(translucency::MaxJsonNesting) +
+      " levels");
+  }
   json j;
   try
   {
-    in >> j;
+    j = json::parse(text);
   }
   catch (const std::exception& e)
   {
-    ctx.Fail(std::string("not valid JSON: ") + e.what());
+    ctx.Fail(std::string("not valid JSON: ") + translucency::Abbreviate(e.what(), 160));
   }
   if (!j.is_object() || !j.contains("objects") || !j["objects"].is_array() ||
     j["objects"].empty())
@@ -270,7 +291,7 @@ LoadedScene LoadScene(const std::string& path, double cellSizeOverride)
     const std::string name =
       object.contains("name") && object["name"].is_string() ? object["name"].get<std::string>()
                                                             : "object " + std::to_string(index);
-    ctx.Where = "object " + std::to_string(index) + " '" + name + "'";
+    ctx.Where = "object " + std::to_string(index) + " '" + translucency::Abbreviate(name) + "'";
     if (!object.is_object())
     {
       ctx.Fail("every object must be a JSON object");
@@ -288,6 +309,20 @@ LoadedScene LoadScene(const std::string& path, double cellSizeOverride)
       const int open = object.contains("open_face")
         ? FaceId(object["open_face"].get<std::string>(), ctx)
         : -1;
+      if (cell > 0.0)
+      {
+        double d[3], patches = 0.0;
+        for (int k = 0; k < 3; ++k)
+          d[k] = std::ceil(std::abs(hi[k] - lo[k]) / cell);
+        patches = 2.0 * (d[0] * d[1] + d[1] * d[2] + d[0] * d[2]);
+        if (patches > MaxBoxPatches)
+        {
+          std::ostringstream os;
+          os << "the box would have about " << patches << " patches at cell_size " << cell
+             << " mm (at most " << MaxBoxPatches << "): raise cell_size";
+          ctx.Fail(os.str());
+        }
+      }
       std::vector<double> points;
       std::vector<int> triangles, faces;
       try

@@ -16,6 +16,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <regex>
 #include <sstream>
 #include <system_error>
 
@@ -78,6 +79,39 @@ std::string Extension(const std::string& path)
   return ext;
 }
 
+namespace
+{
+/// The message of the last vtkErrorMacro / vtkWarningMacro text in `text`:
+/// VTK sends "ERROR: In <file>, line <n>\n<class> (<address>): <message>\n\n"
+/// ("Warning: In ..." for warnings). The whole <message> is kept, whatever it
+/// holds (it may itself contain "): ").
+std::string StripVtkHeader(std::string text)
+{
+  size_t header = text.rfind("ERROR: In ");
+  const size_t warning = text.rfind("Warning: In ");
+  if (warning != std::string::npos && (header == std::string::npos || warning > header))
+  {
+    header = warning;
+  }
+  if (header != std::string::npos)
+  {
+    const size_t lineEnd = text.find('\n', header);
+    text = lineEnd == std::string::npos ? std::string() : text.substr(lineEnd + 1);
+  }
+  static const std::regex prefix(R"(^[A-Za-z_][A-Za-z0-9_:]* \([^()\n]*\): )");
+  std::smatch match;
+  if (std::regex_search(text, match, prefix))
+  {
+    text = match.suffix().str();
+  }
+  while (!text.empty() && (text.back() == '\n' || text.back() == ' '))
+  {
+    text.pop_back();
+  }
+  return text;
+}
+} // namespace
+
 MessageCollector::MessageCollector()
 {
   this->ErrorCallback->SetClientData(this);
@@ -86,7 +120,8 @@ MessageCollector::MessageCollector()
     collector->Errors += static_cast<const char*>(data);
   });
   this->WarningCallback->SetCallback([](vtkObject*, unsigned long, void*, void* data) {
-    std::cerr << "translucency: warning: " << static_cast<const char*>(data) << "\n";
+    std::cerr << "translucency: warning: " << StripVtkHeader(static_cast<const char*>(data))
+              << "\n";
   });
 }
 
@@ -105,24 +140,7 @@ void MessageCollector::Watch(vtkObject* object)
 
 std::string MessageCollector::Last() const
 {
-  std::string text = this->Errors;
-  // The last message starts after its "ERROR: In file, line N\nvtkX (0x..): "
-  // header; the message itself may contain "): ".
-  const size_t header = text.rfind("ERROR: In ");
-  if (header != std::string::npos)
-  {
-    text = text.substr(header);
-  }
-  const size_t pos = header != std::string::npos ? text.find("): ") : text.rfind("): ");
-  if (pos != std::string::npos)
-  {
-    text = text.substr(pos + 3);
-  }
-  while (!text.empty() && (text.back() == '\n' || text.back() == ' '))
-  {
-    text.pop_back();
-  }
-  return text;
+  return StripVtkHeader(this->Errors);
 }
 
 bool WriteAtomically(vtkXMLWriter* writer, vtkDataObject* data, const std::string& path,
@@ -166,6 +184,78 @@ bool WriteText(const std::string& path, const std::string& text, std::string& er
     error = "cannot rename the temporary file to '" + path + "'";
     return false;
   }
+  return true;
+}
+
+OutputBatch::~OutputBatch()
+{
+  for (const std::string& path : this->Targets)
+  {
+    // Only a file (a directory of that name is not ours).
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(path + ".part", ec))
+    {
+      std::filesystem::remove(path + ".part", ec);
+    }
+  }
+}
+
+std::string OutputBatch::Add(const std::string& path)
+{
+  this->Targets.push_back(path);
+  return path + ".part";
+}
+
+bool OutputBatch::Write(
+  vtkXMLWriter* writer, vtkDataObject* data, const std::string& path, std::string& error)
+{
+  const std::string tmp = this->Add(path);
+  writer->SetInputData(data);
+  writer->SetFileName(tmp.c_str());
+  writer->SetDataModeToAppended();
+  writer->SetCompressorTypeToZLib();
+  if (writer->Write() == 0 || writer->GetErrorCode() != 0)
+  {
+    error = "cannot write '" + path + "' (no output changed)";
+    return false;
+  }
+  return true;
+}
+
+bool OutputBatch::WriteText(const std::string& path, const std::string& text, std::string& error)
+{
+  const std::string tmp = this->Add(path);
+  std::ofstream out(tmp);
+  out << text;
+  out.close();
+  if (!out)
+  {
+    error = "cannot write '" + path + "' (no output changed)";
+    return false;
+  }
+  return true;
+}
+
+bool OutputBatch::Commit(std::string& error)
+{
+  for (size_t k = 0; k < this->Targets.size(); ++k)
+  {
+    const std::string& path = this->Targets[k];
+    if (std::rename((path + ".part").c_str(), path.c_str()) != 0)
+    {
+      std::string done, kept;
+      for (size_t i = 0; i < this->Targets.size(); ++i)
+      {
+        std::string& list = i < k ? done : kept;
+        list += (list.empty() ? "'" : ", '") + this->Targets[i] + "'";
+      }
+      error = "cannot rename '" + path + ".part' to '" + path + "': " +
+        (done.empty() ? std::string("no output changed") : "replaced " + done + "; left as they were " + kept);
+      this->Targets.erase(this->Targets.begin(), this->Targets.begin() + static_cast<long>(k));
+      return false; // the destructor removes the remaining temporaries
+    }
+  }
+  this->Targets.clear();
   return true;
 }
 

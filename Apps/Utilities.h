@@ -68,6 +68,36 @@ bool WriteAtomically(vtkXMLWriter* writer, vtkDataObject* data, const std::strin
   std::string& error);
 /// The same for a text file.
 bool WriteText(const std::string& path, const std::string& text, std::string& error);
+/**
+ * Outputs that must change together (render's .vtu, .vtp, .png and .json):
+ * each is written to a temporary "<path>.part" first; Commit() renames them
+ * all only once every write succeeded, so a failed write leaves every old
+ * output as it was. A batch destroyed without Commit() removes its
+ * temporaries. A rename failure inside Commit() (rare: the temporaries sit
+ * next to their targets) cannot be undone: the error names the outputs
+ * already replaced and those left as they were, and the rest of the
+ * temporaries are removed.
+ */
+class OutputBatch
+{
+public:
+  OutputBatch() = default;
+  OutputBatch(const OutputBatch&) = delete;
+  OutputBatch& operator=(const OutputBatch&) = delete;
+  ~OutputBatch();
+  /// The temporary to write instead of `path` (a writer of its own, e.g. a PNG snapshot).
+  std::string Add(const std::string& path);
+  /// Write `data` with `writer` (appended, zlib) to the temporary of `path`.
+  bool Write(vtkXMLWriter* writer, vtkDataObject* data, const std::string& path, std::string& error);
+  /// Write a text file to the temporary of `path`.
+  bool WriteText(const std::string& path, const std::string& text, std::string& error);
+  /// Rename every temporary to its target; false with `error` on a failure.
+  bool Commit(std::string& error);
+
+private:
+  std::vector<std::string> Targets;
+};
+
 /// Create the directory holding `path` and its parents (std::filesystem; a
 /// failure only warns: the write that follows reports it).
 void EnsureParentDirectory(const std::string& path);

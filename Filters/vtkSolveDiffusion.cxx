@@ -172,7 +172,12 @@ int vtkSolveDiffusion::RequestData(
   // Convert: the shared mesh, the material, the irradiance and the lights.
   auto start = translucency::Clock::now();
   bool built = false;
-  auto mesh = vtkTranslucency::AcquireTetMesh(input, error, &built);
+  std::string warning;
+  auto mesh = vtkTranslucency::AcquireTetMesh(input, error, &built, &warning);
+  if (!warning.empty())
+  {
+    vtkWarningMacro(<< warning);
+  }
   if (!mesh)
   {
     in.FrontEnd.Reset();

@@ -101,7 +101,12 @@ int vtkSurfaceIrradiance::RequestData(
   std::string error;
   bool built = false;
   const translucency::Timer timer;
-  this->Internal->Mesh = vtkTranslucency::AcquireTetMesh(input, error, &built);
+  std::string warning;
+  this->Internal->Mesh = vtkTranslucency::AcquireTetMesh(input, error, &built, &warning);
+  if (!warning.empty())
+  {
+    vtkWarningMacro(<< warning);
+  }
   this->TopologyTime = built
     ? timer.GetMilliseconds()
     : 0.0;

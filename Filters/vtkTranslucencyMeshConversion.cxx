@@ -17,7 +17,9 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <deque>
 #include <mutex>
 #include <sstream>
@@ -25,7 +27,68 @@
 namespace vtkTranslucency
 {
 
-bool ToTetMesh(vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::string& error)
+namespace
+{
+/// A warning naming coincident points that both carry tets (at most five
+/// pairs), or "" if there is none.
+std::string CoincidentPointsWarning(
+  const std::vector<double>& points, const std::vector<int>& tets, vtkIdType numPoints)
+{
+  std::vector<char> used(static_cast<size_t>(numPoints), 0);
+  for (int id : tets)
+  {
+    used[id] = 1;
+  }
+  std::vector<int> order;
+  for (vtkIdType i = 0; i < numPoints; ++i)
+  {
+    if (used[i])
+    {
+      order.push_back(static_cast<int>(i));
+    }
+  }
+  auto less = [&](int a, int b) {
+    for (int k = 0; k < 3; ++k)
+    {
+      if (points[3 * a + k] != points[3 * b + k])
+      {
+        return points[3 * a + k] < points[3 * b + k];
+      }
+    }
+    return a < b;
+  };
+  std::sort(order.begin(), order.end(), less);
+  std::ostringstream os;
+  size_t pairs = 0;
+  for (size_t i = 1; i < order.size(); ++i)
+  {
+    const int a = order[i - 1], b = order[i];
+    if (points[3 * a] == points[3 * b] && points[3 * a + 1] == points[3 * b + 1] &&
+      points[3 * a + 2] == points[3 * b + 2])
+    {
+      if (pairs < 5)
+      {
+        os << (pairs ? ", " : "") << a << " and " << b << " at (" << points[3 * a] << ", "
+           << points[3 * a + 1] << ", " << points[3 * a + 2] << ")";
+      }
+      ++pairs;
+    }
+  }
+  if (pairs == 0)
+  {
+    return std::string();
+  }
+  std::ostringstream msg;
+  msg << pairs << " pair(s) of coincident points both carry tets (points " << os.str()
+      << (pairs > 5 ? ", ..." : "")
+      << "): the mesh is cracked there and the crack is treated as boundary; merge the points "
+         "(e.g. vtkStaticCleanUnstructuredGrid) unless the crack is intended";
+  return msg.str();
+}
+} // namespace
+
+bool ToTetMesh(
+  vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::string& error, std::string* warning)
 {
   if (!grid || grid->GetNumberOfPoints() == 0 || grid->GetNumberOfCells() == 0)
   {
@@ -45,9 +108,39 @@ bool ToTetMesh(vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::stri
       }
     }
   });
+  for (vtkIdType i = 0; i < numPoints; ++i)
+  {
+    if (!std::isfinite(points[3 * i]) || !std::isfinite(points[3 * i + 1]) ||
+      !std::isfinite(points[3 * i + 2]))
+    {
+      std::ostringstream os;
+      os << "point " << i << " has a non-finite coordinate (" << points[3 * i] << ", "
+         << points[3 * i + 1] << ", " << points[3 * i + 2] << ")";
+      error = os.str();
+      return false;
+    }
+  }
+  if (numPoints > std::numeric_limits<int>::max() ||
+    numCells > std::numeric_limits<int>::max() / 4)
+  {
+    error = "the input mesh has too many points or cells for 32-bit point ids";
+    return false;
+  }
   std::vector<int> tets(4 * static_cast<size_t>(numCells));
   vtkUnsignedCharArray* types = grid->GetCellTypesArray();
   vtkCellArray* cells = grid->GetCells();
+  if (!types || !cells || types->GetNumberOfTuples() < numCells ||
+    cells->GetNumberOfCells() < numCells)
+  {
+    error = "the input mesh's cell arrays are inconsistent (fewer cell types or cells than "
+            "NumberOfCells)";
+    return false;
+  }
+  // Every cell is checked (type, number of points, point ids) before its ids
+  // are read: a short cell must not shift the ids of the next ones.
+  vtkIdType npts;
+  const vtkIdType* ids;
+  auto it = vtk::TakeSmartPointer(cells->NewIterator());
   for (vtkIdType c = 0; c < numCells; ++c)
   {
     if (types->GetValue(c) != VTK_TETRA)
@@ -59,20 +152,31 @@ bool ToTetMesh(vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::stri
       error = os.str();
       return false;
     }
-  }
-  vtkSMPTools::For(0, numCells, [&](vtkIdType begin, vtkIdType end) {
-    vtkIdType npts;
-    const vtkIdType* ids;
-    auto it = vtk::TakeSmartPointer(cells->NewIterator());
-    for (vtkIdType c = begin; c < end; ++c)
+    it->GetCellAtId(c, npts, ids);
+    if (npts != 4)
     {
-      it->GetCellAtId(c, npts, ids);
-      for (int k = 0; k < 4; ++k)
-      {
-        tets[4 * c + k] = static_cast<int>(ids[k]);
-      }
+      std::ostringstream os;
+      os << "cell " << c << " is a tetrahedron with " << npts << " point ids; a tetrahedron has 4";
+      error = os.str();
+      return false;
     }
-  });
+    for (int k = 0; k < 4; ++k)
+    {
+      if (ids[k] < 0 || ids[k] >= numPoints)
+      {
+        std::ostringstream os;
+        os << "cell " << c << " uses point id " << ids[k] << ", outside [0, " << numPoints - 1
+           << "]";
+        error = os.str();
+        return false;
+      }
+      tets[4 * c + k] = static_cast<int>(ids[k]);
+    }
+  }
+  if (warning)
+  {
+    *warning = CoincidentPointsWarning(points, tets, numPoints);
+  }
   try
   {
     mesh.SetGeometry(std::move(points), std::move(tets));
@@ -235,7 +339,7 @@ vtkDataArray* NewTripleArray(const char* name, const std::vector<double>& values
 }
 
 std::shared_ptr<const translucency::TetMesh> AcquireTetMesh(
-  vtkUnstructuredGrid* grid, std::string& error, bool* built)
+  vtkUnstructuredGrid* grid, std::string& error, bool* built, std::string* warning)
 {
   if (built)
   {
@@ -266,7 +370,7 @@ std::shared_ptr<const translucency::TetMesh> AcquireTetMesh(
     }
   }
   auto mesh = std::make_shared<translucency::TetMesh>();
-  if (!ToTetMesh(grid, *mesh, error))
+  if (!ToTetMesh(grid, *mesh, error, warning))
   {
     return nullptr;
   }

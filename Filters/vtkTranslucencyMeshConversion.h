@@ -34,8 +34,14 @@ constexpr const char* OriginalPointIdsName = "vtkOriginalPointIds";
 
 /// Copy points and tets of `grid` into `mesh` (builds the topology). Fails
 /// if the grid is empty or holds a cell that is not a linear tetrahedron, or
-/// if the core rejects the geometry (degenerate tet, ...).
-bool ToTetMesh(vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::string& error);
+/// if the core rejects the geometry (degenerate tet, ...). Every cell is
+/// checked (type, 4 point ids, ids in range; the message names the cell) and
+/// every point (finite coordinates). Coincident points that both carry tets
+/// (an internal crack, treated as boundary) are not an error (vtkStrokeCut and
+/// hand-made meshes may crack a mesh on purpose): `warning`, if given, names
+/// them ("" if none).
+bool ToTetMesh(vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::string& error,
+  std::string* warning = nullptr);
 
 /// Read the three coefficient cell arrays of `grid` into `material`, checked
 /// for presence, number of components and values.
@@ -72,10 +78,11 @@ vtkDataArray* NewTripleArray(const char* name, const std::vector<double>& values
  * topology. The key is the identity and modification time of the points and
  * cells; a small process-wide cache (the last 4 meshes) holds them. Returns
  * null and fills `error` if the grid is not a valid tet mesh. `built` tells
- * whether this call built the mesh (false: taken from the cache).
+ * whether this call built the mesh (false: taken from the cache); `warning`
+ * (if given) gets ToTetMesh's warning when this call built the mesh, "" else.
  */
-std::shared_ptr<const translucency::TetMesh> AcquireTetMesh(
-  vtkUnstructuredGrid* grid, std::string& error, bool* built = nullptr);
+std::shared_ptr<const translucency::TetMesh> AcquireTetMesh(vtkUnstructuredGrid* grid,
+  std::string& error, bool* built = nullptr, std::string* warning = nullptr);
 }
 
 #endif

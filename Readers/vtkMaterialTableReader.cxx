@@ -1,6 +1,7 @@
 #include "vtkMaterialTableReader.h"
 
 #include "OpticalProperties.h"
+#include "Strings.h"
 
 #include <vtkDoubleArray.h>
 #include <vtkInformation.h>
@@ -32,13 +33,20 @@ using json = nlohmann::json;
   throw std::runtime_error("material table '" + fileName + "': " + what);
 }
 
+/// A JSON value for a message: dumped (the nesting is bounded by
+/// translucency::MaxJsonNesting before parsing) and cut to 80 characters.
+std::string Short(const json& v)
+{
+  return translucency::Abbreviate(v.dump());
+}
+
 std::string EntryPrefix(size_t index, const json& entry)
 {
   std::ostringstream os;
   os << "entry " << index;
   if (entry.is_object() && entry.contains("name") && entry["name"].is_string())
   {
-    os << " (\"" << entry["name"].get<std::string>() << "\")";
+    os << " (\"" << translucency::Abbreviate(entry["name"].get<std::string>()) << "\")";
   }
   return os.str();
 }
@@ -48,13 +56,13 @@ double NonNegative(const std::string& fileName, const std::string& where, const 
 {
   if (!v.is_number())
   {
-    Fail(fileName, where + " must be a number, not " + v.dump());
+    Fail(fileName, where + " must be a number, not " + Short(v));
   }
   const double x = v.get<double>();
-  if (!std::isfinite(x) || x < 0.0)
+  if (!std::isfinite(x) || x < 0.0 || x > 1e6)
   {
     std::ostringstream os;
-    os << where << " must be finite and >= 0, not " << v.dump();
+    os << where << " must be finite, >= 0 and <= 1e6, not " << Short(v);
     Fail(fileName, os.str());
   }
   return x;
@@ -91,14 +99,22 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
   {
     Fail(fileName, "cannot open the file");
   }
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  if (translucency::JsonNestingDepth(text) > translucency::MaxJsonNesting)
+  {
+    Fail(fileName, "arrays/objects nested deeper than " +
+        std::to_string(translucency::MaxJsonNesting) + " levels");
+  }
   json root;
   try
   {
-    in >> root;
+    root = json::parse(text);
   }
   catch (const std::exception& e)
   {
-    Fail(fileName, std::string("not valid JSON: ") + e.what());
+    Fail(fileName, std::string("not valid JSON: ") + translucency::Abbreviate(e.what(), 160));
   }
   if (!root.is_object() || !root.contains("materials") || !root["materials"].is_array())
   {
@@ -116,7 +132,7 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
     else if (units == "1/m")
       unitScale = 0.001;
     else
-      Fail(fileName, "\"units\" must be \"1/mm\", \"1/cm\" or \"1/m\", not " + u.dump());
+      Fail(fileName, "\"units\" must be \"1/mm\", \"1/cm\" or \"1/m\", not " + Short(u));
   }
   const json& list = root["materials"];
   if (list.empty())
@@ -132,7 +148,7 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
     const std::string where = EntryPrefix(i, e);
     if (!e.is_object())
     {
-      Fail(fileName, where + " must be a JSON object, not " + e.dump());
+      Fail(fileName, where + " must be a JSON object, not " + Short(e));
     }
     for (auto it = e.begin(); it != e.end(); ++it)
     {
@@ -148,7 +164,7 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
     {
       if (!e["name"].is_string() || e["name"].get<std::string>().empty())
       {
-        Fail(fileName, where + ": \"name\" must be a non-empty string, not " + e["name"].dump());
+        Fail(fileName, where + ": \"name\" must be a non-empty string, not " + Short(e["name"]));
       }
       m.Name = e["name"].get<std::string>();
     }
@@ -158,7 +174,7 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
       if (!id.is_number_integer() || id.get<long long>() < 0 ||
         id.get<long long>() > std::numeric_limits<int>::max())
       {
-        Fail(fileName, where + ": \"id\" must be an integer >= 0, not " + id.dump());
+        Fail(fileName, where + ": \"id\" must be an integer >= 0, not " + Short(id));
       }
       m.Id = id.get<int>();
     }
@@ -178,7 +194,7 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
       if (!e["preset"].is_string())
       {
         Fail(fileName, where + ": \"preset\" must be a preset name (a string), not " +
-            e["preset"].dump());
+            Short(e["preset"]));
       }
       try
       {
@@ -211,7 +227,7 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
         const json& v = e[key];
         if (!v.is_array() || v.size() != 3)
         {
-          Fail(fileName, where + ": \"" + key + "\" must be [r, g, b], not " + v.dump());
+          Fail(fileName, where + ": \"" + key + "\" must be [r, g, b], not " + Short(v));
         }
         for (int c = 0; c < 3; ++c)
         {
@@ -233,10 +249,11 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
       {
         m.RefractiveIndex = NonNegative(fileName, where + ": \"refractive_index\"",
           e["refractive_index"]);
-        if (!(m.RefractiveIndex > 0.0))
+        // [0.1, 10]: 1e-320 passed "> 0" and gave a NaN fluence.
+        if (!(m.RefractiveIndex >= 0.1 && m.RefractiveIndex <= 10.0))
         {
-          Fail(fileName, where + ": \"refractive_index\" must be > 0, not " +
-              e["refractive_index"].dump());
+          Fail(fileName, where + ": \"refractive_index\" must be in [0.1, 10], not " +
+              Short(e["refractive_index"]));
         }
       }
     }

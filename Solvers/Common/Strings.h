@@ -33,4 +33,43 @@ inline std::string JoinNames(const std::vector<std::string>& names, const std::s
   return joined;
 }
 
+/// `text` cut to `maxChars` characters plus "..." if longer: bad values
+/// (e.g. a dumped JSON value) go into error messages only this way.
+inline std::string Abbreviate(const std::string& text, size_t maxChars = 80)
+{
+  return text.size() <= maxChars ? text : text.substr(0, maxChars) + "...";
+}
+
+/// The deepest nesting of [ ] and { } in JSON `text` (brackets inside strings
+/// do not count); a scan without recursion, run before parsing.
+inline int JsonNestingDepth(const std::string& text)
+{
+  int depth = 0, deepest = 0;
+  bool inString = false;
+  for (size_t i = 0; i < text.size(); ++i)
+  {
+    const char c = text[i];
+    if (inString)
+    {
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        inString = false;
+    }
+    else if (c == '"')
+      inString = true;
+    else if (c == '[' || c == '{')
+      deepest = std::max(deepest, ++depth);
+    else if (c == ']' || c == '}')
+      --depth;
+  }
+  return deepest;
+}
+
+/// The deepest nesting of arrays and objects the JSON inputs accept (material
+/// tables, materials, paint/stroke files, scene files need at most 4): deeper
+/// input is refused before it is parsed, so that no recursive walk (dumping a
+/// value into a message) can overflow the stack.
+constexpr int MaxJsonNesting = 64;
+
 } // namespace translucency
