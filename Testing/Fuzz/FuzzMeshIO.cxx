@@ -4,6 +4,7 @@
 // ReadMesh dispatches to is fuzzed through it.
 #include "FuzzSupport.h"
 
+#include "Error.h"
 #include "MeshIO.h"
 
 #include <vtkPolyData.h>
@@ -58,7 +59,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
   {
     std::vector<double> points;
     std::vector<int> tets;
-    translucency_app::GridToCoreArrays(grid, points, tets);
+    try
+    {
+      translucency_app::GridToCoreArrays(grid, points, tets);
+    }
+    catch (const translucency::Error&)
+    {
+    }
   }
   return 0;
 }
