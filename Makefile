@@ -1,11 +1,16 @@
 # Translucency: the two commands a new user needs.
 #   make demo   install missing Debian packages, configure, build, render the bunny into out/
 #   make test   install missing Debian packages, configure, build, run every test with ctest
+# Reliability (Documentation/Reliability.md), each in its own build tree:
+#   make test-sanitize   the core's GoogleTests under ASan + UBSan (gcc, build-sanitize)
+#   make test-fuzz       a short run of every libFuzzer target (clang, build-fuzz)
 BUILD_DIR ?= build
 JOBS ?= 2
 CMAKE_ARGS ?=
+SANITIZE_DIR ?= build-sanitize
+FUZZ_DIR ?= build-fuzz
 
-.PHONY: all deps configure build demo test bench clean
+.PHONY: all deps configure build demo test test-sanitize test-fuzz bench clean
 
 all: build
 
@@ -26,8 +31,26 @@ demo: build
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
+# The core and its GoogleTests only (no VTK): every ASan/UBSan finding fails.
+test-sanitize: deps
+	cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DTRANSLUCENCY_CORE_ONLY=ON -DTRANSLUCENCY_SANITIZE=ON
+	cmake --build $(SANITIZE_DIR) -j $(JOBS)
+	cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1 \
+	  UBSAN_OPTIONS=print_stacktrace=1 \
+	  LSAN_OPTIONS=suppressions=$(CURDIR)/Testing/Sanitizers/lsan.supp \
+	  ctest --output-on-failure -j $(JOBS)
+
+# The libFuzzer targets (clang), each fuzzed for a few seconds plus its regressions.
+test-fuzz: deps
+	cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
+	  -DTRANSLUCENCY_BUILD_FUZZERS=ON
+	cmake --build $(FUZZ_DIR) -j $(JOBS)
+	cd $(FUZZ_DIR) && ctest --output-on-failure -j $(JOBS)
+
 bench: build
 	$(BUILD_DIR)/bin/translucency bench --mesh Data/bunny.ply --tets 100000,1000000 --runs 7
 
 clean:
-	rm -rf $(BUILD_DIR) out
+	rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(FUZZ_DIR) out

@@ -849,6 +849,12 @@ void GridToCoreArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, st
   for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
   {
     grid->GetCellPoints(c, npts, ids);
+    if (npts != 4)
+    {
+      // A .vtu may declare a VTK_TETRA cell with another number of points.
+      throw translucency::Error("cell " + std::to_string(c) + " has " + std::to_string(npts) +
+        " points: a tetrahedron needs 4");
+    }
     for (int k = 0; k < 4; ++k)
       tets[4 * c + k] = static_cast<int>(ids[k]);
   }

@@ -33,7 +33,8 @@ bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
 void CheckVtkXmlFile(const std::string& path);
 
 /// The points (x, y, z per point) and tets (4 point ids per cell) of a
-/// tetrahedral grid as the Solvers/ core takes them.
+/// tetrahedral grid as the Solvers/ core takes them. Throws translucency::Error
+/// naming the cell when a cell does not have 4 points.
 void GridToCoreArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets);
 
 } // namespace translucency_app

@@ -4,6 +4,7 @@
 set -euo pipefail
 
 packages=(
+  clang-14 libclang-rt-14-dev libomp-14-dev
   cmake g++ make ccache
   paraview-dev python3-paraview
   mpi-default-dev libdouble-conversion-dev
