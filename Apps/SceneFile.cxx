@@ -248,9 +248,10 @@ vtkSmartPointer<vtkUnstructuredGrid> Tetrahedralize(
 
 } // namespace
 
-LoadedScene LoadScene(const std::string& path, double cellSizeOverride)
+namespace
 {
-  Context ctx;
+LoadedScene LoadSceneUnchecked(const std::string& path, double cellSizeOverride, Context& ctx)
+{
   ctx.File = path;
   const size_t slash = path.find_last_of('/');
   ctx.Directory = slash == std::string::npos ? std::string() : path.substr(0, slash);
@@ -497,5 +498,23 @@ LoadedScene LoadScene(const std::string& path, double cellSizeOverride)
   }
   return scene;
 }
+
+} // namespace
+
+LoadedScene LoadScene(const std::string& path, double cellSizeOverride)
+{
+  Context ctx;
+  try
+  {
+    return LoadSceneUnchecked(path, cellSizeOverride, ctx);
+  }
+  catch (const json::exception& e)
+  {
+    // A value of the wrong JSON type (e.g. "translucent": []) where a
+    // getter expected another: name the object it was in.
+    ctx.Fail("a value has the wrong JSON type (" + translucency::Abbreviate(e.what(), 160) + ")");
+  }
+}
+
 
 } // namespace translucency_app

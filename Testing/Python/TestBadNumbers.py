@@ -71,6 +71,8 @@ def scene(**changes):
             s["objects"][0]["max"] = value
         elif key == "power":
             s["lights"][0]["power"] = value
+        elif key == "translucent":
+            s["objects"][0]["translucent"] = value
         else:
             s[key] = value
     return s
@@ -196,6 +198,9 @@ class BadNumbers(unittest.TestCase):
             ("rays.json", scene(rays_per_patch=1e9), ["1000000000 rays per patch"]),
             ("rays2.json", scene(rays_per_patch=1e12), ["rays_per_patch", "1000000000000"]),
             ("iter.json", scene(max_iter=1e300), ["max_iter", "1e+300"]),
+            # A fuzzer finding: a value of the wrong JSON type was an uncaught
+            # nlohmann exception, not a scene error naming the object.
+            ("type.json", scene(translucent=[]), ["type.json", "object 0 'room'", "wrong JSON type"]),
             ("power.json", scene(power=1e308), ["radiosity B", "overflow", "light power"]),
         ]:
             with self.subTest(scene=name):
