@@ -333,6 +333,15 @@ bool HostIsLittleEndian()
   return first == 1;
 }
 
+/// The value of type T stored in the bytes at `b`, as a double.
+template <typename T>
+double BytesAs(const unsigned char* b)
+{
+  T v;
+  std::memcpy(&v, b, sizeof v);
+  return static_cast<double>(v);
+}
+
 /// A binary value at `p` (bounds already checked) as a double.
 double ReadBinary(const char* p, const PlyTypeInfo& type, bool swap)
 {
@@ -345,49 +354,21 @@ double ReadBinary(const char* p, const PlyTypeInfo& type, bool swap)
   switch (type.Type)
   {
     case PlyType::Int8:
-    {
-      std::int8_t v;
-      std::memcpy(&v, b, 1);
-      return v;
-    }
+      return BytesAs<std::int8_t>(b);
     case PlyType::UInt8:
-      return b[0];
+      return BytesAs<std::uint8_t>(b);
     case PlyType::Int16:
-    {
-      std::int16_t v;
-      std::memcpy(&v, b, 2);
-      return v;
-    }
+      return BytesAs<std::int16_t>(b);
     case PlyType::UInt16:
-    {
-      std::uint16_t v;
-      std::memcpy(&v, b, 2);
-      return v;
-    }
+      return BytesAs<std::uint16_t>(b);
     case PlyType::Int32:
-    {
-      std::int32_t v;
-      std::memcpy(&v, b, 4);
-      return v;
-    }
+      return BytesAs<std::int32_t>(b);
     case PlyType::UInt32:
-    {
-      std::uint32_t v;
-      std::memcpy(&v, b, 4);
-      return v;
-    }
+      return BytesAs<std::uint32_t>(b);
     case PlyType::Float32:
-    {
-      float v;
-      std::memcpy(&v, b, 4);
-      return v;
-    }
+      return BytesAs<float>(b);
     case PlyType::Float64:
-    {
-      double v;
-      std::memcpy(&v, b, 8);
-      return v;
-    }
+      return BytesAs<double>(b);
   }
   return 0.0;
 }
