@@ -34,7 +34,8 @@ test: build
 # The core and its GoogleTests only (no VTK): every ASan/UBSan finding fails.
 test-sanitize: deps
 	cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-	  -DTRANSLUCENCY_CORE_ONLY=ON -DTRANSLUCENCY_SANITIZE=ON
+	  -DTRANSLUCENCY_CORE_ONLY=ON -DTRANSLUCENCY_SANITIZE=ON \
+	  -DTRANSLUCENCY_USE_HYPRE=OFF
 	cmake --build $(SANITIZE_DIR) -j $(JOBS)
 	cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1 \
 	  UBSAN_OPTIONS=print_stacktrace=1 \

@@ -342,7 +342,7 @@ void TetMesh::BuildTopology()
     // 1. Point -> tets incidence, tets ascending in each list: a counting
     //    sort in which each thread counts, then places, the tets of its own
     //    contiguous range (thread ranges in increasing order).
-    int* count = &counts[static_cast<size_t>(tid) * numPoints];
+    int* count = counts.data() + static_cast<size_t>(tid) * numPoints; // no &v[k] of an empty vector
     std::fill(count, count + numPoints, 0);
     const int tetBegin = static_cast<int>(static_cast<long long>(numTets) * tid / numThreads);
     const int tetEnd = static_cast<int>(static_cast<long long>(numTets) * (tid + 1) / numThreads);
