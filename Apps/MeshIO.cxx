@@ -3,6 +3,7 @@
 
 #include "vtkSurfaceReader.h"
 #include "vtkTetGenReader.h"
+#include "vtkTranslucencyMeshConversion.h"
 
 #include "Error.h"
 #include "Strings.h"
@@ -10,9 +11,6 @@
 #include <vtkAlgorithm.h>
 #include <vtkCellArray.h>
 #include <vtkCellArrayIterator.h>
-#include <vtkCellType.h>
-#include <vtkCellTypes.h>
-#include <vtkUnsignedCharArray.h>
 #include <vtkPolyData.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataReader.h>
@@ -635,59 +633,16 @@ void CheckVtkXmlFile(const std::string& path)
 namespace
 {
 /// The cells of a grid read from `path`: every one a VTK_TETRA of four point
-/// ids in range, every point finite. The filters check the same
-/// (vtkTranslucency::ToTetMesh); here the message names the file.
+/// ids in range, every point finite (vtkTranslucency::ToTetArrays, the check
+/// the filters make); here the message names the file.
 void CheckTetGrid(vtkUnstructuredGrid* grid, const std::string& path)
 {
-  const vtkIdType numPoints = grid->GetNumberOfPoints();
-  const vtkIdType numCells = grid->GetNumberOfCells();
-  auto fail = [&](const std::string& what) { throw translucency::Error("'" + path + "': " + what); };
-  for (vtkIdType i = 0; i < numPoints; ++i)
+  std::vector<double> points;
+  std::vector<int> tets;
+  std::string error;
+  if (!vtkTranslucency::ToTetArrays(grid, points, tets, error))
   {
-    double p[3];
-    grid->GetPoint(i, p);
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-    {
-      std::ostringstream os;
-      os << "point " << i << " has a non-finite coordinate (" << p[0] << ", " << p[1] << ", "
-         << p[2] << ")";
-      fail(os.str());
-    }
-  }
-  vtkUnsignedCharArray* types = grid->GetCellTypesArray();
-  vtkCellArray* cells = grid->GetCells();
-  if (!types || !cells || types->GetNumberOfTuples() < numCells ||
-    cells->GetNumberOfCells() < numCells)
-  {
-    fail("the cell arrays (connectivity, offsets, types) disagree with NumberOfCells");
-  }
-  auto it = vtk::TakeSmartPointer(cells->NewIterator());
-  vtkIdType npts;
-  const vtkIdType* ids;
-  for (vtkIdType c = 0; c < numCells; ++c)
-  {
-    std::ostringstream os;
-    if (types->GetValue(c) != VTK_TETRA)
-    {
-      os << "cell " << c << " is a " << vtkCellTypes::GetClassNameFromTypeId(types->GetValue(c))
-         << ", not a linear tetrahedron (VTK type 10)";
-      fail(os.str());
-    }
-    it->GetCellAtId(c, npts, ids);
-    if (npts != 4)
-    {
-      os << "cell " << c << " is a tetrahedron with " << npts << " point ids; a tetrahedron has 4";
-      fail(os.str());
-    }
-    for (int k = 0; k < 4; ++k)
-    {
-      if (ids[k] < 0 || ids[k] >= numPoints)
-      {
-        os << "cell " << c << " uses point id " << ids[k] << ", outside [0, " << numPoints - 1
-           << "]";
-        fail(os.str());
-      }
-    }
+    throw translucency::Error("'" + path + "': " + error);
   }
 }
 
@@ -840,23 +795,10 @@ bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
 
 void GridToCoreArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets)
 {
-  points.resize(3 * grid->GetNumberOfPoints());
-  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i)
-    grid->GetPoint(i, &points[3 * i]);
-  tets.resize(4 * grid->GetNumberOfCells());
-  const vtkIdType* ids;
-  vtkIdType npts;
-  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
+  std::string error;
+  if (!vtkTranslucency::ToTetArrays(grid, points, tets, error))
   {
-    grid->GetCellPoints(c, npts, ids);
-    if (npts != 4)
-    {
-      // A .vtu may declare a VTK_TETRA cell with another number of points.
-      throw translucency::Error("cell " + std::to_string(c) + " has " + std::to_string(npts) +
-        " points: a tetrahedron needs 4");
-    }
-    for (int k = 0; k < 4; ++k)
-      tets[4 * c + k] = static_cast<int>(ids[k]);
+    throw translucency::Error(error);
   }
 }
 

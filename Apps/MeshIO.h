@@ -34,7 +34,7 @@ void CheckVtkXmlFile(const std::string& path);
 
 /// The points (x, y, z per point) and tets (4 point ids per cell) of a
 /// tetrahedral grid as the Solvers/ core takes them. Throws translucency::Error
-/// naming the cell when a cell does not have 4 points.
+/// naming the first bad point or cell (vtkTranslucency::ToTetArrays).
 void GridToCoreArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets);
 
 } // namespace translucency_app

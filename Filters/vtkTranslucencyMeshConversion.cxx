@@ -87,27 +87,30 @@ std::string CoincidentPointsWarning(
 }
 } // namespace
 
-bool ToTetMesh(
-  vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::string& error, std::string* warning)
+bool ToTetArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets,
+  std::string& error)
 {
-  if (!grid || grid->GetNumberOfPoints() == 0 || grid->GetNumberOfCells() == 0)
+  if (!grid)
   {
-    error = "the input mesh is empty (no points or no cells)";
+    error = "no input mesh";
     return false;
   }
-  const vtkIdType numPoints = grid->GetNumberOfPoints();
+  const vtkIdType numPoints = grid->GetNumberOfPoints(); // 0 without vtkPoints
   const vtkIdType numCells = grid->GetNumberOfCells();
-  std::vector<double> points(3 * static_cast<size_t>(numPoints));
-  vtkDataArray* coords = grid->GetPoints()->GetData();
-  vtkSMPTools::For(0, numPoints, [&](vtkIdType begin, vtkIdType end) {
-    for (vtkIdType i = begin; i < end; ++i)
-    {
-      for (int k = 0; k < 3; ++k)
+  points.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  if (numPoints > 0)
+  {
+    vtkDataArray* coords = grid->GetPoints()->GetData();
+    vtkSMPTools::For(0, numPoints, [&](vtkIdType begin, vtkIdType end) {
+      for (vtkIdType i = begin; i < end; ++i)
       {
-        points[3 * i + k] = coords->GetComponent(i, k);
+        for (int k = 0; k < 3; ++k)
+        {
+          points[3 * i + k] = coords->GetComponent(i, k);
+        }
       }
-    }
-  });
+    });
+  }
   for (vtkIdType i = 0; i < numPoints; ++i)
   {
     if (!std::isfinite(points[3 * i]) || !std::isfinite(points[3 * i + 1]) ||
@@ -126,7 +129,7 @@ bool ToTetMesh(
     error = "the input mesh has too many points or cells for 32-bit point ids";
     return false;
   }
-  std::vector<int> tets(4 * static_cast<size_t>(numCells));
+  tets.assign(4 * static_cast<size_t>(numCells), 0);
   vtkUnsignedCharArray* types = grid->GetCellTypesArray();
   vtkCellArray* cells = grid->GetCells();
   if (!types || !cells || types->GetNumberOfTuples() < numCells ||
@@ -173,6 +176,24 @@ bool ToTetMesh(
       tets[4 * c + k] = static_cast<int>(ids[k]);
     }
   }
+  return true;
+}
+
+bool ToTetMesh(
+  vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::string& error, std::string* warning)
+{
+  if (!grid || grid->GetNumberOfPoints() == 0 || grid->GetNumberOfCells() == 0)
+  {
+    error = "the input mesh is empty (no points or no cells)";
+    return false;
+  }
+  std::vector<double> points;
+  std::vector<int> tets;
+  if (!ToTetArrays(grid, points, tets, error))
+  {
+    return false;
+  }
+  const vtkIdType numPoints = grid->GetNumberOfPoints();
   if (warning)
   {
     *warning = CoincidentPointsWarning(points, tets, numPoints);

@@ -32,6 +32,13 @@ constexpr const char* RadianceName = "Radiance";
 constexpr const char* OriginalCellIdsName = "vtkOriginalCellIds";
 constexpr const char* OriginalPointIdsName = "vtkOriginalPointIds";
 
+/// Copy the points (3 per point, mm) and tets (4 point ids each) of `grid`,
+/// checking every point (finite coordinates) and every cell (a linear
+/// tetrahedron, 4 point ids, ids in range) before its ids are read; the
+/// message names the first bad point or cell. An empty grid is not an error.
+bool ToTetArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets,
+  std::string& error);
+
 /// Copy points and tets of `grid` into `mesh` (builds the topology). Fails
 /// if the grid is empty or holds a cell that is not a linear tetrahedron, or
 /// if the core rejects the geometry (degenerate tet, ...). Every cell is

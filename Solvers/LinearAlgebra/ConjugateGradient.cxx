@@ -1,11 +1,10 @@
 #include "ConjugateGradient.h"
 
-#include <cmath>
-
 #include "Error.h"
 
 #include <Eigen/IterativeLinearSolvers>
 
+#include <cmath>
 #include <sstream>
 
 namespace translucency
