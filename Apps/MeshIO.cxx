@@ -3,6 +3,7 @@
 
 #include "vtkSurfaceReader.h"
 #include "vtkTetGenReader.h"
+#include "vtkTetrahedralizeSurface.h"
 #include "vtkTranslucencyMeshConversion.h"
 
 #include "Error.h"
@@ -10,7 +11,6 @@
 
 #include <vtkAlgorithm.h>
 #include <vtkCellArray.h>
-#include <vtkCellArrayIterator.h>
 #include <vtkPolyData.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataReader.h>
@@ -646,50 +646,19 @@ void CheckTetGrid(vtkUnstructuredGrid* grid, const std::string& path)
   }
 }
 
-/// The cells of a surface read from `path`: point ids in range (vtkStaticCleanPolyData
-/// crashed on one out of range), points finite.
+/// The cells and points of a surface read from `path`: the checks of
+/// vtkTetrahedralizeSurface (vtkStaticCleanPolyData crashed on a point id out of
+/// range), with the file named.
 void CheckSurface(vtkPolyData* surface, const std::string& path)
 {
-  const vtkIdType numPoints = surface->GetNumberOfPoints();
-  for (vtkIdType i = 0; i < numPoints; ++i)
+  std::string error;
+  if (!vtkTranslucency::CheckSurfacePointsAndIds(
+        surface, vtkTetrahedralizeSurface::MaxCoordinate, error))
   {
-    double p[3];
-    surface->GetPoint(i, p);
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-    {
-      std::ostringstream os;
-      os << "point " << i << " has a non-finite coordinate (" << p[0] << ", " << p[1] << ", "
-         << p[2] << ")";
-      throw translucency::Error("'" + path + "': " + os.str());
-    }
-  }
-  const std::pair<const char*, vtkCellArray*> arrays[4] = { { "vertex", surface->GetVerts() },
-    { "line", surface->GetLines() }, { "polygon", surface->GetPolys() },
-    { "strip", surface->GetStrips() } };
-  for (const auto& kind : arrays)
-  {
-    if (!kind.second)
-      continue;
-    auto it = vtk::TakeSmartPointer(kind.second->NewIterator());
-    vtkIdType npts;
-    const vtkIdType* ids;
-    vtkIdType c = 0;
-    for (it->GoToFirstCell(); !it->IsDoneWithTraversal(); it->GoToNextCell(), ++c)
-    {
-      it->GetCurrentCell(npts, ids);
-      for (vtkIdType k = 0; k < npts; ++k)
-      {
-        if (ids[k] < 0 || ids[k] >= numPoints)
-        {
-          std::ostringstream os;
-          os << kind.first << " " << c << " uses point id " << ids[k] << ", outside [0, "
-             << numPoints - 1 << "]";
-          throw translucency::Error("'" + path + "': " + os.str());
-        }
-      }
-    }
+    throw translucency::Error("'" + path + "': " + error);
   }
 }
+
 } // namespace
 
 /// Read a surface or tet mesh. Returns a polydata (to tetrahedralize) or a grid.

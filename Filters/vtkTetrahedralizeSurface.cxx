@@ -4,6 +4,7 @@
 #include "ResourceLimits.h"
 #include "SurfaceIntersections.h"
 #include "TetMesh.h"
+#include "vtkTranslucencyMeshConversion.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellArrayIterator.h>
@@ -42,91 +43,6 @@ std::string FormatPoint(const double* p)
   std::ostringstream os;
   os << "(" << p[0] << ", " << p[1] << ", " << p[2] << ")";
   return os.str();
-}
-
-/// Checks what the VTK filters run before CheckSurface would crash on
-/// (vtkStaticCleanPolyData on infinite or huge coordinates, or on point ids
-/// out of range): every coordinate finite and below MaxCoordinate in
-/// magnitude, every cell array consistent and every point id in range.
-bool CheckPointsAndIds(vtkPolyData* input, std::string& error)
-{
-  const double limit = vtkTetrahedralizeSurface::MaxCoordinate;
-  const vtkIdType np = input->GetNumberOfPoints();
-  for (vtkIdType i = 0; i < np; ++i)
-  {
-    double p[3];
-    input->GetPoints()->GetPoint(i, p);
-    for (int k = 0; k < 3; ++k)
-    {
-      if (!std::isfinite(p[k]))
-      {
-        error = "point " + std::to_string(i) + " has the non-finite coordinate " +
-          std::string(1, "xyz"[k]) + " = " + std::to_string(p[k]);
-        return false;
-      }
-      if (std::abs(p[k]) >= limit)
-      {
-        std::ostringstream os;
-        os << "point " << i << " has the coordinate " << "xyz"[k] << " = " << p[k]
-           << " mm, beyond the supported magnitude " << limit << " mm";
-        error = os.str();
-        return false;
-      }
-    }
-  }
-  vtkCellArray* arrays[4] = { input->GetVerts(), input->GetLines(), input->GetPolys(),
-    input->GetStrips() };
-  const char* kinds[4] = { "vertex cell", "line", "polygon", "triangle strip" };
-  vtkIdType cellId = 0;
-  for (int a = 0; a < 4; ++a)
-  {
-    vtkCellArray* cells = arrays[a];
-    if (!cells)
-    {
-      continue;
-    }
-    vtkDataArray* offsets = cells->GetOffsetsArray();
-    vtkDataArray* connectivity = cells->GetConnectivityArray();
-    const vtkIdType numOffsets = offsets ? offsets->GetNumberOfValues() : 0;
-    const vtkIdType numIds = connectivity ? connectivity->GetNumberOfValues() : 0;
-    if (numOffsets == 0)
-    {
-      continue;
-    }
-    if (offsets->GetNumberOfComponents() != 1 || connectivity->GetNumberOfComponents() != 1 ||
-      offsets->GetComponent(0, 0) != 0 ||
-      offsets->GetComponent(numOffsets - 1, 0) != static_cast<double>(numIds))
-    {
-      error = std::string("the ") + kinds[a] + " cell array is inconsistent (its offsets do not "
-        "start at 0 and end at the connectivity's size)";
-      return false;
-    }
-    double previous = 0;
-    for (vtkIdType c = 0; c + 1 < numOffsets; ++c, ++cellId)
-    {
-      const double end = offsets->GetComponent(c + 1, 0);
-      if (!(end >= previous) || end > static_cast<double>(numIds))
-      {
-        error = "cell " + std::to_string(cellId) + " (" + kinds[a] + ") has the offset " +
-          std::to_string(end) + " out of order";
-        return false;
-      }
-      for (vtkIdType k = static_cast<vtkIdType>(previous); k < static_cast<vtkIdType>(end); ++k)
-      {
-        const double id = connectivity->GetComponent(k, 0);
-        if (!(id >= 0) || !(id < static_cast<double>(np)))
-        {
-          std::ostringstream os;
-          os << "cell " << cellId << " (" << kinds[a] << ") refers to point id " << id
-             << ", out of range [0, " << np << ")";
-          error = os.str();
-          return false;
-        }
-      }
-      previous = end;
-    }
-  }
-  return true;
 }
 
 /// Checks: triangles only, no degenerate triangle, every edge used exactly twice.
@@ -428,7 +344,7 @@ int vtkTetrahedralizeSurface::RequestData(
   // Coordinates and ids first: vtkStaticCleanPolyData crashes on infinite or
   // huge coordinates and on point ids out of range.
   std::string error;
-  if (input && input->GetNumberOfCells() > 0 && !CheckPointsAndIds(input, error))
+  if (input && input->GetNumberOfCells() > 0 && !vtkTranslucency::CheckSurfacePointsAndIds(input, MaxCoordinate, error))
   {
     vtkErrorMacro(<< error);
     return 0;

@@ -13,12 +13,14 @@
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
+#include <vtkPolyData.h>
 #include <vtkSMPTools.h>
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <deque>
 #include <mutex>
@@ -86,6 +88,88 @@ std::string CoincidentPointsWarning(
   return msg.str();
 }
 } // namespace
+
+bool CheckSurfacePointsAndIds(vtkPolyData* input, double maxCoordinate, std::string& error)
+{
+  const double limit = maxCoordinate;
+  const vtkIdType np = input->GetNumberOfPoints();
+  for (vtkIdType i = 0; i < np; ++i)
+  {
+    double p[3];
+    input->GetPoints()->GetPoint(i, p);
+    for (int k = 0; k < 3; ++k)
+    {
+      if (!std::isfinite(p[k]))
+      {
+        error = "point " + std::to_string(i) + " has the non-finite coordinate " +
+          std::string(1, "xyz"[k]) + " = " + std::to_string(p[k]);
+        return false;
+      }
+      if (std::abs(p[k]) >= limit)
+      {
+        std::ostringstream os;
+        os << "point " << i << " has the coordinate " << "xyz"[k] << " = " << p[k]
+           << " mm, beyond the supported magnitude " << limit << " mm";
+        error = os.str();
+        return false;
+      }
+    }
+  }
+  vtkCellArray* arrays[4] = { input->GetVerts(), input->GetLines(), input->GetPolys(),
+    input->GetStrips() };
+  const char* kinds[4] = { "vertex cell", "line", "polygon", "triangle strip" };
+  vtkIdType cellId = 0;
+  for (int a = 0; a < 4; ++a)
+  {
+    vtkCellArray* cells = arrays[a];
+    if (!cells)
+    {
+      continue;
+    }
+    vtkDataArray* offsets = cells->GetOffsetsArray();
+    vtkDataArray* connectivity = cells->GetConnectivityArray();
+    const vtkIdType numOffsets = offsets ? offsets->GetNumberOfValues() : 0;
+    const vtkIdType numIds = connectivity ? connectivity->GetNumberOfValues() : 0;
+    if (numOffsets == 0)
+    {
+      continue;
+    }
+    if (offsets->GetNumberOfComponents() != 1 || connectivity->GetNumberOfComponents() != 1 ||
+      offsets->GetComponent(0, 0) != 0 ||
+      offsets->GetComponent(numOffsets - 1, 0) != static_cast<double>(numIds))
+    {
+      error = std::string("the ") + kinds[a] + " cell array is inconsistent (its offsets do not "
+        "start at 0 and end at the connectivity's size)";
+      return false;
+    }
+    double previous = 0;
+    for (vtkIdType c = 0; c + 1 < numOffsets; ++c, ++cellId)
+    {
+      const double end = offsets->GetComponent(c + 1, 0);
+      if (!(end >= previous) || end > static_cast<double>(numIds))
+      {
+        error = "cell " + std::to_string(cellId) + " (" + kinds[a] + ") has the offset " +
+          std::to_string(end) + " out of order";
+        return false;
+      }
+      for (vtkIdType k = static_cast<vtkIdType>(previous); k < static_cast<vtkIdType>(end); ++k)
+      {
+        const double id = connectivity->GetComponent(k, 0);
+        if (!(id >= 0) || !(id < static_cast<double>(np)))
+        {
+          std::ostringstream os;
+          // Ids are read as doubles: print them as whole numbers.
+          os << kinds[a] << " " << c << " uses point id " << std::fixed << std::setprecision(0)
+             << id << ", out of range [0, " << np << ") (cell " << cellId << ")";
+          error = os.str();
+          return false;
+        }
+      }
+      previous = end;
+    }
+  }
+  return true;
+}
 
 bool ToTetArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets,
   std::string& error)

@@ -18,6 +18,7 @@ class vtkDataArray;
 class vtkDataSetAttributes;
 class vtkFieldData;
 class vtkPointData;
+class vtkPolyData;
 class vtkUnstructuredGrid;
 
 namespace vtkTranslucency
@@ -31,6 +32,13 @@ constexpr const char* FluenceName = "Fluence";
 constexpr const char* RadianceName = "Radiance";
 constexpr const char* OriginalCellIdsName = "vtkOriginalCellIds";
 constexpr const char* OriginalPointIdsName = "vtkOriginalPointIds";
+
+/// The checks a surface needs before any VTK filter touches it
+/// (vtkStaticCleanPolyData crashes on infinite or huge coordinates and on
+/// point ids out of range): every coordinate finite and below `maxCoordinate`
+/// in magnitude (mm), every cell array consistent, every point id in range.
+/// The message names the first bad point or cell.
+bool CheckSurfacePointsAndIds(vtkPolyData* input, double maxCoordinate, std::string& error);
 
 /// Copy the points (3 per point, mm) and tets (4 point ids each) of `grid`,
 /// checking every point (finite coordinates) and every cell (a linear
