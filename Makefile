@@ -4,13 +4,14 @@
 # Reliability (Documentation/Reliability.md), each in its own build tree:
 #   make test-sanitize   the core's GoogleTests under ASan + UBSan (gcc, build-sanitize)
 #   make test-fuzz       a short run of every libFuzzer target (clang, build-fuzz)
+#   make test-soak       the 1,000-step kept-pipeline soak on a 200k-tet sphere (long)
 BUILD_DIR ?= build
 JOBS ?= 2
 CMAKE_ARGS ?=
 SANITIZE_DIR ?= build-sanitize
 FUZZ_DIR ?= build-fuzz
 
-.PHONY: all deps configure build demo test test-sanitize test-fuzz bench clean
+.PHONY: all deps configure build demo test test-sanitize test-fuzz test-soak bench clean
 
 all: build
 
@@ -49,6 +50,13 @@ test-fuzz: deps
 	  -DTRANSLUCENCY_BUILD_FUZZERS=ON
 	cmake --build $(FUZZ_DIR) -j $(JOBS)
 	cd $(FUZZ_DIR) && ctest --output-on-failure -j $(JOBS)
+
+# 1,000 seeded cuts, paints, relights and solver switches through one kept
+# pipeline on a 200k-tet sphere, every invariant after every step and a cold
+# solve compared every 25 steps (Documentation/Reliability.md).
+test-soak: build
+	cd $(BUILD_DIR) && TRANSLUCENCY_SOAK_TETS=200000 TRANSLUCENCY_SOAK_INCREMENTAL_STEPS=1000 \
+	  ctest --output-on-failure -R 'Python.TestSoakIncremental$$' --timeout 14400
 
 bench: build
 	$(BUILD_DIR)/bin/translucency bench --mesh Data/bunny.ply --tets 100000,1000000 --runs 7

@@ -27,17 +27,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
   {
     return -1; // not added to the corpus
   }
-  // TRANSLUCENCY_FUZZ_SKIP: extensions (comma separated) whose readers have an
-  // open finding (Testing/Fuzz/findings/, Documentation/Reliability.md), so
-  // that the short ctest run stays green while the other readers are fuzzed.
-  if (const char* skip = std::getenv("TRANSLUCENCY_FUZZ_SKIP"))
-  {
-    const std::string list = "," + std::string(skip) + ",";
-    if (list.find("," + ext + ",") != std::string::npos)
-    {
-      return -1;
-    }
-  }
   const std::string path = WriteInput("mesh." + ext, data + eol + 1, size - eol - 1);
   vtkSmartPointer<vtkPolyData> surface;
   vtkSmartPointer<vtkUnstructuredGrid> grid;

@@ -27,6 +27,19 @@ and vtkOriginalCellIds, points of the kept side did not move, moved points
 stayed on the removed side, and exactly the tets with a vertex on the kept
 side were kept.
 
+The second test, test_soak_incremental (Python.TestSoakIncremental in ctest:
+1,000 operations on a 200k-tet sphere), keeps ONE vtkSurfaceIrradiance ->
+vtkSolveDiffusion pipeline alive, as the GUI does, so that paints take the
+incremental (values-only) path, relights warm-start and cuts rebuild; a fourth
+kind of step switches the solver (divergence, fem) and the linear solver
+(multigrid-agg, multigrid-cg, cg-ichol). Besides the invariants above, every
+SOAK_COLD_EVERY steps and after the last one the kept pipeline's Fluence must
+equal a fresh, cold pipeline's on the same input (both solved to RelTol 1e-10:
+|difference| <= 1e-6 of the largest fluence), so a stale cache, a wrong
+incremental update or a warm start that kept old state is caught, not only a
+crash. TRANSLUCENCY_SOAK_TETS, TRANSLUCENCY_SOAK_INCREMENTAL_STEPS and
+TRANSLUCENCY_SOAK_COLD_EVERY size it.
+
 On failure, the message names the seed and step to reproduce. Exits non-zero
 on failure (unittest).
 """
@@ -51,6 +64,14 @@ import translucency
 SEED = int(os.environ.get("TRANSLUCENCY_SOAK_SEED", "20261121"))
 STEPS = int(os.environ.get("TRANSLUCENCY_SOAK_STEPS", "200"))
 COEFFICIENTS = ("AbsorptionCoefficient", "ReducedScatteringCoefficient", "RefractiveIndex")
+INCREMENTAL_STEPS = int(os.environ.get("TRANSLUCENCY_SOAK_INCREMENTAL_STEPS", "1000"))
+# TRANSLUCENCY_SOAK_TETS (make test-soak) wins over the ctest default
+# TRANSLUCENCY_SOAK_DEFAULT_TETS (a 3k-tet sphere, to keep the suite short).
+INCREMENTAL_TETS = int(os.environ.get("TRANSLUCENCY_SOAK_TETS") or
+                       os.environ.get("TRANSLUCENCY_SOAK_DEFAULT_TETS", "200000"))
+COLD_EVERY = int(os.environ.get("TRANSLUCENCY_SOAK_COLD_EVERY", "25"))
+SOLVERS = ("divergence", "fem")
+LINEAR_SOLVERS = ("multigrid-agg", "multigrid-cg", "cg-ichol")
 MIN_DIHEDRAL = 0.5  # degrees: vtkStrokeCut's default MinimumDihedralAngle
 
 
@@ -103,14 +124,14 @@ def min_dihedral(points, tets):
     return np.min(np.array(angles), axis=0)
 
 
-def original_mesh():
+def original_mesh(tets=3000, resolution=18):
     source = vtkSphereSource()
     source.SetRadius(10.0)
-    source.SetThetaResolution(18)
-    source.SetPhiResolution(18)
+    source.SetThetaResolution(resolution)
+    source.SetPhiResolution(resolution)
     tetra = translucency.vtkTetrahedralizeSurface()
     tetra.SetInputConnection(source.GetOutputPort())
-    tetra.SetTargetNumberOfTets(3000)
+    tetra.SetTargetNumberOfTets(tets)
     assign = translucency.vtkAssignScatteringCoefficients()
     assign.SetInputConnection(tetra.GetOutputPort())
     assign.SetMaterialName("marble")
@@ -130,7 +151,10 @@ def unit_vector(rng):
 class SoakTest(unittest.TestCase):
 
     def setUp(self):
-        self.original = original_mesh()
+        self.start_with(original_mesh())
+
+    def start_with(self, original):
+        self.original = original
         self.p0 = points_of(self.original)
         self.t0 = tets_of(self.original)
         self.dihedral0 = min_dihedral(self.p0, self.t0)
@@ -141,6 +165,8 @@ class SoakTest(unittest.TestCase):
         self.cut_ids = None  # vtkOriginalCellIds of the current cut
         self.lights = [(0.0, -1.0, -1.0, 1.0)]
         self.uniform = 0.1
+        self.paint_width = 6.0  # mm: the widest stroke
+        self.paint_points = 5  # the most points of a stroke
 
     def with_coefficients(self, grid, ids):
         """A shallow copy of `grid` with the current coefficients of tets `ids`."""
@@ -187,8 +213,11 @@ class SoakTest(unittest.TestCase):
         side1 = (p1[~kept] - origin) @ normal * (-1.0 if inside_out else 1.0)
         self.assertTrue(np.all(side1 >= -1e-9), where + ": a point crossed the cut")
         self.assertTrue(np.all(signed_volumes(p1, t1) > 0), where + ": non-positive tet")
-        bound = np.minimum(MIN_DIHEDRAL, self.dihedral0[cell_ids]) - 1e-6
-        self.assertTrue(np.all(min_dihedral(p1, t1) >= bound), where + ": flat tet")
+        # A tet without a moved vertex is its original tet (points checked above):
+        # the dihedral bound needs checking only where a vertex moved.
+        moved = (~kept[t1]).any(axis=1)
+        bound = np.minimum(MIN_DIHEDRAL, self.dihedral0[cell_ids[moved]]) - 1e-6
+        self.assertTrue(np.all(min_dihedral(p1, t1[moved]) >= bound), where + ": flat tet")
         self.current, self.cut_ids = out, cell_ids
         return "cut (%d tets kept, %d moved)" % (len(cell_ids), cut.GetNumberOfMovedVertices())
 
@@ -196,9 +225,9 @@ class SoakTest(unittest.TestCase):
         lo, hi = self.p0.min(axis=0), self.p0.max(axis=0)
         mode = rng.choice(("set", "multiply", "add"))
         paint = translucency.vtkPaintScatteringCoefficients()
-        for _ in range(rng.randint(1, 5)):
+        for _ in range(rng.randint(1, self.paint_points)):
             paint.AddStrokePoint(*[rng.uniform(lo[k], hi[k]) for k in range(3)])
-        paint.SetWidth(rng.uniform(0.0, 6.0))
+        paint.SetWidth(rng.uniform(0.0, self.paint_width))
         paint.SetStrength(rng.uniform(0.0, 1.0))
         if mode == "set":
             paint.SetModeToSet()
@@ -283,6 +312,99 @@ class SoakTest(unittest.TestCase):
             STEPS, ", ".join("%d %ss" % (n, k) for k, n in kinds.items()), time.time() - start,
             SEED))
         self.assertTrue(all(n > 0 for n in kinds.values()))
+
+
+    # ------------------------------------------------- the kept pipeline
+
+    def step_switch(self, rng, where):
+        self.solver = rng.choice(SOLVERS)
+        self.linear_solver = rng.choice(LINEAR_SOLVERS)
+        return "switch to %s / %s" % (self.solver, self.linear_solver)
+
+    def make_pipeline(self, messages):
+        light = messages.watch(translucency.vtkSurfaceIrradiance())
+        light.SetUniformLightSamples(8)
+        solve = messages.watch(translucency.vtkSolveDiffusion())
+        solve.SetInputConnection(light.GetOutputPort())
+        solve.SetRelTol(1e-10)
+        solve.SetMaxIter(20000)
+        return light, solve
+
+    def run_pipeline(self, light, solve, grid):
+        light.SetInputData(grid)
+        light.RemoveAllDirectionalLights()
+        for x, y, z, e in self.lights:
+            light.AddDirectionalLight(x, y, z, e)
+        light.SetUniformLightIrradiance(self.uniform)
+        if not solve.SetSolverByName(self.solver):
+            self.fail("SetSolverByName(%r) refused" % self.solver)
+        solve.SetLinearSolver(self.linear_solver)
+        solve.Update()
+        return solve.GetOutput()
+
+    def test_soak_incremental(self):
+        # The sphere's surface resolution grows with the tets asked for (TetGen
+        # keeps the surface's triangles: resolution 64 alone gives ~40k tets).
+        resolution = 64 if INCREMENTAL_TETS >= 100000 else 32 if INCREMENTAL_TETS >= 10000 else 18
+        self.start_with(original_mesh(INCREMENTAL_TETS, resolution))
+        self.solver, self.linear_solver = "divergence", "multigrid-agg"
+        # Strokes of 1-2 points up to 1 mm wide touch a few % of the tets, so
+        # most paints take the incremental path (vtkSolveDiffusion's
+        # MaximumChangedFraction, 5 %).
+        self.paint_width, self.paint_points = 1.0, 2
+        rng = random.Random(SEED)
+        start = time.time()
+        messages = Messages()
+        light, solve = self.make_pipeline(messages)
+        kinds = {"cut": 0, "paint": 0, "relight": 0, "switch": 0}
+        paths, colds, worst = {}, 0, 0.0
+        print("%d tets, %d steps, cold comparison every %d" % (
+            len(self.t0), INCREMENTAL_STEPS, COLD_EVERY), flush=True)
+        for step in range(INCREMENTAL_STEPS):
+            kind = rng.choice(tuple(kinds))
+            where = "seed %d, step %d (%s)" % (SEED, step, kind)
+            what = getattr(self, "step_" + kind)(rng, where)
+            ids = np.arange(len(self.t0)) if self.cut_ids is None else self.cut_ids
+            grid = self.with_coefficients(self.current, ids)
+            out = self.run_pipeline(light, solve, grid)
+            self.assertEqual(messages.errors, [], where)
+            for c in range(3):
+                self.assertTrue(solve.GetConverged(c), where + ": channel %d" % c)
+            self.assertEqual(out.GetNumberOfCells(), len(ids), where)
+            fluence = vtk_to_numpy(out.GetPointData().GetArray("Fluence")).copy()
+            self.assertTrue(np.all(np.isfinite(fluence)), where + ": Fluence not finite")
+            for name in COEFFICIENTS:
+                values = vtk_to_numpy(out.GetCellData().GetArray(name))
+                self.assertTrue(np.array_equal(values, self.coefficients[name][ids]),
+                                where + ": " + name + " does not map to the original tets")
+            path = "%s/%s" % (kind, solve.GetLastAssembly())
+            paths[path] = paths.get(path, 0) + 1
+            if (step + 1) % COLD_EVERY == 0 or step == INCREMENTAL_STEPS - 1:
+                cold_messages = Messages()
+                cold_light, cold_solve = self.make_pipeline(cold_messages)
+                cold = self.run_pipeline(cold_light, cold_solve,
+                                         self.with_coefficients(self.current, ids))
+                self.assertEqual(cold_messages.errors, [], where + " (cold)")
+                reference = vtk_to_numpy(cold.GetPointData().GetArray("Fluence"))
+                scale = np.max(np.abs(reference))
+                difference = np.max(np.abs(fluence - reference)) / scale
+                self.assertLessEqual(difference, 1e-6,
+                                     where + ": kept pipeline differs from a cold solve")
+                colds += 1
+                worst = max(worst, difference)
+            kinds[kind] += 1
+            if step % 50 == 0 or os.environ.get("TRANSLUCENCY_SOAK_VERBOSE"):
+                print("step %4d (%.0f s): %s, %s" % (step, time.time() - start, what,
+                                                    solve.GetLastAssembly()), flush=True)
+        print("%d steps (%s) in %.1f s, %d cold comparisons (largest difference %.2g), "
+              "seed %d; paths: %s" % (
+            INCREMENTAL_STEPS, ", ".join("%d %ss" % (n, k) for k, n in kinds.items()),
+            time.time() - start, colds, worst, SEED,
+            ", ".join("%s %d" % kv for kv in sorted(paths.items()))))
+        self.assertTrue(all(n > 0 for n in kinds.values()))
+        # The kept pipeline must have taken its incremental paths at least once.
+        self.assertTrue(any(p.startswith("paint/") and not p.endswith("/full")
+                            for p in paths), paths)
 
 
 if __name__ == "__main__":
