@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <iomanip>
@@ -167,6 +168,12 @@ void AddMemoryLimitOption(CLI::App* command)
       1073741824.0))
     ->check(NumberCheck("--memory-limit", [](double g) { return g >= 1.0 / 1024 && g <= 1 << 24; },
       "--memory-limit must be from 0.0009765625 (1 MiB) to 16777216 GiB"));
+  command
+    ->add_flag_function(
+      "--allow-long-runs", [](std::int64_t) { translucency::SetLongRunsAllowed(true); },
+      "lift the work budgets that refuse hours-long requests\n"
+      "(Monte Carlo photons, form-factor rays, acquisition\n"
+      "solve work); memory stays bounded by --memory-limit");
 }
 
 void AddSceneOptions(CLI::App* command, SceneOptions& scene)

@@ -122,7 +122,8 @@ CLI::Option* AddNumber(CLI::App* app, const std::string& name, T& target, const 
   return option->check(NumberCheck(name, std::move(valid), failure));
 }
 
-/// --memory-limit GiB on `command`: translucency::SetDefaultMemoryLimit for the run.
+/// --memory-limit GiB (translucency::SetDefaultMemoryLimit) and --allow-long-runs
+/// (translucency::SetLongRunsAllowed) on `command`, for the whole run.
 void AddMemoryLimitOption(CLI::App* command);
 
 /// A comma-separated list of numbers into `target`, with `count` numbers if

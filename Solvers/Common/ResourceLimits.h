@@ -46,6 +46,38 @@ inline std::atomic<std::size_t>& DefaultMemoryLimitStorage()
 }
 } // namespace detail
 
+namespace detail
+{
+inline std::atomic<bool>& LongRunsAllowedStorage()
+{
+  static std::atomic<bool> allowed{ false };
+  return allowed;
+}
+} // namespace detail
+
+/**
+ * Work budgets (Monte Carlo photons, form-factor rays, the acquisition's
+ * estimated solve work) refuse a request that would run for hours unless
+ * long runs are allowed: the CLI's `--allow-long-runs`, or this setting
+ * (default false). Memory limits are separate (SetDefaultMemoryLimit).
+ */
+inline void SetLongRunsAllowed(bool allowed)
+{
+  detail::LongRunsAllowedStorage().store(allowed);
+}
+
+/// Whether work budgets are lifted (SetLongRunsAllowed; default false).
+inline bool GetLongRunsAllowed()
+{
+  return detail::LongRunsAllowedStorage().load();
+}
+
+/// How every work-budget message names the override.
+inline const char* LongRunOverride()
+{
+  return "pass --allow-long-runs, or translucency::SetLongRunsAllowed(true)";
+}
+
 /// The memory limit new core objects start with, bytes (default 8 GiB).
 inline std::size_t GetDefaultMemoryLimit()
 {

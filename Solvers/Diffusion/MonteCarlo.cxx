@@ -5,6 +5,7 @@
 #include "LightSources.h"
 #include "Radiance.h"
 #include "RayCaster.h"
+#include "ResourceLimits.h"
 #include "TetMesh.h"
 #include "Timer.h"
 #include "TriangleGeometry.h"
@@ -727,11 +728,12 @@ bool MonteCarloSolver::Solve(
     throw Error("montecarlo: number of photons " + std::to_string(NumberOfPhotons_) +
       ": must be > 0");
   }
-  if (NumberOfPhotons_ > MaxPhotons_)
+  if (NumberOfPhotons_ > MaxPhotons_ && !GetLongRunsAllowed())
   {
     throw Error("montecarlo: " + std::to_string(NumberOfPhotons_) +
       " photons per channel (--photons) are above the budget of " + std::to_string(MaxPhotons_) +
-      " (hours of tracing): use fewer photons (or raise the budget with MonteCarlo::SetMaxPhotons)");
+      " (hours of tracing): use fewer photons (or " + LongRunOverride() +
+      ", or MonteCarlo::SetMaxPhotons)");
   }
   if (NumberOfBatches_ < 2)
   {

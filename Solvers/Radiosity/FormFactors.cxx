@@ -3,6 +3,7 @@
 #include "Error.h"
 #include "RadiosityScene.h"
 #include "RayCaster.h"
+#include "ResourceLimits.h"
 #include "Timer.h"
 #include "TriangleGeometry.h"
 
@@ -92,13 +93,13 @@ bool FormFactorComputer::Compute(const RadiosityScene& scene, FormFactorMatrix& 
   const int numPatches = scene.GetNumberOfPatches();
   {
     const double rays = static_cast<double>(numPatches) * RaysPerPatch_;
-    if (rays > MaxRays_)
+    if (rays > MaxRays_ && !GetLongRunsAllowed())
     {
       throw Error("form factors: " + std::to_string(numPatches) + " patches x " +
         std::to_string(RaysPerPatch_) + " rays per patch = " + FormatNumber(rays) +
         " rays, above the budget of " + FormatNumber(MaxRays_) +
-        " rays: use fewer rays per patch (rays_per_patch, --rays) or larger patches (or raise the "
-        "budget with FormFactorComputer::SetMaxRays)");
+        " rays: use fewer rays per patch (rays_per_patch, --rays) or larger patches (or " +
+        LongRunOverride() + ", or FormFactorComputer::SetMaxRays)");
     }
     const double entries =
       static_cast<double>(numPatches) * std::min<double>(RaysPerPatch_, numPatches);

@@ -133,7 +133,8 @@ class BadNumbers(unittest.TestCase):
         args, outputs = self.render("--solver", "montecarlo", "--photons", "1e18")
         self.expect_refused(args, "photons", "1e+18", outputs=outputs)
         args, outputs = self.render("--solver", "montecarlo", "--photons", "1e12")
-        self.expect_refused(args, "1000000000000 photons", "--photons", outputs=outputs)
+        self.expect_refused(args, "1000000000000 photons", "--photons", "--allow-long-runs",
+                            outputs=outputs)
         args, outputs = self.render("--solver", "montecarlo", "--photons", "1e30")
         self.expect_refused(args, "--photons", "1e+30", outputs=outputs)
 
@@ -195,7 +196,8 @@ class BadNumbers(unittest.TestCase):
             # memory estimate is reached: a patch cap and a +-1e6 mm coordinate range.
             ("cell.json", scene(cell_size=1e-3), ["cell_size 0.001", "patches"]),
             ("huge.json", scene(box_max=[1.5e13, 1.5e13, 1.5e13]), ['"max"', "15000000000000", "1e6"]),
-            ("rays.json", scene(rays_per_patch=1e9), ["1000000000 rays per patch"]),
+            ("rays.json", scene(rays_per_patch=1e9), ["1000000000 rays per patch",
+                                                      "--allow-long-runs"]),
             ("rays2.json", scene(rays_per_patch=1e12), ["rays_per_patch", "1000000000000"]),
             ("iter.json", scene(max_iter=1e300), ["max_iter", "1e+300"]),
             # A fuzzer finding: a value of the wrong JSON type was an uncaught
@@ -217,11 +219,23 @@ class BadNumbers(unittest.TestCase):
             ("200x200x200", "4x4", ["--grid 200x200x200", "--memory-limit"]),
             ("10x10x10", "1000x1000", ["--patterns 1000x1000", "1e+06 patterns", "4096"]),
             ("40x40x40", "64x64", ["--grid 40x40x40", "--patterns 64x64", "--memory-limit"]),
+            # Fits in memory, but would run for half an hour: the work budget.
+            ("100x100x100", "2x2", ["--grid 100x100x100", "minutes", "--allow-long-runs"]),
         ]:
             with self.subTest(grid=grid, patterns=patterns):
                 self.expect_refused(["acquire", "--synthetic-truth", truth, "--grid", grid,
                                      "--patterns", patterns, "--output", prefix],
                                     *needles, outputs=[prefix + ".vtu"])
+
+        # --allow-long-runs lifts the work budget (the run then goes on to read
+        # the truth file, which is not a VTK file) but not the memory limit.
+        message = self.expect_refused(
+            ["acquire", "--allow-long-runs", "--synthetic-truth", truth, "--grid", "100x100x100",
+             "--patterns", "2x2", "--output", prefix], "truth.vti", outputs=[prefix + ".vtu"])
+        self.assertNotIn("minutes", message)
+        self.expect_refused(
+            ["acquire", "--allow-long-runs", "--synthetic-truth", truth, "--grid", "200x200x200",
+             "--patterns", "4x4", "--output", prefix], "--memory-limit", outputs=[prefix + ".vtu"])
 
 
 if __name__ == "__main__":
