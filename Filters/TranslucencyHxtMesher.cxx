@@ -39,13 +39,9 @@ bool RunHxtMesher(const std::vector<double>&, const std::vector<int>&, const Hxt
 
 namespace
 {
-/// gmsh's C API, loaded with dlopen(RTLD_LOCAL | RTLD_DEEPBIND) instead of
-/// linked: libgmsh carries its own copy of TetGen (for HXT's boundary
-/// recovery) under the same symbol names as Debian's libtet, which our TetGen
-/// path links. Linked normally, gmsh's calls bind to libtet's functions and
-/// crash (measured: SIGSEGV in the first HXT run after a TetGen run). Loaded
-/// this way, gmsh resolves its symbols in itself first and adds none to the
-/// process's global scope.
+/// gmsh's C API, loaded with dlmopen(LM_ID_NEWLM) instead of linked (see
+/// the header): libgmsh's own TetGen clashes with Debian's libtet, which our
+/// TetGen path links, and RTLD_DEEPBIND broke gmsh's std::regex.
 struct GmshApi
 {
   void* Handle = nullptr;
@@ -107,7 +103,7 @@ GmshApi& Api()
     return api;
   }
   tried = true;
-  api.Handle = dlopen(TRANSLUCENCY_GMSH_LIBRARY, RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
+  api.Handle = dlmopen(LM_ID_NEWLM, TRANSLUCENCY_GMSH_LIBRARY, RTLD_NOW | RTLD_LOCAL);
   if (!api.Handle)
   {
     const char* why = dlerror();

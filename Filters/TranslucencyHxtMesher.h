@@ -19,10 +19,14 @@
  * (General.AbortOnError = 2: gmsh throws inside, the C API catches; it does
  * not exit()), and the caller's OpenMP thread count is restored afterwards.
  *
- * gmsh is loaded with dlopen(RTLD_LOCAL | RTLD_DEEPBIND), not linked: libgmsh
- * carries its own TetGen under the same symbol names as Debian's libtet,
- * which the TetGen path links; linked together, gmsh's calls went to libtet's
- * functions and crashed (SIGSEGV in the first HXT run after a TetGen run).
+ * gmsh is loaded with dlmopen(LM_ID_NEWLM) into a link-map namespace of its
+ * own, not linked: libgmsh carries its own TetGen under the same symbol names
+ * as Debian's libtet, which the TetGen path links; linked together, gmsh's
+ * calls went to libtet's functions and crashed (SIGSEGV in the first HXT run
+ * after a TetGen run). dlopen(RTLD_DEEPBIND) avoided that but broke gmsh's
+ * std::regex (std::bad_cast from its locale facets in gmsh::initialize, in the
+ * CLI). In its own namespace gmsh has its own C++ and OpenMP runtimes; every
+ * array it returns is freed with its gmshFree.
  */
 #pragma once
 
