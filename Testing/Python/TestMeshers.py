@@ -271,5 +271,40 @@ class MesherTest(unittest.TestCase):
         self.assertTrue(np.all(rms[True] < rms[False]), (rms[True], rms[False]))
 
 
+class CommandLineTest(unittest.TestCase):
+
+    def run_cli(self, *args):
+        import subprocess
+        cli = os.environ.get("TRANSLUCENCY_CLI")
+        if not cli:
+            self.skipTest("TRANSLUCENCY_CLI is not set")
+        return subprocess.run([cli, *args], capture_output=True, text=True, timeout=300)
+
+    def test_mesher_options_and_the_quadgraph_warning(self):
+        import tempfile
+        from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+        with tempfile.TemporaryDirectory() as directory:
+            path = os.path.join(directory, "sphere.vtp")
+            writer = vtkXMLPolyDataWriter()
+            writer.SetInputData(tp.sphere_surface(radius=4.0, resolution=12))
+            writer.SetFileName(path)
+            writer.Write()
+            result = self.run_cli("render", "--mesh", path, "--mesher", "netgen")
+            self.assertNotEqual(result.returncode, 0)
+            self.assertIn("--mesher: unknown mesher 'netgen': use tetgen or hxt", result.stderr)
+            for mesher in MESHERS:
+                result = self.run_cli("render", "--mesh", path, "--target-tets", "1500",
+                                      "--mesher", mesher, "--uniform-size")
+                self.assertEqual(result.returncode, 0, result.stderr)
+            warning = "quadgraph on a graded mesh"
+            for extra, warned in (([], True), (["--uniform-size"], False)):
+                result = self.run_cli("compare", "--mesh", path, "--target-tets", "1500",
+                                      "--solvers", "divergence,quadgraph", "--reference",
+                                      "divergence", "--output", os.path.join(directory, "out"),
+                                      "--no-png", *extra)
+                self.assertEqual(result.returncode, 0, result.stderr)
+                (self.assertIn if warned else self.assertNotIn)(warning, result.stderr)
+
+
 if __name__ == "__main__":
     unittest.main()
