@@ -3,6 +3,7 @@
 // --linear-solvers, every linear solver side by side (BenchLinearSolvers.cxx).
 
 #include "BenchLinearSolvers.h"
+#include "BenchMeshers.h"
 #include "MeshIO.h"
 #include "Options.h"
 
@@ -337,6 +338,14 @@ Command AddBenchCommand(CLI::App& app)
     c->add_flag_callback("--no-cut", [linear]() { linear->DoCut = false; },
        "skip the cut -> new fluence figure")
       ->group(group);
+  auto meshersFlag = std::make_shared<bool>(false);
+  CLI::Option* meshers = c->add_flag("--meshers", *meshersFlag,
+    "compare the tetrahedralisers instead: tetgen and hxt (when\n"
+    "built), graded and --uniform-size, at --tets (default\n"
+    "1000000), --runs (default 3): time, tets/s, min dihedral\n"
+    "histogram, radius-edge ratios, edge-length spread");
+  meshers->excludes(linearSolvers);
+  edit->excludes(meshers);
   edit->excludes(linearSolvers);
   for (CLI::Option* only : { plot, ranks, noCut })
     only->needs(linearSolvers);
@@ -356,6 +365,17 @@ Command AddBenchCommand(CLI::App& app)
               if (*runs > 0)
                 linear->Runs = *runs;
               return BenchLinearSolvers(*linear);
+            }
+            if (*meshersFlag)
+            {
+              MesherBenchOptions m;
+              m.MeshPath = linear->MeshPath;
+              m.JsonPath = linear->JsonPath;
+              if (!tets->empty())
+                m.Tets = *tets;
+              if (*runs > 0)
+                m.Runs = *runs;
+              return BenchMeshers(m);
             }
             plain->MeshPath = linear->MeshPath;
             plain->JsonPath = linear->JsonPath;

@@ -199,6 +199,27 @@ void AddSceneOptions(CLI::App* command, SceneOptions& scene)
     [](double q) { return q >= 1.1; }, "--quality must be >= 1.1")
     ->group(group);
   command
+    ->add_option("--mesher", scene.Mesher,
+      "tetrahedraliser: tetgen (default; single-threaded,\n"
+      "radius-edge bound --quality) or hxt (gmsh's parallel\n"
+      "Delaunay mesher, when the build has gmsh)")
+    ->type_name("NAME")
+    ->check(CLI::Validator(
+      [](std::string& text) {
+        const std::string name = translucency::ToLower(text);
+        if (name != "tetgen" && name != "hxt")
+          throw UsageError("--mesher: unknown mesher '" + text + "': use tetgen or hxt");
+        return std::string();
+      },
+      ""))
+    ->group(group);
+  command
+    ->add_flag("--uniform-size", scene.UniformSizing,
+      "one edge length everywhere (the surface refined, with hxt\n"
+      "also coarsened, to the interior size) instead of cells\n"
+      "graded towards the surface; QuadGraph needs it")
+    ->group(group);
+  command
     ->add_option("--material", scene.Material,
       "measured preset (default marble; see render --list-materials)\n"
       "or a JSON file {\"absorption\": [r,g,b], \"reduced_scattering\":\n"

@@ -126,6 +126,8 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
     messages.Watch(tetra);
     tetra->SetInputData(surface);
     tetra->SetQuality(options.Quality);
+    tetra->SetMesher(options.Mesher.c_str());
+    tetra->SetUniformSizing(options.UniformSizing);
     if (options.MaxTetVolume > 0 && !options.TargetGiven)
       tetra->SetMaxTetVolume(options.MaxTetVolume);
     else

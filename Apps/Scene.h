@@ -38,6 +38,8 @@ struct SceneOptions
   bool TargetGiven = false;
   double MaxTetVolume = 0.0; ///< mm^3; 0: use TargetTets
   double Quality = 1.414;
+  std::string Mesher = "tetgen"; ///< --mesher: tetgen or hxt
+  bool UniformSizing = false;    ///< --uniform-size
   std::vector<Light> Lights;
   bool Shadows = true;
   int UniformSamples = 32;

@@ -2,8 +2,10 @@
 
 #include "Error.h"
 #include "ResourceLimits.h"
+#include "Strings.h"
 #include "SurfaceIntersections.h"
 #include "TetMesh.h"
+#include "TranslucencyHxtMesher.h"
 #include "vtkTranslucencyMeshConversion.h"
 
 #include <vtkCellArray.h>
@@ -289,11 +291,20 @@ bool CheckSelfIntersections(const Surface& surface, std::string& error)
 }
 
 /// Run TetGen with the given switches; fills points and tets (0-based).
+/// With sizing > 0 (and an 'm' among the switches), sizing is TetGen's
+/// target edge length at every input point (its -m sizing function, which
+/// it interpolates to the points it adds).
 bool RunTetGen(const Surface& surface, const std::string& switches, std::vector<double>& points,
-  std::vector<int>& tets, std::string& error)
+  std::vector<int>& tets, std::string& error, double sizing = 0.0)
 {
   tetgenio in, out;
   FillTetGenInput(surface, in);
+  if (sizing > 0)
+  {
+    in.numberofpointmtrs = 1;
+    in.pointmtrlist = new REAL[in.numberofpoints];
+    std::fill(in.pointmtrlist, in.pointmtrlist + in.numberofpoints, sizing);
+  }
   std::vector<char> sw(switches.begin(), switches.end());
   sw.push_back('\0');
   try
@@ -340,6 +351,26 @@ int vtkTetrahedralizeSurface::RequestData(
 {
   vtkPolyData* input = vtkPolyData::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
+
+  // The mesher's name first: a wrong one fails before the checks' work.
+  const std::string mesher = translucency::ToLower(this->Mesher);
+  if (!vtkTetrahedralizeSurface::HasMesher(mesher.c_str()))
+  {
+    if (mesher == "hxt")
+    {
+      translucency::HxtMesherOptions none;
+      std::vector<double> p;
+      std::vector<int> t;
+      std::string message;
+      translucency::RunHxtMesher({}, {}, none, p, t, message); // the build's message
+      vtkErrorMacro(<< "mesher 'hxt': " << message);
+    }
+    else
+    {
+      vtkErrorMacro(<< "unknown mesher '" << this->Mesher << "': use tetgen or hxt");
+    }
+    return 0;
+  }
 
   // Coordinates and ids first: vtkStaticCleanPolyData crashes on infinite or
   // huge coordinates and on point ids out of range.
@@ -413,47 +444,105 @@ int vtkTetrahedralizeSurface::RequestData(
     }
   }
 
-  auto switchesFor = [this](double maxVolume) {
-    std::ostringstream os;
-    os.precision(17);
-    os << "pq" << this->Quality;
-    if (maxVolume > 0)
+  // The mesher: one run for a size parameter, a second one correcting the
+  // parameter when the count misses the target by more than 15 %.
+  // The edge length of the regular tet of volume v.
+  auto regularEdge = [](double v) { return std::cbrt(6.0 * std::sqrt(2.0) * v); };
+  double diag = 0.0;
+  {
+    double lo[3] = { VTK_DOUBLE_MAX, VTK_DOUBLE_MAX, VTK_DOUBLE_MAX };
+    double hi[3] = { -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX };
+    for (size_t i = 0; i < surface.Points.size(); ++i)
     {
-      os << "a" << maxVolume;
+      lo[i % 3] = std::min(lo[i % 3], surface.Points[i]);
+      hi[i % 3] = std::max(hi[i % 3], surface.Points[i]);
     }
-    os << "zQ";
-    return os.str();
-  };
+    diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+      (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  }
 
   std::vector<double> points;
   std::vector<int> tets;
+  // parameter: TetGen's volume bound -a (graded) or edge length (uniform, -m);
+  // HXT's edge length. 0: none.
+  auto runMesher = [&](double parameter) -> bool {
+    if (mesher == "tetgen")
+    {
+      std::ostringstream os;
+      os.precision(17);
+      os << "pq" << this->Quality;
+      double sizing = 0.0;
+      if (this->UniformSizing)
+      {
+        sizing = parameter;
+        if (this->TargetNumberOfTets == 0 && this->MaxTetVolume > 0)
+        {
+          os << "a" << this->MaxTetVolume;
+        }
+        if (sizing > 0)
+        {
+          os << "m";
+        }
+      }
+      else if (parameter > 0)
+      {
+        os << "a" << parameter;
+      }
+      os << "zQ";
+      return RunTetGen(surface, os.str(), points, tets, error, sizing);
+    }
+    std::vector<int> triangles(3 * surface.Triangles.size());
+    for (size_t t = 0; t < surface.Triangles.size(); ++t)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        triangles[3 * t + k] = static_cast<int>(surface.Triangles[t][k]);
+      }
+    }
+    translucency::HxtMesherOptions options;
+    options.MeshSize = parameter > 0 ? parameter : diag;
+    options.RemeshSurface = this->UniformSizing;
+    options.Threads = this->NumberOfThreads;
+    options.Optimize = this->HxtOptimization;
+    return translucency::RunHxtMesher(
+      surface.Points, triangles, options, points, tets, error);
+  };
+
+  // Measured counts (bunny, sphere): TetGen -q1.414 -a: N falls like a^-0.8
+  // and a = 2.5 V/N gives about N at N = 1e6; TetGen -m h: N ~ 5 V / h^3
+  // (5 mm sphere); HXT with edge length h: N ~ 5.5 V / h^3 (bunny, sphere).
+  const bool edgeLength = mesher == "hxt" || this->UniformSizing;
+  const double countConstant = mesher == "hxt" ? 5.5 : 5.0;
+  const double exponent = edgeLength ? 1.0 / 3.0 : 1.0 / 0.8;
+  double parameter = 0.0;
   if (this->TargetNumberOfTets > 0)
   {
-    // Measured on the bunny with -q1.414: the count falls like a^-0.8 in the
-    // bound a and a = 2.5 V/N gives about N at N = 1e6 (surface refinement adds
-    // relatively more tets at small N). Start there and correct once.
-    double bound = 2.5 * volume / static_cast<double>(this->TargetNumberOfTets);
-    if (!RunTetGen(surface, switchesFor(bound), points, tets, error))
-    {
-      vtkErrorMacro(<< error);
-      return 0;
-    }
+    parameter = edgeLength
+      ? std::cbrt(countConstant * volume / static_cast<double>(this->TargetNumberOfTets))
+      : 2.5 * volume / static_cast<double>(this->TargetNumberOfTets);
+  }
+  else if (this->MaxTetVolume > 0)
+  {
+    parameter = edgeLength ? regularEdge(this->MaxTetVolume) : this->MaxTetVolume;
+  }
+  if (!runMesher(parameter))
+  {
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  if (this->TargetNumberOfTets > 0)
+  {
     const double ratio = static_cast<double>(tets.size() / 4) / this->TargetNumberOfTets;
     if (std::abs(ratio - 1.0) > 0.15)
     {
       this->UpdateProgress(0.5);
-      bound *= std::pow(ratio, 1.0 / 0.8);
-      if (!RunTetGen(surface, switchesFor(bound), points, tets, error))
+      parameter *= std::pow(ratio, exponent);
+      if (!runMesher(parameter))
       {
         vtkErrorMacro(<< error);
         return 0;
       }
     }
-  }
-  else if (!RunTetGen(surface, switchesFor(this->MaxTetVolume), points, tets, error))
-  {
-    vtkErrorMacro(<< error);
-    return 0;
   }
   this->UpdateProgress(0.9);
 
@@ -536,4 +625,15 @@ void vtkTetrahedralizeSurface::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "TargetNumberOfTets: " << this->TargetNumberOfTets << "\n";
   os << indent << "MemoryLimit: " << this->MemoryLimit << " GiB\n";
   os << indent << "SpatialReordering: " << this->SpatialReordering << "\n";
+  os << indent << "Mesher: " << this->Mesher << "\n";
+  os << indent << "UniformSizing: " << this->UniformSizing << "\n";
+  os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
+  os << indent << "HxtOptimization: " << this->HxtOptimization << "\n";
+}
+
+//------------------------------------------------------------------------------
+bool vtkTetrahedralizeSurface::HasMesher(const char* name)
+{
+  const std::string mesher = translucency::ToLower(name ? name : "");
+  return mesher == "tetgen" || (mesher == "hxt" && translucency::HasHxtMesher());
 }

@@ -12,6 +12,7 @@ packages=(
   googletest libgtest-dev libbenchmark-dev
   xvfb xauth libcli11-dev
   libsuitesparse-dev libhypre-dev libopenblas0-pthread python3-matplotlib
+  libgmsh-dev
 )
 
 missing=()

@@ -1,0 +1,82 @@
+/**
+ * @file TranslucencyHxtMesher.h
+ * @brief gmsh's HXT parallel Delaunay mesher (gmsh >= 4.8, `Mesh.Algorithm3D
+ * = 10`) behind a plain C++ call: a checked closed triangle surface in,
+ * points and tets out.
+ *
+ * Private to the Filters module (vtkTetrahedralizeSurface is its only user).
+ * It is VTK-free but lives here, not in Solvers/Mesh: gmsh is an optional
+ * dependency (CMake option TRANSLUCENCY_USE_GMSH, on when libgmsh-dev is
+ * found), like TetGen a mesher the filters call, and the core library must
+ * build and link the same with or without it. Without gmsh the functions
+ * exist and RunHxtMesher fails with "this build has no gmsh".
+ *
+ * gmsh keeps global state (one API instance per process, options, a current
+ * model, its own logger, and it calls omp_set_num_threads): every call is
+ * serialised by a mutex, gmsh is initialised once and never finalised, its
+ * terminal output is off (messages go to its logger, from which errors are
+ * taken), its errors come back through its C API's error codes
+ * (General.AbortOnError = 2: gmsh throws inside, the C API catches; it does
+ * not exit()), and the caller's OpenMP thread count is restored afterwards.
+ *
+ * gmsh is loaded with dlmopen(LM_ID_NEWLM) into a link-map namespace of its
+ * own, not linked: libgmsh carries its own TetGen under the same symbol names
+ * as Debian's libtet, which the TetGen path links; linked together, gmsh's
+ * calls went to libtet's functions and crashed (SIGSEGV in the first HXT run
+ * after a TetGen run). dlopen(RTLD_DEEPBIND) avoided that but broke gmsh's
+ * std::regex (std::bad_cast from its locale facets in gmsh::initialize, in the
+ * CLI). In its own namespace gmsh has its own C++ and OpenMP runtimes; every
+ * array it returns is freed with its gmshFree.
+ */
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace translucency
+{
+
+/// Options of one HXT run.
+struct HxtMesherOptions
+{
+  /// Target edge length inside (mm, > 0): gmsh's Mesh.MeshSizeMax.
+  double MeshSize = 1.0;
+  /// Uniform sizing: the surface is re-meshed to MeshSize first (gmsh's
+  /// classifySurfaces (40 degrees) + createGeometry + 2D meshing) and every size is
+  /// MeshSize (Mesh.MeshSizeMin = Mesh.MeshSizeMax). Off: the input triangles are
+  /// kept and sizes grow from theirs to at most MeshSize.
+  bool RemeshSurface = false;
+  /// Run HXT's optimisation pass (gmsh Mesh.Optimize = 1), which improves
+  /// every tet whose gamma quality (gmsh's inscribed/circumscribed radius
+  /// ratio, 1 for the regular tet) is below OptimizeThreshold. Off by default:
+  /// measured 19 s on 33k tets of a UV sphere (its pole triangles leave tets
+  /// it cannot improve) and 9x the meshing time on the bunny at 200k tets,
+  /// raising the 1st percentile of the min dihedral angle from 4 to 16 degrees.
+  bool Optimize = false;
+  /// gmsh Mesh.OptimizeThreshold (default 0.3).
+  double OptimizeThreshold = 0.3;
+  /// Threads for HXT (gmsh General.NumThreads and Mesh.MaxNumThreads3D); 0:
+  /// omp_get_max_threads().
+  int Threads = 0;
+};
+
+/// True when this build links gmsh.
+bool HasHxtMesher();
+
+/// gmsh's version string ("4.8.4"), or "" without gmsh.
+std::string GetHxtMesherVersion();
+
+/**
+ * Tetrahedralises the closed surface (points: x, y, z per point in mm;
+ * triangles: 3 ids per triangle, 0-based, already checked: closed, manifold,
+ * no self-intersection) with HXT. Fills points (x, y, z) and tets (4 ids,
+ * 0-based, only points used by a tet are returned; flat tets whose four
+ * corners lie on the surface, |6V| <= 1e-10 (longest edge)^3, are dropped:
+ * HXT leaves them on planar parts of the surface). Returns false with a
+ * message in error (gmsh's own last error where it gave one), never throws.
+ */
+bool RunHxtMesher(const std::vector<double>& points, const std::vector<int>& triangles,
+  const HxtMesherOptions& options, std::vector<double>& outPoints, std::vector<int>& outTets,
+  std::string& error);
+
+} // namespace translucency

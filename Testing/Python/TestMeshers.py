@@ -1,0 +1,310 @@
+#!/usr/bin/env python3
+"""The two tetrahedralisers of vtkTetrahedralizeSurface and mesh sizing (issue 22).
+
+How to run (from a build tree; ctest sets the variables itself):
+
+    PYTHONPATH=<build>/lib/python3.11/site-packages /usr/bin/python3 TestMeshers.py
+
+Asserts:
+  - the same bad surfaces give the same error message with mesher "tetgen"
+    and "hxt" (the checks run before either mesher); an unknown mesher is
+    named; in a build without gmsh, "hxt" says "this build has no gmsh";
+  - hxt fills the bunny: the tets' volumes sum to the enclosed volume, none is
+    degenerate by TetMesh's test (|V| > 1e-14 diag^3), the count is near the
+    target, the output is in positive (VTK) orientation;
+  - uniform sizing is measurably uniform on a 5 mm sphere: the fraction of
+    tets whose centroid lies within 0.5 mm of the surface is the shell's volume
+    fraction 0.271 +- 0.08 (measured at 30k tets: TetGen 0.284, hxt 0.330;
+    TetGen's graded default: > 0.40, measured 0.44-0.46),
+    and the edge lengths' coefficient of variation is < 0.23 (graded TetGen:
+    0.26-0.27);
+  - TetGen honours its radius-edge bound for all but < 1 % of the tets (those
+    it keeps near the input surface's small angles), with a stricter bound
+    leaving more tets above 1.414; smallest dihedral angle > 1 degree;
+  - QuadGraph on a uniform mesh of a 5 mm sphere under uniform light: RMS
+    relative error against the exact solution phi = C sinh(k r) / r below 12 %
+    in every channel (printed), and below the graded mesh's error.
+
+Exits non-zero on failure (unittest).
+"""
+
+import os
+import sys
+import unittest
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import TestPipeline as tp  # noqa: E402  (helpers: surfaces, optics, Messages)
+
+import translucency  # noqa: E402
+from vtkmodules.vtkCommonDataModel import vtkPolyData  # noqa: E402
+from vtkmodules.vtkFiltersCore import vtkAppendPolyData  # noqa: E402
+from vtkmodules.vtkIOPLY import vtkPLYReader  # noqa: E402
+
+SOURCE_DIR = os.environ.get("TRANSLUCENCY_SOURCE_DIR",
+                            os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+
+HAS_HXT = translucency.vtkTetrahedralizeSurface.HasMesher("hxt")
+MESHERS = ("tetgen", "hxt") if HAS_HXT else ("tetgen",)
+SHELL_FRACTION = 1.0 - 0.9 ** 3  # volume fraction within 0.5 mm of a 5 mm sphere's surface
+
+
+def tetrahedralize(surface, mesher, target=None, uniform=False, quality=None, max_volume=None):
+    """(output grid, errors) of vtkTetrahedralizeSurface."""
+    tetra = translucency.vtkTetrahedralizeSurface()
+    tetra.SetInputData(surface)
+    tetra.SetMesher(mesher)
+    tetra.SetUniformSizing(uniform)
+    if target is not None:
+        tetra.SetTargetNumberOfTets(target)
+    if max_volume is not None:
+        tetra.SetMaxTetVolume(max_volume)
+    if quality is not None:
+        tetra.SetQuality(quality)
+    messages = tp.Messages(tetra)
+    try:
+        tetra.Update()
+    finally:
+        messages.remove()
+    return tetra.GetOutput(), messages.errors
+
+
+def quality(grid):
+    """(min dihedral per tet in degrees, radius-edge ratio per tet, edge lengths)."""
+    p = tp.points_of(grid)[tp.tets_of(grid)]
+    faces = ((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1))
+    normals = []
+    for a, b, c in faces:
+        n = np.cross(p[:, b] - p[:, a], p[:, c] - p[:, a])
+        normals.append(n / np.linalg.norm(n, axis=1)[:, None])
+    angles = np.stack([180.0 - np.degrees(np.arccos(np.clip(
+        np.einsum("ij,ij->i", normals[i], normals[j]), -1.0, 1.0)))
+        for i in range(4) for j in range(i + 1, 4)], axis=1)
+    a, b, c = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]
+    det = np.einsum("ij,ij->i", a, np.cross(b, c))
+    centre = ((a * a).sum(1)[:, None] * np.cross(b, c) + (b * b).sum(1)[:, None] * np.cross(c, a)
+              + (c * c).sum(1)[:, None] * np.cross(a, b)) / (2.0 * det[:, None])
+    edges = np.stack([np.linalg.norm(p[:, i] - p[:, j], axis=1)
+                      for i in range(4) for j in range(i + 1, 4)], axis=1)
+    return angles.min(axis=1), np.linalg.norm(centre, axis=1) / edges.min(axis=1), edges.ravel()
+
+
+def read_bunny():
+    reader = vtkPLYReader()
+    reader.SetFileName(os.path.join(SOURCE_DIR, "Data", "bunny.ply"))
+    reader.Update()
+    return reader.GetOutput()
+
+
+def enclosed_volume(surface):
+    p = tp.points_of(surface)
+    t = tp.triangles_of(surface)
+    return abs(np.einsum("ij,ij->i", p[t[:, 0]], np.cross(p[t[:, 1]], p[t[:, 2]])).sum() / 6.0)
+
+
+class MesherTest(unittest.TestCase):
+
+    def test_same_errors_for_bad_surfaces(self):
+        tet_coords = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+        tet_faces = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)]
+        open_sphere = tp.sphere_surface()
+        open_sphere.BuildLinks()
+        open_sphere.DeleteCell(0)
+        open_sphere.RemoveDeletedCells()
+        coords = [(0, 0, 0), (0, 0, 1), (1, 0, 0), (0, 1, 0), (-1, 0, 0), (0, -1, 0)]
+        glued = []
+        for a, b in ((2, 3), (4, 5)):
+            glued += [(0, b, a), (0, a, 1), (0, 1, b), (1, a, b)]
+        overlapping = vtkAppendPolyData()
+        overlapping.AddInputData(tp.sphere_surface(2.0, (0.0, 0.0, 0.0), 12))
+        overlapping.AddInputData(tp.sphere_surface(2.0, (1.0, 0.0, 0.0), 12))
+        overlapping.Update()
+        infinite = tp.make_polydata([(0, 0, 0), (1, 0, 0), (0, float("inf"), 0), (0, 0, 1)],
+                                    tet_faces)
+        cases = {
+            "open": (open_sphere, "not closed"),
+            "non-manifold": (tp.make_polydata(coords, glued), "manifold"),
+            "flat": (tp.make_polydata([(0, 0, 0), (1, 0, 0), (0, 1, 0), (1, 1, 0)],
+                                      [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)]), "no volume"),
+            "degenerate": (tp.make_polydata(tet_coords + [(0.5, 0, 0)],
+                                            tet_faces + [(0, 4, 1)]), "degenerate"),
+            "self-intersecting": (overlapping.GetOutput(), "intersects itself"),
+            "infinite": (infinite, "non-finite"),
+            "bad id": (tp.make_polydata(tet_coords, tet_faces[:3] + [(0, 3, 4)]), "out of range"),
+            "quads": (tp.cube_polydata(), "triangle"),
+            "empty": (vtkPolyData(), "empty"),
+        }
+        for name, (surface, fragment) in cases.items():
+            with self.subTest(case=name):
+                messages = {}
+                for mesher in MESHERS:
+                    grid, errors = tetrahedralize(surface, mesher, target=1000)
+                    self.assertEqual(len(errors), 1, "%s: %r" % (mesher, errors))
+                    self.assertIn(fragment, errors[0].lower())
+                    self.assertEqual(grid.GetNumberOfCells(), 0)
+                    # The message without VTK's "ERROR: In file, line / object" header.
+                    messages[mesher] = errors[0].split("): ", 1)[-1]
+                self.assertEqual(len(set(messages.values())), 1, messages)
+
+    def test_unknown_mesher_and_build_without_gmsh(self):
+        grid, errors = tetrahedralize(tp.sphere_surface(), "netgen", target=1000)
+        self.assertEqual(len(errors), 1, errors)
+        self.assertIn("unknown mesher 'netgen'", errors[0])
+        self.assertIn("tetgen or hxt", errors[0])
+        # Case-insensitive names.
+        grid, errors = tetrahedralize(tp.sphere_surface(radius=3.0, resolution=8), "TetGen",
+                                      target=300)
+        self.assertEqual(errors, [])
+        self.assertGreater(grid.GetNumberOfCells(), 0)
+        if not HAS_HXT:
+            grid, errors = tetrahedralize(tp.sphere_surface(), "hxt", target=1000)
+            self.assertEqual(len(errors), 1, errors)
+            self.assertIn("this build has no gmsh", errors[0])
+
+    @unittest.skipUnless(HAS_HXT, "this build has no gmsh")
+    def test_hxt_fills_the_bunny(self):
+        bunny = read_bunny()
+        volume = enclosed_volume(bunny)
+        for uniform in (False, True):
+            with self.subTest(uniform=uniform):
+                grid, errors = tetrahedralize(bunny, "hxt", target=20000, uniform=uniform)
+                self.assertEqual(errors, [])
+                n = grid.GetNumberOfCells()
+                print("hxt %s: %d tets for a target of 20000" % (
+                    "uniform" if uniform else "graded", n))
+                self.assertLess(abs(n / 20000.0 - 1.0), 0.25)
+                volumes = tp.tet_volumes(grid)
+                self.assertTrue(np.all(volumes > 0), "VTK orientation")
+                bounds = grid.GetBounds()
+                diag = np.linalg.norm(np.array(bounds[1::2]) - np.array(bounds[0::2]))
+                self.assertGreater(volumes.min(), 1e-14 * diag ** 3, "degenerate tet")
+                # Graded: the input triangles are kept, so the volume is exact;
+                # uniform re-meshes the surface (a polyhedron inscribed in the
+                # same curved surface gmsh interpolates): within 1 %.
+                self.assertAlmostEqual(volumes.sum() / volume, 1.0, delta=1e-9 if not uniform else 0.01)
+        # A maximum tet volume instead of a count: the edge of the regular tet.
+        grid, errors = tetrahedralize(bunny, "hxt", max_volume=volume / 5000.0)
+        self.assertEqual(errors, [])
+        self.assertGreater(grid.GetNumberOfCells(), 2000)
+        self.assertLess(grid.GetNumberOfCells(), 20000)
+
+    def test_uniform_sizing_is_uniform(self):
+        sphere = tp.sphere_surface(radius=5.0, resolution=24)
+        results = {}
+        for mesher in MESHERS:
+            for uniform in (False, True):
+                grid, errors = tetrahedralize(sphere, mesher, target=30000, uniform=uniform)
+                self.assertEqual(errors, [])
+                p = tp.points_of(grid)[tp.tets_of(grid)]
+                near = (np.linalg.norm(p.mean(axis=1), axis=1) > 4.5).mean()
+                _, _, edges = quality(grid)
+                cv = edges.std() / edges.mean()
+                results[(mesher, uniform)] = (grid.GetNumberOfCells(), near, cv)
+                print("%-6s %-7s %6d tets: %.3f of the tets within 0.5 mm of the surface "
+                      "(volume fraction %.3f), edge CV %.3f"
+                      % (mesher, "uniform" if uniform else "graded", grid.GetNumberOfCells(),
+                         near, SHELL_FRACTION, cv))
+        for mesher in MESHERS:
+            n, near, cv = results[(mesher, True)]
+            self.assertLess(abs(near - SHELL_FRACTION), 0.08, mesher)
+            self.assertLess(cv, 0.23, mesher)
+            self.assertLess(abs(n / 30000.0 - 1.0), 0.2, mesher)
+        n, near, cv = results[("tetgen", False)]
+        self.assertGreater(near, 0.40, "TetGen's default grading is what uniform sizing removes")
+        self.assertGreater(cv, results[("tetgen", True)][2])
+
+    def test_tetgen_quality_bound(self):
+        sphere = tp.sphere_surface(radius=5.0, resolution=24)
+        largest = {}
+        for bound in (1.414, 2.0):
+            for uniform in (False, True):
+                grid, errors = tetrahedralize(sphere, "tetgen", target=20000, uniform=uniform,
+                                              quality=bound)
+                self.assertEqual(errors, [])
+                dihedral, ratio, _ = quality(grid)
+                above = (ratio > bound * (1 + 1e-9)).mean()
+                print("tetgen -q%g %s: min dihedral %.2f deg, radius-edge max %.2f, %.3f %% above "
+                      "the bound" % (bound, "uniform" if uniform else "graded", dihedral.min(),
+                                     ratio.max(), 100 * above))
+                self.assertLess(above, 0.01)
+                self.assertGreater(dihedral.min(), 1.0)
+                largest[(bound, uniform)] = (ratio > 1.414).mean()
+        # The bound is what TetGen refines to: the looser one leaves more tets above 1.414.
+        for uniform in (False, True):
+            self.assertLess(largest[(1.414, uniform)], largest[(2.0, uniform)])
+
+    def test_quadgraph_on_a_uniform_mesh(self):
+        """QuadGraph against the exact solution in a 5 mm sphere, uniform light."""
+        eta, radius, irradiance = 1.3, 5.0, 1.0
+        mu_a = np.array([0.01, 0.02, 0.04])
+        mu_s = np.array([1.0, 1.5, 2.0])
+        q = irradiance * tp.hemispherical_transmittance(eta)
+        kappa = 1.0 / (3.0 * (mu_a + mu_s))
+        k = np.sqrt(mu_a / kappa)
+        a = tp.mismatch_a(eta)
+        # phi = C sinh(k r) / r; Robin: phi + 2 A kappa dphi/dr = 4 q / (1 - Fdr) at r = R.
+        f_r = np.sinh(k * radius) / radius
+        df_r = k * np.cosh(k * radius) / radius - np.sinh(k * radius) / radius ** 2
+        c = 4.0 * q / (1.0 - tp.fdr(eta)) / (f_r + 2.0 * a * kappa * df_r)
+        rms = {}
+        for uniform in (True, False):
+            pipe = tp.Pipeline(tp.sphere_surface(radius=radius, resolution=24), target_tets=30000,
+                               material="", absorption=tuple(mu_a), scattering=tuple(mu_s),
+                               eta=eta)
+            pipe.tetra.SetUniformSizing(uniform)
+            pipe.irradiance.SetUniformLightIrradiance(irradiance)
+            pipe.irradiance.SetUniformLightSamples(0)
+            pipe.solve.SetSolver(pipe.solve.SOLVER_QUADGRAPH)
+            pipe.solve.SetRelTol(1e-6)
+            pipe.update(self, pipe.solve)
+            grid = pipe.solve.GetOutput()
+            r = np.linalg.norm(tp.points_of(grid), axis=1)[:, None]
+            exact = c * np.sinh(k * r) / r
+            phi = tp.array(grid, "Fluence")
+            rms[uniform] = np.sqrt(np.mean(((phi - exact) / exact) ** 2, axis=0))
+            print("quadgraph, %s TetGen mesh, %d tets: RMS error vs the exact sphere solution "
+                  "R %.2f %%, G %.2f %%, B %.2f %%" % (
+                      "uniform" if uniform else "graded", grid.GetNumberOfCells(),
+                      *(100 * rms[uniform])))
+        self.assertTrue(np.all(rms[True] < 0.12), rms[True])
+        self.assertTrue(np.all(rms[True] < rms[False]), (rms[True], rms[False]))
+
+
+class CommandLineTest(unittest.TestCase):
+
+    def run_cli(self, *args):
+        import subprocess
+        cli = os.environ.get("TRANSLUCENCY_CLI")
+        if not cli:
+            self.skipTest("TRANSLUCENCY_CLI is not set")
+        return subprocess.run([cli, *args], capture_output=True, text=True, timeout=300)
+
+    def test_mesher_options_and_the_quadgraph_warning(self):
+        import tempfile
+        from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+        with tempfile.TemporaryDirectory() as directory:
+            path = os.path.join(directory, "sphere.vtp")
+            writer = vtkXMLPolyDataWriter()
+            writer.SetInputData(tp.sphere_surface(radius=4.0, resolution=12))
+            writer.SetFileName(path)
+            writer.Write()
+            result = self.run_cli("render", "--mesh", path, "--mesher", "netgen")
+            self.assertNotEqual(result.returncode, 0)
+            self.assertIn("--mesher: unknown mesher 'netgen': use tetgen or hxt", result.stderr)
+            for mesher in MESHERS:
+                result = self.run_cli("render", "--mesh", path, "--target-tets", "1500",
+                                      "--mesher", mesher, "--uniform-size")
+                self.assertEqual(result.returncode, 0, result.stderr)
+            warning = "quadgraph on a graded mesh"
+            for extra, warned in (([], True), (["--uniform-size"], False)):
+                result = self.run_cli("compare", "--mesh", path, "--target-tets", "1500",
+                                      "--solvers", "divergence,quadgraph", "--reference",
+                                      "divergence", "--output", os.path.join(directory, "out"),
+                                      "--no-png", *extra)
+                self.assertEqual(result.returncode, 0, result.stderr)
+                (self.assertIn if warned else self.assertNotIn)(warning, result.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
