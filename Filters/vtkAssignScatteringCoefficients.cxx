@@ -4,6 +4,7 @@
 #include "MaterialFields.h"
 #include "vtkMaterialTableReader.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
@@ -464,6 +465,7 @@ bool vtkAssignScatteringCoefficients::ComputeMaterials(
 int vtkAssignScatteringCoefficients::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   if (!input || input->GetNumberOfCells() == 0)
@@ -523,7 +525,7 @@ int vtkAssignScatteringCoefficients::RequestData(
     }
     output->GetCellData()->AddArray(ids);
   }
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

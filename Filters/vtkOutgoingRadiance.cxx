@@ -6,6 +6,7 @@
 #include "Radiance.h"
 #include "TetMesh.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -50,6 +51,7 @@ int vtkOutgoingRadiance::FillInputPortInformation(int, vtkInformation* info)
 int vtkOutgoingRadiance::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkPolyData* output = vtkPolyData::GetData(outputVector);
   std::string error;
@@ -180,7 +182,7 @@ int vtkOutgoingRadiance::RequestData(
   phiOut->Delete();
   qOut->Delete();
   normalsOut->Delete();
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 #include "vtkPaintScatteringCoefficients.h"
 
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include "TetPaint.h"
 #include "Error.h"
@@ -85,6 +86,7 @@ void vtkPaintScatteringCoefficients::RemoveAllStrokePoints()
 int vtkPaintScatteringCoefficients::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* cut = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* original =
     this->GetNumberOfInputConnections(1) > 0 ? vtkUnstructuredGrid::GetData(inputVector[1]) : nullptr;
@@ -297,7 +299,7 @@ int vtkPaintScatteringCoefficients::RequestData(
                     << " tet channel(s) would have had mu_a + sigma_s' = 0 "
                     << "and kept their old values");
   }
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

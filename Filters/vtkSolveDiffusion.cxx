@@ -9,6 +9,7 @@
 #include "Timer.h"
 #include "VertexDiffusionSolver.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include <vtkDataArray.h>
 #include <vtkFieldData.h>
@@ -162,6 +163,7 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
 int vtkSolveDiffusion::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   Internals& in = *this->Internal;
@@ -298,7 +300,7 @@ int vtkSolveDiffusion::RequestData(
     return 0;
   }
   this->UpdateProgress(1.0);
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------
