@@ -495,10 +495,12 @@ int vtkAssignScatteringCoefficients::RequestData(
   vtkNew<vtkDoubleArray> absorption;
   absorption->SetName(vtkTranslucency::AbsorptionName);
   absorption->SetNumberOfComponents(3);
+  vtkTranslucency::SetRGBComponentNames(absorption);
   absorption->SetNumberOfTuples(n);
   vtkNew<vtkDoubleArray> scattering;
   scattering->SetName(vtkTranslucency::ScatteringName);
   scattering->SetNumberOfComponents(3);
+  vtkTranslucency::SetRGBComponentNames(scattering);
   scattering->SetNumberOfTuples(n);
   vtkNew<vtkDoubleArray> index;
   index->SetName(vtkTranslucency::RefractiveIndexName);

@@ -193,6 +193,7 @@ int vtkPaintScatteringCoefficients::RequestData(
   {
     newArrays[k]->SetName(names[k]);
     newArrays[k]->SetNumberOfComponents(3);
+    vtkTranslucency::SetRGBComponentNames(newArrays[k]);
     newArrays[k]->SetNumberOfTuples(n);
     double* dst = newArrays[k]->GetPointer(0);
     if (vtkDoubleArray* src = vtkDoubleArray::FastDownCast(oldArrays[k]))
