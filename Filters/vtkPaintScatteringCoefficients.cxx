@@ -218,7 +218,17 @@ int vtkPaintScatteringCoefficients::RequestData(
 
   // The paint itself (TransCut Sec. 5.2) is in the core: translucency::TetPaint.
   translucency::TetPaint painter;
-  painter.SetStrokePoints(this->StrokePoints);
+  try
+  {
+    painter.SetStrokePoints(this->StrokeIsPolyline && this->Width > 0.0
+        ? translucency::TetPaint::SamplePolyline(this->StrokePoints, this->Width / 4.0)
+        : this->StrokePoints);
+  }
+  catch (const translucency::Error& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
   painter.SetWidth(this->Width);
   painter.SetStrength(this->Strength);
   painter.SetCutoffWeight(this->CutoffWeight);
@@ -310,6 +320,7 @@ void vtkPaintScatteringCoefficients::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "OriginalMesh: "
      << (this->GetNumberOfInputConnections(1) > 0 ? "connected" : "(none)") << "\n";
   os << indent << "NumberOfStrokePoints: " << this->GetNumberOfStrokePoints() << "\n";
+  os << indent << "StrokeIsPolyline: " << this->StrokeIsPolyline << "\n";
   os << indent << "Width: " << this->Width << "\n";
   os << indent << "Strength: " << this->Strength << "\n";
   os << indent << "CutoffWeight: " << this->CutoffWeight << "\n";

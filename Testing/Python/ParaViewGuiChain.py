@@ -14,7 +14,9 @@ marker file and the screenshot:
    Translucency Surface Reader -> Tetrahedralize Surface -> Assign Scattering
    Coefficients -> Surface Irradiance -> Solve Diffusion -> Outgoing Radiance,
    each shown, the GUI's events processed after each step.
-2. Makes Solve Diffusion the active source (the Properties panel builds its
+2. Paint Scattering Coefficients, from the Translucency menu, with its
+   polyline stroke widget in the panel: two handles, painted along the line.
+   Then Solve Diffusion the active source (the Properties panel builds its
    widgets, the Linear Solver drop-down included).
 3. Plot Over Line downstream of Solve Diffusion, in a line chart view.
 4. The crash of issue 20: Linear Solver set to an unknown name, applied, all
@@ -90,6 +92,22 @@ def run():
         Hide(proxy, view)
 
     stage("chain")
+
+    # 2a. Paint Scattering Coefficients from the Translucency menu: its panel
+    # has the polyline widget of the stroke (no handle yet), then two handles
+    # across the bunny's back, painted along the line between them.
+    paint = PaintScatteringCoefficients(Input=assign)
+    SetActiveSource(paint)
+    process_events()
+    paint.StrokePoints = [-8.0, 16.0, 3.0, 8.0, 16.0, 3.0]
+    paint.Width = 1.5
+    Show(paint, view)
+    Render(view)
+    process_events()
+    weights = servermanager.Fetch(paint).GetCellData().GetArray("PaintWeight")
+    results["paint_cells_above_half"] = sum(
+        1 for i in range(weights.GetNumberOfTuples()) if weights.GetValue(i) > 0.5)
+    Hide(paint, view)
 
     # 2. The Solve Diffusion panel.
     SetActiveSource(solve)

@@ -8,7 +8,8 @@ How to run (ctest does this; needs an X display, e.g. Xvfb):
 
 1. Starts `paraview --dr --script=ParaViewGuiChain.py` (the GUI itself, not
    pvpython): the script builds the chain on the bunny, makes Solve Diffusion
-   the active source (its Properties panel), puts Plot Over Line downstream in
+   the active source (its Properties panel), paints a stroke with Paint
+   Scattering Coefficients (its polyline widget), puts Plot Over Line downstream in
    a line chart view, applies an unknown Linear Solver (the SIGSEGV of issue
    20), repairs it, saves the render view and quits the application.
 2. Checks that the GUI survived: exit code 0 (a crash gives a signal), the
@@ -149,6 +150,11 @@ class ParaViewGuiTest(unittest.TestCase):
         self.assertEqual(choices[0], "default")
         for name in ("cg-jacobi", "multigrid-agg", "bicgstab", "relaxation"):
             self.assertIn(name, choices)
+
+    def test_paint_stroke_drawn_as_a_polyline(self):
+        # Two handles 16 mm apart, Width 1.5 mm: painted along the line (as
+        # two points alone, a few tets around each end would be).
+        self.assertGreater(self.results()["paint_cells_above_half"], 20)
 
     def test_failed_filter_left_a_clean_empty_output(self):
         results = self.results()
