@@ -57,7 +57,7 @@ BASELINE = os.path.join(SOURCE_DIR, "Testing", "Baselines", "paraview_gui_bunny.
 PARAVIEW = shutil.which("paraview") or "/usr/bin/paraview"
 # The GUI's own time limit, below the ctest TIMEOUT so that a hung GUI is
 # reported here (with its log) rather than killed by ctest.
-GUI_TIMEOUT = 240
+GUI_TIMEOUT = 540
 
 # Image comparison as in TestDemoImage.py (vtkImageDifference, AllowShift and
 # Averaging on): per pixel and channel differences up to 16 of 255 levels are
