@@ -4,6 +4,7 @@
 #include "MaterialFields.h"
 #include "vtkMaterialTableReader.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
@@ -464,6 +465,7 @@ bool vtkAssignScatteringCoefficients::ComputeMaterials(
 int vtkAssignScatteringCoefficients::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   if (!input || input->GetNumberOfCells() == 0)
@@ -493,10 +495,12 @@ int vtkAssignScatteringCoefficients::RequestData(
   vtkNew<vtkDoubleArray> absorption;
   absorption->SetName(vtkTranslucency::AbsorptionName);
   absorption->SetNumberOfComponents(3);
+  vtkTranslucency::SetRGBComponentNames(absorption);
   absorption->SetNumberOfTuples(n);
   vtkNew<vtkDoubleArray> scattering;
   scattering->SetName(vtkTranslucency::ScatteringName);
   scattering->SetNumberOfComponents(3);
+  vtkTranslucency::SetRGBComponentNames(scattering);
   scattering->SetNumberOfTuples(n);
   vtkNew<vtkDoubleArray> index;
   index->SetName(vtkTranslucency::RefractiveIndexName);
@@ -523,7 +527,7 @@ int vtkAssignScatteringCoefficients::RequestData(
     }
     output->GetCellData()->AddArray(ids);
   }
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

@@ -4,6 +4,7 @@
 #include "TetFracture.h"
 #include "TetMesh.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -85,6 +86,7 @@ int vtkFractureTetMesh::FillInputPortInformation(int, vtkInformation* info)
 int vtkFractureTetMesh::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkMultiBlockDataSet* output = vtkMultiBlockDataSet::GetData(outputVector);
   this->NumberOfPieces = 0;
@@ -164,7 +166,7 @@ int vtkFractureTetMesh::RequestData(
     }
   }
   this->NumberOfPieces = numPieces;
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

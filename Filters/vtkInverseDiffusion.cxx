@@ -1,6 +1,7 @@
 #include "vtkInverseDiffusion.h"
 
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include "DiffusionForwardModel.h"
 #include "Error.h"
@@ -88,6 +89,7 @@ int CountIndexed(vtkPointData* pd, const char* base)
 int vtkInverseDiffusion::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
   vtkTable* history = vtkTable::GetData(outputVector, 1);
@@ -317,5 +319,5 @@ int vtkInverseDiffusion::RequestData(
     history->AddColumn(column);
   }
   this->UpdateProgress(1.0);
-  return 1;
+  return outputs.Succeed();
 }

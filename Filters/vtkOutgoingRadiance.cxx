@@ -6,6 +6,7 @@
 #include "Radiance.h"
 #include "TetMesh.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -50,6 +51,7 @@ int vtkOutgoingRadiance::FillInputPortInformation(int, vtkInformation* info)
 int vtkOutgoingRadiance::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkPolyData* output = vtkPolyData::GetData(outputVector);
   std::string error;
@@ -143,17 +145,21 @@ int vtkOutgoingRadiance::RequestData(
     polys->InsertNextCell(3, ids);
   }
 
-  auto makeArray = [n](const char* name) {
+  auto makeArray = [n](const char* name, bool rgb) {
     vtkDoubleArray* a = vtkDoubleArray::New();
     a->SetName(name);
     a->SetNumberOfComponents(3);
     a->SetNumberOfTuples(n);
+    if (rgb)
+    {
+      vtkTranslucency::SetRGBComponentNames(a);
+    }
     return a;
   };
-  vtkDoubleArray* radiance = makeArray(vtkTranslucency::RadianceName);
-  vtkDoubleArray* phiOut = makeArray(vtkTranslucency::FluenceName);
-  vtkDoubleArray* qOut = makeArray(vtkTranslucency::IrradianceName);
-  vtkDoubleArray* normalsOut = makeArray("Normals");
+  vtkDoubleArray* radiance = makeArray(vtkTranslucency::RadianceName, true);
+  vtkDoubleArray* phiOut = makeArray(vtkTranslucency::FluenceName, true);
+  vtkDoubleArray* qOut = makeArray(vtkTranslucency::IrradianceName, true);
+  vtkDoubleArray* normalsOut = makeArray("Normals", false);
   const std::vector<double>& normals = mesh.GetPointNormals();
   vtkSMPTools::For(0, n, [&](vtkIdType begin, vtkIdType end) {
     for (vtkIdType k = begin; k < end; ++k)
@@ -180,7 +186,7 @@ int vtkOutgoingRadiance::RequestData(
   phiOut->Delete();
   qOut->Delete();
   normalsOut->Delete();
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

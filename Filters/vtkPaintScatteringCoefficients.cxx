@@ -1,6 +1,7 @@
 #include "vtkPaintScatteringCoefficients.h"
 
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include "TetPaint.h"
 #include "Error.h"
@@ -85,6 +86,7 @@ void vtkPaintScatteringCoefficients::RemoveAllStrokePoints()
 int vtkPaintScatteringCoefficients::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* cut = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* original =
     this->GetNumberOfInputConnections(1) > 0 ? vtkUnstructuredGrid::GetData(inputVector[1]) : nullptr;
@@ -191,6 +193,7 @@ int vtkPaintScatteringCoefficients::RequestData(
   {
     newArrays[k]->SetName(names[k]);
     newArrays[k]->SetNumberOfComponents(3);
+    vtkTranslucency::SetRGBComponentNames(newArrays[k]);
     newArrays[k]->SetNumberOfTuples(n);
     double* dst = newArrays[k]->GetPointer(0);
     if (vtkDoubleArray* src = vtkDoubleArray::FastDownCast(oldArrays[k]))
@@ -215,7 +218,17 @@ int vtkPaintScatteringCoefficients::RequestData(
 
   // The paint itself (TransCut Sec. 5.2) is in the core: translucency::TetPaint.
   translucency::TetPaint painter;
-  painter.SetStrokePoints(this->StrokePoints);
+  try
+  {
+    painter.SetStrokePoints(this->StrokeIsPolyline && this->Width > 0.0
+        ? translucency::TetPaint::SamplePolyline(this->StrokePoints, this->Width / 4.0)
+        : this->StrokePoints);
+  }
+  catch (const translucency::Error& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
   painter.SetWidth(this->Width);
   painter.SetStrength(this->Strength);
   painter.SetCutoffWeight(this->CutoffWeight);
@@ -297,7 +310,7 @@ int vtkPaintScatteringCoefficients::RequestData(
                     << " tet channel(s) would have had mu_a + sigma_s' = 0 "
                     << "and kept their old values");
   }
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------
@@ -307,6 +320,7 @@ void vtkPaintScatteringCoefficients::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "OriginalMesh: "
      << (this->GetNumberOfInputConnections(1) > 0 ? "connected" : "(none)") << "\n";
   os << indent << "NumberOfStrokePoints: " << this->GetNumberOfStrokePoints() << "\n";
+  os << indent << "StrokeIsPolyline: " << this->StrokeIsPolyline << "\n";
   os << indent << "Width: " << this->Width << "\n";
   os << indent << "Strength: " << this->Strength << "\n";
   os << indent << "CutoffWeight: " << this->CutoffWeight << "\n";

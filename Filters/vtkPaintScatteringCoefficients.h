@@ -83,6 +83,20 @@ public:
 
   ///@{
   /**
+   * Treat the stroke points as the vertices of a polyline and paint along
+   * the line: it is sampled every Width / 4 (translucency::TetPaint::
+   * SamplePolyline), so d_t is the distance to the line within Width / 8.
+   * Default off (each point paints on its own, the points of a picked
+   * stroke); the ParaView panel, whose polyline widget gives a few handles,
+   * turns it on.
+   */
+  vtkSetMacro(StrokeIsPolyline, bool);
+  vtkGetMacro(StrokeIsPolyline, bool);
+  vtkBooleanMacro(StrokeIsPolyline, bool);
+  ///@}
+
+  ///@{
+  /**
    * The original uncut mesh (optional input port 1). When set, it is the
    * mesh painted and output; port 0 (the cut mesh) is only validated.
    * Pass nullptr to disconnect.
@@ -159,6 +173,7 @@ protected:
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   std::vector<double> StrokePoints;
+  bool StrokeIsPolyline = false;
   double Width = 1.0;
   double Strength = 1.0;
   double CutoffWeight = 1e-6;

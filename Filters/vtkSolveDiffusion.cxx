@@ -9,13 +9,16 @@
 #include "Timer.h"
 #include "VertexDiffusionSolver.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include <vtkDataArray.h>
 #include <vtkFieldData.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
 #include <vtkObjectFactory.h>
+#include <vtkNew.h>
 #include <vtkPointData.h>
+#include <vtkStringArray.h>
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
@@ -37,6 +40,8 @@ struct vtkSolveDiffusion::Internals
   /// The solver, the changed-tet detection and the warm-start bookkeeping.
   translucency::DiffusionFrontEnd FrontEnd;
   translucency::SolverReport Report;
+  /// GetAvailableLinearSolvers()'s array.
+  vtkNew<vtkStringArray> LinearSolverNames;
 };
 
 //------------------------------------------------------------------------------
@@ -63,6 +68,22 @@ bool vtkSolveDiffusion::SetSolverByName(const char* name)
     vtkErrorMacro(<< e.what());
     return false;
   }
+}
+
+vtkStringArray* vtkSolveDiffusion::GetAvailableLinearSolvers()
+{
+  vtkStringArray* names = this->Internal->LinearSolverNames;
+  names->Initialize();
+  names->InsertNextValue("default");
+  for (const auto& list :
+    { translucency::GetLinearSolverNames(), translucency::GetNonSymmetricLinearSolverNames() })
+  {
+    for (const std::string& name : list)
+    {
+      names->InsertNextValue(name);
+    }
+  }
+  return names;
 }
 
 const char* vtkSolveDiffusion::GetSolverName() const
@@ -162,6 +183,7 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
 int vtkSolveDiffusion::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   Internals& in = *this->Internal;
@@ -209,10 +231,12 @@ int vtkSolveDiffusion::RequestData(
   {
     // Validate: a vertex solver's linear solver must be one of this build's.
     const auto& entry = SolverEntry(this->Solver);
-    if (entry.Properties.UnknownsAtVertices && !this->LinearSolver.empty())
+    const std::string linearSolver =
+      translucency::ToLower(this->LinearSolver) == "default" ? "" : this->LinearSolver;
+    if (entry.Properties.UnknownsAtVertices && !linearSolver.empty())
     {
       const std::vector<std::string> names = translucency::GetLinearSolverNames();
-      if (std::find(names.begin(), names.end(), translucency::ToLower(this->LinearSolver)) ==
+      if (std::find(names.begin(), names.end(), translucency::ToLower(linearSolver)) ==
         names.end())
       {
         vtkErrorMacro(<< "unknown LinearSolver '" << this->LinearSolver << "' for the "
@@ -242,7 +266,7 @@ int vtkSolveDiffusion::RequestData(
     solver.SetRelTol(this->RelTol);
     solver.SetMaxIter(this->MaxIter);
     solver.SetWarmStart(this->WarmStart);
-    solver.SetLinearSolver(this->LinearSolver);
+    solver.SetLinearSolver(linearSolver);
     // Every solver-specific property; the selected solver reads its own and
     // leaves the others unused (they do not apply to it).
     solver.SetOptions(translucency::SolverOptions{
@@ -298,7 +322,7 @@ int vtkSolveDiffusion::RequestData(
     return 0;
   }
   this->UpdateProgress(1.0);
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

@@ -54,6 +54,8 @@
 #include <memory>
 #include <string>
 
+class vtkStringArray;
+
 class TRANSLUCENCYFILTERS_EXPORT vtkSolveDiffusion : public vtkUnstructuredGridAlgorithm
 {
 public:
@@ -129,8 +131,8 @@ public:
   ///@}
 
   ///@{
-  /// Linear solver by name; "" (default) = the chosen solver's default.
-  /// Discrete divergence and FEM: a name of
+  /// Linear solver by name; "" or "default" (default "") = the chosen
+  /// solver's default. Discrete divergence and FEM: a name of
   /// translucency::GetLinearSolverNames() ("cg-jacobi" by default,
   /// "transcut-multires", "multigrid-cg", ...). QuadGraph and grid:
   /// "bicgstab" (default) or "relaxation". An unknown name makes RequestData
@@ -138,6 +140,13 @@ public:
   vtkSetStdStringFromCharMacro(LinearSolver);
   vtkGetCharFromStdStringMacro(LinearSolver);
   ///@}
+
+  /// Every name LinearSolver accepts in this build, for the plugin's
+  /// drop-down: "default", then translucency::GetLinearSolverNames()
+  /// (divergence, fem; optional libraries only when built), then
+  /// translucency::GetNonSymmetricLinearSolverNames() (quadgraph, grid).
+  /// The array is owned by the filter.
+  vtkStringArray* GetAvailableLinearSolvers();
 
   ///@{
   /// QuadGraph and grid: coarse-to-fine initialisation (default off).

@@ -6,6 +6,7 @@
 #include "TetMesh.h"
 #include "Timer.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -82,6 +83,7 @@ vtkMTimeType vtkStrokeCut::GetMTime()
 int vtkStrokeCut::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   this->NumberOfMovableVertices = this->NumberOfMovedVertices = 0;
@@ -207,7 +209,7 @@ int vtkStrokeCut::RequestData(
     vtkWarningMacro(<< "the cut removed the whole mesh: the output is empty");
   }
   this->UpdateProgress(1.0);
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

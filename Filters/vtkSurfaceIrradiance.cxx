@@ -6,6 +6,7 @@
 #include "TetMesh.h"
 #include "Timer.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
@@ -91,6 +92,7 @@ int vtkSurfaceIrradiance::GetNumberOfPointLights() const
 int vtkSurfaceIrradiance::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
 
@@ -167,7 +169,7 @@ int vtkSurfaceIrradiance::RequestData(
   output->GetPointData()->AddArray(array);
   array->Delete();
   this->UpdateProgress(1.0);
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

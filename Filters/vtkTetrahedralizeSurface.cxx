@@ -7,6 +7,7 @@
 #include "TetMesh.h"
 #include "TranslucencyHxtMesher.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellArrayIterator.h>
@@ -349,6 +350,7 @@ int vtkTetrahedralizeSurface::FillInputPortInformation(int, vtkInformation* info
 int vtkTetrahedralizeSurface::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkPolyData* input = vtkPolyData::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
 
@@ -613,7 +615,7 @@ int vtkTetrahedralizeSurface::RequestData(
   output->SetPoints(outPoints);
   output->SetCells(VTK_TETRA, cells);
   this->UpdateProgress(1.0);
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

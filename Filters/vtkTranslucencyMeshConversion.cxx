@@ -433,11 +433,21 @@ void CopyAttributes(vtkDataSetAttributes* in, vtkDataSetAttributes* out,
   out->AddArray(ids);
 }
 
+void SetRGBComponentNames(vtkDataArray* array)
+{
+  static const char* const names[3] = { "R", "G", "B" };
+  for (int c = 0; c < 3; ++c)
+  {
+    array->SetComponentName(c, names[c]);
+  }
+}
+
 vtkDataArray* NewTripleArray(const char* name, const std::vector<double>& values)
 {
   vtkDoubleArray* array = vtkDoubleArray::New();
   array->SetName(name);
   array->SetNumberOfComponents(3);
+  SetRGBComponentNames(array);
   array->SetNumberOfTuples(static_cast<vtkIdType>(values.size() / 3));
   std::copy(values.begin(), values.end(), array->GetPointer(0));
   return array;

@@ -82,7 +82,13 @@ void CopyAttributes(vtkDataSetAttributes* in, vtkDataSetAttributes* out,
 /// Set the cells of `grid` to the tets `tets` (4 point ids each, VTK_TETRA).
 void SetTets(vtkUnstructuredGrid* grid, const std::vector<int>& tets);
 
-/// A new vtkDoubleArray named `name` with 3 components holding `values`.
+/// Name the 3 components of a colour-channel array "R", "G", "B" (ParaView
+/// shows them instead of X, Y, Z). Every RGB array of the filters' outputs
+/// gets them; vectors (Normals) keep X, Y, Z.
+void SetRGBComponentNames(vtkDataArray* array);
+
+/// A new vtkDoubleArray named `name` with 3 components (R, G, B: see
+/// SetRGBComponentNames) holding `values`.
 vtkDataArray* NewTripleArray(const char* name, const std::vector<double>& values);
 
 /**

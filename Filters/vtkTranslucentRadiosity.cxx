@@ -1,6 +1,7 @@
 #include "vtkTranslucentRadiosity.h"
 
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include "Error.h"
 #include "LinearSolver.h"
@@ -461,6 +462,7 @@ void vtkTranslucentRadiosity::AttachOutputs(vtkCompositeDataSet* output,
 int vtkTranslucentRadiosity::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   auto* input = vtkCompositeDataSet::GetData(inputVector[0], 0);
   auto* output = vtkCompositeDataSet::GetData(outputVector, 0);
   if (!input || !output)
@@ -523,7 +525,7 @@ int vtkTranslucentRadiosity::RequestData(
     return 0;
   }
   this->UpdateProgress(1.0);
-  return 1;
+  return outputs.Succeed();
 }
 
 void vtkTranslucentRadiosity::PrintSelf(ostream& os, vtkIndent indent)

@@ -3,9 +3,100 @@
 Every VTK class of the project is available at top level, for example
 ``translucency.vtkSolveDiffusion``. Importing this package also imports the VTK
 modules the classes depend on.
+
+VTK filters only log their errors (an unknown material, an unknown solver, a
+mesh that is not closed) and leave an empty output, so a script goes on and
+fails later with ``None``. To stop at the first error with its message::
+
+    import translucency
+    ...
+    output = translucency.update(solve)       # raises translucency.PipelineError
+
+    with translucency.raise_on_error():       # any VTK error inside the block
+        solve.SetSolverByName("femm")         # raises PipelineError at the block's end
 """
+
+import contextlib
+import re
 
 from .TranslucencyFilters import *  # noqa: F401,F403
 from .TranslucencyReaders import *  # noqa: F401,F403
 
-__all__ = [name for name in dir() if name.startswith("vtk")]
+__all__ = [name for name in dir() if name.startswith("vtk")] + [
+    "PipelineError", "raise_on_error", "update"]
+
+
+class PipelineError(RuntimeError):
+    """A VTK error reported while a Translucency filter (or any VTK object) ran.
+
+    ``str(error)`` is the first message, e.g. ``vtkAssignScatteringCoefficients:
+    unknown material preset 'x'; known presets: ...``; ``messages`` holds all of
+    them in the order they were reported (the root cause upstream first).
+    """
+
+    def __init__(self, messages):
+        self.messages = list(messages)
+        text = self.messages[0] if self.messages else "VTK error"
+        if len(self.messages) > 1:
+            text += " (and %d more error(s): see .messages)" % (len(self.messages) - 1)
+        super().__init__(text)
+
+
+_PIPELINE_FAILURE = re.compile(r"returned failure for request")
+_OBJECT_ADDRESS = re.compile(r"^(\w+) \(0x[0-9a-fA-F]+\): ", re.MULTILINE)
+
+
+def _clean(text):
+    """'ERROR: In file.cxx, line 64\\nvtkX (0x1234): message\\n\\n' -> 'vtkX: message'."""
+    lines = text.strip().splitlines()
+    if lines and lines[0].startswith("ERROR: In "):
+        lines = lines[1:]
+    return _OBJECT_ADDRESS.sub(r"\1: ", "\n".join(lines).strip())
+
+
+@contextlib.contextmanager
+def raise_on_error():
+    """Record every VTK error message reported inside the ``with`` block
+    (through vtkOutputWindow: any object, any filter of a pipeline) and raise
+    :class:`PipelineError` with them at the end of the block. The messages are
+    still printed as usual. The executive's own "returned failure for request"
+    report is kept only if no filter said why it failed.
+    """
+    from vtkmodules.vtkCommonCore import vtkCommand, vtkOutputWindow
+    from vtkmodules.util.misc import calldata_type
+    from vtkmodules.util.vtkConstants import VTK_STRING
+
+    messages = []
+
+    @calldata_type(VTK_STRING)
+    def record(caller, event, text):
+        messages.append(_clean(text or ""))
+
+    window = vtkOutputWindow.GetInstance()
+    tag = window.AddObserver(vtkCommand.ErrorEvent, record)
+    try:
+        yield messages
+    finally:
+        window.RemoveObserver(tag)
+    if messages:
+        reasons = [m for m in messages if not _PIPELINE_FAILURE.search(m)]
+        failures = [m.splitlines()[0] for m in messages if _PIPELINE_FAILURE.search(m)]
+        raise PipelineError(reasons or failures)
+
+
+def update(algorithm, port=0):
+    """Update ``algorithm`` (and so everything upstream of it) and return the
+    data object of its output ``port`` (default 0).
+
+    Raises :class:`PipelineError` carrying the filter's message if any filter
+    of the pipeline reports an error, instead of leaving an empty output to be
+    found later::
+
+        try:
+            surface = translucency.update(radiance)
+        except translucency.PipelineError as error:
+            sys.exit(str(error))
+    """
+    with raise_on_error():
+        algorithm.Update(port)
+    return algorithm.GetOutputDataObject(port)

@@ -12,6 +12,7 @@
 #include <vtkStringArray.h>
 #include <vtkTable.h>
 
+#include "vtkTranslucencyOutputGuard.h"
 #include "vtk_nlohmannjson.h"
 #include VTK_NLOHMANN_JSON(json.hpp)
 
@@ -274,6 +275,7 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
 int vtkMaterialTableReader::RequestData(
   vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkTable* output = vtkTable::GetData(outputVector);
   std::vector<Material> materials;
   try
@@ -317,7 +319,7 @@ int vtkMaterialTableReader::RequestData(
   output->AddColumn(absorption);
   output->AddColumn(scattering);
   output->AddColumn(index);
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

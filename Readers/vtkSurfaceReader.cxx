@@ -11,6 +11,7 @@
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkTranslucencyOutputGuard.h"
 
 #include <algorithm>
 #include <cctype>
@@ -1422,12 +1423,13 @@ int vtkSurfaceReader::CanReadFile(const char* fileName)
 int vtkSurfaceReader::RequestData(
   vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkPolyData* output = vtkPolyData::GetData(outputVector, 0);
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) &&
     outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) > 0)
   {
-    return 1; // the whole surface is piece 0
+    return outputs.Succeed(); // the whole surface is piece 0: an empty piece
   }
   if (this->FileName.empty())
   {
@@ -1502,7 +1504,7 @@ int vtkSurfaceReader::RequestData(
   polys->SetData(offsets, connectivity);
   output->SetPoints(points);
   output->SetPolys(polys);
-  return 1;
+  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

@@ -14,6 +14,7 @@
 #include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkTranslucencyOutputGuard.h"
 #include "vtkUnstructuredGrid.h"
 
 #include <algorithm>
@@ -921,6 +922,7 @@ int vtkTetGenReader::RequestData(vtkInformation* vtkNotUsed(request),
                                  vtkInformationVector** vtkNotUsed(inputVector),
                                  vtkInformationVector* outputVector)
 {
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
   if (!output)
   {
@@ -934,7 +936,7 @@ int vtkTetGenReader::RequestData(vtkInformation* vtkNotUsed(request),
   if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) &&
       outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) > 0)
   {
-    return 1;
+    return outputs.Succeed();
   }
 
   if (!this->FileName || !*this->FileName)
@@ -948,7 +950,7 @@ int vtkTetGenReader::RequestData(vtkInformation* vtkNotUsed(request),
   // out of memory on a file too large for this machine.
   try
   {
-    return this->ReadMesh(output);
+    return this->ReadMesh(output) ? outputs.Succeed() : 0;
   }
   catch (const std::exception& exception)
   {

@@ -10,7 +10,10 @@ fem quadgraph grid; add montecarlo for the ground truth (slow). The command
 line does the same with pictures: `translucency compare --help`.
 
 1. Build a lit tet mesh once (the solvers share the mesh, the material and q).
-2. Run vtkSolveDiffusion once per solver (SetSolverByName).
+2. Run vtkSolveDiffusion once per solver (SetSolverByName). Errors stop the
+   script with the filter's message: an unknown solver name (try `femm`) in
+   translucency.raise_on_error(), a failing filter in translucency.update(),
+   both raise translucency.PipelineError.
 3. Compare boundary fluence against the FEM reference: max and RMS relative error.
 """
 
@@ -40,8 +43,7 @@ material.SetMaterialName("marble")
 light = translucency.vtkSurfaceIrradiance()
 light.SetInputConnection(material.GetOutputPort())
 light.AddDirectionalLight(0.0, -1.0, 0.0, 1.0)
-light.Update()
-lit = light.GetOutput()
+lit = translucency.update(light)  # raises translucency.PipelineError on any error
 print("mesh: %d points, %d tets" % (lit.GetNumberOfPoints(), lit.GetNumberOfCells()))
 
 # 2. One solve per solver (the reference first).
@@ -49,19 +51,17 @@ surface_ids = None
 fluence = {}
 for name in [reference] + [s for s in solvers if s != reference]:
     solve = translucency.vtkSolveDiffusion()
-    if not solve.SetSolverByName(name):
-        sys.exit("unknown solver %r" % name)
+    with translucency.raise_on_error():  # an unknown name raises PipelineError
+        solve.SetSolverByName(name)
     solve.SetInputData(lit)
     solve.SetRelTol(1e-8)
     solve.SetNumberOfPhotons(200000)
-    solve.Update()
-    phi = vtk_to_numpy(solve.GetOutput().GetPointData().GetArray("Fluence"))
+    phi = vtk_to_numpy(translucency.update(solve).GetPointData().GetArray("Fluence"))
     if surface_ids is None:
         radiance = translucency.vtkOutgoingRadiance()
         radiance.SetInputData(solve.GetOutput())
-        radiance.Update()
         surface_ids = vtk_to_numpy(
-            radiance.GetOutput().GetPointData().GetArray("vtkOriginalPointIds"))
+            translucency.update(radiance).GetPointData().GetArray("vtkOriginalPointIds"))
     fluence[name] = phi[surface_ids]
     print("%-10s %8d unknowns %9d nonzeros  setup %7.1f ms  solve %8.1f ms  iterations %s"
           % (name, solve.GetNumberOfUnknowns(), solve.GetNumberOfNonZeros(),

@@ -10,7 +10,9 @@ step 7 (pass --no-render).
 
 The pipeline is made of ordinary VTK classes plus the five Translucency filters:
 surface -> tetrahedra -> coefficients -> boundary irradiance -> fluence ->
-outgoing radiance -> picture.
+outgoing radiance -> picture. VTK filters only log their errors;
+translucency.update(filter) updates and raises translucency.PipelineError with
+the filter's message instead (try SetMaterialName("marbel") in step 3).
 """
 
 import os
@@ -48,7 +50,7 @@ light.SetUniformLightIrradiance(0.1)  # W/mm^2
 solve = translucency.vtkSolveDiffusion()
 solve.SetInputConnection(light.GetOutputPort())
 solve.SetRelTol(1e-6)
-solve.Update()
+translucency.update(solve)  # raises translucency.PipelineError on any error upstream
 for c, name in enumerate("RGB"):
     print(f"channel {name}: {solve.GetNumberOfIterations(c)} iterations, "
           f"residual {solve.GetFinalResidual(c):.2e}")
@@ -56,8 +58,7 @@ for c, name in enumerate("RGB"):
 # 6. Outgoing radiance on the surface (TransCut eq. 3).
 radiance = translucency.vtkOutgoingRadiance()
 radiance.SetInputConnection(solve.GetOutputPort())
-radiance.Update()
-surface = radiance.GetOutput()
+surface = translucency.update(radiance)
 print("surface points:", surface.GetNumberOfPoints(),
       "max radiance R:", surface.GetPointData().GetArray("Radiance").GetRange(0)[1])
 

@@ -123,6 +123,77 @@ struct StrokeGrid
 
 } // namespace
 
+std::vector<double> TetPaint::SamplePolyline(
+  const std::vector<double>& points, double spacing, std::int64_t maximumPoints)
+{
+  if (!(spacing > 0.0) || !std::isfinite(spacing))
+  {
+    std::ostringstream os;
+    os << "TetPaint: the stroke sample spacing " << spacing << " mm must be finite and > 0";
+    throw Error(os.str());
+  }
+  if (points.size() % 3 != 0)
+  {
+    std::ostringstream os;
+    os << "TetPaint: " << points.size() << " stroke coordinates: not 3 per point";
+    throw Error(os.str());
+  }
+  for (size_t k = 0; k < points.size(); ++k)
+  {
+    if (!std::isfinite(points[k]))
+    {
+      std::ostringstream os;
+      os << "TetPaint: stroke point " << k / 3 << " has the coordinate " << points[k]
+         << ": must be finite";
+      throw Error(os.str());
+    }
+  }
+  const size_t n = points.size() / 3;
+  // Pieces per segment first, so that the size is checked before any allocation.
+  std::vector<double> pieces(n > 0 ? n - 1 : 0);
+  double total = static_cast<double>(n);
+  for (size_t i = 0; i + 1 < n; ++i)
+  {
+    const double* a = &points[3 * i];
+    const double* b = &points[3 * i + 3];
+    const double length =
+      std::sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) +
+        (b[2] - a[2]) * (b[2] - a[2]));
+    pieces[i] = std::max(1.0, std::ceil(length / spacing));
+    total += pieces[i] - 1.0;
+  }
+  if (total > static_cast<double>(maximumPoints))
+  {
+    std::ostringstream os;
+    os << "TetPaint: sampling the stroke every " << spacing << " mm gives " << total
+       << " points, more than " << maximumPoints
+       << ": shorten the stroke or widen the brush";
+    throw Error(os.str());
+  }
+  std::vector<double> samples;
+  samples.reserve(3 * static_cast<size_t>(total));
+  for (size_t i = 0; i < n; ++i)
+  {
+    const double* a = &points[3 * i];
+    samples.insert(samples.end(), a, a + 3);
+    if (i + 1 == n)
+    {
+      break;
+    }
+    const double* b = &points[3 * i + 3];
+    const int m = static_cast<int>(pieces[i]);
+    for (int j = 1; j < m; ++j)
+    {
+      const double t = static_cast<double>(j) / m;
+      for (int c = 0; c < 3; ++c)
+      {
+        samples.push_back(a[c] + t * (b[c] - a[c]));
+      }
+    }
+  }
+  return samples;
+}
+
 void TetPaint::Validate() const
 {
   if (Stroke_.empty() || Stroke_.size() % 3 != 0)

@@ -85,6 +85,21 @@ public:
   double GetCutoffRadius() const;
 
   /**
+   * The polyline through `points` (3 coordinates each, mm, in order) as
+   * stroke points at most `spacing` (mm, finite, > 0) apart: the given
+   * points are kept, in order, and each segment gets the fewest evenly spaced
+   * points between its ends that achieve the spacing. Every point of the
+   * polyline is then within spacing / 2 of a sample, so painting the samples
+   * follows the line drawn, not only its vertices (the ParaView polyline
+   * widget gives a few handles). Throws translucency::Error naming the value
+   * if the spacing is not finite and > 0, a coordinate is not finite, the
+   * point count is not a multiple of 3, or the result would exceed
+   * `maximumPoints` points (a stroke far longer than the spacing).
+   */
+  static std::vector<double> SamplePolyline(
+    const std::vector<double>& points, double spacing, std::int64_t maximumPoints = 10000000);
+
+  /**
    * Paint the cells given in CSR form (cell k has the point ids
    * connectivity[offsets[k] .. offsets[k+1]-1], numberOfCells + 1 offsets)
    * of `points` (3 coordinates per point, numberOfPoints points).

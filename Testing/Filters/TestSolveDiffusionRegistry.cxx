@@ -3,9 +3,14 @@
 // order must be the registry's (the plugin XML's enumeration is compared
 // with GetDiffusionSolverNames() by another test).
 #include "DiffusionSolverFactory.h"
+#include "LinearSolver.h"
+#include "VertexDiffusionSolver.h"
 #include "vtkSolveDiffusion.h"
 
 #include <vtkNew.h>
+#include <vtkStringArray.h>
+
+#include <algorithm>
 
 #include <gtest/gtest.h>
 
@@ -44,4 +49,36 @@ TEST(SolveDiffusionRegistry, UnknownNameIsRefusedWithTheRegistryNames)
   EXPECT_FALSE(solve->SetSolverByName("voxels"));
   EXPECT_FALSE(solve->SetSolverByName(nullptr));
   EXPECT_EQ(solve->GetSolver(), vtkSolveDiffusion::SOLVER_GRID); // unchanged
+}
+
+// The plugin's Linear Solver drop-down is fed by GetAvailableLinearSolvers():
+// "default", then every linear solver of the registry that this build has,
+// each once, the symmetric ones (divergence, fem) first in registry order.
+TEST(SolveDiffusionRegistry, AvailableLinearSolversAreTheBuiltRegistryEntries)
+{
+  vtkNew<vtkSolveDiffusion> solve;
+  vtkStringArray* names = solve->GetAvailableLinearSolvers();
+  ASSERT_NE(names, nullptr);
+  std::vector<std::string> listed;
+  for (vtkIdType i = 0; i < names->GetNumberOfValues(); ++i)
+  {
+    listed.push_back(names->GetValue(i));
+  }
+  std::vector<std::string> expected{ "default" };
+  std::vector<std::string> nonSymmetric;
+  for (const auto& entry : translucency::GetLinearSolverRegistry().GetEntries())
+  {
+    if (entry.Properties.Built)
+    {
+      (entry.Properties.NeedsSymmetricPositiveDefinite ? expected : nonSymmetric)
+        .push_back(entry.Name);
+    }
+  }
+  expected.insert(expected.end(), nonSymmetric.begin(), nonSymmetric.end());
+  EXPECT_EQ(listed, expected);
+  EXPECT_EQ(listed.at(1), translucency::VertexDiffusionSolver::GetDefaultLinearSolverName());
+  EXPECT_NE(std::find(listed.begin(), listed.end(), "bicgstab"), listed.end());
+  // Asked again (ParaView asks on every information update): the same list.
+  EXPECT_EQ(solve->GetAvailableLinearSolvers()->GetNumberOfValues(),
+    static_cast<vtkIdType>(expected.size()));
 }

@@ -17,7 +17,9 @@ How to run (from a build tree; ctest sets the variables itself):
 3. The channel mask leaves masked channels bit-identical.
 4. Width 0 or Strength 0 change nothing (bit-identical arrays).
 5. Bad input (no stroke points, negative width, no coefficient arrays) is an
-   error naming the problem.
+   error naming the problem. StrokeIsPolyline paints along the line through
+   two stroke points (the exact segment distance within Width / 8), not only
+   around them.
 6. Painting a cut mesh (TransCut, Sec. 5.2): with the cut mesh (translucency
    vtkStrokeCut, plane) on port 0 and the original on port 1 (OriginalMesh),
    the output is bit-identical to painting the original directly; a tet
@@ -76,8 +78,9 @@ class PaintTest(unittest.TestCase):
 
     def paint(self, stroke, width=1.5, strength=1.0, mode=0, target_a=(0.061, 0.97, 1.45),
               target_s=(0.18, 0.07, 0.03), mask=(1, 1, 1), grid=None, original=None,
-              cutoff=None):
+              cutoff=None, polyline=False):
         paint = translucency.vtkPaintScatteringCoefficients()
+        paint.SetStrokeIsPolyline(polyline)
         paint.SetInputData(grid if grid is not None else self.grid)
         if original is not None:
             paint.SetOriginalMeshData(original)
@@ -133,6 +136,27 @@ class PaintTest(unittest.TestCase):
         # The other arrays pass through (shallow copy).
         self.assertIsNotNone(out.GetCellData().GetArray("RefractiveIndex"))
         self.assertEqual(out.GetNumberOfPoints(), self.grid.GetNumberOfPoints())
+
+    def test_polyline_stroke_paints_along_the_line(self):
+        # Two handles 8 mm apart (the ParaView polyline widget): as points they
+        # paint only near the ends; as a polyline, along the whole segment,
+        # with d_t within Width / 8 of the distance to the segment, so the
+        # weight within a factor exp(-1/128) of the exact one, never above it.
+        a, b = np.array([-4.0, 0.0, 0.0]), np.array([4.0, 0.0, 0.0])
+        width = 0.8
+        w_points, _, _, _ = self.paint([a, b], width=width, cutoff=0.0)
+        np.testing.assert_allclose(w_points, self.expected_weights([a, b], width, 1.0, 0.0),
+                                   rtol=1e-12, atol=1e-300)
+        w_line, _, _, _ = self.paint([a, b], width=width, cutoff=0.0, polyline=True)
+        t = np.clip((self.centroids - a) @ (b - a) / ((b - a) @ (b - a)), 0.0, 1.0)
+        nearest = a + t[:, None] * (b - a)
+        exact = np.exp(-((self.centroids - nearest) ** 2).sum(axis=1) / (2.0 * width ** 2))
+        self.assertTrue(np.all(w_line <= exact * (1 + 1e-12)))
+        self.assertTrue(np.all(w_line >= exact * np.exp(-1.0 / 128.0) * (1 - 1e-12)))
+        middle = (np.abs(self.centroids[:, 0]) < 1.0) & (exact > 0.5)  # >= 3 mm from the ends
+        self.assertGreater(np.count_nonzero(middle), 3)
+        self.assertTrue(np.all(w_line[middle] > 0.49))
+        self.assertTrue(np.all(w_points[middle] < 1e-3))  # the points alone miss the middle
 
     def test_set_multiply_add(self):
         stroke = [(0.0, 0.0, 4.0)]

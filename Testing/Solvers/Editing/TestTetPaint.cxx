@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -391,6 +392,103 @@ TEST_F(TetPaintTest, BadInputIsNamed)
   expectError(paint, tets, "cell 17");
   paint.SetStrokePoints({ 1.0, std::numeric_limits<double>::infinity(), 3.0 });
   expectError(paint, Mesh.Tets, "stroke point 0");
+}
+
+
+// TetPaint::SamplePolyline: the ParaView polyline widget gives a few handles;
+// the filter paints along the line through them by sampling it.
+TEST(TetPaintSamplePolyline, OneSegmentIsSplitEvenly)
+{
+  // 10 mm at a spacing of 3 mm: ceil(10 / 3) = 4 pieces of 2.5 mm.
+  const std::vector<double> samples = TetPaint::SamplePolyline({ 0, 0, 0, 10, 0, 0 }, 3.0);
+  const std::vector<double> expected{ 0, 0, 0, 2.5, 0, 0, 5, 0, 0, 7.5, 0, 0, 10, 0, 0 };
+  ASSERT_EQ(samples.size(), expected.size());
+  for (size_t k = 0; k < expected.size(); ++k)
+  {
+    EXPECT_NEAR(samples[k], expected[k], 1e-12) << k;
+  }
+  // A spacing that divides the length exactly adds no extra point.
+  EXPECT_EQ(TetPaint::SamplePolyline({ 0, 0, 0, 0, 6, 0 }, 2.0).size(), 3u * 4u);
+}
+
+TEST(TetPaintSamplePolyline, KeepsTheHandlesAndCoversTheLine)
+{
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> coordinate(-20.0, 20.0);
+  std::vector<double> handles(3 * 6);
+  for (double& x : handles)
+  {
+    x = coordinate(random);
+  }
+  handles.insert(handles.end(), handles.end() - 3, handles.end()); // a repeated handle
+  const double spacing = 0.7;
+  const std::vector<double> samples = TetPaint::SamplePolyline(handles, spacing);
+  ASSERT_EQ(samples.size() % 3, 0u);
+  const size_t n = samples.size() / 3;
+  auto distance = [](const double* a, const double* b) {
+    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+      (a[2] - b[2]) * (a[2] - b[2]));
+  };
+  // Consecutive samples at most `spacing` apart.
+  for (size_t i = 0; i + 1 < n; ++i)
+  {
+    EXPECT_LE(distance(&samples[3 * i], &samples[3 * i + 3]), spacing * (1 + 1e-12)) << i;
+  }
+  // Every handle is a sample, in order.
+  size_t at = 0;
+  for (size_t h = 0; h < handles.size() / 3; ++h)
+  {
+    while (at < n && distance(&samples[3 * at], &handles[3 * h]) > 0.0)
+    {
+      ++at;
+    }
+    ASSERT_LT(at, n) << "handle " << h << " is not a sample (in order)";
+  }
+  // Every point of the polyline is within spacing / 2 of a sample.
+  for (size_t h = 0; h + 1 < handles.size() / 3; ++h)
+  {
+    for (int j = 0; j <= 100; ++j)
+    {
+      double p[3];
+      for (int c = 0; c < 3; ++c)
+      {
+        p[c] = handles[3 * h + c] + j / 100.0 * (handles[3 * h + 3 + c] - handles[3 * h + c]);
+      }
+      double nearest = std::numeric_limits<double>::infinity();
+      for (size_t i = 0; i < n; ++i)
+      {
+        nearest = std::min(nearest, distance(p, &samples[3 * i]));
+      }
+      EXPECT_LE(nearest, spacing / 2 * (1 + 1e-9)) << "segment " << h << ", t = " << j / 100.0;
+    }
+  }
+  // One point or none: unchanged.
+  EXPECT_EQ(TetPaint::SamplePolyline({ 1, 2, 3 }, 0.1), (std::vector<double>{ 1, 2, 3 }));
+  EXPECT_TRUE(TetPaint::SamplePolyline({}, 0.1).empty());
+}
+
+TEST(TetPaintSamplePolyline, BadInputIsAnErrorNamingIt)
+{
+  auto expectError = [](const std::vector<double>& points, double spacing, std::int64_t limit,
+                       const char* fragment) {
+    try
+    {
+      TetPaint::SamplePolyline(points, spacing, limit);
+      ADD_FAILURE() << "no error, expected one containing '" << fragment << "'";
+    }
+    catch (const Error& e)
+    {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  };
+  const std::vector<double> line{ 0, 0, 0, 1, 0, 0 };
+  expectError(line, 0.0, 100, "spacing 0 mm");
+  expectError(line, -1.0, 100, "spacing -1 mm");
+  expectError(line, std::nan(""), 100, "spacing nan mm");
+  expectError(line, std::numeric_limits<double>::infinity(), 100, "spacing inf mm");
+  expectError({ 0, 0, 0, 1, std::nan(""), 0 }, 0.1, 100, "stroke point 1");
+  expectError({ 0, 0, 0, 1 }, 0.1, 100, "4 stroke coordinates");
+  expectError({ 0, 0, 0, 1e6, 0, 0 }, 1e-3, 1000, "more than 1000");
 }
 
 } // namespace

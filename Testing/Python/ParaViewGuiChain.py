@@ -1,0 +1,193 @@
+"""What a user does in the ParaView GUI, as a script the GUI runs at start-up.
+
+Not a test by itself: Testing/Python/TestParaViewGui.py starts
+
+    paraview --dr --script=ParaViewGuiChain.py
+
+under Xvfb with these environment variables, then checks the exit code, the
+marker file and the screenshot:
+    TRANSLUCENCY_PLUGIN      the plugin (.so) to load, as Tools > Manage Plugins does
+    TRANSLUCENCY_SOURCE_DIR  the repository (for Data/bunny.ply)
+    TRANSLUCENCY_GUI_OUT     directory for the screenshot, the results and the marker
+
+1. Loads the plugin and builds the chain on the bunny (about 3000 tets):
+   Translucency Surface Reader -> Tetrahedralize Surface -> Assign Scattering
+   Coefficients -> Surface Irradiance -> Solve Diffusion -> Outgoing Radiance,
+   each shown, the GUI's events processed after each step.
+2. Paint Scattering Coefficients, from the Translucency menu, with its
+   polyline stroke widget in the panel: two handles, painted along the line.
+   Then Solve Diffusion the active source (the Properties panel builds its
+   widgets, the Linear Solver drop-down included).
+3. Plot Over Line downstream of Solve Diffusion, in a line chart view.
+4. The crash of issue 20: Linear Solver set to an unknown name, applied, all
+   views rendered; the failed output must be empty and the GUI alive.
+5. Linear Solver back to "default": the Outgoing Radiance is shown again and
+   the render view saved (fixed camera, colour range and size) for the
+   baseline comparison.
+6. Writes results.json and the marker, then quits the application with exit
+   code 0 (1 and error.txt on any exception), through QCoreApplication::exit:
+   the GUI's Python has no Qt binding, so it is called with ctypes.
+"""
+
+import ctypes
+import json
+import os
+import time
+import traceback
+
+from paraview.simple import *  # noqa: F401,F403
+from paraview import servermanager
+
+OUT = os.environ["TRANSLUCENCY_GUI_OUT"]
+QT = ctypes.CDLL("libQt5Core.so.5")
+
+
+def process_events():
+    """QCoreApplication::processEvents(QEventLoop::AllEvents): let the GUI
+    update its panels and views as it would between two user actions."""
+    for _ in range(3):
+        QT._ZN16QCoreApplication13processEventsE6QFlagsIN10QEventLoop17ProcessEventsFlagEE(0)
+
+
+def quit_application(code):
+    """QCoreApplication::exit(code): the event loop ends after this script."""
+    QT._ZN16QCoreApplication4exitEi(code)
+
+
+def array_names(attributes):
+    return [attributes.GetArrayName(i) for i in range(attributes.GetNumberOfArrays())]
+
+
+def run():
+    results = {"seconds": {}}
+    start = time.perf_counter()
+
+    def stage(name):
+        results["seconds"][name] = round(time.perf_counter() - start, 2)
+    LoadPlugin(os.environ["TRANSLUCENCY_PLUGIN"], remote=False, ns=globals())
+    bunny = os.path.join(os.environ["TRANSLUCENCY_SOURCE_DIR"], "Data", "bunny.ply")
+
+    # 1. The chain, step by step as from the Filters > Translucency menu.
+    view = GetActiveViewOrCreate("RenderView")
+    reader = TranslucencySurfaceReader(FileName=bunny)
+    Show(reader, view)
+    process_events()
+    stage("reader")
+    tetra = TetrahedralizeSurface(Input=reader, TargetNumberOfTets=3000)
+    assign = AssignScatteringCoefficients(Input=tetra)
+    # The scene is set explicitly (not left to the defaults) so that the baseline
+    # picture stays valid when a default changes: marble lit from above-front.
+    assign.MaterialName = "marble"
+    irradiance = SurfaceIrradiance(Input=assign, DirectionalLights=[0.0, -1.0, -1.0, 1.0],
+                                   UniformLightIrradiance=0.1)
+    solve = SolveDiffusion(Input=irradiance)
+    radiance = OutgoingRadiance(Input=solve)
+    for proxy in (tetra, assign, irradiance, solve, radiance):
+        SetActiveSource(proxy)
+        Show(proxy, view)
+        Render(view)
+        process_events()
+        stage(proxy.GetXMLLabel())
+    for proxy in (reader, tetra, assign, irradiance, solve):
+        Hide(proxy, view)
+
+    stage("chain")
+
+    # 2a. Paint Scattering Coefficients from the Translucency menu: its panel
+    # has the polyline widget of the stroke (no handle yet), then two handles
+    # across the bunny's back, painted along the line between them.
+    paint = PaintScatteringCoefficients(Input=assign)
+    SetActiveSource(paint)
+    process_events()
+    paint.StrokePoints = [-8.0, 16.0, 3.0, 8.0, 16.0, 3.0]
+    paint.Width = 1.5
+    Show(paint, view)
+    Render(view)
+    process_events()
+    weights = servermanager.Fetch(paint).GetCellData().GetArray("PaintWeight")
+    results["paint_cells_above_half"] = sum(
+        1 for i in range(weights.GetNumberOfTuples()) if weights.GetValue(i) > 0.5)
+    Hide(paint, view)
+
+    # 2. The Solve Diffusion panel.
+    SetActiveSource(solve)
+    process_events()
+    domain = solve.GetProperty("LinearSolver").GetDomain("list")
+    results["linear_solver_choices"] = [
+        domain.GetString(i) for i in range(domain.GetNumberOfStrings())]
+
+    stage("panel")
+
+    # 3. Plot Over Line downstream, in a line chart view of its own.
+    line = PlotOverLine(Input=solve)
+    chart = CreateView("XYChartView")
+    AssignViewToLayout(view=chart)
+    Show(line, chart)
+    Render(chart)
+    process_events()
+    results["probed_points_before"] = servermanager.Fetch(line).GetNumberOfPoints()
+
+    stage("plot_over_line")
+
+    # 4. An unknown linear solver, applied with Plot Over Line downstream.
+    solve.LinearSolver = "nosuchsolver"
+    Render(view)
+    Render(chart)
+    process_events()
+    failed = servermanager.Fetch(solve)
+    results["failed_output"] = {
+        "class": failed.GetClassName(),
+        "points": failed.GetNumberOfPoints(),
+        "cells": failed.GetNumberOfCells(),
+        "has_points_object": failed.GetPoints() is not None,
+        "point_arrays": array_names(failed.GetPointData()),
+        "cell_arrays": array_names(failed.GetCellData()),
+    }
+    results["radiance_points_failed"] = servermanager.Fetch(radiance).GetNumberOfPoints()
+
+    stage("failure")
+
+    # 5. Repaired: the picture for the baseline.
+    solve.LinearSolver = "default"
+    SetActiveSource(radiance)
+    display = Show(radiance, view)
+    ColorBy(display, ("POINTS", "Radiance", "Magnitude"))
+    lut = GetColorTransferFunction("Radiance")
+    lut.ApplyPreset("Inferno (matplotlib)", True)
+    lut.RescaleTransferFunction(0.0, 1.0)  # W/(mm^2 sr); the bunny: about 0.08 to 0.91
+    display.SetScalarBarVisibility(view, False)
+    display.Ambient = 1.0  # the solver's light only, not the view's
+    display.Diffuse = 0.0
+    view.OrientationAxesVisibility = 0
+    view.UseColorPaletteForBackground = 0
+    view.Background = [0.1, 0.1, 0.12]
+    view.CameraPosition = [0.0, 14.5, 80.0]  # the bunny: 30 mm, centre (0, 14.5, 0)
+    view.CameraFocalPoint = [0.0, 14.5, 0.0]
+    view.CameraViewUp = [0.0, 1.0, 0.0]
+    view.CameraParallelProjection = 0
+    view.CameraViewAngle = 30
+    Render(view)
+    Render(chart)
+    process_events()
+    data = servermanager.Fetch(radiance)
+    results["radiance_points"] = data.GetNumberOfPoints()
+    results["radiance_range"] = list(data.GetPointData().GetArray("Radiance").GetRange(-1))
+    results["probed_points_after"] = servermanager.Fetch(line).GetNumberOfPoints()
+    SaveScreenshot(os.path.join(OUT, "render_view.png"), view, ImageResolution=[640, 480],
+                   TransparentBackground=0)
+    process_events()
+
+    stage("picture")
+    with open(os.path.join(OUT, "results.json"), "w") as f:
+        json.dump(results, f, indent=1)
+    with open(os.path.join(OUT, "marker"), "w") as f:
+        f.write("the GUI ran the whole script\n")
+
+
+try:
+    run()
+    quit_application(0)
+except BaseException:  # report everything and leave: the test must not hang
+    with open(os.path.join(OUT, "error.txt"), "w") as f:
+        f.write(traceback.format_exc())
+    quit_application(1)

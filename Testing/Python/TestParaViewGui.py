@@ -1,0 +1,203 @@
+#!/usr/bin/env python3
+"""The ParaView GUI with the Translucency plugin, as a user meets it (issue 20).
+
+How to run (ctest does this; needs an X display, e.g. Xvfb):
+
+    xvfb-run -a -s "-screen 0 1280x1024x24" /usr/bin/python3 TestParaViewGui.py \\
+        <Translucency plugin .so> [--update-baseline]
+
+1. Starts `paraview --dr --script=ParaViewGuiChain.py` (the GUI itself, not
+   pvpython): the script builds the chain on the bunny, makes Solve Diffusion
+   the active source (its Properties panel), paints a stroke with Paint
+   Scattering Coefficients (its polyline widget), puts Plot Over Line downstream in
+   a line chart view, applies an unknown Linear Solver (the SIGSEGV of issue
+   20), repairs it, saves the render view and quits the application.
+2. Checks that the GUI survived: exit code 0 (a crash gives a signal), the
+   marker written at the end of the script, no error.txt.
+3. Checks what the script saw: the Linear Solver drop-down lists this build's
+   solvers, "default" first; the failed Solve Diffusion output was a clean
+   empty vtkUnstructuredGrid (vtkPoints present, no arrays) and Outgoing
+   Radiance downstream empty; after the repair, Radiance again.
+4. Compares the render view (640 x 480, Outgoing Radiance magnitude on a fixed
+   0..1 W/(mm^2 sr) Inferno scale, fixed camera) with the baseline
+   Testing/Baselines/paraview_gui_bunny.png (vtkImageDifference, the
+   tolerances of TestDemoImage). The baseline was made by this test with
+   --update-baseline and looked at: the marble bunny lit from above-front,
+   brighter on the top of the back and the ears, darker underneath.
+
+Exits non-zero on failure (unittest).
+"""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import numpy as np
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkImagingCore import vtkImageDifference
+from vtkmodules.vtkIOImage import vtkPNGReader
+
+UPDATE = "--update-baseline" in sys.argv
+ARGS = [a for a in sys.argv[1:] if a != "--update-baseline"]
+if not ARGS or not os.path.isfile(ARGS[0]):
+    sys.exit("usage: xvfb-run -a python3 TestParaViewGui.py <Translucency plugin> "
+             "[--update-baseline]")
+PLUGIN = os.path.abspath(ARGS[0])
+del sys.argv[1:]
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SOURCE_DIR = os.environ.get("TRANSLUCENCY_SOURCE_DIR") or os.path.abspath(
+    os.path.join(HERE, "..", ".."))
+SCRIPT = os.path.join(HERE, "ParaViewGuiChain.py")
+BASELINE = os.path.join(SOURCE_DIR, "Testing", "Baselines", "paraview_gui_bunny.png")
+PARAVIEW = shutil.which("paraview") or "/usr/bin/paraview"
+# The GUI's own time limit, below the ctest TIMEOUT so that a hung GUI is
+# reported here (with its log) rather than killed by ctest.
+GUI_TIMEOUT = 540
+
+# Image comparison as in TestDemoImage.py (vtkImageDifference, AllowShift and
+# Averaging on): per pixel and channel differences up to 16 of 255 levels are
+# ignored (silhouette rasterisation, GL driver); the thresholded error may be
+# the equivalent of 10 fully wrong pixels; the mean absolute difference over
+# all pixels and channels at most 2 levels.
+PIXEL_THRESHOLD = 16
+IMAGE_TOLERANCE = 10.0
+MEAN_TOLERANCE = 2.0
+MIN_FOREGROUND = 0.10
+
+
+def read_png(path):
+    reader = vtkPNGReader()
+    reader.SetFileName(path)
+    reader.Update()
+    image = reader.GetOutput()
+    if image.GetNumberOfPoints() == 0:
+        raise AssertionError("cannot read the image %s" % path)
+    return image
+
+
+def pixels(image):
+    return vtk_to_numpy(image.GetPointData().GetScalars()).astype(int)
+
+
+def foreground_fraction(image):
+    """Fraction of pixels that differ from the corner (background) colour."""
+    rgb = pixels(image)[:, :3]
+    return float(np.mean(np.abs(rgb - rgb[0]).sum(axis=1) > 30))
+
+
+def keep_for_inspection(png):
+    binary_dir = os.environ.get("TRANSLUCENCY_BINARY_DIR")
+    if not binary_dir:
+        return png
+    kept = os.path.join(binary_dir, "Testing", "Temporary", "TestParaViewGui.png")
+    os.makedirs(os.path.dirname(kept), exist_ok=True)
+    shutil.copyfile(png, kept)
+    return kept
+
+
+class ParaViewGuiTest(unittest.TestCase):
+
+    @classmethod
+    def setUpClass(cls):
+        cls._tmp = tempfile.TemporaryDirectory(prefix="translucency-gui-")
+        cls.out = cls._tmp.name
+        env = dict(os.environ, TRANSLUCENCY_PLUGIN=PLUGIN, TRANSLUCENCY_SOURCE_DIR=SOURCE_DIR,
+                   TRANSLUCENCY_GUI_OUT=cls.out)
+        try:
+            cls.result = subprocess.run(
+                [PARAVIEW, "--dr", "--script=" + SCRIPT], env=env, cwd=cls.out,
+                capture_output=True, text=True, timeout=GUI_TIMEOUT)
+        except subprocess.TimeoutExpired as expired:
+            cls.result = None
+            cls.timeout_log = (expired.stderr or b"")[-4000:]
+
+    @classmethod
+    def tearDownClass(cls):
+        cls._tmp.cleanup()
+
+    def file(self, name):
+        return os.path.join(self.out, name)
+
+    def setUp(self):
+        if self.result is None:
+            self.fail("the GUI did not quit within %d s: %s" % (GUI_TIMEOUT, self.timeout_log))
+
+    def test_gui_survived_and_quit(self):
+        error = ""
+        if os.path.exists(self.file("error.txt")):
+            with open(self.file("error.txt")) as f:
+                error = f.read()
+        self.assertEqual(error, "", "the GUI script raised")
+        self.assertEqual(self.result.returncode, 0,
+                         "paraview exited with %d (negative: killed by a signal); its log:\n%s"
+                         % (self.result.returncode, self.result.stderr[-4000:]))
+        self.assertTrue(os.path.exists(self.file("marker")),
+                        "the GUI did not reach the end of the script")
+
+    def results(self):
+        path = self.file("results.json")
+        self.assertTrue(os.path.exists(path), "no results.json: " + self.result.stderr[-4000:])
+        with open(path) as f:
+            return json.load(f)
+
+    def test_linear_solver_drop_down(self):
+        choices = self.results()["linear_solver_choices"]
+        self.assertEqual(choices[0], "default")
+        for name in ("cg-jacobi", "multigrid-agg", "bicgstab", "relaxation"):
+            self.assertIn(name, choices)
+
+    def test_paint_stroke_drawn_as_a_polyline(self):
+        # Two handles 16 mm apart, Width 1.5 mm: painted along the line (as
+        # two points alone, a few tets around each end would be).
+        self.assertGreater(self.results()["paint_cells_above_half"], 20)
+
+    def test_failed_filter_left_a_clean_empty_output(self):
+        results = self.results()
+        self.assertEqual(results["failed_output"], {
+            "class": "vtkUnstructuredGrid", "points": 0, "cells": 0,
+            "has_points_object": True, "point_arrays": [], "cell_arrays": []})
+        self.assertEqual(results["radiance_points_failed"], 0)
+        self.assertGreater(results["probed_points_before"], 0)
+        self.assertGreater(results["probed_points_after"], 0)
+        self.assertGreater(results["radiance_points"], 1000)
+        low, high = results["radiance_range"]
+        self.assertGreater(low, 0.0)
+        self.assertLess(high, 1.0)  # inside the fixed colour range of the picture
+
+    def test_render_view_matches_baseline(self):
+        png = self.file("render_view.png")
+        self.assertTrue(os.path.exists(png), "no screenshot")
+        image = read_png(png)
+        self.assertEqual(image.GetDimensions()[:2], (640, 480))
+        self.assertGreater(foreground_fraction(image), MIN_FOREGROUND, "the picture is blank")
+        if UPDATE:
+            shutil.copyfile(png, BASELINE)
+            print("wrote the baseline %s: look at it before committing" % BASELINE)
+            return
+        self.assertTrue(os.path.isfile(BASELINE),
+                        "no baseline %s: run with --update-baseline" % BASELINE)
+        baseline = read_png(BASELINE)
+        self.assertEqual(image.GetDimensions(), baseline.GetDimensions())
+        difference = vtkImageDifference()
+        difference.SetThreshold(PIXEL_THRESHOLD)
+        difference.SetInputData(image)
+        difference.SetImageData(baseline)
+        difference.Update()
+        thresholded = difference.GetThresholdedError()
+        mean = float(np.mean(np.abs(pixels(image)[:, :3] - pixels(baseline)[:, :3])))
+        print("image difference: thresholded error %.3f (tolerance %g), mean %.3f levels "
+              "(tolerance %g)" % (thresholded, IMAGE_TOLERANCE, mean, MEAN_TOLERANCE))
+        message = ("%s differs from the baseline %s; if the change is intended, look at it "
+                   "and update the baseline with --update-baseline"
+                   % (keep_for_inspection(png), BASELINE))
+        self.assertLessEqual(thresholded, IMAGE_TOLERANCE, message)
+        self.assertLessEqual(mean, MEAN_TOLERANCE, message)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
