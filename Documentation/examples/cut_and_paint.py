@@ -111,8 +111,15 @@ after = light_and_solve(paint.GetOutput())
 
 
 # 7. Show both from the removed side (looking along +x), with the exposure of
-#    the uncut bunny: tone-map the linear radiance with an sRGB curve.
+#    the uncut bunny: tone-map the linear radiance with an sRGB curve. One
+#    render window serves both pictures: a window per picture opens and closes
+#    an X connection each time, and a connection made while the X server resets
+#    after the last client left is dropped (VTK then aborts the program).
+window = None
+
+
 def write_png(surface, path, exposure):
+    global window
     values = exposure * vtk_to_numpy(surface.GetPointData().GetArray("Radiance"))
     v = np.clip(values, 0.0, 1.0)
     v = np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
@@ -135,10 +142,13 @@ def write_png(surface, path, exposure):
     camera.SetPosition(cx - 4.0 * (x1 - x0), cy, cz)
     camera.SetViewUp(0.0, 1.0, 0.0)
     ren.ResetCamera(marble.GetBounds())
-    win = vtk.vtkRenderWindow()
-    win.SetOffScreenRendering(1)
+    if window is None:
+        window = vtk.vtkRenderWindow()
+        window.SetOffScreenRendering(1)
+        window.SetSize(800, 600)
+    win = window
+    win.GetRenderers().RemoveAllItems()
     win.AddRenderer(ren)
-    win.SetSize(800, 600)
     win.Render()
     grab = vtk.vtkWindowToImageFilter()
     grab.SetInput(win)
