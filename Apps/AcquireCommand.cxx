@@ -2,6 +2,8 @@
 // measurement files, or from synthetic measurements of a known volume.
 #include "MeshIO.h"
 #include "Options.h"
+#include "Pictures.h"
+#include "Provenance.h"
 #include "PipelineRender.h"
 
 #include "DiffusionForwardModel.h"
@@ -319,16 +321,13 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildSynthetic(const std::string& truthPath
   return mesh;
 }
 
-/// RGB colour ramp (dark blue - blue - green - yellow - white) at t in [0, 1].
+/// Viridis (perceptually uniform, Pictures.h) at t in [0, 1], as 8-bit RGB.
 void Ramp(double t, unsigned char rgb[3])
 {
-  static const double stops[5][3] = { { 0.05, 0.03, 0.25 }, { 0.15, 0.35, 0.85 },
-    { 0.2, 0.75, 0.4 }, { 0.95, 0.85, 0.2 }, { 1.0, 1.0, 0.95 } };
-  t = std::min(1.0, std::max(0.0, std::isfinite(t) ? t : 0.0)) * 4.0;
-  const int k = std::min(3, static_cast<int>(t));
-  const double f = t - k;
-  for (int c = 0; c < 3; ++c)
-    rgb[c] = static_cast<unsigned char>(255.0 * ((1 - f) * stops[k][c] + f * stops[k + 1][c]));
+  double c[3];
+  SampleColourMap(ColourMap::Viridis, t, c);
+  for (int k = 0; k < 3; ++k)
+    rgb[k] = static_cast<unsigned char>(std::lround(255.0 * c[k]));
 }
 
 /// A picture made of tiles of scalar maps (no rendering: written directly).
@@ -535,6 +534,7 @@ struct AcquireOptions
   unsigned Seed = 1;
   bool NoPng = false;
   std::vector<double> InitialMu = { 0.01 }, InitialSigma = { 1.0 };
+  const CLI::App* App = nullptr; ///< for the provenance of the JSON
 };
 
 int Acquire(const AcquireOptions& o)
@@ -639,7 +639,7 @@ int Acquire(const AcquireOptions& o)
   inverse->SetGaussNewtonLineSearch(gaussNewtonLineSearch);
   inverse->SetElementArrayName(elementArray.c_str());
   MessageCollector messages;
-  messages.Watch(inverse);
+  messages.Watch(inverse, "inverse diffusion");
   vtkNew<vtkCallbackCommand> progress;
   int lastPercent = -1;
   progress->SetClientData(&lastPercent);
@@ -701,6 +701,8 @@ int Acquire(const AcquireOptions& o)
   }
   json report;
   report["command"] = "acquire";
+  report["provenance"] = Provenance(o.App);
+  report["provenance"]["seed"] = seed;
   report["mode"] = synthetic ? "synthetic" : "files";
   report["patterns"] = numPatterns;
   report["lambda"] = lambda;
@@ -810,7 +812,9 @@ int Acquire(const AcquireOptions& o)
   {
     // Needs an X server (xvfb-run): a failure only warns.
     std::string plotError;
-    if (!WritePlotPNG(series, "iteration (homogeneous fit, then heterogeneous)",
+    if (!OpenPictureDisplay("--no-png", plotError))
+      std::cerr << "translucency: warning: objective plot not written: " << plotError << "\n";
+    else if (!WritePlotPNG(series, "iteration (homogeneous fit, then heterogeneous)",
           "normalised objective", outputPrefix + "_objective.png", plotError))
       std::cerr << "translucency: warning: objective plot not written: " << plotError << "\n";
   }
@@ -854,6 +858,7 @@ Command AddAcquireCommand(CLI::App& app)
     "\n\nusage: translucency acquire --sample FILE --patterns DIR|FILE --output PREFIX [options]\n"
            "   or: translucency acquire --synthetic-truth FILE --grid NXxNYxNZ --patterns RxC "
            "--output PREFIX [options]");
+  o->App = c;
   c->add_option("--sample", o->SamplePath, "tet mesh (.vtu), optional RefractiveIndex cell array")
     ->type_name("FILE");
   c->add_option("--patterns", o->PatternsArg,

@@ -125,6 +125,9 @@ CLI::Option* AddNumber(CLI::App* app, const std::string& name, T& target, const 
 /// --memory-limit GiB on `command`: translucency::SetDefaultMemoryLimit for the run.
 void AddMemoryLimitOption(CLI::App* command);
 
+/// --quiet on `command`: SetQuiet(true) (progress lines off; warnings stay).
+void AddQuietOption(CLI::App* command);
+
 /// A comma-separated list of numbers into `target`, with `count` numbers if
 /// count > 0 (else UsageError(failure)).
 CLI::Option* AddNumberList(CLI::App* app, const std::string& name, std::vector<double>& target,

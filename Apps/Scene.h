@@ -39,6 +39,7 @@ struct SceneOptions
   double MaxTetVolume = 0.0; ///< mm^3; 0: use TargetTets
   double Quality = 1.414;
   std::vector<Light> Lights;
+  bool DefaultLights = false; ///< no --light given: Finish() added the default lights
   bool Shadows = true;
   int UniformSamples = 32;
   std::vector<double> CutPlane; ///< --cut-plane: origin (mm) and normal; empty: no plane cut
