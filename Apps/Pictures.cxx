@@ -10,6 +10,8 @@
 #include <vtkTextProperty.h>
 
 #include <algorithm>
+#include <chrono>
+#include <thread>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -70,8 +72,19 @@ bool OpenPictureDisplay(const std::string& skipOption, std::string& error)
       " (this VTK build renders through GLX only)";
     if (!name || !*name)
       d.Error = "no X display for the pictures (DISPLAY is not set)" + advice;
-    else if (!(d.Connection = XOpenDisplay(name)))
-      d.Error = std::string("cannot connect to the X display '") + name + "'" + advice;
+    else
+    {
+      // A server resetting after its last client left (another program's
+      // pictures just finished) drops new connections for a moment: retry.
+      for (int attempt = 0; attempt < 5 && !d.Connection; ++attempt)
+      {
+        if (attempt > 0)
+          std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        d.Connection = XOpenDisplay(name);
+      }
+      if (!d.Connection)
+        d.Error = std::string("cannot connect to the X display '") + name + "'" + advice;
+    }
   }
   if (!d.Connection)
   {

@@ -56,7 +56,7 @@ nlohmann::json Provenance(const CLI::App* command)
     }
     else if (!option->get_default_str().empty())
       options[name] = option->get_default_str();
-    else if (option->get_type_size_max() == 0)
+    else if (option->get_expected_max() == 0)
       options[name] = false; // a flag not given
   }
   p["options"] = options;
