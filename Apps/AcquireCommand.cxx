@@ -408,7 +408,8 @@ bool WriteRadianceMosaic(const Synthetic& s, const std::vector<std::vector<doubl
   const int tileW = px * scale, tileH = py * scale, gap = 6;
   const int numPatterns = static_cast<int>(s.Radiance.size());
   const int rows = (numPatterns + cols - 1) / cols;
-  Mosaic mosaic(cols * (2 * tileW + 3 * gap), rows * (tileH + gap) + gap);
+  const int tilesHeight = rows * (tileH + gap) + gap;
+  Mosaic mosaic(std::max(cols * (2 * tileW + 3 * gap), 320), tilesHeight + ColourBarHeight() + gap);
   for (int m = 0; m < numPatterns; ++m)
   {
     double hi = 0.0;
@@ -419,12 +420,15 @@ bool WriteRadianceMosaic(const Synthetic& s, const std::vector<std::vector<doubl
     for (int which = 0; which < 2; ++which)
     {
       const std::vector<double>& l = which == 0 ? s.Radiance[m] : fitted[m];
-      mosaic.Tile(x0 + which * (tileW + gap), y0, px, py, scale, 0.0, hi, [&](int i, int j) {
+      mosaic.Tile(x0 + which * (tileW + gap), y0, px, py, scale, 0.0, 1.0, [&](int i, int j) {
         const size_t id = i + static_cast<size_t>(px) * (j + static_cast<size_t>(py) * k);
-        return s.Observed[m][id] ? l[3 * id + 1] : std::nan("");
+        return s.Observed[m][id] && hi > 0 ? l[3 * id + 1] / hi : std::nan("");
       });
     }
   }
+  DrawColourBar({ mosaic.Width, mosaic.Height, &mosaic.Pixels }, gap, tilesHeight,
+    std::min(mosaic.Width - 2 * gap, 400), ColourMap::Viridis, 0.0, 1.0,
+    "radiance G / the pattern's measured peak (measured | fitted)", "1");
   return mosaic.Write(path, error);
 }
 
@@ -448,7 +452,9 @@ bool WriteSliceMosaic(const Synthetic& s, const std::vector<double>& kappa,
   const int scale = TileScale(std::max(nx, ny));
   const int tileW = nx * scale, tileH = ny * scale, gap = 6;
   const std::vector<int> layers = SliceLayers(s);
-  Mosaic mosaic(4 * (tileW + gap) + 2 * gap, static_cast<int>(layers.size()) * (tileH + gap) + gap);
+  const int tilesHeight = static_cast<int>(layers.size()) * (tileH + gap) + gap;
+  const int halfWidth = std::max(2 * (tileW + gap), 240);
+  Mosaic mosaic(2 * halfWidth + 2 * gap, tilesHeight + ColourBarHeight() + gap);
   double range[2][2];
   for (int q = 0; q < 2; ++q)
   {
@@ -471,12 +477,17 @@ bool WriteSliceMosaic(const Synthetic& s, const std::vector<double>& kappa,
       const int q = col / 2;
       const std::vector<double>& a =
         col == 0 ? kappa : col == 1 ? s.Kappa : col == 2 ? mu : s.Mu;
-      const int x0 = col * (tileW + gap) + gap + (col >= 2 ? gap : 0);
+      const int x0 = (col >= 2 ? halfWidth + gap : 0) + (col % 2) * (tileW + gap) + gap;
       const int y0 = static_cast<int>(r) * (tileH + gap) + gap;
       mosaic.Tile(x0, y0, nx, ny, scale, range[q][0], range[q][1],
         [&](int i, int j) { return a[3 * (i + static_cast<size_t>(nx) * (j + static_cast<size_t>(ny) * k)) + 1]; });
     }
   }
+  const int barWidth = halfWidth - 3 * gap;
+  DrawColourBar({ mosaic.Width, mosaic.Height, &mosaic.Pixels }, gap, tilesHeight, barWidth,
+    ColourMap::Viridis, range[0][0], range[0][1], "kappa G (recovered | true)", "mm");
+  DrawColourBar({ mosaic.Width, mosaic.Height, &mosaic.Pixels }, halfWidth + 2 * gap, tilesHeight,
+    barWidth, ColourMap::Viridis, range[1][0], range[1][1], "mu_a G (recovered | true)", "1/mm");
   return mosaic.Write(path, error);
 }
 

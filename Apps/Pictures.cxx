@@ -3,17 +3,21 @@
 #include "Error.h"
 
 #include <vtkColorTransferFunction.h>
+#include <vtkImageData.h>
 #include <vtkLookupTable.h>
 #include <vtkNew.h>
 #include <vtkRenderWindow.h>
 #include <vtkScalarBarActor.h>
 #include <vtkTextProperty.h>
+#include <vtkStdString.h>
+#include <vtkTextRenderer.h>
 
 #include <algorithm>
 #include <chrono>
 #include <thread>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 
 // Last: Xlib defines macros (None, Status, Bool) that clash with other headers.
@@ -195,6 +199,79 @@ vtkSmartPointer<vtkScalarBarActor> MakeColourBar(
   bar->GetTitleTextProperty()->SetFontSize(16);
   bar->GetLabelTextProperty()->SetFontSize(13);
   return bar;
+}
+
+void DrawText(RasterImage image, int x, int y, const std::string& text, int fontSize,
+  const unsigned char colour[3])
+{
+  vtkNew<vtkTextProperty> property;
+  property->SetFontSize(fontSize);
+  property->SetFontFamilyToArial();
+  property->SetColor(colour[0] / 255.0, colour[1] / 255.0, colour[2] / 255.0);
+  property->SetJustificationToLeft();
+  property->SetVerticalJustificationToTop();
+  vtkNew<vtkImageData> rendered;
+  int dims[2] = { 0, 0 };
+  vtkTextRenderer* renderer = vtkTextRenderer::GetInstance();
+  if (!renderer || !renderer->RenderString(property, text, rendered, dims, 72))
+    return;
+  int extent[6];
+  rendered->GetExtent(extent);
+  const int w = extent[1] - extent[0] + 1, h = extent[3] - extent[2] + 1;
+  auto* rgba = static_cast<unsigned char*>(rendered->GetScalarPointer());
+  const int components = rendered->GetNumberOfScalarComponents();
+  if (!rgba || components != 4)
+    return;
+  // The text image's rows go upwards; its top row is the text's top.
+  for (int row = 0; row < h; ++row)
+    for (int col = 0; col < w; ++col)
+    {
+      const unsigned char* p = rgba + 4 * (static_cast<size_t>(h - 1 - row) * w + col);
+      const int px = x + col, py = y + row;
+      if (p[3] == 0 || px < 0 || py < 0 || px >= image.Width || py >= image.Height)
+        continue;
+      unsigned char* q = &(*image.Pixels)[3 * (static_cast<size_t>(py) * image.Width + px)];
+      const double a = p[3] / 255.0;
+      for (int c = 0; c < 3; ++c)
+        q[c] = static_cast<unsigned char>(std::lround((1 - a) * q[c] + a * colour[c]));
+    }
+}
+
+int ColourBarHeight()
+{
+  return 16 + 4 + 14 + 4 + 13 + 6;
+}
+
+int DrawColourBar(RasterImage image, int x, int y, int width, ColourMap map, double lo, double hi,
+  const std::string& quantity, const std::string& unit)
+{
+  static const unsigned char black[3] = { 0, 0, 0 };
+  DrawText(image, x, y, quantity + (unit.empty() ? "" : " (" + unit + ")"), 14, black);
+  const int barTop = y + 20, barHeight = 14;
+  for (int col = 0; col < width; ++col)
+  {
+    double rgb[3];
+    SampleColourMap(map, width > 1 ? col / (width - 1.0) : 0.0, rgb);
+    for (int row = 0; row < barHeight; ++row)
+    {
+      const int px = x + col, py = barTop + row;
+      if (px < 0 || py < 0 || px >= image.Width || py >= image.Height)
+        continue;
+      unsigned char* q = &(*image.Pixels)[3 * (static_cast<size_t>(py) * image.Width + px)];
+      for (int c = 0; c < 3; ++c)
+        q[c] = static_cast<unsigned char>(std::lround(255.0 * rgb[c]));
+    }
+  }
+  char text[64];
+  const double values[3] = { lo, 0.5 * (lo + hi), hi };
+  for (int k = 0; k < 3; ++k)
+  {
+    std::snprintf(text, sizeof(text), "%.3g", values[k]);
+    const int approxWidth = 7 * static_cast<int>(std::string(text).size());
+    const int tx = x + k * (width - 1) / 2 - (k == 0 ? 0 : k == 1 ? approxWidth / 2 : approxWidth);
+    DrawText(image, tx, barTop + barHeight + 4, text, 12, black);
+  }
+  return ColourBarHeight();
 }
 
 int ChannelIndex(const std::string& name)

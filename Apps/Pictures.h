@@ -21,6 +21,7 @@
 #include <vtkSmartPointer.h>
 
 #include <string>
+#include <vector>
 
 class vtkLookupTable;
 class vtkRenderWindow;
@@ -72,6 +73,26 @@ vtkSmartPointer<vtkLookupTable> MakeLookupTable(
  */
 vtkSmartPointer<vtkScalarBarActor> MakeColourBar(
   vtkLookupTable* table, const std::string& quantity, const std::string& unit);
+
+/**
+ * Pictures drawn pixel by pixel (acquire's mosaics; no X needed): an RGB
+ * buffer, row 0 at the top. DrawText writes `text` (FreeType, font size in
+ * points at 72 dpi, i.e. pixels) with its top-left corner at (x, y) in
+ * `colour`; DrawColourBar draws a horizontal bar of `map` on [lo, hi] of
+ * `width` pixels at (x, y), labelled with lo, the middle and hi, titled
+ * `quantity (unit)` above it, and returns the height it took.
+ */
+struct RasterImage
+{
+  int Width = 0, Height = 0;
+  std::vector<unsigned char>* Pixels = nullptr;
+};
+void DrawText(RasterImage image, int x, int y, const std::string& text, int fontSize,
+  const unsigned char colour[3]);
+int DrawColourBar(RasterImage image, int x, int y, int width, ColourMap map, double lo, double hi,
+  const std::string& quantity, const std::string& unit);
+/// The height DrawColourBar takes (pixels).
+int ColourBarHeight();
 
 /// Channel index of "R", "G" or "B" (any case); -1 otherwise.
 int ChannelIndex(const std::string& name);
