@@ -222,6 +222,50 @@ json ChannelErrors(vtkDataArray* x, vtkDataArray* r)
   return errors;
 }
 
+/**
+ * A solver's boundary fluence against Monte Carlo's, weighted by the
+ * reported standard error: per channel, over the points whose relative
+ * standard error is at most `maxRelativeSE` (the rest are masked: too few
+ * photons there to judge), the z-scores z = (x - mc) / se (RMS and the
+ * fraction with |z| > 3) and the relative RMS difference.
+ */
+json AgainstMonteCarlo(vtkDataArray* x, const SolverResult& mc, double maxRelativeSE)
+{
+  static const char* names[3] = { "R", "G", "B" };
+  vtkDataArray* se = mc.Volume->GetPointData()->GetArray("FluenceStandardError");
+  auto* ids =
+    vtkIdTypeArray::SafeDownCast(mc.Surface->GetPointData()->GetArray("vtkOriginalPointIds"));
+  vtkDataArray* phi = mc.Surface->GetPointData()->GetArray("Fluence");
+  json result;
+  result["max_relative_standard_error"] = maxRelativeSE;
+  for (int c = 0; c < 3; ++c)
+  {
+    long long used = 0, masked = 0, beyond3 = 0;
+    double z2 = 0.0, r2 = 0.0;
+    for (vtkIdType k = 0; k < ids->GetNumberOfTuples(); ++k)
+    {
+      const double m = phi->GetComponent(k, c);
+      const double e = se->GetComponent(ids->GetValue(k), c);
+      if (!(m > 0) || !(e > 0) || e > maxRelativeSE * m)
+      {
+        ++masked;
+        continue;
+      }
+      const double d = x->GetComponent(k, c) - m;
+      const double z = d / e;
+      z2 += z * z;
+      r2 += (d / m) * (d / m);
+      beyond3 += std::abs(z) > 3.0;
+      ++used;
+    }
+    result[names[c]] = { { "points", used }, { "masked", masked },
+      { "z_rms", used ? std::sqrt(z2 / used) : 0.0 },
+      { "fraction_abs_z_above_3", used ? static_cast<double>(beyond3) / used : 0.0 },
+      { "relative_rms", used ? std::sqrt(r2 / used) : 0.0 } };
+  }
+  return result;
+}
+
 /// Signed relative error (x - r) / max(|r|, floor) of one channel, in percent
 /// (floor as in RelativeError), as the point array "SignedRelativeRadianceError".
 vtkSmartPointer<vtkDoubleArray> SignedError(vtkDataArray* x, vtkDataArray* r, int c)
@@ -393,6 +437,18 @@ int Compare(CompareOptions& o)
     table.push_back(r.Stats);
   }
 
+  // Against Monte Carlo, when it ran: z-scores by its standard error.
+  const SolverResult* monteCarlo = nullptr;
+  for (const std::string& name : order)
+    if (results[name].Volume->GetPointData()->GetArray("FluenceStandardError"))
+      monteCarlo = &results[name];
+  if (monteCarlo)
+    for (json& s : table)
+      if (s["solver"] != monteCarlo->Name)
+        s["fluence_against_montecarlo"] = AgainstMonteCarlo(
+          results[s["solver"].get<std::string>()].Surface->GetPointData()->GetArray("Fluence"),
+          *monteCarlo, 0.1);
+
   // Table first, flushed (a pipe buffers it otherwise), then the JSON: both
   // before the pictures, so a failure there loses neither.
   std::cout << "mesh: " << lit->GetNumberOfPoints() << " points, " << lit->GetNumberOfCells()
@@ -417,6 +473,32 @@ int Compare(CompareOptions& o)
       std::cout << "  (MC standard error " << std::setprecision(2)
                 << 100 * s["fluence_mean_relative_standard_error"].get<double>() << "%)";
     std::cout << "\n";
+  }
+  if (monteCarlo)
+  {
+    std::cout << "\n  against " << monteCarlo->Name
+              << " (boundary fluence; points with its relative standard error > 10 % masked):\n"
+                 "  solver      z RMS R/G/B          |z| > 3 R/G/B        rel. RMS R/G/B\n";
+    for (const json& s : table)
+    {
+      if (!s.contains("fluence_against_montecarlo"))
+        continue;
+      const json& a = s["fluence_against_montecarlo"];
+      std::cout << "  " << std::left << std::setw(10) << s["solver"].get<std::string>()
+                << std::right << std::fixed << std::setprecision(2);
+      for (const char* key : { "z_rms", "fraction_abs_z_above_3", "relative_rms" })
+      {
+        std::cout << "  ";
+        for (const char* c : { "R", "G", "B" })
+          std::cout << std::setw(6) << a[c][key].get<double>() * (key[0] == 'z' ? 1.0 : 100.0)
+                    << (key[0] == 'z' ? " " : "%");
+      }
+      std::cout << std::defaultfloat << "\n";
+    }
+    if (!nSquaredLaw)
+      std::cout << "  note: radiance against " << monteCarlo->Name
+                << " without --n-squared-law differs by about eta^2 by the read-out\n"
+                   "  convention (TransCut eq. 3), not by an error (Documentation/Solvers.md)\n";
   }
   std::cout.flush();
 

@@ -14,7 +14,8 @@ deliberate change of the picture, look at the new image, then run it with
    connection" / abort (it aborted in ~1 run of 4: each picture's window
    opened and closed its own X connection, and the server drops a client
    that connects while it resets after its last client left); the JSON is
-   complete (provenance, per-channel errors, error-vs-time curves); the
+   complete (provenance, per-channel errors, z-scores against Monte Carlo,
+   error-vs-time curves); the
    error-vs-time sweep's non-convergence is one summary line, not a flood.
 2. Without DISPLAY: `compare` and `render --png` stop before solving with one
    line telling the user to run under `xvfb-run -a` (exit 1, no abort).
@@ -131,8 +132,11 @@ class PicturesTest(unittest.TestCase):
                         image, _ = read_png(png)
                         self.assertEqual(image.GetDimensions()[:2], (320, 240), png)
                 self.assertTrue(os.path.exists(os.path.join(out, "error_vs_time.png")))
-                self.assertEqual(sorted(re.findall(r"^  (\w+) ", result.stdout, re.M)),
+                table, _, against = result.stdout.partition("\n  against montecarlo")
+                self.assertEqual(sorted(re.findall(r"^  (\w+) ", table, re.M)),
                                  sorted(names + ["solver"]))
+                self.assertEqual(sorted(re.findall(r"^  (\w+) +\d", against, re.M)),
+                                 sorted(n for n in names if n != "montecarlo"))
                 # One summary line instead of a warning per stopped solve.
                 self.assertNotIn("did not converge", result.stderr)
                 self.assertEqual(len(re.findall("stopped before convergence", result.stderr)), 1)
@@ -146,6 +150,16 @@ class PicturesTest(unittest.TestCase):
             self.assertEqual(set(s["radiance_relative_error_per_channel"]), {"R", "G", "B"})
             if name != "montecarlo":
                 self.assertIn("error_vs_time", s, name)
+                # z-scores against Monte Carlo over the points its standard error allows.
+                a = s["fluence_against_montecarlo"]
+                total = a["R"]["points"] + a["R"]["masked"]  # the boundary points
+                for c in "RGB":
+                    self.assertEqual(a[c]["points"] + a[c]["masked"], total, a)
+                    self.assertGreater(a[c]["points"], 0, a)  # 3000 photons: many masked
+                    self.assertTrue(0 < a[c]["z_rms"] < 1e3, a)
+                    self.assertTrue(0 <= a[c]["fraction_abs_z_above_3"] <= 1, a)
+            else:
+                self.assertNotIn("fluence_against_montecarlo", s)
         # The error maps are signed: cool-warm bars.
         _, pixels = read_png(os.path.join(out, "divergence_error.png"))
         row = bar_row(pixels)
