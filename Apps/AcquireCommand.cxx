@@ -2,6 +2,8 @@
 // measurement files, or from synthetic measurements of a known volume.
 #include "MeshIO.h"
 #include "Options.h"
+#include "Pictures.h"
+#include "Provenance.h"
 #include "PipelineRender.h"
 
 #include "DiffusionForwardModel.h"
@@ -319,16 +321,13 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildSynthetic(const std::string& truthPath
   return mesh;
 }
 
-/// RGB colour ramp (dark blue - blue - green - yellow - white) at t in [0, 1].
+/// Viridis (perceptually uniform, Pictures.h) at t in [0, 1], as 8-bit RGB.
 void Ramp(double t, unsigned char rgb[3])
 {
-  static const double stops[5][3] = { { 0.05, 0.03, 0.25 }, { 0.15, 0.35, 0.85 },
-    { 0.2, 0.75, 0.4 }, { 0.95, 0.85, 0.2 }, { 1.0, 1.0, 0.95 } };
-  t = std::min(1.0, std::max(0.0, std::isfinite(t) ? t : 0.0)) * 4.0;
-  const int k = std::min(3, static_cast<int>(t));
-  const double f = t - k;
-  for (int c = 0; c < 3; ++c)
-    rgb[c] = static_cast<unsigned char>(255.0 * ((1 - f) * stops[k][c] + f * stops[k + 1][c]));
+  double c[3];
+  SampleColourMap(ColourMap::Viridis, t, c);
+  for (int k = 0; k < 3; ++k)
+    rgb[k] = static_cast<unsigned char>(std::lround(255.0 * c[k]));
 }
 
 /// A picture made of tiles of scalar maps (no rendering: written directly).
@@ -409,7 +408,8 @@ bool WriteRadianceMosaic(const Synthetic& s, const std::vector<std::vector<doubl
   const int tileW = px * scale, tileH = py * scale, gap = 6;
   const int numPatterns = static_cast<int>(s.Radiance.size());
   const int rows = (numPatterns + cols - 1) / cols;
-  Mosaic mosaic(cols * (2 * tileW + 3 * gap), rows * (tileH + gap) + gap);
+  const int tilesHeight = rows * (tileH + gap) + gap;
+  Mosaic mosaic(std::max(cols * (2 * tileW + 3 * gap), 320), tilesHeight + ColourBarHeight() + gap);
   for (int m = 0; m < numPatterns; ++m)
   {
     double hi = 0.0;
@@ -420,12 +420,15 @@ bool WriteRadianceMosaic(const Synthetic& s, const std::vector<std::vector<doubl
     for (int which = 0; which < 2; ++which)
     {
       const std::vector<double>& l = which == 0 ? s.Radiance[m] : fitted[m];
-      mosaic.Tile(x0 + which * (tileW + gap), y0, px, py, scale, 0.0, hi, [&](int i, int j) {
+      mosaic.Tile(x0 + which * (tileW + gap), y0, px, py, scale, 0.0, 1.0, [&](int i, int j) {
         const size_t id = i + static_cast<size_t>(px) * (j + static_cast<size_t>(py) * k);
-        return s.Observed[m][id] ? l[3 * id + 1] : std::nan("");
+        return s.Observed[m][id] && hi > 0 ? l[3 * id + 1] / hi : std::nan("");
       });
     }
   }
+  DrawColourBar({ mosaic.Width, mosaic.Height, &mosaic.Pixels }, gap, tilesHeight,
+    std::min(mosaic.Width - 2 * gap, 400), ColourMap::Viridis, 0.0, 1.0,
+    "radiance G / the pattern's measured peak (measured | fitted)", "1");
   return mosaic.Write(path, error);
 }
 
@@ -449,7 +452,9 @@ bool WriteSliceMosaic(const Synthetic& s, const std::vector<double>& kappa,
   const int scale = TileScale(std::max(nx, ny));
   const int tileW = nx * scale, tileH = ny * scale, gap = 6;
   const std::vector<int> layers = SliceLayers(s);
-  Mosaic mosaic(4 * (tileW + gap) + 2 * gap, static_cast<int>(layers.size()) * (tileH + gap) + gap);
+  const int tilesHeight = static_cast<int>(layers.size()) * (tileH + gap) + gap;
+  const int halfWidth = std::max(2 * (tileW + gap), 240);
+  Mosaic mosaic(2 * halfWidth + 2 * gap, tilesHeight + ColourBarHeight() + gap);
   double range[2][2];
   for (int q = 0; q < 2; ++q)
   {
@@ -472,12 +477,17 @@ bool WriteSliceMosaic(const Synthetic& s, const std::vector<double>& kappa,
       const int q = col / 2;
       const std::vector<double>& a =
         col == 0 ? kappa : col == 1 ? s.Kappa : col == 2 ? mu : s.Mu;
-      const int x0 = col * (tileW + gap) + gap + (col >= 2 ? gap : 0);
+      const int x0 = (col >= 2 ? halfWidth + gap : 0) + (col % 2) * (tileW + gap) + gap;
       const int y0 = static_cast<int>(r) * (tileH + gap) + gap;
       mosaic.Tile(x0, y0, nx, ny, scale, range[q][0], range[q][1],
         [&](int i, int j) { return a[3 * (i + static_cast<size_t>(nx) * (j + static_cast<size_t>(ny) * k)) + 1]; });
     }
   }
+  const int barWidth = halfWidth - 3 * gap;
+  DrawColourBar({ mosaic.Width, mosaic.Height, &mosaic.Pixels }, gap, tilesHeight, barWidth,
+    ColourMap::Viridis, range[0][0], range[0][1], "kappa G (recovered | true)", "mm");
+  DrawColourBar({ mosaic.Width, mosaic.Height, &mosaic.Pixels }, halfWidth + 2 * gap, tilesHeight,
+    barWidth, ColourMap::Viridis, range[1][0], range[1][1], "mu_a G (recovered | true)", "1/mm");
   return mosaic.Write(path, error);
 }
 
@@ -535,6 +545,7 @@ struct AcquireOptions
   unsigned Seed = 1;
   bool NoPng = false;
   std::vector<double> InitialMu = { 0.01 }, InitialSigma = { 1.0 };
+  const CLI::App* App = nullptr; ///< for the provenance of the JSON
 };
 
 int Acquire(const AcquireOptions& o)
@@ -659,7 +670,7 @@ int Acquire(const AcquireOptions& o)
   inverse->SetGaussNewtonLineSearch(gaussNewtonLineSearch);
   inverse->SetElementArrayName(elementArray.c_str());
   MessageCollector messages;
-  messages.Watch(inverse);
+  messages.Watch(inverse, "inverse diffusion");
   vtkNew<vtkCallbackCommand> progress;
   int lastPercent = -1;
   progress->SetClientData(&lastPercent);
@@ -721,6 +732,8 @@ int Acquire(const AcquireOptions& o)
   }
   json report;
   report["command"] = "acquire";
+  report["provenance"] = Provenance(o.App);
+  report["provenance"]["seed"] = seed;
   report["mode"] = synthetic ? "synthetic" : "files";
   report["patterns"] = numPatterns;
   report["lambda"] = lambda;
@@ -830,7 +843,9 @@ int Acquire(const AcquireOptions& o)
   {
     // Needs an X server (xvfb-run): a failure only warns.
     std::string plotError;
-    if (!WritePlotPNG(series, "iteration (homogeneous fit, then heterogeneous)",
+    if (!OpenPictureDisplay("--no-png", plotError))
+      std::cerr << "translucency: warning: objective plot not written: " << plotError << "\n";
+    else if (!WritePlotPNG(series, "iteration (homogeneous fit, then heterogeneous)",
           "normalised objective", outputPrefix + "_objective.png", plotError))
       std::cerr << "translucency: warning: objective plot not written: " << plotError << "\n";
   }
@@ -874,6 +889,7 @@ Command AddAcquireCommand(CLI::App& app)
     "\n\nusage: translucency acquire --sample FILE --patterns DIR|FILE --output PREFIX [options]\n"
            "   or: translucency acquire --synthetic-truth FILE --grid NXxNYxNZ --patterns RxC "
            "--output PREFIX [options]");
+  o->App = c;
   c->add_option("--sample", o->SamplePath, "tet mesh (.vtu), optional RefractiveIndex cell array")
     ->type_name("FILE");
   c->add_option("--patterns", o->PatternsArg,

@@ -4,7 +4,9 @@
 // error against wall time for the iterative solvers, and a .vtm multiblock.
 
 #include "Options.h"
+#include "Pictures.h"
 #include "PipelineRender.h"
+#include "Provenance.h"
 #include "Scene.h"
 
 #include "DiffusionSolverFactory.h"
@@ -14,7 +16,9 @@
 #include "vtkOutgoingRadiance.h"
 #include "vtkSolveDiffusion.h"
 
+#include <vtkCommand.h>
 #include <vtkDataArray.h>
+#include <vtkExecutive.h>
 #include <vtkDoubleArray.h>
 #include <vtkIdTypeArray.h>
 #include <vtkInformation.h>
@@ -57,6 +61,7 @@ struct CompareOptions
   long long Photons = 1000000;
   int Seed = 1;
   bool NoPictures = false, NSquaredLaw = false;
+  const CLI::App* App = nullptr; ///< for the provenance of the JSON
 };
 
 struct SolverResult
@@ -146,7 +151,7 @@ SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double
 {
   MessageCollector messages;
   vtkNew<vtkSolveDiffusion> solve;
-  messages.Watch(solve);
+  messages.Watch(solve, "solving with " + name);
   if (!solve->SetSolverByName(name.c_str()))
     throw UsageError(messages.Last());
   solve->SetInputData(lit);
@@ -190,30 +195,127 @@ SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double
   return result;
 }
 
+/// Per-channel relative error of `x` against `r` (as RelativeError, one
+/// channel at a time): {"R": {"max", "rms"}, "G": ..., "B": ...}.
+json ChannelErrors(vtkDataArray* x, vtkDataArray* r)
+{
+  static const char* names[3] = { "R", "G", "B" };
+  json errors;
+  const vtkIdType n = r->GetNumberOfTuples();
+  for (int c = 0; c < 3; ++c)
+  {
+    double range[2];
+    r->GetRange(range, c);
+    double floor = 0.01 * std::max(std::abs(range[0]), std::abs(range[1]));
+    if (floor <= 0)
+      floor = 1e-300;
+    double maxError = 0.0, sum = 0.0;
+    for (vtkIdType i = 0; i < n; ++i)
+    {
+      const double ref = r->GetComponent(i, c);
+      const double e = std::abs(x->GetComponent(i, c) - ref) / std::max(std::abs(ref), floor);
+      maxError = std::max(maxError, e);
+      sum += e * e;
+    }
+    errors[names[c]] = { { "max", maxError }, { "rms", n > 0 ? std::sqrt(sum / n) : 0.0 } };
+  }
+  return errors;
+}
+
+/**
+ * A solver's boundary fluence against Monte Carlo's, weighted by the
+ * reported standard error: per channel, over the points whose relative
+ * standard error is at most `maxRelativeSE` (the rest are masked: too few
+ * photons there to judge), the z-scores z = (x - mc) / se (RMS and the
+ * fraction with |z| > 3) and the relative RMS difference.
+ */
+json AgainstMonteCarlo(vtkDataArray* x, const SolverResult& mc, double maxRelativeSE)
+{
+  static const char* names[3] = { "R", "G", "B" };
+  vtkDataArray* se = mc.Volume->GetPointData()->GetArray("FluenceStandardError");
+  auto* ids =
+    vtkIdTypeArray::SafeDownCast(mc.Surface->GetPointData()->GetArray("vtkOriginalPointIds"));
+  vtkDataArray* phi = mc.Surface->GetPointData()->GetArray("Fluence");
+  json result;
+  result["max_relative_standard_error"] = maxRelativeSE;
+  for (int c = 0; c < 3; ++c)
+  {
+    long long used = 0, masked = 0, beyond3 = 0;
+    double z2 = 0.0, r2 = 0.0;
+    for (vtkIdType k = 0; k < ids->GetNumberOfTuples(); ++k)
+    {
+      const double m = phi->GetComponent(k, c);
+      const double e = se->GetComponent(ids->GetValue(k), c);
+      if (!(m > 0) || !(e > 0) || e > maxRelativeSE * m)
+      {
+        ++masked;
+        continue;
+      }
+      const double d = x->GetComponent(k, c) - m;
+      const double z = d / e;
+      z2 += z * z;
+      r2 += (d / m) * (d / m);
+      beyond3 += std::abs(z) > 3.0;
+      ++used;
+    }
+    result[names[c]] = { { "points", used }, { "masked", masked },
+      { "z_rms", used ? std::sqrt(z2 / used) : 0.0 },
+      { "fraction_abs_z_above_3", used ? static_cast<double>(beyond3) / used : 0.0 },
+      { "relative_rms", used ? std::sqrt(r2 / used) : 0.0 } };
+  }
+  return result;
+}
+
+/// Signed relative error (x - r) / max(|r|, floor) of one channel, in percent
+/// (floor as in RelativeError), as the point array "SignedRelativeRadianceError".
+vtkSmartPointer<vtkDoubleArray> SignedError(vtkDataArray* x, vtkDataArray* r, int c)
+{
+  double range[2];
+  r->GetRange(range, c);
+  double floor = 0.01 * std::max(std::abs(range[0]), std::abs(range[1]));
+  if (floor <= 0)
+    floor = 1e-300;
+  auto error = vtkSmartPointer<vtkDoubleArray>::New();
+  error->SetName("SignedRelativeRadianceError");
+  error->SetNumberOfTuples(r->GetNumberOfTuples());
+  for (vtkIdType i = 0; i < r->GetNumberOfTuples(); ++i)
+  {
+    const double ref = r->GetComponent(i, c);
+    error->SetValue(i, 100.0 * (x->GetComponent(i, c) - ref) / std::max(std::abs(ref), floor));
+  }
+  return error;
+}
+
 /// Error against the reference after k iterations, k = 1, 2, 4, ... until
-/// converged: relative error of boundary fluence against wall time.
+/// converged: relative error of boundary fluence against wall time. The
+/// solves stopped early do not converge by design: their warnings are
+/// dropped and counted in `unconverged` (one summary line instead).
 PlotSeries ErrorVersusTime(const std::string& name, vtkUnstructuredGrid* lit,
-  vtkDataArray* referenceFluence, double gridSpacing)
+  vtkDataArray* referenceFluence, double gridSpacing, int& unconverged)
 {
   PlotSeries series;
   series.Name = name;
+  MessageCollector messages;
   for (int k = 1; k <= 8192; k *= 2)
   {
-    MessageCollector messages;
     vtkNew<vtkSolveDiffusion> solve;
-    messages.Watch(solve);
     solve->SetSolverByName(name.c_str());
     solve->SetInputData(lit);
     solve->SetRelTol(1e-8);
     solve->SetMaxIter(k);
     solve->SetWarmStart(false);
     solve->SetGridSpacing(gridSpacing);
+    // Not converging is the point here: the warnings are ignored, not logged.
+    solve->AddObserver(vtkCommand::WarningEvent, messages.IgnoreCallback);
+    solve->AddObserver(vtkCommand::ErrorEvent, messages.IgnoreCallback);
+    solve->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, messages.IgnoreCallback);
     const auto start = Clock::now();
-    // Not converging is the point here: drop the warnings.
-    solve->RemoveAllObservers();
     solve->Update();
     const double ms = MillisecondsSince(start);
     vtkNew<vtkOutgoingRadiance> radiance;
+    radiance->AddObserver(vtkCommand::WarningEvent, messages.IgnoreCallback);
+    radiance->AddObserver(vtkCommand::ErrorEvent, messages.IgnoreCallback);
+    radiance->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, messages.IgnoreCallback);
     radiance->SetInputData(solve->GetOutput());
     radiance->Update();
     vtkDataArray* fluence = radiance->GetOutput()->GetPointData()->GetArray("Fluence");
@@ -225,8 +327,17 @@ PlotSeries ErrorVersusTime(const std::string& name, vtkUnstructuredGrid* lit,
     series.Y.push_back(rmsError);
     if (solve->GetConverged(0) && solve->GetConverged(1) && solve->GetConverged(2))
       break;
+    ++unconverged;
   }
   return series;
+}
+
+void WriteJson(const std::string& path, const json& j)
+{
+  std::string error;
+  EnsureParentDirectory(path);
+  if (!WriteText(path, j.dump(2) + "\n", error))
+    throw translucency::Error(error);
 }
 
 int Compare(CompareOptions& o)
@@ -245,6 +356,10 @@ int Compare(CompareOptions& o)
   std::vector<std::string> solvers = SplitList(solverList);
   if (solvers.empty())
     throw UsageError("--solvers lists no solver");
+  // Before minutes of solving: the pictures need an X server (one
+  // connection held for the whole run, see Pictures.h).
+  if (pictures)
+    RequirePictureDisplay("--no-png");
   // The names were checked while parsing (DiffusionSolverCheck).
   std::vector<std::string> order = { reference };
   for (const std::string& name : solvers)
@@ -270,9 +385,11 @@ int Compare(CompareOptions& o)
   vtkSmartPointer<vtkUnstructuredGrid> lit = BuildLitMesh(scene, stages, topologyMs);
 
   std::map<std::string, SolverResult> results;
-  for (const std::string& name : order)
+  for (size_t k = 0; k < order.size(); ++k)
   {
-    std::cerr << "translucency: solving with " << name << "...\n";
+    const std::string& name = order[k];
+    Progress("solving with " + name + " (" + std::to_string(k + 1) + " of " +
+      std::to_string(order.size()) + ")...");
     results[name] = RunSolver(name, lit, relTol, 20000, gridSpacing, photons, seed, nSquaredLaw);
   }
   const SolverResult& ref = results[reference];
@@ -287,7 +404,8 @@ int Compare(CompareOptions& o)
     SolverResult& r = results[name];
     double fMax, fRms, lMax, lRms;
     std::vector<double> perPoint;
-    RelativeError(r.Surface->GetPointData()->GetArray("Fluence"), refFluence, fMax, fRms);
+    vtkDataArray* fluence = r.Surface->GetPointData()->GetArray("Fluence");
+    RelativeError(fluence, refFluence, fMax, fRms);
     vtkSmartPointer<vtkDataArray> radiance = SurfaceRadiance(r);
     RelativeError(radiance, refRadiance, lMax, lRms, &perPoint);
     vtkNew<vtkDoubleArray> errorArray;
@@ -295,14 +413,22 @@ int Compare(CompareOptions& o)
     errorArray->SetNumberOfTuples(static_cast<vtkIdType>(perPoint.size()));
     std::copy(perPoint.begin(), perPoint.end(), errorArray->GetPointer(0));
     r.Surface->GetPointData()->AddArray(errorArray);
-    if (name != reference && !perPoint.empty())
+    vtkSmartPointer<vtkDoubleArray> signedError =
+      SignedError(radiance, refRadiance, image.Channel);
+    r.Surface->GetPointData()->AddArray(signedError);
+    if (name != reference && signedError->GetNumberOfTuples() > 0)
     {
-      std::vector<double> sorted = perPoint;
-      std::nth_element(sorted.begin(), sorted.begin() + 99 * (sorted.size() - 1) / 100, sorted.end());
-      errorScale = std::max(errorScale, sorted[99 * (sorted.size() - 1) / 100]);
+      std::vector<double> sorted(static_cast<size_t>(signedError->GetNumberOfTuples()));
+      for (size_t i = 0; i < sorted.size(); ++i)
+        sorted[i] = std::abs(signedError->GetValue(static_cast<vtkIdType>(i)));
+      const size_t k = 99 * (sorted.size() - 1) / 100;
+      std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
+      errorScale = std::max(errorScale, sorted[k]);
     }
     r.Stats["fluence_relative_error"] = { { "max", fMax }, { "rms", fRms } };
     r.Stats["radiance_relative_error"] = { { "max", lMax }, { "rms", lRms } };
+    r.Stats["fluence_relative_error_per_channel"] = ChannelErrors(fluence, refFluence);
+    r.Stats["radiance_relative_error_per_channel"] = ChannelErrors(radiance, refRadiance);
     r.Stats["wall_ms"] = r.WallMs;
     r.Stats["reference"] = reference;
     if (vtkDataArray* se = r.Volume->GetPointData()->GetArray("FluenceStandardError"))
@@ -325,9 +451,23 @@ int Compare(CompareOptions& o)
     table.push_back(r.Stats);
   }
 
-  // Table.
+  // Against Monte Carlo, when it ran: z-scores by its standard error.
+  const SolverResult* monteCarlo = nullptr;
+  for (const std::string& name : order)
+    if (results[name].Volume->GetPointData()->GetArray("FluenceStandardError"))
+      monteCarlo = &results[name];
+  if (monteCarlo)
+    for (json& s : table)
+      if (s["solver"] != monteCarlo->Name)
+        s["fluence_against_montecarlo"] = AgainstMonteCarlo(
+          results[s["solver"].get<std::string>()].Surface->GetPointData()->GetArray("Fluence"),
+          *monteCarlo, 0.1);
+
+  // Table first, flushed (a pipe buffers it otherwise), then the JSON: both
+  // before the pictures, so a failure there loses neither.
   std::cout << "mesh: " << lit->GetNumberOfPoints() << " points, " << lit->GetNumberOfCells()
-            << " tets; reference: " << reference << "\n\n";
+            << " tets; reference: " << reference << "\n";
+  std::cout << LightsLine(scene) << "\n\n";
   std::cout << "  solver      unknowns      nnz  memory(MB)  setup(ms)  solve(ms)  iters(R)"
                "  fluence err max/rms   radiance err max/rms\n";
   for (const json& s : table)
@@ -348,6 +488,45 @@ int Compare(CompareOptions& o)
                 << 100 * s["fluence_mean_relative_standard_error"].get<double>() << "%)";
     std::cout << "\n";
   }
+  if (monteCarlo)
+  {
+    std::cout << "\n  against " << monteCarlo->Name
+              << " (boundary fluence; points with its relative standard error > 10 % masked):\n"
+                 "  solver      z RMS R/G/B          |z| > 3 R/G/B        rel. RMS R/G/B\n";
+    for (const json& s : table)
+    {
+      if (!s.contains("fluence_against_montecarlo"))
+        continue;
+      const json& a = s["fluence_against_montecarlo"];
+      std::cout << "  " << std::left << std::setw(10) << s["solver"].get<std::string>()
+                << std::right << std::fixed << std::setprecision(2);
+      for (const char* key : { "z_rms", "fraction_abs_z_above_3", "relative_rms" })
+      {
+        std::cout << "  ";
+        for (const char* c : { "R", "G", "B" })
+          std::cout << std::setw(6) << a[c][key].get<double>() * (key[0] == 'z' ? 1.0 : 100.0)
+                    << (key[0] == 'z' ? " " : "%");
+      }
+      std::cout << std::defaultfloat << "\n";
+    }
+    if (!nSquaredLaw)
+      std::cout << "  note: radiance against " << monteCarlo->Name
+                << " without --n-squared-law differs by about eta^2 by the read-out\n"
+                   "  convention (TransCut eq. 3), not by an error (Documentation/Solvers.md)\n";
+  }
+  std::cout.flush();
+
+  json report;
+  report["provenance"] = Provenance(o.App);
+  report["provenance"]["scene"] = SceneProvenance(scene);
+  report["provenance"]["seed"] = seed;
+  report["mesh"] = scene.MeshPath;
+  report["points"] = lit->GetNumberOfPoints();
+  report["tets"] = lit->GetNumberOfCells();
+  report["reference"] = reference;
+  report["solvers"] = table;
+  if (!jsonPath.empty())
+    WriteJson(jsonPath, report);
 
   // Files.
   std::string error;
@@ -412,6 +591,7 @@ int Compare(CompareOptions& o)
 
   if (pictures)
   {
+    Progress("writing the pictures...");
     // One exposure for every radiance picture: the reference's.
     vtkNew<vtkPolyData> refSurface;
     refSurface->ShallowCopy(ref.Surface);
@@ -419,7 +599,9 @@ int Compare(CompareOptions& o)
     RadianceImageOptions shared = image;
     shared.Exposure = exposure;
     if (errorScale <= 0)
-      errorScale = 0.01;
+      errorScale = 1.0; // percent
+    static const char* channelNames[3] = { "R", "G", "B" };
+    const std::string channel = channelNames[image.Channel];
     for (const std::string& name : order)
     {
       SolverResult& r = results[name];
@@ -429,36 +611,35 @@ int Compare(CompareOptions& o)
       surface->GetPointData()->AddArray(radiance); // the tallied one for Monte Carlo
       surface->GetPointData()->RemoveArray("RadianceRGB");
       if (!WriteRadiancePNG(surface, shared, outputDir + "/" + name + "_radiance.png", error) ||
-        !WriteScalarMapPNG(surface, "RelativeRadianceError", 0.0, errorScale,
-          "radiance error vs " + reference, image, outputDir + "/" + name + "_error.png", error))
+        !WriteScalarMapPNG(surface, "SignedRelativeRadianceError", -errorScale, errorScale,
+          "radiance " + channel + " relative error, " + name + " - " + reference, "%",
+          name + " against " + reference + " (shared scale: 99th percentile of |error|)", image,
+          outputDir + "/" + name + "_error.png", error))
         throw translucency::Error(error);
     }
     std::vector<PlotSeries> curves;
+    int unconverged = 0;
     // A stochastic solver has no error-vs-tolerance curve.
     for (const std::string& name : order)
       if (!translucency::GetDiffusionSolverRegistry().Get(name).Properties.IsStochastic)
-        curves.push_back(ErrorVersusTime(name, lit, refFluence, gridSpacing));
+      {
+        Progress("error against time: " + name + "...");
+        curves.push_back(ErrorVersusTime(name, lit, refFluence, gridSpacing, unconverged));
+      }
+    if (unconverged > 0)
+      Progress("error against time: " + std::to_string(unconverged) +
+        " solves stopped before convergence on purpose (iteration limits 1, 2, 4, ...)");
     if (!WritePlotPNG(curves, "wall time (ms)", "RMS relative error of boundary fluence",
           outputDir + "/error_vs_time.png", error))
       throw translucency::Error(error);
     json plot;
     for (const PlotSeries& c : curves)
       plot[c.Name] = { { "ms", c.X }, { "rms_error", c.Y } };
-    for (json& s : table)
+    for (json& s : report["solvers"])
       if (plot.contains(s["solver"].get<std::string>()))
         s["error_vs_time"] = plot[s["solver"].get<std::string>()];
-  }
-  if (!jsonPath.empty())
-  {
-    json j;
-    j["mesh"] = scene.MeshPath;
-    j["points"] = lit->GetNumberOfPoints();
-    j["tets"] = lit->GetNumberOfCells();
-    j["reference"] = reference;
-    j["solvers"] = table;
-    EnsureParentDirectory(jsonPath);
-    if (!WriteText(jsonPath, j.dump(2) + "\n", error))
-      throw translucency::Error(error);
+    if (!jsonPath.empty())
+      WriteJson(jsonPath, report);
   }
   return 0;
 }
@@ -471,6 +652,7 @@ Command AddCompareCommand(CLI::App& app)
   CLI::App* c =
     app.add_subcommand("compare", "Run several solvers on the same problem and lay the results side by side."
     "\n\nusage: translucency compare --mesh FILE [scene options] --output DIR [options]");
+  o->App = c;
   AddSceneOptions(c, o->Scene);
   c->add_option("--solvers", o->SolverList, "from " + WrapNames(translucency::GetDiffusionSolverNames()))
     ->type_name("A,B,...")
@@ -494,7 +676,9 @@ Command AddCompareCommand(CLI::App& app)
   c->add_flag("--n-squared-law", o->NSquaredLaw,
     "energy-conserving radiance read-out (eq. 3 / eta^2); use it\n"
     "when the reference is montecarlo (see Documentation/Solvers.md)");
-  c->add_option("--json", o->JsonPath, "the table as JSON")->type_name("FILE");
+  c->add_option("--json", o->JsonPath,
+     "the table as JSON (with provenance), written before the\n"
+     "pictures and again with the error-vs-time curves")->type_name("FILE");
   AddImageOptions(c, o->Image);
   return { c, [o]() { return Compare(*o); } };
 }

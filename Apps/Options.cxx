@@ -1,4 +1,5 @@
 #include "Options.h"
+#include "Pictures.h"
 #include "PipelineRender.h"
 #include "Scene.h"
 
@@ -176,6 +177,12 @@ void AddMemoryLimitOption(CLI::App* command)
       "solve work); memory stays bounded by --memory-limit");
 }
 
+void AddQuietOption(CLI::App* command)
+{
+  command->add_flag_function(
+    "--quiet", [](std::int64_t) { SetQuiet(true); }, "no progress lines on stderr");
+}
+
 void AddSceneOptions(CLI::App* command, SceneOptions& scene)
 {
   const std::string group = "Scene options";
@@ -339,6 +346,41 @@ void AddImageOptions(CLI::App* command, RadianceImageOptions& image)
         if (std::sscanf(text.c_str(), "%dx%d", &w, &h) != 2 || w < 16 || h < 16 || w > 8192 ||
           h > 8192)
           throw UsageError("--size must be WxH, e.g. 800x600");
+        return std::string();
+      },
+      ""))
+    ->group(group);
+  command
+    ->add_option_function<std::string>(
+      "--channel", [im](const std::string& text) { im->Channel = ChannelIndex(text); },
+      "colour channel of the colour-mapped pictures (slice, error maps)")
+    ->type_name("R|G|B")
+    ->default_str("R")
+    ->check(CLI::Validator(
+      [](std::string& text) {
+        if (ChannelIndex(text) < 0)
+          throw UsageError("--channel: '" + text + "' is not R, G or B");
+        return std::string();
+      },
+      ""))
+    ->group(group);
+  command
+    ->add_option_function<std::string>(
+      "--scale", [im](const std::string& text) { im->LogScale = text == "log"; },
+      "colour scale of the fluence slice")
+    ->type_name("log|linear")
+    ->default_str("log")
+    ->check(OneOf("--scale", { "log", "linear" }))
+    ->group(group);
+  AddNumberList(command, "--slice-plane", image.SlicePlane,
+    "slice of --slice-png: the plane through o (mm) with normal n\n"
+    "(default: through the centre, normal to --view)",
+    "ox,oy,oz,nx,ny,nz", 6, "--slice-plane needs six numbers: ox,oy,oz,nx,ny,nz")
+    ->check(CLI::Validator(
+      [](std::string& text) {
+        const std::vector<double> v = ParseNumbers(text, "--slice-plane");
+        if (v.size() == 6 && v[3] == 0 && v[4] == 0 && v[5] == 0)
+          throw UsageError("--slice-plane: the normal (last three numbers) is zero");
         return std::string();
       },
       ""))

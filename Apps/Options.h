@@ -126,6 +126,9 @@ CLI::Option* AddNumber(CLI::App* app, const std::string& name, T& target, const 
 /// (translucency::SetLongRunsAllowed) on `command`, for the whole run.
 void AddMemoryLimitOption(CLI::App* command);
 
+/// --quiet on `command`: SetQuiet(true) (progress lines off; warnings stay).
+void AddQuietOption(CLI::App* command);
+
 /// A comma-separated list of numbers into `target`, with `count` numbers if
 /// count > 0 (else UsageError(failure)).
 CLI::Option* AddNumberList(CLI::App* app, const std::string& name, std::vector<double>& target,

@@ -1,4 +1,5 @@
 #include "PipelineRender.h"
+#include "Pictures.h"
 
 #include <vtkActor.h>
 #include <vtkAxis.h>
@@ -24,6 +25,7 @@
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
 #include <vtkScalarBarActor.h>
+#include <vtkTextActor.h>
 #include <vtkTextProperty.h>
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
@@ -32,6 +34,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
+#include <sstream>
 #include <vector>
 
 namespace translucency_app
@@ -143,13 +147,36 @@ bool WriteRadiancePNG(vtkPolyData* surface, const RadianceImageOptions& options,
   vtkNew<vtkRenderer> renderer;
   renderer->AddActor(actor);
   renderer->SetBackground(0.08, 0.08, 0.1);
-  vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetMultiSamples(0);
+  vtkSmartPointer<vtkRenderWindow> window = NewPictureWindow(options.Width, options.Height);
   window->AddRenderer(renderer);
-  window->SetSize(options.Width, options.Height);
   PlaceCamera(renderer, surface->GetBounds(), options);
   return Snapshot(window, fileName, error);
+}
+
+namespace
+{
+/// A caption centred at the top of the picture (never shrunk: long text wraps
+/// at " | ").
+void AddCaption(vtkRenderer* renderer, const std::string& text)
+{
+  if (text.empty())
+    return;
+  vtkNew<vtkTextActor> caption;
+  caption->SetInput(text.c_str());
+  caption->GetTextProperty()->SetFontSize(16);
+  caption->GetTextProperty()->SetColor(1.0, 1.0, 1.0);
+  caption->GetTextProperty()->SetJustificationToCentered();
+  caption->GetTextProperty()->SetVerticalJustificationToTop();
+  caption->GetPositionCoordinate()->SetCoordinateSystemToNormalizedViewport();
+  caption->SetPosition(0.5, 0.97);
+  renderer->AddActor2D(caption);
+}
+
+const char* ChannelName(int c)
+{
+  static const char* names[3] = { "R", "G", "B" };
+  return names[std::min(2, std::max(0, c))];
+}
 }
 
 bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions& options,
@@ -157,11 +184,18 @@ bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions&
 {
   double bounds[6];
   mesh->GetBounds(bounds);
-  const double center[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
+  double origin[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
     0.5 * (bounds[4] + bounds[5]) };
+  double normal[3] = { options.ViewDirection[0], options.ViewDirection[1],
+    options.ViewDirection[2] };
+  if (options.SlicePlane.size() == 6)
+  {
+    std::copy(options.SlicePlane.begin(), options.SlicePlane.begin() + 3, origin);
+    std::copy(options.SlicePlane.begin() + 3, options.SlicePlane.end(), normal);
+  }
   vtkNew<vtkPlane> plane;
-  plane->SetOrigin(center);
-  plane->SetNormal(options.ViewDirection);
+  plane->SetOrigin(origin);
+  plane->SetNormal(normal);
   vtkNew<vtkCutter> cutter;
   cutter->SetInputData(mesh);
   cutter->SetCutFunction(plane);
@@ -170,7 +204,12 @@ bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions&
   vtkPolyData* slice = cutter->GetOutput();
   if (slice->GetNumberOfPoints() == 0)
   {
-    error = "the slice through the centre of the mesh is empty";
+    error = options.SlicePlane.empty()
+      ? "the slice through the centre of the mesh is empty"
+      : "--slice-plane misses the mesh (bounds " + std::to_string(bounds[0]) + ".." +
+        std::to_string(bounds[1]) + ", " + std::to_string(bounds[2]) + ".." +
+        std::to_string(bounds[3]) + ", " + std::to_string(bounds[4]) + ".." +
+        std::to_string(bounds[5]) + " mm)";
     return false;
   }
   vtkDataArray* fluence = slice->GetPointData()->GetArray("Fluence");
@@ -179,22 +218,19 @@ bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions&
     error = "the mesh has no Fluence array to slice";
     return false;
   }
+  const int channel = options.Channel;
   double range[2];
-  fluence->GetRange(range, 0);
+  fluence->GetRange(range, channel);
   const double hi = std::max(range[1], 1e-300);
-  const double lo = std::max(range[0], hi * 1e-4);
-  vtkNew<vtkLookupTable> lut;
-  lut->SetScaleToLog10();
-  lut->SetTableRange(lo, hi);
-  lut->SetHueRange(0.667, 0.0);
-  lut->SetNumberOfTableValues(256);
-  lut->Build();
+  const double lo = options.LogScale ? std::max(range[0], hi * 1e-4) : std::min(range[0], 0.0);
+  vtkSmartPointer<vtkLookupTable> lut =
+    MakeLookupTable(ColourMap::Inferno, lo, hi, options.LogScale);
   vtkNew<vtkPolyDataMapper> mapper;
   mapper->SetInputData(slice);
   mapper->SetLookupTable(lut);
   mapper->SetScalarModeToUsePointFieldData();
   mapper->SelectColorArray("Fluence");
-  mapper->ColorByArrayComponent("Fluence", 0);
+  mapper->ColorByArrayComponent("Fluence", channel);
   mapper->SetUseLookupTableScalarRange(true);
   mapper->ScalarVisibilityOn();
   vtkNew<vtkActor> actor;
@@ -212,45 +248,49 @@ bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions&
   surfaceActor->GetProperty()->SetOpacity(0.15);
   surfaceActor->GetProperty()->SetColor(0.8, 0.8, 0.8);
 
-  vtkNew<vtkScalarBarActor> bar;
-  bar->SetLookupTable(lut);
-  bar->SetTitle("Fluence R (W/mm^2)");
-  bar->SetNumberOfLabels(5);
-  bar->SetLabelFormat("%.1e");
-  bar->SetPosition(0.84, 0.1);
-  bar->SetPosition2(0.14, 0.8);
-  bar->GetTitleTextProperty()->SetFontSize(14);
-  bar->GetLabelTextProperty()->SetFontSize(12);
-  bar->UnconstrainedFontSizeOn();
-
+  std::ostringstream caption;
+  caption << "fluence rate slice, channel " << ChannelName(channel) << ", plane through ("
+          << std::setprecision(3) << origin[0] << ", " << origin[1] << ", " << origin[2]
+          << ") mm, normal (" << normal[0] << ", " << normal[1] << ", " << normal[2] << ")";
   vtkNew<vtkRenderer> renderer;
   renderer->AddActor(actor);
   renderer->AddActor(surfaceActor);
-  renderer->AddViewProp(bar);
+  renderer->AddViewProp(MakeColourBar(
+    lut, std::string("Fluence rate ") + ChannelName(channel), "W/mm^2"));
+  AddCaption(renderer, caption.str());
   renderer->SetBackground(0.08, 0.08, 0.1);
-  vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetMultiSamples(0);
+  vtkSmartPointer<vtkRenderWindow> window = NewPictureWindow(options.Width, options.Height);
   window->AddRenderer(renderer);
-  window->SetSize(options.Width, options.Height);
-  PlaceCamera(renderer, bounds, options);
+  // Look at the slice face on: along its normal (an up vector not parallel to it).
+  RadianceImageOptions view = options;
+  std::copy(normal, normal + 3, view.ViewDirection);
+  const double n2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2];
+  const double dot = normal[0] * view.ViewUp[0] + normal[1] * view.ViewUp[1] +
+    normal[2] * view.ViewUp[2];
+  const double up2 =
+    view.ViewUp[0] * view.ViewUp[0] + view.ViewUp[1] * view.ViewUp[1] + view.ViewUp[2] * view.ViewUp[2];
+  if (dot * dot > 0.99 * n2 * up2)
+  {
+    view.ViewUp[0] = std::abs(normal[2]) < std::abs(normal[0]) ? 0.0 : 1.0;
+    view.ViewUp[1] = 0.0;
+    view.ViewUp[2] = std::abs(normal[2]) < std::abs(normal[0]) ? 1.0 : 0.0;
+  }
+  PlaceCamera(renderer, bounds, view);
   return Snapshot(window, fileName, error);
 }
 
 bool WriteScalarMapPNG(vtkPolyData* surface, const char* arrayName, double lo, double hi,
-  const std::string& title, const RadianceImageOptions& options, const std::string& fileName,
-  std::string& error)
+  const std::string& quantity, const std::string& unit, const std::string& caption,
+  const RadianceImageOptions& options, const std::string& fileName, std::string& error)
 {
   if (!surface->GetPointData()->GetArray(arrayName))
   {
     error = std::string("no point array '") + arrayName + "' to render";
     return false;
   }
-  vtkNew<vtkLookupTable> lut;
-  lut->SetTableRange(lo, hi > lo ? hi : lo + 1e-12);
-  lut->SetHueRange(0.667, 0.0);
-  lut->SetNumberOfTableValues(256);
-  lut->Build();
+  const bool signedValues = lo < 0 && hi > 0;
+  vtkSmartPointer<vtkLookupTable> lut =
+    MakeLookupTable(signedValues ? ColourMap::CoolWarm : ColourMap::Viridis, lo, hi, false);
   vtkNew<vtkPolyDataMapper> mapper;
   mapper->SetInputData(surface);
   mapper->SetLookupTable(lut);
@@ -261,25 +301,13 @@ bool WriteScalarMapPNG(vtkPolyData* surface, const char* arrayName, double lo, d
   vtkNew<vtkActor> actor;
   actor->SetMapper(mapper);
   actor->GetProperty()->LightingOff();
-  vtkNew<vtkScalarBarActor> bar;
-  bar->SetLookupTable(lut);
-  bar->SetTitle(title.c_str());
-  bar->SetNumberOfLabels(5);
-  bar->SetLabelFormat("%.3g");
-  bar->SetPosition(0.84, 0.1);
-  bar->SetPosition2(0.14, 0.8);
-  bar->GetTitleTextProperty()->SetFontSize(14);
-  bar->GetLabelTextProperty()->SetFontSize(12);
-  bar->UnconstrainedFontSizeOn();
   vtkNew<vtkRenderer> renderer;
   renderer->AddActor(actor);
-  renderer->AddViewProp(bar);
+  renderer->AddViewProp(MakeColourBar(lut, quantity, unit));
+  AddCaption(renderer, caption);
   renderer->SetBackground(0.08, 0.08, 0.1);
-  vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetMultiSamples(0);
+  vtkSmartPointer<vtkRenderWindow> window = NewPictureWindow(options.Width, options.Height);
   window->AddRenderer(renderer);
-  window->SetSize(options.Width, options.Height);
   PlaceCamera(renderer, surface->GetBounds(), options);
   return Snapshot(window, fileName, error);
 }
@@ -288,7 +316,7 @@ bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTit
   const std::string& yTitle, const std::string& fileName, std::string& error)
 {
   vtkNew<vtkContextView> view;
-  view->GetRenderWindow()->SetOffScreenRendering(1);
+  UsePictureDisplay(view->GetRenderWindow());
   view->GetRenderWindow()->SetSize(800, 600);
   view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
   vtkNew<vtkChartXY> chart;

@@ -26,6 +26,13 @@ struct RadianceImageOptions
   /// Camera direction of view (from the camera towards the object).
   double ViewDirection[3] = { 0.0, 0.0, -1.0 };
   double ViewUp[3] = { 0.0, 1.0, 0.0 };
+  /// Colour channel of the colour-mapped field pictures (0 R, 1 G, 2 B).
+  int Channel = 0;
+  /// Colour scale of the magnitude pictures (the fluence slice): log10 or linear.
+  bool LogScale = true;
+  /// Slice plane: origin (mm) and normal; empty: through the centre of the
+  /// bounds, normal to the view direction.
+  std::vector<double> SlicePlane;
 };
 
 /**
@@ -40,19 +47,20 @@ double ToneMapRadiance(vtkPolyData* surface, double exposure);
 bool WriteRadiancePNG(vtkPolyData* surface, const RadianceImageOptions& options,
   const std::string& fileName, std::string& error);
 
-/// Render a slice of the fluence (red channel, log scale, colour bar) through
-/// the centre of `mesh`, normal to the view direction.
+/// Render a slice of the fluence rate (options.Channel, log or linear
+/// options.LogScale, inferno, colour bar in W/mm^2) on options.SlicePlane.
 bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions& options,
   const std::string& fileName, std::string& error);
 
 /**
  * Render `surface` coloured by its 1-component point array `arrayName` on the
- * linear range [lo, hi] (a shared scale across pictures), with a colour bar
- * titled `title`.
+ * linear range [lo, hi] (a shared scale across pictures): cool-warm if lo < 0
+ * < hi (signed values), viridis otherwise, with a colour bar "quantity (unit)"
+ * and `caption` above the object.
  */
 bool WriteScalarMapPNG(vtkPolyData* surface, const char* arrayName, double lo, double hi,
-  const std::string& title, const RadianceImageOptions& options, const std::string& fileName,
-  std::string& error);
+  const std::string& quantity, const std::string& unit, const std::string& caption,
+  const RadianceImageOptions& options, const std::string& fileName, std::string& error);
 
 /// One curve of a line plot.
 struct PlotSeries

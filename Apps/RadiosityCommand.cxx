@@ -4,7 +4,9 @@
 // optional relight / translucency-change timings, --bench N).
 
 #include "Options.h"
+#include "Pictures.h"
 #include "PipelineRender.h"
+#include "Provenance.h"
 #include "SceneFile.h"
 
 #include "Error.h"
@@ -124,10 +126,7 @@ bool WriteFourPanels(vtkDataObject* result, const SceneCamera& camera, const std
   const double exposure = p99 > 0.0 ? 0.9 / p99 : 1.0;
 
   const int size = 400;
-  vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetMultiSamples(0);
-  window->SetSize(4 * size, size);
+  vtkSmartPointer<vtkRenderWindow> window = NewPictureWindow(4 * size, size);
   double bounds[6] = { 1e300, -1e300, 1e300, -1e300, 1e300, -1e300 };
   for (const auto& poly : smooth)
   {
@@ -203,6 +202,7 @@ struct RadiosityOptions
   int Rays = -1;          ///< -1: the scene's
   int Bench = 0;
   bool Heuristics = false;
+  const CLI::App* App = nullptr; ///< for the provenance of the JSON
 };
 
 int Radiosity(const RadiosityOptions& o)
@@ -214,6 +214,9 @@ int Radiosity(const RadiosityOptions& o)
   const int rays = o.Rays, bench = o.Bench;
   const bool heuristics = o.Heuristics;
   std::vector<Stage> stages;
+  const auto wallStart = Clock::now();
+  if (!png.empty())
+    RequirePictureDisplay("no --png"); // before the solve (Pictures.h)
   auto start = Clock::now();
   LoadedScene scene = LoadScene(scenePath, cellSize);
   stages.push_back({ "scene (read, tetrahedralize)", MillisecondsSince(start) });
@@ -233,7 +236,7 @@ int Radiosity(const RadiosityOptions& o)
 
   MessageCollector messages;
   vtkNew<vtkTranslucentRadiosity> radiosity;
-  messages.Watch(radiosity);
+  messages.Watch(radiosity, "radiosity");
   radiosity->SetInputData(scene.Objects);
   radiosity->SetSubsurfaceMethod(s.SOperator == "profile"
       ? vtkTranslucentRadiosity::SUBSURFACE_PROFILE
@@ -270,11 +273,15 @@ int Radiosity(const RadiosityOptions& o)
   if (!messages.Errors.empty())
     throw translucency::Error("scene '" + scenePath + "': " + messages.Last());
   const double firstMs = MillisecondsSince(start);
+  // The filter's parts, then the rest of it: the rows add up (no row
+  // contains another), and "other" below makes the total the wall time.
   stages.push_back({ "form factors", radiosity->GetFormFactorTime() });
   stages.push_back({ "S set-up", radiosity->GetSetupTime() });
   stages.push_back({ "direct light + S E", radiosity->GetDirectTime() });
   stages.push_back({ "iteration", radiosity->GetSolveTime() });
-  stages.push_back({ "radiosity filter total", firstMs });
+  stages.push_back({ "radiosity (rest)",
+    std::max(0.0, firstMs - radiosity->GetFormFactorTime() - radiosity->GetSetupTime() -
+        radiosity->GetDirectTime() - radiosity->GetSolveTime()) });
 
   json report = { { "scene", scenePath }, { "s_operator", s.SOperator },
     { "iteration", s.Iteration }, { "linear_solver", s.LinearSolver }, { "patches", radiosity->GetNumberOfPatches() },
@@ -286,6 +293,7 @@ int Radiosity(const RadiosityOptions& o)
     { "subsurface_bytes", radiosity->GetSubsurfaceMemory() },
     { "direct_ms", radiosity->GetDirectTime() }, { "solve_ms", radiosity->GetSolveTime() },
     { "filter_total_ms", firstMs } };
+  report["provenance"] = Provenance(o.App);
 
   // Outputs: one .vtp per object, the PNG and the JSON report, all new or
   // all old (OutputBatch), committed after the report.
@@ -319,6 +327,7 @@ int Radiosity(const RadiosityOptions& o)
 
   if (bench > 0)
   {
+    start = Clock::now();
     // Relight: move the first light a little each time (form factors and S
     // are kept; warm-started diffusion solves).
     std::vector<double> relightTotal, relightCore, changeTotal, changeCore;
@@ -375,6 +384,7 @@ int Radiosity(const RadiosityOptions& o)
       { "translucency_change_filter_ms_median", MedianOf(changeTotal) },
       { "translucency_change_core_ms_median", MedianOf(changeCore) },
       { "translucency_change_iterations", changeIterations } };
+    stages.push_back({ "bench", MillisecondsSince(start) });
     std::cout << "relight: median " << MedianOf(relightTotal) << " ms (filter), "
               << MedianOf(relightCore) << " ms (direct light + iteration)\n"
               << "translucency change: median " << MedianOf(changeTotal) << " ms (filter), "
@@ -385,7 +395,16 @@ int Radiosity(const RadiosityOptions& o)
             << " iterations (" << (radiosity->GetConverged() ? "converged" : "NOT converged")
             << "), F " << radiosity->GetFormFactorMemory() / 1048576.0 << " MiB, S "
             << radiosity->GetSubsurfaceMemory() / 1048576.0 << " MiB\n";
+  // Everything not in a row (reports, bookkeeping): the total is the wall time.
+  double rows = 0.0;
+  for (const Stage& stage : stages)
+    rows += stage.Milliseconds;
+  stages.push_back({ "other", std::max(0.0, MillisecondsSince(wallStart) - rows) });
   PrintStages(stages);
+  json timing = json::object();
+  for (const Stage& stage : stages)
+    timing[stage.Name] = stage.Milliseconds;
+  report["times_ms"] = timing;
   if (!jsonPath.empty())
   {
     std::string error;
@@ -410,6 +429,7 @@ Command AddRadiosityCommand(CLI::App& app)
     "DirectIrradiance, DirectRadiosity, SubsurfaceRadiosity,\n"
     "InterReflectionRadiosity, Radiosity). Scene format: Documentation/Radiosity.md."
     "\n\nusage: translucency radiosity --scene FILE.json --output PREFIX [options]");
+  o->App = c;
   c->add_option("--scene", o->ScenePath, "the scene (objects, materials, lights, camera)")
     ->type_name("FILE.json")
     ->required();

@@ -2,7 +2,9 @@
 // lights -> diffusion solve -> radiance -> files, pictures and a report.
 
 #include "Options.h"
+#include "Pictures.h"
 #include "PipelineRender.h"
+#include "Provenance.h"
 #include "Scene.h"
 
 #include "DiffusionSolverFactory.h"
@@ -49,6 +51,7 @@ struct RenderOptions
   double GridSpacing = 0.0;
   long long Photons = 1000000;
   bool ListMaterials = false;
+  const CLI::App* App = nullptr; ///< for the provenance of the JSON
 };
 
 void ListMaterials()
@@ -75,6 +78,9 @@ int Render(RenderOptions& o)
   const std::string &outputPrefix = o.OutputPrefix, &pngPath = o.PngPath,
                     &slicePath = o.SlicePath, &jsonPath = o.JsonPath;
   const RadianceImageOptions& image = o.Image;
+  // Before the solve: the pictures need an X server (Pictures.h).
+  if (!pngPath.empty() || !slicePath.empty())
+    RequirePictureDisplay("no --png/--slice-png");
 
   std::vector<Stage> stages;
   std::string error;
@@ -85,7 +91,8 @@ int Render(RenderOptions& o)
 
   // 5. Solve.
   vtkNew<vtkSolveDiffusion> solve;
-  messages.Watch(solve);
+  messages.Watch(solve, "solving with " + solverName);
+  Progress("solving with " + solverName + "...");
   if (!solve->SetSolverByName(solverName.c_str()))
     throw UsageError(messages.Last());
   solve->SetInputData(lit);
@@ -152,6 +159,7 @@ int Render(RenderOptions& o)
   const vtkIdType numBoundary = outSurface->GetNumberOfPoints();
   std::cout << "mesh: " << numPoints << " points, " << numTets << " tets, " << numBoundary
             << " boundary points\n";
+  std::cout << LightsLine(scene) << "\n";
   std::cout << "solver: " << solve->GetSolverName() << " (" << solve->GetNumberOfUnknowns()
             << " unknowns per channel, linear solver " << solve->GetLinearSolverUsed() << ")\n";
   static const char* channel[3] = { "R", "G", "B" };
@@ -167,6 +175,9 @@ int Render(RenderOptions& o)
   if (!jsonPath.empty())
   {
     json j;
+    j["provenance"] = Provenance(o.App);
+    j["provenance"]["scene"] = SceneProvenance(scene);
+    j["provenance"]["seed"] = solve->GetSeed();
     j["mesh"] = scene.MeshPath;
     j["points"] = numPoints;
     j["tets"] = numTets;
@@ -215,6 +226,7 @@ Command AddRenderCommand(CLI::App& app)
     "Tetrahedralize a surface (or read a tet mesh), assign a material,\n"
     "light it, solve the diffusion equation, write the results."
     "\n\nusage: translucency render --mesh FILE [scene options] [options]");
+  o->App = c;
   AddSceneOptions(c, o->Scene);
   c->add_option("--solver", o->SolverName,
      WrapNames(translucency::GetDiffusionSolverNames()))
@@ -243,7 +255,8 @@ Command AddRenderCommand(CLI::App& app)
      "render the tone-mapped radiance (needs X,\ne.g. run under xvfb-run -a)")
     ->type_name("FILE");
   c->add_option("--slice-png", o->SlicePath,
-     "render a fluence slice through the centre with a colour bar")
+     "render a slice of the fluence rate (inferno, colour bar in\n"
+     "W/mm^2; --slice-plane, --channel, --scale)")
     ->type_name("FILE");
   AddImageOptions(c, o->Image);
   c->add_option("--json", o->JsonPath, "machine-readable statistics")->type_name("FILE");

@@ -18,6 +18,8 @@
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
+#include <cmath>
+#include <iostream>
 #include <sstream>
 
 namespace translucency_app
@@ -97,6 +99,9 @@ void SceneOptions::Finish(const std::string& command)
   }
   if (this->Lights.empty())
   {
+    // The one default, the same as the ParaView plugin's Surface Irradiance
+    // panel (Plugin/SurfaceIrradiance.xml); every report prints it.
+    this->DefaultLights = true;
     this->Lights.push_back(ParseLight("directional:0,-1,-1:1"));
     this->Lights.push_back(ParseLight("uniform:0.1"));
   }
@@ -123,7 +128,8 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   {
     start = Clock::now();
     vtkNew<vtkTetrahedralizeSurface> tetra;
-    messages.Watch(tetra);
+    messages.Watch(tetra, "tetrahedralizing (TetGen)");
+    Progress("tetrahedralizing " + options.MeshPath + " (TetGen)...");
     tetra->SetInputData(surface);
     tetra->SetQuality(options.Quality);
     tetra->SetMesher(options.Mesher.c_str());
@@ -137,6 +143,14 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
       throw translucency::Error("'" + options.MeshPath + "': " + messages.Last());
     grid = tetra->GetOutput();
     stages.push_back({ "tetrahedralize", MillisecondsSince(start) });
+    // TetGen meets a tet count only roughly: say so when it is far off.
+    const double made = static_cast<double>(grid->GetNumberOfCells());
+    if ((options.TargetGiven || options.MaxTetVolume <= 0) && options.TargetTets > 0 &&
+      std::abs(made - options.TargetTets) > 0.2 * options.TargetTets)
+      std::cerr << "translucency: note: --target-tets " << options.TargetTets << ": TetGen made "
+                << grid->GetNumberOfCells() << " tets ("
+                << std::lround(100.0 * (made - options.TargetTets) / options.TargetTets)
+                << " %; a tet count is only approximate)\n";
   }
 
   // 3. Coefficients.

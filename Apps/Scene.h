@@ -41,6 +41,7 @@ struct SceneOptions
   std::string Mesher = "tetgen"; ///< --mesher: tetgen or hxt
   bool UniformSizing = false;    ///< --uniform-size
   std::vector<Light> Lights;
+  bool DefaultLights = false; ///< no --light given: Finish() added the default lights
   bool Shadows = true;
   int UniformSamples = 32;
   std::vector<double> CutPlane; ///< --cut-plane: origin (mm) and normal; empty: no plane cut

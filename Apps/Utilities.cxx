@@ -16,6 +16,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <system_error>
@@ -112,8 +113,56 @@ std::string StripVtkHeader(std::string text)
 }
 } // namespace
 
+namespace
+{
+bool QuietFlag = false;
+
+/// The state of one watched algorithm's progress lines.
+struct ProgressState
+{
+  std::string Label;
+  double LastFraction = -1.0;
+  translucency::Clock::time_point LastTime;
+};
+}
+
+void SetQuiet(bool quiet)
+{
+  QuietFlag = quiet;
+}
+
+bool IsQuiet()
+{
+  return QuietFlag;
+}
+
+void Progress(const std::string& text)
+{
+  if (!QuietFlag)
+    std::cerr << "translucency: " << text << std::endl;
+}
+
 MessageCollector::MessageCollector()
 {
+  this->ProgressCallback->SetClientData(this);
+  this->ProgressCallback->SetCallback([](vtkObject* caller, unsigned long, void* self, void* data) {
+    if (QuietFlag || !data)
+      return;
+    static std::map<const vtkObject*, ProgressState> states;
+    const double fraction = *static_cast<double*>(data);
+    ProgressState& state = states[caller];
+    state.Label = static_cast<MessageCollector*>(self)->Labels[caller];
+    const auto now = translucency::Clock::now();
+    if (fraction < state.LastFraction)
+      state.LastFraction = -1.0; // a new run of the same filter
+    if (fraction < 0.05 || fraction >= 1.0 || fraction - state.LastFraction < 0.1 ||
+      (state.LastFraction >= 0 && translucency::MillisecondsSince(state.LastTime) < 2000))
+      return;
+    state.LastFraction = fraction;
+    state.LastTime = now;
+    std::cerr << "translucency: " << state.Label << " " << static_cast<int>(100 * fraction)
+              << " %" << std::endl;
+  });
   this->ErrorCallback->SetClientData(this);
   this->ErrorCallback->SetCallback([](vtkObject*, unsigned long, void* self, void* data) {
     auto* collector = static_cast<MessageCollector*>(self);
@@ -125,8 +174,13 @@ MessageCollector::MessageCollector()
   });
 }
 
-void MessageCollector::Watch(vtkObject* object)
+void MessageCollector::Watch(vtkObject* object, const std::string& label)
 {
+  if (!label.empty())
+  {
+    object->AddObserver(vtkCommand::ProgressEvent, this->ProgressCallback);
+    this->Labels[object] = label;
+  }
   object->AddObserver(vtkCommand::ErrorEvent, this->ErrorCallback);
   object->AddObserver(vtkCommand::WarningEvent, this->WarningCallback);
   // The executive's "Algorithm ... returned failure for request" follows

@@ -11,6 +11,7 @@
 #include <vtkCallbackCommand.h>
 #include <vtkNew.h>
 
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -49,6 +50,12 @@ std::vector<double> ParseNumbers(const std::string& text, const std::string& wha
 /// The lower-case extension of `path`, without the dot ("" if none).
 std::string Extension(const std::string& path);
 
+/// --quiet: no progress lines on stderr (warnings and errors still print).
+void SetQuiet(bool quiet);
+bool IsQuiet();
+/// "translucency: <text>" on stderr unless --quiet (flushed: it is progress).
+void Progress(const std::string& text);
+
 /// Collects vtkErrorMacro text of the filters it watches; prints warnings.
 struct MessageCollector
 {
@@ -56,8 +63,13 @@ struct MessageCollector
   vtkNew<vtkCallbackCommand> ErrorCallback;
   vtkNew<vtkCallbackCommand> WarningCallback;
   vtkNew<vtkCallbackCommand> IgnoreCallback;
+  /// Prints "translucency: <label> NN %" on stderr at most every 10 % and
+  /// 2 s (not under --quiet), for the filters that report progress.
+  vtkNew<vtkCallbackCommand> ProgressCallback;
+  std::map<const vtkObject*, std::string> Labels; ///< progress label per watched object
   MessageCollector();
-  void Watch(vtkObject* algorithm);
+  /// Errors collected, warnings printed; progress printed as `label` (none if empty).
+  void Watch(vtkObject* algorithm, const std::string& label = std::string());
   /// The message of the last error, without VTK's "ERROR: In file, line" header.
   std::string Last() const;
 };

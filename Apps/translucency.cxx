@@ -6,6 +6,7 @@
 //   translucency radiosity --scene FILE.json ...  translucent radiosity of a scene
 //   translucency acquire ...                      inverse diffusion from measured radiance
 //   translucency --help | help [COMMAND]
+//   translucency --version                        version and source revision
 //
 // Each command declares its options (CLI11) and runs itself (<Name>Command.cxx);
 // this file builds the parser, prints the help and turns errors into exit
@@ -13,6 +14,7 @@
 // and 2 for a mistake in the command line.
 
 #include "Options.h"
+#include "Provenance.h"
 
 #include "Error.h"
 
@@ -72,9 +74,15 @@ int main(int argc, char* argv[])
   std::vector<Command> commands = { AddRenderCommand(app), AddCompareCommand(app),
     AddBenchCommand(app), AddRadiosityCommand(app), AddAcquireCommand(app) };
   for (const Command& c : commands)
+  {
     AddMemoryLimitOption(c.App);
+    AddQuietOption(c.App);
+  }
   for (const Command& c : commands)
     c.App->get_help_ptr()->group(""); // works, but not listed: every --help prints all
+  bool version = false;
+  app.add_flag("--version", version, "print the version and source revision");
+  SetCommandLine(argc, argv);
   std::string helpTopic;
   CLI::App* help = app.add_subcommand("help", "Print the options of every command, or of one.");
   help->add_option("command", helpTopic, "a command")->check(CLI::IsMember([&commands]() {
@@ -117,6 +125,11 @@ int main(int argc, char* argv[])
     catch (const CLI::ParseError& e)
     {
       throw UsageError(e.what());
+    }
+    if (version)
+    {
+      std::cout << VersionLine() << "\n";
+      return 0;
     }
     if (help->parsed() || app.get_subcommands().empty())
     {
