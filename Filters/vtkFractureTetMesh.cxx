@@ -4,6 +4,7 @@
 #include "TetFracture.h"
 #include "TetMesh.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyParallel.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -83,8 +84,18 @@ int vtkFractureTetMesh::FillInputPortInformation(int, vtkInformation* info)
 
 //------------------------------------------------------------------------------
 int vtkFractureTetMesh::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  int parallelResult = 0;
+  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
+        vtkTranslucencyParallel::GatherMode::RankZero,
+        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+        { return this->RequestData(r, i, o); },
+        parallelResult))
+  {
+    return parallelResult;
+  }
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkMultiBlockDataSet* output = vtkMultiBlockDataSet::GetData(outputVector);
   this->NumberOfPieces = 0;

@@ -1,6 +1,7 @@
 #include "vtkInverseDiffusion.h"
 
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyParallel.h"
 
 #include "DiffusionForwardModel.h"
 #include "Error.h"
@@ -86,8 +87,18 @@ int CountIndexed(vtkPointData* pd, const char* base)
 } // namespace
 
 int vtkInverseDiffusion::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  int parallelResult = 0;
+  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
+        vtkTranslucencyParallel::GatherMode::SameMesh,
+        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+        { return this->RequestData(r, i, o); },
+        parallelResult))
+  {
+    return parallelResult;
+  }
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);
   vtkTable* history = vtkTable::GetData(outputVector, 1);

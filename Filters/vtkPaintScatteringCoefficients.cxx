@@ -1,6 +1,7 @@
 #include "vtkPaintScatteringCoefficients.h"
 
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyParallel.h"
 
 #include "TetPaint.h"
 #include "Error.h"
@@ -83,8 +84,18 @@ void vtkPaintScatteringCoefficients::RemoveAllStrokePoints()
 
 //------------------------------------------------------------------------------
 int vtkPaintScatteringCoefficients::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  int parallelResult = 0;
+  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
+        vtkTranslucencyParallel::GatherMode::SameMesh,
+        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+        { return this->RequestData(r, i, o); },
+        parallelResult))
+  {
+    return parallelResult;
+  }
   vtkUnstructuredGrid* cut = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* original =
     this->GetNumberOfInputConnections(1) > 0 ? vtkUnstructuredGrid::GetData(inputVector[1]) : nullptr;

@@ -9,6 +9,7 @@
 #include "Timer.h"
 #include "VertexDiffusionSolver.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyParallel.h"
 
 #include <vtkDataArray.h>
 #include <vtkFieldData.h>
@@ -160,8 +161,18 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
 
 //------------------------------------------------------------------------------
 int vtkSolveDiffusion::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  int parallelResult = 0;
+  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
+        vtkTranslucencyParallel::GatherMode::SameMesh,
+        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+        { return this->RequestData(r, i, o); },
+        parallelResult))
+  {
+    return parallelResult;
+  }
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   Internals& in = *this->Internal;
