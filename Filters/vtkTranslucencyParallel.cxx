@@ -239,18 +239,24 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
       }
       local[r][i] = inserted.first->second;
     }
-    // Ghost-only points: their owner's point (or -1 if none has it).
-    for (vtkIdType i = 0; i < n; ++i)
-    {
-      if (local[r][i] < 0)
-      {
-        const auto found = index.find(KeyOf(s, globalIds, i));
-        local[r][i] = found == index.end() ? -1 : found->second;
-      }
-    }
     ++input;
   }
   merged->SetPoints(points);
+  // Points of ghost cells only: their owner's point (-1 if no piece owns it),
+  // once every piece's points are in.
+  for (size_t r = 0; r < sets.size(); ++r)
+  {
+    vtkPointSet* s = sets[r];
+    vtkDataArray* globalIds = s && useGlobalIds ? s->GetPointData()->GetGlobalIds() : nullptr;
+    for (size_t i = 0; i < local[r].size(); ++i)
+    {
+      if (local[r][i] < 0)
+      {
+        const auto found = index.find(KeyOf(s, globalIds, static_cast<vtkIdType>(i)));
+        local[r][i] = found == index.end() ? -1 : found->second;
+      }
+    }
+  }
 
   // Cells: the owned cells of each piece in order.
   std::vector<vtkIdType> ids;

@@ -1,0 +1,141 @@
+"""The pvbatch side of TestParallel.py: the plugin's filters on distributed data.
+
+    pvbatch ParallelPipeline.py <Translucency plugin> <work dir> prepare
+    mpiexec -n N pvbatch ParallelPipeline.py <Translucency plugin> <work dir> run
+
+prepare (one process): writes a closed sphere surface (surface.ply), meshes
+it and assigns the material (mesh.vtu), writes two partitioned copies of the
+same tets (mesh2g.pvtu: 2 pieces with one level of ghost cells; mesh3id.pvtu:
+3 pieces with point GlobalIds) and the serial references of every case
+(ref_*.vtu: Fluence; ref_*_surface.vtp: Outgoing Radiance).
+
+run (under mpiexec): the same chains on distributed data, each result saved
+as .pvtu / .pvtp (one piece per rank) for TestParallel.py to compare:
+  ply       PLY reader (rank 0 only) -> Tetrahedralize -> Assign -> ... -> Radiance
+  pvtu2     mesh2g.pvtu (ghost cells; with 3 ranks one rank has no piece)
+  pvtu3     mesh3id.pvtu (GlobalIds; with 2 ranks a rank reads 2 pieces)
+  redist    mesh.vtu (on rank 0) -> Redistribute DataSet -> ...
+  cut       mesh.vtu (on rank 0) -> Stroke Cut (plane) -> Redistribute DataSet -> ...
+  paint     Redistribute DataSet -> Paint -> ...
+  error     Solve Diffusion without Irradiance: the same error on every rank
+Every line "case <name> done" on stdout marks a finished case.
+"""
+
+import os
+import sys
+
+from paraview.simple import *  # noqa: F401,F403
+
+PLUGIN, WORK, MODE = sys.argv[1], sys.argv[2], sys.argv[3]
+LoadPlugin(PLUGIN, ns=globals())
+
+
+def path(name):
+    return os.path.join(WORK, name)
+
+
+def light(source):
+    # Shadows on, no stochastic occlusion sampling of the uniform light (its
+    # per-point sample rotation follows the point order, see Parallel.md).
+    return SurfaceIrradiance(Input=source, UniformLightSamples=0)
+
+
+def solve(source):
+    return SolveDiffusion(Input=source, RelTol=1e-12, MaxIter=20000)
+
+
+def plane_cut(source):
+    cut = StrokeCut(Input=source, CutType="Plane")
+    cut.CutType.Origin = [0.5, 0.0, 0.0]
+    cut.CutType.Normal = [1.0, 0.3, 0.0]
+    return cut
+
+
+def paint(source):
+    return PaintScatteringCoefficients(Input=source, StrokePoints=[3.5, 0.0, 0.0, 2.0, 2.5, 0.0],
+                                       Width=1.0)
+
+
+def chain(name, source, surface=True):
+    solved = solve(light(source))
+    SaveData(path(name + ".pvtu"), proxy=solved)
+    if surface:
+        SaveData(path(name + "_surface.pvtp"), proxy=OutgoingRadiance(Input=solved))
+    print("case %s done" % name.split("_")[-1], flush=True)
+
+
+if MODE == "prepare":
+    from vtkmodules.vtkCommonCore import vtkIdTypeArray
+    from vtkmodules.vtkFiltersCore import vtkTriangleFilter
+    from vtkmodules.vtkFiltersParallel import vtkExtractUnstructuredGridPiece
+    from vtkmodules.vtkFiltersSources import vtkSphereSource
+    from vtkmodules.vtkIOParallelXML import vtkXMLPUnstructuredGridWriter
+    from vtkmodules.vtkIOPLY import vtkPLYWriter
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+
+    sphere = vtkSphereSource()
+    sphere.SetRadius(4.0)
+    sphere.SetThetaResolution(16)
+    sphere.SetPhiResolution(16)
+    triangles = vtkTriangleFilter()
+    triangles.SetInputConnection(sphere.GetOutputPort())
+    ply = vtkPLYWriter()
+    ply.SetInputConnection(triangles.GetOutputPort())
+    ply.SetFileName(path("surface.ply"))
+    ply.Write()
+
+    reader = TranslucencySurfaceReader(FileName=path("surface.ply"))
+    assign = AssignScatteringCoefficients(
+        Input=TetrahedralizeSurface(Input=reader, TargetNumberOfTets=3000))
+    SaveData(path("mesh.vtu"), proxy=assign)
+    chain("ref_ply", assign)
+
+    # The same tets in pieces, written here with plain VTK (one process).
+    mesh_reader = vtkXMLUnstructuredGridReader()
+    mesh_reader.SetFileName(path("mesh.vtu"))
+    mesh_reader.Update()
+    mesh = mesh_reader.GetOutput()
+    ids = vtkIdTypeArray()
+    ids.SetName("GlobalIds")
+    ids.SetNumberOfTuples(mesh.GetNumberOfPoints())
+    for i in range(mesh.GetNumberOfPoints()):
+        ids.SetValue(i, 1000 + 7 * i)
+    with_ids = mesh.NewInstance()
+    with_ids.ShallowCopy(mesh)
+    with_ids.GetPointData().SetGlobalIds(ids)
+    for name, data, pieces, ghosts in (("mesh2g", mesh, 2, 1), ("mesh3id", with_ids, 3, 0)):
+        split = vtkExtractUnstructuredGridPiece()
+        split.SetInputData(data)
+        writer = vtkXMLPUnstructuredGridWriter()
+        writer.SetInputConnection(split.GetOutputPort())
+        writer.SetFileName(path(name + ".pvtu"))
+        writer.SetNumberOfPieces(pieces)
+        writer.SetStartPiece(0)
+        writer.SetEndPiece(pieces - 1)
+        writer.SetGhostLevel(ghosts)
+        writer.Write()
+
+    mesh_source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
+    chain("ref_mesh", mesh_source)
+    chain("ref_cut", plane_cut(mesh_source), surface=False)
+    chain("ref_paint", paint(mesh_source), surface=False)
+elif MODE == "run":
+    reader = TranslucencySurfaceReader(FileName=path("surface.ply"))
+    chain("par_ply", AssignScatteringCoefficients(
+        Input=TetrahedralizeSurface(Input=reader, TargetNumberOfTets=3000)))
+    chain("par_pvtu2", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")]))
+    chain("par_pvtu3", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")]))
+    redistributed = RedistributeDataSet(
+        Input=XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))
+    chain("par_redist", redistributed)
+    # The cut's relaxation visits the vertices in order: cut the mesh in its
+    # serial order (read by rank 0), then spread the result over the ranks.
+    chain("par_cut", RedistributeDataSet(
+        Input=plane_cut(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))), surface=False)
+    chain("par_paint", paint(redistributed), surface=False)
+    # No Irradiance array: every rank reports Solve Diffusion's error, none hangs.
+    unlit = solve(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))
+    unlit.UpdatePipeline()
+    print("case error done", flush=True)
+else:
+    sys.exit("mode must be prepare or run, not " + MODE)
