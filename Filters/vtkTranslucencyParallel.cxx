@@ -192,16 +192,35 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
     mergedPoly->AllocateEstimate(totalCells, 4);
   }
 
+  // Which piece is which input of the field lists (the non-empty ones, in order).
+  std::vector<int> inputIndex(sets.size(), -1);
+  int inputs = 0;
+  for (size_t r = 0; r < sets.size(); ++r)
+  {
+    if (sets[r] && !IsEmpty(sets[r]))
+    {
+      inputIndex[r] = inputs++;
+    }
+  }
+
   // Points: those of owned cells, and points of no cell at all (an orphan
-  // point is one in serial too); a point of ghost cells only is matched later.
+  // point is one in serial too), each once, in the order of first occurrence
+  // or, with GlobalIds, of the ids; a point of ghost cells only is matched
+  // to its owner's once every piece's points are in.
+  struct PointRef
+  {
+    size_t Piece;
+    vtkIdType Id;
+    double GlobalId;
+  };
+  std::vector<PointRef> unique;
   std::unordered_map<PointKey, vtkIdType, PointKeyHash> index;
   std::vector<std::vector<vtkIdType>> local(sets.size());
-  int input = 0; // index among the non-empty pieces, as in the field lists
   vtkNew<vtkIdList> cellPoints;
   for (size_t r = 0; r < sets.size(); ++r)
   {
     vtkPointSet* s = sets[r];
-    if (!s || IsEmpty(s))
+    if (inputIndex[r] < 0)
     {
       continue;
     }
@@ -230,58 +249,148 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
       {
         continue;
       }
-      const auto inserted = index.emplace(KeyOf(s, globalIds, i), points->GetNumberOfPoints());
+      const PointKey key = KeyOf(s, globalIds, i);
+      const auto inserted = index.emplace(key, static_cast<vtkIdType>(unique.size()));
       if (inserted.second)
       {
-        points->InsertNextPoint(s->GetPoint(i));
-        merged->GetPointData()->CopyData(
-          pointFields, s->GetPointData(), input, i, inserted.first->second);
+        unique.push_back({ r, i, key.X[0] });
       }
       local[r][i] = inserted.first->second;
     }
-    ++input;
+  }
+  std::vector<vtkIdType> order(unique.size());
+  for (size_t k = 0; k < order.size(); ++k)
+  {
+    order[k] = static_cast<vtkIdType>(k);
+  }
+  if (useGlobalIds)
+  {
+    std::stable_sort(order.begin(), order.end(),
+      [&unique](vtkIdType a, vtkIdType b) { return unique[a].GlobalId < unique[b].GlobalId; });
+  }
+  std::vector<vtkIdType> finalId(unique.size());
+  points->SetNumberOfPoints(static_cast<vtkIdType>(unique.size()));
+  for (size_t k = 0; k < order.size(); ++k)
+  {
+    const PointRef& p = unique[static_cast<size_t>(order[k])];
+    finalId[static_cast<size_t>(order[k])] = static_cast<vtkIdType>(k);
+    points->SetPoint(static_cast<vtkIdType>(k), sets[p.Piece]->GetPoint(p.Id));
+    merged->GetPointData()->CopyData(pointFields, sets[p.Piece]->GetPointData(),
+      inputIndex[p.Piece], p.Id, static_cast<vtkIdType>(k));
   }
   merged->SetPoints(points);
-  // Points of ghost cells only: their owner's point (-1 if no piece owns it),
-  // once every piece's points are in.
   for (size_t r = 0; r < sets.size(); ++r)
   {
     vtkPointSet* s = sets[r];
     vtkDataArray* globalIds = s && useGlobalIds ? s->GetPointData()->GetGlobalIds() : nullptr;
     for (size_t i = 0; i < local[r].size(); ++i)
     {
-      if (local[r][i] < 0)
+      vtkIdType& id = local[r][i];
+      if (id >= 0)
       {
-        const auto found = index.find(KeyOf(s, globalIds, static_cast<vtkIdType>(i)));
-        local[r][i] = found == index.end() ? -1 : found->second;
+        id = finalId[static_cast<size_t>(id)];
+        continue;
       }
+      const auto found = index.find(KeyOf(s, globalIds, static_cast<vtkIdType>(i)));
+      id = found == index.end() ? -1 : finalId[static_cast<size_t>(found->second)];
     }
   }
 
-  // Cells: the owned cells of each piece in order.
-  std::vector<vtkIdType> ids;
-  input = 0;
+  // Cells: the owned cells of each piece, in piece order or, when every
+  // piece has cell GlobalIds, in id order. A cell that another piece already
+  // brought (the same points: overlapping pieces not marked as ghosts) is
+  // taken once; a ghost cell maps to the owned cell with its points.
+  bool useCellGlobalIds = true;
+  for (size_t r = 0; r < sets.size(); ++r)
+  {
+    if (inputIndex[r] >= 0)
+    {
+      useCellGlobalIds = useCellGlobalIds && sets[r]->GetCellData()->GetGlobalIds() != nullptr;
+    }
+  }
+  struct CellRef
+  {
+    size_t Piece;
+    vtkIdType Id;
+    double GlobalId;
+  };
+  std::vector<CellRef> ownedCells;
+  std::vector<std::vector<vtkIdType>> cellMaps(sets.size());
   bool anyGhost = false;
   for (size_t r = 0; r < sets.size(); ++r)
   {
     vtkPointSet* s = sets[r];
-    if (!s || IsEmpty(s))
+    if (!s)
     {
-      if (maps && s)
-      {
-        maps->Points[r].assign(static_cast<size_t>(s->GetNumberOfPoints()), -1);
-        maps->Cells[r].assign(static_cast<size_t>(s->GetNumberOfCells()), -1);
-      }
+      continue;
+    }
+    cellMaps[r].assign(static_cast<size_t>(s->GetNumberOfCells()), -1);
+    if (inputIndex[r] < 0)
+    {
       continue;
     }
     auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
       s->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()));
-    std::vector<vtkIdType> cellMap(static_cast<size_t>(s->GetNumberOfCells()), -1);
+    vtkDataArray* cellIds = useCellGlobalIds ? s->GetCellData()->GetGlobalIds() : nullptr;
     for (vtkIdType c = 0; c < s->GetNumberOfCells(); ++c)
     {
       if (IsGhostCell(ghosts, c))
       {
         anyGhost = true;
+        continue;
+      }
+      ownedCells.push_back({ r, c, cellIds ? cellIds->GetComponent(c, 0) : 0.0 });
+    }
+  }
+  if (useCellGlobalIds)
+  {
+    std::stable_sort(ownedCells.begin(), ownedCells.end(),
+      [](const CellRef& a, const CellRef& b) { return a.GlobalId < b.GlobalId; });
+  }
+  // A cell's identity: its type and sorted merged point ids.
+  auto cellKey = [](int type, std::vector<vtkIdType> ids) {
+    std::sort(ids.begin(), ids.end());
+    ids.push_back(type);
+    return std::string(reinterpret_cast<const char*>(ids.data()), ids.size() * sizeof(vtkIdType));
+  };
+  std::unordered_map<std::string, vtkIdType> cellIndex;
+  cellIndex.reserve(ownedCells.size());
+  std::vector<size_t> cellPiece;
+  std::vector<vtkIdType> ids;
+  for (const CellRef& cell : ownedCells)
+  {
+    vtkPointSet* s = sets[cell.Piece];
+    s->GetCellPoints(cell.Id, cellPoints);
+    ids.resize(static_cast<size_t>(cellPoints->GetNumberOfIds()));
+    for (size_t k = 0; k < ids.size(); ++k)
+    {
+      ids[k] = local[cell.Piece][cellPoints->GetId(static_cast<vtkIdType>(k))];
+    }
+    const int type = s->GetCellType(cell.Id);
+    const auto known = cellIndex.emplace(cellKey(type, ids), merged->GetNumberOfCells());
+    if (!known.second && cellPiece[static_cast<size_t>(known.first->second)] != cell.Piece)
+    {
+      cellMaps[cell.Piece][cell.Id] = known.first->second; // brought by another piece
+      continue;
+    }
+    const vtkIdType id = mergedGrid
+      ? mergedGrid->InsertNextCell(type, static_cast<vtkIdType>(ids.size()), ids.data())
+      : mergedPoly->InsertNextCell(type, static_cast<vtkIdType>(ids.size()), ids.data());
+    merged->GetCellData()->CopyData(
+      cellFields, s->GetCellData(), inputIndex[cell.Piece], cell.Id, id);
+    cellMaps[cell.Piece][cell.Id] = id;
+    cellPiece.push_back(cell.Piece);
+  }
+  for (size_t r = 0; anyGhost && r < sets.size(); ++r)
+  {
+    vtkPointSet* s = sets[r];
+    auto* ghosts = inputIndex[r] < 0 ? nullptr
+                                     : vtkUnsignedCharArray::SafeDownCast(s->GetCellData()->GetArray(
+                                         vtkDataSetAttributes::GhostArrayName()));
+    for (vtkIdType c = 0; ghosts && c < s->GetNumberOfCells(); ++c)
+    {
+      if (!IsGhostCell(ghosts, c))
+      {
         continue;
       }
       s->GetCellPoints(c, cellPoints);
@@ -290,55 +399,20 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
       {
         ids[k] = local[r][cellPoints->GetId(static_cast<vtkIdType>(k))];
       }
-      const int type = s->GetCellType(c);
-      const vtkIdType id = mergedGrid
-        ? mergedGrid->InsertNextCell(type, static_cast<vtkIdType>(ids.size()), ids.data())
-        : mergedPoly->InsertNextCell(type, static_cast<vtkIdType>(ids.size()), ids.data());
-      merged->GetCellData()->CopyData(cellFields, s->GetCellData(), input, c, id);
-      cellMap[c] = id;
+      const auto found = cellIndex.find(cellKey(s->GetCellType(c), ids));
+      cellMaps[r][c] = found == cellIndex.end() ? -1 : found->second;
     }
-    if (maps)
-    {
-      maps->Points[r] = local[r];
-      maps->Cells[r] = std::move(cellMap);
-    }
-    ++input;
   }
-
-  // A ghost cell takes the values of the owned cell with the same points.
-  if (maps && anyGhost)
+  if (maps)
   {
-    std::map<std::vector<vtkIdType>, vtkIdType> byPoints;
-    for (vtkIdType c = 0; c < merged->GetNumberOfCells(); ++c)
-    {
-      merged->GetCellPoints(c, cellPoints);
-      std::vector<vtkIdType> key(
-        cellPoints->GetPointer(0), cellPoints->GetPointer(0) + cellPoints->GetNumberOfIds());
-      std::sort(key.begin(), key.end());
-      byPoints.emplace(std::move(key), c);
-    }
     for (size_t r = 0; r < sets.size(); ++r)
     {
-      vtkPointSet* s = sets[r];
-      auto* ghosts = s ? vtkUnsignedCharArray::SafeDownCast(
-                           s->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()))
-                       : nullptr;
-      for (vtkIdType c = 0; ghosts && c < s->GetNumberOfCells(); ++c)
+      maps->Points[r] = sets[r] ? std::move(local[r]) : std::vector<vtkIdType>();
+      if (sets[r] && maps->Points[r].empty())
       {
-        if (!IsGhostCell(ghosts, c))
-        {
-          continue;
-        }
-        s->GetCellPoints(c, cellPoints);
-        std::vector<vtkIdType> key;
-        for (vtkIdType k = 0; k < cellPoints->GetNumberOfIds(); ++k)
-        {
-          key.push_back(maps->Points[r][cellPoints->GetId(k)]);
-        }
-        std::sort(key.begin(), key.end());
-        const auto found = byPoints.find(key);
-        maps->Cells[r][c] = found == byPoints.end() ? -1 : found->second;
+        maps->Points[r].assign(static_cast<size_t>(sets[r]->GetNumberOfPoints()), -1);
       }
+      maps->Cells[r] = std::move(cellMaps[r]);
     }
   }
 

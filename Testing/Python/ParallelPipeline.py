@@ -6,7 +6,7 @@
 prepare (one process): writes a closed sphere surface (surface.ply), meshes
 it and assigns the material (mesh.vtu), writes two partitioned copies of the
 same tets (mesh2g.pvtu: 2 pieces with one level of ghost cells; mesh3id.pvtu:
-3 pieces with point GlobalIds) and the serial references of every case
+3 pieces with point and cell GlobalIds) and the serial references of every case
 (ref_*.vtu: Fluence; ref_*_surface.vtp: Outgoing Radiance).
 
 run (under mpiexec): the same chains on distributed data, each result saved
@@ -17,6 +17,8 @@ as .pvtu / .pvtp (one piece per rank) for TestParallel.py to compare:
   redist    mesh.vtu (on rank 0) -> Redistribute DataSet -> ...
   cut       mesh.vtu (on rank 0) -> Stroke Cut (plane) -> Redistribute DataSet -> ...
   paint     Redistribute DataSet -> Paint -> ...
+  cutids    mesh3id.pvtu (point and cell GlobalIds) -> Stroke Cut -> ..., with
+            the uniform light's occlusion sampling on
   error     Solve Diffusion without Irradiance: the same error on every rank
 Every line "case <name> done" on stdout marks a finished case.
 """
@@ -34,10 +36,10 @@ def path(name):
     return os.path.join(WORK, name)
 
 
-def light(source):
-    # Shadows on, no stochastic occlusion sampling of the uniform light (its
+def light(source, samples=0):
+    # Shadows on; by default no occlusion sampling of the uniform light (its
     # per-point sample rotation follows the point order, see Parallel.md).
-    return SurfaceIrradiance(Input=source, UniformLightSamples=0)
+    return SurfaceIrradiance(Input=source, UniformLightSamples=samples)
 
 
 def solve(source):
@@ -56,8 +58,8 @@ def paint(source):
                                        Width=1.0)
 
 
-def chain(name, source, surface=True):
-    solved = solve(light(source))
+def chain(name, source, surface=True, samples=0):
+    solved = solve(light(source, samples))
     SaveData(path(name + ".pvtu"), proxy=solved)
     if surface:
         SaveData(path(name + "_surface.pvtp"), proxy=OutgoingRadiance(Input=solved))
@@ -65,13 +67,13 @@ def chain(name, source, surface=True):
 
 
 if MODE == "prepare":
-    from vtkmodules.vtkCommonCore import vtkIdTypeArray
+    from vtkmodules.vtkCommonCore import vtkIdTypeArray, vtkPoints
     from vtkmodules.vtkFiltersCore import vtkTriangleFilter
     from vtkmodules.vtkFiltersParallel import vtkExtractUnstructuredGridPiece
     from vtkmodules.vtkFiltersSources import vtkSphereSource
     from vtkmodules.vtkIOParallelXML import vtkXMLPUnstructuredGridWriter
     from vtkmodules.vtkIOPLY import vtkPLYWriter
-    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader, vtkXMLUnstructuredGridWriter
 
     sphere = vtkSphereSource()
     sphere.SetRadius(4.0)
@@ -91,18 +93,34 @@ if MODE == "prepare":
     chain("ref_ply", assign)
 
     # The same tets in pieces, written here with plain VTK (one process).
+    # vtkExtractUnstructuredGridPiece makes float points: mesh.vtu gets float
+    # points too, so that every case has the very same coordinates.
     mesh_reader = vtkXMLUnstructuredGridReader()
     mesh_reader.SetFileName(path("mesh.vtu"))
     mesh_reader.Update()
     mesh = mesh_reader.GetOutput()
-    ids = vtkIdTypeArray()
-    ids.SetName("GlobalIds")
-    ids.SetNumberOfTuples(mesh.GetNumberOfPoints())
-    for i in range(mesh.GetNumberOfPoints()):
-        ids.SetValue(i, 1000 + 7 * i)
+    float_points = vtkPoints()
+    float_points.SetDataTypeToFloat()
+    float_points.DeepCopy(mesh.GetPoints())
+    mesh.SetPoints(float_points)
+    mesh_writer = vtkXMLUnstructuredGridWriter()
+    mesh_writer.SetInputData(mesh)
+    mesh_writer.SetFileName(path("mesh.vtu"))
+    mesh_writer.Write()
+    # mesh3id: point and cell ids in the serial order (plain arrays through
+    # vtkExtractUnstructuredGridPiece, which drops the GlobalIds attribute,
+    # marked as GlobalIds in the written files afterwards).
     with_ids = mesh.NewInstance()
     with_ids.ShallowCopy(mesh)
-    with_ids.GetPointData().SetGlobalIds(ids)
+    for data, count, name, scale in (
+            (with_ids.GetPointData(), mesh.GetNumberOfPoints(), "PointIds", 7),
+            (with_ids.GetCellData(), mesh.GetNumberOfCells(), "CellIds", 3)):
+        ids = vtkIdTypeArray()
+        ids.SetName(name)
+        ids.SetNumberOfTuples(count)
+        for i in range(count):
+            ids.SetValue(i, 1000 + scale * i)
+        data.AddArray(ids)
     for name, data, pieces, ghosts in (("mesh2g", mesh, 2, 1), ("mesh3id", with_ids, 3, 0)):
         split = vtkExtractUnstructuredGridPiece()
         split.SetInputData(data)
@@ -114,11 +132,29 @@ if MODE == "prepare":
         writer.SetEndPiece(pieces - 1)
         writer.SetGhostLevel(ghosts)
         writer.Write()
+    for k in range(3):
+        piece_reader = vtkXMLUnstructuredGridReader()
+        piece_reader.SetFileName(path("mesh3id_%d.vtu" % k))
+        piece_reader.Update()
+        piece = piece_reader.GetOutput()
+        piece.GetPointData().SetActiveGlobalIds("PointIds")
+        piece.GetCellData().SetActiveGlobalIds("CellIds")
+        piece_writer = vtkXMLUnstructuredGridWriter()
+        piece_writer.SetInputData(piece)
+        piece_writer.SetFileName(path("mesh3id_%d.vtu" % k))
+        piece_writer.Write()
+    with open(path("mesh3id.pvtu")) as f:
+        summary = f.read()
+    summary = summary.replace("<PPointData>", '<PPointData GlobalIds="PointIds">')
+    summary = summary.replace("<PCellData>", '<PCellData GlobalIds="CellIds">')
+    with open(path("mesh3id.pvtu"), "w") as f:
+        f.write(summary)
 
     mesh_source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     chain("ref_mesh", mesh_source)
     chain("ref_cut", plane_cut(mesh_source), surface=False)
     chain("ref_paint", paint(mesh_source), surface=False)
+    chain("ref_cutids", plane_cut(mesh_source), surface=False, samples=32)
 elif MODE == "run":
     reader = TranslucencySurfaceReader(FileName=path("surface.ply"))
     chain("par_ply", AssignScatteringCoefficients(
@@ -133,6 +169,12 @@ elif MODE == "run":
     chain("par_cut", RedistributeDataSet(
         Input=plane_cut(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))), surface=False)
     chain("par_paint", paint(redistributed), surface=False)
+    # With point and cell GlobalIds (made in the serial order) the gathered
+    # mesh is in the serial order: the order-dependent cut relaxation and
+    # uniform-light sampling give the serial result.
+    chain("par_cutids", plane_cut(
+        XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")])),
+        surface=False, samples=32)
     # No Irradiance array: every rank reports Solve Diffusion's error, none hangs.
     unlit = solve(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))
     unlit.UpdatePipeline()

@@ -11,7 +11,8 @@ How to run (ctest does this, with 2 and with 3 ranks):
    ... run` runs the same chains on distributed data: a PLY surface read by
    rank 0 only (the other ranks have empty pieces in every filter), a .pvtu
    in 2 pieces with ghost cells (with 3 ranks, one rank has no piece), a .pvtu
-   in 3 pieces with point GlobalIds, the output of Redistribute DataSet, and a
+   in 3 pieces with point and cell GlobalIds (also cut, with the
+   order-dependent uniform-light sampling on), the output of Redistribute DataSet, and a
    plane cut of the mesh read by rank 0, redistributed after the cut, and a
    paint after Redistribute DataSet.
 3. Here: at every point of every rank's piece (shared points included, each
@@ -27,6 +28,7 @@ Exits non-zero on failure (unittest).
 
 import os
 import re
+import signal
 import subprocess
 import sys
 import tempfile
@@ -40,11 +42,32 @@ from vtkmodules.vtkIOXML import vtkXMLPPolyDataReader, vtkXMLPUnstructuredGridRe
 HERE = os.path.dirname(os.path.abspath(__file__))
 PLUGIN = sys.argv[1] if len(sys.argv) > 1 else ""
 RANKS = int(sys.argv[2]) if len(sys.argv) > 2 else 2
-TIME_LIMIT = 55  # seconds for each pvbatch run (ctest allows 120 in all)
+TIME_LIMIT = 50  # seconds for each pvbatch run (ctest allows 120 in all)
 
 
 def run(command, work):
-    return subprocess.run(command, cwd=work, capture_output=True, text=True, timeout=TIME_LIMIT)
+    """The finished process, or one with returncode None that says it hung.
+    A hung mpiexec gets SIGTERM (it ends its ranks), then its process group
+    SIGKILL, so that no rank is left running."""
+    process = subprocess.Popen(command, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True, start_new_session=True)
+    try:
+        out, err = process.communicate(timeout=TIME_LIMIT)
+        return subprocess.CompletedProcess(command, process.returncode, out, err)
+    except subprocess.TimeoutExpired:
+        process.terminate()
+        try:
+            out, err = process.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            out, err = "", ""
+        try:
+            os.killpg(process.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        if process.poll() is None:
+            out, err = process.communicate()
+        return subprocess.CompletedProcess(
+            command, None, out, err + "\nHUNG: no end after %d s: %s" % (TIME_LIMIT, " ".join(command)))
 
 
 def read(name):
@@ -95,7 +118,8 @@ class ParallelTest(unittest.TestCase):
         cls.work = cls.tmp.name
         script = os.path.join(HERE, "ParallelPipeline.py")
         prepare = run(["pvbatch", script, PLUGIN, cls.work, "prepare"], cls.work)
-        if prepare.returncode != 0 or "case paint done" not in prepare.stdout:
+        if prepare.returncode != 0 or "case cutids done" not in prepare.stdout:
+            cls.tmp.cleanup()
             raise AssertionError("prepare failed:\n" + prepare.stdout + prepare.stderr)
         cls.result = run(["mpiexec", "--allow-run-as-root", "--oversubscribe", "-n", str(RANKS),
                           "pvbatch", script, PLUGIN, cls.work, "run"], cls.work)
@@ -137,7 +161,7 @@ class ParallelTest(unittest.TestCase):
 
     def test_0_runs(self):
         self.assertEqual(self.result.returncode, 0, self.result.stderr[-3000:])
-        for case in ("ply", "pvtu2", "pvtu3", "redist", "cut", "paint", "error"):
+        for case in ("ply", "pvtu2", "pvtu3", "redist", "cut", "paint", "cutids", "error"):
             self.assertIn("case %s done" % case, self.result.stdout)
 
     def test_surface_read_by_one_rank(self):
@@ -159,6 +183,10 @@ class ParallelTest(unittest.TestCase):
     def test_cut_and_paint(self):
         self.check_fluence("cut", "cut", split=True)
         self.check_fluence("paint", "paint", split=True)
+
+    def test_global_ids_give_the_serial_order(self):
+        # Cut relaxation and uniform-light sampling follow the point order.
+        self.check_fluence("cutids", "cutids", split=False)
 
     def test_errors(self):
         # The one expected error, once per rank with the same text; no other.
