@@ -19,6 +19,8 @@ as .pvtu / .pvtp (one piece per rank) for TestParallel.py to compare:
   paint     Redistribute DataSet -> Paint -> ...
   cutids    mesh3id.pvtu (point and cell GlobalIds) -> Stroke Cut -> ..., with
             the uniform light's occlusion sampling on
+  fracture, radiosity: mesh.vtu (on rank 0) -> Fracture Tet Mesh, and
+            Translucent Radiosity with a floor: totals printed as "summary" lines
   error     Solve Diffusion without Irradiance: the same error on every rank
 Every line "case <name> done" on stdout marks a finished case.
 """
@@ -56,6 +58,29 @@ def plane_cut(source):
 def paint(source):
     return PaintScatteringCoefficients(Input=source, StrokePoints=[3.5, 0.0, 0.0, 2.0, 2.5, 0.0],
                                        Width=1.0)
+
+
+def summary(name, proxy, array):
+    """One line of totals over all ranks, compared by TestParallel.py."""
+    proxy.UpdatePipeline()
+    info = proxy.GetDataInformation()
+    ranges = [proxy.CellData[array].GetRange(c) for c in range(3)]
+    print("summary %s: %d cells, %d points, %s %s" % (
+        name, info.GetNumberOfCells(), info.GetNumberOfPoints(), array,
+        " ".join("%.12g %.12g" % r for r in ranges)), flush=True)
+
+
+def serial_stages(mesh_source):
+    """Fracture and radiosity: computed on rank 0, the result stays there."""
+    summary("fracture", FractureTetMesh(Input=mesh_source, RandomSeeds=[4, 1]),
+            "AbsorptionCoefficient")
+    plane = Plane(Origin=[-10, -10, -5], Point1=[10, -10, -5], Point2=[-10, 10, -5],
+                  XResolution=4, YResolution=4)
+    floor = Calculator(Input=Triangulate(Input=plane), AttributeType="Cell Data",
+                       ResultArrayName="Albedo", Function="0.6*iHat+0.6*jHat+0.6*kHat")
+    summary("radiosity", TranslucentRadiosity(
+        Input=GroupDatasets(Input=[floor, mesh_source]), LightPosition=[0, 0, 20],
+        LightPower=[500, 500, 500], RaysPerPatch=16), "Radiosity")
 
 
 def chain(name, source, surface=True, samples=0):
@@ -144,17 +169,18 @@ if MODE == "prepare":
         piece_writer.SetFileName(path("mesh3id_%d.vtu" % k))
         piece_writer.Write()
     with open(path("mesh3id.pvtu")) as f:
-        summary = f.read()
-    summary = summary.replace("<PPointData>", '<PPointData GlobalIds="PointIds">')
-    summary = summary.replace("<PCellData>", '<PCellData GlobalIds="CellIds">')
+        text = f.read()
+    text = text.replace("<PPointData>", '<PPointData GlobalIds="PointIds">')
+    text = text.replace("<PCellData>", '<PCellData GlobalIds="CellIds">')
     with open(path("mesh3id.pvtu"), "w") as f:
-        f.write(summary)
+        f.write(text)
 
     mesh_source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     chain("ref_mesh", mesh_source)
     chain("ref_cut", plane_cut(mesh_source), surface=False)
     chain("ref_paint", paint(mesh_source), surface=False)
     chain("ref_cutids", plane_cut(mesh_source), surface=False, samples=32)
+    serial_stages(mesh_source)
 elif MODE == "run":
     reader = TranslucencySurfaceReader(FileName=path("surface.ply"))
     chain("par_ply", AssignScatteringCoefficients(
@@ -175,6 +201,7 @@ elif MODE == "run":
     chain("par_cutids", plane_cut(
         XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")])),
         surface=False, samples=32)
+    serial_stages(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))
     # No Irradiance array: every rank reports Solve Diffusion's error, none hangs.
     unlit = solve(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))
     unlit.UpdatePipeline()

@@ -21,7 +21,9 @@ How to run (ctest does this, with 2 and with 3 ranks):
    number of faces and area and the serial Radiance at every point; the pieces
    stay distributed (more than one non-empty piece where the input was split);
    Solve Diffusion without Irradiance fails with the same message on every
-   rank; nothing hangs (each run has a time limit) and no other error is logged.
+   rank; Fracture Tet Mesh and Translucent Radiosity (results on rank 0) give the
+   serial totals; nothing hangs (each run has a time limit) and no other error
+   is logged.
 
 Exits non-zero on failure (unittest).
 """
@@ -117,8 +119,8 @@ class ParallelTest(unittest.TestCase):
         cls.tmp = tempfile.TemporaryDirectory()
         cls.work = cls.tmp.name
         script = os.path.join(HERE, "ParallelPipeline.py")
-        prepare = run(["pvbatch", script, PLUGIN, cls.work, "prepare"], cls.work)
-        if prepare.returncode != 0 or "case cutids done" not in prepare.stdout:
+        cls.prepare = prepare = run(["pvbatch", script, PLUGIN, cls.work, "prepare"], cls.work)
+        if prepare.returncode != 0 or "summary radiosity" not in prepare.stdout:
             cls.tmp.cleanup()
             raise AssertionError("prepare failed:\n" + prepare.stdout + prepare.stderr)
         cls.result = run(["mpiexec", "--allow-run-as-root", "--oversubscribe", "-n", str(RANKS),
@@ -187,6 +189,13 @@ class ParallelTest(unittest.TestCase):
     def test_global_ids_give_the_serial_order(self):
         # Cut relaxation and uniform-light sampling follow the point order.
         self.check_fluence("cutids", "cutids", split=False)
+
+    def test_fracture_and_radiosity(self):
+        # Computed on rank 0 in the serial order: the serial totals and ranges.
+        lines = lambda text: sorted(l for l in text.splitlines() if l.startswith("summary "))  # noqa: E731,E741
+        serial = lines(self.prepare.stdout)
+        self.assertEqual(len(serial), 2, self.prepare.stdout)
+        self.assertEqual(lines(self.result.stdout), serial)
 
     def test_errors(self):
         # The one expected error, once per rank with the same text; no other.
