@@ -19,8 +19,9 @@ as .pvtu / .pvtp (one piece per rank) for TestParallel.py to compare:
   paint     Redistribute DataSet -> Paint -> ...
   cutids    mesh3id.pvtu (point and cell GlobalIds) -> Stroke Cut -> ..., with
             the uniform light's occlusion sampling on
-  fracture, radiosity: mesh.vtu (on rank 0) -> Fracture Tet Mesh, and
-            Translucent Radiosity with a floor: totals printed as "summary" lines
+  fracture, radiosity, volume: mesh.vtu (on rank 0) -> Fracture Tet Mesh,
+            Translucent Radiosity with a floor, Assign from a Wavelet image
+            (split by extent): totals printed as "summary" lines
   error     Solve Diffusion without Irradiance: the same error on every rank
 Every line "case <name> done" on stdout marks a finished case.
 """
@@ -71,7 +72,16 @@ def summary(name, proxy, array):
 
 
 def serial_stages(mesh_source):
-    """Fracture and radiosity: computed on rank 0, the result stays there."""
+    """Fracture and radiosity: computed on rank 0, the result stays there; a
+    Volume material from an image that ParaView splits by extent over the ranks."""
+    absorption = Calculator(Input=Wavelet(), ResultArrayName="AbsorptionCoefficient",
+                            ResultArrayType="Double",
+                            Function="(0.01 + 0.001*(coordsX+10))*iHat + "
+                                     "(0.02 + 0.002*(coordsY+10))*jHat + 0.03*kHat")
+    scattering = Calculator(Input=absorption, ResultArrayName="ReducedScatteringCoefficient",
+                            ResultArrayType="Double", Function="2*iHat + 2*jHat + 3*kHat")
+    summary("volume", AssignScatteringCoefficients(Input=mesh_source, MaterialMode="Volume",
+                                                   Volume=scattering), "AbsorptionCoefficient")
     summary("fracture", FractureTetMesh(Input=mesh_source, RandomSeeds=[4, 1]),
             "AbsorptionCoefficient")
     plane = Plane(Origin=[-10, -10, -5], Point1=[10, -10, -5], Point2=[-10, 10, -5],
