@@ -53,8 +53,8 @@ struct PieceMaps
   std::vector<std::vector<vtkIdType>> Cells;
 };
 
-/// The algorithms whose RequestData runs inside RunGathered on this thread:
-/// their nested (serial) call must not gather again.
+/// The algorithms whose serial RequestData runs inside RunGathered on this
+/// thread (on rank 0 only): neither they nor any filter they run may gather.
 thread_local std::vector<vtkAlgorithm*> ActiveAlgorithms;
 
 bool IsEmpty(vtkDataObject* data)
@@ -626,8 +626,8 @@ bool RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVect
   vtkInformationVector* outputVector, GatherMode mode, const SerialRequest& serial, int& result)
 {
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  if (!controller || controller->GetNumberOfProcesses() <= 1 ||
-    std::find(ActiveAlgorithms.begin(), ActiveAlgorithms.end(), self) != ActiveAlgorithms.end())
+  // Inside a gathered run (rank 0 alone), any of our filters runs serially.
+  if (!controller || controller->GetNumberOfProcesses() <= 1 || !ActiveAlgorithms.empty())
   {
     return false;
   }

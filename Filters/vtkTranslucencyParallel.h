@@ -60,7 +60,8 @@ int GetNumberOfProcesses();
 /**
  * Run `serial` on the data of every rank gathered to rank 0 and hand the
  * outputs back (see the file comment). Returns false when there is nothing to
- * distribute (one process, or called from inside `serial` itself): the caller
+ * distribute (one process, or called while a gathered run is under way on
+ * this thread, i.e. from `serial` itself or a filter it runs): the caller
  * then runs its serial code. Returns true when it ran the filter; `result` is
  * then what RequestData must return (1 on success, 0 on every rank on failure).
  */

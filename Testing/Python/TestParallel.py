@@ -44,7 +44,7 @@ from vtkmodules.vtkIOXML import vtkXMLPPolyDataReader, vtkXMLPUnstructuredGridRe
 HERE = os.path.dirname(os.path.abspath(__file__))
 PLUGIN = sys.argv[1] if len(sys.argv) > 1 else ""
 RANKS = int(sys.argv[2]) if len(sys.argv) > 2 else 2
-TIME_LIMIT = {"prepare": 50, "run": 80}  # seconds (ctest allows 150 in all)
+TIME_LIMIT = {"prepare": 60, "run": 100}  # seconds (ctest allows 180 in all)
 
 
 def run(command, work, limit):
