@@ -17,7 +17,10 @@
 #include <vtkInformationVector.h>
 #include <vtkMultiProcessController.h>
 #include <vtkMultiProcessStream.h>
+#include <vtkDataAssembly.h>
 #include <vtkNew.h>
+#include <vtkPartitionedDataSet.h>
+#include <vtkPartitionedDataSetCollection.h>
 #include <vtkPointData.h>
 #include <vtkPointSet.h>
 #include <vtkPoints.h>
@@ -456,9 +459,88 @@ vtkSmartPointer<vtkDataObject> MergeImages(const Pieces& pieces)
   return merged;
 }
 
+/// Partitioned pieces: partitioned data set k of every rank (all its
+/// partitions, whatever their number per rank) merged into one partition.
+vtkSmartPointer<vtkDataObject> MergePartitioned(const Pieces& pieces, std::string& error)
+{
+  auto partitionsOf = [](vtkPartitionedDataSet* set, Pieces& parts) {
+    for (unsigned int j = 0; set && j < set->GetNumberOfPartitions(); ++j)
+    {
+      if (vtkDataObject* part = set->GetPartitionAsDataObject(j))
+      {
+        parts.emplace_back(part);
+      }
+    }
+  };
+  if (auto* first = vtkPartitionedDataSetCollection::SafeDownCast(pieces.front()))
+  {
+    unsigned int count = 0;
+    for (const auto& p : pieces)
+    {
+      auto* collection = vtkPartitionedDataSetCollection::SafeDownCast(p);
+      if (!collection)
+      {
+        error = "the ranks' pieces are not all partitioned data set collections";
+        return nullptr;
+      }
+      count = std::max(count, collection->GetNumberOfPartitionedDataSets());
+    }
+    auto merged = vtkSmartPointer<vtkPartitionedDataSetCollection>::New();
+    merged->SetNumberOfPartitionedDataSets(count);
+    for (unsigned int k = 0; k < count; ++k)
+    {
+      Pieces parts;
+      for (const auto& p : pieces)
+      {
+        auto* collection = vtkPartitionedDataSetCollection::SafeDownCast(p);
+        if (k < collection->GetNumberOfPartitionedDataSets())
+        {
+          partitionsOf(collection->GetPartitionedDataSet(k), parts);
+        }
+      }
+      if (!parts.empty())
+      {
+        vtkSmartPointer<vtkDataObject> leaf = Merge(parts, nullptr, error);
+        if (!leaf)
+        {
+          return nullptr;
+        }
+        merged->SetPartition(k, 0, leaf);
+      }
+      if (k < first->GetNumberOfPartitionedDataSets() && first->HasMetaData(k))
+      {
+        merged->GetMetaData(k)->Copy(first->GetMetaData(k));
+      }
+    }
+    merged->SetDataAssembly(first->GetDataAssembly());
+    return merged;
+  }
+  Pieces parts;
+  for (const auto& p : pieces)
+  {
+    partitionsOf(vtkPartitionedDataSet::SafeDownCast(p), parts);
+  }
+  auto merged = vtkSmartPointer<vtkPartitionedDataSet>::New();
+  if (!parts.empty())
+  {
+    vtkSmartPointer<vtkDataObject> leaf = Merge(parts, nullptr, error);
+    if (!leaf)
+    {
+      return nullptr;
+    }
+    merged->SetPartition(0, leaf);
+  }
+  return merged;
+}
+
 /// Composite pieces merged leaf by leaf (every rank has the same structure).
 vtkSmartPointer<vtkDataObject> MergeComposite(const Pieces& pieces, std::string& error)
 {
+  if (vtkPartitionedDataSetCollection::SafeDownCast(pieces.front()) ||
+    vtkPartitionedDataSet::SafeDownCast(pieces.front()))
+  {
+    return MergePartitioned(pieces, error);
+  }
   auto* structure = vtkCompositeDataSet::SafeDownCast(pieces.front());
   vtkSmartPointer<vtkCompositeDataSet> merged;
   merged.TakeReference(structure->NewInstance());
