@@ -697,13 +697,6 @@ void CaptureError(vtkObject*, unsigned long, void* clientData, void* callData)
 } // namespace
 
 //------------------------------------------------------------------------------
-int GetNumberOfProcesses()
-{
-  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  return controller ? controller->GetNumberOfProcesses() : 1;
-}
-
-//------------------------------------------------------------------------------
 bool RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
   vtkInformationVector* outputVector, GatherMode mode, const SerialRequest& serial, int& result)
 {

@@ -54,9 +54,6 @@ enum class GatherMode
 using SerialRequest =
   std::function<int(vtkInformation*, vtkInformationVector**, vtkInformationVector*)>;
 
-/// Number of processes of the global controller (1 without MPI).
-int GetNumberOfProcesses();
-
 /**
  * Run `serial` on the data of every rank gathered to rank 0 and hand the
  * outputs back (see the file comment). Returns false when there is nothing to
