@@ -1,6 +1,7 @@
 #include "vtkOutgoingRadiance.h"
 
 #include "ResourceLimits.h"
+#include "vtkTranslucencyParallel.h"
 
 #include "Error.h"
 #include "Radiance.h"
@@ -49,8 +50,18 @@ int vtkOutgoingRadiance::FillInputPortInformation(int, vtkInformation* info)
 
 //------------------------------------------------------------------------------
 int vtkOutgoingRadiance::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  int parallelResult = 0;
+  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
+        vtkTranslucencyParallel::GatherMode::RankZero,
+        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+        { return this->RequestData(r, i, o); },
+        parallelResult))
+  {
+    return parallelResult;
+  }
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkPolyData* output = vtkPolyData::GetData(outputVector);

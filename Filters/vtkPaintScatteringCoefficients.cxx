@@ -2,6 +2,7 @@
 
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
+#include "vtkTranslucencyParallel.h"
 
 #include "TetPaint.h"
 #include "Error.h"
@@ -84,8 +85,18 @@ void vtkPaintScatteringCoefficients::RemoveAllStrokePoints()
 
 //------------------------------------------------------------------------------
 int vtkPaintScatteringCoefficients::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  int parallelResult = 0;
+  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
+        vtkTranslucencyParallel::GatherMode::SameMesh,
+        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+        { return this->RequestData(r, i, o); },
+        parallelResult))
+  {
+    return parallelResult;
+  }
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* cut = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* original =

@@ -8,6 +8,7 @@
 #include "TranslucencyHxtMesher.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
+#include "vtkTranslucencyParallel.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellArrayIterator.h>
@@ -348,8 +349,18 @@ int vtkTetrahedralizeSurface::FillInputPortInformation(int, vtkInformation* info
 
 //------------------------------------------------------------------------------
 int vtkTetrahedralizeSurface::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  int parallelResult = 0;
+  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
+        vtkTranslucencyParallel::GatherMode::RankZero,
+        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+        { return this->RequestData(r, i, o); },
+        parallelResult))
+  {
+    return parallelResult;
+  }
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkPolyData* input = vtkPolyData::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);

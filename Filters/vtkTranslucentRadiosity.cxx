@@ -2,6 +2,7 @@
 
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
+#include "vtkTranslucencyParallel.h"
 
 #include "Error.h"
 #include "LinearSolver.h"
@@ -460,8 +461,18 @@ void vtkTranslucentRadiosity::AttachOutputs(vtkCompositeDataSet* output,
 
 //------------------------------------------------------------------------------
 int vtkTranslucentRadiosity::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  int parallelResult = 0;
+  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
+        vtkTranslucencyParallel::GatherMode::RankZero,
+        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+        { return this->RequestData(r, i, o); },
+        parallelResult))
+  {
+    return parallelResult;
+  }
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   auto* input = vtkCompositeDataSet::GetData(inputVector[0], 0);
   auto* output = vtkCompositeDataSet::GetData(outputVector, 0);

@@ -1,0 +1,896 @@
+#include "vtkTranslucencyParallel.h"
+
+#include <vtkAlgorithm.h>
+#include <vtkCallbackCommand.h>
+#include <vtkCellData.h>
+#include <vtkCommand.h>
+#include <vtkCompositeDataIterator.h>
+#include <vtkCompositeDataSet.h>
+#include <vtkDataArray.h>
+#include <vtkDataObject.h>
+#include <vtkDataSetAttributes.h>
+#include <vtkFieldData.h>
+#include <vtkIdList.h>
+#include <vtkImageAppend.h>
+#include <vtkImageData.h>
+#include <vtkInformation.h>
+#include <vtkInformationVector.h>
+#include <vtkMultiProcessController.h>
+#include <vtkMultiProcessStream.h>
+#include <vtkDataAssembly.h>
+#include <vtkNew.h>
+#include <vtkPartitionedDataSet.h>
+#include <vtkPartitionedDataSetCollection.h>
+#include <vtkPointData.h>
+#include <vtkPointSet.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkTable.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkUnstructuredGrid.h>
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace vtkTranslucencyParallel
+{
+namespace
+{
+/// Message tags of the scatter (point and cell arrays to rank r).
+constexpr int PointArraysTag = 0x7a51;
+constexpr int CellArraysTag = 0x7a52;
+
+using Pieces = std::vector<vtkSmartPointer<vtkDataObject>>;
+
+/// For the first input: where each rank's points and cells are in the merged
+/// data set (-1: a point or ghost cell with no counterpart there).
+struct PieceMaps
+{
+  std::vector<std::vector<vtkIdType>> Points;
+  std::vector<std::vector<vtkIdType>> Cells;
+};
+
+/// The algorithms whose serial RequestData runs inside RunGathered on this
+/// thread (on rank 0 only): neither they nor any filter they run may gather.
+thread_local std::vector<vtkAlgorithm*> ActiveAlgorithms;
+
+bool IsEmpty(vtkDataObject* data)
+{
+  if (!data)
+  {
+    return true;
+  }
+  if (auto* ds = vtkDataSet::SafeDownCast(data))
+  {
+    return ds->GetNumberOfPoints() == 0 && ds->GetNumberOfCells() == 0;
+  }
+  if (auto* composite = vtkCompositeDataSet::SafeDownCast(data))
+  {
+    return composite->GetNumberOfPoints() == 0 && composite->GetNumberOfCells() == 0;
+  }
+  return false;
+}
+
+/// True if cell `c` of a piece is a ghost (owned by another piece).
+bool IsGhostCell(vtkUnsignedCharArray* ghosts, vtkIdType c)
+{
+  return ghosts && (ghosts->GetValue(c) & vtkDataSetAttributes::DUPLICATECELL);
+}
+
+/// A point's identity across pieces: its global id, or its exact coordinates.
+struct PointKey
+{
+  std::array<double, 3> X;
+  bool operator==(const PointKey& o) const { return X == o.X; }
+};
+struct PointKeyHash
+{
+  size_t operator()(const PointKey& k) const
+  {
+    size_t h = 1469598103934665603ull;
+    for (double v : k.X)
+    {
+      unsigned long long bits;
+      std::memcpy(&bits, &v, sizeof bits);
+      h = (h ^ bits) * 1099511628211ull;
+    }
+    return h;
+  }
+};
+
+PointKey KeyOf(vtkPointSet* piece, vtkDataArray* globalIds, vtkIdType i)
+{
+  PointKey key;
+  if (globalIds)
+  {
+    key.X = { globalIds->GetComponent(i, 0), 0.0, 0.0 };
+  }
+  else
+  {
+    piece->GetPoint(i, key.X.data());
+  }
+  for (double& v : key.X)
+  {
+    v += 0.0; // -0 and +0 are one coordinate
+  }
+  return key;
+}
+
+/// Merge point-set pieces (vtkUnstructuredGrid or vtkPolyData) into one:
+/// ghost cells dropped, shared points merged (see the header), the arrays
+/// common to every non-empty piece kept (ghost arrays removed).
+vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* maps)
+{
+  std::vector<vtkPointSet*> sets;
+  vtkPointSet* prototype = nullptr;
+  for (const auto& p : pieces)
+  {
+    sets.push_back(vtkPointSet::SafeDownCast(p));
+    if (!prototype && sets.back() && !IsEmpty(sets.back()))
+    {
+      prototype = sets.back();
+    }
+  }
+  if (maps)
+  {
+    maps->Points.assign(pieces.size(), {});
+    maps->Cells.assign(pieces.size(), {});
+  }
+  if (!prototype)
+  {
+    vtkSmartPointer<vtkDataObject> empty;
+    empty.TakeReference(pieces.front()->NewInstance());
+    return empty;
+  }
+  vtkSmartPointer<vtkPointSet> merged;
+  merged.TakeReference(prototype->NewInstance());
+  auto* mergedGrid = vtkUnstructuredGrid::SafeDownCast(merged);
+  auto* mergedPoly = vtkPolyData::SafeDownCast(merged);
+
+  // Global ids only if every non-empty piece has them.
+  bool useGlobalIds = true;
+  vtkIdType totalPoints = 0, totalCells = 0;
+  vtkDataSetAttributes::FieldList pointFields(static_cast<int>(sets.size()));
+  vtkDataSetAttributes::FieldList cellFields(static_cast<int>(sets.size()));
+  bool first = true;
+  for (vtkPointSet* s : sets)
+  {
+    if (!s || IsEmpty(s))
+    {
+      continue;
+    }
+    useGlobalIds = useGlobalIds && s->GetPointData()->GetGlobalIds() != nullptr;
+    totalPoints += s->GetNumberOfPoints();
+    totalCells += s->GetNumberOfCells();
+    if (first)
+    {
+      pointFields.InitializeFieldList(s->GetPointData());
+      cellFields.InitializeFieldList(s->GetCellData());
+      first = false;
+    }
+    else
+    {
+      pointFields.IntersectFieldList(s->GetPointData());
+      cellFields.IntersectFieldList(s->GetCellData());
+    }
+  }
+
+  vtkNew<vtkPoints> points;
+  points->SetDataType(prototype->GetPoints() ? prototype->GetPoints()->GetDataType() : VTK_DOUBLE);
+  points->Allocate(totalPoints);
+  merged->GetPointData()->CopyAllocate(pointFields, totalPoints);
+  merged->GetCellData()->CopyAllocate(cellFields, totalCells);
+  if (mergedGrid)
+  {
+    mergedGrid->Allocate(totalCells);
+  }
+  else if (mergedPoly)
+  {
+    mergedPoly->AllocateEstimate(totalCells, 4);
+  }
+
+  // Which piece is which input of the field lists (the non-empty ones, in order).
+  std::vector<int> inputIndex(sets.size(), -1);
+  int inputs = 0;
+  for (size_t r = 0; r < sets.size(); ++r)
+  {
+    if (sets[r] && !IsEmpty(sets[r]))
+    {
+      inputIndex[r] = inputs++;
+    }
+  }
+
+  // Points: those of owned cells, and points of no cell at all (an orphan
+  // point is one in serial too), each once, in the order of first occurrence
+  // or, with GlobalIds, of the ids; a point of ghost cells only is matched
+  // to its owner's once every piece's points are in.
+  struct PointRef
+  {
+    size_t Piece;
+    vtkIdType Id;
+    double GlobalId;
+  };
+  std::vector<PointRef> unique;
+  std::unordered_map<PointKey, vtkIdType, PointKeyHash> index;
+  std::vector<std::vector<vtkIdType>> local(sets.size());
+  vtkNew<vtkIdList> cellPoints;
+  for (size_t r = 0; r < sets.size(); ++r)
+  {
+    vtkPointSet* s = sets[r];
+    if (inputIndex[r] < 0)
+    {
+      continue;
+    }
+    vtkDataArray* globalIds = useGlobalIds ? s->GetPointData()->GetGlobalIds() : nullptr;
+    auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
+      s->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()));
+    const vtkIdType n = s->GetNumberOfPoints();
+    std::vector<char> owned(static_cast<size_t>(n), 0), used(static_cast<size_t>(n), 0);
+    for (vtkIdType c = 0; c < s->GetNumberOfCells(); ++c)
+    {
+      s->GetCellPoints(c, cellPoints);
+      const bool ghost = IsGhostCell(ghosts, c);
+      for (vtkIdType k = 0; k < cellPoints->GetNumberOfIds(); ++k)
+      {
+        used[cellPoints->GetId(k)] = 1;
+        if (!ghost)
+        {
+          owned[cellPoints->GetId(k)] = 1;
+        }
+      }
+    }
+    local[r].assign(static_cast<size_t>(n), -1);
+    for (vtkIdType i = 0; i < n; ++i)
+    {
+      if (!owned[i] && used[i])
+      {
+        continue;
+      }
+      const PointKey key = KeyOf(s, globalIds, i);
+      const auto inserted = index.emplace(key, static_cast<vtkIdType>(unique.size()));
+      if (inserted.second)
+      {
+        unique.push_back({ r, i, key.X[0] });
+      }
+      local[r][i] = inserted.first->second;
+    }
+  }
+  std::vector<vtkIdType> order(unique.size());
+  for (size_t k = 0; k < order.size(); ++k)
+  {
+    order[k] = static_cast<vtkIdType>(k);
+  }
+  if (useGlobalIds)
+  {
+    std::stable_sort(order.begin(), order.end(),
+      [&unique](vtkIdType a, vtkIdType b) { return unique[a].GlobalId < unique[b].GlobalId; });
+  }
+  std::vector<vtkIdType> finalId(unique.size());
+  points->SetNumberOfPoints(static_cast<vtkIdType>(unique.size()));
+  for (size_t k = 0; k < order.size(); ++k)
+  {
+    const PointRef& p = unique[static_cast<size_t>(order[k])];
+    finalId[static_cast<size_t>(order[k])] = static_cast<vtkIdType>(k);
+    points->SetPoint(static_cast<vtkIdType>(k), sets[p.Piece]->GetPoint(p.Id));
+    merged->GetPointData()->CopyData(pointFields, sets[p.Piece]->GetPointData(),
+      inputIndex[p.Piece], p.Id, static_cast<vtkIdType>(k));
+  }
+  merged->SetPoints(points);
+  for (size_t r = 0; r < sets.size(); ++r)
+  {
+    vtkPointSet* s = sets[r];
+    vtkDataArray* globalIds = s && useGlobalIds ? s->GetPointData()->GetGlobalIds() : nullptr;
+    for (size_t i = 0; i < local[r].size(); ++i)
+    {
+      vtkIdType& id = local[r][i];
+      if (id >= 0)
+      {
+        id = finalId[static_cast<size_t>(id)];
+        continue;
+      }
+      const auto found = index.find(KeyOf(s, globalIds, static_cast<vtkIdType>(i)));
+      id = found == index.end() ? -1 : finalId[static_cast<size_t>(found->second)];
+    }
+  }
+
+  // Cells: the owned cells of each piece, in piece order or, when every
+  // piece has cell GlobalIds, in id order. A cell that another piece already
+  // brought (the same points: overlapping pieces not marked as ghosts) is
+  // taken once; a ghost cell maps to the owned cell with its points.
+  bool useCellGlobalIds = true;
+  for (size_t r = 0; r < sets.size(); ++r)
+  {
+    if (inputIndex[r] >= 0)
+    {
+      useCellGlobalIds = useCellGlobalIds && sets[r]->GetCellData()->GetGlobalIds() != nullptr;
+    }
+  }
+  struct CellRef
+  {
+    size_t Piece;
+    vtkIdType Id;
+    double GlobalId;
+  };
+  std::vector<CellRef> ownedCells;
+  std::vector<std::vector<vtkIdType>> cellMaps(sets.size());
+  bool anyGhost = false;
+  for (size_t r = 0; r < sets.size(); ++r)
+  {
+    vtkPointSet* s = sets[r];
+    if (!s)
+    {
+      continue;
+    }
+    cellMaps[r].assign(static_cast<size_t>(s->GetNumberOfCells()), -1);
+    if (inputIndex[r] < 0)
+    {
+      continue;
+    }
+    auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
+      s->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()));
+    vtkDataArray* cellIds = useCellGlobalIds ? s->GetCellData()->GetGlobalIds() : nullptr;
+    for (vtkIdType c = 0; c < s->GetNumberOfCells(); ++c)
+    {
+      if (IsGhostCell(ghosts, c))
+      {
+        anyGhost = true;
+        continue;
+      }
+      ownedCells.push_back({ r, c, cellIds ? cellIds->GetComponent(c, 0) : 0.0 });
+    }
+  }
+  if (useCellGlobalIds)
+  {
+    std::stable_sort(ownedCells.begin(), ownedCells.end(),
+      [](const CellRef& a, const CellRef& b) { return a.GlobalId < b.GlobalId; });
+  }
+  // A cell's identity: its type and sorted merged point ids.
+  auto cellKey = [](int type, std::vector<vtkIdType> ids) {
+    std::sort(ids.begin(), ids.end());
+    ids.push_back(type);
+    return std::string(reinterpret_cast<const char*>(ids.data()), ids.size() * sizeof(vtkIdType));
+  };
+  std::unordered_map<std::string, vtkIdType> cellIndex;
+  cellIndex.reserve(ownedCells.size());
+  std::vector<size_t> cellPiece;
+  std::vector<vtkIdType> ids;
+  for (const CellRef& cell : ownedCells)
+  {
+    vtkPointSet* s = sets[cell.Piece];
+    s->GetCellPoints(cell.Id, cellPoints);
+    ids.resize(static_cast<size_t>(cellPoints->GetNumberOfIds()));
+    for (size_t k = 0; k < ids.size(); ++k)
+    {
+      ids[k] = local[cell.Piece][cellPoints->GetId(static_cast<vtkIdType>(k))];
+    }
+    const int type = s->GetCellType(cell.Id);
+    const auto known = cellIndex.emplace(cellKey(type, ids), merged->GetNumberOfCells());
+    if (!known.second && cellPiece[static_cast<size_t>(known.first->second)] != cell.Piece)
+    {
+      cellMaps[cell.Piece][cell.Id] = known.first->second; // brought by another piece
+      continue;
+    }
+    const vtkIdType id = mergedGrid
+      ? mergedGrid->InsertNextCell(type, static_cast<vtkIdType>(ids.size()), ids.data())
+      : mergedPoly->InsertNextCell(type, static_cast<vtkIdType>(ids.size()), ids.data());
+    merged->GetCellData()->CopyData(
+      cellFields, s->GetCellData(), inputIndex[cell.Piece], cell.Id, id);
+    cellMaps[cell.Piece][cell.Id] = id;
+    cellPiece.push_back(cell.Piece);
+  }
+  for (size_t r = 0; anyGhost && r < sets.size(); ++r)
+  {
+    vtkPointSet* s = sets[r];
+    auto* ghosts = inputIndex[r] < 0 ? nullptr
+                                     : vtkUnsignedCharArray::SafeDownCast(s->GetCellData()->GetArray(
+                                         vtkDataSetAttributes::GhostArrayName()));
+    for (vtkIdType c = 0; ghosts && c < s->GetNumberOfCells(); ++c)
+    {
+      if (!IsGhostCell(ghosts, c))
+      {
+        continue;
+      }
+      s->GetCellPoints(c, cellPoints);
+      ids.resize(static_cast<size_t>(cellPoints->GetNumberOfIds()));
+      for (size_t k = 0; k < ids.size(); ++k)
+      {
+        ids[k] = local[r][cellPoints->GetId(static_cast<vtkIdType>(k))];
+      }
+      const auto found = cellIndex.find(cellKey(s->GetCellType(c), ids));
+      cellMaps[r][c] = found == cellIndex.end() ? -1 : found->second;
+    }
+  }
+  if (maps)
+  {
+    for (size_t r = 0; r < sets.size(); ++r)
+    {
+      maps->Points[r] = sets[r] ? std::move(local[r]) : std::vector<vtkIdType>();
+      if (sets[r] && maps->Points[r].empty())
+      {
+        maps->Points[r].assign(static_cast<size_t>(sets[r]->GetNumberOfPoints()), -1);
+      }
+      maps->Cells[r] = std::move(cellMaps[r]);
+    }
+  }
+
+  merged->GetPointData()->RemoveArray(vtkDataSetAttributes::GhostArrayName());
+  merged->GetCellData()->RemoveArray(vtkDataSetAttributes::GhostArrayName());
+  merged->GetPointData()->Squeeze();
+  merged->GetCellData()->Squeeze();
+  merged->GetFieldData()->ShallowCopy(prototype->GetFieldData());
+  return merged;
+}
+
+vtkSmartPointer<vtkDataObject> Merge(const Pieces& pieces, PieceMaps* maps, std::string& error);
+
+/// Image pieces put together by their extents.
+vtkSmartPointer<vtkDataObject> MergeImages(const Pieces& pieces)
+{
+  vtkNew<vtkImageAppend> append;
+  append->PreserveExtentsOn();
+  vtkSmartPointer<vtkDataObject> only;
+  int count = 0;
+  for (const auto& p : pieces)
+  {
+    auto* image = vtkImageData::SafeDownCast(p);
+    if (image && image->GetNumberOfPoints() > 0)
+    {
+      append->AddInputData(image);
+      only = p;
+      ++count;
+    }
+  }
+  if (count <= 1)
+  {
+    if (!only)
+    {
+      only.TakeReference(pieces.front()->NewInstance());
+    }
+    return only;
+  }
+  append->Update();
+  vtkSmartPointer<vtkDataObject> merged = append->GetOutputDataObject(0);
+  return merged;
+}
+
+/// Partitioned pieces: partitioned data set k of every rank (all its
+/// partitions, whatever their number per rank) merged into one partition.
+vtkSmartPointer<vtkDataObject> MergePartitioned(const Pieces& pieces, std::string& error)
+{
+  auto partitionsOf = [](vtkPartitionedDataSet* set, Pieces& parts) {
+    for (unsigned int j = 0; set && j < set->GetNumberOfPartitions(); ++j)
+    {
+      if (vtkDataObject* part = set->GetPartitionAsDataObject(j))
+      {
+        parts.emplace_back(part);
+      }
+    }
+  };
+  if (auto* first = vtkPartitionedDataSetCollection::SafeDownCast(pieces.front()))
+  {
+    unsigned int count = 0;
+    for (const auto& p : pieces)
+    {
+      auto* collection = vtkPartitionedDataSetCollection::SafeDownCast(p);
+      if (!collection)
+      {
+        error = "the ranks' pieces are not all partitioned data set collections";
+        return nullptr;
+      }
+      count = std::max(count, collection->GetNumberOfPartitionedDataSets());
+    }
+    auto merged = vtkSmartPointer<vtkPartitionedDataSetCollection>::New();
+    merged->SetNumberOfPartitionedDataSets(count);
+    for (unsigned int k = 0; k < count; ++k)
+    {
+      Pieces parts;
+      for (const auto& p : pieces)
+      {
+        auto* collection = vtkPartitionedDataSetCollection::SafeDownCast(p);
+        if (k < collection->GetNumberOfPartitionedDataSets())
+        {
+          partitionsOf(collection->GetPartitionedDataSet(k), parts);
+        }
+      }
+      if (!parts.empty())
+      {
+        vtkSmartPointer<vtkDataObject> leaf = Merge(parts, nullptr, error);
+        if (!leaf)
+        {
+          return nullptr;
+        }
+        merged->SetPartition(k, 0, leaf);
+      }
+      if (k < first->GetNumberOfPartitionedDataSets() && first->HasMetaData(k))
+      {
+        merged->GetMetaData(k)->Copy(first->GetMetaData(k));
+      }
+    }
+    merged->SetDataAssembly(first->GetDataAssembly());
+    return merged;
+  }
+  Pieces parts;
+  for (const auto& p : pieces)
+  {
+    partitionsOf(vtkPartitionedDataSet::SafeDownCast(p), parts);
+  }
+  auto merged = vtkSmartPointer<vtkPartitionedDataSet>::New();
+  if (!parts.empty())
+  {
+    vtkSmartPointer<vtkDataObject> leaf = Merge(parts, nullptr, error);
+    if (!leaf)
+    {
+      return nullptr;
+    }
+    merged->SetPartition(0, leaf);
+  }
+  return merged;
+}
+
+/// Composite pieces merged leaf by leaf (every rank has the same structure).
+vtkSmartPointer<vtkDataObject> MergeComposite(const Pieces& pieces, std::string& error)
+{
+  if (vtkPartitionedDataSetCollection::SafeDownCast(pieces.front()) ||
+    vtkPartitionedDataSet::SafeDownCast(pieces.front()))
+  {
+    return MergePartitioned(pieces, error);
+  }
+  auto* structure = vtkCompositeDataSet::SafeDownCast(pieces.front());
+  vtkSmartPointer<vtkCompositeDataSet> merged;
+  merged.TakeReference(structure->NewInstance());
+  merged->CopyStructure(structure);
+  vtkSmartPointer<vtkCompositeDataIterator> it;
+  it.TakeReference(structure->NewIterator());
+  it->SkipEmptyNodesOff();
+  for (it->InitTraversal(); !it->IsDoneWithTraversal(); it->GoToNextItem())
+  {
+    Pieces leaves;
+    for (const auto& p : pieces)
+    {
+      auto* composite = vtkCompositeDataSet::SafeDownCast(p);
+      if (!composite)
+      {
+        error = "the ranks' pieces are not all composite data";
+        return nullptr;
+      }
+      vtkDataObject* leaf = composite->GetDataSet(it);
+      if (leaf)
+      {
+        leaves.emplace_back(leaf);
+      }
+    }
+    if (!leaves.empty())
+    {
+      vtkSmartPointer<vtkDataObject> leaf = Merge(leaves, nullptr, error);
+      if (!leaf)
+      {
+        return nullptr;
+      }
+      merged->SetDataSet(it, leaf);
+    }
+  }
+  return merged;
+}
+
+vtkSmartPointer<vtkDataObject> Merge(const Pieces& pieces, PieceMaps* maps, std::string& error)
+{
+  vtkDataObject* first = nullptr;
+  for (const auto& p : pieces)
+  {
+    if (p && (!first || IsEmpty(first)))
+    {
+      first = p;
+    }
+  }
+  if (!first)
+  {
+    return nullptr;
+  }
+  if (vtkPointSet::SafeDownCast(first))
+  {
+    Pieces sets;
+    for (const auto& p : pieces)
+    {
+      sets.push_back(vtkPointSet::SafeDownCast(p) ? p : nullptr);
+    }
+    if (!sets.front())
+    {
+      sets.front().TakeReference(first->NewInstance());
+    }
+    return MergePointSets(sets, maps);
+  }
+  if (vtkImageData::SafeDownCast(first))
+  {
+    return MergeImages(pieces);
+  }
+  if (vtkCompositeDataSet::SafeDownCast(first))
+  {
+    return MergeComposite(pieces, error);
+  }
+  // Anything else (a table, ...): rank 0's, else the first non-empty one.
+  return pieces.front() ? pieces.front() : vtkSmartPointer<vtkDataObject>(first);
+}
+
+/// Arrays of `from`, tuple i taken from tuple map[i] (0 where map[i] < 0).
+void MapArrays(vtkDataSetAttributes* from, const std::vector<vtkIdType>& map, vtkFieldData* to)
+{
+  const vtkIdType n = static_cast<vtkIdType>(map.size());
+  for (int a = 0; a < from->GetNumberOfArrays(); ++a)
+  {
+    vtkAbstractArray* source = from->GetAbstractArray(a);
+    if (!source || !source->GetName())
+    {
+      continue;
+    }
+    vtkSmartPointer<vtkAbstractArray> mapped;
+    mapped.TakeReference(source->NewInstance());
+    mapped->SetName(source->GetName());
+    mapped->SetNumberOfComponents(source->GetNumberOfComponents());
+    mapped->SetNumberOfTuples(n);
+    if (auto* numeric = vtkDataArray::SafeDownCast(mapped))
+    {
+      for (int c = 0; c < numeric->GetNumberOfComponents(); ++c)
+      {
+        numeric->FillComponent(c, 0.0);
+      }
+    }
+    for (vtkIdType i = 0; i < n; ++i)
+    {
+      if (map[i] >= 0)
+      {
+        mapped->SetTuple(i, map[i], source);
+      }
+    }
+    to->AddArray(mapped);
+  }
+}
+
+/// Replace the output piece's arrays by the scattered ones.
+void ApplyArrays(vtkDataSet* output, vtkTable* pointArrays, vtkTable* cellArrays)
+{
+  vtkFieldData* pointData = pointArrays->GetRowData();
+  for (int a = 0; a < pointData->GetNumberOfArrays(); ++a)
+  {
+    output->GetPointData()->AddArray(pointData->GetAbstractArray(a));
+  }
+  vtkFieldData* cellData = cellArrays->GetRowData();
+  for (int a = 0; a < cellData->GetNumberOfArrays(); ++a)
+  {
+    output->GetCellData()->AddArray(cellData->GetAbstractArray(a));
+  }
+  // A field data object of its own (the shallow copy shares the input's).
+  vtkNew<vtkFieldData> fieldData;
+  fieldData->ShallowCopy(pointArrays->GetFieldData());
+  output->SetFieldData(fieldData);
+}
+
+/// The body of a captured error message: the text after "<Class> (0x...): ".
+std::string MessageBody(const std::string& text)
+{
+  std::string body = text;
+  const size_t at = body.find("): ");
+  if (at != std::string::npos)
+  {
+    body = body.substr(at + 3);
+  }
+  while (!body.empty() && (body.back() == '\n' || body.back() == ' '))
+  {
+    body.pop_back();
+  }
+  return body;
+}
+
+void CaptureError(vtkObject*, unsigned long, void* clientData, void* callData)
+{
+  auto* messages = static_cast<std::string*>(clientData);
+  if (callData && messages->empty())
+  {
+    *messages = MessageBody(static_cast<const char*>(callData));
+  }
+}
+} // namespace
+
+//------------------------------------------------------------------------------
+bool RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector, GatherMode mode, const SerialRequest& serial, int& result)
+{
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  // Inside a gathered run (rank 0 alone), any of our filters runs serially.
+  if (!controller || controller->GetNumberOfProcesses() <= 1 || !ActiveAlgorithms.empty())
+  {
+    return false;
+  }
+  const int rank = controller->GetLocalProcessId();
+  const int size = controller->GetNumberOfProcesses();
+  const int numInputs = self->GetNumberOfInputPorts();
+  const int numOutputs = self->GetNumberOfOutputPorts();
+
+  // 1. Every input port's pieces to rank 0 (an unconnected port on every rank is skipped).
+  std::vector<Pieces> gathered(static_cast<size_t>(numInputs));
+  std::vector<vtkSmartPointer<vtkDataObject>> local(static_cast<size_t>(numInputs));
+  for (int port = 0; port < numInputs; ++port)
+  {
+    vtkDataObject* in = inputVector[port]->GetNumberOfInformationObjects() > 0
+      ? vtkDataObject::GetData(inputVector[port], 0)
+      : nullptr;
+    int present = in ? 1 : 0, anyPresent = 0;
+    controller->AllReduce(&present, &anyPresent, 1, vtkCommunicator::MAX_OP);
+    if (!anyPresent)
+    {
+      continue;
+    }
+    local[port] = in;
+    if (!in)
+    {
+      local[port] = vtkSmartPointer<vtkUnstructuredGrid>::New();
+    }
+    controller->Gather(local[port], gathered[port], 0);
+  }
+
+  // 2. Rank 0 merges and runs the filter's serial RequestData.
+  int status = 1;
+  std::string error;
+  PieceMaps maps;
+  std::vector<vtkSmartPointer<vtkDataObject>> serialOutputs(static_cast<size_t>(numOutputs));
+  if (rank == 0)
+  {
+    std::vector<vtkSmartPointer<vtkInformationVector>> inputs;
+    std::vector<vtkInformationVector*> inputPointers;
+    for (int port = 0; port < numInputs && status; ++port)
+    {
+      auto vector = vtkSmartPointer<vtkInformationVector>::New();
+      if (!gathered[port].empty())
+      {
+        vtkSmartPointer<vtkDataObject> merged =
+          Merge(gathered[port], port == 0 ? &maps : nullptr, error);
+        if (!merged)
+        {
+          status = 0;
+          error = "cannot gather the pieces of input " + std::to_string(port) + " to one rank" +
+            (error.empty() ? std::string() : ": " + error);
+          break;
+        }
+        vtkNew<vtkInformation> info;
+        if (inputVector[port]->GetNumberOfInformationObjects() > 0)
+        {
+          info->Copy(inputVector[port]->GetInformationObject(0));
+        }
+        info->Set(vtkDataObject::DATA_OBJECT(), merged);
+        vector->Append(info);
+      }
+      inputs.push_back(vector);
+      inputPointers.push_back(vector);
+    }
+    if (status)
+    {
+      vtkNew<vtkInformationVector> outputs;
+      for (int port = 0; port < numOutputs; ++port)
+      {
+        vtkInformation* realInfo = outputVector->GetInformationObject(port);
+        vtkNew<vtkInformation> info;
+        info->Copy(realInfo);
+        vtkDataObject* real = realInfo->Get(vtkDataObject::DATA_OBJECT());
+        serialOutputs[port].TakeReference(real->NewInstance());
+        info->Set(vtkDataObject::DATA_OBJECT(), serialOutputs[port]);
+        outputs->Append(info);
+      }
+      // The filter's errors are captured here and reported below on every rank.
+      vtkNew<vtkCallbackCommand> capture;
+      capture->SetCallback(CaptureError);
+      capture->SetClientData(&error);
+      const unsigned long observer = self->AddObserver(vtkCommand::ErrorEvent, capture);
+      ActiveAlgorithms.push_back(self);
+      try
+      {
+        status = serial(request, inputPointers.data(), outputs);
+      }
+      catch (...)
+      {
+        ActiveAlgorithms.pop_back();
+        self->RemoveObserver(observer);
+        throw;
+      }
+      ActiveAlgorithms.pop_back();
+      self->RemoveObserver(observer);
+      if (status && mode == GatherMode::SameMesh)
+      {
+        // The first output must be the merged input's mesh; else keep it on rank 0.
+        auto* out = vtkDataSet::SafeDownCast(serialOutputs[0]);
+        auto* in = gathered[0].empty()
+          ? nullptr
+          : vtkDataSet::SafeDownCast(inputs[0]->GetInformationObject(0)->Get(
+              vtkDataObject::DATA_OBJECT()));
+        if (!out || !in || out->GetNumberOfPoints() != in->GetNumberOfPoints() ||
+          out->GetNumberOfCells() != in->GetNumberOfCells())
+        {
+          mode = GatherMode::RankZero;
+        }
+      }
+    }
+  }
+
+  // 3. The outcome, the same on every rank.
+  vtkMultiProcessStream stream;
+  if (rank == 0)
+  {
+    stream << status << static_cast<int>(mode) << error;
+  }
+  controller->Broadcast(stream, 0);
+  int modeValue = 0;
+  stream >> status >> modeValue >> error;
+  mode = static_cast<GatherMode>(modeValue);
+
+  if (!status)
+  {
+    for (int port = 0; port < numOutputs; ++port)
+    {
+      if (vtkDataObject* out = vtkDataObject::GetData(outputVector, port))
+      {
+        out->Initialize();
+      }
+    }
+    if (!error.empty())
+    {
+      vtkErrorWithObjectMacro(self, << error);
+    }
+    result = 0;
+    return true;
+  }
+
+  for (int port = 0; port < numOutputs; ++port)
+  {
+    vtkDataObject* out = vtkDataObject::GetData(outputVector, port);
+    if (port == 0 && mode == GatherMode::SameMesh)
+    {
+      auto* piece = vtkDataSet::SafeDownCast(local[0]);
+      auto* outSet = vtkDataSet::SafeDownCast(out);
+      if (rank == 0)
+      {
+        auto* serialOut = vtkDataSet::SafeDownCast(serialOutputs[0]);
+        for (int r = size - 1; r >= 0; --r) // rank 0's last: its own piece below
+        {
+          vtkNew<vtkTable> pointArrays, cellArrays;
+          MapArrays(serialOut->GetPointData(), maps.Points[r], pointArrays->GetRowData());
+          MapArrays(serialOut->GetCellData(), maps.Cells[r], cellArrays->GetRowData());
+          pointArrays->GetFieldData()->ShallowCopy(serialOut->GetFieldData());
+          if (r > 0)
+          {
+            controller->Send(pointArrays, r, PointArraysTag);
+            controller->Send(cellArrays, r, CellArraysTag);
+          }
+          else
+          {
+            outSet->ShallowCopy(piece);
+            ApplyArrays(outSet, pointArrays, cellArrays);
+          }
+        }
+      }
+      else
+      {
+        vtkNew<vtkTable> pointArrays, cellArrays;
+        controller->Receive(pointArrays, 0, PointArraysTag);
+        controller->Receive(cellArrays, 0, CellArraysTag);
+        outSet->ShallowCopy(piece);
+        ApplyArrays(outSet, pointArrays, cellArrays);
+      }
+      continue;
+    }
+    if (rank == 0)
+    {
+      out->ShallowCopy(serialOutputs[port]);
+    }
+    else
+    {
+      out->Initialize();
+    }
+  }
+  result = 1;
+  return true;
+}
+}

@@ -1,0 +1,220 @@
+"""The pvbatch side of TestParallel.py: the plugin's filters on distributed data.
+
+    pvbatch ParallelPipeline.py <Translucency plugin> <work dir> prepare
+    mpiexec -n N pvbatch ParallelPipeline.py <Translucency plugin> <work dir> run
+
+prepare (one process): writes a closed sphere surface (surface.ply), meshes
+it and assigns the material (mesh.vtu), writes two partitioned copies of the
+same tets (mesh2g.pvtu: 2 pieces with one level of ghost cells; mesh3id.pvtu:
+3 pieces with point and cell GlobalIds) and the serial references of every case
+(ref_*.vtu: Fluence; ref_*_surface.vtp: Outgoing Radiance).
+
+run (under mpiexec): the same chains on distributed data, each result saved
+as .pvtu / .pvtp (one piece per rank) for TestParallel.py to compare:
+  ply       PLY reader (rank 0 only) -> Tetrahedralize -> Assign -> ... -> Radiance
+  pvtu2     mesh2g.pvtu (ghost cells; with 3 ranks one rank has no piece)
+  pvtu3     mesh3id.pvtu (GlobalIds; with 2 ranks a rank reads 2 pieces)
+  redist    mesh.vtu (on rank 0) -> Redistribute DataSet -> ...
+  cut       mesh.vtu (on rank 0) -> Stroke Cut (plane) -> Redistribute DataSet -> ...
+  paint     Redistribute DataSet -> Paint -> ...
+  cutids    mesh3id.pvtu (point and cell GlobalIds) -> Stroke Cut -> ..., with
+            the uniform light's occlusion sampling on
+  fracture, radiosity, volume: mesh.vtu (on rank 0) -> Fracture Tet Mesh,
+            Translucent Radiosity with a floor, Assign from a Wavelet image
+            (split by extent): totals printed as "summary" lines
+  error     Solve Diffusion without Irradiance: the same error on every rank
+Every line "case <name> done" on stdout marks a finished case.
+"""
+
+import os
+import sys
+
+from paraview.simple import *  # noqa: F401,F403
+
+PLUGIN, WORK, MODE = sys.argv[1], sys.argv[2], sys.argv[3]
+LoadPlugin(PLUGIN, ns=globals())
+
+
+def path(name):
+    return os.path.join(WORK, name)
+
+
+def light(source, samples=0):
+    # Shadows on; by default no occlusion sampling of the uniform light (its
+    # per-point sample rotation follows the point order, see Parallel.md).
+    return SurfaceIrradiance(Input=source, UniformLightSamples=samples)
+
+
+def solve(source):
+    return SolveDiffusion(Input=source, RelTol=1e-12, MaxIter=20000)
+
+
+def plane_cut(source):
+    cut = StrokeCut(Input=source, CutType="Plane")
+    cut.CutType.Origin = [0.5, 0.0, 0.0]
+    cut.CutType.Normal = [1.0, 0.3, 0.0]
+    return cut
+
+
+def paint(source):
+    return PaintScatteringCoefficients(Input=source, StrokePoints=[3.5, 0.0, 0.0, 2.0, 2.5, 0.0],
+                                       Width=1.0)
+
+
+def summary(name, proxy, array):
+    """One line of totals over all ranks, compared by TestParallel.py."""
+    proxy.UpdatePipeline()
+    info = proxy.GetDataInformation()
+    ranges = [proxy.CellData[array].GetRange(c) for c in range(3)]
+    print("summary %s: %d cells, %d points, %s %s" % (
+        name, info.GetNumberOfCells(), info.GetNumberOfPoints(), array,
+        " ".join("%.12g %.12g" % r for r in ranges)), flush=True)
+
+
+def serial_stages(mesh_source):
+    """Fracture and radiosity: computed on rank 0, the result stays there; a
+    Volume material from an image that ParaView splits by extent over the ranks."""
+    absorption = Calculator(Input=Wavelet(), ResultArrayName="AbsorptionCoefficient",
+                            ResultArrayType="Double",
+                            Function="(0.01 + 0.001*(coordsX+10))*iHat + "
+                                     "(0.02 + 0.002*(coordsY+10))*jHat + 0.03*kHat")
+    scattering = Calculator(Input=absorption, ResultArrayName="ReducedScatteringCoefficient",
+                            ResultArrayType="Double", Function="2*iHat + 2*jHat + 3*kHat")
+    summary("volume", AssignScatteringCoefficients(Input=mesh_source, MaterialMode="Volume",
+                                                   Volume=scattering), "AbsorptionCoefficient")
+    summary("fracture", FractureTetMesh(Input=mesh_source, RandomSeeds=[4, 1]),
+            "AbsorptionCoefficient")
+    plane = Plane(Origin=[-10, -10, -5], Point1=[10, -10, -5], Point2=[-10, 10, -5],
+                  XResolution=4, YResolution=4)
+    floor = Calculator(Input=Triangulate(Input=plane), AttributeType="Cell Data",
+                       ResultArrayName="Albedo", Function="0.6*iHat+0.6*jHat+0.6*kHat")
+    summary("radiosity", TranslucentRadiosity(
+        Input=GroupDatasets(Input=[floor, mesh_source]), LightPosition=[0, 0, 20],
+        LightPower=[500, 500, 500], RaysPerPatch=16), "Radiosity")
+
+
+def chain(name, source, surface=True, samples=0):
+    solved = solve(light(source, samples))
+    SaveData(path(name + ".pvtu"), proxy=solved)
+    if surface:
+        SaveData(path(name + "_surface.pvtp"), proxy=OutgoingRadiance(Input=solved))
+    print("case %s done" % name.split("_")[-1], flush=True)
+
+
+if MODE == "prepare":
+    from vtkmodules.vtkCommonCore import vtkIdTypeArray, vtkPoints
+    from vtkmodules.vtkFiltersCore import vtkTriangleFilter
+    from vtkmodules.vtkFiltersParallel import vtkExtractUnstructuredGridPiece
+    from vtkmodules.vtkFiltersSources import vtkSphereSource
+    from vtkmodules.vtkIOParallelXML import vtkXMLPUnstructuredGridWriter
+    from vtkmodules.vtkIOPLY import vtkPLYWriter
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader, vtkXMLUnstructuredGridWriter
+
+    sphere = vtkSphereSource()
+    sphere.SetRadius(4.0)
+    sphere.SetThetaResolution(16)
+    sphere.SetPhiResolution(16)
+    triangles = vtkTriangleFilter()
+    triangles.SetInputConnection(sphere.GetOutputPort())
+    ply = vtkPLYWriter()
+    ply.SetInputConnection(triangles.GetOutputPort())
+    ply.SetFileName(path("surface.ply"))
+    ply.Write()
+
+    reader = TranslucencySurfaceReader(FileName=path("surface.ply"))
+    assign = AssignScatteringCoefficients(
+        Input=TetrahedralizeSurface(Input=reader, TargetNumberOfTets=3000))
+    SaveData(path("mesh.vtu"), proxy=assign)
+    chain("ref_ply", assign)
+
+    # The same tets in pieces, written here with plain VTK (one process).
+    # vtkExtractUnstructuredGridPiece makes float points: mesh.vtu gets float
+    # points too, so that every case has the very same coordinates.
+    mesh_reader = vtkXMLUnstructuredGridReader()
+    mesh_reader.SetFileName(path("mesh.vtu"))
+    mesh_reader.Update()
+    mesh = mesh_reader.GetOutput()
+    float_points = vtkPoints()
+    float_points.SetDataTypeToFloat()
+    float_points.DeepCopy(mesh.GetPoints())
+    mesh.SetPoints(float_points)
+    mesh_writer = vtkXMLUnstructuredGridWriter()
+    mesh_writer.SetInputData(mesh)
+    mesh_writer.SetFileName(path("mesh.vtu"))
+    mesh_writer.Write()
+    # mesh3id: point and cell ids in the serial order (plain arrays through
+    # vtkExtractUnstructuredGridPiece, which drops the GlobalIds attribute,
+    # marked as GlobalIds in the written files afterwards).
+    with_ids = mesh.NewInstance()
+    with_ids.ShallowCopy(mesh)
+    for data, count, name, scale in (
+            (with_ids.GetPointData(), mesh.GetNumberOfPoints(), "PointIds", 7),
+            (with_ids.GetCellData(), mesh.GetNumberOfCells(), "CellIds", 3)):
+        ids = vtkIdTypeArray()
+        ids.SetName(name)
+        ids.SetNumberOfTuples(count)
+        for i in range(count):
+            ids.SetValue(i, 1000 + scale * i)
+        data.AddArray(ids)
+    for name, data, pieces, ghosts in (("mesh2g", mesh, 2, 1), ("mesh3id", with_ids, 3, 0)):
+        split = vtkExtractUnstructuredGridPiece()
+        split.SetInputData(data)
+        writer = vtkXMLPUnstructuredGridWriter()
+        writer.SetInputConnection(split.GetOutputPort())
+        writer.SetFileName(path(name + ".pvtu"))
+        writer.SetNumberOfPieces(pieces)
+        writer.SetStartPiece(0)
+        writer.SetEndPiece(pieces - 1)
+        writer.SetGhostLevel(ghosts)
+        writer.Write()
+    for k in range(3):
+        piece_reader = vtkXMLUnstructuredGridReader()
+        piece_reader.SetFileName(path("mesh3id_%d.vtu" % k))
+        piece_reader.Update()
+        piece = piece_reader.GetOutput()
+        piece.GetPointData().SetActiveGlobalIds("PointIds")
+        piece.GetCellData().SetActiveGlobalIds("CellIds")
+        piece_writer = vtkXMLUnstructuredGridWriter()
+        piece_writer.SetInputData(piece)
+        piece_writer.SetFileName(path("mesh3id_%d.vtu" % k))
+        piece_writer.Write()
+    with open(path("mesh3id.pvtu")) as f:
+        text = f.read()
+    text = text.replace("<PPointData>", '<PPointData GlobalIds="PointIds">')
+    text = text.replace("<PCellData>", '<PCellData GlobalIds="CellIds">')
+    with open(path("mesh3id.pvtu"), "w") as f:
+        f.write(text)
+
+    mesh_source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
+    chain("ref_mesh", mesh_source)
+    chain("ref_cut", plane_cut(mesh_source), surface=False)
+    chain("ref_paint", paint(mesh_source), surface=False)
+    chain("ref_cutids", plane_cut(mesh_source), surface=False, samples=32)
+    serial_stages(mesh_source)
+elif MODE == "run":
+    reader = TranslucencySurfaceReader(FileName=path("surface.ply"))
+    chain("par_ply", AssignScatteringCoefficients(
+        Input=TetrahedralizeSurface(Input=reader, TargetNumberOfTets=3000)))
+    chain("par_pvtu2", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")]))
+    chain("par_pvtu3", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")]))
+    redistributed = RedistributeDataSet(
+        Input=XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))
+    chain("par_redist", redistributed)
+    # The cut's relaxation visits the vertices in order: cut the mesh in its
+    # serial order (read by rank 0), then spread the result over the ranks.
+    chain("par_cut", RedistributeDataSet(
+        Input=plane_cut(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))), surface=False)
+    chain("par_paint", paint(redistributed), surface=False)
+    # With point and cell GlobalIds (made in the serial order) the gathered
+    # mesh is in the serial order: the order-dependent cut relaxation and
+    # uniform-light sampling give the serial result.
+    chain("par_cutids", plane_cut(
+        XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")])),
+        surface=False, samples=32)
+    serial_stages(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))
+    # No Irradiance array: every rank reports Solve Diffusion's error, none hangs.
+    unlit = solve(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))
+    unlit.UpdatePipeline()
+    print("case error done", flush=True)
+else:
+    sys.exit("mode must be prepare or run, not " + MODE)
