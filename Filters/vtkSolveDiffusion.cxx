@@ -156,6 +156,24 @@ void vtkSolveDiffusion::RemoveAllSources()
   }
 }
 
+void vtkSolveDiffusion::RemoveAllPointSources()
+{
+  if (!this->Internal->Sources.GetPointSources().empty())
+  {
+    this->Internal->Sources.ClearPointSources();
+    this->Modified();
+  }
+}
+
+void vtkSolveDiffusion::RemoveAllPencilBeams()
+{
+  if (!this->Internal->Sources.GetPencilBeams().empty())
+  {
+    this->Internal->Sources.ClearPencilBeams();
+    this->Modified();
+  }
+}
+
 int vtkSolveDiffusion::GetNumberOfSources() const
 {
   return static_cast<int>(this->Internal->Sources.GetPointSources().size() +

@@ -198,6 +198,10 @@ public:
   void AddPencilBeam(double x, double y, double z, double dx, double dy, double dz,
     double powerR, double powerG, double powerB);
   void RemoveAllSources();
+  /// Remove one kind only (the plugin's PointSources and PencilBeams
+  /// properties each clear their own).
+  void RemoveAllPointSources();
+  void RemoveAllPencilBeams();
   int GetNumberOfSources() const;
   ///@}
 

@@ -76,6 +76,8 @@ public:
     Points_.clear();
     Pencils_.clear();
   }
+  void ClearPointSources() { Points_.clear(); }
+  void ClearPencilBeams() { Pencils_.clear(); }
 
   /// Throws translucency::Error naming the source unless every position and
   /// direction is finite, every power finite and >= 0, and every direction
