@@ -252,7 +252,8 @@ void AddSceneOptions(CLI::App* command, SceneOptions& scene)
       "may repeat; default directional:0,-1,-1:1 and uniform:0.1\n"
       "directional:dx,dy,dz[:E]  direction of travel, E W/mm^2 (1)\n"
       "point:x,y,z[:I]           position mm, intensity W/sr (1)\n"
-      "uniform[:E]               environment, E W/mm^2 (1)")
+      "uniform[:E]               environment, E W/mm^2 (1)\n"
+      "none                      no light (alone)")
     ->type_name("SPEC")
     ->group(group);
   command->add_flag_callback("--no-shadows", [s]() { s->Shadows = false; }, "no self-shadowing")

@@ -1,6 +1,7 @@
 // `translucency render`: a surface (or tet mesh) -> tet mesh -> material ->
 // lights -> diffusion solve -> radiance -> files, pictures and a report.
 
+#include "DiffuseOpticsOptions.h"
 #include "Options.h"
 #include "Pictures.h"
 #include "PipelineRender.h"
@@ -52,6 +53,7 @@ struct RenderOptions
   long long Photons = 1000000;
   bool ListMaterials = false;
   const CLI::App* App = nullptr; ///< for the provenance of the JSON
+  DiffuseOpticsOptions Optics;
 };
 
 void ListMaterials()
@@ -73,6 +75,7 @@ int Render(RenderOptions& o)
     return 0;
   }
   SceneOptions& scene = o.Scene;
+  scene.InteriorSources = !o.Optics.Sources.empty();
   scene.Finish("render");
   const std::string &solverName = o.SolverName, &linearSolver = o.LinearSolver;
   const std::string &outputPrefix = o.OutputPrefix, &pngPath = o.PngPath,
@@ -101,6 +104,7 @@ int Render(RenderOptions& o)
   solve->SetLinearSolver(linearSolver.c_str());
   solve->SetGridSpacing(o.GridSpacing);
   solve->SetNumberOfPhotons(o.Photons);
+  o.Optics.Apply(solve);
   solve->Update();
   if (!messages.Errors.empty())
     throw translucency::Error(messages.Last());
@@ -170,6 +174,7 @@ int Render(RenderOptions& o)
               << solve->GetFinalResidual(c) << std::defaultfloat
               << (solve->GetConverged(c) ? "" : " (NOT converged)") << "\n";
   }
+  o.Optics.Print(solve);
   PrintStages(stages);
 
   if (!jsonPath.empty())
@@ -195,6 +200,7 @@ int Render(RenderOptions& o)
     {
       j["paint"] = { { "tets_touched", edits.PaintedTets }, { "ms", edits.PaintMs } };
     }
+    o.Optics.Report(solve, j);
     for (int c = 0; c < 3; ++c)
     {
       j["channels"][channel[c]] = { { "iterations", solve->GetNumberOfIterations(c) },
@@ -259,6 +265,7 @@ Command AddRenderCommand(CLI::App& app)
      "W/mm^2; --slice-plane, --channel, --scale)")
     ->type_name("FILE");
   AddImageOptions(c, o->Image);
+  AddDiffuseOpticsOptions(c, o->Optics);
   c->add_option("--json", o->JsonPath, "machine-readable statistics")->type_name("FILE");
   c->add_flag("--list-materials", o->ListMaterials, "print the measured presets and exit");
   return { c, [o]() { return Render(*o); } };

@@ -40,7 +40,15 @@ Light ParseLight(const std::string& spec)
     throw UsageError("empty --light");
   }
   light.Type = parts[0];
-  if (light.Type == "uniform")
+  if (light.Type == "none")
+  {
+    if (parts.size() > 1)
+    {
+      throw UsageError("--light none takes no values: '" + spec + "'");
+    }
+    light.Power = 0.0;
+  }
+  else if (light.Type == "uniform")
   {
     if (parts.size() > 2)
     {
@@ -74,7 +82,8 @@ Light ParseLight(const std::string& spec)
   }
   else
   {
-    throw UsageError("unknown light type '" + light.Type + "' (directional, point or uniform)");
+    throw UsageError(
+      "unknown light type '" + light.Type + "' (directional, point, uniform or none)");
   }
   if (!(light.Power >= 0))
   {
@@ -97,7 +106,17 @@ void SceneOptions::Finish(const std::string& command)
   {
     throw UsageError("give --cut-plane or --cut-stroke, not both");
   }
-  if (this->Lights.empty())
+  const bool none = std::any_of(
+    this->Lights.begin(), this->Lights.end(), [](const Light& l) { return l.Type == "none"; });
+  if (none)
+  {
+    if (this->Lights.size() > 1)
+    {
+      throw UsageError("--light none cannot be combined with other --light options");
+    }
+    this->Lights.clear(); // no light at all
+  }
+  else if (this->Lights.empty() && !this->InteriorSources)
   {
     // The one default, the same as the ParaView plugin's Surface Irradiance
     // panel (Plugin/SurfaceIrradiance.xml); every report prints it.

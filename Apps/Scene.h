@@ -47,9 +47,15 @@ struct SceneOptions
   std::vector<double> CutPlane; ///< --cut-plane: origin (mm) and normal; empty: no plane cut
   std::string CutStroke;        ///< --cut-stroke: JSON stroke file; empty: no stroke cut
   std::string Paint;            ///< --paint: JSON paint file; empty: no painting
+  /// The command has interior sources (render --source): then no default
+  /// lights are added when no --light is given.
+  bool InteriorSources = false;
 
   /// Checks across options and the default lights, once all options are
-  /// read (`command` names the command in messages).
+  /// read (`command` names the command in messages). The default lights
+  /// (directional:0,-1,-1:1 and uniform:0.1) are added when no --light is
+  /// given and there are no interior sources; `--light none` (alone) means
+  /// no light.
   void Finish(const std::string& command);
 };
 

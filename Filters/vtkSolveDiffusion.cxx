@@ -1,5 +1,6 @@
 #include "vtkSolveDiffusion.h"
 
+#include "Detectors.h"
 #include "DiffusionFrontEnd.h"
 #include "DiffusionSolverFactory.h"
 #include "DiscreteDivergence.h"
@@ -23,6 +24,9 @@
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <complex>
 
 vtkStandardNewMacro(vtkSolveDiffusion);
 
@@ -43,6 +47,11 @@ struct vtkSolveDiffusion::Internals
   translucency::SolverReport Report;
   /// GetAvailableLinearSolvers()'s array.
   vtkNew<vtkStringArray> LinearSolverNames;
+  translucency::Sources Sources;
+  std::vector<translucency::Detector> Detectors;
+  /// Readings of the last solve (amplitudes) and their phases (radians).
+  std::vector<translucency::DetectorReading> Readings;
+  std::vector<std::array<double, 3>> FluencePhase, ExitancePhase;
 };
 
 //------------------------------------------------------------------------------
@@ -139,6 +148,125 @@ vtkTypeInt64 vtkSolveDiffusion::GetMemoryBytes() const
 }
 
 //------------------------------------------------------------------------------
+void vtkSolveDiffusion::AddPointSource(
+  double x, double y, double z, double powerR, double powerG, double powerB)
+{
+  translucency::PointSource source;
+  source.Position = { x, y, z };
+  source.Power = { powerR, powerG, powerB };
+  this->Internal->Sources.AddPointSource(source);
+  this->Modified();
+}
+
+void vtkSolveDiffusion::AddPencilBeam(double x, double y, double z, double dx, double dy,
+  double dz, double powerR, double powerG, double powerB)
+{
+  translucency::PencilBeam beam;
+  beam.Position = { x, y, z };
+  beam.Direction = { dx, dy, dz };
+  beam.Power = { powerR, powerG, powerB };
+  this->Internal->Sources.AddPencilBeam(beam);
+  this->Modified();
+}
+
+void vtkSolveDiffusion::RemoveAllSources()
+{
+  if (!this->Internal->Sources.Empty())
+  {
+    this->Internal->Sources.Clear();
+    this->Modified();
+  }
+}
+
+void vtkSolveDiffusion::RemoveAllPointSources()
+{
+  if (!this->Internal->Sources.GetPointSources().empty())
+  {
+    this->Internal->Sources.ClearPointSources();
+    this->Modified();
+  }
+}
+
+void vtkSolveDiffusion::RemoveAllPencilBeams()
+{
+  if (!this->Internal->Sources.GetPencilBeams().empty())
+  {
+    this->Internal->Sources.ClearPencilBeams();
+    this->Modified();
+  }
+}
+
+int vtkSolveDiffusion::GetNumberOfSources() const
+{
+  return static_cast<int>(this->Internal->Sources.GetPointSources().size() +
+    this->Internal->Sources.GetPencilBeams().size());
+}
+
+void vtkSolveDiffusion::AddDetector(double x, double y, double z, double radius)
+{
+  translucency::Detector detector;
+  detector.Position = { x, y, z };
+  detector.Radius = radius;
+  this->Internal->Detectors.push_back(detector);
+  this->Modified();
+}
+
+void vtkSolveDiffusion::RemoveAllDetectors()
+{
+  if (!this->Internal->Detectors.empty())
+  {
+    this->Internal->Detectors.clear();
+    this->Modified();
+  }
+}
+
+int vtkSolveDiffusion::GetNumberOfDetectors() const
+{
+  return static_cast<int>(this->Internal->Detectors.size());
+}
+
+namespace
+{
+bool InRange(int k, int c, std::size_t n)
+{
+  return k >= 0 && static_cast<std::size_t>(k) < n && c >= 0 && c < 3;
+}
+}
+
+double vtkSolveDiffusion::GetDetectorFluence(int detector, int channel) const
+{
+  const auto& r = this->Internal->Readings;
+  return InRange(detector, channel, r.size()) ? r[detector].Fluence[channel] : 0.0;
+}
+
+double vtkSolveDiffusion::GetDetectorExitance(int detector, int channel) const
+{
+  const auto& r = this->Internal->Readings;
+  return InRange(detector, channel, r.size()) ? r[detector].Exitance[channel] : 0.0;
+}
+
+double vtkSolveDiffusion::GetDetectorFluencePhase(int detector, int channel) const
+{
+  const auto& p = this->Internal->FluencePhase;
+  return InRange(detector, channel, p.size()) ? p[detector][channel] : 0.0;
+}
+
+double vtkSolveDiffusion::GetDetectorExitancePhase(int detector, int channel) const
+{
+  const auto& p = this->Internal->ExitancePhase;
+  return InRange(detector, channel, p.size()) ? p[detector][channel] : 0.0;
+}
+
+void vtkSolveDiffusion::GetDetectorSurfacePosition(int detector, double position[3]) const
+{
+  const auto& r = this->Internal->Readings;
+  for (int d = 0; d < 3; ++d)
+  {
+    position[d] = InRange(detector, 0, r.size()) ? r[detector].SurfacePosition[d] : 0.0;
+  }
+}
+
+//------------------------------------------------------------------------------
 namespace
 {
 /// The lights vtkSurfaceIrradiance recorded in the field data (for Monte Carlo).
@@ -201,6 +329,15 @@ int vtkSolveDiffusion::RequestData(
   std::string error;
   this->TopologyTime = this->AssemblyTime = this->SolveTime = 0.0;
   in.Report = translucency::SolverReport();
+  in.Readings.clear();
+  in.FluencePhase.clear();
+  in.ExitancePhase.clear();
+  if (!std::isfinite(this->ModulationFrequency) || this->ModulationFrequency < 0.0)
+  {
+    vtkErrorMacro(<< "ModulationFrequency " << this->ModulationFrequency
+                  << " Hz: expected a finite value >= 0 (0 = continuous wave)");
+    return 0;
+  }
 
   // Convert: the shared mesh, the material, the irradiance and the lights.
   auto start = translucency::Clock::now();
@@ -237,6 +374,7 @@ int vtkSolveDiffusion::RequestData(
   }
   translucency::DiffusionProblem light;
   ReadLights(input, light);
+  light.InteriorSources = &in.Sources;
 
   try
   {
@@ -290,11 +428,90 @@ int vtkSolveDiffusion::RequestData(
       return !this->CheckAbort();
     });
 
-    std::vector<double> fluence;
-    if (!frontEnd.Solve(mesh, std::move(material), std::move(irradiance), light, fluence,
-          in.Report))
+    const bool frequencyDomain = this->ModulationFrequency > 0.0;
+    if ((frequencyDomain || !in.Sources.Empty() || !in.Detectors.empty()) &&
+      !entry.Properties.UnknownsAtVertices)
     {
-      return 0; // aborted by the user
+      vtkErrorMacro(<< "the " << entry.Name
+                    << " solver has no interior sources, detectors or frequency domain: they "
+                       "are implemented for the divergence and fem solvers");
+      return 0;
+    }
+    // The detectors read the material and the irradiance after the solve.
+    translucency::OpticalProperties detectorMaterial;
+    std::vector<double> detectorIrradiance;
+    if (!in.Detectors.empty())
+    {
+      detectorMaterial = material;
+      detectorIrradiance = irradiance;
+    }
+    std::vector<double> fluence;
+    std::vector<double> amplitude, phase;
+    if (frequencyDomain)
+    {
+      auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver);
+      translucency::DiffusionProblem problem = light;
+      problem.Mesh = mesh.get();
+      problem.Material = &material;
+      problem.Irradiance = &irradiance;
+      std::vector<std::complex<double>> complexFluence;
+      if (!vertex ||
+        !vertex->SolveFrequencyDomain(problem, this->ModulationFrequency, complexFluence,
+          in.Report))
+      {
+        return 0; // aborted by the user
+      }
+      std::vector<double> real(complexFluence.size()), imag(complexFluence.size());
+      amplitude.resize(complexFluence.size());
+      phase.resize(complexFluence.size());
+      for (std::size_t i = 0; i < complexFluence.size(); ++i)
+      {
+        real[i] = complexFluence[i].real();
+        imag[i] = complexFluence[i].imag();
+        amplitude[i] = std::abs(complexFluence[i]);
+        phase[i] = std::arg(complexFluence[i]);
+      }
+      fluence = amplitude;
+      if (!in.Detectors.empty())
+      {
+        // The readings are linear in (phi, q): read the real part with q
+        // (modulated in phase with the sources) and the imaginary part
+        // without, then take amplitude and phase.
+        const auto re = translucency::ReadDetectors(
+          *mesh, detectorMaterial, in.Detectors, real, &detectorIrradiance);
+        const auto im =
+          translucency::ReadDetectors(*mesh, detectorMaterial, in.Detectors, imag, nullptr);
+        in.Readings = re;
+        in.FluencePhase.resize(re.size());
+        in.ExitancePhase.resize(re.size());
+        for (std::size_t k = 0; k < re.size(); ++k)
+        {
+          for (int c = 0; c < 3; ++c)
+          {
+            const std::complex<double> f(re[k].Fluence[c], im[k].Fluence[c]);
+            const std::complex<double> j(re[k].Exitance[c], im[k].Exitance[c]);
+            in.Readings[k].Fluence[c] = std::abs(f);
+            in.Readings[k].Exitance[c] = std::abs(j);
+            in.FluencePhase[k][c] = std::arg(f);
+            in.ExitancePhase[k][c] = std::arg(j);
+          }
+        }
+      }
+    }
+    else
+    {
+      if (!frontEnd.Solve(mesh, std::move(material), std::move(irradiance), light, fluence,
+            in.Report))
+      {
+        return 0; // aborted by the user
+      }
+      if (!in.Detectors.empty())
+      {
+        in.Readings = translucency::ReadDetectors(
+          *mesh, detectorMaterial, in.Detectors, fluence, &detectorIrradiance);
+        in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
+        in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
+      }
     }
     this->AssemblyTime = in.Report.SetupMilliseconds;
     this->SolveTime = in.Report.SolveMilliseconds;
@@ -325,6 +542,36 @@ int vtkSolveDiffusion::RequestData(
     attach("FluenceStandardError", in.Report.FluenceStandardError);
     attach("MonteCarloRadiance", in.Report.Radiance);
     attach("MonteCarloRadianceStandardError", in.Report.RadianceStandardError);
+    attach("FluenceAmplitude", amplitude);
+    attach("FluencePhase", phase);
+    if (!in.Readings.empty())
+    {
+      std::vector<double> position, detectorFluence, exitance, fluencePhase, exitancePhase;
+      for (std::size_t k = 0; k < in.Readings.size(); ++k)
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          position.push_back(in.Readings[k].SurfacePosition[c]);
+          detectorFluence.push_back(in.Readings[k].Fluence[c]);
+          exitance.push_back(in.Readings[k].Exitance[c]);
+          fluencePhase.push_back(in.FluencePhase[k][c]);
+          exitancePhase.push_back(in.ExitancePhase[k][c]);
+        }
+      }
+      auto field = [output](const char* name, const std::vector<double>& values) {
+        vtkDataArray* array = vtkTranslucency::NewTripleArray(name, values);
+        output->GetFieldData()->AddArray(array);
+        array->Delete();
+      };
+      field("DetectorPosition", position);
+      field("DetectorFluence", detectorFluence);
+      field("DetectorExitance", exitance);
+      if (frequencyDomain)
+      {
+        field("DetectorFluencePhase", fluencePhase);
+        field("DetectorExitancePhase", exitancePhase);
+      }
+    }
   }
   catch (const translucency::Error& e)
   {
@@ -352,4 +599,7 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
   os << indent << "IncrementalAssembly: " << this->IncrementalAssembly << "\n";
   os << indent << "MaximumChangedFraction: " << this->MaximumChangedFraction << "\n";
+  os << indent << "Sources: " << this->GetNumberOfSources() << "\n";
+  os << indent << "Detectors: " << this->GetNumberOfDetectors() << "\n";
+  os << indent << "ModulationFrequency: " << this->ModulationFrequency << " Hz\n";
 }

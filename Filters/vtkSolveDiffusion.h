@@ -39,6 +39,27 @@
  * path was taken ("incremental" or "full"). Discretisations without an
  * incremental update (fem) always assemble in full.
  *
+ * Diffuse optics (divergence and fem solvers; Documentation/DiffuseOptics.md):
+ *  - interior sources: isotropic point sources (AddPointSource) and pencil
+ *    beams (AddPencilBeam: the Farrell et al. 1992 equivalent source one
+ *    transport mean free path below the entry point), in W per channel, on
+ *    top of the boundary irradiance (give an all-zero `Irradiance`, e.g.
+ *    vtkSurfaceIrradiance without lights, for sources alone);
+ *  - detectors on the surface (AddDetector, optional fibre radius): fluence
+ *    and exitance per channel, read with GetDetectorFluence() and
+ *    GetDetectorExitance() and attached as field arrays `DetectorPosition`
+ *    (the surface point), `DetectorFluence`, `DetectorExitance` (3
+ *    components, W/mm^2, one tuple per detector);
+ *  - frequency domain (ModulationFrequency > 0): the complex diffusion
+ *    equation; point arrays `FluenceAmplitude`, `FluencePhase` (radians,
+ *    arg of the complex fluence: negative = lagging the source) and
+ *    `Fluence` = the amplitude; the detectors read amplitudes and also give
+ *    `DetectorFluencePhase`, `DetectorExitancePhase`.
+ * A source outside the object, a pencil beam pointing out of the surface, a
+ * detector off the surface or a negative frequency make RequestData fail
+ * with an error naming it; so do sources or a frequency with the quadgraph,
+ * grid or montecarlo solvers. The sources need the whole mesh in one piece.
+ *
  * @warning A solve that does not reach RelTol within MaxIter iterations is
  * not an error: the filter warns with the channel, iterations and residual,
  * and GetConverged(channel) returns false.
@@ -177,6 +198,51 @@ public:
   vtkGetMacro(MaximumChangedFraction, double);
   ///@}
 
+  ///@{
+  /// Interior sources (divergence, fem), W per channel (>= 0), positions
+  /// and directions in mm. A pencil beam enters at (x, y, z), on the
+  /// surface, travelling along (dx, dy, dz) into the object. None by
+  /// default.
+  void AddPointSource(double x, double y, double z, double powerR, double powerG, double powerB);
+  void AddPencilBeam(double x, double y, double z, double dx, double dy, double dz,
+    double powerR, double powerG, double powerB);
+  void RemoveAllSources();
+  /// Remove one kind only (the plugin's PointSources and PencilBeams
+  /// properties each clear their own).
+  void RemoveAllPointSources();
+  void RemoveAllPencilBeams();
+  int GetNumberOfSources() const;
+  ///@}
+
+  ///@{
+  /// Detectors on the surface: a point (radius 0) or a fibre face of the
+  /// given radius (mm), read after each solve. None by default.
+  void AddDetector(double x, double y, double z, double radius);
+  void RemoveAllDetectors();
+  int GetNumberOfDetectors() const;
+  ///@}
+
+  ///@{
+  /// Readings of the last solve for detector k, channel c (0 if out of
+  /// range): fluence and exitance (W/mm^2; amplitudes in the frequency
+  /// domain), their phases (radians; 0 for a continuous-wave solve), and the
+  /// surface point read (mm).
+  double GetDetectorFluence(int detector, int channel) const;
+  double GetDetectorExitance(int detector, int channel) const;
+  double GetDetectorFluencePhase(int detector, int channel) const;
+  double GetDetectorExitancePhase(int detector, int channel) const;
+  void GetDetectorSurfacePosition(int detector, double position[3]) const;
+  ///@}
+
+  ///@{
+  /// Modulation frequency f (Hz) of the sources and the irradiance: 0 (the
+  /// default) solves the continuous-wave equation; f > 0 the frequency-
+  /// domain equation with absorption mu_a + i 2 pi f eta / c (divergence and
+  /// fem only). A negative or non-finite value makes RequestData fail.
+  vtkSetMacro(ModulationFrequency, double);
+  vtkGetMacro(ModulationFrequency, double);
+  ///@}
+
   /// How the last vertex solve (divergence, fem) built its system: "full" or
   /// "incremental"; empty for the other solvers and before the first solve.
   const char* GetLastAssembly() const;
@@ -231,6 +297,7 @@ protected:
   int NumberOfThreads = 0;
   bool IncrementalAssembly = true;
   double MaximumChangedFraction = 0.05;
+  double ModulationFrequency = 0.0;
   double TopologyTime = 0.0;
   double AssemblyTime = 0.0;
   double SolveTime = 0.0;

@@ -714,6 +714,7 @@ bool MonteCarloSolver::Solve(
   {
     throw Error("montecarlo: the problem needs a mesh and a material");
   }
+  RequireNoInteriorSources(problem, "montecarlo");
   const TetMesh& mesh = *problem.Mesh;
   const int numTets = mesh.GetNumberOfTets();
   const int numPoints = mesh.GetNumberOfPoints();

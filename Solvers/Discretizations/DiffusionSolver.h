@@ -8,8 +8,10 @@
  */
 #pragma once
 
+#include "InteriorSources.h"
 #include "LightSources.h"
 #include "OpticalProperties.h"
+#include "Error.h"
 #include "SolverOptions.h"
 
 #include <array>
@@ -37,7 +39,26 @@ struct DiffusionProblem
   std::vector<LightSource> Lights;
   double UniformIrradiance = 0.0; ///< W/mm^2, see LightSource
   bool Shadows = true;
+  /// Sources inside the object (point sources, pencil beams), borrowed; null
+  /// or empty = none. Only the vertex discretisations (divergence, fem)
+  /// implement them; the other solvers throw translucency::Error when
+  /// given any (RequireNoInteriorSources).
+  const Sources* InteriorSources = nullptr;
+
+  bool HasInteriorSources() const { return InteriorSources && !InteriorSources->Empty(); }
 };
+
+/// Throws translucency::Error naming `solver` if the problem has interior
+/// sources (for the solvers that do not implement them).
+inline void RequireNoInteriorSources(const DiffusionProblem& problem, const std::string& solver)
+{
+  if (problem.HasInteriorSources())
+  {
+    throw Error(solver +
+      ": interior sources (point sources, pencil beams) are implemented for the "
+      "\"divergence\" and \"fem\" solvers only");
+  }
+}
 
 /// What a solve cost and how it ended (valid after Solve()).
 struct SolverReport

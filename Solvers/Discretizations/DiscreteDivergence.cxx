@@ -254,3 +254,36 @@ void DiscreteDivergence::ToPointFluence(const TetMesh& mesh,
 }
 
 } // namespace translucency
+
+namespace translucency
+{
+
+bool DiscreteDivergence::AddMass(const TetMesh& mesh, const std::vector<double>& coefficient,
+  std::array<std::vector<double>, NumberOfChannels>& values) const
+{
+  const int numTets = mesh.GetNumberOfTets();
+  if (coefficient.size() != 3 * static_cast<std::size_t>(numTets) ||
+    values[0].size() != static_cast<std::size_t>(mesh.GetNumberOfNonZeros()))
+  {
+    throw Error("divergence: AddMass needs 3 coefficients per tet and a system of this mesh");
+  }
+  const int* diagonal = mesh.GetDiagonalPositions().data();
+  // Serial: each diagonal entry sums its tets in id order (the same bits at
+  // any thread count).
+  for (int t = 0; t < numTets; ++t)
+  {
+    const int* tet = mesh.GetTet(t);
+    const double volume = mesh.GetTetVolume(t);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      const double mass = volume * coefficient[3 * static_cast<std::size_t>(t) + c]; // eq. 13
+      for (int a = 0; a < 4; ++a)
+      {
+        values[c][diagonal[tet[a]]] += mass;
+      }
+    }
+  }
+  return true;
+}
+
+} // namespace translucency

@@ -46,6 +46,10 @@ public:
     const std::vector<double>& irradiance, const std::vector<int>& changedTets,
     DiffusionSystem& system) const override;
 
+  /// The lumped mass of TransCut eq. 13 (V_t per vertex of tet t, 4 x V_t/4).
+  bool AddMass(const TetMesh& mesh, const std::vector<double>& coefficient,
+    std::array<std::vector<double>, NumberOfChannels>& values) const override;
+
   /// Unknowns are the vertex fluences: a copy.
   void ToPointFluence(const TetMesh& mesh, const DiffusionSystem& system,
     const std::array<Eigen::VectorXd, NumberOfChannels>& solution,

@@ -49,6 +49,20 @@ public:
     return false;
   }
 
+  /**
+   * Add, for every tet t and channel c, coefficient[3 t + c] (1/mm) times
+   * this discretisation's (scaled) mass matrix of tet t to values[c], the
+   * value arrays of a system assembled by Assemble() on `mesh`: the change
+   * of the matrix when mu_a grows by `coefficient`, kappa held fixed. The
+   * frequency-domain solve uses it for the imaginary absorption
+   * 2 pi f eta / c. Returns false if the discretisation has none (default).
+   */
+  virtual bool AddMass(const TetMesh& /*mesh*/, const std::vector<double>& /*coefficient*/,
+    std::array<std::vector<double>, NumberOfChannels>& /*values*/) const
+  {
+    return false;
+  }
+
   /// Map the per-channel solutions to fluence phi, 3 values per mesh point
   /// (W/mm^2).
   virtual void ToPointFluence(const TetMesh& mesh, const DiffusionSystem& system,

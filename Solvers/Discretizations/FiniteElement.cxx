@@ -166,3 +166,38 @@ void FiniteElement::ToPointFluence(const TetMesh& mesh,
 }
 
 } // namespace translucency
+
+namespace translucency
+{
+
+bool FiniteElement::AddMass(const TetMesh& mesh, const std::vector<double>& coefficient,
+  std::array<std::vector<double>, NumberOfChannels>& values) const
+{
+  const int numTets = mesh.GetNumberOfTets();
+  if (coefficient.size() != 3 * static_cast<std::size_t>(numTets) ||
+    values[0].size() != static_cast<std::size_t>(mesh.GetNumberOfNonZeros()))
+  {
+    throw Error("fem: AddMass needs 3 coefficients per tet and a system of this mesh");
+  }
+  const int* positions = mesh.GetTetNonZeroPositions().data();
+  for (int t = 0; t < numTets; ++t)
+  {
+    const double volume = mesh.GetTetVolume(t);
+    const int* pos = positions + 16 * static_cast<std::size_t>(t);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      // 4 x (V_t / 20)(1 + delta_ab) coefficient.
+      const double mass = 0.2 * volume * coefficient[3 * static_cast<std::size_t>(t) + c];
+      for (int a = 0; a < 4; ++a)
+      {
+        for (int b = 0; b < 4; ++b)
+        {
+          values[c][pos[4 * a + b]] += a == b ? 2.0 * mass : mass;
+        }
+      }
+    }
+  }
+  return true;
+}
+
+} // namespace translucency

@@ -69,6 +69,10 @@ public:
   void Assemble(const TetMesh& mesh, const OpticalProperties& material,
     const std::vector<double>& irradiance, DiffusionSystem& system) override;
 
+  /// 4 x the consistent mass (V_t / 20)(1 + delta_ab).
+  bool AddMass(const TetMesh& mesh, const std::vector<double>& coefficient,
+    std::array<std::vector<double>, NumberOfChannels>& values) const override;
+
   /// Unknowns are the vertex fluences: a copy.
   void ToPointFluence(const TetMesh& mesh, const DiffusionSystem& system,
     const std::array<Eigen::VectorXd, NumberOfChannels>& solution,

@@ -1192,6 +1192,7 @@ bool GridSolver::Solve(const DiffusionProblem& problem,
   std::vector<double>& fluence,
   SolverReport& report)
 {
+  RequireNoInteriorSources(problem, "grid");
   return SolveImpl(problem, nullptr, fluence, report);
 }
 
@@ -1200,6 +1201,7 @@ bool GridSolver::SolveWithNodeIrradiance(const DiffusionProblem& problem,
   std::vector<double>& fluence,
   SolverReport& report)
 {
+  RequireNoInteriorSources(problem, "grid");
   return SolveImpl(problem, &nodeIrradiance, fluence, report);
 }
 

@@ -1,5 +1,6 @@
 #include "VertexDiffusionSolver.h"
 
+#include "ComplexConjugateGradient.h"
 #include "Error.h"
 #include "Strings.h"
 #include "TetMesh.h"
@@ -7,9 +8,33 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <sstream>
 
 namespace translucency
 {
+
+namespace
+{
+
+/// The speed of light in vacuum, mm/s.
+constexpr double SpeedOfLight = 299792458e3;
+
+/// b += 4 x the source load (the discretisations' matrices and right-hand
+/// sides are 4 x the weak form's; the load is the weak form's, in W).
+void AddSourceLoad(const std::vector<double>& load, DiffusionSystem& system)
+{
+  const int n = system.NumberOfUnknowns;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    for (int i = 0; i < n; ++i)
+    {
+      system.RightHandSide[c][i] += 4.0 * load[3 * static_cast<std::size_t>(i) + c];
+    }
+  }
+}
+
+} // namespace
 
 VertexDiffusionSolver::VertexDiffusionSolver(std::unique_ptr<Discretization> discretization)
   : Discretization_(std::move(discretization))
@@ -66,6 +91,14 @@ bool VertexDiffusionSolver::Solve(
   report.LinearSolver = Linear_->GetName();
 
   auto start = Clock::now();
+  // Interior sources: their load, computed first (a source outside the
+  // object is an error before any work).
+  const bool hasSources = problem.HasInteriorSources();
+  std::vector<double> sourceLoad;
+  if (hasSources)
+  {
+    sourceLoad = problem.InteriorSources->ComputeLoad(mesh, *problem.Material);
+  }
   // Painting: rebuild only the rows of the changed tets' vertices (TransCut
   // Sec. 5.2) when the system of the last successful solve is of this mesh
   // with its current geometry. The request is one-shot, also when the update
@@ -76,8 +109,10 @@ bool VertexDiffusionSolver::Solve(
   HasChangedTets_ = false;
   const bool sameGeometry = LastMesh_ == &mesh && LastPoints_ == mesh.GetNumberOfPoints() &&
     LastTets_ == mesh.GetNumberOfTets() && LastRevision_ == mesh.GetGeometryRevision();
-  const bool incremental = requested && sameGeometry && LinearReady_ &&
-    Discretization_->UpdateTets(mesh, *problem.Material, *problem.Irradiance, changedTets, System_);
+  // The incremental update rebuilds right-hand-side rows from q only: not
+  // with interior sources in this or the last system.
+  const bool incremental = requested && sameGeometry && LinearReady_ && !hasSources &&
+    !SystemHasSources_ && Discretization_->UpdateTets(mesh, *problem.Material, *problem.Irradiance, changedTets, System_);
   if (!incremental)
   {
     // Keep the previous values (swap, no copy) to see whether they changed.
@@ -88,6 +123,11 @@ bool VertexDiffusionSolver::Solve(
     Discretization_->Assemble(mesh, *problem.Material, *problem.Irradiance, System_);
   }
   report.Assembly = incremental ? "incremental" : "full";
+  SystemHasSources_ = hasSources;
+  if (hasSources)
+  {
+    AddSourceLoad(sourceLoad, System_);
+  }
 
   // A warm start needs the same unknowns: the same mesh object and size;
   // the same tets and pattern size, or the linear solver is set up anew.
@@ -150,6 +190,101 @@ bool VertexDiffusionSolver::Solve(
     report.Converged[c] = stats[c].Converged;
   }
   Discretization_->ToPointFluence(mesh, System_, Solution_, fluence);
+  return true;
+}
+
+bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem,
+  double frequency, std::vector<std::complex<double>>& fluence, SolverReport& report)
+{
+  if (!problem.Mesh || !problem.Material || !problem.Irradiance)
+  {
+    throw Error(GetName() + ": the problem needs a mesh, a material and an irradiance");
+  }
+  if (!std::isfinite(frequency) || !(frequency > 0.0))
+  {
+    std::ostringstream out;
+    out << GetName() << ": modulation frequency " << frequency
+        << " Hz (expected a finite value > 0; 0 is the continuous-wave Solve())";
+    throw Error(out.str());
+  }
+  const TetMesh& mesh = *problem.Mesh;
+  const OpticalProperties& material = *problem.Material;
+  report = SolverReport();
+  report.Solver = GetName();
+  report.LinearSolver = "cocg-jacobi";
+  report.Assembly = "full";
+
+  auto start = Clock::now();
+  std::vector<double> sourceLoad;
+  if (problem.HasInteriorSources())
+  {
+    sourceLoad = problem.InteriorSources->ComputeLoad(mesh, material);
+  }
+  DiffusionSystem system;
+  Discretization_->Assemble(mesh, material, *problem.Irradiance, system);
+  if (!sourceLoad.empty())
+  {
+    AddSourceLoad(sourceLoad, system);
+  }
+  // The imaginary absorption omega eta_t / c (1/mm) per tet and channel.
+  const int numTets = mesh.GetNumberOfTets();
+  const double omega = 2.0 * 3.14159265358979323846 * frequency;
+  std::vector<double> coefficient(3 * static_cast<std::size_t>(numTets));
+  for (int t = 0; t < numTets; ++t)
+  {
+    const double value = omega * material.RefractiveIndex[t] / SpeedOfLight;
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      coefficient[3 * static_cast<std::size_t>(t) + c] = value;
+    }
+  }
+  std::array<std::vector<double>, NumberOfChannels> imaginary;
+  for (auto& values : imaginary)
+  {
+    values.assign(system.ColumnIndices.size(), 0.0);
+  }
+  if (!Discretization_->AddMass(mesh, coefficient, imaginary))
+  {
+    throw Error(GetName() + ": this discretisation has no frequency-domain solve");
+  }
+  report.SetupMilliseconds = MillisecondsSince(start);
+
+  start = Clock::now();
+  std::array<Eigen::VectorXd, NumberOfChannels> realPart, imagPart;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    Eigen::VectorXcd x;
+    LinearSolveStats stats;
+    const auto progress = [this, c](int iteration) {
+      return ReportProgress((c + static_cast<double>(iteration) / std::max(1, MaxIter_)) /
+        NumberOfChannels);
+    };
+    const Eigen::VectorXcd b = system.RightHandSide[c].cast<std::complex<double>>();
+    if (!SolveComplexSymmetricCOCG(system.NumberOfUnknowns, system.RowOffsets.data(),
+          system.ColumnIndices.data(), system.Values[c].data(), imaginary[c].data(), b, x,
+          RelTol_, MaxIter_, stats, progress))
+    {
+      return false;
+    }
+    realPart[c] = x.real();
+    imagPart[c] = x.imag();
+    report.Iterations[c] = stats.Iterations;
+    report.Residual[c] = stats.RelativeResidual;
+    report.Converged[c] = stats.Converged;
+  }
+  report.SolveMilliseconds = MillisecondsSince(start);
+  report.NumberOfUnknowns = system.NumberOfUnknowns;
+  report.NumberOfNonZeros = static_cast<long long>(system.ColumnIndices.size());
+  report.MemoryBytes = system.ColumnIndices.size() * (sizeof(int) + 4 * NumberOfChannels *
+    sizeof(double)) + 10 * static_cast<std::size_t>(system.NumberOfUnknowns) * sizeof(double);
+  std::vector<double> re, im;
+  Discretization_->ToPointFluence(mesh, system, realPart, re);
+  Discretization_->ToPointFluence(mesh, system, imagPart, im);
+  fluence.resize(re.size());
+  for (std::size_t i = 0; i < re.size(); ++i)
+  {
+    fluence[i] = std::complex<double>(re[i], im[i]);
+  }
   return true;
 }
 

@@ -18,6 +18,7 @@
 #include "Discretization.h"
 #include "LinearSolver.h"
 
+#include <complex>
 #include <cstdint>
 
 namespace translucency
@@ -33,6 +34,27 @@ public:
   bool Solve(const DiffusionProblem& problem, std::vector<double>& fluence,
     SolverReport& report) override;
   void Reset() override;
+
+  /**
+   * Frequency domain: solve the complex diffusion equation
+   *   -div(kappa grad Phi) + (mu_a + i omega eta / c) Phi = S,  omega = 2 pi f,
+   * (kappa real, c = 299792458e3 mm/s the speed of light in vacuum, eta the
+   * tet's refractive index) with the same boundary condition and sources as
+   * Solve(), the sources and the boundary irradiance modulated at f with
+   * phase 0. The matrix is this discretisation's real matrix plus i times
+   * its mass matrix (Discretization::AddMass) times omega eta / c: complex
+   * symmetric, solved per channel by COCG with the Jacobi preconditioner
+   * (ComplexConjugateGradient.h) to GetRelTol() within GetMaxIter()
+   * iterations (the linear-solver name is not used; no warm start).
+   * @param frequency modulation frequency f in Hz (finite, > 0; else
+   *        translucency::Error naming the value)
+   * @param fluence complex Phi, 3 values per mesh point (W/mm^2 per W of
+   *        source modulation amplitude); amplitude |Phi|, phase arg(Phi)
+   *        (negative: the fluence lags the source)
+   * Returns false if the progress callback aborted.
+   */
+  bool SolveFrequencyDomain(const DiffusionProblem& problem, double frequency,
+    std::vector<std::complex<double>>& fluence, SolverReport& report);
 
   /**
    * Painting (TransCut Sec. 5.2): the next Solve() only rebuilds the rows of
@@ -73,6 +95,8 @@ private:
   std::size_t LastNonZeros_ = 0;
   std::uint64_t LastRevision_ = 0; ///< TetMesh::GetGeometryRevision of the last solve
   bool HasChangedTets_ = false;
+  /// System_'s right-hand side holds interior sources (no incremental update).
+  bool SystemHasSources_ = false;
   std::vector<int> ChangedTets_;
 };
 

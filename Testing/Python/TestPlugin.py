@@ -104,6 +104,34 @@ class PluginTest(unittest.TestCase):
         self.assertTrue(np.all(point_array(surface, "Radiance") >= 0.0))
         self.assertGreater(np.max(point_array(surface, "Radiance")), 0.0)
 
+    def test_sources_detectors_frequency(self):
+        """PointSources, PencilBeams, Detectors, ModulationFrequency (DiffuseOptics.md)."""
+        solve = SolveDiffusion(Input=self.irradiance, Solver="fem", RelTol=1e-10)
+        try:
+            solve.PointSources = [0, 0, 0, 1, 1, 1, 1, 0.5, 0, 2, 2, 2]
+            solve.PencilBeams = [0, 0, 4, 0, 0, -1, 1, 1, 1]
+            solve.Detectors = [4, 0, 0, 0, 0, 4, 0, 1]
+            grid = self.fetch(solve)
+            fluence = grid.GetFieldData().GetArray("DetectorFluence")
+            exitance = grid.GetFieldData().GetArray("DetectorExitance")
+            self.assertEqual(fluence.GetNumberOfTuples(), 2)
+            self.assertTrue(np.all(vtk_to_numpy(exitance) > 0.0))
+            self.assertTrue(np.all(vtk_to_numpy(fluence) > vtk_to_numpy(exitance)))
+            with_sources = point_array(grid, "Fluence")
+            self.assertIsNone(grid.GetPointData().GetArray("FluencePhase"))
+            solve.ModulationFrequency = 100e6
+            grid = self.fetch(solve)
+            self.assertEqual(grid.GetPointData().GetArray("FluencePhase").GetNumberOfComponents(), 3)
+            self.assertTrue(np.all(point_array(grid, "FluenceAmplitude") <= with_sources * 1.001))
+            self.assertIsNotNone(grid.GetFieldData().GetArray("DetectorFluencePhase"))
+            # Clearing one kind keeps the other: fewer sources, less light.
+            solve.ModulationFrequency = 0
+            solve.PointSources = []
+            grid = self.fetch(solve)
+            self.assertLess(np.sum(point_array(grid, "Fluence")), np.sum(with_sources))
+        finally:
+            Delete(solve)
+
     def test_material_property(self):
         self.assign.MaterialName = "skin1"
         try:

@@ -1,0 +1,65 @@
+/**
+ * @file DiffuseOpticsOptions.h
+ * @brief The diffuse-optics options of `render` (group "Diffuse optics"):
+ * --source, --detector, --frequency, their parsing, how they go to
+ * vtkSolveDiffusion and the report (stdout and JSON).
+ * Documentation/DiffuseOptics.md has the physics.
+ */
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "vtk_nlohmannjson.h"
+#include VTK_NLOHMANN_JSON(json.hpp)
+
+#include <array>
+#include <string>
+#include <vector>
+
+class vtkSolveDiffusion;
+
+namespace translucency_app
+{
+
+/// One --source: "point:x,y,z[:P]" or "pencil:x,y,z:dx,dy,dz[:P]"; P is one
+/// power for the three channels or three (W; default 1).
+struct SourceSpec
+{
+  std::string Spec; ///< as given, for messages and the report
+  bool Pencil = false;
+  std::array<double, 3> Position{};
+  std::array<double, 3> Direction{};
+  std::array<double, 3> Power{ 1.0, 1.0, 1.0 };
+};
+/// Parse a --source SPEC; a UsageError naming --source and the fault otherwise.
+SourceSpec ParseSource(const std::string& spec);
+
+/// One --detector: "x,y,z[:r]" (mm; r the fibre radius, default 0).
+struct DetectorSpec
+{
+  std::string Spec;
+  std::array<double, 3> Position{};
+  double Radius = 0.0;
+};
+/// Parse a --detector SPEC; a UsageError naming --detector otherwise.
+DetectorSpec ParseDetector(const std::string& spec);
+
+struct DiffuseOpticsOptions
+{
+  std::vector<SourceSpec> Sources;
+  std::vector<DetectorSpec> Detectors;
+  double Frequency = 0.0; ///< Hz; 0 = continuous wave (--frequency must be > 0)
+
+  /// Give the sources, detectors and frequency to the filter.
+  void Apply(vtkSolveDiffusion* solve) const;
+  /// Print the detector readings of the last solve.
+  void Print(vtkSolveDiffusion* solve) const;
+  /// The JSON entries "frequency_hz", "sources" and "detectors" (with the
+  /// readings of the last solve).
+  void Report(vtkSolveDiffusion* solve, nlohmann::json& j) const;
+};
+
+/// --source, --detector, --frequency on `command`.
+void AddDiffuseOpticsOptions(CLI::App* command, DiffuseOpticsOptions& options);
+
+} // namespace translucency_app

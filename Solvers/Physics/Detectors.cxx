@@ -1,0 +1,208 @@
+#include "Detectors.h"
+
+#include "Error.h"
+#include "Fresnel.h"
+#include "TetMesh.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace translucency
+{
+
+namespace
+{
+
+void CheckPointArray(const TetMesh& mesh, const std::vector<double>* values, const char* what)
+{
+  if (values && values->size() != 3 * static_cast<std::size_t>(mesh.GetNumberOfPoints()))
+  {
+    std::ostringstream out;
+    out << what << " has " << values->size() << " values, expected 3 per mesh point ("
+        << 3 * static_cast<std::size_t>(mesh.GetNumberOfPoints()) << ")";
+    throw Error(out.str());
+  }
+}
+
+} // namespace
+
+PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<double>& fluence, const std::vector<double>* irradiance)
+{
+  const int numTets = mesh.GetNumberOfTets();
+  material.Validate(numTets);
+  CheckPointArray(mesh, &fluence, "fluence");
+  CheckPointArray(mesh, irradiance, "irradiance");
+  PowerBalance balance;
+  // Absorbed: sum_t mu_a V_t mean(phi at the 4 vertices) (exact for P1 phi).
+  for (int t = 0; t < numTets; ++t)
+  {
+    const int* tet = mesh.GetTet(t);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      double sum = 0.0;
+      for (int a = 0; a < 4; ++a)
+      {
+        sum += fluence[3 * static_cast<std::size_t>(tet[a]) + c];
+      }
+      balance.Absorbed[c] +=
+        material.AbsorptionCoefficient[3 * t + c] * mesh.GetTetVolume(t) * 0.25 * sum;
+    }
+  }
+  // Escaped and entering: the P1 integrals over each boundary triangle, A of
+  // the tet that owns it.
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
+  const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
+  for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+  {
+    const double a = Fresnel::MismatchA(material.RefractiveIndex[owners[f]]);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      double phi = 0.0, q = 0.0;
+      for (int v = 0; v < 3; ++v)
+      {
+        const std::size_t i = 3 * static_cast<std::size_t>(triangles[3 * f + v]) + c;
+        phi += fluence[i];
+        q += irradiance ? (*irradiance)[i] : 0.0;
+      }
+      phi *= areas[f] / 3.0;
+      q *= areas[f] / 3.0;
+      balance.Escaped[c] += (phi - 2.0 * q) / (2.0 * a);
+      balance.BoundaryInjected[c] += q;
+    }
+  }
+  return balance;
+}
+
+std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
+  const OpticalProperties& material, const std::vector<Detector>& detectors,
+  const std::vector<double>& fluence, const std::vector<double>* irradiance)
+{
+  material.Validate(mesh.GetNumberOfTets());
+  CheckPointArray(mesh, &fluence, "fluence");
+  CheckPointArray(mesh, irradiance, "irradiance");
+  std::vector<DetectorReading> readings;
+  if (detectors.empty())
+  {
+    return readings;
+  }
+  const double tolerance = SurfaceTolerance(mesh);
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
+  const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
+
+  // Adds the P1 values at barycentric weights w of triangle f, times `weight`,
+  // to the reading.
+  const auto accumulate = [&](int f, const double w[3], double weight, DetectorReading& reading) {
+    const double a = Fresnel::MismatchA(material.RefractiveIndex[owners[f]]);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      double phi = 0.0, q = 0.0;
+      for (int v = 0; v < 3; ++v)
+      {
+        const std::size_t i = 3 * static_cast<std::size_t>(triangles[3 * f + v]) + c;
+        phi += w[v] * fluence[i];
+        q += irradiance ? w[v] * (*irradiance)[i] : 0.0;
+      }
+      reading.Fluence[c] += weight * phi;
+      reading.Exitance[c] += weight * (phi - 2.0 * q) / (2.0 * a);
+    }
+  };
+
+  for (std::size_t k = 0; k < detectors.size(); ++k)
+  {
+    const Detector& detector = detectors[k];
+    const std::string name =
+      detector.Label.empty() ? "detector " + std::to_string(k + 1) : detector.Label;
+    const double* x = detector.Position.data();
+    if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
+    {
+      throw Error(name + ": position is not finite");
+    }
+    if (!std::isfinite(detector.Radius) || detector.Radius < 0.0)
+    {
+      std::ostringstream out;
+      out << name << ": fibre radius " << detector.Radius << " mm (expected a finite value >= 0)";
+      throw Error(out.str());
+    }
+    const SurfacePoint surface = FindSurfacePoint(mesh, x);
+    if (surface.Distance > tolerance)
+    {
+      std::ostringstream out;
+      out.precision(6);
+      out << name << ": (" << x[0] << ", " << x[1] << ", " << x[2] << ") is off the surface, "
+          << surface.Distance << " mm from its nearest surface point (" << surface.Position[0]
+          << ", " << surface.Position[1] << ", " << surface.Position[2] << "); at most "
+          << tolerance << " mm (half the mean surface edge) is allowed";
+      throw Error(out.str());
+    }
+    DetectorReading reading;
+    reading.SurfacePosition = surface.Position;
+    const double radius = detector.Radius;
+    if (radius > 0.0)
+    {
+      const Eigen::Vector3d s = Eigen::Map<const Eigen::Vector3d>(surface.Position.data());
+      const Eigen::Vector3d ns = Eigen::Map<const Eigen::Vector3d>(surface.Normal.data());
+      double area = 0.0;
+      for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+      {
+        const Eigen::Vector3d p0 = Eigen::Map<const Eigen::Vector3d>(mesh.GetPoint(triangles[3 * f]));
+        const Eigen::Vector3d p1 = Eigen::Map<const Eigen::Vector3d>(mesh.GetPoint(triangles[3 * f + 1]));
+        const Eigen::Vector3d p2 = Eigen::Map<const Eigen::Vector3d>(mesh.GetPoint(triangles[3 * f + 2]));
+        const Eigen::Vector3d centroid = (p0 + p1 + p2) / 3.0;
+        const double reach = std::max({ (p0 - centroid).norm(), (p1 - centroid).norm(),
+          (p2 - centroid).norm() });
+        if ((centroid - s).norm() > radius + reach || (p1 - p0).cross(p2 - p0).dot(ns) <= 0.0)
+        {
+          continue;
+        }
+        const double edge = std::max({ (p1 - p0).norm(), (p2 - p1).norm(), (p0 - p2).norm() });
+        const int m = std::clamp(static_cast<int>(std::ceil(4.0 * edge / radius)), 1, 64);
+        const double subArea = areas[f] / (static_cast<double>(m) * m);
+        // The m^2 sub-triangles of a uniform split: upward ones with centroid
+        // ((i + 1/3)/m, (j + 1/3)/m), downward ones ((i + 2/3)/m, (j + 2/3)/m).
+        for (int up = 0; up < 2; ++up)
+        {
+          const double shift = up == 0 ? 1.0 / 3.0 : 2.0 / 3.0;
+          for (int i = 0; i < m; ++i)
+          {
+            for (int j = 0; i + j <= m - 1 - up; ++j)
+            {
+              const double u = (i + shift) / m, v = (j + shift) / m;
+              const Eigen::Vector3d y = p0 + u * (p1 - p0) + v * (p2 - p0);
+              if ((y - s).norm() <= radius)
+              {
+                const double w[3] = { 1.0 - u - v, u, v };
+                accumulate(f, w, subArea, reading);
+                area += subArea;
+              }
+            }
+          }
+        }
+      }
+      if (area > 0.0)
+      {
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          reading.Fluence[c] /= area;
+          reading.Exitance[c] /= area;
+        }
+        reading.Area = area;
+        readings.push_back(reading);
+        continue;
+      }
+      reading = DetectorReading();
+      reading.SurfacePosition = surface.Position;
+    }
+    accumulate(surface.Triangle, surface.Weights, 1.0, reading);
+    readings.push_back(reading);
+  }
+  return readings;
+}
+
+} // namespace translucency

@@ -1,0 +1,74 @@
+/**
+ * @file Detectors.h
+ * @brief Read-outs of a diffusion solution on the surface: detectors (point
+ * or fibre; fluence and exitance per channel) and the power balance.
+ * Documentation/DiffuseOptics.md has the conventions.
+ */
+#pragma once
+
+#include "InteriorSources.h"
+
+namespace translucency
+{
+
+/**
+ * Power balance of a solution (per channel, W), with the P1 integrals of the
+ * vertex discretisations (exact for a P1 phi; the lumped integrals of the
+ * discrete divergence have the same values):
+ *  - Absorbed = integral of mu_a phi over the object;
+ *  - Escaped = integral over the surface of the exitance J = (phi - 2 q)/(2 A)
+ *    (the flux leaving; DetectorReading::Exitance);
+ *  - BoundaryInjected = integral of q (boundary irradiance entering).
+ * For a converged solve Absorbed + Escaped = BoundaryInjected + the interior
+ * sources' InjectedPower (both discretisations satisfy it to solver
+ * tolerance: summing the rows of their systems gives exactly these integrals
+ * when eta is uniform on the surface). `irradiance` may be null (q = 0).
+ */
+struct PowerBalance
+{
+  std::array<double, NumberOfChannels> Absorbed{};
+  std::array<double, NumberOfChannels> Escaped{};
+  std::array<double, NumberOfChannels> BoundaryInjected{};
+};
+PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<double>& fluence, const std::vector<double>* irradiance);
+
+/// A detector on the surface: a point or a fibre face of radius Radius.
+struct Detector
+{
+  std::array<double, 3> Position{}; ///< mm, on the surface (within SurfaceTolerance())
+  double Radius = 0.0; ///< fibre radius (mm, >= 0); 0 = the value at the point
+  /// Name used in error messages; "" = "detector <k>" (1-based).
+  std::string Label;
+};
+
+/// What a detector reads (per channel).
+struct DetectorReading
+{
+  std::array<double, 3> SurfacePosition{}; ///< the closest surface point (mm)
+  double Area = 0.0; ///< surface area averaged over (mm^2); 0 for a point detector
+  std::array<double, NumberOfChannels> Fluence{};  ///< phi, W/mm^2
+  /// Exitance (diffuse reflectance) J = (phi - 2 q) / (2 A), W/mm^2: the
+  /// hemispherical integral of TransCut eq. 3's radiance (F_t integrates to
+  /// 1 - Fdr), equal to the flux -kappa dphi/dn of the Robin condition where
+  /// q = 0. A from the refractive index of the tet under the point.
+  std::array<double, NumberOfChannels> Exitance{};
+};
+
+/**
+ * Read detectors from a solution. `fluence` and `irradiance` (may be null:
+ * q = 0) have 3 values per mesh point; the readings are linear in them (a
+ * complex solution can be read as its real and imaginary parts). A point
+ * detector (Radius 0) reads the P1 interpolant at the closest surface
+ * point; a fibre reads the area-weighted mean over the surface within
+ * Radius of that point (triangles facing the same way as the detector's,
+ * each split into sub-triangles no larger than Radius / 4, a sub-triangle
+ * counted if its centroid is inside the disc). Throws translucency::Error
+ * naming the detector when it is more than SurfaceTolerance() from the
+ * surface, or its position or radius is invalid.
+ */
+std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
+  const OpticalProperties& material, const std::vector<Detector>& detectors,
+  const std::vector<double>& fluence, const std::vector<double>* irradiance);
+
+} // namespace translucency
