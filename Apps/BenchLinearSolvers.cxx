@@ -8,7 +8,9 @@
 // set-up (pattern changed, and values only), a cold solve from zero and a
 // warm solve after a 10-degree light rotation, each at the loosest tolerance
 // of a fixed ladder that gives <= 1 % relative L2 error of the boundary
-// fluence in every channel; and "cut -> new fluence" (with multigrid-agg).
+// fluence in every channel; "paint -> new fluence" and "cut -> new fluence"
+// (with multigrid-agg); then the interactive figures of issue 22 next to their
+// targets, and the memory per tet of every structure.
 
 #include "BenchLinearSolvers.h"
 #include "HypreMPI.h"
