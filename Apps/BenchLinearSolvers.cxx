@@ -8,7 +8,9 @@
 // set-up (pattern changed, and values only), a cold solve from zero and a
 // warm solve after a 10-degree light rotation, each at the loosest tolerance
 // of a fixed ladder that gives <= 1 % relative L2 error of the boundary
-// fluence in every channel; and "cut -> new fluence" (with multigrid-agg).
+// fluence in every channel; "paint -> new fluence" and "cut -> new fluence"
+// (with multigrid-agg); then the interactive figures of issue 22 next to their
+// targets, and the memory per tet of every structure.
 
 #include "BenchLinearSolvers.h"
 #include "HypreMPI.h"
@@ -26,6 +28,7 @@
 #include "Radiance.h"
 #include "TetCut.h"
 #include "TetMesh.h"
+#include "TetPaint.h"
 
 #include "vtkTetrahedralizeSurface.h"
 
@@ -52,6 +55,7 @@
 #include <memory>
 #include <set>
 #include <sstream>
+#include <sys/resource.h>
 
 namespace translucency_app
 {
@@ -617,6 +621,258 @@ json BenchCut(const std::string& solverName, const Problem& p, const Solution& p
     { "error_one_step_looser", looser }, { "reference_residual", residual } };
 }
 
+/// Paint stroke -> new fluence with `solverName` on the lit uncut mesh: a
+/// stroke point on top of the object (width 2.4 % of the bounding-box
+/// diagonal, ~1 % of the tets at 1M, as `bench --edit`) sets the ketchup
+/// coefficients (translucency::TetPaint, cut-off 1e-6), then
+/// DiscreteDivergence::UpdateTets rebuilds the touched rows, the solver's
+/// values-only Setup and a solve warm-started from `previous` at the loosest
+/// ladder tolerance giving <= 1 % boundary error (untimed calibration pass
+/// against a 1e-10 reference of the painted system). Same-run baseline: the
+/// same with a full 3-channel assembly instead of the row update.
+json BenchPaint(const std::string& solverName, const Problem& p, const Solution& previous,
+  int runs)
+{
+  const std::vector<double>& points = p.Mesh.GetPoints();
+  double lo[3] = { 1e300, 1e300, 1e300 }, hi[3] = { -1e300, -1e300, -1e300 };
+  for (size_t i = 0; i < points.size(); i += 3)
+    for (int d = 0; d < 3; ++d)
+    {
+      lo[d] = std::min(lo[d], points[i + d]);
+      hi[d] = std::max(hi[d], points[i + d]);
+    }
+  const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
+    (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const translucency::MaterialPreset& ketchup = translucency::FindMaterialPreset("ketchup");
+  translucency::TetPaint paint;
+  paint.SetStrokePoints({ 0.5 * (lo[0] + hi[0]), hi[1], 0.5 * (lo[2] + hi[2]) });
+  paint.SetWidth(0.024 * diag);
+  paint.SetTargetAbsorption({ ketchup.Absorption[0], ketchup.Absorption[1], ketchup.Absorption[2] });
+  paint.SetTargetScattering({ ketchup.ReducedScattering[0], ketchup.ReducedScattering[1],
+    ketchup.ReducedScattering[2] });
+  const std::vector<double> q = Irradiance(p.Mesh, p.Material, p.Dir0);
+  translucency::DiscreteDivergence disc;
+  translucency::DiffusionSystem base;
+  disc.Assemble(p.Mesh, p.Material, q, base);
+  auto solver = translucency::CreateLinearSolver(solverName);
+  solver->SetMaxIter(BenchMaxIter);
+  solver->Setup(base, &p.Mesh, true);
+  std::vector<double> paintMs, rowsMs, valuesMs, solveMs, totalMs, fullAsmMs, baselineMs;
+  double tolerance = 0.0, looser = -1.0, error = 0.0, residual = 0.0;
+  bool reached = false;
+  int touched = 0, iterations = 0;
+  Solution ref, x;
+  for (int r = -1; r < runs; ++r) // r = -1: untimed calibration pass
+  {
+    translucency::OpticalProperties material = p.Material;
+    translucency::DiffusionSystem system = base;
+    solver->SetRelTol(tolerance);
+    auto start = Clock::now();
+    const auto begin = start;
+    paint.Paint(points, p.Mesh.GetTets(), material.AbsorptionCoefficient,
+      material.ReducedScatteringCoefficient, nullptr);
+    paintMs.push_back(MillisecondsSince(start));
+    touched = static_cast<int>(paint.GetChangedCells().size());
+    start = Clock::now();
+    disc.UpdateTets(p.Mesh, material, q, paint.GetChangedCells(), system);
+    rowsMs.push_back(MillisecondsSince(start));
+    start = Clock::now();
+    solver->Setup(system, &p.Mesh, false);
+    valuesMs.push_back(MillisecondsSince(start));
+    if (r < 0)
+    {
+      ref = Reference(system, residual);
+      std::vector<CurvePoint> probes;
+      int k = Calibrate(*solver, system, ref, p.Mesh.GetBoundaryPoints(), &previous, nullptr, probes);
+      reached = k >= 0;
+      if (k < 0)
+        k = static_cast<int>(probes.size()) - 1;
+      tolerance = ToleranceLadder[k];
+      looser = k > 0 ? probes[k - 1].Error : -1.0;
+      paintMs.clear();
+      rowsMs.clear();
+      valuesMs.clear();
+      continue;
+    }
+    x = previous;
+    Stats stats;
+    start = Clock::now();
+    solver->Solve(system, x, true, stats);
+    solveMs.push_back(MillisecondsSince(start));
+    totalMs.push_back(MillisecondsSince(begin));
+    iterations = stats[0].Iterations;
+    error = BoundaryError(x, ref, p.Mesh.GetBoundaryPoints());
+    // Baseline: the full 3-channel assembly instead of the row update.
+    translucency::DiffusionSystem full;
+    start = Clock::now();
+    disc.Assemble(p.Mesh, material, q, full);
+    fullAsmMs.push_back(MillisecondsSince(start));
+    baselineMs.push_back(paintMs.back() + fullAsmMs.back() + valuesMs.back() + solveMs.back());
+  }
+  const double pm = Median(paintMs), rm = Median(rowsMs), vm = Median(valuesMs),
+               sm = Median(solveMs), tm = Median(totalMs);
+  std::cout << std::fixed << std::setprecision(1) << "  paint -> new fluence (" << solverName
+            << ", tolerance " << std::setprecision(3) << tolerance << std::setprecision(1)
+            << ", warm from the unpainted fluence): paint " << pm << " (" << touched << " tets, "
+            << std::setprecision(2) << 100.0 * touched / p.Mesh.GetNumberOfTets()
+            << " %) + rows " << rm << " + values-only setup " << vm << " + solve " << sm
+            << std::setprecision(1) << " = " << tm << " ms (R iterations " << iterations
+            << ", boundary error " << std::setprecision(2) << 100.0 * error
+            << " %); same-run baseline with a full assembly instead of the rows "
+            << std::setprecision(1) << Median(baselineMs) << " ms\n"
+            << std::defaultfloat;
+  return { { "solver", solverName }, { "tolerance", tolerance }, { "paint_ms", pm },
+    { "rows_ms", rm }, { "values_setup_ms", vm }, { "solve_ms", sm }, { "total_ms", tm },
+    { "tets_painted", touched }, { "iterations_R", iterations }, { "error", error },
+    { "reached_1pct", reached }, { "error_one_step_looser", looser },
+    { "reference_residual", residual }, { "full_assembly_ms", Median(fullAsmMs) },
+    { "baseline_full_assembly_total_ms", Median(baselineMs) } };
+}
+
+/// Peak resident set size of this process so far (bytes; getrusage).
+double PeakRssBytes()
+{
+  struct rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
+  return 1024.0 * static_cast<double>(usage.ru_maxrss);
+}
+
+std::string OneDecimal(double v)
+{
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(1) << v;
+  return os.str();
+}
+
+/// One row of the issue-22 table: this run's figure, the issue's idle
+/// figure ("today", -1: none), the target, and a same-run baseline (-1: none).
+struct TargetRow
+{
+  std::string Figure;
+  double Ms, Today, Target, Baseline;
+  std::string BaselineName;
+};
+
+/// Prints the interactive figures of issue 22 (section 3) next to their
+/// targets. Absolute times depend on the machine's load: the "SpMVs" columns
+/// divide by this run's one-channel SpMV, and the target's by the idle SpMV
+/// of the same mesh (1.90 ms, Performance.md, session 16).
+json PrintTargets(const std::vector<SolverRow>& rows, const json& entry,
+  const std::string& cutSolver, double spmvMs)
+{
+  constexpr double IdleSpMVMs = 1.90;
+  const SolverRow* agg = nullptr;
+  const SolverRow* cg = nullptr;
+  for (const SolverRow& r : rows)
+  {
+    if (r.Name == cutSolver)
+      agg = &r;
+    if (r.Name == "cg-jacobi")
+      cg = &r;
+  }
+  std::vector<TargetRow> table;
+  if (agg)
+    table.push_back({ "warm relight, 3 channels (" + cutSolver + ")", agg->WarmMs, 28.9, 16.0,
+      cg ? cg->WarmMs : -1.0, "cg-jacobi warm" });
+  const json& paint = entry["paint"];
+  table.push_back({ "paint 1 % -> new fluence (paint + rows + values set-up + warm solve)",
+    paint["total_ms"].get<double>(), -1.0, 33.0,
+    paint["baseline_full_assembly_total_ms"].get<double>(), "full assembly instead of rows" });
+  if (entry.contains("cut"))
+  {
+    const json& cut = entry["cut"];
+    table.push_back({ "plane cut -> new fluence (cut, topology, irradiance, assembly, hierarchy, solve)",
+      cut["total_ms"].get<double>(), 241.0, 120.0, -1.0, "" });
+    table.push_back({ "topology + hierarchy after a cut",
+      cut["topology_ms"].get<double>() + cut["setup_ms"].get<double>(), 212.0, 120.0, -1.0, "" });
+  }
+  table.push_back({ "3-channel assembly", entry["assembly_3ch_ms"].get<double>(), 28.6, 22.0,
+    3.0 * spmvMs, "3 SpMVs" });
+  if (agg)
+    table.push_back({ "cold 3-channel solve to 1 % (" + cutSolver + ")", agg->ColdMs, 52.0, 40.0,
+      cg ? cg->ColdMs : -1.0, "cg-jacobi cold" });
+  std::cout << "\n  issue 22 targets (this run; SpMVs = ms / this run's one SpMV of " << std::fixed
+            << std::setprecision(2) << spmvMs << " ms; target SpMVs = target / the idle SpMV of "
+            << IdleSpMVMs << " ms):\n"
+            << "  " << std::left << std::setw(84) << "figure" << std::right << std::setw(9)
+            << "ms" << std::setw(8) << "SpMVs" << std::setw(9) << "today" << std::setw(8)
+            << "target" << std::setw(8) << "t.SpMVs" << std::setw(9) << "met ms" << std::setw(11)
+            << "met SpMVs" << "  same-run baseline\n";
+  json out = json::array();
+  for (const TargetRow& t : table)
+  {
+    const double spmvs = t.Ms / spmvMs, targetSpmvs = t.Target / IdleSpMVMs;
+    const bool met = spmvs <= targetSpmvs;
+    std::cout << "  " << std::left << std::setw(84) << t.Figure << std::right
+              << std::setprecision(1) << std::setw(9) << t.Ms << std::setw(8) << spmvs
+              << std::setw(9) << (t.Today >= 0 ? OneDecimal(t.Today) : std::string("-"))
+              << std::setw(8) << t.Target << std::setw(8) << targetSpmvs << std::setw(9)
+              << (t.Ms <= t.Target ? "yes" : "no") << std::setw(11) << (met ? "yes" : "no");
+    if (t.Baseline >= 0)
+      std::cout << "  " << t.BaselineName << " " << t.Baseline << " ms (x" << std::setprecision(2)
+                << t.Ms / t.Baseline << ")";
+    std::cout << "\n";
+    out.push_back({ { "figure", t.Figure }, { "ms", t.Ms }, { "spmvs", spmvs },
+      { "today_idle_ms", t.Today }, { "target_ms", t.Target }, { "target_spmvs", targetSpmvs },
+      { "met_in_spmvs", met }, { "met_in_ms", t.Ms <= t.Target }, { "baseline", t.BaselineName }, { "baseline_ms", t.Baseline } });
+  }
+  std::cout << "  (targets and today's figures: 1M tets, idle; met SpMVs = this run's figure in "
+               "SpMVs <= the target in idle SpMVs, a load-independent reading while the machine "
+               "is shared)\n" << std::defaultfloat;
+  return out;
+}
+
+/// Bytes per tet of every structure of one lit, assembled, solvable mesh.
+json PrintMemory(const Problem& p, const translucency::DiscreteDivergence& disc,
+  const std::vector<double>& irradiance, const std::vector<SolverRow>& rows,
+  const std::string& cutSolver)
+{
+  const double tets = p.Mesh.GetNumberOfTets();
+  double hierarchy = -1.0;
+  for (const SolverRow& r : rows)
+    if (r.Name == cutSolver)
+      hierarchy = r.MemoryBytes;
+  double solution = 0.0, material = 0.0;
+  for (int c = 0; c < 3; ++c)
+    solution += 8.0 * p.Ref0[c].size();
+  material = 8.0 * (p.Material.AbsorptionCoefficient.capacity() +
+    p.Material.ReducedScatteringCoefficient.capacity() + p.Material.RefractiveIndex.capacity());
+  const std::vector<std::pair<std::string, double>> parts = {
+    { "mesh (points, tets)", static_cast<double>(p.Mesh.GetGeometryMemoryBytes()) },
+    { "topology (volumes, boundary, CSR pattern, incidence, entry positions, schedule)",
+      static_cast<double>(p.Mesh.GetTopologyMemoryBytes()) },
+    { "material (mu_a, sigma_s', n per tet)", material },
+    { "assembler geometry cache", static_cast<double>(disc.GetCacheMemoryBytes()) },
+    { "3-channel system (pattern, values, right-hand sides)",
+      static_cast<double>(p.System.GetMemoryBytes()) },
+    { cutSolver + " hierarchy", hierarchy },
+    { "irradiance (3 channels per point)", 8.0 * irradiance.capacity() },
+    { "fluence (3 channels per point)", solution } };
+  std::cout << "\n  memory at " << static_cast<long>(tets) << " tets (bytes per tet; MB):\n";
+  json out = json::object();
+  double total = 0.0;
+  for (const auto& part : parts)
+  {
+    if (part.second < 0)
+      continue;
+    total += part.second;
+    std::cout << "    " << std::left << std::setw(82) << part.first << std::right << std::fixed
+              << std::setprecision(1) << std::setw(8) << part.second / tets << std::setw(9)
+              << part.second / 1048576.0 << "\n";
+    out[part.first] = part.second / tets;
+  }
+  const double peak = PeakRssBytes();
+  std::cout << "    " << std::left << std::setw(82) << "sum of the above" << std::right
+            << std::setw(8) << total / tets << std::setw(9) << total / 1048576.0 << "\n"
+            << "    " << std::left << std::setw(82)
+            << "peak RSS of this bench process so far (all solvers, references, TetGen)"
+            << std::right << std::setw(8) << peak / tets << std::setw(9) << peak / 1048576.0
+            << "\n" << std::defaultfloat;
+  out["sum"] = total / tets;
+  out["peak_rss_bytes"] = peak;
+  return out;
+}
+
 void PrintRows(const std::vector<SolverRow>& rows, double topologyMs)
 {
   // Ratios against the best peer of this size (setup + cold; warm).
@@ -833,19 +1089,20 @@ int BenchLinearSolvers(const LinearSolverBenchOptions& options)
       entry["solvers"].push_back(RowJson(r, topologyMs));
     if (!hypreRanksError.empty())
       entry["hypre_ranks_error"] = hypreRanksError;
-    if (doCut)
+    if (defaultCold[0].size() == 0)
     {
-      if (defaultCold[0].size() == 0)
-      {
-        // The cut solver was not in the list: solve once for the warm start.
-        auto solver = translucency::CreateLinearSolver(cutSolver);
-        solver->SetRelTol(1e-3);
-        solver->Setup(p.System, &p.Mesh, true);
-        Stats stats;
-        solver->Solve(p.System, defaultCold, false, stats);
-      }
-      entry["cut"] = BenchCut(cutSolver, p, defaultCold, runs);
+      // The cut solver was not in the list: solve once for the warm starts.
+      auto solver = translucency::CreateLinearSolver(cutSolver);
+      solver->SetRelTol(1e-3);
+      solver->Setup(p.System, &p.Mesh, true);
+      Stats stats;
+      solver->Solve(p.System, defaultCold, false, stats);
     }
+    entry["paint"] = BenchPaint(cutSolver, p, defaultCold, runs);
+    if (doCut)
+      entry["cut"] = BenchCut(cutSolver, p, defaultCold, runs);
+    entry["targets"] = PrintTargets(rows, entry, cutSolver, spmvMs);
+    entry["memory"] = PrintMemory(p, disc, q0, rows, cutSolver);
     results.push_back(entry);
   }
   if (!jsonPath.empty())

@@ -55,6 +55,9 @@ public:
     const std::array<Eigen::VectorXd, NumberOfChannels>& solution,
     std::vector<double>& fluence) const override;
 
+  /// Bytes of the per-tet geometry cache (7 doubles per tet once filled).
+  std::size_t GetCacheMemoryBytes() const { return GeometryCache_.GetMemoryBytes(); }
+
   /// OpenMP threads for assembly (0 = OpenMP default). Default 0.
   void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
   int GetNumberOfThreads() const { return NumberOfThreads_; }

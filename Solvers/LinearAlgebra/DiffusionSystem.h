@@ -29,6 +29,16 @@ struct DiffusionSystem
   std::array<std::vector<double>, NumberOfChannels> Values;
   std::array<Eigen::VectorXd, NumberOfChannels> RightHandSide;
 
+  /// Bytes held: pattern, values and right-hand sides of the three channels.
+  std::size_t GetMemoryBytes() const
+  {
+    std::size_t bytes = (RowOffsets.capacity() + ColumnIndices.capacity()) * sizeof(int);
+    for (int c = 0; c < NumberOfChannels; ++c)
+      bytes += Values[c].capacity() * sizeof(double) +
+        static_cast<std::size_t>(RightHandSide[c].size()) * sizeof(double);
+    return bytes;
+  }
+
   /// The matrix of channel c as an Eigen map (no copy; valid while this lives).
   SparseMatrixMap Matrix(int c) const
   {

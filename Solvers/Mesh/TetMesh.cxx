@@ -871,4 +871,29 @@ void TetMesh::ComputeSpatialOrder(const std::vector<double>& points,
   tetOrder = SortByCode(CentroidCodes(encode, points, tets));
 }
 
+namespace
+{
+template <typename T>
+std::size_t BytesOf(const std::vector<T>& v)
+{
+  return v.capacity() * sizeof(T);
+}
+} // namespace
+
+std::size_t TetMesh::GetGeometryMemoryBytes() const
+{
+  return BytesOf(Points_) + BytesOf(Tets_);
+}
+
+std::size_t TetMesh::GetTopologyMemoryBytes() const
+{
+  return BytesOf(TetVolumes_) + BytesOf(BoundaryTriangles_) + BytesOf(BoundaryTriangleTets_) +
+    BytesOf(BoundaryTriangleAreas_) + BytesOf(BoundaryPoints_) +
+    BytesOf(BoundaryPointTriangleOffsets_) + BytesOf(BoundaryPointTriangles_) +
+    BytesOf(VertexVolume_) + BytesOf(BoundaryArea_) + BytesOf(PointNormals_) +
+    BytesOf(RowOffsets_) + BytesOf(ColumnIndices_) + BytesOf(DiagonalPositions_) +
+    BytesOf(PointTetOffsets_) + BytesOf(PointTets_) + BytesOf(TetNonZeros_) +
+    BytesOf(Schedule_.Tets) + BytesOf(Schedule_.ChunkOffsets) + BytesOf(Schedule_.ColourOffsets);
+}
+
 } // namespace translucency

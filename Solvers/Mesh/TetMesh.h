@@ -137,6 +137,13 @@ public:
   };
   const ScatterSchedule& GetScatterSchedule() const { return Schedule_; }
 
+  /// Bytes held by the geometry as given (points and tets; vector capacities).
+  std::size_t GetGeometryMemoryBytes() const;
+  /// Bytes held by everything SetGeometry derives from it: volumes, boundary
+  /// lists and measures, normals, the CSR pattern, the point-tet incidence,
+  /// the 16 entry positions per tet and the scatter schedule.
+  std::size_t GetTopologyMemoryBytes() const;
+
   /**
    * A cache-friendly order: points sorted along a Morton (Z-order) curve of
    * their coordinates and tets by the Morton code of their centroid.
