@@ -47,7 +47,11 @@ OPTIONS = {
     "render": {"--target-tets": 1, "--max-tet-volume": 1, "--quality": 1,
                "--uniform-samples": 1, "--rel-tol": 1, "--max-iter": 1, "--grid-spacing": 1,
                "--photons": 1, "--exposure": 1, "--view": 3, "--up": 3, "--cut-plane": 6,
-               "--memory-limit": 1, "--light-power": 1, "--size": 1},
+               "--memory-limit": 1, "--light-power": 1, "--size": 1,
+               # Diffuse optics and meshers (session 17): compound values are
+               # built in run_case with one hostile part.
+               "--frequency": 1, "--uniform-size": 1, "--source-point": 1,
+               "--source-pencil": 1, "--detector": 1, "--hxt-target-tets": 1},
     "compare": {"--target-tets": 1, "--max-tet-volume": 1, "--uniform-samples": 1,
                 "--rel-tol": 1, "--seed": 1, "--photons": 1, "--grid-spacing": 1,
                 "--memory-limit": 1, "--light-power": 1},
@@ -160,14 +164,19 @@ def finite_outputs(paths):
     return True
 
 
+COMMANDS = []  # --commands: restrict the commands mutated
+ONLY = []  # --only: restrict the options mutated
+
+
 def run_case(args):
     cli, root, index, seed, timeout = args
     rng = random.Random(seed * 1000003 + index)
-    command = rng.choice(list(OPTIONS))
+    command = rng.choice(COMMANDS or list(OPTIONS))
     work = os.path.join(root, f"case{index}")
     os.makedirs(work, exist_ok=True)
     options, outputs = base_case(command, work)
-    chosen = rng.sample(list(OPTIONS[command]), k=rng.choice([1, 1, 2]))
+    pool = [o for o in OPTIONS[command] if not ONLY or o in ONLY] or list(OPTIONS[command])
+    chosen = rng.sample(pool, k=min(len(pool), rng.choice([1, 1, 2])))
     scene_changes = {}
     mutated = []
     for option in chosen:
@@ -177,6 +186,18 @@ def run_case(args):
             scene_changes[option] = value
         elif option == "--light-power":
             options["--light"] = f"directional:0,-1,-1:{value}"
+        elif option == "--source-point":
+            options["--source"] = rng.choice([f"point:5,5,{value}:1", f"point:5,5,5:{value}",
+                                              f"point:{value},5,5"])
+        elif option == "--source-pencil":
+            options["--source"] = rng.choice([f"pencil:5,5,10:0,0,-1:{value}",
+                                              f"pencil:5,5,{value}:0,0,-1",
+                                              f"pencil:5,5,10:0,0,{value}"])
+        elif option == "--detector":
+            options["--detector"] = rng.choice([f"5,5,10:{value}", f"5,{value},10"])
+        elif option == "--hxt-target-tets":
+            options["--mesher"] = "hxt"
+            options["--target-tets"] = value
         else:
             options[option] = value
     if command == "radiosity":
@@ -209,7 +230,11 @@ def main():
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--timeout", type=float, default=20.0)
     parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--commands", default="", help="comma-separated commands to mutate")
+    parser.add_argument("--only", default="", help="comma-separated options to mutate")
     a = parser.parse_args()
+    COMMANDS[:] = [c for c in a.commands.split(",") if c]
+    ONLY[:] = [o for o in a.only.split(",") if o]
     root = tempfile.mkdtemp(prefix="mutate-options-")
     with open(os.path.join(root, "cube.obj"), "w") as f:
         f.write(CUBE_OBJ)

@@ -142,7 +142,9 @@ SurfacePoint FindSurfacePoint(const TetMesh& mesh, const double x[3])
     double w[3];
     const Eigen::Vector3d q = ClosestPointOnTriangle(p, Eigen::Vector3d(a[0], a[1], a[2]),
       Eigen::Vector3d(b[0], b[1], b[2]), Eigen::Vector3d(c[0], c[1], c[2]), w);
-    const double distance = (q - p).norm();
+    // stableNorm: a point 1e300 mm away must not overflow to inf (with every
+    // distance inf no triangle would be chosen).
+    const double distance = (q - p).stableNorm();
     if (distance < best.Distance)
     {
       best.Distance = distance;
@@ -153,6 +155,13 @@ SurfacePoint FindSurfacePoint(const TetMesh& mesh, const double x[3])
         best.Position[i] = q[i];
       }
     }
+  }
+  if (best.Triangle < 0 || best.Triangle >= numTriangles)
+  {
+    std::ostringstream out;
+    out << "no surface point found near " << FormatPoint(x)
+        << " (its distance to every boundary triangle is not a number)";
+    throw Error(out.str());
   }
   const int* t = &triangles[3 * best.Triangle];
   const Eigen::Vector3d a = Eigen::Map<const Eigen::Vector3d>(mesh.GetPoint(t[0]));

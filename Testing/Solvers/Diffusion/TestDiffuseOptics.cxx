@@ -554,6 +554,27 @@ TEST(DiffuseOptics, BadInputIsAnError)
     const std::string message =
       ErrorMessage([&] { ReadDetectors(mesh, material, detectors, fluence, nullptr); });
     EXPECT_TRUE(Contains(message, "detector 1: (5, 5, 3) is off the surface")) << message;
+    // A finite position so far away that its squared distance overflows
+    // (option mutation found it: every distance was inf, no triangle was
+    // chosen and the search read triangle -1).
+    for (double far : { 1e300, -1e308 })
+    {
+      detectors[0].Position = { 5, far, 0.5 };
+      const std::string farMessage =
+        ErrorMessage([&] { ReadDetectors(mesh, material, detectors, fluence, nullptr); });
+      EXPECT_TRUE(Contains(farMessage, "is off the surface") ||
+        Contains(farMessage, "no surface point found"))
+        << farMessage;
+      Sources farSources;
+      PencilBeam beam;
+      beam.Position = { 5, 5, far };
+      beam.Direction = { 0, 0, -1 };
+      farSources.AddPencilBeam(beam);
+      const std::string beamMessage = placeError(farSources);
+      EXPECT_TRUE(Contains(beamMessage, "from the surface") ||
+        Contains(beamMessage, "no surface point found"))
+        << beamMessage;
+    }
     detectors[0].Position = { 5, 5, 0.5 };
     detectors[0].Radius = -1;
     EXPECT_TRUE(Contains(
