@@ -5,6 +5,9 @@
 #   make test-sanitize   the core's GoogleTests under ASan + UBSan (gcc, build-sanitize)
 #   make test-fuzz       a short run of every libFuzzer target (clang, build-fuzz)
 #   make test-soak       the 1,000-step kept-pipeline soak on a 200k-tet sphere (long)
+# ccache (scripts/install-deps.sh) shares compiled objects between clones: paths
+# below this checkout are hashed relative to it, wherever it is cloned.
+export CCACHE_BASEDIR := $(CURDIR)
 BUILD_DIR ?= build
 JOBS ?= 2
 CMAKE_ARGS ?=
