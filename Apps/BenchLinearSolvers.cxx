@@ -261,6 +261,22 @@ int Calibrate(translucency::LinearSolver& solver, const translucency::DiffusionS
   return chosen;
 }
 
+/// The tolerance an interactive figure is timed at: Calibrate's choice (the
+/// loosest reaching 1 % error from `guess`), or the tightest tried when none
+/// did (`reached` false). `looser` is the next looser probe's error (-1: none).
+void PickTolerance(translucency::LinearSolver& solver, const translucency::DiffusionSystem& s,
+  const Solution& ref, const std::vector<int>& boundary, const Solution* guess, double& tolerance,
+  double& looser, bool& reached)
+{
+  std::vector<CurvePoint> probes;
+  int k = Calibrate(solver, s, ref, boundary, guess, nullptr, probes);
+  reached = k >= 0;
+  if (k < 0)
+    k = static_cast<int>(probes.size()) - 1;
+  tolerance = ToleranceLadder[k];
+  looser = k > 0 ? probes[k - 1].Error : -1.0;
+}
+
 struct SolverRow
 {
   std::string Name;
@@ -579,13 +595,8 @@ json BenchCut(const std::string& solverName, const Problem& p, const Solution& p
     if (r < 0)
     {
       ref = Reference(system, residual);
-      std::vector<CurvePoint> probes;
-      int k = Calibrate(*solver, system, ref, mesh.GetBoundaryPoints(), &guess, nullptr, probes);
-      reached = k >= 0;
-      if (k < 0)
-        k = static_cast<int>(probes.size()) - 1;
-      tolerance = ToleranceLadder[k];
-      looser = k > 0 ? probes[k - 1].Error : -1.0;
+      PickTolerance(*solver, system, ref, mesh.GetBoundaryPoints(), &guess, tolerance, looser,
+        reached);
       cutMs.clear();
       topoMs.clear();
       lightMs.clear();
@@ -682,13 +693,8 @@ json BenchPaint(const std::string& solverName, const Problem& p, const Solution&
     if (r < 0)
     {
       ref = Reference(system, residual);
-      std::vector<CurvePoint> probes;
-      int k = Calibrate(*solver, system, ref, p.Mesh.GetBoundaryPoints(), &previous, nullptr, probes);
-      reached = k >= 0;
-      if (k < 0)
-        k = static_cast<int>(probes.size()) - 1;
-      tolerance = ToleranceLadder[k];
-      looser = k > 0 ? probes[k - 1].Error : -1.0;
+      PickTolerance(*solver, system, ref, p.Mesh.GetBoundaryPoints(), &previous, tolerance, looser,
+        reached);
       paintMs.clear();
       rowsMs.clear();
       valuesMs.clear();

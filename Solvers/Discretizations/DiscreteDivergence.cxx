@@ -253,10 +253,6 @@ void DiscreteDivergence::ToPointFluence(const TetMesh& mesh,
   VertexSolutionToPointFluence("DiscreteDivergence", mesh, system, solution, fluence);
 }
 
-} // namespace translucency
-
-namespace translucency
-{
 
 bool DiscreteDivergence::AddMass(const TetMesh& mesh, const std::vector<double>& coefficient,
   std::array<std::vector<double>, NumberOfChannels>& values) const

@@ -165,10 +165,6 @@ void FiniteElement::ToPointFluence(const TetMesh& mesh,
   VertexSolutionToPointFluence("FiniteElement", mesh, system, solution, fluence);
 }
 
-} // namespace translucency
-
-namespace translucency
-{
 
 bool FiniteElement::AddMass(const TetMesh& mesh, const std::vector<double>& coefficient,
   std::array<std::vector<double>, NumberOfChannels>& values) const

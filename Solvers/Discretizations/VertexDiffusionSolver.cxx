@@ -112,7 +112,8 @@ bool VertexDiffusionSolver::Solve(
   // The incremental update rebuilds right-hand-side rows from q only: not
   // with interior sources in this or the last system.
   const bool incremental = requested && sameGeometry && LinearReady_ && !hasSources &&
-    !SystemHasSources_ && Discretization_->UpdateTets(mesh, *problem.Material, *problem.Irradiance, changedTets, System_);
+    !SystemHasSources_ &&
+    Discretization_->UpdateTets(mesh, *problem.Material, *problem.Irradiance, changedTets, System_);
   if (!incremental)
   {
     // Keep the previous values (swap, no copy) to see whether they changed.
@@ -275,8 +276,10 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   report.SolveMilliseconds = MillisecondsSince(start);
   report.NumberOfUnknowns = system.NumberOfUnknowns;
   report.NumberOfNonZeros = static_cast<long long>(system.ColumnIndices.size());
-  report.MemoryBytes = system.ColumnIndices.size() * (sizeof(int) + 4 * NumberOfChannels *
-    sizeof(double)) + 10 * static_cast<std::size_t>(system.NumberOfUnknowns) * sizeof(double);
+  // The system, the imaginary mass values, and COCG's complex work vectors.
+  report.MemoryBytes = system.GetMemoryBytes() +
+    NumberOfChannels * system.ColumnIndices.size() * sizeof(double) +
+    10 * static_cast<std::size_t>(system.NumberOfUnknowns) * sizeof(double);
   std::vector<double> re, im;
   Discretization_->ToPointFluence(mesh, system, realPart, re);
   Discretization_->ToPointFluence(mesh, system, imagPart, im);
