@@ -6,6 +6,7 @@
 #include "Options.h"
 #include "Pictures.h"
 #include "PipelineRender.h"
+#include "PowerReport.h"
 #include "Provenance.h"
 #include "Scene.h"
 
@@ -192,6 +193,7 @@ SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double
     s["relative_residual"].push_back(solve->GetFinalResidual(c));
     s["converged"].push_back(solve->GetConverged(c));
   }
+  s["power_W"] = PowerBalanceJson(solve);
   return result;
 }
 
@@ -487,6 +489,18 @@ int Compare(CompareOptions& o)
       std::cout << "  (MC standard error " << std::setprecision(2)
                 << 100 * s["fluence_mean_relative_standard_error"].get<double>() << "%)";
     std::cout << "\n";
+  }
+  std::cout << "\n  power (W, channel R)  injected     absorbed      escaped  imbalance\n";
+  for (const json& s : table)
+  {
+    if (s["power_W"].is_null())
+      continue;
+    const json& p = s["power_W"]["R"];
+    std::cout << "  " << std::left << std::setw(20) << s["solver"].get<std::string>()
+              << std::right << std::scientific << std::setprecision(4) << std::setw(10)
+              << p["injected"].get<double>() << std::setw(13) << p["absorbed"].get<double>()
+              << std::setw(13) << p["escaped"].get<double>() << std::setprecision(2)
+              << std::setw(11) << p["imbalance"].get<double>() << std::defaultfloat << "\n";
   }
   if (monteCarlo)
   {

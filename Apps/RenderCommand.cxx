@@ -5,6 +5,7 @@
 #include "Options.h"
 #include "Pictures.h"
 #include "PipelineRender.h"
+#include "PowerReport.h"
 #include "Provenance.h"
 #include "Scene.h"
 
@@ -175,6 +176,8 @@ int Render(RenderOptions& o)
               << (solve->GetConverged(c) ? "" : " (NOT converged)") << "\n";
   }
   o.Optics.Print(solve);
+  const json power = PowerBalanceJson(solve);
+  PrintPowerBalance(power, std::cout);
   PrintStages(stages);
 
   if (!jsonPath.empty())
@@ -201,6 +204,7 @@ int Render(RenderOptions& o)
       j["paint"] = { { "tets_touched", edits.PaintedTets }, { "ms", edits.PaintMs } };
     }
     o.Optics.Report(solve, j);
+    j["power_W"] = power;
     for (int c = 0; c < 3; ++c)
     {
       j["channels"][channel[c]] = { { "iterations", solve->GetNumberOfIterations(c) },

@@ -2,6 +2,7 @@
 #include "JsonInputs.h"
 #include "MeshIO.h"
 
+#include "DefaultLights.h"
 #include "Error.h"
 
 #include "vtkAssignScatteringCoefficients.h"
@@ -121,8 +122,12 @@ void SceneOptions::Finish(const std::string& command)
     // The one default, the same as the ParaView plugin's Surface Irradiance
     // panel (Plugin/SurfaceIrradiance.xml); every report prints it.
     this->DefaultLights = true;
-    this->Lights.push_back(ParseLight("directional:0,-1,-1:1"));
-    this->Lights.push_back(ParseLight("uniform:0.1"));
+    std::istringstream specs(translucency::DescribeDefaultLights());
+    std::string spec;
+    while (specs >> spec)
+    {
+      this->Lights.push_back(ParseLight(spec));
+    }
   }
 }
 
@@ -256,6 +261,7 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   messages.Watch(irradiance);
   irradiance->SetInputData(withMaterial);
   irradiance->SetShadows(options.Shadows);
+  irradiance->SetDefaultLights(false); // Finish() resolved the defaults: the lights are explicit
   irradiance->SetUniformLightSamples(options.UniformSamples);
   double uniformE = 0.0;
   for (const Light& l : options.Lights)

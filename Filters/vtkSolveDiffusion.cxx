@@ -584,6 +584,56 @@ int vtkSolveDiffusion::RequestData(
 }
 
 //------------------------------------------------------------------------------
+bool vtkSolveDiffusion::ComputePowerBalance(
+  double injected[3], double absorbed[3], double escaped[3])
+{
+  vtkUnstructuredGrid* output = this->GetOutput();
+  std::string error;
+  if (this->ModulationFrequency > 0.0)
+  {
+    vtkErrorMacro(<< "no power balance in the frequency domain (ModulationFrequency "
+                  << this->ModulationFrequency << " Hz): the fluence is complex");
+    return false;
+  }
+  if (!output || output->GetNumberOfCells() == 0 ||
+    !output->GetPointData()->GetArray(vtkTranslucency::FluenceName))
+  {
+    vtkErrorMacro(<< "no power balance: no solution (update the filter first; a failed solve "
+                     "leaves an empty output)");
+    return false;
+  }
+  auto mesh = vtkTranslucency::AcquireTetMesh(output, error);
+  translucency::OpticalProperties material;
+  std::vector<double> fluence, irradiance;
+  if (!mesh || !vtkTranslucency::ToOpticalProperties(output, material, error) ||
+    !vtkTranslucency::ReadPointArray(output, vtkTranslucency::FluenceName, 3, fluence, error) ||
+    !vtkTranslucency::ReadPointArray(
+      output, vtkTranslucency::IrradianceName, 3, irradiance, error))
+  {
+    vtkErrorMacro(<< "no power balance: " << error);
+    return false;
+  }
+  try
+  {
+    const translucency::PowerBalance balance =
+      translucency::ComputePowerBalance(*mesh, material, fluence, &irradiance);
+    const auto sources = this->Internal->Sources.InjectedPower(*mesh, material);
+    for (int c = 0; c < 3; ++c)
+    {
+      injected[c] = balance.BoundaryInjected[c] + sources[c];
+      absorbed[c] = balance.Absorbed[c];
+      escaped[c] = balance.Escaped[c];
+    }
+  }
+  catch (const translucency::Error& e)
+  {
+    vtkErrorMacro(<< "no power balance: " << e.what());
+    return false;
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
 void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);

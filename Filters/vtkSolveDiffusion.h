@@ -44,7 +44,7 @@
  *    beams (AddPencilBeam: the Farrell et al. 1992 equivalent source one
  *    transport mean free path below the entry point), in W per channel, on
  *    top of the boundary irradiance (give an all-zero `Irradiance`, e.g.
- *    vtkSurfaceIrradiance without lights, for sources alone);
+ *    vtkSurfaceIrradiance with DefaultLights off, for sources alone);
  *  - detectors on the surface (AddDetector, optional fibre radius): fluence
  *    and exitance per channel, read with GetDetectorFluence() and
  *    GetDetectorExitance() and attached as field arrays `DetectorPosition`
@@ -232,6 +232,21 @@ public:
   double GetDetectorFluencePhase(int detector, int channel) const;
   double GetDetectorExitancePhase(int detector, int channel) const;
   void GetDetectorSurfacePosition(int detector, double position[3]) const;
+
+  /**
+   * Power balance of the last solve, per channel R, G, B (W): `injected` =
+   * the boundary irradiance integrated over the surface plus the interior
+   * sources' power, `absorbed` = integral of mu_a Fluence over the object,
+   * `escaped` = integral of the exitance (Fluence - 2 q)/(2 A) over the
+   * surface (P1 integrals; translucency::ComputePowerBalance). For the
+   * divergence and fem solvers absorbed + escaped = injected to solver
+   * tolerance; for the others the gap measures how far they are from
+   * conserving light in this discretisation. Computed on demand from the
+   * output (nothing is spent when it is not asked for). Returns false, with
+   * an error, when there is no steady-state solution (never solved, failed,
+   * or frequency domain).
+   */
+  bool ComputePowerBalance(double injected[3], double absorbed[3], double escaped[3]);
   ///@}
 
   ///@{

@@ -1,5 +1,6 @@
 #include "vtkSurfaceIrradiance.h"
 
+#include "DefaultLights.h"
 #include "Error.h"
 #include "LightSources.h"
 #include "Radiance.h"
@@ -18,8 +19,11 @@
 #include <vtkInformationVector.h>
 #include <vtkObjectFactory.h>
 #include <vtkPointData.h>
+#include <vtkStringArray.h>
 #include <vtkUnstructuredGrid.h>
 
+#include <cmath>
+#include <sstream>
 #include <vector>
 
 vtkStandardNewMacro(vtkSurfaceIrradiance);
@@ -109,7 +113,48 @@ int vtkSurfaceIrradiance::RequestData(
 
   std::vector<translucency::LightSource> lights = this->Internal->Directional;
   lights.insert(lights.end(), this->Internal->Point.begin(), this->Internal->Point.end());
+  if (this->InteractiveLight)
+  {
+    translucency::LightSource light;
+    light.Power = { this->InteractiveLightPower, this->InteractiveLightPower,
+      this->InteractiveLightPower };
+    std::copy(this->InteractiveLightPoint1, this->InteractiveLightPoint1 + 3,
+      light.Position.begin());
+    if (this->InteractiveLightType == 0)
+    {
+      light.Type = translucency::LightSource::Kind::Directional;
+      for (int k = 0; k < 3; ++k)
+      {
+        light.Direction[k] = this->InteractiveLightPoint2[k] - this->InteractiveLightPoint1[k];
+      }
+      if (light.Direction[0] == 0.0 && light.Direction[1] == 0.0 && light.Direction[2] == 0.0)
+      {
+        vtkErrorMacro(<< "the interactive directional light has no direction: Point1 and Point2"
+                      << " are the same point (" << this->InteractiveLightPoint1[0] << ", "
+                      << this->InteractiveLightPoint1[1] << ", "
+                      << this->InteractiveLightPoint1[2] << "); move one end of the line");
+        return 0;
+      }
+    }
+    else
+    {
+      light.Type = translucency::LightSource::Kind::Point;
+    }
+    lights.push_back(light);
+  }
   // The lights are validated by the core (translucency::ValidateLight).
+  double uniformIrradiance = this->UniformLightIrradiance;
+  const bool useDefault = this->DefaultLights && lights.empty() && uniformIrradiance == 0.0;
+  if (useDefault)
+  {
+    lights.push_back(translucency::DefaultKeyLight());
+    uniformIrradiance = translucency::DefaultUniformIrradiance;
+  }
+  this->LightsDescription = vtkSurfaceIrradiance::DescribeLights(lights, uniformIrradiance);
+  if (useDefault)
+  {
+    this->LightsDescription += " (the default: add a light to choose)";
+  }
 
   std::string error;
   bool built = false;
@@ -138,7 +183,7 @@ int vtkSurfaceIrradiance::RequestData(
   try
   {
     const bool completed = translucency::ComputeBoundaryIrradiance(mesh, pointEta, lights,
-      this->UniformLightIrradiance, this->UniformLightSamples, this->Shadows, q,
+      uniformIrradiance, this->UniformLightSamples, this->Shadows, q,
       [this]() { return this->GetAbortExecute() != 0; });
     if (!completed)
     {
@@ -169,8 +214,12 @@ int vtkSurfaceIrradiance::RequestData(
   fieldData->AddArray(lightArray);
   vtkNew<vtkDoubleArray> uniformArray;
   uniformArray->SetName("TranslucencyUniformLight");
-  uniformArray->InsertNextValue(this->UniformLightIrradiance);
+  uniformArray->InsertNextValue(uniformIrradiance);
   fieldData->AddArray(uniformArray);
+  vtkNew<vtkStringArray> descriptionArray;
+  descriptionArray->SetName("TranslucencyLightsDescription");
+  descriptionArray->InsertNextValue(this->LightsDescription);
+  fieldData->AddArray(descriptionArray);
   vtkNew<vtkDoubleArray> shadowArray;
   shadowArray->SetName("TranslucencyShadows");
   shadowArray->InsertNextValue(this->Shadows ? 1.0 : 0.0);
@@ -184,6 +233,32 @@ int vtkSurfaceIrradiance::RequestData(
 }
 
 //------------------------------------------------------------------------------
+std::string vtkSurfaceIrradiance::DescribeLights(
+  const std::vector<translucency::LightSource>& lights, double uniformIrradiance)
+{
+  std::ostringstream text;
+  const char* separator = "";
+  for (const auto& light : lights)
+  {
+    const bool directional = light.Type == translucency::LightSource::Kind::Directional;
+    const auto& v = directional ? light.Direction : light.Position;
+    text << separator << (directional ? "directional:" : "point:") << v[0] << "," << v[1] << ","
+         << v[2] << ":" << light.Power[0];
+    if (light.Power[1] != light.Power[0] || light.Power[2] != light.Power[0])
+    {
+      text << "," << light.Power[1] << "," << light.Power[2];
+    }
+    separator = " ";
+  }
+  if (uniformIrradiance > 0.0)
+  {
+    text << separator << "uniform:" << uniformIrradiance;
+    separator = " ";
+  }
+  return *separator ? text.str() : std::string("none");
+}
+
+//------------------------------------------------------------------------------
 void vtkSurfaceIrradiance::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
@@ -191,5 +266,8 @@ void vtkSurfaceIrradiance::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "PointLights: " << this->Internal->Point.size() << "\n";
   os << indent << "UniformLightIrradiance: " << this->UniformLightIrradiance << "\n";
   os << indent << "UniformLightSamples: " << this->UniformLightSamples << "\n";
+  os << indent << "DefaultLights: " << this->DefaultLights << "\n";
+  os << indent << "InteractiveLight: " << this->InteractiveLight << " (type "
+     << this->InteractiveLightType << ", power " << this->InteractiveLightPower << ")\n";
   os << indent << "Shadows: " << this->Shadows << "\n";
 }

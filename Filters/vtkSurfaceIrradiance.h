@@ -27,6 +27,16 @@
  * `TranslucencyUniformLight`; `TranslucencyShadows`) for solvers that launch
  * photons from them (vtkSolveDiffusion's Monte Carlo reference).
  *
+ * **Default lights**: when no light is given (no directional or point light,
+ * no interactive light and UniformLightIrradiance 0) and DefaultLights is on
+ * (the default), the filter uses the project's one default lighting, the
+ * same as `translucency` without `--light` and the ParaView panel: a
+ * directional light along (0, -1, -1) of 1 W/mm^2 and a uniform light of
+ * 0.1 W/mm^2 (translucency/Physics/DefaultLights.h). Turn DefaultLights off
+ * for no boundary light at all (interior sources alone). The lights used are
+ * described in the field data (`TranslucencyLightsDescription`, in the CLI's
+ * --light syntax) and by GetLightsDescription().
+ *
  * @warning Lights are white (same value in R, G, B). The input must hold
  * only linear tetrahedra and the cell array `RefractiveIndex`.
  *
@@ -39,6 +49,13 @@
 #include "vtkUnstructuredGridAlgorithm.h"
 
 #include <memory>
+#include <string>
+#include <vector>
+
+namespace translucency
+{
+struct LightSource;
+}
 
 class TRANSLUCENCYFILTERS_EXPORT vtkSurfaceIrradiance : public vtkUnstructuredGridAlgorithm
 {
@@ -80,6 +97,40 @@ public:
   ///@}
 
   ///@{
+  /**
+   * Use the default lights (directional (0, -1, -1) 1 W/mm^2 + uniform
+   * 0.1 W/mm^2) when no light is given. Default on; off means no light.
+   */
+  vtkSetMacro(DefaultLights, bool);
+  vtkGetMacro(DefaultLights, bool);
+  vtkBooleanMacro(DefaultLights, bool);
+  ///@}
+
+  ///@{
+  /**
+   * One more light placed with a line widget in ParaView (off by default).
+   * Type 0: directional, travelling from Point1 to Point2 (mm; only the
+   * direction matters), irradiance Power (W/mm^2). Type 1: point light at
+   * Point1 (Point2 unused), intensity Power (W/sr).
+   */
+  vtkSetMacro(InteractiveLight, bool);
+  vtkGetMacro(InteractiveLight, bool);
+  vtkBooleanMacro(InteractiveLight, bool);
+  vtkSetClampMacro(InteractiveLightType, int, 0, 1);
+  vtkGetMacro(InteractiveLightType, int);
+  vtkSetVector3Macro(InteractiveLightPoint1, double);
+  vtkGetVector3Macro(InteractiveLightPoint1, double);
+  vtkSetVector3Macro(InteractiveLightPoint2, double);
+  vtkGetVector3Macro(InteractiveLightPoint2, double);
+  vtkSetMacro(InteractiveLightPower, double);
+  vtkGetMacro(InteractiveLightPower, double);
+  ///@}
+
+  /// The lights of the last execution in the CLI's --light syntax, e.g.
+  /// "directional:0,-1,-1:1 uniform:0.1 (the default)"; "none" for no light.
+  const char* GetLightsDescription() const { return this->LightsDescription.c_str(); }
+
+  ///@{
   /// Self-shadowing by ray casting (default on).
   vtkSetMacro(Shadows, bool);
   vtkGetMacro(Shadows, bool);
@@ -99,7 +150,14 @@ protected:
   double UniformLightIrradiance = 0.0;
   int UniformLightSamples = 32;
   bool Shadows = true;
+  bool DefaultLights = true;
+  bool InteractiveLight = false;
+  int InteractiveLightType = 0;
+  double InteractiveLightPoint1[3] = { 0.0, 1.0, 1.0 };
+  double InteractiveLightPoint2[3] = { 0.0, 0.0, 0.0 };
+  double InteractiveLightPower = 1.0;
   double TopologyTime = 0.0;
+  std::string LightsDescription;
 
 private:
   vtkSurfaceIrradiance(const vtkSurfaceIrradiance&) = delete;
@@ -107,6 +165,10 @@ private:
 
   struct Internals;
   std::unique_ptr<Internals> Internal;
+
+  /// The lights in the CLI's --light syntax ("none" for none).
+  static std::string DescribeLights(
+    const std::vector<translucency::LightSource>& lights, double uniformIrradiance);
 };
 
 #endif

@@ -93,6 +93,48 @@ def run():
 
     stage("chain")
 
+    # 1b. Surface Irradiance as the menu creates it: the default light must be
+    # there (it was dropped: the XML gave default values without a size), the
+    # same lights as the explicit ones above, so the same Irradiance exactly.
+    default_light = SurfaceIrradiance(Input=assign)
+    SetActiveSource(default_light)
+    process_events()
+    results["default_directional_lights"] = list(default_light.DirectionalLights)
+    results["default_uniform"] = default_light.UniformLightIrradiance[0] \
+        if hasattr(default_light.UniformLightIrradiance, "__len__") \
+        else default_light.UniformLightIrradiance
+
+    def irradiance_values(proxy):
+        array = servermanager.Fetch(proxy).GetPointData().GetArray("Irradiance")
+        return [array.GetComponent(i, c) for i in range(array.GetNumberOfTuples())
+                for c in range(3)]
+
+    explicit_q = irradiance_values(irradiance)
+    default_q = irradiance_values(default_light)
+    results["default_vs_explicit_max_diff"] = max(
+        abs(a - b) for a, b in zip(explicit_q, default_q)) if explicit_q else None
+    results["default_points"] = len(default_q) // 3
+    description = servermanager.Fetch(default_light).GetFieldData().GetAbstractArray(
+        "TranslucencyLightsDescription")
+    results["default_description"] = description.GetValue(0) if description else None
+    # The interactive light: its line widget in the panel, placed from the
+    # bounds (Point 1 above and behind the object, Point 2 at its centre).
+    default_light.InteractiveLight = 1
+    process_events()
+    Render(view)
+    process_events()
+    results["interactive_point1"] = list(default_light.InteractiveLightPoint1)
+    results["interactive_point2"] = list(default_light.InteractiveLightPoint2)
+    results["bounds"] = list(servermanager.Fetch(assign).GetBounds())
+    with_interactive = irradiance_values(default_light)
+    results["interactive_adds_light"] = sum(with_interactive) - sum(default_q)
+    description = servermanager.Fetch(default_light).GetFieldData().GetAbstractArray(
+        "TranslucencyLightsDescription")
+    results["interactive_description"] = description.GetValue(0) if description else None
+    Delete(default_light)
+    del default_light
+    process_events()
+
     # 2a. Paint Scattering Coefficients from the Translucency menu: its panel
     # has the polyline widget of the stroke (no handle yet), then two handles
     # across the bunny's back, painted along the line between them.

@@ -151,6 +151,27 @@ class ParaViewGuiTest(unittest.TestCase):
         for name in ("cg-jacobi", "multigrid-agg", "bicgstab", "relaxation"):
             self.assertIn(name, choices)
 
+    def test_default_light_and_interactive_light(self):
+        results = self.results()
+        # The panel's defaults are the project's one default lighting (the
+        # CLI's directional:0,-1,-1:1 uniform:0.1), and give exactly the
+        # Irradiance of the same lights set explicitly.
+        self.assertEqual(results["default_directional_lights"], [0.0, -1.0, -1.0, 1.0])
+        self.assertAlmostEqual(results["default_uniform"], 0.1)
+        self.assertGreater(results["default_points"], 500)
+        self.assertEqual(results["default_vs_explicit_max_diff"], 0.0)
+        self.assertEqual(results["default_description"], "directional:0,-1,-1:1 uniform:0.1")
+        # The line widget starts above and behind the object, at its centre.
+        xmin, xmax, ymin, ymax, zmin, zmax = results["bounds"]
+        p1, p2 = results["interactive_point1"], results["interactive_point2"]
+        for got, want in zip(p1, ((xmin + xmax) / 2, ymax, zmax)):
+            self.assertAlmostEqual(got, want, places=3)
+        for got, want in zip(p2, ((xmin + xmax) / 2, (ymin + ymax) / 2, (zmin + zmax) / 2)):
+            self.assertAlmostEqual(got, want, places=3)
+        self.assertGreater(results["interactive_adds_light"], 0.0)
+        self.assertTrue(results["interactive_description"].startswith(
+            "directional:0,-1,-1:1 directional:"), results["interactive_description"])
+
     def test_paint_stroke_drawn_as_a_polyline(self):
         # Two handles 16 mm apart, Width 1.5 mm: painted along the line (as
         # two points alone, a few tets around each end would be).

@@ -1,0 +1,227 @@
+#!/usr/bin/env python3
+"""One default lighting everywhere, and the power balance reported (issue 20).
+
+How to run (from a build tree; ctest sets the environment):
+
+    PYTHONPATH=<build>/lib/python3.11/site-packages TRANSLUCENCY_CLI=<build>/bin/translucency \\
+        /usr/bin/python3 TestLightsAndPower.py
+
+1. vtkSurfaceIrradiance with no light uses the default lights: the Irradiance
+   equals, bit for bit, the one of the same lights given explicitly
+   (directional (0, -1, -1) 1 W/mm^2 + uniform 0.1 W/mm^2), and the field
+   data says "(the default"; with DefaultLights off there is no light (all
+   zero, "none"). The interactive light (Point1 -> Point2) equals the same
+   directional light added by AddDirectionalLight.
+2. `translucency render` without --light and the VTK pipeline without a
+   light give the same Fluence on the same tets (the CLI's mesh read back):
+   one default everywhere, so the same numbers for the same scene.
+3. vtkSolveDiffusion.ComputePowerBalance: for divergence and fem, absorbed +
+   escaped = injected to the solver tolerance (a discrete identity: summing
+   the rows of either system); an interior point source of 0.5 W alone
+   injects exactly 0.5 W per channel (its definition); `render --json`
+   reports the same balance as the filter.
+4. Frequency domain: ComputePowerBalance refuses (complex fluence).
+
+Exits non-zero on failure (unittest).
+"""
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import translucency
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkFiltersSources import vtkSphereSource
+from vtkmodules.vtkIOGeometry import vtkSTLWriter
+from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+
+
+def find_cli():
+    cli = os.environ.get("TRANSLUCENCY_CLI")
+    if not cli:
+        binary = os.environ.get("TRANSLUCENCY_BINARY_DIR")
+        if binary:
+            cli = os.path.join(binary, "bin", "translucency")
+    if not cli or not os.access(cli, os.X_OK):
+        sys.exit("TestLightsAndPower: set TRANSLUCENCY_CLI to the built translucency executable "
+                 "(got %r)" % cli)
+    return cli
+
+
+CLI = find_cli()
+REL_TOL = 1e-10
+
+
+def irradiance_of(light):
+    light.Update()
+    return vtk_to_numpy(light.GetOutput().GetPointData().GetArray("Irradiance")).copy()
+
+
+def description_of(light):
+    return light.GetOutput().GetFieldData().GetAbstractArray(
+        "TranslucencyLightsDescription").GetValue(0)
+
+
+class LightsAndPowerTest(unittest.TestCase):
+
+    @classmethod
+    def setUpClass(cls):
+        cls.dir = tempfile.TemporaryDirectory()
+        sphere = vtkSphereSource()
+        sphere.SetRadius(5.0)
+        sphere.SetThetaResolution(24)
+        sphere.SetPhiResolution(24)
+        stl = os.path.join(cls.dir.name, "sphere.stl")
+        writer = vtkSTLWriter()
+        writer.SetFileName(stl)
+        writer.SetInputConnection(sphere.GetOutputPort())
+        writer.Write()
+        # The CLI with no --light: its mesh, coefficients and Fluence.
+        cls.prefix = os.path.join(cls.dir.name, "cli")
+        result = subprocess.run(
+            [CLI, "render", "--mesh", stl, "--target-tets", "4000", "--solver", "fem",
+             "--rel-tol", str(REL_TOL), "--max-iter", "20000", "--output", cls.prefix,
+             "--json", cls.prefix + ".json", "--quiet"],
+            capture_output=True, text=True, timeout=300)
+        if result.returncode != 0:
+            raise AssertionError("render failed:\n" + result.stdout + result.stderr)
+        cls.cli_stdout = result.stdout
+        with open(cls.prefix + ".json") as f:
+            cls.report = json.load(f)
+        reader = vtkXMLUnstructuredGridReader()
+        reader.SetFileName(cls.prefix + ".vtu")
+        reader.Update()
+        cls.grid = reader.GetOutput()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.dir.cleanup()
+
+    def light(self):
+        light = translucency.vtkSurfaceIrradiance()
+        light.SetInputData(self.grid)
+        return light
+
+    def solve(self, light, solver="fem"):
+        solve = translucency.vtkSolveDiffusion()
+        self.assertTrue(solve.SetSolverByName(solver))
+        solve.SetInputConnection(light.GetOutputPort())
+        solve.SetRelTol(REL_TOL)
+        solve.SetMaxIter(20000)
+        return solve
+
+    # 1.
+    def test_default_lights_are_the_explicit_default(self):
+        default = self.light()
+        explicit = self.light()
+        explicit.AddDirectionalLight(0.0, -1.0, -1.0, 1.0)
+        explicit.SetUniformLightIrradiance(0.1)
+        q_default, q_explicit = irradiance_of(default), irradiance_of(explicit)
+        self.assertGreater(q_explicit.max(), 0.1)
+        self.assertEqual(abs(q_default - q_explicit).max(), 0.0)
+        self.assertEqual(description_of(default),
+                         "directional:0,-1,-1:1 uniform:0.1 (the default: add a light to choose)")
+        self.assertEqual(description_of(explicit), "directional:0,-1,-1:1 uniform:0.1")
+        self.assertIn("(the default", default.GetLightsDescription())
+
+    def test_default_lights_off_means_no_light(self):
+        light = self.light()
+        light.SetDefaultLights(False)
+        self.assertEqual(abs(irradiance_of(light)).max(), 0.0)
+        self.assertEqual(description_of(light), "none")
+
+    def test_a_given_light_replaces_the_default(self):
+        light = self.light()
+        light.SetUniformLightIrradiance(0.25)
+        uniform_only = irradiance_of(light)
+        self.assertEqual(description_of(light), "uniform:0.25")
+        reference = self.light()
+        reference.SetUniformLightIrradiance(0.25)
+        reference.AddPointLight(0.0, 100.0, 0.0, 0.0)  # a light of no power: no default
+        self.assertEqual(abs(uniform_only - irradiance_of(reference)).max(), 0.0)
+
+    def test_interactive_light_is_a_directional_light(self):
+        widget = self.light()
+        widget.SetDefaultLights(False)
+        widget.SetInteractiveLight(True)
+        widget.SetInteractiveLightPoint1(3.0, 10.0, 20.0)
+        widget.SetInteractiveLightPoint2(3.0, 0.0, 0.0)
+        widget.SetInteractiveLightPower(2.0)
+        explicit = self.light()
+        explicit.AddDirectionalLight(0.0, -10.0, -20.0, 2.0)
+        q_widget, q_explicit = irradiance_of(widget), irradiance_of(explicit)
+        self.assertGreater(q_explicit.max(), 0.5)
+        self.assertEqual(abs(q_widget - q_explicit).max(), 0.0)
+        # A line of zero length has no direction: an error naming the point.
+        widget.SetInteractiveLightPoint2(3.0, 10.0, 20.0)
+        with self.assertRaises(translucency.PipelineError) as caught:
+            translucency.update(widget)
+        self.assertIn("no direction", str(caught.exception))
+        self.assertIn("(3, 10, 20)", str(caught.exception))
+
+    # 2.
+    def test_cli_and_pipeline_defaults_give_the_same_fluence(self):
+        self.assertIn("lights: directional:0,-1,-1:1 uniform:0.1 (the default", self.cli_stdout)
+        solve = self.solve(self.light())
+        output = translucency.update(solve)
+        pipeline = vtk_to_numpy(output.GetPointData().GetArray("Fluence"))
+        cli = vtk_to_numpy(self.grid.GetPointData().GetArray("Fluence"))
+        self.assertEqual(pipeline.shape, cli.shape)
+        self.assertGreater(cli.max(), 0.1)
+        # Both solved to RelTol 1e-10 from the same system.
+        self.assertLess(abs(pipeline - cli).max() / cli.max(), 1e-7)
+
+    # 3.
+    def test_power_balance_of_the_vertex_solvers(self):
+        for solver in ("fem", "divergence"):
+            solve = self.solve(self.light(), solver)
+            translucency.update(solve)
+            injected, absorbed, escaped = [0.0] * 3, [0.0] * 3, [0.0] * 3
+            self.assertTrue(solve.ComputePowerBalance(injected, absorbed, escaped))
+            for c in range(3):
+                self.assertGreater(injected[c], 10.0)
+                self.assertGreater(absorbed[c], 0.01 * injected[c])
+                self.assertLess(abs(absorbed[c] + escaped[c] - injected[c]) / injected[c], 1e-6,
+                                "%s channel %d" % (solver, c))
+
+    def test_point_source_alone_injects_its_power(self):
+        light = self.light()
+        light.SetDefaultLights(False)
+        solve = self.solve(light)
+        solve.AddPointSource(0.5, -1.0, 2.0, 0.5, 0.5, 0.5)
+        translucency.update(solve)
+        injected, absorbed, escaped = [0.0] * 3, [0.0] * 3, [0.0] * 3
+        self.assertTrue(solve.ComputePowerBalance(injected, absorbed, escaped))
+        for c in range(3):
+            self.assertAlmostEqual(injected[c], 0.5, places=12)
+            self.assertLess(abs(absorbed[c] + escaped[c] - 0.5) / 0.5, 1e-6)
+
+    def test_cli_reports_the_filters_balance(self):
+        power = self.report["power_W"]
+        solve = self.solve(self.light())
+        translucency.update(solve)
+        injected, absorbed, escaped = [0.0] * 3, [0.0] * 3, [0.0] * 3
+        self.assertTrue(solve.ComputePowerBalance(injected, absorbed, escaped))
+        for c, name in enumerate("RGB"):
+            self.assertAlmostEqual(power[name]["injected"], injected[c], delta=1e-9 * injected[c])
+            self.assertAlmostEqual(power[name]["absorbed"], absorbed[c], delta=1e-6 * injected[c])
+            self.assertLess(abs(power[name]["imbalance"]), 1e-6)
+        self.assertIn("power (W)", self.cli_stdout)
+
+    # 4.
+    def test_no_balance_in_the_frequency_domain(self):
+        solve = self.solve(self.light())
+        solve.SetModulationFrequency(1e8)
+        translucency.update(solve)
+        injected, absorbed, escaped = [0.0] * 3, [0.0] * 3, [0.0] * 3
+        with self.assertRaises(translucency.PipelineError) as caught:
+            with translucency.raise_on_error():
+                self.assertFalse(solve.ComputePowerBalance(injected, absorbed, escaped))
+        self.assertIn("frequency domain", str(caught.exception))
+
+
+if __name__ == "__main__":
+    unittest.main()
