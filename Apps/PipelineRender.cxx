@@ -1,5 +1,7 @@
 #include "PipelineRender.h"
+
 #include "Pictures.h"
+#include "ToneMap.h"
 
 #include <vtkActor.h>
 #include <vtkAxis.h>
@@ -42,12 +44,6 @@ namespace translucency_app
 {
 namespace
 {
-double SRGB(double v)
-{
-  v = std::min(1.0, std::max(0.0, v));
-  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
-}
-
 void PlaceCamera(vtkRenderer* renderer, const double bounds[6], const RadianceImageOptions& options)
 {
   const double center[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
@@ -95,35 +91,24 @@ double ToneMapRadiance(vtkPolyData* surface, double exposure)
 {
   vtkDataArray* radiance = surface->GetPointData()->GetArray("Radiance");
   const vtkIdType n = surface->GetNumberOfPoints();
-  if (exposure <= 0.0)
-  {
-    std::vector<double> peaks(static_cast<size_t>(n));
-    for (vtkIdType i = 0; i < n; ++i)
-    {
-      peaks[i] = std::max(
-        { radiance->GetComponent(i, 0), radiance->GetComponent(i, 1), radiance->GetComponent(i, 2) });
-    }
-    double p99 = 1.0;
-    if (n > 0)
-    {
-      const size_t k = static_cast<size_t>(0.99 * (n - 1));
-      std::nth_element(peaks.begin(), peaks.begin() + k, peaks.end());
-      p99 = peaks[k];
-    }
-    exposure = p99 > 0 ? 0.9 / p99 : 1.0;
-  }
-  vtkNew<vtkUnsignedCharArray> rgb;
-  rgb->SetName("RadianceRGB");
-  rgb->SetNumberOfComponents(3);
-  rgb->SetNumberOfTuples(n);
+  std::vector<double> values(3 * static_cast<size_t>(n));
   for (vtkIdType i = 0; i < n; ++i)
   {
     for (int c = 0; c < 3; ++c)
     {
-      rgb->SetTypedComponent(i, c,
-        static_cast<unsigned char>(std::lround(255.0 * SRGB(exposure * radiance->GetComponent(i, c)))));
+      values[3 * i + c] = radiance->GetComponent(i, c);
     }
   }
+  if (exposure <= 0.0)
+  {
+    exposure = translucency::AutomaticExposure(values);
+  }
+  const std::vector<unsigned char> bytes = translucency::ToneMap(values, exposure);
+  vtkNew<vtkUnsignedCharArray> rgb;
+  rgb->SetName("RadianceRGB");
+  rgb->SetNumberOfComponents(3);
+  rgb->SetNumberOfTuples(n);
+  std::copy(bytes.begin(), bytes.end(), rgb->GetPointer(0));
   surface->GetPointData()->AddArray(rgb);
   return exposure;
 }

@@ -12,6 +12,7 @@
 #include "Error.h"
 #include "LinearSolver.h"
 #include "Strings.h"
+#include "ToneMap.h"
 
 #include "vtkTranslucentRadiosity.h"
 
@@ -69,9 +70,8 @@ void Colourise(vtkPolyData* poly, const char* array, double exposure)
   {
     for (int c = 0; c < 3; ++c)
     {
-      double v = std::min(1.0, std::max(0.0, exposure * values->GetComponent(i, c)));
-      v = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
-      rgb->SetComponent(i, c, std::round(255.0 * v));
+      rgb->SetComponent(
+        i, c, std::round(255.0 * translucency::EncodeSRGB(exposure * values->GetComponent(i, c))));
     }
   }
   poly->GetPointData()->AddArray(rgb);

@@ -5,6 +5,7 @@
 
 #include "Error.h"
 #include "Radiance.h"
+#include "ToneMap.h"
 #include "TetMesh.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
@@ -17,7 +18,9 @@
 #include <vtkInformationVector.h>
 #include <vtkNew.h>
 #include <vtkObjectFactory.h>
+#include <vtkFieldData.h>
 #include <vtkPointData.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkSMPTools.h>
@@ -192,6 +195,21 @@ int vtkOutgoingRadiance::RequestData(
   output->GetPointData()->AddArray(qOut);
   output->GetPointData()->SetNormals(normalsOut);
   output->GetPointData()->AddArray(originalIds);
+  // The display colours (the CLI's PNG mapping): Map Scalars off in ParaView.
+  this->ExposureUsed =
+    this->Exposure > 0.0 ? this->Exposure : translucency::AutomaticExposure(values);
+  const std::vector<unsigned char> bytes = translucency::ToneMap(values, this->ExposureUsed);
+  vtkNew<vtkUnsignedCharArray> rgb;
+  rgb->SetName("RadianceRGB");
+  rgb->SetNumberOfComponents(3);
+  rgb->SetNumberOfTuples(n);
+  std::copy(bytes.begin(), bytes.end(), rgb->GetPointer(0));
+  vtkTranslucency::SetRGBComponentNames(rgb);
+  output->GetPointData()->AddArray(rgb);
+  vtkNew<vtkDoubleArray> exposureArray;
+  exposureArray->SetName("RadianceExposure");
+  exposureArray->InsertNextValue(this->ExposureUsed);
+  output->GetFieldData()->AddArray(exposureArray);
   output->GetPointData()->SetActiveScalars(vtkTranslucency::RadianceName);
   radiance->Delete();
   phiOut->Delete();

@@ -12,7 +12,12 @@
  * mapped; clamped below at 0 where eq. 3 would go negative, which happens under
  * strong direct light on meshes too coarse to resolve the fluence near the
  * surface), `Fluence`, `Irradiance`, `Normals` (outward unit normals) and
- * `vtkOriginalPointIds` (ids in the tet mesh).
+ * `vtkOriginalPointIds` (ids in the tet mesh), and `RadianceRGB`: the
+ * display colours (unsigned char, R, G, B) of Exposure x Radiance, clamped
+ * and sRGB-encoded (translucency/Physics/ToneMap.h), the mapping of the
+ * CLI's `render --png`: colour by it with Map Scalars off to see the
+ * translucent object as the CLI renders it. The field array
+ * `RadianceExposure` holds the exposure used.
  *
  * The outgoing direction w_o is the surface normal by default (F_t at normal
  * exit); with UseViewPoint on, it points from each surface point to the
@@ -56,6 +61,19 @@ public:
   ///@}
 
   ///@{
+  /**
+   * Multiplier of the radiance (sr mm^2/W) before display for `RadianceRGB`.
+   * 0 (default) = automatic: 0.9 / the 99th percentile of the per-point
+   * brightest channel, as the CLI's --exposure default.
+   */
+  vtkSetClampMacro(Exposure, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(Exposure, double);
+  ///@}
+
+  /// The exposure of the last execution (Exposure, or the automatic one).
+  double GetExposureUsed() const { return this->ExposureUsed; }
+
+  ///@{
   /// Camera position (mm) used when UseViewPoint is on. Default (0, 0, 0).
   vtkSetVector3Macro(ViewPoint, double);
   vtkGetVector3Macro(ViewPoint, double);
@@ -71,6 +89,8 @@ protected:
   bool UseViewPoint = false;
   bool NSquaredLaw = false;
   double ViewPoint[3] = { 0.0, 0.0, 0.0 };
+  double Exposure = 0.0;
+  double ExposureUsed = 1.0;
 
 private:
   vtkOutgoingRadiance(const vtkOutgoingRadiance&) = delete;
