@@ -13,6 +13,7 @@ packages=(
   xvfb xauth libx11-dev libcli11-dev libqt5svg5
   libsuitesparse-dev libhypre-dev libopenblas0-pthread python3-matplotlib
   libgmsh-dev
+  qtxmlpatterns5-dev-tools qhelpgenerator-qt5 qttools5-dev
 )
 
 missing=()

@@ -21,13 +21,22 @@ How to run (no ParaView needed; ctest does this):
    an empty name; the refractive index there and in the Volume mode.
 4. Solve Diffusion's Linear Solver is a drop-down fed by an information
    property of the filter (GetAvailableLinearSolvers), defaulting to "default".
+5. The "?" help: the plugin is built with XML_DOCUMENTATION, so the build
+   has a Qt help collection (Plugin/paraview_help/Translucency.qch, an SQLite
+   file the plugin embeds and ParaView registers at load) with one page per
+   proxy, and each page holds every property's label and documentation
+   (needs TRANSLUCENCY_BINARY_DIR; skipped without it).
 
 Exits non-zero on failure (unittest).
 """
 
 import glob
+import html
 import os
+import re
+import sqlite3
 import unittest
+import zlib
 import xml.etree.ElementTree as ET
 
 SOURCE_DIR = os.environ.get("TRANSLUCENCY_SOURCE_DIR") or os.path.abspath(
@@ -170,6 +179,44 @@ class PluginXmlTest(unittest.TestCase):
         self.assertEqual(info.get("information_only"), "1")
         self.assertEqual(info.get("command"), "GetAvailableLinearSolvers")
         self.assertIsNotNone(info.find("StringArrayHelper"))
+
+    def test_help_pages_hold_every_property(self):
+        binary = os.environ.get("TRANSLUCENCY_BINARY_DIR")
+        if not binary:
+            self.skipTest("TRANSLUCENCY_BINARY_DIR not set")
+        qch = os.path.join(binary, "Plugin", "paraview_help", "Translucency.qch")
+        self.assertTrue(os.path.isfile(qch), "no help collection: " + qch)
+        db = sqlite3.connect(qch)
+        pages = {}
+        for file_id, name in db.execute("SELECT FileId, Name FROM FileNameTable"):
+            data = db.execute("SELECT Data FROM FileDataTable WHERE Id = ?",
+                              (file_id,)).fetchone()
+            if name.endswith(".html") and data:
+                # qCompress: a 4-byte big-endian length, then zlib.
+                pages[name] = zlib.decompress(data[0][4:]).decode("utf-8")
+        db.close()
+
+        def words(text):
+            """The text of an HTML page or of a Documentation element."""
+            return " ".join(html.unescape(re.sub(r"<[^>]+>", " ", text)).split())
+
+        count = 0
+        for path, proxy in proxies():
+            group = "sources" if proxy.tag == "SourceProxy" and proxy.find(
+                "InputProperty") is None else "filters"
+            name = "%s.%s.html" % (group, proxy.get("name"))
+            self.assertIn(name, pages, "no help page for %s (%s)" % (proxy.get("name"), path))
+            page = words(pages[name])
+            for prop in proxy:
+                doc = prop.find("Documentation")
+                if prop.get("name") is None or doc is None or prop.get("panel_visibility") == \
+                        "never" or prop.get("information_only") == "1":
+                    continue
+                self.assertIn(" ".join((doc.text or "").split())[:60], page,
+                              "%s: the help of %s lacks its documentation"
+                              % (name, prop.get("name")))
+                count += 1
+        self.assertGreater(count, 60)
 
 
 if __name__ == "__main__":
