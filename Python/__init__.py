@@ -14,16 +14,21 @@ fails later with ``None``. To stop at the first error with its message::
 
     with translucency.raise_on_error():       # any VTK error inside the block
         solve.SetSolverByName("femm")         # raises PipelineError at the block's end
+
+Scripts copied anywhere find the project's data and command-line tool with
+``translucency.find_data("bunny.ply")`` and ``translucency.find_cli()``.
 """
 
 import contextlib
+import os
 import re
+import shutil
 
 from .TranslucencyFilters import *  # noqa: F401,F403
 from .TranslucencyReaders import *  # noqa: F401,F403
 
 __all__ = [name for name in dir() if name.startswith("vtk")] + [
-    "PipelineError", "raise_on_error", "update"]
+    "PipelineError", "raise_on_error", "update", "find_data", "find_cli"]
 
 
 class PipelineError(RuntimeError):
@@ -100,3 +105,54 @@ def update(algorithm, port=0):
     with raise_on_error():
         algorithm.Update(port)
     return algorithm.GetOutputDataObject(port)
+
+
+# Where this package is: <build>/lib/python3.X/site-packages/translucency in a
+# build tree (with _locations.py, written by CMake, naming the source tree),
+# <prefix>/lib/python3.X/site-packages/translucency once installed (the data
+# in <prefix>/share/translucency/Data, the tool in <prefix>/bin).
+_PREFIX = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
+
+
+def _data_dirs():
+    dirs = []
+    if os.environ.get("TRANSLUCENCY_DATA_DIR"):
+        dirs.append(os.environ["TRANSLUCENCY_DATA_DIR"])
+    try:
+        from . import _locations
+        dirs.append(_locations.SOURCE_DATA_DIR)
+    except ImportError:
+        pass
+    dirs.append(os.path.join(_PREFIX, "share", "translucency", "Data"))
+    return dirs
+
+
+def find_data(name):
+    """The path of one of the project's data files (``"bunny.ply"``,
+    ``"materials.json"``, ``"cornell_box.json"``), wherever the script runs
+    from: ``$TRANSLUCENCY_DATA_DIR``, the source tree of this build, or the
+    installed ``<prefix>/share/translucency/Data``. Raises FileNotFoundError
+    naming every place it looked."""
+    tried = []
+    for directory in _data_dirs():
+        path = os.path.join(directory, name)
+        if os.path.isfile(path):
+            return path
+        tried.append(path)
+    raise FileNotFoundError("translucency data file %r not found; looked at: %s "
+                            "(set TRANSLUCENCY_DATA_DIR to the directory holding it)"
+                            % (name, ", ".join(tried)))
+
+
+def find_cli():
+    """The ``translucency`` command-line tool of this build or installation:
+    ``$TRANSLUCENCY_CLI``, ``<build or prefix>/bin/translucency``, or the
+    first on PATH. Raises FileNotFoundError naming every place it looked."""
+    candidates = [os.environ.get("TRANSLUCENCY_CLI"),
+                  os.path.join(_PREFIX, "bin", "translucency"), shutil.which("translucency")]
+    for path in candidates:
+        if path and os.path.isfile(path) and os.access(path, os.X_OK):
+            return path
+    raise FileNotFoundError("the translucency command-line tool was not found; looked at: %s "
+                            "(set TRANSLUCENCY_CLI to its path)"
+                            % ", ".join(p for p in candidates if p) or "PATH")

@@ -1,13 +1,14 @@
 """Acquire a heterogeneous material from synthetic measurements (inverse diffusion).
 
-How to run (after `make build`), from the repository root:
+How to run (after `make build`), from any directory (the CLI is found with
+translucency.find_cli(); the output directory is created):
 
-    export PYTHONPATH=$PWD/build/lib/python3.11/site-packages
-    xvfb-run -a /usr/bin/python3 Documentation/examples/acquire_synthetic.py [OUTPUT_PREFIX]
+    export PYTHONPATH=/path/to/translucency/build/lib/python3.11/site-packages
+    xvfb-run -a /usr/bin/python3 acquire_synthetic.py [OUTPUT_PREFIX]
 
 (xvfb-run only for the objective plot; without an X display the command warns
 and writes the other pictures.) TRANSLUCENCY_CLI may name the `translucency`
-executable (default: build/bin/translucency).
+executable (default: translucency.find_cli()).
 
 1. Write a known volume (the "truth"): a marble-like block, 8 x 8 x 2 mm, with
    an absorbing, less scattering inclusion under the measured face.
@@ -31,7 +32,9 @@ import translucency
 from vtkmodules.util.numpy_support import numpy_to_vtk
 
 prefix = sys.argv[1] if len(sys.argv) > 1 else "acquire_synthetic"
-cli = os.environ.get("TRANSLUCENCY_CLI", os.path.join("build", "bin", "translucency"))
+if os.path.dirname(prefix):
+    os.makedirs(os.path.dirname(prefix), exist_ok=True)
+cli = translucency.find_cli()  # $TRANSLUCENCY_CLI, this build's or installation's bin/, PATH
 
 # 1. The truth: cell data on a 32 x 32 x 8 image covering [0,8] x [0,8] x [0,2] mm.
 n = (32, 32, 8)

@@ -1,9 +1,9 @@
 """Cut the marble bunny open with a stroke, paint a ketchup vein on the cut, re-solve.
 
-How to run (after `make demo` or `make build`), from the repository root:
+How to run (after `make demo` or `make build`), from any directory:
 
-    export PYTHONPATH=$PWD/build/lib/python3.11/site-packages
-    xvfb-run -a /usr/bin/python3 Documentation/examples/cut_and_paint.py [PREFIX]
+    export PYTHONPATH=/path/to/translucency/build/lib/python3.11/site-packages
+    xvfb-run -a /usr/bin/python3 cut_and_paint.py [PREFIX]
 
 It writes PREFIX_before.png (the whole bunny) and PREFIX_after.png (cut open,
 with the vein), both seen from the side the cut removes; PREFIX defaults to
@@ -24,9 +24,10 @@ import vtk  # ParaView's VTK 9.2 (python3-paraview)
 from vtk.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 import translucency
 
-here = os.path.dirname(os.path.abspath(__file__))
-bunny = os.path.join(here, "..", "..", "Data", "bunny.ply")
+bunny = translucency.find_data("bunny.ply")  # from any directory
 prefix = next((a for a in sys.argv[1:] if not a.startswith("--")), "cut_and_paint")
+if os.path.dirname(prefix):
+    os.makedirs(os.path.dirname(prefix), exist_ok=True)
 render = "--no-render" not in sys.argv
 
 

@@ -1,9 +1,10 @@
 """Render the Stanford bunny in marble with the Translucency VTK filters.
 
-How to run (after `make demo` or `make build`), from the repository root:
+How to run (after `make demo` or `make build`), from any directory (the bunny is
+found with translucency.find_data; the picture's directory is created):
 
-    export PYTHONPATH=$PWD/build/lib/python3.11/site-packages
-    xvfb-run -a /usr/bin/python3 Documentation/examples/render_bunny.py [out.png]
+    export PYTHONPATH=/path/to/translucency/build/lib/python3.11/site-packages
+    xvfb-run -a /usr/bin/python3 render_bunny.py [out.png]
 
 (`pvpython` works too.) Without an X display, drop xvfb-run only if you skip
 step 7 (pass --no-render).
@@ -21,8 +22,7 @@ import sys
 import vtk  # ParaView's VTK 9.2 (python3-paraview)
 import translucency
 
-here = os.path.dirname(os.path.abspath(__file__))
-bunny = os.path.join(here, "..", "..", "Data", "bunny.ply")
+bunny = translucency.find_data("bunny.ply")
 out_png = next((a for a in sys.argv[1:] if not a.startswith("--")), "bunny.png")
 render = "--no-render" not in sys.argv
 
@@ -62,24 +62,10 @@ surface = translucency.update(radiance)
 print("surface points:", surface.GetNumberOfPoints(),
       "max radiance R:", surface.GetPointData().GetArray("Radiance").GetRange(0)[1])
 
-# 7. Show it: tone-map the linear radiance with a simple exposure + sRGB curve.
+# 7. Show it: RadianceRGB is the tone-mapped radiance (exposure x radiance,
+# sRGB-encoded; radiance.SetExposure(x) to choose, default automatic), the
+# colours the CLI's `render --png` and ParaView (Map Scalars off) show.
 if render:
-    rgb = vtk.vtkUnsignedCharArray()
-    rgb.SetName("RadianceRGB")
-    rgb.SetNumberOfComponents(3)
-    rgb.SetNumberOfTuples(surface.GetNumberOfPoints())
-    values = surface.GetPointData().GetArray("Radiance")
-    peak = max(values.GetRange(c)[1] for c in range(3))
-    exposure = 0.9 / peak if peak > 0 else 1.0
-    for i in range(surface.GetNumberOfPoints()):
-        tup = []
-        for c in range(3):
-            v = min(1.0, max(0.0, exposure * values.GetComponent(i, c)))
-            v = 12.92 * v if v <= 0.0031308 else 1.055 * v ** (1 / 2.4) - 0.055
-            tup.append(round(255 * v))
-        rgb.SetTypedTuple(i, tup)
-    surface.GetPointData().AddArray(rgb)
-
     mapper = vtk.vtkPolyDataMapper()
     mapper.SetInputData(surface)
     mapper.SetScalarModeToUsePointFieldData()
@@ -101,6 +87,8 @@ if render:
     grab.SetInput(win)
     writer = vtk.vtkPNGWriter()
     writer.SetInputConnection(grab.GetOutputPort())
+    if os.path.dirname(out_png):
+        os.makedirs(os.path.dirname(out_png), exist_ok=True)
     writer.SetFileName(out_png)
     writer.Write()
     print("wrote", out_png)
