@@ -1,6 +1,7 @@
 #include "vtkSolveDiffusion.h"
 
 #include "Detectors.h"
+#include "ModelRange.h"
 #include "DiffusionFrontEnd.h"
 #include "DiffusionSolverFactory.h"
 #include "DiscreteDivergence.h"
@@ -52,6 +53,9 @@ struct vtkSolveDiffusion::Internals
   /// Readings of the last solve (amplitudes) and their phases (radians).
   std::vector<translucency::DetectorReading> Readings;
   std::vector<std::array<double, 3>> FluencePhase, ExitancePhase;
+  /// Tet sizes of the mesh the model-range check last saw (TetSizes).
+  const translucency::TetMesh* SizesMesh = nullptr;
+  std::vector<double> Sizes;
 };
 
 //------------------------------------------------------------------------------
@@ -427,6 +431,28 @@ int vtkSolveDiffusion::RequestData(
       this->UpdateProgress(0.05 + 0.9 * fraction);
       return !this->CheckAbort();
     });
+
+    // The diffusion model's range (Monte Carlo solves the transport itself).
+    // Warned when the verdict changes, not at every paint stroke.
+    if (entry.Name != "montecarlo")
+    {
+      if (in.SizesMesh != mesh.get())
+      {
+        in.Sizes = translucency::TetSizes(*mesh);
+        in.SizesMesh = mesh.get();
+      }
+      const std::string warning =
+        translucency::CheckModelRange(*mesh, material, &in.Sizes).Message();
+      if (!warning.empty() && warning != this->ModelRangeWarning)
+      {
+        vtkWarningMacro(<< warning);
+      }
+      this->ModelRangeWarning = warning;
+    }
+    else
+    {
+      this->ModelRangeWarning.clear();
+    }
 
     const bool frequencyDomain = this->ModulationFrequency > 0.0;
     if ((frequencyDomain || !in.Sources.Empty() || !in.Detectors.empty()) &&

@@ -247,6 +247,16 @@ public:
    * or frequency domain).
    */
   bool ComputePowerBalance(double injected[3], double absorbed[3], double escaped[3]);
+
+  /**
+   * The model-range warning of the last execution, empty when the material
+   * and mesh are in the diffusion model's range (translucency::
+   * CheckModelRange: transport albedo mu_s'/(mu_a + mu_s') below 0.9, or
+   * tets larger than 3 transport mean free paths, on more than 1 % of the
+   * volume). Also issued as a VTK warning whenever it changes. Empty for
+   * the montecarlo solver.
+   */
+  const char* GetModelRangeWarning() const { return this->ModelRangeWarning.c_str(); }
   ///@}
 
   ///@{
@@ -308,6 +318,7 @@ protected:
   vtkTypeInt64 NumberOfPhotons = 1000000;
   int Seed = 1;
   std::string LinearSolver;
+  std::string ModelRangeWarning;
   bool MultiLevel = false;
   int NumberOfThreads = 0;
   bool IncrementalAssembly = true;

@@ -21,6 +21,9 @@ How to run (from a build tree; ctest sets the environment):
    injects exactly 0.5 W per channel (its definition); `render --json`
    reports the same balance as the filter.
 4. Frequency domain: ComputePowerBalance refuses (complex fluence).
+5. The model-range warning: skin1 (transport albedo 0.68 in blue) warns,
+   naming the albedo; marble on the same tets does not; the montecarlo
+   solver (transport itself) does not.
 
 Exits non-zero on failure (unittest).
 """
@@ -221,6 +224,28 @@ class LightsAndPowerTest(unittest.TestCase):
             with translucency.raise_on_error():
                 self.assertFalse(solve.ComputePowerBalance(injected, absorbed, escaped))
         self.assertIn("frequency domain", str(caught.exception))
+
+    # 5.
+    def test_model_range_warning(self):
+        def warning_for(preset, solver="fem"):
+            assign = translucency.vtkAssignScatteringCoefficients()
+            assign.SetInputData(self.grid)
+            assign.SetMaterialName(preset)
+            light = translucency.vtkSurfaceIrradiance()
+            light.SetInputConnection(assign.GetOutputPort())
+            light.SetUniformLightSamples(0)
+            solve = self.solve(light, solver)
+            solve.SetNumberOfPhotons(20000)
+            solve.SetRelTol(1e-6)
+            translucency.update(solve)
+            return solve.GetModelRangeWarning()
+
+        skin = warning_for("skin1")
+        self.assertIn("out of its range", skin)
+        self.assertIn("100 % of the volume", skin)
+        self.assertIn("lowest 0.678", skin)
+        self.assertEqual(warning_for("marble"), "")
+        self.assertEqual(warning_for("skin1", "montecarlo"), "")
 
 
 if __name__ == "__main__":
