@@ -12,6 +12,7 @@
 #include "TranslucentRadiosity.h"
 
 #include <vtkCellArray.h>
+#include <vtkStringArray.h>
 #include <vtkCellData.h>
 #include <vtkCompositeDataIterator.h>
 #include <vtkCompositeDataSet.h>
@@ -45,6 +46,7 @@ struct vtkTranslucentRadiosity::Leaf
 
 struct vtkTranslucentRadiosity::Internals
 {
+  vtkNew<vtkStringArray> LinearSolverNames; ///< GetAvailableLinearSolvers()'s array
   std::vector<translucency::LightSource> Lights;
   // Scene, form factors and solver (warm starts, cached optical distances),
   // kept while the geometry and the settings are unchanged.
@@ -457,6 +459,18 @@ void vtkTranslucentRadiosity::AttachOutputs(vtkCompositeDataSet* output,
     }
     output->SetDataSet(leaf.Where, leaf.Output);
   }
+}
+
+//------------------------------------------------------------------------------
+vtkStringArray* vtkTranslucentRadiosity::GetAvailableLinearSolvers()
+{
+  vtkStringArray* names = this->Internal->LinearSolverNames;
+  names->Initialize();
+  for (const std::string& name : translucency::GetLinearSolverNames())
+  {
+    names->InsertNextValue(name);
+  }
+  return names;
 }
 
 //------------------------------------------------------------------------------

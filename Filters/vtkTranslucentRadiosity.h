@@ -48,6 +48,7 @@
 #include <vector> // for the steps of RequestData
 
 class vtkCompositeDataSet;
+class vtkStringArray;
 namespace translucency
 {
 struct LightSource;
@@ -123,6 +124,10 @@ public:
   vtkSetStdStringFromCharMacro(LinearSolver);
   vtkGetCharFromStdStringMacro(LinearSolver);
   ///@}
+
+  /// The linear solvers this build has for the diffusion S (the choices of
+  /// LinearSolver; the ParaView drop-down reads it).
+  vtkStringArray* GetAvailableLinearSolvers();
 
   ///@{
   /// Shadows of the direct light. Default on.

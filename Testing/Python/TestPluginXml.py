@@ -19,8 +19,9 @@ How to run (no ParaView needed; ctest does this):
    reads (vtkAssignScatteringCoefficients::ComputeMaterials): Material Name in
    the Uniform mode; the explicit mu_a and sigma_s' in the Uniform mode with
    an empty name; the refractive index there and in the Volume mode.
-4. Solve Diffusion's Linear Solver is a drop-down fed by an information
-   property of the filter (GetAvailableLinearSolvers), defaulting to "default".
+4. Solve Diffusion's and Translucent Radiosity's Linear Solver are drop-downs
+   fed by an information property of the filter (GetAvailableLinearSolvers),
+   defaulting to "default" and "cg-jacobi".
 5. The "?" help: the plugin is built with XML_DOCUMENTATION, so the build
    has a Qt help collection (Plugin/paraview_help/Translucency.qch, an SQLite
    file the plugin embeds and ParaView registers at load) with one page per
@@ -166,19 +167,22 @@ class PluginXmlTest(unittest.TestCase):
                         self.assertEqual(shown(by_name[name], values), wanted)
 
     def test_linear_solver_is_a_drop_down_of_the_build(self):
-        proxy = next(p for _, p in proxies() if p.get("name") == "SolveDiffusion")
-        by_name = {p.get("name"): p for p in properties(proxy)}
-        linear = by_name["LinearSolver"]
-        self.assertEqual(linear.get("default_values"), "default")
-        domain = linear.find("StringListDomain")
-        self.assertIsNotNone(domain, "Linear Solver is not a drop-down")
-        self.assertEqual(domain.findall("String"), [], "the list comes from the filter")
-        required = domain.find("RequiredProperties").find("Property")
-        self.assertEqual(required.get("function"), "ArrayList")
-        info = by_name[required.get("name")]
-        self.assertEqual(info.get("information_only"), "1")
-        self.assertEqual(info.get("command"), "GetAvailableLinearSolvers")
-        self.assertIsNotNone(info.find("StringArrayHelper"))
+        for proxy_name, default in (("SolveDiffusion", "default"),
+                                    ("TranslucentRadiosity", "cg-jacobi")):
+            with self.subTest(proxy=proxy_name):
+                proxy = next(p for _, p in proxies() if p.get("name") == proxy_name)
+                by_name = {p.get("name"): p for p in properties(proxy)}
+                linear = by_name["LinearSolver"]
+                self.assertEqual(linear.get("default_values"), default)
+                domain = linear.find("StringListDomain")
+                self.assertIsNotNone(domain, "Linear Solver is not a drop-down")
+                self.assertEqual(domain.findall("String"), [], "the list comes from the filter")
+                required = domain.find("RequiredProperties").find("Property")
+                self.assertEqual(required.get("function"), "ArrayList")
+                info = by_name[required.get("name")]
+                self.assertEqual(info.get("information_only"), "1")
+                self.assertEqual(info.get("command"), "GetAvailableLinearSolvers")
+                self.assertIsNotNone(info.find("StringArrayHelper"))
 
     def test_help_pages_hold_every_property(self):
         binary = os.environ.get("TRANSLUCENCY_BINARY_DIR")

@@ -57,6 +57,14 @@ class RadiosityPluginTest(unittest.TestCase):
         radiosity.LightPosition = [0, 0, 20]
         radiosity.LightPower = [500, 500, 500]
         radiosity.RaysPerPatch = 128
+        # Linear Solver is a drop-down of this build's solvers (the information
+        # property the panel reads), cg-jacobi first chosen.
+        domain = radiosity.GetProperty("LinearSolver").GetDomain("list")
+        radiosity.UpdatePropertyInformation()
+        choices = [domain.GetString(i) for i in range(domain.GetNumberOfStrings())]
+        self.assertIn("cg-jacobi", choices)
+        self.assertIn("multigrid-agg", choices)
+        self.assertEqual(radiosity.LinearSolver, "cg-jacobi")
         radiosity.UpdatePipeline()
         data = servermanager.Fetch(radiosity)
         parts = leaves(data)
