@@ -179,7 +179,9 @@ int vtkPaintScatteringCoefficients::RequestData(
   }
   if (this->StrokePoints.empty())
   {
-    vtkErrorMacro(<< "no stroke points: add at least one with AddStrokePoint");
+    vtkErrorMacro(<< "no stroke points: nothing to paint yet. In ParaView, draw the stroke with "
+                     "the polyline widget of the Properties panel (Ctrl+click in the view adds "
+                     "a handle), then Apply; from Python, call AddStrokePoint");
     return 0;
   }
   if (!(this->Width >= 0.0) || !std::isfinite(this->Width))
