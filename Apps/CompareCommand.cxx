@@ -490,13 +490,14 @@ int Compare(CompareOptions& o)
                 << 100 * s["fluence_mean_relative_standard_error"].get<double>() << "%)";
     std::cout << "\n";
   }
-  std::cout << "\n  power (W, channel R)  injected     absorbed      escaped  imbalance\n";
+  std::cout << "\npower balance (W, channel R; JSON power_W has every channel):\n"
+               "    solver              injected     absorbed      escaped  imbalance\n";
   for (const json& s : table)
   {
     if (s["power_W"].is_null())
       continue;
     const json& p = s["power_W"]["R"];
-    std::cout << "  " << std::left << std::setw(20) << s["solver"].get<std::string>()
+    std::cout << "    " << std::left << std::setw(18) << s["solver"].get<std::string>()
               << std::right << std::scientific << std::setprecision(4) << std::setw(10)
               << p["injected"].get<double>() << std::setw(13) << p["absorbed"].get<double>()
               << std::setw(13) << p["escaped"].get<double>() << std::setprecision(2)

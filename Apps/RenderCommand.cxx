@@ -178,6 +178,9 @@ int Render(RenderOptions& o)
   o.Optics.Print(solve);
   const json power = PowerBalanceJson(solve);
   PrintPowerBalance(power, std::cout);
+  const std::string meshNote = solve->GetMeshResolutionNote();
+  if (!meshNote.empty())
+    std::cout << "note: " << meshNote << "\n";
   PrintStages(stages);
 
   if (!jsonPath.empty())
@@ -205,6 +208,8 @@ int Render(RenderOptions& o)
     }
     o.Optics.Report(solve, j);
     j["power_W"] = power;
+    j["model_range"] = { { "warning", solve->GetModelRangeWarning() },
+      { "mesh_resolution_note", meshNote } };
     for (int c = 0; c < 3; ++c)
     {
       j["channels"][channel[c]] = { { "iterations", solve->GetNumberOfIterations(c) },

@@ -432,8 +432,9 @@ int vtkSolveDiffusion::RequestData(
       return !this->CheckAbort();
     });
 
-    // The diffusion model's range (Monte Carlo solves the transport itself).
-    // Warned when the verdict changes, not at every paint stroke.
+    // The diffusion model's range (Monte Carlo solves the transport itself):
+    // a warning when the verdict changes (not at every paint stroke); the
+    // mesh resolution is a note (GetMeshResolutionNote), printed by the CLI.
     if (entry.Name != "montecarlo")
     {
       if (in.SizesMesh != mesh.get())
@@ -441,17 +442,20 @@ int vtkSolveDiffusion::RequestData(
         in.Sizes = translucency::TetSizes(*mesh);
         in.SizesMesh = mesh.get();
       }
-      const std::string warning =
-        translucency::CheckModelRange(*mesh, material, &in.Sizes).Message();
+      const translucency::ModelRangeReport range =
+        translucency::CheckModelRange(*mesh, material, &in.Sizes);
+      const std::string warning = range.AlbedoMessage();
       if (!warning.empty() && warning != this->ModelRangeWarning)
       {
         vtkWarningMacro(<< warning);
       }
       this->ModelRangeWarning = warning;
+      this->MeshResolutionNote = range.ResolutionMessage();
     }
     else
     {
       this->ModelRangeWarning.clear();
+      this->MeshResolutionNote.clear();
     }
 
     const bool frequencyDomain = this->ModulationFrequency > 0.0;

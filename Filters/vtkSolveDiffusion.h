@@ -250,13 +250,20 @@ public:
 
   /**
    * The model-range warning of the last execution, empty when the material
-   * and mesh are in the diffusion model's range (translucency::
-   * CheckModelRange: transport albedo mu_s'/(mu_a + mu_s') below 0.9, or
-   * tets larger than 3 transport mean free paths, on more than 1 % of the
-   * volume). Also issued as a VTK warning whenever it changes. Empty for
-   * the montecarlo solver.
+   * is in the diffusion model's range (translucency::CheckModelRange:
+   * transport albedo mu_s'/(mu_a + mu_s') below 0.9 on more than 1 % of the
+   * volume). Also issued as a VTK warning whenever it changes. Empty for the
+   * montecarlo solver.
    */
   const char* GetModelRangeWarning() const { return this->ModelRangeWarning.c_str(); }
+
+  /**
+   * A note when the mesh is coarse for the material: the tets under more
+   * than 1 % of the surface are larger than 3 transport mean free paths
+   * 1/(mu_a + mu_s'), so the lit boundary layer is not resolved. Not a VTK
+   * warning (small meshes for a first look are common); the CLI prints it.
+   */
+  const char* GetMeshResolutionNote() const { return this->MeshResolutionNote.c_str(); }
   ///@}
 
   ///@{
@@ -319,6 +326,7 @@ protected:
   int Seed = 1;
   std::string LinearSolver;
   std::string ModelRangeWarning;
+  std::string MeshResolutionNote;
   bool MultiLevel = false;
   int NumberOfThreads = 0;
   bool IncrementalAssembly = true;

@@ -98,7 +98,7 @@ ModelRangeReport CheckModelRange(
   return report;
 }
 
-std::string ModelRangeReport::Message() const
+std::string ModelRangeReport::AlbedoMessage() const
 {
   std::ostringstream text;
   text.precision(3);
@@ -110,12 +110,15 @@ std::string ModelRangeReport::Message() const
          << this->MinimumAlbedoTet << ", channel " << ChannelName(this->MinimumAlbedoChannel)
          << "); expect errors of tens of per cent there: check with the montecarlo solver.";
   }
+  return text.str();
+}
+
+std::string ModelRangeReport::ResolutionMessage() const
+{
+  std::ostringstream text;
+  text.precision(3);
   if (this->CoarseAreaFraction > DiffusionToleratedVolumeFraction)
   {
-    if (text.tellp() > 0)
-    {
-      text << " ";
-    }
     text << "The mesh is coarse for this material under " << 100.0 * this->CoarseAreaFraction
          << " % of the surface: tets larger than " << DiffusionMaximumTetSizeInMeanFreePaths
          << " transport mean free paths 1/(mu_a + mu_s') (largest "
@@ -124,6 +127,12 @@ std::string ModelRangeReport::Message() const
          << "); the lit boundary layer is not resolved: use more tets.";
   }
   return text.str();
+}
+
+std::string ModelRangeReport::Message() const
+{
+  const std::string albedo = this->AlbedoMessage(), resolution = this->ResolutionMessage();
+  return albedo.empty() || resolution.empty() ? albedo + resolution : albedo + " " + resolution;
 }
 
 } // namespace translucency

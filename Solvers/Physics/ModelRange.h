@@ -51,8 +51,13 @@ struct ModelRangeReport
   int LargestSizeTet = -1;
   int LargestSizeChannel = 0;
 
-  /// One sentence per range exceeded on more than 1 % of the volume, with
-  /// the worst tet and channel; empty when the model and mesh are in range.
+  /// The model's range: a sentence when the albedo is below 0.9 on more
+  /// than 1 % of the volume (worst tet and channel), else empty.
+  std::string AlbedoMessage() const;
+  /// The mesh's resolution: a sentence when the tets under more than 1 % of
+  /// the surface exceed 3 l* (worst tet and channel), else empty.
+  std::string ResolutionMessage() const;
+  /// Both, separated by a space (empty when both are).
   std::string Message() const;
 };
 

@@ -62,6 +62,11 @@ class IncrementalSolveTest(unittest.TestCase):
         self.paint.AddStrokePoint(2.0, 3.5, 1.0)
         self.paint.SetWidth(0.25)
         self.paint.SetStrength(0.0)  # nothing painted yet
+        # A paint inside the diffusion model's range (the default target,
+        # ketchup, has albedo 0.02 in B and now draws the model-range warning
+        # when the wide stroke below paints every tet).
+        self.paint.SetTargetAbsorptionCoefficient(0.02, 0.05, 0.1)
+        self.paint.SetTargetReducedScatteringCoefficient(1.5, 1.8, 2.0)
         self.solve = new_solver()
         self.solve.SetInputConnection(self.paint.GetOutputPort())
 
