@@ -394,9 +394,10 @@ int vtkSolveDiffusion::RequestData(
       {
         vtkErrorMacro(<< "unknown LinearSolver '" << this->LinearSolver << "' for the "
                       << entry.Name << " solver (this build has: "
-                      << translucency::JoinNames(names) << "; empty = "
-                      << translucency::VertexDiffusionSolver::GetDefaultLinearSolverName()
-                      << ")");
+                      << translucency::JoinNames(names) << "; empty or \"default\" = "
+                      << translucency::VertexDiffusionSolver::GetDefaultLinearSolverName(
+                           mesh->GetNumberOfPoints())
+                      << " for this mesh)");
         return 0;
       }
     }

@@ -154,7 +154,9 @@ public:
   ///@{
   /// Linear solver by name; "" or "default" (default "") = the chosen
   /// solver's default. Discrete divergence and FEM: a name of
-  /// translucency::GetLinearSolverNames() ("cg-jacobi" by default,
+  /// translucency::GetLinearSolverNames() (by default "cg-jacobi" below
+  /// 20,000 unknowns, "multigrid-agg" above: VertexDiffusionSolver::
+  /// GetDefaultLinearSolverName(int)),
   /// "transcut-multires", "multigrid-cg", ...). QuadGraph and grid:
   /// "bicgstab" (default) or "relaxation". An unknown name makes RequestData
   /// fail with an error listing the known names.

@@ -46,6 +46,11 @@ std::string VertexDiffusionSolver::GetDefaultLinearSolverName()
   return "cg-jacobi";
 }
 
+std::string VertexDiffusionSolver::GetDefaultLinearSolverName(int unknowns)
+{
+  return unknowns < LargeSystemUnknowns ? GetDefaultLinearSolverName() : "multigrid-agg";
+}
+
 void VertexDiffusionSolver::Reset()
 {
   for (auto& x : Solution_)
@@ -80,7 +85,9 @@ bool VertexDiffusionSolver::Solve(
   report.Solver = GetName();
 
   // The linear solver by name (kept while the name stays the same).
-  std::string name = LinearSolver_.empty() ? GetDefaultLinearSolverName() : LinearSolver_;
+  std::string name = LinearSolver_.empty()
+    ? GetDefaultLinearSolverName(mesh.GetNumberOfPoints())
+    : LinearSolver_;
   name = ToLower(name);
   if (!Linear_ || name != LinearName_)
   {

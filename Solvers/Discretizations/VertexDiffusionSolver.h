@@ -77,8 +77,21 @@ public:
 
   /// The linear solver of the last Solve (null before the first one).
   LinearSolver* GetLinearSolverObject() { return Linear_.get(); }
-  /// The linear solver used when SetLinearSolver("") (the default).
+  /// The default linear solver of small systems (below
+  /// LargeSystemUnknowns unknowns), and the first of GetLinearSolverNames().
   static std::string GetDefaultLinearSolverName();
+  /**
+   * The linear solver used when SetLinearSolver("") (the default), chosen by
+   * size: cg-jacobi (no set-up) below LargeSystemUnknowns unknowns per
+   * channel, multigrid-agg from there on (measured in `bench
+   * --linear-solvers`, Documentation/Performance.md: set-up + cold solve
+   * 0.80x of cg-jacobi and warm relights 0.46x at 27k unknowns, 0.31x and
+   * 0.21x at 183k).
+   */
+  static std::string GetDefaultLinearSolverName(int unknowns);
+  /// Size (unknowns per channel, about 90k tets) from which the default is
+  /// multigrid-agg.
+  static constexpr int LargeSystemUnknowns = 20000;
 
 private:
   std::unique_ptr<Discretization> Discretization_;
