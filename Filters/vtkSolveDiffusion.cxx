@@ -9,6 +9,7 @@
 #include "TetMesh.h"
 #include "Timer.h"
 #include "VertexDiffusionSolver.h"
+#include "vtkTranslucencyDistributedSolve.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkTranslucencyParallel.h"
@@ -17,6 +18,7 @@
 #include <vtkFieldData.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
+#include <vtkMultiProcessController.h>
 #include <vtkObjectFactory.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
@@ -52,6 +54,9 @@ struct vtkSolveDiffusion::Internals
   /// Readings of the last solve (amplitudes) and their phases (radians).
   std::vector<translucency::DetectorReading> Readings;
   std::vector<std::array<double, 3>> FluencePhase, ExitancePhase;
+  /// The distributed path's solver (kept: hierarchy and warm start).
+  vtkTranslucencyDistributedSolve Distributed;
+  std::string ParallelPath;
 };
 
 //------------------------------------------------------------------------------
@@ -120,6 +125,11 @@ bool vtkSolveDiffusion::GetConverged(int channel) const
 const char* vtkSolveDiffusion::GetLinearSolverUsed() const
 {
   return this->Internal->Report.LinearSolver.c_str();
+}
+
+const char* vtkSolveDiffusion::GetParallelPath() const
+{
+  return this->Internal->ParallelPath.c_str();
 }
 
 const char* vtkSolveDiffusion::GetLastAssembly() const
@@ -312,7 +322,18 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
 int vtkSolveDiffusion::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  // Under MPI: the divergence and fem systems distributed over the ranks
+  // (hypre), or else gather to rank 0, run this serially there, hand the
+  // result back.
+  const bool vertexSolver =
+    this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
+  if (this->DistributedSolve && vertexSolver && this->Internal->Sources.Empty() &&
+    this->Internal->Detectors.empty() && this->ModulationFrequency == 0.0 &&
+    vtkTranslucencyDistributedSolve::IsAllowedByEnvironment() &&
+    vtkTranslucencyDistributedSolve::IsAvailable())
+  {
+    return this->RequestDistributed(inputVector, outputVector);
+  }
   int parallelResult = 0;
   if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
         vtkTranslucencyParallel::GatherMode::SameMesh,
@@ -320,7 +341,14 @@ int vtkSolveDiffusion::RequestData(
         { return this->RequestData(r, i, o); },
         parallelResult))
   {
+    this->Internal->ParallelPath = "gathered";
     return parallelResult;
+  }
+  // (On rank 0 inside a gathered run the outer call sets "gathered" after this.)
+  if (vtkMultiProcessController::GetGlobalController() == nullptr ||
+    vtkMultiProcessController::GetGlobalController()->GetNumberOfProcesses() <= 1)
+  {
+    this->Internal->ParallelPath = "serial";
   }
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
@@ -584,6 +612,54 @@ int vtkSolveDiffusion::RequestData(
 }
 
 //------------------------------------------------------------------------------
+int vtkSolveDiffusion::RequestDistributed(
+  vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
+  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
+  Internals& in = *this->Internal;
+  in.ParallelPath = "distributed";
+  in.Report = translucency::SolverReport();
+  in.Readings.clear();
+  in.FluencePhase.clear();
+  in.ExitancePhase.clear();
+  in.FrontEnd.Reset();
+  this->TopologyTime = this->AssemblyTime = this->SolveTime = 0.0;
+  std::vector<double> fluence;
+  std::string error;
+  if (!in.Distributed.Solve(input, SolverEntry(this->Solver).Name, this->RelTol, this->MaxIter,
+        this->WarmStart, this->NumberOfThreads, fluence, in.Report, error))
+  {
+    in.Report = translucency::SolverReport();
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  this->AssemblyTime = in.Report.SetupMilliseconds;
+  this->SolveTime = in.Report.SolveMilliseconds;
+  static const char* channelNames[3] = { "R", "G", "B" };
+  for (int c = 0; c < 3; ++c)
+  {
+    if (!in.Report.Converged[c] && in.Report.Iterations[c] > 0)
+    {
+      vtkWarningMacro(<< "channel " << channelNames[c] << " did not converge: relative residual "
+                      << in.Report.Residual[c] << " after " << in.Report.Iterations[c]
+                      << " iterations (RelTol " << this->RelTol << ", MaxIter " << this->MaxIter
+                      << ")");
+    }
+  }
+  if (input)
+  {
+    output->ShallowCopy(input);
+    vtkDataArray* array = vtkTranslucency::NewTripleArray(vtkTranslucency::FluenceName, fluence);
+    output->GetPointData()->AddArray(array);
+    array->Delete();
+  }
+  this->UpdateProgress(1.0);
+  return outputs.Succeed();
+}
+
+//------------------------------------------------------------------------------
 void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
@@ -602,4 +678,5 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Sources: " << this->GetNumberOfSources() << "\n";
   os << indent << "Detectors: " << this->GetNumberOfDetectors() << "\n";
   os << indent << "ModulationFrequency: " << this->ModulationFrequency << " Hz\n";
+  os << indent << "DistributedSolve: " << this->DistributedSolve << "\n";
 }
