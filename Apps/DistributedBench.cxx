@@ -15,7 +15,9 @@
 // on the whole box: what Solve Diffusion computes with one process.
 // Times are the slowest rank's; memory is each rank's resident-set growth
 // while its solver and piece are alive (after malloc_trim: live memory), and
-// each process's peak resident set.
+// each process's peak resident set; the CPU time of each rank's Solve call
+// (with OMPI_MCA_mpi_yield_when_idle=1 a waiting rank gives its core away, so
+// this approximates the work a rank does, whatever the machine's load).
 
 #include "DiffusionSolverFactory.h"
 #include "DistributedVertexSolver.h"
@@ -36,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 namespace
@@ -57,6 +60,15 @@ double StatusBytes(const char* field = "VmRSS:")
 double ResidentBytes()
 {
   return StatusBytes();
+}
+
+/// CPU time of this process (ms, user + system).
+double CpuMilliseconds()
+{
+  rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
+  return 1000.0 * (usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+    (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) / 1000.0;
 }
 
 struct Piece
@@ -183,7 +195,11 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
       translucency::SolverReport report;
       MPI_Barrier(comm);
       const double start = MPI_Wtime();
+      const double cpuStart = CpuMilliseconds();
       solver.Solve(piece.Points, piece.Keys, piece.Tets, piece.Material, q, result.Fluence, report);
+      const double cpu = CpuMilliseconds() - cpuStart;
+      std::vector<double> cpus(static_cast<size_t>(ranks));
+      MPI_Gather(&cpu, 1, MPI_DOUBLE, cpus.data(), 1, MPI_DOUBLE, 0, comm);
       const double total = Max(1000.0 * (MPI_Wtime() - start), comm);
       const auto& t = solver.GetTimings();
       const double numbering = Max(t.Numbering, comm), assembly = Max(t.Assembly, comm),
@@ -214,6 +230,9 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
           *std::max_element(memories.begin(), memories.end()) / 1e6 / (allTets / 1e6 / ranks), ranks);
         for (double mb : peaks)
           std::printf(" %.0f", mb / 1e6);
+        std::printf("; CPU ms per rank");
+        for (double ms : cpus)
+          std::printf(" %.0f", ms);
         std::printf("\n");
         std::fflush(stdout);
       }
