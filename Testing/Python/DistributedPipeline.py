@@ -19,7 +19,8 @@ Cases: pvtu3 (GlobalIds; 2 ranks read 3 pieces), pvtu2 (ghost cells; 3
 ranks on 2 pieces: a rank with an empty piece), redist (Redistribute
 DataSet), fem (fem solver on pvtu3), relight (pvtu3 relit: hierarchy kept),
 warm (the relit system again: warm start), gathered (pvtu3 with DistributedSolve off, the gathered path in
-the same run).
+the same run), an invalid mu_a on rank 1 only (the same error on every rank),
+after_error (a solve after it).
 """
 
 import os
@@ -171,6 +172,22 @@ elif MODE == "run":
         FileName=[path("mesh.vtu")])))
     case("fem", pvtu3, solver="fem")
     case("gathered", pvtu3, distributed=0)
+    # An invalid value on rank 1 only: every rank reports rank 1's error and
+    # nobody hangs; the next solve works.
+    bad = ProgrammableFilter(Input=SurfaceIrradiance(Input=pvtu3, DirectionalLights=LIGHTS["a"]))
+    bad.Script = """
+from vtkmodules.vtkParallelCore import vtkMultiProcessController
+out = self.GetOutput()
+out.ShallowCopy(self.GetInput())
+if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
+    a = out.GetCellData().GetArray("AbsorptionCoefficient")
+    b = a.NewInstance()
+    b.DeepCopy(a)
+    b.SetComponent(5, 1, -1.0)
+    out.GetCellData().AddArray(b)
+"""
+    SolveDiffusion(Input=bad, RelTol=TOL).UpdatePipeline()
+    report("after_error", solve(pvtu3, "a")[1])
     print("run done", flush=True)
 else:
     sys.exit("mode must be prepare or run, not " + MODE)
