@@ -24,6 +24,7 @@
 #include "Error.h"
 
 #include <malloc.h>
+#include <omp.h>
 #include <mpi.h>
 
 #include <algorithm>
@@ -295,6 +296,9 @@ int main(int argc, char* argv[])
       return 2;
     }
   }
+  // Every OpenMP region (the local topology too) on `threads` threads, so that
+  // 1 rank and 2 ranks use the same cores per rank.
+  omp_set_num_threads(std::max(1, threads));
   const int n = std::max(2, static_cast<int>(std::lround(std::cbrt(targetTets / 6.0))));
   const double sizeMm = 50.0;
   int code = 0;
