@@ -10,6 +10,7 @@
 #include "TetMesh.h"
 #include "Timer.h"
 #include "VertexDiffusionSolver.h"
+#include "vtkTranslucencyDistributedSolve.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkTranslucencyParallel.h"
@@ -18,6 +19,7 @@
 #include <vtkFieldData.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
+#include <vtkMultiProcessController.h>
 #include <vtkObjectFactory.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
@@ -56,6 +58,9 @@ struct vtkSolveDiffusion::Internals
   /// Tet sizes of the mesh the model-range check last saw (TetSizes).
   const translucency::TetMesh* SizesMesh = nullptr;
   std::vector<double> Sizes;
+  /// The distributed path's solver (kept: hierarchy and warm start).
+  vtkTranslucencyDistributedSolve Distributed;
+  std::string ParallelPath;
 };
 
 //------------------------------------------------------------------------------
@@ -124,6 +129,11 @@ bool vtkSolveDiffusion::GetConverged(int channel) const
 const char* vtkSolveDiffusion::GetLinearSolverUsed() const
 {
   return this->Internal->Report.LinearSolver.c_str();
+}
+
+const char* vtkSolveDiffusion::GetParallelPath() const
+{
+  return this->Internal->ParallelPath.c_str();
 }
 
 const char* vtkSolveDiffusion::GetLastAssembly() const
@@ -316,7 +326,18 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
 int vtkSolveDiffusion::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  // Under MPI: the divergence and fem systems distributed over the ranks
+  // (hypre), or else gather to rank 0, run this serially there, hand the
+  // result back.
+  const bool vertexSolver =
+    this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
+  if (this->DistributedSolve && vertexSolver && this->Internal->Sources.Empty() &&
+    this->Internal->Detectors.empty() && this->ModulationFrequency == 0.0 &&
+    vtkTranslucencyDistributedSolve::IsAllowedByEnvironment() &&
+    vtkTranslucencyDistributedSolve::IsAvailable())
+  {
+    return this->RequestDistributed(inputVector, outputVector);
+  }
   int parallelResult = 0;
   if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
         vtkTranslucencyParallel::GatherMode::SameMesh,
@@ -324,7 +345,14 @@ int vtkSolveDiffusion::RequestData(
         { return this->RequestData(r, i, o); },
         parallelResult))
   {
+    this->Internal->ParallelPath = "gathered";
     return parallelResult;
+  }
+  // (On rank 0 inside a gathered run the outer call sets "gathered" after this.)
+  if (vtkMultiProcessController::GetGlobalController() == nullptr ||
+    vtkMultiProcessController::GetGlobalController()->GetNumberOfProcesses() <= 1)
+  {
+    this->Internal->ParallelPath = "serial";
   }
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
@@ -620,6 +648,12 @@ bool vtkSolveDiffusion::ComputePowerBalance(
 {
   vtkUnstructuredGrid* output = this->GetOutput();
   std::string error;
+  if (this->Internal->ParallelPath == "distributed")
+  {
+    vtkErrorMacro(<< "no power balance under MPI: this rank holds one piece of the object "
+                     "(compute it in a serial run)");
+    return false;
+  }
   if (this->ModulationFrequency > 0.0)
   {
     vtkErrorMacro(<< "no power balance in the frequency domain (ModulationFrequency "
@@ -665,6 +699,54 @@ bool vtkSolveDiffusion::ComputePowerBalance(
 }
 
 //------------------------------------------------------------------------------
+int vtkSolveDiffusion::RequestDistributed(
+  vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
+  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
+  Internals& in = *this->Internal;
+  in.ParallelPath = "distributed";
+  in.Report = translucency::SolverReport();
+  in.Readings.clear();
+  in.FluencePhase.clear();
+  in.ExitancePhase.clear();
+  in.FrontEnd.Reset();
+  this->TopologyTime = this->AssemblyTime = this->SolveTime = 0.0;
+  std::vector<double> fluence;
+  std::string error;
+  if (!in.Distributed.Solve(input, SolverEntry(this->Solver).Name, this->RelTol, this->MaxIter,
+        this->WarmStart, this->NumberOfThreads, fluence, in.Report, error))
+  {
+    in.Report = translucency::SolverReport();
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  this->AssemblyTime = in.Report.SetupMilliseconds;
+  this->SolveTime = in.Report.SolveMilliseconds;
+  static const char* channelNames[3] = { "R", "G", "B" };
+  for (int c = 0; c < 3; ++c)
+  {
+    if (!in.Report.Converged[c] && in.Report.Iterations[c] > 0)
+    {
+      vtkWarningMacro(<< "channel " << channelNames[c] << " did not converge: relative residual "
+                      << in.Report.Residual[c] << " after " << in.Report.Iterations[c]
+                      << " iterations (RelTol " << this->RelTol << ", MaxIter " << this->MaxIter
+                      << ")");
+    }
+  }
+  if (input)
+  {
+    output->ShallowCopy(input);
+    vtkDataArray* array = vtkTranslucency::NewTripleArray(vtkTranslucency::FluenceName, fluence);
+    output->GetPointData()->AddArray(array);
+    array->Delete();
+  }
+  this->UpdateProgress(1.0);
+  return outputs.Succeed();
+}
+
+//------------------------------------------------------------------------------
 void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
@@ -683,4 +765,5 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Sources: " << this->GetNumberOfSources() << "\n";
   os << indent << "Detectors: " << this->GetNumberOfDetectors() << "\n";
   os << indent << "ModulationFrequency: " << this->ModulationFrequency << " Hz\n";
+  os << indent << "DistributedSolve: " << this->DistributedSolve << "\n";
 }

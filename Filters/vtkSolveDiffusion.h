@@ -277,8 +277,30 @@ public:
   vtkGetMacro(ModulationFrequency, double);
   ///@}
 
+  ///@{
+  /// Under MPI with more than one process: solve the divergence and fem
+  /// systems distributed, each rank assembling its own tets into one hypre
+  /// BoomerAMG-PCG system (Documentation/Parallel.md), instead of gathering
+  /// the mesh to rank 0. Default on. Off (or the environment variable
+  /// TRANSLUCENCY_GATHERED_SOLVE=1) gathers, as do interior sources,
+  /// detectors, a modulation frequency, the other solvers and builds
+  /// without hypre. The distributed path always uses hypre's BoomerAMG-PCG
+  /// (LinearSolver, IncrementalAssembly and NumberOfThreads' effect on the
+  /// solve do not apply).
+  vtkSetMacro(DistributedSolve, bool);
+  vtkGetMacro(DistributedSolve, bool);
+  vtkBooleanMacro(DistributedSolve, bool);
+  ///@}
+
+  /// Where the last execution solved: "serial" (one process), "gathered"
+  /// (MPI, the mesh gathered to rank 0) or "distributed" (MPI, hypre on
+  /// every rank); empty before the first one.
+  const char* GetParallelPath() const;
+
   /// How the last vertex solve (divergence, fem) built its system: "full" or
-  /// "incremental"; empty for the other solvers and before the first solve.
+  /// "incremental"; the distributed path: "full" or "unchanged" (matrix
+  /// values as in the last solve on every rank, e.g. a relight: the hypre
+  /// hierarchies kept); empty for the other solvers and before the first solve.
   const char* GetLastAssembly() const;
 
   /// Tets found changed for the last incremental update (-1 if the filter
@@ -318,6 +340,8 @@ protected:
   ~vtkSolveDiffusion() override;
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// The distributed path (vtkTranslucencyDistributedSolve), on every rank.
+  int RequestDistributed(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
 
   int Solver = SOLVER_DIVERGENCE;
   double RelTol = 1e-6;
@@ -334,6 +358,7 @@ protected:
   bool IncrementalAssembly = true;
   double MaximumChangedFraction = 0.05;
   double ModulationFrequency = 0.0;
+  bool DistributedSolve = true;
   double TopologyTime = 0.0;
   double AssemblyTime = 0.0;
   double SolveTime = 0.0;

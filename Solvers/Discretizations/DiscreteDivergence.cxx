@@ -3,6 +3,7 @@
 #include "Error.h"
 #include "Fresnel.h"
 #include "Radiance.h"
+#include "TetContributions.h"
 #include "TetGeometry.h"
 #include "TetMesh.h"
 #include "VertexAssembly.h"
@@ -41,20 +42,10 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
 
   auto prepare = []() {};
   auto tetKernel = [&](size_t t, const int*, const int* pos, const TetGeometry& geometry) {
-    const double volume = geometry.Volume;
-    const double(&g)[4][4] = geometry.Stiffness; // g_ab = N_a.N_b / (36 V_t)
     for (int c = 0; c < NumberOfChannels; ++c)
     {
-      const double mu = muA[3 * t + c];
-      const double four = 4.0 / (3.0 * (mu + sigmaS[3 * t + c])); // 4 kappa_t
-      const double mass = volume * mu; // V_t mu_t: the tet's share of V_i mu(x_i), eq. 13
-      // TransCut eq. 14: M_ij = 4 w_ij.
-      const double w01 = four * g[0][1], w02 = four * g[0][2], w03 = four * g[0][3];
-      const double w12 = four * g[1][2], w13 = four * g[1][3], w23 = four * g[2][3];
-      // TransCut eq. 13: M_ii = -4 sum_j w_ij + V_i mu(x_i).
-      const double diag[4] = { four * g[0][0] + mass, four * g[1][1] + mass,
-        four * g[2][2] + mass, four * g[3][3] + mass };
-      const double off[6] = { w01, w02, w03, w12, w13, w23 };
+      double diag[4], off[6]; // TransCut eq. 13-14 (TetContributions.h)
+      DivergenceTetMatrix(geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
       ScatterTetMatrix(values[c], pos, diag, off);
     }
   };
@@ -72,9 +63,8 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
       const double s = boundaryArea[i];
       for (int c = 0; c < NumberOfChannels; ++c)
       {
-        values[c][diagonal[i]] += 2.0 * s / (3.0 * a); // TransCut eq. 13, boundary case
-        rhs[c][i] =
-          8.0 * s * q[3 * static_cast<size_t>(i) + c] / (3.0 * a * (1.0 - fdr)); // eq. 12
+        values[c][diagonal[i]] += DivergenceRobinDiagonal(s, a); // TransCut eq. 13, boundary case
+        rhs[c][i] = DivergenceRobinLoad(s, q[3 * static_cast<size_t>(i) + c], a, fdr); // eq. 12
       }
     }
   };

@@ -2,6 +2,7 @@
 
 #include "Error.h"
 #include "Fresnel.h"
+#include "TetContributions.h"
 #include "TetGeometry.h"
 #include "TetMesh.h"
 #include "VertexAssembly.h"
@@ -79,23 +80,10 @@ void FiniteElement::Assemble(const TetMesh& mesh,
     }
   };
   auto tetKernel = [&](size_t t, const int* tv, const int* pos, const TetGeometry& geometry) {
-    const double volume = geometry.Volume;
-    const double(&g)[4][4] = geometry.Stiffness; // g_ab = N_a.N_b / (36 V_t)
     for (int c = 0; c < NumberOfChannels; ++c)
     {
-      const double mu = muA[3 * t + c];
-      const double four = 4.0 / (3.0 * (mu + sigmaS[3 * t + c])); // 4 kappa_t
-      // 4 x consistent mass (V_t / 20)(1 + delta_ab) mu_t: V_t mu_t / 5
-      // off the diagonal, twice that on it.
-      const double mass = volume * mu * 0.2;
-      const double mass2 = mass + mass;
-      const double w01 = four * g[0][1] + mass, w02 = four * g[0][2] + mass,
-                   w03 = four * g[0][3] + mass;
-      const double w12 = four * g[1][2] + mass, w13 = four * g[1][3] + mass,
-                   w23 = four * g[2][3] + mass;
-      const double diag[4] = { four * g[0][0] + mass2, four * g[1][1] + mass2,
-        four * g[2][2] + mass2, four * g[3][3] + mass2 };
-      const double off[6] = { w01, w02, w03, w12, w13, w23 };
+      double diag[4], off[6]; // stiffness + consistent mass (TetContributions.h)
+      FiniteElementTetMatrix(geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
       ScatterTetMatrix(values[c], pos, diag, off);
     }
     // The tet's boundary triangles: consistent Robin mass and load, with A
@@ -118,12 +106,12 @@ void FiniteElement::Assemble(const TetMesh& mesh,
       const int pac = pos[4 * la + lc], pca = pos[4 * lc + la];
       const int pbc = pos[4 * lb + lc], pcb = pos[4 * lc + lb];
       const double area = triangleAreas[f];
-      // 4 x (S_f / 12)(1 + delta_ab) / (2 A): S_f / (6 A) off the diagonal.
-      const double robin = area / (6.0 * a);
-      const double robin2 = robin + robin;
+      // 4 x (S_f / 12)(1 + delta_ab) / (2 A): S_f / (6 A) off the diagonal;
       // 4 x (2 / (A (1 - Fdr))) (S_f / 12) sum_b (1 + delta_ab) q_b
       //   = (2 S_f / (3 A (1 - Fdr))) (q_a + q_a + q_b + q_c).
-      const double load = 2.0 * area / (3.0 * a * (1.0 - fdr));
+      double robin, load;
+      FiniteElementRobin(area, a, fdr, robin, load);
+      const double robin2 = robin + robin;
       const double* qa = q + 3 * static_cast<size_t>(tri[0]);
       const double* qb = q + 3 * static_cast<size_t>(tri[1]);
       const double* qc = q + 3 * static_cast<size_t>(tri[2]);

@@ -11,6 +11,7 @@
 #include <mutex>
 #include <numeric>
 #include <sstream>
+#include <type_traits>
 #include <vector>
 
 namespace translucency
@@ -84,8 +85,9 @@ struct HypreBoomerAMGPCG::Handles
   std::vector<HYPRE_BigInt> Rows;
 };
 
-HypreBoomerAMGPCG::HypreBoomerAMGPCG(MPI_Comm comm)
+HypreBoomerAMGPCG::HypreBoomerAMGPCG(MPI_Comm comm, const BoomerAMGOptions& options)
   : Comm_(comm)
+  , Options_(options)
   , H_(std::make_unique<Handles>())
 {
   EnsureHypreInitialized();
@@ -141,6 +143,70 @@ void HypreBoomerAMGPCG::Setup(
   Check(HYPRE_IJMatrixSetValues(h.A, rows, sizes.data(), h.Rows.data(), cols.data(), values),
     "setting the matrix values");
   Check(HYPRE_IJMatrixAssemble(h.A), "matrix assembly");
+  BuildSolver();
+}
+
+void HypreBoomerAMGPCG::SetupAddTo(int rowBegin, int rowEnd, const std::vector<int>& rows,
+  const std::vector<int>& sizes, const std::vector<int>& columns,
+  const std::vector<double>& values, const int* rowSizeHints)
+{
+  Free();
+  const double start = MPI_Wtime();
+  RowBegin_ = rowBegin;
+  RowEnd_ = rowEnd;
+  const int owned = rowEnd - rowBegin;
+  Handles& h = *H_;
+  Check(HYPRE_IJMatrixCreate(Comm_, rowBegin, rowEnd - 1, rowBegin, rowEnd - 1, &h.A),
+    "matrix creation");
+  Check(HYPRE_IJMatrixSetObjectType(h.A, HYPRE_PARCSR), "matrix type");
+  if (rowSizeHints)
+  {
+    std::vector<HYPRE_Int> hints(rowSizeHints, rowSizeHints + owned);
+    Check(HYPRE_IJMatrixSetRowSizes(h.A, hints.data()), "matrix row sizes");
+  }
+  // Off-rank entries: room for what this rank sends (hypre grows it if needed).
+  std::size_t offRank = 0;
+  for (std::size_t k = 0; k < rows.size(); ++k)
+  {
+    if (rows[k] < rowBegin || rows[k] >= rowEnd)
+      offRank += static_cast<std::size_t>(sizes[k]);
+  }
+  Check(HYPRE_IJMatrixSetMaxOffProcElmts(h.A, static_cast<HYPRE_Int>(offRank)),
+    "matrix off-rank room");
+  Check(HYPRE_IJMatrixInitialize(h.A), "matrix initialisation");
+  h.Rows.resize(static_cast<std::size_t>(owned));
+  for (int i = 0; i < owned; ++i)
+    h.Rows[i] = rowBegin + i;
+  if (!rows.empty())
+  {
+    // hypre's integer types are int in Debian's build: no copies then.
+    if constexpr (std::is_same<HYPRE_Int, int>::value && std::is_same<HYPRE_BigInt, int>::value)
+    {
+      std::vector<int> n(sizes); // hypre takes the sizes as non-const
+      Check(HYPRE_IJMatrixAddToValues(h.A, static_cast<HYPRE_Int>(rows.size()), n.data(),
+              rows.data(), columns.data(), values.data()),
+        "adding the matrix values");
+    }
+    else
+    {
+      std::vector<HYPRE_Int> n(sizes.begin(), sizes.end());
+      std::vector<HYPRE_BigInt> r(rows.begin(), rows.end()), c(columns.begin(), columns.end());
+      Check(HYPRE_IJMatrixAddToValues(h.A, static_cast<HYPRE_Int>(r.size()), n.data(), r.data(),
+              c.data(), values.data()),
+        "adding the matrix values");
+    }
+  }
+  Check(HYPRE_IJMatrixAssemble(h.A), "matrix assembly");
+  const double assembled = MPI_Wtime();
+  MatrixMilliseconds_ = 1000.0 * (assembled - start);
+  BuildSolver();
+  HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
+}
+
+void HypreBoomerAMGPCG::BuildSolver()
+{
+  Handles& h = *H_;
+  const int rowBegin = RowBegin_, rowEnd = RowEnd_;
   for (HYPRE_IJVector* v : { &h.B, &h.X })
   {
     Check(HYPRE_IJVectorCreate(Comm_, rowBegin, rowEnd - 1, v), "vector creation");
@@ -156,12 +222,18 @@ void HypreBoomerAMGPCG::Setup(
 
   Check(HYPRE_BoomerAMGCreate(&h.AMG), "BoomerAMG creation");
   HYPRE_BoomerAMGSetPrintLevel(h.AMG, 0);
-  HYPRE_BoomerAMGSetCoarsenType(h.AMG, 10);     // HMIS
-  HYPRE_BoomerAMGSetInterpType(h.AMG, 6);       // extended+i
-  HYPRE_BoomerAMGSetPMaxElmts(h.AMG, 4);        // interpolation truncation
-  HYPRE_BoomerAMGSetStrongThreshold(h.AMG, 0.5); // 3-D recommendation
-  HYPRE_BoomerAMGSetRelaxType(h.AMG, 8);        // l1-scaled hybrid symmetric Gauss-Seidel
-  HYPRE_BoomerAMGSetNumSweeps(h.AMG, 1);
+  const BoomerAMGOptions& o = Options_; // defaults: hypre's 3-D diffusion recommendations
+  HYPRE_BoomerAMGSetCoarsenType(h.AMG, o.CoarsenType);
+  HYPRE_BoomerAMGSetInterpType(h.AMG, o.InterpType);
+  HYPRE_BoomerAMGSetPMaxElmts(h.AMG, o.PMaxElmts);
+  HYPRE_BoomerAMGSetStrongThreshold(h.AMG, o.StrongThreshold);
+  HYPRE_BoomerAMGSetRelaxType(h.AMG, o.RelaxType);
+  HYPRE_BoomerAMGSetNumSweeps(h.AMG, o.NumSweeps);
+  if (o.AggNumLevels > 0)
+  {
+    HYPRE_BoomerAMGSetAggNumLevels(h.AMG, o.AggNumLevels);
+    HYPRE_BoomerAMGSetAggInterpType(h.AMG, o.AggInterpType);
+  }
   HYPRE_BoomerAMGSetTol(h.AMG, 0.0);
   HYPRE_BoomerAMGSetMaxIter(h.AMG, 1); // one V-cycle per application
   Check(HYPRE_ParCSRPCGCreate(Comm_, &h.PCG), "PCG creation");
@@ -192,6 +264,7 @@ void HypreBoomerAMGPCG::Setup(
   double total[3];
   MPI_Allreduce(local, total, 3, MPI_DOUBLE, MPI_SUM, Comm_);
   OperatorComplexity_ = total[0] > 0 ? total[1] / total[0] : 0.0;
+  NonZeros_ = static_cast<long long>(total[0]);
   IterationWork_ = total[0] > 0 ? 1.0 + (3.0 * total[1] + 2.0 * total[2]) / total[0] : 0.0;
   MemoryBytes_ = static_cast<std::size_t>((local[1] - local[0] + local[2]) * 12.0);
 }

@@ -14,6 +14,7 @@
 #include <mpi.h>
 
 #include <memory>
+#include <vector>
 
 namespace translucency
 {
@@ -22,6 +23,34 @@ namespace translucency
 /// MPI_COMM_SELF; ParaView's VTK may already have initialised it), and
 /// HYPRE_Init; both are finalised at exit if this call initialised them.
 void EnsureHypreInitialized();
+
+/**
+ * BoomerAMG settings (hypre's codes). The defaults are the in-process
+ * "hypre-amg" solver's; DistributedVertexSolver uses Tuned().
+ */
+struct BoomerAMGOptions
+{
+  int CoarsenType = 10;          ///< 10 = HMIS
+  int InterpType = 6;            ///< 6 = extended+i
+  int PMaxElmts = 4;             ///< interpolation truncation (entries per row)
+  double StrongThreshold = 0.5;  ///< strength of connection
+  int RelaxType = 8;             ///< 8 = l1-scaled hybrid symmetric Gauss-Seidel
+  int NumSweeps = 1;             ///< sweeps down and up
+  int AggNumLevels = 0;          ///< levels of aggressive coarsening
+  int AggInterpType = 4;         ///< interpolation on those levels (4 = multipass)
+
+  /// The settings measured best on the bunny diffusion system
+  /// (Documentation/Scaling.md): HMIS, strong threshold 0.25, one level of
+  /// aggressive coarsening with multipass interpolation, extended+i
+  /// elsewhere, l1 hybrid symmetric Gauss-Seidel, Pmax 4.
+  static BoomerAMGOptions Tuned()
+  {
+    BoomerAMGOptions o;
+    o.StrongThreshold = 0.25;
+    o.AggNumLevels = 1;
+    return o;
+  }
+};
 
 /**
  * One SPD matrix distributed by rows over `comm` (this rank holds rows
@@ -35,7 +64,7 @@ void EnsureHypreInitialized();
 class HypreBoomerAMGPCG
 {
 public:
-  explicit HypreBoomerAMGPCG(MPI_Comm comm);
+  explicit HypreBoomerAMGPCG(MPI_Comm comm, const BoomerAMGOptions& options = BoomerAMGOptions());
   ~HypreBoomerAMGPCG();
   HypreBoomerAMGPCG(const HypreBoomerAMGPCG&) = delete;
   HypreBoomerAMGPCG& operator=(const HypreBoomerAMGPCG&) = delete;
@@ -47,6 +76,19 @@ public:
    */
   void Setup(int rowBegin, int rowEnd, const int* rowOffsets, const int* columns,
     const double* values);
+
+  /**
+   * Collective over the communicator: this rank owns rows [rowBegin,
+   * rowEnd) and adds entries to any rows, its own or other ranks'
+   * (HYPRE_IJMatrixAddToValues; hypre sends the off-rank rows to their
+   * owners when the matrix is assembled). Row k of the `rows` list has
+   * sizes[k] entries, (columns, values) from offset sum_{j<k} sizes[j];
+   * rowSizeHints (rowEnd - rowBegin values, may be null) estimates the
+   * entries of each owned row. Then builds the AMG hierarchy as Setup().
+   */
+  void SetupAddTo(int rowBegin, int rowEnd, const std::vector<int>& rows,
+    const std::vector<int>& sizes, const std::vector<int>& columns,
+    const std::vector<double>& values, const int* rowSizeHints);
 
   /**
    * Solve for the local part b (rowEnd - rowBegin values) into x; x is the
@@ -64,18 +106,31 @@ public:
   /// sum_l nnz(A_l) / nnz(A_0) of the hierarchy.
   double GetOperatorComplexity() const { return OperatorComplexity_; }
   int GetNumberOfLevels() const { return Levels_; }
+  /// Non-zeros of the fine matrix, summed over the ranks.
+  long long GetNumberOfNonZeros() const { return NonZeros_; }
+  /// Wall times of the last SetupAddTo on this rank (ms): the IJ matrix
+  /// (values added, off-rank rows exchanged, assembled), then the vectors
+  /// and the BoomerAMG hierarchy.
+  double GetMatrixMilliseconds() const { return MatrixMilliseconds_; }
+  double GetHierarchyMilliseconds() const { return HierarchyMilliseconds_; }
   std::size_t GetMemoryBytes() const { return MemoryBytes_; }
 
 private:
   void Free();
+  /// Vectors, BoomerAMG and PCG on the assembled matrix; work and memory.
+  void BuildSolver();
 
   MPI_Comm Comm_;
+  BoomerAMGOptions Options_;
   struct Handles;
   std::unique_ptr<Handles> H_;
   int RowBegin_ = 0, RowEnd_ = 0;
   double IterationWork_ = 0.0;
   double OperatorComplexity_ = 0.0;
   int Levels_ = 0;
+  long long NonZeros_ = 0;
+  double MatrixMilliseconds_ = 0.0;
+  double HierarchyMilliseconds_ = 0.0;
   std::size_t MemoryBytes_ = 0;
 };
 

@@ -1,0 +1,422 @@
+// translucency-distributed-bench: strong scaling of the distributed vertex
+// solve (Solvers/Parallel/DistributedVertexSolver) on a box of Kuhn tets,
+// cut into x slabs, one per rank. Documentation/Scaling.md has the figures.
+//
+//   mpiexec -n 2 translucency-distributed-bench [--tets N] [--solver divergence|fem]
+//       [--coordinates] [--no-single] [--serial] [--strong T] [--agg L] [--pmax P]
+//       [--interp I] [--tol TOL] [--threads T] [--rounds R]
+//
+// In one run, --rounds times (default 2): first every rank of MPI_COMM_WORLD
+// solves its slab (cold solve: numbering, assembly, AMG set-up, PCG; then a
+// relight: new right-hand side, hierarchy kept, warm start), then rank 0
+// alone (MPI_COMM_SELF; the others sleep) solves the whole box the same way,
+// and the two fluences are compared at every point. --serial also compares
+// with the serial core path (the solver's default linear solver, cg-jacobi)
+// on the whole box: what Solve Diffusion computes with one process.
+// Times are the slowest rank's; memory is each rank's resident-set growth
+// while its solver and piece are alive (after malloc_trim: live memory), and
+// each process's peak resident set; the CPU time of each rank's Solve call
+// (with OMPI_MCA_mpi_yield_when_idle=1 a waiting rank gives its core away, so
+// this approximates the work a rank does, whatever the machine's load).
+
+#include "DiffusionSolverFactory.h"
+#include "DistributedVertexSolver.h"
+#include "Error.h"
+
+#include <malloc.h>
+#include <omp.h>
+#include <mpi.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+namespace
+{
+
+/// A size of this process (bytes) from /proc/self/status: "VmRSS:" (resident
+/// now) or "VmHWM:" (the peak).
+double StatusBytes(const char* field = "VmRSS:")
+{
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+  {
+    if (line.rfind(field, 0) == 0)
+      return std::atof(line.c_str() + std::strlen(field)) * 1024.0;
+  }
+  return 0.0;
+}
+double ResidentBytes()
+{
+  return StatusBytes();
+}
+
+/// CPU time of this process (ms, user + system).
+double CpuMilliseconds()
+{
+  rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
+  return 1000.0 * (usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+    (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) / 1000.0;
+}
+
+struct Piece
+{
+  std::vector<double> Points;
+  std::vector<translucency::PointKey> Keys;
+  std::vector<int> Tets;
+  std::vector<long long> Ids; ///< global point id per local point
+  translucency::OpticalProperties Material;
+};
+
+/// Slab [i0, i1) of cubes along x of an n^3 box of side `size` mm, 6 Kuhn tets per cube.
+Piece MakeSlab(int n, int i0, int i1, double size, bool coordinateKeys)
+{
+  Piece p;
+  const int m = n + 1;
+  const double h = size / n;
+  std::vector<int> local(static_cast<size_t>(i1 - i0 + 1) * m * m, -1);
+  auto id = [&](int i, int j, int k) { return (static_cast<long long>(i) * m + j) * m + k; };
+  auto point = [&](int i, int j, int k) {
+    int& l = local[(static_cast<size_t>(i - i0) * m + j) * m + k];
+    if (l < 0)
+    {
+      l = static_cast<int>(p.Ids.size());
+      p.Ids.push_back(id(i, j, k));
+      const double x[3] = { i * h, j * h, k * h };
+      p.Points.insert(p.Points.end(), x, x + 3);
+      p.Keys.push_back(coordinateKeys ? translucency::PointKeyFromCoordinates(x)
+                                      : translucency::PointKeyFromId(id(i, j, k)));
+    }
+    return l;
+  };
+  static const int perms[6][3] = { { 0, 1, 2 }, { 0, 2, 1 }, { 1, 0, 2 }, { 1, 2, 0 },
+    { 2, 0, 1 }, { 2, 1, 0 } };
+  for (int i = i0; i < i1; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k)
+      {
+        const double cx = (i + 0.5) * h, cy = (j + 0.5) * h, cz = (k + 0.5) * h;
+        for (const auto& perm : perms)
+        {
+          int v[3] = { i, j, k };
+          p.Tets.push_back(point(v[0], v[1], v[2]));
+          for (int a = 0; a < 3; ++a)
+          {
+            ++v[perm[a]];
+            p.Tets.push_back(point(v[0], v[1], v[2]));
+          }
+          // A heterogeneous skin-like material: an inclusion and a layer.
+          const bool inclusion = (cx - 0.6 * size) * (cx - 0.6 * size) +
+              (cy - 0.5 * size) * (cy - 0.5 * size) + (cz - 0.5 * size) * (cz - 0.5 * size) <
+            0.04 * size * size;
+          const bool layer = cz > 0.8 * size;
+          const double mu[3] = { 0.002, 0.005, 0.01 }, sig[3] = { 1.0, 1.5, 2.0 };
+          for (int c = 0; c < 3; ++c)
+          {
+            p.Material.AbsorptionCoefficient.push_back(mu[c] * (inclusion ? 10.0 : 1.0));
+            p.Material.ReducedScatteringCoefficient.push_back(sig[c] * (layer ? 0.5 : 1.0));
+          }
+          p.Material.RefractiveIndex.push_back(layer ? 1.4 : 1.3);
+        }
+      }
+  return p;
+}
+
+std::vector<double> Irradiance(const Piece& p, double size, bool relight)
+{
+  std::vector<double> q(p.Points.size());
+  for (size_t i = 0; i < p.Points.size() / 3; ++i)
+  {
+    const double* x = p.Points.data() + 3 * i;
+    const double s = relight ? 0.5 + 0.5 * x[0] / size : 0.5 + 0.5 * x[2] / size;
+    const double w[3] = { 1.0, relight ? 0.5 : 1.0, relight ? 0.2 : 1.0 };
+    for (int c = 0; c < 3; ++c)
+      q[3 * i + c] = s * w[c];
+  }
+  return q;
+}
+
+double Max(double v, MPI_Comm comm)
+{
+  double m = 0.0;
+  MPI_Allreduce(&v, &m, 1, MPI_DOUBLE, MPI_MAX, comm);
+  return m;
+}
+
+struct Result
+{
+  std::vector<long long> Ids;
+  std::vector<double> Fluence;
+};
+
+/// Times (ms) of every round, per "<label> <phase>" and metric, on rank 0.
+std::map<std::string, std::vector<std::array<double, 5>>> Rounds;
+
+double Median(std::vector<double> v)
+{
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+/// Cold solve + relight on `comm`; prints one line per phase (rank 0 of comm).
+Result Run(const char* label, MPI_Comm comm, int n, double size, const std::string& solverName,
+  bool coordinates, const translucency::BoomerAMGOptions& options, double tol, int threads)
+{
+  int rank = 0, ranks = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &ranks);
+  malloc_trim(0);
+  const double baseline = ResidentBytes();
+  const int i0 = static_cast<int>(static_cast<long long>(n) * rank / ranks);
+  const int i1 = static_cast<int>(static_cast<long long>(n) * (rank + 1) / ranks);
+  Piece piece = MakeSlab(n, i0, i1, size, coordinates);
+  Result result;
+  {
+    translucency::DistributedVertexSolver solver(comm, solverName);
+    solver.SetAMGOptions(options);
+    solver.SetRelTol(tol);
+    solver.SetMaxIter(1000);
+    solver.SetNumberOfThreads(threads);
+    for (int phase = 0; phase < 2; ++phase)
+    {
+      const std::vector<double> q = Irradiance(piece, size, phase == 1);
+      translucency::SolverReport report;
+      MPI_Barrier(comm);
+      const double start = MPI_Wtime();
+      const double cpuStart = CpuMilliseconds();
+      solver.Solve(piece.Points, piece.Keys, piece.Tets, piece.Material, q, result.Fluence, report);
+      const double cpu = CpuMilliseconds() - cpuStart;
+      std::vector<double> cpus(static_cast<size_t>(ranks));
+      MPI_Gather(&cpu, 1, MPI_DOUBLE, cpus.data(), 1, MPI_DOUBLE, 0, comm);
+      const double total = Max(1000.0 * (MPI_Wtime() - start), comm);
+      const auto& t = solver.GetTimings();
+      const double numbering = Max(t.Numbering, comm), assembly = Max(t.Assembly, comm),
+                   amg = Max(t.AMGSetup, comm), solve = Max(t.Solve, comm);
+      malloc_trim(0); // free heap pages back to the system: count what is live
+      const double memory = ResidentBytes() - baseline;
+      std::vector<double> memories(static_cast<size_t>(ranks)), peaks(memories);
+      const double peak = StatusBytes("VmHWM:");
+      MPI_Gather(&memory, 1, MPI_DOUBLE, memories.data(), 1, MPI_DOUBLE, 0, comm);
+      MPI_Gather(&peak, 1, MPI_DOUBLE, peaks.data(), 1, MPI_DOUBLE, 0, comm);
+      long long tets = static_cast<long long>(piece.Tets.size() / 4), allTets = 0;
+      MPI_Allreduce(&tets, &allTets, 1, MPI_LONG_LONG, MPI_SUM, comm);
+      if (rank == 0)
+      {
+        Rounds[std::string(label) + (phase == 0 ? " cold" : " relight")].push_back(
+          { numbering, assembly, amg, solve, total });
+        std::printf("%s ranks %d %s tets %lld unknowns %lld: numbering %.0f ms, assembly %.0f ms, "
+                    "AMG set-up %.0f ms, solve %.0f ms (total %.0f ms); iterations %d %d %d, "
+                    "residual %.1e; levels %d, operator complexity %.2f; assembly '%s'; memory MB "
+                    "per rank",
+          label, ranks, phase == 0 ? "cold" : "relight", allTets, solver.GetNumberOfRows(),
+          numbering, assembly, amg, solve, total, report.Iterations[0], report.Iterations[1],
+          report.Iterations[2], std::max({ report.Residual[0], report.Residual[1], report.Residual[2] }),
+          solver.GetNumberOfLevels(0), solver.GetOperatorComplexity(0), report.Assembly.c_str());
+        for (double mb : memories)
+          std::printf(" %.0f", mb / 1e6);
+        std::printf(" (%.0f MB per million tets per rank at %d ranks); process peak MB",
+          *std::max_element(memories.begin(), memories.end()) / 1e6 / (allTets / 1e6 / ranks), ranks);
+        for (double mb : peaks)
+          std::printf(" %.0f", mb / 1e6);
+        std::printf("; CPU ms per rank");
+        for (double ms : cpus)
+          std::printf(" %.0f", ms);
+        std::printf("\n");
+        std::fflush(stdout);
+      }
+    }
+  }
+  result.Ids = piece.Ids;
+  return result;
+}
+
+} // namespace
+
+int main(int argc, char* argv[])
+{
+  MPI_Init(&argc, &argv);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  long long targetTets = 1000000;
+  std::string solver = "divergence";
+  bool coordinates = false, single = true, serial = false;
+  double tol = 1e-8;
+  int threads = 1;
+  int rounds = 2;
+  translucency::BoomerAMGOptions options = translucency::BoomerAMGOptions::Tuned();
+  for (int a = 1; a < argc; ++a)
+  {
+    const std::string arg = argv[a];
+    auto next = [&]() { return a + 1 < argc ? argv[++a] : ""; };
+    if (arg == "--tets")
+      targetTets = std::atoll(next());
+    else if (arg == "--solver")
+      solver = next();
+    else if (arg == "--coordinates")
+      coordinates = true;
+    else if (arg == "--no-single")
+      single = false;
+    else if (arg == "--serial")
+      serial = true;
+    else if (arg == "--strong")
+      options.StrongThreshold = std::atof(next());
+    else if (arg == "--agg")
+      options.AggNumLevels = std::atoi(next());
+    else if (arg == "--pmax")
+      options.PMaxElmts = std::atoi(next());
+    else if (arg == "--interp")
+      options.InterpType = std::atoi(next());
+    else if (arg == "--tol")
+      tol = std::atof(next());
+    else if (arg == "--rounds")
+      rounds = std::max(1, std::atoi(next()));
+    else if (arg == "--threads")
+      threads = std::atoi(next());
+    else
+    {
+      if (rank == 0)
+        std::cerr << "usage: mpiexec -n RANKS translucency-distributed-bench [--tets N] [--solver "
+                     "divergence|fem] [--coordinates] [--no-single] [--serial] [--strong T] [--agg L] "
+                     "[--pmax P] [--interp I] [--tol TOL] [--threads T] [--rounds R]\n";
+      MPI_Finalize();
+      return 2;
+    }
+  }
+  // Every OpenMP region (the local topology too) on `threads` threads, so that
+  // 1 rank and 2 ranks use the same cores per rank.
+  omp_set_num_threads(std::max(1, threads));
+  const int n = std::max(2, static_cast<int>(std::lround(std::cbrt(targetTets / 6.0))));
+  const double sizeMm = 50.0;
+  int code = 0;
+  try
+  {
+    translucency::EnsureHypreInitialized();
+    // Rounds alternate the two configurations, so that a change of the
+    // machine's load shows in both.
+    for (int round = 0; round < rounds; ++round)
+    {
+      if (rank == 0)
+        std::printf("round %d\n", round + 1);
+      const Result all =
+        Run("distributed", MPI_COMM_WORLD, n, sizeMm, solver, coordinates, options, tol, threads);
+      // Rank 0 gathers the distributed fluence by global id.
+      const int count = static_cast<int>(all.Ids.size());
+      std::vector<int> counts(static_cast<size_t>(size)), offsets(static_cast<size_t>(size) + 1, 0);
+      MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+      for (int r = 0; r < size; ++r)
+        offsets[r + 1] = offsets[r] + counts[r];
+      std::vector<long long> ids(static_cast<size_t>(offsets[size]));
+      std::vector<double> fluence(3 * ids.size());
+      MPI_Gatherv(all.Ids.data(), count, MPI_LONG_LONG, ids.data(), counts.data(), offsets.data(),
+        MPI_LONG_LONG, 0, MPI_COMM_WORLD);
+      for (int r = 0; r < size; ++r)
+      {
+        counts[r] *= 3;
+        offsets[r] *= 3;
+      }
+      MPI_Gatherv(all.Fluence.data(), 3 * count, MPI_DOUBLE, fluence.data(), counts.data(),
+        offsets.data(), MPI_DOUBLE, 0, MPI_COMM_WORLD);
+      if (rank == 0 && single && size > 1)
+      {
+        const Result one =
+          Run("single", MPI_COMM_SELF, n, sizeMm, solver, coordinates, options, tol, threads);
+        std::vector<size_t> where(one.Ids.size());
+        for (size_t k = 0; k < one.Ids.size(); ++k)
+          where[static_cast<size_t>(one.Ids[k])] = k;
+        double worst = 0.0;
+        for (size_t k = 0; k < ids.size(); ++k)
+          for (int c = 0; c < 3; ++c)
+          {
+            const double a = fluence[3 * k + c],
+                         b = one.Fluence[3 * where[static_cast<size_t>(ids[k])] + c];
+            worst = std::max(worst, std::abs(a - b) / std::abs(b));
+          }
+        std::printf("max relative difference, %d ranks vs 1 (relit fluence, every point of every "
+                    "rank): %.2e\n", size, worst);
+        std::fflush(stdout);
+      }
+      if (rank == 0 && serial)
+      {
+        // The serial core path (Solve Diffusion with one process) on the
+        // whole box: the relit fluence, to RelTol `tol`.
+        Piece whole = MakeSlab(n, 0, n, sizeMm, coordinates);
+        translucency::TetMesh mesh;
+        mesh.SetGeometry(whole.Points, whole.Tets);
+        const std::vector<double> q = Irradiance(whole, sizeMm, true);
+        auto reference = translucency::CreateDiffusionSolver(solver);
+        reference->SetRelTol(tol);
+        reference->SetMaxIter(100000);
+        translucency::DiffusionProblem problem;
+        problem.Mesh = &mesh;
+        problem.Material = &whole.Material;
+        problem.Irradiance = &q;
+        std::vector<double> expected;
+        translucency::SolverReport report;
+        const double start = MPI_Wtime();
+        reference->Solve(problem, expected, report);
+        std::vector<size_t> where(whole.Ids.size());
+        for (size_t k = 0; k < whole.Ids.size(); ++k)
+          where[static_cast<size_t>(whole.Ids[k])] = k;
+        double worst = 0.0;
+        for (size_t k = 0; k < ids.size(); ++k)
+          for (int c = 0; c < 3; ++c)
+          {
+            const double b = expected[3 * where[static_cast<size_t>(ids[k])] + c];
+            worst = std::max(worst, std::abs(fluence[3 * k + c] - b) / std::abs(b));
+          }
+        std::printf("serial %s (%s, %.0f ms): max relative difference, %d ranks vs serial: %.2e\n",
+          solver.c_str(), report.LinearSolver.c_str(), 1000.0 * (MPI_Wtime() - start), size, worst);
+        std::fflush(stdout);
+      }
+      // The other ranks wait without spinning (a busy MPI wait would take a
+      // core from rank 0's single-rank run).
+      MPI_Request request;
+      MPI_Ibarrier(MPI_COMM_WORLD, &request);
+      int done = 0;
+      while (!done)
+      {
+        MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+        if (!done)
+          usleep(1000);
+      }
+    }
+    if (rank == 0)
+    {
+      static const char* names[5] = { "numbering", "assembly", "AMG set-up", "solve", "total" };
+      for (const auto& entry : Rounds)
+      {
+        std::printf("summary %s over %zu rounds (min / median ms):", entry.first.c_str(),
+          entry.second.size());
+        for (int m = 0; m < 5; ++m)
+        {
+          std::vector<double> v;
+          for (const auto& r : entry.second)
+            v.push_back(r[m]);
+          std::printf(" %s %.0f / %.0f%s", names[m], *std::min_element(v.begin(), v.end()),
+            Median(v), m < 4 ? "," : "\n");
+        }
+      }
+    }
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "translucency-distributed-bench: error: " << e.what() << "\n";
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  }
+  MPI_Finalize();
+  return code;
+}

@@ -1,0 +1,190 @@
+#include "vtkTranslucencyDistributedSolve.h"
+
+#include <cstdlib>
+#include <cstring>
+
+#ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
+#include "DistributedVertexSolver.h"
+#include "Error.h"
+#include "vtkTranslucencyMeshConversion.h"
+
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkDataSetAttributes.h>
+#include <vtkMPI.h>
+#include <vtkMPICommunicator.h>
+#include <vtkMultiProcessController.h>
+#include <vtkPointData.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkUnstructuredGrid.h>
+
+namespace
+{
+MPI_Comm* GlobalCommunicator()
+{
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  if (!controller || controller->GetNumberOfProcesses() <= 1)
+  {
+    return nullptr;
+  }
+  auto* communicator = vtkMPICommunicator::SafeDownCast(controller->GetCommunicator());
+  if (!communicator || !communicator->GetMPIComm())
+  {
+    return nullptr;
+  }
+  return communicator->GetMPIComm()->GetHandle();
+}
+}
+
+struct vtkTranslucencyDistributedSolve::Impl
+{
+  std::unique_ptr<translucency::DistributedVertexSolver> Solver;
+  std::string Discretization;
+};
+
+bool vtkTranslucencyDistributedSolve::IsAvailable()
+{
+  return GlobalCommunicator() != nullptr;
+}
+
+bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
+  const std::string& discretization, double relTol, int maxIter, bool warmStart, int threads,
+  std::vector<double>& fluence, translucency::SolverReport& report, std::string& error)
+{
+  MPI_Comm comm = *GlobalCommunicator();
+  std::string local;
+  std::vector<double> points;
+  std::vector<int> cells;
+  std::vector<int> tets;
+  translucency::OpticalProperties material;
+  std::vector<double> irradiance;
+  std::vector<translucency::PointKey> keys;
+  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
+  const vtkIdType numCells = input ? input->GetNumberOfCells() : 0;
+  vtkDataArray* globalIds = input ? input->GetPointData()->GetGlobalIds() : nullptr;
+  try
+  {
+    if (numPoints > 0 && !vtkTranslucency::ToTetArrays(input, points, cells, local))
+    {
+      throw translucency::Error(local);
+    }
+    // Owned cells only: a ghost copy is another rank's tet.
+    auto* ghosts = numCells > 0 ? vtkUnsignedCharArray::SafeDownCast(input->GetCellData()->GetArray(
+                                    vtkDataSetAttributes::GhostArrayName()))
+                                : nullptr;
+    std::vector<vtkIdType> kept;
+    for (vtkIdType c = 0; c < numCells; ++c)
+    {
+      if (!ghosts || !(ghosts->GetValue(c) & vtkDataSetAttributes::DUPLICATECELL))
+      {
+        kept.push_back(c);
+        tets.insert(tets.end(), cells.begin() + 4 * c, cells.begin() + 4 * c + 4);
+      }
+    }
+    cells = {};
+    if (!kept.empty())
+    {
+      translucency::OpticalProperties all;
+      if (!vtkTranslucency::ToOpticalProperties(input, all, local))
+      {
+        throw translucency::Error(local);
+      }
+      for (vtkIdType c : kept)
+      {
+        for (int k = 0; k < 3; ++k)
+        {
+          material.AbsorptionCoefficient.push_back(all.AbsorptionCoefficient[3 * c + k]);
+          material.ReducedScatteringCoefficient.push_back(
+            all.ReducedScatteringCoefficient[3 * c + k]);
+        }
+        material.RefractiveIndex.push_back(all.RefractiveIndex[c]);
+      }
+    }
+    if (!kept.empty() &&
+      !vtkTranslucency::ReadPointArray(input, vtkTranslucency::IrradianceName, 3, irradiance, local))
+    {
+      if (local.find("no point array") != std::string::npos)
+      {
+        local += ": compute it with vtkSurfaceIrradiance or supply your own";
+      }
+      throw translucency::Error(local);
+    }
+    if (kept.empty())
+    {
+      irradiance.assign(3 * static_cast<size_t>(numPoints), 0.0); // no tet reads it
+    }
+  }
+  catch (const translucency::Error& e)
+  {
+    local = e.what();
+  }
+  catch (const std::exception& e)
+  {
+    local = e.what();
+  }
+  // Global ids when every rank with points has them.
+  int haveIds = (numPoints == 0 || globalIds) ? 1 : 0, allIds = 0;
+  MPI_Allreduce(&haveIds, &allIds, 1, MPI_INT, MPI_MIN, comm);
+  keys.resize(static_cast<size_t>(numPoints));
+  for (vtkIdType i = 0; i < numPoints && local.empty(); ++i)
+  {
+    keys[i] = allIds ? translucency::PointKeyFromId(static_cast<std::int64_t>(globalIds->GetComponent(i, 0)))
+                     : translucency::PointKeyFromCoordinates(points.data() + 3 * i);
+  }
+  try
+  {
+    translucency::AgreeOnError(comm, local);
+    if (!this->Internal->Solver || this->Internal->Discretization != discretization)
+    {
+      this->Internal->Solver =
+        std::make_unique<translucency::DistributedVertexSolver>(comm, discretization);
+      this->Internal->Discretization = discretization;
+    }
+    translucency::DistributedVertexSolver& solver = *this->Internal->Solver;
+    solver.SetRelTol(relTol);
+    solver.SetMaxIter(maxIter);
+    solver.SetWarmStart(warmStart);
+    solver.SetNumberOfThreads(threads);
+    solver.Solve(points, keys, tets, material, irradiance, fluence, report);
+  }
+  catch (const translucency::Error& e)
+  {
+    error = e.what(); // the same on every rank (AgreeOnError)
+    this->Internal->Solver.reset();
+    return false;
+  }
+  return true;
+}
+
+#else // no distributed solve in this build
+
+struct vtkTranslucencyDistributedSolve::Impl
+{
+};
+
+bool vtkTranslucencyDistributedSolve::IsAvailable()
+{
+  return false;
+}
+
+bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid*, const std::string&, double,
+  int, bool, int, std::vector<double>&, translucency::SolverReport&, std::string& error)
+{
+  error = "this build has no distributed solve (hypre or VTK's ParallelMPI missing)";
+  return false;
+}
+
+#endif
+
+vtkTranslucencyDistributedSolve::vtkTranslucencyDistributedSolve()
+  : Internal(new Impl)
+{
+}
+
+vtkTranslucencyDistributedSolve::~vtkTranslucencyDistributedSolve() = default;
+
+bool vtkTranslucencyDistributedSolve::IsAllowedByEnvironment()
+{
+  const char* value = std::getenv("TRANSLUCENCY_GATHERED_SOLVE");
+  return !value || !*value || std::strcmp(value, "0") == 0;
+}

@@ -1,0 +1,58 @@
+/**
+ * @file   vtkTranslucencyDistributedSolve.h
+ * @brief  vtkSolveDiffusion's distributed path under MPI: each rank's piece
+ *         is solved in place by translucency::DistributedVertexSolver (hypre
+ *         BoomerAMG-PCG on the global controller's communicator), instead of
+ *         being gathered to rank 0 (vtkTranslucencyParallel::RunGathered).
+ *
+ * Used for the divergence and fem solvers without interior sources,
+ * detectors or modulation, whenever the global controller is an MPI
+ * controller with more than one process (every rank takes part, a rank
+ * with an empty piece too), unless vtkSolveDiffusion's DistributedSolve is
+ * off or the environment variable TRANSLUCENCY_GATHERED_SOLVE is set to a
+ * value other than 0. A build without hypre or without VTK's ParallelMPI
+ * module has no distributed path (IsAvailable() is false).
+ *
+ * The piece: its owned cells (cells flagged vtkGhostType DUPLICATECELL are
+ * left out) must be linear tets; points are identified across ranks by the
+ * point GlobalIds when every rank with points has them, else by exactly
+ * equal coordinates (as the gathered path).
+ */
+#ifndef vtkTranslucencyDistributedSolve_h
+#define vtkTranslucencyDistributedSolve_h
+
+#include "DiffusionSolver.h" // for translucency::SolverReport
+
+#include <memory>
+#include <string>
+#include <vector>
+
+class vtkUnstructuredGrid;
+
+class vtkTranslucencyDistributedSolve
+{
+public:
+  vtkTranslucencyDistributedSolve();
+  ~vtkTranslucencyDistributedSolve();
+
+  /// True if this build has the distributed solve and the global
+  /// controller runs more than one MPI process.
+  static bool IsAvailable();
+  /// True unless TRANSLUCENCY_GATHERED_SOLVE is set (and not "0").
+  static bool IsAllowedByEnvironment();
+
+  /**
+   * Collective. Solve on this rank's piece `input` ("divergence" or "fem");
+   * fluence gets 3 values per input point. Returns false with `error` (the
+   * same on every rank) on failure.
+   */
+  bool Solve(vtkUnstructuredGrid* input, const std::string& discretization, double relTol,
+    int maxIter, bool warmStart, int threads, std::vector<double>& fluence,
+    translucency::SolverReport& report, std::string& error);
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> Internal;
+};
+
+#endif

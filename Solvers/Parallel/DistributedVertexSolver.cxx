@@ -1,0 +1,433 @@
+#include "DistributedVertexSolver.h"
+
+#include "Error.h"
+#include "Fresnel.h"
+#include "TetContributions.h"
+#include "VertexAssembly.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace translucency
+{
+
+namespace
+{
+
+/// Local number (0..3) of point id in tet tv (the caller knows it is there).
+inline int LocalIndex(const int* tv, int id)
+{
+  return tv[0] == id ? 0 : (tv[1] == id ? 1 : (tv[2] == id ? 2 : 3));
+}
+
+double Milliseconds(double since)
+{
+  return 1000.0 * (MPI_Wtime() - since);
+}
+
+} // namespace
+
+DistributedVertexSolver::DistributedVertexSolver(MPI_Comm comm, const std::string& discretization)
+  : Comm_(comm)
+  , Name_(discretization)
+{
+  if (discretization != "divergence" && discretization != "fem")
+  {
+    throw Error("distributed solve: unknown discretisation '" + discretization +
+      "' (divergence or fem)");
+  }
+  Fem_ = discretization == "fem";
+  EnsureHypreInitialized();
+}
+
+DistributedVertexSolver::~DistributedVertexSolver() = default;
+
+void DistributedVertexSolver::SetAMGOptions(const BoomerAMGOptions& options)
+{
+  Options_ = options;
+  OptionsChanged_ = true;
+}
+
+int DistributedVertexSolver::GetNumberOfLevels(int c) const
+{
+  return Channels_[c] ? Channels_[c]->GetNumberOfLevels() : 0;
+}
+
+double DistributedVertexSolver::GetOperatorComplexity(int c) const
+{
+  return Channels_[c] ? Channels_[c]->GetOperatorComplexity() : 0.0;
+}
+
+void DistributedVertexSolver::BuildGeometry(
+  const std::vector<double>& points, const std::vector<PointKey>& keys, const std::vector<int>& tets)
+{
+  HaveGeometry_ = false;
+  for (auto& channel : Channels_)
+    channel.reset();
+  for (auto& x : Solution_)
+    x.clear();
+  const std::size_t numPoints = keys.size();
+
+  // The local mesh: the owned tets on the local points (partition faces
+  // are boundary faces of it; the count across ranks sorts them out).
+  std::string error;
+  Mesh_ = TetMesh();
+  if (!tets.empty())
+  {
+    try
+    {
+      Mesh_.SetGeometry(points, tets);
+    }
+    catch (const Error& e)
+    {
+      error = e.what();
+    }
+  }
+  AgreeOnError(Comm_, error);
+  Used_.assign(numPoints, 0);
+  for (int id : tets)
+    Used_[static_cast<std::size_t>(id)] = 1;
+  Numbering_.Build(Comm_, keys, Used_);
+
+  // The physical boundary: local boundary faces no other tet shares.
+  const std::vector<int>& triangles = Mesh_.GetBoundaryTriangles();
+  std::vector<int> triangleRows(triangles.size());
+  for (std::size_t k = 0; k < triangles.size(); ++k)
+    triangleRows[k] = Numbering_.GetRow(triangles[k]);
+  const std::vector<int> counts = CountSharedTriangles(Comm_, triangleRows);
+  PhysicalFace_.assign(counts.size(), 0);
+  for (std::size_t f = 0; f < counts.size(); ++f)
+  {
+    PhysicalFace_[f] = counts[f] == 1;
+    if (counts[f] > 2 && error.empty())
+    {
+      const int* v = triangles.data() + 3 * f;
+      std::ostringstream os;
+      os << "the face of points (" << v[0] << ", " << v[1] << ", " << v[2]
+         << ") of this rank's piece belongs to " << counts[f]
+         << " tets over all ranks (at most 2 in a tet mesh): overlapping pieces? Mark the copies "
+            "as ghost cells (vtkGhostType) or use the gathered solve";
+      error = os.str();
+    }
+  }
+  AgreeOnError(Comm_, error);
+
+  // What goes to hypre: the rows of the vertices of owned tets.
+  const int owned = Numbering_.GetNumberOfOwnedRows();
+  FirstLocal_.assign(static_cast<std::size_t>(owned), -1);
+  RowSizeHints_.assign(static_cast<std::size_t>(owned), 1);
+  SendRows_.clear();
+  SendSizes_.clear();
+  SendColumns_.clear();
+  SendPositions_.clear();
+  const std::vector<int>& offsets = Mesh_.GetRowOffsets();
+  const std::vector<int>& columns = Mesh_.GetColumnIndices();
+  for (std::size_t i = 0; i < numPoints && !tets.empty(); ++i)
+  {
+    if (!Used_[i])
+      continue;
+    const int row = Numbering_.GetRow(static_cast<int>(i));
+    const int length = offsets[i + 1] - offsets[i];
+    if (Numbering_.IsOwned(static_cast<int>(i)))
+    {
+      int& first = FirstLocal_[static_cast<std::size_t>(row - Numbering_.GetRowBegin())];
+      if (first < 0)
+        first = static_cast<int>(i);
+      // A shared row gets entries from other ranks too: room for them.
+      int& hint = RowSizeHints_[static_cast<std::size_t>(row - Numbering_.GetRowBegin())];
+      hint = std::max(hint, length + 8);
+    }
+    SendRows_.push_back(row);
+    SendSizes_.push_back(length);
+    for (int k = offsets[i]; k < offsets[i + 1]; ++k)
+    {
+      SendColumns_.push_back(Numbering_.GetRow(columns[static_cast<std::size_t>(k)]));
+      SendPositions_.push_back(k);
+    }
+  }
+  Points_ = points;
+  Keys_ = keys;
+  Tets_ = tets;
+  HaveGeometry_ = true;
+}
+
+void DistributedVertexSolver::Solve(const std::vector<double>& points,
+  const std::vector<PointKey>& keys, const std::vector<int>& tets,
+  const OpticalProperties& material, const std::vector<double>& irradiance,
+  std::vector<double>& fluence, SolverReport& report)
+{
+  Timings_ = Timings();
+  report = SolverReport();
+  report.Solver = Name_;
+  report.LinearSolver = "hypre-amg (distributed)";
+  report.Assembly = "full";
+  const std::size_t numPoints = keys.size();
+  const int numTets = static_cast<int>(tets.size() / 4);
+
+  // 0. Sizes and ids (the values are checked by the assembly).
+  std::string error;
+  try
+  {
+    if (points.size() != 3 * numPoints || irradiance.size() != 3 * numPoints ||
+      tets.size() % 4 != 0)
+    {
+      std::ostringstream os;
+      os << "distributed solve: " << numPoints << " point keys, " << points.size() / 3
+         << " points, " << irradiance.size() << " irradiance values (3 per point) and "
+         << tets.size() << " tet ids (4 per tet) do not match";
+      throw Error(os.str());
+    }
+    for (std::size_t k = 0; k < tets.size(); ++k)
+    {
+      if (tets[k] < 0 || static_cast<std::size_t>(tets[k]) >= numPoints)
+      {
+        std::ostringstream os;
+        os << "tet " << k / 4 << " has point id " << tets[k] << " (the piece has " << numPoints
+           << " points)";
+        throw Error(os.str());
+      }
+    }
+    material.Validate(numTets);
+  }
+  catch (const Error& e)
+  {
+    error = e.what();
+  }
+  AgreeOnError(Comm_, error);
+
+  // 1. The global identity and boundary, unless the mesh is the last one.
+  double start = MPI_Wtime();
+  int same = HaveGeometry_ && points == Points_ && keys == Keys_ && tets == Tets_ ? 1 : 0;
+  int allSame = 0;
+  MPI_Allreduce(&same, &allSame, 1, MPI_INT, MPI_MIN, Comm_);
+  if (!allSame)
+  {
+    BuildGeometry(points, keys, tets);
+    Timings_.Numbering = Milliseconds(start);
+  }
+
+  // 2. The local system: element matrices of the owned tets, boundary terms
+  // of the physical faces.
+  start = MPI_Wtime();
+  DiffusionSystem system;
+  const int* tetPositions = Mesh_.GetTetNonZeroPositions().data();
+  const double* muA = material.AbsorptionCoefficient.data();
+  const double* sigmaS = material.ReducedScatteringCoefficient.data();
+  const double* tetEta = material.RefractiveIndex.data();
+  const double* q = irradiance.data();
+  if (numTets > 0)
+  {
+    const int threads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
+    ResizeVertexSystem(Mesh_, system); // sized first: the kernel keeps pointers into it
+    const ChannelPointers channels(system);
+    const ChannelPointers* pointers = &channels;
+    const bool fem = Fem_;
+    auto kernel = [&](size_t t, const int*, const int* pos, const TetGeometry& geometry) {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        double diag[4], off[6];
+        if (fem)
+          FiniteElementTetMatrix(geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
+        else
+          DivergenceTetMatrix(geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
+        ScatterTetMatrix(pointers->Values[c], pos, diag, off);
+      }
+    };
+    if (!AssembleVertexSystem(Mesh_, material, irradiance, system, threads, GeometryCache_,
+          [] {}, kernel, [] {}))
+    {
+      try
+      {
+        CheckIrradiance(Mesh_, irradiance); // names the point (the material was checked)
+        error = "distributed solve: invalid material or irradiance";
+      }
+      catch (const Error& e)
+      {
+        error = e.what();
+      }
+    }
+  }
+  AgreeOnError(Comm_, error);
+
+  const std::vector<int>& triangles = Mesh_.GetBoundaryTriangles();
+  const std::vector<int>& triangleTets = Mesh_.GetBoundaryTriangleTets();
+  const std::vector<double>& areas = Mesh_.GetBoundaryTriangleAreas();
+  std::vector<double> localRhs(3 * numPoints, 0.0);
+  if (Fem_)
+  {
+    // Each physical face with its tet, on the tet's rank (TransCut eq. 2).
+    for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
+    {
+      if (!PhysicalFace_[f])
+        continue;
+      const int t = triangleTets[f];
+      const int* tv = Mesh_.GetTet(t);
+      const int* pos = tetPositions + 16 * static_cast<std::size_t>(t);
+      const int* tri = triangles.data() + 3 * f;
+      const int l[3] = { LocalIndex(tv, tri[0]), LocalIndex(tv, tri[1]), LocalIndex(tv, tri[2]) };
+      const double eta = tetEta[t];
+      double robin, load;
+      FiniteElementRobin(areas[f], Fresnel::MismatchA(eta), Fresnel::DiffuseReflectance(eta),
+        robin, load);
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        double* v = system.Values[c].data();
+        double sum = 0.0;
+        for (int a = 0; a < 3; ++a)
+          sum += q[3 * static_cast<std::size_t>(tri[a]) + c];
+        for (int a = 0; a < 3; ++a)
+        {
+          for (int b = 0; b < 3; ++b)
+            v[pos[4 * l[a] + l[b]]] += a == b ? robin + robin : robin;
+          localRhs[3 * static_cast<std::size_t>(tri[a]) + c] +=
+            load * (sum + q[3 * static_cast<std::size_t>(tri[a]) + c]);
+        }
+      }
+    }
+  }
+  else
+  {
+    // S_i and sum of S_f eta_f around i over every rank's physical faces,
+    // at the owner, which adds the lumped Robin term (eq. 12-13).
+    std::vector<double> measures(2 * numPoints, 0.0);
+    for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
+    {
+      if (!PhysicalFace_[f])
+        continue;
+      const double eta = tetEta[triangleTets[f]];
+      for (int a = 0; a < 3; ++a)
+      {
+        const std::size_t i = static_cast<std::size_t>(triangles[3 * f + a]);
+        measures[2 * i] += areas[f];
+        measures[2 * i + 1] += areas[f] * eta;
+      }
+    }
+    const std::vector<double> owned = Numbering_.SumToOwners(Comm_, measures, 2);
+    const int* diagonal = Mesh_.GetDiagonalPositions().data();
+    for (std::size_t r = 0; r < FirstLocal_.size(); ++r)
+    {
+      const double s = owned[2 * r];
+      if (!(s > 0.0))
+        continue;
+      const std::size_t i = static_cast<std::size_t>(FirstLocal_[r]);
+      const double eta = owned[2 * r + 1] / s;
+      const double a = Fresnel::MismatchA(eta), fdr = Fresnel::DiffuseReflectance(eta);
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        system.Values[c][static_cast<std::size_t>(diagonal[i])] += DivergenceRobinDiagonal(s, a);
+        localRhs[3 * i + c] = DivergenceRobinLoad(s, q[3 * i + c], a, fdr);
+      }
+    }
+  }
+  const std::vector<double> rhs = Numbering_.SumToOwners(Comm_, localRhs, 3);
+  localRhs = {};
+
+  // 3. The matrices: rebuilt (values added, hierarchy set up) when changed.
+  const int owned = Numbering_.GetNumberOfOwnedRows();
+  double hierarchyMs = 0.0;
+  bool rebuilt = false;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    std::vector<double> values(SendPositions_.size());
+    for (std::size_t k = 0; k < SendPositions_.size(); ++k)
+      values[k] = system.Values[c][static_cast<std::size_t>(SendPositions_[k])];
+    int changed = (!Channels_[c] || OptionsChanged_ || values != Contributions_[c]) ? 1 : 0;
+    int anyChanged = 0;
+    MPI_Allreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, Comm_);
+    system.Values[c] = {};
+    if (anyChanged)
+    {
+      try
+      {
+        if (!Channels_[c])
+          Channels_[c] = std::make_unique<HypreBoomerAMGPCG>(Comm_, Options_);
+        else if (OptionsChanged_)
+          Channels_[c] = std::make_unique<HypreBoomerAMGPCG>(Comm_, Options_);
+        Channels_[c]->SetupAddTo(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), SendRows_,
+          SendSizes_, SendColumns_, values, RowSizeHints_.data());
+      }
+      catch (const Error& e)
+      {
+        error = e.what();
+      }
+      AgreeOnError(Comm_, error);
+      rebuilt = true;
+      hierarchyMs += Channels_[c]->GetHierarchyMilliseconds();
+      Contributions_[c].swap(values);
+    }
+  }
+  OptionsChanged_ = false;
+  report.Assembly = rebuilt ? "full" : "unchanged";
+  system = DiffusionSystem();
+  Timings_.Assembly = Milliseconds(start) - hierarchyMs;
+  Timings_.AMGSetup = hierarchyMs;
+
+  // 4. PCG per channel, from the previous solution on the same unknowns.
+  start = MPI_Wtime();
+  std::vector<double> solution(3 * static_cast<std::size_t>(owned), 0.0);
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    std::vector<double> b(static_cast<std::size_t>(owned));
+    double norm = 0.0;
+    for (int r = 0; r < owned; ++r)
+    {
+      b[r] = rhs[3 * static_cast<std::size_t>(r) + c];
+      norm += b[r] * b[r];
+    }
+    double globalNorm = 0.0;
+    MPI_Allreduce(&norm, &globalNorm, 1, MPI_DOUBLE, MPI_SUM, Comm_);
+    std::vector<double>& x = Solution_[c];
+    const bool guess = WarmStart_ && x.size() == static_cast<std::size_t>(owned);
+    if (!guess)
+      x.assign(static_cast<std::size_t>(owned), 0.0);
+    if (globalNorm == 0.0)
+    {
+      std::fill(x.begin(), x.end(), 0.0);
+      report.Converged[c] = true;
+    }
+    else
+    {
+      double residual = 0.0;
+      try
+      {
+        report.Iterations[c] = Channels_[c]->Solve(b.data(), x.data(), guess, RelTol_, MaxIter_, residual);
+      }
+      catch (const Error& e)
+      {
+        error = e.what();
+      }
+      AgreeOnError(Comm_, error);
+      report.Residual[c] = residual;
+      report.Converged[c] = residual <= RelTol_;
+    }
+    for (int r = 0; r < owned; ++r)
+      solution[3 * static_cast<std::size_t>(r) + c] = x[static_cast<std::size_t>(r)];
+  }
+  fluence = Numbering_.FetchFromOwners(Comm_, solution, 3);
+  Timings_.Solve = Milliseconds(start);
+
+  report.SetupMilliseconds = Timings_.Numbering + Timings_.Assembly + Timings_.AMGSetup;
+  report.SolveMilliseconds = Timings_.Solve;
+  report.NumberOfUnknowns = Numbering_.GetNumberOfRows();
+  report.NumberOfNonZeros = Channels_[0] ? Channels_[0]->GetNumberOfNonZeros() : 0;
+  std::size_t bytes = Numbering_.GetMemoryBytes() +
+    (SendRows_.capacity() + SendSizes_.capacity() + SendColumns_.capacity() +
+      SendPositions_.capacity()) * sizeof(int);
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    bytes += Contributions_[c].capacity() * sizeof(double) + Solution_[c].capacity() * sizeof(double);
+    if (Channels_[c])
+    {
+      // The hierarchy below the fine level with its interpolation, the two IJ
+      // vectors, and the fine matrix (~ the entries sent, 12 bytes each).
+      bytes += Channels_[c]->GetMemoryBytes() + static_cast<std::size_t>(owned) * 2 * sizeof(double) +
+        SendColumns_.size() * (sizeof(int) + sizeof(double));
+    }
+  }
+  report.MemoryBytes = bytes;
+}
+
+} // namespace translucency

@@ -1,0 +1,139 @@
+/**
+ * @file DistributedVertexSolver.h
+ * @brief The diffusion solve of a tet mesh distributed over MPI ranks
+ * (divergence or fem discretisation): each rank assembles its own tets
+ * into one hypre IJ matrix, solved by PCG with BoomerAMG on all ranks.
+ *
+ * Every rank gives its piece: its points (with a global key each: a
+ * global id, or the exact coordinates), the tets it owns (ghost cells
+ * left out by the caller), their material, and the irradiance at its
+ * points. The result is the fluence at every local point, shared points
+ * included, equal to the serial solve on the union of the tets:
+ *  - a vertex shared by pieces is one unknown (DistributedNumbering);
+ *  - a face is boundary only if no tet of any rank shares it: each rank's
+ *    local boundary faces are counted across ranks (CountSharedTriangles);
+ *    S_i and the area-weighted boundary eta of the divergence are summed
+ *    over the ranks at the vertex's owner, the fem's Robin terms added by
+ *    the rank of the face's tet;
+ *  - each rank adds its tets' element matrices (TetContributions.h, the
+ *    serial assemblies' expressions) to the rows of their vertices, off-rank
+ *    rows through HYPRE_IJMatrixAddToValues.
+ * Iterations and residuals are hypre's global ones (the same on every
+ * rank). The hierarchy is kept while the matrix is unchanged (a relight),
+ * and the solve warm-starts from the previous solution on the same mesh.
+ *
+ * Every public call is collective over the communicator (ranks with empty
+ * pieces too); an error on any rank is thrown on every rank with the same
+ * message (AgreeOnError).
+ */
+#pragma once
+
+#include "DiffusionSolver.h"
+#include "DistributedNumbering.h"
+#include "HypreSolver.h"
+#include "OpticalProperties.h"
+#include "TetGeometry.h"
+#include "TetMesh.h"
+
+#include <mpi.h>
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace translucency
+{
+
+class DistributedVertexSolver
+{
+public:
+  /// `discretization`: "divergence" or "fem" (else translucency::Error).
+  /// The communicator must outlive the solver.
+  DistributedVertexSolver(MPI_Comm comm, const std::string& discretization);
+  ~DistributedVertexSolver();
+
+  ///@{
+  /// PCG stopping rule ||b - A x|| <= RelTol ||b|| (default 1e-6) within
+  /// MaxIter iterations (default 2000) per channel; warm start (default on).
+  void SetRelTol(double tol) { RelTol_ = tol; }
+  void SetMaxIter(int n) { MaxIter_ = n; }
+  void SetWarmStart(bool on) { WarmStart_ = on; }
+  ///@}
+  /// OpenMP threads of the local assembly (0 = OpenMP's default).
+  void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+  /// BoomerAMG settings (default BoomerAMGOptions::Tuned()); a change
+  /// rebuilds the hierarchy at the next Solve.
+  void SetAMGOptions(const BoomerAMGOptions& options);
+
+  /**
+   * Collective. points: 3 per local point (mm); keys: one per local point;
+   * tets: 4 local point ids per owned tet; material: per owned tet;
+   * irradiance: 3 per local point (W/mm^2). fluence gets 3 per local point.
+   * Throws translucency::Error (on every rank) on invalid input.
+   * report.Assembly is "full" when the hypre matrices and hierarchies were
+   * rebuilt, "unchanged" when every rank's matrix values equal the last
+   * Solve's (a relight: the hierarchies are kept, only the right-hand side
+   * is new); iterations and residuals are the same on every rank.
+   */
+  void Solve(const std::vector<double>& points, const std::vector<PointKey>& keys,
+    const std::vector<int>& tets, const OpticalProperties& material,
+    const std::vector<double>& irradiance, std::vector<double>& fluence, SolverReport& report);
+
+  /// Wall times of the last Solve on this rank (ms): global numbering and
+  /// boundary (0 when the mesh is unchanged), local assembly and hypre's
+  /// IJ assembly, BoomerAMG set-up (0 if kept), PCG solve.
+  struct Timings
+  {
+    double Numbering = 0.0;
+    double Assembly = 0.0;
+    double AMGSetup = 0.0;
+    double Solve = 0.0;
+  };
+  const Timings& GetTimings() const { return Timings_; }
+  /// Owned rows on this rank and the global number of unknowns.
+  int GetNumberOfOwnedRows() const { return Numbering_.GetNumberOfOwnedRows(); }
+  long long GetNumberOfRows() const { return Numbering_.GetNumberOfRows(); }
+  /// Levels and operator complexity of channel c's hierarchy.
+  int GetNumberOfLevels(int c) const;
+  double GetOperatorComplexity(int c) const;
+
+private:
+  void BuildGeometry(const std::vector<double>& points, const std::vector<PointKey>& keys,
+    const std::vector<int>& tets);
+
+  MPI_Comm Comm_;
+  std::string Name_;
+  bool Fem_ = false;
+  double RelTol_ = 1e-6;
+  int MaxIter_ = 2000;
+  bool WarmStart_ = true;
+  int NumberOfThreads_ = 0;
+  BoomerAMGOptions Options_ = BoomerAMGOptions::Tuned();
+  bool OptionsChanged_ = false;
+
+  // The geometry of the last Solve and what was derived from it.
+  bool HaveGeometry_ = false;
+  std::vector<double> Points_;
+  std::vector<PointKey> Keys_;
+  std::vector<int> Tets_;
+  TetMesh Mesh_; ///< the owned tets with the local points (no tets: unused)
+  TetGeometryCache GeometryCache_;
+  DistributedNumbering Numbering_;
+  std::vector<char> PhysicalFace_; ///< per local boundary triangle of Mesh_
+  std::vector<int> RowSizeHints_;  ///< per owned row
+  std::vector<char> Used_;         ///< per local point: a vertex of an owned tet
+  std::vector<int> FirstLocal_;    ///< per owned row: its first local point
+  /// The local matrix entries sent to hypre: rows (global), entries per
+  /// row, columns (global) and their positions in the local CSR values.
+  std::vector<int> SendRows_, SendSizes_, SendColumns_, SendPositions_;
+
+  // The matrices' local contributions of the last Solve, their hierarchies
+  // and solutions (owned rows).
+  std::array<std::vector<double>, NumberOfChannels> Contributions_;
+  std::array<std::unique_ptr<HypreBoomerAMGPCG>, NumberOfChannels> Channels_;
+  std::array<std::vector<double>, NumberOfChannels> Solution_;
+  Timings Timings_;
+};
+
+} // namespace translucency

@@ -1,0 +1,193 @@
+"""The pvbatch side of TestDistributedSolve.py: the distributed Solve Diffusion.
+
+    pvbatch DistributedPipeline.py <plugin> <work dir> prepare
+    mpiexec -n N pvbatch --symmetric DistributedPipeline.py <plugin> <work dir> run
+
+prepare (one process): a sphere meshed by TetGen with a heterogeneous
+material (mu_a, sigma_s' and eta vary with the cell centre, so the boundary
+eta averaging and the kappa jumps are exercised) and a plain "PointIds"
+array numbering the points (mesh.vtu); the same tets in 2 pieces with a
+ghost level (mesh2g.pvtu) and in 3 pieces with the point ids as GlobalIds
+(mesh3id.pvtu); the serial references (ref_<light>_<solver>.vtu) for the
+divergence and fem solvers and two lights, solved to RelTol 1e-13.
+
+run (every rank runs the script, --symmetric): for each case the chain
+reader -> Surface Irradiance -> Solve Diffusion (distributed), saved as
+<case>.pvtu, and one line per rank in solves_<rank>.txt
+    solve <case> rank <r> path <path> assembly <a> iterations <i,i,i> residuals <r,r,r>
+Cases: pvtu3 (GlobalIds; 2 ranks read 3 pieces), pvtu2 (ghost cells; 3
+ranks on 2 pieces: a rank with an empty piece), redist (Redistribute
+DataSet), fem (fem solver on pvtu3), relight (pvtu3 relit: hierarchy kept),
+warm (the relit system again: warm start), gathered (pvtu3 with DistributedSolve off, the gathered path in
+the same run), an invalid mu_a on rank 1 only (the same error on every rank),
+after_error (a solve after it).
+"""
+
+import os
+import sys
+
+from paraview.simple import *  # noqa: F401,F403
+
+PLUGIN, WORK, MODE = sys.argv[1], sys.argv[2], sys.argv[3]
+LoadPlugin(PLUGIN, ns=globals())
+TOL = 1e-13
+LIGHTS = {"a": [0.0, -1.0, -1.0, 1.0], "b": [1.0, 0.2, -0.5, 2.0]}
+
+
+def path(name):
+    return os.path.join(WORK, name)
+
+
+def solve(source, light, solver="divergence", distributed=1):
+    lit = SurfaceIrradiance(Input=source, DirectionalLights=LIGHTS[light])
+    return lit, SolveDiffusion(Input=lit, Solver=solver, RelTol=TOL, MaxIter=20000,
+                               DistributedSolve=distributed)
+
+
+if MODE == "prepare":
+    import numpy as np
+    from vtkmodules.numpy_interface import dataset_adapter as dsa
+    from vtkmodules.vtkCommonCore import vtkIdTypeArray, vtkPoints
+    from vtkmodules.vtkFiltersCore import vtkTriangleFilter
+    from vtkmodules.vtkFiltersParallel import vtkExtractUnstructuredGridPiece
+    from vtkmodules.vtkFiltersSources import vtkSphereSource
+    from vtkmodules.vtkIOParallelXML import vtkXMLPUnstructuredGridWriter
+    from vtkmodules.vtkIOPLY import vtkPLYWriter
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader, vtkXMLUnstructuredGridWriter
+
+    sphere = vtkSphereSource()
+    sphere.SetRadius(4.0)
+    sphere.SetThetaResolution(20)
+    sphere.SetPhiResolution(20)
+    triangles = vtkTriangleFilter()
+    triangles.SetInputConnection(sphere.GetOutputPort())
+    ply = vtkPLYWriter()
+    ply.SetInputConnection(triangles.GetOutputPort())
+    ply.SetFileName(path("surface.ply"))
+    ply.Write()
+    assign = AssignScatteringCoefficients(Input=TetrahedralizeSurface(
+        Input=TranslucencySurfaceReader(FileName=path("surface.ply")), TargetNumberOfTets=8000))
+    SaveData(path("tets.vtu"), proxy=assign)
+
+    reader = vtkXMLUnstructuredGridReader()
+    reader.SetFileName(path("tets.vtu"))
+    reader.Update()
+    mesh = reader.GetOutput()
+    # Float points (vtkExtractUnstructuredGridPiece writes float points: every
+    # case then has the very same coordinates).
+    float_points = vtkPoints()
+    float_points.SetDataTypeToFloat()
+    float_points.DeepCopy(mesh.GetPoints())
+    mesh.SetPoints(float_points)
+    # A heterogeneous material from the cell centres.
+    wrapped = dsa.WrapDataObject(mesh)
+    x = np.asarray(wrapped.Points, dtype=float)
+    cells = np.asarray(wrapped.Cells).reshape(-1, 5)[:, 1:]
+    centre = x[cells].mean(axis=1)
+    mu = np.column_stack([0.002 + 0.001 * (centre[:, 0] > 0), 0.004 + 0.002 * (centre[:, 1] > 0),
+                          0.008 + 0.004 * (centre[:, 2] > 1)])
+    sigma = np.column_stack([1.0 + 0.5 * (centre[:, 1] > 0), 1.5 + 0.1 * centre[:, 0],
+                             2.0 + 0.5 * (centre[:, 0] > 1)])
+    eta = 1.3 + 0.1 * (centre[:, 2] > 0)
+    for name, values in (("AbsorptionCoefficient", mu), ("ReducedScatteringCoefficient", sigma),
+                         ("RefractiveIndex", eta)):
+        mesh.GetCellData().RemoveArray(name)
+        wrapped.CellData.append(values, name)
+    ids = vtkIdTypeArray()
+    ids.SetName("PointIds")
+    ids.SetNumberOfTuples(mesh.GetNumberOfPoints())
+    for i in range(mesh.GetNumberOfPoints()):
+        ids.SetValue(i, 500 + 3 * i)
+    mesh.GetPointData().AddArray(ids)
+    writer = vtkXMLUnstructuredGridWriter()
+    writer.SetInputData(mesh)
+    writer.SetFileName(path("mesh.vtu"))
+    writer.Write()
+    for name, pieces, ghosts in (("mesh2g", 2, 1), ("mesh3id", 3, 0)):
+        split = vtkExtractUnstructuredGridPiece()
+        split.SetInputData(mesh)
+        pwriter = vtkXMLPUnstructuredGridWriter()
+        pwriter.SetInputConnection(split.GetOutputPort())
+        pwriter.SetFileName(path(name + ".pvtu"))
+        pwriter.SetNumberOfPieces(pieces)
+        pwriter.SetStartPiece(0)
+        pwriter.SetEndPiece(pieces - 1)
+        pwriter.SetGhostLevel(ghosts)
+        pwriter.Write()
+    with open(path("mesh3id.pvtu")) as f:
+        text = f.read()
+    with open(path("mesh3id.pvtu"), "w") as f:
+        f.write(text.replace("<PPointData>", '<PPointData GlobalIds="PointIds">'))
+    for k in range(3):
+        piece_reader = vtkXMLUnstructuredGridReader()
+        piece_reader.SetFileName(path("mesh3id_%d.vtu" % k))
+        piece_reader.Update()
+        piece = piece_reader.GetOutput()
+        piece.GetPointData().SetActiveGlobalIds("PointIds")
+        piece_writer = vtkXMLUnstructuredGridWriter()
+        piece_writer.SetInputData(piece)
+        piece_writer.SetFileName(path("mesh3id_%d.vtu" % k))
+        piece_writer.Write()
+
+    source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
+    for light in LIGHTS:
+        for solver in ("divergence", "fem"):
+            _, solved = solve(source, light, solver)
+            SaveData(path("ref_%s_%s.vtu" % (light, solver)), proxy=solved)
+    print("prepared", flush=True)
+elif MODE == "run":
+    from vtkmodules.vtkParallelCore import vtkMultiProcessController
+    import translucency  # noqa: F401  (the getters of the filter)
+
+    RANK = vtkMultiProcessController.GetGlobalController().GetLocalProcessId()
+
+    def report(case, solved):
+        solved.UpdatePipeline()
+        o = solved.GetClientSideObject()
+        # One file per rank (the ranks' stdout lines interleave).
+        with open(path("solves_%d.txt" % RANK), "a") as f:
+            f.write("solve %s rank %d path %s assembly %s iterations %s residuals %s\n" % (
+                case, RANK, o.GetParallelPath(), o.GetLastAssembly() or "-",
+                ",".join(str(o.GetNumberOfIterations(c)) for c in range(3)),
+                ",".join("%.6e" % o.GetFinalResidual(c) for c in range(3))))
+
+    def case(name, source, light="a", solver="divergence", distributed=1):
+        lit, solved = solve(source, light, solver, distributed)
+        report(name, solved)
+        SaveData(path(name + ".pvtu"), proxy=solved)
+        return lit, solved
+
+    pvtu3 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")])
+    lit, solved = case("pvtu3", pvtu3)
+    # Relight: same mesh and material, another light: the hierarchy is kept
+    # and the solve starts from the previous fluence.
+    lit.DirectionalLights = LIGHTS["b"]
+    report("relight", solved)
+    SaveData(path("relight.pvtu"), proxy=solved)
+    # Warm start: the same system again (a tolerance change re-executes).
+    solved.RelTol = 2 * TOL
+    report("warm", solved)
+    case("pvtu2", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")]))
+    case("redist", RedistributeDataSet(Input=XMLUnstructuredGridReader(
+        FileName=[path("mesh.vtu")])))
+    case("fem", pvtu3, solver="fem")
+    case("gathered", pvtu3, distributed=0)
+    # An invalid value on rank 1 only: every rank reports rank 1's error and
+    # nobody hangs; the next solve works.
+    bad = ProgrammableFilter(Input=SurfaceIrradiance(Input=pvtu3, DirectionalLights=LIGHTS["a"]))
+    bad.Script = """
+from vtkmodules.vtkParallelCore import vtkMultiProcessController
+out = self.GetOutput()
+out.ShallowCopy(self.GetInput())
+if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
+    a = out.GetCellData().GetArray("AbsorptionCoefficient")
+    b = a.NewInstance()
+    b.DeepCopy(a)
+    b.SetComponent(5, 1, -1.0)
+    out.GetCellData().AddArray(b)
+"""
+    SolveDiffusion(Input=bad, RelTol=TOL).UpdatePipeline()
+    report("after_error", solve(pvtu3, "a")[1])
+    print("run done", flush=True)
+else:
+    sys.exit("mode must be prepare or run, not " + MODE)
