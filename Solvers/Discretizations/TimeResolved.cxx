@@ -276,52 +276,84 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   // BDF2; `add` the step integrals to the current gate; `gateEnd(step)` after
   // every step (to close gates).
   Eigen::VectorXd rhs(n), guess(n);
+  // The integral of the last backward-Euler step, per channel: the first
+  // BDF2 interval takes half of it in place of dt phi / 2, which keeps the
+  // sum over the steps exactly K^-1 b (Documentation/DiffuseOptics.md).
+  std::array<Eigen::VectorXd, NumberOfChannels> lastEuler;
+  // One linear solve of channel c from `guess`, with the statistics.
+  const auto solve = [&](int c, const Eigen::VectorXd& right, const Eigen::VectorXd& start) {
+    Eigen::VectorXd next;
+    if (right.squaredNorm() == 0.0)
+    {
+      next.setZero(n);
+      return next;
+    }
+    next = cg[c].solveWithGuess(right, start);
+    const int used = static_cast<int>(cg[c].iterations());
+    iterations[c] += used;
+    result.MaximumStepIterations[c] = std::max(result.MaximumStepIterations[c], used);
+    report.Residual[c] = std::max(report.Residual[c], cg[c].error());
+    if (cg[c].info() != Eigen::Success || !next.allFinite())
+    {
+      report.Converged[c] = false;
+    }
+    return next;
+  };
   const auto runSegment = [&](long long steps, double dt, bool add,
                             const std::function<void(long long)>& afterStep) -> bool {
+    // From the pulse: TimeGates::PulseEulerSteps backward-Euler steps of
+    // PulseEulerSubSteps sub-steps each (see there); a restart from a
+    // smooth field: one step.
+    const bool fromPulse = pulse;
+    const long long eulerSteps = fromPulse ? TimeGates::PulseEulerSteps : 1;
+    const int subSteps = fromPulse ? TimeGates::PulseEulerSubSteps : 1;
+    const double h = dt / subSteps;
     for (long long s = 0; s < steps; ++s)
     {
-      const bool euler = s == 0;
-      setMatrix((euler ? 1.0 : 1.5) / dt);
+      const bool euler = s < eulerSteps;
+      setMatrix(euler ? 1.0 / h : 1.5 / dt);
       for (int c = 0; c < NumberOfChannels; ++c)
       {
+        Eigen::VectorXd next, massNext;
         if (euler)
         {
-          rhs = massPhi[c] / dt; // (M / dt + K) phi' = M phi / dt
-          guess = pulse ? Eigen::VectorXd::Zero(n) : Eigen::VectorXd(phi[c]);
-        }
-        else
-        {
-          // BDF2: (3/2 M / dt + K) phi' = M (2 phi - phi_prev / 2) / dt.
-          rhs = (2.0 * massPhi[c] - 0.5 * massPhiPrevious[c]) / dt;
-          guess = s == 1 ? Eigen::VectorXd(phi[c]) : Eigen::VectorXd(2.0 * phi[c] - phiPrevious[c]);
-        }
-        Eigen::VectorXd next;
-        if (rhs.squaredNorm() == 0.0)
-        {
-          next.setZero(n);
-        }
-        else
-        {
-          next = cg[c].solveWithGuess(rhs, guess);
-          const int used = static_cast<int>(cg[c].iterations());
-          iterations[c] += used;
-          result.MaximumStepIterations[c] = std::max(result.MaximumStepIterations[c], used);
-          report.Residual[c] = std::max(report.Residual[c], cg[c].error());
-          if (cg[c].info() != Eigen::Success || !next.allFinite())
+          // (M / h + K) x' = M x / h, subSteps times; the right rectangle.
+          Eigen::VectorXd massX = massPhi[c];
+          next = phi[c];
+          lastEuler[c].setZero(n);
+          for (int j = 0; j < subSteps; ++j)
           {
-            report.Converged[c] = false;
+            rhs = massX / h;
+            guess = pulse && j == 0 ? Eigen::VectorXd::Zero(n) : next;
+            next = solve(c, rhs, guess);
+            lastEuler[c] += h * next;
+            MassTimes(system, mass, next, massX);
+          }
+          massNext = std::move(massX);
+          if (add)
+          {
+            gate[c] += lastEuler[c];
           }
         }
-        if (add)
+        else
         {
-          // Backward Euler: the right rectangle; BDF2: the trapezoid (the
-          // weights that make the sum over the steps K^-1 b exactly).
-          gate[c] += euler ? (dt * next).eval() : (0.5 * dt * (phi[c] + next)).eval();
+          // BDF2: (3/2 M / dt + K) phi' = M (2 phi - phi_prev / 2) / dt;
+          // the trapezoid.
+          rhs = (2.0 * massPhi[c] - 0.5 * massPhiPrevious[c]) / dt;
+          guess = s == eulerSteps ? Eigen::VectorXd(phi[c])
+                                  : Eigen::VectorXd(2.0 * phi[c] - phiPrevious[c]);
+          next = solve(c, rhs, guess);
+          MassTimes(system, mass, next, massNext);
+          if (add)
+          {
+            gate[c] += s == eulerSteps ? (0.5 * lastEuler[c] + 0.5 * dt * next).eval()
+                                       : (0.5 * dt * (phi[c] + next)).eval();
+          }
         }
         phiPrevious[c].swap(phi[c]);
         phi[c].swap(next);
         massPhiPrevious[c].swap(massPhi[c]);
-        MassTimes(system, mass, phi[c], massPhi[c]);
+        massPhi[c].swap(massNext);
       }
       pulse = false;
       ++stepsDone;

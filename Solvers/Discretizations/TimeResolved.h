@@ -15,14 +15,16 @@
  * right-hand side, M its mass matrix times eta / c (Discretization::AddMass:
  * lumped for divergence, consistent for fem). The pulse sets M phi(0+) = b.
  *
- * Time stepping: one backward-Euler step, then BDF2 with a constant step
+ * Time stepping: TimeGates::PulseEulerSteps (4) backward-Euler steps of
+ * PulseEulerSubSteps (4) sub-steps each, then BDF2 with a constant step
  * (second order, A-stable and strongly damping, so the delta start does not
  * ring as Crank-Nicolson would); when T0 > 0 the interval [0, T0] is
  * stepped first (steps of at most the gate step) and the gates restart with
  * one backward-Euler step. Each step solves the SPD system
  * (a M / dt + K) phi = rhs (a = 1 or 3/2) with Jacobi-preconditioned CG from
- * the extrapolated previous values. Gate averages: the backward-Euler step
- * contributes dt phi (right rectangle), the BDF2 steps the trapezoid rule.
+ * the extrapolated previous values. Gate averages: the backward-Euler steps
+ * contribute h phi (right rectangle), the BDF2 steps the trapezoid rule (the
+ * first one with half the last Euler step's integral for dt phi / 2).
  * With these weights the sum over all steps of the step integrals equals
  * K^-1 b, the continuous-wave solution, exactly (up to the CG tolerance and
  * the tail after the last step): the power identity the tests check.
@@ -60,6 +62,21 @@ struct TimeGates
    */
   int StepsPerGate = 0;
 
+  /**
+   * Backward-Euler steps from the pulse before BDF2 (each of
+   * PulseEulerSubSteps sub-steps). BDF2's history term 2 phi^n - phi^(n-1) / 2
+   * is negative where the field falls by more than 4x in a step, as it does
+   * next to the source just after the pulse: with one start step the
+   * fluence there went negative (-18 % of the largest value one gate later,
+   * 20k-tet box, pencil beam). Four steps of four sub-steps damp the fast
+   * modes by (1 + lambda dt / 4)^-16 before BDF2 takes over; their first-
+   * order error is small (measured time error at 4 steps per gate 0.10 %,
+   * against 0.11 % with one plain start step and 0.22 % with four).
+   */
+  static constexpr int PulseEulerSteps = 4;
+  /// Sub-steps of each of those backward-Euler steps (dt / 4 each: stronger
+  /// damping of the fast modes, a quarter of the first-order error).
+  static constexpr int PulseEulerSubSteps = 4;
   /// The automatic choice's least number of steps per gate.
   static constexpr int DefaultStepsPerGate = 4;
   /**

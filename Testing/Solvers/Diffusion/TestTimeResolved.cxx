@@ -258,12 +258,12 @@ void CheckInfiniteTimeResolved(const char* name, double fineRms, double fineMax)
   EXPECT_LT(previous, 0.003) << name; // 4 steps per gate
 }
 
-// Measured (32 cells, 0.6 mm in the test region): rms / max 0.015 / 0.059
-// (fem), 0.0052 / 0.028 (divergence), from 0.051 / 0.24 and 0.025 / 0.11 on
-// 16 cells (3.5x and 4.8x: second order in h); time error 0.028 / 0.0050 /
-// 0.0011 (fem) and 0.020 / 0.0042 / 0.00092 (divergence) at 1 / 2 / 4 steps
-// per gate (4.6-5.6x per halving: second order in dt). Tolerances: 2x the
-// measured mesh error (the CW test of TestDiffuseOptics has the same
+// Measured (32 cells, 0.6 mm in the test region): rms / max 0.015 / 0.058
+// (fem), 0.0052 / 0.028 (divergence), from 0.050 / 0.24 and 0.025 / 0.11 on
+// 16 cells (3.5x and 4.8x: second order in h); time error 0.017 / 0.0043 /
+// 0.0010 (fem) and 0.014 / 0.0036 / 0.00088 (divergence) at 1 / 2 / 4 steps
+// per gate (3.8-4.2x per halving: second order in dt). Tolerances: about 2x
+// the measured mesh error (the CW test of TestDiffuseOptics has the same
 // margin), 3x per halving, and a time error < 0.3 % at 4 steps per gate.
 TEST(TimeResolved, InfiniteMediumFem)
 {
