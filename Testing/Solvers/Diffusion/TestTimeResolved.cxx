@@ -350,7 +350,7 @@ double LogSlope(const std::vector<double>& t, const std::vector<double>& y, doub
 // ps, 2 steps per gate): peak / extrapolated 0.98-1.00 (fem), 0.92-0.95
 // (divergence); peak / Patterson 1.06-1.16 and 0.99-1.11 (the references
 // differ by 18 % at 10 mm, 8 % at 15 mm); late slope (0.8-1.2 ns) within
-// 0.5 % of Patterson's eq. 5 and 3 % of the extrapolated form (2.4 % apart);
+// 0.5 % of Patterson's eq. 5 and 3.5 % of the extrapolated form (2-3 % apart);
 // slope differences within 0.2 % of -(mu_a1 - mu_a2) c_m. Tolerances: peak
 // 10 % against the extrapolated form (the mesh; a 20 ps gate is 7 % of the
 // peak time at 10 mm) and the model difference plus 10 % against
