@@ -3,6 +3,7 @@
 #include "Options.h"
 #include "Utilities.h"
 
+#include "TimeResolved.h"
 #include "vtkSolveDiffusion.h"
 
 #include <cmath>
@@ -128,6 +129,39 @@ DetectorSpec ParseDetector(const std::string& spec)
   return detector;
 }
 
+TimeGatesSpec ParseTimeGates(const std::string& spec)
+{
+  const std::vector<double> v = ParseNumbers(spec, "--time-gates " + spec);
+  if (v.size() != 3)
+  {
+    throw UsageError("--time-gates " + spec + ": expected T0,T1,N (ns, ns, number of gates)");
+  }
+  const std::string count = spec.substr(spec.rfind(',') + 1);
+  if (!(v[2] == std::floor(v[2])))
+  {
+    throw UsageError("--time-gates " + spec + ": N = " + count + " is not a whole number of gates");
+  }
+  if (v[2] > translucency::TimeGates::MaximumTimeGates)
+  {
+    throw UsageError("--time-gates " + spec + ": N = " + count + " gates is more than the limit of " +
+      std::to_string(translucency::TimeGates::MaximumTimeGates));
+  }
+  translucency::TimeGates gates;
+  gates.Start = v[0];
+  gates.End = v[1];
+  if (v[2] < 1.0)
+  {
+    throw UsageError("--time-gates " + spec + ": N = " + count + " gates (expected N >= 1)");
+  }
+  gates.Count = static_cast<int>(v[2]);
+  const std::string fault = gates.Check();
+  if (!fault.empty())
+  {
+    throw UsageError("--time-gates " + spec + ": " + fault);
+  }
+  return { spec, gates.Start, gates.End, gates.Count };
+}
+
 void DiffuseOpticsOptions::Apply(vtkSolveDiffusion* solve) const
 {
   solve->RemoveAllSources();
@@ -150,6 +184,19 @@ void DiffuseOpticsOptions::Apply(vtkSolveDiffusion* solve) const
     solve->AddDetector(d.Position[0], d.Position[1], d.Position[2], d.Radius);
   }
   solve->SetModulationFrequency(this->Frequency);
+  solve->SetTimeGates(this->TimeGates.Start, this->TimeGates.End, this->TimeGates.Count);
+  solve->SetTimeStepsPerGate(this->StepsPerGate);
+  solve->RemoveAllTimeSnapshots();
+  for (int g : this->TimeSnapshots)
+  {
+    if (g >= this->TimeGates.Count)
+    {
+      throw UsageError("--time-snapshots: gate " + std::to_string(g) + " (expected 0.." +
+        std::to_string(this->TimeGates.Count - 1) + " for --time-gates " + this->TimeGates.Spec +
+        "; the gates are numbered from 0)");
+    }
+    solve->AddTimeSnapshot(g);
+  }
 }
 
 void DiffuseOpticsOptions::Print(vtkSolveDiffusion* solve) const
@@ -175,6 +222,34 @@ void DiffuseOpticsOptions::Print(vtkSolveDiffusion* solve) const
     }
     std::cout << std::setprecision(6) << "\n";
   }
+  const int gates = solve->GetNumberOfTimeGates();
+  if (gates == 0)
+  {
+    return;
+  }
+  std::cout << "time gates: " << gates << " of "
+            << (this->TimeGates.End - this->TimeGates.Start) / gates << " ns from "
+            << this->TimeGates.Start << " ns, " << solve->GetTimeStepsPerGateUsed()
+            << " time steps per gate; readings above are time integrals (J/mm^2 per J)\n";
+  for (std::size_t k = 0; k < this->Detectors.size(); ++k)
+  {
+    const int d = static_cast<int>(k);
+    std::cout << "detector " << this->Detectors[k].Spec
+              << ": TPSF, gate averages in J/(mm^2 ns) per J of pulse\n"
+              << "  t (ns)       fluence R    fluence G    fluence B    exitance R   exitance G"
+                 "   exitance B\n";
+    for (int g = 0; g < gates; ++g)
+    {
+      std::cout << "  " << std::fixed << std::setprecision(5) << std::setw(9)
+                << solve->GetTimeGateCentre(g) << std::scientific << std::setprecision(4);
+      for (int c = 0; c < 3; ++c)
+        std::cout << "  " << std::setw(11) << solve->GetDetectorFluenceTPSF(d, g, c);
+      for (int c = 0; c < 3; ++c)
+        std::cout << "  " << std::setw(11) << solve->GetDetectorExitanceTPSF(d, g, c);
+      std::cout << "\n";
+    }
+    std::cout << std::defaultfloat << std::setprecision(6);
+  }
 }
 
 void DiffuseOpticsOptions::Report(vtkSolveDiffusion* solve, nlohmann::json& j) const
@@ -194,6 +269,21 @@ void DiffuseOpticsOptions::Report(vtkSolveDiffusion* solve, nlohmann::json& j) c
     j["sources"].push_back(source);
   }
   static const char* channel[3] = { "R", "G", "B" };
+  const int gates = solve->GetNumberOfTimeGates();
+  if (gates > 0)
+  {
+    std::vector<double> centres;
+    for (int g = 0; g < gates; ++g)
+    {
+      centres.push_back(solve->GetTimeGateCentre(g));
+    }
+    j["time_gates"] = { { "spec", this->TimeGates.Spec }, { "t0_ns", this->TimeGates.Start },
+      { "t1_ns", this->TimeGates.End }, { "count", gates },
+      { "width_ns", (this->TimeGates.End - this->TimeGates.Start) / gates },
+      { "steps_per_gate", solve->GetTimeStepsPerGateUsed() },
+      { "gate_centres_ns", centres }, { "snapshots", this->TimeSnapshots },
+      { "reading", "gate average" } };
+  }
   for (std::size_t k = 0; k < this->Detectors.size(); ++k)
   {
     const int d = static_cast<int>(k);
@@ -211,6 +301,21 @@ void DiffuseOpticsOptions::Report(vtkSolveDiffusion* solve, nlohmann::json& j) c
       {
         detector["fluence_phase_rad"][channel[c]] = solve->GetDetectorFluencePhase(d, c);
         detector["exitance_phase_rad"][channel[c]] = solve->GetDetectorExitancePhase(d, c);
+      }
+    }
+    if (gates > 0)
+    {
+      // fluence_w_mm2 / exitance_w_mm2 above are then the time integrals.
+      for (int c = 0; c < 3; ++c)
+      {
+        std::vector<double> fluence, exitance;
+        for (int g = 0; g < gates; ++g)
+        {
+          fluence.push_back(solve->GetDetectorFluenceTPSF(d, g, c));
+          exitance.push_back(solve->GetDetectorExitanceTPSF(d, g, c));
+        }
+        detector["tpsf"]["fluence_j_mm2_ns"][channel[c]] = fluence;
+        detector["tpsf"]["exitance_j_mm2_ns"][channel[c]] = exitance;
       }
     }
     j["detectors"].push_back(detector);
@@ -248,11 +353,53 @@ void AddDiffuseOpticsOptions(CLI::App* command, DiffuseOpticsOptions& options)
       "radius r mm; reports fluence and exitance per channel (may repeat)")
     ->type_name("SPEC")
     ->group(group);
-  AddNumber(command, "--frequency", options.Frequency,
+  CLI::Option* frequency = AddNumber(command, "--frequency", options.Frequency,
     "modulation frequency (Hz): solve the frequency-domain equation;\n"
     "FluenceAmplitude and FluencePhase point arrays, detector phases",
     "HZ", [](double f) { return f > 0; }, "--frequency must be > 0 Hz")
     ->group(group);
+  CLI::Option* gates =
+    command
+      ->add_option_function<std::string>(
+        "--time-gates", [o](const std::string& spec) { o->TimeGates = ParseTimeGates(spec); },
+        "T0,T1,N: time-resolved: the response to a pulse at t = 0 (a\n"
+        "source of P W is a pulse of P J), averaged over N equal gates\n"
+        "covering [T0, T1] ns (T0 >= 0, N <= " +
+          std::to_string(translucency::TimeGates::MaximumTimeGates) +
+          "): a TPSF table per detector;\n"
+          "Fluence = the time integral (Documentation/DiffuseOptics.md)")
+      ->type_name("T0,T1,N")
+      ->group(group)
+      ->excludes(frequency);
+  AddNumber(command, "--steps-per-gate", options.StepsPerGate,
+    "time steps per gate (0 = automatic: 4, more where\nmu_a c dt / eta > 0.05)", "K",
+    [](double k) { return k >= 0 && k <= translucency::TimeGates::MaximumStepsPerGate; },
+    "--steps-per-gate must be 0 (automatic) to " +
+      std::to_string(translucency::TimeGates::MaximumStepsPerGate))
+    ->group(group)
+    ->needs(gates);
+  command
+    ->add_option_function<std::vector<std::string>>(
+      "--time-snapshots",
+      [o](const std::vector<std::string>& specs) {
+        for (const std::string& spec : specs)
+        {
+          for (double g : ParseNumbers(spec, "--time-snapshots " + spec))
+          {
+            if (!(g >= 0.0) || g != std::floor(g) || g > 1e9)
+            {
+              throw UsageError("--time-snapshots " + spec +
+                ": a gate is a whole number >= 0 (gates are numbered from 0)");
+            }
+            o->TimeSnapshots.push_back(static_cast<int>(g));
+          }
+        }
+      },
+      "G[,G...]: add the gate-averaged fluence of these gates\n"
+      "(0-based) as point arrays FluenceGate<G> to the .vtu")
+    ->type_name("G,...")
+    ->group(group)
+    ->needs(gates);
 }
 
 } // namespace translucency_app

@@ -16,6 +16,7 @@
 #include "vtkTranslucencyParallel.h"
 
 #include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
 #include <vtkFieldData.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
@@ -61,6 +62,9 @@ struct vtkSolveDiffusion::Internals
   /// The distributed path's solver (kept: hierarchy and warm start).
   vtkTranslucencyDistributedSolve Distributed;
   std::string ParallelPath;
+  /// Time gates: the snapshots asked for and the last time-resolved result.
+  std::vector<int> TimeSnapshots;
+  translucency::TimeResolvedResult TimeResolved;
 };
 
 //------------------------------------------------------------------------------
@@ -281,6 +285,68 @@ void vtkSolveDiffusion::GetDetectorSurfacePosition(int detector, double position
 }
 
 //------------------------------------------------------------------------------
+void vtkSolveDiffusion::SetTimeGates(double t0, double t1, int n)
+{
+  if (t0 != this->TimeGatesStart || t1 != this->TimeGatesEnd || n != this->TimeGatesCount)
+  {
+    this->TimeGatesStart = t0;
+    this->TimeGatesEnd = t1;
+    this->TimeGatesCount = n;
+    this->Modified();
+  }
+}
+
+void vtkSolveDiffusion::AddTimeSnapshot(int gate)
+{
+  this->Internal->TimeSnapshots.push_back(gate);
+  this->Modified();
+}
+
+void vtkSolveDiffusion::RemoveAllTimeSnapshots()
+{
+  if (!this->Internal->TimeSnapshots.empty())
+  {
+    this->Internal->TimeSnapshots.clear();
+    this->Modified();
+  }
+}
+
+int vtkSolveDiffusion::GetNumberOfTimeGates() const
+{
+  const auto& r = this->Internal->TimeResolved;
+  return r.IntegratedFluence.empty() ? 0 : r.Gates.Count;
+}
+
+double vtkSolveDiffusion::GetTimeGateCentre(int gate) const
+{
+  const auto& r = this->Internal->TimeResolved;
+  return gate >= 0 && gate < this->GetNumberOfTimeGates() ? r.Gates.GetGateCentre(gate) : 0.0;
+}
+
+int vtkSolveDiffusion::GetTimeStepsPerGateUsed() const
+{
+  return this->GetNumberOfTimeGates() > 0 ? this->Internal->TimeResolved.Gates.StepsPerGate : 0;
+}
+
+double vtkSolveDiffusion::GetDetectorFluenceTPSF(int detector, int gate, int channel) const
+{
+  const auto& r = this->Internal->TimeResolved.Readings;
+  return gate >= 0 && static_cast<std::size_t>(gate) < r.size() &&
+      InRange(detector, channel, r[gate].size())
+    ? r[gate][detector].Fluence[channel]
+    : 0.0;
+}
+
+double vtkSolveDiffusion::GetDetectorExitanceTPSF(int detector, int gate, int channel) const
+{
+  const auto& r = this->Internal->TimeResolved.Readings;
+  return gate >= 0 && static_cast<std::size_t>(gate) < r.size() &&
+      InRange(detector, channel, r[gate].size())
+    ? r[gate][detector].Exitance[channel]
+    : 0.0;
+}
+
+//------------------------------------------------------------------------------
 namespace
 {
 /// The lights vtkSurfaceIrradiance recorded in the field data (for Monte Carlo).
@@ -333,6 +399,7 @@ int vtkSolveDiffusion::RequestData(
     this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
   if (this->DistributedSolve && vertexSolver && this->Internal->Sources.Empty() &&
     this->Internal->Detectors.empty() && this->ModulationFrequency == 0.0 &&
+    this->TimeGatesCount == 0 &&
     vtkTranslucencyDistributedSolve::IsAllowedByEnvironment() &&
     vtkTranslucencyDistributedSolve::IsAvailable())
   {
@@ -364,10 +431,39 @@ int vtkSolveDiffusion::RequestData(
   in.Readings.clear();
   in.FluencePhase.clear();
   in.ExitancePhase.clear();
+  in.TimeResolved = translucency::TimeResolvedResult();
   if (!std::isfinite(this->ModulationFrequency) || this->ModulationFrequency < 0.0)
   {
     vtkErrorMacro(<< "ModulationFrequency " << this->ModulationFrequency
                   << " Hz: expected a finite value >= 0 (0 = continuous wave)");
+    return 0;
+  }
+  const bool timeResolved = this->TimeGatesCount != 0;
+  translucency::TimeGates gates;
+  gates.Start = this->TimeGatesStart;
+  gates.End = this->TimeGatesEnd;
+  gates.Count = this->TimeGatesCount;
+  gates.StepsPerGate = this->TimeStepsPerGate;
+  if (timeResolved)
+  {
+    const std::string fault = gates.Check();
+    if (!fault.empty())
+    {
+      vtkErrorMacro(<< "TimeGates (" << gates.Start << ", " << gates.End << ", " << gates.Count
+                    << "): " << fault);
+      return 0;
+    }
+    if (this->ModulationFrequency > 0.0)
+    {
+      vtkErrorMacro(<< "ModulationFrequency " << this->ModulationFrequency
+                    << " Hz and TimeGates together: choose the frequency domain or the time "
+                       "domain");
+      return 0;
+    }
+  }
+  else if (!in.TimeSnapshots.empty())
+  {
+    vtkErrorMacro(<< "time snapshots without TimeGates: call SetTimeGates(T0, T1, N) first");
     return 0;
   }
 
@@ -488,12 +584,12 @@ int vtkSolveDiffusion::RequestData(
     }
 
     const bool frequencyDomain = this->ModulationFrequency > 0.0;
-    if ((frequencyDomain || !in.Sources.Empty() || !in.Detectors.empty()) &&
+    if ((frequencyDomain || timeResolved || !in.Sources.Empty() || !in.Detectors.empty()) &&
       !entry.Properties.UnknownsAtVertices)
     {
       vtkErrorMacro(<< "the " << entry.Name
-                    << " solver has no interior sources, detectors or frequency domain: they "
-                       "are implemented for the divergence and fem solvers");
+                    << " solver has no interior sources, detectors, frequency domain or time "
+                       "gates: they are implemented for the divergence and fem solvers");
       return 0;
     }
     // The detectors read the material and the irradiance after the solve.
@@ -506,7 +602,44 @@ int vtkSolveDiffusion::RequestData(
     }
     std::vector<double> fluence;
     std::vector<double> amplitude, phase;
-    if (frequencyDomain)
+    if (timeResolved)
+    {
+      auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver);
+      translucency::DiffusionProblem problem = light;
+      problem.Mesh = mesh.get();
+      problem.Material = &material;
+      problem.Irradiance = &irradiance;
+      if (!vertex ||
+        !vertex->SolveTimeResolved(
+          problem, gates, in.Detectors, in.TimeSnapshots, in.TimeResolved, in.Report))
+      {
+        return 0; // aborted by the user
+      }
+      fluence = in.TimeResolved.IntegratedFluence;
+      if (!in.Detectors.empty())
+      {
+        // The time integrals of the gate averages (the continuous-wave
+        // readings when the gates cover the whole response).
+        const double width = in.TimeResolved.Gates.GetWidth();
+        in.Readings = in.TimeResolved.Readings.front();
+        for (std::size_t k = 0; k < in.Readings.size(); ++k)
+        {
+          in.Readings[k].Fluence.fill(0.0);
+          in.Readings[k].Exitance.fill(0.0);
+          for (const auto& gate : in.TimeResolved.Readings)
+          {
+            for (int c = 0; c < 3; ++c)
+            {
+              in.Readings[k].Fluence[c] += width * gate[k].Fluence[c];
+              in.Readings[k].Exitance[c] += width * gate[k].Exitance[c];
+            }
+          }
+        }
+        in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
+        in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
+      }
+    }
+    else if (frequencyDomain)
     {
       auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver);
       translucency::DiffusionProblem problem = light;
@@ -603,6 +736,43 @@ int vtkSolveDiffusion::RequestData(
     attach("MonteCarloRadianceStandardError", in.Report.RadianceStandardError);
     attach("FluenceAmplitude", amplitude);
     attach("FluencePhase", phase);
+    const translucency::TimeResolvedResult& timeResult = in.TimeResolved;
+    for (std::size_t k = 0; k < timeResult.Snapshots.size(); ++k)
+    {
+      attach(("FluenceGate" + std::to_string(timeResult.SnapshotGates[k])).c_str(),
+        timeResult.Snapshots[k]);
+    }
+    if (timeResolved)
+    {
+      vtkNew<vtkDoubleArray> centres;
+      centres->SetName("TimeGateCentres");
+      for (int g = 0; g < timeResult.Gates.Count; ++g)
+      {
+        centres->InsertNextValue(timeResult.Gates.GetGateCentre(g));
+      }
+      output->GetFieldData()->AddArray(centres);
+      for (std::size_t k = 0; k < in.Detectors.size(); ++k)
+      {
+        std::vector<double> tpsfFluence, tpsfExitance;
+        for (const auto& gate : timeResult.Readings)
+        {
+          for (int c = 0; c < 3; ++c)
+          {
+            tpsfFluence.push_back(gate[k].Fluence[c]);
+            tpsfExitance.push_back(gate[k].Exitance[c]);
+          }
+        }
+        for (const auto& [name, values] :
+          { std::make_pair("DetectorFluenceTPSF", &tpsfFluence),
+            std::make_pair("DetectorExitanceTPSF", &tpsfExitance) })
+        {
+          vtkDataArray* array = vtkTranslucency::NewTripleArray(
+            (std::string(name) + std::to_string(k)).c_str(), *values);
+          output->GetFieldData()->AddArray(array);
+          array->Delete();
+        }
+      }
+    }
     if (!in.Readings.empty())
     {
       std::vector<double> position, detectorFluence, exitance, fluencePhase, exitancePhase;
@@ -766,4 +936,7 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Detectors: " << this->GetNumberOfDetectors() << "\n";
   os << indent << "ModulationFrequency: " << this->ModulationFrequency << " Hz\n";
   os << indent << "DistributedSolve: " << this->DistributedSolve << "\n";
+  os << indent << "TimeGates: " << this->TimeGatesStart << ", " << this->TimeGatesEnd << " ns, "
+     << this->TimeGatesCount << " gates\n";
+  os << indent << "TimeStepsPerGate: " << this->TimeStepsPerGate << "\n";
 }

@@ -54,11 +54,23 @@
  *    equation; point arrays `FluenceAmplitude`, `FluencePhase` (radians,
  *    arg of the complex fluence: negative = lagging the source) and
  *    `Fluence` = the amplitude; the detectors read amplitudes and also give
- *    `DetectorFluencePhase`, `DetectorExitancePhase`.
+ *    `DetectorFluencePhase`, `DetectorExitancePhase`;
+ *  - time-resolved (SetTimeGates(T0, T1, N), N > 0): the response to a
+ *    pulse at t = 0 of the sources (energy P J for a power P) and of the
+ *    irradiance, averaged over N equal gates covering [T0, T1] ns, by
+ *    implicit time stepping (translucency::TimeGates); `Fluence` is then the
+ *    time integral over [T0, T1] (J/mm^2: the continuous-wave fluence when
+ *    the gates cover the whole response), the detector readings are the
+ *    time integrals too, and the field arrays `TimeGateCentres` (ns, one
+ *    tuple per gate), `DetectorFluenceTPSF<k>` and `DetectorExitanceTPSF<k>`
+ *    (k = 0, 1, ...: 3 components, one tuple per gate, J/(mm^2 ns)) hold the
+ *    temporal point-spread functions; AddTimeSnapshot(g) adds the point
+ *    array `FluenceGate<g>` (the gate-averaged fluence, J/(mm^2 ns)).
  * A source outside the object, a pencil beam pointing out of the surface, a
- * detector off the surface or a negative frequency make RequestData fail
- * with an error naming it; so do sources or a frequency with the quadgraph,
- * grid or montecarlo solvers. The sources need the whole mesh in one piece.
+ * detector off the surface, a negative frequency or invalid time gates make
+ * RequestData fail with an error naming it; so do sources, a frequency or
+ * time gates with the quadgraph, grid or montecarlo solvers, and a frequency
+ * together with time gates. The sources need the whole mesh in one piece.
  *
  * @warning A solve that does not reach RelTol within MaxIter iterations is
  * not an error: the filter warns with the channel, iterations and residual,
@@ -297,6 +309,42 @@ public:
   /// every rank); empty before the first one.
   const char* GetParallelPath() const;
 
+  ///@{
+  /// Time gates: N gates covering [T0, T1] ns (T0 >= 0, T1 > T0, N in
+  /// 1..10000); N = 0 (the default) solves the continuous-wave (or
+  /// frequency-domain) equation. Invalid values make RequestData fail.
+  void SetTimeGates(double t0, double t1, int n);
+  double GetTimeGatesStart() const { return this->TimeGatesStart; }
+  double GetTimeGatesEnd() const { return this->TimeGatesEnd; }
+  int GetTimeGatesCount() const { return this->TimeGatesCount; }
+  ///@}
+
+  ///@{
+  /// Time steps per gate, 1..1000, or 0 (the default) for automatic: 4, or
+  /// more where mu_a c_m dt would exceed 0.05 (translucency::TimeGates).
+  vtkSetClampMacro(TimeStepsPerGate, int, 0, 1000);
+  vtkGetMacro(TimeStepsPerGate, int);
+  ///@}
+
+  ///@{
+  /// Gates (0-based) whose gate-averaged fluence is added as the point array
+  /// `FluenceGate<g>`. None by default; a gate >= N is an error.
+  void AddTimeSnapshot(int gate);
+  void RemoveAllTimeSnapshots();
+  ///@}
+
+  ///@{
+  /// Time-resolved results of the last solve: the gate centres (ns), the
+  /// steps per gate used, and detector k's gate-averaged fluence and
+  /// exitance in gate g, channel c (J/(mm^2 ns) per J of pulse; 0 if out of
+  /// range).
+  int GetNumberOfTimeGates() const;
+  double GetTimeGateCentre(int gate) const;
+  int GetTimeStepsPerGateUsed() const;
+  double GetDetectorFluenceTPSF(int detector, int gate, int channel) const;
+  double GetDetectorExitanceTPSF(int detector, int gate, int channel) const;
+  ///@}
+
   /// How the last vertex solve (divergence, fem) built its system: "full" or
   /// "incremental"; the distributed path: "full" or "unchanged" (matrix
   /// values as in the last solve on every rank, e.g. a relight: the hypre
@@ -359,6 +407,10 @@ protected:
   double MaximumChangedFraction = 0.05;
   double ModulationFrequency = 0.0;
   bool DistributedSolve = true;
+  double TimeGatesStart = 0.0;
+  double TimeGatesEnd = 0.0;
+  int TimeGatesCount = 0;
+  int TimeStepsPerGate = 0;
   double TopologyTime = 0.0;
   double AssemblyTime = 0.0;
   double SolveTime = 0.0;

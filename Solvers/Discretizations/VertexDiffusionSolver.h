@@ -17,6 +17,7 @@
 #include "DiffusionSolver.h"
 #include "Discretization.h"
 #include "LinearSolver.h"
+#include "TimeResolved.h"
 
 #include <complex>
 #include <cstdint>
@@ -55,6 +56,28 @@ public:
    */
   bool SolveFrequencyDomain(const DiffusionProblem& problem, double frequency,
     std::vector<std::complex<double>>& fluence, SolverReport& report);
+
+  /**
+   * Time-resolved (TimeResolved.h has the equation, the scheme and the
+   * units): the response to a pulse of the sources and the boundary
+   * irradiance at t = 0 (energy P J for a source of power P), averaged over
+   * `gates`, by implicit time stepping (one backward-Euler step, then BDF2)
+   * with this discretisation's mass matrix; each step is solved per channel
+   * by Jacobi-preconditioned CG to GetRelTol() within GetMaxIter()
+   * iterations from the extrapolated previous values (the linear-solver
+   * name is not used). Implemented in TimeResolved.cxx.
+   * @param gates validated (TimeGates::Validate throws translucency::Error)
+   * @param detectors read at every gate (ReadDetectors); may be empty
+   * @param snapshotGates gates (0-based) whose gate-averaged fluence is kept
+   *        (an index outside 0..N-1 is a translucency::Error)
+   * @param result the readings, the integrated fluence and the snapshots;
+   *        report: Iterations are summed over the steps, Residual is the
+   *        largest of the steps', Converged false if any step did not.
+   * Returns false if the progress callback aborted.
+   */
+  bool SolveTimeResolved(const DiffusionProblem& problem, const TimeGates& gates,
+    const std::vector<Detector>& detectors, const std::vector<int>& snapshotGates,
+    TimeResolvedResult& result, SolverReport& report);
 
   /**
    * Painting (TransCut Sec. 5.2): the next Solve() only rebuilds the rows of

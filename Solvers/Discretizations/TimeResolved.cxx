@@ -1,0 +1,447 @@
+// Time-resolved diffusion: VertexDiffusionSolver::SolveTimeResolved and the
+// time gates (TimeResolved.h has the equations and the scheme).
+#include "TimeResolved.h"
+
+#include "Error.h"
+#include "TetMesh.h"
+#include "Timer.h"
+#include "VertexDiffusionSolver.h"
+
+#include <Eigen/IterativeLinearSolvers>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <sstream>
+
+namespace translucency
+{
+
+long long TimeGates::GetStepsBeforeStart() const
+{
+  if (!(Start > 0.0))
+  {
+    return 0;
+  }
+  // A tolerance so that T0 = k x step (up to rounding) gives k steps.
+  return static_cast<long long>(std::ceil(Start / GetTimeStep() * (1.0 - 1e-12)));
+}
+
+int TimeGates::ChooseStepsPerGate(double absorptionRate) const
+{
+  if (StepsPerGate > 0)
+  {
+    return StepsPerGate;
+  }
+  const double needed = std::ceil(GetWidth() * absorptionRate / MaximumDecayPerStep);
+  return static_cast<int>(std::min<double>(
+    std::max<double>(DefaultStepsPerGate, std::isfinite(needed) ? needed : 0.0),
+    MaximumStepsPerGate + 1.0)); // beyond the limit: Check() says so
+}
+
+std::string TimeGates::Check() const
+{
+  if (StepsPerGate == 0)
+  {
+    TimeGates chosen = *this;
+    chosen.StepsPerGate = DefaultStepsPerGate;
+    return chosen.Check();
+  }
+  std::ostringstream out;
+  out.precision(10);
+  if (!std::isfinite(Start) || !std::isfinite(End))
+  {
+    out << "T0 = " << Start << " ns and T1 = " << End << " ns must be finite";
+  }
+  else if (Start < 0.0)
+  {
+    out << "T0 = " << Start << " ns is negative (the pulse is at t = 0; expected T0 >= 0)";
+  }
+  else if (!(End > Start))
+  {
+    out << "T1 = " << End << " ns is not after T0 = " << Start << " ns (expected T0 < T1)";
+  }
+  else if (Count < 1)
+  {
+    out << "N = " << Count << " gates (expected N >= 1)";
+  }
+  else if (Count > MaximumTimeGates)
+  {
+    out << "N = " << Count << " gates is more than the limit of " << MaximumTimeGates;
+  }
+  else if (StepsPerGate < 0 || StepsPerGate > MaximumStepsPerGate)
+  {
+    out << StepsPerGate << " steps per gate (expected 1.." << MaximumStepsPerGate
+        << ", or 0 for automatic)";
+  }
+  else if (!(GetTimeStep() > 0.0) || !std::isfinite(Start / GetTimeStep()))
+  {
+    out << "the gates are too narrow: step " << GetTimeStep() << " ns";
+  }
+  else if (Start / GetTimeStep() + 1.0 * Count * StepsPerGate > MaximumTimeSteps)
+  {
+    out << "these gates need " << std::ceil(Start / GetTimeStep()) + 1.0 * Count * StepsPerGate
+        << " time steps of " << GetTimeStep() << " ns (" << StepsPerGate
+        << " per gate, from t = 0 to T1 = " << End << " ns); the limit is " << MaximumTimeSteps
+        << ": use fewer or wider gates, or fewer steps per gate (the automatic choice takes "
+        << DefaultStepsPerGate << ", more where mu_a c_m dt would exceed "
+        << MaximumDecayPerStep << ")";
+  }
+  return out.str();
+}
+
+void TimeGates::Validate() const
+{
+  const std::string fault = Check();
+  if (!fault.empty())
+  {
+    std::ostringstream out;
+    out.precision(10);
+    out << "time gates " << Start << "," << End << "," << Count << ": " << fault;
+    throw Error(out.str());
+  }
+}
+
+namespace
+{
+
+using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+using CG = Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper,
+  Eigen::DiagonalPreconditioner<double>>;
+
+/// y = M x for the mass values on the system's pattern (OpenMP rows).
+void MassTimes(const DiffusionSystem& system, const std::vector<double>& mass,
+  const Eigen::VectorXd& x, Eigen::VectorXd& y)
+{
+  const int n = system.NumberOfUnknowns;
+  y.resize(n);
+  const int* rows = system.RowOffsets.data();
+  const int* cols = system.ColumnIndices.data();
+  const double* values = mass.data();
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i)
+  {
+    double sum = 0.0;
+    for (int k = rows[i]; k < rows[i + 1]; ++k)
+    {
+      sum += values[k] * x[cols[k]];
+    }
+    y[i] = sum;
+  }
+}
+
+} // namespace
+
+bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
+  const TimeGates& gates, const std::vector<Detector>& detectors,
+  const std::vector<int>& snapshotGates, TimeResolvedResult& result, SolverReport& report)
+{
+  if (!problem.Mesh || !problem.Material || !problem.Irradiance)
+  {
+    throw Error(GetName() + ": the problem needs a mesh, a material and an irradiance");
+  }
+  gates.Validate();
+  const OpticalProperties& material = *problem.Material;
+  material.Validate(problem.Mesh->GetNumberOfTets());
+  double absorptionRate = 0.0; // the largest mu_a c_m, 1/ns
+  for (std::size_t t = 0; t < material.RefractiveIndex.size(); ++t)
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      absorptionRate = std::max(absorptionRate, material.AbsorptionCoefficient[3 * t + c] *
+          SpeedOfLightMillimetresPerNanosecond / material.RefractiveIndex[t]);
+    }
+  }
+  TimeGates used = gates;
+  used.StepsPerGate = gates.ChooseStepsPerGate(absorptionRate);
+  used.Validate();
+  for (int g : snapshotGates)
+  {
+    if (g < 0 || g >= gates.Count)
+    {
+      std::ostringstream out;
+      out << GetName() << ": snapshot gate " << g << " (expected 0.." << gates.Count - 1
+          << ", the gates are numbered from 0)";
+      throw Error(out.str());
+    }
+  }
+  const TetMesh& mesh = *problem.Mesh;
+  const std::vector<double>& irradiance = *problem.Irradiance;
+  report = SolverReport();
+  report.Solver = GetName();
+  report.LinearSolver = "cg-jacobi";
+  report.Assembly = "full";
+  result = TimeResolvedResult();
+  result.Gates = used;
+  result.TimeStep = used.GetTimeStep();
+  result.SnapshotGates = snapshotGates;
+
+  auto start = Clock::now();
+  std::vector<double> sourceLoad;
+  if (problem.HasInteriorSources())
+  {
+    sourceLoad = problem.InteriorSources->ComputeLoad(mesh, material);
+  }
+  DiffusionSystem system; // K and b of the continuous-wave solve
+  Discretization_->Assemble(mesh, material, irradiance, system);
+  if (!sourceLoad.empty())
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      for (int i = 0; i < system.NumberOfUnknowns; ++i)
+      {
+        system.RightHandSide[c][i] += 4.0 * sourceLoad[3 * static_cast<std::size_t>(i) + c];
+      }
+    }
+  }
+  // M: the mass matrix times 1 / c_m = eta / c (ns/mm), the same for the
+  // three channels (eta is per tet).
+  const int numTets = mesh.GetNumberOfTets();
+  const std::size_t nnz = system.ColumnIndices.size();
+  std::vector<double> coefficient(3 * static_cast<std::size_t>(numTets));
+  for (int t = 0; t < numTets; ++t)
+  {
+    const double value = material.RefractiveIndex[t] / SpeedOfLightMillimetresPerNanosecond;
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      coefficient[3 * static_cast<std::size_t>(t) + c] = value;
+    }
+  }
+  std::vector<double> mass;
+  {
+    std::array<std::vector<double>, NumberOfChannels> masses;
+    for (auto& values : masses)
+    {
+      values.assign(nnz, 0.0);
+    }
+    if (!Discretization_->AddMass(mesh, coefficient, masses))
+    {
+      throw Error(GetName() + ": this discretisation has no time-resolved solve");
+    }
+    mass = std::move(masses[0]);
+  }
+  // The step matrices a M / dt + K share K's pattern.
+  DiffusionSystem step;
+  step.NumberOfUnknowns = system.NumberOfUnknowns;
+  step.RowOffsets = system.RowOffsets;
+  step.ColumnIndices = system.ColumnIndices;
+  std::array<CG, NumberOfChannels> cg;
+  double matrixFactor = -1.0; // a / dt of step.Values
+  const auto setMatrix = [&](double factor) {
+    if (factor == matrixFactor)
+    {
+      return;
+    }
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      step.Values[c].resize(nnz);
+      for (std::size_t k = 0; k < nnz; ++k)
+      {
+        step.Values[c][k] = system.Values[c][k] + factor * mass[k];
+      }
+      cg[c].setTolerance(RelTol_);
+      cg[c].setMaxIterations(MaxIter_);
+      cg[c].compute(step.Matrix(c));
+      if (cg[c].info() != Eigen::Success)
+      {
+        throw Error(GetName() + ": the time-step matrix has a zero or non-finite diagonal");
+      }
+    }
+    matrixFactor = factor;
+  };
+  report.SetupMilliseconds = MillisecondsSince(start);
+
+  start = Clock::now();
+  const int n = system.NumberOfUnknowns;
+  // Per channel: phi at the last two steps, M phi at the last two steps,
+  // the integral over the current gate and over [T0, T1].
+  std::array<Eigen::VectorXd, NumberOfChannels> phi, phiPrevious, massPhi, massPhiPrevious, gate,
+    integral;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    phi[c].setZero(n);
+    phiPrevious[c].setZero(n);
+    massPhi[c] = system.RightHandSide[c]; // M phi(0+) = b: the pulse
+    massPhiPrevious[c].setZero(n);
+    gate[c].setZero(n);
+    integral[c].setZero(n);
+    report.Converged[c] = true;
+  }
+  const long long totalSteps = used.GetNumberOfSteps();
+  long long stepsDone = 0;
+  std::array<long long, NumberOfChannels> iterations{};
+  bool pulse = true; // the next step starts from the pulse (phi is a delta)
+
+  // One segment: `steps` steps of dt, the first backward Euler, the others
+  // BDF2; `add` the step integrals to the current gate; `gateEnd(step)` after
+  // every step (to close gates).
+  Eigen::VectorXd rhs(n), guess(n);
+  // The integral of the last backward-Euler step, per channel: the first
+  // BDF2 interval takes half of it in place of dt phi / 2, which keeps the
+  // sum over the steps exactly K^-1 b (Documentation/DiffuseOptics.md).
+  std::array<Eigen::VectorXd, NumberOfChannels> lastEuler;
+  // One linear solve of channel c from `guess`, with the statistics.
+  const auto solve = [&](int c, const Eigen::VectorXd& right, const Eigen::VectorXd& start) {
+    Eigen::VectorXd next;
+    if (right.squaredNorm() == 0.0)
+    {
+      next.setZero(n);
+      return next;
+    }
+    next = cg[c].solveWithGuess(right, start);
+    const int used = static_cast<int>(cg[c].iterations());
+    iterations[c] += used;
+    result.MaximumStepIterations[c] = std::max(result.MaximumStepIterations[c], used);
+    report.Residual[c] = std::max(report.Residual[c], cg[c].error());
+    if (cg[c].info() != Eigen::Success || !next.allFinite())
+    {
+      report.Converged[c] = false;
+    }
+    return next;
+  };
+  const auto runSegment = [&](long long steps, double dt, bool add,
+                            const std::function<void(long long)>& afterStep) -> bool {
+    // From the pulse: TimeGates::PulseEulerSteps backward-Euler steps of
+    // PulseEulerSubSteps sub-steps each (see there); a restart from a
+    // smooth field: one step.
+    const bool fromPulse = pulse;
+    const long long eulerSteps = fromPulse ? TimeGates::PulseEulerSteps : 1;
+    const int subSteps = fromPulse ? TimeGates::PulseEulerSubSteps : 1;
+    const double h = dt / subSteps;
+    for (long long s = 0; s < steps; ++s)
+    {
+      const bool euler = s < eulerSteps;
+      setMatrix(euler ? 1.0 / h : 1.5 / dt);
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        Eigen::VectorXd next, massNext;
+        if (euler)
+        {
+          // (M / h + K) x' = M x / h, subSteps times; the right rectangle.
+          Eigen::VectorXd massX = massPhi[c];
+          next = phi[c];
+          lastEuler[c].setZero(n);
+          for (int j = 0; j < subSteps; ++j)
+          {
+            rhs = massX / h;
+            guess = pulse && j == 0 ? Eigen::VectorXd::Zero(n) : next;
+            next = solve(c, rhs, guess);
+            lastEuler[c] += h * next;
+            MassTimes(system, mass, next, massX);
+          }
+          massNext = std::move(massX);
+          if (add)
+          {
+            gate[c] += lastEuler[c];
+          }
+        }
+        else
+        {
+          // BDF2: (3/2 M / dt + K) phi' = M (2 phi - phi_prev / 2) / dt;
+          // the trapezoid.
+          rhs = (2.0 * massPhi[c] - 0.5 * massPhiPrevious[c]) / dt;
+          guess = s == eulerSteps ? Eigen::VectorXd(phi[c])
+                                  : Eigen::VectorXd(2.0 * phi[c] - phiPrevious[c]);
+          next = solve(c, rhs, guess);
+          MassTimes(system, mass, next, massNext);
+          if (add)
+          {
+            gate[c] += s == eulerSteps ? (0.5 * lastEuler[c] + 0.5 * dt * next).eval()
+                                       : (0.5 * dt * (phi[c] + next)).eval();
+          }
+        }
+        phiPrevious[c].swap(phi[c]);
+        phi[c].swap(next);
+        massPhiPrevious[c].swap(massPhi[c]);
+        massPhi[c].swap(massNext);
+      }
+      pulse = false;
+      ++stepsDone;
+      afterStep(s);
+      if (!ReportProgress(static_cast<double>(stepsDone) / static_cast<double>(totalSteps)))
+      {
+        return false;
+      }
+    }
+    return true;
+  };
+
+  // [0, T0]: steps of at most the gate step, nothing recorded.
+  const long long before = used.GetStepsBeforeStart();
+  if (before > 0 &&
+    !runSegment(before, used.Start / static_cast<double>(before), false, [](long long) {}))
+  {
+    return false;
+  }
+  // The gates.
+  const double width = used.GetWidth();
+  std::vector<double> irradianceOverWidth;
+  if (!detectors.empty() && before == 0)
+  {
+    // The q delta(t) term of the exitance, averaged over the first gate.
+    irradianceOverWidth = irradiance;
+    for (double& q : irradianceOverWidth)
+    {
+      q /= width;
+    }
+  }
+  std::vector<double> points;
+  std::array<Eigen::VectorXd, NumberOfChannels> average;
+  const auto closeGate = [&](long long s) {
+    if ((s + 1) % used.StepsPerGate != 0)
+    {
+      return;
+    }
+    const int g = static_cast<int>(s / used.StepsPerGate);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      integral[c] += gate[c];
+      average[c] = gate[c] / width;
+      gate[c].setZero();
+    }
+    const auto snapshot = std::find(snapshotGates.begin(), snapshotGates.end(), g);
+    if (detectors.empty() && snapshot == snapshotGates.end())
+    {
+      return;
+    }
+    Discretization_->ToPointFluence(mesh, system, average, points);
+    if (!detectors.empty())
+    {
+      result.Readings.push_back(ReadDetectors(mesh, material, detectors, points,
+        g == 0 && !irradianceOverWidth.empty() ? &irradianceOverWidth : nullptr));
+    }
+    if (snapshot != snapshotGates.end())
+    {
+      result.Snapshots.resize(snapshotGates.size());
+      for (std::size_t k = 0; k < snapshotGates.size(); ++k)
+      {
+        if (snapshotGates[k] == g)
+        {
+          result.Snapshots[k] = points;
+        }
+      }
+    }
+  };
+  if (!runSegment(static_cast<long long>(used.Count) * used.StepsPerGate,
+        used.GetTimeStep(), true, closeGate))
+  {
+    return false;
+  }
+  Discretization_->ToPointFluence(mesh, system, integral, result.IntegratedFluence);
+  result.NumberOfSteps = stepsDone;
+  report.SolveMilliseconds = MillisecondsSince(start);
+  report.NumberOfUnknowns = n;
+  report.NumberOfNonZeros = static_cast<long long>(nnz);
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    report.Iterations[c] = static_cast<int>(std::min<long long>(iterations[c], 2147483647LL));
+  }
+  // The system, the mass and step values, 8 vectors per channel and the
+  // snapshots.
+  report.MemoryBytes = system.GetMemoryBytes() + (1 + NumberOfChannels) * nnz * sizeof(double) +
+    8 * NumberOfChannels * static_cast<std::size_t>(n) * sizeof(double) +
+    result.Snapshots.size() * 3 * static_cast<std::size_t>(n) * sizeof(double);
+  return true;
+}
+
+} // namespace translucency
