@@ -130,14 +130,15 @@ int vtkSurfaceIrradiance::RequestData(
     return 0;
   }
   const translucency::TetMesh& mesh = *this->Internal->Mesh;
-  const std::vector<double> pointEta = translucency::PointRefractiveIndex(mesh, tetEta);
   this->UpdateProgress(0.1);
 
   // Direct and uniform light with self-shadowing, OpenMP-parallel in the core.
   std::vector<double> q;
   try
   {
-    const bool completed = translucency::ComputeBoundaryIrradiance(mesh, pointEta, lights,
+    // Per boundary triangle (each corner with the triangle's own normal),
+    // projected to the points: the solvers' loads are triangle-integrated.
+    const bool completed = translucency::ComputeProjectedIrradiance(mesh, tetEta, lights,
       this->UniformLightIrradiance, this->UniformLightSamples, this->Shadows, q,
       [this]() { return this->GetAbortExecute() != 0; });
     if (!completed)
