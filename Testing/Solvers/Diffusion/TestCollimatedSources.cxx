@@ -302,3 +302,115 @@ TEST(CollimatedSource, PowerBalanceHolds)
 }
 
 } // namespace translucency
+
+namespace translucency
+{
+
+// The issue's box (20 x 20 x 10 mm, mu_a 0.01/mm, mu_s' 1/mm, eta 1.3) lit
+// face-on: the mean fluence over the vertices 2-7 mm deep within 4 mm of the
+// axis, of divergence and fem with the surface and the extended model,
+// against our Monte Carlo (isotropic scattering, mu_s = mu_s'; it agrees
+// with an independent transport code within 1 %; here 4 x 100k photons,
+// the standard error of the mean printed). The issue's target (halve the
+// gap) is NOT reached, see below and DiffuseOptics.md.
+TEST(CollimatedSource, GapToMonteCarloOnTheIssuesBox)
+{
+  const auto data = BoxMesh(10, 10, 10, 20.0, 20.0, 10.0);
+  TetMesh mesh;
+  mesh.SetGeometry(data.Points, data.Tets);
+  const double muA[3] = { 0.01, 0.01, 0.01 }, muS[3] = { 1.0, 1.0, 1.0 };
+  const OpticalProperties material =
+    OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, muS, BoxEta);
+  const std::vector<LightSource> lights = { Directional(0, 0, -1, 1.0, 1.0, 1.0) };
+  std::vector<int> column;
+  for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    const double* x = mesh.GetPoint(i);
+    const double depth = 10.0 - x[2];
+    if (depth >= 2.0 - 1e-9 && depth <= 7.0 + 1e-9 && std::abs(x[0] - 10.0) <= 4.0 + 1e-9 &&
+      std::abs(x[1] - 10.0) <= 4.0 + 1e-9)
+    {
+      column.push_back(i);
+    }
+  }
+  ASSERT_GT(column.size(), 100u);
+  auto mean = [&](const std::vector<double>& fluence) {
+    double sum = 0.0;
+    for (int i : column)
+    {
+      sum += fluence[3 * static_cast<size_t>(i)];
+    }
+    return sum / column.size();
+  };
+
+  DiffusionProblem problem;
+  problem.Mesh = &mesh;
+  problem.Material = &material;
+  problem.Lights = lights;
+  problem.Shadows = false;
+  std::vector<double> q;
+  ASSERT_TRUE(ComputeProjectedIrradiance(mesh, material.RefractiveIndex, lights, 0.0, 0, false, q));
+  problem.Irradiance = &q;
+
+  // The reference: 4 runs of 100k photons with different seeds; the
+  // standard error of the mean from their spread (the vertex errors are
+  // correlated through shared tets, so they are not summed).
+  double runs[4], mcMean = 0.0;
+  for (int run = 0; run < 4; ++run)
+  {
+    MonteCarloSolver monteCarlo;
+    monteCarlo.SetNumberOfPhotons(100000);
+    monteCarlo.SetSeed(11 + run);
+    std::vector<double> reference;
+    SolverReport mcReport;
+    ASSERT_TRUE(monteCarlo.Solve(problem, reference, mcReport));
+    runs[run] = mean(reference);
+    mcMean += 0.25 * runs[run];
+  }
+  double spread = 0.0;
+  for (double r : runs)
+  {
+    spread += (r - mcMean) * (r - mcMean);
+  }
+  const double mcError = std::sqrt(spread / 3.0) / 2.0; // sample std / sqrt(4)
+  std::cout << "Monte Carlo mean fluence " << mcMean << " W/mm^2, standard error " << mcError
+            << " (" << 100.0 * mcError / mcMean << " %), " << column.size() << " vertices\n";
+
+  const std::vector<double> zero(q.size(), 0.0);
+  for (const char* name : { "divergence", "fem" })
+  {
+    double gap[2];
+    for (int model = 0; model < 2; ++model)
+    {
+      std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver(name);
+      solver->SetRelTol(1e-10);
+      solver->SetMaxIter(20000);
+      DiffusionProblem diffusion = problem;
+      if (model == 1)
+      {
+        diffusion.Collimated = CollimatedModel::Extended;
+        diffusion.Irradiance = &zero; // the only light is the beam
+      }
+      std::vector<double> fluence;
+      SolverReport report;
+      ASSERT_TRUE(solver->Solve(diffusion, fluence, report));
+      gap[model] = mean(fluence) / mcMean - 1.0;
+      std::cout << name << (model ? ", extended" : ", surface") << ": mean " << mean(fluence)
+                << ", gap to Monte Carlo " << 100.0 * gap[model] << " %\n";
+    }
+    // Measured (DiffuseOptics.md): surface -7.7 % (divergence) / -7.3 %
+    // (fem), extended +6.1 % / +6.9 % (MC standard error 0.3 %): the
+    // extended model overshoots by about as much as the surface model
+    // undershoots, so the issue's target (halve the gap) is NOT reached:
+    // this is the P1 error of a source within one transport length of the
+    // surface (the 1D half-space solutions of the two models differ by the
+    // same 9-16 %). The test pins the signs and sizes.
+    EXPECT_LT(gap[0], -0.05) << name << ": the surface model reads low";
+    EXPECT_GT(gap[1], 0.03) << name << ": the extended model reads high";
+    EXPECT_GT((1.0 + gap[1]) / (1.0 + gap[0]), 1.09) << name;
+    EXPECT_LT((1.0 + gap[1]) / (1.0 + gap[0]), 1.20) << name;
+    EXPECT_LT(gap[1], 0.08) << name;
+  }
+}
+
+} // namespace translucency
