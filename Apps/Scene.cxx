@@ -257,6 +257,9 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   irradiance->SetInputData(withMaterial);
   irradiance->SetShadows(options.Shadows);
   irradiance->SetUniformLightSamples(options.UniformSamples);
+  irradiance->SetCollimatedModel(options.Collimated == "extended"
+      ? vtkSurfaceIrradiance::COLLIMATED_EXTENDED
+      : vtkSurfaceIrradiance::COLLIMATED_SURFACE);
   double uniformE = 0.0;
   for (const Light& l : options.Lights)
   {

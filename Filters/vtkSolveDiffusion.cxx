@@ -305,6 +305,14 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
   {
     problem.Shadows = shadows->GetComponent(0, 0) != 0;
   }
+  // vtkSurfaceIrradiance's CollimatedModel: 1 = extended (its Irradiance
+  // then leaves the directional lights out).
+  if (vtkDataArray* model = fd->GetArray("TranslucencyCollimatedModel"))
+  {
+    problem.Collimated = model->GetComponent(0, 0) == 1.0
+      ? translucency::CollimatedModel::Extended
+      : translucency::CollimatedModel::Surface;
+  }
 }
 }
 
@@ -507,8 +515,15 @@ int vtkSolveDiffusion::RequestData(
       }
       if (!in.Detectors.empty())
       {
+        // The detectors read the diffuse fluence (the unscattered beam of
+        // the extended model does not leave as diffuse exitance).
+        std::vector<double> diffuse = fluence;
+        for (std::size_t k = 0; k < in.Report.CollimatedFluence.size(); ++k)
+        {
+          diffuse[k] -= in.Report.CollimatedFluence[k];
+        }
         in.Readings = translucency::ReadDetectors(
-          *mesh, detectorMaterial, in.Detectors, fluence, &detectorIrradiance);
+          *mesh, detectorMaterial, in.Detectors, diffuse, &detectorIrradiance);
         in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
         in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
       }
@@ -540,6 +555,7 @@ int vtkSolveDiffusion::RequestData(
     };
     attach(vtkTranslucency::FluenceName, fluence);
     attach("FluenceStandardError", in.Report.FluenceStandardError);
+    attach("CollimatedFluence", in.Report.CollimatedFluence);
     attach("MonteCarloRadiance", in.Report.Radiance);
     attach("MonteCarloRadianceStandardError", in.Report.RadianceStandardError);
     attach("FluenceAmplitude", amplitude);

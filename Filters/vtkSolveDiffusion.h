@@ -55,6 +55,14 @@
  *    arg of the complex fluence: negative = lagging the source) and
  *    `Fluence` = the amplitude; the detectors read amplitudes and also give
  *    `DetectorFluencePhase`, `DetectorExitancePhase`.
+ *  - collimated beams as an extended source: when the input's field data
+ *    has `TranslucencyCollimatedModel` = 1 (vtkSurfaceIrradiance's
+ *    CollimatedModel extended), the directional lights of
+ *    `TranslucencyLights` enter as the unscattered beam E_c and its volume
+ *    source mu_s' E_c; `Fluence` is then phi_d + E_c and the point array
+ *    `CollimatedFluence` holds E_c (the detectors and vtkOutgoingRadiance
+ *    read phi_d = Fluence - CollimatedFluence). Quadgraph, grid and the
+ *    frequency domain refuse it; Monte Carlo (transport) ignores it.
  * A source outside the object, a pencil beam pointing out of the surface, a
  * detector off the surface or a negative frequency make RequestData fail
  * with an error naming it; so do sources or a frequency with the quadgraph,

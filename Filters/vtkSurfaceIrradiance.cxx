@@ -1,6 +1,7 @@
 #include "vtkSurfaceIrradiance.h"
 
 #include "Error.h"
+#include "CollimatedSource.h"
 #include "LightSources.h"
 #include "Radiance.h"
 #include "TetMesh.h"
@@ -138,7 +139,10 @@ int vtkSurfaceIrradiance::RequestData(
   {
     // Per boundary triangle (each corner with the triangle's own normal),
     // projected to the points: the solvers' loads are triangle-integrated.
-    const bool completed = translucency::ComputeProjectedIrradiance(mesh, tetEta, lights,
+    // The extended model leaves the directional lights to the solver.
+    const bool completed = translucency::ComputeProjectedIrradiance(mesh, tetEta,
+      this->CollimatedModel == COLLIMATED_EXTENDED ? translucency::NonCollimatedLights(lights)
+                                                   : lights,
       this->UniformLightIrradiance, this->UniformLightSamples, this->Shadows, q,
       [this]() { return this->GetAbortExecute() != 0; });
     if (!completed)
@@ -176,6 +180,10 @@ int vtkSurfaceIrradiance::RequestData(
   shadowArray->SetName("TranslucencyShadows");
   shadowArray->InsertNextValue(this->Shadows ? 1.0 : 0.0);
   fieldData->AddArray(shadowArray);
+  vtkNew<vtkDoubleArray> collimatedArray;
+  collimatedArray->SetName("TranslucencyCollimatedModel");
+  collimatedArray->InsertNextValue(this->CollimatedModel);
+  fieldData->AddArray(collimatedArray);
   output->SetFieldData(fieldData);
   vtkDataArray* array = vtkTranslucency::NewTripleArray(vtkTranslucency::IrradianceName, q);
   output->GetPointData()->AddArray(array);
@@ -193,4 +201,6 @@ void vtkSurfaceIrradiance::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "UniformLightIrradiance: " << this->UniformLightIrradiance << "\n";
   os << indent << "UniformLightSamples: " << this->UniformLightSamples << "\n";
   os << indent << "Shadows: " << this->Shadows << "\n";
+  os << indent << "CollimatedModel: "
+     << (this->CollimatedModel == COLLIMATED_EXTENDED ? "extended" : "surface") << "\n";
 }
