@@ -263,6 +263,15 @@ void AddSceneOptions(CLI::App* command, SceneOptions& scene)
     [](double n) { return n >= 0 && n <= 4096; }, "--uniform-samples must be from 0 to 4096")
     ->group(group);
   command
+    ->add_option("--collimated", scene.Collimated,
+      "how directional lights enter the diffusion model:\n"
+      "surface   boundary irradiance (default)\n"
+      "extended  unscattered beam exp(-mu_t' s) + volume source\n"
+      "          mu_s' E_c (divergence and fem; DiffuseOptics.md)")
+    ->type_name("MODEL")
+    ->check(OneOf("--collimated", { "surface", "extended" }))
+    ->group(group);
+  command
     ->add_option("--paint", scene.Paint,
       "paint the coefficients along a 3D stroke (after the material,\n"
       "before any cut; vtkPaintScatteringCoefficients):\n"

@@ -263,6 +263,9 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   irradiance->SetShadows(options.Shadows);
   irradiance->SetDefaultLights(false); // Finish() resolved the defaults: the lights are explicit
   irradiance->SetUniformLightSamples(options.UniformSamples);
+  irradiance->SetCollimatedModel(options.Collimated == "extended"
+      ? vtkSurfaceIrradiance::COLLIMATED_EXTENDED
+      : vtkSurfaceIrradiance::COLLIMATED_SURFACE);
   double uniformE = 0.0;
   for (const Light& l : options.Lights)
   {

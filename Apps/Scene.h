@@ -44,6 +44,9 @@ struct SceneOptions
   bool DefaultLights = false; ///< no --light given: Finish() added the default lights
   bool Shadows = true;
   int UniformSamples = 32;
+  /// --collimated: how directional lights enter the diffusion model,
+  /// "surface" (boundary irradiance) or "extended" (volume source).
+  std::string Collimated = "surface";
   std::vector<double> CutPlane; ///< --cut-plane: origin (mm) and normal; empty: no plane cut
   std::string CutStroke;        ///< --cut-stroke: JSON stroke file; empty: no stroke cut
   std::string Paint;            ///< --paint: JSON paint file; empty: no painting

@@ -84,6 +84,21 @@ int vtkOutgoingRadiance::RequestData(
     vtkErrorMacro(<< error << " (run vtkSurfaceIrradiance and vtkSolveDiffusion first)");
     return 0;
   }
+  // The extended collimated model's Fluence includes the unscattered beam,
+  // which does not leave as diffuse radiance: read phi_d.
+  if (input->GetPointData()->GetArray("CollimatedFluence"))
+  {
+    std::vector<double> collimated;
+    if (!vtkTranslucency::ReadPointArray(input, "CollimatedFluence", 3, collimated, error))
+    {
+      vtkErrorMacro(<< error);
+      return 0;
+    }
+    for (std::size_t k = 0; k < fluence.size(); ++k)
+    {
+      fluence[k] -= collimated[k];
+    }
+  }
   std::vector<double> tetEta;
   if (!vtkTranslucency::ReadRefractiveIndex(input, tetEta, error))
   {

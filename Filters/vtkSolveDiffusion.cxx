@@ -44,6 +44,20 @@ const translucency::DiffusionSolverRegistry::Entry& SolverEntry(int solver)
 }
 }
 
+namespace
+{
+/// Whether the input asks for the extended collimated-source model
+/// (vtkSurfaceIrradiance's CollimatedModel, in the field data): the
+/// distributed path does not implement it, so such inputs are gathered.
+bool ExtendedCollimatedModel(vtkInformationVector* inputs)
+{
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputs);
+  vtkDataArray* model =
+    input ? input->GetFieldData()->GetArray("TranslucencyCollimatedModel") : nullptr;
+  return model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) == 1.0;
+}
+}
+
 struct vtkSolveDiffusion::Internals
 {
   /// The solver, the changed-tet detection and the warm-start bookkeeping.
@@ -385,6 +399,14 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
   {
     problem.Shadows = shadows->GetComponent(0, 0) != 0;
   }
+  // vtkSurfaceIrradiance's CollimatedModel: 1 = extended (its Irradiance
+  // then leaves the directional lights out).
+  if (vtkDataArray* model = fd->GetArray("TranslucencyCollimatedModel"))
+  {
+    problem.Collimated = model->GetComponent(0, 0) == 1.0
+      ? translucency::CollimatedModel::Extended
+      : translucency::CollimatedModel::Surface;
+  }
 }
 }
 
@@ -399,7 +421,7 @@ int vtkSolveDiffusion::RequestData(
     this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
   if (this->DistributedSolve && vertexSolver && this->Internal->Sources.Empty() &&
     this->Internal->Detectors.empty() && this->ModulationFrequency == 0.0 &&
-    this->TimeGatesCount == 0 &&
+    this->TimeGatesCount == 0 && !ExtendedCollimatedModel(inputVector[0]) &&
     vtkTranslucencyDistributedSolve::IsAllowedByEnvironment() &&
     vtkTranslucencyDistributedSolve::IsAvailable())
   {
@@ -699,8 +721,15 @@ int vtkSolveDiffusion::RequestData(
       }
       if (!in.Detectors.empty())
       {
+        // The detectors read the diffuse fluence (the unscattered beam of
+        // the extended model does not leave as diffuse exitance).
+        std::vector<double> diffuse = fluence;
+        for (std::size_t k = 0; k < in.Report.CollimatedFluence.size(); ++k)
+        {
+          diffuse[k] -= in.Report.CollimatedFluence[k];
+        }
         in.Readings = translucency::ReadDetectors(
-          *mesh, detectorMaterial, in.Detectors, fluence, &detectorIrradiance);
+          *mesh, detectorMaterial, in.Detectors, diffuse, &detectorIrradiance);
         in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
         in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
       }
@@ -732,6 +761,7 @@ int vtkSolveDiffusion::RequestData(
     };
     attach(vtkTranslucency::FluenceName, fluence);
     attach("FluenceStandardError", in.Report.FluenceStandardError);
+    attach("CollimatedFluence", in.Report.CollimatedFluence);
     attach("MonteCarloRadiance", in.Report.Radiance);
     attach("MonteCarloRadianceStandardError", in.Report.RadianceStandardError);
     attach("FluenceAmplitude", amplitude);

@@ -65,7 +65,15 @@
  *    tuple per gate), `DetectorFluenceTPSF<k>` and `DetectorExitanceTPSF<k>`
  *    (k = 0, 1, ...: 3 components, one tuple per gate, J/(mm^2 ns)) hold the
  *    temporal point-spread functions; AddTimeSnapshot(g) adds the point
- *    array `FluenceGate<g>` (the gate-averaged fluence, J/(mm^2 ns)).
+ *    array `FluenceGate<g>` (the gate-averaged fluence, J/(mm^2 ns));
+ *  - collimated beams as an extended source: when the input's field data
+ *    has `TranslucencyCollimatedModel` = 1 (vtkSurfaceIrradiance's
+ *    CollimatedModel extended), the directional lights of
+ *    `TranslucencyLights` enter as the unscattered beam E_c and its volume
+ *    source mu_s' E_c; `Fluence` is then phi_d + E_c and the point array
+ *    `CollimatedFluence` holds E_c (the detectors and vtkOutgoingRadiance
+ *    read phi_d = Fluence - CollimatedFluence). Quadgraph, grid and the
+ *    frequency domain refuse it; Monte Carlo (transport) ignores it.
  * A source outside the object, a pencil beam pointing out of the surface, a
  * detector off the surface, a negative frequency or invalid time gates make
  * RequestData fail with an error naming it; so do sources, a frequency or

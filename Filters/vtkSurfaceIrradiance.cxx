@@ -2,6 +2,7 @@
 
 #include "DefaultLights.h"
 #include "Error.h"
+#include "CollimatedSource.h"
 #include "LightSources.h"
 #include "Radiance.h"
 #include "TetMesh.h"
@@ -175,14 +176,18 @@ int vtkSurfaceIrradiance::RequestData(
     return 0;
   }
   const translucency::TetMesh& mesh = *this->Internal->Mesh;
-  const std::vector<double> pointEta = translucency::PointRefractiveIndex(mesh, tetEta);
   this->UpdateProgress(0.1);
 
   // Direct and uniform light with self-shadowing, OpenMP-parallel in the core.
   std::vector<double> q;
   try
   {
-    const bool completed = translucency::ComputeBoundaryIrradiance(mesh, pointEta, lights,
+    // Per boundary triangle (each corner with the triangle's own normal),
+    // projected to the points: the solvers' loads are triangle-integrated.
+    // The extended model leaves the directional lights to the solver.
+    const bool completed = translucency::ComputeProjectedIrradiance(mesh, tetEta,
+      this->CollimatedModel == COLLIMATED_EXTENDED ? translucency::NonCollimatedLights(lights)
+                                                   : lights,
       uniformIrradiance, this->UniformLightSamples, this->Shadows, q,
       [this]() { return this->GetAbortExecute() != 0; });
     if (!completed)
@@ -224,6 +229,10 @@ int vtkSurfaceIrradiance::RequestData(
   shadowArray->SetName("TranslucencyShadows");
   shadowArray->InsertNextValue(this->Shadows ? 1.0 : 0.0);
   fieldData->AddArray(shadowArray);
+  vtkNew<vtkDoubleArray> collimatedArray;
+  collimatedArray->SetName("TranslucencyCollimatedModel");
+  collimatedArray->InsertNextValue(this->CollimatedModel);
+  fieldData->AddArray(collimatedArray);
   output->SetFieldData(fieldData);
   vtkDataArray* array = vtkTranslucency::NewTripleArray(vtkTranslucency::IrradianceName, q);
   output->GetPointData()->AddArray(array);
@@ -270,4 +279,6 @@ void vtkSurfaceIrradiance::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "InteractiveLight: " << this->InteractiveLight << " (type "
      << this->InteractiveLightType << ", power " << this->InteractiveLightPower << ")\n";
   os << indent << "Shadows: " << this->Shadows << "\n";
+  os << indent << "CollimatedModel: "
+     << (this->CollimatedModel == COLLIMATED_EXTENDED ? "extended" : "surface") << "\n";
 }

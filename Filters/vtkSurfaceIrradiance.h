@@ -20,6 +20,12 @@
  * with UniformLightSamples cosine-weighted rays per point (ambient
  * occlusion); with 0 samples it is unoccluded and exact.
  *
+ * q is evaluated per boundary triangle (at each corner with the triangle's
+ * own normal) and projected to the points
+ * (translucency::ComputeProjectedIrradiance), so the solvers' load is the
+ * triangle-integrated irradiance: a flat lit face injects E cos F_t S and a
+ * face parallel to a light nothing (Documentation/DiffuseOptics.md).
+ *
  * Output: a shallow copy of the input with the point array `Irradiance`
  * (3 components R, G, B, W/mm^2; 0 at interior points). The lights are
  * also recorded in the field data (`TranslucencyLights`: 7 components per
@@ -96,6 +102,27 @@ public:
   vtkGetMacro(UniformLightSamples, int);
   ///@}
 
+  /// How the directional (collimated) lights enter the diffusion model.
+  enum CollimatedModels
+  {
+    COLLIMATED_SURFACE = 0, ///< as boundary irradiance q (the default)
+    COLLIMATED_EXTENDED = 1 ///< as a volume source (translucency::ComputeCollimatedSource)
+  };
+
+  ///@{
+  /**
+   * COLLIMATED_SURFACE (default): the directional lights are part of
+   * `Irradiance`. COLLIMATED_EXTENDED: they are left out of `Irradiance`
+   * (the point and uniform lights stay) and the field data records the
+   * model (`TranslucencyCollimatedModel` = 1), so that vtkSolveDiffusion
+   * (divergence, fem) adds the unscattered beam and its volume source
+   * (Documentation/DiffuseOptics.md, "Collimated beams: the extended
+   * source").
+   */
+  vtkSetClampMacro(CollimatedModel, int, COLLIMATED_SURFACE, COLLIMATED_EXTENDED);
+  vtkGetMacro(CollimatedModel, int);
+  ///@}
+
   ///@{
   /**
    * Use the default lights (directional (0, -1, -1) 1 W/mm^2 + uniform
@@ -156,6 +183,7 @@ protected:
   double InteractiveLightPoint1[3] = { 0.0, 1.0, 1.0 };
   double InteractiveLightPoint2[3] = { 0.0, 0.0, 0.0 };
   double InteractiveLightPower = 1.0;
+  int CollimatedModel = COLLIMATED_SURFACE;
   double TopologyTime = 0.0;
   std::string LightsDescription;
 

@@ -297,7 +297,10 @@ struct LaunchLight
   LightSource::Kind Type = LightSource::Kind::Directional;
   double Direction[3] = { 0.0, 0.0, -1.0 }; ///< unit, direction of travel
   double Position[3] = { 0.0, 0.0, 0.0 };
-  std::vector<double> Q; ///< its q, 3 per mesh point (W/mm^2)
+  /// Its q at the corners of the boundary triangles, 9 per triangle
+  /// (ComputeTriangleCornerIrradiance: the values whose projection is the
+  /// diffusion solvers' load), W/mm^2.
+  std::vector<double> Q;
 };
 
 /// Where the photons of one channel start: (light, triangle) pairs with
@@ -390,7 +393,7 @@ struct Tracer
     double q[3], qSum = 0.0;
     for (int k = 0; k < 3; ++k)
     {
-      q[k] = light.Q[3 * static_cast<std::size_t>(v[k]) + Channel];
+      q[k] = light.Q[9 * static_cast<std::size_t>(tri) + 3 * k + Channel];
       qSum += q[k];
     }
     const double pick = rng.Uniform() * qSum;
@@ -812,8 +815,8 @@ bool MonteCarloSolver::Solve(
     // Checks the light and computes its q alone.
     try
     {
-      if (!ComputeBoundaryIrradiance(
-            mesh, pointEta, { source }, 0.0, 0, problem.Shadows, light.Q, abortCheck))
+      if (!ComputeTriangleCornerIrradiance(mesh, material.RefractiveIndex, { source }, 0.0, 0,
+            problem.Shadows, light.Q, abortCheck))
       {
         return false;
       }
@@ -832,7 +835,7 @@ bool MonteCarloSolver::Solve(
   {
     LaunchLight light;
     light.Type = LightSource::Kind::Uniform;
-    if (!ComputeBoundaryIrradiance(mesh, pointEta, {}, problem.UniformIrradiance,
+    if (!ComputeTriangleCornerIrradiance(mesh, material.RefractiveIndex, {}, problem.UniformIrradiance,
           UniformLightSamples_, problem.Shadows, light.Q, abortCheck))
     {
       return false;
@@ -868,10 +871,9 @@ bool MonteCarloSolver::Solve(
     caster.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
   }
 
-  // Power through each boundary triangle: S_f x mean of the linear q
-  // (the integral of q over f; the diffusion solvers' lumped load, S_i q_i / 3
-  // per corner, sums to the same total).
-  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  // Power through each boundary triangle: S_f x mean of its corner values
+  // (the vertex rule for the integral of q over f; the diffusion solvers'
+  // loads S_i q_i / 3 of the projected q sum to the same total).
   const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
   const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
   std::array<ChannelSource, NumberOfChannels> sources;
@@ -884,11 +886,8 @@ bool MonteCarloSolver::Solve(
       const std::vector<double>& q = lights[l].Q;
       for (int f = 0; f < numTriangles; ++f)
       {
-        const int* v = &triangles[3 * static_cast<std::size_t>(f)];
-        const double power = areas[f] *
-          (q[3 * static_cast<std::size_t>(v[0]) + c] + q[3 * static_cast<std::size_t>(v[1]) + c] +
-            q[3 * static_cast<std::size_t>(v[2]) + c]) /
-          3.0;
+        const double* qf = &q[9 * static_cast<std::size_t>(f) + c];
+        const double power = areas[f] * (qf[0] + qf[3] + qf[6]) / 3.0;
         if (power > 0.0)
         {
           total += power;

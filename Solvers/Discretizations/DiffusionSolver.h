@@ -8,6 +8,7 @@
  */
 #pragma once
 
+#include "CollimatedSource.h"
 #include "InteriorSources.h"
 #include "LightSources.h"
 #include "OpticalProperties.h"
@@ -45,8 +46,29 @@ struct DiffusionProblem
   /// given any (RequireNoInteriorSources).
   const Sources* InteriorSources = nullptr;
 
+  /// How the directional lights enter (DiffuseOptics.md): Surface (the
+  /// default) = as Irradiance, which then includes them; Extended = as the
+  /// volume source of ComputeCollimatedSource() from Lights, and Irradiance
+  /// must not include them (vtkSurfaceIrradiance's CollimatedModel). Only
+  /// the vertex discretisations (divergence, fem, continuous wave)
+  /// implement Extended; quadgraph and grid throw, Monte Carlo (transport,
+  /// not diffusion) ignores it.
+  CollimatedModel Collimated = CollimatedModel::Surface;
+
   bool HasInteriorSources() const { return InteriorSources && !InteriorSources->Empty(); }
 };
+
+/// Throws translucency::Error naming `solver` if the problem asks for the
+/// extended collimated-source model (for the solvers without it).
+inline void RequireSurfaceCollimatedModel(const DiffusionProblem& problem, const std::string& solver)
+{
+  if (problem.Collimated == CollimatedModel::Extended)
+  {
+    throw Error(solver +
+      ": the extended collimated-source model is implemented for the \"divergence\" and "
+      "\"fem\" solvers only (use the surface model)");
+  }
+}
 
 /// Throws translucency::Error naming `solver` if the problem has interior
 /// sources (for the solvers that do not implement them).
@@ -81,6 +103,16 @@ struct SolverReport
   /// tallied exitant Radiance with its standard error (3 per mesh point,
   /// boundary points only; W/mm^2/sr). Empty for the diffusion solvers.
   std::vector<double> FluenceStandardError;
+  /// Extended collimated model only (vertex solvers): the collimated fluence
+  /// rate E_c (3 per mesh point, W/mm^2; included in the fluence, which is
+  /// phi_d + E_c) and the beams' power balance (W per channel):
+  /// transmitted into the object, scattered into the diffuse field (the
+  /// volume source's injected power) and absorbed directly. Empty / zero
+  /// otherwise.
+  std::vector<double> CollimatedFluence;
+  std::array<double, NumberOfChannels> CollimatedEntering{};
+  std::array<double, NumberOfChannels> CollimatedScattered{};
+  std::array<double, NumberOfChannels> CollimatedAbsorbed{};
   std::vector<double> Radiance;
   std::vector<double> RadianceStandardError;
 };

@@ -1193,6 +1193,7 @@ bool GridSolver::Solve(const DiffusionProblem& problem,
   SolverReport& report)
 {
   RequireNoInteriorSources(problem, "grid");
+  RequireSurfaceCollimatedModel(problem, "grid");
   return SolveImpl(problem, nullptr, fluence, report);
 }
 
@@ -1202,6 +1203,7 @@ bool GridSolver::SolveWithNodeIrradiance(const DiffusionProblem& problem,
   SolverReport& report)
 {
   RequireNoInteriorSources(problem, "grid");
+  RequireSurfaceCollimatedModel(problem, "grid");
   return SolveImpl(problem, &nodeIrradiance, fluence, report);
 }
 

@@ -947,6 +947,7 @@ bool QuadGraphSolver::Solve(
     throw Error("quadgraph: the problem needs a mesh, a material and an irradiance");
   }
   RequireNoInteriorSources(problem, "quadgraph");
+  RequireSurfaceCollimatedModel(problem, "quadgraph");
   const TetMesh& mesh = *problem.Mesh;
   const int numTets = mesh.GetNumberOfTets();
   const int numPoints = mesh.GetNumberOfPoints();

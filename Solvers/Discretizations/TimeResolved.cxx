@@ -141,6 +141,12 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     throw Error(GetName() + ": the problem needs a mesh, a material and an irradiance");
   }
   gates.Validate();
+  if (problem.Collimated == CollimatedModel::Extended)
+  {
+    throw Error(GetName() +
+      ": the extended collimated-source model is not implemented in the time domain "
+      "(use the surface model)");
+  }
   const OpticalProperties& material = *problem.Material;
   material.Validate(problem.Mesh->GetNumberOfTets());
   double absorptionRate = 0.0; // the largest mu_a c_m, 1/ns

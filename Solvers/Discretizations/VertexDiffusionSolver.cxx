@@ -100,11 +100,30 @@ bool VertexDiffusionSolver::Solve(
   auto start = Clock::now();
   // Interior sources: their load, computed first (a source outside the
   // object is an error before any work).
-  const bool hasSources = problem.HasInteriorSources();
+  // The extended collimated model adds its volume source to the same load.
+  const bool extended = problem.Collimated == CollimatedModel::Extended;
+  const bool hasSources = problem.HasInteriorSources() || extended;
   std::vector<double> sourceLoad;
-  if (hasSources)
+  if (problem.HasInteriorSources())
   {
     sourceLoad = problem.InteriorSources->ComputeLoad(mesh, *problem.Material);
+  }
+  CollimatedSource collimated;
+  if (extended)
+  {
+    collimated =
+      ComputeCollimatedSource(mesh, *problem.Material, problem.Lights, problem.Shadows);
+    if (sourceLoad.empty())
+    {
+      sourceLoad.swap(collimated.Load);
+    }
+    else
+    {
+      for (std::size_t k = 0; k < sourceLoad.size(); ++k)
+      {
+        sourceLoad[k] += collimated.Load[k];
+      }
+    }
   }
   // Painting: rebuild only the rows of the changed tets' vertices (TransCut
   // Sec. 5.2) when the system of the last successful solve is of this mesh
@@ -198,6 +217,18 @@ bool VertexDiffusionSolver::Solve(
     report.Converged[c] = stats[c].Converged;
   }
   Discretization_->ToPointFluence(mesh, System_, Solution_, fluence);
+  if (extended)
+  {
+    // The total fluence rate: diffuse plus the unscattered beam.
+    for (std::size_t k = 0; k < fluence.size(); ++k)
+    {
+      fluence[k] += collimated.Fluence[k];
+    }
+    report.CollimatedFluence = std::move(collimated.Fluence);
+    report.CollimatedEntering = collimated.Entering;
+    report.CollimatedScattered = collimated.Scattered;
+    report.CollimatedAbsorbed = collimated.Absorbed;
+  }
   return true;
 }
 
@@ -222,6 +253,12 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   report.LinearSolver = "cocg-jacobi";
   report.Assembly = "full";
 
+  if (problem.Collimated == CollimatedModel::Extended)
+  {
+    throw Error(GetName() +
+      ": the extended collimated-source model is not implemented in the frequency domain "
+      "(use the surface model)");
+  }
   auto start = Clock::now();
   std::vector<double> sourceLoad;
   if (problem.HasInteriorSources())

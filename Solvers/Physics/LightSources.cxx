@@ -3,6 +3,7 @@
 
 #include "Error.h"
 #include "Fresnel.h"
+#include "Radiance.h"
 #include "RayCaster.h"
 #include "TetMesh.h"
 #include "TriangleGeometry.h"
@@ -304,6 +305,230 @@ bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& p
     }
   }
   return !aborted.load();
+}
+
+
+bool ComputeTriangleCornerIrradiance(const TetMesh& mesh, const std::vector<double>& tetEta,
+  const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
+  bool shadows, std::vector<double>& cornerQ, const std::function<bool()>& abort)
+{
+  const int numTets = mesh.GetNumberOfTets();
+  if (tetEta.size() != static_cast<size_t>(numTets))
+  {
+    std::ostringstream msg;
+    msg << "boundary irradiance: " << tetEta.size() << " refractive indices for " << numTets
+        << " tets";
+    throw Error(msg.str());
+  }
+  const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
+  for (int f = 0; f < numTriangles; ++f)
+  {
+    const double eta = tetEta[triangleTets[f]];
+    if (!(eta > 0.0) || !std::isfinite(eta))
+    {
+      std::ostringstream msg;
+      msg << "boundary irradiance: the refractive index of tet " << triangleTets[f]
+          << " (under boundary triangle " << f << ") is " << eta << ": must be finite and > 0";
+      throw Error(msg.str());
+    }
+  }
+  // The uniform light per point, and every check of the arguments, by the
+  // point version (no directional or point light: no rays for them there).
+  const std::vector<double> pointEta = PointRefractiveIndex(mesh, tetEta);
+  std::vector<double> uniform;
+  for (size_t l = 0; l < lights.size(); ++l)
+  {
+    ValidateLight(lights[l], l);
+  }
+  if (!ComputeBoundaryIrradiance(
+        mesh, pointEta, {}, uniformIrradiance, uniformSamples, shadows, uniform, abort))
+  {
+    return false;
+  }
+  cornerQ.assign(9 * static_cast<size_t>(numTriangles), 0.0);
+  const std::vector<int>& boundary = mesh.GetBoundaryPoints();
+  if (boundary.empty())
+  {
+    return true;
+  }
+
+  // Unit outward normals of the triangles (TetMesh orients them outwards:
+  // the area vector (b - a) x (c - a) / 2 points out of the object).
+  std::vector<double> normals(3 * static_cast<size_t>(numTriangles), 0.0);
+  for (int f = 0; f < numTriangles; ++f)
+  {
+    const int* tri = &triangles[3 * static_cast<size_t>(f)];
+    const double* a = mesh.GetPoint(tri[0]);
+    const double* b = mesh.GetPoint(tri[1]);
+    const double* c = mesh.GetPoint(tri[2]);
+    const double e1[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+    const double e2[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
+    double* n = &normals[3 * static_cast<size_t>(f)];
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; ++k)
+    {
+      n[k] = length > 0.0 ? n[k] / length : 0.0;
+    }
+  }
+
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    lo[k] = std::numeric_limits<double>::infinity();
+    hi[k] = -lo[k];
+  }
+  for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    const double* x = mesh.GetPoint(i);
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], x[k]);
+      hi[k] = std::max(hi[k], x[k]);
+    }
+  }
+  const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
+    (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const double offset = 1e-5 * diag;
+  RayCaster caster;
+  if (shadows && !lights.empty())
+  {
+    caster.Build(mesh.GetPoints(), triangles);
+  }
+  const std::vector<double>& pointNormals = mesh.GetPointNormals();
+  const std::vector<int>& offsets = mesh.GetBoundaryPointTriangleOffsets();
+  const std::vector<int>& incident = mesh.GetBoundaryPointTriangles();
+  const int numBoundary = static_cast<int>(boundary.size());
+  if (abort && abort())
+  {
+    return false;
+  }
+  // Each corner value is written by the one thread handling its point.
+  std::atomic<bool> aborted(false);
+#pragma omp parallel for schedule(dynamic, 64)
+  for (int k = 0; k < numBoundary; ++k)
+  {
+    if (aborted.load(std::memory_order_relaxed))
+    {
+      continue;
+    }
+    if (abort && k % 64 == 0 && omp_get_thread_num() == 0 && abort())
+    {
+      aborted.store(true, std::memory_order_relaxed);
+      continue;
+    }
+    const int i = boundary[k];
+    const double* x = mesh.GetPoint(i);
+    const double* ni = &pointNormals[3 * static_cast<size_t>(i)];
+    for (int m = offsets[k]; m < offsets[k + 1]; ++m)
+    {
+      const int f = incident[m];
+      const int* tri = &triangles[3 * static_cast<size_t>(f)];
+      const int corner = tri[0] == i ? 0 : (tri[1] == i ? 1 : 2);
+      double* qc = &cornerQ[9 * static_cast<size_t>(f) + 3 * static_cast<size_t>(corner)];
+      for (int c = 0; c < 3; ++c)
+      {
+        qc[c] = uniform[3 * static_cast<size_t>(i) + c];
+      }
+    }
+    for (const auto& light : lights)
+    {
+      int visible = -1; // unknown until a triangle faces the light
+      for (int m = offsets[k]; m < offsets[k + 1]; ++m)
+      {
+        const int f = incident[m];
+        const double* n = &normals[3 * static_cast<size_t>(f)];
+        double ql[3], w[3], distance;
+        if (!DirectIrradiance(light, x, n, tetEta[triangleTets[f]], ql, w, distance))
+        {
+          continue;
+        }
+        if (shadows && visible < 0)
+        {
+          // The point's shadow ray, as in ComputeBoundaryIrradiance.
+          const double reach = std::min(distance, 2.0 * diag);
+          const double origin[3] = { x[0] + offset * (ni[0] + w[0]),
+            x[1] + offset * (ni[1] + w[1]), x[2] + offset * (ni[2] + w[2]) };
+          visible = caster.Occluded(origin, w, reach) ? 0 : 1;
+        }
+        if (shadows && visible == 0)
+        {
+          break;
+        }
+        const int* tri = &triangles[3 * static_cast<size_t>(f)];
+        const int corner = tri[0] == i ? 0 : (tri[1] == i ? 1 : 2);
+        double* qc = &cornerQ[9 * static_cast<size_t>(f) + 3 * static_cast<size_t>(corner)];
+        for (int c = 0; c < 3; ++c)
+        {
+          qc[c] += ql[c];
+        }
+      }
+    }
+  }
+  return !aborted.load();
+}
+
+void ProjectCornerIrradiance(
+  const TetMesh& mesh, const std::vector<double>& cornerQ, std::vector<double>& pointQ)
+{
+  const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+  if (cornerQ.size() != 9 * static_cast<size_t>(numTriangles))
+  {
+    std::ostringstream msg;
+    msg << "boundary irradiance: " << cornerQ.size() << " corner values for " << numTriangles
+        << " boundary triangles (expected 9 per triangle)";
+    throw Error(msg.str());
+  }
+  pointQ.assign(3 * static_cast<size_t>(mesh.GetNumberOfPoints()), 0.0);
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const std::vector<int>& boundary = mesh.GetBoundaryPoints();
+  const std::vector<int>& offsets = mesh.GetBoundaryPointTriangleOffsets();
+  const std::vector<int>& incident = mesh.GetBoundaryPointTriangles();
+  const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
+  const int numBoundary = static_cast<int>(boundary.size());
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < numBoundary; ++k)
+  {
+    const int i = boundary[k];
+    double load[3] = { 0.0, 0.0, 0.0 };
+    double area = 0.0;
+    for (int m = offsets[k]; m < offsets[k + 1]; ++m)
+    {
+      const int f = incident[m];
+      const int* tri = &triangles[3 * static_cast<size_t>(f)];
+      const int corner = tri[0] == i ? 0 : (tri[1] == i ? 1 : 2);
+      area += areas[f];
+      for (int c = 0; c < 3; ++c)
+      {
+        load[c] += areas[f] * cornerQ[9 * static_cast<size_t>(f) + 3 * corner + c];
+      }
+    }
+    if (area > 0.0)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        pointQ[3 * static_cast<size_t>(i) + c] = load[c] / area;
+      }
+    }
+  }
+}
+
+bool ComputeProjectedIrradiance(const TetMesh& mesh, const std::vector<double>& tetEta,
+  const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
+  bool shadows, std::vector<double>& q, const std::function<bool()>& abort)
+{
+  std::vector<double> cornerQ;
+  if (!ComputeTriangleCornerIrradiance(
+        mesh, tetEta, lights, uniformIrradiance, uniformSamples, shadows, cornerQ, abort))
+  {
+    return false;
+  }
+  ProjectCornerIrradiance(mesh, cornerQ, q);
+  return true;
 }
 
 } // namespace translucency

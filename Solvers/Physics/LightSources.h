@@ -111,4 +111,54 @@ bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& p
   const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
   bool shadows, std::vector<double>& q, const std::function<bool()>& abort = {});
 
+/**
+ * The boundary irradiance integrated per boundary triangle (issue 19;
+ * Documentation/DiffuseOptics.md, "Boundary irradiance per triangle"): the
+ * value of q at each corner of each boundary triangle, evaluated with the
+ * triangle's own outward normal, so that the load of vertex i,
+ *   integral of q phi_i dS ~ sum over its triangles f of (S_f / 3) q_f(x_i)
+ * (the vertex rule on each triangle, exact for a q constant on the triangle:
+ * a directional light on a flat face), injects exactly E cos F_t S on a lit
+ * flat face and exactly 0 on a face parallel to the light (whose triangles
+ * see the light at grazing incidence), unlike the vertex normals of
+ * ComputeBoundaryIrradiance(), which light the edge vertices of such faces.
+ *
+ * Directional, point and spot lights: q_f(x_i) = DirectIrradiance() at the
+ * point x_i with the normal of f and the refractive index of the tet under
+ * f, times the visibility of the light from x_i (one shadow ray per point
+ * and light, cast as in ComputeBoundaryIrradiance(), only if some triangle
+ * around the point faces the light). The uniform light is the same at all
+ * corners of a point: ComputeBoundaryIrradiance()'s value there (its q does
+ * not depend on the face orientation of a convex object).
+ *
+ * @param tetEta refractive index per tet (finite and > 0 under the surface)
+ * @param cornerQ output: 9 values per boundary triangle (corner k = 0..2 in
+ *   mesh.GetBoundaryTriangles() order, then R, G, B), W/mm^2
+ * Other parameters, the abort contract and the errors as in
+ * ComputeBoundaryIrradiance(); OpenMP-parallel over the boundary points, the
+ * result does not depend on the number of threads.
+ */
+bool ComputeTriangleCornerIrradiance(const TetMesh& mesh, const std::vector<double>& tetEta,
+  const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
+  bool shadows, std::vector<double>& cornerQ, const std::function<bool()>& abort = {});
+
+/**
+ * The point irradiance the solvers read, from corner values:
+ *   q_i = sum_f S_f q_f(x_i) / sum_f S_f   (sums over the boundary triangles
+ * around i), so that S_i q_i / 3 (S_i = sum_f S_f, TetMesh::GetBoundaryAreas)
+ * is the triangle-integrated load of vertex i: the discrete divergence's load
+ * is exactly it, and every solver's total, the integral of the P1 q, is the
+ * sum of the triangle integrals. 3 values per mesh point, 0 inside.
+ */
+void ProjectCornerIrradiance(
+  const TetMesh& mesh, const std::vector<double>& cornerQ, std::vector<double>& pointQ);
+
+/**
+ * ComputeTriangleCornerIrradiance() then ProjectCornerIrradiance(): the
+ * `Irradiance` point array vtkSurfaceIrradiance writes (3 per mesh point).
+ */
+bool ComputeProjectedIrradiance(const TetMesh& mesh, const std::vector<double>& tetEta,
+  const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
+  bool shadows, std::vector<double>& q, const std::function<bool()>& abort = {});
+
 } // namespace translucency

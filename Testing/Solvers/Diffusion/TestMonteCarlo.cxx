@@ -260,11 +260,10 @@ TEST(MonteCarlo, PowerBalanceIsExact)
   solver.SetUniformLightSamples(16);
   const Result run = Solve(solver, problem);
 
-  // The pipeline's q with the same lights and samples.
+  // The pipeline's q with the same lights and samples (vtkSurfaceIrradiance's
+  // triangle-integrated irradiance).
   std::vector<double> q;
-  const std::vector<double> pointEta =
-    BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
-  ASSERT_TRUE(ComputeBoundaryIrradiance(mesh, pointEta, problem.Lights,
+  ASSERT_TRUE(ComputeProjectedIrradiance(mesh, material.RefractiveIndex, problem.Lights,
     problem.UniformIrradiance, 16, true, q));
   for (int c = 0; c < 3; ++c)
   {
@@ -563,9 +562,8 @@ struct DiffusionComparison
     {
       Problem.Lights = { Directional(0.0, 0.0, -1.0, 1.0, 0.0, 0.0) };
     }
-    const std::vector<double> pointEta =
-      BoundaryPointRefractiveIndex(Mesh, Material.RefractiveIndex);
-    EXPECT_TRUE(ComputeBoundaryIrradiance(Mesh, pointEta, Problem.Lights,
+    // The pipeline's (vtkSurfaceIrradiance's) triangle-integrated q.
+    EXPECT_TRUE(ComputeProjectedIrradiance(Mesh, Material.RefractiveIndex, Problem.Lights,
       Problem.UniformIrradiance, 32, true, Irradiance));
     Problem.Irradiance = &Irradiance;
     const std::vector<std::string> names = GetDiffusionSolverNames();

@@ -1,0 +1,329 @@
+#include "CollimatedSource.h"
+
+#include "Error.h"
+#include "Fresnel.h"
+#include "RayCaster.h"
+#include "TetMesh.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace translucency
+{
+
+namespace
+{
+
+/// Rules on the reference tet, in barycentric coordinates: the tet split
+/// `level` times into 8 of equal volume by its edge midpoints (4 corner tets
+/// and the octahedron cut along the diagonal m02-m13), each with the
+/// symmetric 4-point rule of degree 2 (a = (5 + 3 sqrt 5) / 20,
+/// b = (5 - sqrt 5) / 20). Level L has 4 x 8^L points of equal weight.
+struct TetRules
+{
+  static constexpr int MaxLevel = 4;
+  std::vector<std::array<double, 4>> Points[MaxLevel + 1];
+
+  TetRules()
+  {
+    using Tet = std::array<std::array<double, 4>, 4>;
+    std::vector<Tet> tets(1);
+    for (int k = 0; k < 4; ++k)
+    {
+      for (int j = 0; j < 4; ++j)
+      {
+        tets[0][k][j] = k == j ? 1.0 : 0.0;
+      }
+    }
+    const double a = 0.5854101966249685, b = 0.1381966011250105;
+    for (int level = 0; level <= MaxLevel; ++level)
+    {
+      for (const Tet& t : tets)
+      {
+        for (int k = 0; k < 4; ++k)
+        {
+          std::array<double, 4> p{};
+          for (int m = 0; m < 4; ++m)
+          {
+            for (int j = 0; j < 4; ++j)
+            {
+              p[j] += (m == k ? a : b) * t[m][j];
+            }
+          }
+          Points[level].push_back(p);
+        }
+      }
+      if (level == MaxLevel)
+      {
+        break;
+      }
+      std::vector<Tet> finer;
+      finer.reserve(8 * tets.size());
+      for (const Tet& t : tets)
+      {
+        std::array<double, 4> v[10];
+        for (int k = 0; k < 4; ++k)
+        {
+          v[k] = t[k];
+        }
+        const int pairs[6][2] = { { 0, 1 }, { 0, 2 }, { 0, 3 }, { 1, 2 }, { 1, 3 }, { 2, 3 } };
+        for (int m = 0; m < 6; ++m)
+        {
+          for (int j = 0; j < 4; ++j)
+          {
+            v[4 + m][j] = 0.5 * (t[pairs[m][0]][j] + t[pairs[m][1]][j]);
+          }
+        }
+        // Midpoints 4..9: 01, 02, 03, 12, 13, 23.
+        const int sub[8][4] = { { 0, 4, 5, 6 }, { 1, 4, 7, 8 }, { 2, 5, 7, 9 }, { 3, 6, 8, 9 },
+          { 5, 8, 4, 7 }, { 5, 8, 7, 9 }, { 5, 8, 9, 6 }, { 5, 8, 6, 4 } };
+        for (const auto& s : sub)
+        {
+          finer.push_back(Tet{ v[s[0]], v[s[1]], v[s[2]], v[s[3]] });
+        }
+      }
+      tets.swap(finer);
+    }
+  }
+};
+
+} // namespace
+
+std::vector<LightSource> NonCollimatedLights(const std::vector<LightSource>& lights)
+{
+  std::vector<LightSource> rest;
+  for (const LightSource& light : lights)
+  {
+    if (light.Type != LightSource::Kind::Directional)
+    {
+      rest.push_back(light);
+    }
+  }
+  return rest;
+}
+
+CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<LightSource>& lights, bool shadows)
+{
+  const int numPoints = mesh.GetNumberOfPoints();
+  const int numTets = mesh.GetNumberOfTets();
+  material.Validate(numTets);
+  std::vector<LightSource> beams;
+  for (size_t l = 0; l < lights.size(); ++l)
+  {
+    ValidateLight(lights[l], l);
+    if (lights[l].Type == LightSource::Kind::Directional)
+    {
+      beams.push_back(lights[l]);
+    }
+  }
+  CollimatedSource out;
+  out.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  out.Load.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  if (beams.empty() || mesh.GetNumberOfBoundaryTriangles() == 0)
+  {
+    return out;
+  }
+  const std::vector<double>& tetEta = material.RefractiveIndex;
+  const std::vector<double>& muA = material.AbsorptionCoefficient;
+  const std::vector<double>& muS = material.ReducedScatteringCoefficient;
+
+  // Entering power: the triangle-integrated irradiance of the beams.
+  {
+    std::vector<double> cornerQ;
+    ComputeTriangleCornerIrradiance(mesh, tetEta, beams, 0.0, 0, shadows, cornerQ);
+    const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
+    for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        const double* q = &cornerQ[9 * static_cast<size_t>(f) + c];
+        out.Entering[c] += areas[f] * (q[0] + q[3] + q[6]) / 3.0;
+      }
+    }
+  }
+
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    lo[k] = std::numeric_limits<double>::infinity();
+    hi[k] = -lo[k];
+  }
+  for (int i = 0; i < numPoints; ++i)
+  {
+    const double* x = mesh.GetPoint(i);
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], x[k]);
+      hi[k] = std::max(hi[k], x[k]);
+    }
+  }
+  const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
+    (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const double offset = 1e-5 * diag;
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
+  RayCaster caster;
+  caster.Build(mesh.GetPoints(), triangles);
+  const std::vector<double>& pointNormals = mesh.GetPointNormals();
+
+  // E_c at the points.
+#pragma omp parallel for schedule(dynamic, 256)
+  for (int i = 0; i < numPoints; ++i)
+  {
+    const double* x = mesh.GetPoint(i);
+    double origin[3] = { x[0], x[1], x[2] };
+    if (mesh.IsBoundaryPoint(i))
+    {
+      const double* n = &pointNormals[3 * static_cast<size_t>(i)];
+      for (int k = 0; k < 3; ++k)
+      {
+        origin[k] -= offset * n[k]; // just inside
+      }
+    }
+    for (const LightSource& beam : beams)
+    {
+      const double len = std::sqrt(beam.Direction[0] * beam.Direction[0] +
+        beam.Direction[1] * beam.Direction[1] + beam.Direction[2] * beam.Direction[2]);
+      const double w[3] = { -beam.Direction[0] / len, -beam.Direction[1] / len,
+        -beam.Direction[2] / len };
+      double t = 0.0;
+      int f = -1;
+      if (!caster.FirstHit(origin, w, std::numeric_limits<double>::infinity(), t, f))
+      {
+        continue;
+      }
+      // The entry triangle's outward normal.
+      const int* tri = &triangles[3 * static_cast<size_t>(f)];
+      const double* a = mesh.GetPoint(tri[0]);
+      const double* b = mesh.GetPoint(tri[1]);
+      const double* c3 = mesh.GetPoint(tri[2]);
+      const double e1[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+      const double e2[3] = { c3[0] - a[0], c3[1] - a[1], c3[2] - a[2] };
+      double n[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0] };
+      const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      if (!(nl > 0.0))
+      {
+        continue;
+      }
+      const double cosIn = (n[0] * w[0] + n[1] * w[1] + n[2] * w[2]) / nl;
+      if (!(cosIn > 0.0))
+      {
+        continue; // not an exit towards the light: no entry along this ray
+      }
+      if (shadows)
+      {
+        const double p[3] = { origin[0] + t * w[0] + offset * (n[0] / nl + w[0]),
+          origin[1] + t * w[1] + offset * (n[1] / nl + w[1]),
+          origin[2] + t * w[2] + offset * (n[2] / nl + w[2]) };
+        if (caster.Occluded(p, w, 2.0 * diag))
+        {
+          continue;
+        }
+      }
+      const int tet = triangleTets[f];
+      const double eta = tetEta[tet];
+      const double sin2 = (1.0 - cosIn * cosIn) / (eta * eta);
+      const double cosT = std::sqrt(std::max(0.0, 1.0 - sin2));
+      if (!(cosT > 0.0))
+      {
+        continue;
+      }
+      // Depth of x below the entry plane (from x itself, not the shifted
+      // origin), then the refracted path to that depth.
+      const double depth =
+        std::max(0.0, (n[0] * (a[0] - x[0]) + n[1] * (a[1] - x[1]) + n[2] * (a[2] - x[2])) / nl);
+      const double s = depth / cosT;
+      const double entering = cosIn * Fresnel::Transmittance(cosIn, eta) / cosT;
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        const double muT = muA[3 * static_cast<size_t>(tet) + c] +
+          muS[3 * static_cast<size_t>(tet) + c];
+        out.Fluence[3 * static_cast<size_t>(i) + c] +=
+          beam.Power[c] * entering * std::exp(-muT * s);
+      }
+    }
+  }
+
+  // Loads: integral of mu_s' E_c phi_a per tet, then scattered to the points.
+  static const TetRules rules;
+  std::vector<double> tetLoad(12 * static_cast<size_t>(numTets), 0.0);
+  std::vector<double> tetAbsorbed(3 * static_cast<size_t>(numTets), 0.0);
+#pragma omp parallel for schedule(static)
+  for (int t = 0; t < numTets; ++t)
+  {
+    const int* v = mesh.GetTet(t);
+    const double volume = mesh.GetTetVolume(t);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      double e[4], logE[4];
+      bool positive = true, any = false;
+      for (int k = 0; k < 4; ++k)
+      {
+        e[k] = out.Fluence[3 * static_cast<size_t>(v[k]) + c];
+        positive = positive && e[k] > 0.0;
+        any = any || e[k] > 0.0;
+        logE[k] = e[k] > 0.0 ? std::log(e[k]) : 0.0;
+      }
+      if (!any)
+      {
+        continue;
+      }
+      // Finer rules where E_c varies more across the tet: the log range per
+      // sub-tet at most 0.5 (level <= 4).
+      int level = 1;
+      if (positive)
+      {
+        const double range = std::max(std::max(logE[0], logE[1]), std::max(logE[2], logE[3])) -
+          std::min(std::min(logE[0], logE[1]), std::min(logE[2], logE[3]));
+        level = 0;
+        while (level < TetRules::MaxLevel && range > 0.5 * (1 << level))
+        {
+          ++level;
+        }
+      }
+      const std::vector<std::array<double, 4>>& points = rules.Points[level];
+      double moment[4] = { 0.0, 0.0, 0.0, 0.0 }, total = 0.0;
+      for (const std::array<double, 4>& l : points)
+      {
+        const double g = positive
+          ? std::exp(l[0] * logE[0] + l[1] * logE[1] + l[2] * logE[2] + l[3] * logE[3])
+          : l[0] * e[0] + l[1] * e[1] + l[2] * e[2] + l[3] * e[3];
+        total += g;
+        for (int k = 0; k < 4; ++k)
+        {
+          moment[k] += g * l[k];
+        }
+      }
+      const double scale = volume / static_cast<double>(points.size());
+      const double sigma = muS[3 * static_cast<size_t>(t) + c];
+      for (int k = 0; k < 4; ++k)
+      {
+        tetLoad[12 * static_cast<size_t>(t) + 3 * k + c] = sigma * scale * moment[k];
+      }
+      tetAbsorbed[3 * static_cast<size_t>(t) + c] =
+        muA[3 * static_cast<size_t>(t) + c] * scale * total;
+    }
+  }
+  for (int t = 0; t < numTets; ++t)
+  {
+    const int* v = mesh.GetTet(t);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      for (int k = 0; k < 4; ++k)
+      {
+        const double load = tetLoad[12 * static_cast<size_t>(t) + 3 * k + c];
+        out.Load[3 * static_cast<size_t>(v[k]) + c] += load;
+        out.Scattered[c] += load;
+      }
+      out.Absorbed[c] += tetAbsorbed[3 * static_cast<size_t>(t) + c];
+    }
+  }
+  return out;
+}
+
+} // namespace translucency
