@@ -54,7 +54,18 @@ bool ExtendedCollimatedModel(vtkInformationVector* inputs)
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputs);
   vtkDataArray* model =
     input ? input->GetFieldData()->GetArray("TranslucencyCollimatedModel") : nullptr;
-  return model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) == 1.0;
+  int extended =
+    model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) == 1.0 ? 1 : 0;
+  // A collective decision: an empty piece may carry no field data, and every
+  // rank must take the same path (or the others hang in its collectives).
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  if (controller && controller->GetNumberOfProcesses() > 1)
+  {
+    int any = 0;
+    controller->AllReduce(&extended, &any, 1, vtkCommunicator::MAX_OP);
+    extended = any;
+  }
+  return extended != 0;
 }
 }
 
