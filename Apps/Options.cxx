@@ -252,6 +252,9 @@ void AddSceneOptions(CLI::App* command, SceneOptions& scene)
       "may repeat; default directional:0,-1,-1:1 and uniform:0.1\n"
       "directional:dx,dy,dz[:E]  direction of travel, E W/mm^2 (1)\n"
       "point:x,y,z[:I]           position mm, intensity W/sr (1)\n"
+      "spot:x,y,z:dx,dy,dz:C[,X][:I]  axis, cone half-angle C deg,\n"
+      "                          fall-off cos^X (0), I W/sr on the axis\n"
+      "E or I: one number, or R,G,B for a coloured light\n"
       "uniform[:E]               environment, E W/mm^2 (1)\n"
       "none                      no light (alone)")
     ->type_name("SPEC")

@@ -72,7 +72,12 @@ std::string LightsLine(const SceneOptions& scene)
     if (l.Type != "uniform")
       line += ":" + DefaultText(l.Values[0]) + "," + DefaultText(l.Values[1]) + "," +
         DefaultText(l.Values[2]);
-    line += ":" + DefaultText(l.Power);
+    if (l.Type == "spot")
+      line += ":" + DefaultText(l.Axis[0]) + "," + DefaultText(l.Axis[1]) + "," +
+        DefaultText(l.Axis[2]) + ":" + DefaultText(l.Cutoff) + "," + DefaultText(l.Exponent);
+    line += ":" + DefaultText(l.PowerRGB[0]);
+    if (l.Coloured)
+      line += "," + DefaultText(l.PowerRGB[1]) + "," + DefaultText(l.PowerRGB[2]);
   }
   if (scene.DefaultLights)
     line += " (the default: set --light to choose)";
@@ -91,9 +96,18 @@ nlohmann::json SceneProvenance(const SceneOptions& scene)
     nlohmann::json light = { { "type", l.Type } };
     if (l.Type == "directional")
       light["direction"] = { l.Values[0], l.Values[1], l.Values[2] };
-    else if (l.Type == "point")
+    else if (l.Type == "point" || l.Type == "spot")
       light["position_mm"] = { l.Values[0], l.Values[1], l.Values[2] };
-    light[l.Type == "point" ? "intensity_W_per_sr" : "irradiance_W_per_mm2"] = l.Power;
+    if (l.Type == "spot")
+    {
+      light["axis"] = { l.Axis[0], l.Axis[1], l.Axis[2] };
+      light["cutoff_deg"] = l.Cutoff;
+      light["exponent"] = l.Exponent;
+    }
+    const bool intensity = l.Type == "point" || l.Type == "spot";
+    light[intensity ? "intensity_W_per_sr" : "irradiance_W_per_mm2"] = l.Coloured
+      ? nlohmann::json({ l.PowerRGB[0], l.PowerRGB[1], l.PowerRGB[2] })
+      : nlohmann::json(l.Power);
     lights.push_back(light);
   }
   s["lights"] = lights;

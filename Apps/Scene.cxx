@@ -40,6 +40,32 @@ Light ParseLight(const std::string& spec)
   {
     throw UsageError("empty --light");
   }
+  // The power: one number (every channel) or R,G,B.
+  auto power = [&](const std::string& text) {
+    const std::vector<double> p = ParseNumbers(text, "--light " + spec);
+    if (p.size() != 1 && p.size() != 3)
+    {
+      throw UsageError("--light " + spec + ": the power is one number or R,G,B");
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      light.PowerRGB[c] = p.size() == 3 ? p[c] : p[0];
+      if (!(light.PowerRGB[c] >= 0))
+      {
+        throw UsageError("--light " + spec + ": the power must be >= 0");
+      }
+    }
+    light.Power = light.PowerRGB[0];
+    light.Coloured = p.size() == 3;
+  };
+  auto triple = [&](const std::string& text, double out[3]) {
+    const std::vector<double> v = ParseNumbers(text, "--light " + spec);
+    if (v.size() != 3)
+    {
+      throw UsageError("--light " + spec + ": expected three comma-separated numbers");
+    }
+    std::copy(v.begin(), v.end(), out);
+  };
   light.Type = parts[0];
   if (light.Type == "none")
   {
@@ -48,6 +74,7 @@ Light ParseLight(const std::string& spec)
       throw UsageError("--light none takes no values: '" + spec + "'");
     }
     light.Power = 0.0;
+    std::fill(light.PowerRGB, light.PowerRGB + 3, 0.0);
   }
   else if (light.Type == "uniform")
   {
@@ -58,6 +85,7 @@ Light ParseLight(const std::string& spec)
     if (parts.size() == 2)
     {
       light.Power = ParseNumbers(parts[1], "--light " + spec).at(0);
+      std::fill(light.PowerRGB, light.PowerRGB + 3, light.Power);
     }
   }
   else if (light.Type == "directional" || light.Type == "point")
@@ -66,25 +94,54 @@ Light ParseLight(const std::string& spec)
     {
       throw UsageError("--light " + light.Type + " needs x,y,z[:power]: '" + spec + "'");
     }
-    std::vector<double> v = ParseNumbers(parts[1], "--light " + spec);
-    if (v.size() != 3)
-    {
-      throw UsageError("--light " + spec + ": expected three comma-separated numbers");
-    }
-    std::copy(v.begin(), v.end(), light.Values);
+    triple(parts[1], light.Values);
     if (parts.size() == 3)
     {
-      light.Power = ParseNumbers(parts[2], "--light " + spec).at(0);
+      power(parts[2]);
     }
-    if (light.Type == "directional" && v[0] == 0 && v[1] == 0 && v[2] == 0)
+    if (light.Type == "directional" && light.Values[0] == 0 && light.Values[1] == 0 &&
+      light.Values[2] == 0)
     {
       throw UsageError("--light " + spec + ": the direction is zero");
     }
   }
+  else if (light.Type == "spot")
+  {
+    if (parts.size() < 4 || parts.size() > 5)
+    {
+      throw UsageError(
+        "--light spot needs x,y,z:dx,dy,dz:cutoff[,exponent][:power]: '" + spec + "'");
+    }
+    triple(parts[1], light.Values);
+    triple(parts[2], light.Axis);
+    const std::vector<double> cone = ParseNumbers(parts[3], "--light " + spec);
+    if (cone.size() > 2)
+    {
+      throw UsageError("--light " + spec + ": the cone is cutoff[,exponent]");
+    }
+    light.Cutoff = cone[0];
+    light.Exponent = cone.size() == 2 ? cone[1] : 0.0;
+    if (parts.size() == 5)
+    {
+      power(parts[4]);
+    }
+    if (light.Axis[0] == 0 && light.Axis[1] == 0 && light.Axis[2] == 0)
+    {
+      throw UsageError("--light " + spec + ": the axis is zero");
+    }
+    if (!(light.Cutoff > 0 && light.Cutoff <= 180))
+    {
+      throw UsageError("--light " + spec + ": the cut-off must be in (0, 180] degrees");
+    }
+    if (!(light.Exponent >= 0))
+    {
+      throw UsageError("--light " + spec + ": the exponent must be >= 0");
+    }
+  }
   else
   {
-    throw UsageError(
-      "unknown light type '" + light.Type + "' (directional, point, uniform or none)");
+    throw UsageError("unknown light type '" + light.Type +
+      "' (directional, point, spot, uniform or none)");
   }
   if (!(light.Power >= 0))
   {
@@ -269,10 +326,14 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   double uniformE = 0.0;
   for (const Light& l : options.Lights)
   {
+    const double* p = l.PowerRGB;
     if (l.Type == "directional")
-      irradiance->AddDirectionalLight(l.Values[0], l.Values[1], l.Values[2], l.Power);
+      irradiance->AddDirectionalLightRGB(l.Values[0], l.Values[1], l.Values[2], p[0], p[1], p[2]);
     else if (l.Type == "point")
-      irradiance->AddPointLight(l.Values[0], l.Values[1], l.Values[2], l.Power);
+      irradiance->AddPointLightRGB(l.Values[0], l.Values[1], l.Values[2], p[0], p[1], p[2]);
+    else if (l.Type == "spot")
+      irradiance->AddSpotLight(l.Values[0], l.Values[1], l.Values[2], l.Axis[0], l.Axis[1],
+        l.Axis[2], l.Cutoff, l.Exponent, p[0], p[1], p[2]);
     else
       uniformE += l.Power;
   }

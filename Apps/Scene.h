@@ -21,9 +21,14 @@ namespace translucency_app
 /// A light from --light: type directional|point|uniform, 3 values, power.
 struct Light
 {
-  std::string Type;
-  double Values[3] = { 0, 0, 0 };
-  double Power = 1.0;
+  std::string Type;            ///< directional, point, spot, uniform or none
+  double Values[3] = { 0, 0, 0 }; ///< direction (directional) or position (point, spot)
+  double Power = 1.0;          ///< channel R's power (all channels unless Coloured)
+  double PowerRGB[3] = { 1.0, 1.0, 1.0 }; ///< power per channel R, G, B
+  bool Coloured = false;       ///< the power was given as R,G,B
+  double Axis[3] = { 0, 0, -1 }; ///< spot: axis direction
+  double Cutoff = 30.0;        ///< spot: cone half-angle (degrees)
+  double Exponent = 0.0;       ///< spot: fall-off exponent
 };
 /// Parse a --light SPEC; a UsageError naming --light and the fault otherwise.
 Light ParseLight(const std::string& spec);

@@ -380,22 +380,32 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
   vtkFieldData* fd = input->GetFieldData();
   if (vtkDataArray* lights = fd->GetArray("TranslucencyLights"))
   {
-    if (lights->GetNumberOfComponents() == 7)
+    // 12 components (kind 0 directional / 1 point / 2 spot, direction or
+    // position, power R, G, B, spot axis, cut-off, exponent); 7 in files
+    // written before spot lights (no spot part).
+    const int components = lights->GetNumberOfComponents();
+    if (components == 7 || components == 12)
     {
       for (vtkIdType k = 0; k < lights->GetNumberOfTuples(); ++k)
       {
-        double v[7];
+        double v[12] = {};
         lights->GetTuple(k, v);
         translucency::LightSource light;
-        light.Type = v[0] == 0 ? translucency::LightSource::Kind::Directional
-                               : translucency::LightSource::Kind::Point;
-        if (light.Type == translucency::LightSource::Kind::Directional)
+        using Kind = translucency::LightSource::Kind;
+        light.Type = v[0] == 0 ? Kind::Directional : (v[0] == 2 ? Kind::Spot : Kind::Point);
+        if (light.Type == Kind::Directional)
         {
           light.Direction = { v[1], v[2], v[3] };
         }
         else
         {
           light.Position = { v[1], v[2], v[3] };
+        }
+        if (light.Type == Kind::Spot)
+        {
+          light.Direction = { v[7], v[8], v[9] };
+          light.SpotCutoff = v[10];
+          light.SpotExponent = v[11];
         }
         light.Power = { v[4], v[5], v[6] };
         problem.Lights.push_back(light);

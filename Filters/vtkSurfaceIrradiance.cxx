@@ -33,6 +33,7 @@ struct vtkSurfaceIrradiance::Internals
 {
   std::vector<translucency::LightSource> Directional;
   std::vector<translucency::LightSource> Point;
+  std::vector<translucency::LightSource> Spot;
   std::shared_ptr<const translucency::TetMesh> Mesh;
 };
 
@@ -94,6 +95,48 @@ int vtkSurfaceIrradiance::GetNumberOfPointLights() const
   return static_cast<int>(this->Internal->Point.size());
 }
 
+void vtkSurfaceIrradiance::AddDirectionalLightRGB(
+  double dx, double dy, double dz, double r, double g, double b)
+{
+  this->AddDirectionalLight(dx, dy, dz, r);
+  this->Internal->Directional.back().Power = { r, g, b };
+}
+
+void vtkSurfaceIrradiance::AddPointLightRGB(
+  double x, double y, double z, double r, double g, double b)
+{
+  this->AddPointLight(x, y, z, r);
+  this->Internal->Point.back().Power = { r, g, b };
+}
+
+void vtkSurfaceIrradiance::AddSpotLight(double x, double y, double z, double dx, double dy,
+  double dz, double cutoff, double exponent, double r, double g, double b)
+{
+  translucency::LightSource light;
+  light.Type = translucency::LightSource::Kind::Spot;
+  light.Position = { x, y, z };
+  light.Direction = { dx, dy, dz };
+  light.SpotCutoff = cutoff;
+  light.SpotExponent = exponent;
+  light.Power = { r, g, b };
+  this->Internal->Spot.push_back(light);
+  this->Modified();
+}
+
+void vtkSurfaceIrradiance::RemoveAllSpotLights()
+{
+  if (!this->Internal->Spot.empty())
+  {
+    this->Internal->Spot.clear();
+    this->Modified();
+  }
+}
+
+int vtkSurfaceIrradiance::GetNumberOfSpotLights() const
+{
+  return static_cast<int>(this->Internal->Spot.size());
+}
+
 //------------------------------------------------------------------------------
 int vtkSurfaceIrradiance::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
@@ -114,6 +157,7 @@ int vtkSurfaceIrradiance::RequestData(
 
   std::vector<translucency::LightSource> lights = this->Internal->Directional;
   lights.insert(lights.end(), this->Internal->Point.begin(), this->Internal->Point.end());
+  lights.insert(lights.end(), this->Internal->Spot.begin(), this->Internal->Spot.end());
   if (this->InteractiveLight)
   {
     translucency::LightSource light;
@@ -207,13 +251,17 @@ int vtkSurfaceIrradiance::RequestData(
   fieldData->ShallowCopy(input->GetFieldData());
   vtkNew<vtkDoubleArray> lightArray;
   lightArray->SetName("TranslucencyLights");
-  lightArray->SetNumberOfComponents(7);
+  lightArray->SetNumberOfComponents(12);
   for (const auto& light : lights)
   {
-    const bool directional = light.Type == translucency::LightSource::Kind::Directional;
+    using Kind = translucency::LightSource::Kind;
+    const bool directional = light.Type == Kind::Directional;
+    const bool spot = light.Type == Kind::Spot;
     const auto& v = directional ? light.Direction : light.Position;
-    const double tuple[7] = { directional ? 0.0 : 1.0, v[0], v[1], v[2], light.Power[0],
-      light.Power[1], light.Power[2] };
+    const double tuple[12] = { directional ? 0.0 : (spot ? 2.0 : 1.0), v[0], v[1], v[2],
+      light.Power[0], light.Power[1], light.Power[2], spot ? light.Direction[0] : 0.0,
+      spot ? light.Direction[1] : 0.0, spot ? light.Direction[2] : 0.0,
+      spot ? light.SpotCutoff : 0.0, spot ? light.SpotExponent : 0.0 };
     lightArray->InsertNextTuple(tuple);
   }
   fieldData->AddArray(lightArray);
@@ -249,10 +297,18 @@ std::string vtkSurfaceIrradiance::DescribeLights(
   const char* separator = "";
   for (const auto& light : lights)
   {
-    const bool directional = light.Type == translucency::LightSource::Kind::Directional;
+    using Kind = translucency::LightSource::Kind;
+    const bool directional = light.Type == Kind::Directional;
     const auto& v = directional ? light.Direction : light.Position;
-    text << separator << (directional ? "directional:" : "point:") << v[0] << "," << v[1] << ","
-         << v[2] << ":" << light.Power[0];
+    text << separator
+         << (directional ? "directional:" : (light.Type == Kind::Spot ? "spot:" : "point:"))
+         << v[0] << "," << v[1] << "," << v[2] << ":";
+    if (light.Type == Kind::Spot)
+    {
+      text << light.Direction[0] << "," << light.Direction[1] << "," << light.Direction[2] << ":"
+           << light.SpotCutoff << "," << light.SpotExponent << ":";
+    }
+    text << light.Power[0];
     if (light.Power[1] != light.Power[0] || light.Power[2] != light.Power[0])
     {
       text << "," << light.Power[1] << "," << light.Power[2];

@@ -28,8 +28,9 @@
  *
  * Output: a shallow copy of the input with the point array `Irradiance`
  * (3 components R, G, B, W/mm^2; 0 at interior points). The lights are
- * also recorded in the field data (`TranslucencyLights`: 7 components per
- * light — kind 0 directional / 1 point, direction or position, power R, G, B;
+ * also recorded in the field data (`TranslucencyLights`: 12 components per
+ * light — kind 0 directional / 1 point / 2 spot, direction or position,
+ * power R, G, B, then the spot's axis (3), cut-off (degrees) and exponent;
  * `TranslucencyUniformLight`; `TranslucencyShadows`) for solvers that launch
  * photons from them (vtkSolveDiffusion's Monte Carlo reference).
  *
@@ -43,7 +44,7 @@
  * described in the field data (`TranslucencyLightsDescription`, in the CLI's
  * --light syntax) and by GetLightsDescription().
  *
- * @warning Lights are white (same value in R, G, B). The input must hold
+ * @warning The input must hold
  * only linear tetrahedra and the cell array `RefractiveIndex`.
  *
  * @sa vtkSolveDiffusion vtkOutgoingRadiance
@@ -85,6 +86,27 @@ public:
   void AddPointLight(double x, double y, double z, double intensity);
   void RemoveAllPointLights();
   int GetNumberOfPointLights() const;
+  ///@}
+
+  ///@{
+  /// Coloured directional and point lights: E (W/mm^2) or I (W/sr) per
+  /// channel R, G, B (each >= 0); they join the lists above.
+  void AddDirectionalLightRGB(double dx, double dy, double dz, double r, double g, double b);
+  void AddPointLightRGB(double x, double y, double z, double r, double g, double b);
+  ///@}
+
+  ///@{
+  /**
+   * Spot lights: position (mm), axis direction (any length), cone half-angle
+   * `cutoff` (degrees, in (0, 180]), fall-off exponent (>= 0) and intensity
+   * I (W/sr) per channel on the axis; at angle alpha from the axis the
+   * intensity is I cos(alpha)^exponent inside the cone and 0 outside
+   * (translucency::LightSource::Kind::Spot). None by default.
+   */
+  void AddSpotLight(double x, double y, double z, double dx, double dy, double dz,
+    double cutoff, double exponent, double r, double g, double b);
+  void RemoveAllSpotLights();
+  int GetNumberOfSpotLights() const;
   ///@}
 
   ///@{

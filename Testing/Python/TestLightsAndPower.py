@@ -21,6 +21,12 @@ How to run (from a build tree; ctest sets the environment):
    injects exactly 0.5 W per channel (its definition); `render --json`
    reports the same balance as the filter.
 4. Frequency domain: ComputePowerBalance refuses (complex fluence).
+6. Coloured and spot lights: an R,G,B directional light scales each channel
+   of a white one exactly (powers of two); a spot light equals the point
+   light at the same place inside its cone and is 0 outside (exponent 0);
+   the CLI parses both into the same lights (its Irradiance equals the
+   filter's) and refuses a zero axis, a cone outside (0, 180] and a power
+   of two numbers; Monte Carlo refuses a spot light by name.
 5. The model-range warning: skin1 (transport albedo 0.68 in blue) warns,
    naming the albedo; marble on the same tets does not; the montecarlo
    solver (transport itself) does not.
@@ -246,6 +252,75 @@ class LightsAndPowerTest(unittest.TestCase):
         self.assertIn("lowest 0.678", skin)
         self.assertEqual(warning_for("marble"), "")
         self.assertEqual(warning_for("skin1", "montecarlo"), "")
+
+    # 6.
+    def test_coloured_directional_light(self):
+        white = self.light()
+        white.AddDirectionalLight(0.0, -1.0, -1.0, 1.0)
+        coloured = self.light()
+        coloured.AddDirectionalLightRGB(0.0, -1.0, -1.0, 1.0, 0.5, 0.25)
+        q_white, q = irradiance_of(white), irradiance_of(coloured)
+        self.assertGreater(q_white[:, 0].max(), 0.1)
+        self.assertEqual(abs(q[:, 0] - q_white[:, 0]).max(), 0.0)
+        self.assertEqual(abs(q[:, 1] - 0.5 * q_white[:, 1]).max(), 0.0)
+        self.assertEqual(abs(q[:, 2] - 0.25 * q_white[:, 2]).max(), 0.0)
+        self.assertEqual(description_of(coloured), "directional:0,-1,-1:1,0.5,0.25")
+
+    def test_spot_light_is_a_point_light_inside_its_cone(self):
+        import numpy as np
+        spot = self.light()
+        spot.AddSpotLight(0.0, 0.0, 20.0, 0.0, 0.0, -1.0, 10.0, 0.0, 500.0, 500.0, 500.0)
+        point = self.light()
+        point.AddPointLight(0.0, 0.0, 20.0, 500.0)
+        q_spot, q_point = irradiance_of(spot), irradiance_of(point)
+        points = vtk_to_numpy(self.grid.GetPoints().GetData())
+        to_point = points - np.array([0.0, 0.0, 20.0])
+        angle = np.degrees(np.arccos(-to_point[:, 2] / np.linalg.norm(to_point, axis=1)))
+        inside, outside = angle < 9.9, angle > 10.1
+        lit = q_point[:, 0] > 0
+        self.assertGreater(int(np.sum(inside & lit)), 5)
+        self.assertGreater(int(np.sum(outside & lit)), 50)
+        self.assertEqual(abs(q_spot[inside] - q_point[inside]).max(), 0.0)
+        self.assertEqual(abs(q_spot[outside]).max(), 0.0)
+        self.assertEqual(description_of(spot), "spot:0,0,20:0,0,-1:10,0:500")
+        solve = self.solve(spot, "montecarlo")
+        with self.assertRaises(translucency.PipelineError) as caught:
+            translucency.update(solve)
+        self.assertIn("spot light", str(caught.exception))
+
+    def test_cli_coloured_and_spot_lights(self):
+        import numpy as np
+        prefix = os.path.join(self.dir.name, "lights")
+        result = subprocess.run(
+            [CLI, "render", "--mesh", self.prefix + ".vtu", "--solver", "fem",
+             "--light", "directional:0,-1,-1:1,0.5,0.25", "--light", "spot:0,0,20:0,0,-1:10,2:500",
+             "--output", prefix, "--json", prefix + ".json", "--quiet"],
+            capture_output=True, text=True, timeout=300)
+        self.assertEqual(result.returncode, 0, result.stderr)
+        self.assertIn("lights: directional:0,-1,-1:1,0.5,0.25 spot:0,0,20:0,0,-1:10,2:500",
+                      result.stdout)
+        with open(prefix + ".json") as f:
+            lights = json.load(f)["provenance"]["scene"]["lights"]
+        self.assertEqual(lights[0]["irradiance_W_per_mm2"], [1.0, 0.5, 0.25])
+        self.assertEqual(lights[1]["cutoff_deg"], 10.0)
+        self.assertEqual(lights[1]["exponent"], 2.0)
+        reader = vtkXMLUnstructuredGridReader()
+        reader.SetFileName(prefix + ".vtu")
+        reader.Update()
+        cli_q = vtk_to_numpy(reader.GetOutput().GetPointData().GetArray("Irradiance"))
+        light = self.light()
+        light.AddDirectionalLightRGB(0.0, -1.0, -1.0, 1.0, 0.5, 0.25)
+        light.AddSpotLight(0.0, 0.0, 20.0, 0.0, 0.0, -1.0, 10.0, 2.0, 500.0, 500.0, 500.0)
+        self.assertEqual(abs(irradiance_of(light) - cli_q).max(), 0.0)
+        for spec, message in (("spot:0,0,20:0,0,0:10", "the axis is zero"),
+                              ("spot:0,0,20:0,0,-1:200", "(0, 180]"),
+                              ("spot:0,0,20:0,0,-1:10,-1", "exponent must be >= 0"),
+                              ("point:0,0,20:1,2", "one number or R,G,B"),
+                              ("directional:0,-1,-1:1,-1,1", "must be >= 0")):
+            bad = subprocess.run([CLI, "render", "--mesh", self.prefix + ".vtu", "--light", spec],
+                                 capture_output=True, text=True, timeout=120)
+            self.assertNotEqual(bad.returncode, 0, spec)
+            self.assertIn(message, bad.stderr, spec)
 
 
 if __name__ == "__main__":
