@@ -312,11 +312,25 @@ void vtkSolveDiffusion::GetDetectorSurfacePosition(int detector, double position
 //------------------------------------------------------------------------------
 void vtkSolveDiffusion::SetTimeGates(double t0, double t1, int n)
 {
+  this->TimeGatesCountText = n;
   if (t0 != this->TimeGatesStart || t1 != this->TimeGatesEnd || n != this->TimeGatesCount)
   {
     this->TimeGatesStart = t0;
     this->TimeGatesEnd = t1;
     this->TimeGatesCount = n;
+    this->Modified();
+  }
+}
+
+void vtkSolveDiffusion::SetTimeGatesFromPanel(double t0, double t1, double n)
+{
+  // ParaView's DoubleVectorProperty passes the count as a double: a whole
+  // number is the count; anything else is kept to be reported by RequestData.
+  const bool whole = std::isfinite(n) && n == std::floor(n) && std::abs(n) <= 1e9;
+  this->SetTimeGates(t0, t1, whole ? static_cast<int>(n) : 0);
+  if (!whole)
+  {
+    this->TimeGatesCountText = n; // reported by RequestData
     this->Modified();
   }
 }
@@ -479,6 +493,13 @@ int vtkSolveDiffusion::RequestData(
   {
     vtkErrorMacro(<< "ModulationFrequency " << this->ModulationFrequency
                   << " Hz: expected a finite value >= 0 (0 = continuous wave)");
+    return 0;
+  }
+  if (!(std::isfinite(this->TimeGatesCountText) &&
+        this->TimeGatesCountText == std::floor(this->TimeGatesCountText)))
+  {
+    vtkErrorMacro(<< "TimeGates: the number of gates must be a whole number, got "
+                  << this->TimeGatesCountText);
     return 0;
   }
   const bool timeResolved = this->TimeGatesCount != 0;

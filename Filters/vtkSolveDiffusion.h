@@ -322,6 +322,9 @@ public:
   /// 1..10000); N = 0 (the default) solves the continuous-wave (or
   /// frequency-domain) equation. Invalid values make RequestData fail.
   void SetTimeGates(double t0, double t1, int n);
+  /// The same with N as a double (the ParaView panel's property): a value
+  /// that is not a whole number makes RequestData fail naming it.
+  void SetTimeGatesFromPanel(double t0, double t1, double n);
   double GetTimeGatesStart() const { return this->TimeGatesStart; }
   double GetTimeGatesEnd() const { return this->TimeGatesEnd; }
   int GetTimeGatesCount() const { return this->TimeGatesCount; }
@@ -418,6 +421,7 @@ protected:
   double TimeGatesStart = 0.0;
   double TimeGatesEnd = 0.0;
   int TimeGatesCount = 0;
+  double TimeGatesCountText = 0.0; ///< N as given to SetTimeGatesFromPanel
   int TimeStepsPerGate = 0;
   double TopologyTime = 0.0;
   double AssemblyTime = 0.0;

@@ -181,6 +181,28 @@ class TimeResolvedCLI(unittest.TestCase):
             with open(prefix + ".json") as f:
                 self.assertEqual(f.read(), "precious", extra)
 
+    def test_panel_property_counts_gates_as_whole_numbers(self):
+        """The ParaView property passes N as a double (SetTimeGatesFromPanel):
+        a whole number runs that many gates, anything else fails naming it."""
+        import translucency
+        reader = vtkXMLUnstructuredGridReader()
+        reader.SetFileName(self.mesh)
+        reader.Update()
+        light = translucency.vtkSurfaceIrradiance()
+        light.SetInputData(reader.GetOutput())
+        solve = translucency.vtkSolveDiffusion()
+        solve.SetInputConnection(light.GetOutputPort())
+        solve.SetTimeGatesFromPanel(0.0, 2.0, 8.0)
+        output = translucency.update(solve)
+        centres = vtk_to_numpy(output.GetFieldData().GetArray("TimeGateCentres"))
+        np.testing.assert_allclose(centres.ravel(), 0.125 + 0.25 * np.arange(8), rtol=1e-12)
+        solve.SetTimeGatesFromPanel(0.0, 2.0, 2.5)
+        with self.assertRaises(translucency.PipelineError) as caught:
+            translucency.update(solve)
+        self.assertIn("whole number, got 2.5", str(caught.exception))
+        solve.SetTimeGatesFromPanel(0.0, 0.0, 0.0)  # back to continuous wave
+        self.assertIsNone(translucency.update(solve).GetFieldData().GetArray("TimeGateCentres"))
+
 
 if __name__ == "__main__":
     unittest.main()
