@@ -46,7 +46,7 @@ struct RenderOptions
   RadianceImageOptions Image;
   std::string SolverName = translucency::GetDiffusionSolverNames().front(); ///< the default
   std::string LinearSolver;
-  std::string OutputPrefix, PngPath, SlicePath, JsonPath;
+  std::string OutputPrefix, PngPath, SlicePath, TpsfPath, JsonPath;
   double RelTol = 1e-6;
   int MaxIter = 2000;
   bool NSquaredLaw = false;
@@ -80,11 +80,14 @@ int Render(RenderOptions& o)
   scene.Finish("render");
   const std::string &solverName = o.SolverName, &linearSolver = o.LinearSolver;
   const std::string &outputPrefix = o.OutputPrefix, &pngPath = o.PngPath,
-                    &slicePath = o.SlicePath, &jsonPath = o.JsonPath;
+                    &slicePath = o.SlicePath, &tpsfPath = o.TpsfPath,
+                    &jsonPath = o.JsonPath;
   const RadianceImageOptions& image = o.Image;
+  if (!tpsfPath.empty() && (o.Optics.TimeGates.Count == 0 || o.Optics.Detectors.empty()))
+    throw UsageError("--tpsf-png needs --time-gates and at least one --detector");
   // Before the solve: the pictures need an X server (Pictures.h).
-  if (!pngPath.empty() || !slicePath.empty())
-    RequirePictureDisplay("no --png/--slice-png");
+  if (!pngPath.empty() || !slicePath.empty() || !tpsfPath.empty())
+    RequirePictureDisplay("no --png/--slice-png/--tpsf-png");
 
   std::vector<Stage> stages;
   std::string error;
@@ -156,6 +159,37 @@ int Render(RenderOptions& o)
         throw translucency::Error(error);
     }
     stages.push_back({ "render", MillisecondsSince(start) });
+  }
+  if (!tpsfPath.empty())
+  {
+    // The temporal point-spread function of every detector, channel
+    // --channel, on a log scale (gates with no positive reading left out).
+    start = Clock::now();
+    static const char* channelName[3] = { "R", "G", "B" };
+    std::vector<PlotSeries> curves;
+    for (int d = 0; d < solve->GetNumberOfDetectors(); ++d)
+    {
+      PlotSeries curve;
+      curve.Name = "detector " + std::to_string(d + 1) + " (" +
+        o.Optics.Detectors[static_cast<size_t>(d)].Spec + ")";
+      for (int g = 0; g < solve->GetNumberOfTimeGates(); ++g)
+      {
+        const double value = solve->GetDetectorFluenceTPSF(d, g, image.Channel);
+        if (value > 0.0)
+        {
+          curve.X.push_back(solve->GetTimeGateCentre(g));
+          curve.Y.push_back(value);
+        }
+      }
+      curves.push_back(curve);
+    }
+    EnsureParentDirectory(tpsfPath);
+    if (!WritePlotPNG(curves, "time (ns, gate centres)",
+          std::string("fluence ") + channelName[image.Channel] +
+            " per J of pulse (J/(mm^2 ns)), gate average, log scale",
+          outputs.Add(tpsfPath), error))
+      throw translucency::Error(error);
+    stages.push_back({ "tpsf plot", MillisecondsSince(start) });
   }
 
   // 8. Report.
@@ -268,6 +302,10 @@ Command AddRenderCommand(CLI::App& app)
     ->type_name("PREFIX");
   c->add_option("--png", o->PngPath,
      "render the tone-mapped radiance (needs X,\ne.g. run under xvfb-run -a)")
+    ->type_name("FILE");
+  c->add_option("--tpsf-png", o->TpsfPath,
+     "plot each detector's temporal point-spread function\n"
+     "(--time-gates, channel --channel, log scale; needs X)")
     ->type_name("FILE");
   c->add_option("--slice-png", o->SlicePath,
      "render a slice of the fluence rate (inferno, colour bar in\n"

@@ -273,6 +273,24 @@ class PicturesTest(unittest.TestCase):
         self.assertIn("provenance", data)
         self.assertAlmostEqual(sum(data["times_ms"].values()), total, delta=0.1 * len(rows))
 
+    def test_6_tpsf_plot(self):
+        """render --tpsf-png: one curve per detector (the plot's first two
+        series colours each drawn along a curve), and a clear usage error
+        without --time-gates."""
+        png = os.path.join(self.tmp.name, "tpsf.png")
+        result = run("render", "--mesh", self.mesh, "--target-tets", "2000", "--light", "none",
+                     "--source", "pencil:0,0,5:0,0,-1", "--detector", "0,3,4",
+                     "--detector", "0,-4.5,2", "--time-gates", "0,1,20", "--tpsf-png", png,
+                     "--quiet")
+        self.assertEqual(result.returncode, 0, result.stderr)
+        _, pixels = read_png(png)
+        for colour in ((31, 119, 180), (255, 127, 14)):
+            count = int((np.abs(pixels - np.array(colour)).max(axis=-1) <= 30).sum())
+            self.assertGreater(count, 150, "the curve in %s is missing" % (colour,))
+        bad = run("render", "--mesh", self.mesh, "--target-tets", "500", "--tpsf-png", png)
+        self.assertNotEqual(bad.returncode, 0)
+        self.assertIn("--tpsf-png needs --time-gates and at least one --detector", bad.stderr)
+
 
 if __name__ == "__main__":
     unittest.main(argv=[a for a in sys.argv if a != "--update-baseline"])
