@@ -52,19 +52,9 @@ from vtkmodules.vtkIOXML import (
 )
 
 
-def find_cli():
-    cli = os.environ.get("TRANSLUCENCY_CLI")
-    if not cli:
-        binary = os.environ.get("TRANSLUCENCY_BINARY_DIR")
-        if binary:
-            cli = os.path.join(binary, "bin", "translucency")
-    if not cli or not os.access(cli, os.X_OK):
-        sys.exit("TestCommandLine: set TRANSLUCENCY_CLI to the built translucency executable "
-                 "(got %r)" % cli)
-    return cli
+from cli_under_test import find_cli  # noqa: E402
 
-
-CLI = find_cli()
+CLI = find_cli("TestCommandLine")
 OPTIONS = ("--mesh", "--target-tets", "--max-tet-volume", "--material", "--material-ids",
            "--light", "--output",
            "--png", "--slice-png", "--json", "--paint", "--cut-plane", "--cut-stroke")

@@ -40,19 +40,9 @@ from vtkmodules.vtkIOGeometry import vtkSTLWriter
 from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
 
-def find_cli():
-    cli = os.environ.get("TRANSLUCENCY_CLI")
-    if not cli:
-        binary = os.environ.get("TRANSLUCENCY_BINARY_DIR")
-        if binary:
-            cli = os.path.join(binary, "bin", "translucency")
-    if not cli or not os.access(cli, os.X_OK):
-        sys.exit("TestDiffuseOpticsCLI: set TRANSLUCENCY_CLI to the built translucency executable "
-                 "(got %r)" % cli)
-    return cli
+from cli_under_test import find_cli  # noqa: E402
 
-
-CLI = find_cli()
+CLI = find_cli("TestDiffuseOpticsCLI")
 
 
 class DiffuseOpticsCLI(unittest.TestCase):
