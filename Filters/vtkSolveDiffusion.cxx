@@ -17,6 +17,7 @@
 
 #include <vtkDataArray.h>
 #include <vtkDoubleArray.h>
+#include <vtkCellData.h>
 #include <vtkFieldData.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
@@ -81,9 +82,12 @@ struct vtkSolveDiffusion::Internals
   /// Readings of the last solve (amplitudes) and their phases (radians).
   std::vector<translucency::DetectorReading> Readings;
   std::vector<std::array<double, 3>> FluencePhase, ExitancePhase;
-  /// Tet sizes of the mesh the model-range check last saw (TetSizes).
-  const translucency::TetMesh* SizesMesh = nullptr;
+  /// The model-range check's inputs last time: the mesh (its TetSizes) and
+  /// the modification times of the coefficient arrays. A relight changes
+  /// neither, so it does not repeat the check.
+  std::weak_ptr<const translucency::TetMesh> RangeMesh;
   std::vector<double> Sizes;
+  vtkMTimeType RangeAbsorptionTime = 0, RangeScatteringTime = 0;
   /// The distributed path's solver (kept: hierarchy and warm start).
   vtkTranslucencyDistributedSolve Distributed;
   std::string ParallelPath;
@@ -624,13 +628,28 @@ int vtkSolveDiffusion::RequestData(
     // The diffusion model's range (Monte Carlo solves the transport itself):
     // a warning when the verdict changes (not at every paint stroke); the
     // mesh resolution is a note (GetMeshResolutionNote), printed by the CLI.
-    if (entry.Name != "montecarlo")
+    vtkDataArray* absorption =
+      input->GetCellData()->GetArray(vtkTranslucency::AbsorptionName);
+    vtkDataArray* scattering =
+      input->GetCellData()->GetArray(vtkTranslucency::ScatteringName);
+    const vtkMTimeType absorptionTime = absorption ? absorption->GetMTime() : 0;
+    const vtkMTimeType scatteringTime = scattering ? scattering->GetMTime() : 0;
+    if (entry.Name == "montecarlo")
     {
-      if (in.SizesMesh != mesh.get())
+      this->ModelRangeWarning.clear();
+      this->MeshResolutionNote.clear();
+      in.RangeMesh.reset(); // checked again when a diffusion solver returns
+    }
+    else if (in.RangeMesh.lock() != mesh || absorptionTime != in.RangeAbsorptionTime ||
+      scatteringTime != in.RangeScatteringTime)
+    {
+      if (in.RangeMesh.lock() != mesh)
       {
         in.Sizes = translucency::TetSizes(*mesh);
-        in.SizesMesh = mesh.get();
       }
+      in.RangeMesh = mesh;
+      in.RangeAbsorptionTime = absorptionTime;
+      in.RangeScatteringTime = scatteringTime;
       const translucency::ModelRangeReport range =
         translucency::CheckModelRange(*mesh, material, &in.Sizes);
       const std::string warning = range.AlbedoMessage();
@@ -640,11 +659,6 @@ int vtkSolveDiffusion::RequestData(
       }
       this->ModelRangeWarning = warning;
       this->MeshResolutionNote = range.ResolutionMessage();
-    }
-    else
-    {
-      this->ModelRangeWarning.clear();
-      this->MeshResolutionNote.clear();
     }
 
     const bool frequencyDomain = this->ModulationFrequency > 0.0;

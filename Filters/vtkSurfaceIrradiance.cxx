@@ -23,6 +23,7 @@
 #include <vtkStringArray.h>
 #include <vtkUnstructuredGrid.h>
 
+#include <array>
 #include <cmath>
 #include <sstream>
 #include <vector>
@@ -49,12 +50,7 @@ vtkSurfaceIrradiance::~vtkSurfaceIrradiance() = default;
 //------------------------------------------------------------------------------
 void vtkSurfaceIrradiance::AddDirectionalLight(double dx, double dy, double dz, double irradiance)
 {
-  translucency::LightSource light;
-  light.Type = translucency::LightSource::Kind::Directional;
-  light.Direction = { dx, dy, dz };
-  light.Power = { irradiance, irradiance, irradiance };
-  this->Internal->Directional.push_back(light);
-  this->Modified();
+  this->AddDirectionalLightRGB(dx, dy, dz, irradiance, irradiance, irradiance);
 }
 
 void vtkSurfaceIrradiance::RemoveAllDirectionalLights()
@@ -73,12 +69,7 @@ int vtkSurfaceIrradiance::GetNumberOfDirectionalLights() const
 
 void vtkSurfaceIrradiance::AddPointLight(double x, double y, double z, double intensity)
 {
-  translucency::LightSource light;
-  light.Type = translucency::LightSource::Kind::Point;
-  light.Position = { x, y, z };
-  light.Power = { intensity, intensity, intensity };
-  this->Internal->Point.push_back(light);
-  this->Modified();
+  this->AddPointLightRGB(x, y, z, intensity, intensity, intensity);
 }
 
 void vtkSurfaceIrradiance::RemoveAllPointLights()
@@ -98,28 +89,22 @@ int vtkSurfaceIrradiance::GetNumberOfPointLights() const
 void vtkSurfaceIrradiance::AddDirectionalLightRGB(
   double dx, double dy, double dz, double r, double g, double b)
 {
-  this->AddDirectionalLight(dx, dy, dz, r);
-  this->Internal->Directional.back().Power = { r, g, b };
+  this->Internal->Directional.push_back(translucency::DirectionalLight({ dx, dy, dz }, { r, g, b }));
+  this->Modified();
 }
 
 void vtkSurfaceIrradiance::AddPointLightRGB(
   double x, double y, double z, double r, double g, double b)
 {
-  this->AddPointLight(x, y, z, r);
-  this->Internal->Point.back().Power = { r, g, b };
+  this->Internal->Point.push_back(translucency::PointLight({ x, y, z }, { r, g, b }));
+  this->Modified();
 }
 
 void vtkSurfaceIrradiance::AddSpotLight(double x, double y, double z, double dx, double dy,
   double dz, double cutoff, double exponent, double r, double g, double b)
 {
-  translucency::LightSource light;
-  light.Type = translucency::LightSource::Kind::Spot;
-  light.Position = { x, y, z };
-  light.Direction = { dx, dy, dz };
-  light.SpotCutoff = cutoff;
-  light.SpotExponent = exponent;
-  light.Power = { r, g, b };
-  this->Internal->Spot.push_back(light);
+  this->Internal->Spot.push_back(
+    translucency::SpotLight({ x, y, z }, { dx, dy, dz }, cutoff, exponent, { r, g, b }));
   this->Modified();
 }
 
@@ -160,19 +145,13 @@ int vtkSurfaceIrradiance::RequestData(
   lights.insert(lights.end(), this->Internal->Spot.begin(), this->Internal->Spot.end());
   if (this->InteractiveLight)
   {
-    translucency::LightSource light;
-    light.Power = { this->InteractiveLightPower, this->InteractiveLightPower,
-      this->InteractiveLightPower };
-    std::copy(this->InteractiveLightPoint1, this->InteractiveLightPoint1 + 3,
-      light.Position.begin());
+    const double* p1 = this->InteractiveLightPoint1;
+    const double* p2 = this->InteractiveLightPoint2;
+    const double power = this->InteractiveLightPower;
     if (this->InteractiveLightType == 0)
     {
-      light.Type = translucency::LightSource::Kind::Directional;
-      for (int k = 0; k < 3; ++k)
-      {
-        light.Direction[k] = this->InteractiveLightPoint2[k] - this->InteractiveLightPoint1[k];
-      }
-      if (light.Direction[0] == 0.0 && light.Direction[1] == 0.0 && light.Direction[2] == 0.0)
+      const std::array<double, 3> direction = { p2[0] - p1[0], p2[1] - p1[1], p2[2] - p1[2] };
+      if (direction[0] == 0.0 && direction[1] == 0.0 && direction[2] == 0.0)
       {
         vtkErrorMacro(<< "the interactive directional light has no direction: Point1 and Point2"
                       << " are the same point (" << this->InteractiveLightPoint1[0] << ", "
@@ -180,12 +159,12 @@ int vtkSurfaceIrradiance::RequestData(
                       << this->InteractiveLightPoint1[2] << "); move one end of the line");
         return 0;
       }
+      lights.push_back(translucency::DirectionalLight(direction, { power, power, power }));
     }
     else
     {
-      light.Type = translucency::LightSource::Kind::Point;
+      lights.push_back(translucency::PointLight({ p1[0], p1[1], p1[2] }, { power, power, power }));
     }
-    lights.push_back(light);
   }
   // The lights are validated by the core (translucency::ValidateLight).
   double uniformIrradiance = this->UniformLightIrradiance;

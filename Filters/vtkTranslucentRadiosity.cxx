@@ -5,6 +5,7 @@
 #include "vtkTranslucencyParallel.h"
 
 #include "Error.h"
+#include "LightSources.h"
 #include "LinearSolver.h"
 #include "RadiosityScene.h"
 #include "RadiositySession.h"
@@ -68,36 +69,22 @@ vtkTranslucentRadiosity::~vtkTranslucentRadiosity() = default;
 
 void vtkTranslucentRadiosity::AddPointLight(double x, double y, double z, double r, double g, double b)
 {
-  translucency::LightSource light;
-  light.Type = translucency::LightSource::Kind::Point;
-  light.Position = { x, y, z };
-  light.Power = { r, g, b };
-  this->Internal->Lights.push_back(light);
+  this->Internal->Lights.push_back(translucency::PointLight({ x, y, z }, { r, g, b }));
   this->Modified();
 }
 
 void vtkTranslucentRadiosity::AddDirectionalLight(
   double dx, double dy, double dz, double r, double g, double b)
 {
-  translucency::LightSource light;
-  light.Type = translucency::LightSource::Kind::Directional;
-  light.Direction = { dx, dy, dz };
-  light.Power = { r, g, b };
-  this->Internal->Lights.push_back(light);
+  this->Internal->Lights.push_back(translucency::DirectionalLight({ dx, dy, dz }, { r, g, b }));
   this->Modified();
 }
 
 void vtkTranslucentRadiosity::AddSpotLight(double x, double y, double z, double dx, double dy,
   double dz, double cutoff, double exponent, double r, double g, double b)
 {
-  translucency::LightSource light;
-  light.Type = translucency::LightSource::Kind::Spot;
-  light.Position = { x, y, z };
-  light.Direction = { dx, dy, dz };
-  light.SpotCutoff = cutoff;
-  light.SpotExponent = exponent;
-  light.Power = { r, g, b };
-  this->Internal->Lights.push_back(light);
+  this->Internal->Lights.push_back(
+    translucency::SpotLight({ x, y, z }, { dx, dy, dz }, cutoff, exponent, { r, g, b }));
   this->Modified();
 }
 

@@ -22,11 +22,7 @@ namespace translucency
 /// irradiance 1 W/mm^2 per channel.
 inline LightSource DefaultKeyLight()
 {
-  LightSource light;
-  light.Type = LightSource::Kind::Directional;
-  light.Direction = { 0.0, -1.0, -1.0 };
-  light.Power = { 1.0, 1.0, 1.0 };
-  return light;
+  return DirectionalLight({ 0.0, -1.0, -1.0 }, { 1.0, 1.0, 1.0 });
 }
 
 /// The default uniform fill light's irradiance (W/mm^2 per channel).

@@ -45,6 +45,45 @@ struct LightSource
   double SpotExponent = 0.0; ///< Spot only: fall-off exponent (>= 0) inside the cone
 };
 
+/// A directional light travelling along `direction` with irradiance E per channel.
+inline LightSource DirectionalLight(
+  const std::array<double, 3>& direction, const std::array<double, 3>& power)
+{
+  LightSource light;
+  light.Type = LightSource::Kind::Directional;
+  light.Direction = direction;
+  light.Power = power;
+  return light;
+}
+
+/// A point light at `position` with intensity I (W/sr) per channel.
+inline LightSource PointLight(
+  const std::array<double, 3>& position, const std::array<double, 3>& power)
+{
+  LightSource light;
+  light.Type = LightSource::Kind::Point;
+  light.Position = position;
+  light.Power = power;
+  return light;
+}
+
+/// A spot light at `position` along `axis`, cone half-angle `cutoff`
+/// (degrees), fall-off exponent, intensity I (W/sr) per channel on the axis.
+inline LightSource SpotLight(const std::array<double, 3>& position,
+  const std::array<double, 3>& axis, double cutoff, double exponent,
+  const std::array<double, 3>& power)
+{
+  LightSource light;
+  light.Type = LightSource::Kind::Spot;
+  light.Position = position;
+  light.Direction = axis;
+  light.SpotCutoff = cutoff;
+  light.SpotExponent = exponent;
+  light.Power = power;
+  return light;
+}
+
+
 /**
  * Unoccluded irradiance transmitted into the medium at a boundary point
  * (W/mm^2 per channel) for a directional or point light.

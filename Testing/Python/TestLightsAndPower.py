@@ -242,6 +242,24 @@ class LightsAndPowerTest(unittest.TestCase):
         self.assertIn("lowest 0.678", skin)
         self.assertEqual(warning_for("marble"), "")
         self.assertEqual(warning_for("skin1", "montecarlo"), "")
+        # One kept pipeline: a relight keeps the verdict without redoing the
+        # check (same coefficient arrays); a new material redoes it.
+        assign = translucency.vtkAssignScatteringCoefficients()
+        assign.SetInputData(self.grid)
+        assign.SetMaterialName("skin1")
+        light = translucency.vtkSurfaceIrradiance()
+        light.SetInputConnection(assign.GetOutputPort())
+        light.SetUniformLightSamples(0)
+        solve = self.solve(light)
+        solve.SetRelTol(1e-6)
+        translucency.update(solve)
+        self.assertIn("lowest 0.678", solve.GetModelRangeWarning())
+        light.AddDirectionalLight(1.0, 0.0, 0.0, 0.5)
+        translucency.update(solve)
+        self.assertIn("lowest 0.678", solve.GetModelRangeWarning())
+        assign.SetMaterialName("marble")
+        translucency.update(solve)
+        self.assertEqual(solve.GetModelRangeWarning(), "")
 
     # 6.
     def test_coloured_directional_light(self):

@@ -31,61 +31,23 @@ Exits non-zero on failure (unittest).
 
 import json
 import os
-import subprocess
 import sys
-import tempfile
 import unittest
 
 import numpy as np
 
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkFiltersCore import vtkTriangleFilter
-from vtkmodules.vtkFiltersSources import vtkCubeSource
-from vtkmodules.vtkIOGeometry import vtkSTLWriter
 from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
 
-from cli_under_test import find_cli  # noqa: E402
+from cli_under_test import BoxRenderTest, find_cli  # noqa: E402
 
 CLI = find_cli("TestTimeResolvedCLI")
 
 
-class TimeResolvedCLI(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls):
-        cls.dir = tempfile.TemporaryDirectory()
-        cube = vtkCubeSource()
-        cube.SetXLength(20)
-        cube.SetYLength(20)
-        cube.SetZLength(10)
-        triangles = vtkTriangleFilter()
-        triangles.SetInputConnection(cube.GetOutputPort())
-        cls.box = os.path.join(cls.dir.name, "box.stl")
-        writer = vtkSTLWriter()
-        writer.SetFileName(cls.box)
-        writer.SetInputConnection(triangles.GetOutputPort())
-        writer.Write()
-        cls.mesh = os.path.join(cls.dir.name, "box")
-        cls.run_ok(["--mesh", cls.box, "--target-tets", "10000", "--output", cls.mesh,
-                    "--light", "none"])
-        cls.mesh += ".vtu"
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.dir.cleanup()
-
-    @staticmethod
-    def run_cli(args):
-        return subprocess.run([CLI, "render"] + args, capture_output=True, text=True,
-                              timeout=300)
-
-    @classmethod
-    def run_ok(cls, args):
-        result = cls.run_cli(args)
-        if result.returncode != 0:
-            raise AssertionError("render %s failed:\n%s%s" % (" ".join(args), result.stdout,
-                                                               result.stderr))
-        return result
+class TimeResolvedCLI(BoxRenderTest):
+    CLI = CLI
+    BOX_TETS = 10000
 
     def render(self, extra, name):
         prefix = os.path.join(self.dir.name, name)

@@ -2,7 +2,10 @@
 Testing/Python; ctest sets TRANSLUCENCY_CLI or TRANSLUCENCY_BINARY_DIR)."""
 
 import os
+import subprocess
 import sys
+import tempfile
+import unittest
 
 
 def find_cli(test_name):
@@ -17,3 +20,53 @@ def find_cli(test_name):
         sys.exit("%s: set TRANSLUCENCY_CLI to the built translucency executable (got %r)"
                  % (test_name, cli))
     return cli
+
+
+class BoxRenderTest(unittest.TestCase):
+    """Tests of `translucency render` on one 20 x 20 x 10 mm box: setUpClass
+    writes it as STL and meshes it once with BOX_TETS tets (no light), so that
+    every run of the class sees the same points and tets (`cls.mesh`, .vtu).
+    Subclasses set CLI (find_cli) and BOX_TETS."""
+
+    CLI = None
+    BOX_TETS = 10000
+
+    @classmethod
+    def setUpClass(cls):
+        from vtkmodules.vtkFiltersCore import vtkTriangleFilter
+        from vtkmodules.vtkFiltersSources import vtkCubeSource
+        from vtkmodules.vtkIOGeometry import vtkSTLWriter
+
+        cls.dir = tempfile.TemporaryDirectory()
+        cube = vtkCubeSource()
+        cube.SetXLength(20)
+        cube.SetYLength(20)
+        cube.SetZLength(10)
+        triangles = vtkTriangleFilter()
+        triangles.SetInputConnection(cube.GetOutputPort())
+        cls.box = os.path.join(cls.dir.name, "box.stl")
+        writer = vtkSTLWriter()
+        writer.SetFileName(cls.box)
+        writer.SetInputConnection(triangles.GetOutputPort())
+        writer.Write()
+        cls.mesh = os.path.join(cls.dir.name, "box")
+        cls.run_ok(["--mesh", cls.box, "--target-tets", str(cls.BOX_TETS), "--output", cls.mesh,
+                    "--light", "none"])
+        cls.mesh += ".vtu"
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.dir.cleanup()
+
+    @classmethod
+    def run_cli(cls, args):
+        return subprocess.run([cls.CLI, "render"] + args, capture_output=True, text=True,
+                              timeout=300)
+
+    @classmethod
+    def run_ok(cls, args):
+        result = cls.run_cli(args)
+        if result.returncode != 0:
+            raise AssertionError("render %s failed:\n%s%s" % (" ".join(args), result.stdout,
+                                                               result.stderr))
+        return result

@@ -14,6 +14,7 @@
 #include "DiffusionSolverFactory.h"
 #include "Fresnel.h"
 #include "InteriorSources.h"
+#include "GradedMeshes.h"
 #include "TestMeshes.h"
 #include "TestProblems.h"
 #include "TetMesh.h"
@@ -29,55 +30,14 @@ using namespace translucency;
 using translucency::testing::Contains;
 using translucency::testing::ErrorMessage;
 
+using translucency::testing::GradedCube;
+using translucency::testing::GradedSlab;
+
 namespace
 {
 
 constexpr double Pi = 3.14159265358979323846;
 constexpr double C = SpeedOfLightMillimetresPerNanosecond;
-
-/// x = l g(u) for u in [-1, 1]: uniform cells within |x| <= r, stretched
-/// beyond (as in TestDiffuseOptics).
-double Stretch(double u, double r, double l, double u0)
-{
-  const double v = std::abs(u);
-  const double slope = r / u0;
-  const double x = v <= u0 ? slope * v
-                           : r + slope * (v - u0) +
-      (l - r - slope * (1.0 - u0)) * (v - u0) * (v - u0) / ((1.0 - u0) * (1.0 - u0));
-  return u < 0 ? -x : x;
-}
-
-std::unique_ptr<TetMesh> GradedCube(int n, double r, double l, double u0)
-{
-  translucency::testing::MeshData data = translucency::testing::CubeMesh(n, 2.0);
-  for (double& x : data.Points)
-  {
-    x = Stretch(x - 1.0, r, l, u0);
-  }
-  auto mesh = std::make_unique<TetMesh>();
-  mesh->SetGeometry(data.Points, data.Tets);
-  return mesh;
-}
-
-/// [-lx, lx]^2 x [-lz, 0], graded towards x = y = 0 and z = 0.
-std::unique_ptr<TetMesh> GradedSlab(int nxy, int nz, double lx, double lz, double a)
-{
-  translucency::testing::MeshData data =
-    translucency::testing::BoxMesh(nxy, nxy, nz, 2.0, 2.0, 1.0);
-  for (std::size_t i = 0; i < data.Points.size(); i += 3)
-  {
-    for (int d = 0; d < 2; ++d)
-    {
-      const double u = data.Points[i + d] - 1.0;
-      data.Points[i + d] = lx * u * (a + (1.0 - a) * std::abs(u));
-    }
-    const double w = 1.0 - data.Points[i + 2];
-    data.Points[i + 2] = -lz * w * (a + (1.0 - a) * w);
-  }
-  auto mesh = std::make_unique<TetMesh>();
-  mesh->SetGeometry(data.Points, data.Tets);
-  return mesh;
-}
 
 /// Patterson et al. 1989, eq. 2: the fluence rate of a pulse of energy P at
 /// r = 0, t = 0 in an infinite medium, c_m the speed in the medium (mm/ns),
