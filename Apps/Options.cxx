@@ -227,6 +227,14 @@ void AddSceneOptions(CLI::App* command, SceneOptions& scene)
       "graded towards the surface; QuadGraph needs it")
     ->group(group);
   command
+    ->add_option("--grading", scene.GradingFactor,
+      "tetgen: surface cells G times smaller than the interior\n"
+      "ones (1 <= G <= 8; 1 = --uniform-size), growing linearly\n"
+      "over one interior cell (default: TetGen's own grading)")
+    ->check(CLI::Range(1.0, 8.0))
+    ->excludes("--uniform-size")
+    ->group(group);
+  command
     ->add_option("--material", scene.Material,
       "measured preset (default marble; see render --list-materials)\n"
       "or a JSON file {\"absorption\": [r,g,b], \"reduced_scattering\":\n"

@@ -215,6 +215,7 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
     tetra->SetQuality(options.Quality);
     tetra->SetMesher(options.Mesher.c_str());
     tetra->SetUniformSizing(options.UniformSizing);
+    tetra->SetGradingFactor(options.GradingFactor);
     if (options.MaxTetVolume > 0 && !options.TargetGiven)
       tetra->SetMaxTetVolume(options.MaxTetVolume);
     else

@@ -45,6 +45,7 @@ struct SceneOptions
   double Quality = 1.414;
   std::string Mesher = "tetgen"; ///< --mesher: tetgen or hxt
   bool UniformSizing = false;    ///< --uniform-size
+  double GradingFactor = 0.0;    ///< --grading (0: off)
   std::vector<Light> Lights;
   bool DefaultLights = false; ///< no --light given: Finish() added the default lights
   bool Shadows = true;

@@ -19,6 +19,8 @@
 #include <vtkObjectFactory.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkGenericCell.h>
+#include <vtkStaticCellLocator.h>
 #include <vtkStaticCleanPolyData.h>
 #include <vtkUnstructuredGrid.h>
 
@@ -296,8 +298,11 @@ bool CheckSelfIntersections(const Surface& surface, std::string& error)
 /// With sizing > 0 (and an 'm' among the switches), sizing is TetGen's
 /// target edge length at every input point (its -m sizing function, which
 /// it interpolates to the points it adds).
+/// With background (a tet mesh whose points carry pointmtrlist), TetGen's -m
+/// sizing function is interpolated from it instead (tetrahedralize's bgmin).
 bool RunTetGen(const Surface& surface, const std::string& switches, std::vector<double>& points,
-  std::vector<int>& tets, std::string& error, double sizing = 0.0)
+  std::vector<int>& tets, std::string& error, double sizing = 0.0,
+  tetgenio* background = nullptr)
 {
   tetgenio in, out;
   FillTetGenInput(surface, in);
@@ -311,7 +316,7 @@ bool RunTetGen(const Surface& surface, const std::string& switches, std::vector<
   sw.push_back('\0');
   try
   {
-    tetrahedralize(sw.data(), &in, &out);
+    tetrahedralize(sw.data(), &in, &out, nullptr, background);
   }
   catch (int code)
   {
@@ -333,6 +338,69 @@ bool RunTetGen(const Surface& surface, const std::string& switches, std::vector<
       tets[4 * t + k] = out.tetrahedronlist[corners * t + k] - out.firstnumber;
     }
   }
+  return true;
+}
+
+/// The graded sizing function h(d) = min(h, h / g + (1 - 1 / g) d) as a
+/// TetGen background mesh: a coarse TetGen mesh of the surface (no quality
+/// refinement, surface kept (-Y), volume bound of the regular tet of edge 2h)
+/// whose points carry h(d), d the exact distance to the surface triangles.
+/// TetGen interpolates h linearly inside each background tet.
+bool BuildGradedBackground(const Surface& surface, double h, double g, tetgenio& background,
+  std::string& error)
+{
+  std::vector<double> points;
+  std::vector<int> tets;
+  std::ostringstream os;
+  os.precision(17);
+  const double coarseVolume = std::pow(2.0 * h, 3) / (6.0 * std::sqrt(2.0));
+  os << "pYa" << coarseVolume << "zQ";
+  if (!RunTetGen(surface, os.str(), points, tets, error))
+  {
+    error = "the background mesh of the graded sizing: " + error;
+    return false;
+  }
+  vtkNew<vtkPoints> surfacePoints;
+  surfacePoints->SetDataTypeToDouble();
+  const vtkIdType numSurfacePoints = static_cast<vtkIdType>(surface.Points.size() / 3);
+  surfacePoints->SetNumberOfPoints(numSurfacePoints);
+  for (vtkIdType i = 0; i < numSurfacePoints; ++i)
+  {
+    surfacePoints->SetPoint(i, &surface.Points[3 * i]);
+  }
+  vtkNew<vtkCellArray> triangles;
+  for (const auto& t : surface.Triangles)
+  {
+    triangles->InsertNextCell(3, t.data());
+  }
+  vtkNew<vtkPolyData> polyData;
+  polyData->SetPoints(surfacePoints);
+  polyData->SetPolys(triangles);
+  vtkNew<vtkStaticCellLocator> locator;
+  locator->SetDataSet(polyData);
+  locator->BuildLocator();
+
+  const int numPoints = static_cast<int>(points.size() / 3);
+  background.firstnumber = 0;
+  background.numberofpoints = numPoints;
+  background.pointlist = new REAL[points.size()];
+  std::copy(points.begin(), points.end(), background.pointlist);
+  background.numberofpointmtrs = 1;
+  background.pointmtrlist = new REAL[numPoints];
+  vtkNew<vtkGenericCell> cell;
+  for (int i = 0; i < numPoints; ++i)
+  {
+    double closest[3], distance2 = 0.0;
+    vtkIdType cellId = -1;
+    int subId = 0;
+    locator->FindClosestPoint(&points[3 * i], closest, cell, cellId, subId, distance2);
+    background.pointmtrlist[i] =
+      std::min(h, h / g + (1.0 - 1.0 / g) * std::sqrt(std::max(distance2, 0.0)));
+  }
+  background.numberofcorners = 4;
+  background.numberoftetrahedra = static_cast<int>(tets.size() / 4);
+  background.tetrahedronlist = new int[tets.size()];
+  std::copy(tets.begin(), tets.end(), background.tetrahedronlist);
   return true;
 }
 }
@@ -383,6 +451,32 @@ int vtkTetrahedralizeSurface::RequestData(
       vtkErrorMacro(<< "unknown mesher '" << this->Mesher << "': use tetgen or hxt");
     }
     return 0;
+  }
+
+  // The grading factor: off (0) or in [1, 8], tetgen only, not with UniformSizing.
+  const double grading = this->GradingFactor;
+  if (grading != 0.0)
+  {
+    if (!std::isfinite(grading) || grading < 1.0 || grading > 8.0)
+    {
+      vtkErrorMacro(<< "GradingFactor " << grading
+                    << " is out of range: use 0 (off: the mesher's own grading) or a ratio of "
+                       "interior to surface edge length from 1 (uniform) to 8");
+      return 0;
+    }
+    if (this->UniformSizing)
+    {
+      vtkErrorMacro(<< "GradingFactor " << grading
+                    << " and UniformSizing are both set: uniform sizing is GradingFactor 1; "
+                       "set one of them");
+      return 0;
+    }
+    if (mesher != "tetgen")
+    {
+      vtkErrorMacro(<< "GradingFactor is available with the tetgen mesher only (mesher '"
+                    << mesher << "'): use UniformSizing with hxt, or mesher tetgen");
+      return 0;
+    }
   }
 
   // Coordinates and ids first: vtkStaticCleanPolyData crashes on infinite or
@@ -479,6 +573,19 @@ int vtkTetrahedralizeSurface::RequestData(
   // parameter: TetGen's volume bound -a (graded) or edge length (uniform, -m);
   // HXT's edge length. 0: none.
   auto runMesher = [&](double parameter) -> bool {
+    if (mesher == "tetgen" && grading > 0.0)
+    {
+      const double h = parameter > 0 ? parameter : diag / 10.0;
+      tetgenio background;
+      if (!BuildGradedBackground(surface, h, grading, background, error))
+      {
+        return false;
+      }
+      std::ostringstream os;
+      os.precision(17);
+      os << "pq" << this->Quality << "mzQ";
+      return RunTetGen(surface, os.str(), points, tets, error, h / grading, &background);
+    }
     if (mesher == "tetgen")
     {
       std::ostringstream os;
@@ -521,10 +628,28 @@ int vtkTetrahedralizeSurface::RequestData(
       surface.Points, triangles, options, points, tets, error);
   };
 
+  // A k of the graded layer (see below); 0 without grading.
+  double gradedLayer = 0.0;
+  if (grading > 0.0)
+  {
+    for (const auto& t : surface.Triangles)
+    {
+      const double* a = &surface.Points[3 * t[0]];
+      const double* b = &surface.Points[3 * t[1]];
+      const double* c = &surface.Points[3 * t[2]];
+      const double u[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+      const double v[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
+      const double n[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0] };
+      gradedLayer += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    }
+    gradedLayer *= grading * (grading + 1.0) / 2.0 - 1.0;
+  }
+
   // Measured counts (bunny, sphere): TetGen -q1.414 -a: N falls like a^-0.8
   // and a = 2.5 V/N gives about N at N = 1e6; TetGen -m h: N ~ 5 V / h^3
   // (5 mm sphere); HXT with edge length h: N ~ 5.5 V / h^3 (bunny, sphere).
-  const bool edgeLength = mesher == "hxt" || this->UniformSizing;
+  const bool edgeLength = mesher == "hxt" || this->UniformSizing || grading > 0.0;
   const double countConstant = mesher == "hxt" ? 5.5 : 5.0;
   const double exponent = edgeLength ? 1.0 / 3.0 : 1.0 / 0.8;
   double parameter = 0.0;
@@ -533,10 +658,40 @@ int vtkTetrahedralizeSurface::RequestData(
     parameter = edgeLength
       ? std::cbrt(countConstant * volume / static_cast<double>(this->TargetNumberOfTets))
       : 2.5 * volume / static_cast<double>(this->TargetNumberOfTets);
+    // Graded: the transition layer adds about A (g (g + 1) / 2 - 1) / h^2
+    // cells (the integral of 1/h(d)^3 - 1/h^3 over the layer, A the surface
+    // area): solve N = c (V / h^3 + A k / h^2) for h by fixed point.
+    for (int it = 0; grading > 0.0 && it < 30; ++it)
+    {
+      parameter = std::cbrt(countConstant * (volume + gradedLayer * parameter) /
+        static_cast<double>(this->TargetNumberOfTets));
+    }
   }
   else if (this->MaxTetVolume > 0)
   {
     parameter = edgeLength ? regularEdge(this->MaxTetVolume) : this->MaxTetVolume;
+    if (grading > 0.0)
+    {
+      // The size guard above counted the volume only: add the graded layer.
+      const double tets = countConstant *
+        (volume / std::pow(parameter, 3) + gradedLayer / (parameter * parameter));
+      const std::size_t limit = this->MemoryLimit > 0
+        ? static_cast<std::size_t>(std::min(this->MemoryLimit * 1073741824.0, 1.8e19))
+        : translucency::GetDefaultMemoryLimit();
+      try
+      {
+        translucency::CheckMemory("about " + translucency::FormatNumber(tets) +
+            " tets (MaxTetVolume with GradingFactor " + translucency::FormatNumber(grading) + ")",
+          tets * 400.0, limit,
+          "ask for fewer tets (a larger maximum volume or a smaller GradingFactor; filter: "
+          "MemoryLimit GiB)");
+      }
+      catch (const translucency::Error& e)
+      {
+        vtkErrorMacro(<< e.what());
+        return 0;
+      }
+    }
   }
   if (!runMesher(parameter))
   {
@@ -549,11 +704,30 @@ int vtkTetrahedralizeSurface::RequestData(
     if (std::abs(ratio - 1.0) > 0.15)
     {
       this->UpdateProgress(0.5);
+      const double firstParameter = parameter;
       parameter *= std::pow(ratio, exponent);
       if (!runMesher(parameter))
       {
         vtkErrorMacro(<< error);
         return 0;
+      }
+      // Graded: the count is not a power of h (the layer grows as h^-2, the
+      // surface's own resolution caps it): a third run on the secant of
+      // log N against log h through the two runs.
+      const double ratio2 = static_cast<double>(tets.size() / 4) / this->TargetNumberOfTets;
+      if (grading > 0.0 && std::abs(ratio2 - 1.0) > 0.15 && std::abs(ratio2 - ratio) > 1e-3)
+      {
+        this->UpdateProgress(0.7);
+        const double slope = std::log(ratio2 / ratio) / std::log(parameter / firstParameter);
+        if (std::isfinite(slope) && slope < 0.0)
+        {
+          parameter *= std::exp(-std::log(ratio2) / slope);
+          if (!runMesher(parameter))
+          {
+            vtkErrorMacro(<< error);
+            return 0;
+          }
+        }
       }
     }
   }
@@ -640,6 +814,7 @@ void vtkTetrahedralizeSurface::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SpatialReordering: " << this->SpatialReordering << "\n";
   os << indent << "Mesher: " << this->Mesher << "\n";
   os << indent << "UniformSizing: " << this->UniformSizing << "\n";
+  os << indent << "GradingFactor: " << this->GradingFactor << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
   os << indent << "HxtOptimization: " << this->HxtOptimization << "\n";
 }

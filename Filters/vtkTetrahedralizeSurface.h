@@ -29,7 +29,9 @@
  * a surface finer than h: such a surface keeps its finer cells); HXT re-meshes
  * the surface to h (gmsh classifySurfaces + createGeometry + 2D meshing; this
  * coarsens too). Uniform meshes are what QuadGraph needs (its eq. 5 does not
- * conserve light on graded meshes, Documentation/Solvers.md).
+ * conserve light on graded meshes, Documentation/Solvers.md). Between the
+ * two, SetGradingFactor(g) asks for surface cells g times smaller than the
+ * interior ones, with a linear transition one interior cell deep (tetgen).
  *
  * The output points and tets are put in a spatial (Morton)
  * order, which makes the downstream assembly and solves cache-friendly.
@@ -137,6 +139,24 @@ public:
 
   ///@{
   /**
+   * Grading factor g (default 0: off, the mesher's own grading; else 1 <= g
+   * <= 8): the ratio of the interior edge length h (from the target count or
+   * MaxTetVolume) to the edge length at the surface, h / g. Between them the
+   * target edge length grows linearly with the distance d from the surface,
+   * h(d) = min(h, h / g + (1 - 1 / g) d), reaching h one interior edge length
+   * deep. g = 1 is uniform sizing (as UniformSizing); g = 2 halves the surface
+   * cells' edges. tetgen only: the sizing function is a background mesh
+   * (TetGen -m with a coarse first mesh carrying h(d) at its points, d the
+   * exact distance to the input surface). Like uniform sizing, TetGen refines
+   * a coarser surface but cannot coarsen a finer one. Set together with
+   * UniformSizing, or with hxt, RequestData fails with an error naming both.
+   */
+  vtkSetMacro(GradingFactor, double);
+  vtkGetMacro(GradingFactor, double);
+  ///@}
+
+  ///@{
+  /**
    * hxt only: run HXT's optimisation pass (gmsh Mesh.Optimize, threshold 0.3
    * on gmsh's gamma quality) to remove slivers. Default off: it multiplied the
    * meshing time by 9 on the bunny (200k tets) and took 19 s on a 33k-tet UV
@@ -180,6 +200,7 @@ protected:
   bool SpatialReordering = true;
   std::string Mesher = "tetgen";
   bool UniformSizing = false;
+  double GradingFactor = 0.0;
   int NumberOfThreads = 0;
   bool HxtOptimization = false;
 

@@ -21,6 +21,11 @@ Asserts:
   - TetGen honours its radius-edge bound for all but < 1 % of the tets (those
     it keeps near the input surface's small angles), with a stricter bound
     leaving more tets above 1.414; smallest dihedral angle > 1 degree;
+  - GradingFactor g (tetgen): the interior / surface edge-length ratio is
+    below 1.35 at g = 1 and 2.2-3.8 times that at g = 3 (measured 1.17 and
+    3.08 / 1.17 on a finer sphere), the count near the target, the quality
+    bound kept; out-of-range g, g with UniformSizing and g with hxt are
+    errors naming GradingFactor;
   - QuadGraph on a uniform mesh of a 5 mm sphere under uniform light: RMS
     relative error against the exact solution phi = C sinh(k r) / r below 12 %
     in every channel (printed), and below the graded mesh's error.
@@ -213,6 +218,61 @@ class MesherTest(unittest.TestCase):
         n, near, cv = results[("tetgen", False)]
         self.assertGreater(near, 0.40, "TetGen's default grading is what uniform sizing removes")
         self.assertGreater(cv, results[("tetgen", True)][2])
+
+    def test_grading_factor(self):
+        """GradingFactor g: surface edges g times shorter than interior ones."""
+        sphere = tp.sphere_surface(radius=5.0, resolution=24)
+        ratios = {}
+        for g in (1.0, 3.0):
+            tetra = translucency.vtkTetrahedralizeSurface()
+            tetra.SetInputData(sphere)
+            tetra.SetTargetNumberOfTets(20000)
+            tetra.SetGradingFactor(g)
+            messages = tp.Messages(tetra)
+            tetra.Update()
+            messages.remove()
+            self.assertEqual(messages.errors, [])
+            grid = tetra.GetOutput()
+            p = tp.points_of(grid)[tp.tets_of(grid)]
+            r = np.linalg.norm(p.mean(axis=1), axis=1)
+            dihedral, radius_edge, edges = quality(grid)
+            edge = edges.reshape(-1, 6).mean(axis=1)
+            ratios[g] = edge[r < 2.5].mean() / edge[r > 4.6].mean()
+            above = (radius_edge > 1.414 * (1 + 1e-9)).mean()
+            print("tetgen GradingFactor %g: %d tets, interior / surface edge length %.2f, "
+                  "%.3f of the tets within 0.5 mm of the surface, %.2f %% above the radius-edge "
+                  "bound, min dihedral %.2f deg" % (g, grid.GetNumberOfCells(), ratios[g],
+                                                    (r > 4.5).mean(), 100 * above,
+                                                    dihedral.min()))
+            self.assertLess(abs(grid.GetNumberOfCells() / 20000.0 - 1.0), 0.25)
+            self.assertLess(above, 0.01)
+            self.assertGreater(dihedral.min(), 1.0)
+        # g = 1 is uniform (within the transition's discreteness); g = 3 gives
+        # about 3 times the uniform ratio.
+        self.assertLess(ratios[1.0], 1.35)
+        self.assertGreater(ratios[3.0] / ratios[1.0], 2.2)
+        self.assertLess(ratios[3.0] / ratios[1.0], 3.8)
+
+    def test_grading_factor_errors(self):
+        sphere = tp.sphere_surface(radius=5.0, resolution=12)
+        cases = [(0.5, "tetgen", False, "out of range"), (9.0, "tetgen", False, "out of range"),
+                 (float("nan"), "tetgen", False, "out of range"),
+                 (2.0, "tetgen", True, "UniformSizing")]
+        if HAS_HXT:
+            cases.append((2.0, "hxt", False, "tetgen mesher only"))
+        for g, mesher, uniform, fragment in cases:
+            with self.subTest(g=g, mesher=mesher, uniform=uniform):
+                tetra = translucency.vtkTetrahedralizeSurface()
+                tetra.SetInputData(sphere)
+                tetra.SetMesher(mesher)
+                tetra.SetUniformSizing(uniform)
+                tetra.SetGradingFactor(g)
+                messages = tp.Messages(tetra)
+                tetra.Update()
+                messages.remove()
+                self.assertEqual(tetra.GetOutput().GetNumberOfCells(), 0)
+                self.assertTrue(any(fragment in e and "GradingFactor" in e
+                                    for e in messages.errors), messages.errors)
 
     def test_tetgen_quality_bound(self):
         sphere = tp.sphere_surface(radius=5.0, resolution=24)
