@@ -1064,6 +1064,8 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "IncrementalAssembly: " << this->IncrementalAssembly << "\n";
   os << indent << "MaximumChangedFraction: " << this->MaximumChangedFraction << "\n";
   os << indent << "Sources: " << this->GetNumberOfSources() << "\n";
+  os << indent << "InteractivePointSource: " << this->InteractivePointSource << "\n";
+  os << indent << "InteractivePencilBeam: " << this->InteractivePencilBeam << "\n";
   os << indent << "Detectors: " << this->GetNumberOfDetectors() << "\n";
   os << indent << "ModulationFrequency: " << this->ModulationFrequency << " Hz\n";
   os << indent << "DistributedSolve: " << this->DistributedSolve << "\n";
