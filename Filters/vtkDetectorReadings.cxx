@@ -23,7 +23,7 @@ namespace
 const char* const ChannelSuffix[3] = { "R", "G", "B" };
 
 /// Add one column per component of `array` (3 components: name + R/G/B;
-/// 1 component: name), `rows` tuples starting at tuple 0.
+/// 1 component: name), one row per tuple.
 void AddColumns(vtkTable* table, const std::string& name, vtkDataArray* array)
 {
   const int components = array->GetNumberOfComponents();
