@@ -1,5 +1,6 @@
 #include "vtkSolveDiffusion.h"
 
+#include "AimedPencilBeam.h"
 #include "Detectors.h"
 #include "ModelRange.h"
 #include "DiffusionFrontEnd.h"
@@ -78,6 +79,8 @@ struct vtkSolveDiffusion::Internals
   /// GetAvailableLinearSolvers()'s array.
   vtkNew<vtkStringArray> LinearSolverNames;
   translucency::Sources Sources;
+  /// The sources of the last execution: Sources plus the interactive ones.
+  translucency::Sources SolvedSources;
   std::vector<translucency::Detector> Detectors;
   /// Readings of the last solve (amplitudes) and their phases (radians).
   std::vector<translucency::DetectorReading> Readings;
@@ -459,6 +462,7 @@ int vtkSolveDiffusion::RequestData(
   const bool vertexSolver =
     this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
   if (this->DistributedSolve && vertexSolver && this->Internal->Sources.Empty() &&
+    !this->InteractivePointSource && !this->InteractivePencilBeam &&
     this->Internal->Detectors.empty() && this->ModulationFrequency == 0.0 &&
     this->TimeGatesCount == 0 && !ExtendedCollimatedModel(inputVector[0]) &&
     vtkTranslucencyDistributedSolve::IsAllowedByEnvironment() &&
@@ -570,7 +574,37 @@ int vtkSolveDiffusion::RequestData(
   }
   translucency::DiffusionProblem light;
   ReadLights(input, light);
-  light.InteriorSources = &in.Sources;
+  // The listed sources and, while on, the interactive ones (the plugin's widgets).
+  in.SolvedSources = in.Sources;
+  std::fill(this->InteractivePencilBeamEntry, this->InteractivePencilBeamEntry + 3, 0.0);
+  try
+  {
+    if (this->InteractivePointSource)
+    {
+      translucency::PointSource source;
+      std::copy_n(this->InteractivePointSourcePosition, 3, source.Position.begin());
+      std::copy_n(this->InteractivePointSourcePower, 3, source.Power.begin());
+      source.Label = "interactive point source";
+      in.SolvedSources.AddPointSource(source);
+    }
+    if (this->InteractivePencilBeam)
+    {
+      std::array<double, 3> point1, point2, power;
+      std::copy_n(this->InteractivePencilBeamPoint1, 3, point1.begin());
+      std::copy_n(this->InteractivePencilBeamPoint2, 3, point2.begin());
+      std::copy_n(this->InteractivePencilBeamPower, 3, power.begin());
+      const translucency::PencilBeam beam =
+        translucency::AimPencilBeam(*mesh, point1, point2, power, "interactive pencil beam");
+      in.SolvedSources.AddPencilBeam(beam);
+      std::copy_n(beam.Position.begin(), 3, this->InteractivePencilBeamEntry);
+    }
+  }
+  catch (const translucency::Error& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  light.InteriorSources = &in.SolvedSources;
 
   try
   {
@@ -662,7 +696,7 @@ int vtkSolveDiffusion::RequestData(
     }
 
     const bool frequencyDomain = this->ModulationFrequency > 0.0;
-    if ((frequencyDomain || timeResolved || !in.Sources.Empty() || !in.Detectors.empty()) &&
+    if ((frequencyDomain || timeResolved || !in.SolvedSources.Empty() || !in.Detectors.empty()) &&
       !entry.Properties.UnknownsAtVertices)
     {
       vtkErrorMacro(<< "the " << entry.Name
@@ -879,6 +913,17 @@ int vtkSolveDiffusion::RequestData(
         array->Delete();
       };
       field("DetectorPosition", position);
+      // What was asked for (vtkDetectorReadings' table shows both positions).
+      std::vector<double> requested;
+      vtkNew<vtkDoubleArray> radius;
+      radius->SetName("DetectorRadius");
+      for (const translucency::Detector& detector : in.Detectors)
+      {
+        requested.insert(requested.end(), detector.Position.begin(), detector.Position.end());
+        radius->InsertNextValue(detector.Radius);
+      }
+      field("DetectorRequestedPosition", requested);
+      output->GetFieldData()->AddArray(radius);
       field("DetectorFluence", detectorFluence);
       field("DetectorExitance", exitance);
       if (frequencyDomain)
@@ -938,7 +983,7 @@ bool vtkSolveDiffusion::ComputePowerBalance(
   {
     const translucency::PowerBalance balance =
       translucency::ComputePowerBalance(*mesh, material, fluence, &irradiance);
-    const auto sources = this->Internal->Sources.InjectedPower(*mesh, material);
+    const auto sources = this->Internal->SolvedSources.InjectedPower(*mesh, material);
     for (int c = 0; c < 3; ++c)
     {
       injected[c] = balance.BoundaryInjected[c] + sources[c];
@@ -1019,6 +1064,8 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "IncrementalAssembly: " << this->IncrementalAssembly << "\n";
   os << indent << "MaximumChangedFraction: " << this->MaximumChangedFraction << "\n";
   os << indent << "Sources: " << this->GetNumberOfSources() << "\n";
+  os << indent << "InteractivePointSource: " << this->InteractivePointSource << "\n";
+  os << indent << "InteractivePencilBeam: " << this->InteractivePencilBeam << "\n";
   os << indent << "Detectors: " << this->GetNumberOfDetectors() << "\n";
   os << indent << "ModulationFrequency: " << this->ModulationFrequency << " Hz\n";
   os << indent << "DistributedSolve: " << this->DistributedSolve << "\n";

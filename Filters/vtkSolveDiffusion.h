@@ -245,6 +245,46 @@ public:
   ///@}
 
   ///@{
+  /**
+   * The plugin's interactive sources (ParaView's handle and line widgets),
+   * added to the listed sources while on. Both are off by default.
+   *
+   * Interactive point source: an isotropic point source at
+   * InteractivePointSourcePosition (mm, inside the object; default the
+   * origin) of power InteractivePointSourcePower (W per channel R, G, B;
+   * default 1, 1, 1).
+   *
+   * Interactive pencil beam: a beam that starts at
+   * InteractivePencilBeamPoint1 (mm, outside the object) and travels towards
+   * InteractivePencilBeamPoint2; it enters where that ray first hits the
+   * surface (translucency::AimPencilBeam), and is then the same pencil beam
+   * as AddPencilBeam(entry, Point2 - Point1, power). Power
+   * InteractivePencilBeamPower (W per channel; default 1, 1, 1). Coinciding
+   * points, a ray that misses the object and a Point 1 inside the object
+   * make RequestData fail with an error naming them.
+   */
+  vtkSetMacro(InteractivePointSource, bool);
+  vtkGetMacro(InteractivePointSource, bool);
+  vtkBooleanMacro(InteractivePointSource, bool);
+  vtkSetVector3Macro(InteractivePointSourcePosition, double);
+  vtkGetVector3Macro(InteractivePointSourcePosition, double);
+  vtkSetVector3Macro(InteractivePointSourcePower, double);
+  vtkGetVector3Macro(InteractivePointSourcePower, double);
+  vtkSetMacro(InteractivePencilBeam, bool);
+  vtkGetMacro(InteractivePencilBeam, bool);
+  vtkBooleanMacro(InteractivePencilBeam, bool);
+  vtkSetVector3Macro(InteractivePencilBeamPoint1, double);
+  vtkGetVector3Macro(InteractivePencilBeamPoint1, double);
+  vtkSetVector3Macro(InteractivePencilBeamPoint2, double);
+  vtkGetVector3Macro(InteractivePencilBeamPoint2, double);
+  vtkSetVector3Macro(InteractivePencilBeamPower, double);
+  vtkGetVector3Macro(InteractivePencilBeamPower, double);
+  /// The entry point (mm) of the interactive pencil beam in the last
+  /// execution; (0, 0, 0) when it was off or failed.
+  vtkGetVector3Macro(InteractivePencilBeamEntry, double);
+  ///@}
+
+  ///@{
   /// Readings of the last solve for detector k, channel c (0 if out of
   /// range): fluence and exitance (W/mm^2; amplitudes in the frequency
   /// domain), their phases (radians; 0 for a continuous-wave solve), and the
@@ -423,6 +463,16 @@ protected:
   int TimeGatesCount = 0;
   double TimeGatesCountText = 0.0; ///< N as given to SetTimeGatesFromPanel
   int TimeStepsPerGate = 0;
+  // The plugin's interactive sources (widgets).
+  bool InteractivePointSource = false;
+  double InteractivePointSourcePosition[3] = { 0.0, 0.0, 0.0 };
+  double InteractivePointSourcePower[3] = { 1.0, 1.0, 1.0 };
+  bool InteractivePencilBeam = false;
+  double InteractivePencilBeamPoint1[3] = { 0.0, 0.0, 1.0 };
+  double InteractivePencilBeamPoint2[3] = { 0.0, 0.0, 0.0 };
+  double InteractivePencilBeamPower[3] = { 1.0, 1.0, 1.0 };
+  double InteractivePencilBeamEntry[3] = { 0.0, 0.0, 0.0 };
+
   double TopologyTime = 0.0;
   double AssemblyTime = 0.0;
   double SolveTime = 0.0;

@@ -35,6 +35,9 @@ struct vtkSurfaceIrradiance::Internals
   std::vector<translucency::LightSource> Directional;
   std::vector<translucency::LightSource> Point;
   std::vector<translucency::LightSource> Spot;
+  /// The panel's coloured tables (cleared on their own).
+  std::vector<translucency::LightSource> ColouredDirectional;
+  std::vector<translucency::LightSource> ColouredPoint;
   std::shared_ptr<const translucency::TetMesh> Mesh;
 };
 
@@ -100,6 +103,39 @@ void vtkSurfaceIrradiance::AddPointLightRGB(
   this->Modified();
 }
 
+void vtkSurfaceIrradiance::AddColouredDirectionalLight(
+  double dx, double dy, double dz, double r, double g, double b)
+{
+  this->Internal->ColouredDirectional.push_back(
+    translucency::DirectionalLight({ dx, dy, dz }, { r, g, b }));
+  this->Modified();
+}
+
+void vtkSurfaceIrradiance::RemoveAllColouredDirectionalLights()
+{
+  if (!this->Internal->ColouredDirectional.empty())
+  {
+    this->Internal->ColouredDirectional.clear();
+    this->Modified();
+  }
+}
+
+void vtkSurfaceIrradiance::AddColouredPointLight(
+  double x, double y, double z, double r, double g, double b)
+{
+  this->Internal->ColouredPoint.push_back(translucency::PointLight({ x, y, z }, { r, g, b }));
+  this->Modified();
+}
+
+void vtkSurfaceIrradiance::RemoveAllColouredPointLights()
+{
+  if (!this->Internal->ColouredPoint.empty())
+  {
+    this->Internal->ColouredPoint.clear();
+    this->Modified();
+  }
+}
+
 void vtkSurfaceIrradiance::AddSpotLight(double x, double y, double z, double dx, double dy,
   double dz, double cutoff, double exponent, double r, double g, double b)
 {
@@ -141,7 +177,11 @@ int vtkSurfaceIrradiance::RequestData(
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
 
   std::vector<translucency::LightSource> lights = this->Internal->Directional;
+  lights.insert(lights.end(), this->Internal->ColouredDirectional.begin(),
+    this->Internal->ColouredDirectional.end());
   lights.insert(lights.end(), this->Internal->Point.begin(), this->Internal->Point.end());
+  lights.insert(
+    lights.end(), this->Internal->ColouredPoint.begin(), this->Internal->ColouredPoint.end());
   lights.insert(lights.end(), this->Internal->Spot.begin(), this->Internal->Spot.end());
   if (this->InteractiveLight)
   {
@@ -308,6 +348,10 @@ void vtkSurfaceIrradiance::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "DirectionalLights: " << this->Internal->Directional.size() << "\n";
   os << indent << "PointLights: " << this->Internal->Point.size() << "\n";
+  os << indent << "ColouredDirectionalLights: " << this->Internal->ColouredDirectional.size()
+     << "\n";
+  os << indent << "ColouredPointLights: " << this->Internal->ColouredPoint.size() << "\n";
+  os << indent << "SpotLights: " << this->Internal->Spot.size() << "\n";
   os << indent << "UniformLightIrradiance: " << this->UniformLightIrradiance << "\n";
   os << indent << "UniformLightSamples: " << this->UniformLightSamples << "\n";
   os << indent << "DefaultLights: " << this->DefaultLights << "\n";

@@ -97,6 +97,22 @@ public:
 
   ///@{
   /**
+   * The ParaView panel's coloured tables (properties ColouredDirectionalLights
+   * and ColouredPointLights): the same lights as AddDirectionalLightRGB and
+   * AddPointLightRGB, kept in lists of their own so that each panel table
+   * clears only its own rows (ParaView pushes one table at a time, calling
+   * its clean command first; the grey tables keep RemoveAllDirectionalLights
+   * and RemoveAllPointLights, so existing state files and scripts are
+   * unchanged). They join the lights of the other lists. None by default.
+   */
+  void AddColouredDirectionalLight(double dx, double dy, double dz, double r, double g, double b);
+  void RemoveAllColouredDirectionalLights();
+  void AddColouredPointLight(double x, double y, double z, double r, double g, double b);
+  void RemoveAllColouredPointLights();
+  ///@}
+
+  ///@{
+  /**
    * Spot lights: position (mm), axis direction (any length), cone half-angle
    * `cutoff` (degrees, in (0, 180]), fall-off exponent (>= 0) and intensity
    * I (W/sr) per channel on the axis; at angle alpha from the axis the

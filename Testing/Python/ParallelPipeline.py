@@ -23,6 +23,9 @@ as .pvtu / .pvtp (one piece per rank) for TestParallel.py to compare:
             Translucent Radiosity with a floor, Assign from a Wavelet image
             (split by extent): totals printed as "summary" lines
   error     Solve Diffusion without Irradiance: the same error on every rank
+  detectors Redistribute DataSet -> ... -> Solve Diffusion with two detectors ->
+            Detector Readings: a "detectors" line with the rows of all ranks'
+            tables (the serial count: rows only on rank 0) and the values
 Every line "case <name> done" on stdout marks a finished case.
 """
 
@@ -30,6 +33,7 @@ import os
 import sys
 
 from paraview.simple import *  # noqa: F401,F403
+from paraview import servermanager
 
 PLUGIN, WORK, MODE = sys.argv[1], sys.argv[2], sys.argv[3]
 LoadPlugin(PLUGIN, ns=globals())
@@ -91,6 +95,22 @@ def serial_stages(mesh_source):
     summary("radiosity", TranslucentRadiosity(
         Input=GroupDatasets(Input=[floor, mesh_source]), LightPosition=[0, 0, 20],
         LightPower=[500, 500, 500], RaysPerPatch=16), "Radiosity")
+
+
+def detector_table(source):
+    """Detector Readings appended over the ranks: the serial rows, once."""
+    solved = SolveDiffusion(Input=light(source), RelTol=1e-12, MaxIter=20000,
+                            Detectors=[0.0, 0.0, 4.0, 0.0, 0.0, 0.0, -4.0, 1.0])
+    readings = DetectorReadings(Input=solved)
+    readings.UpdatePipeline()
+    # The data information sums the ranks' rows (as the spreadsheet view
+    # appends them); Fetch would bring one rank's table only.
+    rows = readings.GetDataInformation().GetNumberOfRows()
+    table = servermanager.Fetch(readings)
+    fluence = table.GetColumnByName("FluenceR")
+    values = [fluence.GetValue(k) for k in range(table.GetNumberOfRows())] if fluence else []
+    print("detectors: %d rows, FluenceR %s" % (rows, " ".join("%.4g" % v for v in values)),
+          flush=True)
 
 
 def chain(name, source, surface=True, samples=0):
@@ -191,6 +211,7 @@ if MODE == "prepare":
     chain("ref_paint", paint(mesh_source), surface=False)
     chain("ref_cutids", plane_cut(mesh_source), surface=False, samples=32)
     serial_stages(mesh_source)
+    detector_table(mesh_source)
 elif MODE == "run":
     reader = TranslucencySurfaceReader(FileName=path("surface.ply"))
     chain("par_ply", AssignScatteringCoefficients(
@@ -205,6 +226,7 @@ elif MODE == "run":
     chain("par_cut", RedistributeDataSet(
         Input=plane_cut(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))), surface=False)
     chain("par_paint", paint(redistributed), surface=False)
+    detector_table(redistributed)
     # With point and cell GlobalIds (made in the serial order) the gathered
     # mesh is in the serial order: the order-dependent cut relaxation and
     # uniform-light sampling give the serial result.

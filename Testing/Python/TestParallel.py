@@ -23,6 +23,8 @@ How to run (ctest does this, with 2 and with 3 ranks):
    Solve Diffusion without Irradiance fails with the same message on every
    rank; Fracture Tet Mesh and Translucent Radiosity (results on rank 0) and a
    Volume material from an image split by extent give the serial totals;
+   Detector Readings after a redistributed Solve Diffusion gives the serial
+   table once (rows on rank 0 only), not once per rank;
    nothing hangs (each run has a time limit) and no other error is logged.
 
 Exits non-zero on failure (unittest).
@@ -202,6 +204,16 @@ class ParallelTest(unittest.TestCase):
         serial = summaries(self.prepare.stdout)
         self.assertEqual(len(serial), 3, self.prepare.stdout)
         self.assertEqual(summaries(self.result.stdout), serial)
+
+    def test_detector_table_once(self):
+        # Detector Readings fills its table on rank 0 only: fetched (appended
+        # over the ranks) it has the serial rows, not one copy per rank.
+        def lines(text):
+            return [line for line in text.splitlines() if line.startswith("detectors: ")]
+        serial = lines(self.prepare.stdout)
+        self.assertEqual(len(serial), 1, self.prepare.stdout)
+        self.assertTrue(serial[0].startswith("detectors: 2 rows"), serial[0])
+        self.assertEqual(lines(self.result.stdout), serial)
 
     def test_errors(self):
         # The one expected error, once per rank with the same text; no other.
