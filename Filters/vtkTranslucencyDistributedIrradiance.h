@@ -16,10 +16,12 @@
  * must be linear tets; points are identified across ranks by the point
  * GlobalIds when every rank with points has them, else by exactly equal
  * coordinates (as the distributed solve). The result equals the serial
- * filter's to round-off; the uniform light's sampled occlusion uses each
- * point's global id as the serial code uses the point index (so ids 0..n-1
- * of the serial mesh give the serial samples), and without ids a hash of the
- * point's coordinates (the same for any partition).
+ * filter's to round-off. The uniform light's sampled occlusion rotates each
+ * point's samples by its index, as the serial code, taking the index the
+ * gathered path's merged mesh would give it: its rank among the global ids
+ * (the serial index when the ids grow with the serial order, whatever the
+ * partition), or without ids its global row (the rank order; the serial
+ * index when one rank holds the whole mesh).
  */
 #ifndef vtkTranslucencyDistributedIrradiance_h
 #define vtkTranslucencyDistributedIrradiance_h

@@ -30,16 +30,8 @@ struct PointRecord
   int Row;
   int Padding;
   double X[3];
-  std::uint64_t Key; ///< global id (ids) or a hash of the coordinates
+  std::uint64_t Key; ///< global id (ids), or the first word of the key
 };
-
-std::uint64_t Mix(std::uint64_t x)
-{
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
 
 /// Every rank's `mine`, concatenated in rank order, on every rank.
 template <typename T>
@@ -163,7 +155,7 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
     record.Row = numbering.GetRow(static_cast<int>(i));
     record.Padding = 0;
     std::memcpy(record.X, &points[3 * i], sizeof record.X);
-    record.Key = ids ? keys[i][0] : Mix(keys[i][0] ^ Mix(keys[i][1] ^ Mix(keys[i][2])));
+    record.Key = keys[i][0];
     myPoints.push_back(record);
   }
   std::sort(myPoints.begin(), myPoints.end(),
@@ -186,8 +178,38 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   {
     surfaceRows[p] = allPoints[p].Row;
     std::memcpy(&surface.Points[3 * p], allPoints[p].X, sizeof allPoints[p].X);
-    rotations[p] = ids ? UniformSampleRotation(static_cast<double>(allPoints[p].Key))
-                       : static_cast<double>(allPoints[p].Key >> 11) * 0x1.0p-53;
+  }
+  // The uniform light's rotation follows the point's index in the gathered
+  // path's merged mesh (points in id order with ids, else in rank order), the
+  // serial index when the ids (or the one rank holding the mesh) follow the
+  // serial order: with ids, the number of distinct ids below the point's,
+  // counted over every rank (each point by its owner; points no tet uses by
+  // every rank holding them); without, the global row.
+  if (ids)
+  {
+    std::vector<std::int64_t> counted;
+    for (std::size_t i = 0; i < numPoints; ++i)
+    {
+      if (numbering.GetRow(static_cast<int>(i)) < 0 || numbering.IsOwned(static_cast<int>(i)))
+        counted.push_back(static_cast<std::int64_t>(keys[i][0]));
+    }
+    std::sort(counted.begin(), counted.end());
+    counted.erase(std::unique(counted.begin(), counted.end()), counted.end());
+    std::vector<long long> below(allPoints.size());
+    for (std::size_t p = 0; p < allPoints.size(); ++p)
+    {
+      below[p] = std::lower_bound(counted.begin(), counted.end(),
+                   static_cast<std::int64_t>(allPoints[p].Key)) - counted.begin();
+    }
+    MPI_Allreduce(MPI_IN_PLACE, below.data(), static_cast<int>(below.size()), MPI_LONG_LONG,
+      MPI_SUM, comm);
+    for (std::size_t p = 0; p < allPoints.size(); ++p)
+      rotations[p] = UniformSampleRotation(static_cast<double>(below[p]));
+  }
+  else
+  {
+    for (std::size_t p = 0; p < allPoints.size(); ++p)
+      rotations[p] = UniformSampleRotation(static_cast<double>(allPoints[p].Row));
   }
   allPoints = {};
   auto indexOf = [&surfaceRows](int row) {

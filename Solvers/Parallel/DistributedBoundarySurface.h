@@ -37,11 +37,12 @@ struct BoundarySurfaceReport
  * Collective.
  * @param points this rank's points, 3 each (mm)
  * @param keys one per point (PointKeyFromId / PointKeyFromCoordinates)
- * @param ids true if the keys are global ids: the uniform light's sample
- *   rotation of a point is then UniformSampleRotation(id) (the serial one
- *   when the ids number the serial mesh's points 0, 1, ...), else a hash of
- *   its exact coordinates (independent of the partition, but not the serial
- *   rotation)
+ * @param ids true if the keys are global ids. The uniform light's sample
+ *   rotation of a point is UniformSampleRotation(k), k its index in the mesh
+ *   the gathered path would merge: with ids, the number of distinct ids
+ *   below its id over every rank (independent of the partition; the serial
+ *   index when the ids grow with the serial order), else its global row
+ *   (rank order: the serial index when one rank holds the whole mesh).
  * @param used 1 per point of an owned tet of this rank
  * @param triangles this rank's boundary triangles (of its own tets; 3 local
  *   point ids each, outward as TetMesh::GetBoundaryTriangles)

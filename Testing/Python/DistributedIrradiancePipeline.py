@@ -7,7 +7,7 @@ distributed over MPI ranks (the boundary surface all-gathered, no mesh gather).
 prepare (one process): a box of 16 x 16 x 14 cubes (6 tets each) with a well
 dug from its top (non-convex: the walls shadow the well's floor), about 20k
 tets, float points, a heterogeneous material (RefractiveIndex 1.3 to 1.45),
-and a "PointIds" array numbering the points 0, 1, ... (mesh.vtu; meshid.vtu
+and a "PointIds" array numbering the points 1000 + 7 i (mesh.vtu; meshid.vtu
 with it as GlobalIds); the same tets as one piece (mesh1.pvtu), 2 pieces
 with a ghost level (mesh2g.pvtu) and 3 pieces with GlobalIds (mesh3id.pvtu);
 the serial references ref_<lights>.vtu (Irradiance and Fluence, RelTol 1e-13)
@@ -105,7 +105,7 @@ if MODE == "prepare":
     ids.SetName("PointIds")
     ids.SetNumberOfTuples(mesh.GetNumberOfPoints())
     for i in range(mesh.GetNumberOfPoints()):
-        ids.SetValue(i, i)
+        ids.SetValue(i, 1000 + 7 * i)  # growing with the serial order
     mesh.GetPointData().AddArray(ids)
     # Boundary triangles: faces of one tet only.
     faces = np.sort(np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]],
