@@ -20,6 +20,9 @@ and boundary.txt, the number of boundary triangles.
 run (every rank): for each case reader -> Surface Irradiance -> Solve
 Diffusion, saved as <case>.pvtu, and per rank one line in irr_<rank>.txt:
     irr <case> rank <r> path <path> triangles <n> bytes <b> ms <t>
+then Assign Scattering Coefficients (a spherical inclusion) on the 3-piece,
+1-piece and ghost-cell .pvtu (assign_<case>.pvtu; the serial ref_assign.vtu),
+with a line "assign <case> rank <r> path <path>".
 """
 
 import os
@@ -45,6 +48,12 @@ def path(name):
 def chain(source, lights):
     lit = SurfaceIrradiance(Input=source, Shadows=1, **LIGHTS[lights])
     return lit, SolveDiffusion(Input=lit, Solver="divergence", RelTol=TOL, MaxIter=20000)
+
+
+def assign(source):
+    # A spherical inclusion (per tet: computed on each piece under MPI).
+    return AssignScatteringCoefficients(Input=source, MaterialMode=2, InclusionCenter=[8, 8, 4],
+                                        InclusionRadius=5.0)
 
 
 if MODE == "prepare":
@@ -153,6 +162,7 @@ if MODE == "prepare":
         writer.Write()
 
     source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
+    SaveData(path("ref_assign.vtu"), proxy=assign(source))
     for lights in LIGHTS:
         _, solved = chain(source, lights)
         SaveData(path("ref_%s.vtu" % lights), proxy=solved)
@@ -186,6 +196,17 @@ elif MODE == "run":
         FileName=[path("mesh.vtu")])), "B")
     case("pvtu1_B", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")]), "B")
     case("gathered_A", pvtu3, "A", gathered=True)
+    # Assign Scattering Coefficients per piece (no ghost cells, no cell ids),
+    # and gathered (ghost cells: vtkOriginalCellIds need the gathered order).
+    for name, source in (("assign_pvtu3", pvtu3), ("assign_pvtu1", XMLPartitionedUnstructuredGridReader(
+            FileName=[path("mesh1.pvtu")])), ("assign_pvtu2", XMLPartitionedUnstructuredGridReader(
+            FileName=[path("mesh2g.pvtu")]))):
+        assigned = assign(source)
+        assigned.UpdatePipeline()
+        with open(path("irr_%d.txt" % RANK), "a") as f:
+            f.write("assign %s rank %d path %s\n" % (
+                name, RANK, assigned.GetClientSideObject().GetParallelPath().replace(" ", "-")))
+        SaveData(path(name + ".pvtu"), proxy=assigned)
     print("run done", flush=True)
 else:
     sys.exit("mode must be prepare or run, not " + MODE)

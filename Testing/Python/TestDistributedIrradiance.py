@@ -93,6 +93,12 @@ class DistributedIrradianceTest(unittest.TestCase):
             for m in re.finditer(r"^irr (\S+) rank (\d+) path (\S+) triangles (\d+) bytes (\d+) "
                                  r"ms (\S+)$", text, re.M):
                 cls.reports.setdefault(m.group(1), {})[int(m.group(2))] = m.groups()[2:]
+        cls.assign_paths = {}
+        for rank in range(RANKS):
+            name = os.path.join(cls.work, "irr_%d.txt" % rank)
+            text = open(name).read() if os.path.exists(name) else ""
+            for m in re.finditer(r"^assign (\S+) rank (\d+) path (\S+)$", text, re.M):
+                cls.assign_paths.setdefault(m.group(1), {})[int(m.group(2))] = m.group(3)
         with open(os.path.join(cls.work, "boundary.txt")) as f:
             cls.boundary = int(f.read().split()[0])
 
@@ -159,6 +165,46 @@ class DistributedIrradianceTest(unittest.TestCase):
                 # about half a point per triangle, a few twice).
                 self.assertLess(int(size), 60 * self.boundary, case)
                 self.assertEqual(per_rank[rank][:3], per_rank[0][:3], case)
+
+    def test_assign_per_piece(self):
+        # The serial materials at every cell (matched by its centroid), the
+        # vtkOriginalCellIds a permutation of the serial ones; the per-tet mode
+        # ran per piece, except with ghost cells (gathered).
+        def cells(piece):
+            from vtkmodules.numpy_interface import dataset_adapter as dsa
+            wrapped = dsa.WrapDataObject(piece)
+            x = np.asarray(wrapped.Points, dtype=float)
+            conn = np.asarray(wrapped.Cells).reshape(-1, 5)[:, 1:]
+            keys = [tuple(c) for c in np.round(x[conn].mean(axis=1), 6)]
+            data = piece.GetCellData()
+            values = np.column_stack([vtk_to_numpy(data.GetArray(n)).reshape(len(keys), -1)
+                                      for n in ("AbsorptionCoefficient",
+                                                "ReducedScatteringCoefficient",
+                                                "RefractiveIndex")])
+            ghosts = data.GetArray("vtkGhostType")
+            owned = np.ones(len(keys), bool) if ghosts is None else \
+                (vtk_to_numpy(ghosts) & 1) == 0
+            return keys, values, vtk_to_numpy(data.GetArray("vtkOriginalCellIds")), owned
+        reader = vtkXMLUnstructuredGridReader()
+        reader.SetFileName(os.path.join(self.work, "ref_assign.vtu"))
+        reader.Update()
+        keys, values, _, _ = cells(reader.GetOutput())
+        ref = dict(zip(keys, values))
+        self.assertGreater(len({tuple(v) for v in values}), 1, "two materials")
+        for case, expected in (("assign_pvtu3", "per-piece"), ("assign_pvtu1", "per-piece"),
+                               ("assign_pvtu2", "gathered")):
+            paths = self.assign_paths.get(case, {})
+            self.assertEqual(sorted(paths), list(range(RANKS)), case)
+            self.assertEqual(set(paths.values()), {expected}, case)
+            ids = []
+            for piece in pieces_of(os.path.join(self.work, case + ".pvtu")):
+                if piece.GetNumberOfCells() == 0:
+                    continue
+                k, v, original, owned = cells(piece)
+                for key, row in zip(k, v):
+                    self.assertTrue(np.array_equal(row, ref[key]), case)
+                ids.extend(original[owned].tolist())
+            self.assertEqual(sorted(ids), list(range(len(ref))), case)
 
 
 if __name__ == "__main__":
