@@ -20,7 +20,8 @@ and boundary.txt, the number of boundary triangles.
 run (every rank): for each case reader -> Surface Irradiance -> Solve
 Diffusion, saved as <case>.pvtu, and per rank one line in irr_<rank>.txt:
     irr <case> rank <r> path <path> triangles <n> bytes <b> ms <t>
-then Assign Scattering Coefficients (a spherical inclusion) on the 3-piece,
+an invalid RefractiveIndex on rank 1 only (the same error on every rank),
+after_error_B (a run after it), then Assign Scattering Coefficients (a spherical inclusion) on the 3-piece,
 1-piece and ghost-cell .pvtu (assign_<case>.pvtu; the serial ref_assign.vtu),
 with a line "assign <case> rank <r> path <path>".
 """
@@ -207,6 +208,22 @@ elif MODE == "run":
             f.write("assign %s rank %d path %s\n" % (
                 name, RANK, assigned.GetClientSideObject().GetParallelPath().replace(" ", "-")))
         SaveData(path(name + ".pvtu"), proxy=assigned)
+    # An invalid RefractiveIndex on rank 1 only: every rank reports rank 1's
+    # error and nobody hangs; the next run works.
+    bad = ProgrammableFilter(Input=pvtu3)
+    bad.Script = """
+from vtkmodules.vtkParallelCore import vtkMultiProcessController
+out = self.GetOutput()
+out.ShallowCopy(self.GetInput())
+if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
+    a = out.GetCellData().GetArray("RefractiveIndex")
+    b = a.NewInstance()
+    b.DeepCopy(a)
+    b.SetValue(5, -1.0)
+    out.GetCellData().AddArray(b)
+"""
+    SurfaceIrradiance(Input=bad, Shadows=1, **LIGHTS["B"]).UpdatePipeline()
+    case("after_error_B", pvtu3, "B")
     print("run done", flush=True)
 else:
     sys.exit("mode must be prepare or run, not " + MODE)
