@@ -44,6 +44,12 @@
  * described in the field data (`TranslucencyLightsDescription`, in the CLI's
  * --light syntax) and by GetLightsDescription().
  *
+ * **Under MPI** (more than one process) each rank computes its own piece:
+ * only the physical boundary surface is all-gathered, for the shadow rays
+ * (vtkTranslucencyDistributedIrradiance.h, Documentation/Parallel.md); the
+ * result equals the serial one to round-off. TRANSLUCENCY_GATHERED_IRRADIANCE=1
+ * gathers the mesh to rank 0 instead. GetParallelPath() tells which ran.
+ *
  * @warning The input must hold
  * only linear tetrahedra and the cell array `RefractiveIndex`.
  *
