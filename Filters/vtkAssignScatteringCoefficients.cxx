@@ -3,6 +3,7 @@
 #include "Error.h"
 #include "MaterialFields.h"
 #include "vtkMaterialTableReader.h"
+#include "vtkTranslucencyDistributedPieces.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkTranslucencyParallel.h"
@@ -466,14 +467,38 @@ bool vtkAssignScatteringCoefficients::ComputeMaterials(
 int vtkAssignScatteringCoefficients::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: gather to rank 0, run this serially there, hand the result back.
-  int parallelResult = 0;
-  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
-        vtkTranslucencyParallel::GatherMode::SameMesh,
-        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-        { return this->RequestData(r, i, o); },
-        parallelResult))
+  // Under MPI: the per-tet modes on each rank's own piece (no gather);
+  // otherwise gather to rank 0, run this serially there, hand the result back.
+  const bool perTet = this->MaterialMode == UNIFORM || this->MaterialMode == MATERIAL_IDS ||
+    this->MaterialMode == SPHERICAL_INCLUSION;
+  if (perTet && !this->Gathering && vtkTranslucencyDistributedPieces::IsAvailable())
   {
+    vtkUnstructuredGrid* piece = vtkUnstructuredGrid::GetData(inputVector[0]);
+    const bool hasCells = piece && piece->GetNumberOfCells() > 0;
+    // vtkOriginalCellIds (added when missing) number the gathered mesh's
+    // cells: the rank order unless ghost cells or cell GlobalIds reorder them.
+    const bool reordered = vtkTranslucencyDistributedPieces::Any(hasCells &&
+      !piece->GetCellData()->GetArray(vtkTranslucency::OriginalCellIdsName) &&
+      (vtkTranslucencyDistributedPieces::HasGhostCells(piece) ||
+        piece->GetCellData()->GetGlobalIds()));
+    if (!reordered)
+    {
+      this->ParallelPath = "per piece";
+      return this->RequestPerPiece(inputVector, outputVector);
+    }
+  }
+  this->ParallelPath = "serial";
+  int parallelResult = 0;
+  this->Gathering = true; // the serial run on rank 0 must not go per piece
+  const bool gathered = vtkTranslucencyParallel::RunGathered(this, request, inputVector,
+    outputVector, vtkTranslucencyParallel::GatherMode::SameMesh,
+    [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+    { return this->RequestData(r, i, o); },
+    parallelResult);
+  this->Gathering = false;
+  if (gathered)
+  {
+    this->ParallelPath = "gathered";
     return parallelResult;
   }
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
@@ -501,6 +526,58 @@ int vtkAssignScatteringCoefficients::RequestData(
     return 0;
   }
 
+  this->AttachMaterials(input, output, field, 0);
+  return outputs.Succeed();
+}
+
+//------------------------------------------------------------------------------
+int vtkAssignScatteringCoefficients::RequestPerPiece(
+  vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
+  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
+  const long long cells = input ? input->GetNumberOfCells() : 0;
+  // Every rank takes part in every collective below, an empty piece too.
+  const long long total = vtkTranslucencyDistributedPieces::Sum(cells);
+  const long long offset = vtkTranslucencyDistributedPieces::ExclusiveSum(cells);
+  if (total == 0)
+  {
+    vtkErrorMacro(<< "the input mesh is empty (no cells)");
+    return 0;
+  }
+  MaterialField field;
+  std::string local;
+  if (cells > 0)
+  {
+    try
+    {
+      this->ComputeMaterials(input, nullptr, field); // the per-tet modes do not abort
+      field.Scale(this->ScaleFactor);
+      field.Validate();
+    }
+    catch (const std::exception& e)
+    {
+      local = e.what();
+    }
+  }
+  const std::string error = vtkTranslucencyDistributedPieces::AgreeOnError(local);
+  if (!error.empty())
+  {
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  if (input)
+  {
+    this->AttachMaterials(input, output, field, offset);
+  }
+  return outputs.Succeed();
+}
+
+//------------------------------------------------------------------------------
+void vtkAssignScatteringCoefficients::AttachMaterials(vtkUnstructuredGrid* input,
+  vtkUnstructuredGrid* output, const translucency::MaterialField& field, long long firstId)
+{
   const vtkIdType n = input->GetNumberOfCells();
   output->ShallowCopy(input);
   vtkNew<vtkDoubleArray> absorption;
@@ -534,11 +611,10 @@ int vtkAssignScatteringCoefficients::RequestData(
     ids->SetNumberOfTuples(n);
     for (vtkIdType i = 0; i < n; ++i)
     {
-      ids->SetValue(i, i);
+      ids->SetValue(i, static_cast<vtkIdType>(firstId) + i);
     }
     output->GetCellData()->AddArray(ids);
   }
-  return outputs.Succeed();
 }
 
 //------------------------------------------------------------------------------

@@ -286,6 +286,12 @@ public:
   vtkGetMacro(VeinSeed, int);
   ///@}
 
+  /// How the last execution ran: "serial" (one process), "per piece" (MPI:
+  /// the uniform, material-id and spherical-inclusion modes on each rank's
+  /// own piece, no gather) or "gathered" (MPI: the other modes, or pieces
+  /// with ghost cells or cell GlobalIds and no vtkOriginalCellIds).
+  const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+
 protected:
   vtkAssignScatteringCoefficients();
   ~vtkAssignScatteringCoefficients() override = default;
@@ -300,6 +306,14 @@ protected:
   bool ComputeMaterials(
     vtkUnstructuredGrid* input, vtkImageData* volume, translucency::MaterialField& field);
   int FillInputPortInformation(int port, vtkInformation* info) override;
+  /// Under MPI, the per-tet modes on this rank's piece (collective).
+  int RequestPerPiece(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
+  /// output = input with the material arrays of `field`, and vtkOriginalCellIds
+  /// firstId, firstId + 1, ... if the input has none.
+  void AttachMaterials(vtkUnstructuredGrid* input, vtkUnstructuredGrid* output,
+    const translucency::MaterialField& field, long long firstId);
+  std::string ParallelPath = "serial";
+  bool Gathering = false; ///< inside RunGathered (its serial run on rank 0)
 
   std::string MaterialName = "marble";
   double AbsorptionCoefficient[3] = { 0.0021, 0.0041, 0.0071 };

@@ -7,6 +7,7 @@
 #include "Radiance.h"
 #include "TetMesh.h"
 #include "Timer.h"
+#include "vtkTranslucencyDistributedIrradiance.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkTranslucencyParallel.h"
@@ -162,16 +163,22 @@ int vtkSurfaceIrradiance::GetNumberOfSpotLights() const
 int vtkSurfaceIrradiance::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  // Under MPI: each rank computes its own piece on the gathered boundary
+  // surface (distributed); or, without that path, gather the mesh to rank 0,
+  // run this serially there, hand the result back.
+  const bool distributed = vtkTranslucencyDistributedIrradiance::IsAvailable();
   int parallelResult = 0;
-  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
-        vtkTranslucencyParallel::GatherMode::SameMesh,
-        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-        { return this->RequestData(r, i, o); },
-        parallelResult))
+  if (!distributed &&
+    vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
+      vtkTranslucencyParallel::GatherMode::SameMesh,
+      [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestData(r, i, o); },
+      parallelResult))
   {
+    this->ParallelPath = "gathered";
     return parallelResult;
   }
+  this->ParallelPath = distributed ? "distributed" : "serial";
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
@@ -221,6 +228,30 @@ int vtkSurfaceIrradiance::RequestData(
   }
 
   std::string error;
+  std::vector<double> q;
+  const std::vector<translucency::LightSource>& computed =
+    this->CollimatedModel == COLLIMATED_EXTENDED ? translucency::NonCollimatedLights(lights)
+                                                 : lights;
+  if (distributed)
+  {
+    this->TopologyTime = 0.0;
+    vtkTranslucencyDistributedIrradiance::Report report;
+    if (!vtkTranslucencyDistributedIrradiance::Compute(input, computed, uniformIrradiance,
+          this->UniformLightSamples, this->Shadows,
+          [this]() { return this->GetAbortExecute() != 0; }, q, report, error))
+    {
+      if (!error.empty())
+      {
+        vtkErrorMacro(<< error);
+      }
+      return 0;
+    }
+    this->BoundarySurfaceTriangles = report.SurfaceTriangles;
+    this->BoundarySurfaceBytes = report.GatheredBytes;
+    this->BoundarySurfaceTime = report.GatherMilliseconds;
+    return this->AttachOutputs(input, output, lights, uniformIrradiance, q) ? outputs.Succeed()
+                                                                          : 0;
+  }
   bool built = false;
   const translucency::Timer timer;
   std::string warning;
@@ -242,15 +273,12 @@ int vtkSurfaceIrradiance::RequestData(
   this->UpdateProgress(0.1);
 
   // Direct and uniform light with self-shadowing, OpenMP-parallel in the core.
-  std::vector<double> q;
   try
   {
     // Per boundary triangle (each corner with the triangle's own normal),
     // projected to the points: the solvers' loads are triangle-integrated.
     // The extended model leaves the directional lights to the solver.
-    const bool completed = translucency::ComputeProjectedIrradiance(mesh, tetEta,
-      this->CollimatedModel == COLLIMATED_EXTENDED ? translucency::NonCollimatedLights(lights)
-                                                   : lights,
+    const bool completed = translucency::ComputeProjectedIrradiance(mesh, tetEta, computed,
       uniformIrradiance, this->UniformLightSamples, this->Shadows, q,
       [this]() { return this->GetAbortExecute() != 0; });
     if (!completed)
@@ -263,6 +291,14 @@ int vtkSurfaceIrradiance::RequestData(
     vtkErrorMacro(<< e.what());
     return 0;
   }
+  return this->AttachOutputs(input, output, lights, uniformIrradiance, q) ? outputs.Succeed() : 0;
+}
+
+//------------------------------------------------------------------------------
+bool vtkSurfaceIrradiance::AttachOutputs(vtkUnstructuredGrid* input, vtkUnstructuredGrid* output,
+  const std::vector<translucency::LightSource>& lights, double uniformIrradiance,
+  const std::vector<double>& q)
+{
   output->ShallowCopy(input);
   // Record the lights for solvers that launch photons from them (Monte Carlo):
   // kind (0 directional, 1 point), direction or position, power R, G, B.
@@ -305,7 +341,7 @@ int vtkSurfaceIrradiance::RequestData(
   output->GetPointData()->AddArray(array);
   array->Delete();
   this->UpdateProgress(1.0);
-  return outputs.Succeed();
+  return true;
 }
 
 //------------------------------------------------------------------------------

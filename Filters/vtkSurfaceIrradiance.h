@@ -44,6 +44,12 @@
  * described in the field data (`TranslucencyLightsDescription`, in the CLI's
  * --light syntax) and by GetLightsDescription().
  *
+ * **Under MPI** (more than one process) each rank computes its own piece:
+ * only the physical boundary surface is all-gathered, for the shadow rays
+ * (vtkTranslucencyDistributedIrradiance.h, Documentation/Parallel.md); the
+ * result equals the serial one to round-off. TRANSLUCENCY_GATHERED_IRRADIANCE=1
+ * gathers the mesh to rank 0 instead. GetParallelPath() tells which ran.
+ *
  * @warning The input must hold
  * only linear tetrahedra and the cell array `RefractiveIndex`.
  *
@@ -206,6 +212,19 @@ public:
   /// execution; 0 when the topology came from the shared cache.
   double GetTopologyTime() const { return this->TopologyTime; }
 
+  /// How the last execution ran: "serial" (one process), "distributed"
+  /// (MPI: each rank its own piece on the all-gathered boundary surface,
+  /// Documentation/Parallel.md) or "gathered" (MPI: the mesh gathered to
+  /// rank 0; TRANSLUCENCY_GATHERED_IRRADIANCE=1 or a build without the
+  /// distributed path).
+  const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  /// The distributed path's boundary surface in the last execution (0 on
+  /// the other paths): its triangles, the bytes every rank received for it,
+  /// and the wall time (ms) of the numbering, face count and gather.
+  long long GetBoundarySurfaceTriangles() const { return this->BoundarySurfaceTriangles; }
+  long long GetBoundarySurfaceBytes() const { return this->BoundarySurfaceBytes; }
+  double GetBoundarySurfaceTime() const { return this->BoundarySurfaceTime; }
+
 protected:
   vtkSurfaceIrradiance();
   ~vtkSurfaceIrradiance() override;
@@ -224,6 +243,10 @@ protected:
   int CollimatedModel = COLLIMATED_SURFACE;
   double TopologyTime = 0.0;
   std::string LightsDescription;
+  std::string ParallelPath = "serial";
+  long long BoundarySurfaceTriangles = 0;
+  long long BoundarySurfaceBytes = 0;
+  double BoundarySurfaceTime = 0.0;
 
 private:
   vtkSurfaceIrradiance(const vtkSurfaceIrradiance&) = delete;
@@ -231,6 +254,11 @@ private:
 
   struct Internals;
   std::unique_ptr<Internals> Internal;
+
+  /// The output: `input` with the Irradiance `q` and the lights' field data.
+  bool AttachOutputs(vtkUnstructuredGrid* input, vtkUnstructuredGrid* output,
+    const std::vector<translucency::LightSource>& lights, double uniformIrradiance,
+    const std::vector<double>& q);
 
   /// The lights in the CLI's --light syntax ("none" for none).
   static std::string DescribeLights(

@@ -1,0 +1,229 @@
+#include "vtkTranslucencyDistributedIrradiance.h"
+
+#include <cstdlib>
+#include <cstring>
+
+#ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
+#include "DistributedBoundarySurface.h"
+#include "Error.h"
+#include "TetMesh.h"
+#include "Timer.h"
+#include "vtkTranslucencyMeshConversion.h"
+
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkDataSetAttributes.h>
+#include <vtkMPI.h>
+#include <vtkMPICommunicator.h>
+#include <vtkMultiProcessController.h>
+#include <vtkPointData.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkUnstructuredGrid.h>
+
+#include <algorithm>
+#include <memory>
+
+namespace
+{
+MPI_Comm* GlobalCommunicator()
+{
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  if (!controller || controller->GetNumberOfProcesses() <= 1)
+  {
+    return nullptr;
+  }
+  auto* communicator = vtkMPICommunicator::SafeDownCast(controller->GetCommunicator());
+  if (!communicator || !communicator->GetMPIComm())
+  {
+    return nullptr;
+  }
+  return communicator->GetMPIComm()->GetHandle();
+}
+
+bool AllowedByEnvironment()
+{
+  const char* value = std::getenv("TRANSLUCENCY_GATHERED_IRRADIANCE");
+  return !value || !*value || std::strcmp(value, "0") == 0;
+}
+}
+
+bool vtkTranslucencyDistributedIrradiance::IsAvailable()
+{
+  return AllowedByEnvironment() && GlobalCommunicator() != nullptr;
+}
+
+bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
+  const std::vector<translucency::LightSource>& lights, double uniformIrradiance,
+  int uniformSamples, bool shadows, const std::function<bool()>& abort, std::vector<double>& q,
+  Report& report, std::string& error)
+{
+  MPI_Comm comm = *GlobalCommunicator();
+  report = Report();
+  std::string local;
+  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
+  const vtkIdType numCells = input ? input->GetNumberOfCells() : 0;
+  vtkDataArray* globalIds = input ? input->GetPointData()->GetGlobalIds() : nullptr;
+  std::vector<double> points;
+  std::vector<char> used(static_cast<size_t>(numPoints), 0);
+  std::vector<int> triangles, triangleTets;
+  std::vector<double> triangleEta;
+  long long ownedTets = 0;
+  try
+  {
+    std::vector<int> cells;
+    if (numPoints > 0 && !vtkTranslucency::ToTetArrays(input, points, cells, local))
+    {
+      throw translucency::Error(local);
+    }
+    auto* ghosts = numCells > 0 ? vtkUnsignedCharArray::SafeDownCast(input->GetCellData()->GetArray(
+                                    vtkDataSetAttributes::GhostArrayName()))
+                                : nullptr;
+    std::vector<int> kept;
+    std::vector<int> tets;
+    for (vtkIdType c = 0; c < numCells; ++c)
+    {
+      if (!ghosts || !(ghosts->GetValue(c) & vtkDataSetAttributes::DUPLICATECELL))
+      {
+        kept.push_back(static_cast<int>(c));
+        tets.insert(tets.end(), cells.begin() + 4 * c, cells.begin() + 4 * c + 4);
+      }
+    }
+    ownedTets = static_cast<long long>(kept.size());
+    if (!kept.empty())
+    {
+      std::vector<double> eta;
+      if (!vtkTranslucency::ReadRefractiveIndex(input, eta, local))
+      {
+        throw translucency::Error(local);
+      }
+      // The piece's own tets: the cached topology when it has no ghost cells.
+      std::shared_ptr<const translucency::TetMesh> mesh;
+      if (kept.size() == static_cast<size_t>(numCells))
+      {
+        mesh = vtkTranslucency::AcquireTetMesh(input, local);
+        if (!mesh)
+        {
+          throw translucency::Error(local);
+        }
+      }
+      else
+      {
+        auto owned = std::make_shared<translucency::TetMesh>();
+        owned->SetGeometry(points, tets);
+        mesh = owned;
+      }
+      for (int v : mesh->GetTets())
+      {
+        used[static_cast<size_t>(v)] = 1;
+      }
+      triangles = mesh->GetBoundaryTriangles();
+      for (int t : mesh->GetBoundaryTriangleTets())
+      {
+        triangleTets.push_back(kept[static_cast<size_t>(t)]);
+        triangleEta.push_back(eta[static_cast<size_t>(kept[static_cast<size_t>(t)])]);
+      }
+    }
+  }
+  catch (const std::exception& e)
+  {
+    local = e.what();
+  }
+  int haveIds = (numPoints == 0 || globalIds) ? 1 : 0, allIds = 0;
+  MPI_Allreduce(&haveIds, &allIds, 1, MPI_INT, MPI_MIN, comm);
+  long long totalTets = 0;
+  MPI_Allreduce(&ownedTets, &totalTets, 1, MPI_LONG_LONG, MPI_SUM, comm);
+  std::vector<translucency::PointKey> keys(static_cast<size_t>(numPoints));
+  for (vtkIdType i = 0; i < numPoints && local.empty(); ++i)
+  {
+    keys[i] = allIds
+      ? translucency::PointKeyFromId(static_cast<std::int64_t>(globalIds->GetComponent(i, 0)))
+      : translucency::PointKeyFromCoordinates(points.data() + 3 * i);
+  }
+  try
+  {
+    translucency::AgreeOnError(comm, local);
+    if (totalTets == 0)
+    {
+      throw translucency::Error("the input mesh is empty (no points or no cells)");
+    }
+    translucency::BoundarySurface surface;
+    std::vector<int> surfacePoint;
+    std::vector<double> rotations;
+    translucency::BoundarySurfaceReport gathered;
+    translucency::GatherBoundarySurface(comm, points, keys, allIds != 0, used, triangles,
+      triangleEta, triangleTets, surface, surfacePoint, rotations, gathered);
+    report.SurfaceTriangles = gathered.Triangles;
+    report.SurfacePoints = gathered.Points;
+    report.GatheredBytes = gathered.GatheredBytes;
+    report.GatherMilliseconds = gathered.Milliseconds;
+
+    // This rank's distinct surface points, computed once each.
+    const translucency::Timer timer;
+    std::vector<int> wanted;
+    for (int s : surfacePoint)
+    {
+      if (s >= 0)
+        wanted.push_back(s);
+    }
+    std::sort(wanted.begin(), wanted.end());
+    wanted.erase(std::unique(wanted.begin(), wanted.end()), wanted.end());
+    std::vector<double> wantedRotations(wanted.size());
+    for (size_t k = 0; k < wanted.size(); ++k)
+      wantedRotations[k] = rotations[static_cast<size_t>(wanted[k])];
+    std::vector<double> values;
+    int aborted = 0;
+    local.clear();
+    try
+    {
+      aborted = translucency::ComputeSurfacePointIrradiance(surface, wanted, wantedRotations,
+                  lights, uniformIrradiance, uniformSamples, shadows, values, abort)
+        ? 0
+        : 1;
+    }
+    catch (const translucency::Error& e)
+    {
+      local = e.what();
+    }
+    translucency::AgreeOnError(comm, local);
+    MPI_Allreduce(MPI_IN_PLACE, &aborted, 1, MPI_INT, MPI_MAX, comm);
+    if (aborted)
+    {
+      error.clear();
+      return false;
+    }
+    q.assign(3 * static_cast<size_t>(numPoints), 0.0);
+    for (vtkIdType i = 0; i < numPoints; ++i)
+    {
+      const int s = surfacePoint[static_cast<size_t>(i)];
+      if (s < 0)
+        continue;
+      const size_t k = static_cast<size_t>(
+        std::lower_bound(wanted.begin(), wanted.end(), s) - wanted.begin());
+      std::copy(values.begin() + 3 * k, values.begin() + 3 * k + 3, q.begin() + 3 * i);
+    }
+    report.RayMilliseconds = timer.GetMilliseconds();
+  }
+  catch (const translucency::Error& e)
+  {
+    error = e.what(); // the same on every rank (AgreeOnError)
+    return false;
+  }
+  return true;
+}
+
+#else // no distributed path in this build
+
+bool vtkTranslucencyDistributedIrradiance::IsAvailable()
+{
+  return false;
+}
+
+bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid*,
+  const std::vector<translucency::LightSource>&, double, int, bool,
+  const std::function<bool()>&, std::vector<double>&, Report&, std::string& error)
+{
+  error = "this build has no distributed surface irradiance (hypre or VTK's ParallelMPI missing)";
+  return false;
+}
+
+#endif

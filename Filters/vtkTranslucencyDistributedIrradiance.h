@@ -1,0 +1,67 @@
+/**
+ * @file   vtkTranslucencyDistributedIrradiance.h
+ * @brief  vtkSurfaceIrradiance's distributed path under MPI: no rank gathers
+ *         the mesh; only the physical boundary surface is all-gathered
+ *         (translucency::GatherBoundarySurface), and each rank computes the
+ *         Irradiance of its own piece's points on it
+ *         (translucency::ComputeSurfacePointIrradiance).
+ *
+ * Used whenever the global controller is an MPI controller with more than
+ * one process (every rank takes part, a rank with an empty piece too),
+ * unless the environment variable TRANSLUCENCY_GATHERED_IRRADIANCE is set to
+ * a value other than 0 (then the filter gathers, as before). A build without
+ * the Parallel layer (hypre) or VTK's ParallelMPI gathers.
+ *
+ * The piece: its owned cells (vtkGhostType DUPLICATECELL cells are left out)
+ * must be linear tets; points are identified across ranks by the point
+ * GlobalIds when every rank with points has them, else by exactly equal
+ * coordinates (as the distributed solve). The result equals the serial
+ * filter's to round-off. The uniform light's sampled occlusion rotates each
+ * point's samples by its index, as the serial code, taking the index the
+ * gathered path's merged mesh would give it: its rank among the global ids
+ * (the serial index when the ids grow with the serial order, whatever the
+ * partition), or without ids its global row (the rank order; the serial
+ * index when one rank holds the whole mesh).
+ */
+#ifndef vtkTranslucencyDistributedIrradiance_h
+#define vtkTranslucencyDistributedIrradiance_h
+
+#include "LightSources.h" // for translucency::LightSource
+
+#include <functional>
+#include <string>
+#include <vector>
+
+class vtkUnstructuredGrid;
+
+namespace vtkTranslucencyDistributedIrradiance
+{
+/// True if this build has the distributed path, the global controller runs
+/// more than one MPI process and TRANSLUCENCY_GATHERED_IRRADIANCE is unset
+/// (or "0").
+bool IsAvailable();
+
+/// What the last Compute() gathered (the same numbers on every rank).
+struct Report
+{
+  long long SurfaceTriangles = 0; ///< physical boundary triangles gathered
+  long long SurfacePoints = 0;    ///< their points
+  long long GatheredBytes = 0;    ///< bytes each rank received
+  double GatherMilliseconds = 0.0; ///< numbering, face count and gather (this rank)
+  double RayMilliseconds = 0.0;    ///< the irradiance of this rank's points
+};
+
+/**
+ * Collective. The projected irradiance (3 per input point: R, G, B,
+ * W/mm^2, 0 inside) of this rank's piece `input` for `lights` (directional,
+ * point and spot), the uniform light and shadows as vtkSurfaceIrradiance.
+ * Returns false with `error` (the same on every rank, "" if aborted on some
+ * rank) on failure.
+ */
+bool Compute(vtkUnstructuredGrid* input, const std::vector<translucency::LightSource>& lights,
+  double uniformIrradiance, int uniformSamples, bool shadows,
+  const std::function<bool()>& abort, std::vector<double>& q, Report& report,
+  std::string& error);
+}
+
+#endif

@@ -1,0 +1,243 @@
+#include "DistributedBoundarySurface.h"
+
+#include "Error.h"
+#include "Timer.h"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+namespace translucency
+{
+
+namespace
+{
+
+/// A physical triangle as gathered: global rows and its tet's eta.
+struct TriangleRecord
+{
+  int Rows[3];
+  int Padding;
+  double Eta;
+};
+
+/// A physical boundary point as gathered.
+struct PointRecord
+{
+  int Row;
+  int Padding;
+  double X[3];
+  std::uint64_t Key; ///< global id (ids), or the first word of the key
+};
+
+/// Every rank's `mine`, concatenated in rank order, on every rank.
+template <typename T>
+std::vector<T> AllGather(MPI_Comm comm, const std::vector<T>& mine, long long& bytes)
+{
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  const long long myBytes = static_cast<long long>(mine.size() * sizeof(T));
+  std::vector<long long> all(static_cast<std::size_t>(size));
+  MPI_Allgather(&myBytes, 1, MPI_LONG_LONG, all.data(), 1, MPI_LONG_LONG, comm);
+  long long total = 0;
+  for (long long b : all)
+    total += b;
+  if (total > INT_MAX)
+  {
+    throw Error("distributed surface irradiance: the boundary surface takes " +
+      std::to_string(total) + " bytes, above MPI's 2 GB per gather");
+  }
+  std::vector<int> counts(static_cast<std::size_t>(size)), displs(static_cast<std::size_t>(size), 0);
+  for (int r = 0; r < size; ++r)
+  {
+    counts[r] = static_cast<int>(all[r]);
+    if (r > 0)
+      displs[r] = displs[r - 1] + counts[r - 1];
+  }
+  std::vector<T> result(static_cast<std::size_t>(total) / sizeof(T));
+  MPI_Allgatherv(mine.data(), static_cast<int>(myBytes), MPI_BYTE, result.data(), counts.data(),
+    displs.data(), MPI_BYTE, comm);
+  bytes += total;
+  return result;
+}
+
+} // namespace
+
+void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
+  const std::vector<PointKey>& keys, bool ids, const std::vector<char>& used,
+  const std::vector<int>& triangles, const std::vector<double>& triangleEta,
+  const std::vector<int>& triangleTets, BoundarySurface& surface,
+  std::vector<int>& surfacePoint, std::vector<double>& rotations,
+  BoundarySurfaceReport& report)
+{
+  const Timer timer;
+  report = BoundarySurfaceReport();
+  const std::size_t numPoints = keys.size();
+  const std::size_t numTriangles = triangles.size() / 3;
+
+  // The bounding box of every rank's points (the serial one: every point).
+  double box[6];
+  for (int k = 0; k < 3; ++k)
+  {
+    box[k] = std::numeric_limits<double>::infinity();      // min
+    box[3 + k] = std::numeric_limits<double>::infinity();  // -max
+  }
+  for (std::size_t i = 0; i < numPoints; ++i)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      box[k] = std::min(box[k], points[3 * i + k]);
+      box[3 + k] = std::min(box[3 + k], -points[3 * i + k]);
+    }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, box, 6, MPI_DOUBLE, MPI_MIN, comm);
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    lo[k] = box[k];
+    hi[k] = -box[3 + k];
+  }
+  surface.Diagonal = std::isfinite(lo[0])
+    ? std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+        (hi[2] - lo[2]) * (hi[2] - lo[2]))
+    : 0.0;
+
+  // Global rows, and the physical triangles: those no other rank has.
+  DistributedNumbering numbering;
+  numbering.Build(comm, keys, used);
+  std::vector<int> rows(3 * numTriangles);
+  for (std::size_t k = 0; k < rows.size(); ++k)
+    rows[k] = numbering.GetRow(triangles[k]);
+  const std::vector<int> seen = CountSharedTriangles(comm, rows);
+  std::string error;
+  std::vector<TriangleRecord> myTriangles;
+  std::vector<char> onSurface(numPoints, 0);
+  for (std::size_t f = 0; f < numTriangles && error.empty(); ++f)
+  {
+    if (seen[f] > 2)
+    {
+      std::ostringstream msg;
+      msg << "the boundary face of tet " << triangleTets[f] << " is held by " << seen[f]
+          << " pieces: overlapping pieces without ghost marks (use the gathered path, "
+             "TRANSLUCENCY_GATHERED_IRRADIANCE=1)";
+      error = msg.str();
+    }
+    if (seen[f] != 1)
+      continue;
+    if (!(triangleEta[f] > 0.0) || !std::isfinite(triangleEta[f]))
+    {
+      std::ostringstream msg;
+      msg << "RefractiveIndex of tet " << triangleTets[f] << " (under a boundary face) is "
+          << triangleEta[f] << ": must be finite and > 0";
+      error = msg.str();
+    }
+    TriangleRecord record;
+    record.Padding = 0;
+    record.Eta = triangleEta[f];
+    for (int m = 0; m < 3; ++m)
+    {
+      record.Rows[m] = rows[3 * f + m];
+      onSurface[static_cast<std::size_t>(triangles[3 * f + m])] = 1;
+    }
+    myTriangles.push_back(record);
+  }
+  AgreeOnError(comm, error);
+
+  std::vector<PointRecord> myPoints;
+  for (std::size_t i = 0; i < numPoints; ++i)
+  {
+    if (!onSurface[i])
+      continue;
+    PointRecord record;
+    record.Row = numbering.GetRow(static_cast<int>(i));
+    record.Padding = 0;
+    std::memcpy(record.X, &points[3 * i], sizeof record.X);
+    record.Key = keys[i][0];
+    myPoints.push_back(record);
+  }
+  std::sort(myPoints.begin(), myPoints.end(),
+    [](const PointRecord& a, const PointRecord& b) { return a.Row < b.Row; });
+  myPoints.erase(std::unique(myPoints.begin(), myPoints.end(),
+                   [](const PointRecord& a, const PointRecord& b) { return a.Row == b.Row; }),
+    myPoints.end());
+
+  std::vector<PointRecord> allPoints = AllGather(comm, myPoints, report.GatheredBytes);
+  myPoints = {};
+  std::sort(allPoints.begin(), allPoints.end(),
+    [](const PointRecord& a, const PointRecord& b) { return a.Row < b.Row; });
+  allPoints.erase(std::unique(allPoints.begin(), allPoints.end(),
+                    [](const PointRecord& a, const PointRecord& b) { return a.Row == b.Row; }),
+    allPoints.end());
+  std::vector<int> surfaceRows(allPoints.size());
+  surface.Points.resize(3 * allPoints.size());
+  rotations.resize(allPoints.size());
+  for (std::size_t p = 0; p < allPoints.size(); ++p)
+  {
+    surfaceRows[p] = allPoints[p].Row;
+    std::memcpy(&surface.Points[3 * p], allPoints[p].X, sizeof allPoints[p].X);
+  }
+  // The uniform light's rotation follows the point's index in the gathered
+  // path's merged mesh (points in id order with ids, else in rank order), the
+  // serial index when the ids (or the one rank holding the mesh) follow the
+  // serial order: with ids, the number of distinct ids below the point's,
+  // counted over every rank (each point by its owner; points no tet uses by
+  // every rank holding them); without, the global row.
+  if (ids)
+  {
+    std::vector<std::int64_t> counted;
+    for (std::size_t i = 0; i < numPoints; ++i)
+    {
+      if (numbering.GetRow(static_cast<int>(i)) < 0 || numbering.IsOwned(static_cast<int>(i)))
+        counted.push_back(static_cast<std::int64_t>(keys[i][0]));
+    }
+    std::sort(counted.begin(), counted.end());
+    counted.erase(std::unique(counted.begin(), counted.end()), counted.end());
+    std::vector<long long> below(allPoints.size());
+    for (std::size_t p = 0; p < allPoints.size(); ++p)
+    {
+      below[p] = std::lower_bound(counted.begin(), counted.end(),
+                   static_cast<std::int64_t>(allPoints[p].Key)) - counted.begin();
+    }
+    MPI_Allreduce(MPI_IN_PLACE, below.data(), static_cast<int>(below.size()), MPI_LONG_LONG,
+      MPI_SUM, comm);
+    for (std::size_t p = 0; p < allPoints.size(); ++p)
+      rotations[p] = UniformSampleRotation(static_cast<double>(below[p]));
+  }
+  else
+  {
+    for (std::size_t p = 0; p < allPoints.size(); ++p)
+      rotations[p] = UniformSampleRotation(static_cast<double>(allPoints[p].Row));
+  }
+  allPoints = {};
+  auto indexOf = [&surfaceRows](int row) {
+    const auto it = std::lower_bound(surfaceRows.begin(), surfaceRows.end(), row);
+    return it != surfaceRows.end() && *it == row ? static_cast<int>(it - surfaceRows.begin())
+                                                 : -1;
+  };
+
+  const std::vector<TriangleRecord> allTriangles =
+    AllGather(comm, myTriangles, report.GatheredBytes);
+  surface.Triangles.resize(3 * allTriangles.size());
+  surface.TriangleEta.resize(allTriangles.size());
+  for (std::size_t f = 0; f < allTriangles.size(); ++f)
+  {
+    for (int m = 0; m < 3; ++m)
+      surface.Triangles[3 * f + m] = indexOf(allTriangles[f].Rows[m]);
+    surface.TriangleEta[f] = allTriangles[f].Eta;
+  }
+  surfacePoint.assign(numPoints, -1);
+  for (std::size_t i = 0; i < numPoints; ++i)
+  {
+    const int row = numbering.GetRow(static_cast<int>(i));
+    if (row >= 0)
+      surfacePoint[i] = indexOf(row);
+  }
+  report.Triangles = static_cast<long long>(surface.GetNumberOfTriangles());
+  report.Points = static_cast<long long>(surface.GetNumberOfPoints());
+  report.Milliseconds = timer.GetMilliseconds();
+}
+
+} // namespace translucency

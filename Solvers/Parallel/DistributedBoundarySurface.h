@@ -1,0 +1,67 @@
+/**
+ * @file DistributedBoundarySurface.h
+ * @brief The physical boundary surface of a tet mesh distributed over MPI
+ * ranks, gathered on every rank (for the shadow rays of the distributed
+ * Surface Irradiance; Documentation/Parallel.md).
+ *
+ * Each rank brings the boundary triangles of its own tets; a triangle that
+ * no other rank also has is physical boundary (DistributedNumbering and
+ * CountSharedTriangles, as the distributed solve). The physical triangles
+ * (global rows and the refractive index of their tet) and their points (row,
+ * coordinates, global id) are all-gathered: every rank then holds the same
+ * surface, O(N^(2/3)) of N tets, with points in global-row order and the
+ * triangles in rank order. Collective: every rank calls it, a rank with an
+ * empty piece too.
+ */
+#pragma once
+
+#include "DistributedNumbering.h"
+#include "SurfaceLightKernel.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace translucency
+{
+
+/// What GatherBoundarySurface() gathered (the same on every rank).
+struct BoundarySurfaceReport
+{
+  long long Triangles = 0;       ///< physical boundary triangles
+  long long Points = 0;          ///< their distinct points
+  long long GatheredBytes = 0;   ///< bytes every rank received (the records, all ranks)
+  double Milliseconds = 0.0;     ///< wall time of the numbering, counting and gather (this rank)
+};
+
+/**
+ * Collective.
+ * @param points this rank's points, 3 each (mm)
+ * @param keys one per point (PointKeyFromId / PointKeyFromCoordinates)
+ * @param ids true if the keys are global ids. The uniform light's sample
+ *   rotation of a point is UniformSampleRotation(k), k its index in the mesh
+ *   the gathered path would merge: with ids, the number of distinct ids
+ *   below its id over every rank (independent of the partition; the serial
+ *   index when the ids grow with the serial order), else its global row
+ *   (rank order: the serial index when one rank holds the whole mesh).
+ * @param used 1 per point of an owned tet of this rank
+ * @param triangles this rank's boundary triangles (of its own tets; 3 local
+ *   point ids each, outward as TetMesh::GetBoundaryTriangles)
+ * @param triangleEta the refractive index of each triangle's tet
+ * @param triangleTets each triangle's tet (this rank's numbering; for messages)
+ * @param surface output: the physical boundary (surface.Diagonal: the
+ *   bounding box diagonal of every rank's points)
+ * @param surfacePoint output: per local point, its index in surface.Points
+ *   (-1: not on the physical boundary)
+ * @param rotations output: per surface point, its uniform-light rotation
+ * Throws translucency::Error, with the same message on every rank, for a
+ * triangle held by more than two ranks (overlapping pieces without ghost
+ * marks) or an invalid refractive index under a physical triangle.
+ */
+void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
+  const std::vector<PointKey>& keys, bool ids, const std::vector<char>& used,
+  const std::vector<int>& triangles, const std::vector<double>& triangleEta,
+  const std::vector<int>& triangleTets, BoundarySurface& surface,
+  std::vector<int>& surfacePoint, std::vector<double>& rotations,
+  BoundarySurfaceReport& report);
+
+} // namespace translucency

@@ -1,0 +1,229 @@
+"""The pvbatch side of TestDistributedIrradiance.py: Surface Irradiance
+distributed over MPI ranks (the boundary surface all-gathered, no mesh gather).
+
+    pvbatch DistributedIrradiancePipeline.py <plugin> <work dir> prepare
+    mpiexec -n N pvbatch --symmetric DistributedIrradiancePipeline.py <plugin> <work dir> run
+
+prepare (one process): a box of 16 x 16 x 14 cubes (6 tets each) with a well
+dug from its top (non-convex: the walls shadow the well's floor), about 20k
+tets, float points, a heterogeneous material (RefractiveIndex 1.3 to 1.45),
+and a "PointIds" array numbering the points 1000 + 7 i (mesh.vtu; meshid.vtu
+with it as GlobalIds); the same tets as one piece (mesh1.pvtu), 2 pieces
+with a ghost level (mesh2g.pvtu) and 3 pieces with GlobalIds (mesh3id.pvtu);
+the serial references ref_<lights>.vtu (Irradiance and Fluence, RelTol 1e-13)
+for two lightings, shadows on:
+  A: a point light beside the well and a uniform light with 16 occlusion
+     samples per point (the samples follow the point's index / global id),
+  B: a directional and a point light and the exact uniform light (0 samples);
+and boundary.txt, the number of boundary triangles.
+
+run (every rank): for each case reader -> Surface Irradiance -> Solve
+Diffusion, saved as <case>.pvtu, and per rank one line in irr_<rank>.txt:
+    irr <case> rank <r> path <path> triangles <n> bytes <b> ms <t>
+an invalid RefractiveIndex on rank 1 only (the same error on every rank),
+after_error_B (a run after it), then Assign Scattering Coefficients (a spherical inclusion) on the 3-piece,
+1-piece and ghost-cell .pvtu (assign_<case>.pvtu; the serial ref_assign.vtu),
+with a line "assign <case> rank <r> path <path>".
+"""
+
+import os
+import sys
+
+from paraview.simple import *  # noqa: F401,F403
+
+PLUGIN, WORK, MODE = sys.argv[1], sys.argv[2], sys.argv[3]
+LoadPlugin(PLUGIN, ns=globals())
+TOL = 1e-13
+LIGHTS = {
+    "A": dict(PointLights=[14.0, 3.0, 22.0, 400.0], UniformLightIrradiance=0.3,
+              UniformLightSamples=16),
+    "B": dict(DirectionalLights=[0.4, -0.3, -1.0, 1.0], PointLights=[-4.0, 8.0, 20.0, 300.0],
+              UniformLightIrradiance=0.2, UniformLightSamples=0),
+}
+
+
+def path(name):
+    return os.path.join(WORK, name)
+
+
+def chain(source, lights):
+    lit = SurfaceIrradiance(Input=source, Shadows=1, **LIGHTS[lights])
+    return lit, SolveDiffusion(Input=lit, Solver="divergence", RelTol=TOL, MaxIter=20000)
+
+
+def assign(source):
+    # A spherical inclusion (per tet: computed on each piece under MPI).
+    return AssignScatteringCoefficients(Input=source, MaterialMode=2, InclusionCenter=[8, 8, 4],
+                                        InclusionRadius=5.0)
+
+
+if MODE == "prepare":
+    import numpy as np
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonCore import vtkIdTypeArray, vtkPoints
+    from vtkmodules.vtkCommonDataModel import VTK_TETRA, vtkCellArray, vtkUnstructuredGrid
+    from vtkmodules.vtkFiltersParallel import vtkExtractUnstructuredGridPiece
+    from vtkmodules.vtkIOParallelXML import vtkXMLPUnstructuredGridWriter
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader, vtkXMLUnstructuredGridWriter
+    from vtkmodules.util.numpy_support import numpy_to_vtkIdTypeArray
+
+    nx, ny, nz, h = 16, 16, 14, 1.0
+    keep = np.ones((nx, ny, nz), bool)
+    keep[5:11, 5:11, 7:] = False  # the well
+    px, py, pz = nx + 1, ny + 1, nz + 1
+
+    def pid(i, j, k):
+        return i + px * (j + py * k)
+    # The 6 Kuhn tets of a cube around its main diagonal (conforming).
+    paths = [(0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]
+    tets = []
+    for i, j, k in zip(*np.nonzero(keep)):
+        for p in paths:
+            c = [0, 0, 0]
+            tet = [pid(i, j, k)]
+            for axis in p:
+                c[axis] += 1
+                tet.append(pid(i + c[0], j + c[1], k + c[2]))
+            tets.append(tet)
+    tets = np.array(tets, dtype=np.int64)
+    used = np.unique(tets)
+    renumber = -np.ones(px * py * pz, np.int64)
+    renumber[used] = np.arange(len(used))
+    tets = renumber[tets]
+    grid = np.stack(np.meshgrid(np.arange(px), np.arange(py), np.arange(pz), indexing="ij"), -1)
+    coords = (grid.transpose(2, 1, 0, 3).reshape(-1, 3) * h)[used].astype(np.float32)
+    mesh = vtkUnstructuredGrid()
+    points = vtkPoints()
+    points.SetData(numpy_to_vtk(coords, deep=True))
+    mesh.SetPoints(points)
+    cells = vtkCellArray()
+    cells.SetData(numpy_to_vtkIdTypeArray(np.arange(0, 4 * len(tets) + 1, 4), deep=True),
+                  numpy_to_vtkIdTypeArray(tets.ravel(), deep=True))
+    mesh.SetCells(VTK_TETRA, cells)
+    centre = coords[tets].mean(axis=1)
+    mu = np.column_stack([0.002 + 0.001 * (centre[:, 0] > 8), np.full(len(tets), 0.004),
+                          0.008 + 0.004 * (centre[:, 2] > 5)])
+    sigma = np.column_stack([1.0 + 0.5 * (centre[:, 1] > 8), np.full(len(tets), 1.5),
+                             2.0 + 0.5 * (centre[:, 0] > 4)])
+    eta = 1.3 + 0.1 * (centre[:, 2] > 7) + 0.05 * (centre[:, 0] > 8)
+    for name, values in (("AbsorptionCoefficient", mu), ("ReducedScatteringCoefficient", sigma),
+                         ("RefractiveIndex", eta)):
+        array = numpy_to_vtk(np.ascontiguousarray(values, dtype=float), deep=True)
+        array.SetName(name)
+        mesh.GetCellData().AddArray(array)
+    ids = vtkIdTypeArray()
+    ids.SetName("PointIds")
+    ids.SetNumberOfTuples(mesh.GetNumberOfPoints())
+    for i in range(mesh.GetNumberOfPoints()):
+        ids.SetValue(i, 1000 + 7 * i)  # growing with the serial order
+    mesh.GetPointData().AddArray(ids)
+    # Boundary triangles: faces of one tet only.
+    faces = np.sort(np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]],
+                                    tets[:, [0, 1, 2]]]), axis=1)
+    _, counts = np.unique(faces, axis=0, return_counts=True)
+    with open(path("boundary.txt"), "w") as f:
+        f.write("%d %d\n" % (int((counts == 1).sum()), len(tets)))
+
+    writer = vtkXMLUnstructuredGridWriter()
+    writer.SetInputData(mesh)
+    writer.SetFileName(path("mesh.vtu"))
+    writer.Write()
+    with_ids = mesh.NewInstance()
+    with_ids.ShallowCopy(mesh)
+    with_ids.GetPointData().SetActiveGlobalIds("PointIds")
+    writer.SetInputData(with_ids)
+    writer.SetFileName(path("meshid.vtu"))
+    writer.Write()
+    for name, source, pieces, ghosts in (("mesh1", mesh, 1, 0), ("mesh2g", mesh, 2, 1),
+                                          ("mesh3id", mesh, 3, 0)):
+        split = vtkExtractUnstructuredGridPiece()
+        split.SetInputData(source)
+        pwriter = vtkXMLPUnstructuredGridWriter()
+        pwriter.SetInputConnection(split.GetOutputPort())
+        pwriter.SetFileName(path(name + ".pvtu"))
+        pwriter.SetNumberOfPieces(pieces)
+        pwriter.SetStartPiece(0)
+        pwriter.SetEndPiece(pieces - 1)
+        pwriter.SetGhostLevel(ghosts)
+        pwriter.Write()
+
+    # (vtkExtractUnstructuredGridPiece drops the GlobalIds attribute: set it again.)
+    with open(path("mesh3id.pvtu")) as f:
+        text = f.read()
+    with open(path("mesh3id.pvtu"), "w") as f:
+        f.write(text.replace("<PPointData>", '<PPointData GlobalIds="PointIds">'))
+    for k in range(3):
+        piece_reader = vtkXMLUnstructuredGridReader()
+        piece_reader.SetFileName(path("mesh3id_%d.vtu" % k))
+        piece_reader.Update()
+        piece = piece_reader.GetOutput()
+        piece.GetPointData().SetActiveGlobalIds("PointIds")
+        writer.SetInputData(piece)
+        writer.SetFileName(path("mesh3id_%d.vtu" % k))
+        writer.Write()
+
+    source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
+    SaveData(path("ref_assign.vtu"), proxy=assign(source))
+    for lights in LIGHTS:
+        _, solved = chain(source, lights)
+        SaveData(path("ref_%s.vtu" % lights), proxy=solved)
+    print("prepared", flush=True)
+elif MODE == "run":
+    from vtkmodules.vtkParallelCore import vtkMultiProcessController
+    import translucency  # noqa: F401  (the getters of the filters)
+
+    RANK = vtkMultiProcessController.GetGlobalController().GetLocalProcessId()
+
+    def case(name, source, lights, gathered=False):
+        if gathered:
+            os.environ["TRANSLUCENCY_GATHERED_IRRADIANCE"] = "1"
+        lit, solved = chain(source, lights)
+        solved.UpdatePipeline()
+        os.environ.pop("TRANSLUCENCY_GATHERED_IRRADIANCE", None)
+        o = lit.GetClientSideObject()
+        with open(path("irr_%d.txt" % RANK), "a") as f:
+            f.write("irr %s rank %d path %s triangles %d bytes %d ms %.3f\n" % (
+                name, RANK, o.GetParallelPath(), o.GetBoundarySurfaceTriangles(),
+                o.GetBoundarySurfaceBytes(), o.GetBoundarySurfaceTime()))
+        SaveData(path(name + ".pvtu"), proxy=solved)
+
+    pvtu3 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")])
+    case("pvtu3_A", pvtu3, "A")
+    case("pvtu3_B", pvtu3, "B")
+    case("redistid_A", RedistributeDataSet(Input=XMLUnstructuredGridReader(
+        FileName=[path("meshid.vtu")])), "A")
+    case("pvtu2_B", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")]), "B")
+    case("redist_B", RedistributeDataSet(Input=XMLUnstructuredGridReader(
+        FileName=[path("mesh.vtu")])), "B")
+    case("pvtu1_B", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")]), "B")
+    case("gathered_A", pvtu3, "A", gathered=True)
+    # Assign Scattering Coefficients per piece (no ghost cells, no cell ids),
+    # and gathered (ghost cells: vtkOriginalCellIds need the gathered order).
+    for name, source in (("assign_pvtu3", pvtu3), ("assign_pvtu1", XMLPartitionedUnstructuredGridReader(
+            FileName=[path("mesh1.pvtu")])), ("assign_pvtu2", XMLPartitionedUnstructuredGridReader(
+            FileName=[path("mesh2g.pvtu")]))):
+        assigned = assign(source)
+        assigned.UpdatePipeline()
+        with open(path("irr_%d.txt" % RANK), "a") as f:
+            f.write("assign %s rank %d path %s\n" % (
+                name, RANK, assigned.GetClientSideObject().GetParallelPath().replace(" ", "-")))
+        SaveData(path(name + ".pvtu"), proxy=assigned)
+    # An invalid RefractiveIndex on rank 1 only: every rank reports rank 1's
+    # error and nobody hangs; the next run works.
+    bad = ProgrammableFilter(Input=pvtu3)
+    bad.Script = """
+from vtkmodules.vtkParallelCore import vtkMultiProcessController
+out = self.GetOutput()
+out.ShallowCopy(self.GetInput())
+if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
+    a = out.GetCellData().GetArray("RefractiveIndex")
+    b = a.NewInstance()
+    b.DeepCopy(a)
+    b.SetValue(5, -1.0)
+    out.GetCellData().AddArray(b)
+"""
+    SurfaceIrradiance(Input=bad, Shadows=1, **LIGHTS["B"]).UpdatePipeline()
+    case("after_error_B", pvtu3, "B")
+    print("run done", flush=True)
+else:
+    sys.exit("mode must be prepare or run, not " + MODE)

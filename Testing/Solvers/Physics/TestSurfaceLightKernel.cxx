@@ -1,0 +1,151 @@
+// ComputeSurfacePointIrradiance (the distributed Surface Irradiance's kernel
+// on the gathered boundary surface) equals the serial
+// ComputeProjectedIrradiance on the TetMesh's own boundary, to round-off, on
+// a box with a well (shadows matter), a heterogeneous refractive index,
+// directional, point and uniform (sampled) lights; also with the surface's
+// triangles in another order (the gather's order is not the mesh's).
+
+#include "Error.h"
+#include "LightSources.h"
+#include "SurfaceLightKernel.h"
+#include "TestMeshes.h"
+#include "TetMesh.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace
+{
+
+using namespace translucency;
+
+struct WellCase
+{
+  TetMesh Mesh;
+  std::vector<double> TetEta;
+};
+
+/// An 8 mm cube in 8^3 cells with a 4 x 4 x 4 mm well dug from its top.
+void MakeWell(WellCase& c)
+{
+  const translucency::testing::MeshData box = translucency::testing::CubeMesh(8, 8.0, 0.2, 7);
+  std::vector<int> tets;
+  for (size_t t = 0; t < box.Tets.size() / 4; ++t)
+  {
+    double centre[3] = { 0.0, 0.0, 0.0 };
+    for (int v = 0; v < 4; ++v)
+      for (int d = 0; d < 3; ++d)
+        centre[d] += 0.25 * box.Points[3 * static_cast<size_t>(box.Tets[4 * t + v]) + d];
+    if (centre[0] > 2.0 && centre[0] < 6.0 && centre[1] > 2.0 && centre[1] < 6.0 &&
+      centre[2] > 4.0)
+      continue;
+    tets.insert(tets.end(), box.Tets.begin() + 4 * t, box.Tets.begin() + 4 * t + 4);
+    c.TetEta.push_back(1.3 + 0.1 * (centre[0] > 4.0) + 0.05 * (centre[2] > 3.0));
+  }
+  c.Mesh.SetGeometry(box.Points, tets);
+}
+
+BoundarySurface SurfaceOf(const TetMesh& mesh, const std::vector<double>& tetEta, bool reversed)
+{
+  BoundarySurface s;
+  s.Points = mesh.GetPoints();
+  const int n = mesh.GetNumberOfBoundaryTriangles();
+  for (int k = 0; k < n; ++k)
+  {
+    const int f = reversed ? n - 1 - k : k;
+    for (int m = 0; m < 3; ++m)
+      s.Triangles.push_back(mesh.GetBoundaryTriangles()[3 * static_cast<size_t>(f) + m]);
+    s.TriangleEta.push_back(tetEta[mesh.GetBoundaryTriangleTets()[f]]);
+  }
+  double lo[3] = { 1e300, 1e300, 1e300 }, hi[3] = { -1e300, -1e300, -1e300 };
+  for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
+    for (int d = 0; d < 3; ++d)
+    {
+      lo[d] = std::min(lo[d], mesh.GetPoint(i)[d]);
+      hi[d] = std::max(hi[d], mesh.GetPoint(i)[d]);
+    }
+  s.Diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+    (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  return s;
+}
+
+TEST(SurfaceLightKernel, EqualsTheSerialProjectedIrradiance)
+{
+  WellCase c;
+  MakeWell(c);
+  const std::vector<LightSource> lights = { DirectionalLight({ 0.3, -0.5, -1.0 }, { 1.0, 0.5, 0.2 }),
+    PointLight({ 9.0, 4.0, 12.0 }, { 50.0, 60.0, 70.0 }) };
+  const int numPoints = c.Mesh.GetNumberOfPoints();
+  std::vector<int> all(static_cast<size_t>(numPoints));
+  std::vector<double> rotations(all.size());
+  for (int i = 0; i < numPoints; ++i)
+  {
+    all[i] = i;
+    rotations[i] = UniformSampleRotation(i);
+  }
+  for (const bool shadows : { true, false })
+  {
+    std::vector<double> serial;
+    ASSERT_TRUE(ComputeProjectedIrradiance(c.Mesh, c.TetEta, lights, 0.2, 16, shadows, serial));
+    for (const bool reversed : { false, true })
+    {
+      const BoundarySurface surface = SurfaceOf(c.Mesh, c.TetEta, reversed);
+      std::vector<double> q;
+      ASSERT_TRUE(
+        ComputeSurfacePointIrradiance(surface, all, rotations, lights, 0.2, 16, shadows, q));
+      ASSERT_EQ(q.size(), serial.size());
+      double scale = 0.0;
+      for (double v : serial)
+        scale = std::max(scale, std::abs(v));
+      ASSERT_GT(scale, 0.0);
+      for (size_t k = 0; k < q.size(); ++k)
+        EXPECT_NEAR(q[k], serial[k], 1e-13 * scale) << "value " << k << " reversed " << reversed;
+    }
+  }
+  // Shadows matter on this mesh (else the comparison above proves little).
+  std::vector<double> lit, unlit;
+  ComputeProjectedIrradiance(c.Mesh, c.TetEta, lights, 0.2, 16, true, lit);
+  ComputeProjectedIrradiance(c.Mesh, c.TetEta, lights, 0.2, 16, false, unlit);
+  int shadowed = 0;
+  for (size_t k = 0; k < lit.size(); ++k)
+    shadowed += lit[k] < unlit[k] - 1e-6 ? 1 : 0;
+  EXPECT_GT(shadowed, 30);
+}
+
+TEST(SurfaceLightKernel, SomePointsOnlyAndErrors)
+{
+  WellCase c;
+  MakeWell(c);
+  const BoundarySurface surface = SurfaceOf(c.Mesh, c.TetEta, false);
+  const std::vector<LightSource> lights = { PointLight({ 9.0, 4.0, 12.0 }, { 50.0, 60.0, 70.0 }) };
+  const int n = c.Mesh.GetNumberOfPoints();
+  std::vector<int> all, some;
+  std::vector<double> rAll, rSome;
+  for (int i = 0; i < n; ++i)
+  {
+    all.push_back(i);
+    rAll.push_back(UniformSampleRotation(i));
+    if (i % 7 == 3)
+    {
+      some.push_back(i);
+      rSome.push_back(UniformSampleRotation(i));
+    }
+  }
+  std::vector<double> qAll, qSome;
+  ASSERT_TRUE(ComputeSurfacePointIrradiance(surface, all, rAll, lights, 0.1, 8, true, qAll));
+  ASSERT_TRUE(ComputeSurfacePointIrradiance(surface, some, rSome, lights, 0.1, 8, true, qSome));
+  for (size_t k = 0; k < some.size(); ++k)
+    for (int ch = 0; ch < 3; ++ch)
+      EXPECT_EQ(qSome[3 * k + ch], qAll[3 * static_cast<size_t>(some[k]) + ch]);
+  BoundarySurface bad = surface;
+  bad.TriangleEta[5] = -1.0;
+  EXPECT_THROW(ComputeSurfacePointIrradiance(bad, some, rSome, lights, 0.1, 8, true, qSome), Error);
+  EXPECT_THROW(ComputeSurfacePointIrradiance(surface, { n }, { 0.0 }, lights, 0.1, 8, true, qSome),
+    Error);
+  EXPECT_THROW(ComputeSurfacePointIrradiance(surface, some, rSome, lights, -1.0, 8, true, qSome),
+    Error);
+}
+
+} // namespace
