@@ -118,6 +118,7 @@ struct AggregationMultigridSolver::Internals
   std::size_t CoarsestFactorNonZeros = 0;
   double VCycleFlops = 0.0; ///< multiply-adds per channel of one V-cycle
   mutable blocked::FusedPCGWorkspace Work; ///< CG vectors, kept between solves
+  SolutionRecycler Recycler; ///< earlier solutions (SetRecycledSolutions)
   /// Level-0 rows changed by row updates since the last full values set-up
   /// (1 = changed), and their count.
   std::vector<char> StaleRows;
@@ -158,6 +159,7 @@ void AggregationMultigridSolver::CheckSetup(
 
 void AggregationMultigridSolver::SetupStructure(const DiffusionSystem& system, const TetMesh* mesh)
 {
+  Internal_->Recycler.Clear();
   const auto start = Clock::now();
   BuildHierarchy(system, mesh->GetPoints());
   HierarchyMs_ = MillisecondsSince(start);
@@ -166,6 +168,7 @@ void AggregationMultigridSolver::SetupStructure(const DiffusionSystem& system, c
 
 void AggregationMultigridSolver::SetupValues(const DiffusionSystem& system, const TetMesh*)
 {
+  Internal_->Recycler.Clear();
   const auto start = Clock::now();
   ComputeValues(system);
   ValuesMs_ = MillisecondsSince(start);
@@ -175,6 +178,7 @@ void AggregationMultigridSolver::SetupValues(const DiffusionSystem& system, cons
 void AggregationMultigridSolver::SetupRows(
   const DiffusionSystem& system, const TetMesh* mesh, const std::vector<int>& rows)
 {
+  Internal_->Recycler.Clear();
   const auto start = Clock::now();
   auto& levels = Internal_->Levels;
   const int n = system.NumberOfUnknowns;
@@ -942,9 +946,27 @@ bool AggregationMultigridSolver::Solve(const DiffusionSystem& system,
   const double flops =
     static_cast<double>(system.ColumnIndices.size()) + 5.0 * n + Internal_->VCycleFlops;
   const float* single = UsesSinglePrecisionProduct() ? Internal_->Levels[0].Single.data() : nullptr;
+  // Recycled solutions only with the single-precision products (their floor).
+  SolutionRecycler* recycler =
+    single && Internal_->Recycler.GetCapacity() > 0 ? &Internal_->Recycler : nullptr;
   return FusedBlockedPCG(
     system, single, [this](const double* r, double* z) { return Precondition(r, z); }, x,
-    warmStart, RelTol_, MaxIter_, stats, flops, Progress_, Internal_->Work);
+    warmStart, RelTol_, MaxIter_, stats, flops, Progress_, Internal_->Work, recycler);
+}
+
+void AggregationMultigridSolver::SetRecycledSolutions(int k)
+{
+  Internal_->Recycler.SetCapacity(k);
+}
+
+int AggregationMultigridSolver::GetRecycledSolutions() const
+{
+  return Internal_->Recycler.GetCapacity();
+}
+
+void AggregationMultigridSolver::ClearRecycledSolutions()
+{
+  Internal_->Recycler.Clear();
 }
 
 bool AggregationMultigridSolver::UsesSinglePrecisionProduct() const
@@ -1027,6 +1049,7 @@ std::size_t AggregationMultigridSolver::GetMemoryBytes() const
   const auto& w = Internal_->Work;
   bytes += (w.R.size() + w.Z.size() + w.P.size() + w.Q.size()) * sizeof(double);
   bytes += NC * Internal_->CoarsestFactorNonZeros * (sizeof(double) + sizeof(int));
+  bytes += Internal_->Recycler.GetMemoryBytes();
   return bytes;
 }
 

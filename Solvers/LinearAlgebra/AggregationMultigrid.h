@@ -135,6 +135,16 @@ public:
   /// Distinct rows changed since the last full values set-up.
   int GetNumberOfStaleRows() const;
 
+  /// Warm solves with single-precision products (RelTol >= the single
+  /// product tolerance) start from the A-norm-best combination of the given
+  /// x and the last k solutions of the same matrices (SolutionRecycler: a
+  /// light being dragged); forgotten at every Setup. Default 0 (off), at
+  /// most SolutionRecycler::MaxCapacity.
+  void SetRecycledSolutions(int k);
+  int GetRecycledSolutions() const;
+  /// Forget the kept solutions (e.g. before timing a solve).
+  void ClearRecycledSolutions();
+
   /// One V-cycle z = B r on the three channels (interleaved, 3 values per
   /// vertex) — the preconditioner, exposed for tests. The cycle works on
   /// single-precision vectors (r and z are double).
