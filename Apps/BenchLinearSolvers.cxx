@@ -897,10 +897,6 @@ json PrintTargets(const std::vector<SolverRow>& rows, const json& entry,
   if (agg)
     table.push_back({ "warm relight, 3 channels (" + cutSolver + ")", agg->WarmMs, 28.9, 16.0,
       cg ? cg->WarmMs : -1.0, "cg-jacobi warm" });
-  if (entry.contains("drag") && entry["drag"].contains("recycled"))
-    table.push_back({ "relight during a drag, 3 recycled solutions (" + cutSolver + ")",
-      entry["drag"]["recycled"]["ms"].get<double>(), 28.9, 16.0,
-      entry["drag"]["previous_frame_only"]["ms"].get<double>(), "previous frame only" });
   const json& paint = entry["paint"];
   table.push_back({ "paint 1 % -> new fluence (paint + rows + values set-up + warm solve)",
     paint["total_ms"].get<double>(), -1.0, 33.0,
