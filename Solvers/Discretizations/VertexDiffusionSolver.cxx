@@ -180,7 +180,22 @@ bool VertexDiffusionSolver::Solve(
     {
       valuesChanged = System_.Values[c] != PreviousValues_[c];
     }
-    if (valuesChanged)
+    if (valuesChanged && incremental)
+    {
+      // Only the rows of the changed tets' vertices changed.
+      const std::vector<int>& tets = mesh.GetTets();
+      std::vector<int> rows;
+      rows.reserve(4 * changedTets.size());
+      for (const int t : changedTets)
+      {
+        for (int v = 0; v < 4; ++v)
+        {
+          rows.push_back(tets[4 * static_cast<std::size_t>(t) + v]);
+        }
+      }
+      Linear_->SetupChangedRows(System_, &mesh, rows);
+    }
+    else if (valuesChanged)
     {
       Linear_->Setup(System_, &mesh, false); // same pattern, new values
     }

@@ -30,6 +30,62 @@ int Threads(int requested)
   return requested > 0 ? requested : omp_get_max_threads();
 }
 
+/// Row i of a level's smoother data from its double values (channel c of
+/// non-zero k is v[c][k * vs]): the single-precision copy of the row
+/// (interleaved, 3 per non-zero) and the l1 diagonal 1 / sum_j |a_ij| per
+/// channel. Returns false if the row has a non-finite entry or a diagonal
+/// entry that is not positive.
+bool SmootherRow(
+  const CsrPattern& p, const double* const* v, std::size_t vs, int i, float* single, float* inverse)
+{
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+  bool ok = true;
+  for (int k = p.Offsets[i]; k < p.Offsets[i + 1]; ++k)
+  {
+    const std::size_t q = static_cast<std::size_t>(k) * vs;
+    const double a0 = v[0][q], a1 = v[1][q], a2 = v[2][q];
+    float* out = single + 3 * static_cast<std::size_t>(k);
+    out[0] = static_cast<float>(a0);
+    out[1] = static_cast<float>(a1);
+    out[2] = static_cast<float>(a2);
+    s0 += std::abs(a0);
+    s1 += std::abs(a1);
+    s2 += std::abs(a2);
+    if (p.Columns[k] == i)
+    {
+      ok = a0 > 0.0 && a1 > 0.0 && a2 > 0.0;
+    }
+  }
+  // A NaN or infinite entry makes its row's sum of |a_ij| non-finite.
+  ok = ok && std::isfinite(s0) && std::isfinite(s1) && std::isfinite(s2);
+  float* inv = inverse + 3 * static_cast<std::size_t>(i);
+  inv[0] = s0 > 0.0 ? static_cast<float>(1.0 / s0) : 0.0f;
+  inv[1] = s1 > 0.0 ? static_cast<float>(1.0 / s1) : 0.0f;
+  inv[2] = s2 > 0.0 ? static_cast<float>(1.0 / s2) : 0.0f;
+  return ok;
+}
+
+/// The error of a row that SmootherRow rejected (row `row` of level `l`).
+[[noreturn]] void ThrowNotSpd(const std::string& name, const CsrPattern& p, int l, int row,
+  const double* const* v, std::size_t vs)
+{
+  std::ostringstream os;
+  os << name << ": row " << row << " (level " << l
+     << ") has a non-finite entry or a diagonal entry that is not positive (";
+  for (int c = 0; c < NC; ++c)
+  {
+    for (int k = p.Offsets[row]; k < p.Offsets[row + 1]; ++k)
+    {
+      if (p.Columns[k] == row)
+      {
+        os << (c ? ", " : "") << "channel " << c << " diagonal " << v[c][static_cast<std::size_t>(k) * vs];
+      }
+    }
+  }
+  os << "): the matrix is not SPD";
+  throw Error(os.str());
+}
+
 } // namespace
 
 struct AggregationMultigridSolver::Internals
@@ -62,6 +118,11 @@ struct AggregationMultigridSolver::Internals
   std::size_t CoarsestFactorNonZeros = 0;
   double VCycleFlops = 0.0; ///< multiply-adds per channel of one V-cycle
   mutable blocked::FusedPCGWorkspace Work; ///< CG vectors, kept between solves
+  SolutionRecycler Recycler; ///< earlier solutions (SetRecycledSolutions)
+  /// Level-0 rows changed by row updates since the last full values set-up
+  /// (1 = changed), and their count.
+  std::vector<char> StaleRows;
+  int StaleCount = 0;
 
   // The cycle (single-precision vectors; see ApplyPreconditioner).
   struct Cycle;
@@ -98,6 +159,7 @@ void AggregationMultigridSolver::CheckSetup(
 
 void AggregationMultigridSolver::SetupStructure(const DiffusionSystem& system, const TetMesh* mesh)
 {
+  Internal_->Recycler.Clear();
   const auto start = Clock::now();
   BuildHierarchy(system, mesh->GetPoints());
   HierarchyMs_ = MillisecondsSince(start);
@@ -106,10 +168,80 @@ void AggregationMultigridSolver::SetupStructure(const DiffusionSystem& system, c
 
 void AggregationMultigridSolver::SetupValues(const DiffusionSystem& system, const TetMesh*)
 {
+  Internal_->Recycler.Clear();
   const auto start = Clock::now();
   ComputeValues(system);
   ValuesMs_ = MillisecondsSince(start);
   ++Setups_;
+}
+
+void AggregationMultigridSolver::SetupRows(
+  const DiffusionSystem& system, const TetMesh* mesh, const std::vector<int>& rows)
+{
+  Internal_->Recycler.Clear();
+  const auto start = Clock::now();
+  auto& levels = Internal_->Levels;
+  const int n = system.NumberOfUnknowns;
+  auto& stale = Internal_->StaleRows;
+  if (levels.size() < 2 || stale.size() != static_cast<std::size_t>(n))
+  {
+    SetupValues(system, mesh); // one level: the direct solve needs new values
+    return;
+  }
+  // Distinct new rows (the marker is cleared again below).
+  std::vector<int> fresh;
+  fresh.reserve(rows.size());
+  std::vector<char> seen(n, 0);
+  for (const int i : rows)
+  {
+    if (!seen[i])
+    {
+      seen[i] = 1;
+      fresh.push_back(i);
+    }
+  }
+  int newlyStale = 0;
+  for (const int i : fresh)
+  {
+    newlyStale += stale[i] ? 0 : 1;
+  }
+  if (Internal_->StaleCount + newlyStale > CoarseRefreshFraction_ * n)
+  {
+    SetupValues(system, mesh);
+    return;
+  }
+  auto& l0 = levels[0];
+  const double* v[NC] = { system.Values[0].data(), system.Values[1].data(),
+    system.Values[2].data() };
+  const int m = static_cast<int>(fresh.size());
+  long long badRow = -1;
+#pragma omp parallel for num_threads(Threads(Threads_)) schedule(static) reduction(max : badRow) if(m > ParallelThreshold)
+  for (int k = 0; k < m; ++k)
+  {
+    const int i = fresh[k];
+    if (!SmootherRow(l0.Pattern, v, 1, i, l0.Single.data(), l0.InverseL1.data()))
+    {
+      badRow = std::max<long long>(badRow, i);
+    }
+  }
+  if (badRow >= 0)
+  {
+    // The rows before the bad one are refreshed; the solver is not ready
+    // (LinearSolver::SetupChangedRows) until the next Setup.
+    ThrowNotSpd(GetName(), l0.Pattern, 0, static_cast<int>(badRow), v, 1);
+  }
+  for (const int i : fresh)
+  {
+    Internal_->StaleCount += stale[i] ? 0 : 1;
+    stale[i] = 1;
+  }
+  ValuesMs_ = MillisecondsSince(start);
+  ++RowSetups_;
+}
+
+int AggregationMultigridSolver::GetNumberOfStaleRows() const
+{
+  return Internal_->StaleCount;
 }
 
 void AggregationMultigridSolver::BuildHierarchy(
@@ -347,6 +479,8 @@ void AggregationMultigridSolver::BuildHierarchy(
 void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
 {
   auto& levels = Internal_->Levels;
+  Internal_->StaleRows.assign(system.NumberOfUnknowns, 0);
+  Internal_->StaleCount = 0;
   const int L = static_cast<int>(levels.size());
   Internal_->VCycleFlops = 0.0;
   const int degree = std::max(1, Degree_);
@@ -468,55 +602,18 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
       v[2] = v[0] + 2;
     }
     float* single = lev.Single.data();
+    float* inverse = lev.InverseL1.data();
 #pragma omp parallel for schedule(static) reduction(max : badRow) if(n > ParallelThreshold)
     for (int i = 0; i < n; ++i)
     {
-      double s0 = 0.0, s1 = 0.0, s2 = 0.0;
-      bool ok = true;
-      for (int k = p.Offsets[i]; k < p.Offsets[i + 1]; ++k)
-      {
-        const std::size_t q = static_cast<std::size_t>(k) * vs;
-        const double a0 = v[0][q], a1 = v[1][q], a2 = v[2][q];
-        float* out = single + 3 * static_cast<std::size_t>(k);
-        out[0] = static_cast<float>(a0);
-        out[1] = static_cast<float>(a1);
-        out[2] = static_cast<float>(a2);
-        s0 += std::abs(a0);
-        s1 += std::abs(a1);
-        s2 += std::abs(a2);
-        if (p.Columns[k] == i)
-        {
-          ok = a0 > 0.0 && a1 > 0.0 && a2 > 0.0;
-        }
-      }
-      // A NaN or infinite entry makes its row's sum of |a_ij| non-finite.
-      ok = ok && std::isfinite(s0) && std::isfinite(s1) && std::isfinite(s2);
-      float* inv = lev.InverseL1.data() + 3 * static_cast<std::size_t>(i);
-      inv[0] = s0 > 0.0 ? static_cast<float>(1.0 / s0) : 0.0f;
-      inv[1] = s1 > 0.0 ? static_cast<float>(1.0 / s1) : 0.0f;
-      inv[2] = s2 > 0.0 ? static_cast<float>(1.0 / s2) : 0.0f;
-      if (!ok)
+      if (!SmootherRow(p, v, vs, i, single, inverse))
       {
         badRow = std::max<long long>(badRow, i);
       }
     }
     if (badRow >= 0)
     {
-      std::ostringstream os;
-      os << GetName() << ": row " << badRow << " (level " << l
-         << ") has a non-finite entry or a diagonal entry that is not positive (";
-      for (int c = 0; c < NC; ++c)
-      {
-        for (int k = p.Offsets[badRow]; k < p.Offsets[badRow + 1]; ++k)
-        {
-          if (p.Columns[k] == badRow)
-          {
-            os << (c ? ", " : "") << "channel " << c << " diagonal " << value(k, c);
-          }
-        }
-      }
-      os << "): the matrix is not SPD";
-      throw Error(os.str());
+      ThrowNotSpd(GetName(), p, l, static_cast<int>(badRow), v, vs);
     }
     // Multiply-adds per channel of one visit: 2 * degree products with A,
     // restriction and prolongation, ~4 vector operations per Chebyshev step.
@@ -849,9 +946,27 @@ bool AggregationMultigridSolver::Solve(const DiffusionSystem& system,
   const double flops =
     static_cast<double>(system.ColumnIndices.size()) + 5.0 * n + Internal_->VCycleFlops;
   const float* single = UsesSinglePrecisionProduct() ? Internal_->Levels[0].Single.data() : nullptr;
+  // Recycled solutions only with the single-precision products (their floor).
+  SolutionRecycler* recycler =
+    single && Internal_->Recycler.GetCapacity() > 0 ? &Internal_->Recycler : nullptr;
   return FusedBlockedPCG(
     system, single, [this](const double* r, double* z) { return Precondition(r, z); }, x,
-    warmStart, RelTol_, MaxIter_, stats, flops, Progress_, Internal_->Work);
+    warmStart, RelTol_, MaxIter_, stats, flops, Progress_, Internal_->Work, recycler);
+}
+
+void AggregationMultigridSolver::SetRecycledSolutions(int k)
+{
+  Internal_->Recycler.SetCapacity(k);
+}
+
+int AggregationMultigridSolver::GetRecycledSolutions() const
+{
+  return Internal_->Recycler.GetCapacity();
+}
+
+void AggregationMultigridSolver::ClearRecycledSolutions()
+{
+  Internal_->Recycler.Clear();
 }
 
 bool AggregationMultigridSolver::UsesSinglePrecisionProduct() const
@@ -934,6 +1049,7 @@ std::size_t AggregationMultigridSolver::GetMemoryBytes() const
   const auto& w = Internal_->Work;
   bytes += (w.R.size() + w.Z.size() + w.P.size() + w.Q.size()) * sizeof(double);
   bytes += NC * Internal_->CoarsestFactorNonZeros * (sizeof(double) + sizeof(int));
+  bytes += Internal_->Recycler.GetMemoryBytes();
   return bytes;
 }
 

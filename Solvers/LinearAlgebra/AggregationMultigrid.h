@@ -118,7 +118,32 @@ public:
   double GetHierarchyMilliseconds() const { return HierarchyMs_; }
   double GetValuesMilliseconds() const { return ValuesMs_; }
   int GetNumberOfHierarchyBuilds() const { return Builds_; }
+  /// Value set-ups of every level (Setup, and row updates past the limit).
   int GetNumberOfSetups() const { return Setups_; }
+  /// Row updates (SetupChangedRows) that kept the coarse levels.
+  int GetNumberOfRowSetups() const { return RowSetups_; }
+
+  /// SetupChangedRows refreshes only the level-0 single-precision values and
+  /// l1 diagonal of the changed rows and keeps the coarse levels (their
+  /// Galerkin values then belong to the matrix of the last full set-up: the
+  /// V-cycle stays symmetric positive definite, only its quality changes),
+  /// until the distinct rows changed since the last full set-up exceed this
+  /// fraction of the unknowns; that update recomputes every level. Default
+  /// 0.1; 0: every row update is a full values set-up.
+  void SetCoarseRefreshFraction(double f) { CoarseRefreshFraction_ = f; }
+  double GetCoarseRefreshFraction() const { return CoarseRefreshFraction_; }
+  /// Distinct rows changed since the last full values set-up.
+  int GetNumberOfStaleRows() const;
+
+  /// Warm solves with single-precision products (RelTol >= the single
+  /// product tolerance) start from the A-norm-best combination of the given
+  /// x and the last k solutions of the same matrices (SolutionRecycler: a
+  /// light being dragged); forgotten at every Setup. Default 0 (off), at
+  /// most SolutionRecycler::MaxCapacity.
+  void SetRecycledSolutions(int k);
+  int GetRecycledSolutions() const;
+  /// Forget the kept solutions (e.g. before timing a solve).
+  void ClearRecycledSolutions();
 
   /// One V-cycle z = B r on the three channels (interleaved, 3 values per
   /// vertex) — the preconditioner, exposed for tests. The cycle works on
@@ -132,6 +157,9 @@ protected:
   void SetupStructure(const DiffusionSystem& system, const TetMesh* mesh) override;
   /// Recomputes the Galerkin values and the smoothers.
   void SetupValues(const DiffusionSystem& system, const TetMesh* mesh) override;
+  /// Refreshes the level-0 smoother of `rows` (SetCoarseRefreshFraction).
+  void SetupRows(
+    const DiffusionSystem& system, const TetMesh* mesh, const std::vector<int>& rows) override;
 
 private:
   /// z = B r (3n values each); returns r.z per channel (deterministic sums).
@@ -151,7 +179,8 @@ private:
   int CycleIndex_ = 2;
   int Threads_ = 0;
   double HierarchyMs_ = 0.0, ValuesMs_ = 0.0;
-  int Builds_ = 0, Setups_ = 0;
+  double CoarseRefreshFraction_ = 0.1;
+  int Builds_ = 0, Setups_ = 0, RowSetups_ = 0;
 };
 
 } // namespace translucency

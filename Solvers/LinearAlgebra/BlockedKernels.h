@@ -10,6 +10,7 @@
 #pragma once
 
 #include "DiffusionSystem.h"
+#include "SolutionRecycler.h"
 #include "LinearSolver.h"
 #include "MultiresHierarchy.h"
 #include "Error.h"
@@ -511,13 +512,17 @@ struct FusedPCGWorkspace
  * With single values CG solves the rounded system A_f x = b, so RelTol is
  * reached for A_f: use it only for tolerances well above the rounding
  * (the caller's rule). warm: start from x (else from 0; x is resized).
- * Work vectors in `w`. Returns false if aborted.
+ * Work vectors in `w`. recycler (optional): a warm start is first replaced
+ * by its projection onto span{x, kept solutions} (SolutionRecycler), and
+ * the solution is kept there after a solve that was not aborted. Returns
+ * false if aborted.
  */
 template <typename Precondition>
 inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
   Precondition precondition, std::array<Eigen::VectorXd, NC>& x, bool warm, double tol,
   int maxIter, std::array<LinearSolveStats, NC>& stats, double flopsPerIteration,
-  const std::function<bool(double)>& progress, FusedPCGWorkspace& w)
+  const std::function<bool(double)>& progress, FusedPCGWorkspace& w,
+  SolutionRecycler* recycler = nullptr)
 {
   const int n = system.NumberOfUnknowns;
   const long long n3 = 3 * static_cast<long long>(n);
@@ -590,18 +595,33 @@ inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
         }
       });
   };
-  const std::array<double, 6> start =
-    single ? initial(std::true_type()) : initial(std::false_type());
+  std::array<double, 6> start = single ? initial(std::true_type()) : initial(std::false_type());
+  double recycleSpMV = 0.0;
+  if (recycler && warm && recycler->GetSize() > 0)
+  {
+    const int k = recycler->GetSize();
+    const auto rr = recycler->Project(n, { bc[0], bc[1], bc[2] }, { x[0].data(), x[1].data(), x[2].data() }, r);
+    start[3] = rr[0];
+    start[4] = rr[1];
+    start[5] = rr[2];
+    // Two passes over x, r, b and 2k single-precision vectors (multiply-adds
+    // per channel: (k + 1)^2 + (k + 1) + 2k + 2 per vertex).
+    recycleSpMV = ((k + 1.0) * (k + 1.0) + 3.0 * k + 3.0) * n / nnz;
+  }
   std::array<bool, NC> active;
   std::array<double, NC> normB, rz{};
   const auto zero = StartChannels({ start[0], start[1], start[2] },
-    { start[3], start[4], start[5] }, tol, (warm ? 1.0 : 0.0) + 4.0 * n / nnz, normB, active,
-    stats);
+    { start[3], start[4], start[5] }, tol, (warm ? 1.0 : 0.0) + 4.0 * n / nnz + recycleSpMV,
+    normB, active, stats);
   for (int c = 0; c < NC; ++c)
   {
     if (zero[c])
     {
       x[c].setZero();
+      for (int i = 0; i < n; ++i)
+      {
+        r[3 * static_cast<long long>(i) + c] = 0.0; // b = 0, x = 0
+      }
     }
   }
   auto anyActive = [&]() { return active[0] || active[1] || active[2]; };
@@ -673,6 +693,10 @@ inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
     }
     const auto rzNew = precondition(static_cast<const double*>(r), w.Z.data());
     UpdateDirections(w.P.data(), w.Z.data(), NextBeta(active, rz, rzNew), active, n);
+  }
+  if (recycler)
+  {
+    recycler->Store(n, { bc[0], bc[1], bc[2] }, { x[0].data(), x[1].data(), x[2].data() }, r);
   }
   if (progress)
   {

@@ -1,7 +1,9 @@
 #include "LinearSolver.h"
 
 #include <cmath>
+#include <string>
 
+#include "Error.h"
 #include "LinearSolverCommon.h"
 
 namespace translucency
@@ -28,6 +30,28 @@ void LinearSolver::Setup(const DiffusionSystem& system, const TetMesh* mesh, boo
   SetupValues(system, mesh);
   Unknowns_ = system.NumberOfUnknowns;
   NonZeros_ = system.ColumnIndices.size();
+  Ready_ = true;
+}
+
+void LinearSolver::SetupChangedRows(
+  const DiffusionSystem& system, const TetMesh* mesh, const std::vector<int>& rows)
+{
+  if (!IsSetUpFor(system))
+  {
+    Setup(system, mesh, true);
+    return;
+  }
+  CheckSetup(system, mesh);
+  for (const int i : rows)
+  {
+    if (i < 0 || i >= system.NumberOfUnknowns)
+    {
+      throw Error(GetName() + ": changed row " + std::to_string(i) + " is out of range (the system has " +
+        std::to_string(system.NumberOfUnknowns) + " unknowns)");
+    }
+  }
+  Ready_ = false; // a set-up that throws leaves the solver not ready
+  SetupRows(system, mesh, rows);
   Ready_ = true;
 }
 

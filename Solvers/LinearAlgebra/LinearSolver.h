@@ -68,6 +68,20 @@ public:
   void Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged);
 
   /**
+   * Values-only Setup after a change confined to `rows` (a paint stroke):
+   * every entry of the matrices that changed since the last Setup lies in
+   * one of these rows (for a symmetric system list both i and j of a changed
+   * a_ij, e.g. every vertex of a repainted tet; duplicates are allowed).
+   * Solvers that can refresh part of their set-up do (SetupRows: multigrid-
+   * agg refreshes the level-0 smoother of these rows and keeps its coarse
+   * levels), the others run SetupValues. Without a successful Setup for a
+   * system of this size this is Setup(system, mesh, true). Throws
+   * translucency::Error for a row out of range.
+   */
+  void SetupChangedRows(const DiffusionSystem& system, const TetMesh* mesh,
+    const std::vector<int>& rows);
+
+  /**
    * Solve the three channels of `system` (the one given to Setup, with its
    * current right-hand sides). If warmStart and x[c] has the right size it is
    * the initial guess, otherwise the solve starts from zero. Returns false if
@@ -107,6 +121,13 @@ protected:
   /// The value-dependent part of Setup (numeric factorisation, coarse
   /// values); runs on every Setup. Default: nothing.
   virtual void SetupValues(const DiffusionSystem&, const TetMesh*) {}
+  /// The part of SetupChangedRows after its checks (rows in range, a Setup
+  /// for this size done). Default: SetupValues.
+  virtual void SetupRows(
+    const DiffusionSystem& system, const TetMesh* mesh, const std::vector<int>& /*rows*/)
+  {
+    SetupValues(system, mesh);
+  }
   /// Whether the last Setup succeeded for a system of this size.
   bool IsSetUpFor(const DiffusionSystem& system) const
   {

@@ -21,6 +21,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -348,6 +349,200 @@ TEST(AggregationMultigrid, WarmStartAndValuesOnlySetup)
     EXPECT_EQ(s1[c].Iterations, s2[c].Iterations);
     EXPECT_EQ((x1[c] - x2[c]).norm(), 0.0) << "channel " << c;
     EXPECT_LT(RelativeError(x1[c], paintedReference[c]), 1e-5);
+  }
+}
+
+// A paint stroke: SetupChangedRows refreshes the level-0 single-precision
+// values and l1 diagonal of the painted rows and keeps the coarse levels (the
+// unpainted Galerkin values); the preconditioner stays symmetric positive,
+// CG reaches the painted system's solution in a few more iterations at most,
+// and CG's own single-precision products use the painted values (else the
+// true residual would stall). Past the refresh fraction a row update
+// recomputes every level; bad rows are named.
+TEST(AggregationMultigrid, RowUpdateAfterPaint)
+{
+  Problem p(CubeMesh(12, 5.0, 0.3, 61), 62);
+  const auto q = RandomIrradiance(p.Mesh, 63);
+  DiscreteDivergence disc;
+  disc.Assemble(p.Mesh, p.Material, q, p.System);
+  const int n = p.System.NumberOfUnknowns;
+  auto solver = MakeSolver();
+  solver->Setup(p.System, &p.Mesh, true);
+  ASSERT_GE(solver->GetNumberOfLevels(), 3);
+  const Eigen::MatrixXd coarseBefore = Eigen::MatrixXd(solver->GetCoarseMatrix(1, 0));
+  // Paint a corner: 20x absorption, 0.3x scattering.
+  const std::vector<int>& tets = p.Mesh.GetTets();
+  OpticalProperties painted = p.Material;
+  std::vector<int> changed, rows;
+  std::vector<char> isRow(n, 0);
+  for (int t = 0; t < p.Mesh.GetNumberOfTets(); ++t)
+  {
+    const double* x0 = p.Mesh.GetPoint(tets[4 * t]);
+    if (x0[0] * x0[0] + x0[1] * x0[1] + x0[2] * x0[2] < 1.6 * 1.6)
+    {
+      changed.push_back(t);
+      for (int c = 0; c < 3; ++c)
+      {
+        painted.AbsorptionCoefficient[3 * t + c] *= 20.0;
+        painted.ReducedScatteringCoefficient[3 * t + c] *= 0.3;
+      }
+      for (int v = 0; v < 4; ++v)
+      {
+        rows.push_back(tets[4 * t + v]);
+        isRow[tets[4 * t + v]] = 1;
+      }
+    }
+  }
+  const int distinct = static_cast<int>(std::count(isRow.begin(), isRow.end(), 1));
+  ASSERT_GT(distinct, n / 100);
+  ASSERT_LT(distinct, n / 10);
+  disc.UpdateTets(p.Mesh, painted, q, changed, p.System);
+  solver->SetupChangedRows(p.System, &p.Mesh, rows);
+  EXPECT_EQ(solver->GetNumberOfRowSetups(), 1);
+  EXPECT_EQ(solver->GetNumberOfSetups(), 1);
+  EXPECT_EQ(solver->GetNumberOfStaleRows(), distinct);
+  EXPECT_EQ((Eigen::MatrixXd(solver->GetCoarseMatrix(1, 0)) - coarseBefore).norm(), 0.0);
+
+  // Symmetric positive preconditioner.
+  std::mt19937_64 rng(7);
+  Eigen::VectorXd u(3 * n), v(3 * n), bu, bv;
+  for (int k = 0; k < 3 * n; ++k)
+  {
+    u[k] = Uniform01(rng) - 0.5;
+    v[k] = Uniform01(rng) - 0.5;
+  }
+  solver->ApplyPreconditioner(u, bu);
+  solver->ApplyPreconditioner(v, bv);
+  EXPECT_NEAR(u.dot(bv), v.dot(bu), 1e-5 * (u.cwiseAbs().dot(bv.cwiseAbs())));
+  EXPECT_GT(v.dot(bv), 0.0);
+
+  // Against a fresh set-up of the painted system, at a tolerance with
+  // single-precision products (1e-4) and a tight one (1e-9).
+  auto fresh = MakeSolver();
+  fresh->Setup(p.System, &p.Mesh, true);
+  const auto reference = Cholesky(p.System);
+  for (const double tol : { 1e-4, 1e-9 })
+  {
+    solver->SetRelTol(tol);
+    fresh->SetRelTol(tol);
+    EXPECT_EQ(solver->UsesSinglePrecisionProduct(), tol >= 1e-5);
+    std::array<Eigen::VectorXd, 3> x, xf;
+    std::array<LinearSolveStats, 3> s, sf;
+    ASSERT_TRUE(solver->Solve(p.System, x, false, s));
+    ASSERT_TRUE(fresh->Solve(p.System, xf, false, sf));
+    for (int c = 0; c < 3; ++c)
+    {
+      EXPECT_TRUE(s[c].Converged) << "tol " << tol << " channel " << c;
+      EXPECT_LE(s[c].Iterations, sf[c].Iterations + 3) << "tol " << tol << " channel " << c;
+      const double trueResidual =
+        (p.System.RightHandSide[c] - p.System.Matrix(c) * x[c]).norm() /
+        p.System.RightHandSide[c].norm();
+      EXPECT_LT(trueResidual, 10 * tol) << "tol " << tol << " channel " << c;
+      EXPECT_LT(RelativeError(x[c], reference[c]), tol < 1e-8 ? 1e-6 : 1e-2)
+        << "tol " << tol << " channel " << c;
+    }
+  }
+
+  // The same rows again do not add stale rows; past the fraction (0 here)
+  // every level is recomputed and equals a fresh set-up's.
+  solver->SetupChangedRows(p.System, &p.Mesh, rows);
+  EXPECT_EQ(solver->GetNumberOfRowSetups(), 2);
+  EXPECT_EQ(solver->GetNumberOfStaleRows(), distinct);
+  solver->SetCoarseRefreshFraction(0.0);
+  solver->SetupChangedRows(p.System, &p.Mesh, { rows[0] });
+  EXPECT_EQ(solver->GetNumberOfRowSetups(), 2);
+  EXPECT_EQ(solver->GetNumberOfSetups(), 2);
+  EXPECT_EQ(solver->GetNumberOfStaleRows(), 0);
+  EXPECT_EQ((Eigen::MatrixXd(solver->GetCoarseMatrix(1, 0)) -
+              Eigen::MatrixXd(fresh->GetCoarseMatrix(1, 0)))
+              .norm(),
+    0.0);
+
+  // Bad rows: out of range, a NaN in a changed row (then the solver is not
+  // ready and the next row update is a full set-up).
+  solver->SetCoarseRefreshFraction(0.1);
+  std::string message =
+    tt::ErrorMessage([&] { solver->SetupChangedRows(p.System, &p.Mesh, { 3, n + 2 }); });
+  EXPECT_TRUE(tt::Contains(message, "changed row " + std::to_string(n + 2))) << message;
+  EXPECT_TRUE(tt::Contains(message, "out of range")) << message;
+  DiffusionSystem bad = p.System;
+  bad.Values[1][bad.RowOffsets[rows[0]]] = std::nan("");
+  message = tt::ErrorMessage([&] { solver->SetupChangedRows(bad, &p.Mesh, { rows[0] }); });
+  EXPECT_TRUE(tt::Contains(message, "row " + std::to_string(rows[0]) + " (level 0)")) << message;
+  EXPECT_TRUE(tt::Contains(message, "not SPD")) << message;
+  std::array<Eigen::VectorXd, 3> x;
+  std::array<LinearSolveStats, 3> s;
+  EXPECT_TRUE(tt::Contains(
+    tt::ErrorMessage([&] { solver->Solve(p.System, x, false, s); }), "before Setup"));
+  solver->SetupChangedRows(p.System, &p.Mesh, { rows[0] });
+  EXPECT_EQ(solver->GetNumberOfHierarchyBuilds(), 2);
+  EXPECT_EQ(solver->GetNumberOfRowSetups(), 2);
+}
+
+// Recycled solutions (a light being dragged): right-hand sides b(t) =
+// cos t b_a + sin t b_b, solved for t = 0, 0.1, 0.2 with 3 solutions kept;
+// the warm solve at t = 0.3 starts from their A-norm-best combination (the
+// exact solution lies in their span) and needs fewer iterations than a
+// solver without them on the same sequence, with the same accuracy. A
+// Setup forgets them; tight tolerances (double products) do not use them.
+TEST(AggregationMultigrid, RecycledSolutionsOnALightSweep)
+{
+  Problem p(CubeMesh(12, 5.0, 0.3, 71), 72);
+  DiffusionSystem other;
+  DiscreteDivergence().Assemble(p.Mesh, p.Material, RandomIrradiance(p.Mesh, 73), other);
+  const auto ba = p.System.RightHandSide;
+  const auto bb = other.RightHandSide;
+  auto sweep = [&](AggregationMultigridSolver& solver, double tol, std::array<Eigen::VectorXd, 3>& x,
+                 std::array<LinearSolveStats, 3>& last)
+  {
+    solver.SetRelTol(tol);
+    for (int f = 0; f < 4; ++f)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        p.System.RightHandSide[c] = std::cos(0.1 * f) * ba[c] + std::sin(0.1 * f) * bb[c];
+      }
+      ASSERT_TRUE(solver.Solve(p.System, x, f > 0, last));
+    }
+  };
+  auto recycling = MakeSolver();
+  recycling->SetRecycledSolutions(3);
+  EXPECT_EQ(recycling->GetRecycledSolutions(), 3);
+  recycling->Setup(p.System, &p.Mesh, true);
+  auto plain = MakeSolver();
+  plain->Setup(p.System, &p.Mesh, true);
+  std::array<Eigen::VectorXd, 3> x, y;
+  std::array<LinearSolveStats, 3> s, t;
+  sweep(*recycling, 1e-4, x, s);
+  sweep(*plain, 1e-4, y, t);
+  const auto reference = Cholesky(p.System);
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_TRUE(s[c].Converged);
+    EXPECT_LT(s[c].Iterations, t[c].Iterations) << "channel " << c;
+    const double trueResidual = (p.System.RightHandSide[c] - p.System.Matrix(c) * x[c]).norm() /
+      p.System.RightHandSide[c].norm();
+    EXPECT_LT(trueResidual, 1e-3) << "channel " << c;
+    EXPECT_LT(RelativeError(x[c], reference[c]), 1e-2) << "channel " << c;
+  }
+  // After a Setup the kept solutions are gone: the same warm solve as
+  // without them, iteration for iteration.
+  recycling->Setup(p.System, &p.Mesh, false);
+  plain->Setup(p.System, &p.Mesh, false);
+  std::array<Eigen::VectorXd, 3> x1 = y, y1 = y;
+  ASSERT_TRUE(recycling->Solve(p.System, x1, true, s));
+  ASSERT_TRUE(plain->Solve(p.System, y1, true, t));
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_EQ(s[c].Iterations, t[c].Iterations) << "channel " << c;
+  }
+  // Double-precision products (tolerance 1e-9): not used.
+  sweep(*recycling, 1e-9, x, s);
+  sweep(*plain, 1e-9, y, t);
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_EQ(s[c].Iterations, t[c].Iterations) << "channel " << c;
+    EXPECT_LT(RelativeError(x[c], Cholesky(p.System)[c]), 1e-6) << "channel " << c;
   }
 }
 
