@@ -324,7 +324,7 @@ void DiffuseOpticsOptions::Report(vtkSolveDiffusion* solve, nlohmann::json& j) c
 
 void AddDiffuseOpticsOptions(CLI::App* command, DiffuseOpticsOptions& options)
 {
-  const std::string group = "Diffuse optics (divergence and fem solvers)";
+  const std::string group = "Diffuse optics (divergence, fem; montecarlo but --frequency)";
   DiffuseOpticsOptions* o = &options;
   command
     ->add_option_function<std::vector<std::string>>(
@@ -338,7 +338,8 @@ void AddDiffuseOpticsOptions(CLI::App* command, DiffuseOpticsOptions& options)
       "point:x,y,z[:P]             isotropic point source at x,y,z mm\n"
       "pencil:x,y,z:dx,dy,dz[:P]   pencil beam entering at the surface\n"
       "                            point x,y,z along dx,dy,dz (Farrell\n"
-      "                            et al. 1992 equivalent source)\n"
+      "                            et al. 1992 equivalent source;\n"
+      "                            montecarlo: the refracted beam)\n"
       "P: W, one value or R,G,B (1)")
     ->type_name("SPEC")
     ->group(group);

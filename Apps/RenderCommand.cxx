@@ -31,6 +31,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,7 @@ struct RenderOptions
   bool NSquaredLaw = false;
   double GridSpacing = 0.0;
   long long Photons = 1000000;
+  double Anisotropy = 0.0; ///< Henyey-Greenstein g of montecarlo
   bool ListMaterials = false;
   const CLI::App* App = nullptr; ///< for the provenance of the JSON
   DiffuseOpticsOptions Optics;
@@ -79,6 +81,13 @@ int Render(RenderOptions& o)
   scene.InteriorSources = !o.Optics.Sources.empty();
   scene.Finish("render");
   const std::string &solverName = o.SolverName, &linearSolver = o.LinearSolver;
+  if (o.Anisotropy != 0.0 && translucency::ToLower(solverName) != "montecarlo")
+  {
+    std::ostringstream message;
+    message << "--anisotropy " << o.Anisotropy << " applies to --solver montecarlo only (the "
+            << solverName << " solver uses mu_s', in which g is already folded)";
+    throw UsageError(message.str());
+  }
   const std::string &outputPrefix = o.OutputPrefix, &pngPath = o.PngPath,
                     &slicePath = o.SlicePath, &tpsfPath = o.TpsfPath,
                     &jsonPath = o.JsonPath;
@@ -108,6 +117,7 @@ int Render(RenderOptions& o)
   solve->SetLinearSolver(linearSolver.c_str());
   solve->SetGridSpacing(o.GridSpacing);
   solve->SetNumberOfPhotons(o.Photons);
+  solve->SetAnisotropy(o.Anisotropy);
   o.Optics.Apply(solve);
   solve->Update();
   if (!messages.Errors.empty())
@@ -289,6 +299,10 @@ Command AddRenderCommand(CLI::App& app)
        WrapNames(translucency::GetNonSymmetricLinearSolverNames()) + " (the first is the default)")
     ->type_name("NAME");
   AddGridAndPhotonOptions(c, o->GridSpacing, o->Photons);
+  AddNumber(c, "--anisotropy", o->Anisotropy,
+    "Henyey-Greenstein g of montecarlo, in (-1, 1): mu_s = mu_s' / (1 - g)\n"
+    "(the material's mu_s' is kept)", "G", [](double g) { return g > -1 && g < 1; },
+    "--anisotropy must be in (-1, 1)");
   AddNumber(c, "--rel-tol", o->RelTol, "relative residual of iterative solvers", "T",
     [](double t) { return t > 0 && t < 1; }, "--rel-tol must be in (0, 1)");
   AddNumber(c, "--max-iter", o->MaxIter, "iteration limit", "N", [](double n) { return n >= 1; },

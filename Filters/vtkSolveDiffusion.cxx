@@ -3,6 +3,7 @@
 #include "AimedPencilBeam.h"
 #include "Detectors.h"
 #include "ModelRange.h"
+#include "MonteCarlo.h"
 #include "DiffusionFrontEnd.h"
 #include "DiffusionSolverFactory.h"
 #include "DiscreteDivergence.h"
@@ -84,6 +85,13 @@ struct vtkSolveDiffusion::Internals
   std::vector<translucency::Detector> Detectors;
   /// Readings of the last solve (amplitudes) and their phases (radians).
   std::vector<translucency::DetectorReading> Readings;
+  /// Monte Carlo: standard errors of Readings (continuous wave) and of the
+  /// gate readings ([gate][detector]); empty otherwise.
+  std::vector<translucency::DetectorReading> ReadingErrors;
+  /// The photons' power bookkeeping after a montecarlo solve (else unset).
+  bool HasMonteCarloBalance = false;
+  std::array<translucency::MonteCarloSolver::PowerBalance, 3> MonteCarloBalance{};
+  std::vector<std::vector<translucency::DetectorReading>> GateErrors;
   std::vector<std::array<double, 3>> FluencePhase, ExitancePhase;
   /// The model-range check's inputs last time: the mesh (its TetSizes) and
   /// the modification times of the coefficient arrays. A relight changes
@@ -456,6 +464,7 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
 int vtkSolveDiffusion::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  this->Internal->HasMonteCarloBalance = false; // set again by a montecarlo solve
   // Under MPI: the divergence and fem systems distributed over the ranks
   // (hypre), or else gather to rank 0, run this serially there, hand the
   // result back.
@@ -696,12 +705,42 @@ int vtkSolveDiffusion::RequestData(
     }
 
     const bool frequencyDomain = this->ModulationFrequency > 0.0;
+    auto* monteCarlo = dynamic_cast<translucency::MonteCarloSolver*>(&solver);
+    if (monteCarlo)
+    {
+      // Henyey-Greenstein g, interior sources, detectors and time-of-flight
+      // gates; no frequency domain, no fluence snapshots per gate.
+      monteCarlo->SetAnisotropy(this->Anisotropy);
+      monteCarlo->SetDetectors(in.Detectors);
+      monteCarlo->SetTimeGates(timeResolved ? gates : translucency::TimeGates());
+      if (frequencyDomain)
+      {
+        vtkErrorMacro(<< "the montecarlo solver has no frequency domain (ModulationFrequency "
+                      << this->ModulationFrequency
+                      << " Hz): use the divergence or fem solver, or time gates");
+        return 0;
+      }
+      if (!in.TimeSnapshots.empty())
+      {
+        vtkErrorMacro(<< "the montecarlo solver tallies the time gates at the detectors only: "
+                         "no fluence snapshots per gate (use the divergence or fem solver)");
+        return 0;
+      }
+    }
+    else if (this->Anisotropy != 0.0)
+    {
+      vtkWarningMacro(<< "Anisotropy g = " << this->Anisotropy << " is ignored by the "
+                      << entry.Name
+                      << " solver: it applies to montecarlo only (the diffusion solvers use the "
+                         "reduced scattering coefficient, in which g is already folded)");
+    }
     if ((frequencyDomain || timeResolved || !in.SolvedSources.Empty() || !in.Detectors.empty()) &&
-      !entry.Properties.UnknownsAtVertices)
+      !entry.Properties.UnknownsAtVertices && !monteCarlo)
     {
       vtkErrorMacro(<< "the " << entry.Name
                     << " solver has no interior sources, detectors, frequency domain or time "
-                       "gates: they are implemented for the divergence and fem solvers");
+                       "gates: they are implemented for the divergence, fem and (but the "
+                       "frequency domain) montecarlo solvers");
       return 0;
     }
     // The detectors read the material and the irradiance after the solve.
@@ -714,7 +753,60 @@ int vtkSolveDiffusion::RequestData(
     }
     std::vector<double> fluence;
     std::vector<double> amplitude, phase;
-    if (timeResolved)
+    // The detector readings of a time-resolved run: the time integrals of
+    // the gate averages (the continuous-wave readings when the gates cover
+    // the whole response).
+    auto integrateGates = [&in]() {
+      const double width = in.TimeResolved.Gates.GetWidth();
+      in.Readings = in.TimeResolved.Readings.front();
+      for (std::size_t k = 0; k < in.Readings.size(); ++k)
+      {
+        in.Readings[k].Fluence.fill(0.0);
+        in.Readings[k].Exitance.fill(0.0);
+        for (const auto& gate : in.TimeResolved.Readings)
+        {
+          for (int c = 0; c < 3; ++c)
+          {
+            in.Readings[k].Fluence[c] += width * gate[k].Fluence[c];
+            in.Readings[k].Exitance[c] += width * gate[k].Exitance[c];
+          }
+        }
+      }
+    };
+    in.ReadingErrors.clear();
+    in.GateErrors.clear();
+    in.HasMonteCarloBalance = false;
+    if (monteCarlo)
+    {
+      if (!frontEnd.Solve(mesh, std::move(material), std::move(irradiance), light, fluence,
+            in.Report))
+      {
+        return 0; // aborted by the user
+      }
+      in.HasMonteCarloBalance = true;
+      for (int c = 0; c < 3; ++c)
+      {
+        in.MonteCarloBalance[c] = monteCarlo->GetPowerBalance(c);
+      }
+      in.Readings = monteCarlo->GetDetectorReadings();
+      in.ReadingErrors = monteCarlo->GetDetectorStandardErrors();
+      in.TimeResolved = translucency::TimeResolvedResult();
+      if (timeResolved)
+      {
+        in.TimeResolved.Gates = gates;
+        in.TimeResolved.Readings = monteCarlo->GetGateReadings();
+        in.TimeResolved.IntegratedFluence = fluence; // all time (the photons' CW fluence)
+        in.GateErrors = monteCarlo->GetGateStandardErrors();
+        if (!in.Detectors.empty())
+        {
+          integrateGates();
+          in.ReadingErrors.clear(); // those are of the all-time readings
+        }
+      }
+      in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
+      in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
+    }
+    else if (timeResolved)
     {
       auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver);
       translucency::DiffusionProblem problem = light;
@@ -730,23 +822,7 @@ int vtkSolveDiffusion::RequestData(
       fluence = in.TimeResolved.IntegratedFluence;
       if (!in.Detectors.empty())
       {
-        // The time integrals of the gate averages (the continuous-wave
-        // readings when the gates cover the whole response).
-        const double width = in.TimeResolved.Gates.GetWidth();
-        in.Readings = in.TimeResolved.Readings.front();
-        for (std::size_t k = 0; k < in.Readings.size(); ++k)
-        {
-          in.Readings[k].Fluence.fill(0.0);
-          in.Readings[k].Exitance.fill(0.0);
-          for (const auto& gate : in.TimeResolved.Readings)
-          {
-            for (int c = 0; c < 3; ++c)
-            {
-              in.Readings[k].Fluence[c] += width * gate[k].Fluence[c];
-              in.Readings[k].Exitance[c] += width * gate[k].Exitance[c];
-            }
-          }
-        }
+        integrateGates();
         in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
         in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
       }
@@ -873,7 +949,7 @@ int vtkSolveDiffusion::RequestData(
       output->GetFieldData()->AddArray(centres);
       for (std::size_t k = 0; k < in.Detectors.size(); ++k)
       {
-        std::vector<double> tpsfFluence, tpsfExitance;
+        std::vector<double> tpsfFluence, tpsfExitance, tpsfFluenceError, tpsfExitanceError;
         for (const auto& gate : timeResult.Readings)
         {
           for (int c = 0; c < 3; ++c)
@@ -882,10 +958,24 @@ int vtkSolveDiffusion::RequestData(
             tpsfExitance.push_back(gate[k].Exitance[c]);
           }
         }
+        for (const auto& gate : in.GateErrors) // Monte Carlo only
+        {
+          for (int c = 0; c < 3; ++c)
+          {
+            tpsfFluenceError.push_back(gate[k].Fluence[c]);
+            tpsfExitanceError.push_back(gate[k].Exitance[c]);
+          }
+        }
         for (const auto& [name, values] :
           { std::make_pair("DetectorFluenceTPSF", &tpsfFluence),
-            std::make_pair("DetectorExitanceTPSF", &tpsfExitance) })
+            std::make_pair("DetectorExitanceTPSF", &tpsfExitance),
+            std::make_pair("DetectorFluenceTPSFStandardError", &tpsfFluenceError),
+            std::make_pair("DetectorExitanceTPSFStandardError", &tpsfExitanceError) })
         {
+          if (values->empty())
+          {
+            continue;
+          }
           vtkDataArray* array = vtkTranslucency::NewTripleArray(
             (std::string(name) + std::to_string(k)).c_str(), *values);
           output->GetFieldData()->AddArray(array);
@@ -926,6 +1016,20 @@ int vtkSolveDiffusion::RequestData(
       output->GetFieldData()->AddArray(radius);
       field("DetectorFluence", detectorFluence);
       field("DetectorExitance", exitance);
+      if (!in.ReadingErrors.empty()) // Monte Carlo, continuous wave
+      {
+        std::vector<double> fluenceError, exitanceError;
+        for (const auto& error : in.ReadingErrors)
+        {
+          for (int c = 0; c < 3; ++c)
+          {
+            fluenceError.push_back(error.Fluence[c]);
+            exitanceError.push_back(error.Exitance[c]);
+          }
+        }
+        field("DetectorFluenceStandardError", fluenceError);
+        field("DetectorExitanceStandardError", exitanceError);
+      }
       if (frequencyDomain)
       {
         field("DetectorFluencePhase", fluencePhase);
@@ -967,6 +1071,17 @@ bool vtkSolveDiffusion::ComputePowerBalance(
     vtkErrorMacro(<< "no power balance: no solution (update the filter first; a failed solve "
                      "leaves an empty output)");
     return false;
+  }
+  if (this->Internal->HasMonteCarloBalance)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const auto& balance = this->Internal->MonteCarloBalance[c];
+      injected[c] = balance.Injected;
+      absorbed[c] = balance.Absorbed;
+      escaped[c] = balance.Escaped;
+    }
+    return true;
   }
   auto mesh = vtkTranslucency::AcquireTetMesh(output, error);
   translucency::OpticalProperties material;
@@ -1058,6 +1173,7 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "GridSpacing: " << this->GridSpacing << "\n";
   os << indent << "NumberOfPhotons: " << this->NumberOfPhotons << "\n";
   os << indent << "Seed: " << this->Seed << "\n";
+  os << indent << "Anisotropy: " << this->Anisotropy << "\n";
   os << indent << "LinearSolver: " << this->LinearSolver << "\n";
   os << indent << "MultiLevel: " << this->MultiLevel << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";

@@ -172,6 +172,16 @@ public:
   ///@}
 
   ///@{
+  /// Monte Carlo: Henyey-Greenstein mean cosine g in (-1, 1) (default 0:
+  /// isotropic scattering with mu_s = mu_s'); mu_s = mu_s' / (1 - g), so the
+  /// reduced scattering coefficient stays the material's. The diffusion
+  /// solvers ignore it (with a warning when it is not 0): g is already
+  /// folded into mu_s'. A value outside (-1, 1) makes RequestData fail.
+  vtkSetMacro(Anisotropy, double);
+  vtkGetMacro(Anisotropy, double);
+  ///@}
+
+  ///@{
   /// Linear solver by name; "" or "default" (default "") = the chosen
   /// solver's default. Discrete divergence and FEM: a name of
   /// translucency::GetLinearSolverNames() (by default "cg-jacobi" below
@@ -303,7 +313,10 @@ public:
    * surface (P1 integrals; translucency::ComputePowerBalance). For the
    * divergence and fem solvers absorbed + escaped = injected to solver
    * tolerance; for the others the gap measures how far they are from
-   * conserving light in this discretisation. Computed on demand from the
+   * conserving light in this discretisation. After a montecarlo solve the
+   * photons' own tallies (MonteCarloSolver::GetPowerBalance: launched,
+   * absorbed and escaped weight), whose gap is the Russian roulette's
+   * zero-mean gain (a statistical error). Computed on demand from the
    * output (nothing is spent when it is not asked for). Returns false, with
    * an error, when there is no steady-state solution (never solved, failed,
    * or frequency domain).
@@ -449,6 +462,7 @@ protected:
   double GridSpacing = 0.0;
   vtkTypeInt64 NumberOfPhotons = 1000000;
   int Seed = 1;
+  double Anisotropy = 0.0;
   std::string LinearSolver;
   std::string ModelRangeWarning;
   std::string MeshResolutionNote;

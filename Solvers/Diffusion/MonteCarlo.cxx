@@ -2,6 +2,7 @@
 
 #include "Error.h"
 #include "Fresnel.h"
+#include "InteriorSources.h"
 #include "LightSources.h"
 #include "Radiance.h"
 #include "RayCaster.h"
@@ -303,8 +304,20 @@ struct LaunchLight
   std::vector<double> Q;
 };
 
-/// Where the photons of one channel start: (light, triangle) pairs with
-/// their power and its cumulative sum.
+/// A photon start inside or on the object that is not a light's triangle:
+/// an isotropic point source or a pencil beam's entry point.
+struct InteriorLaunch
+{
+  double X[3] = { 0.0, 0.0, 0.0 }; ///< mm
+  double D[3] = { 0.0, 0.0, 1.0 }; ///< unit direction inside (pencil beam)
+  int Tet = -1;
+  int Face = -1;          ///< local face of the entry triangle (pencil beam), -1 inside
+  bool Isotropic = true;  ///< point source: a uniform direction
+};
+
+/// Where the photons of one channel start: (light, triangle) pairs or
+/// interior launches (Light = -1 - index into the launches) with their
+/// power and its cumulative sum.
 struct ChannelSource
 {
   std::vector<int> Light;
@@ -331,14 +344,79 @@ struct alignas(128) BatchTally
 {
   std::vector<double> Track; ///< per tet: sum of weight x length (W mm)
   std::vector<double> Exit;  ///< per point: escaped weight (W)
+  /// Detector readings (fluence of the K detectors, then their exitance;
+  /// W/mm^2) and per gate (fluence [g K + k], then exitance [G K + g K + k];
+  /// J/mm^2, not yet divided by the gate width).
+  std::vector<double> Detector, Gate;
   MonteCarloSolver::PowerBalance Balance;
   long long Begin = 0, End = 0;
 
-  void Reset(int numTets, int numPoints)
+  void Reset(int numTets, int numPoints, std::size_t detectorItems, std::size_t gateItems)
   {
     Track.assign(numTets, 0.0);
     Exit.assign(numPoints, 0.0);
+    Detector.assign(detectorItems, 0.0);
+    Gate.assign(gateItems, 0.0);
     Balance = MonteCarloSolver::PowerBalance();
+  }
+};
+
+/// The detectors as weights on the walk's tallies (compressed rows): per tet
+/// the fluence weight U_k(t) = sum over the tet's vertices i of W_k(i) / V_i
+/// (the point fluence is the ring's track length / V_i), per boundary point
+/// the exitance weight W_k(i) / (S_i / 3), W_k the footprint's point weights.
+struct DetectorMap
+{
+  int Count = 0;
+  std::vector<int> TetOffsets, PointOffsets;
+  std::vector<std::pair<int, double>> TetWeights, PointWeights;
+
+  void Build(const TetMesh& mesh, const std::vector<DetectorFootprint>& footprints)
+  {
+    Count = static_cast<int>(footprints.size());
+    const int numTets = mesh.GetNumberOfTets(), numPoints = mesh.GetNumberOfPoints();
+    std::vector<std::vector<std::pair<int, double>>> perPoint(numPoints);
+    std::vector<std::vector<std::pair<int, double>>> tetLists(numTets);
+    const std::vector<double>& vertexVolumes = mesh.GetVertexVolumes();
+    const std::vector<double>& boundaryAreas = mesh.GetBoundaryAreas();
+    const std::vector<int>& pointTetOffsets = mesh.GetPointTetOffsets();
+    const std::vector<int>& pointTets = mesh.GetPointTets();
+    for (int k = 0; k < Count; ++k)
+    {
+      for (const auto& [i, w] : footprints[k].GetPointWeights(mesh))
+      {
+        if (boundaryAreas[i] > 0.0)
+        {
+          perPoint[i].emplace_back(k, w / (boundaryAreas[i] / 3.0));
+        }
+        if (vertexVolumes[i] > 0.0)
+        {
+          for (int j = pointTetOffsets[i]; j < pointTetOffsets[i + 1]; ++j)
+          {
+            auto& list = tetLists[pointTets[j]];
+            if (!list.empty() && list.back().first == k)
+            {
+              list.back().second += w / vertexVolumes[i];
+            }
+            else
+            {
+              list.emplace_back(k, w / vertexVolumes[i]);
+            }
+          }
+        }
+      }
+    }
+    auto compress = [](const std::vector<std::vector<std::pair<int, double>>>& lists,
+                      std::vector<int>& offsets, std::vector<std::pair<int, double>>& flat) {
+      offsets.assign(lists.size() + 1, 0);
+      for (std::size_t i = 0; i < lists.size(); ++i)
+      {
+        offsets[i + 1] = offsets[i] + static_cast<int>(lists[i].size());
+        flat.insert(flat.end(), lists[i].begin(), lists[i].end());
+      }
+    };
+    compress(tetLists, TetOffsets, TetWeights);
+    compress(perPoint, PointOffsets, PointWeights);
   }
 };
 
@@ -349,6 +427,11 @@ struct Tracer
   const WalkMesh* Walk = nullptr;
   const ChannelSource* Source = nullptr;
   const std::vector<LaunchLight>* Lights = nullptr;
+  const std::vector<InteriorLaunch>* Interior = nullptr;
+  /// Detectors (null: none) and the time gates (GateCount 0: none).
+  const DetectorMap* Detectors = nullptr;
+  double GateStart = 0.0, GateEnd = 0.0, GateWidth = 1.0; ///< ns
+  int GateCount = 0;
   const RayCaster* Caster = nullptr; ///< non-null: the uniform light is shadowed
   const std::vector<double>* Eta = nullptr; ///< per tet
   double Anisotropy = 0.0; ///< Henyey-Greenstein g
@@ -384,6 +467,26 @@ struct Tracer
       std::upper_bound(src.Cumulative.begin(), src.Cumulative.end(), target) -
       src.Cumulative.begin());
     e = std::min(e, src.Cumulative.size() - 1);
+    if (src.Light[e] < 0)
+    {
+      const InteriorLaunch& start = (*Interior)[-1 - src.Light[e]];
+      std::copy(start.X, start.X + 3, x);
+      tet = start.Tet;
+      face = start.Face;
+      if (start.Isotropic)
+      {
+        const double cosTheta = 2.0 * rng.Uniform() - 1.0, phi = 2.0 * Pi * rng.Uniform();
+        const double sinTheta = std::sqrt(std::max(0.0, 1.0 - cosTheta * cosTheta));
+        d[0] = sinTheta * std::cos(phi);
+        d[1] = sinTheta * std::sin(phi);
+        d[2] = cosTheta;
+      }
+      else
+      {
+        std::copy(start.D, start.D + 3, d);
+      }
+      return;
+    }
     const LaunchLight& light = (*Lights)[src.Light[e]];
     const int tri = src.Triangle[e];
     const int* v = &Mesh->GetBoundaryTriangles()[3 * static_cast<std::size_t>(tri)];
@@ -546,6 +649,79 @@ struct Tracer
     return false;
   }
 
+  /// The detectors' fluence over a segment of length `length` (mm) in tet
+  /// t, started at `time` (ns) with weight w0: `track` is its track-length
+  /// integral (W mm); per gate, the part of it inside the gate.
+  void TallyDetectorFluence(int t, double w0, double length, double muA, double track,
+    double time, BatchTally& tally) const
+  {
+    const DetectorMap& map = *Detectors;
+    const int first = map.TetOffsets[t], last = map.TetOffsets[t + 1];
+    for (int j = first; j < last; ++j)
+    {
+      tally.Detector[map.TetWeights[j].first] += track * map.TetWeights[j].second;
+    }
+    if (GateCount == 0)
+    {
+      return;
+    }
+    const double speed = SpeedOfLightMillimetresPerNanosecond / (*Eta)[t]; // mm/ns
+    const double end = time + length / speed;
+    if (end <= GateStart || time >= GateEnd)
+    {
+      return;
+    }
+    const int k0 = std::max(0, static_cast<int>(std::floor((time - GateStart) / GateWidth)) - 1);
+    for (int g = k0; g < GateCount; ++g)
+    {
+      const double g0 = GateStart + g * GateWidth, g1 = GateStart + (g + 1) * GateWidth;
+      if (g0 >= end)
+      {
+        break;
+      }
+      const double a = std::max(time, g0), b = std::min(end, g1);
+      if (!(b > a))
+      {
+        continue;
+      }
+      const double s1 = (a - time) * speed, s2 = (b - time) * speed;
+      const double part = muA > 0.0
+        ? w0 * (std::exp(-muA * s1) - std::exp(-muA * s2)) / muA
+        : w0 * (s2 - s1);
+      double* gate = &tally.Gate[static_cast<std::size_t>(g) * map.Count];
+      for (int j = first; j < last; ++j)
+      {
+        gate[map.TetWeights[j].first] += part * map.TetWeights[j].second;
+      }
+    }
+  }
+
+  /// The detectors' exitance of weight `w` escaping at point i at `time` (ns).
+  void TallyDetectorExit(int i, double w, double time, BatchTally& tally) const
+  {
+    const DetectorMap& map = *Detectors;
+    const int first = map.PointOffsets[i], last = map.PointOffsets[i + 1];
+    if (first == last)
+    {
+      return;
+    }
+    for (int j = first; j < last; ++j)
+    {
+      tally.Detector[map.Count + map.PointWeights[j].first] += w * map.PointWeights[j].second;
+    }
+    if (GateCount == 0 || time < GateStart || time >= GateEnd)
+    {
+      return;
+    }
+    const int g = std::clamp(
+      static_cast<int>(std::floor((time - GateStart) / GateWidth)), 0, GateCount - 1);
+    double* gate = &tally.Gate[(static_cast<std::size_t>(GateCount) + g) * map.Count];
+    for (int j = first; j < last; ++j)
+    {
+      gate[map.PointWeights[j].first] += w * map.PointWeights[j].second;
+    }
+  }
+
   /// Trace photon number `index` of this channel into the batch tally.
   void Trace(long long index, BatchTally& tally) const
   {
@@ -560,6 +736,8 @@ struct Tracer
     ++balance.Photons;
     const double threshold = RouletteThreshold * Weight;
     double tau = -std::log(rng.OpenUniform()); // optical depth to the next scattering
+    double time = 0.0; // ns since the emission (time of flight)
+    const bool detectors = Detectors && Detectors->Count > 0;
     int zeroSteps = 0;
     const int* tets = Mesh->GetTets().data();
     for (long long step = 0;; ++step)
@@ -614,16 +792,24 @@ struct Tracer
       const double length = scatters ? scatterDistance : exitDistance;
       // Continuous absorption: the weight lost on the segment is absorbed
       // there; its track-length fluence integral is that / mu_a.
+      const double w0 = w;
+      double track;
       if (muA > 0.0)
       {
         const double absorbed = -w * std::expm1(-muA * length);
-        tally.Track[t] += absorbed / muA;
+        track = absorbed / muA;
         balance.Absorbed += absorbed;
         w -= absorbed;
       }
       else
       {
-        tally.Track[t] += w * length;
+        track = w * length;
+      }
+      tally.Track[t] += track;
+      if (detectors)
+      {
+        TallyDetectorFluence(t, w0, length, muA, track, time, tally);
+        time += length * (*Eta)[t] / SpeedOfLightMillimetresPerNanosecond;
       }
       for (int a = 0; a < 3; ++a)
       {
@@ -697,7 +883,12 @@ struct Tracer
         if (a != exitFace)
         {
           const double share = sum > 0.0 ? lambda[a] / sum : 1.0 / 3.0;
-          tally.Exit[tets[4 * static_cast<std::size_t>(t) + a]] += w * share;
+          const int point = tets[4 * static_cast<std::size_t>(t) + a];
+          tally.Exit[point] += w * share;
+          if (detectors)
+          {
+            TallyDetectorExit(point, w * share, time, tally);
+          }
         }
       }
       balance.Escaped += w;
@@ -717,7 +908,6 @@ bool MonteCarloSolver::Solve(
   {
     throw Error("montecarlo: the problem needs a mesh and a material");
   }
-  RequireNoInteriorSources(problem, "montecarlo");
   const TetMesh& mesh = *problem.Mesh;
   const int numTets = mesh.GetNumberOfTets();
   const int numPoints = mesh.GetNumberOfPoints();
@@ -767,11 +957,24 @@ bool MonteCarloSolver::Solve(
         << " W/mm^2: must be finite and >= 0";
     throw Error(msg.str());
   }
-  if (problem.Lights.empty() && problem.UniformIrradiance == 0.0)
+  if (problem.Lights.empty() && problem.UniformIrradiance == 0.0 &&
+    !problem.HasInteriorSources())
   {
-    throw Error("montecarlo: the problem has no light (no Lights and UniformIrradiance 0): the "
-                "Monte Carlo reference launches its photons from the lights, not from the "
-                "Irradiance array");
+    throw Error("montecarlo: the problem has no light (no Lights, UniformIrradiance 0 and no "
+                "interior source): the Monte Carlo reference launches its photons from the "
+                "lights and sources, not from the Irradiance array");
+  }
+  const bool timed = Gates_.Count != 0;
+  if (timed)
+  {
+    try
+    {
+      Gates_.Validate();
+    }
+    catch (const Error& e)
+    {
+      throw Error(std::string("montecarlo: ") + e.what());
+    }
   }
   for (std::size_t l = 0; l < problem.Lights.size(); ++l)
   {
@@ -797,6 +1000,7 @@ bool MonteCarloSolver::Solve(
     BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
 
   std::vector<LaunchLight> lights;
+  std::vector<std::pair<std::size_t, int>> pencilTriangles; // (launch, boundary triangle)
   bool aborted = false;
   auto abortCheck = [this, &aborted]() {
     aborted = aborted || !ReportProgress(0.0);
@@ -843,8 +1047,77 @@ bool MonteCarloSolver::Solve(
     lights.push_back(std::move(light));
   }
 
+  // Interior sources: point sources placed in their tets, pencil beams at
+  // their entry points (the errors name the source).
+  std::vector<InteriorLaunch> interior;
+  std::vector<std::array<double, NumberOfChannels>> interiorPower;
+  if (problem.HasInteriorSources())
+  {
+    const Sources& all = *problem.InteriorSources;
+    Sources points;
+    for (const PointSource& point : all.GetPointSources())
+    {
+      points.AddPointSource(point);
+    }
+    try
+    {
+      all.Validate();
+      for (const PlacedSource& placed : points.Place(mesh, material))
+      {
+        InteriorLaunch start;
+        std::copy(placed.Source.Position.begin(), placed.Source.Position.end(), start.X);
+        start.Tet = placed.Tet;
+        interior.push_back(start);
+        interiorPower.push_back(placed.Source.Power);
+      }
+      const std::vector<PencilBeam>& pencils = all.GetPencilBeams();
+      const double tolerance = pencils.empty() ? 0.0 : SurfaceTolerance(mesh);
+      for (std::size_t k = 0; k < pencils.size(); ++k)
+      {
+        const PencilBeam& beam = pencils[k];
+        const std::string name =
+          beam.Label.empty() ? "pencil beam " + std::to_string(k + 1) : beam.Label;
+        const PencilEntry entry = LocatePencilEntry(mesh, material, beam, name, tolerance);
+        InteriorLaunch start;
+        std::copy(entry.Surface.Position.begin(), entry.Surface.Position.end(), start.X);
+        std::copy(entry.Refracted.begin(), entry.Refracted.end(), start.D);
+        start.Isotropic = false;
+        interior.push_back(start);
+        std::array<double, NumberOfChannels> power{};
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          power[c] = entry.Transmitted * beam.Power[c];
+        }
+        interiorPower.push_back(power);
+        pencilTriangles.push_back({ interior.size() - 1, entry.Surface.Triangle });
+      }
+    }
+    catch (const Error& e)
+    {
+      throw Error(std::string("montecarlo: ") + e.what());
+    }
+  }
+  // The detectors' footprints (the errors of ReadDetectors).
+  DetectorMap detectorMap;
+  std::vector<DetectorFootprint> footprints;
+  try
+  {
+    footprints = LocateDetectors(mesh, Detectors_);
+  }
+  catch (const Error& e)
+  {
+    throw Error(std::string("montecarlo: ") + e.what());
+  }
+  detectorMap.Build(mesh, footprints);
+
   WalkMesh walk;
   walk.Build(mesh);
+  for (const auto& [launch, triangle] : pencilTriangles)
+  {
+    const int code = walk.TriangleFace[triangle];
+    interior[launch].Tet = code >> 2;
+    interior[launch].Face = code & 3;
+  }
 
   // The shadowed uniform light launches along unoccluded directions only.
   const bool uniformShadowed =
@@ -895,6 +1168,17 @@ bool MonteCarloSolver::Solve(
           src.Triangle.push_back(f);
           src.Cumulative.push_back(total);
         }
+      }
+    }
+    for (std::size_t s = 0; s < interior.size(); ++s)
+    {
+      const double power = interiorPower[s][c];
+      if (power > 0.0)
+      {
+        total += power;
+        src.Light.push_back(-1 - static_cast<int>(s));
+        src.Triangle.push_back(-1);
+        src.Cumulative.push_back(total);
       }
     }
     src.Power = total;
@@ -954,6 +1238,26 @@ bool MonteCarloSolver::Solve(
   std::vector<double> exitance(3 * static_cast<std::size_t>(numPoints), 0.0);
   std::vector<double> exitanceError(3 * static_cast<std::size_t>(numPoints), 0.0);
   std::array<PowerBalance, NumberOfChannels> balances{};
+  const int numDetectors = detectorMap.Count;
+  const std::size_t detectorItems = 2 * static_cast<std::size_t>(numDetectors);
+  const std::size_t gateItems = timed ? detectorItems * Gates_.Count : 0;
+  std::vector<DetectorReading> readings(numDetectors), readingErrors(numDetectors);
+  std::vector<std::vector<DetectorReading>> gateReadings(
+    timed ? Gates_.Count : 0, std::vector<DetectorReading>(numDetectors));
+  std::vector<std::vector<DetectorReading>> gateErrors = gateReadings;
+  for (int k = 0; k < numDetectors; ++k)
+  {
+    readings[k].SurfacePosition = footprints[k].SurfacePosition;
+    readings[k].Area = footprints[k].Area;
+    readingErrors[k] = readings[k];
+    for (std::size_t g = 0; g < gateReadings.size(); ++g)
+    {
+      gateReadings[g][k] = readings[k];
+      gateErrors[g][k] = readings[k];
+    }
+  }
+  std::vector<double> detectorA1(detectorItems), detectorA2(detectorItems), gateA1(gateItems),
+    gateA2(gateItems);
 
   const int numBatches =
     static_cast<int>(std::min<long long>(NumberOfBatches_, numPhotons));
@@ -964,7 +1268,8 @@ bool MonteCarloSolver::Solve(
   std::vector<double> tetSum(numTets), fluenceA1(numPoints), fluenceA2(numPoints),
     exitA1(numPoints), exitA2(numPoints);
   const std::size_t tallyBytes =
-    static_cast<std::size_t>(slots) * (numTets + static_cast<std::size_t>(numPoints)) *
+    static_cast<std::size_t>(slots) *
+      (numTets + static_cast<std::size_t>(numPoints) + detectorItems + gateItems) *
       sizeof(double) +
     (tetSum.size() + 4 * static_cast<std::size_t>(numPoints)) * sizeof(double) +
     (tetFluence.size() + 4 * pointFluence.size()) * sizeof(double);
@@ -980,6 +1285,15 @@ bool MonteCarloSolver::Solve(
     tracer.Walk = &walk;
     tracer.Source = &sources[c];
     tracer.Lights = &lights;
+    tracer.Interior = &interior;
+    tracer.Detectors = numDetectors > 0 ? &detectorMap : nullptr;
+    if (timed)
+    {
+      tracer.GateStart = Gates_.Start;
+      tracer.GateEnd = Gates_.End;
+      tracer.GateWidth = Gates_.GetWidth();
+      tracer.GateCount = Gates_.Count;
+    }
     tracer.Caster = uniformShadowed ? &caster : nullptr;
     tracer.Eta = &material.RefractiveIndex;
     tracer.Anisotropy = Anisotropy_;
@@ -1001,6 +1315,10 @@ bool MonteCarloSolver::Solve(
     std::fill(fluenceA2.begin(), fluenceA2.end(), 0.0);
     std::fill(exitA1.begin(), exitA1.end(), 0.0);
     std::fill(exitA2.begin(), exitA2.end(), 0.0);
+    std::fill(detectorA1.begin(), detectorA1.end(), 0.0);
+    std::fill(detectorA2.begin(), detectorA2.end(), 0.0);
+    std::fill(gateA1.begin(), gateA1.end(), 0.0);
+    std::fill(gateA2.begin(), gateA2.end(), 0.0);
 
     for (int first = 0; first < numBatches && !stop; first += slots)
     {
@@ -1010,7 +1328,7 @@ bool MonteCarloSolver::Solve(
       for (int k = 0; k < count; ++k)
       {
         BatchTally& tally = tallies[k];
-        tally.Reset(numTets, numPoints);
+        tally.Reset(numTets, numPoints, detectorItems, gateItems);
         const long long b = first + k;
         tally.Begin = b * numPhotons / numBatches;
         tally.End = (b + 1) * numPhotons / numBatches;
@@ -1065,7 +1383,19 @@ bool MonteCarloSolver::Solve(
       }
       for (int k = 0; k < count; ++k)
       {
-        AddBalance(balances[c], tallies[k].Balance);
+        const BatchTally& tally = tallies[k];
+        const double n = static_cast<double>(tally.End - tally.Begin);
+        for (std::size_t m = 0; m < detectorItems; ++m)
+        {
+          detectorA1[m] += tally.Detector[m];
+          detectorA2[m] += tally.Detector[m] * tally.Detector[m] / n;
+        }
+        for (std::size_t m = 0; m < gateItems; ++m)
+        {
+          gateA1[m] += tally.Gate[m];
+          gateA2[m] += tally.Gate[m] * tally.Gate[m] / n;
+        }
+        AddBalance(balances[c], tally.Balance);
       }
     }
     if (stop)
@@ -1104,6 +1434,26 @@ bool MonteCarloSolver::Solve(
         exitanceError[ic] = standardError(exitA1[i], exitA2[i], s);
       }
     }
+    // Detectors: the tallies are the readings (the weights hold the
+    // measures); the gate sums become gate averages (/ width).
+    for (int k = 0; k < numDetectors; ++k)
+    {
+      const std::size_t f = k, e = numDetectors + static_cast<std::size_t>(k);
+      readings[k].Fluence[c] = detectorA1[f];
+      readings[k].Exitance[c] = detectorA1[e];
+      readingErrors[k].Fluence[c] = standardError(detectorA1[f], detectorA2[f], 1.0);
+      readingErrors[k].Exitance[c] = standardError(detectorA1[e], detectorA2[e], 1.0);
+      for (int g = 0; timed && g < Gates_.Count; ++g)
+      {
+        const double width = Gates_.GetWidth();
+        const std::size_t gf = static_cast<std::size_t>(g) * numDetectors + k;
+        const std::size_t ge = (static_cast<std::size_t>(Gates_.Count) + g) * numDetectors + k;
+        gateReadings[g][k].Fluence[c] = gateA1[gf] / width;
+        gateReadings[g][k].Exitance[c] = gateA1[ge] / width;
+        gateErrors[g][k].Fluence[c] = standardError(gateA1[gf], gateA2[gf], width);
+        gateErrors[g][k].Exitance[c] = standardError(gateA1[ge], gateA2[ge], width);
+      }
+    }
   }
   if (stop)
   {
@@ -1138,6 +1488,10 @@ bool MonteCarloSolver::Solve(
   TetFluence_ = std::move(tetFluence);
   Exitance_ = std::move(exitance);
   ExitanceError_ = std::move(exitanceError);
+  Readings_ = std::move(readings);
+  ReadingErrors_ = std::move(readingErrors);
+  GateReadings_ = std::move(gateReadings);
+  GateReadingErrors_ = std::move(gateErrors);
   PhotonsTraced_ = traced;
   ThreadsUsed_ = slots;
   Rate_ = solveMs > 0.0 ? traced / (solveMs * 1e-3) / slots : 0.0;

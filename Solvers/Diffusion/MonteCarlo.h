@@ -7,7 +7,9 @@
  */
 #pragma once
 
+#include "Detectors.h"
 #include "DiffusionSolver.h"
+#include "TimeResolved.h"
 
 #include <array>
 #include <cstddef>
@@ -22,7 +24,15 @@ namespace translucency
  * through the Fresnel-refracting boundary.
  *
  * Sources: the problem's lights (DiffusionProblem::Lights,
- * UniformIrradiance, Shadows), not its Irradiance array. The irradiance q_l
+ * UniformIrradiance, Shadows), not its Irradiance array, and its interior
+ * sources (DiffusionProblem::InteriorSources): an isotropic point source
+ * launches from its position (in the tet TetLocator finds) in a uniform
+ * direction; a pencil beam is followed as a real beam: it enters at the
+ * closest surface point of its entry point (LocatePencilEntry: within
+ * SurfaceTolerance(), direction into the object) along the Snell-refracted
+ * direction with the power (1 - R_sp) P (the specular part does not enter,
+ * as for the directional light, whose q carries F_t), not the diffusion
+ * side's equivalent point source one 1/mu_t' deep. The irradiance q_l
  * of each light alone is computed with ComputeBoundaryIrradiance() (same
  * shadows as the diffusion pipeline); the power entering through boundary
  * triangle f is S_f times the mean of q_l at its corners (q linear on f: the
@@ -31,7 +41,9 @@ namespace translucency
  * a point in it with density proportional to the linear q_l, and the
  * direction is the light's, refracted by Snell's law (uniform light: cosine
  * x F_t by rejection, visible directions only when shadowed). Each photon
- * carries P_c / N (W), P_c the injected power of channel c.
+ * carries P_c / N (W), P_c the injected power of channel c: the N photons
+ * of a channel are shared among the lights' triangles and the interior
+ * sources in proportion to their power (every photon has the same weight).
  *
  * Transport: free flights between scattering events with mu_s = sigma_s' /
  * (1 - g) (g = 0 by default: isotropic scattering with mu_s = sigma_s', the
@@ -55,6 +67,29 @@ namespace translucency
  * radiance along the normal that eq. 3's angular form implies:
  * L_n = M F_t(1) / (pi UniformTransmittance(eta)) (see Documentation/Solvers.md).
  *
+ * Detectors (SetDetectors, Detectors.h): the same read-out as the diffusion
+ * solvers' ReadDetectors applied to the Monte Carlo point tallies, i.e.
+ * the weights of LocateDetectors' footprint on the point fluence (the
+ * track-length fluence of the ring of tets around each vertex) and on the
+ * tallied boundary-point exitance above. A point detector (radius 0) thus
+ * reads the P1 interpolant of the boundary-point exitance at its surface
+ * point (photons escaping through the triangles around it, shared by
+ * barycentric weights); a fibre reads the area mean of it over its disc.
+ * The tallies are made per photon (so each detector has its standard error
+ * from the batches, like the point arrays), not from the point arrays.
+ * Exitance is what escapes (W/mm^2), with no diffusion formula in it.
+ *
+ * Time of flight (SetTimeGates): each photon carries its time t = (sum over
+ * its segments of length x eta of the tet) / c (c = 299.792458 mm/ns,
+ * SpeedOfLightMillimetresPerNanosecond; every source emits at t = 0). The
+ * escaping weight is binned by exit time, the track-length fluence by the
+ * time along each segment (split exactly at the gate boundaries, with the
+ * continuous-absorption weight), and each gate's sum is divided by the
+ * gate width: the gate average in J/(mm^2 ns) per J of pulse (a source of
+ * P W is a pulse of P J), exactly the normalisation of the diffusion TPSF
+ * (TimeResolved.h), so the sum over the gates times the width is the CW
+ * reading minus what arrives outside [T0, T1].
+ *
  * Statistics: the photons of a channel are split into B batches (default
  * 32); the standard errors come from the spread of the batch estimates.
  * Every photon has its own random stream, a function of (seed, channel,
@@ -77,7 +112,10 @@ public:
    * filled (3 per mesh point; Radiance 0 at interior points); LinearSolver
    * is "photons". Throws translucency::Error for: no mesh / material, a mesh
    * without tets, invalid material, NumberOfPhotons <= 0, no light at all
-   * (no Lights and UniformIrradiance 0), an invalid light. Returns false if
+   * (no Lights, UniformIrradiance 0 and no interior source), an invalid
+   * light, an invalid interior source (outside the object, entry point off
+   * the surface, ...: the messages of Sources::Place), an invalid detector
+   * (those of ReadDetectors) or invalid time gates (TimeGates::Validate). Returns false if
    * the progress callback asked to abort (outputs then unchanged).
    */
   bool Solve(const DiffusionProblem& problem, std::vector<double>& fluence,
@@ -138,6 +176,39 @@ public:
   int GetUniformLightSamples() const { return UniformLightSamples_; }
   ///@}
 
+  ///@{
+  /// Detectors read by the next Solve() (default none; Detectors.h).
+  void SetDetectors(const std::vector<Detector>& detectors) { Detectors_ = detectors; }
+  const std::vector<Detector>& GetDetectors() const { return Detectors_; }
+  ///@}
+
+  ///@{
+  /// Time gates of the time-of-flight tallies (Count 0, the default: none).
+  /// StepsPerGate is not used (there are no time steps).
+  void SetTimeGates(const TimeGates& gates) { Gates_ = gates; }
+  const TimeGates& GetTimeGates() const { return Gates_; }
+  ///@}
+
+  ///@{
+  /// Detector readings of the last Solve(), one per detector (all time:
+  /// the continuous-wave values, W/mm^2 per channel; Area and
+  /// SurfacePosition as ReadDetectors), and their standard errors (W/mm^2;
+  /// NaN with a single batch).
+  const std::vector<DetectorReading>& GetDetectorReadings() const { return Readings_; }
+  const std::vector<DetectorReading>& GetDetectorStandardErrors() const { return ReadingErrors_; }
+  ///@}
+
+  ///@{
+  /// Time-of-flight readings of the last Solve() with time gates:
+  /// [gate][detector], gate averages in J/(mm^2 ns) per J of pulse (the
+  /// layout of TimeResolvedResult::Readings), and their standard errors.
+  const std::vector<std::vector<DetectorReading>>& GetGateReadings() const { return GateReadings_; }
+  const std::vector<std::vector<DetectorReading>>& GetGateStandardErrors() const
+  {
+    return GateReadingErrors_;
+  }
+  ///@}
+
   /// Power bookkeeping of one channel (W), valid after Solve(). With
   /// continuous absorption, Injected + RouletteGain = Absorbed + Escaped +
   /// Lost holds to round-off; RouletteGain has mean 0.
@@ -178,7 +249,12 @@ private:
   int NumberOfThreads_ = 0;
   int UniformLightSamples_ = 32;
 
+  std::vector<Detector> Detectors_;
+  TimeGates Gates_;
+
   std::array<PowerBalance, NumberOfChannels> Balance_{};
+  std::vector<DetectorReading> Readings_, ReadingErrors_;
+  std::vector<std::vector<DetectorReading>> GateReadings_, GateReadingErrors_;
   std::vector<double> TetFluence_;
   std::vector<double> Exitance_;
   std::vector<double> ExitanceError_;

@@ -79,41 +79,17 @@ PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& m
   return balance;
 }
 
-std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
-  const OpticalProperties& material, const std::vector<Detector>& detectors,
-  const std::vector<double>& fluence, const std::vector<double>* irradiance)
+std::vector<DetectorFootprint> LocateDetectors(
+  const TetMesh& mesh, const std::vector<Detector>& detectors)
 {
-  material.Validate(mesh.GetNumberOfTets());
-  CheckPointArray(mesh, &fluence, "fluence");
-  CheckPointArray(mesh, irradiance, "irradiance");
-  std::vector<DetectorReading> readings;
+  std::vector<DetectorFootprint> footprints;
   if (detectors.empty())
   {
-    return readings;
+    return footprints;
   }
   const double tolerance = SurfaceTolerance(mesh);
   const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
   const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
-  const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
-
-  // Adds the P1 values at barycentric weights w of triangle f, times `weight`,
-  // to the reading.
-  const auto accumulate = [&](int f, const double w[3], double weight, DetectorReading& reading) {
-    const double a = Fresnel::MismatchA(material.RefractiveIndex[owners[f]]);
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      double phi = 0.0, q = 0.0;
-      for (int v = 0; v < 3; ++v)
-      {
-        const std::size_t i = 3 * static_cast<std::size_t>(triangles[3 * f + v]) + c;
-        phi += w[v] * fluence[i];
-        q += irradiance ? w[v] * (*irradiance)[i] : 0.0;
-      }
-      reading.Fluence[c] += weight * phi;
-      reading.Exitance[c] += weight * (phi - 2.0 * q) / (2.0 * a);
-    }
-  };
-
   for (std::size_t k = 0; k < detectors.size(); ++k)
   {
     const Detector& detector = detectors[k];
@@ -141,8 +117,8 @@ std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
           << tolerance << " mm (half the mean surface edge) is allowed";
       throw Error(out.str());
     }
-    DetectorReading reading;
-    reading.SurfacePosition = surface.Position;
+    DetectorFootprint footprint;
+    footprint.SurfacePosition = surface.Position;
     const double radius = detector.Radius;
     if (radius > 0.0)
     {
@@ -177,8 +153,7 @@ std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
               const Eigen::Vector3d y = p0 + u * (p1 - p0) + v * (p2 - p0);
               if ((y - s).norm() <= radius)
               {
-                const double w[3] = { 1.0 - u - v, u, v };
-                accumulate(f, w, subArea, reading);
+                footprint.Samples.push_back({ f, { 1.0 - u - v, u, v }, subArea });
                 area += subArea;
               }
             }
@@ -187,19 +162,94 @@ std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
       }
       if (area > 0.0)
       {
-        for (int c = 0; c < NumberOfChannels; ++c)
-        {
-          reading.Fluence[c] /= area;
-          reading.Exitance[c] /= area;
-        }
-        reading.Area = area;
-        readings.push_back(reading);
+        footprint.Area = area;
+        footprints.push_back(std::move(footprint));
         continue;
       }
-      reading = DetectorReading();
-      reading.SurfacePosition = surface.Position;
+      footprint.Samples.clear();
     }
-    accumulate(surface.Triangle, surface.Weights, 1.0, reading);
+    footprint.Samples.push_back(
+      { surface.Triangle, { surface.Weights[0], surface.Weights[1], surface.Weights[2] }, 1.0 });
+    footprints.push_back(std::move(footprint));
+  }
+  return footprints;
+}
+
+std::vector<std::pair<int, double>> DetectorFootprint::GetPointWeights(const TetMesh& mesh) const
+{
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const double scale = Area > 0.0 ? 1.0 / Area : 1.0;
+  std::vector<std::pair<int, double>> weights;
+  for (const Sample& sample : Samples)
+  {
+    for (int v = 0; v < 3; ++v)
+    {
+      weights.emplace_back(
+        triangles[3 * static_cast<std::size_t>(sample.Triangle) + v], sample.Weight * sample.Weights[v] * scale);
+    }
+  }
+  std::sort(weights.begin(), weights.end());
+  std::vector<std::pair<int, double>> merged;
+  for (const auto& [point, weight] : weights)
+  {
+    if (!merged.empty() && merged.back().first == point)
+    {
+      merged.back().second += weight;
+    }
+    else if (weight != 0.0)
+    {
+      merged.emplace_back(point, weight);
+    }
+  }
+  return merged;
+}
+
+std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
+  const OpticalProperties& material, const std::vector<Detector>& detectors,
+  const std::vector<double>& fluence, const std::vector<double>* irradiance)
+{
+  material.Validate(mesh.GetNumberOfTets());
+  CheckPointArray(mesh, &fluence, "fluence");
+  CheckPointArray(mesh, irradiance, "irradiance");
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
+
+  // Adds the P1 values at barycentric weights w of triangle f, times `weight`,
+  // to the reading.
+  const auto accumulate = [&](int f, const double w[3], double weight, DetectorReading& reading) {
+    const double a = Fresnel::MismatchA(material.RefractiveIndex[owners[f]]);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      double phi = 0.0, q = 0.0;
+      for (int v = 0; v < 3; ++v)
+      {
+        const std::size_t i = 3 * static_cast<std::size_t>(triangles[3 * f + v]) + c;
+        phi += w[v] * fluence[i];
+        q += irradiance ? w[v] * (*irradiance)[i] : 0.0;
+      }
+      reading.Fluence[c] += weight * phi;
+      reading.Exitance[c] += weight * (phi - 2.0 * q) / (2.0 * a);
+    }
+  };
+
+  std::vector<DetectorReading> readings;
+  for (const DetectorFootprint& footprint : LocateDetectors(mesh, detectors))
+  {
+    DetectorReading reading;
+    reading.SurfacePosition = footprint.SurfacePosition;
+    for (const DetectorFootprint::Sample& sample : footprint.Samples)
+    {
+      accumulate(sample.Triangle, sample.Weights, sample.Weight, reading);
+    }
+    if (footprint.Area > 0.0)
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        reading.Fluence[c] /= footprint.Area;
+        reading.Exitance[c] /= footprint.Area;
+      }
+      reading.Area = footprint.Area;
+    }
     readings.push_back(reading);
   }
   return readings;

@@ -8,6 +8,9 @@
 
 #include "InteriorSources.h"
 
+#include <utility>
+#include <vector>
+
 namespace translucency
 {
 
@@ -54,6 +57,35 @@ struct DetectorReading
   /// q = 0. A from the refractive index of the tet under the point.
   std::array<double, NumberOfChannels> Exitance{};
 };
+
+/**
+ * Where a detector reads: its closest surface point and the P1 samples its
+ * reading averages (ReadDetectors): reading = sum of Weight x (the P1 value
+ * at Weights in Triangle), divided by Area for a fibre. A point detector
+ * (and a fibre whose disc catches no sub-triangle) has one sample of
+ * weight 1 and Area 0.
+ */
+struct DetectorFootprint
+{
+  struct Sample
+  {
+    int Triangle = -1;   ///< boundary triangle (TetMesh numbering)
+    double Weights[3]{}; ///< barycentric weights in it
+    double Weight = 0.0; ///< mm^2 (sub-triangle area) for a fibre, 1 for a point
+  };
+  std::array<double, 3> SurfacePosition{}; ///< mm
+  double Area = 0.0;                       ///< mm^2, 0 for a point detector
+  std::vector<Sample> Samples;
+
+  /// The reading as weights of mesh-point values: reading = sum over the
+  /// pairs (point i, w_i) of w_i x value_i (sorted by point, merged; the
+  /// weights sum to 1).
+  std::vector<std::pair<int, double>> GetPointWeights(const TetMesh& mesh) const;
+};
+
+/// The footprints of the detectors (the checks and errors of ReadDetectors).
+std::vector<DetectorFootprint> LocateDetectors(
+  const TetMesh& mesh, const std::vector<Detector>& detectors);
 
 /**
  * Read detectors from a solution. `fluence` and `irradiance` (may be null:

@@ -193,6 +193,47 @@ double SurfaceTolerance(const TetMesh& mesh)
   return numTriangles > 0 ? 0.5 * sum / (3.0 * numTriangles) : 0.0;
 }
 
+PencilEntry LocatePencilEntry(const TetMesh& mesh, const OpticalProperties& material,
+  const PencilBeam& beam, const std::string& name, double tolerance)
+{
+  PencilEntry result;
+  const SurfacePoint entry = FindSurfacePoint(mesh, beam.Position.data());
+  if (entry.Distance > tolerance)
+  {
+    std::ostringstream out;
+    out << name << ": entry point " << FormatPoint(beam.Position.data()) << " is "
+        << entry.Distance << " mm from the surface (nearest surface point "
+        << FormatPoint(entry.Position.data()) << "; at most " << tolerance
+        << " mm, half the mean surface edge, is allowed)";
+    throw Error(out.str());
+  }
+  const Eigen::Vector3d d = Eigen::Map<const Eigen::Vector3d>(beam.Direction.data()).normalized();
+  const Eigen::Vector3d n = Eigen::Map<const Eigen::Vector3d>(entry.Normal.data());
+  const double cosIn = -d.dot(n); // cosine of the angle of incidence
+  if (!(cosIn > 1e-6))
+  {
+    std::ostringstream out;
+    out << name << ": direction " << FormatPoint(beam.Direction.data())
+        << " does not point into the object at " << FormatPoint(entry.Position.data())
+        << " (outward surface normal " << FormatPoint(entry.Normal.data()) << ")";
+    throw Error(out.str());
+  }
+  result.Surface = entry;
+  result.Tet = mesh.GetBoundaryTriangleTets()[entry.Triangle];
+  const double eta = material.RefractiveIndex[result.Tet];
+  // Snell's law from vacuum (index 1) into eta: the refracted direction
+  // t = r d + (r cos_i - cos_t) n with r = 1/eta, n the outward normal.
+  const double r = 1.0 / eta;
+  const double cosT = std::sqrt(std::max(0.0, 1.0 - r * r * (1.0 - cosIn * cosIn)));
+  const Eigen::Vector3d refracted = (r * d + (r * cosIn - cosT) * n).normalized();
+  for (int i = 0; i < 3; ++i)
+  {
+    result.Refracted[i] = refracted[i];
+  }
+  result.Transmitted = 1.0 - Fresnel::Reflectance(cosIn, eta);
+  return result;
+}
+
 std::vector<PlacedSource> Sources::Place(
   const TetMesh& mesh, const OpticalProperties& material) const
 {
@@ -216,36 +257,11 @@ std::vector<PlacedSource> Sources::Place(
   {
     const PencilBeam& beam = Pencils_[k];
     const std::string name = NameOf(beam.Label, "pencil beam", k);
-    const SurfacePoint entry = FindSurfacePoint(mesh, beam.Position.data());
-    if (entry.Distance > tolerance)
-    {
-      std::ostringstream out;
-      out << name << ": entry point " << FormatPoint(beam.Position.data()) << " is "
-          << entry.Distance << " mm from the surface (nearest surface point "
-          << FormatPoint(entry.Position.data()) << "; at most " << tolerance
-          << " mm, half the mean surface edge, is allowed)";
-      throw Error(out.str());
-    }
-    const Eigen::Vector3d d =
-      Eigen::Map<const Eigen::Vector3d>(beam.Direction.data()).normalized();
-    const Eigen::Vector3d n = Eigen::Map<const Eigen::Vector3d>(entry.Normal.data());
-    const double cosIn = -d.dot(n); // cosine of the angle of incidence
-    if (!(cosIn > 1e-6))
-    {
-      std::ostringstream out;
-      out << name << ": direction " << FormatPoint(beam.Direction.data())
-          << " does not point into the object at " << FormatPoint(entry.Position.data())
-          << " (outward surface normal " << FormatPoint(entry.Normal.data()) << ")";
-      throw Error(out.str());
-    }
-    const int tet = mesh.GetBoundaryTriangleTets()[entry.Triangle];
-    const double eta = material.RefractiveIndex[tet];
-    // Snell's law from vacuum (index 1) into eta: the refracted direction
-    // t = r d + (r cos_i - cos_t) n with r = 1/eta, n the outward normal.
-    const double r = 1.0 / eta;
-    const double cosT = std::sqrt(std::max(0.0, 1.0 - r * r * (1.0 - cosIn * cosIn)));
-    const Eigen::Vector3d refracted = (r * d + (r * cosIn - cosT) * n).normalized();
-    const double transmitted = 1.0 - Fresnel::Reflectance(cosIn, eta);
+    const PencilEntry pencil = LocatePencilEntry(mesh, material, beam, name, tolerance);
+    const SurfacePoint& entry = pencil.Surface;
+    const int tet = pencil.Tet;
+    const Eigen::Vector3d refracted = Eigen::Map<const Eigen::Vector3d>(pencil.Refracted.data());
+    const double transmitted = pencil.Transmitted;
     // One equivalent source per distinct depth (Farrell et al. 1992: z0 = 1/mu_t').
     bool done[NumberOfChannels] = {};
     for (int c = 0; c < NumberOfChannels; ++c)

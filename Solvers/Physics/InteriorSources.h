@@ -128,6 +128,26 @@ struct SurfacePoint
 /// triangles: O(triangles) per query). Throws if the mesh has no boundary.
 SurfacePoint FindSurfacePoint(const TetMesh& mesh, const double x[3]);
 
+/// Where a pencil beam enters (LocatePencilEntry).
+struct PencilEntry
+{
+  SurfacePoint Surface;               ///< the entry point on the tessellated surface
+  int Tet = -1;                       ///< the tet under it (owner of Surface.Triangle)
+  std::array<double, 3> Refracted{};  ///< unit direction of travel inside (Snell, from vacuum)
+  double Transmitted = 0.0;           ///< 1 - R_sp, the Fresnel transmittance at incidence
+};
+
+/**
+ * The entry of a pencil beam (Sources::Place and the Monte Carlo launch):
+ * the closest surface point of beam.Position, the refracted direction and
+ * the transmitted fraction, with the eta of the tet under the entry point.
+ * Throws translucency::Error starting with `name` when the entry point is
+ * more than `tolerance` (mm) from the surface or the direction does not
+ * point into the object.
+ */
+PencilEntry LocatePencilEntry(const TetMesh& mesh, const OpticalProperties& material,
+  const PencilBeam& beam, const std::string& name, double tolerance);
+
 /**
  * How far a point said to be on the surface (pencil beam entry, detector) may
  * lie from the tessellated surface: half the mean boundary edge length (mm).

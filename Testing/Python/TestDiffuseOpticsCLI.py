@@ -17,7 +17,7 @@ How to run (from a build tree; ctest sets the variables itself):
    farther detector; the amplitude is below the continuous-wave fluence.
 3. --light none without sources: zero fluence.
 4. Bad input (point source outside, pencil beam pointing out, detector off
-   the surface, zero frequency, malformed specs, sources with montecarlo)
+   the surface, zero frequency, malformed specs, sources with grid, montecarlo with --frequency, --anisotropy)
    exits non-zero with a message naming the option or source, and leaves an
    existing output file alone.
 
@@ -123,8 +123,14 @@ class DiffuseOpticsCLI(BoxRenderTest):
             (["--source", "laser:0,0,0"], "unknown source type 'laser'"),
             (["--source", "point:0,0,0:-1"], "the power must be finite and >= 0"),
             (["--detector", "0,0,5:-1"], "fibre radius is one number >= 0"),
-            (["--source", "point:0,0,0", "--solver", "montecarlo"],
-             "implemented for the divergence and fem solvers"),
+            (["--source", "point:0,0,0", "--solver", "montecarlo", "--frequency", "1e8"],
+             "the montecarlo solver has no frequency domain"),
+            (["--source", "point:0,0,0", "--solver", "grid"],
+             "the grid solver has no interior sources"),
+            (["--source", "point:0,0,0", "--anisotropy", "0.8"],
+             "--anisotropy 0.8 applies to --solver montecarlo only"),
+            (["--source", "point:0,0,0", "--solver", "montecarlo", "--anisotropy", "1"],
+             "--anisotropy must be in (-1, 1)"),
             (["--light", "none", "--light", "uniform"], "--light none cannot be combined"),
         ]
         for extra, message in cases:

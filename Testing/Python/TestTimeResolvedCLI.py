@@ -22,8 +22,8 @@ How to run (from a build tree; ctest sets the variables itself):
    -0.02 % of the gate's largest value, bound 2 %.
 2. Bad input (gates with T1 <= T0, N < 1, N not whole, too many gates or
    steps, non-finite or negative T0, --frequency with --time-gates, a
-   snapshot gate >= N, --steps-per-gate without --time-gates, the
-   montecarlo solver) exits non-zero with a message naming the option and
+   snapshot gate >= N, --steps-per-gate without --time-gates, a solver
+   without time gates, snapshots with montecarlo) exits non-zero with a message naming the option and
    the value, and leaves an existing output file alone.
 
 Exits non-zero on failure (unittest).
@@ -99,6 +99,39 @@ class TimeResolvedCLI(BoxRenderTest):
             self.assertGreater(snapshot.min(), -0.02 * snapshot.max() if g < 20 else 0.0, g)
         self.assertIsNone(points.GetArray("FluenceGate6"))
 
+    def test_montecarlo_tpsf(self):
+        """Monte Carlo fills the same detector outputs from its photons'
+        time of flight: the gate averages integrate to the readings, the
+        farther fibre peaks later, and the standard errors are in the
+        .vtu's field data."""
+        prefix = os.path.join(self.dir.name, "mc")
+        result = self.run_ok(["--mesh", self.mesh, "--solver", "montecarlo", "--photons", "20000",
+                              "--anisotropy", "0.5", "--source", "pencil:0,0,5:0,0,-1",
+                              "--detector", "3,0,5:1", "--detector", "6,0,5:1.5",
+                              "--time-gates", "0,2,40", "--output", prefix,
+                              "--json", prefix + ".json"])
+        self.assertIn("TPSF", result.stdout)
+        with open(prefix + ".json") as f:
+            report = json.load(f)
+        self.assertEqual(report["time_gates"]["count"], 40)
+        peaks = []
+        for detector in report["detectors"]:
+            exitance = np.array(detector["tpsf"]["exitance_j_mm2_ns"]["R"])
+            self.assertEqual(exitance.shape, (40,))
+            self.assertTrue(np.all(exitance >= 0.0))
+            self.assertGreater(exitance.max(), 0.0)
+            self.assertAlmostEqual(0.05 * exitance.sum() / detector["exitance_w_mm2"]["R"], 1.0,
+                                   places=9)
+            peaks.append(int(np.argmax(exitance)))
+        self.assertLessEqual(peaks[0], peaks[1])
+        reader = vtkXMLUnstructuredGridReader()
+        reader.SetFileName(prefix + ".vtu")
+        reader.Update()
+        fields = reader.GetOutput().GetFieldData()
+        for name in ("DetectorExitanceTPSF0", "DetectorExitanceTPSFStandardError1",
+                     "TimeGateCentres"):
+            self.assertIsNotNone(fields.GetArray(name), name)
+
     def test_bad_input(self):
         prefix = os.path.join(self.dir.name, "keep")
         with open(prefix + ".json", "w") as f:
@@ -122,8 +155,10 @@ class TimeResolvedCLI(BoxRenderTest):
             (["--time-gates", "0,1,4", "--time-snapshots", "-1"], "--time-snapshots -1: a gate is"),
             (["--steps-per-gate", "3"], "--steps-per-gate requires --time-gates"),
             (["--time-gates", "0,1,4", "--steps-per-gate", "1001"], "--steps-per-gate must be"),
-            (["--time-gates", "0,1,4", "--solver", "montecarlo"],
+            (["--time-gates", "0,1,4", "--solver", "quadgraph"],
              "no interior sources, detectors, frequency domain or time gates"),
+            (["--time-gates", "0,1,4", "--time-snapshots", "1", "--solver", "montecarlo"],
+             "no fluence snapshots per gate"),
         ]
         for extra, message in cases:
             result = self.run_cli(["--mesh", self.mesh, "--source", "point:0,0,0",
