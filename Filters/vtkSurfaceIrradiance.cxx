@@ -209,8 +209,8 @@ int vtkSurfaceIrradiance::RequestData(
     // projected to the points: the solvers' loads are triangle-integrated.
     // The extended model leaves the directional lights to the solver.
     const bool completed = translucency::ComputeProjectedIrradiance(mesh, tetEta,
-      this->CollimatedModel == COLLIMATED_EXTENDED ? translucency::NonCollimatedLights(lights)
-                                                   : lights,
+      this->CollimatedModel != COLLIMATED_SURFACE ? translucency::NonCollimatedLights(lights)
+                                                  : lights,
       uniformIrradiance, this->UniformLightSamples, this->Shadows, q,
       [this]() { return this->GetAbortExecute() != 0; });
     if (!completed)
@@ -315,5 +315,8 @@ void vtkSurfaceIrradiance::PrintSelf(ostream& os, vtkIndent indent)
      << this->InteractiveLightType << ", power " << this->InteractiveLightPower << ")\n";
   os << indent << "Shadows: " << this->Shadows << "\n";
   os << indent << "CollimatedModel: "
-     << (this->CollimatedModel == COLLIMATED_EXTENDED ? "extended" : "surface") << "\n";
+     << (this->CollimatedModel == COLLIMATED_EXTENDED_MOMENTS ? "extended-moments"
+          : this->CollimatedModel == COLLIMATED_EXTENDED   ? "extended"
+                                                           : "surface")
+     << "\n";
 }
