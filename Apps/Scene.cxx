@@ -323,7 +323,8 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   irradiance->SetUniformLightSamples(options.UniformSamples);
   irradiance->SetCollimatedModel(options.Collimated == "extended"
       ? vtkSurfaceIrradiance::COLLIMATED_EXTENDED
-      : vtkSurfaceIrradiance::COLLIMATED_SURFACE);
+      : options.Collimated == "extended-moments" ? vtkSurfaceIrradiance::COLLIMATED_EXTENDED_MOMENTS
+                                                 : vtkSurfaceIrradiance::COLLIMATED_SURFACE);
   double uniformE = 0.0;
   for (const Light& l : options.Lights)
   {

@@ -58,7 +58,7 @@ bool ExtendedCollimatedModel(vtkInformationVector* inputs)
   vtkDataArray* model =
     input ? input->GetFieldData()->GetArray("TranslucencyCollimatedModel") : nullptr;
   int extended =
-    model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) == 1.0 ? 1 : 0;
+    model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) != 0.0 ? 1 : 0;
   // A collective decision: an empty piece may carry no field data, and every
   // rank must take the same path (or the others hang in its collectives).
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
@@ -449,13 +449,15 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
   {
     problem.Shadows = shadows->GetComponent(0, 0) != 0;
   }
-  // vtkSurfaceIrradiance's CollimatedModel: 1 = extended (its Irradiance
-  // then leaves the directional lights out).
+  // vtkSurfaceIrradiance's CollimatedModel: 1 = extended, 2 = extended with
+  // the Fresnel-moment boundary (its Irradiance then leaves the directional
+  // lights out).
   if (vtkDataArray* model = fd->GetArray("TranslucencyCollimatedModel"))
   {
-    problem.Collimated = model->GetComponent(0, 0) == 1.0
-      ? translucency::CollimatedModel::Extended
-      : translucency::CollimatedModel::Surface;
+    const double value = model->GetComponent(0, 0);
+    problem.Collimated = value == 1.0 ? translucency::CollimatedModel::Extended
+      : value == 2.0                  ? translucency::CollimatedModel::ExtendedMoments
+                                      : translucency::CollimatedModel::Surface;
   }
 }
 }
@@ -894,8 +896,11 @@ int vtkSolveDiffusion::RequestData(
         {
           diffuse[k] -= in.Report.CollimatedFluence[k];
         }
-        in.Readings = translucency::ReadDetectors(
-          *mesh, detectorMaterial, in.Detectors, diffuse, &detectorIrradiance);
+        in.Readings = translucency::ReadDetectors(*mesh, detectorMaterial, in.Detectors, diffuse,
+          &detectorIrradiance,
+          light.Collimated == translucency::CollimatedModel::ExtendedMoments
+            ? translucency::Fresnel::BoundaryRule::Moments
+            : translucency::Fresnel::BoundaryRule::Fit);
         in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
         in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
       }

@@ -230,7 +230,7 @@ int vtkSurfaceIrradiance::RequestData(
   std::string error;
   std::vector<double> q;
   const std::vector<translucency::LightSource>& computed =
-    this->CollimatedModel == COLLIMATED_EXTENDED ? translucency::NonCollimatedLights(lights)
+    this->CollimatedModel != COLLIMATED_SURFACE ? translucency::NonCollimatedLights(lights)
                                                  : lights;
   if (distributed)
   {
@@ -395,5 +395,8 @@ void vtkSurfaceIrradiance::PrintSelf(ostream& os, vtkIndent indent)
      << this->InteractiveLightType << ", power " << this->InteractiveLightPower << ")\n";
   os << indent << "Shadows: " << this->Shadows << "\n";
   os << indent << "CollimatedModel: "
-     << (this->CollimatedModel == COLLIMATED_EXTENDED ? "extended" : "surface") << "\n";
+     << (this->CollimatedModel == COLLIMATED_EXTENDED_MOMENTS ? "extended-moments"
+          : this->CollimatedModel == COLLIMATED_EXTENDED   ? "extended"
+                                                           : "surface")
+     << "\n";
 }

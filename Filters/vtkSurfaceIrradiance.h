@@ -149,8 +149,11 @@ public:
   /// How the directional (collimated) lights enter the diffusion model.
   enum CollimatedModels
   {
-    COLLIMATED_SURFACE = 0, ///< as boundary irradiance q (the default)
-    COLLIMATED_EXTENDED = 1 ///< as a volume source (translucency::ComputeCollimatedSource)
+    COLLIMATED_SURFACE = 0,  ///< as boundary irradiance q (the default)
+    COLLIMATED_EXTENDED = 1, ///< as a volume source (translucency::ComputeCollimatedSource)
+    /// as COLLIMATED_EXTENDED, with the Robin condition from the Fresnel
+    /// moments (translucency::CollimatedModel::ExtendedMoments)
+    COLLIMATED_EXTENDED_MOMENTS = 2
   };
 
   ///@{
@@ -161,9 +164,11 @@ public:
    * model (`TranslucencyCollimatedModel` = 1), so that vtkSolveDiffusion
    * (divergence, fem) adds the unscattered beam and its volume source
    * (Documentation/DiffuseOptics.md, "Collimated beams: the extended
-   * source").
+   * source"). COLLIMATED_EXTENDED_MOMENTS (= 2 in the field data): the
+   * same, and the solve's Robin condition takes A and Fdr from the Fresnel
+   * moments (closer to Monte Carlo; DiffuseOptics.md).
    */
-  vtkSetClampMacro(CollimatedModel, int, COLLIMATED_SURFACE, COLLIMATED_EXTENDED);
+  vtkSetClampMacro(CollimatedModel, int, COLLIMATED_SURFACE, COLLIMATED_EXTENDED_MOMENTS);
   vtkGetMacro(CollimatedModel, int);
   ///@}
 

@@ -51,8 +51,9 @@ struct DiffusionProblem
   /// volume source of ComputeCollimatedSource() from Lights, and Irradiance
   /// must not include them (vtkSurfaceIrradiance's CollimatedModel). Only
   /// the vertex discretisations (divergence, fem, continuous wave)
-  /// implement Extended; quadgraph and grid throw, Monte Carlo (transport,
-  /// not diffusion) ignores it.
+  /// implement Extended and ExtendedMoments (which also switches their
+  /// Robin condition to Fresnel::BoundaryRule::Moments); quadgraph and grid
+  /// throw, Monte Carlo (transport, not diffusion) ignores it.
   CollimatedModel Collimated = CollimatedModel::Surface;
 
   bool HasInteriorSources() const { return InteriorSources && !InteriorSources->Empty(); }
@@ -62,7 +63,7 @@ struct DiffusionProblem
 /// extended collimated-source model (for the solvers without it).
 inline void RequireSurfaceCollimatedModel(const DiffusionProblem& problem, const std::string& solver)
 {
-  if (problem.Collimated == CollimatedModel::Extended)
+  if (IsExtendedCollimatedModel(problem.Collimated))
   {
     throw Error(solver +
       ": the extended collimated-source model is implemented for the \"divergence\" and "

@@ -57,9 +57,10 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
       const int i = boundaryPoints[k];
       // Area-weighted eta of the boundary triangles around i (the material
       // was checked in AssembleVertexSystem).
-      const double eta = BoundaryPointRefractiveIndexAt(mesh, tetEta, k);
-      const double fdr = Fresnel::DiffuseReflectance(eta);
-      const double a = Fresnel::MismatchA(eta);
+      const Fresnel::RobinCoefficients robinCoefficients = Fresnel::BoundaryCoefficients(
+        BoundaryPointRefractiveIndexAt(mesh, tetEta, k), BoundaryRule_);
+      const double fdr = robinCoefficients.Fdr;
+      const double a = robinCoefficients.A;
       const double s = boundaryArea[i];
       for (int c = 0; c < NumberOfChannels; ++c)
       {
@@ -222,9 +223,10 @@ bool DiscreteDivergence::UpdateTets(const TetMesh& mesh,
     }
     const size_t k = static_cast<size_t>(
       std::lower_bound(boundaryPoints.begin(), boundaryPoints.end(), i) - boundaryPoints.begin());
-    const double eta = BoundaryPointRefractiveIndexAt(mesh, tetEta, k);
-    const double fdr = Fresnel::DiffuseReflectance(eta);
-    const double a = Fresnel::MismatchA(eta);
+    const Fresnel::RobinCoefficients robinCoefficients =
+      Fresnel::BoundaryCoefficients(BoundaryPointRefractiveIndexAt(mesh, tetEta, k), BoundaryRule_);
+    const double fdr = robinCoefficients.Fdr;
+    const double a = robinCoefficients.A;
     const double s = boundaryArea[i];
     for (int c = 0; c < NumberOfChannels; ++c)
     {

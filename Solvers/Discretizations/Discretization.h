@@ -7,6 +7,7 @@
 #pragma once
 
 #include "DiffusionSystem.h"
+#include "Fresnel.h"
 
 #include <array>
 #include <string>
@@ -63,11 +64,23 @@ public:
     return false;
   }
 
+  /**
+   * The coefficients A and Fdr of the Robin condition that Assemble() and
+   * UpdateTets() use (Fresnel::BoundaryRule; default Fit, TransCut eq. 2).
+   * Discretisations without the choice keep Fit and ignore it
+   * (VertexDiffusionSolver sets it from DiffusionProblem::Collimated).
+   */
+  void SetBoundaryRule(Fresnel::BoundaryRule rule) { BoundaryRule_ = rule; }
+  Fresnel::BoundaryRule GetBoundaryRule() const { return BoundaryRule_; }
+
   /// Map the per-channel solutions to fluence phi, 3 values per mesh point
   /// (W/mm^2).
   virtual void ToPointFluence(const TetMesh& mesh, const DiffusionSystem& system,
     const std::array<Eigen::VectorXd, NumberOfChannels>& solution,
     std::vector<double>& fluence) const = 0;
+
+protected:
+  Fresnel::BoundaryRule BoundaryRule_ = Fresnel::BoundaryRule::Fit;
 };
 
 } // namespace translucency

@@ -93,9 +93,10 @@ void FiniteElement::Assemble(const TetMesh& mesh,
     {
       return;
     }
-    const double eta = tetEta[t];
-    const double fdr = Fresnel::DiffuseReflectance(eta);
-    const double a = Fresnel::MismatchA(eta);
+    const Fresnel::RobinCoefficients robinCoefficients =
+      Fresnel::BoundaryCoefficients(tetEta[t], BoundaryRule_);
+    const double fdr = robinCoefficients.Fdr;
+    const double a = robinCoefficients.A;
     for (; f >= 0; f = next[f])
     {
       const int* tri = triangles + 3 * static_cast<size_t>(f);

@@ -141,7 +141,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     throw Error(GetName() + ": the problem needs a mesh, a material and an irradiance");
   }
   gates.Validate();
-  if (problem.Collimated == CollimatedModel::Extended)
+  if (IsExtendedCollimatedModel(problem.Collimated))
   {
     throw Error(GetName() +
       ": the extended collimated-source model is not implemented in the time domain "
@@ -189,6 +189,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     sourceLoad = problem.InteriorSources->ComputeLoad(mesh, material);
   }
   DiffusionSystem system; // K and b of the continuous-wave solve
+  Discretization_->SetBoundaryRule(Fresnel::BoundaryRule::Fit); // surface model only
   Discretization_->Assemble(mesh, material, irradiance, system);
   if (!sourceLoad.empty())
   {

@@ -101,7 +101,14 @@ bool VertexDiffusionSolver::Solve(
   // Interior sources: their load, computed first (a source outside the
   // object is an error before any work).
   // The extended collimated model adds its volume source to the same load.
-  const bool extended = problem.Collimated == CollimatedModel::Extended;
+  const bool extended = IsExtendedCollimatedModel(problem.Collimated);
+  // The Robin coefficients of this problem (the moment rule with
+  // ExtendedMoments): a change of rule changes every boundary row.
+  const Fresnel::BoundaryRule rule = problem.Collimated == CollimatedModel::ExtendedMoments
+    ? Fresnel::BoundaryRule::Moments
+    : Fresnel::BoundaryRule::Fit;
+  const bool sameRule = rule == Discretization_->GetBoundaryRule();
+  Discretization_->SetBoundaryRule(rule);
   const bool hasSources = problem.HasInteriorSources() || extended;
   std::vector<double> sourceLoad;
   if (problem.HasInteriorSources())
@@ -137,7 +144,7 @@ bool VertexDiffusionSolver::Solve(
     LastTets_ == mesh.GetNumberOfTets() && LastRevision_ == mesh.GetGeometryRevision();
   // The incremental update rebuilds right-hand-side rows from q only: not
   // with interior sources in this or the last system.
-  const bool incremental = requested && sameGeometry && LinearReady_ && !hasSources &&
+  const bool incremental = requested && sameGeometry && sameRule && LinearReady_ && !hasSources &&
     !SystemHasSources_ &&
     Discretization_->UpdateTets(mesh, *problem.Material, *problem.Irradiance, changedTets, System_);
   if (!incremental)
@@ -268,7 +275,7 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   report.LinearSolver = "cocg-jacobi";
   report.Assembly = "full";
 
-  if (problem.Collimated == CollimatedModel::Extended)
+  if (IsExtendedCollimatedModel(problem.Collimated))
   {
     throw Error(GetName() +
       ": the extended collimated-source model is not implemented in the frequency domain "
@@ -281,6 +288,9 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
     sourceLoad = problem.InteriorSources->ComputeLoad(mesh, material);
   }
   DiffusionSystem system;
+  // The surface model only (checked above): the fit's Robin coefficients,
+  // whatever the last continuous-wave solve used.
+  Discretization_->SetBoundaryRule(Fresnel::BoundaryRule::Fit);
   Discretization_->Assemble(mesh, material, *problem.Irradiance, system);
   if (!sourceLoad.empty())
   {

@@ -32,9 +32,20 @@ class TetMesh;
 /// How a directional (collimated) light enters the diffusion model.
 enum class CollimatedModel
 {
-  Surface, ///< as boundary irradiance q (TransCut eq. 2), the default
-  Extended ///< as the volume source mu_s' E_c (CollimatedSource.h)
+  Surface,  ///< as boundary irradiance q (TransCut eq. 2), the default
+  Extended, ///< as the volume source mu_s' E_c (CollimatedSource.h)
+  /// Extended, with the Robin condition of every boundary term of the solve
+  /// from the Fresnel moments (Fresnel::BoundaryRule::Moments) instead of
+  /// the fit: the consistent P1 (Marshak) condition. DiffuseOptics.md has
+  /// the derivation and the gain against Monte Carlo.
+  ExtendedMoments
 };
+
+/// True for the models with the volume source (Extended, ExtendedMoments).
+inline bool IsExtendedCollimatedModel(CollimatedModel model)
+{
+  return model != CollimatedModel::Surface;
+}
 
 /// The unscattered beam of the directional lights and its source terms.
 struct CollimatedSource

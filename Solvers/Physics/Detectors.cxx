@@ -28,10 +28,24 @@ void CheckPointArray(const TetMesh& mesh, const std::vector<double>* values, con
   }
 }
 
+/// The exitance of the Robin condition: (phi - 2 q) / (2 A) with the fit
+/// (as always), q + (phi - 4 q / (1 - Fdr)) / (2 A) in general (equal when
+/// A = (1 + Fdr) / (1 - Fdr)).
+double Exitance(double phi, double q, const Fresnel::RobinCoefficients& robin,
+  Fresnel::BoundaryRule rule)
+{
+  if (rule == Fresnel::BoundaryRule::Fit)
+  {
+    return (phi - 2.0 * q) / (2.0 * robin.A);
+  }
+  return q + (phi - 4.0 * q / (1.0 - robin.Fdr)) / (2.0 * robin.A);
+}
+
 } // namespace
 
 PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<double>& fluence, const std::vector<double>* irradiance)
+  const std::vector<double>& fluence, const std::vector<double>* irradiance,
+  Fresnel::BoundaryRule rule)
 {
   const int numTets = mesh.GetNumberOfTets();
   material.Validate(numTets);
@@ -60,7 +74,9 @@ PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& m
   const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
   for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
   {
-    const double a = Fresnel::MismatchA(material.RefractiveIndex[owners[f]]);
+    const Fresnel::RobinCoefficients robin =
+      Fresnel::BoundaryCoefficients(material.RefractiveIndex[owners[f]], rule);
+    const double a = robin.A;
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       double phi = 0.0, q = 0.0;
@@ -72,7 +88,7 @@ PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& m
       }
       phi *= areas[f] / 3.0;
       q *= areas[f] / 3.0;
-      balance.Escaped[c] += (phi - 2.0 * q) / (2.0 * a);
+      balance.Escaped[c] += Exitance(phi, q, robin, rule);
       balance.BoundaryInjected[c] += q;
     }
   }
@@ -206,7 +222,8 @@ std::vector<std::pair<int, double>> DetectorFootprint::GetPointWeights(const Tet
 
 std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
   const OpticalProperties& material, const std::vector<Detector>& detectors,
-  const std::vector<double>& fluence, const std::vector<double>* irradiance)
+  const std::vector<double>& fluence, const std::vector<double>* irradiance,
+  Fresnel::BoundaryRule rule)
 {
   material.Validate(mesh.GetNumberOfTets());
   CheckPointArray(mesh, &fluence, "fluence");
@@ -217,7 +234,8 @@ std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
   // Adds the P1 values at barycentric weights w of triangle f, times `weight`,
   // to the reading.
   const auto accumulate = [&](int f, const double w[3], double weight, DetectorReading& reading) {
-    const double a = Fresnel::MismatchA(material.RefractiveIndex[owners[f]]);
+    const Fresnel::RobinCoefficients robin =
+      Fresnel::BoundaryCoefficients(material.RefractiveIndex[owners[f]], rule);
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       double phi = 0.0, q = 0.0;
@@ -228,7 +246,7 @@ std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
         q += irradiance ? w[v] * (*irradiance)[i] : 0.0;
       }
       reading.Fluence[c] += weight * phi;
-      reading.Exitance[c] += weight * (phi - 2.0 * q) / (2.0 * a);
+      reading.Exitance[c] += weight * Exitance(phi, q, robin, rule);
     }
   };
 

@@ -6,6 +6,7 @@
  */
 #pragma once
 
+#include "Fresnel.h"
 #include "InteriorSources.h"
 
 #include <utility>
@@ -33,8 +34,17 @@ struct PowerBalance
   std::array<double, NumberOfChannels> Escaped{};
   std::array<double, NumberOfChannels> BoundaryInjected{};
 };
+/**
+ * The PowerBalance of `fluence` (3 values per mesh point, W/mm^2).
+ * `rule`: the Robin coefficients the solve used (Fresnel::BoundaryRule;
+ * Moments with the "extended-moments" collimated model). With Moments the
+ * exitance is J = q + (phi - 4 q / (1 - Fdr)) / (2 A) (the flux of the
+ * Robin condition plus the injected q; with the fit's A = (1 + Fdr) /
+ * (1 - Fdr) this is the (phi - 2 q) / (2 A) above).
+ */
 PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<double>& fluence, const std::vector<double>* irradiance);
+  const std::vector<double>& fluence, const std::vector<double>* irradiance,
+  Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit);
 
 /// A detector on the surface: a point or a fibre face of radius Radius.
 struct Detector
@@ -97,10 +107,12 @@ std::vector<DetectorFootprint> LocateDetectors(
  * each split into sub-triangles no larger than Radius / 4, a sub-triangle
  * counted if its centroid is inside the disc). Throws translucency::Error
  * naming the detector when it is more than SurfaceTolerance() from the
- * surface, or its position or radius is invalid.
+ * surface, or its position or radius is invalid. `rule` as in
+ * ComputePowerBalance (the exitance's A and Fdr).
  */
 std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
   const OpticalProperties& material, const std::vector<Detector>& detectors,
-  const std::vector<double>& fluence, const std::vector<double>* irradiance);
+  const std::vector<double>& fluence, const std::vector<double>* irradiance,
+  Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit);
 
 } // namespace translucency

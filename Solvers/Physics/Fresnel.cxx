@@ -117,5 +117,83 @@ double UniformTransmittance(double eta)
   return 2.0 * sum;
 }
 
+namespace
+{
+
+/// R_phi and R_J (ReflectanceMomentPhi/J), both at once.
+std::array<double, 2> ReflectanceMoments(double eta)
+{
+  const GaussLegendre& rule = Quadrature();
+  double phi = 0.0, j = 0.0;
+  if (eta >= 1.0)
+  {
+    // Inside directions with mu < mu_c = sqrt(1 - 1/eta^2) are totally
+    // reflected: 2 int_0^mu_c mu dmu = mu_c^2, 3 int_0^mu_c mu^2 dmu = mu_c^3.
+    // The rest maps onto the outside cosine c (mu^2 = 1 - (1 - c^2)/eta^2,
+    // mu dmu = c dc / eta^2), on which R(c) is smooth.
+    const double muC2 = 1.0 - 1.0 / (eta * eta);
+    const double muC = std::sqrt(muC2);
+    double sumPhi = 0.0, sumJ = 0.0;
+    for (int i = 0; i < QuadratureOrder; ++i)
+    {
+      const double c = rule.Nodes[i];
+      const double r = Reflectance(c, eta);
+      const double mu = std::sqrt(1.0 - (1.0 - c * c) / (eta * eta));
+      sumPhi += rule.Weights[i] * r * c;
+      sumJ += rule.Weights[i] * r * c * mu;
+    }
+    phi = muC2 + 2.0 * sumPhi / (eta * eta);
+    j = muC2 * muC + 3.0 * sumJ / (eta * eta);
+  }
+  else
+  {
+    // No total internal reflection: every inside direction leaves, towards
+    // the outside cosine c = sqrt(1 - eta^2 (1 - mu^2)).
+    for (int i = 0; i < QuadratureOrder; ++i)
+    {
+      const double mu = rule.Nodes[i];
+      const double r = Reflectance(std::sqrt(1.0 - eta * eta * (1.0 - mu * mu)), eta);
+      phi += 2.0 * rule.Weights[i] * r * mu;
+      j += 3.0 * rule.Weights[i] * r * mu * mu;
+    }
+  }
+  return { phi, j };
+}
+
+} // namespace
+
+double ReflectanceMomentPhi(double eta)
+{
+  return ReflectanceMoments(eta)[0];
+}
+
+double ReflectanceMomentJ(double eta)
+{
+  return ReflectanceMoments(eta)[1];
+}
+
+RobinCoefficients BoundaryCoefficients(double eta, BoundaryRule rule)
+{
+  RobinCoefficients out;
+  if (rule == BoundaryRule::Fit)
+  {
+    out.Fdr = DiffuseReflectance(eta);
+    out.A = MismatchA(eta);
+    return out;
+  }
+  // The assemblers ask per boundary point or triangle, almost always with
+  // the same eta: keep the last one per thread.
+  thread_local double lastEta = -1.0;
+  thread_local RobinCoefficients last;
+  if (eta != lastEta)
+  {
+    const std::array<double, 2> moments = ReflectanceMoments(eta);
+    last.Fdr = moments[0];
+    last.A = (1.0 + moments[1]) / (1.0 - moments[0]);
+    lastEta = eta;
+  }
+  return last;
+}
+
 } // namespace Fresnel
 } // namespace translucency

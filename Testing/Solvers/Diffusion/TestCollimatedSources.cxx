@@ -13,10 +13,13 @@
 #include "Radiance.h"
 #include "TestMeshes.h"
 #include "TetMesh.h"
+#include "VertexDiffusionSolver.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <complex>
 #include <iostream>
 #include <memory>
 #include <vector>
@@ -254,7 +257,9 @@ TEST(CollimatedSource, PowerBalanceHolds)
   ASSERT_TRUE(ComputeProjectedIrradiance(
     mesh, material.RefractiveIndex, NonCollimatedLights(lights), 0.0, 0, true, q));
   for (const char* name : { "divergence", "fem" })
+  for (CollimatedModel model : { CollimatedModel::Extended, CollimatedModel::ExtendedMoments })
   {
+    SCOPED_TRACE(model == CollimatedModel::Extended ? "extended" : "extended-moments");
     std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver(name);
     solver->SetRelTol(1e-12);
     solver->SetMaxIter(20000);
@@ -263,7 +268,7 @@ TEST(CollimatedSource, PowerBalanceHolds)
     problem.Material = &material;
     problem.Irradiance = &q;
     problem.Lights = lights;
-    problem.Collimated = CollimatedModel::Extended;
+    problem.Collimated = model;
     std::vector<double> fluence;
     SolverReport report;
     ASSERT_TRUE(solver->Solve(problem, fluence, report));
@@ -273,7 +278,10 @@ TEST(CollimatedSource, PowerBalanceHolds)
     {
       diffuse[k] -= report.CollimatedFluence[k];
     }
-    const PowerBalance balance = ComputePowerBalance(mesh, material, diffuse, &q);
+    // The read-out with the Robin coefficients the solve used.
+    const PowerBalance balance = ComputePowerBalance(mesh, material, diffuse, &q,
+      model == CollimatedModel::ExtendedMoments ? Fresnel::BoundaryRule::Moments
+                                                : Fresnel::BoundaryRule::Fit);
     for (int c = 0; c < 3; ++c)
     {
       ASSERT_TRUE(report.Converged[c]);
@@ -293,6 +301,7 @@ TEST(CollimatedSource, PowerBalanceHolds)
   }
   // The solvers without the model say so; the frequency domain too.
   for (const char* name : { "quadgraph", "grid" })
+  for (CollimatedModel model : { CollimatedModel::Extended, CollimatedModel::ExtendedMoments })
   {
     std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver(name);
     DiffusionProblem problem;
@@ -300,10 +309,108 @@ TEST(CollimatedSource, PowerBalanceHolds)
     problem.Material = &material;
     problem.Irradiance = &q;
     problem.Lights = lights;
-    problem.Collimated = CollimatedModel::Extended;
+    problem.Collimated = model;
     std::vector<double> fluence;
     SolverReport report;
     EXPECT_THROW(solver->Solve(problem, fluence, report), Error) << name;
+  }
+}
+
+// The Robin coefficients follow the problem's model on a reused solver:
+// extended -> extended-moments -> extended -> the frequency domain (fit)
+// give what fresh solvers give (a stale rule would keep A = 2.34 or 2.60),
+// and the two rules give different fluences (by more than 1 % at the lit
+// face: A is 10 % lower with the moments). The moment rule's power
+// balance with the fit's read-out does not close, with its own it does
+// (PowerBalanceHolds).
+TEST(CollimatedSource, BoundaryRuleFollowsTheModel)
+{
+  const TetMesh mesh = Box(6, 3, 0.3);
+  const double muA[3] = { 0.01, 0.1, 0.3 }, muS[3] = { 1.0, 0.5, 2.0 };
+  const OpticalProperties material =
+    OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, muS, BoxEta);
+  LightSource point;
+  point.Type = LightSource::Kind::Point;
+  point.Position = { 10.0, 10.0, 30.0 };
+  point.Power = { 100.0, 100.0, 100.0 };
+  const std::vector<LightSource> lights = { Directional(0, 0, -1, 1.0, 2.0, 0.5), point };
+  std::vector<double> q;
+  ASSERT_TRUE(ComputeProjectedIrradiance(
+    mesh, material.RefractiveIndex, NonCollimatedLights(lights), 0.0, 0, true, q));
+  for (const char* name : { "divergence", "fem" })
+  {
+    SCOPED_TRACE(name);
+    DiffusionProblem problem;
+    problem.Mesh = &mesh;
+    problem.Material = &material;
+    problem.Irradiance = &q;
+    problem.Lights = lights;
+    const auto solve = [&](DiffusionSolver& solver, CollimatedModel model) {
+      solver.SetRelTol(1e-12);
+      solver.SetMaxIter(20000);
+      DiffusionProblem p = problem;
+      p.Collimated = model;
+      std::vector<double> fluence;
+      SolverReport report;
+      EXPECT_TRUE(solver.Solve(p, fluence, report));
+      return fluence;
+    };
+    std::unique_ptr<DiffusionSolver> reused = CreateDiffusionSolver(name);
+    std::vector<std::vector<double>> fresh;
+    const CollimatedModel sequence[3] = { CollimatedModel::Extended,
+      CollimatedModel::ExtendedMoments, CollimatedModel::Extended };
+    for (CollimatedModel model : sequence)
+    {
+      std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver(name);
+      fresh.push_back(solve(*solver, model));
+    }
+    for (int k = 0; k < 3; ++k)
+    {
+      const std::vector<double> fluence = solve(*reused, sequence[k]);
+      ASSERT_EQ(fluence.size(), fresh[k].size());
+      // The warm start changes the last digits: 1e-8 of the largest value
+      // (a stale rule moves the lit face by about 10 %).
+      const double largest = *std::max_element(fresh[k].begin(), fresh[k].end());
+      for (size_t i = 0; i < fluence.size(); ++i)
+      {
+        ASSERT_NEAR(fluence[i], fresh[k][i], 1e-8 * largest) << "step " << k;
+      }
+    }
+    // The rules differ: the top (lit) face reads lower with the smaller A.
+    double top[2] = { 0.0, 0.0 };
+    for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
+    {
+      if (mesh.GetPoint(i)[2] > 10.0 - 1e-9)
+      {
+        top[0] += fresh[0][3 * static_cast<size_t>(i)];
+        top[1] += fresh[1][3 * static_cast<size_t>(i)];
+      }
+    }
+    EXPECT_LT(top[1], 0.99 * top[0]);
+    // The frequency domain (surface model only) after extended-moments:
+    // the fit's coefficients again, as a fresh solver.
+    auto* vertex = dynamic_cast<VertexDiffusionSolver*>(reused.get());
+    ASSERT_NE(vertex, nullptr);
+    std::vector<double> surfaceQ;
+    ASSERT_TRUE(
+      ComputeProjectedIrradiance(mesh, material.RefractiveIndex, lights, 0.0, 0, true, surfaceQ));
+    DiffusionProblem surface = problem;
+    surface.Irradiance = &surfaceQ;
+    std::vector<std::complex<double>> afterMoments, clean;
+    SolverReport report;
+    solve(*reused, CollimatedModel::ExtendedMoments);
+    vertex->SetRelTol(1e-12);
+    ASSERT_TRUE(vertex->SolveFrequencyDomain(surface, 1e8, afterMoments, report));
+    std::unique_ptr<DiffusionSolver> other = CreateDiffusionSolver(name);
+    auto* fresh2 = dynamic_cast<VertexDiffusionSolver*>(other.get());
+    fresh2->SetRelTol(1e-12);
+    fresh2->SetMaxIter(20000);
+    ASSERT_TRUE(fresh2->SolveFrequencyDomain(surface, 1e8, clean, report));
+    ASSERT_EQ(afterMoments.size(), clean.size());
+    for (size_t i = 0; i < clean.size(); ++i)
+    {
+      ASSERT_NEAR(std::abs(afterMoments[i] - clean[i]), 0.0, 1e-9 * std::abs(clean[i]));
+    }
   }
 }
 
@@ -317,8 +424,9 @@ namespace translucency
 // axis, of divergence and fem with the surface and the extended model,
 // against our Monte Carlo (isotropic scattering, mu_s = mu_s'; it agrees
 // with an independent transport code within 1 %; here 4 x 100k photons,
-// the standard error of the mean printed). The issue's target (halve the
-// gap) is NOT reached, see below and DiffuseOptics.md.
+// the standard error of the mean printed). The surface and extended models
+// miss by 6-8 %; the issue's target (halve the gap) is reached by
+// extended-moments, see below and DiffuseOptics.md.
 TEST(CollimatedSource, GapToMonteCarloOnTheIssuesBox)
 {
   const auto data = BoxMesh(10, 10, 10, 20.0, 20.0, 10.0);
@@ -385,23 +493,25 @@ TEST(CollimatedSource, GapToMonteCarloOnTheIssuesBox)
   const std::vector<double> zero(q.size(), 0.0);
   for (const char* name : { "divergence", "fem" })
   {
-    double gap[2];
-    for (int model = 0; model < 2; ++model)
+    double gap[3];
+    const char* modelNames[3] = { "surface", "extended", "extended-moments" };
+    for (int model = 0; model < 3; ++model)
     {
       std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver(name);
       solver->SetRelTol(1e-10);
       solver->SetMaxIter(20000);
       DiffusionProblem diffusion = problem;
-      if (model == 1)
+      if (model > 0)
       {
-        diffusion.Collimated = CollimatedModel::Extended;
+        diffusion.Collimated =
+          model == 1 ? CollimatedModel::Extended : CollimatedModel::ExtendedMoments;
         diffusion.Irradiance = &zero; // the only light is the beam
       }
       std::vector<double> fluence;
       SolverReport report;
       ASSERT_TRUE(solver->Solve(diffusion, fluence, report));
       gap[model] = mean(fluence) / mcMean - 1.0;
-      std::cout << name << (model ? ", extended" : ", surface") << ": mean " << mean(fluence)
+      std::cout << name << ", " << modelNames[model] << ": mean " << mean(fluence)
                 << ", gap to Monte Carlo " << 100.0 * gap[model] << " %\n";
     }
     // Measured (DiffuseOptics.md): surface -7.7 % (divergence) / -7.3 %
@@ -416,6 +526,17 @@ TEST(CollimatedSource, GapToMonteCarloOnTheIssuesBox)
     EXPECT_GT((1.0 + gap[1]) / (1.0 + gap[0]), 1.09) << name;
     EXPECT_LT((1.0 + gap[1]) / (1.0 + gap[0]), 1.20) << name;
     EXPECT_LT(gap[1], 0.08) << name;
+    // The issue's target, met by extended-moments (the same volume source,
+    // the Robin condition with the Fresnel moments' A = 2.34 instead of the
+    // fit's 2.60; DiffuseOptics.md): at most half the gap of either other
+    // model, and within +-3.6 % (half the smaller of the two gaps measured
+    // before, -7.3 % / +6.1 %: 13 MC standard errors). Measured +1.2 % /
+    // +2.0 % (divergence / fem); the 1D slab (discrete ordinates against
+    // P1) gives +0.25 %, the rest is the mesh (h = 2 mm), as for the other
+    // two models.
+    EXPECT_LT(std::abs(gap[2]), 0.036) << name << ": extended-moments";
+    EXPECT_LT(std::abs(gap[2]), 0.5 * std::abs(gap[0])) << name << ": half the surface gap";
+    EXPECT_LT(std::abs(gap[2]), 0.5 * std::abs(gap[1])) << name << ": half the extended gap";
   }
 }
 

@@ -96,6 +96,86 @@ TEST(Fresnel, DiffuseReflectanceFitAgreesWithQuadrature)
   }
 }
 
+/// R_J = 3 int_0^{pi/2} R cos^2 sin dtheta inside the medium, by the same
+/// substitution as InternalDiffuseReflectance (above the critical angle R =
+/// 1: 3 int cos^2 sin = cos^3(theta_c)).
+double InternalFluxReflectance(double eta)
+{
+  const double critical = std::asin(1.0 / eta);
+  const int n = 20000;
+  const double h = 1.0 / n;
+  double sum = 0.0;
+  for (int k = 0; k <= n; ++k)
+  {
+    const double s = k * h;
+    const double theta = critical * (1.0 - s * s);
+    const double w = (k == 0 || k == n) ? 1.0 : (k % 2 ? 4.0 : 2.0);
+    sum += w * ReflectanceAngles(theta, eta, 1.0) * std::cos(theta) * std::cos(theta) *
+      std::sin(theta) * 2.0 * critical * s;
+  }
+  return 3.0 * sum * h / 3.0 + std::pow(std::cos(critical), 3.0);
+}
+
+// The Fresnel moments of the "extended-moments" boundary condition
+// (Haskell et al. 1994): against the independent angle quadratures above,
+// the published effective reflectance R_eff = (R_phi + R_J) / (2 - R_phi +
+// R_J) (0.431 at eta 1.33, 0.493 at 1.4, Haskell's table as quoted widely),
+// the index-matched limit, and a medium less dense than its surroundings
+// (no total reflection; a plain quadrature over the inside cosine).
+TEST(Fresnel, ReflectanceMomentsAndTheMomentBoundaryRule)
+{
+  for (double eta : { 1.05, 1.3, 1.33, 1.4, 1.5, 2.0 })
+  {
+    const double phi = Fresnel::ReflectanceMomentPhi(eta);
+    const double j = Fresnel::ReflectanceMomentJ(eta);
+    EXPECT_NEAR(phi, InternalDiffuseReflectance(eta), 1e-9) << "eta " << eta;
+    EXPECT_NEAR(j, InternalFluxReflectance(eta), 1e-9) << "eta " << eta;
+    EXPECT_LT(j, phi) << "eta " << eta; // R grows towards grazing: mu^2 weighs it less
+    const Fresnel::RobinCoefficients moments =
+      Fresnel::BoundaryCoefficients(eta, Fresnel::BoundaryRule::Moments);
+    EXPECT_DOUBLE_EQ(moments.Fdr, phi);
+    EXPECT_DOUBLE_EQ(moments.A, (1.0 + j) / (1.0 - phi));
+    const Fresnel::RobinCoefficients fit =
+      Fresnel::BoundaryCoefficients(eta, Fresnel::BoundaryRule::Fit);
+    EXPECT_EQ(fit.Fdr, Fresnel::DiffuseReflectance(eta));
+    EXPECT_EQ(fit.A, Fresnel::MismatchA(eta));
+  }
+  const auto effective = [](double eta) {
+    const double phi = Fresnel::ReflectanceMomentPhi(eta), j = Fresnel::ReflectanceMomentJ(eta);
+    return (phi + j) / (2.0 - phi + j);
+  };
+  EXPECT_NEAR(effective(1.33), 0.431, 5e-4);
+  EXPECT_NEAR(effective(1.4), 0.493, 5e-4);
+  // The eta 1.3: the fit's Fdr is R_phi to 3e-4, but A = 2.602
+  // (fit, R_J taken as R_phi) against 2.3405 (moments).
+  EXPECT_NEAR(Fresnel::ReflectanceMomentPhi(1.3), 0.4444567, 1e-6);
+  EXPECT_NEAR(Fresnel::ReflectanceMomentJ(1.3), 0.3002670, 1e-6);
+  EXPECT_NEAR(Fresnel::BoundaryCoefficients(1.3, Fresnel::BoundaryRule::Moments).A, 2.340532,
+    1e-6);
+  EXPECT_NEAR(Fresnel::DiffuseReflectance(1.3), Fresnel::ReflectanceMomentPhi(1.3), 5e-4);
+  // Index matched: no reflection, A = 1.
+  EXPECT_NEAR(Fresnel::ReflectanceMomentPhi(1.0), 0.0, 1e-15);
+  EXPECT_NEAR(Fresnel::ReflectanceMomentJ(1.0), 0.0, 1e-15);
+  EXPECT_NEAR(Fresnel::BoundaryCoefficients(1.0, Fresnel::BoundaryRule::Moments).A, 1.0, 1e-15);
+  // eta < 1: Simpson over the inside cosine mu (the outside cosine
+  // sqrt(1 - eta^2 (1 - mu^2)), by reciprocity the same reflectance).
+  for (double eta : { 0.7, 0.9 })
+  {
+    const int n = 20000;
+    double phi = 0.0, j = 0.0;
+    for (int k = 0; k <= n; ++k)
+    {
+      const double mu = static_cast<double>(k) / n;
+      const double w = ((k == 0 || k == n) ? 1.0 : (k % 2 ? 4.0 : 2.0)) / (3.0 * n);
+      const double r = ReflectanceAngles(std::acos(mu), eta, 1.0);
+      phi += 2.0 * w * r * mu;
+      j += 3.0 * w * r * mu * mu;
+    }
+    EXPECT_NEAR(Fresnel::ReflectanceMomentPhi(eta), phi, 1e-9) << "eta " << eta;
+    EXPECT_NEAR(Fresnel::ReflectanceMomentJ(eta), j, 1e-9) << "eta " << eta;
+  }
+}
+
 TEST(Fresnel, TransmittanceAtNormalAndGrazingIncidence)
 {
   for (double eta : { 1.0, 1.3, 1.5, 2.4 })
