@@ -8,6 +8,7 @@
 #include "Error.h"
 #include "TetMesh.h"
 #include "Timer.h"
+#include "vtkTranslucencyGlobalCommunicator.h"
 #include "vtkTranslucencyMeshConversion.h"
 
 #include <vtkCellData.h>
@@ -25,20 +26,7 @@
 
 namespace
 {
-MPI_Comm* GlobalCommunicator()
-{
-  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  if (!controller || controller->GetNumberOfProcesses() <= 1)
-  {
-    return nullptr;
-  }
-  auto* communicator = vtkMPICommunicator::SafeDownCast(controller->GetCommunicator());
-  if (!communicator || !communicator->GetMPIComm())
-  {
-    return nullptr;
-  }
-  return communicator->GetMPIComm()->GetHandle();
-}
+using vtkTranslucency::GlobalCommunicator;
 
 bool AllowedByEnvironment()
 {
@@ -75,19 +63,8 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
     {
       throw translucency::Error(local);
     }
-    auto* ghosts = numCells > 0 ? vtkUnsignedCharArray::SafeDownCast(input->GetCellData()->GetArray(
-                                    vtkDataSetAttributes::GhostArrayName()))
-                                : nullptr;
-    std::vector<int> kept;
     std::vector<int> tets;
-    for (vtkIdType c = 0; c < numCells; ++c)
-    {
-      if (!ghosts || !(ghosts->GetValue(c) & vtkDataSetAttributes::DUPLICATECELL))
-      {
-        kept.push_back(static_cast<int>(c));
-        tets.insert(tets.end(), cells.begin() + 4 * c, cells.begin() + 4 * c + 4);
-      }
-    }
+    const std::vector<vtkIdType> kept = vtkTranslucency::OwnedTets(input, cells, tets);
     ownedTets = static_cast<long long>(kept.size());
     if (!kept.empty())
     {
@@ -119,8 +96,9 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
       triangles = mesh->GetBoundaryTriangles();
       for (int t : mesh->GetBoundaryTriangleTets())
       {
-        triangleTets.push_back(kept[static_cast<size_t>(t)]);
-        triangleEta.push_back(eta[static_cast<size_t>(kept[static_cast<size_t>(t)])]);
+        const vtkIdType cell = kept[static_cast<size_t>(t)];
+        triangleTets.push_back(static_cast<int>(cell));
+        triangleEta.push_back(eta[static_cast<size_t>(cell)]);
       }
     }
   }

@@ -6,6 +6,7 @@
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
 #include "DistributedVertexSolver.h"
 #include "Error.h"
+#include "vtkTranslucencyGlobalCommunicator.h"
 #include "vtkTranslucencyMeshConversion.h"
 
 #include <vtkCellData.h>
@@ -20,20 +21,7 @@
 
 namespace
 {
-MPI_Comm* GlobalCommunicator()
-{
-  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  if (!controller || controller->GetNumberOfProcesses() <= 1)
-  {
-    return nullptr;
-  }
-  auto* communicator = vtkMPICommunicator::SafeDownCast(controller->GetCommunicator());
-  if (!communicator || !communicator->GetMPIComm())
-  {
-    return nullptr;
-  }
-  return communicator->GetMPIComm()->GetHandle();
-}
+using vtkTranslucency::GlobalCommunicator;
 }
 
 struct vtkTranslucencyDistributedSolve::Impl
@@ -60,7 +48,6 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   std::vector<double> irradiance;
   std::vector<translucency::PointKey> keys;
   const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
-  const vtkIdType numCells = input ? input->GetNumberOfCells() : 0;
   vtkDataArray* globalIds = input ? input->GetPointData()->GetGlobalIds() : nullptr;
   try
   {
@@ -69,18 +56,7 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
       throw translucency::Error(local);
     }
     // Owned cells only: a ghost copy is another rank's tet.
-    auto* ghosts = numCells > 0 ? vtkUnsignedCharArray::SafeDownCast(input->GetCellData()->GetArray(
-                                    vtkDataSetAttributes::GhostArrayName()))
-                                : nullptr;
-    std::vector<vtkIdType> kept;
-    for (vtkIdType c = 0; c < numCells; ++c)
-    {
-      if (!ghosts || !(ghosts->GetValue(c) & vtkDataSetAttributes::DUPLICATECELL))
-      {
-        kept.push_back(c);
-        tets.insert(tets.end(), cells.begin() + 4 * c, cells.begin() + 4 * c + 4);
-      }
-    }
+    const std::vector<vtkIdType> kept = vtkTranslucency::OwnedTets(input, cells, tets);
     cells = {};
     if (!kept.empty())
     {

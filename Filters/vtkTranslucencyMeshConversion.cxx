@@ -171,6 +171,25 @@ bool CheckSurfacePointsAndIds(vtkPolyData* input, double maxCoordinate, std::str
   return true;
 }
 
+std::vector<vtkIdType> OwnedTets(
+  vtkUnstructuredGrid* grid, const std::vector<int>& cells, std::vector<int>& tets)
+{
+  const vtkIdType numCells = grid ? grid->GetNumberOfCells() : 0;
+  auto* ghosts = numCells > 0 ? vtkUnsignedCharArray::SafeDownCast(grid->GetCellData()->GetArray(
+                                  vtkDataSetAttributes::GhostArrayName()))
+                              : nullptr;
+  std::vector<vtkIdType> kept;
+  for (vtkIdType c = 0; c < numCells; ++c)
+  {
+    if (!ghosts || !(ghosts->GetValue(c) & vtkDataSetAttributes::DUPLICATECELL))
+    {
+      kept.push_back(c);
+      tets.insert(tets.end(), cells.begin() + 4 * c, cells.begin() + 4 * c + 4);
+    }
+  }
+  return kept;
+}
+
 bool ToTetArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets,
   std::string& error)
 {

@@ -12,6 +12,8 @@
 
 #include <memory>
 #include <string>
+#include <vtkType.h> // for vtkIdType
+
 #include <vector>
 
 class vtkDataArray;
@@ -46,6 +48,12 @@ bool CheckSurfacePointsAndIds(vtkPolyData* input, double maxCoordinate, std::str
 /// message names the first bad point or cell. An empty grid is not an error.
 bool ToTetArrays(vtkUnstructuredGrid* grid, std::vector<double>& points, std::vector<int>& tets,
   std::string& error);
+
+/// The cells of `grid` this piece owns (not flagged vtkGhostType
+/// DUPLICATECELL: a ghost copy is another rank's tet), in order; their 4 point
+/// ids from `cells` (ToTetArrays' tets) are appended to `tets`.
+std::vector<vtkIdType> OwnedTets(
+  vtkUnstructuredGrid* grid, const std::vector<int>& cells, std::vector<int>& tets);
 
 /// Copy points and tets of `grid` into `mesh` (builds the topology). Fails
 /// if the grid is empty or holds a cell that is not a linear tetrahedron, or
