@@ -657,6 +657,10 @@ struct Tracer
   {
     const DetectorMap& map = *Detectors;
     const int first = map.TetOffsets[t], last = map.TetOffsets[t + 1];
+    if (first == last)
+    {
+      return; // no detector reads this tet: nothing to split into gates either
+    }
     for (int j = first; j < last; ++j)
     {
       tally.Detector[map.TetWeights[j].first] += track * map.TetWeights[j].second;
