@@ -54,6 +54,7 @@ struct RenderOptions
   double GridSpacing = 0.0;
   long long Photons = 1000000;
   double Anisotropy = 0.0; ///< Henyey-Greenstein g of montecarlo
+  bool TwoPointFlux = false; ///< quadgraph's opt-in, non-paper link weights
   bool ListMaterials = false;
   const CLI::App* App = nullptr; ///< for the provenance of the JSON
   DiffuseOpticsOptions Optics;
@@ -88,6 +89,9 @@ int Render(RenderOptions& o)
             << solverName << " solver uses mu_s', in which g is already folded)";
     throw UsageError(message.str());
   }
+  if (o.TwoPointFlux && translucency::ToLower(solverName) != "quadgraph")
+    throw UsageError("--two-point-flux applies to --solver quadgraph only (it replaces the "
+                     "QuadGraph paper's eq. 5 link weights), not to " + solverName);
   const std::string &outputPrefix = o.OutputPrefix, &pngPath = o.PngPath,
                     &slicePath = o.SlicePath, &tpsfPath = o.TpsfPath,
                     &jsonPath = o.JsonPath;
@@ -118,6 +122,7 @@ int Render(RenderOptions& o)
   solve->SetGridSpacing(o.GridSpacing);
   solve->SetNumberOfPhotons(o.Photons);
   solve->SetAnisotropy(o.Anisotropy);
+  solve->SetQuadGraphTwoPointFlux(o.TwoPointFlux);
   o.Optics.Apply(solve);
   solve->Update();
   if (!messages.Errors.empty())
@@ -303,6 +308,10 @@ Command AddRenderCommand(CLI::App& app)
     "Henyey-Greenstein g of montecarlo, in (-1, 1): mu_s = mu_s' / (1 - g)\n"
     "(the material's mu_s' is kept)", "G", [](double g) { return g > -1 && g < 1; },
     "--anisotropy must be in (-1, 1)");
+  c->add_flag("--two-point-flux", o->TwoPointFlux,
+    "quadgraph only, NOT the paper's scheme: two-point finite-volume link\n"
+    "weights kappa S / (V d) instead of eq. 5's 1 / d^2 (conserves light on\n"
+    "graded meshes; Documentation/Solvers.md)");
   AddNumber(c, "--rel-tol", o->RelTol, "relative residual of iterative solvers", "T",
     [](double t) { return t > 0 && t < 1; }, "--rel-tol must be in (0, 1)");
   AddNumber(c, "--max-iter", o->MaxIter, "iteration limit", "N", [](double n) { return n >= 1; },

@@ -663,6 +663,7 @@ int vtkSolveDiffusion::RequestData(
     solver.SetOptions(translucency::SolverOptions{
       { translucency::DiffusionOption::GridSpacing, this->GridSpacing },
       { translucency::DiffusionOption::MultiLevel, this->MultiLevel ? 1.0 : 0.0 },
+      { translucency::DiffusionOption::TwoPointFlux, this->QuadGraphTwoPointFlux ? 1.0 : 0.0 },
       { translucency::DiffusionOption::Photons, static_cast<double>(this->NumberOfPhotons) },
       { translucency::DiffusionOption::Seed, static_cast<double>(this->Seed) } });
     solver.SetProgressCallback([this](double fraction) {
@@ -1181,6 +1182,7 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Anisotropy: " << this->Anisotropy << "\n";
   os << indent << "LinearSolver: " << this->LinearSolver << "\n";
   os << indent << "MultiLevel: " << this->MultiLevel << "\n";
+  os << indent << "QuadGraphTwoPointFlux: " << this->QuadGraphTwoPointFlux << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
   os << indent << "IncrementalAssembly: " << this->IncrementalAssembly << "\n";
   os << indent << "MaximumChangedFraction: " << this->MaximumChangedFraction << "\n";

@@ -209,6 +209,16 @@ public:
   ///@}
 
   ///@{
+  /// QuadGraph only, NOT the paper's scheme (default off): two-point
+  /// finite-volume link weights kappa_ij S_ij / (V_i d_ij) instead of eq. 5's
+  /// 1 / d_ij^2; conserves light on graded meshes
+  /// (translucency::QuadGraphSolver::SetTwoPointFlux, Documentation/Solvers.md).
+  vtkSetMacro(QuadGraphTwoPointFlux, bool);
+  vtkGetMacro(QuadGraphTwoPointFlux, bool);
+  vtkBooleanMacro(QuadGraphTwoPointFlux, bool);
+  ///@}
+
+  ///@{
   /// OpenMP threads for the discrete-divergence assembly (0 = OpenMP's default).
   vtkSetClampMacro(NumberOfThreads, int, 0, 1024);
   vtkGetMacro(NumberOfThreads, int);
@@ -467,6 +477,7 @@ protected:
   std::string ModelRangeWarning;
   std::string MeshResolutionNote;
   bool MultiLevel = false;
+  bool QuadGraphTwoPointFlux = false;
   int NumberOfThreads = 0;
   bool IncrementalAssembly = true;
   double MaximumChangedFraction = 0.05;

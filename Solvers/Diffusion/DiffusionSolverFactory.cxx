@@ -28,7 +28,7 @@ DiffusionSolverRegistry MakeRegistry()
     [] { return std::make_unique<VertexDiffusionSolver>(std::make_unique<FiniteElement>()); },
     { true, false, true, {} }, "linear finite elements (Galerkin) at the vertices, CG" });
   registry.Add({ "quadgraph", [] { return std::make_unique<QuadGraphSolver>(); },
-    { true, false, false, { DiffusionOption::MultiLevel } },
+    { true, false, false, { DiffusionOption::MultiLevel, DiffusionOption::TwoPointFlux } },
     "finite differences on the tet dual graph (QuadGraph, eq. 5-6), BiCGSTAB" });
   registry.Add({ "grid", [] { return std::make_unique<GridSolver>(); },
     { true, false, false, { DiffusionOption::GridSpacing, DiffusionOption::MultiLevel } },

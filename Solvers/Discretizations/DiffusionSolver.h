@@ -123,6 +123,7 @@ namespace DiffusionOption
 {
 constexpr const char* GridSpacing = "grid-spacing"; ///< GridSolver: h (mm), 0 = automatic
 constexpr const char* MultiLevel = "multilevel";    ///< GridSolver, QuadGraphSolver: 0 or 1
+constexpr const char* TwoPointFlux = "two-point-flux"; ///< QuadGraphSolver: 0 or 1 (not the paper's)
 constexpr const char* Photons = "photons";          ///< MonteCarloSolver: photon budget
 constexpr const char* Seed = "seed";                ///< MonteCarloSolver: random seed
 }
@@ -180,6 +181,8 @@ public:
    *    automatic;
    *  - "multilevel" (GridSolver, QuadGraphSolver): coarse-to-fine
    *    initialisation, 0 or 1;
+   *  - "two-point-flux" (QuadGraphSolver): two-point finite-volume link
+   *    weights instead of the paper's eq. 5, 0 or 1;
    *  - "photons", "seed" (MonteCarloSolver): photon budget >= 1, random seed
    *    >= 0 (integers).
    *

@@ -85,7 +85,7 @@ void BuildPattern(QuadGraphSolver::Level& level)
   }
 }
 
-/// Sort the links of every node by node id (with their lengths).
+/// Sort the links of every node by node id (with their lengths and areas).
 void SortLinks(QuadGraphSolver::Level& level, int numThreads)
 {
   const int n = level.GetNumberOfNodes();
@@ -97,14 +97,24 @@ void SortLinks(QuadGraphSolver::Level& level, int numThreads)
     {
       const int node = level.LinkNodes[a];
       const double length = level.LinkLengths[a];
+      const bool areas = !level.LinkAreas.empty();
+      const double area = areas ? level.LinkAreas[a] : 0.0;
       int b = a;
       for (; b > begin && level.LinkNodes[b - 1] > node; --b)
       {
         level.LinkNodes[b] = level.LinkNodes[b - 1];
         level.LinkLengths[b] = level.LinkLengths[b - 1];
+        if (areas)
+        {
+          level.LinkAreas[b] = level.LinkAreas[b - 1];
+        }
       }
       level.LinkNodes[b] = node;
       level.LinkLengths[b] = length;
+      if (areas)
+      {
+        level.LinkAreas[b] = area;
+      }
     }
   }
 }
@@ -136,8 +146,10 @@ struct LevelCoefficients
 void AssembleLevel(const QuadGraphSolver::Level& level,
   const LevelCoefficients& k,
   DiffusionSystem& system,
-  int numThreads)
+  int numThreads,
+  bool twoPointFlux = false)
 {
+  twoPointFlux = twoPointFlux && !level.LinkAreas.empty();
   const int n = level.GetNumberOfNodes();
   const int numCells = level.NumberOfCells;
   system.NumberOfUnknowns = n;
@@ -157,7 +169,34 @@ void AssembleLevel(const QuadGraphSolver::Level& level,
       int pos = level.RowOffsets[i];
       int diagonalPos = -1;
       double diagonal = 0.0, rhs = 0.0;
-      if (i < numCells)
+      if (i < numCells && twoPointFlux)
+      {
+        // Not the paper's eq. 5 (QuadGraphSolver::SetTwoPointFlux): the
+        // two-point finite-volume balance of cell i divided by V_i,
+        // sum_j T_ij (phi_i - phi_j) + mu_i phi_i = 0,
+        // T_ij = kappa_ij S_ij / (V_i d_ij), kappa_ij the harmonic mean.
+        const double kappaI = k.CellKappa[c][i];
+        const double volume = level.CellVolumes[i];
+        diagonal = k.CellMu[c][i];
+        for (int l = level.LinkOffsets[i]; l < level.LinkOffsets[i + 1]; ++l)
+        {
+          const int j = level.LinkNodes[l];
+          if (diagonalPos < 0 && j > i)
+          {
+            diagonalPos = pos++;
+          }
+          double kappa = kappaI;
+          if (j < numCells)
+          {
+            const double kappaJ = k.CellKappa[c][j];
+            kappa = 2.0 * kappaI * kappaJ / (kappaI + kappaJ);
+          }
+          const double weight = kappa * level.LinkAreas[l] / (volume * level.LinkLengths[l]);
+          diagonal += weight;
+          values[pos++] = -weight;
+        }
+      }
+      else if (i < numCells)
       {
         // eq. 5: sum_j kappa_j phi_j / d_ij^2 - (w kappa_i + mu_i) phi_i = 0,
         // w = sum_j 1/d_ij^2; written with the opposite sign (positive diagonal).
@@ -506,6 +545,7 @@ void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
   }
   fine.LinkNodes.resize(fine.LinkOffsets[numNodes]);
   fine.LinkLengths.resize(fine.LinkOffsets[numNodes]);
+  fine.LinkAreas.resize(fine.LinkOffsets[numNodes]);
   auto acrossNode = [&](int t, int k)
   {
     const size_t tk = 4 * static_cast<size_t>(t) + k;
@@ -544,6 +584,44 @@ void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
     for (int l = fine.LinkOffsets[i]; l < fine.LinkOffsets[i + 1]; ++l)
     {
       fine.LinkLengths[l] = (At(fine.Positions, fine.LinkNodes[l]) - x).norm();
+    }
+    // The face each link crosses, for the two-point weights: of a cell's
+    // split-mesh tet, the face opposite vertex a, where a is the link's
+    // local face (unsplit: link k crosses face k; sub-tet on face k: link 0
+    // crosses face k, the link to sibling m the face opposite vertex m).
+    double* area = &fine.LinkAreas[fine.LinkOffsets[i]];
+    if (i >= numCells)
+    {
+      area[0] = fine.SurfaceAreas[i - numCells];
+      continue;
+    }
+    const int* st = &g.SplitTets[4 * static_cast<size_t>(i)];
+    auto faceArea = [&](int a)
+    {
+      const Vec3 p0 = At(g.SplitPoints, st[FaceVertices[a][0]]);
+      const Vec3 p1 = At(g.SplitPoints, st[FaceVertices[a][1]]);
+      const Vec3 p2 = At(g.SplitPoints, st[FaceVertices[a][2]]);
+      return 0.5 * (p1 - p0).cross(p2 - p0).norm();
+    };
+    if (g.CellFaces[i] < 0)
+    {
+      for (int a = 0; a < 4; ++a)
+      {
+        area[a] = faceArea(a);
+      }
+    }
+    else
+    {
+      const int k = g.CellFaces[i];
+      area[0] = faceArea(k);
+      int n = 1;
+      for (int m = 0; m < 4; ++m)
+      {
+        if (m != k)
+        {
+          area[n++] = faceArea(m);
+        }
+      }
     }
   }
   SortLinks(fine, numThreads);
@@ -1024,7 +1102,7 @@ bool QuadGraphSolver::Solve(
   }
   Coefficients coefficients;
   ComputeFineCoefficients(mesh, material, q, coefficients, numThreads);
-  AssembleLevel(Graph_.Fine, coefficients, System_, numThreads);
+  AssembleLevel(Graph_.Fine, coefficients, System_, numThreads, TwoPointFlux_);
   // Coarse systems for the multi-level initialisation.
   std::vector<DiffusionSystem> coarseSystems;
   if (multiLevel)

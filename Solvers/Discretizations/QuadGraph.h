@@ -85,10 +85,29 @@ public:
   bool GetMultiLevel() const { return MultiLevel_; }
   ///@}
 
-  /// Reads "multilevel" (see DiffusionSolver::SetOptions).
+  ///@{
+  /**
+   * NOT the paper's scheme, opt-in (default off): two-point finite-volume
+   * link weights instead of eq. 5's inverse-square distances. Inner row i
+   * becomes sum_j T_ij (phi_i - phi_j) + mu_i phi_i = 0 with
+   * T_ij = kappa_ij S_ij / (V_i d_ij): S_ij the area of the face the link
+   * crosses, V_i the cell volume, d_ij the link length, kappa_ij the
+   * harmonic mean of the two cells' kappa (the cell's own kappa on a
+   * surface link, whose length is the normal distance to the face). The
+   * surface rows (eq. 6) are unchanged. It conserves light cell by cell on
+   * graded meshes, where eq. 5 does not (Documentation/Solvers.md, "Use a
+   * uniform mesh"). The multi-level guess keeps eq. 5 on the coarse levels.
+   * Option DiffusionOption::TwoPointFlux ("two-point-flux").
+   */
+  void SetTwoPointFlux(bool on) { TwoPointFlux_ = on; }
+  bool GetTwoPointFlux() const { return TwoPointFlux_; }
+  ///@}
+
+  /// Reads "multilevel" and "two-point-flux" (see DiffusionSolver::SetOptions).
   void SetOptions(const SolverOptions& options) override
   {
     options.ReadFlag(GetName(), DiffusionOption::MultiLevel, MultiLevel_);
+    options.ReadFlag(GetName(), DiffusionOption::TwoPointFlux, TwoPointFlux_);
   }
 
   /// OpenMP threads for the graph build, assembly, the matrix products of
@@ -116,6 +135,9 @@ public:
     std::vector<int> LinkOffsets;
     std::vector<int> LinkNodes;
     std::vector<double> LinkLengths;
+    /// Finest level only: the area of the face each link crosses (mm^2;
+    /// a surface node's link: its boundary triangle). Empty on coarse levels.
+    std::vector<double> LinkAreas;
     /// Coarse levels only: for each node of the next finer level, the node
     /// of this level that contains it (a cell's group, a surface node's
     /// coarse surface node).
@@ -170,6 +192,7 @@ public:
 
 private:
   bool MultiLevel_ = false;
+  bool TwoPointFlux_ = false;
   /// Per-channel coefficients of the nodes (defined in the .cxx).
   struct Coefficients;
 
