@@ -4,6 +4,7 @@
 
 #include "DefaultLights.h"
 #include "Error.h"
+#include "Strings.h"
 
 #include "vtkAssignScatteringCoefficients.h"
 #include "vtkPaintScatteringCoefficients.h"
@@ -209,8 +210,11 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   {
     start = Clock::now();
     vtkNew<vtkTetrahedralizeSurface> tetra;
-    messages.Watch(tetra, "tetrahedralizing (TetGen)");
-    Progress("tetrahedralizing " + options.MeshPath + " (TetGen)...");
+    // The mesher's own name in the messages (--mesher: tetgen or hxt).
+    const std::string mesher =
+      translucency::ToLower(options.Mesher) == "hxt" ? "gmsh HXT" : "TetGen";
+    messages.Watch(tetra, "tetrahedralizing (" + mesher + ")");
+    Progress("tetrahedralizing " + options.MeshPath + " (" + mesher + ")...");
     tetra->SetInputData(surface);
     tetra->SetQuality(options.Quality);
     tetra->SetMesher(options.Mesher.c_str());

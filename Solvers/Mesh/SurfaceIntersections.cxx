@@ -46,7 +46,22 @@ bool CrossEdge(const RayCaster& caster, const std::vector<double>& points,
     const int* ids = &triangles[3 * static_cast<size_t>(tri)];
     const bool adjacent = ids[0] == a || ids[1] == a || ids[2] == a || ids[0] == b ||
       ids[1] == b || ids[2] == b;
-    if (!adjacent && along > margin)
+    // An edge in the triangle's plane cannot pierce it: the ray test's
+    // determinant is then round-off (1e-18 for the coplanar pieces of a
+    // subdivided triangle) and its "hit" is noise. Coplanar overlaps are
+    // left to TetGen's -d pass (vtkTetrahedralizeSurface).
+    const double* q0 = &points[3 * static_cast<size_t>(ids[0])];
+    const double* q1 = &points[3 * static_cast<size_t>(ids[1])];
+    const double* q2 = &points[3 * static_cast<size_t>(ids[2])];
+    const double e1[3] = { q1[0] - q0[0], q1[1] - q0[1], q1[2] - q0[2] };
+    const double e2[3] = { q2[0] - q0[0], q2[1] - q0[1], q2[2] - q0[2] };
+    const double normal[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+      e1[0] * e2[1] - e1[1] * e2[0] };
+    const double normalLength =
+      std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    const bool inPlane = std::abs(normal[0] * dir[0] + normal[1] * dir[1] + normal[2] * dir[2]) <=
+      1e-9 * normalLength;
+    if (!adjacent && !inPlane && along > margin)
     {
       crossing.EdgePoints[0] = a;
       crossing.EdgePoints[1] = b;

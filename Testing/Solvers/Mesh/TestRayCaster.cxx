@@ -14,6 +14,7 @@
 #include "TestMeshes.h"
 #include "TetMesh.h"
 
+#include <map>
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
@@ -765,6 +766,71 @@ TEST(FindEdgeCrossing, ClosedSphereHasNone)
   const Surface sphere = UVSphere(30, 40, 3.0, center);
   EdgeCrossing crossing;
   EXPECT_FALSE(FindEdgeCrossing(sphere.Points, sphere.Triangles, crossing));
+}
+
+TEST(FindEdgeCrossing, SubdividedCoplanarTrianglesDoNotCross)
+{
+  // A closed surface whose faces are split into coplanar pieces (VTK's
+  // linear subdivision of a mesh does this): every edge lies in the plane
+  // of the neighbouring pieces up to round-off. Found on the bunny
+  // subdivided twice, whose edge 1432-17373 was reported to cross the
+  // coplanar triangle 24221 far outside it. Here: a rotated, off-centre
+  // octahedron, each face split three times into 4 (64 coplanar pieces).
+  const Eigen::Matrix3d rotation =
+    (Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized())).toRotationMatrix();
+  std::vector<Eigen::Vector3d> corners = { { 1, 0, 0 }, { -1, 0, 0 }, { 0, 1, 0 }, { 0, -1, 0 },
+    { 0, 0, 1 }, { 0, 0, -1 } };
+  for (Eigen::Vector3d& p : corners)
+  {
+    p = 8.3 * (rotation * p) + Eigen::Vector3d(-8.6, 0.3, -1.1);
+  }
+  std::vector<std::array<Eigen::Vector3d, 3>> faces;
+  for (int sx : { 0, 1 })
+    for (int sy : { 2, 3 })
+      for (int sz : { 4, 5 })
+      {
+        const bool flip = (sx + sy + sz) % 2 == 0;
+        faces.push_back({ corners[sx], flip ? corners[sz] : corners[sy],
+          flip ? corners[sy] : corners[sz] });
+      }
+  for (int level = 0; level < 3; ++level)
+  {
+    std::vector<std::array<Eigen::Vector3d, 3>> finer;
+    for (const auto& f : faces)
+    {
+      const Eigen::Vector3d m01 = 0.5 * (f[0] + f[1]), m12 = 0.5 * (f[1] + f[2]),
+                            m20 = 0.5 * (f[2] + f[0]);
+      finer.push_back({ f[0], m01, m20 });
+      finer.push_back({ m01, f[1], m12 });
+      finer.push_back({ m20, m12, f[2] });
+      finer.push_back({ m01, m12, m20 });
+    }
+    faces = std::move(finer);
+  }
+  // Merge equal points (midpoints are computed the same way from both sides).
+  std::vector<double> points;
+  std::vector<int> triangles;
+  std::map<std::array<double, 3>, int> ids;
+  for (const auto& f : faces)
+  {
+    for (const Eigen::Vector3d& p : f)
+    {
+      const std::array<double, 3> key = { p[0], p[1], p[2] };
+      auto it = ids.find(key);
+      if (it == ids.end())
+      {
+        it = ids.emplace(key, static_cast<int>(points.size() / 3)).first;
+        points.insert(points.end(), { p[0], p[1], p[2] });
+      }
+      triangles.push_back(it->second);
+    }
+  }
+  ASSERT_EQ(triangles.size(), 3u * 8 * 64);
+  ASSERT_EQ(points.size(), 3u * (8 * 64 / 2 + 2)); // Euler: V = F/2 + 2
+  EdgeCrossing crossing;
+  EXPECT_FALSE(FindEdgeCrossing(points, triangles, crossing))
+    << "edge " << crossing.EdgePoints[0] << "-" << crossing.EdgePoints[1] << " triangle "
+    << crossing.Triangle;
 }
 
 TEST(FindEdgeCrossing, OverlappingSpheresCross)
