@@ -8,7 +8,10 @@
 //
 // In one run, --rounds times (default 2): first every rank of MPI_COMM_WORLD
 // solves its slab (cold solve: numbering, assembly, AMG set-up, PCG; then a
-// relight: new right-hand side, hierarchy kept, warm start), then rank 0
+// relight: new right-hand side, hierarchy kept, warm start; then two paint
+// strokes, each changing mu_a x5 and mu_s' x2 in a half ball under the top
+// face (~1 % of the tets): the first with a full hierarchy set-up, the
+// second with the values-only set-up, warm started), then rank 0
 // alone (MPI_COMM_SELF; the others sleep) solves the whole box the same way,
 // and the two fluences are compared at every point. --serial also compares
 // with the serial core path (the solver's default linear solver, cg-jacobi)
@@ -135,6 +138,31 @@ Piece MakeSlab(int n, int i0, int i1, double size, bool coordinateKeys)
   return p;
 }
 
+/// Paint stroke k (1 or 2): mu_a x5 and mu_s' x2 in the tets whose
+/// centroid lies within 0.17 size of a point on the top face (a half ball,
+/// ~1 % of the box), at x = 0.3 size (k = 1) or 0.7 size (k = 2).
+void Paint(Piece& p, double size, int k)
+{
+  const double centre[3] = { (k == 1 ? 0.3 : 0.7) * size, 0.5 * size, size };
+  const double radius = 0.17 * size;
+  for (size_t t = 0; t < p.Tets.size() / 4; ++t)
+  {
+    double x[3] = { 0.0, 0.0, 0.0 };
+    for (int a = 0; a < 4; ++a)
+      for (int d = 0; d < 3; ++d)
+        x[d] += 0.25 * p.Points[3 * static_cast<size_t>(p.Tets[4 * t + a]) + d];
+    const double r2 = (x[0] - centre[0]) * (x[0] - centre[0]) +
+      (x[1] - centre[1]) * (x[1] - centre[1]) + (x[2] - centre[2]) * (x[2] - centre[2]);
+    if (r2 >= radius * radius)
+      continue;
+    for (int c = 0; c < 3; ++c)
+    {
+      p.Material.AbsorptionCoefficient[3 * t + c] *= 5.0;
+      p.Material.ReducedScatteringCoefficient[3 * t + c] *= 2.0;
+    }
+  }
+}
+
 std::vector<double> Irradiance(const Piece& p, double size, bool relight)
 {
   std::vector<double> q(p.Points.size());
@@ -190,14 +218,25 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
     solver.SetRelTol(tol);
     solver.SetMaxIter(1000);
     solver.SetNumberOfThreads(threads);
-    for (int phase = 0; phase < 2; ++phase)
+    static const char* phases[4] = { "cold", "relight", "paint (full set-up)",
+      "paint (values-only set-up)" };
+    for (int phase = 0; phase < 4; ++phase)
     {
-      const std::vector<double> q = Irradiance(piece, size, phase == 1);
+      const std::vector<double> q = Irradiance(piece, size, phase >= 1);
+      if (phase >= 2)
+      {
+        Paint(piece, size, phase - 1);
+        solver.SetValuesOnlySetup(phase == 3);
+      }
       translucency::SolverReport report;
       MPI_Barrier(comm);
       const double start = MPI_Wtime();
       const double cpuStart = CpuMilliseconds();
       solver.Solve(piece.Points, piece.Keys, piece.Tets, piece.Material, q, result.Fluence, report);
+      static const char* expected[4] = { "full", "unchanged", "full", "values-only" };
+      if (report.Assembly != expected[phase])
+        throw translucency::Error(std::string("the ") + phases[phase] + " solve took the '" +
+          report.Assembly + "' path, not '" + expected[phase] + "'");
       const double cpu = CpuMilliseconds() - cpuStart;
       std::vector<double> cpus(static_cast<size_t>(ranks));
       MPI_Gather(&cpu, 1, MPI_DOUBLE, cpus.data(), 1, MPI_DOUBLE, 0, comm);
@@ -215,13 +254,13 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
       MPI_Allreduce(&tets, &allTets, 1, MPI_LONG_LONG, MPI_SUM, comm);
       if (rank == 0)
       {
-        Rounds[std::string(label) + (phase == 0 ? " cold" : " relight")].push_back(
+        Rounds[std::string(label) + " " + phases[phase]].push_back(
           { numbering, assembly, amg, solve, total });
         std::printf("%s ranks %d %s tets %lld unknowns %lld: numbering %.0f ms, assembly %.0f ms, "
                     "AMG set-up %.0f ms, solve %.0f ms (total %.0f ms); iterations %d %d %d, "
                     "residual %.1e; levels %d, operator complexity %.2f; assembly '%s'; memory MB "
                     "per rank",
-          label, ranks, phase == 0 ? "cold" : "relight", allTets, solver.GetNumberOfRows(),
+          label, ranks, phases[phase], allTets, solver.GetNumberOfRows(),
           numbering, assembly, amg, solve, total, report.Iterations[0], report.Iterations[1],
           report.Iterations[2], std::max({ report.Residual[0], report.Residual[1], report.Residual[2] }),
           solver.GetNumberOfLevels(0), solver.GetOperatorComplexity(0), report.Assembly.c_str());
@@ -345,15 +384,18 @@ int main(int argc, char* argv[])
                          b = one.Fluence[3 * where[static_cast<size_t>(ids[k])] + c];
             worst = std::max(worst, std::abs(a - b) / std::abs(b));
           }
-        std::printf("max relative difference, %d ranks vs 1 (relit fluence, every point of every "
-                    "rank): %.2e\n", size, worst);
+        std::printf("max relative difference, %d ranks vs 1 (relit, twice painted fluence, every "
+                    "point of every rank): %.2e\n", size, worst);
         std::fflush(stdout);
       }
       if (rank == 0 && serial)
       {
         // The serial core path (Solve Diffusion with one process) on the
-        // whole box: the relit fluence, to RelTol `tol`.
+        // whole box: the relit fluence after both paint strokes, to RelTol
+        // `tol` (the last distributed solve used the values-only set-up).
         Piece whole = MakeSlab(n, 0, n, sizeMm, coordinates);
+        Paint(whole, sizeMm, 1);
+        Paint(whole, sizeMm, 2);
         translucency::TetMesh mesh;
         mesh.SetGeometry(whole.Points, whole.Tets);
         const std::vector<double> q = Irradiance(whole, sizeMm, true);

@@ -203,6 +203,34 @@ void HypreBoomerAMGPCG::SetupAddTo(int rowBegin, int rowEnd, const std::vector<i
   HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
 }
 
+void HypreBoomerAMGPCG::UpdateValuesAddTo(const std::vector<int>& rows,
+  const std::vector<int>& sizes, const std::vector<int>& columns,
+  const std::vector<double>& values)
+{
+  Handles& h = *H_;
+  if (!h.A || !h.PCG)
+  {
+    throw Error("hypre-amg: UpdateValuesAddTo() called before SetupAddTo()");
+  }
+  const double start = MPI_Wtime();
+  // hypre (2.26): SetConstantValues on the assembled matrix, then
+  // Initialize re-opens it for values on its existing pattern (the
+  // ParCSR object, and so the hierarchy's fine level, stays the same).
+  Check(HYPRE_IJMatrixSetConstantValues(h.A, 0.0), "zeroing the matrix values");
+  Check(HYPRE_IJMatrixInitialize(h.A), "matrix re-initialisation");
+  if (!rows.empty())
+  {
+    std::vector<HYPRE_Int> n(sizes.begin(), sizes.end());
+    std::vector<HYPRE_BigInt> r(rows.begin(), rows.end()), c(columns.begin(), columns.end());
+    Check(HYPRE_IJMatrixAddToValues(h.A, static_cast<HYPRE_Int>(r.size()), n.data(), r.data(),
+            c.data(), values.data()),
+      "adding the new matrix values");
+  }
+  Check(HYPRE_IJMatrixAssemble(h.A), "matrix re-assembly");
+  MatrixMilliseconds_ = 1000.0 * (MPI_Wtime() - start);
+  HierarchyMilliseconds_ = 0.0;
+}
+
 void HypreBoomerAMGPCG::BuildSolver()
 {
   Handles& h = *H_;

@@ -91,6 +91,20 @@ public:
     const std::vector<double>& values, const int* rowSizeHints);
 
   /**
+   * Values-only update (collective): the same rows, sizes and columns as
+   * the last SetupAddTo, new values, written into the same hypre matrix
+   * (re-initialised, zeroed, added to, re-assembled); the BoomerAMG
+   * hierarchy is kept. Its fine level is this matrix, so smoothing and
+   * residuals see the new values; the coarse levels and the smoother's
+   * l1 norms are the old matrix's, a preconditioner that stays good while
+   * the change is small (a paint stroke). PCG then converges to RelTol on
+   * the new matrix. Throws translucency::Error if there is no SetupAddTo
+   * to update or hypre refuses an entry (a changed pattern).
+   */
+  void UpdateValuesAddTo(const std::vector<int>& rows, const std::vector<int>& sizes,
+    const std::vector<int>& columns, const std::vector<double>& values);
+
+  /**
    * Solve for the local part b (rowEnd - rowBegin values) into x; x is the
    * initial guess if `guess`, else zero. Returns the PCG iterations;
    * relativeResidual gets ||b - Ax|| / ||b||.

@@ -325,10 +325,12 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
   const std::vector<double> rhs = Numbering_.SumToOwners(Comm_, localRhs, 3);
   localRhs = {};
 
-  // 3. The matrices: rebuilt (values added, hierarchy set up) when changed.
+  // 3. The matrices: rebuilt (values added, hierarchy set up) when changed,
+  // or, on the same mesh, new values under the kept hierarchy.
   const int owned = Numbering_.GetNumberOfOwnedRows();
   double hierarchyMs = 0.0;
-  bool rebuilt = false;
+  bool rebuilt = false, updated = false;
+  std::array<bool, NumberOfChannels> valuesOnly{};
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     std::vector<double> values(SendPositions_.size());
@@ -338,8 +340,40 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
     int anyChanged = 0;
     MPI_Allreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, Comm_);
     system.Values[c] = {};
-    if (anyChanged)
+    // Values only when every rank can (the same branch on every rank).
+    int canUpdate = allSame && Channels_[c] && !OptionsChanged_ && !ForceFull_[c] &&
+        values.size() == Contributions_[c].size()
+      ? 1
+      : 0;
+    int allCanUpdate = 0;
+    MPI_Allreduce(&canUpdate, &allCanUpdate, 1, MPI_INT, MPI_MIN, Comm_);
+    if (anyChanged && ValuesOnly_ && allCanUpdate)
     {
+      try
+      {
+        Channels_[c]->UpdateValuesAddTo(SendRows_, SendSizes_, SendColumns_, values);
+      }
+      catch (const Error& e)
+      {
+        error = e.what();
+      }
+      int failed = error.empty() ? 0 : 1, anyFailed = 0;
+      MPI_Allreduce(&failed, &anyFailed, 1, MPI_INT, MPI_MAX, Comm_);
+      if (anyFailed)
+      {
+        // The matrix is half-updated: the next Solve sets up from scratch.
+        Channels_[c].reset();
+        Contributions_[c].clear();
+      }
+      AgreeOnError(Comm_, error);
+      updated = true;
+      valuesOnly[c] = true;
+      Contributions_[c].swap(values);
+    }
+    else if (anyChanged)
+    {
+      ForceFull_[c] = false;
+      FullIterations_[c] = -1; // set by this Solve's PCG
       try
       {
         if (!Channels_[c])
@@ -360,7 +394,7 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
     }
   }
   OptionsChanged_ = false;
-  report.Assembly = rebuilt ? "full" : "unchanged";
+  report.Assembly = rebuilt ? "full" : updated ? "values-only" : "unchanged";
   system = DiffusionSystem();
   Timings_.Assembly = Milliseconds(start) - hierarchyMs;
   Timings_.AMGSetup = hierarchyMs;
@@ -402,6 +436,11 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
       AgreeOnError(Comm_, error);
       report.Residual[c] = residual;
       report.Converged[c] = residual <= RelTol_;
+      const int iterations = report.Iterations[c]; // global: the same on every rank
+      if (FullIterations_[c] < 0)
+        FullIterations_[c] = iterations;
+      else if (valuesOnly[c] && iterations > 2 * std::max(FullIterations_[c], 5))
+        ForceFull_[c] = true; // the kept hierarchy has aged: rebuild at the next change
     }
     for (int r = 0; r < owned; ++r)
       solution[3 * static_cast<std::size_t>(r) + c] = x[static_cast<std::size_t>(r)];

@@ -60,6 +60,18 @@ public:
   void SetMaxIter(int n) { MaxIter_ = n; }
   void SetWarmStart(bool on) { WarmStart_ = on; }
   ///@}
+  /**
+   * Values-only set-up (default on): when the mesh is the last Solve's and
+   * only the matrix values changed (a paint), the new values go into the
+   * same hypre matrices and the BoomerAMG hierarchies are kept
+   * (HypreBoomerAMGPCG::UpdateValuesAddTo): no set-up, PCG still converges
+   * to RelTol on the new matrix. A channel whose PCG then needs more than
+   * twice the iterations of its last solve after a full set-up (at least
+   * 10) gets a full set-up at the next change. Off: every change of values
+   * rebuilds the hierarchies.
+   */
+  void SetValuesOnlySetup(bool on) { ValuesOnly_ = on; }
+  bool GetValuesOnlySetup() const { return ValuesOnly_; }
   /// OpenMP threads of the local assembly (0 = OpenMP's default).
   void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
   /// BoomerAMG settings (default BoomerAMGOptions::Tuned()); a change
@@ -72,9 +84,11 @@ public:
    * irradiance: 3 per local point (W/mm^2). fluence gets 3 per local point.
    * Throws translucency::Error (on every rank) on invalid input.
    * report.Assembly is "full" when the hypre matrices and hierarchies were
-   * rebuilt, "unchanged" when every rank's matrix values equal the last
-   * Solve's (a relight: the hierarchies are kept, only the right-hand side
-   * is new); iterations and residuals are the same on every rank.
+   * rebuilt, "values-only" when new values went into the kept matrices and
+   * hierarchies (SetValuesOnlySetup), "unchanged" when every rank's matrix
+   * values equal the last Solve's (a relight: the hierarchies are kept,
+   * only the right-hand side is new); iterations and residuals are the same
+   * on every rank.
    */
   void Solve(const std::vector<double>& points, const std::vector<PointKey>& keys,
     const std::vector<int>& tets, const OpticalProperties& material,
@@ -111,6 +125,11 @@ private:
   int NumberOfThreads_ = 0;
   BoomerAMGOptions Options_ = BoomerAMGOptions::Tuned();
   bool OptionsChanged_ = false;
+  bool ValuesOnly_ = true;
+  /// Per channel: iterations of the last solve after a full set-up, and
+  /// whether the next change of values must rebuild the hierarchy.
+  std::array<int, NumberOfChannels> FullIterations_{};
+  std::array<bool, NumberOfChannels> ForceFull_{};
 
   // The geometry of the last Solve and what was derived from it.
   bool HaveGeometry_ = false;
