@@ -110,8 +110,16 @@ int vtkOutgoingRadiance::RequestData(
   std::vector<double> values;
   try
   {
+    // The Robin rule the solve used (vtkSolveDiffusion writes
+    // TranslucencyBoundaryRule = 1 for the Fresnel moments of the
+    // "extended-moments" collimated model); absent: eq. 3's fit.
+    vtkDataArray* ruleArray = input->GetFieldData()->GetArray("TranslucencyBoundaryRule");
+    const translucency::Fresnel::BoundaryRule rule =
+      ruleArray && ruleArray->GetNumberOfTuples() > 0 && ruleArray->GetComponent(0, 0) == 1.0
+      ? translucency::Fresnel::BoundaryRule::Moments
+      : translucency::Fresnel::BoundaryRule::Fit;
     values = translucency::BoundaryRadiance(mesh, fluence, irradiance, pointEta,
-      this->UseViewPoint ? this->ViewPoint : nullptr, this->NSquaredLaw);
+      this->UseViewPoint ? this->ViewPoint : nullptr, this->NSquaredLaw, rule);
   }
   catch (const translucency::Error& e)
   {

@@ -21,6 +21,7 @@
 #include <vtkDoubleArray.h>
 #include <vtkCellData.h>
 #include <vtkFieldData.h>
+#include <vtkIntArray.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
 #include <vtkMultiProcessController.h>
@@ -77,6 +78,10 @@ struct vtkSolveDiffusion::Internals
   /// The solver, the changed-tet detection and the warm-start bookkeeping.
   translucency::DiffusionFrontEnd FrontEnd;
   translucency::SolverReport Report;
+  /// The Robin rule of the last solve (Moments after a divergence/fem solve
+  /// with the "extended-moments" collimated model), for the power balance
+  /// and, through the field array TranslucencyBoundaryRule, the radiance.
+  translucency::Fresnel::BoundaryRule SolvedRule = translucency::Fresnel::BoundaryRule::Fit;
   /// GetAvailableLinearSolvers()'s array.
   vtkNew<vtkStringArray> LinearSolverNames;
   translucency::Sources Sources;
@@ -504,6 +509,7 @@ int vtkSolveDiffusion::RequestData(
   std::string error;
   this->TopologyTime = this->AssemblyTime = this->SolveTime = 0.0;
   in.Report = translucency::SolverReport();
+  in.SolvedRule = translucency::Fresnel::BoundaryRule::Fit;
   in.Readings.clear();
   in.FluencePhase.clear();
   in.ExitancePhase.clear();
@@ -888,6 +894,13 @@ int vtkSolveDiffusion::RequestData(
       {
         return 0; // aborted by the user
       }
+      // divergence and fem solve the extended-moments model with the Robin
+      // rule of the Fresnel moments (VertexDiffusionSolver; quadgraph and
+      // grid refuse the extended models).
+      if (light.Collimated == translucency::CollimatedModel::ExtendedMoments)
+      {
+        in.SolvedRule = translucency::Fresnel::BoundaryRule::Moments;
+      }
       if (!in.Detectors.empty())
       {
         // The detectors read the diffuse fluence (the unscattered beam of
@@ -934,6 +947,19 @@ int vtkSolveDiffusion::RequestData(
     attach(vtkTranslucency::FluenceName, fluence);
     attach("FluenceStandardError", in.Report.FluenceStandardError);
     attach("CollimatedFluence", in.Report.CollimatedFluence);
+    if (in.SolvedRule == translucency::Fresnel::BoundaryRule::Moments)
+    {
+      // Read by vtkOutgoingRadiance: the radiance of this solve's boundary
+      // condition (Fresnel-moment A and Fdr), not eq. 3's fit.
+      vtkNew<vtkIntArray> rule;
+      rule->SetName("TranslucencyBoundaryRule");
+      rule->InsertNextValue(1);
+      output->GetFieldData()->AddArray(rule);
+    }
+    else
+    {
+      output->GetFieldData()->RemoveArray("TranslucencyBoundaryRule"); // not this solve's
+    }
     attach("MonteCarloRadiance", in.Report.Radiance);
     attach("MonteCarloRadianceStandardError", in.Report.RadianceStandardError);
     attach("FluenceAmplitude", amplitude);
@@ -1102,14 +1128,35 @@ bool vtkSolveDiffusion::ComputePowerBalance(
   }
   try
   {
-    const translucency::PowerBalance balance =
-      translucency::ComputePowerBalance(*mesh, material, fluence, &irradiance);
+    // The extended collimated model: Fluence = phi_d + E_c. The diffuse
+    // field's balance is read from phi_d with the solve's Robin rule; the
+    // beam adds what entered (injected), what it deposited directly
+    // (absorbed) and what leaves unscattered, entering - scattered -
+    // absorbed (escaped; DiffuseOptics.md, "Power balance").
+    const translucency::SolverReport& report = this->Internal->Report;
+    const bool beam = report.CollimatedFluence.size() == fluence.size();
+    if (beam)
+    {
+      for (std::size_t k = 0; k < fluence.size(); ++k)
+      {
+        fluence[k] -= report.CollimatedFluence[k];
+      }
+    }
+    const translucency::PowerBalance balance = translucency::ComputePowerBalance(
+      *mesh, material, fluence, &irradiance, this->Internal->SolvedRule);
     const auto sources = this->Internal->SolvedSources.InjectedPower(*mesh, material);
     for (int c = 0; c < 3; ++c)
     {
       injected[c] = balance.BoundaryInjected[c] + sources[c];
       absorbed[c] = balance.Absorbed[c];
       escaped[c] = balance.Escaped[c];
+      if (beam)
+      {
+        injected[c] += report.CollimatedEntering[c];
+        absorbed[c] += report.CollimatedAbsorbed[c];
+        escaped[c] +=
+          report.CollimatedEntering[c] - report.CollimatedScattered[c] - report.CollimatedAbsorbed[c];
+      }
     }
   }
   catch (const translucency::Error& e)

@@ -30,17 +30,29 @@ void CheckTetEta(const TetMesh& mesh, const std::vector<double>& tetEta)
 
 } // namespace
 
-double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nSquaredLaw)
+double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nSquaredLaw,
+  Fresnel::BoundaryRule rule)
 {
   if (!(cosOut > 0.0))
   {
     return 0.0;
   }
-  const double fdr = Fresnel::DiffuseReflectance(eta);
-  const double a = Fresnel::MismatchA(eta);
   const double ft = Fresnel::Transmittance(std::min(cosOut, 1.0), eta);
-  // TransCut eq. 3: L_o = F_t/(4 pi) [ (1 + 1/A) phi - 4/(1 + Fdr) q ]
-  double radiance = ft / (4.0 * Pi) * ((1.0 + 1.0 / a) * phi - 4.0 / (1.0 + fdr) * q);
+  double radiance = 0.0;
+  if (rule == Fresnel::BoundaryRule::Fit)
+  {
+    const double fdr = Fresnel::DiffuseReflectance(eta);
+    const double a = Fresnel::MismatchA(eta);
+    // TransCut eq. 3: L_o = F_t/(4 pi) [ (1 + 1/A) phi - 4/(1 + Fdr) q ]
+    radiance = ft / (4.0 * Pi) * ((1.0 + 1.0 / a) * phi - 4.0 / (1.0 + fdr) * q);
+  }
+  else
+  {
+    // The same read-out with the rule's A and Fdr (Radiance.h): eq. 3's
+    // 4/(1 + Fdr) q is (4 q/(1 - Fdr)) / A for the fit's A.
+    const Fresnel::RobinCoefficients robin = Fresnel::BoundaryCoefficients(eta, rule);
+    radiance = ft / (4.0 * Pi) * (phi + (phi - 4.0 * q / (1.0 - robin.Fdr)) / robin.A);
+  }
   if (nSquaredLaw)
   {
     radiance /= eta * eta; // radiance from inside to vacuum scales by 1/eta^2
@@ -65,7 +77,7 @@ std::vector<double> BoundaryPointRefractiveIndex(const TetMesh& mesh,
 
 std::vector<double> BoundaryRadiance(const TetMesh& mesh, const std::vector<double>& fluence,
   const std::vector<double>& irradiance, const std::vector<double>& pointEta,
-  const double* viewPoint, bool nSquaredLaw)
+  const double* viewPoint, bool nSquaredLaw, Fresnel::BoundaryRule rule)
 {
   const size_t numPoints = static_cast<size_t>(mesh.GetNumberOfPoints());
   if (fluence.size() != 3 * numPoints || irradiance.size() != 3 * numPoints ||
@@ -97,7 +109,7 @@ std::vector<double> BoundaryRadiance(const TetMesh& mesh, const std::vector<doub
     for (int c = 0; c < 3; ++c)
     {
       radiance[3 * k + c] = OutgoingRadiance(
-        fluence[3 * i + c], irradiance[3 * i + c], pointEta[i], cosOut, nSquaredLaw);
+        fluence[3 * i + c], irradiance[3 * i + c], pointEta[i], cosOut, nSquaredLaw, rule);
     }
   }
   RequireFinite(radiance, "Radiance", OverflowCause());

@@ -4,6 +4,7 @@
  */
 #pragma once
 
+#include "Fresnel.h"
 #include "TetMesh.h"
 
 #include <cstddef>
@@ -14,6 +15,11 @@ namespace translucency
 
 /**
  * L_o = F_t(w_o)/(4 pi) [ (1 + 1/A) phi - 4/(1 + Fdr) q ]   (TransCut eq. 3)
+ * with the fit's A = (1 + Fdr)/(1 - Fdr) (Fresnel::BoundaryRule::Fit). With
+ * another rule (`rule`, the Robin coefficients the solve used: Moments for
+ * the "extended-moments" collimated model) the same read-out is written
+ * L_o = F_t/(4 pi) [ phi + (phi - 4 q/(1 - Fdr)) / A ], which is eq. 3 for
+ * the fit and the matching flux of the Robin condition otherwise.
  * @param phi fluence at the point (W/mm^2)
  * @param q boundary irradiance at the point (W/mm^2)
  * @param eta refractive index at the point
@@ -26,7 +32,8 @@ namespace translucency
  *        Default false (the paper's formula).
  * @return radiance (W/mm^2/sr), clamped below at 0
  */
-double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nSquaredLaw = false);
+double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nSquaredLaw = false,
+  Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit);
 
 /**
  * OutgoingRadiance() at every boundary point of the mesh, in the order of
@@ -36,13 +43,14 @@ double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nS
  * @param viewPoint null: every point seen along its normal (cosOut = 1);
  *        else seen from this point (mm): cosOut is the cosine between the
  *        point normal and the direction to it (0 at the view point itself)
- * @param nSquaredLaw see OutgoingRadiance()
+ * @param nSquaredLaw, rule see OutgoingRadiance()
  * OpenMP-parallel over the points (each value independent: same bits at any
  * thread count). Throws translucency::Error on wrong array sizes.
  */
 std::vector<double> BoundaryRadiance(const TetMesh& mesh, const std::vector<double>& fluence,
   const std::vector<double>& irradiance, const std::vector<double>& pointEta,
-  const double* viewPoint, bool nSquaredLaw = false);
+  const double* viewPoint, bool nSquaredLaw = false,
+  Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit);
 
 /**
  * Refractive index seen by each mesh point: the area-weighted mean of the

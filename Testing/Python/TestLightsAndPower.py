@@ -20,6 +20,13 @@ How to run (from a build tree; ctest sets the environment):
    the rows of either system); an interior point source of 0.5 W alone
    injects exactly 0.5 W per channel (its definition); `render --json`
    reports the same balance as the filter.
+   The same identity under each collimated-beam model (surface, extended,
+   extended-moments): the report adds the beam (entering, directly absorbed,
+   leaving unscattered) to the diffuse field's balance, read with the Robin
+   rule the solve used; the three models inject the same power (incident
+   times F_t, computed two ways). Outgoing Radiance after an
+   extended-moments solve equals eq. 3 rewritten with the Fresnel-moment
+   A and Fdr, computed here by quadrature (an independent implementation).
 4. Frequency domain: ComputePowerBalance refuses (complex fluence).
 6. Coloured and spot lights: an R,G,B directional light scales each channel
    of a white one exactly (powers of two); a spot light equals the point
@@ -41,6 +48,7 @@ import sys
 import tempfile
 import unittest
 
+import numpy as np
 import translucency
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkFiltersSources import vtkSphereSource
@@ -49,6 +57,8 @@ from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
 
 from cli_under_test import find_cli  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import TestPipeline as tp  # noqa: E402  (the Fresnel helpers, written independently)
 
 CLI = find_cli("TestLightsAndPower")
 REL_TOL = 1e-10
@@ -185,6 +195,69 @@ class LightsAndPowerTest(unittest.TestCase):
                 self.assertGreater(absorbed[c], 0.01 * injected[c])
                 self.assertLess(abs(absorbed[c] + escaped[c] - injected[c]) / injected[c], 1e-6,
                                 "%s channel %d" % (solver, c))
+
+    def test_power_balance_under_every_collimated_model(self):
+        injected_by_model = {}
+        for model in (0, 1, 2):  # surface, extended, extended-moments
+            for solver in ("fem", "divergence"):
+                light = self.light()
+                light.SetCollimatedModel(model)
+                solve = self.solve(light, solver)
+                translucency.update(solve)
+                injected, absorbed, escaped = [0.0] * 3, [0.0] * 3, [0.0] * 3
+                self.assertTrue(solve.ComputePowerBalance(injected, absorbed, escaped))
+                for c in range(3):
+                    self.assertLess(abs(absorbed[c] + escaped[c] - injected[c]) / injected[c],
+                                    1e-6, "model %d, %s channel %d: %s %s %s" % (
+                                        model, solver, c, injected, absorbed, escaped))
+                injected_by_model.setdefault(model, injected)
+        for model in (1, 2):
+            for c in range(3):
+                self.assertLess(abs(injected_by_model[model][c] - injected_by_model[0][c]) /
+                                injected_by_model[0][c], 1e-3, (model, injected_by_model))
+
+    @staticmethod
+    def fresnel_moments(eta):
+        """R_phi = 2 int R mu dmu, R_J = 3 int R mu^2 dmu over the internal cosine mu
+        (R = 1 below the critical cosine), Gauss-Legendre above it in t, mu = mu_c +
+        (1 - mu_c) t^2 (which removes the square root at the critical angle)."""
+        mu_c = np.sqrt(1.0 - 1.0 / eta ** 2)
+        x, w = np.polynomial.legendre.leggauss(400)
+        t = 0.5 * (x + 1.0)
+        mu = mu_c + (1.0 - mu_c) * t ** 2
+        weights = 0.5 * w * 2.0 * (1.0 - mu_c) * t
+        cos_outside = np.sqrt(np.clip(1.0 - eta ** 2 * (1.0 - mu ** 2), 0.0, 1.0))
+        r = 1.0 - tp.fresnel_transmittance(cos_outside, eta)
+        r_phi = mu_c ** 2 + 2.0 * np.sum(weights * r * mu)
+        r_j = mu_c ** 3 + 3.0 * np.sum(weights * r * mu ** 2)
+        return r_phi, r_j
+
+    def test_radiance_uses_the_rule_of_the_solve(self):
+        light = self.light()
+        light.SetCollimatedModel(2)
+        solve = self.solve(light, "divergence")
+        radiance = translucency.vtkOutgoingRadiance()
+        radiance.SetInputConnection(solve.GetOutputPort())
+        translucency.update(radiance)
+        grid, out = solve.GetOutput(), radiance.GetOutput()
+        self.assertIsNotNone(grid.GetFieldData().GetArray("TranslucencyBoundaryRule"))
+        ids = vtk_to_numpy(out.GetPointData().GetArray("vtkOriginalPointIds"))
+        phi = vtk_to_numpy(grid.GetPointData().GetArray("Fluence"))[ids]
+        phi = phi - vtk_to_numpy(grid.GetPointData().GetArray("CollimatedFluence"))[ids]
+        q = vtk_to_numpy(grid.GetPointData().GetArray("Irradiance"))[ids]
+        eta = vtk_to_numpy(grid.GetCellData().GetArray("RefractiveIndex"))
+        self.assertLess(np.ptp(eta), 1e-12)  # one eta: every boundary point sees it
+        eta = float(eta[0])
+        r_phi, r_j = self.fresnel_moments(eta)
+        a = (1.0 + r_j) / (1.0 - r_phi)
+        f_t = 1.0 - ((eta - 1.0) / (eta + 1.0)) ** 2  # seen along the normal
+        expected = np.maximum(0.0, f_t / (4 * np.pi) * (phi + (phi - 4 * q / (1 - r_phi)) / a))
+        fit = np.maximum(0.0, f_t / (4 * np.pi) * ((1 + 1 / tp.mismatch_a(eta)) * phi -
+                                                   4 / (1 + tp.fdr(eta)) * q))
+        got = vtk_to_numpy(out.GetPointData().GetArray("Radiance"))
+        scale = expected.max()
+        self.assertLess(abs(got - expected).max() / scale, 1e-9)
+        self.assertGreater(abs(fit - expected).max() / scale, 1e-2)  # the rule matters
 
     def test_point_source_alone_injects_its_power(self):
         light = self.light()
