@@ -338,6 +338,12 @@ Command AddBenchCommand(CLI::App& app)
     c->add_flag_callback("--no-cut", [linear]() { linear->DoCut = false; },
        "skip the cut -> new fluence figure")
       ->group(group);
+  CLI::Option* frequency = AddNumber(c, "--frequency", linear->Frequency,
+    "also the frequency-domain figure at this modulation\n"
+    "frequency (Hz, > 0): the divergence solve of light 0, CW vs\n"
+    "COCG-multigrid and COCG-Jacobi, same run",
+    "HZ", [](double f) { return f > 0 && f < 1e12; }, "--frequency must be in (0, 1e12) Hz")
+    ->group(group);
   auto meshersFlag = std::make_shared<bool>(false);
   CLI::Option* meshers = c->add_flag("--meshers", *meshersFlag,
     "compare the tetrahedralisers instead: tetgen and hxt (when\n"
@@ -347,7 +353,7 @@ Command AddBenchCommand(CLI::App& app)
   meshers->excludes(linearSolvers);
   edit->excludes(meshers);
   edit->excludes(linearSolvers);
-  for (CLI::Option* only : { plot, ranks, noCut })
+  for (CLI::Option* only : { plot, ranks, noCut, frequency })
     only->needs(linearSolvers);
   return { c, [=]() {
             if (linearSolvers->count() > 0)

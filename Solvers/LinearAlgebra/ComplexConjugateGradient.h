@@ -19,6 +19,8 @@
 
 #include <Eigen/Core>
 
+#include <array>
+
 #include <complex>
 #include <functional>
 
@@ -40,5 +42,37 @@ bool SolveComplexSymmetricCOCG(int n, const int* rowOffsets, const int* columns,
   const double* realValues, const double* imagValues, const Eigen::VectorXcd& b,
   Eigen::VectorXcd& x, double relTol, int maxIter, LinearSolveStats& stats,
   const std::function<bool(int)>& progress = {});
+
+/// z = B r for the three channels interleaved (3 n real values, vertex i's
+/// channels at 3 i .. 3 i + 2): a real symmetric positive definite
+/// preconditioner, e.g. one multigrid cycle
+/// (AggregationMultigridSolver::ApplyPreconditioner).
+using InterleavedPreconditioner =
+  std::function<void(const Eigen::VectorXd& r, Eigen::VectorXd& z)>;
+
+/**
+ * COCG on the three channels at once, (A_c + i B) x_c = b_c on one CSR
+ * pattern (A_c real per channel, B real and the same for the three
+ * channels: the modulation term omega eta / c does not depend on the
+ * wavelength), preconditioned by a real symmetric positive definite M
+ * applied to the real and the imaginary parts of the residuals. A real
+ * symmetric preconditioner keeps the preconditioned system complex
+ * symmetric, so COCG's short recurrence holds. Vectors are interleaved:
+ * real and imaginary parts in separate arrays of 3 n values (vertex i's
+ * channels at 3 i .. 3 i + 2); x is the initial guess if both parts have
+ * 3 n values, else zero. Each iteration is one fused, OpenMP-parallel
+ * product of the three channels with their bilinear forms, two
+ * applications of M (real parts, imaginary parts) and one fused update.
+ * Per channel: stops when ||b_c - (A_c + i B) x_c|| <= relTol ||b_c|| (a
+ * channel that has converged keeps its x), the true residual checked at
+ * the end; b_c = 0 gives x_c = 0; a breakdown stops that channel, not
+ * converged. `progress` as SolveComplexSymmetricCOCG.
+ * stats[c].SpMVEquivalents counts complex products (the caller adds M's).
+ */
+bool SolveComplexSymmetricCOCGChannels(int n, const int* rowOffsets, const int* columns,
+  const std::array<const double*, 3>& realValues, const double* imagValues,
+  const Eigen::VectorXd& bReal, const Eigen::VectorXd& bImag, Eigen::VectorXd& xReal,
+  Eigen::VectorXd& xImag, double relTol, int maxIter, std::array<LinearSolveStats, 3>& stats,
+  const InterleavedPreconditioner& precondition, const std::function<bool(int)>& progress = {});
 
 } // namespace translucency
