@@ -23,7 +23,9 @@ Diffusion, saved as <case>.pvtu, and per rank one line in irr_<rank>.txt:
 an invalid RefractiveIndex on rank 1 only (the same error on every rank),
 after_error_B (a run after it), then Assign Scattering Coefficients (a spherical inclusion) on the 3-piece,
 1-piece and ghost-cell .pvtu (assign_<case>.pvtu; the serial ref_assign.vtu),
-with a line "assign <case> rank <r> path <path>".
+with a line "assign <case> rank <r> path <path>", and Paint Scattering
+Coefficients per piece (paint_<case>.pvtu; the serial ref_paint.vtu, painted
+then lit with B and solved), with a line "paint <case> rank <r> path <path>".
 """
 
 import os
@@ -49,6 +51,14 @@ def path(name):
 def chain(source, lights):
     lit = SurfaceIrradiance(Input=source, Shadows=1, **LIGHTS[lights])
     return lit, SolveDiffusion(Input=lit, Solver="divergence", RelTol=TOL, MaxIter=20000)
+
+
+def paint(source, original=None):
+    # A stroke over the top and down one side (per tet: each piece painted
+    # on its rank under MPI); with `original`, the two-port form.
+    extra = {} if original is None else dict(OriginalMesh=original)
+    return PaintScatteringCoefficients(Input=source, StrokePoints=[2, 2, 14, 12, 3, 14, 15, 12, 8],
+                                       StrokeIsPolyline=1, Width=1.5, **extra)
 
 
 def assign(source):
@@ -111,6 +121,9 @@ if MODE == "prepare":
         array = numpy_to_vtk(np.ascontiguousarray(values, dtype=float), deep=True)
         array.SetName(name)
         mesh.GetCellData().AddArray(array)
+    tet_ids = numpy_to_vtk(np.arange(len(tets), dtype=np.int64) * 3 + 5, deep=True)
+    tet_ids.SetName("TetIds")  # a cell identity that survives partitioning
+    mesh.GetCellData().AddArray(tet_ids)
     ids = vtkIdTypeArray()
     ids.SetName("PointIds")
     ids.SetNumberOfTuples(mesh.GetNumberOfPoints())
@@ -164,6 +177,8 @@ if MODE == "prepare":
 
     source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     SaveData(path("ref_assign.vtu"), proxy=assign(source))
+    _, painted = chain(paint(source), "B")
+    SaveData(path("ref_paint.vtu"), proxy=painted)
     for lights in LIGHTS:
         _, solved = chain(source, lights)
         SaveData(path("ref_%s.vtu" % lights), proxy=solved)
@@ -208,6 +223,27 @@ elif MODE == "run":
             f.write("assign %s rank %d path %s\n" % (
                 name, RANK, assigned.GetClientSideObject().GetParallelPath().replace(" ", "-")))
         SaveData(path(name + ".pvtu"), proxy=assigned)
+    # Paint per piece, then the chain (B): a .pvtu with ids, Redistribute
+    # DataSet (coordinate keys), the two-port form (a cut of the .pvtu, gathered
+    # on rank 0, as port 0); the paint alone on the ghost-cell .pvtu (3 ranks:
+    # an empty piece) and the one-piece .pvtu (empty pieces elsewhere).
+    pvtu2 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")])
+    pvtu1 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")])
+    cut = StrokeCut(Input=pvtu3, CutType="Plane")
+    cut.CutType.Origin = [8.0, 8.0, 3.0]
+    cut.CutType.Normal = [0.2, 0.1, 1.0]
+    for name, source, solve in (
+            ("paint_pvtu3", paint(pvtu3), True),
+            ("paint_redist", paint(RedistributeDataSet(Input=XMLUnstructuredGridReader(
+                FileName=[path("mesh.vtu")]))), True),
+            ("paint_twoport", paint(cut, original=pvtu3), True),
+            ("paint_pvtu2", paint(pvtu2), False), ("paint_pvtu1", paint(pvtu1), False)):
+        proxy = chain(source, "B")[1] if solve else source
+        proxy.UpdatePipeline()
+        with open(path("irr_%d.txt" % RANK), "a") as f:
+            f.write("paint %s rank %d path %s\n" % (
+                name, RANK, source.GetClientSideObject().GetParallelPath().replace(" ", "-")))
+        SaveData(path(name + ".pvtu"), proxy=proxy)
     # An invalid RefractiveIndex on rank 1 only: every rank reports rank 1's
     # error and nobody hangs; the next run works.
     bad = ProgrammableFilter(Input=pvtu3)

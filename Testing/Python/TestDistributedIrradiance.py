@@ -100,6 +100,12 @@ class DistributedIrradianceTest(unittest.TestCase):
             text = open(name).read() if os.path.exists(name) else ""
             for m in re.finditer(r"^assign (\S+) rank (\d+) path (\S+)$", text, re.M):
                 cls.assign_paths.setdefault(m.group(1), {})[int(m.group(2))] = m.group(3)
+        cls.paint_paths = {}
+        for rank in range(RANKS):
+            name = os.path.join(cls.work, "irr_%d.txt" % rank)
+            text = open(name).read() if os.path.exists(name) else ""
+            for m in re.finditer(r"^paint (\S+) rank (\d+) path (\S+)$", text, re.M):
+                cls.paint_paths.setdefault(m.group(1), {})[int(m.group(2))] = m.group(3)
         with open(os.path.join(cls.work, "boundary.txt")) as f:
             cls.boundary = int(f.read().split()[0])
 
@@ -216,6 +222,72 @@ class DistributedIrradianceTest(unittest.TestCase):
                     self.assertTrue(np.array_equal(row, ref[key]), case)
                 ids.extend(original[owned].tolist())
             self.assertEqual(sorted(ids), list(range(len(ref))), case)
+
+    def test_paint_per_piece(self):
+        # Paint Scattering Coefficients ran on each rank's piece: at every
+        # cell (matched by its TetIds) the serial painted mu_a, sigma_s' and
+        # PaintWeight; every serial tet once among the owned cells; the
+        # pieces' PaintedCellIds together the serial ones; the Fluence after
+        # the paint equal to the serial one to 1e-6 at every point.
+        names = ("AbsorptionCoefficient", "ReducedScatteringCoefficient", "PaintWeight")
+
+        def cells(piece):
+            data = piece.GetCellData()
+            tet = vtk_to_numpy(data.GetArray("TetIds"))
+            values = np.column_stack([vtk_to_numpy(data.GetArray(n)).reshape(len(tet), -1)
+                                      for n in names])
+            ghosts = data.GetArray("vtkGhostType")
+            owned = np.ones(len(tet), bool) if ghosts is None else (vtk_to_numpy(ghosts) & 1) == 0
+            changed = vtk_to_numpy(piece.GetFieldData().GetArray("PaintedCellIds"))
+            return tet, values, owned, changed
+        reader = vtkXMLUnstructuredGridReader()
+        reader.SetFileName(os.path.join(self.work, "ref_paint.vtu"))
+        reader.Update()
+        tet, values, _, changed = cells(reader.GetOutput())
+        ref = dict(zip(tet.tolist(), values))
+        ref_changed = set(tet[changed].tolist())
+        weights = values[:, -1]
+        self.assertGreater((weights > 1e-3).sum(), 100, "a stroke that paints")
+        self.assertGreater((weights == 0).sum(), len(weights) // 4, "and leaves many tets")
+        self.assertGreater(len(ref_changed), 100)
+        _, ref_f = self.reference("B")
+        ids, _, fluence = arrays(reader.GetOutput())
+        ref_f = dict(zip(ids.tolist(), fluence))
+        scale_f = max(np.abs(v).max() for v in ref_f.values())
+        unpainted = self.reference("B")[1]
+        self.assertGreater(max(worst_relative(ref_f[i], unpainted[i], scale_f) for i in ref_f),
+                           1e-3, "the paint changes the fluence")
+        for case in ("paint_pvtu3", "paint_redist", "paint_twoport", "paint_pvtu2",
+                     "paint_pvtu1"):
+            paths = self.paint_paths.get(case, {})
+            self.assertEqual(sorted(paths), list(range(RANKS)), case)
+            self.assertEqual(set(paths.values()), {"per-piece"}, case)
+            pieces = pieces_of(os.path.join(self.work, case + ".pvtu"))
+            seen, found_changed, worst_f, points = [], set(), 0.0, set()
+            for piece in pieces:
+                if piece.GetNumberOfCells() == 0:
+                    continue
+                t, v, owned, c = cells(piece)
+                for key, row in zip(t.tolist(), v):
+                    np.testing.assert_allclose(row, ref[key], rtol=1e-13, atol=0, err_msg=case)
+                seen.extend(t[owned].tolist())
+                mask = np.zeros(len(t), bool)
+                mask[c] = True
+                found_changed.update(t[mask & owned].tolist())
+                if case in ("paint_pvtu3", "paint_redist", "paint_twoport"):
+                    for i, _, f in zip(*arrays(piece)):
+                        worst_f = max(worst_f, worst_relative(f, ref_f[int(i)], scale_f))
+                        points.add(int(i))
+            self.assertEqual(sorted(seen), sorted(ref), "every tet once, " + case)
+            self.assertEqual(found_changed, ref_changed, "PaintedCellIds, " + case)
+            if case in ("paint_pvtu3", "paint_redist", "paint_twoport"):
+                self.assertEqual(points, set(ref_f), "every point, " + case)
+                self.assertLessEqual(worst_f, 1e-6, "max relative Fluence difference, " + case)
+            nonempty = sum(1 for p in pieces if p.GetNumberOfCells() > 0)
+            if case == "paint_pvtu1" or (case == "paint_pvtu2" and RANKS == 3):
+                self.assertEqual(nonempty, 1 if case == "paint_pvtu1" else 2, case)
+            else:
+                self.assertGreater(nonempty, 1, "the pieces stay distributed, " + case)
 
 
 if __name__ == "__main__":
