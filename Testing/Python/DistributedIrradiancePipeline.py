@@ -25,7 +25,10 @@ after_error_B (a run after it), then Assign Scattering Coefficients (a spherical
 1-piece and ghost-cell .pvtu (assign_<case>.pvtu; the serial ref_assign.vtu),
 with a line "assign <case> rank <r> path <path>", and Paint Scattering
 Coefficients per piece (paint_<case>.pvtu; the serial ref_paint.vtu, painted
-then lit with B and solved), with a line "paint <case> rank <r> path <path>".
+then lit with B and solved), with a line "paint <case> rank <r> path <path>";
+Outgoing Radiance of pvtu3_B, pvtu2_B, redist_B and pvtu1_B per piece and of
+pvtu3_B gathered (radiance_<case>.pvtp; the serial ref_radiance.vtp), with a
+line "radiance <case> rank <r> path <path> triangles <n> exposure <e>".
 """
 
 import os
@@ -182,6 +185,8 @@ if MODE == "prepare":
     for lights in LIGHTS:
         _, solved = chain(source, lights)
         SaveData(path("ref_%s.vtu" % lights), proxy=solved)
+        if lights == "B":
+            SaveData(path("ref_radiance.vtp"), proxy=OutgoingRadiance(Input=solved))
     print("prepared", flush=True)
 elif MODE == "run":
     from vtkmodules.vtkParallelCore import vtkMultiProcessController
@@ -201,16 +206,36 @@ elif MODE == "run":
                 name, RANK, o.GetParallelPath(), o.GetBoundarySurfaceTriangles(),
                 o.GetBoundarySurfaceBytes(), o.GetBoundarySurfaceTime()))
         SaveData(path(name + ".pvtu"), proxy=solved)
+        return solved
+
+    def radiance(name, solved, gathered=False):
+        # Outgoing Radiance: per piece (each rank its own physical faces), or
+        # gathered to rank 0 with TRANSLUCENCY_GATHERED_RADIANCE=1.
+        if gathered:
+            os.environ["TRANSLUCENCY_GATHERED_RADIANCE"] = "1"
+        out = OutgoingRadiance(Input=solved)
+        out.UpdatePipeline()
+        os.environ.pop("TRANSLUCENCY_GATHERED_RADIANCE", None)
+        o = out.GetClientSideObject()
+        with open(path("irr_%d.txt" % RANK), "a") as f:
+            f.write("radiance %s rank %d path %s triangles %d exposure %.17g\n" % (
+                name, RANK, o.GetParallelPath().replace(" ", "-"),
+                o.GetNumberOfSurfaceTriangles(), o.GetExposureUsed()))
+        SaveData(path("radiance_" + name + ".pvtp"), proxy=out)
 
     pvtu3 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")])
     case("pvtu3_A", pvtu3, "A")
-    case("pvtu3_B", pvtu3, "B")
+    solved = case("pvtu3_B", pvtu3, "B")
+    radiance("pvtu3_B", solved)
+    radiance("gathered_B", solved, gathered=True)
     case("redistid_A", RedistributeDataSet(Input=XMLUnstructuredGridReader(
         FileName=[path("meshid.vtu")])), "A")
-    case("pvtu2_B", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")]), "B")
-    case("redist_B", RedistributeDataSet(Input=XMLUnstructuredGridReader(
-        FileName=[path("mesh.vtu")])), "B")
-    case("pvtu1_B", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")]), "B")
+    radiance("pvtu2_B", case(
+        "pvtu2_B", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")]), "B"))
+    radiance("redist_B", case("redist_B", RedistributeDataSet(Input=XMLUnstructuredGridReader(
+        FileName=[path("mesh.vtu")])), "B"))
+    radiance("pvtu1_B", case(
+        "pvtu1_B", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")]), "B"))
     case("gathered_A", pvtu3, "A", gathered=True)
     # Assign Scattering Coefficients per piece (no ghost cells, no cell ids),
     # and gathered (ghost cells: vtkOriginalCellIds need the gathered order).

@@ -106,6 +106,13 @@ class DistributedIrradianceTest(unittest.TestCase):
             text = open(name).read() if os.path.exists(name) else ""
             for m in re.finditer(r"^paint (\S+) rank (\d+) path (\S+)$", text, re.M):
                 cls.paint_paths.setdefault(m.group(1), {})[int(m.group(2))] = m.group(3)
+        cls.radiance_reports = {}
+        for rank in range(RANKS):
+            name = os.path.join(cls.work, "irr_%d.txt" % rank)
+            text = open(name).read() if os.path.exists(name) else ""
+            for m in re.finditer(r"^radiance (\S+) rank (\d+) path (\S+) triangles (\d+) "
+                                 r"exposure (\S+)$", text, re.M):
+                cls.radiance_reports.setdefault(m.group(1), {})[int(m.group(2))] = m.groups()[2:]
         with open(os.path.join(cls.work, "boundary.txt")) as f:
             cls.boundary = int(f.read().split()[0])
 
@@ -288,6 +295,92 @@ class DistributedIrradianceTest(unittest.TestCase):
                 self.assertEqual(nonempty, 1 if case == "paint_pvtu1" else 2, case)
             else:
                 self.assertGreater(nonempty, 1, "the pieces stay distributed, " + case)
+
+    def test_outgoing_radiance_per_piece(self):
+        # Each rank output the physical faces of its own piece: together the
+        # serial surface (each face once, matched by the global ids of its
+        # points; the same total area), Radiance and Normals at every face
+        # corner equal to the serial ones, the serial automatic exposure on
+        # every rank; the gathered path the serial surface on rank 0.
+        from vtkmodules.vtkIOXML import vtkXMLPolyDataReader, vtkXMLPPolyDataReader
+        from vtkmodules.numpy_interface import dataset_adapter as dsa
+
+        def faces(surface, ids):
+            wrapped = dsa.WrapDataObject(surface)
+            x = np.asarray(wrapped.Points, dtype=float)
+            tri = vtk_to_numpy(surface.GetPolys().GetConnectivityArray()).reshape(-1, 3)
+            original = vtk_to_numpy(surface.GetPointData().GetArray("vtkOriginalPointIds"))
+            radiance = vtk_to_numpy(surface.GetPointData().GetArray("Radiance"))
+            normals = vtk_to_numpy(surface.GetPointData().GetArray("Normals"))
+            area = 0.5 * np.linalg.norm(np.cross(x[tri[:, 1]] - x[tri[:, 0]],
+                                                 x[tri[:, 2]] - x[tri[:, 0]]), axis=1)
+            result = {}
+            for f, t in enumerate(tri):
+                key = tuple(sorted(int(ids[original[v]]) for v in t))
+                result.setdefault(key, []).append(
+                    (area[f], {int(ids[original[v]]): (radiance[v], normals[v]) for v in t}))
+            return result
+        reader = vtkXMLPolyDataReader()
+        reader.SetFileName(os.path.join(self.work, "ref_radiance.vtp"))
+        reader.Update()
+        ref_mesh = vtkXMLUnstructuredGridReader()
+        ref_mesh.SetFileName(os.path.join(self.work, "ref_B.vtu"))
+        ref_mesh.Update()
+        ref = faces(reader.GetOutput(), arrays(ref_mesh.GetOutput())[0])
+        ref_exposure = float(reader.GetOutput().GetFieldData().GetArray(
+            "RadianceExposure").GetValue(0))
+        self.assertEqual(len(ref), self.boundary)
+        ref_area = sum(v[0][0] for v in ref.values())
+        scale = max(float(np.abs(r).max()) for v in ref.values() for r, _ in v[0][1].values())
+        for case in ("pvtu3_B", "pvtu2_B", "redist_B", "pvtu1_B", "gathered_B"):
+            per_rank = self.radiance_reports.get(case, {})
+            self.assertEqual(sorted(per_rank), list(range(RANKS)), case)
+            gathered = case.startswith("gathered")
+            for rank in range(RANKS):
+                path, triangles, exposure = per_rank[rank]
+                self.assertEqual(path, "gathered" if gathered else "per-piece", case)
+                if not gathered:
+                    self.assertEqual(int(triangles), self.boundary, case)
+                    self.assertLessEqual(abs(float(exposure) - ref_exposure), 1e-12 * ref_exposure,
+                                         "the serial exposure, rank %d, %s" % (rank, case))
+            preader = vtkXMLPPolyDataReader()
+            preader.SetFileName(os.path.join(self.work, "radiance_%s.pvtp" % case))
+            preader.Update()
+            meshes = pieces_of(os.path.join(self.work, ("pvtu3_B" if gathered else case) + ".pvtu"))
+            found, nonempty = {}, 0
+            for k in range(preader.GetNumberOfPieces()):
+                preader.UpdatePiece(k, preader.GetNumberOfPieces(), 0)
+                surface = preader.GetOutput()
+                if surface.GetNumberOfCells() == 0:
+                    continue
+                nonempty += 1
+                if gathered:
+                    self.assertEqual(k, 0, "the gathered surface is on rank 0")
+                    self.assertEqual(surface.GetNumberOfCells(), self.boundary)
+                    break
+                # vtkOriginalPointIds: ids in the rank's piece of the solved mesh.
+                piece_ids = arrays(meshes[k])[0]
+                for key, value in faces(surface, piece_ids).items():
+                    found.setdefault(key, []).extend(value)
+            if gathered:
+                self.assertEqual(nonempty, 1, case)
+                continue
+            self.assertEqual(set(found), set(ref), "the serial faces, " + case)
+            self.assertTrue(all(len(v) == 1 for v in found.values()), "each face once, " + case)
+            area = sum(v[0][0] for v in found.values())
+            self.assertLessEqual(abs(area - ref_area), 1e-12 * ref_area, case)
+            worst_l, worst_n = 0.0, 0.0
+            for key, value in found.items():
+                for i, (radiance, normal) in value[0][1].items():
+                    ref_radiance, ref_normal = ref[key][0][1][i]
+                    worst_l = max(worst_l, worst_relative(radiance, ref_radiance, scale))
+                    worst_n = max(worst_n, float(np.abs(normal - ref_normal).max()))
+            self.assertLessEqual(worst_l, 1e-6, "max relative Radiance difference, " + case)
+            self.assertLessEqual(worst_n, 1e-12, "max Normals difference, " + case)
+            if case == "pvtu1_B":
+                self.assertEqual(nonempty, 1, case)
+            else:
+                self.assertGreater(nonempty, 1, "the faces stay distributed, " + case)
 
 
 if __name__ == "__main__":
