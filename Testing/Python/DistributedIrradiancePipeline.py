@@ -23,6 +23,8 @@ Diffusion, saved as <case>.pvtu, and per rank one line in irr_<rank>.txt:
 an invalid RefractiveIndex on rank 1 only (the same error on every rank),
 after_error_B (a run after it), then Assign Scattering Coefficients (a spherical inclusion) on the 3-piece,
 1-piece and ghost-cell .pvtu (assign_<case>.pvtu; the serial ref_assign.vtu),
+veins on the 3-piece .pvtu and Redistribute DataSet (assignveins_<case>.pvtu;
+ref_assignveins.vtu),
 with a line "assign <case> rank <r> path <path>", and Paint Scattering
 Coefficients per piece (paint_<case>.pvtu; the serial ref_paint.vtu, painted
 then lit with B and solved), with a line "paint <case> rank <r> path <path>";
@@ -64,8 +66,11 @@ def paint(source, original=None):
                                        StrokeIsPolyline=1, Width=1.5, **extra)
 
 
-def assign(source):
-    # A spherical inclusion (per tet: computed on each piece under MPI).
+def assign(source, veins=False):
+    # A spherical inclusion, or veins (per tet: computed on each piece under MPI).
+    if veins:
+        return AssignScatteringCoefficients(Input=source, MaterialMode=4, VeinFrequency=0.3,
+                                            VeinTurbulence=2.0, VeinSeed=3)
     return AssignScatteringCoefficients(Input=source, MaterialMode=2, InclusionCenter=[8, 8, 4],
                                         InclusionRadius=5.0)
 
@@ -180,6 +185,7 @@ if MODE == "prepare":
 
     source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     SaveData(path("ref_assign.vtu"), proxy=assign(source))
+    SaveData(path("ref_assignveins.vtu"), proxy=assign(source, veins=True))
     _, painted = chain(paint(source), "B")
     SaveData(path("ref_paint.vtu"), proxy=painted)
     for lights in LIGHTS:
@@ -241,8 +247,10 @@ elif MODE == "run":
     # and gathered (ghost cells: vtkOriginalCellIds need the gathered order).
     for name, source in (("assign_pvtu3", pvtu3), ("assign_pvtu1", XMLPartitionedUnstructuredGridReader(
             FileName=[path("mesh1.pvtu")])), ("assign_pvtu2", XMLPartitionedUnstructuredGridReader(
-            FileName=[path("mesh2g.pvtu")]))):
-        assigned = assign(source)
+            FileName=[path("mesh2g.pvtu")])), ("assignveins_pvtu3", pvtu3),
+            ("assignveins_redist", RedistributeDataSet(Input=XMLUnstructuredGridReader(
+                FileName=[path("mesh.vtu")])))):
+        assigned = assign(source, veins=name.startswith("assignveins"))
         assigned.UpdatePipeline()
         with open(path("irr_%d.txt" % RANK), "a") as f:
             f.write("assign %s rank %d path %s\n" % (

@@ -209,14 +209,18 @@ class DistributedIrradianceTest(unittest.TestCase):
             owned = np.ones(len(keys), bool) if ghosts is None else \
                 (vtk_to_numpy(ghosts) & 1) == 0
             return keys, values, vtk_to_numpy(data.GetArray("vtkOriginalCellIds")), owned
-        reader = vtkXMLUnstructuredGridReader()
-        reader.SetFileName(os.path.join(self.work, "ref_assign.vtu"))
-        reader.Update()
-        keys, values, _, _ = cells(reader.GetOutput())
-        ref = dict(zip(keys, values))
-        self.assertGreater(len({tuple(v) for v in values}), 1, "two materials")
+        refs = {}
+        for name in ("assign", "assignveins"):
+            reader = vtkXMLUnstructuredGridReader()
+            reader.SetFileName(os.path.join(self.work, "ref_%s.vtu" % name))
+            reader.Update()
+            keys, values, _, _ = cells(reader.GetOutput())
+            refs[name] = dict(zip(keys, values))
+            self.assertGreater(len({tuple(v) for v in values}), 1, "two materials or more")
         for case, expected in (("assign_pvtu3", "per-piece"), ("assign_pvtu1", "per-piece"),
-                               ("assign_pvtu2", "gathered")):
+                               ("assign_pvtu2", "gathered"), ("assignveins_pvtu3", "per-piece"),
+                               ("assignveins_redist", "per-piece")):
+            ref = refs[case.split("_")[0]]
             paths = self.assign_paths.get(case, {})
             self.assertEqual(sorted(paths), list(range(RANKS)), case)
             self.assertEqual(set(paths.values()), {expected}, case)
