@@ -469,8 +469,10 @@ int vtkAssignScatteringCoefficients::RequestData(
 {
   // Under MPI: the per-tet modes on each rank's own piece (no gather);
   // otherwise gather to rank 0, run this serially there, hand the result back.
+  // (Veins: a function of the tet's centroid too. Layers need the depth
+  // below the whole surface, Volume the image around every tet: gathered.)
   const bool perTet = this->MaterialMode == UNIFORM || this->MaterialMode == MATERIAL_IDS ||
-    this->MaterialMode == SPHERICAL_INCLUSION;
+    this->MaterialMode == SPHERICAL_INCLUSION || this->MaterialMode == VEINS;
   if (perTet && !this->Gathering && vtkTranslucencyDistributedPieces::IsAvailable())
   {
     vtkUnstructuredGrid* piece = vtkUnstructuredGrid::GetData(inputVector[0]);
@@ -548,13 +550,17 @@ int vtkAssignScatteringCoefficients::RequestPerPiece(
   }
   MaterialField field;
   std::string local;
+  bool aborted = false;
   if (cells > 0)
   {
     try
     {
-      this->ComputeMaterials(input, nullptr, field); // the per-tet modes do not abort
-      field.Scale(this->ScaleFactor);
-      field.Validate();
+      aborted = !this->ComputeMaterials(input, nullptr, field); // Veins may abort
+      if (!aborted)
+      {
+        field.Scale(this->ScaleFactor);
+        field.Validate();
+      }
     }
     catch (const std::exception& e)
     {
@@ -566,6 +572,10 @@ int vtkAssignScatteringCoefficients::RequestPerPiece(
   {
     vtkErrorMacro(<< error);
     return 0;
+  }
+  if (vtkTranslucencyDistributedPieces::Any(aborted))
+  {
+    return 0; // aborted on some rank: every rank stops
   }
   if (input)
   {

@@ -287,8 +287,8 @@ public:
   ///@}
 
   /// How the last execution ran: "serial" (one process), "per piece" (MPI:
-  /// the uniform, material-id and spherical-inclusion modes on each rank's
-  /// own piece, no gather) or "gathered" (MPI: the other modes, or pieces
+  /// the uniform, material-id, spherical-inclusion and veins modes on each
+  /// rank's own piece, no gather) or "gathered" (MPI: the other modes, or pieces
   /// with ghost cells or cell GlobalIds and no vtkOriginalCellIds).
   const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
 

@@ -1,6 +1,8 @@
 #include "vtkOutgoingRadiance.h"
 
 #include "ResourceLimits.h"
+#include "vtkTranslucencyDistributedPieces.h"
+#include "vtkTranslucencyDistributedRadiance.h"
 #include "vtkTranslucencyParallel.h"
 
 #include "Error.h"
@@ -23,11 +25,14 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
 #include <vtkSMPTools.h>
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 
 vtkStandardNewMacro(vtkOutgoingRadiance);
 
@@ -55,7 +60,15 @@ int vtkOutgoingRadiance::FillInputPortInformation(int, vtkInformation* info)
 int vtkOutgoingRadiance::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: gather to rank 0, run this serially there, hand the result back.
+  // Under MPI: each rank its own piece's physical boundary (no gather), or,
+  // with TRANSLUCENCY_GATHERED_RADIANCE=1 or without the distributed path,
+  // gather to rank 0, run this serially there, the surface on rank 0.
+  if (vtkTranslucencyDistributedRadiance::IsAvailable() && !vtkTranslucencyParallel::IsGathering())
+  {
+    this->ParallelPath = "per piece";
+    return this->RequestPerPiece(inputVector, outputVector);
+  }
+  this->ParallelPath = "serial";
   int parallelResult = 0;
   if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
         vtkTranslucencyParallel::GatherMode::RankZero,
@@ -63,6 +76,7 @@ int vtkOutgoingRadiance::RequestData(
         { return this->RequestData(r, i, o); },
         parallelResult))
   {
+    this->ParallelPath = "gathered";
     return parallelResult;
   }
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
@@ -242,9 +256,231 @@ int vtkOutgoingRadiance::RequestData(
 }
 
 //------------------------------------------------------------------------------
+int vtkOutgoingRadiance::RequestPerPiece(
+  vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  namespace pieces = vtkTranslucencyDistributedPieces;
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
+  vtkPolyData* output = vtkPolyData::GetData(outputVector);
+  this->Internal->Mesh.reset();
+  // Every rank takes part in every collective below, an empty piece too.
+  vtkTranslucencyDistributedRadiance::Surface surface;
+  std::string error;
+  if (!vtkTranslucencyDistributedRadiance::FindSurface(input, surface, error))
+  {
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
+  std::vector<double> fluence, irradiance;
+  std::string local;
+  if (numPoints > 0)
+  {
+    if (!vtkTranslucency::ReadPointArray(input, vtkTranslucency::FluenceName, 3, fluence, local) ||
+      !vtkTranslucency::ReadPointArray(input, vtkTranslucency::IrradianceName, 3, irradiance, local))
+    {
+      local += " (run vtkSurfaceIrradiance and vtkSolveDiffusion first)";
+    }
+    // The extended collimated model's Fluence includes the unscattered beam,
+    // which does not leave as diffuse radiance: read phi_d.
+    else if (input->GetPointData()->GetArray("CollimatedFluence"))
+    {
+      std::vector<double> collimated;
+      if (vtkTranslucency::ReadPointArray(input, "CollimatedFluence", 3, collimated, local))
+      {
+        for (std::size_t k = 0; k < fluence.size(); ++k)
+        {
+          fluence[k] -= collimated[k];
+        }
+      }
+    }
+  }
+  // Radiance (TransCut eq. 3) at every local point on the physical boundary,
+  // with the serial normal and eta (summed over every rank's faces).
+  std::vector<double> values(3 * static_cast<size_t>(numPoints), 0.0);
+  double extremes[8] = { 0.0, 0.0, -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX,
+    -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX }; // max q, max L, -min x, max x, ...
+  if (local.empty())
+  {
+    for (vtkIdType i = 0; i < numPoints; ++i)
+    {
+      double x[3];
+      input->GetPoint(i, x);
+      for (int k = 0; k < 3; ++k)
+      {
+        extremes[2 + 2 * k] = std::max(extremes[2 + 2 * k], -x[k]);
+        extremes[3 + 2 * k] = std::max(extremes[3 + 2 * k], x[k]);
+      }
+      if (!surface.OnBoundary[i])
+      {
+        continue;
+      }
+      const double* nrm = &surface.Normals[3 * static_cast<size_t>(i)];
+      double cosOut = 1.0;
+      if (this->UseViewPoint)
+      {
+        const double d[3] = { this->ViewPoint[0] - x[0], this->ViewPoint[1] - x[1],
+          this->ViewPoint[2] - x[2] };
+        const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
+      }
+      for (int c = 0; c < 3; ++c)
+      {
+        const size_t k = 3 * static_cast<size_t>(i) + c;
+        values[k] = translucency::OutgoingRadiance(
+          fluence[k], irradiance[k], surface.Eta[i], cosOut, this->NSquaredLaw);
+        extremes[0] = std::max(extremes[0], irradiance[k]);
+        extremes[1] = std::max(extremes[1], values[k]);
+      }
+    }
+    try
+    {
+      translucency::RequireFinite(values, "Radiance", translucency::OverflowCause());
+    }
+    catch (const translucency::Error& e)
+    {
+      local = e.what();
+    }
+  }
+  error = pieces::AgreeOnError(local);
+  if (!error.empty())
+  {
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  std::vector<double> reduced(extremes, extremes + 8);
+  vtkTranslucencyDistributedRadiance::AllMax(reduced);
+  if (reduced[0] > 0.0 && reduced[1] == 0.0 && pieces::GetRank() == 0)
+  {
+    // As the serial path: light enters but no radiance leaves anywhere.
+    const double diagonal = std::sqrt((reduced[3] + reduced[2]) * (reduced[3] + reduced[2]) +
+      (reduced[5] + reduced[4]) * (reduced[5] + reduced[4]) +
+      (reduced[7] + reduced[6]) * (reduced[7] + reduced[6]));
+    const double spacing =
+      diagonal / std::cbrt(std::max<double>(1.0, static_cast<double>(surface.TotalTets)));
+    vtkWarningMacro(<< "Radiance is 0 at every boundary point although light enters (irradiance "
+                    << "up to " << reduced[0] << " W/mm^2): the model is "
+                    << translucency::FormatNumber(diagonal) << " mm across with tets of about "
+                    << translucency::FormatNumber(spacing)
+                    << " mm, far coarser than the light's mean free path (~1/sigma_s', about "
+                       "1 mm for the measured materials), so the fluence at the surface is "
+                       "not resolved: is the model in mm? (else use much smaller tets)");
+  }
+  // The automatic exposure over every boundary point once (by its owner):
+  // the serial percentile.
+  if (this->Exposure > 0.0)
+  {
+    this->ExposureUsed = this->Exposure;
+  }
+  else
+  {
+    std::vector<double> owned;
+    for (vtkIdType i = 0; i < numPoints; ++i)
+    {
+      if (surface.OnBoundary[i] && surface.Owned[i])
+      {
+        owned.insert(owned.end(), values.begin() + 3 * i, values.begin() + 3 * i + 3);
+      }
+    }
+    this->ExposureUsed =
+      translucency::AutomaticExposure(vtkTranslucencyDistributedRadiance::AllGather(owned));
+  }
+
+  // This rank's faces and their points, in local point order.
+  std::vector<vtkIdType> surfaceId(static_cast<size_t>(numPoints), -1);
+  for (long long v : surface.Triangles)
+  {
+    surfaceId[static_cast<size_t>(v)] = 0;
+  }
+  std::vector<vtkIdType> used;
+  for (vtkIdType i = 0; i < numPoints; ++i)
+  {
+    if (surfaceId[i] == 0)
+    {
+      surfaceId[i] = static_cast<vtkIdType>(used.size());
+      used.push_back(i);
+    }
+  }
+  const vtkIdType n = static_cast<vtkIdType>(used.size());
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(n);
+  vtkNew<vtkIdTypeArray> originalIds;
+  originalIds->SetName(vtkTranslucency::OriginalPointIdsName);
+  originalIds->SetNumberOfTuples(n);
+  auto makeArray = [n](const char* name, bool rgb) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name);
+    a->SetNumberOfComponents(3);
+    a->SetNumberOfTuples(n);
+    if (rgb)
+    {
+      vtkTranslucency::SetRGBComponentNames(a);
+    }
+    return vtkSmartPointer<vtkDoubleArray>(a.GetPointer());
+  };
+  vtkSmartPointer<vtkDoubleArray> radiance = makeArray(vtkTranslucency::RadianceName, true);
+  vtkSmartPointer<vtkDoubleArray> phiOut = makeArray(vtkTranslucency::FluenceName, true);
+  vtkSmartPointer<vtkDoubleArray> qOut = makeArray(vtkTranslucency::IrradianceName, true);
+  vtkSmartPointer<vtkDoubleArray> normalsOut = makeArray("Normals", false);
+  std::vector<double> surfaceValues(3 * static_cast<size_t>(n));
+  for (vtkIdType k = 0; k < n; ++k)
+  {
+    const size_t i = static_cast<size_t>(used[k]);
+    double x[3];
+    input->GetPoint(used[k], x);
+    points->SetPoint(k, x);
+    originalIds->SetValue(k, used[k]);
+    for (int c = 0; c < 3; ++c)
+    {
+      surfaceValues[3 * k + c] = values[3 * i + c];
+      radiance->SetTypedComponent(k, c, values[3 * i + c]);
+      phiOut->SetTypedComponent(k, c, fluence[3 * i + c]);
+      qOut->SetTypedComponent(k, c, irradiance[3 * i + c]);
+      normalsOut->SetTypedComponent(k, c, surface.Normals[3 * i + c]);
+    }
+  }
+  vtkNew<vtkCellArray> polys;
+  polys->AllocateExact(static_cast<vtkIdType>(surface.Triangles.size() / 3),
+    static_cast<vtkIdType>(surface.Triangles.size()));
+  for (size_t f = 0; f < surface.Triangles.size() / 3; ++f)
+  {
+    const vtkIdType ids[3] = { surfaceId[surface.Triangles[3 * f]],
+      surfaceId[surface.Triangles[3 * f + 1]], surfaceId[surface.Triangles[3 * f + 2]] };
+    polys->InsertNextCell(3, ids);
+  }
+  output->SetPoints(points);
+  output->SetPolys(polys);
+  output->GetPointData()->AddArray(radiance);
+  output->GetPointData()->AddArray(phiOut);
+  output->GetPointData()->AddArray(qOut);
+  output->GetPointData()->SetNormals(normalsOut);
+  output->GetPointData()->AddArray(originalIds);
+  const std::vector<unsigned char> bytes = translucency::ToneMap(surfaceValues, this->ExposureUsed);
+  vtkNew<vtkUnsignedCharArray> rgb;
+  rgb->SetName("RadianceRGB");
+  rgb->SetNumberOfComponents(3);
+  rgb->SetNumberOfTuples(n);
+  std::copy(bytes.begin(), bytes.end(), rgb->GetPointer(0));
+  vtkTranslucency::SetRGBComponentNames(rgb);
+  output->GetPointData()->AddArray(rgb);
+  vtkNew<vtkDoubleArray> exposureArray;
+  exposureArray->SetName("RadianceExposure");
+  exposureArray->InsertNextValue(this->ExposureUsed);
+  output->GetFieldData()->AddArray(exposureArray);
+  output->GetPointData()->SetActiveScalars(vtkTranslucency::RadianceName);
+  // A point that other ranks hold too has the same values on each; every
+  // rank's faces together are the serial surface.
+  this->NumberOfSurfaceTriangles = surface.TotalTriangles;
+  return outputs.Succeed();
+}
+
+//------------------------------------------------------------------------------
 void vtkOutgoingRadiance::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
   os << indent << "UseViewPoint: " << this->UseViewPoint << "\n";
   os << indent << "NSquaredLaw: " << this->NSquaredLaw << "\n";
   os << indent << "ViewPoint: " << this->ViewPoint[0] << ", " << this->ViewPoint[1] << ", "

@@ -23,6 +23,17 @@
  * exit); with UseViewPoint on, it points from each surface point to the
  * ViewPoint (a camera position), and points facing away get 0.
  *
+ * Under MPI (the global controller runs more than one MPI process) each
+ * rank outputs the physical boundary faces of its own tets, no gather: a
+ * face shared with a tet of another rank is not boundary; a point's normal
+ * and refractive index sum the faces of every rank around it, so every
+ * value equals the serial one and a point on the seam between two ranks'
+ * faces is output by both with the same values. `vtkOriginalPointIds` are
+ * then ids in the rank's piece, and the automatic exposure is the serial
+ * one (every boundary point once). TRANSLUCENCY_GATHERED_RADIANCE=1 (every
+ * rank) gathers to rank 0 instead (the whole surface there). See
+ * Documentation/Parallel.md.
+ *
  * @sa vtkSolveDiffusion vtkSurfaceIrradiance
  */
 #ifndef vtkOutgoingRadiance_h
@@ -32,6 +43,7 @@
 #include "TranslucencyFiltersModule.h" // for export macro
 
 #include <memory>
+#include <string> // for the parallel path
 
 class TRANSLUCENCYFILTERS_EXPORT vtkOutgoingRadiance : public vtkPolyDataAlgorithm
 {
@@ -79,6 +91,15 @@ public:
   vtkGetVector3Macro(ViewPoint, double);
   ///@}
 
+  /**
+   * After an execution: "per piece" (under MPI each rank output the
+   * physical boundary faces of its own piece, no gather), "gathered" (the
+   * surface on rank 0) or "serial".
+   */
+  const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  /// After a per-piece execution: the physical boundary faces over every rank.
+  long long GetNumberOfSurfaceTriangles() const { return this->NumberOfSurfaceTriangles; }
+
 protected:
   vtkOutgoingRadiance();
   ~vtkOutgoingRadiance() override;
@@ -91,8 +112,13 @@ protected:
   double ViewPoint[3] = { 0.0, 0.0, 0.0 };
   double Exposure = 0.0;
   double ExposureUsed = 1.0;
+  std::string ParallelPath = "serial";
+  long long NumberOfSurfaceTriangles = 0;
 
 private:
+  /// The per-piece path under MPI (vtkTranslucencyDistributedRadiance).
+  int RequestPerPiece(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
+
   vtkOutgoingRadiance(const vtkOutgoingRadiance&) = delete;
   void operator=(const vtkOutgoingRadiance&) = delete;
 

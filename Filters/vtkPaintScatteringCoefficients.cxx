@@ -2,6 +2,7 @@
 
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
+#include "vtkTranslucencyDistributedPieces.h"
 #include "vtkTranslucencyParallel.h"
 
 #include "TetPaint.h"
@@ -17,6 +18,8 @@
 #include <vtkTypeInt32Array.h>
 #include <vtkTypeInt64Array.h>
 #include <vtkDataArray.h>
+#include <vtkDataSetAttributes.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkDoubleArray.h>
 #include <vtkAlgorithm.h>
 #include <vtkAlgorithmOutput.h>
@@ -30,6 +33,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <sstream>
+#include <string>
 #include <vector>
 
 vtkStandardNewMacro(vtkPaintScatteringCoefficients);
@@ -84,118 +89,192 @@ void vtkPaintScatteringCoefficients::RemoveAllStrokePoints()
 }
 
 //------------------------------------------------------------------------------
-int vtkPaintScatteringCoefficients::RequestData(
-  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+namespace
 {
-  // Under MPI: gather to rank 0, run this serially there, hand the result back.
-  int parallelResult = 0;
-  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
-        vtkTranslucencyParallel::GatherMode::SameMesh,
-        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-        { return this->RequestData(r, i, o); },
-        parallelResult))
+/// Cells not flagged vtkGhostType DUPLICATECELL (all cells without ghosts).
+long long OwnedCells(vtkUnstructuredGrid* grid)
+{
+  if (!grid)
   {
-    return parallelResult;
+    return 0;
   }
+  auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
+    grid->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()));
+  long long owned = grid->GetNumberOfCells();
+  for (vtkIdType c = 0; ghosts && c < ghosts->GetNumberOfTuples(); ++c)
+  {
+    if (ghosts->GetValue(c) & vtkDataSetAttributes::DUPLICATECELL)
+    {
+      --owned;
+    }
+  }
+  return owned;
+}
+
+/// "" if `cut` (port 0) maps into the original mesh (port 1) of
+/// `numOriginal` tets, else the error. `numCut`: the cut mesh's tets (all
+/// pieces' owned cells under MPI); `withoutIds`: some piece with cells has
+/// no vtkOriginalCellIds (this one under MPI: any rank's). The ids are
+/// checked on `cut` itself.
+std::string CheckCutMapping(
+  vtkUnstructuredGrid* cut, long long numCut, long long numOriginal, bool withoutIds)
+{
+  std::ostringstream msg;
+  vtkDataArray* ids = cut ? cut->GetCellData()->GetArray("vtkOriginalCellIds") : nullptr;
+  const vtkIdType localCut = cut ? cut->GetNumberOfCells() : 0;
+  if (withoutIds)
+  {
+    if (numCut != numOriginal)
+    {
+      msg << "the cut mesh (input port 0) has no cell array 'vtkOriginalCellIds' "
+          << "and " << numCut << " cells, not the " << numOriginal
+          << " of the OriginalMesh (input port 1): it is not a cut of it";
+    }
+    return msg.str();
+  }
+  if (localCut == 0)
+  {
+    return std::string(); // an empty piece under MPI
+  }
+  if (ids->GetNumberOfComponents() != 1 || ids->GetNumberOfTuples() != localCut)
+  {
+    msg << "the cell array 'vtkOriginalCellIds' of the cut mesh (input port 0) has "
+        << ids->GetNumberOfComponents() << " components and " << ids->GetNumberOfTuples()
+        << " tuples; 1 component and " << localCut << " tuples expected";
+    return msg.str();
+  }
+  for (vtkIdType i = 0; i < localCut; ++i)
+  {
+    const double id = ids->GetComponent(i, 0);
+    if (!(id >= 0.0) || !(id < static_cast<double>(numOriginal)) || id != std::floor(id))
+    {
+      msg << "bad vtkOriginalCellIds " << id << " at cell " << i
+          << " of the cut mesh (input port 0): the OriginalMesh (input port 1) has "
+          << numOriginal << " tets (valid ids 0.." << numOriginal - 1
+          << "); is port 1 the mesh that was cut?";
+      return msg.str();
+    }
+  }
+  return std::string();
+}
+}
+
+//------------------------------------------------------------------------------
+int vtkPaintScatteringCoefficients::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* cut = vtkUnstructuredGrid::GetData(inputVector[0]);
-  vtkUnstructuredGrid* original =
-    this->GetNumberOfInputConnections(1) > 0 ? vtkUnstructuredGrid::GetData(inputVector[1]) : nullptr;
+  const bool hasOriginal = this->GetNumberOfInputConnections(1) > 0;
+  vtkUnstructuredGrid* original = hasOriginal ? vtkUnstructuredGrid::GetData(inputVector[1]) : nullptr;
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   // The mesh painted: the original uncut mesh when port 1 is connected
   // (TransCut Sec. 5.2 paints the tets of the original mesh), else port 0.
   vtkUnstructuredGrid* input = original ? original : cut;
-  if (this->GetNumberOfInputConnections(1) > 0 && !original)
+
+  // Under MPI each rank paints its own piece (the weight of a tet depends on
+  // its centroid only; a ghost cell gets the same value as the tet it copies);
+  // the checks that need the whole mesh use totals over the ranks, and every
+  // rank reports the same error.
+  const bool perPiece =
+    vtkTranslucencyDistributedPieces::IsAvailable() && !vtkTranslucencyParallel::IsGathering();
+  this->ParallelPath = perPiece ? "per piece" : "serial";
+  auto sum = [perPiece](long long value)
+  { return perPiece ? vtkTranslucencyDistributedPieces::Sum(value) : value; };
+  // Every rank takes part in every collective below, an empty piece too.
+  const long long totalInput = sum(input ? input->GetNumberOfCells() : 0);
+  long long numCut = 0, numOriginal = 0;
+  bool cutWithoutIds = false;
+  if (hasOriginal)
   {
-    vtkErrorMacro(<< "the OriginalMesh (input port 1) is not a vtkUnstructuredGrid");
-    return 0;
+    cutWithoutIds = cut && cut->GetNumberOfCells() > 0 &&
+      !cut->GetCellData()->GetArray("vtkOriginalCellIds");
+    cutWithoutIds = perPiece ? vtkTranslucencyDistributedPieces::Any(cutWithoutIds) : cutWithoutIds;
+    numCut = sum(perPiece ? OwnedCells(cut) : (cut ? cut->GetNumberOfCells() : 0));
+    numOriginal = sum(perPiece ? OwnedCells(original) : (original ? original->GetNumberOfCells() : 0));
   }
-  if (!input || input->GetNumberOfCells() == 0)
+  std::string error;
+  if (hasOriginal && !original)
   {
-    vtkErrorMacro(<< (original ? "the OriginalMesh (input port 1) is empty (no cells)"
-                               : "the input mesh is empty (no cells)"));
-    return 0;
+    error = "the OriginalMesh (input port 1) is not a vtkUnstructuredGrid";
   }
-  if (original && cut && cut->GetNumberOfCells() > 0)
+  else if (totalInput == 0)
+  {
+    error = hasOriginal ? "the OriginalMesh (input port 1) is empty (no cells)"
+                        : "the input mesh is empty (no cells)";
+  }
+  else if (hasOriginal && numCut > 0)
   {
     // Port 0 (the cut mesh the stroke was drawn on) must map into port 1.
-    const vtkIdType numOriginal = original->GetNumberOfCells();
-    const vtkIdType numCut = cut->GetNumberOfCells();
-    vtkDataArray* ids = cut->GetCellData()->GetArray("vtkOriginalCellIds");
-    if (!ids)
-    {
-      if (numCut != numOriginal)
-      {
-        vtkErrorMacro(<< "the cut mesh (input port 0) has no cell array 'vtkOriginalCellIds' "
-                      << "and " << numCut << " cells, not the " << numOriginal
-                      << " of the OriginalMesh (input port 1): it is not a cut of it");
-        return 0;
-      }
-    }
-    else if (ids->GetNumberOfComponents() != 1 || ids->GetNumberOfTuples() != numCut)
-    {
-      vtkErrorMacro(<< "the cell array 'vtkOriginalCellIds' of the cut mesh (input port 0) has "
-                    << ids->GetNumberOfComponents() << " components and "
-                    << ids->GetNumberOfTuples() << " tuples; 1 component and " << numCut
-                    << " tuples expected");
-      return 0;
-    }
-    else
-    {
-      for (vtkIdType i = 0; i < numCut; ++i)
-      {
-        const double id = ids->GetComponent(i, 0);
-        if (!(id >= 0.0) || !(id < static_cast<double>(numOriginal)) || id != std::floor(id))
-        {
-          vtkErrorMacro(<< "bad vtkOriginalCellIds " << id << " at cell " << i
-                        << " of the cut mesh (input port 0): the OriginalMesh (input port 1) has "
-                        << numOriginal << " tets (valid ids 0.." << numOriginal - 1
-                        << "); is port 1 the mesh that was cut?");
-          return 0;
-        }
-      }
-    }
+    error = CheckCutMapping(cut, numCut, numOriginal, cutWithoutIds);
   }
-  const vtkIdType n = input->GetNumberOfCells();
-  vtkDataArray* oldArrays[2] = { input->GetCellData()->GetArray(vtkTranslucency::AbsorptionName),
-    input->GetCellData()->GetArray(vtkTranslucency::ScatteringName) };
-  const char* names[2] = { vtkTranslucency::AbsorptionName, vtkTranslucency::ScatteringName };
-  for (int k = 0; k < 2; ++k)
+  long long keptChannels = 0;
+  if (error.empty())
   {
+    error = this->Paint(input, output, keptChannels);
+  }
+  if (perPiece)
+  {
+    error = vtkTranslucencyDistributedPieces::AgreeOnError(error);
+    keptChannels = vtkTranslucencyDistributedPieces::Sum(keptChannels);
+  }
+  if (!error.empty())
+  {
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  if (keptChannels > 0 && vtkTranslucencyDistributedPieces::GetRank() == 0)
+  {
+    vtkWarningMacro(<< keptChannels << " tet channel(s) would have had mu_a + sigma_s' = 0 "
+                    << "and kept their old values");
+  }
+  return outputs.Succeed();
+}
+
+//------------------------------------------------------------------------------
+std::string vtkPaintScatteringCoefficients::Paint(
+  vtkUnstructuredGrid* input, vtkUnstructuredGrid* output, long long& keptChannels)
+{
+  std::ostringstream msg;
+  const vtkIdType n = input ? input->GetNumberOfCells() : 0;
+  vtkDataArray* oldArrays[2] = { nullptr, nullptr };
+  const char* names[2] = { vtkTranslucency::AbsorptionName, vtkTranslucency::ScatteringName };
+  for (int k = 0; k < 2 && n > 0; ++k)
+  {
+    // (An empty piece under MPI need not carry the arrays.)
+    oldArrays[k] = input->GetCellData()->GetArray(names[k]);
     if (!oldArrays[k])
     {
-      vtkErrorMacro(<< "the input has no cell array '" << names[k]
-                    << "' (run vtkAssignScatteringCoefficients first)");
-      return 0;
+      msg << "the input has no cell array '" << names[k]
+          << "' (run vtkAssignScatteringCoefficients first)";
+      return msg.str();
     }
     if (oldArrays[k]->GetNumberOfComponents() != 3 || oldArrays[k]->GetNumberOfTuples() != n)
     {
-      vtkErrorMacro(<< "the cell array '" << names[k] << "' has "
-                    << oldArrays[k]->GetNumberOfComponents() << " components and "
-                    << oldArrays[k]->GetNumberOfTuples() << " tuples; 3 components and " << n
-                    << " tuples (one per tet) expected");
-      return 0;
+      msg << "the cell array '" << names[k] << "' has " << oldArrays[k]->GetNumberOfComponents()
+          << " components and " << oldArrays[k]->GetNumberOfTuples()
+          << " tuples; 3 components and " << n << " tuples (one per tet) expected";
+      return msg.str();
     }
   }
   if (this->StrokePoints.empty())
   {
-    vtkErrorMacro(<< "no stroke points: nothing to paint yet. In ParaView, draw the stroke with "
-                     "the polyline widget of the Properties panel (Ctrl+click in the view adds "
-                     "a handle), then Apply; from Python, call AddStrokePoint");
-    return 0;
+    return "no stroke points: nothing to paint yet. In ParaView, draw the stroke with "
+           "the polyline widget of the Properties panel (Ctrl+click in the view adds "
+           "a handle), then Apply; from Python, call AddStrokePoint";
   }
   if (!(this->Width >= 0.0) || !std::isfinite(this->Width))
   {
-    vtkErrorMacro(<< "the width " << this->Width << " mm must be finite and >= 0");
-    return 0;
+    msg << "the width " << this->Width << " mm must be finite and >= 0";
+    return msg.str();
   }
   for (int c = 0; c < 3; ++c)
   {
     if (!std::isfinite(this->TargetAbsorptionCoefficient[c]) ||
       !std::isfinite(this->TargetReducedScatteringCoefficient[c]))
     {
-      vtkErrorMacro(<< "the target of channel " << "RGB"[c] << " is not finite");
-      return 0;
+      msg << "the target of channel " << "RGB"[c] << " is not finite";
+      return msg.str();
     }
   }
 
@@ -208,6 +287,10 @@ int vtkPaintScatteringCoefficients::RequestData(
     newArrays[k]->SetNumberOfComponents(3);
     vtkTranslucency::SetRGBComponentNames(newArrays[k]);
     newArrays[k]->SetNumberOfTuples(n);
+    if (n == 0)
+    {
+      continue;
+    }
     double* dst = newArrays[k]->GetPointer(0);
     if (vtkDoubleArray* src = vtkDoubleArray::FastDownCast(oldArrays[k]))
     {
@@ -239,8 +322,7 @@ int vtkPaintScatteringCoefficients::RequestData(
   }
   catch (const translucency::Error& e)
   {
-    vtkErrorMacro(<< e.what());
-    return 0;
+    return e.what();
   }
   painter.SetWidth(this->Width);
   painter.SetStrength(this->Strength);
@@ -252,78 +334,83 @@ int vtkPaintScatteringCoefficients::RequestData(
     this->TargetReducedScatteringCoefficient[1], this->TargetReducedScatteringCoefficient[2] } });
   painter.SetChannelMask(
     { { this->ChannelMask[0] != 0, this->ChannelMask[1] != 0, this->ChannelMask[2] != 0 } });
-  try
+  if (n > 0)
   {
-    // Raw views of the points (float or double) and cells (32 or 64-bit ids).
-    vtkSmartPointer<vtkDoubleArray> converted;
-    vtkDataArray* pointData = input->GetPoints() ? input->GetPoints()->GetData() : nullptr;
-    const vtkIdType numPoints = input->GetNumberOfPoints();
-    vtkFloatArray* floatPoints = vtkFloatArray::FastDownCast(pointData);
-    vtkDoubleArray* doublePoints = vtkDoubleArray::FastDownCast(pointData);
-    if (pointData && !floatPoints && !doublePoints)
+    try
     {
-      converted = vtkSmartPointer<vtkDoubleArray>::New();
-      converted->DeepCopy(pointData);
-      doublePoints = converted;
-    }
-    vtkCellArray* cells = input->GetCells();
-    if (!cells || (!floatPoints && !doublePoints))
-    {
-      vtkErrorMacro(<< "the input mesh has no points or no cells");
-      return 0;
-    }
-    double* a = newArrays[0]->GetPointer(0);
-    double* s = newArrays[1]->GetPointer(0);
-    double* w = weights->GetPointer(0);
-    auto paint = [&](auto* offsets, auto* connectivity) {
-      if (floatPoints)
+      // Raw views of the points (float or double) and cells (32 or 64-bit ids).
+      vtkSmartPointer<vtkDoubleArray> converted;
+      vtkDataArray* pointData = input->GetPoints() ? input->GetPoints()->GetData() : nullptr;
+      const vtkIdType numPoints = input->GetNumberOfPoints();
+      vtkFloatArray* floatPoints = vtkFloatArray::FastDownCast(pointData);
+      vtkDoubleArray* doublePoints = vtkDoubleArray::FastDownCast(pointData);
+      if (pointData && !floatPoints && !doublePoints)
       {
-        painter.Paint(floatPoints->GetPointer(0), numPoints, offsets, connectivity, n, a, s, w);
+        converted = vtkSmartPointer<vtkDoubleArray>::New();
+        converted->DeepCopy(pointData);
+        doublePoints = converted;
+      }
+      vtkCellArray* cells = input->GetCells();
+      if (!cells || (!floatPoints && !doublePoints))
+      {
+        return "the input mesh has no points or no cells";
+      }
+      double* a = newArrays[0]->GetPointer(0);
+      double* s = newArrays[1]->GetPointer(0);
+      double* w = weights->GetPointer(0);
+      auto paint = [&](auto* offsets, auto* connectivity) {
+        if (floatPoints)
+        {
+          painter.Paint(floatPoints->GetPointer(0), numPoints, offsets, connectivity, n, a, s, w);
+        }
+        else
+        {
+          painter.Paint(doublePoints->GetPointer(0), numPoints, offsets, connectivity, n, a, s, w);
+        }
+      };
+      if (cells->IsStorage64Bit())
+      {
+        paint(reinterpret_cast<const long long*>(cells->GetOffsetsArray64()->GetPointer(0)),
+          reinterpret_cast<const long long*>(cells->GetConnectivityArray64()->GetPointer(0)));
       }
       else
       {
-        painter.Paint(doublePoints->GetPointer(0), numPoints, offsets, connectivity, n, a, s, w);
+        paint(reinterpret_cast<const int*>(cells->GetOffsetsArray32()->GetPointer(0)),
+          reinterpret_cast<const int*>(cells->GetConnectivityArray32()->GetPointer(0)));
       }
-    };
-    if (cells->IsStorage64Bit())
-    {
-      paint(reinterpret_cast<const long long*>(cells->GetOffsetsArray64()->GetPointer(0)),
-        reinterpret_cast<const long long*>(cells->GetConnectivityArray64()->GetPointer(0)));
     }
-    else
+    catch (const translucency::Error& e)
     {
-      paint(reinterpret_cast<const int*>(cells->GetOffsetsArray32()->GetPointer(0)),
-        reinterpret_cast<const int*>(cells->GetConnectivityArray32()->GetPointer(0)));
+      return e.what();
     }
-  }
-  catch (const translucency::Error& e)
-  {
-    vtkErrorMacro(<< e.what());
-    return 0;
   }
 
   // The ids of the cells whose coefficients changed (for incremental updates).
   const std::vector<int>& changed = painter.GetChangedCells();
   vtkNew<vtkIdTypeArray> changedIds;
   changedIds->SetName("PaintedCellIds");
-  changedIds->SetNumberOfTuples(static_cast<vtkIdType>(changed.size()));
-  std::copy(changed.begin(), changed.end(), changedIds->GetPointer(0));
+  changedIds->SetNumberOfTuples(n > 0 ? static_cast<vtkIdType>(changed.size()) : 0);
+  if (n > 0)
+  {
+    std::copy(changed.begin(), changed.end(), changedIds->GetPointer(0));
+  }
 
-  output->ShallowCopy(input);
+  if (input)
+  {
+    output->ShallowCopy(input);
+  }
   output->GetCellData()->AddArray(newArrays[0]);
   output->GetCellData()->AddArray(newArrays[1]);
   output->GetCellData()->AddArray(weights);
   vtkNew<vtkFieldData> fieldData;
-  fieldData->ShallowCopy(input->GetFieldData());
+  if (input)
+  {
+    fieldData->ShallowCopy(input->GetFieldData());
+  }
   fieldData->AddArray(changedIds);
   output->SetFieldData(fieldData);
-  if (painter.GetNumberOfKeptChannels() > 0)
-  {
-    vtkWarningMacro(<< painter.GetNumberOfKeptChannels()
-                    << " tet channel(s) would have had mu_a + sigma_s' = 0 "
-                    << "and kept their old values");
-  }
-  return outputs.Succeed();
+  keptChannels = n > 0 ? painter.GetNumberOfKeptChannels() : 0;
+  return std::string();
 }
 
 //------------------------------------------------------------------------------
@@ -332,6 +419,7 @@ void vtkPaintScatteringCoefficients::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "OriginalMesh: "
      << (this->GetNumberOfInputConnections(1) > 0 ? "connected" : "(none)") << "\n";
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
   os << indent << "NumberOfStrokePoints: " << this->GetNumberOfStrokePoints() << "\n";
   os << indent << "StrokeIsPolyline: " << this->StrokeIsPolyline << "\n";
   os << indent << "Width: " << this->Width << "\n";

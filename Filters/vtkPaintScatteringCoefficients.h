@@ -56,6 +56,20 @@
  * No stroke point, a negative or non-finite Width, or a missing / wrongly
  * sized coefficient array is an error naming the problem.
  *
+ * Under MPI (the global controller runs more than one process) each rank
+ * paints its own piece of the painted mesh, no gather: w_t depends only on
+ * the tet's centroid, so the arrays equal the serial run's cell by cell, and
+ * a ghost cell gets the value of the tet it copies. The checks that need the
+ * whole mesh count over every rank's owned cells (ghost copies left out): the
+ * empty mesh, and the cut mesh's vtkOriginalCellIds against the number of
+ * tets of the original mesh (all ranks' pieces of port 1; the ids number the
+ * gathered mesh, as vtkStrokeCut writes them). An error on any rank is
+ * reported by every rank with the same text ("rank r: ..."); an empty piece
+ * gives an empty output. `PaintedCellIds` then lists the changed cells of the
+ * rank's own piece (its cell ids); the warning about kept channels is given
+ * by rank 0 with the total over the pieces (ghost copies counted too).
+ * Documentation/Parallel.md.
+ *
  * @sa vtkAssignScatteringCoefficients vtkSolveDiffusion
  */
 #ifndef vtkPaintScatteringCoefficients_h
@@ -64,6 +78,7 @@
 #include "TranslucencyFiltersModule.h" // for export macro
 #include "vtkUnstructuredGridAlgorithm.h"
 
+#include <string> // for the parallel path
 #include <vector> // for the stroke points
 
 class TRANSLUCENCYFILTERS_EXPORT vtkPaintScatteringCoefficients
@@ -165,6 +180,10 @@ public:
   vtkGetVector3Macro(ChannelMask, int);
   ///@}
 
+  /// "per piece" (under MPI: each rank painted its own piece) or "serial",
+  /// after the last execution.
+  const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+
 protected:
   vtkPaintScatteringCoefficients();
   ~vtkPaintScatteringCoefficients() override = default;
@@ -181,8 +200,14 @@ protected:
   double TargetAbsorptionCoefficient[3] = { 0.061, 0.97, 1.45 };
   double TargetReducedScatteringCoefficient[3] = { 0.18, 0.07, 0.03 };
   int ChannelMask[3] = { 1, 1, 1 };
+  std::string ParallelPath = "serial";
 
 private:
+  /// Paint `input` (may be null or empty: an empty output with empty arrays)
+  /// into `output`; returns the error ("" on success) and the channels kept.
+  std::string Paint(vtkUnstructuredGrid* input, vtkUnstructuredGrid* output,
+    long long& keptChannels);
+
   vtkPaintScatteringCoefficients(const vtkPaintScatteringCoefficients&) = delete;
   void operator=(const vtkPaintScatteringCoefficients&) = delete;
 };

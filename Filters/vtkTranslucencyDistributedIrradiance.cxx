@@ -10,6 +10,7 @@
 #include "Timer.h"
 #include "vtkTranslucencyGlobalCommunicator.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyPieceFaces.h"
 
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
@@ -49,74 +50,21 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
   report = Report();
   std::string local;
   const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
-  const vtkIdType numCells = input ? input->GetNumberOfCells() : 0;
-  vtkDataArray* globalIds = input ? input->GetPointData()->GetGlobalIds() : nullptr;
-  std::vector<double> points;
-  std::vector<char> used(static_cast<size_t>(numPoints), 0);
-  std::vector<int> triangles, triangleTets;
-  std::vector<double> triangleEta;
-  long long ownedTets = 0;
+  vtkTranslucency::PieceFaces faces;
   try
   {
-    std::vector<int> cells;
-    if (numPoints > 0 && !vtkTranslucency::ToTetArrays(input, points, cells, local))
-    {
-      throw translucency::Error(local);
-    }
-    std::vector<int> tets;
-    const std::vector<vtkIdType> kept = vtkTranslucency::OwnedTets(input, cells, tets);
-    ownedTets = static_cast<long long>(kept.size());
-    if (!kept.empty())
-    {
-      std::vector<double> eta;
-      if (!vtkTranslucency::ReadRefractiveIndex(input, eta, local))
-      {
-        throw translucency::Error(local);
-      }
-      // The piece's own tets: the cached topology when it has no ghost cells.
-      std::shared_ptr<const translucency::TetMesh> mesh;
-      if (kept.size() == static_cast<size_t>(numCells))
-      {
-        mesh = vtkTranslucency::AcquireTetMesh(input, local);
-        if (!mesh)
-        {
-          throw translucency::Error(local);
-        }
-      }
-      else
-      {
-        auto owned = std::make_shared<translucency::TetMesh>();
-        owned->SetGeometry(points, tets);
-        mesh = owned;
-      }
-      for (int v : mesh->GetTets())
-      {
-        used[static_cast<size_t>(v)] = 1;
-      }
-      triangles = mesh->GetBoundaryTriangles();
-      for (int t : mesh->GetBoundaryTriangleTets())
-      {
-        const vtkIdType cell = kept[static_cast<size_t>(t)];
-        triangleTets.push_back(static_cast<int>(cell));
-        triangleEta.push_back(eta[static_cast<size_t>(cell)]);
-      }
-    }
+    vtkTranslucency::ExtractPieceFaces(input, faces);
   }
   catch (const std::exception& e)
   {
     local = e.what();
   }
-  int haveIds = (numPoints == 0 || globalIds) ? 1 : 0, allIds = 0;
-  MPI_Allreduce(&haveIds, &allIds, 1, MPI_INT, MPI_MIN, comm);
+  const std::vector<double>& points = faces.Points;
+  const long long ownedTets = faces.OwnedTets;
   long long totalTets = 0;
+  std::vector<translucency::PointKey> keys;
+  const int allIds = vtkTranslucency::MakePointKeys(comm, input, points, !local.empty(), keys);
   MPI_Allreduce(&ownedTets, &totalTets, 1, MPI_LONG_LONG, MPI_SUM, comm);
-  std::vector<translucency::PointKey> keys(static_cast<size_t>(numPoints));
-  for (vtkIdType i = 0; i < numPoints && local.empty(); ++i)
-  {
-    keys[i] = allIds
-      ? translucency::PointKeyFromId(static_cast<std::int64_t>(globalIds->GetComponent(i, 0)))
-      : translucency::PointKeyFromCoordinates(points.data() + 3 * i);
-  }
   try
   {
     translucency::AgreeOnError(comm, local);
@@ -128,8 +76,9 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
     std::vector<int> surfacePoint;
     std::vector<double> rotations;
     translucency::BoundarySurfaceReport gathered;
-    translucency::GatherBoundarySurface(comm, points, keys, allIds != 0, used, triangles,
-      triangleEta, triangleTets, surface, surfacePoint, rotations, gathered);
+    translucency::GatherBoundarySurface(comm, points, keys, allIds != 0, faces.Used,
+      faces.Triangles, faces.TriangleEta, faces.TriangleTets, surface, surfacePoint, rotations,
+      gathered);
     report.SurfaceTriangles = gathered.Triangles;
     report.SurfacePoints = gathered.Points;
     report.GatheredBytes = gathered.GatheredBytes;

@@ -697,6 +697,12 @@ void CaptureError(vtkObject*, unsigned long, void* clientData, void* callData)
 } // namespace
 
 //------------------------------------------------------------------------------
+bool IsGathering()
+{
+  return !ActiveAlgorithms.empty();
+}
+
+//------------------------------------------------------------------------------
 bool RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
   vtkInformationVector* outputVector, GatherMode mode, const SerialRequest& serial, int& result)
 {

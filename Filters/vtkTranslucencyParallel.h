@@ -64,6 +64,13 @@ using SerialRequest =
  */
 bool RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
   vtkInformationVector* outputVector, GatherMode mode, const SerialRequest& serial, int& result);
+
+/**
+ * True while a gathered run is under way on this thread (rank 0 runs a
+ * filter's serial code on the merged data, alone): a filter that would run
+ * per piece with collectives must then run serially instead.
+ */
+bool IsGathering();
 }
 
 #endif

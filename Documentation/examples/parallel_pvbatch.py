@@ -16,7 +16,7 @@ and <prefix>_surface.pvtp (the boundary surface with Radiance).
    each gathers the pieces to rank 0, computes there and hands every rank its
    own piece back with the new arrays (Documentation/Parallel.md).
 3. Outgoing Radiance: the surface of physical boundary faces only (no
-   partition faces), on rank 0.
+   partition faces), each rank the faces of its own tets.
 4. The counts printed are over all ranks: a point shared by two pieces is
    counted in each.
 """

@@ -64,6 +64,42 @@ std::vector<T> AllGather(MPI_Comm comm, const std::vector<T>& mine, long long& b
   return result;
 }
 
+/// The global rows of the triangles (`rows`, 3 each) and, per triangle, how
+/// many ranks hold it (CountSharedTriangles). Every rank throws the same
+/// error for a triangle held by more than two ranks or an invalid eta under
+/// a physical triangle. `gathered`: how to select the gathered path instead.
+std::vector<int> ClassifyTriangles(MPI_Comm comm, const DistributedNumbering& numbering,
+  const std::vector<int>& triangles, const std::vector<double>& triangleEta,
+  const std::vector<int>& triangleTets, const char* gathered, std::vector<int>& rows)
+{
+  const std::size_t numTriangles = triangles.size() / 3;
+  rows.resize(3 * numTriangles);
+  for (std::size_t k = 0; k < rows.size(); ++k)
+    rows[k] = numbering.GetRow(triangles[k]);
+  std::vector<int> seen = CountSharedTriangles(comm, rows);
+  std::string error;
+  for (std::size_t f = 0; f < numTriangles && error.empty(); ++f)
+  {
+    if (seen[f] > 2)
+    {
+      std::ostringstream msg;
+      msg << "the boundary face of tet " << triangleTets[f] << " is held by " << seen[f]
+          << " pieces: overlapping pieces without ghost marks (use the gathered path, "
+          << gathered << ")";
+      error = msg.str();
+    }
+    if (seen[f] == 1 && (!(triangleEta[f] > 0.0) || !std::isfinite(triangleEta[f])))
+    {
+      std::ostringstream msg;
+      msg << "RefractiveIndex of tet " << triangleTets[f] << " (under a boundary face) is "
+          << triangleEta[f] << ": must be finite and > 0";
+      error = msg.str();
+    }
+  }
+  AgreeOnError(comm, error);
+  return seen;
+}
+
 } // namespace
 
 void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
@@ -108,32 +144,15 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   // Global rows, and the physical triangles: those no other rank has.
   DistributedNumbering numbering;
   numbering.Build(comm, keys, used);
-  std::vector<int> rows(3 * numTriangles);
-  for (std::size_t k = 0; k < rows.size(); ++k)
-    rows[k] = numbering.GetRow(triangles[k]);
-  const std::vector<int> seen = CountSharedTriangles(comm, rows);
-  std::string error;
+  std::vector<int> rows;
+  const std::vector<int> seen = ClassifyTriangles(comm, numbering, triangles, triangleEta,
+    triangleTets, "TRANSLUCENCY_GATHERED_IRRADIANCE=1", rows);
   std::vector<TriangleRecord> myTriangles;
   std::vector<char> onSurface(numPoints, 0);
-  for (std::size_t f = 0; f < numTriangles && error.empty(); ++f)
+  for (std::size_t f = 0; f < numTriangles; ++f)
   {
-    if (seen[f] > 2)
-    {
-      std::ostringstream msg;
-      msg << "the boundary face of tet " << triangleTets[f] << " is held by " << seen[f]
-          << " pieces: overlapping pieces without ghost marks (use the gathered path, "
-             "TRANSLUCENCY_GATHERED_IRRADIANCE=1)";
-      error = msg.str();
-    }
     if (seen[f] != 1)
       continue;
-    if (!(triangleEta[f] > 0.0) || !std::isfinite(triangleEta[f]))
-    {
-      std::ostringstream msg;
-      msg << "RefractiveIndex of tet " << triangleTets[f] << " (under a boundary face) is "
-          << triangleEta[f] << ": must be finite and > 0";
-      error = msg.str();
-    }
     TriangleRecord record;
     record.Padding = 0;
     record.Eta = triangleEta[f];
@@ -144,7 +163,6 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
     }
     myTriangles.push_back(record);
   }
-  AgreeOnError(comm, error);
 
   std::vector<PointRecord> myPoints;
   for (std::size_t i = 0; i < numPoints; ++i)
@@ -238,6 +256,78 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   report.Triangles = static_cast<long long>(surface.GetNumberOfTriangles());
   report.Points = static_cast<long long>(surface.GetNumberOfPoints());
   report.Milliseconds = timer.GetMilliseconds();
+}
+
+void FindPieceBoundary(MPI_Comm comm, const std::vector<double>& points,
+  const std::vector<PointKey>& keys, const std::vector<char>& used,
+  const std::vector<int>& triangles, const std::vector<double>& triangleEta,
+  const std::vector<int>& triangleTets, const char* gathered, PieceBoundary& boundary)
+{
+  const std::size_t numPoints = keys.size();
+  const std::size_t numTriangles = triangles.size() / 3;
+  DistributedNumbering numbering;
+  numbering.Build(comm, keys, used);
+  std::vector<int> rows;
+  const std::vector<int> seen =
+    ClassifyTriangles(comm, numbering, triangles, triangleEta, triangleTets, gathered, rows);
+  // Per local point: S_i, the area vector and area x eta of this rank's
+  // physical triangles around it (TetMesh::ComputeMeasures' expressions),
+  // summed over the ranks at the owners and handed back.
+  std::vector<double> sums(5 * numPoints, 0.0);
+  boundary.Physical.assign(numTriangles, 0);
+  long long mine = 0;
+  for (std::size_t f = 0; f < numTriangles; ++f)
+  {
+    if (seen[f] != 1)
+      continue;
+    boundary.Physical[f] = 1;
+    ++mine;
+    const double* p0 = &points[3 * static_cast<std::size_t>(triangles[3 * f])];
+    const double* p1 = &points[3 * static_cast<std::size_t>(triangles[3 * f + 1])];
+    const double* p2 = &points[3 * static_cast<std::size_t>(triangles[3 * f + 2])];
+    const double e1[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
+    const double e2[3] = { p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2] };
+    const double n[3] = { 0.5 * (e1[1] * e2[2] - e1[2] * e2[1]),
+      0.5 * (e1[2] * e2[0] - e1[0] * e2[2]), 0.5 * (e1[0] * e2[1] - e1[1] * e2[0]) };
+    const double area = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int m = 0; m < 3; ++m)
+    {
+      double* to = &sums[5 * static_cast<std::size_t>(triangles[3 * f + m])];
+      to[0] += area;
+      to[1] += n[0];
+      to[2] += n[1];
+      to[3] += n[2];
+      to[4] += area * triangleEta[f];
+    }
+  }
+  MPI_Allreduce(&mine, &boundary.Triangles, 1, MPI_LONG_LONG, MPI_SUM, comm);
+  const std::vector<double> global =
+    numbering.FetchFromOwners(comm, numbering.SumToOwners(comm, sums, 5), 5);
+  boundary.PointArea.assign(numPoints, 0.0);
+  boundary.PointNormal.assign(3 * numPoints, 0.0);
+  boundary.PointEta.assign(numPoints, 0.0);
+  boundary.Owned.assign(numPoints, 0);
+  // A row held twice by this rank (a piece read as several parts) is owned
+  // by its first local point only.
+  std::vector<char> rowTaken(static_cast<std::size_t>(numbering.GetNumberOfOwnedRows()), 0);
+  for (std::size_t i = 0; i < numPoints; ++i)
+  {
+    const double* g = &global[5 * i];
+    if (!(g[0] > 0.0))
+      continue;
+    boundary.PointArea[i] = g[0];
+    const double length = std::sqrt(g[1] * g[1] + g[2] * g[2] + g[3] * g[3]);
+    for (int k = 0; k < 3; ++k)
+      boundary.PointNormal[3 * i + k] = length > 0.0 ? g[1 + k] / length : g[1 + k];
+    boundary.PointEta[i] = g[4] / g[0];
+    if (numbering.IsOwned(static_cast<int>(i)))
+    {
+      char& taken = rowTaken[static_cast<std::size_t>(
+        numbering.GetRow(static_cast<int>(i)) - numbering.GetRowBegin())];
+      boundary.Owned[i] = taken ? 0 : 1;
+      taken = 1;
+    }
+  }
 }
 
 } // namespace translucency

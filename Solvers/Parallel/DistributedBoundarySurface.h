@@ -64,4 +64,32 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   std::vector<int>& surfacePoint, std::vector<double>& rotations,
   BoundarySurfaceReport& report);
 
+/// A rank's part of the physical boundary (FindPieceBoundary()).
+struct PieceBoundary
+{
+  std::vector<char> Physical;      ///< per local triangle: 1 if no other rank holds it
+  std::vector<double> PointArea;   ///< per local point: S_i, mm^2 (0: not on the boundary)
+  std::vector<double> PointNormal; ///< 3 per local point: outward unit normal (0 off the boundary)
+  std::vector<double> PointEta;    ///< per local point: area-weighted eta of the faces around it
+  std::vector<char> Owned;         ///< per local point on the boundary: this rank owns its row
+  long long Triangles = 0;         ///< physical triangles over every rank
+};
+
+/**
+ * Collective: which of this rank's boundary triangles are physical (no
+ * other rank holds them), and, at every local point, the boundary measures
+ * the serial TetMesh gives it: S_i (the areas of the physical triangles
+ * around it), the unit normal (the normalised sum of their area vectors) and
+ * the area-weighted refractive index (BoundaryPointRefractiveIndexAt),
+ * summed over every rank's triangles (DistributedNumbering::SumToOwners,
+ * FetchFromOwners: no surface is gathered). Arguments as
+ * GatherBoundarySurface(); `gathered` names how to select the gathered path
+ * (for the overlapping-pieces error). Throws translucency::Error, the same on
+ * every rank, as GatherBoundarySurface().
+ */
+void FindPieceBoundary(MPI_Comm comm, const std::vector<double>& points,
+  const std::vector<PointKey>& keys, const std::vector<char>& used,
+  const std::vector<int>& triangles, const std::vector<double>& triangleEta,
+  const std::vector<int>& triangleTets, const char* gathered, PieceBoundary& boundary);
+
 } // namespace translucency

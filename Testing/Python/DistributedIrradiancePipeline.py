@@ -23,7 +23,14 @@ Diffusion, saved as <case>.pvtu, and per rank one line in irr_<rank>.txt:
 an invalid RefractiveIndex on rank 1 only (the same error on every rank),
 after_error_B (a run after it), then Assign Scattering Coefficients (a spherical inclusion) on the 3-piece,
 1-piece and ghost-cell .pvtu (assign_<case>.pvtu; the serial ref_assign.vtu),
-with a line "assign <case> rank <r> path <path>".
+veins on the 3-piece .pvtu and Redistribute DataSet (assignveins_<case>.pvtu;
+ref_assignveins.vtu),
+with a line "assign <case> rank <r> path <path>", and Paint Scattering
+Coefficients per piece (paint_<case>.pvtu; the serial ref_paint.vtu, painted
+then lit with B and solved), with a line "paint <case> rank <r> path <path>";
+Outgoing Radiance of pvtu3_B, pvtu2_B, redist_B and pvtu1_B per piece and of
+pvtu3_B gathered (radiance_<case>.pvtp; the serial ref_radiance.vtp), with a
+line "radiance <case> rank <r> path <path> triangles <n> exposure <e>".
 """
 
 import os
@@ -51,8 +58,19 @@ def chain(source, lights):
     return lit, SolveDiffusion(Input=lit, Solver="divergence", RelTol=TOL, MaxIter=20000)
 
 
-def assign(source):
-    # A spherical inclusion (per tet: computed on each piece under MPI).
+def paint(source, original=None):
+    # A stroke over the top and down one side (per tet: each piece painted
+    # on its rank under MPI); with `original`, the two-port form.
+    extra = {} if original is None else dict(OriginalMesh=original)
+    return PaintScatteringCoefficients(Input=source, StrokePoints=[2, 2, 14, 12, 3, 14, 15, 12, 8],
+                                       StrokeIsPolyline=1, Width=1.5, **extra)
+
+
+def assign(source, veins=False):
+    # A spherical inclusion, or veins (per tet: computed on each piece under MPI).
+    if veins:
+        return AssignScatteringCoefficients(Input=source, MaterialMode=4, VeinFrequency=0.3,
+                                            VeinTurbulence=2.0, VeinSeed=3)
     return AssignScatteringCoefficients(Input=source, MaterialMode=2, InclusionCenter=[8, 8, 4],
                                         InclusionRadius=5.0)
 
@@ -111,6 +129,9 @@ if MODE == "prepare":
         array = numpy_to_vtk(np.ascontiguousarray(values, dtype=float), deep=True)
         array.SetName(name)
         mesh.GetCellData().AddArray(array)
+    tet_ids = numpy_to_vtk(np.arange(len(tets), dtype=np.int64) * 3 + 5, deep=True)
+    tet_ids.SetName("TetIds")  # a cell identity that survives partitioning
+    mesh.GetCellData().AddArray(tet_ids)
     ids = vtkIdTypeArray()
     ids.SetName("PointIds")
     ids.SetNumberOfTuples(mesh.GetNumberOfPoints())
@@ -164,9 +185,14 @@ if MODE == "prepare":
 
     source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     SaveData(path("ref_assign.vtu"), proxy=assign(source))
+    SaveData(path("ref_assignveins.vtu"), proxy=assign(source, veins=True))
+    _, painted = chain(paint(source), "B")
+    SaveData(path("ref_paint.vtu"), proxy=painted)
     for lights in LIGHTS:
         _, solved = chain(source, lights)
         SaveData(path("ref_%s.vtu" % lights), proxy=solved)
+        if lights == "B":
+            SaveData(path("ref_radiance.vtp"), proxy=OutgoingRadiance(Input=solved))
     print("prepared", flush=True)
 elif MODE == "run":
     from vtkmodules.vtkParallelCore import vtkMultiProcessController
@@ -186,28 +212,71 @@ elif MODE == "run":
                 name, RANK, o.GetParallelPath(), o.GetBoundarySurfaceTriangles(),
                 o.GetBoundarySurfaceBytes(), o.GetBoundarySurfaceTime()))
         SaveData(path(name + ".pvtu"), proxy=solved)
+        return solved
+
+    def radiance(name, solved, gathered=False):
+        # Outgoing Radiance: per piece (each rank its own physical faces), or
+        # gathered to rank 0 with TRANSLUCENCY_GATHERED_RADIANCE=1.
+        if gathered:
+            os.environ["TRANSLUCENCY_GATHERED_RADIANCE"] = "1"
+        out = OutgoingRadiance(Input=solved)
+        out.UpdatePipeline()
+        os.environ.pop("TRANSLUCENCY_GATHERED_RADIANCE", None)
+        o = out.GetClientSideObject()
+        with open(path("irr_%d.txt" % RANK), "a") as f:
+            f.write("radiance %s rank %d path %s triangles %d exposure %.17g\n" % (
+                name, RANK, o.GetParallelPath().replace(" ", "-"),
+                o.GetNumberOfSurfaceTriangles(), o.GetExposureUsed()))
+        SaveData(path("radiance_" + name + ".pvtp"), proxy=out)
 
     pvtu3 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")])
     case("pvtu3_A", pvtu3, "A")
-    case("pvtu3_B", pvtu3, "B")
+    solved = case("pvtu3_B", pvtu3, "B")
+    radiance("pvtu3_B", solved)
+    radiance("gathered_B", solved, gathered=True)
     case("redistid_A", RedistributeDataSet(Input=XMLUnstructuredGridReader(
         FileName=[path("meshid.vtu")])), "A")
-    case("pvtu2_B", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")]), "B")
-    case("redist_B", RedistributeDataSet(Input=XMLUnstructuredGridReader(
-        FileName=[path("mesh.vtu")])), "B")
-    case("pvtu1_B", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")]), "B")
+    radiance("pvtu2_B", case(
+        "pvtu2_B", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")]), "B"))
+    radiance("redist_B", case("redist_B", RedistributeDataSet(Input=XMLUnstructuredGridReader(
+        FileName=[path("mesh.vtu")])), "B"))
+    radiance("pvtu1_B", case(
+        "pvtu1_B", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")]), "B"))
     case("gathered_A", pvtu3, "A", gathered=True)
     # Assign Scattering Coefficients per piece (no ghost cells, no cell ids),
     # and gathered (ghost cells: vtkOriginalCellIds need the gathered order).
     for name, source in (("assign_pvtu3", pvtu3), ("assign_pvtu1", XMLPartitionedUnstructuredGridReader(
             FileName=[path("mesh1.pvtu")])), ("assign_pvtu2", XMLPartitionedUnstructuredGridReader(
-            FileName=[path("mesh2g.pvtu")]))):
-        assigned = assign(source)
+            FileName=[path("mesh2g.pvtu")])), ("assignveins_pvtu3", pvtu3),
+            ("assignveins_redist", RedistributeDataSet(Input=XMLUnstructuredGridReader(
+                FileName=[path("mesh.vtu")])))):
+        assigned = assign(source, veins=name.startswith("assignveins"))
         assigned.UpdatePipeline()
         with open(path("irr_%d.txt" % RANK), "a") as f:
             f.write("assign %s rank %d path %s\n" % (
                 name, RANK, assigned.GetClientSideObject().GetParallelPath().replace(" ", "-")))
         SaveData(path(name + ".pvtu"), proxy=assigned)
+    # Paint per piece, then the chain (B): a .pvtu with ids, Redistribute
+    # DataSet (coordinate keys), the two-port form (a cut of the .pvtu, gathered
+    # on rank 0, as port 0); the paint alone on the ghost-cell .pvtu (3 ranks:
+    # an empty piece) and the one-piece .pvtu (empty pieces elsewhere).
+    pvtu2 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")])
+    pvtu1 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")])
+    cut = StrokeCut(Input=pvtu3, CutType="Plane")
+    cut.CutType.Origin = [8.0, 8.0, 3.0]
+    cut.CutType.Normal = [0.2, 0.1, 1.0]
+    for name, source, solve in (
+            ("paint_pvtu3", paint(pvtu3), True),
+            ("paint_redist", paint(RedistributeDataSet(Input=XMLUnstructuredGridReader(
+                FileName=[path("mesh.vtu")]))), True),
+            ("paint_twoport", paint(cut, original=pvtu3), True),
+            ("paint_pvtu2", paint(pvtu2), False), ("paint_pvtu1", paint(pvtu1), False)):
+        proxy = chain(source, "B")[1] if solve else source
+        proxy.UpdatePipeline()
+        with open(path("irr_%d.txt" % RANK), "a") as f:
+            f.write("paint %s rank %d path %s\n" % (
+                name, RANK, source.GetClientSideObject().GetParallelPath().replace(" ", "-")))
+        SaveData(path(name + ".pvtu"), proxy=proxy)
     # An invalid RefractiveIndex on rank 1 only: every rank reports rank 1's
     # error and nobody hangs; the next run works.
     bad = ProgrammableFilter(Input=pvtu3)

@@ -100,6 +100,19 @@ class DistributedIrradianceTest(unittest.TestCase):
             text = open(name).read() if os.path.exists(name) else ""
             for m in re.finditer(r"^assign (\S+) rank (\d+) path (\S+)$", text, re.M):
                 cls.assign_paths.setdefault(m.group(1), {})[int(m.group(2))] = m.group(3)
+        cls.paint_paths = {}
+        for rank in range(RANKS):
+            name = os.path.join(cls.work, "irr_%d.txt" % rank)
+            text = open(name).read() if os.path.exists(name) else ""
+            for m in re.finditer(r"^paint (\S+) rank (\d+) path (\S+)$", text, re.M):
+                cls.paint_paths.setdefault(m.group(1), {})[int(m.group(2))] = m.group(3)
+        cls.radiance_reports = {}
+        for rank in range(RANKS):
+            name = os.path.join(cls.work, "irr_%d.txt" % rank)
+            text = open(name).read() if os.path.exists(name) else ""
+            for m in re.finditer(r"^radiance (\S+) rank (\d+) path (\S+) triangles (\d+) "
+                                 r"exposure (\S+)$", text, re.M):
+                cls.radiance_reports.setdefault(m.group(1), {})[int(m.group(2))] = m.groups()[2:]
         with open(os.path.join(cls.work, "boundary.txt")) as f:
             cls.boundary = int(f.read().split()[0])
 
@@ -196,14 +209,18 @@ class DistributedIrradianceTest(unittest.TestCase):
             owned = np.ones(len(keys), bool) if ghosts is None else \
                 (vtk_to_numpy(ghosts) & 1) == 0
             return keys, values, vtk_to_numpy(data.GetArray("vtkOriginalCellIds")), owned
-        reader = vtkXMLUnstructuredGridReader()
-        reader.SetFileName(os.path.join(self.work, "ref_assign.vtu"))
-        reader.Update()
-        keys, values, _, _ = cells(reader.GetOutput())
-        ref = dict(zip(keys, values))
-        self.assertGreater(len({tuple(v) for v in values}), 1, "two materials")
+        refs = {}
+        for name in ("assign", "assignveins"):
+            reader = vtkXMLUnstructuredGridReader()
+            reader.SetFileName(os.path.join(self.work, "ref_%s.vtu" % name))
+            reader.Update()
+            keys, values, _, _ = cells(reader.GetOutput())
+            refs[name] = dict(zip(keys, values))
+            self.assertGreater(len({tuple(v) for v in values}), 1, "two materials or more")
         for case, expected in (("assign_pvtu3", "per-piece"), ("assign_pvtu1", "per-piece"),
-                               ("assign_pvtu2", "gathered")):
+                               ("assign_pvtu2", "gathered"), ("assignveins_pvtu3", "per-piece"),
+                               ("assignveins_redist", "per-piece")):
+            ref = refs[case.split("_")[0]]
             paths = self.assign_paths.get(case, {})
             self.assertEqual(sorted(paths), list(range(RANKS)), case)
             self.assertEqual(set(paths.values()), {expected}, case)
@@ -216,6 +233,158 @@ class DistributedIrradianceTest(unittest.TestCase):
                     self.assertTrue(np.array_equal(row, ref[key]), case)
                 ids.extend(original[owned].tolist())
             self.assertEqual(sorted(ids), list(range(len(ref))), case)
+
+    def test_paint_per_piece(self):
+        # Paint Scattering Coefficients ran on each rank's piece: at every
+        # cell (matched by its TetIds) the serial painted mu_a, sigma_s' and
+        # PaintWeight; every serial tet once among the owned cells; the
+        # pieces' PaintedCellIds together the serial ones; the Fluence after
+        # the paint equal to the serial one to 1e-6 at every point.
+        names = ("AbsorptionCoefficient", "ReducedScatteringCoefficient", "PaintWeight")
+
+        def cells(piece):
+            data = piece.GetCellData()
+            tet = vtk_to_numpy(data.GetArray("TetIds"))
+            values = np.column_stack([vtk_to_numpy(data.GetArray(n)).reshape(len(tet), -1)
+                                      for n in names])
+            ghosts = data.GetArray("vtkGhostType")
+            owned = np.ones(len(tet), bool) if ghosts is None else (vtk_to_numpy(ghosts) & 1) == 0
+            changed = vtk_to_numpy(piece.GetFieldData().GetArray("PaintedCellIds"))
+            return tet, values, owned, changed
+        reader = vtkXMLUnstructuredGridReader()
+        reader.SetFileName(os.path.join(self.work, "ref_paint.vtu"))
+        reader.Update()
+        tet, values, _, changed = cells(reader.GetOutput())
+        ref = dict(zip(tet.tolist(), values))
+        ref_changed = set(tet[changed].tolist())
+        weights = values[:, -1]
+        self.assertGreater((weights > 1e-3).sum(), 100, "a stroke that paints")
+        self.assertGreater((weights == 0).sum(), len(weights) // 4, "and leaves many tets")
+        self.assertGreater(len(ref_changed), 100)
+        _, ref_f = self.reference("B")
+        ids, _, fluence = arrays(reader.GetOutput())
+        ref_f = dict(zip(ids.tolist(), fluence))
+        scale_f = max(np.abs(v).max() for v in ref_f.values())
+        unpainted = self.reference("B")[1]
+        self.assertGreater(max(worst_relative(ref_f[i], unpainted[i], scale_f) for i in ref_f),
+                           1e-3, "the paint changes the fluence")
+        for case in ("paint_pvtu3", "paint_redist", "paint_twoport", "paint_pvtu2",
+                     "paint_pvtu1"):
+            paths = self.paint_paths.get(case, {})
+            self.assertEqual(sorted(paths), list(range(RANKS)), case)
+            self.assertEqual(set(paths.values()), {"per-piece"}, case)
+            pieces = pieces_of(os.path.join(self.work, case + ".pvtu"))
+            seen, found_changed, worst_f, points = [], set(), 0.0, set()
+            for piece in pieces:
+                if piece.GetNumberOfCells() == 0:
+                    continue
+                t, v, owned, c = cells(piece)
+                for key, row in zip(t.tolist(), v):
+                    np.testing.assert_allclose(row, ref[key], rtol=1e-13, atol=0, err_msg=case)
+                seen.extend(t[owned].tolist())
+                mask = np.zeros(len(t), bool)
+                mask[c] = True
+                found_changed.update(t[mask & owned].tolist())
+                if case in ("paint_pvtu3", "paint_redist", "paint_twoport"):
+                    for i, _, f in zip(*arrays(piece)):
+                        worst_f = max(worst_f, worst_relative(f, ref_f[int(i)], scale_f))
+                        points.add(int(i))
+            self.assertEqual(sorted(seen), sorted(ref), "every tet once, " + case)
+            self.assertEqual(found_changed, ref_changed, "PaintedCellIds, " + case)
+            if case in ("paint_pvtu3", "paint_redist", "paint_twoport"):
+                self.assertEqual(points, set(ref_f), "every point, " + case)
+                self.assertLessEqual(worst_f, 1e-6, "max relative Fluence difference, " + case)
+            nonempty = sum(1 for p in pieces if p.GetNumberOfCells() > 0)
+            if case == "paint_pvtu1" or (case == "paint_pvtu2" and RANKS == 3):
+                self.assertEqual(nonempty, 1 if case == "paint_pvtu1" else 2, case)
+            else:
+                self.assertGreater(nonempty, 1, "the pieces stay distributed, " + case)
+
+    def test_outgoing_radiance_per_piece(self):
+        # Each rank output the physical faces of its own piece: together the
+        # serial surface (each face once, matched by the global ids of its
+        # points; the same total area), Radiance and Normals at every face
+        # corner equal to the serial ones, the serial automatic exposure on
+        # every rank; the gathered path the serial surface on rank 0.
+        from vtkmodules.vtkIOXML import vtkXMLPolyDataReader, vtkXMLPPolyDataReader
+        from vtkmodules.numpy_interface import dataset_adapter as dsa
+
+        def faces(surface, ids):
+            wrapped = dsa.WrapDataObject(surface)
+            x = np.asarray(wrapped.Points, dtype=float)
+            tri = vtk_to_numpy(surface.GetPolys().GetConnectivityArray()).reshape(-1, 3)
+            original = vtk_to_numpy(surface.GetPointData().GetArray("vtkOriginalPointIds"))
+            radiance = vtk_to_numpy(surface.GetPointData().GetArray("Radiance"))
+            normals = vtk_to_numpy(surface.GetPointData().GetArray("Normals"))
+            area = 0.5 * np.linalg.norm(np.cross(x[tri[:, 1]] - x[tri[:, 0]],
+                                                 x[tri[:, 2]] - x[tri[:, 0]]), axis=1)
+            result = {}
+            for f, t in enumerate(tri):
+                key = tuple(sorted(int(ids[original[v]]) for v in t))
+                result.setdefault(key, []).append(
+                    (area[f], {int(ids[original[v]]): (radiance[v], normals[v]) for v in t}))
+            return result
+        reader = vtkXMLPolyDataReader()
+        reader.SetFileName(os.path.join(self.work, "ref_radiance.vtp"))
+        reader.Update()
+        ref_mesh = vtkXMLUnstructuredGridReader()
+        ref_mesh.SetFileName(os.path.join(self.work, "ref_B.vtu"))
+        ref_mesh.Update()
+        ref = faces(reader.GetOutput(), arrays(ref_mesh.GetOutput())[0])
+        ref_exposure = float(reader.GetOutput().GetFieldData().GetArray(
+            "RadianceExposure").GetValue(0))
+        self.assertEqual(len(ref), self.boundary)
+        ref_area = sum(v[0][0] for v in ref.values())
+        scale = max(float(np.abs(r).max()) for v in ref.values() for r, _ in v[0][1].values())
+        for case in ("pvtu3_B", "pvtu2_B", "redist_B", "pvtu1_B", "gathered_B"):
+            per_rank = self.radiance_reports.get(case, {})
+            self.assertEqual(sorted(per_rank), list(range(RANKS)), case)
+            gathered = case.startswith("gathered")
+            for rank in range(RANKS):
+                path, triangles, exposure = per_rank[rank]
+                self.assertEqual(path, "gathered" if gathered else "per-piece", case)
+                if not gathered:
+                    self.assertEqual(int(triangles), self.boundary, case)
+                    self.assertLessEqual(abs(float(exposure) - ref_exposure), 1e-12 * ref_exposure,
+                                         "the serial exposure, rank %d, %s" % (rank, case))
+            preader = vtkXMLPPolyDataReader()
+            preader.SetFileName(os.path.join(self.work, "radiance_%s.pvtp" % case))
+            preader.Update()
+            meshes = pieces_of(os.path.join(self.work, ("pvtu3_B" if gathered else case) + ".pvtu"))
+            found, nonempty = {}, 0
+            for k in range(preader.GetNumberOfPieces()):
+                preader.UpdatePiece(k, preader.GetNumberOfPieces(), 0)
+                surface = preader.GetOutput()
+                if surface.GetNumberOfCells() == 0:
+                    continue
+                nonempty += 1
+                if gathered:
+                    self.assertEqual(k, 0, "the gathered surface is on rank 0")
+                    self.assertEqual(surface.GetNumberOfCells(), self.boundary)
+                    break
+                # vtkOriginalPointIds: ids in the rank's piece of the solved mesh.
+                piece_ids = arrays(meshes[k])[0]
+                for key, value in faces(surface, piece_ids).items():
+                    found.setdefault(key, []).extend(value)
+            if gathered:
+                self.assertEqual(nonempty, 1, case)
+                continue
+            self.assertEqual(set(found), set(ref), "the serial faces, " + case)
+            self.assertTrue(all(len(v) == 1 for v in found.values()), "each face once, " + case)
+            area = sum(v[0][0] for v in found.values())
+            self.assertLessEqual(abs(area - ref_area), 1e-12 * ref_area, case)
+            worst_l, worst_n = 0.0, 0.0
+            for key, value in found.items():
+                for i, (radiance, normal) in value[0][1].items():
+                    ref_radiance, ref_normal = ref[key][0][1][i]
+                    worst_l = max(worst_l, worst_relative(radiance, ref_radiance, scale))
+                    worst_n = max(worst_n, float(np.abs(normal - ref_normal).max()))
+            self.assertLessEqual(worst_l, 1e-6, "max relative Radiance difference, " + case)
+            self.assertLessEqual(worst_n, 1e-12, "max Normals difference, " + case)
+            if case == "pvtu1_B":
+                self.assertEqual(nonempty, 1, case)
+            else:
+                self.assertGreater(nonempty, 1, "the faces stay distributed, " + case)
 
 
 if __name__ == "__main__":

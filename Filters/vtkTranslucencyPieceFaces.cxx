@@ -1,0 +1,84 @@
+#include "vtkTranslucencyPieceFaces.h"
+
+#ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
+#include "Error.h"
+#include "TetMesh.h"
+#include "vtkTranslucencyMeshConversion.h"
+
+#include <vtkDataArray.h>
+#include <vtkPointData.h>
+#include <vtkUnstructuredGrid.h>
+
+#include <memory>
+#include <string>
+
+void vtkTranslucency::ExtractPieceFaces(vtkUnstructuredGrid* input, PieceFaces& faces)
+{
+  faces = PieceFaces();
+  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
+  const vtkIdType numCells = input ? input->GetNumberOfCells() : 0;
+  faces.Used.assign(static_cast<size_t>(numPoints), 0);
+  std::string error;
+  std::vector<int> cells;
+  if (numPoints > 0 && !vtkTranslucency::ToTetArrays(input, faces.Points, cells, error))
+  {
+    throw translucency::Error(error);
+  }
+  std::vector<int> tets;
+  const std::vector<vtkIdType> kept = vtkTranslucency::OwnedTets(input, cells, tets);
+  faces.OwnedTets = static_cast<long long>(kept.size());
+  if (kept.empty())
+  {
+    return;
+  }
+  std::vector<double> eta;
+  if (!vtkTranslucency::ReadRefractiveIndex(input, eta, error))
+  {
+    throw translucency::Error(error);
+  }
+  // The piece's own tets: the cached topology when it has no ghost cells.
+  std::shared_ptr<const translucency::TetMesh> mesh;
+  if (kept.size() == static_cast<size_t>(numCells))
+  {
+    mesh = vtkTranslucency::AcquireTetMesh(input, error);
+    if (!mesh)
+    {
+      throw translucency::Error(error);
+    }
+  }
+  else
+  {
+    auto owned = std::make_shared<translucency::TetMesh>();
+    owned->SetGeometry(faces.Points, tets);
+    mesh = owned;
+  }
+  for (int v : mesh->GetTets())
+  {
+    faces.Used[static_cast<size_t>(v)] = 1;
+  }
+  faces.Triangles = mesh->GetBoundaryTriangles();
+  for (int t : mesh->GetBoundaryTriangleTets())
+  {
+    const vtkIdType cell = kept[static_cast<size_t>(t)];
+    faces.TriangleTets.push_back(static_cast<int>(cell));
+    faces.TriangleEta.push_back(eta[static_cast<size_t>(cell)]);
+  }
+}
+
+bool vtkTranslucency::MakePointKeys(MPI_Comm comm, vtkUnstructuredGrid* input,
+  const std::vector<double>& points, bool skip, std::vector<translucency::PointKey>& keys)
+{
+  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
+  vtkDataArray* globalIds = input ? input->GetPointData()->GetGlobalIds() : nullptr;
+  int haveIds = (numPoints == 0 || globalIds) ? 1 : 0, allIds = 0;
+  MPI_Allreduce(&haveIds, &allIds, 1, MPI_INT, MPI_MIN, comm);
+  keys.assign(skip ? 0 : static_cast<size_t>(numPoints), translucency::PointKey());
+  for (vtkIdType i = 0; i < numPoints && !skip; ++i)
+  {
+    keys[i] = allIds
+      ? translucency::PointKeyFromId(static_cast<std::int64_t>(globalIds->GetComponent(i, 0)))
+      : translucency::PointKeyFromCoordinates(points.data() + 3 * i);
+  }
+  return allIds != 0;
+}
+#endif
