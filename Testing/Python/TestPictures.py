@@ -291,6 +291,22 @@ class PicturesTest(unittest.TestCase):
         self.assertNotEqual(bad.returncode, 0)
         self.assertIn("--tpsf-png needs --time-gates and at least one --detector", bad.stderr)
 
+    def test_7_compare_tpsf_plot(self):
+        """compare --time-gates --detector: one TPSF plot overlaying the
+        solvers (a colour per solver: fem's line, divergence's line and
+        Monte Carlo's circles are all drawn) next to its data (tpsf.csv)."""
+        out = os.path.join(self.tmp.name, "compare_tpsf")
+        result = run("compare", "--mesh", self.mesh, "--target-tets", "2000", "--light", "none",
+                     "--solvers", "fem,divergence,montecarlo", "--photons", "20000",
+                     "--source", "pencil:0,0,5:0,0,-1", "--detector", "0,3,4:1",
+                     "--time-gates", "0,1,20", "--output", out, "--quiet")
+        self.assertEqual(result.returncode, 0, result.stderr)
+        self.assertTrue(os.path.exists(os.path.join(out, "tpsf.csv")))
+        _, pixels = read_png(os.path.join(out, "tpsf.png"))
+        for colour in ((31, 119, 180), (255, 127, 14), (44, 160, 44)):
+            count = int((np.abs(pixels - np.array(colour)).max(axis=-1) <= 30).sum())
+            self.assertGreater(count, 100, "the series in %s is missing" % (colour,))
+
 
 if __name__ == "__main__":
     unittest.main(argv=[a for a in sys.argv if a != "--update-baseline"])
