@@ -672,7 +672,7 @@ int Compare(CompareOptions& o)
       std::ostringstream caption;
       caption << "TPSF per detector, " << o.Optics.TimeGates.Count << " gates of "
               << (o.Optics.TimeGates.End - o.Optics.TimeGates.Start) / o.Optics.TimeGates.Count
-              << " ns; lines: diffusion, circles: Monte Carlo";
+              << " ns; lines: diffusion, markers: Monte Carlo";
       if (!WriteTpsfPNG(tpsf, image.Channel, caption.str(), outputDir + "/tpsf.png", error))
         throw translucency::Error(error);
     }

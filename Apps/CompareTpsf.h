@@ -68,8 +68,9 @@ nlohmann::json TpsfJson(const TpsfTable& table);
 
 /**
  * One plot of the exitance TPSF, channel `channel` (0..2): a colour per solver (Monte Carlo
- * as circles, the diffusion solvers as lines), solid lines for the 1st,
- * 3rd, ... detector and dashed for the 2nd, 4th, ...; time in ns on x,
+ * as markers, the diffusion solvers as lines), solid lines and circles for
+ * the 1st, 3rd, ... detector, dashed lines and diamonds for the 2nd, 4th,
+ * ...; time in ns on x,
  * log-scale TPSF on y. Gates with no positive reading are left out of a
  * curve. `caption` is the plot's title.
  */

@@ -399,7 +399,7 @@ bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTit
     line->SetWidth(2.0);
     if (auto* points = vtkPlotPoints::SafeDownCast(line); points && s.Markers)
     {
-      points->SetMarkerStyle(vtkPlotPoints::CIRCLE);
+      points->SetMarkerStyle(s.Dashed ? vtkPlotPoints::DIAMOND : vtkPlotPoints::CIRCLE);
       points->SetMarkerSize(7.0);
     }
     if (s.Dashed)

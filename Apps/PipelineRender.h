@@ -80,7 +80,7 @@ struct PlotSeries
   std::vector<double> X;
   std::vector<double> Y;
   int Colour = -1;      ///< palette index (6 colours); -1 = the series' position
-  bool Dashed = false;  ///< a dashed line
+  bool Dashed = false;  ///< a dashed line (with Markers: diamonds instead of circles)
   bool Markers = false; ///< circles at the points, no line (e.g. Monte Carlo)
 };
 
