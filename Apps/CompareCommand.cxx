@@ -2,7 +2,12 @@
 // material, lights), side by side: a table (stdout and JSON), a radiance
 // picture and a relative-error map per solver on one colour scale, a plot of
 // error against wall time for the iterative solvers, and a .vtm multiblock.
+// With the diffuse-optics options (sources, detectors, time gates): every
+// solver's detector readings, and with --time-gates one TPSF plot overlaying
+// the solvers (CompareTpsf.h).
 
+#include "CompareTpsf.h"
+#include "DiffuseOpticsOptions.h"
 #include "Options.h"
 #include "Pictures.h"
 #include "PipelineRender.h"
@@ -63,6 +68,7 @@ struct CompareOptions
   int Seed = 1;
   bool NoPictures = false, NSquaredLaw = false;
   const CLI::App* App = nullptr; ///< for the provenance of the JSON
+  DiffuseOpticsOptions Optics;   ///< --source, --detector, --time-gates, ...
 };
 
 struct SolverResult
@@ -148,7 +154,8 @@ vtkSmartPointer<vtkDataArray> SurfaceRadiance(const SolverResult& result)
 }
 
 SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double relTol,
-  int maxIter, double gridSpacing, long long photons, int seed, bool nSquaredLaw)
+  int maxIter, double gridSpacing, long long photons, int seed, bool nSquaredLaw,
+  const DiffuseOpticsOptions& optics)
 {
   MessageCollector messages;
   vtkNew<vtkSolveDiffusion> solve;
@@ -162,6 +169,7 @@ SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double
   solve->SetGridSpacing(gridSpacing);
   solve->SetNumberOfPhotons(photons);
   solve->SetSeed(seed);
+  optics.Apply(solve);
   const auto start = Clock::now();
   solve->Update();
   if (!messages.Errors.empty())
@@ -194,6 +202,8 @@ SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double
     s["converged"].push_back(solve->GetConverged(c));
   }
   s["power_W"] = PowerBalanceJson(solve);
+  // Sources, detector readings (and each detector's TPSF), as render reports them.
+  optics.Report(solve, s);
   return result;
 }
 
@@ -293,7 +303,8 @@ vtkSmartPointer<vtkDoubleArray> SignedError(vtkDataArray* x, vtkDataArray* r, in
 /// solves stopped early do not converge by design: their warnings are
 /// dropped and counted in `unconverged` (one summary line instead).
 PlotSeries ErrorVersusTime(const std::string& name, vtkUnstructuredGrid* lit,
-  vtkDataArray* referenceFluence, double gridSpacing, int& unconverged)
+  vtkDataArray* referenceFluence, double gridSpacing, const DiffuseOpticsOptions& optics,
+  int& unconverged)
 {
   PlotSeries series;
   series.Name = name;
@@ -307,6 +318,7 @@ PlotSeries ErrorVersusTime(const std::string& name, vtkUnstructuredGrid* lit,
     solve->SetMaxIter(k);
     solve->SetWarmStart(false);
     solve->SetGridSpacing(gridSpacing);
+    optics.Apply(solve); // the same sources (never time gates or a frequency: see Compare)
     // Not converging is the point here: the warnings are ignored, not logged.
     solve->AddObserver(vtkCommand::WarningEvent, messages.IgnoreCallback);
     solve->AddObserver(vtkCommand::ErrorEvent, messages.IgnoreCallback);
@@ -352,6 +364,7 @@ int Compare(CompareOptions& o)
   const long long photons = o.Photons;
   const int seed = o.Seed;
   const bool pictures = !o.NoPictures, nSquaredLaw = o.NSquaredLaw;
+  scene.InteriorSources = !o.Optics.Sources.empty();
   scene.Finish("compare");
   if (outputDir.empty())
     throw UsageError("compare needs --output DIR");
@@ -392,9 +405,23 @@ int Compare(CompareOptions& o)
     const std::string& name = order[k];
     Progress("solving with " + name + " (" + std::to_string(k + 1) + " of " +
       std::to_string(order.size()) + ")...");
-    results[name] = RunSolver(name, lit, relTol, 20000, gridSpacing, photons, seed, nSquaredLaw);
+    results[name] =
+      RunSolver(name, lit, relTol, 20000, gridSpacing, photons, seed, nSquaredLaw, o.Optics);
   }
   const SolverResult& ref = results[reference];
+  // The TPSF of every solver at every detector, on the same gates.
+  const bool timeResolved = o.Optics.TimeGates.Count > 0 && !o.Optics.Detectors.empty();
+  TpsfTable tpsf;
+  if (timeResolved)
+  {
+    std::vector<vtkUnstructuredGrid*> volumes;
+    std::vector<std::string> specs;
+    for (const std::string& name : order)
+      volumes.push_back(results[name].Volume);
+    for (const DetectorSpec& d : o.Optics.Detectors)
+      specs.push_back(d.Spec);
+    tpsf = CollectTpsf(order, volumes, specs);
+  }
   vtkDataArray* refFluence = ref.Surface->GetPointData()->GetArray("Fluence");
   vtkSmartPointer<vtkDataArray> refRadiance = SurfaceRadiance(ref);
 
@@ -540,11 +567,19 @@ int Compare(CompareOptions& o)
   report["tets"] = lit->GetNumberOfCells();
   report["reference"] = reference;
   report["solvers"] = table;
+  if (timeResolved)
+    report["tpsf"] = TpsfJson(tpsf);
   if (!jsonPath.empty())
     WriteJson(jsonPath, report);
 
   // Files.
   std::string error;
+  if (timeResolved)
+  {
+    EnsureParentDirectory(outputDir + "/tpsf.csv");
+    if (!WriteText(outputDir + "/tpsf.csv", TpsfCsv(tpsf), error))
+      throw translucency::Error(error);
+  }
   EnsureParentDirectory(outputDir + "/compare.vtm");
   vtkNew<vtkMultiBlockDataSet> blocks;
   vtkNew<vtkUnstructuredGrid> volume;
@@ -632,20 +667,34 @@ int Compare(CompareOptions& o)
           outputDir + "/" + name + "_error.png", error))
         throw translucency::Error(error);
     }
+    if (timeResolved)
+    {
+      std::ostringstream caption;
+      caption << "TPSF per detector, " << o.Optics.TimeGates.Count << " gates of "
+              << (o.Optics.TimeGates.End - o.Optics.TimeGates.Start) / o.Optics.TimeGates.Count
+              << " ns; lines: diffusion, markers: Monte Carlo";
+      if (!WriteTpsfPNG(tpsf, image.Channel, caption.str(), outputDir + "/tpsf.png", error))
+        throw translucency::Error(error);
+    }
     std::vector<PlotSeries> curves;
     int unconverged = 0;
-    // A stochastic solver has no error-vs-tolerance curve.
+    // A stochastic solver has no error-vs-tolerance curve; a time-resolved or
+    // frequency-domain run has none either (the iteration limit of its many
+    // solves is not a measure of its cost).
+    const bool steady = o.Optics.TimeGates.Count == 0 && o.Optics.Frequency == 0.0;
     for (const std::string& name : order)
-      if (!translucency::GetDiffusionSolverRegistry().Get(name).Properties.IsStochastic)
+      if (steady && !translucency::GetDiffusionSolverRegistry().Get(name).Properties.IsStochastic)
       {
         Progress("error against time: " + name + "...");
-        curves.push_back(ErrorVersusTime(name, lit, refFluence, gridSpacing, unconverged));
+        curves.push_back(
+          ErrorVersusTime(name, lit, refFluence, gridSpacing, o.Optics, unconverged));
       }
     if (unconverged > 0)
       Progress("error against time: " + std::to_string(unconverged) +
         " solves stopped before convergence on purpose (iteration limits 1, 2, 4, ...)");
-    if (!WritePlotPNG(curves, "wall time (ms)", "RMS relative error of boundary fluence",
-          outputDir + "/error_vs_time.png", error))
+    if (!curves.empty() &&
+      !WritePlotPNG(curves, "wall time (ms)", "RMS relative error of boundary fluence",
+        outputDir + "/error_vs_time.png", error))
       throw translucency::Error(error);
     json plot;
     for (const PlotSeries& c : curves)
@@ -685,7 +734,9 @@ Command AddCompareCommand(CLI::App& app)
     [](double t) { return t > 0 && t < 1; }, "--rel-tol must be in (0, 1)");
   c->add_option("--output", o->OutputDir,
      "<solver>_radiance.png, <solver>_error.png, error_vs_time.png,\n"
-     "compare.vtm (needs X for the PNGs: xvfb-run -a)")
+     "compare.vtm (needs X for the PNGs: xvfb-run -a); with\n"
+     "--time-gates and --detector: tpsf.png (every solver's TPSF\n"
+     "per detector, channel --channel) and tpsf.csv (its data)")
     ->type_name("DIR");
   c->add_flag("--no-png", o->NoPictures, "skip the pictures and the plot (no X needed)");
   c->add_flag("--n-squared-law", o->NSquaredLaw,
@@ -695,6 +746,7 @@ Command AddCompareCommand(CLI::App& app)
      "the table as JSON (with provenance), written before the\n"
      "pictures and again with the error-vs-time curves")->type_name("FILE");
   AddImageOptions(c, o->Image);
+  AddDiffuseOpticsOptions(c, o->Optics);
   return { c, [o]() { return Compare(*o); } };
 }
 

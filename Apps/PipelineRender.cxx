@@ -10,7 +10,9 @@
 #include <vtkContextScene.h>
 #include <vtkContextView.h>
 #include <vtkDoubleArray.h>
+#include <vtkPen.h>
 #include <vtkPlot.h>
+#include <vtkPlotPoints.h>
 #include <vtkTable.h>
 #include <vtkCamera.h>
 #include <vtkCutter.h>
@@ -164,8 +166,18 @@ const char* ChannelName(int c)
 }
 }
 
-bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions& options,
-  const std::string& fileName, std::string& error)
+namespace
+{
+/// One slice picture: the slice plane of `options` (origin, normal) through
+/// `mesh`, coloured by component options.Channel of the point array
+/// `arrayName` (`map`, log10 scale if `logScale`, else linear from
+/// min(0, lo) for magnitudes or on [lo, hi] for signed values), its colour
+/// bar "quantity (unit)", a caption and the object's silhouette, into
+/// `renderer`; the camera looks along the slice normal.
+bool AddSlicePanel(vtkUnstructuredGrid* mesh, const RadianceImageOptions& options,
+  const char* arrayName, ColourMap map, bool logScale, bool magnitude,
+  const std::string& quantity, const std::string& unit, const std::string& what,
+  vtkRenderer* renderer, std::string& error)
 {
   double bounds[6];
   mesh->GetBounds(bounds);
@@ -197,25 +209,33 @@ bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions&
         std::to_string(bounds[5]) + " mm)";
     return false;
   }
-  vtkDataArray* fluence = slice->GetPointData()->GetArray("Fluence");
-  if (!fluence)
+  vtkDataArray* values = slice->GetPointData()->GetArray(arrayName);
+  if (!values)
   {
-    error = "the mesh has no Fluence array to slice";
+    error = std::string("the mesh has no ") + arrayName + " array to slice";
     return false;
   }
   const int channel = options.Channel;
   double range[2];
-  fluence->GetRange(range, channel);
-  const double hi = std::max(range[1], 1e-300);
-  const double lo = options.LogScale ? std::max(range[0], hi * 1e-4) : std::min(range[0], 0.0);
-  vtkSmartPointer<vtkLookupTable> lut =
-    MakeLookupTable(ColourMap::Inferno, lo, hi, options.LogScale);
+  values->GetRange(range, channel);
+  double lo = range[0], hi = range[1];
+  if (magnitude)
+  {
+    hi = std::max(range[1], 1e-300);
+    lo = logScale ? std::max(range[0], hi * 1e-4) : std::min(range[0], 0.0);
+  }
+  else if (!(hi > lo))
+  {
+    lo -= 0.5;
+    hi += 0.5;
+  }
+  vtkSmartPointer<vtkLookupTable> lut = MakeLookupTable(map, lo, hi, logScale);
   vtkNew<vtkPolyDataMapper> mapper;
   mapper->SetInputData(slice);
   mapper->SetLookupTable(lut);
   mapper->SetScalarModeToUsePointFieldData();
-  mapper->SelectColorArray("Fluence");
-  mapper->ColorByArrayComponent("Fluence", channel);
+  mapper->SelectColorArray(arrayName);
+  mapper->ColorByArrayComponent(arrayName, channel);
   mapper->SetUseLookupTableScalarRange(true);
   mapper->ScalarVisibilityOn();
   vtkNew<vtkActor> actor;
@@ -234,18 +254,15 @@ bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions&
   surfaceActor->GetProperty()->SetColor(0.8, 0.8, 0.8);
 
   std::ostringstream caption;
-  caption << "fluence rate slice, channel " << ChannelName(channel) << ", plane through ("
+  caption << what << " slice, channel " << ChannelName(channel) << ", plane through ("
           << std::setprecision(3) << origin[0] << ", " << origin[1] << ", " << origin[2]
           << ") mm, normal (" << normal[0] << ", " << normal[1] << ", " << normal[2] << ")";
-  vtkNew<vtkRenderer> renderer;
   renderer->AddActor(actor);
   renderer->AddActor(surfaceActor);
-  renderer->AddViewProp(MakeColourBar(
-    lut, std::string("Fluence rate ") + ChannelName(channel), "W/mm^2"));
+  renderer->AddViewProp(
+    MakeColourBar(lut, quantity + " " + ChannelName(channel), unit));
   AddCaption(renderer, caption.str());
   renderer->SetBackground(0.08, 0.08, 0.1);
-  vtkSmartPointer<vtkRenderWindow> window = NewPictureWindow(options.Width, options.Height);
-  window->AddRenderer(renderer);
   // Look at the slice face on: along its normal (an up vector not parallel to it).
   RadianceImageOptions view = options;
   std::copy(normal, normal + 3, view.ViewDirection);
@@ -261,6 +278,43 @@ bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions&
     view.ViewUp[2] = std::abs(normal[2]) < std::abs(normal[0]) ? 1.0 : 0.0;
   }
   PlaceCamera(renderer, bounds, view);
+  return true;
+}
+} // namespace
+
+bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions& options,
+  const std::string& fileName, std::string& error)
+{
+  vtkNew<vtkRenderer> renderer;
+  if (!AddSlicePanel(mesh, options, "Fluence", ColourMap::Inferno, options.LogScale, true,
+        "Fluence rate", "W/mm^2", "fluence rate", renderer, error))
+  {
+    return false;
+  }
+  vtkSmartPointer<vtkRenderWindow> window = NewPictureWindow(options.Width, options.Height);
+  window->AddRenderer(renderer);
+  return Snapshot(window, fileName, error);
+}
+
+bool WriteAmplitudePhaseSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions& options,
+  double frequency, const std::string& fileName, std::string& error)
+{
+  std::ostringstream hz;
+  hz << std::setprecision(4) << frequency / 1e6 << " MHz";
+  vtkNew<vtkRenderer> amplitude, phase;
+  if (!AddSlicePanel(mesh, options, "FluenceAmplitude", ColourMap::Inferno, options.LogScale,
+        true, "Fluence amplitude |Phi|", "W/mm^2", "amplitude at " + hz.str() + ",",
+        amplitude, error) ||
+    !AddSlicePanel(mesh, options, "FluencePhase", ColourMap::Viridis, false, false,
+      "Fluence phase arg(Phi)", "rad, < 0: lag", "phase at " + hz.str() + ",", phase, error))
+  {
+    return false;
+  }
+  amplitude->SetViewport(0.0, 0.0, 0.5, 1.0);
+  phase->SetViewport(0.5, 0.0, 1.0, 1.0);
+  vtkSmartPointer<vtkRenderWindow> window = NewPictureWindow(2 * options.Width, options.Height);
+  window->AddRenderer(amplitude);
+  window->AddRenderer(phase);
   return Snapshot(window, fileName, error);
 }
 
@@ -298,7 +352,8 @@ bool WriteScalarMapPNG(vtkPolyData* surface, const char* arrayName, double lo, d
 }
 
 bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTitle,
-  const std::string& yTitle, const std::string& fileName, std::string& error)
+  const std::string& yTitle, const std::string& fileName, std::string& error,
+  const std::string& title)
 {
   vtkNew<vtkContextView> view;
   UsePictureDisplay(view->GetRenderWindow());
@@ -307,6 +362,10 @@ bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTit
   vtkNew<vtkChartXY> chart;
   view->GetScene()->AddItem(chart);
   chart->SetShowLegend(true);
+  if (!title.empty())
+  {
+    chart->SetTitle(title);
+  }
   chart->GetAxis(vtkAxis::BOTTOM)->SetTitle(xTitle);
   chart->GetAxis(vtkAxis::LEFT)->SetTitle(yTitle);
   chart->GetAxis(vtkAxis::LEFT)->SetLogScale(true);
@@ -332,11 +391,21 @@ bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTit
     table->AddColumn(x);
     table->AddColumn(y);
     tables.push_back(table);
-    vtkPlot* line = chart->AddPlot(vtkChart::LINE);
+    vtkPlot* line = chart->AddPlot(s.Markers ? vtkChart::POINTS : vtkChart::LINE);
     line->SetInputData(table, 0, 1);
-    const unsigned char* c = colours[k++ % 6];
+    const unsigned char* c = colours[(s.Colour >= 0 ? s.Colour : k) % 6];
+    ++k;
     line->SetColor(c[0], c[1], c[2], 255);
     line->SetWidth(2.0);
+    if (auto* points = vtkPlotPoints::SafeDownCast(line); points && s.Markers)
+    {
+      points->SetMarkerStyle(s.Dashed ? vtkPlotPoints::DIAMOND : vtkPlotPoints::CIRCLE);
+      points->SetMarkerSize(7.0);
+    }
+    if (s.Dashed)
+    {
+      line->GetPen()->SetLineType(vtkPen::DASH_LINE);
+    }
   }
   if (tables.empty())
   {

@@ -53,6 +53,17 @@ bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions&
   const std::string& fileName, std::string& error);
 
 /**
+ * The frequency-domain slice (`render --frequency F --slice-png`): two panels
+ * side by side on options.SlicePlane, each options.Width wide: the amplitude
+ * `FluenceAmplitude` (inferno, log or linear as options.LogScale, W/mm^2 per
+ * W of source) and the phase `FluencePhase` (viridis, linear, radians;
+ * negative: the fluence lags the source), channel options.Channel;
+ * `frequency` (Hz) goes into the captions.
+ */
+bool WriteAmplitudePhaseSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions& options,
+  double frequency, const std::string& fileName, std::string& error);
+
+/**
  * Render `surface` coloured by its 1-component point array `arrayName` on the
  * linear range [lo, hi] (a shared scale across pictures): cool-warm if lo < 0
  * < hi (signed values), viridis otherwise, with a colour bar "quantity (unit)"
@@ -68,6 +79,9 @@ struct PlotSeries
   std::string Name;
   std::vector<double> X;
   std::vector<double> Y;
+  int Colour = -1;      ///< palette index (6 colours); -1 = the series' position
+  bool Dashed = false;  ///< a dashed line (with Markers: diamonds instead of circles)
+  bool Markers = false; ///< circles at the points, no line (e.g. Monte Carlo)
 };
 
 /**
@@ -75,7 +89,8 @@ struct PlotSeries
  * wall time (TransCut Fig. 7 style).
  */
 bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTitle,
-  const std::string& yTitle, const std::string& fileName, std::string& error);
+  const std::string& yTitle, const std::string& fileName, std::string& error,
+  const std::string& title = std::string());
 
 /// Render `window` and write it to a PNG through a temporary file renamed
 /// into place. Returns false with `error` set.

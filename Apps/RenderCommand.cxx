@@ -170,7 +170,11 @@ int Render(RenderOptions& o)
     if (!slicePath.empty())
     {
       EnsureParentDirectory(slicePath);
-      if (!WriteFluenceSlicePNG(solved, image, outputs.Add(slicePath), error))
+      // Frequency domain: amplitude and phase side by side.
+      if (o.Optics.Frequency > 0.0
+            ? !WriteAmplitudePhaseSlicePNG(
+                solved, image, o.Optics.Frequency, outputs.Add(slicePath), error)
+            : !WriteFluenceSlicePNG(solved, image, outputs.Add(slicePath), error))
         throw translucency::Error(error);
     }
     stages.push_back({ "render", MillisecondsSince(start) });
@@ -332,7 +336,8 @@ Command AddRenderCommand(CLI::App& app)
     ->type_name("FILE");
   c->add_option("--slice-png", o->SlicePath,
      "render a slice of the fluence rate (inferno, colour bar in\n"
-     "W/mm^2; --slice-plane, --channel, --scale)")
+     "W/mm^2; --slice-plane, --channel, --scale); with --frequency\n"
+     "two panels: amplitude (W/mm^2) and phase (rad)")
     ->type_name("FILE");
   AddImageOptions(c, o->Image);
   AddDiffuseOpticsOptions(c, o->Optics);

@@ -743,11 +743,14 @@ int vtkSolveDiffusion::RequestData(
                       << " solver: it applies to montecarlo only (the diffusion solvers use the "
                          "reduced scattering coefficient, in which g is already folded)");
     }
-    if ((frequencyDomain || timeResolved || !in.SolvedSources.Empty() || !in.Detectors.empty()) &&
+    // Detectors read the vertex Fluence every solver writes (the continuous-
+    // wave branch below), so they work for quadgraph and grid too; the rest
+    // needs the vertex systems (or the photons).
+    if ((frequencyDomain || timeResolved || !in.SolvedSources.Empty()) &&
       !entry.Properties.UnknownsAtVertices && !monteCarlo)
     {
       vtkErrorMacro(<< "the " << entry.Name
-                    << " solver has no interior sources, detectors, frequency domain or time "
+                    << " solver has no interior sources, frequency domain or time "
                        "gates: they are implemented for the divergence, fem and (but the "
                        "frequency domain) montecarlo solvers");
       return 0;

@@ -45,8 +45,9 @@
  *    transport mean free path below the entry point), in W per channel, on
  *    top of the boundary irradiance (give an all-zero `Irradiance`, e.g.
  *    vtkSurfaceIrradiance with DefaultLights off, for sources alone);
- *  - detectors on the surface (AddDetector, optional fibre radius): fluence
- *    and exitance per channel, read with GetDetectorFluence() and
+ *  - detectors on the surface (AddDetector, optional fibre radius; with
+ *    every solver: quadgraph and grid read them from their vertex Fluence,
+ *    continuous wave only): fluence and exitance per channel, read with GetDetectorFluence() and
  *    GetDetectorExitance() and attached as field arrays `DetectorPosition`
  *    (the surface point), `DetectorFluence`, `DetectorExitance` (3
  *    components, W/mm^2, one tuple per detector);

@@ -534,8 +534,10 @@ struct Tracer
     {
       std::copy(light.Direction, light.Direction + 3, in);
     }
-    else if (light.Type == LightSource::Kind::Point)
+    else if (light.Type == LightSource::Kind::Point || light.Type == LightSource::Kind::Spot)
     {
+      // A spot light is a point light whose cone and fall-off are in its q
+      // (the launch density): the photons come from its position.
       for (int a = 0; a < 3; ++a)
       {
         in[a] = x[a] - light.Position[a];
@@ -982,11 +984,6 @@ bool MonteCarloSolver::Solve(
   }
   for (std::size_t l = 0; l < problem.Lights.size(); ++l)
   {
-    if (problem.Lights[l].Type == LightSource::Kind::Spot)
-    {
-      throw Error("montecarlo: light " + std::to_string(l) +
-        " is a spot light: the Monte Carlo reference supports directional and point lights");
-    }
     if (problem.Lights[l].Type == LightSource::Kind::Uniform)
     {
       throw Error("montecarlo: light " + std::to_string(l) +

@@ -16,6 +16,8 @@ How to run (from a build tree; ctest sets the variables itself):
    phases in the JSON report, negative (lagging) and larger in magnitude at a
    farther detector; the amplitude is below the continuous-wave fluence.
 3. --light none without sources: zero fluence.
+3b. Detectors with quadgraph and grid: a point detector on a boundary vertex
+   reads that vertex's Fluence.
 4. Bad input (point source outside, pencil beam pointing out, detector off
    the surface, zero frequency, malformed specs, sources with grid, montecarlo with --frequency, --anisotropy)
    exits non-zero with a message naming the option or source, and leaves an
@@ -103,6 +105,32 @@ class DiffuseOpticsCLI(BoxRenderTest):
             self.assertLess(near["fluence_phase_rad"][c], 0.0)
             self.assertLess(far["fluence_phase_rad"][c], near["fluence_phase_rad"][c])
             self.assertLess(near["fluence_w_mm2"][c], cw["detectors"][0]["fluence_w_mm2"][c])
+
+    def test_detectors_every_solver(self):
+        # quadgraph and grid read their detectors from the vertex Fluence
+        # they write (the P1 interpolant at the surface point): a point
+        # detector placed on a boundary vertex reads that vertex's Fluence
+        # (a second way to get the same number, to round-off).
+        reader = vtkXMLUnstructuredGridReader()
+        reader.SetFileName(self.mesh)
+        reader.Update()
+        points = vtk_to_numpy(reader.GetOutput().GetPoints().GetData())
+        top = np.flatnonzero(np.isclose(points[:, 2], 5.0) & (np.abs(points[:, 0]) < 6)
+                             & (np.abs(points[:, 1]) < 6))
+        self.assertGreater(len(top), 0)
+        vertex = int(top[0])
+        spec = ",".join(repr(float(x)) for x in points[vertex])
+        for solver in ("quadgraph", "grid"):
+            report, solved = self.render(["--detector", spec, "--detector", "0,0,5:2"],
+                                         "det_" + solver, solver)
+            fluence = vtk_to_numpy(solved.GetArray("Fluence"))
+            point, fibre = report["detectors"]
+            for c, name in enumerate("RGB"):
+                self.assertGreater(fluence[vertex, c], 0.0, solver)
+                self.assertAlmostEqual(point["fluence_w_mm2"][name] / fluence[vertex, c], 1.0,
+                                       places=9, msg=solver)
+                self.assertGreater(point["exitance_w_mm2"][name], 0.0, solver)
+                self.assertGreater(fibre["fluence_w_mm2"][name], 0.0, solver)
 
     def test_light_none(self):
         _, points = self.render(["--light", "none"], "dark")

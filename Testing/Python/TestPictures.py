@@ -58,6 +58,7 @@ MEAN_TOLERANCE = 2.0
 # The ends of matplotlib's inferno and of Moreland's cool-warm (8-bit RGB).
 INFERNO_ENDS = ((0, 0, 4), (252, 255, 164))
 COOLWARM_ENDS = ((59, 76, 192), (180, 4, 38))
+VIRIDIS_ENDS = ((68, 1, 84), (253, 231, 37))
 
 
 def run(*args, env=None):
@@ -290,6 +291,39 @@ class PicturesTest(unittest.TestCase):
         bad = run("render", "--mesh", self.mesh, "--target-tets", "500", "--tpsf-png", png)
         self.assertNotEqual(bad.returncode, 0)
         self.assertIn("--tpsf-png needs --time-gates and at least one --detector", bad.stderr)
+
+    def test_7_compare_tpsf_plot(self):
+        """compare --time-gates --detector: one TPSF plot overlaying the
+        solvers (a colour per solver: fem's line, divergence's line and
+        Monte Carlo's circles are all drawn) next to its data (tpsf.csv)."""
+        out = os.path.join(self.tmp.name, "compare_tpsf")
+        result = run("compare", "--mesh", self.mesh, "--target-tets", "2000", "--light", "none",
+                     "--solvers", "fem,divergence,montecarlo", "--photons", "20000",
+                     "--source", "pencil:0,0,5:0,0,-1", "--detector", "0,3,4:1",
+                     "--time-gates", "0,1,20", "--output", out, "--quiet")
+        self.assertEqual(result.returncode, 0, result.stderr)
+        self.assertTrue(os.path.exists(os.path.join(out, "tpsf.csv")))
+        _, pixels = read_png(os.path.join(out, "tpsf.png"))
+        for colour in ((31, 119, 180), (255, 127, 14), (44, 160, 44)):
+            count = int((np.abs(pixels - np.array(colour)).max(axis=-1) <= 30).sum())
+            self.assertGreater(count, 100, "the series in %s is missing" % (colour,))
+
+    def test_8_amplitude_phase_slice(self):
+        """render --frequency --slice-png: two panels side by side, each
+        --size wide: the amplitude (inferno colour bar) on the left, the
+        phase (viridis colour bar) on the right."""
+        png = os.path.join(self.tmp.name, "fd_slice.png")
+        result = run("render", "--mesh", self.mesh, "--target-tets", "2000", "--light", "none",
+                     "--source", "point:0,0,0", "--frequency", "200e6", "--size", "400x300",
+                     "--slice-png", png, "--quiet")
+        self.assertEqual(result.returncode, 0, result.stderr)
+        image, pixels = read_png(png)
+        self.assertEqual(image.GetDimensions()[:2], (800, 300))
+        left, right = bar_row(pixels[:, :400]), bar_row(pixels[:, 400:])
+        for colour in INFERNO_ENDS:
+            self.assertTrue(near(colour, left), "inferno end %s not in the left bar" % (colour,))
+        for colour in VIRIDIS_ENDS:
+            self.assertTrue(near(colour, right), "viridis end %s not in the right bar" % (colour,))
 
 
 if __name__ == "__main__":
