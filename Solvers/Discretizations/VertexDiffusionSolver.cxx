@@ -272,7 +272,6 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   const OpticalProperties& material = *problem.Material;
   report = SolverReport();
   report.Solver = GetName();
-  report.LinearSolver = "cocg-jacobi";
   report.Assembly = "full";
 
   if (IsExtendedCollimatedModel(problem.Collimated))
@@ -317,11 +316,59 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   {
     throw Error(GetName() + ": this discretisation has no frequency-domain solve");
   }
+
+  // The preconditioner: the cycle of the linear solver this solve would use
+  // in continuous wave (by name, or by size: multigrid-agg from
+  // LargeSystemUnknowns on), built on the real part A, when that solver has
+  // one (LinearSolver::HasPreconditioner); else Jacobi.
+  // Documentation/DiffuseOptics.md says why.
+  std::unique_ptr<LinearSolver> real;
+  {
+    const std::string name = ToLower(LinearSolver_.empty()
+        ? GetDefaultLinearSolverName(mesh.GetNumberOfPoints())
+        : LinearSolver_);
+    real = CreateLinearSolver(name); // throws, listing the known names
+    // Only solvers with a cycle are set up (a factorisation would be wasted).
+    if (real->GetName() == "multigrid-agg")
+    {
+      real->Setup(system, &mesh, true);
+    }
+    if (!real->HasPreconditioner())
+    {
+      real.reset();
+    }
+  }
+  report.LinearSolver = real ? "cocg-" + real->GetName() : "cocg-jacobi";
   report.SetupMilliseconds = MillisecondsSince(start);
 
   start = Clock::now();
   std::array<Eigen::VectorXd, NumberOfChannels> realPart, imagPart;
-  for (int c = 0; c < NumberOfChannels; ++c)
+  if (real)
+  {
+    std::array<Eigen::VectorXcd, NumberOfChannels> x;
+    std::array<LinearSolveStats, NumberOfChannels> stats;
+    const auto progress = [this](int iteration) {
+      return ReportProgress(static_cast<double>(iteration) / std::max(1, MaxIter_));
+    };
+    const LinearSolver* preconditioner = real.get();
+    if (!SolveComplexSymmetricBlockedCOCG(system, imaginary,
+          [preconditioner](const double* r, double* z) {
+            preconditioner->ApplyPreconditioner(r, z);
+          },
+          x, RelTol_, MaxIter_, stats, progress))
+    {
+      return false;
+    }
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      realPart[c] = x[c].real();
+      imagPart[c] = x[c].imag();
+      report.Iterations[c] = stats[c].Iterations;
+      report.Residual[c] = stats[c].RelativeResidual;
+      report.Converged[c] = stats[c].Converged;
+    }
+  }
+  for (int c = 0; c < NumberOfChannels && !real; ++c)
   {
     Eigen::VectorXcd x;
     LinearSolveStats stats;
@@ -345,10 +392,12 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   report.SolveMilliseconds = MillisecondsSince(start);
   report.NumberOfUnknowns = system.NumberOfUnknowns;
   report.NumberOfNonZeros = static_cast<long long>(system.ColumnIndices.size());
-  // The system, the imaginary mass values, and COCG's complex work vectors.
+  // The system, the imaginary mass values, COCG's complex work vectors and
+  // the preconditioner's hierarchy.
   report.MemoryBytes = system.GetMemoryBytes() +
     NumberOfChannels * system.ColumnIndices.size() * sizeof(double) +
-    10 * static_cast<std::size_t>(system.NumberOfUnknowns) * sizeof(double);
+    (real ? 36 : 10) * static_cast<std::size_t>(system.NumberOfUnknowns) * sizeof(double) +
+    (real ? real->GetMemoryBytes() : 0);
   std::vector<double> re, im;
   Discretization_->ToPointFluence(mesh, system, realPart, re);
   Discretization_->ToPointFluence(mesh, system, imagPart, im);

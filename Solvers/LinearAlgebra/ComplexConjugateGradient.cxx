@@ -1,5 +1,6 @@
 #include "ComplexConjugateGradient.h"
 
+#include "BlockedKernels.h"
 #include "Error.h"
 
 #include <Eigen/Sparse>
@@ -102,6 +103,285 @@ bool SolveComplexSymmetricCOCG(int n, const int* rowOffsets, const int* columns,
   stats.RelativeResidual = residual;
   stats.Converged = std::isfinite(residual) && residual <= relTol * 1.000001 + 1e-15;
   stats.SpMVEquivalents = iteration + 2;
+  return true;
+}
+
+} // namespace translucency
+
+namespace translucency
+{
+
+namespace
+{
+
+using blocked::ChunkedSums;
+using blocked::NC;
+
+/// B compressed to its non-zero entries (any channel), 3 values per entry.
+struct CompressedImaginary
+{
+  std::vector<int> Offsets, Columns;
+  std::vector<double> Values;
+};
+
+CompressedImaginary Compress(const DiffusionSystem& system,
+  const std::array<std::vector<double>, NumberOfChannels>& imag)
+{
+  const int n = system.NumberOfUnknowns;
+  CompressedImaginary b;
+  b.Offsets.assign(static_cast<std::size_t>(n) + 1, 0);
+  for (int i = 0; i < n; ++i)
+  {
+    for (int k = system.RowOffsets[i]; k < system.RowOffsets[i + 1]; ++k)
+    {
+      if (imag[0][k] != 0.0 || imag[1][k] != 0.0 || imag[2][k] != 0.0)
+      {
+        b.Columns.push_back(system.ColumnIndices[k]);
+        for (int c = 0; c < NC; ++c)
+        {
+          b.Values.push_back(imag[c][k]);
+        }
+      }
+    }
+    b.Offsets[i + 1] = static_cast<int>(b.Columns.size());
+  }
+  return b;
+}
+
+} // namespace
+
+bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
+  const std::array<std::vector<double>, NumberOfChannels>& imagValues,
+  const std::function<void(const double*, double*)>& precondition,
+  std::array<Eigen::VectorXcd, NumberOfChannels>& x, double relTol, int maxIter,
+  std::array<LinearSolveStats, NumberOfChannels>& stats, const std::function<bool(int)>& progress)
+{
+  const int n = system.NumberOfUnknowns;
+  const std::size_t nnz = system.ColumnIndices.size();
+  bool ok = n >= 0 && system.RowOffsets.size() == static_cast<std::size_t>(n) + 1 &&
+    static_cast<std::size_t>(system.RowOffsets.back()) == nnz;
+  for (int c = 0; c < NC && ok; ++c)
+  {
+    ok = system.Values[c].size() == nnz && imagValues[c].size() == nnz &&
+      system.RightHandSide[c].size() == n;
+  }
+  if (!ok)
+  {
+    throw Error("COCG: the imaginary values or the right-hand sides do not match the system");
+  }
+  const CompressedImaginary imag = Compress(system, imagValues);
+  const long long n3 = 3 * static_cast<long long>(n);
+  // Interleaved work vectors, real and imaginary parts apart (the
+  // preconditioner takes each part as one real interleaved vector).
+  std::vector<double> xr(n3, 0.0), xi(n3, 0.0), rr(n3), ri(n3, 0.0), zr(n3), zi(n3), pr(n3),
+    pi(n3), qr(n3), qi(n3);
+  std::array<double, NC> normB{};
+  std::array<bool, NC> active{};
+  for (int c = 0; c < NC; ++c)
+  {
+    stats[c] = LinearSolveStats();
+    const Eigen::VectorXd& b = system.RightHandSide[c];
+    for (int i = 0; i < n; ++i)
+    {
+      rr[3 * static_cast<std::size_t>(i) + c] = b[i];
+    }
+    normB[c] = b.norm();
+    active[c] = normB[c] > 0.0;
+    stats[c].Converged = !active[c];
+  }
+  const int* ro = system.RowOffsets.data();
+  const int* ci = system.ColumnIndices.data();
+  const double* a[NC] = { system.Values[0].data(), system.Values[1].data(),
+    system.Values[2].data() };
+  const int* bo = imag.Offsets.data();
+  const int* bc = imag.Columns.data();
+  const double* bv = imag.Values.data();
+  // Row i of (A + i B) v into (outR, outI)[3 i ...].
+  const auto row = [&](const double* vr, const double* vi, long long i, double* outR,
+                     double* outI) {
+    double sr[NC] = { 0.0, 0.0, 0.0 }, si[NC] = { 0.0, 0.0, 0.0 };
+    for (int k = ro[i]; k < ro[i + 1]; ++k)
+    {
+      const std::size_t j = 3 * static_cast<std::size_t>(ci[k]);
+      for (int c = 0; c < NC; ++c)
+      {
+        sr[c] += a[c][k] * vr[j + c];
+        si[c] += a[c][k] * vi[j + c];
+      }
+    }
+    for (int k = bo[i]; k < bo[i + 1]; ++k)
+    {
+      const std::size_t j = 3 * static_cast<std::size_t>(bc[k]);
+      const double* b = bv + 3 * static_cast<std::size_t>(k);
+      for (int c = 0; c < NC; ++c)
+      {
+        sr[c] -= b[c] * vi[j + c];
+        si[c] += b[c] * vr[j + c];
+      }
+    }
+    for (int c = 0; c < NC; ++c)
+    {
+      outR[c] = sr[c];
+      outI[c] = si[c];
+    }
+  };
+  // u^T v (unconjugated) per channel: sums 0-2 real, 3-5 imaginary parts.
+  const auto bilinear = [n](const std::vector<double>& ur, const std::vector<double>& ui,
+                          const std::vector<double>& vr, const std::vector<double>& vi) {
+    const auto s = ChunkedSums<6>(n, [&](long long begin, long long end, double* sums) {
+      for (long long k = 3 * begin; k < 3 * end; ++k)
+      {
+        sums[k % 3] += ur[k] * vr[k] - ui[k] * vi[k];
+        sums[3 + k % 3] += ur[k] * vi[k] + ui[k] * vr[k];
+      }
+    });
+    std::array<std::complex<double>, NC> out;
+    for (int c = 0; c < NC; ++c)
+    {
+      out[c] = std::complex<double>(s[c], s[3 + c]);
+    }
+    return out;
+  };
+  const auto anyActive = [&]() { return active[0] || active[1] || active[2]; };
+  const double imagShare = static_cast<double>(imag.Columns.size()) / std::max<double>(1.0, nnz);
+  std::array<std::complex<double>, NC> rho{};
+  if (anyActive())
+  {
+    precondition(rr.data(), zr.data());
+    precondition(ri.data(), zi.data());
+    pr = zr;
+    pi = zi;
+    rho = bilinear(rr, ri, zr, zi);
+  }
+  int iteration = 0;
+  for (; iteration < maxIter && anyActive(); ++iteration)
+  {
+    if (progress && !progress(iteration))
+    {
+      return false;
+    }
+    // q = (A + i B) p with p^T q.
+    const auto pqSums = ChunkedSums<6>(n, [&](long long begin, long long end, double* sums) {
+      for (long long i = begin; i < end; ++i)
+      {
+        row(pr.data(), pi.data(), i, qr.data() + 3 * i, qi.data() + 3 * i);
+        for (int c = 0; c < NC; ++c)
+        {
+          const long long k = 3 * i + c;
+          sums[c] += pr[k] * qr[k] - pi[k] * qi[k];
+          sums[3 + c] += pr[k] * qi[k] + pi[k] * qr[k];
+        }
+      }
+    });
+    std::array<std::complex<double>, NC> alpha{};
+    for (int c = 0; c < NC; ++c)
+    {
+      if (!active[c])
+      {
+        continue;
+      }
+      const std::complex<double> pq(pqSums[c], pqSums[3 + c]);
+      if (std::abs(pq) == 0.0 || !std::isfinite(std::abs(pq)) || !std::isfinite(std::abs(rho[c])))
+      {
+        active[c] = false; // breakdown: not converged
+        continue;
+      }
+      alpha[c] = rho[c] / pq;
+      stats[c].Iterations = iteration + 1;
+      stats[c].SpMVEquivalents += 2.0 + 2.0 * imagShare;
+    }
+    // x += alpha p, r -= alpha q, with ||r||^2.
+    const auto rrSums = ChunkedSums<3>(n, [&](long long begin, long long end, double* sums) {
+      for (long long i = begin; i < end; ++i)
+      {
+        for (int c = 0; c < NC; ++c)
+        {
+          const long long k = 3 * i + c;
+          const double ar = alpha[c].real(), ai = alpha[c].imag();
+          xr[k] += ar * pr[k] - ai * pi[k];
+          xi[k] += ar * pi[k] + ai * pr[k];
+          rr[k] -= ar * qr[k] - ai * qi[k];
+          ri[k] -= ar * qi[k] + ai * qr[k];
+          sums[c] += rr[k] * rr[k] + ri[k] * ri[k];
+        }
+      }
+    });
+    for (int c = 0; c < NC; ++c)
+    {
+      if (active[c])
+      {
+        stats[c].RelativeResidual = std::sqrt(rrSums[c]) / normB[c];
+        if (stats[c].RelativeResidual <= relTol)
+        {
+          active[c] = false;
+        }
+      }
+    }
+    if (!anyActive())
+    {
+      ++iteration;
+      break;
+    }
+    precondition(rr.data(), zr.data());
+    precondition(ri.data(), zi.data());
+    const auto rhoNext = bilinear(rr, ri, zr, zi);
+    std::array<std::complex<double>, NC> beta{};
+    for (int c = 0; c < NC; ++c)
+    {
+      beta[c] = active[c] && std::abs(rho[c]) > 0.0 ? rhoNext[c] / rho[c] : 0.0;
+      if (active[c] && std::abs(rho[c]) == 0.0)
+      {
+        active[c] = false; // breakdown
+      }
+    }
+    // p = z + beta p on the active channels.
+#pragma omp parallel for schedule(static) if(n > blocked::ParallelThreshold)
+    for (long long i = 0; i < n; ++i)
+    {
+      for (int c = 0; c < NC; ++c)
+      {
+        if (!active[c])
+        {
+          continue;
+        }
+        const long long k = 3 * i + c;
+        const double br = beta[c].real(), bi = beta[c].imag();
+        const double p0 = pr[k], p1 = pi[k];
+        pr[k] = zr[k] + br * p0 - bi * p1;
+        pi[k] = zi[k] + br * p1 + bi * p0;
+      }
+    }
+    rho = rhoNext;
+  }
+  // The true residuals (the recurrence's may drift).
+  const auto trueSums = ChunkedSums<3>(n, [&](long long begin, long long end, double* sums) {
+    for (long long i = begin; i < end; ++i)
+    {
+      double axr[NC], axi[NC];
+      row(xr.data(), xi.data(), i, axr, axi);
+      for (int c = 0; c < NC; ++c)
+      {
+        const double er = system.RightHandSide[c][i] - axr[c], ei = -axi[c];
+        sums[c] += er * er + ei * ei;
+      }
+    }
+  });
+  for (int c = 0; c < NC; ++c)
+  {
+    x[c].resize(n);
+    for (int i = 0; i < n; ++i)
+    {
+      const std::size_t k = 3 * static_cast<std::size_t>(i) + c;
+      x[c][i] = std::complex<double>(xr[k], xi[k]);
+    }
+    if (normB[c] > 0.0)
+    {
+      const double residual = std::sqrt(trueSums[c]) / normB[c];
+      stats[c].RelativeResidual = residual;
+      stats[c].Converged = std::isfinite(residual) && residual <= relTol * 1.000001 + 1e-15;
+      stats[c].SpMVEquivalents += 2.0 + 2.0 * imagShare;
+    }
+  }
   return true;
 }
 

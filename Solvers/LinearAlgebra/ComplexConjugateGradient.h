@@ -19,8 +19,10 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <complex>
 #include <functional>
+#include <vector>
 
 namespace translucency
 {
@@ -39,6 +41,35 @@ namespace translucency
 bool SolveComplexSymmetricCOCG(int n, const int* rowOffsets, const int* columns,
   const double* realValues, const double* imagValues, const Eigen::VectorXcd& b,
   Eigen::VectorXcd& x, double relTol, int maxIter, LinearSolveStats& stats,
+  const std::function<bool(int)>& progress = {});
+
+/**
+ * Preconditioned COCG on the three channels of a DiffusionSystem together:
+ * (A_c + i B_c) x_c = b_c, A_c = system.Values[c] (the real SPD matrix),
+ * B_c = imagValues[c] on the same pattern (zeros allowed: they are dropped),
+ * b_c = system.RightHandSide[c] (real: sources modulated with phase 0).
+ * precondition(r, z) computes z = P r on 3 n interleaved real values (channel
+ * c of unknown i at 3 i + c) with P a fixed real symmetric positive definite
+ * operator, e.g. the multigrid cycle of A (LinearSolver::ApplyPreconditioner);
+ * it is applied to the real and the imaginary part of the residual
+ * separately, so P (A + i B) stays complex symmetric in the P-bilinear form
+ * and COCG's short recurrence holds. Each channel has its own scalars and
+ * stops when its ||b - (A + i B) x|| <= relTol ||b|| (the recurrence's
+ * residual; the true one is computed at the end for the statistics) or after
+ * maxIter iterations; b_c = 0 gives x_c = 0. Starts from x = 0. `progress`
+ * receives the iteration count and returns false to abort (the function
+ * then returns false). A breakdown (p^T (A + i B) p = 0 or not finite)
+ * stops that channel, not converged. The dot products are summed in a fixed
+ * chunk order: the result does not depend on the number of threads.
+ * SpMVEquivalents counts the complex products in units of a real product
+ * with A (a complex product is 2 plus B's share; the preconditioner's work
+ * is not counted).
+ */
+bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
+  const std::array<std::vector<double>, NumberOfChannels>& imagValues,
+  const std::function<void(const double*, double*)>& precondition,
+  std::array<Eigen::VectorXcd, NumberOfChannels>& x, double relTol, int maxIter,
+  std::array<LinearSolveStats, NumberOfChannels>& stats,
   const std::function<bool(int)>& progress = {});
 
 } // namespace translucency
