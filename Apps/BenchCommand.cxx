@@ -1,7 +1,10 @@
 // `translucency bench`: median topology, assembly, SpMV and solve times at
 // several mesh sizes (optionally cut and paint timings, --edit), or, with
-// --linear-solvers, every linear solver side by side (BenchLinearSolvers.cxx).
+// --linear-solvers, every linear solver side by side (BenchLinearSolvers.cxx),
+// or, with --diffuse-optics, the frequency-domain and time-gate solves against
+// the CW solve (BenchDiffuseOptics.cxx).
 
+#include "BenchDiffuseOptics.h"
 #include "BenchLinearSolvers.h"
 #include "BenchMeshers.h"
 #include "MeshIO.h"
@@ -14,6 +17,7 @@
 #include "OpticalProperties.h"
 #include "Strings.h"
 #include "TetMesh.h"
+#include "TimeResolved.h"
 
 #include "vtkAssignScatteringCoefficients.h"
 #include "vtkPaintScatteringCoefficients.h"
@@ -338,12 +342,6 @@ Command AddBenchCommand(CLI::App& app)
     c->add_flag_callback("--no-cut", [linear]() { linear->DoCut = false; },
        "skip the cut -> new fluence figure")
       ->group(group);
-  CLI::Option* frequency = AddNumber(c, "--frequency", linear->Frequency,
-    "also the frequency-domain figure at this modulation\n"
-    "frequency (Hz, > 0): the divergence solve of light 0, CW vs\n"
-    "COCG-multigrid and COCG-Jacobi, same run",
-    "HZ", [](double f) { return f > 0 && f < 1e12; }, "--frequency must be in (0, 1e12) Hz")
-    ->group(group);
   auto meshersFlag = std::make_shared<bool>(false);
   CLI::Option* meshers = c->add_flag("--meshers", *meshersFlag,
     "compare the tetrahedralisers instead: tetgen and hxt (when\n"
@@ -353,8 +351,34 @@ Command AddBenchCommand(CLI::App& app)
   meshers->excludes(linearSolvers);
   edit->excludes(meshers);
   edit->excludes(linearSolvers);
-  for (CLI::Option* only : { plot, ranks, noCut, frequency })
+  for (CLI::Option* only : { plot, ranks, noCut })
     only->needs(linearSolvers);
+  // Diffuse optics (issue 19's performance targets).
+  auto optics = std::make_shared<DiffuseOpticsBenchOptions>();
+  auto opticsFlag = std::make_shared<bool>(false);
+  const std::string opticsGroup = "Diffuse optics (bench --diffuse-optics)";
+  CLI::Option* diffuseOptics = c->add_flag("--diffuse-optics", *opticsFlag,
+    "frequency-domain solves (COCG with Jacobi and with the\n"
+    "multigrid of the real part) against the CW cold solve at\n"
+    "--tets (default 1000000), and --gates time gates at\n"
+    "--gate-tets with the cg-jacobi and multigrid step solvers;\n"
+    "--runs default 3")->group(opticsGroup);
+  CLI::Option* frequency = AddNumber(c, "--frequency", optics->Frequency,
+    "modulation frequency of the frequency-domain solves (Hz)", "HZ",
+    [](double f) { return std::isfinite(f) && f > 0.0; }, "--frequency must be finite and > 0")
+    ->group(opticsGroup);
+  CLI::Option* gateTets = AddNumber(c, "--gate-tets", optics->GateTets,
+    "target size of the time-gate table (0: skip it)", "N",
+    [](double n) { return n >= 0 && n <= 1e8; }, "--gate-tets must be from 0 to 1e8")
+    ->group(opticsGroup);
+  CLI::Option* gateCount = AddNumber(c, "--gates", optics->Gates,
+    "time gates over 0-5 ns", "N",
+    [](double n) { return n >= 1 && n <= translucency::TimeGates::MaximumTimeGates; },
+    "--gates must be from 1 to 10000")->group(opticsGroup);
+  for (CLI::Option* only : { frequency, gateTets, gateCount })
+    only->needs(diffuseOptics);
+  for (CLI::Option* other : { linearSolvers, meshers, edit })
+    diffuseOptics->excludes(other);
   return { c, [=]() {
             if (linearSolvers->count() > 0)
             {
@@ -371,6 +395,16 @@ Command AddBenchCommand(CLI::App& app)
               if (*runs > 0)
                 linear->Runs = *runs;
               return BenchLinearSolvers(*linear);
+            }
+            if (*opticsFlag)
+            {
+              optics->MeshPath = linear->MeshPath;
+              optics->JsonPath = linear->JsonPath;
+              if (!tets->empty())
+                optics->Tets = *tets;
+              if (*runs > 0)
+                optics->Runs = *runs;
+              return BenchDiffuseOptics(*optics);
             }
             if (*meshersFlag)
             {

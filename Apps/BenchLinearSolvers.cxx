@@ -20,7 +20,6 @@
 
 #include "AggregationMultigrid.h"
 #include "ConjugateGradient.h"
-#include "DiffusionSolverFactory.h"
 #include "DiscreteDivergence.h"
 #include "Error.h"
 #include "LightSources.h"
@@ -30,7 +29,6 @@
 #include "TetCut.h"
 #include "TetMesh.h"
 #include "TetPaint.h"
-#include "VertexDiffusionSolver.h"
 
 #include "vtkTetrahedralizeSurface.h"
 
@@ -45,7 +43,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <complex>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -644,79 +641,6 @@ json BenchCut(const std::string& solverName, const Problem& p, const Solution& p
 /// ladder tolerance giving <= 1 % boundary error (untimed calibration pass
 /// against a 1e-10 reference of the painted system). Same-run baseline: the
 /// same with a full 3-channel assembly instead of the row update.
-/// Issue 19's frequency-domain figure: the divergence solve of light 0
-/// (3 channels, RelTol 1e-6, cold) in the continuous wave with the default
-/// linear solver of this size, and at `frequency` with COCG preconditioned
-/// by the multigrid-agg cycle of A + B and with COCG-Jacobi; medians of
-/// `runs`, set-up (assembly, mass matrix, hierarchy) and solve apart.
-json BenchFrequencyDomain(const Problem& p, const std::vector<double>& q, double frequency, int runs)
-{
-  translucency::DiffusionProblem problem;
-  problem.Mesh = &p.Mesh;
-  problem.Material = &p.Material;
-  problem.Irradiance = &q;
-  struct Case
-  {
-    const char* Label;
-    const char* Linear;
-    bool Frequency;
-  };
-  const Case cases[3] = { { "continuous wave", "", false },
-    { "frequency domain, COCG-multigrid", "multigrid-agg", true },
-    { "frequency domain, COCG-Jacobi", "cg-jacobi", true } };
-  json out = json::object();
-  out["frequency_hz"] = frequency;
-  double cwSolve = 0.0, cwTotal = 0.0;
-  std::cout << "\n  frequency domain (" << frequency / 1e6
-            << " MHz; divergence, light 0, 3 channels, RelTol 1e-6, cold, medians of " << runs
-            << "):\n";
-  for (const Case& k : cases)
-  {
-    std::vector<double> setup, solve;
-    translucency::SolverReport report;
-    for (int r = 0; r < runs; ++r)
-    {
-      auto solver = translucency::CreateDiffusionSolver("divergence");
-      solver->SetRelTol(1e-6);
-      solver->SetMaxIter(20000);
-      solver->SetWarmStart(false);
-      solver->SetLinearSolver(k.Linear);
-      if (k.Frequency)
-      {
-        std::vector<std::complex<double>> fluence;
-        dynamic_cast<translucency::VertexDiffusionSolver&>(*solver).SolveFrequencyDomain(
-          problem, frequency, fluence, report);
-      }
-      else
-      {
-        std::vector<double> fluence;
-        solver->Solve(problem, fluence, report);
-      }
-      setup.push_back(report.SetupMilliseconds);
-      solve.push_back(report.SolveMilliseconds);
-    }
-    const double s = Median(solve), total = Median(setup) + s;
-    if (!k.Frequency)
-    {
-      cwSolve = s;
-      cwTotal = total;
-    }
-    std::printf("    %-36s %-20s set-up %8.1f ms, solve %8.1f ms (x%.2f of CW), set-up + solve %8.1f "
-                "ms (x%.2f); iterations %d/%d/%d%s\n",
-      k.Label, report.LinearSolver.c_str(), Median(setup), s, cwSolve > 0 ? s / cwSolve : 1.0,
-      total, cwTotal > 0 ? total / cwTotal : 1.0, report.Iterations[0], report.Iterations[1],
-      report.Iterations[2],
-      report.Converged[0] && report.Converged[1] && report.Converged[2] ? "" : " (not converged)");
-    json row = { { "linear_solver", report.LinearSolver }, { "setup_ms", Median(setup) },
-      { "solve_ms", s }, { "solve_ratio_to_cw", cwSolve > 0 ? s / cwSolve : 1.0 },
-      { "total_ratio_to_cw", cwTotal > 0 ? total / cwTotal : 1.0 },
-      { "iterations", { report.Iterations[0], report.Iterations[1], report.Iterations[2] } } };
-    out[k.Label] = row;
-  }
-  std::cout << "    (issue 19 target: the frequency-domain solve within 3x of the CW cold solve)\n";
-  return out;
-}
-
 json BenchPaint(const std::string& solverName, const Problem& p, const Solution& previous,
   int runs)
 {
@@ -1302,8 +1226,6 @@ int BenchLinearSolvers(const LinearSolverBenchOptions& options)
       entry["drag"] = BenchDrag(cutSolver, p, runs);
     if (doCut)
       entry["cut"] = BenchCut(cutSolver, p, defaultCold, runs);
-    if (options.Frequency > 0.0)
-      entry["frequency_domain"] = BenchFrequencyDomain(p, q0, options.Frequency, runs);
     entry["targets"] = PrintTargets(rows, entry, cutSolver, spmvMs);
     entry["memory"] = PrintMemory(p, disc, q0, rows, cutSolver);
     results.push_back(entry);

@@ -36,10 +36,6 @@ struct LinearSolverBenchOptions
   std::string PlotPath; ///< error vs time picture (and its .csv); empty: none
   int HypreRanks = 2;   ///< ranks of the multi-rank hypre-amg row; < 2: none
   bool DoCut = true;    ///< the cut -> new fluence figure
-  /// > 0: also the frequency-domain figure (issue 19) at this modulation
-  /// frequency (Hz): the divergence solve of light 0, 3 channels, to 1e-6,
-  /// continuous wave against COCG-multigrid and COCG-Jacobi, same run.
-  double Frequency = 0.0;
 };
 
 /// `translucency bench --linear-solvers ...`.

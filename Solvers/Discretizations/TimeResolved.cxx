@@ -7,6 +7,8 @@
 #include "Timer.h"
 #include "VertexDiffusionSolver.h"
 
+#include "Strings.h"
+
 #include <Eigen/IterativeLinearSolvers>
 
 #include <algorithm>
@@ -106,7 +108,7 @@ namespace
 {
 
 using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
-using CG = Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper,
+using JacobiCG = Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper,
   Eigen::DiagonalPreconditioner<double>>;
 
 /// y = M x for the mass values on the system's pattern (OpenMP rows).
@@ -175,7 +177,6 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   const std::vector<double>& irradiance = *problem.Irradiance;
   report = SolverReport();
   report.Solver = GetName();
-  report.LinearSolver = "cg-jacobi";
   report.Assembly = "full";
   result = TimeResolvedResult();
   result.Gates = used;
@@ -227,13 +228,29 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     }
     mass = std::move(masses[0]);
   }
-  // The step matrices a M / dt + K share K's pattern.
+  // The step matrices a M / dt + K share K's pattern. They are solved, the
+  // three channels together, by the linear solver a continuous-wave Solve()
+  // would use (SetLinearSolver's name, or by size: multigrid-agg from
+  // LargeSystemUnknowns on), set up once for the pattern (its hierarchy is
+  // kept for the whole run) and again for the values when a / dt changes
+  // (twice per run, three times with T0 > 0).
   DiffusionSystem step;
   step.NumberOfUnknowns = system.NumberOfUnknowns;
   step.RowOffsets = system.RowOffsets;
   step.ColumnIndices = system.ColumnIndices;
-  std::array<CG, NumberOfChannels> cg;
+  std::unique_ptr<LinearSolver> linear = CreateLinearSolver(ToLower(LinearSolver_.empty()
+      ? GetDefaultLinearSolverName(system.NumberOfUnknowns)
+      : LinearSolver_)); // throws, listing the known names
+  linear->SetRelTol(RelTol_);
+  linear->SetMaxIter(MaxIter_);
+  report.LinearSolver = linear->GetName();
+  // cg-jacobi: Eigen's CG per channel with its diagonal kept per step matrix
+  // (the registry's cg-jacobi rebuilds it at every Solve, one more pass over
+  // the matrix per step).
+  const bool jacobi = linear->GetName() == "cg-jacobi";
+  std::array<JacobiCG, NumberOfChannels> cg;
   double matrixFactor = -1.0; // a / dt of step.Values
+  bool structure = true;      // the first set-up builds the structure
   const auto setMatrix = [&](double factor) {
     if (factor == matrixFactor)
     {
@@ -246,6 +263,10 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
       {
         step.Values[c][k] = system.Values[c][k] + factor * mass[k];
       }
+      step.RightHandSide[c].setZero(system.NumberOfUnknowns);
+    }
+    for (int c = 0; c < NumberOfChannels && jacobi; ++c)
+    {
       cg[c].setTolerance(RelTol_);
       cg[c].setMaxIterations(MaxIter_);
       cg[c].compute(step.Matrix(c));
@@ -254,6 +275,19 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
         throw Error(GetName() + ": the time-step matrix has a zero or non-finite diagonal");
       }
     }
+    try
+    {
+      if (!jacobi)
+      {
+        linear->Setup(step, &mesh, structure);
+      }
+    }
+    catch (const Error& e)
+    {
+      throw Error(GetName() + ": the time-step matrix (a M / dt + K, a / dt = " +
+        std::to_string(factor) + "/ns) is not SPD: " + e.what());
+    }
+    structure = false;
     matrixFactor = factor;
   };
   report.SetupMilliseconds = MillisecondsSince(start);
@@ -282,30 +316,50 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   // One segment: `steps` steps of dt, the first backward Euler, the others
   // BDF2; `add` the step integrals to the current gate; `gateEnd(step)` after
   // every step (to close gates).
-  Eigen::VectorXd rhs(n), guess(n);
   // The integral of the last backward-Euler step, per channel: the first
   // BDF2 interval takes half of it in place of dt phi / 2, which keeps the
   // sum over the steps exactly K^-1 b (Documentation/DiffuseOptics.md).
   std::array<Eigen::VectorXd, NumberOfChannels> lastEuler;
-  // One linear solve of channel c from `guess`, with the statistics.
-  const auto solve = [&](int c, const Eigen::VectorXd& right, const Eigen::VectorXd& start) {
-    Eigen::VectorXd next;
-    if (right.squaredNorm() == 0.0)
+  // One linear solve of the three channels (right-hand sides in
+  // step.RightHandSide) from `next` (the guess), with the statistics.
+  std::array<LinearSolveStats, NumberOfChannels> stats;
+  const auto solve = [&](std::array<Eigen::VectorXd, NumberOfChannels>& next) {
+    if (jacobi)
     {
-      next.setZero(n);
-      return next;
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        stats[c] = LinearSolveStats();
+        const Eigen::VectorXd& right = step.RightHandSide[c];
+        if (right.squaredNorm() == 0.0)
+        {
+          next[c].setZero(n);
+          stats[c].Converged = true;
+          continue;
+        }
+        const Eigen::VectorXd guess = next[c];
+        next[c] = cg[c].solveWithGuess(right, guess);
+        stats[c].Iterations = static_cast<int>(cg[c].iterations());
+        stats[c].RelativeResidual = cg[c].error();
+        stats[c].Converged = cg[c].info() == Eigen::Success;
+      }
     }
-    next = cg[c].solveWithGuess(right, start);
-    const int used = static_cast<int>(cg[c].iterations());
-    iterations[c] += used;
-    result.MaximumStepIterations[c] = std::max(result.MaximumStepIterations[c], used);
-    report.Residual[c] = std::max(report.Residual[c], cg[c].error());
-    if (cg[c].info() != Eigen::Success || !next.allFinite())
+    else
     {
-      report.Converged[c] = false;
+      linear->Solve(step, next, true, stats);
     }
-    return next;
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      const int used = stats[c].Iterations;
+      iterations[c] += used;
+      result.MaximumStepIterations[c] = std::max(result.MaximumStepIterations[c], used);
+      report.Residual[c] = std::max(report.Residual[c], stats[c].RelativeResidual);
+      if (!stats[c].Converged || !next[c].allFinite())
+      {
+        report.Converged[c] = false;
+      }
+    }
   };
+  std::array<Eigen::VectorXd, NumberOfChannels> next, massNext;
   const auto runSegment = [&](long long steps, double dt, bool add,
                             const std::function<void(long long)>& afterStep) -> bool {
     // From the pulse: TimeGates::PulseEulerSteps backward-Euler steps of
@@ -319,48 +373,64 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     {
       const bool euler = s < eulerSteps;
       setMatrix(euler ? 1.0 / h : 1.5 / dt);
+      if (euler)
+      {
+        // (M / h + K) x' = M x / h, subSteps times; the right rectangle.
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          massNext[c] = massPhi[c];
+          next[c] = phi[c];
+          lastEuler[c].setZero(n);
+        }
+        for (int j = 0; j < subSteps; ++j)
+        {
+          for (int c = 0; c < NumberOfChannels; ++c)
+          {
+            step.RightHandSide[c] = massNext[c] / h;
+            if (pulse && j == 0)
+            {
+              next[c].setZero(n);
+            }
+          }
+          solve(next);
+          for (int c = 0; c < NumberOfChannels; ++c)
+          {
+            lastEuler[c] += h * next[c];
+            MassTimes(system, mass, next[c], massNext[c]);
+          }
+        }
+        for (int c = 0; c < NumberOfChannels && add; ++c)
+        {
+          gate[c] += lastEuler[c];
+        }
+      }
+      else
+      {
+        // BDF2: (3/2 M / dt + K) phi' = M (2 phi - phi_prev / 2) / dt;
+        // the trapezoid.
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          step.RightHandSide[c] = (2.0 * massPhi[c] - 0.5 * massPhiPrevious[c]) / dt;
+          next[c] = s == eulerSteps ? Eigen::VectorXd(phi[c])
+                                    : Eigen::VectorXd(2.0 * phi[c] - phiPrevious[c]);
+        }
+        solve(next);
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          MassTimes(system, mass, next[c], massNext[c]);
+          if (add)
+          {
+            gate[c] += s == eulerSteps ? (0.5 * lastEuler[c] + 0.5 * dt * next[c]).eval()
+                                       : (0.5 * dt * (phi[c] + next[c])).eval();
+          }
+        }
+      }
       for (int c = 0; c < NumberOfChannels; ++c)
       {
-        Eigen::VectorXd next, massNext;
-        if (euler)
-        {
-          // (M / h + K) x' = M x / h, subSteps times; the right rectangle.
-          Eigen::VectorXd massX = massPhi[c];
-          next = phi[c];
-          lastEuler[c].setZero(n);
-          for (int j = 0; j < subSteps; ++j)
-          {
-            rhs = massX / h;
-            guess = pulse && j == 0 ? Eigen::VectorXd::Zero(n) : next;
-            next = solve(c, rhs, guess);
-            lastEuler[c] += h * next;
-            MassTimes(system, mass, next, massX);
-          }
-          massNext = std::move(massX);
-          if (add)
-          {
-            gate[c] += lastEuler[c];
-          }
-        }
-        else
-        {
-          // BDF2: (3/2 M / dt + K) phi' = M (2 phi - phi_prev / 2) / dt;
-          // the trapezoid.
-          rhs = (2.0 * massPhi[c] - 0.5 * massPhiPrevious[c]) / dt;
-          guess = s == eulerSteps ? Eigen::VectorXd(phi[c])
-                                  : Eigen::VectorXd(2.0 * phi[c] - phiPrevious[c]);
-          next = solve(c, rhs, guess);
-          MassTimes(system, mass, next, massNext);
-          if (add)
-          {
-            gate[c] += s == eulerSteps ? (0.5 * lastEuler[c] + 0.5 * dt * next).eval()
-                                       : (0.5 * dt * (phi[c] + next)).eval();
-          }
-        }
         phiPrevious[c].swap(phi[c]);
-        phi[c].swap(next);
+        phi[c].swap(next[c]);
         massPhiPrevious[c].swap(massPhi[c]);
-        massPhi[c].swap(massNext);
+        massPhi[c].swap(massNext[c]);
       }
       pulse = false;
       ++stepsDone;
@@ -443,10 +513,11 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   {
     report.Iterations[c] = static_cast<int>(std::min<long long>(iterations[c], 2147483647LL));
   }
-  // The system, the mass and step values, 8 vectors per channel and the
-  // snapshots.
+  // The system, the mass and step values, 10 vectors per channel, the
+  // linear solver's own memory and the snapshots.
   report.MemoryBytes = system.GetMemoryBytes() + (1 + NumberOfChannels) * nnz * sizeof(double) +
-    8 * NumberOfChannels * static_cast<std::size_t>(n) * sizeof(double) +
+    10 * NumberOfChannels * static_cast<std::size_t>(n) * sizeof(double) +
+    linear->GetMemoryBytes() +
     result.Snapshots.size() * 3 * static_cast<std::size_t>(n) * sizeof(double);
   return true;
 }

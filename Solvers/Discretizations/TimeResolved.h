@@ -21,8 +21,10 @@
  * ring as Crank-Nicolson would); when T0 > 0 the interval [0, T0] is
  * stepped first (steps of at most the gate step) and the gates restart with
  * one backward-Euler step. Each step solves the SPD system
- * (a M / dt + K) phi = rhs (a = 1 or 3/2) with Jacobi-preconditioned CG from
- * the extrapolated previous values. Gate averages: the backward-Euler steps
+ * (a M / dt + K) phi = rhs (a = 1 or 3/2) from the extrapolated previous
+ * values, the three channels by the linear solver a continuous-wave solve
+ * would use (multigrid-agg from VertexDiffusionSolver::LargeSystemUnknowns
+ * unknowns on, its hierarchy built once per run; cg-jacobi below). Gate averages: the backward-Euler steps
  * contribute h phi (right rectangle), the BDF2 steps the trapezoid rule (the
  * first one with half the last Euler step's integral for dt phi / 2).
  * With these weights the sum over all steps of the step integrals equals
@@ -142,7 +144,7 @@ struct TimeResolvedResult
   /// (3 values per mesh point, J/(mm^2 ns)), in the same order.
   std::vector<int> SnapshotGates;
   std::vector<std::vector<double>> Snapshots;
-  /// CG iterations of the most expensive step, per channel.
+  /// Linear-solver iterations of the most expensive step, per channel.
   std::array<int, NumberOfChannels> MaximumStepIterations{};
 };
 

@@ -1,6 +1,5 @@
 #include "VertexDiffusionSolver.h"
 
-#include "AggregationMultigrid.h"
 #include "ComplexConjugateGradient.h"
 #include "Error.h"
 #include "Strings.h"
@@ -273,7 +272,6 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   const OpticalProperties& material = *problem.Material;
   report = SolverReport();
   report.Solver = GetName();
-  report.LinearSolver = "cocg-jacobi";
   report.Assembly = "full";
 
   if (IsExtendedCollimatedModel(problem.Collimated))
@@ -318,92 +316,59 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   {
     throw Error(GetName() + ": this discretisation has no frequency-domain solve");
   }
-  // The complex solver (DiffuseOptics.md, "The complex solver"): COCG
-  // preconditioned by one multigrid-agg cycle of the real, symmetric
-  // positive definite A + B (the absorption part plus the modulation part:
-  // Axelsson's real preconditioner of A + i B; for omega -> 0 it is the CW
-  // hierarchy), the three channels per cycle, where the continuous-wave
-  // default is multigrid-agg (or when LinearSolver names it); COCG with the
-  // complex Jacobi preconditioner otherwise.
-  const std::string linearName = GetLinearSolver().empty() || GetLinearSolver() == "default"
-    ? GetDefaultLinearSolverName(system.NumberOfUnknowns)
-    : ToLower(GetLinearSolver());
-  const bool multigrid = linearName == "multigrid-agg";
-  std::unique_ptr<AggregationMultigridSolver> hierarchy;
-  if (multigrid)
+
+  // The preconditioner: the cycle of the linear solver this solve would use
+  // in continuous wave (by name, or by size: multigrid-agg from
+  // LargeSystemUnknowns on), built on the real part A, when that solver has
+  // one (LinearSolver::HasPreconditioner); else Jacobi.
+  // Documentation/DiffuseOptics.md says why.
+  std::unique_ptr<LinearSolver> real;
   {
-    DiffusionSystem shifted;
-    shifted.NumberOfUnknowns = system.NumberOfUnknowns;
-    shifted.RowOffsets = system.RowOffsets;
-    shifted.ColumnIndices = system.ColumnIndices;
-    for (int c = 0; c < NumberOfChannels; ++c)
+    const std::string name = ToLower(LinearSolver_.empty()
+        ? GetDefaultLinearSolverName(mesh.GetNumberOfPoints())
+        : LinearSolver_);
+    real = CreateLinearSolver(name); // throws, listing the known names
+    // Only solvers with a cycle are set up (a factorisation would be wasted).
+    if (real->GetName() == "multigrid-agg")
     {
-      shifted.Values[c] = system.Values[c];
-      for (std::size_t k = 0; k < shifted.Values[c].size(); ++k)
-      {
-        shifted.Values[c][k] += imaginary[c][k];
-      }
-      shifted.RightHandSide[c] = system.RightHandSide[c];
+      real->Setup(system, &mesh, true);
     }
-    hierarchy = std::make_unique<AggregationMultigridSolver>();
-    hierarchy->Setup(shifted, &mesh, true);
-    report.LinearSolver = "cocg-multigrid-agg";
+    if (!real->HasPreconditioner())
+    {
+      real.reset();
+    }
   }
+  report.LinearSolver = real ? "cocg-" + real->GetName() : "cocg-jacobi";
   report.SetupMilliseconds = MillisecondsSince(start);
 
   start = Clock::now();
   std::array<Eigen::VectorXd, NumberOfChannels> realPart, imagPart;
-  if (multigrid)
+  if (real)
   {
-    // The modulation term omega eta_t / c is the same for the three
-    // channels, so one array of B values serves them (asserted here).
-    for (int c = 1; c < NumberOfChannels; ++c)
-    {
-      if (imaginary[c] != imaginary[0])
-      {
-        throw Error(GetName() + ": internal: the modulation term differs between channels");
-      }
-    }
-    const int n = system.NumberOfUnknowns;
-    Eigen::VectorXd bReal(3 * static_cast<Eigen::Index>(n)), bImag = Eigen::VectorXd::Zero(bReal.size());
-    std::array<const double*, NumberOfChannels> re;
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      re[c] = system.Values[c].data();
-      for (int i = 0; i < n; ++i)
-      {
-        bReal[3 * i + c] = system.RightHandSide[c][i];
-      }
-    }
-    Eigen::VectorXd xReal, xImag;
+    std::array<Eigen::VectorXcd, NumberOfChannels> x;
     std::array<LinearSolveStats, NumberOfChannels> stats;
-    const AggregationMultigridSolver& cycle = *hierarchy;
     const auto progress = [this](int iteration) {
       return ReportProgress(static_cast<double>(iteration) / std::max(1, MaxIter_));
     };
-    if (!SolveComplexSymmetricCOCGChannels(n, system.RowOffsets.data(),
-          system.ColumnIndices.data(), re, imaginary[0].data(), bReal, bImag, xReal, xImag,
-          RelTol_, MaxIter_, stats,
-          [&cycle](const Eigen::VectorXd& r, Eigen::VectorXd& z) { cycle.ApplyPreconditioner(r, z); },
-          progress))
+    const LinearSolver* preconditioner = real.get();
+    if (!SolveComplexSymmetricBlockedCOCG(system, imaginary,
+          [preconditioner](const double* r, double* z) {
+            preconditioner->ApplyPreconditioner(r, z);
+          },
+          x, RelTol_, MaxIter_, stats, progress))
     {
       return false;
     }
     for (int c = 0; c < NumberOfChannels; ++c)
     {
-      realPart[c].resize(n);
-      imagPart[c].resize(n);
-      for (int i = 0; i < n; ++i)
-      {
-        realPart[c][i] = xReal[3 * i + c];
-        imagPart[c][i] = xImag[3 * i + c];
-      }
+      realPart[c] = x[c].real();
+      imagPart[c] = x[c].imag();
       report.Iterations[c] = stats[c].Iterations;
       report.Residual[c] = stats[c].RelativeResidual;
       report.Converged[c] = stats[c].Converged;
     }
   }
-  for (int c = 0; c < NumberOfChannels && !multigrid; ++c)
+  for (int c = 0; c < NumberOfChannels && !real; ++c)
   {
     Eigen::VectorXcd x;
     LinearSolveStats stats;
@@ -428,10 +393,11 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   report.NumberOfUnknowns = system.NumberOfUnknowns;
   report.NumberOfNonZeros = static_cast<long long>(system.ColumnIndices.size());
   // The system, the imaginary mass values, COCG's complex work vectors and
-  // the hierarchy.
-  report.MemoryBytes = (hierarchy ? hierarchy->GetMemoryBytes() : 0) + system.GetMemoryBytes() +
+  // the preconditioner's hierarchy.
+  report.MemoryBytes = system.GetMemoryBytes() +
     NumberOfChannels * system.ColumnIndices.size() * sizeof(double) +
-    10 * static_cast<std::size_t>(system.NumberOfUnknowns) * sizeof(double);
+    (real ? 36 : 10) * static_cast<std::size_t>(system.NumberOfUnknowns) * sizeof(double) +
+    (real ? real->GetMemoryBytes() : 0);
   std::vector<double> re, im;
   Discretization_->ToPointFluence(mesh, system, realPart, re);
   Discretization_->ToPointFluence(mesh, system, imagPart, im);

@@ -44,9 +44,15 @@ public:
    * Solve(), the sources and the boundary irradiance modulated at f with
    * phase 0. The matrix is this discretisation's real matrix plus i times
    * its mass matrix (Discretization::AddMass) times omega eta / c: complex
-   * symmetric, solved per channel by COCG with the Jacobi preconditioner
-   * (ComplexConjugateGradient.h) to GetRelTol() within GetMaxIter()
-   * iterations (the linear-solver name is not used; no warm start).
+   * symmetric, solved by COCG (ComplexConjugateGradient.h) to GetRelTol()
+   * within GetMaxIter() iterations, no warm start. The preconditioner
+   * follows the linear solver a continuous-wave Solve() would use (the name
+   * of SetLinearSolver, or by size GetDefaultLinearSolverName(unknowns)):
+   * multigrid-agg -> its cycle built on the real part A, applied to the real
+   * and imaginary parts (the three channels together; report.LinearSolver
+   * "cocg-multigrid-agg"); any other -> the Jacobi preconditioner of the
+   * complex diagonal, per channel ("cocg-jacobi"). A hierarchy is built per
+   * call (set-up time in report.SetupMilliseconds).
    * @param frequency modulation frequency f in Hz (finite, > 0; else
    *        translucency::Error naming the value)
    * @param fluence complex Phi, 3 values per mesh point (W/mm^2 per W of
@@ -62,10 +68,13 @@ public:
    * units): the response to a pulse of the sources and the boundary
    * irradiance at t = 0 (energy P J for a source of power P), averaged over
    * `gates`, by implicit time stepping (one backward-Euler step, then BDF2)
-   * with this discretisation's mass matrix; each step is solved per channel
-   * by Jacobi-preconditioned CG to GetRelTol() within GetMaxIter()
-   * iterations from the extrapolated previous values (the linear-solver
-   * name is not used). Implemented in TimeResolved.cxx.
+   * with this discretisation's mass matrix; each step is solved to
+   * GetRelTol() within GetMaxIter() iterations from the extrapolated
+   * previous values by the linear solver a continuous-wave Solve() would use
+   * (SetLinearSolver's name, or by size GetDefaultLinearSolverName(unknowns):
+   * multigrid-agg, its hierarchy built once per call and its values set up
+   * again only when the step changes, from LargeSystemUnknowns on; cg-jacobi
+   * below). Implemented in TimeResolved.cxx.
    * @param gates validated (TimeGates::Validate throws translucency::Error)
    * @param detectors read at every gate (ReadDetectors); may be empty
    * @param snapshotGates gates (0-based) whose gate-averaged fluence is kept

@@ -932,6 +932,15 @@ void AggregationMultigridSolver::ApplyPreconditioner(
   Precondition(rhs.data(), out.data());
 }
 
+void AggregationMultigridSolver::ApplyPreconditioner(const double* r, double* z) const
+{
+  if (!Ready_ || Internal_->Levels.empty())
+  {
+    throw Error(GetName() + ": ApplyPreconditioner() before a successful Setup()");
+  }
+  Precondition(r, z);
+}
+
 void AggregationMultigridSolver::CheckSystem(const DiffusionSystem& system) const
 {
   blocked::CheckSolveMatchesSetup(GetName(), system, Ready_, Unknowns_, NonZeros_);

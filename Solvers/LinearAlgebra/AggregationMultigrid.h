@@ -149,6 +149,11 @@ public:
   /// vertex) — the preconditioner, exposed for tests. The cycle works on
   /// single-precision vectors (r and z are double).
   void ApplyPreconditioner(const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
+  /// The LinearSolver hook: true once set up (the cycle is a fixed symmetric
+  /// positive definite operator, so CG and COCG stay valid with it).
+  bool HasPreconditioner() const override { return Ready_; }
+  /// z = B r, one cycle on 3 n interleaved values (LinearSolver's hook).
+  void ApplyPreconditioner(const double* r, double* z) const override;
 
 protected:
   /// The system must live on `mesh` (the aggregation reads its positions).

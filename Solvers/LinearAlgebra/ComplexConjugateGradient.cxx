@@ -1,5 +1,6 @@
 #include "ComplexConjugateGradient.h"
 
+#include "BlockedKernels.h"
 #include "Error.h"
 
 #include <Eigen/Sparse>
@@ -105,289 +106,281 @@ bool SolveComplexSymmetricCOCG(int n, const int* rowOffsets, const int* columns,
   return true;
 }
 
+} // namespace translucency
+
+namespace translucency
+{
+
 namespace
 {
-constexpr int NC = 3;
-using Triple = std::array<double, NC>;
 
-/// The three channels' A_c + i B entries of one nonzero, interleaved.
-struct ChannelMatrix
+using blocked::ChunkedSums;
+using blocked::NC;
+
+/// B compressed to its non-zero entries (any channel), 3 values per entry.
+struct CompressedImaginary
 {
-  int N = 0;
-  const int* RowOffsets = nullptr;
-  const int* Columns = nullptr;
-  std::vector<double> Real; ///< 3 per nonzero
-  const double* Imag = nullptr;
-
-  /// q = (A + i B) p for the three channels; returns p^T q per channel
-  /// (the bilinear form, unconjugated) as real and imaginary parts.
-  void Multiply(const double* pr, const double* pi, double* qr, double* qi, Triple& dotRe,
-    Triple& dotIm) const
-  {
-    double re0 = 0, re1 = 0, re2 = 0, im0 = 0, im1 = 0, im2 = 0;
-#pragma omp parallel for schedule(static) reduction(+ : re0, re1, re2, im0, im1, im2)
-    for (int i = 0; i < N; ++i)
-    {
-      double sr[NC] = { 0, 0, 0 }, si[NC] = { 0, 0, 0 };
-      for (int k = RowOffsets[i]; k < RowOffsets[i + 1]; ++k)
-      {
-        const std::size_t j = 3 * static_cast<std::size_t>(Columns[k]);
-        const double* a = &Real[3 * static_cast<std::size_t>(k)];
-        const double b = Imag[k];
-        for (int c = 0; c < NC; ++c)
-        {
-          sr[c] += a[c] * pr[j + c] - b * pi[j + c];
-          si[c] += a[c] * pi[j + c] + b * pr[j + c];
-        }
-      }
-      const std::size_t o = 3 * static_cast<std::size_t>(i);
-      for (int c = 0; c < NC; ++c)
-      {
-        qr[o + c] = sr[c];
-        qi[o + c] = si[c];
-      }
-      re0 += pr[o] * sr[0] - pi[o] * si[0];
-      im0 += pr[o] * si[0] + pi[o] * sr[0];
-      re1 += pr[o + 1] * sr[1] - pi[o + 1] * si[1];
-      im1 += pr[o + 1] * si[1] + pi[o + 1] * sr[1];
-      re2 += pr[o + 2] * sr[2] - pi[o + 2] * si[2];
-      im2 += pr[o + 2] * si[2] + pi[o + 2] * sr[2];
-    }
-    dotRe = { re0, re1, re2 };
-    dotIm = { im0, im1, im2 };
-  }
+  std::vector<int> Offsets, Columns;
+  std::vector<double> Values;
 };
 
-/// Per channel: sum over the vertices of |v_r|^2 + |v_i|^2.
-Triple SquaredNorms(int n, const double* vr, const double* vi)
+CompressedImaginary Compress(const DiffusionSystem& system,
+  const std::array<std::vector<double>, NumberOfChannels>& imag)
 {
-  double s0 = 0, s1 = 0, s2 = 0;
-#pragma omp parallel for schedule(static) reduction(+ : s0, s1, s2)
+  const int n = system.NumberOfUnknowns;
+  CompressedImaginary b;
+  b.Offsets.assign(static_cast<std::size_t>(n) + 1, 0);
   for (int i = 0; i < n; ++i)
   {
-    const std::size_t o = 3 * static_cast<std::size_t>(i);
-    s0 += vr[o] * vr[o] + vi[o] * vi[o];
-    s1 += vr[o + 1] * vr[o + 1] + vi[o + 1] * vi[o + 1];
-    s2 += vr[o + 2] * vr[o + 2] + vi[o + 2] * vi[o + 2];
+    for (int k = system.RowOffsets[i]; k < system.RowOffsets[i + 1]; ++k)
+    {
+      if (imag[0][k] != 0.0 || imag[1][k] != 0.0 || imag[2][k] != 0.0)
+      {
+        b.Columns.push_back(system.ColumnIndices[k]);
+        for (int c = 0; c < NC; ++c)
+        {
+          b.Values.push_back(imag[c][k]);
+        }
+      }
+    }
+    b.Offsets[i + 1] = static_cast<int>(b.Columns.size());
   }
-  return { s0, s1, s2 };
+  return b;
 }
+
 } // namespace
 
-bool SolveComplexSymmetricCOCGChannels(int n, const int* rowOffsets, const int* columns,
-  const std::array<const double*, 3>& realValues, const double* imagValues,
-  const Eigen::VectorXd& bReal, const Eigen::VectorXd& bImag, Eigen::VectorXd& xReal,
-  Eigen::VectorXd& xImag, double relTol, int maxIter, std::array<LinearSolveStats, 3>& stats,
-  const InterleavedPreconditioner& precondition, const std::function<bool(int)>& progress)
+bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
+  const std::array<std::vector<double>, NumberOfChannels>& imagValues,
+  const std::function<void(const double*, double*)>& precondition,
+  std::array<Eigen::VectorXcd, NumberOfChannels>& x, double relTol, int maxIter,
+  std::array<LinearSolveStats, NumberOfChannels>& stats, const std::function<bool(int)>& progress)
 {
-  using Complex = std::complex<double>;
-  const Eigen::Index size = 3 * static_cast<Eigen::Index>(std::max(n, 0));
-  if (n < 0 || bReal.size() != size || bImag.size() != size)
+  const int n = system.NumberOfUnknowns;
+  const std::size_t nnz = system.ColumnIndices.size();
+  bool ok = n >= 0 && system.RowOffsets.size() == static_cast<std::size_t>(n) + 1 &&
+    static_cast<std::size_t>(system.RowOffsets.back()) == nnz;
+  for (int c = 0; c < NC && ok; ++c)
   {
-    throw Error("COCG: the right-hand side does not match the matrix");
+    ok = system.Values[c].size() == nnz && imagValues[c].size() == nnz &&
+      system.RightHandSide[c].size() == n;
   }
-  stats = {};
-  ChannelMatrix matrix;
-  matrix.N = n;
-  matrix.RowOffsets = rowOffsets;
-  matrix.Columns = columns;
-  matrix.Imag = imagValues;
-  const int nnz = n > 0 ? rowOffsets[n] : 0;
-  matrix.Real.resize(3 * static_cast<std::size_t>(nnz));
-#pragma omp parallel for schedule(static)
-  for (int k = 0; k < nnz; ++k)
+  if (!ok)
   {
-    for (int c = 0; c < NC; ++c)
-    {
-      matrix.Real[3 * static_cast<std::size_t>(k) + c] = realValues[c][k];
-    }
+    throw Error("COCG: the imaginary values or the right-hand sides do not match the system");
   }
-  if (xReal.size() != size || xImag.size() != size)
-  {
-    xReal.setZero(size);
-    xImag.setZero(size);
-  }
-  Eigen::VectorXd rr(size), ri(size), zr, zi, pr(size), pi(size), qr(size), qi(size);
-  Triple dotRe, dotIm;
-  // r = b - (A + i B) x.
-  matrix.Multiply(xReal.data(), xImag.data(), qr.data(), qi.data(), dotRe, dotIm);
-  rr = bReal - qr;
-  ri = bImag - qi;
-  const Triple bNorm2 = SquaredNorms(n, bReal.data(), bImag.data());
-  Triple residual2 = SquaredNorms(n, rr.data(), ri.data());
-  std::array<double, NC> bNorm{}, residual{};
+  const CompressedImaginary imag = Compress(system, imagValues);
+  const long long n3 = 3 * static_cast<long long>(n);
+  // Interleaved work vectors, real and imaginary parts apart (the
+  // preconditioner takes each part as one real interleaved vector).
+  std::vector<double> xr(n3, 0.0), xi(n3, 0.0), rr(n3), ri(n3, 0.0), zr(n3), zi(n3), pr(n3),
+    pi(n3), qr(n3), qi(n3);
+  std::array<double, NC> normB{};
   std::array<bool, NC> active{};
   for (int c = 0; c < NC; ++c)
   {
-    bNorm[c] = std::sqrt(bNorm2[c]);
-    if (bNorm[c] == 0.0)
+    stats[c] = LinearSolveStats();
+    const Eigen::VectorXd& b = system.RightHandSide[c];
+    for (int i = 0; i < n; ++i)
     {
-      for (int i = 0; i < n; ++i)
-      {
-        xReal[3 * i + c] = xImag[3 * i + c] = 0.0;
-      }
-      stats[c].Converged = true;
-      continue;
+      rr[3 * static_cast<std::size_t>(i) + c] = b[i];
     }
-    residual[c] = std::sqrt(residual2[c]) / bNorm[c];
-    active[c] = residual[c] > relTol;
+    normB[c] = b.norm();
+    active[c] = normB[c] > 0.0;
+    stats[c].Converged = !active[c];
   }
-  std::array<Complex, NC> rho{};
-  // z = M r; rho = r^T z; p = z (channels not active: p = 0).
-  const auto preconditionAndDot = [&](std::array<Complex, NC>& out) {
-    precondition(rr, zr);
-    precondition(ri, zi);
-    double re0 = 0, re1 = 0, re2 = 0, im0 = 0, im1 = 0, im2 = 0;
-#pragma omp parallel for schedule(static) reduction(+ : re0, re1, re2, im0, im1, im2)
-    for (int i = 0; i < n; ++i)
+  const int* ro = system.RowOffsets.data();
+  const int* ci = system.ColumnIndices.data();
+  const double* a[NC] = { system.Values[0].data(), system.Values[1].data(),
+    system.Values[2].data() };
+  const int* bo = imag.Offsets.data();
+  const int* bc = imag.Columns.data();
+  const double* bv = imag.Values.data();
+  // Row i of (A + i B) v into (outR, outI)[3 i ...].
+  const auto row = [&](const double* vr, const double* vi, long long i, double* outR,
+                     double* outI) {
+    double sr[NC] = { 0.0, 0.0, 0.0 }, si[NC] = { 0.0, 0.0, 0.0 };
+    for (int k = ro[i]; k < ro[i + 1]; ++k)
     {
-      const std::size_t o = 3 * static_cast<std::size_t>(i);
-      re0 += rr[o] * zr[o] - ri[o] * zi[o];
-      im0 += rr[o] * zi[o] + ri[o] * zr[o];
-      re1 += rr[o + 1] * zr[o + 1] - ri[o + 1] * zi[o + 1];
-      im1 += rr[o + 1] * zi[o + 1] + ri[o + 1] * zr[o + 1];
-      re2 += rr[o + 2] * zr[o + 2] - ri[o + 2] * zi[o + 2];
-      im2 += rr[o + 2] * zi[o + 2] + ri[o + 2] * zr[o + 2];
-    }
-    out = { Complex(re0, im0), Complex(re1, im1), Complex(re2, im2) };
-  };
-  preconditionAndDot(rho);
-  pr.setZero();
-  pi.setZero();
-  {
-    std::array<double, NC> keep{};
-    for (int c = 0; c < NC; ++c)
-    {
-      keep[c] = active[c] ? 1.0 : 0.0;
-    }
-#pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; ++i)
-    {
+      const std::size_t j = 3 * static_cast<std::size_t>(ci[k]);
       for (int c = 0; c < NC; ++c)
       {
-        const std::size_t o = 3 * static_cast<std::size_t>(i) + c;
-        pr[o] = keep[c] * zr[o];
-        pi[o] = keep[c] * zi[o];
+        sr[c] += a[c][k] * vr[j + c];
+        si[c] += a[c][k] * vi[j + c];
       }
     }
+    for (int k = bo[i]; k < bo[i + 1]; ++k)
+    {
+      const std::size_t j = 3 * static_cast<std::size_t>(bc[k]);
+      const double* b = bv + 3 * static_cast<std::size_t>(k);
+      for (int c = 0; c < NC; ++c)
+      {
+        sr[c] -= b[c] * vi[j + c];
+        si[c] += b[c] * vr[j + c];
+      }
+    }
+    for (int c = 0; c < NC; ++c)
+    {
+      outR[c] = sr[c];
+      outI[c] = si[c];
+    }
+  };
+  // u^T v (unconjugated) per channel: sums 0-2 real, 3-5 imaginary parts.
+  const auto bilinear = [n](const std::vector<double>& ur, const std::vector<double>& ui,
+                          const std::vector<double>& vr, const std::vector<double>& vi) {
+    const auto s = ChunkedSums<6>(n, [&](long long begin, long long end, double* sums) {
+      for (long long k = 3 * begin; k < 3 * end; ++k)
+      {
+        sums[k % 3] += ur[k] * vr[k] - ui[k] * vi[k];
+        sums[3 + k % 3] += ur[k] * vi[k] + ui[k] * vr[k];
+      }
+    });
+    std::array<std::complex<double>, NC> out;
+    for (int c = 0; c < NC; ++c)
+    {
+      out[c] = std::complex<double>(s[c], s[3 + c]);
+    }
+    return out;
+  };
+  const auto anyActive = [&]() { return active[0] || active[1] || active[2]; };
+  const double imagShare = static_cast<double>(imag.Columns.size()) / std::max<double>(1.0, nnz);
+  std::array<std::complex<double>, NC> rho{};
+  if (anyActive())
+  {
+    precondition(rr.data(), zr.data());
+    precondition(ri.data(), zi.data());
+    pr = zr;
+    pi = zi;
+    rho = bilinear(rr, ri, zr, zi);
   }
   int iteration = 0;
-  while ((active[0] || active[1] || active[2]) && iteration < maxIter)
+  for (; iteration < maxIter && anyActive(); ++iteration)
   {
     if (progress && !progress(iteration))
     {
-      for (int c = 0; c < NC; ++c)
-      {
-        stats[c].RelativeResidual = residual[c];
-      }
       return false;
     }
-    ++iteration;
-    matrix.Multiply(pr.data(), pi.data(), qr.data(), qi.data(), dotRe, dotIm);
-    std::array<double, NC> alphaRe{}, alphaIm{};
+    // q = (A + i B) p with p^T q.
+    const auto pqSums = ChunkedSums<6>(n, [&](long long begin, long long end, double* sums) {
+      for (long long i = begin; i < end; ++i)
+      {
+        row(pr.data(), pi.data(), i, qr.data() + 3 * i, qi.data() + 3 * i);
+        for (int c = 0; c < NC; ++c)
+        {
+          const long long k = 3 * i + c;
+          sums[c] += pr[k] * qr[k] - pi[k] * qi[k];
+          sums[3 + c] += pr[k] * qi[k] + pi[k] * qr[k];
+        }
+      }
+    });
+    std::array<std::complex<double>, NC> alpha{};
     for (int c = 0; c < NC; ++c)
     {
       if (!active[c])
       {
         continue;
       }
-      const Complex pq(dotRe[c], dotIm[c]);
-      if (std::abs(pq) == 0.0 || !std::isfinite(std::abs(pq)))
+      const std::complex<double> pq(pqSums[c], pqSums[3 + c]);
+      if (std::abs(pq) == 0.0 || !std::isfinite(std::abs(pq)) || !std::isfinite(std::abs(rho[c])))
       {
-        active[c] = false; // breakdown: this channel stops, not converged
+        active[c] = false; // breakdown: not converged
         continue;
       }
-      const Complex alpha = rho[c] / pq;
-      alphaRe[c] = alpha.real();
-      alphaIm[c] = alpha.imag();
-      stats[c].Iterations = iteration;
+      alpha[c] = rho[c] / pq;
+      stats[c].Iterations = iteration + 1;
+      stats[c].SpMVEquivalents += 2.0 + 2.0 * imagShare;
     }
-    // x += alpha p, r -= alpha q (alpha = 0 for the channels not active).
-    double s0 = 0, s1 = 0, s2 = 0;
-#pragma omp parallel for schedule(static) reduction(+ : s0, s1, s2)
-    for (int i = 0; i < n; ++i)
-    {
-      double sums[NC];
-      for (int c = 0; c < NC; ++c)
+    // x += alpha p, r -= alpha q, with ||r||^2.
+    const auto rrSums = ChunkedSums<3>(n, [&](long long begin, long long end, double* sums) {
+      for (long long i = begin; i < end; ++i)
       {
-        const std::size_t o = 3 * static_cast<std::size_t>(i) + c;
-        const double ar = alphaRe[c], ai = alphaIm[c];
-        xReal[o] += ar * pr[o] - ai * pi[o];
-        xImag[o] += ar * pi[o] + ai * pr[o];
-        rr[o] -= ar * qr[o] - ai * qi[o];
-        ri[o] -= ar * qi[o] + ai * qr[o];
-        sums[c] = rr[o] * rr[o] + ri[o] * ri[o];
+        for (int c = 0; c < NC; ++c)
+        {
+          const long long k = 3 * i + c;
+          const double ar = alpha[c].real(), ai = alpha[c].imag();
+          xr[k] += ar * pr[k] - ai * pi[k];
+          xi[k] += ar * pi[k] + ai * pr[k];
+          rr[k] -= ar * qr[k] - ai * qi[k];
+          ri[k] -= ar * qi[k] + ai * qr[k];
+          sums[c] += rr[k] * rr[k] + ri[k] * ri[k];
+        }
       }
-      s0 += sums[0];
-      s1 += sums[1];
-      s2 += sums[2];
-    }
-    const Triple norms = { s0, s1, s2 };
+    });
     for (int c = 0; c < NC; ++c)
     {
       if (active[c])
       {
-        residual[c] = std::sqrt(norms[c]) / bNorm[c];
-        if (residual[c] <= relTol)
+        stats[c].RelativeResidual = std::sqrt(rrSums[c]) / normB[c];
+        if (stats[c].RelativeResidual <= relTol)
         {
           active[c] = false;
         }
       }
     }
-    if (!(active[0] || active[1] || active[2]))
+    if (!anyActive())
     {
+      ++iteration;
       break;
     }
-    std::array<Complex, NC> rhoNext;
-    preconditionAndDot(rhoNext);
-    std::array<double, NC> betaRe{}, betaIm{}, keep{};
+    precondition(rr.data(), zr.data());
+    precondition(ri.data(), zi.data());
+    const auto rhoNext = bilinear(rr, ri, zr, zi);
+    std::array<std::complex<double>, NC> beta{};
     for (int c = 0; c < NC; ++c)
     {
+      beta[c] = active[c] && std::abs(rho[c]) > 0.0 ? rhoNext[c] / rho[c] : 0.0;
       if (active[c] && std::abs(rho[c]) == 0.0)
       {
-        active[c] = false;
+        active[c] = false; // breakdown
       }
-      if (!active[c])
-      {
-        continue;
-      }
-      const Complex beta = rhoNext[c] / rho[c];
-      betaRe[c] = beta.real();
-      betaIm[c] = beta.imag();
-      keep[c] = 1.0;
-      rho[c] = rhoNext[c];
     }
-    // p = z + beta p (channels not active: p = 0).
-#pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; ++i)
+    // p = z + beta p on the active channels.
+#pragma omp parallel for schedule(static) if(n > blocked::ParallelThreshold)
+    for (long long i = 0; i < n; ++i)
     {
       for (int c = 0; c < NC; ++c)
       {
-        const std::size_t o = 3 * static_cast<std::size_t>(i) + c;
-        const double br = betaRe[c], bi = betaIm[c];
-        const double nr = zr[o] + br * pr[o] - bi * pi[o];
-        const double ni = zi[o] + br * pi[o] + bi * pr[o];
-        pr[o] = keep[c] * nr;
-        pi[o] = keep[c] * ni;
+        if (!active[c])
+        {
+          continue;
+        }
+        const long long k = 3 * i + c;
+        const double br = beta[c].real(), bi = beta[c].imag();
+        const double p0 = pr[k], p1 = pi[k];
+        pr[k] = zr[k] + br * p0 - bi * p1;
+        pi[k] = zi[k] + br * p1 + bi * p0;
       }
     }
+    rho = rhoNext;
   }
-  // The true residual (the recurrence's may drift).
-  matrix.Multiply(xReal.data(), xImag.data(), qr.data(), qi.data(), dotRe, dotIm);
-  rr = bReal - qr;
-  ri = bImag - qi;
-  residual2 = SquaredNorms(n, rr.data(), ri.data());
+  // The true residuals (the recurrence's may drift).
+  const auto trueSums = ChunkedSums<3>(n, [&](long long begin, long long end, double* sums) {
+    for (long long i = begin; i < end; ++i)
+    {
+      double axr[NC], axi[NC];
+      row(xr.data(), xi.data(), i, axr, axi);
+      for (int c = 0; c < NC; ++c)
+      {
+        const double er = system.RightHandSide[c][i] - axr[c], ei = -axi[c];
+        sums[c] += er * er + ei * ei;
+      }
+    }
+  });
   for (int c = 0; c < NC; ++c)
   {
-    if (bNorm[c] == 0.0)
+    x[c].resize(n);
+    for (int i = 0; i < n; ++i)
     {
-      continue;
+      const std::size_t k = 3 * static_cast<std::size_t>(i) + c;
+      x[c][i] = std::complex<double>(xr[k], xi[k]);
     }
-    const double trueResidual = std::sqrt(residual2[c]) / bNorm[c];
-    stats[c].RelativeResidual = trueResidual;
-    stats[c].Converged =
-      std::isfinite(trueResidual) && trueResidual <= relTol * 1.000001 + 1e-15;
-    stats[c].SpMVEquivalents = stats[c].Iterations + 2;
+    if (normB[c] > 0.0)
+    {
+      const double residual = std::sqrt(trueSums[c]) / normB[c];
+      stats[c].RelativeResidual = residual;
+      stats[c].Converged = std::isfinite(residual) && residual <= relTol * 1.000001 + 1e-15;
+      stats[c].SpMVEquivalents += 2.0 + 2.0 * imagShare;
+    }
   }
   return true;
 }

@@ -20,9 +20,9 @@
 #include <Eigen/Core>
 
 #include <array>
-
 #include <complex>
 #include <functional>
+#include <vector>
 
 namespace translucency
 {
@@ -43,36 +43,33 @@ bool SolveComplexSymmetricCOCG(int n, const int* rowOffsets, const int* columns,
   Eigen::VectorXcd& x, double relTol, int maxIter, LinearSolveStats& stats,
   const std::function<bool(int)>& progress = {});
 
-/// z = B r for the three channels interleaved (3 n real values, vertex i's
-/// channels at 3 i .. 3 i + 2): a real symmetric positive definite
-/// preconditioner, e.g. one multigrid cycle
-/// (AggregationMultigridSolver::ApplyPreconditioner).
-using InterleavedPreconditioner =
-  std::function<void(const Eigen::VectorXd& r, Eigen::VectorXd& z)>;
-
 /**
- * COCG on the three channels at once, (A_c + i B) x_c = b_c on one CSR
- * pattern (A_c real per channel, B real and the same for the three
- * channels: the modulation term omega eta / c does not depend on the
- * wavelength), preconditioned by a real symmetric positive definite M
- * applied to the real and the imaginary parts of the residuals. A real
- * symmetric preconditioner keeps the preconditioned system complex
- * symmetric, so COCG's short recurrence holds. Vectors are interleaved:
- * real and imaginary parts in separate arrays of 3 n values (vertex i's
- * channels at 3 i .. 3 i + 2); x is the initial guess if both parts have
- * 3 n values, else zero. Each iteration is one fused, OpenMP-parallel
- * product of the three channels with their bilinear forms, two
- * applications of M (real parts, imaginary parts) and one fused update.
- * Per channel: stops when ||b_c - (A_c + i B) x_c|| <= relTol ||b_c|| (a
- * channel that has converged keeps its x), the true residual checked at
- * the end; b_c = 0 gives x_c = 0; a breakdown stops that channel, not
- * converged. `progress` as SolveComplexSymmetricCOCG.
- * stats[c].SpMVEquivalents counts complex products (the caller adds M's).
+ * Preconditioned COCG on the three channels of a DiffusionSystem together:
+ * (A_c + i B_c) x_c = b_c, A_c = system.Values[c] (the real SPD matrix),
+ * B_c = imagValues[c] on the same pattern (zeros allowed: they are dropped),
+ * b_c = system.RightHandSide[c] (real: sources modulated with phase 0).
+ * precondition(r, z) computes z = P r on 3 n interleaved real values (channel
+ * c of unknown i at 3 i + c) with P a fixed real symmetric positive definite
+ * operator, e.g. the multigrid cycle of A (LinearSolver::ApplyPreconditioner);
+ * it is applied to the real and the imaginary part of the residual
+ * separately, so P (A + i B) stays complex symmetric in the P-bilinear form
+ * and COCG's short recurrence holds. Each channel has its own scalars and
+ * stops when its ||b - (A + i B) x|| <= relTol ||b|| (the recurrence's
+ * residual; the true one is computed at the end for the statistics) or after
+ * maxIter iterations; b_c = 0 gives x_c = 0. Starts from x = 0. `progress`
+ * receives the iteration count and returns false to abort (the function
+ * then returns false). A breakdown (p^T (A + i B) p = 0 or not finite)
+ * stops that channel, not converged. The dot products are summed in a fixed
+ * chunk order: the result does not depend on the number of threads.
+ * SpMVEquivalents counts the complex products in units of a real product
+ * with A (a complex product is 2 plus B's share; the preconditioner's work
+ * is not counted).
  */
-bool SolveComplexSymmetricCOCGChannels(int n, const int* rowOffsets, const int* columns,
-  const std::array<const double*, 3>& realValues, const double* imagValues,
-  const Eigen::VectorXd& bReal, const Eigen::VectorXd& bImag, Eigen::VectorXd& xReal,
-  Eigen::VectorXd& xImag, double relTol, int maxIter, std::array<LinearSolveStats, 3>& stats,
-  const InterleavedPreconditioner& precondition, const std::function<bool(int)>& progress = {});
+bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
+  const std::array<std::vector<double>, NumberOfChannels>& imagValues,
+  const std::function<void(const double*, double*)>& precondition,
+  std::array<Eigen::VectorXcd, NumberOfChannels>& x, double relTol, int maxIter,
+  std::array<LinearSolveStats, NumberOfChannels>& stats,
+  const std::function<bool(int)>& progress = {});
 
 } // namespace translucency

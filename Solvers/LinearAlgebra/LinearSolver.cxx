@@ -16,6 +16,11 @@ void LinearSolver::CheckSetup(const DiffusionSystem& system, const TetMesh*) con
   CheckLinearSystem(system, GetName());
 }
 
+void LinearSolver::ApplyPreconditioner(const double*, double*) const
+{
+  throw Error(GetName() + ": has no preconditioner to apply (HasPreconditioner() is false)");
+}
+
 void LinearSolver::Setup(const DiffusionSystem& system, const TetMesh* mesh, bool patternChanged)
 {
   CheckSetup(system, mesh);

@@ -109,6 +109,23 @@ public:
   /// Bytes held beyond the system itself (factor, hierarchy, preconditioner).
   virtual std::size_t GetMemoryBytes() const { return 0; }
 
+  ///@{
+  /**
+   * The preconditioner-apply hook, for Krylov methods outside this solver
+   * (the frequency-domain COCG preconditions with the real part's multigrid;
+   * Documentation/DiffuseOptics.md). HasPreconditioner() says whether the
+   * solver has a fixed symmetric positive definite operator B ~ A^-1 of the
+   * matrices given to the last Setup (default false; multigrid-agg: its
+   * cycle). ApplyPreconditioner computes z = B r on the three channels
+   * interleaved (3 n values, channel c of unknown i at 3 i + c; r and z do
+   * not overlap); it throws translucency::Error (naming the solver) without
+   * a preconditioner or before a successful Setup. B is linear: a complex
+   * vector is preconditioned by applying it to its real and imaginary parts.
+   */
+  virtual bool HasPreconditioner() const { return false; }
+  virtual void ApplyPreconditioner(const double* r, double* z) const;
+  ///@}
+
 protected:
   bool ReportProgress(double fraction) const { return !Progress_ || Progress_(fraction); }
 

@@ -7,6 +7,7 @@
 //  - a pencil beam on a wide slab against the diffuse reflectance of Farrell,
 //    Patterson & Wilson (1992);
 //  - bad input: each a translucency::Error naming what is wrong.
+#include "AggregationMultigrid.h"
 #include "Detectors.h"
 #include "DiffusionSolverFactory.h"
 #include "Fresnel.h"
@@ -87,7 +88,8 @@ InfiniteResult SolveInfinite(const std::string& solverName, int cells, double fr
   solver->SetRelTol(1e-8);
   solver->SetMaxIter(20000);
   // Multigrid-CG: the answer at this tolerance does not depend on the linear
-  // solver, the run time does (the frequency solve uses COCG-Jacobi).
+  // solver, the run time does (the frequency solve is then COCG
+  // preconditioned by the multigrid cycle of the real part).
   solver->SetLinearSolver("multigrid-agg");
   SolverReport report;
   InfiniteResult result;
@@ -291,23 +293,28 @@ TEST(DiffuseOptics, InfiniteMediumFrequencyDomainDivergence)
   CheckInfiniteFrequencyDomain("divergence");
 }
 
-// ---- The two complex solvers give one answer: COCG preconditioned by the
-// multigrid-agg cycle of the real A + B (the default where the CW default is
-// multigrid-agg, or LinearSolver "multigrid-agg") against COCG with the
-// complex Jacobi preconditioner (any other name), both to 1e-10, on the
-// 16-cell infinite-medium mesh at 100 MHz and 1 GHz (modulation term
-// 0.16-1.6x mu_a in red): the fluences agree to 1e-7 relative at every
-// point, and the multigrid needs fewer than half Jacobi's iterations.
-TEST(DiffuseOptics, FrequencyDomainMultigridAndJacobiAgree)
+// ---- The frequency-domain preconditioners: COCG preconditioned by the
+// multigrid cycle of the real part A (cocg-multigrid-agg) and by the complex
+// diagonal (cocg-jacobi) solve the same system, so at rel-tol 1e-10 their
+// solutions agree to the solve's error (the tolerance times the condition
+// number of the complex matrix, ~1e3 here: 1e-6 relative allows 10x more);
+// the multigrid one needs far fewer iterations (measured 3-4x fewer at 15k
+// unknowns, the gap growing with the mesh; asserted: fewer than half). A
+// second point source and 1 GHz make the imaginary part larger than mu_a in
+// the least absorbing channel (omega eta / c = 0.029/mm against 0.02/mm).
+TEST(DiffuseOptics, FrequencyDomainMultigridMatchesJacobi)
 {
-  std::unique_ptr<TetMesh> mesh = GradedCube(16, 6.0, 15.0, 0.6);
+  std::unique_ptr<TetMesh> mesh = GradedCube(24, 6.0, 15.0, 0.6);
   const OpticalProperties material =
     Material(mesh->GetNumberOfTets(), InfiniteMuA, InfiniteMuS, InfiniteEta);
   const std::vector<double> irradiance(3 * static_cast<std::size_t>(mesh->GetNumberOfPoints()), 0.0);
   Sources sources;
   PointSource source;
-  source.Position = { 0.5, -0.3, 0.2 };
+  source.Position = { 0.0, 0.0, 0.0 };
   source.Power = InfinitePower;
+  sources.AddPointSource(source);
+  source.Position = { 3.1, -2.2, 1.7 };
+  source.Power = { 0.5, 0.0, 1.5 };
   sources.AddPointSource(source);
   DiffusionProblem problem;
   problem.Mesh = mesh.get();
@@ -315,44 +322,104 @@ TEST(DiffuseOptics, FrequencyDomainMultigridAndJacobiAgree)
   problem.Irradiance = &irradiance;
   problem.InteriorSources = &sources;
   for (const char* name : { "fem", "divergence" })
-  for (double frequency : { 100e6, 1e9 })
   {
-    std::vector<std::complex<double>> fluence[2];
-    SolverReport reports[2];
-    const char* linear[2] = { "multigrid-agg", "cg-jacobi" };
+    std::array<std::vector<std::complex<double>>, 2> fluence;
+    std::array<int, 2> iterations{};
+    std::array<std::string, 2> used;
+    const char* linear[2] = { "cg-jacobi", "multigrid-agg" };
     for (int k = 0; k < 2; ++k)
     {
       auto solver = CreateDiffusionSolver(name);
       solver->SetRelTol(1e-10);
       solver->SetMaxIter(20000);
       solver->SetLinearSolver(linear[k]);
-      auto* vertex = dynamic_cast<VertexDiffusionSolver*>(solver.get());
-      ASSERT_NE(vertex, nullptr);
-      ASSERT_TRUE(vertex->SolveFrequencyDomain(problem, frequency, fluence[k], reports[k]));
+      SolverReport report;
+      ASSERT_TRUE(dynamic_cast<VertexDiffusionSolver&>(*solver).SolveFrequencyDomain(
+        problem, 1e9, fluence[k], report));
+      for (int c = 0; c < 3; ++c)
+      {
+        EXPECT_TRUE(report.Converged[c]) << name << " " << linear[k] << " channel " << c;
+        EXPECT_LE(report.Residual[c], 1e-10 * 1.000001) << name << " " << linear[k];
+        iterations[k] += report.Iterations[c];
+      }
+      used[k] = report.LinearSolver;
+      std::cout << name << ", " << report.LinearSolver << ": " << report.Iterations[0] << "/"
+                << report.Iterations[1] << "/" << report.Iterations[2] << " iterations, "
+                << report.SolveMilliseconds << " ms" << std::endl;
     }
-    EXPECT_EQ(reports[0].LinearSolver, "cocg-multigrid-agg");
-    EXPECT_EQ(reports[1].LinearSolver, "cocg-jacobi");
-    double largest = 0.0, difference = 0.0;
-    for (std::size_t i = 0; i < fluence[0].size(); ++i)
-    {
-      largest = std::max(largest, std::abs(fluence[1][i]));
-    }
-    for (std::size_t i = 0; i < fluence[0].size(); ++i)
-    {
-      difference = std::max(difference, std::abs(fluence[0][i] - fluence[1][i]) / largest);
-    }
-    std::cout << name << " at " << frequency / 1e6 << " MHz: iterations multigrid "
-              << reports[0].Iterations[0] << "/" << reports[0].Iterations[1] << "/"
-              << reports[0].Iterations[2] << ", Jacobi " << reports[1].Iterations[0] << "/"
-              << reports[1].Iterations[1] << "/" << reports[1].Iterations[2]
-              << "; largest difference " << difference << " of the largest |phi|" << std::endl;
-    EXPECT_LT(difference, 1e-7) << name << " " << frequency;
+    EXPECT_EQ(used[0], "cocg-jacobi");
+    EXPECT_EQ(used[1], "cocg-multigrid-agg");
+    ASSERT_EQ(fluence[0].size(), fluence[1].size());
     for (int c = 0; c < 3; ++c)
     {
-      EXPECT_TRUE(reports[0].Converged[c] && reports[1].Converged[c]);
-      EXPECT_LT(2 * reports[0].Iterations[c], reports[1].Iterations[c]) << name << " channel " << c;
+      double difference = 0.0, norm = 0.0;
+      for (std::size_t i = c; i < fluence[0].size(); i += 3)
+      {
+        difference += std::norm(fluence[1][i] - fluence[0][i]);
+        norm += std::norm(fluence[0][i]);
+      }
+      EXPECT_GT(norm, 0.0);
+      EXPECT_LT(std::sqrt(difference / norm), 1e-6) << name << " channel " << c;
     }
+    EXPECT_LT(2 * iterations[1], iterations[0]) << name;
   }
+}
+
+// ---- The preconditioner-apply hook of LinearSolver: multigrid-agg's is its
+// cycle (the same z as the solver's own ApplyPreconditioner, and symmetric:
+// u.Bv = v.Bu to rounding of the single-precision cycle); a solver without
+// one, or multigrid-agg before Setup, throws naming the solver.
+TEST(DiffuseOptics, PreconditionerHook)
+{
+  std::unique_ptr<TetMesh> mesh = GradedCube(12, 6.0, 15.0, 0.6);
+  const OpticalProperties material =
+    Material(mesh->GetNumberOfTets(), InfiniteMuA, InfiniteMuS, InfiniteEta);
+  const std::vector<double> irradiance(3 * static_cast<std::size_t>(mesh->GetNumberOfPoints()), 0.1);
+  auto solver = CreateDiffusionSolver("divergence");
+  solver->SetLinearSolver("multigrid-agg");
+  DiffusionProblem problem;
+  problem.Mesh = mesh.get();
+  problem.Material = &material;
+  problem.Irradiance = &irradiance;
+  std::vector<double> fluence;
+  SolverReport report;
+  ASSERT_TRUE(solver->Solve(problem, fluence, report));
+  auto& vertex = dynamic_cast<VertexDiffusionSolver&>(*solver);
+  LinearSolver* multigrid = vertex.GetLinearSolverObject();
+  ASSERT_NE(multigrid, nullptr);
+  ASSERT_TRUE(multigrid->HasPreconditioner());
+  const int n3 = 3 * mesh->GetNumberOfPoints();
+  Eigen::VectorXd u(n3), v(n3);
+  for (int k = 0; k < n3; ++k)
+  {
+    u[k] = std::sin(0.37 * k) + 0.2;
+    v[k] = std::cos(0.11 * k * k);
+  }
+  Eigen::VectorXd bu(n3), bv(n3), reference;
+  multigrid->ApplyPreconditioner(u.data(), bu.data());
+  multigrid->ApplyPreconditioner(v.data(), bv.data());
+  dynamic_cast<AggregationMultigridSolver&>(*multigrid).ApplyPreconditioner(u, reference);
+  EXPECT_EQ((bu - reference).norm(), 0.0);
+  for (int c = 0; c < 3; ++c)
+  {
+    double ubv = 0.0, vbu = 0.0, ubu = 0.0;
+    for (int k = c; k < n3; k += 3)
+    {
+      ubv += u[k] * bv[k];
+      vbu += v[k] * bu[k];
+      ubu += u[k] * bu[k];
+    }
+    EXPECT_GT(ubu, 0.0);
+    EXPECT_NEAR(ubv, vbu, 1e-4 * std::sqrt(std::abs(ubu) * (v.squaredNorm())) + 1e-12);
+  }
+  auto jacobi = CreateLinearSolver("cg-jacobi");
+  EXPECT_FALSE(jacobi->HasPreconditioner());
+  EXPECT_TRUE(Contains(ErrorMessage([&] { jacobi->ApplyPreconditioner(u.data(), bu.data()); }),
+    "cg-jacobi: has no preconditioner"));
+  auto fresh = CreateLinearSolver("multigrid-agg");
+  EXPECT_FALSE(fresh->HasPreconditioner());
+  EXPECT_TRUE(Contains(ErrorMessage([&] { fresh->ApplyPreconditioner(u.data(), bu.data()); }),
+    "multigrid-agg: ApplyPreconditioner() before a successful Setup()"));
 }
 
 // ---- Power balance: absorbed + escaped = injected, for each source kind
