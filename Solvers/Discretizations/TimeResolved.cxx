@@ -247,7 +247,26 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   // cg-jacobi: Eigen's CG per channel with its diagonal kept per step matrix
   // (the registry's cg-jacobi rebuilds it at every Solve, one more pass over
   // the matrix per step).
-  const bool jacobi = linear->GetName() == "cg-jacobi";
+  bool jacobi = linear->GetName() == "cg-jacobi";
+  // The default (no name given) at multigrid-agg sizes starts with Jacobi:
+  // when the mass term a M / dt dominates the steps, Jacobi-CG needs as few
+  // iterations as the multigrid (5-6 per step on the time-resolved tests'
+  // meshes) and the cycle is pure extra cost (4x slower there); when it does
+  // not (18 per step on the 200k-tet bunny with 100 gates), the multigrid
+  // is 3x faster. So the first AdaptiveSteps BDF2 steps decide:
+  // a mean above AdaptiveIterations Jacobi iterations per channel switches
+  // to the multigrid for the rest of the run (DiffuseOptics.md).
+  constexpr int AdaptiveSteps = 4;
+  constexpr double AdaptiveIterations = 10.0;
+  const bool adaptive = !jacobi && LinearSolver_.empty();
+  if (adaptive)
+  {
+    jacobi = true;
+    report.LinearSolver = "cg-jacobi";
+  }
+  long long adaptiveSolves = 0, adaptiveIterations = 0;
+  bool linearSetUp = false;
+  bool bdf2Step = false; // the solve is a BDF2 step (set by runSegment)
   std::array<JacobiCG, NumberOfChannels> cg;
   double matrixFactor = -1.0; // a / dt of step.Values
   bool structure = true;      // the first set-up builds the structure
@@ -265,7 +284,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
       }
       step.RightHandSide[c].setZero(system.NumberOfUnknowns);
     }
-    for (int c = 0; c < NumberOfChannels && jacobi; ++c)
+    for (int c = 0; c < NumberOfChannels && (jacobi || adaptive); ++c)
     {
       cg[c].setTolerance(RelTol_);
       cg[c].setMaxIterations(MaxIter_);
@@ -279,7 +298,8 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     {
       if (!jacobi)
       {
-        linear->Setup(step, &mesh, structure);
+        linear->Setup(step, &mesh, structure || !linearSetUp);
+        linearSetUp = true;
       }
     }
     catch (const Error& e)
@@ -347,6 +367,27 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     {
       linear->Solve(step, next, true, stats);
     }
+    if (adaptive && jacobi && bdf2Step)
+    {
+      // The adaptive choice (above): after AdaptiveSteps BDF2 solves,
+      // switch to the multigrid if Jacobi needed many.
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        adaptiveIterations += stats[c].Iterations;
+      }
+      if (++adaptiveSolves == AdaptiveSteps)
+      {
+        const double mean = static_cast<double>(adaptiveIterations) /
+          (static_cast<double>(AdaptiveSteps) * NumberOfChannels);
+        if (mean > AdaptiveIterations)
+        {
+          jacobi = false;
+          linear->Setup(step, &mesh, true);
+          linearSetUp = true;
+          report.LinearSolver = "cg-jacobi, then " + linear->GetName();
+        }
+      }
+    }
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       const int used = stats[c].Iterations;
@@ -373,6 +414,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     {
       const bool euler = s < eulerSteps;
       setMatrix(euler ? 1.0 / h : 1.5 / dt);
+      bdf2Step = !euler;
       if (euler)
       {
         // (M / h + K) x' = M x / h, subSteps times; the right rectangle.
