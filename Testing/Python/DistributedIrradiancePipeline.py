@@ -51,6 +51,23 @@ def chain(source, lights):
     return lit, SolveDiffusion(Input=lit, Solver="divergence", RelTol=TOL, MaxIter=20000)
 
 
+def cut(source, kind):
+    """Stroke Cut with an implicit cutter, relaxation off (per piece under MPI):
+    plane: removes x < (the largest x of mesh3x.pvtu's piece 0) + 0.5, so all
+    of that piece's tets; sphere: keeps the tets touching a ball in the box."""
+    if kind == "plane":
+        with open(path("cutplane.txt")) as f:
+            x0 = float(f.read().split()[0])
+        result = StrokeCut(Input=source, CutType="Plane", NumberOfRelaxationIterations=0)
+        result.CutType.Origin = [x0 + 0.5, 0.0, 0.0]
+        result.CutType.Normal = [-1.0, 0.0, 0.0]
+    else:
+        result = StrokeCut(Input=source, CutType="Sphere", NumberOfRelaxationIterations=0)
+        result.CutType.Center = [8.0, 7.0, 5.0]
+        result.CutType.Radius = 6.5
+    return result
+
+
 def assign(source):
     # A spherical inclusion (per tet: computed on each piece under MPI).
     return AssignScatteringCoefficients(Input=source, MaterialMode=2, InclusionCenter=[8, 8, 4],
@@ -162,8 +179,38 @@ if MODE == "prepare":
         writer.SetFileName(path("mesh3id_%d.vtu" % k))
         writer.Write()
 
+    # 3 slabs in x with GlobalIds (mesh3x.pvtu): piece 0 is x <= x0.
+    from vtkmodules.vtkFiltersCore import vtkThreshold
+    slab = numpy_to_vtk(np.minimum((centre[:, 0] * 3 // nx).astype(float), 2.0), deep=True)
+    slab.SetName("Slab")
+    with_ids.GetCellData().AddArray(slab)
+    for k in range(3):
+        threshold = vtkThreshold()
+        threshold.SetInputData(with_ids)
+        threshold.SetInputArrayToProcess(0, 0, 0, 1, "Slab")
+        threshold.SetLowerThreshold(k - 0.5)
+        threshold.SetUpperThreshold(k + 0.5)
+        threshold.SetThresholdFunction(vtkThreshold.THRESHOLD_BETWEEN)
+        threshold.Update()
+        piece = threshold.GetOutput()
+        piece.GetCellData().RemoveArray("Slab")
+        piece.GetPointData().SetActiveGlobalIds("PointIds")
+        if k == 0:
+            with open(path("cutplane.txt"), "w") as f:
+                f.write("%r\n" % piece.GetBounds()[1])
+        writer.SetInputData(piece)
+        writer.SetFileName(path("mesh3x_%d.vtu" % k))
+        writer.Write()
+    with_ids.GetCellData().RemoveArray("Slab")
+    with open(path("mesh3id.pvtu")) as f:
+        text = f.read()
+    with open(path("mesh3x.pvtu"), "w") as f:
+        f.write(text.replace("mesh3id_", "mesh3x_"))
     source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     SaveData(path("ref_assign.vtu"), proxy=assign(source))
+    for kind in ("plane", "sphere"):
+        _, solved = chain(cut(source, kind), "B")
+        SaveData(path("ref_cut%s.vtu" % kind), proxy=solved)
     for lights in LIGHTS:
         _, solved = chain(source, lights)
         SaveData(path("ref_%s.vtu" % lights), proxy=solved)
@@ -208,6 +255,27 @@ elif MODE == "run":
             f.write("assign %s rank %d path %s\n" % (
                 name, RANK, assigned.GetClientSideObject().GetParallelPath().replace(" ", "-")))
         SaveData(path(name + ".pvtu"), proxy=assigned)
+    # Stroke Cut per piece (implicit cutters, no relaxation) -> the distributed
+    # chain; with TRANSLUCENCY_GATHERED_CUT=1 gathered (the cut mesh on rank 0).
+    pvtu1 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")])
+    pvtu3x = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3x.pvtu")])
+    for name, source, kind, gathered in (("cut_plane3", pvtu3x, "plane", False),
+                                         ("cut_sphere3", pvtu3, "sphere", False),
+                                         ("cut_plane1", pvtu1, "plane", False),
+                                         ("cut_gathered3", pvtu3x, "plane", True)):
+        if gathered:
+            os.environ["TRANSLUCENCY_GATHERED_CUT"] = "1"
+        cutter = cut(source, kind)
+        _, solved = chain(cutter, "B")
+        solved.UpdatePipeline()
+        os.environ.pop("TRANSLUCENCY_GATHERED_CUT", None)
+        o = cutter.GetClientSideObject()
+        with open(path("irr_%d.txt" % RANK), "a") as f:
+            f.write("cut %s rank %d path %s in %d out %d\n" % (
+                name, RANK, o.GetParallelPath().replace(" ", "-"),
+                o.GetInputDataObject(0, 0).GetNumberOfCells(),
+                o.GetOutputDataObject(0).GetNumberOfCells()))
+        SaveData(path(name + ".pvtu"), proxy=solved)
     # An invalid RefractiveIndex on rank 1 only: every rank reports rank 1's
     # error and nobody hangs; the next run works.
     bad = ProgrammableFilter(Input=pvtu3)
