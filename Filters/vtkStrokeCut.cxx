@@ -7,6 +7,7 @@
 #include "Timer.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
+#include "vtkTranslucencyDistributedPieces.h"
 #include "vtkTranslucencyParallel.h"
 
 #include <vtkCellArray.h>
@@ -26,6 +27,7 @@
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -81,40 +83,125 @@ vtkMTimeType vtkStrokeCut::GetMTime()
 }
 
 //------------------------------------------------------------------------------
+bool vtkStrokeCut::UseGatheredPath()
+{
+  const char* value = std::getenv("TRANSLUCENCY_GATHERED_CUT");
+  return value && std::string(value) == "1";
+}
+
+//------------------------------------------------------------------------------
 int vtkStrokeCut::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: gather to rank 0, run this serially there, hand the result back.
-  int parallelResult = 0;
-  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
-        vtkTranslucencyParallel::GatherMode::RankZero,
-        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-        { return this->RequestData(r, i, o); },
-        parallelResult))
+  vtkPolyData* stroke = inputVector[1]->GetNumberOfInformationObjects() > 0
+    ? vtkPolyData::GetData(inputVector[1], 0)
+    : nullptr;
+  // Under MPI: an implicit cutter without relaxation on each rank's own piece
+  // (a tet is kept or removed by its own vertices; nothing moves); otherwise
+  // gather to rank 0, run this serially there, hand the result back.
+  if (!this->Gathering && vtkTranslucencyDistributedPieces::IsAvailable())
   {
+    const bool relaxes = this->NumberOfRelaxationIterations > 0 && this->RelaxationFactor > 0.0;
+    // Every rank decides alike (a stroke or the variable on any rank gathers).
+    const bool gather = vtkTranslucencyDistributedPieces::Any(
+      stroke != nullptr || !this->CutFunction || relaxes || UseGatheredPath());
+    if (!gather)
+    {
+      this->ParallelPath = "per piece";
+      return this->RequestPerPiece(inputVector, outputVector);
+    }
+  }
+  this->ParallelPath = "serial";
+  int parallelResult = 0;
+  this->Gathering = true; // the serial run on rank 0 must not go per piece
+  const bool gathered = vtkTranslucencyParallel::RunGathered(this, request, inputVector,
+    outputVector, vtkTranslucencyParallel::GatherMode::RankZero,
+    [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+    { return this->RequestData(r, i, o); },
+    parallelResult);
+  this->Gathering = false;
+  if (gathered)
+  {
+    this->ParallelPath = "gathered";
     return parallelResult;
   }
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
+  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
+  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
+  std::string error;
+  const int status = this->CutPiece(input, stroke, output, error);
+  if (status != 1)
+  {
+    if (status == 0)
+    {
+      vtkErrorMacro(<< error);
+    }
+    return status == 0 ? 0 : 1; // 2: aborted
+  }
+  if (output->GetNumberOfCells() == 0)
+  {
+    vtkWarningMacro(<< "the cut removed the whole mesh: the output is empty");
+  }
+  return outputs.Succeed();
+}
+
+//------------------------------------------------------------------------------
+int vtkStrokeCut::RequestPerPiece(
+  vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   this->NumberOfMovableVertices = this->NumberOfMovedVertices = 0;
   this->NumberOfBlockedVertices = 0;
   this->CutTime = 0.0;
-  const translucency::Timer timer;
-
-  vtkPolyData* stroke = inputVector[1]->GetNumberOfInformationObjects() > 0
-    ? vtkPolyData::GetData(inputVector[1], 0)
-    : nullptr;
-  if (!stroke && !this->CutFunction)
+  const long long cells = input ? input->GetNumberOfCells() : 0;
+  // Every rank takes part in every collective below, an empty piece too.
+  if (vtkTranslucencyDistributedPieces::Sum(cells) == 0)
   {
-    vtkErrorMacro(<< "no cut function: SetCutFunction or a stroke is required");
+    vtkErrorMacro(<< "input is not a tet mesh: the input mesh is empty (no points or no cells)");
     return 0;
   }
-  std::string error;
+  std::string local;
+  int status = 1;
+  if (cells > 0)
+  {
+    status = this->CutPiece(input, nullptr, output, local);
+  }
+  const std::string error =
+    vtkTranslucencyDistributedPieces::AgreeOnError(status == 0 ? local : std::string());
+  if (!error.empty())
+  {
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  const long long kept = vtkTranslucencyDistributedPieces::Sum(
+    status == 1 ? output->GetNumberOfCells() : 1);
+  if (kept == 0 && vtkTranslucencyDistributedPieces::GetRank() == 0)
+  {
+    vtkWarningMacro(<< "the cut removed the whole mesh: the output is empty");
+  }
+  return status == 1 ? outputs.Succeed() : 1; // 2: aborted on this rank
+}
+
+//------------------------------------------------------------------------------
+int vtkStrokeCut::CutPiece(vtkUnstructuredGrid* input, vtkPolyData* stroke,
+  vtkUnstructuredGrid* output, std::string& error)
+{
+  this->NumberOfMovableVertices = this->NumberOfMovedVertices = 0;
+  this->NumberOfBlockedVertices = 0;
+  this->CutTime = 0.0;
+  const translucency::Timer timer;
+
+  if (!stroke && !this->CutFunction)
+  {
+    error = "no cut function: SetCutFunction or a stroke is required";
+    return 0;
+  }
   auto mesh = vtkTranslucency::AcquireTetMesh(input, error);
   if (!mesh)
   {
-    vtkErrorMacro(<< "input is not a tet mesh: " << error);
+    error = "input is not a tet mesh: " + error;
     return 0;
   }
   this->UpdateProgress(0.1);
@@ -150,7 +237,7 @@ int vtkStrokeCut::RequestData(
     }
     catch (const translucency::Error& e)
     {
-      vtkErrorMacro(<< "bad stroke: " << e.what());
+      error = std::string("bad stroke: ") + e.what();
       return 0;
     }
     side = [&surface, sign](const double* x) { return sign * surface.Evaluate(x); };
@@ -171,7 +258,7 @@ int vtkStrokeCut::RequestData(
   }
   if (this->CheckAbort())
   {
-    return 1;
+    return 2;
   }
   this->UpdateProgress(0.2);
 
@@ -185,7 +272,7 @@ int vtkStrokeCut::RequestData(
   }
   catch (const translucency::Error& e)
   {
-    vtkErrorMacro(<< e.what());
+    error = e.what();
     return 0;
   }
   this->NumberOfMovableVertices = cut.GetNumberOfMovableVertices();
@@ -203,11 +290,14 @@ int vtkStrokeCut::RequestData(
   {
     pts->SetPoint(k, &outPoints[3 * k]);
   }
-  const vtkIdType numTets = static_cast<vtkIdType>(cut.GetTets().size() / 4);
   output->SetPoints(pts);
   vtkTranslucency::SetTets(output, cut.GetTets());
 
-  // Attributes, with the id maps to the original mesh.
+  // Attributes, with the id maps to the original mesh. The kept points and
+  // tets are a subset: their GlobalIds stay valid (VTK does not copy them by
+  // default), so a distributed solve downstream matches the pieces by id.
+  output->GetPointData()->CopyGlobalIdsOn();
+  output->GetCellData()->CopyGlobalIdsOn();
   CopyAttributes(input->GetPointData(), output->GetPointData(), cut.GetKeptPoints(),
     OriginalPointIdsName);
   CopyAttributes(input->GetCellData(), output->GetCellData(), cut.GetKeptTets(),
@@ -215,12 +305,8 @@ int vtkStrokeCut::RequestData(
   output->GetFieldData()->PassData(input->GetFieldData());
 
   this->CutTime = timer.GetMilliseconds();
-  if (numTets == 0)
-  {
-    vtkWarningMacro(<< "the cut removed the whole mesh: the output is empty");
-  }
   this->UpdateProgress(1.0);
-  return outputs.Succeed();
+  return 1;
 }
 
 //------------------------------------------------------------------------------

@@ -40,10 +40,12 @@
 
 #include "TranslucencyFiltersModule.h" // for export macro
 #include "vtkUnstructuredGridAlgorithm.h"
+#include <string> // for std::string
 
 class vtkAlgorithmOutput;
 class vtkImplicitFunction;
 class vtkPolyData;
+class vtkUnstructuredGrid;
 
 class TRANSLUCENCYFILTERS_EXPORT vtkStrokeCut : public vtkUnstructuredGridAlgorithm
 {
@@ -109,6 +111,16 @@ public:
   vtkGetMacro(CutTime, double);
   ///@}
 
+  /**
+   * The path of the last execution: "serial" (one process), "per piece" (MPI:
+   * an implicit cutter with the relaxation off, NumberOfRelaxationIterations 0
+   * or RelaxationFactor 0, cut on each rank's own piece, no gather; the
+   * statistics above are then this rank's) or "gathered" (MPI: a stroke, the
+   * relaxation on, or TRANSLUCENCY_GATHERED_CUT=1 on some rank: the pieces
+   * are cut on rank 0, the output is there). Documentation/Parallel.md.
+   */
+  const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+
   /// Modification time including the cut function's.
   vtkMTimeType GetMTime() override;
 
@@ -118,6 +130,14 @@ protected:
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// The MPI per-piece path (collective: every rank calls it).
+  int RequestPerPiece(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
+  /// Cut `input` (a stroke, or CutFunction when `stroke` is null) into
+  /// `output`: 1 done, 0 failed (`error` says why), 2 aborted. Not collective.
+  int CutPiece(vtkUnstructuredGrid* input, vtkPolyData* stroke, vtkUnstructuredGrid* output,
+    std::string& error);
+  /// True if TRANSLUCENCY_GATHERED_CUT is "1" in this process.
+  static bool UseGatheredPath();
 
   vtkImplicitFunction* CutFunction = nullptr;
   bool InsideOut = false;
@@ -129,6 +149,8 @@ protected:
   vtkIdType NumberOfMovedVertices = 0;
   vtkIdType NumberOfBlockedVertices = 0;
   double CutTime = 0.0;
+  std::string ParallelPath = "serial";
+  bool Gathering = false; // true while the gathered serial run executes
 
 private:
   vtkStrokeCut(const vtkStrokeCut&) = delete;

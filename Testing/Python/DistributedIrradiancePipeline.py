@@ -58,6 +58,23 @@ def chain(source, lights):
     return lit, SolveDiffusion(Input=lit, Solver="divergence", RelTol=TOL, MaxIter=20000)
 
 
+def cut(source, kind):
+    """Stroke Cut with an implicit cutter, relaxation off (per piece under MPI):
+    plane: removes x < (the largest x of mesh3x.pvtu's piece 0) + 0.5, so all
+    of that piece's tets; sphere: keeps the tets touching a ball in the box."""
+    if kind == "plane":
+        with open(path("cutplane.txt")) as f:
+            x0 = float(f.read().split()[0])
+        result = StrokeCut(Input=source, CutType="Plane", NumberOfRelaxationIterations=0)
+        result.CutType.Origin = [x0 + 0.5, 0.0, 0.0]
+        result.CutType.Normal = [-1.0, 0.0, 0.0]
+    else:
+        result = StrokeCut(Input=source, CutType="Sphere", NumberOfRelaxationIterations=0)
+        result.CutType.Center = [8.0, 7.0, 5.0]
+        result.CutType.Radius = 6.5
+    return result
+
+
 def paint(source, original=None):
     # A stroke over the top and down one side (per tet: each piece painted
     # on its rank under MPI); with `original`, the two-port form.
@@ -183,11 +200,41 @@ if MODE == "prepare":
         writer.SetFileName(path("mesh3id_%d.vtu" % k))
         writer.Write()
 
+    # 3 slabs in x with GlobalIds (mesh3x.pvtu): piece 0 is x <= x0.
+    from vtkmodules.vtkFiltersCore import vtkThreshold
+    slab = numpy_to_vtk(np.minimum((centre[:, 0] * 3 // nx).astype(float), 2.0), deep=True)
+    slab.SetName("Slab")
+    with_ids.GetCellData().AddArray(slab)
+    for k in range(3):
+        threshold = vtkThreshold()
+        threshold.SetInputData(with_ids)
+        threshold.SetInputArrayToProcess(0, 0, 0, 1, "Slab")
+        threshold.SetLowerThreshold(k - 0.5)
+        threshold.SetUpperThreshold(k + 0.5)
+        threshold.SetThresholdFunction(vtkThreshold.THRESHOLD_BETWEEN)
+        threshold.Update()
+        piece = threshold.GetOutput()
+        piece.GetCellData().RemoveArray("Slab")
+        piece.GetPointData().SetActiveGlobalIds("PointIds")
+        if k == 0:
+            with open(path("cutplane.txt"), "w") as f:
+                f.write("%r\n" % piece.GetBounds()[1])
+        writer.SetInputData(piece)
+        writer.SetFileName(path("mesh3x_%d.vtu" % k))
+        writer.Write()
+    with_ids.GetCellData().RemoveArray("Slab")
+    with open(path("mesh3id.pvtu")) as f:
+        text = f.read()
+    with open(path("mesh3x.pvtu"), "w") as f:
+        f.write(text.replace("mesh3id_", "mesh3x_"))
     source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     SaveData(path("ref_assign.vtu"), proxy=assign(source))
     SaveData(path("ref_assignveins.vtu"), proxy=assign(source, veins=True))
     _, painted = chain(paint(source), "B")
     SaveData(path("ref_paint.vtu"), proxy=painted)
+    for kind in ("plane", "sphere"):
+        _, solved = chain(cut(source, kind), "B")
+        SaveData(path("ref_cut%s.vtu" % kind), proxy=solved)
     for lights in LIGHTS:
         _, solved = chain(source, lights)
         SaveData(path("ref_%s.vtu" % lights), proxy=solved)
@@ -262,14 +309,14 @@ elif MODE == "run":
     # an empty piece) and the one-piece .pvtu (empty pieces elsewhere).
     pvtu2 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")])
     pvtu1 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")])
-    cut = StrokeCut(Input=pvtu3, CutType="Plane")
-    cut.CutType.Origin = [8.0, 8.0, 3.0]
-    cut.CutType.Normal = [0.2, 0.1, 1.0]
+    cut_mesh = StrokeCut(Input=pvtu3, CutType="Plane")
+    cut_mesh.CutType.Origin = [8.0, 8.0, 3.0]
+    cut_mesh.CutType.Normal = [0.2, 0.1, 1.0]
     for name, source, solve in (
             ("paint_pvtu3", paint(pvtu3), True),
             ("paint_redist", paint(RedistributeDataSet(Input=XMLUnstructuredGridReader(
                 FileName=[path("mesh.vtu")]))), True),
-            ("paint_twoport", paint(cut, original=pvtu3), True),
+            ("paint_twoport", paint(cut_mesh, original=pvtu3), True),
             ("paint_pvtu2", paint(pvtu2), False), ("paint_pvtu1", paint(pvtu1), False)):
         proxy = chain(source, "B")[1] if solve else source
         proxy.UpdatePipeline()
@@ -277,6 +324,27 @@ elif MODE == "run":
             f.write("paint %s rank %d path %s\n" % (
                 name, RANK, source.GetClientSideObject().GetParallelPath().replace(" ", "-")))
         SaveData(path(name + ".pvtu"), proxy=proxy)
+    # Stroke Cut per piece (implicit cutters, no relaxation) -> the distributed
+    # chain; with TRANSLUCENCY_GATHERED_CUT=1 gathered (the cut mesh on rank 0).
+    pvtu1 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")])
+    pvtu3x = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3x.pvtu")])
+    for name, source, kind, gathered in (("cut_plane3", pvtu3x, "plane", False),
+                                         ("cut_sphere3", pvtu3, "sphere", False),
+                                         ("cut_plane1", pvtu1, "plane", False),
+                                         ("cut_gathered3", pvtu3x, "plane", True)):
+        if gathered:
+            os.environ["TRANSLUCENCY_GATHERED_CUT"] = "1"
+        cutter = cut(source, kind)
+        _, solved = chain(cutter, "B")
+        solved.UpdatePipeline()
+        os.environ.pop("TRANSLUCENCY_GATHERED_CUT", None)
+        o = cutter.GetClientSideObject()
+        with open(path("irr_%d.txt" % RANK), "a") as f:
+            f.write("cut %s rank %d path %s in %d out %d\n" % (
+                name, RANK, o.GetParallelPath().replace(" ", "-"),
+                o.GetInputDataObject(0, 0).GetNumberOfCells(),
+                o.GetOutputDataObject(0).GetNumberOfCells()))
+        SaveData(path(name + ".pvtu"), proxy=solved)
     # An invalid RefractiveIndex on rank 1 only: every rank reports rank 1's
     # error and nobody hangs; the next run works.
     bad = ProgrammableFilter(Input=pvtu3)
