@@ -20,7 +20,12 @@ ranks on 2 pieces: a rank with an empty piece), redist (Redistribute
 DataSet), fem (fem solver on pvtu3), relight (pvtu3 relit: hierarchy kept),
 warm (the relit system again: warm start), gathered (pvtu3 with DistributedSolve off, the gathered path in
 the same run), an invalid mu_a on rank 1 only (the same error on every rank),
-after_error (a solve after it).
+after_error (a solve after it); src_point (a point source on mesh2g, 3
+ranks: an empty piece) and src_pencil (a pencil beam on mesh3id), each with
+a point and a fibre detector (readings per rank in detectors_<rank>.txt;
+serial references ref_<kind>_divergence.vtu and ref_detectors.json); a
+point source outside the object (its errors, caught by observers, in
+outside_<rank>.txt), src_after_error (a solve after it).
 """
 
 import os

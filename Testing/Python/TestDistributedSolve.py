@@ -20,7 +20,10 @@ How to run (ctest does this, with 2 and with 3 ranks):
    iterations; the pieces stay distributed; with 3 ranks on 2 pieces one
    rank has an empty piece; an invalid mu_a on rank 1 only gives rank 1's
    error on every rank, and the next solve works; no other error is logged
-   and nothing hangs.
+   and nothing hangs; with a point source (one empty piece at 3 ranks) and
+   a pencil beam, Fluence and the readings of a point and a fibre detector
+   equal the serial ones to 1e-6 (the readings the same on every rank); a
+   point source outside the object is the same error on every rank.
 """
 
 import os
