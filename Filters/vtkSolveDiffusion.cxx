@@ -468,6 +468,74 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
 }
 
 //------------------------------------------------------------------------------
+namespace
+{
+/// The detector field arrays of a solve (the serial, gathered and distributed
+/// paths): positions, radii, readings, Monte Carlo standard errors, phases.
+void AttachDetectorArrays(vtkUnstructuredGrid* output,
+  const std::vector<translucency::Detector>& detectors,
+  const std::vector<translucency::DetectorReading>& readings,
+  const std::vector<translucency::DetectorReading>& readingErrors,
+  const std::vector<std::array<double, 3>>& fluencePhases,
+  const std::vector<std::array<double, 3>>& exitancePhases, bool frequencyDomain)
+{
+  if (!readings.empty())
+  {
+    std::vector<double> position, detectorFluence, exitance, fluencePhase, exitancePhase;
+    for (std::size_t k = 0; k < readings.size(); ++k)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        position.push_back(readings[k].SurfacePosition[c]);
+        detectorFluence.push_back(readings[k].Fluence[c]);
+        exitance.push_back(readings[k].Exitance[c]);
+        fluencePhase.push_back(fluencePhases[k][c]);
+        exitancePhase.push_back(exitancePhases[k][c]);
+      }
+    }
+    auto field = [output](const char* name, const std::vector<double>& values) {
+      vtkDataArray* array = vtkTranslucency::NewTripleArray(name, values);
+      output->GetFieldData()->AddArray(array);
+      array->Delete();
+    };
+    field("DetectorPosition", position);
+    // What was asked for (vtkDetectorReadings' table shows both positions).
+    std::vector<double> requested;
+    vtkNew<vtkDoubleArray> radius;
+    radius->SetName("DetectorRadius");
+    for (const translucency::Detector& detector : detectors)
+    {
+      requested.insert(requested.end(), detector.Position.begin(), detector.Position.end());
+      radius->InsertNextValue(detector.Radius);
+    }
+    field("DetectorRequestedPosition", requested);
+    output->GetFieldData()->AddArray(radius);
+    field("DetectorFluence", detectorFluence);
+    field("DetectorExitance", exitance);
+    if (!readingErrors.empty()) // Monte Carlo, continuous wave
+    {
+      std::vector<double> fluenceError, exitanceError;
+      for (const auto& error : readingErrors)
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          fluenceError.push_back(error.Fluence[c]);
+          exitanceError.push_back(error.Exitance[c]);
+        }
+      }
+      field("DetectorFluenceStandardError", fluenceError);
+      field("DetectorExitanceStandardError", exitanceError);
+    }
+    if (frequencyDomain)
+    {
+      field("DetectorFluencePhase", fluencePhase);
+      field("DetectorExitancePhase", exitancePhase);
+    }
+  }
+}
+}
+
+//------------------------------------------------------------------------------
 int vtkSolveDiffusion::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
@@ -477,9 +545,8 @@ int vtkSolveDiffusion::RequestData(
   // result back.
   const bool vertexSolver =
     this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
-  if (this->DistributedSolve && vertexSolver && this->Internal->Sources.Empty() &&
-    !this->InteractivePointSource && !this->InteractivePencilBeam &&
-    this->Internal->Detectors.empty() && this->ModulationFrequency == 0.0 &&
+  if (this->DistributedSolve && vertexSolver && !this->InteractivePencilBeam &&
+    this->ModulationFrequency == 0.0 &&
     this->TimeGatesCount == 0 && !ExtendedCollimatedModel(inputVector[0]) &&
     vtkTranslucencyDistributedSolve::IsAllowedByEnvironment() &&
     vtkTranslucencyDistributedSolve::IsAvailable())
@@ -1018,59 +1085,8 @@ int vtkSolveDiffusion::RequestData(
         }
       }
     }
-    if (!in.Readings.empty())
-    {
-      std::vector<double> position, detectorFluence, exitance, fluencePhase, exitancePhase;
-      for (std::size_t k = 0; k < in.Readings.size(); ++k)
-      {
-        for (int c = 0; c < 3; ++c)
-        {
-          position.push_back(in.Readings[k].SurfacePosition[c]);
-          detectorFluence.push_back(in.Readings[k].Fluence[c]);
-          exitance.push_back(in.Readings[k].Exitance[c]);
-          fluencePhase.push_back(in.FluencePhase[k][c]);
-          exitancePhase.push_back(in.ExitancePhase[k][c]);
-        }
-      }
-      auto field = [output](const char* name, const std::vector<double>& values) {
-        vtkDataArray* array = vtkTranslucency::NewTripleArray(name, values);
-        output->GetFieldData()->AddArray(array);
-        array->Delete();
-      };
-      field("DetectorPosition", position);
-      // What was asked for (vtkDetectorReadings' table shows both positions).
-      std::vector<double> requested;
-      vtkNew<vtkDoubleArray> radius;
-      radius->SetName("DetectorRadius");
-      for (const translucency::Detector& detector : in.Detectors)
-      {
-        requested.insert(requested.end(), detector.Position.begin(), detector.Position.end());
-        radius->InsertNextValue(detector.Radius);
-      }
-      field("DetectorRequestedPosition", requested);
-      output->GetFieldData()->AddArray(radius);
-      field("DetectorFluence", detectorFluence);
-      field("DetectorExitance", exitance);
-      if (!in.ReadingErrors.empty()) // Monte Carlo, continuous wave
-      {
-        std::vector<double> fluenceError, exitanceError;
-        for (const auto& error : in.ReadingErrors)
-        {
-          for (int c = 0; c < 3; ++c)
-          {
-            fluenceError.push_back(error.Fluence[c]);
-            exitanceError.push_back(error.Exitance[c]);
-          }
-        }
-        field("DetectorFluenceStandardError", fluenceError);
-        field("DetectorExitanceStandardError", exitanceError);
-      }
-      if (frequencyDomain)
-      {
-        field("DetectorFluencePhase", fluencePhase);
-        field("DetectorExitancePhase", exitancePhase);
-      }
-    }
+    AttachDetectorArrays(output, in.Detectors, in.Readings, in.ReadingErrors, in.FluencePhase,
+      in.ExitancePhase, frequencyDomain);
   }
   catch (const translucency::Error& e)
   {
@@ -1185,15 +1201,33 @@ int vtkSolveDiffusion::RequestDistributed(
   in.ExitancePhase.clear();
   in.FrontEnd.Reset();
   this->TopologyTime = this->AssemblyTime = this->SolveTime = 0.0;
+  in.ReadingErrors.clear();
+  in.GateErrors.clear();
+  in.TimeResolved = translucency::TimeResolvedResult();
+  // The listed sources and the interactive point source (the interactive
+  // pencil beam, aimed by a ray cast over the whole surface, is gathered).
+  in.SolvedSources = in.Sources;
+  if (this->InteractivePointSource)
+  {
+    translucency::PointSource source;
+    std::copy_n(this->InteractivePointSourcePosition, 3, source.Position.begin());
+    std::copy_n(this->InteractivePointSourcePower, 3, source.Power.begin());
+    source.Label = "interactive point source";
+    in.SolvedSources.AddPointSource(source);
+  }
   std::vector<double> fluence;
   std::string error;
   if (!in.Distributed.Solve(input, SolverEntry(this->Solver).Name, this->RelTol, this->MaxIter,
-        this->WarmStart, this->NumberOfThreads, fluence, in.Report, error))
+        this->WarmStart, this->NumberOfThreads, &in.SolvedSources, in.Detectors, fluence,
+        in.Readings, in.Report, error))
   {
     in.Report = translucency::SolverReport();
+    in.Readings.clear();
     vtkErrorMacro(<< error);
     return 0;
   }
+  in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
+  in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
   this->AssemblyTime = in.Report.SetupMilliseconds;
   this->SolveTime = in.Report.SolveMilliseconds;
   static const char* channelNames[3] = { "R", "G", "B" };
@@ -1214,6 +1248,9 @@ int vtkSolveDiffusion::RequestDistributed(
     output->GetPointData()->AddArray(array);
     array->Delete();
   }
+  // On every rank (an empty piece too): the field arrays vtkDetectorReadings reads.
+  AttachDetectorArrays(output, in.Detectors, in.Readings, in.ReadingErrors, in.FluencePhase,
+    in.ExitancePhase, false);
   this->UpdateProgress(1.0);
   return outputs.Succeed();
 }

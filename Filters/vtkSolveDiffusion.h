@@ -366,9 +366,10 @@ public:
   /// systems distributed, each rank assembling its own tets into one hypre
   /// BoomerAMG-PCG system (Documentation/Parallel.md), instead of gathering
   /// the mesh to rank 0. Default on. Off (or the environment variable
-  /// TRANSLUCENCY_GATHERED_SOLVE=1) gathers, as do interior sources,
-  /// detectors, a modulation frequency, the other solvers and builds
-  /// without hypre. The distributed path always uses hypre's BoomerAMG-PCG
+  /// TRANSLUCENCY_GATHERED_SOLVE=1) gathers, as do a modulation frequency,
+  /// time gates, the interactive pencil beam, the extended collimated
+  /// models, the other solvers and builds without hypre (point sources,
+  /// listed pencil beams and detectors are distributed). The distributed path always uses hypre's BoomerAMG-PCG
   /// (LinearSolver, IncrementalAssembly and NumberOfThreads' effect on the
   /// solve do not apply).
   vtkSetMacro(DistributedSolve, bool);

@@ -37,8 +37,11 @@ bool vtkTranslucencyDistributedSolve::IsAvailable()
 
 bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   const std::string& discretization, double relTol, int maxIter, bool warmStart, int threads,
-  std::vector<double>& fluence, translucency::SolverReport& report, std::string& error)
+  const translucency::Sources* sources, const std::vector<translucency::Detector>& detectors,
+  std::vector<double>& fluence, std::vector<translucency::DetectorReading>& readings,
+  translucency::SolverReport& report, std::string& error)
 {
+  readings.clear();
   MPI_Comm comm = *GlobalCommunicator();
   std::string local;
   std::vector<double> points;
@@ -121,7 +124,11 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
     solver.SetMaxIter(maxIter);
     solver.SetWarmStart(warmStart);
     solver.SetNumberOfThreads(threads);
+    solver.SetInteriorSources(sources);
+    solver.SetDetectors(detectors);
     solver.Solve(points, keys, tets, material, irradiance, fluence, report);
+    solver.SetInteriorSources(nullptr); // not kept past this call
+    readings = solver.GetDetectorReadings();
   }
   catch (const translucency::Error& e)
   {
@@ -144,7 +151,9 @@ bool vtkTranslucencyDistributedSolve::IsAvailable()
 }
 
 bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid*, const std::string&, double,
-  int, bool, int, std::vector<double>&, translucency::SolverReport&, std::string& error)
+  int, bool, int, const translucency::Sources*, const std::vector<translucency::Detector>&,
+  std::vector<double>&, std::vector<translucency::DetectorReading>&, translucency::SolverReport&,
+  std::string& error)
 {
   error = "this build has no distributed solve (hypre or VTK's ParallelMPI missing)";
   return false;

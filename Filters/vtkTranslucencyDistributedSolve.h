@@ -5,8 +5,9 @@
  *         BoomerAMG-PCG on the global controller's communicator), instead of
  *         being gathered to rank 0 (vtkTranslucencyParallel::RunGathered).
  *
- * Used for the divergence and fem solvers without interior sources,
- * detectors or modulation, whenever the global controller is an MPI
+ * Used for the divergence and fem solvers in continuous wave (point
+ * sources, listed pencil beams and detectors included; no modulation, time
+ * gates, interactive pencil beam or extended collimated model), whenever the global controller is an MPI
  * controller with more than one process (every rank takes part, a rank
  * with an empty piece too), unless vtkSolveDiffusion's DistributedSolve is
  * off or the environment variable TRANSLUCENCY_GATHERED_SOLVE is set to a
@@ -21,6 +22,7 @@
 #ifndef vtkTranslucencyDistributedSolve_h
 #define vtkTranslucencyDistributedSolve_h
 
+#include "Detectors.h"       // for translucency::Detector, DetectorReading, Sources
 #include "DiffusionSolver.h" // for translucency::SolverReport
 
 #include <memory>
@@ -43,12 +45,15 @@ public:
 
   /**
    * Collective. Solve on this rank's piece `input` ("divergence" or "fem");
-   * fluence gets 3 values per input point. Returns false with `error` (the
-   * same on every rank) on failure.
+   * fluence gets 3 values per input point. `sources` (may be null) are the
+   * interior sources, `detectors` read into `readings` (the same on every
+   * rank). Returns false with `error` (the same on every rank) on failure.
    */
   bool Solve(vtkUnstructuredGrid* input, const std::string& discretization, double relTol,
-    int maxIter, bool warmStart, int threads, std::vector<double>& fluence,
-    translucency::SolverReport& report, std::string& error);
+    int maxIter, bool warmStart, int threads, const translucency::Sources* sources,
+    const std::vector<translucency::Detector>& detectors, std::vector<double>& fluence,
+    std::vector<translucency::DetectorReading>& readings, translucency::SolverReport& report,
+    std::string& error);
 
 private:
   struct Impl;

@@ -61,6 +61,17 @@ double DistributedVertexSolver::GetOperatorComplexity(int c) const
   return Channels_[c] ? Channels_[c]->GetOperatorComplexity() : 0.0;
 }
 
+DistributedPiece DistributedVertexSolver::Piece(const OpticalProperties& material) const
+{
+  DistributedPiece piece;
+  piece.Mesh = &Mesh_;
+  piece.HasTets = !Tets_.empty();
+  piece.NumberOfPoints = static_cast<int>(Keys_.size());
+  piece.Physical = &PhysicalFace_;
+  piece.Material = &material;
+  return piece;
+}
+
 void DistributedVertexSolver::BuildGeometry(
   const std::vector<double>& points, const std::vector<PointKey>& keys, const std::vector<int>& tets)
 {
@@ -160,6 +171,7 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
   std::vector<double>& fluence, SolverReport& report)
 {
   Timings_ = Timings();
+  Readings_.clear();
   report = SolverReport();
   report.Solver = Name_;
   report.LinearSolver = "hypre-amg (distributed)";
@@ -322,6 +334,15 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
       }
     }
   }
+  // Interior sources: their load on the rank owning each source's tet,
+  // times 4 as every right-hand side (FiniteElement.h).
+  if (Sources_ && !Sources_->Empty())
+  {
+    const std::vector<double> load =
+      ComputeDistributedSourceLoad(Comm_, Piece(material), *Sources_);
+    for (std::size_t k = 0; k < load.size(); ++k)
+      localRhs[k] += 4.0 * load[k];
+  }
   const std::vector<double> rhs = Numbering_.SumToOwners(Comm_, localRhs, 3);
   localRhs = {};
 
@@ -447,6 +468,9 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
   }
   fluence = Numbering_.FetchFromOwners(Comm_, solution, 3);
   Timings_.Solve = Milliseconds(start);
+  Readings_.clear();
+  if (!Detectors_.empty())
+    Readings_ = ReadDistributedDetectors(Comm_, Piece(material), Detectors_, fluence, &irradiance);
 
   report.SetupMilliseconds = Timings_.Numbering + Timings_.Assembly + Timings_.AMGSetup;
   report.SolveMilliseconds = Timings_.Solve;

@@ -30,6 +30,7 @@
 
 #include "DiffusionSolver.h"
 #include "DistributedNumbering.h"
+#include "DistributedSources.h"
 #include "HypreSolver.h"
 #include "OpticalProperties.h"
 #include "TetGeometry.h"
@@ -74,6 +75,19 @@ public:
   bool GetValuesOnlySetup() const { return ValuesOnly_; }
   /// OpenMP threads of the local assembly (0 = OpenMP's default).
   void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+  /**
+   * Interior sources (point sources, pencil beams) of the next Solves (null
+   * or empty: none; the pointer must stay valid through Solve). Their load
+   * is added to the right-hand side where the lowest rank owning each
+   * source's tet puts it (DistributedSources.h); a source outside the
+   * object is the same error on every rank. The matrix and its hierarchy
+   * do not depend on them.
+   */
+  void SetInteriorSources(const Sources* sources) { Sources_ = sources; }
+  /// Detectors read after each Solve (GetDetectorReadings: the same on every rank).
+  void SetDetectors(const std::vector<Detector>& detectors) { Detectors_ = detectors; }
+  /// The readings of the last Solve (one per detector; empty without detectors).
+  const std::vector<DetectorReading>& GetDetectorReadings() const { return Readings_; }
   /// BoomerAMG settings (default BoomerAMGOptions::Tuned()); a change
   /// rebuilds the hierarchy at the next Solve.
   void SetAMGOptions(const BoomerAMGOptions& options);
@@ -93,6 +107,12 @@ public:
   void Solve(const std::vector<double>& points, const std::vector<PointKey>& keys,
     const std::vector<int>& tets, const OpticalProperties& material,
     const std::vector<double>& irradiance, std::vector<double>& fluence, SolverReport& report);
+
+private:
+  /// This rank's piece as DistributedSources.h sees it.
+  DistributedPiece Piece(const OpticalProperties& material) const;
+
+public:
 
   /// Wall times of the last Solve on this rank (ms): global numbering and
   /// boundary (0 when the mesh is unchanged), local assembly and hypre's
@@ -153,6 +173,10 @@ private:
   std::array<std::unique_ptr<HypreBoomerAMGPCG>, NumberOfChannels> Channels_;
   std::array<std::vector<double>, NumberOfChannels> Solution_;
   Timings Timings_;
+
+  const Sources* Sources_ = nullptr;
+  std::vector<Detector> Detectors_;
+  std::vector<DetectorReading> Readings_;
 };
 
 } // namespace translucency

@@ -95,6 +95,67 @@ PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& m
   return balance;
 }
 
+void AppendFibreSamples(const double* a, const double* b, const double* c, double triangleArea,
+  int f, const std::array<double, 3>& centre, const std::array<double, 3>& normal, double radius,
+  std::vector<DetectorFootprint::Sample>& samples, double& area)
+{
+  const Eigen::Vector3d s = Eigen::Map<const Eigen::Vector3d>(centre.data());
+  const Eigen::Vector3d ns = Eigen::Map<const Eigen::Vector3d>(normal.data());
+  const Eigen::Vector3d p0 = Eigen::Map<const Eigen::Vector3d>(a);
+  const Eigen::Vector3d p1 = Eigen::Map<const Eigen::Vector3d>(b);
+  const Eigen::Vector3d p2 = Eigen::Map<const Eigen::Vector3d>(c);
+  const Eigen::Vector3d centroid = (p0 + p1 + p2) / 3.0;
+  const double reach =
+    std::max({ (p0 - centroid).norm(), (p1 - centroid).norm(), (p2 - centroid).norm() });
+  if ((centroid - s).norm() > radius + reach || (p1 - p0).cross(p2 - p0).dot(ns) <= 0.0)
+  {
+    return;
+  }
+  const double edge = std::max({ (p1 - p0).norm(), (p2 - p1).norm(), (p0 - p2).norm() });
+  const int m = std::clamp(static_cast<int>(std::ceil(4.0 * edge / radius)), 1, 64);
+  const double subArea = triangleArea / (static_cast<double>(m) * m);
+  // The m^2 sub-triangles of a uniform split: upward ones with centroid
+  // ((i + 1/3)/m, (j + 1/3)/m), downward ones ((i + 2/3)/m, (j + 2/3)/m).
+  for (int up = 0; up < 2; ++up)
+  {
+    const double shift = up == 0 ? 1.0 / 3.0 : 2.0 / 3.0;
+    for (int i = 0; i < m; ++i)
+    {
+      for (int j = 0; i + j <= m - 1 - up; ++j)
+      {
+        const double u = (i + shift) / m, v = (j + shift) / m;
+        const Eigen::Vector3d y = p0 + u * (p1 - p0) + v * (p2 - p0);
+        if ((y - s).norm() <= radius)
+        {
+          samples.push_back({ f, { 1.0 - u - v, u, v }, subArea });
+          area += subArea;
+        }
+      }
+    }
+  }
+}
+
+void AccumulateDetectorSample(const TetMesh& mesh, const OpticalProperties& material, int f,
+  const double w[3], double weight, const std::vector<double>& fluence,
+  const std::vector<double>* irradiance, Fresnel::BoundaryRule rule, DetectorReading& reading)
+{
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const Fresnel::RobinCoefficients robin = Fresnel::BoundaryCoefficients(
+    material.RefractiveIndex[mesh.GetBoundaryTriangleTets()[static_cast<std::size_t>(f)]], rule);
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    double phi = 0.0, q = 0.0;
+    for (int v = 0; v < 3; ++v)
+    {
+      const std::size_t i = 3 * static_cast<std::size_t>(triangles[3 * static_cast<std::size_t>(f) + v]) + c;
+      phi += w[v] * fluence[i];
+      q += irradiance ? w[v] * (*irradiance)[i] : 0.0;
+    }
+    reading.Fluence[c] += weight * phi;
+    reading.Exitance[c] += weight * Exitance(phi, q, robin, rule);
+  }
+}
+
 std::vector<DetectorFootprint> LocateDetectors(
   const TetMesh& mesh, const std::vector<Detector>& detectors)
 {
@@ -138,43 +199,12 @@ std::vector<DetectorFootprint> LocateDetectors(
     const double radius = detector.Radius;
     if (radius > 0.0)
     {
-      const Eigen::Vector3d s = Eigen::Map<const Eigen::Vector3d>(surface.Position.data());
-      const Eigen::Vector3d ns = Eigen::Map<const Eigen::Vector3d>(surface.Normal.data());
       double area = 0.0;
       for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
       {
-        const Eigen::Vector3d p0 = Eigen::Map<const Eigen::Vector3d>(mesh.GetPoint(triangles[3 * f]));
-        const Eigen::Vector3d p1 = Eigen::Map<const Eigen::Vector3d>(mesh.GetPoint(triangles[3 * f + 1]));
-        const Eigen::Vector3d p2 = Eigen::Map<const Eigen::Vector3d>(mesh.GetPoint(triangles[3 * f + 2]));
-        const Eigen::Vector3d centroid = (p0 + p1 + p2) / 3.0;
-        const double reach = std::max({ (p0 - centroid).norm(), (p1 - centroid).norm(),
-          (p2 - centroid).norm() });
-        if ((centroid - s).norm() > radius + reach || (p1 - p0).cross(p2 - p0).dot(ns) <= 0.0)
-        {
-          continue;
-        }
-        const double edge = std::max({ (p1 - p0).norm(), (p2 - p1).norm(), (p0 - p2).norm() });
-        const int m = std::clamp(static_cast<int>(std::ceil(4.0 * edge / radius)), 1, 64);
-        const double subArea = areas[f] / (static_cast<double>(m) * m);
-        // The m^2 sub-triangles of a uniform split: upward ones with centroid
-        // ((i + 1/3)/m, (j + 1/3)/m), downward ones ((i + 2/3)/m, (j + 2/3)/m).
-        for (int up = 0; up < 2; ++up)
-        {
-          const double shift = up == 0 ? 1.0 / 3.0 : 2.0 / 3.0;
-          for (int i = 0; i < m; ++i)
-          {
-            for (int j = 0; i + j <= m - 1 - up; ++j)
-            {
-              const double u = (i + shift) / m, v = (j + shift) / m;
-              const Eigen::Vector3d y = p0 + u * (p1 - p0) + v * (p2 - p0);
-              if ((y - s).norm() <= radius)
-              {
-                footprint.Samples.push_back({ f, { 1.0 - u - v, u, v }, subArea });
-                area += subArea;
-              }
-            }
-          }
-        }
+        AppendFibreSamples(mesh.GetPoint(triangles[3 * f]), mesh.GetPoint(triangles[3 * f + 1]),
+          mesh.GetPoint(triangles[3 * f + 2]), areas[f], f, surface.Position, surface.Normal,
+          radius, footprint.Samples, area);
       }
       if (area > 0.0)
       {
@@ -228,28 +258,6 @@ std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
   material.Validate(mesh.GetNumberOfTets());
   CheckPointArray(mesh, &fluence, "fluence");
   CheckPointArray(mesh, irradiance, "irradiance");
-  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
-  const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
-
-  // Adds the P1 values at barycentric weights w of triangle f, times `weight`,
-  // to the reading.
-  const auto accumulate = [&](int f, const double w[3], double weight, DetectorReading& reading) {
-    const Fresnel::RobinCoefficients robin =
-      Fresnel::BoundaryCoefficients(material.RefractiveIndex[owners[f]], rule);
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      double phi = 0.0, q = 0.0;
-      for (int v = 0; v < 3; ++v)
-      {
-        const std::size_t i = 3 * static_cast<std::size_t>(triangles[3 * f + v]) + c;
-        phi += w[v] * fluence[i];
-        q += irradiance ? w[v] * (*irradiance)[i] : 0.0;
-      }
-      reading.Fluence[c] += weight * phi;
-      reading.Exitance[c] += weight * Exitance(phi, q, robin, rule);
-    }
-  };
-
   std::vector<DetectorReading> readings;
   for (const DetectorFootprint& footprint : LocateDetectors(mesh, detectors))
   {
@@ -257,7 +265,8 @@ std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
     reading.SurfacePosition = footprint.SurfacePosition;
     for (const DetectorFootprint::Sample& sample : footprint.Samples)
     {
-      accumulate(sample.Triangle, sample.Weights, sample.Weight, reading);
+      AccumulateDetectorSample(mesh, material, sample.Triangle, sample.Weights, sample.Weight,
+        fluence, irradiance, rule, reading);
     }
     if (footprint.Area > 0.0)
     {

@@ -93,6 +93,28 @@ struct DetectorFootprint
   std::vector<std::pair<int, double>> GetPointWeights(const TetMesh& mesh) const;
 };
 
+/**
+ * The fibre samples of one boundary triangle (p0, p1, p2; area mm^2, number
+ * f): the triangle is skipped unless it faces the same way as `normal` and
+ * may reach the disc of `radius` (mm, > 0) around `centre`; else it is split
+ * into m^2 sub-triangles no larger than radius / 4 (m <= 64) and each whose
+ * centroid is in the disc is appended to `samples` (weight: its area),
+ * its area added to `area`. LocateDetectors and the distributed read-out
+ * (Parallel/DistributedSources.h) share it.
+ */
+void AppendFibreSamples(const double* p0, const double* p1, const double* p2, double triangleArea,
+  int f, const std::array<double, 3>& centre, const std::array<double, 3>& normal, double radius,
+  std::vector<DetectorFootprint::Sample>& samples, double& area);
+
+/**
+ * Adds `weight` x (the P1 fluence and exitance at barycentric weights w of
+ * boundary triangle f) to `reading` (A and Fdr of the tet under f, `rule`
+ * as in ComputePowerBalance). `irradiance` may be null (q = 0).
+ */
+void AccumulateDetectorSample(const TetMesh& mesh, const OpticalProperties& material, int f,
+  const double w[3], double weight, const std::vector<double>& fluence,
+  const std::vector<double>* irradiance, Fresnel::BoundaryRule rule, DetectorReading& reading);
+
 /// The footprints of the detectors (the checks and errors of ReadDetectors).
 std::vector<DetectorFootprint> LocateDetectors(
   const TetMesh& mesh, const std::vector<Detector>& detectors);
