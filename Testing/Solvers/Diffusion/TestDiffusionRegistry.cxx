@@ -56,7 +56,7 @@ TEST(DiffusionRegistry, OptionTraitsAreWhatEachSolverReads)
     all.Set(name, 1.0); // valid for every option
   }
   EXPECT_EQ(GetDiffusionSolverOptionNames(),
-    (std::vector<std::string>{ "grid-spacing", "multilevel", "photons", "seed" }));
+    (std::vector<std::string>{ "grid-spacing", "multilevel", "photons", "seed", "two-point-flux" }));
   for (const auto& entry : GetDiffusionSolverRegistry().GetEntries())
   {
     SCOPED_TRACE(entry.Name);
@@ -128,6 +128,6 @@ TEST(DiffusionSolverOptions, BadValueIsRefusedNamingIt)
   EXPECT_EQ(
     ErrorMessage([] { CheckDiffusionSolverOptions(SolverOptions{ { "gridspacing", 0.2 } }); }),
     "unknown solver option 'gridspacing' (known options: grid-spacing, multilevel, photons, "
-    "seed)");
+    "seed, two-point-flux)");
   EXPECT_NO_THROW(CheckDiffusionSolverOptions(SolverOptions{ { "Seed", 3 }, { "photons", 9 } }));
 }
