@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstddef>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -71,5 +73,21 @@ inline int JsonNestingDepth(const std::string& text)
 /// input is refused before it is parsed, so that no recursive walk (dumping a
 /// value into a message) can overflow the stack.
 constexpr int MaxJsonNesting = 64;
+
+/// "(x, y, z)" with 6 significant digits, for error messages naming a point (mm).
+inline std::string FormatPoint(const double* x)
+{
+  std::ostringstream out;
+  out.precision(6);
+  out << "(" << x[0] << ", " << x[1] << ", " << x[2] << ")";
+  return out.str();
+}
+
+/// The name of item k (0-based) of a list in messages: its label, or
+/// "<kind> <k + 1>" when the label is empty (e.g. "detector 2").
+inline std::string NameOf(const std::string& label, const char* kind, std::size_t k)
+{
+  return label.empty() ? std::string(kind) + " " + std::to_string(k + 1) : label;
+}
 
 } // namespace translucency

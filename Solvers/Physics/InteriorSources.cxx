@@ -1,6 +1,7 @@
 #include "InteriorSources.h"
 
 #include "Error.h"
+#include "Strings.h"
 #include "Fresnel.h"
 #include "TetLocator.h"
 #include "TetMesh.h"
@@ -17,19 +18,6 @@ namespace translucency
 
 namespace
 {
-
-std::string FormatPoint(const double* x)
-{
-  std::ostringstream out;
-  out.precision(6);
-  out << "(" << x[0] << ", " << x[1] << ", " << x[2] << ")";
-  return out.str();
-}
-
-std::string NameOf(const std::string& label, const char* kind, std::size_t k)
-{
-  return label.empty() ? std::string(kind) + " " + std::to_string(k + 1) : label;
-}
 
 bool AllFinite(const double* x, int n)
 {
