@@ -36,6 +36,29 @@
 
 vtkStandardNewMacro(vtkOutgoingRadiance);
 
+namespace
+{
+/// The display colours of both paths (the CLI's PNG mapping: Map Scalars
+/// off in ParaView): RadianceRGB at the exposure, the exposure as field
+/// data, Radiance the active scalars.
+void AttachDisplayColours(vtkPolyData* output, const std::vector<double>& values, double exposure)
+{
+  const std::vector<unsigned char> bytes = translucency::ToneMap(values, exposure);
+  vtkNew<vtkUnsignedCharArray> rgb;
+  rgb->SetName("RadianceRGB");
+  rgb->SetNumberOfComponents(3);
+  rgb->SetNumberOfTuples(static_cast<vtkIdType>(values.size() / 3));
+  std::copy(bytes.begin(), bytes.end(), rgb->GetPointer(0));
+  vtkTranslucency::SetRGBComponentNames(rgb);
+  output->GetPointData()->AddArray(rgb);
+  vtkNew<vtkDoubleArray> exposureArray;
+  exposureArray->SetName("RadianceExposure");
+  exposureArray->InsertNextValue(exposure);
+  output->GetFieldData()->AddArray(exposureArray);
+  output->GetPointData()->SetActiveScalars(vtkTranslucency::RadianceName);
+}
+}
+
 struct vtkOutgoingRadiance::Internals
 {
   std::shared_ptr<const translucency::TetMesh> Mesh;
@@ -235,19 +258,7 @@ int vtkOutgoingRadiance::RequestData(
   // The display colours (the CLI's PNG mapping): Map Scalars off in ParaView.
   this->ExposureUsed =
     this->Exposure > 0.0 ? this->Exposure : translucency::AutomaticExposure(values);
-  const std::vector<unsigned char> bytes = translucency::ToneMap(values, this->ExposureUsed);
-  vtkNew<vtkUnsignedCharArray> rgb;
-  rgb->SetName("RadianceRGB");
-  rgb->SetNumberOfComponents(3);
-  rgb->SetNumberOfTuples(n);
-  std::copy(bytes.begin(), bytes.end(), rgb->GetPointer(0));
-  vtkTranslucency::SetRGBComponentNames(rgb);
-  output->GetPointData()->AddArray(rgb);
-  vtkNew<vtkDoubleArray> exposureArray;
-  exposureArray->SetName("RadianceExposure");
-  exposureArray->InsertNextValue(this->ExposureUsed);
-  output->GetFieldData()->AddArray(exposureArray);
-  output->GetPointData()->SetActiveScalars(vtkTranslucency::RadianceName);
+  AttachDisplayColours(output, values, this->ExposureUsed);
   radiance->Delete();
   phiOut->Delete();
   qOut->Delete();
@@ -457,19 +468,7 @@ int vtkOutgoingRadiance::RequestPerPiece(
   output->GetPointData()->AddArray(qOut);
   output->GetPointData()->SetNormals(normalsOut);
   output->GetPointData()->AddArray(originalIds);
-  const std::vector<unsigned char> bytes = translucency::ToneMap(surfaceValues, this->ExposureUsed);
-  vtkNew<vtkUnsignedCharArray> rgb;
-  rgb->SetName("RadianceRGB");
-  rgb->SetNumberOfComponents(3);
-  rgb->SetNumberOfTuples(n);
-  std::copy(bytes.begin(), bytes.end(), rgb->GetPointer(0));
-  vtkTranslucency::SetRGBComponentNames(rgb);
-  output->GetPointData()->AddArray(rgb);
-  vtkNew<vtkDoubleArray> exposureArray;
-  exposureArray->SetName("RadianceExposure");
-  exposureArray->InsertNextValue(this->ExposureUsed);
-  output->GetFieldData()->AddArray(exposureArray);
-  output->GetPointData()->SetActiveScalars(vtkTranslucency::RadianceName);
+  AttachDisplayColours(output, surfaceValues, this->ExposureUsed);
   // A point that other ranks hold too has the same values on each; every
   // rank's faces together are the serial surface.
   this->NumberOfSurfaceTriangles = surface.TotalTriangles;
