@@ -89,29 +89,18 @@ GlobalSurfacePoint FindGlobalSurfacePoint(MPI_Comm comm, const DistributedPiece&
   } local{ std::numeric_limits<double>::infinity(), RankOf(comm) }, global{};
   if (piece.HasTets)
   {
-    const TetMesh& mesh = *piece.Mesh;
-    const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
-    const Eigen::Vector3d p(x[0], x[1], x[2]);
-    for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+    // The closest of this piece's physical faces (faces between pieces are
+    // not surface).
+    const SurfacePoint nearest = ClosestBoundaryPoint(
+      *piece.Mesh, x, [&piece](int f) { return IsPhysical(piece, f); });
+    if (nearest.Triangle >= 0)
     {
-      if (!IsPhysical(piece, f))
-        continue;
-      const double* a = mesh.GetPoint(triangles[3 * f]);
-      const double* b = mesh.GetPoint(triangles[3 * f + 1]);
-      const double* c = mesh.GetPoint(triangles[3 * f + 2]);
-      double w[3];
-      const Eigen::Vector3d q = ClosestPointOnTriangle(p, Eigen::Vector3d(a[0], a[1], a[2]),
-        Eigen::Vector3d(b[0], b[1], b[2]), Eigen::Vector3d(c[0], c[1], c[2]), w);
-      const double distance = (q - p).stableNorm();
-      if (distance < local.Distance)
+      local.Distance = nearest.Distance;
+      best.Triangle = nearest.Triangle;
+      for (int i = 0; i < 3; ++i)
       {
-        local.Distance = distance;
-        best.Triangle = f;
-        for (int i = 0; i < 3; ++i)
-        {
-          best.Weights[i] = w[i];
-          best.Position[i] = q[i];
-        }
+        best.Weights[i] = nearest.Weights[i];
+        best.Position[i] = nearest.Position[i];
       }
     }
   }

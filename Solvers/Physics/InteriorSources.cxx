@@ -111,19 +111,19 @@ void Sources::Validate() const
   }
 }
 
-SurfacePoint FindSurfacePoint(const TetMesh& mesh, const double x[3])
+SurfacePoint ClosestBoundaryPoint(
+  const TetMesh& mesh, const double x[3], const std::function<bool(int)>& include)
 {
-  const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
-  if (numTriangles == 0)
-  {
-    throw Error("the mesh has no surface (no boundary triangles)");
-  }
   const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
   const Eigen::Vector3d p(x[0], x[1], x[2]);
   SurfacePoint best;
   best.Distance = std::numeric_limits<double>::infinity();
-  for (int f = 0; f < numTriangles; ++f)
+  for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
   {
+    if (include && !include(f))
+    {
+      continue;
+    }
     const double* a = mesh.GetPoint(triangles[3 * f]);
     const double* b = mesh.GetPoint(triangles[3 * f + 1]);
     const double* c = mesh.GetPoint(triangles[3 * f + 2]);
@@ -144,6 +144,18 @@ SurfacePoint FindSurfacePoint(const TetMesh& mesh, const double x[3])
       }
     }
   }
+  return best;
+}
+
+SurfacePoint FindSurfacePoint(const TetMesh& mesh, const double x[3])
+{
+  const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+  if (numTriangles == 0)
+  {
+    throw Error("the mesh has no surface (no boundary triangles)");
+  }
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  SurfacePoint best = ClosestBoundaryPoint(mesh, x);
   if (best.Triangle < 0 || best.Triangle >= numTriangles)
   {
     std::ostringstream out;

@@ -15,6 +15,7 @@
 #include "OpticalProperties.h"
 
 #include <array>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -127,6 +128,14 @@ struct SurfacePoint
 /// The closest point of the mesh surface to x (brute force over the boundary
 /// triangles: O(triangles) per query). Throws if the mesh has no boundary.
 SurfacePoint FindSurfacePoint(const TetMesh& mesh, const double x[3]);
+
+/// The closest point to x on the boundary triangles `include` accepts (every
+/// one when `include` is empty): Triangle, Weights, Position and Distance
+/// (Normal not set); Triangle -1 when none is at a finite distance. Does not
+/// throw. FindSurfacePoint and the distributed search (physical faces of a
+/// piece) use it.
+SurfacePoint ClosestBoundaryPoint(
+  const TetMesh& mesh, const double x[3], const std::function<bool(int)>& include = {});
 
 /// Where a pencil beam enters (LocatePencilEntry).
 struct PencilEntry
