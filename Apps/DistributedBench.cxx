@@ -23,6 +23,7 @@
 // this approximates the work a rank does, whatever the machine's load).
 
 #include "DiffusionSolverFactory.h"
+#include "Detectors.h"
 #include "DistributedVertexSolver.h"
 #include "Error.h"
 
@@ -188,6 +189,7 @@ struct Result
 {
   std::vector<long long> Ids;
   std::vector<double> Fluence;
+  translucency::PowerBalance Balance; ///< of the last solve, over every rank
 };
 
 /// Times (ms) of every round, per "<label> <phase>" and metric, on rank 0.
@@ -277,6 +279,7 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
         std::fflush(stdout);
       }
     }
+    result.Balance = solver.GetPowerBalance();
   }
   result.Ids = piece.Ids;
   return result;
@@ -422,6 +425,37 @@ int main(int argc, char* argv[])
           }
         std::printf("serial %s (%s, %.0f ms): max relative difference, %d ranks vs serial: %.2e\n",
           solver.c_str(), report.LinearSolver.c_str(), 1000.0 * (MPI_Wtime() - start), size, worst);
+        // The power balance summed over the ranks (physical faces only) vs
+        // the serial ComputePowerBalance of the whole box on the serial
+        // solution: equal up to the solver tolerance (both fluences are
+        // within `tol` of the same system's solution).
+        const translucency::PowerBalance serialBalance =
+          translucency::ComputePowerBalance(mesh, whole.Material, expected, &q);
+        double balanceWorst = 0.0;
+        for (int c = 0; c < 3; ++c)
+        {
+          const double scale = serialBalance.BoundaryInjected[c];
+          balanceWorst = std::max({ balanceWorst,
+            std::abs(all.Balance.BoundaryInjected[c] - serialBalance.BoundaryInjected[c]) / scale,
+            std::abs(all.Balance.Absorbed[c] - serialBalance.Absorbed[c]) / scale,
+            std::abs(all.Balance.Escaped[c] - serialBalance.Escaped[c]) / scale });
+        }
+        double gap = 0.0;
+        for (int c = 0; c < 3; ++c)
+          gap = std::max(gap, std::abs(all.Balance.Absorbed[c] + all.Balance.Escaped[c] -
+                                all.Balance.BoundaryInjected[c]) / all.Balance.BoundaryInjected[c]);
+        std::printf("power balance, %d ranks vs serial (injected, absorbed, escaped; relative to "
+                    "the injected power), max difference: %.2e\n", size, balanceWorst);
+        // fem's Robin terms use each face's own eta, as the balance does: it
+        // closes to the solver tolerance. The divergence's use the
+        // area-weighted eta of the vertex (paper's S_i), so with a varying
+        // eta its gap is a discretisation difference, not an error.
+        if (solver == "fem")
+          std::printf("power balance, %d ranks: absorbed + escaped vs injected, max relative "
+                      "difference: %.2e\n", size, gap);
+        else
+          std::printf("power balance, %d ranks: absorbed + escaped - injected, relative gap "
+                      "%.2e (vertex-averaged boundary eta)\n", size, gap);
         std::fflush(stdout);
       }
       // The other ranks wait without spinning (a busy MPI wait would take a

@@ -1106,9 +1106,15 @@ bool vtkSolveDiffusion::ComputePowerBalance(
   std::string error;
   if (this->Internal->ParallelPath == "distributed")
   {
-    vtkErrorMacro(<< "no power balance under MPI: this rank holds one piece of the object "
-                     "(compute it in a serial run)");
-    return false;
+    // Summed over the ranks inside the collective solve: the whole object's
+    // balance on every rank (DistributedVertexSolver::GetPowerBalance).
+    if (!this->Internal->Distributed.GetPowerBalance(injected, absorbed, escaped))
+    {
+      vtkErrorMacro(<< "no power balance: no distributed solution (update the filter first; a "
+                       "failed solve leaves an empty output)");
+      return false;
+    }
+    return true;
   }
   if (this->ModulationFrequency > 0.0)
   {

@@ -328,7 +328,11 @@ public:
    * photons' own tallies (MonteCarloSolver::GetPowerBalance: launched,
    * absorbed and escaped weight), whose gap is the Russian roulette's
    * zero-mean gain (a statistical error). Computed on demand from the
-   * output (nothing is spent when it is not asked for). Returns false, with
+   * output (nothing is spent when it is not asked for); on the distributed
+   * MPI path (GetParallelPath() "distributed") it is the whole object's
+   * balance, summed over the ranks during the collective solve (physical
+   * faces only), the same on every rank, so calling it on one rank alone
+   * is safe. Returns false, with
    * an error, when there is no steady-state solution (never solved, failed,
    * or frequency domain).
    */

@@ -139,6 +139,24 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   return true;
 }
 
+bool vtkTranslucencyDistributedSolve::GetPowerBalance(
+  double injected[3], double absorbed[3], double escaped[3]) const
+{
+  if (!this->Internal->Solver)
+  {
+    return false;
+  }
+  const translucency::PowerBalance& balance = this->Internal->Solver->GetPowerBalance();
+  const auto& sources = this->Internal->Solver->GetInjectedSourcePower();
+  for (int c = 0; c < 3; ++c)
+  {
+    injected[c] = balance.BoundaryInjected[c] + sources[c];
+    absorbed[c] = balance.Absorbed[c];
+    escaped[c] = balance.Escaped[c];
+  }
+  return true;
+}
+
 #else // no distributed solve in this build
 
 struct vtkTranslucencyDistributedSolve::Impl
@@ -156,6 +174,11 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid*, const std::str
   std::string& error)
 {
   error = "this build has no distributed solve (hypre or VTK's ParallelMPI missing)";
+  return false;
+}
+
+bool vtkTranslucencyDistributedSolve::GetPowerBalance(double*, double*, double*) const
+{
   return false;
 }
 

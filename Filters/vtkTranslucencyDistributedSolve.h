@@ -55,6 +55,15 @@ public:
     std::vector<translucency::DetectorReading>& readings, translucency::SolverReport& report,
     std::string& error);
 
+  /**
+   * The power balance of the last successful Solve over the whole
+   * distributed mesh (W per channel, the same on every rank; computed
+   * collectively inside Solve, so this call communicates nothing):
+   * injected = boundary irradiance of the physical faces + interior
+   * sources. False before a successful Solve.
+   */
+  bool GetPowerBalance(double injected[3], double absorbed[3], double escaped[3]) const;
+
 private:
   struct Impl;
   std::unique_ptr<Impl> Internal;

@@ -334,6 +334,7 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
       }
     }
   }
+  std::array<double, NumberOfChannels> localSourcePower{};
   // Interior sources: their load on the rank owning each source's tet,
   // times 4 as every right-hand side (FiniteElement.h).
   if (Sources_ && !Sources_->Empty())
@@ -341,7 +342,10 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
     const std::vector<double> load =
       ComputeDistributedSourceLoad(Comm_, Piece(material), *Sources_);
     for (std::size_t k = 0; k < load.size(); ++k)
+    {
       localRhs[k] += 4.0 * load[k];
+      localSourcePower[k % 3] += load[k];
+    }
   }
   const std::vector<double> rhs = Numbering_.SumToOwners(Comm_, localRhs, 3);
   localRhs = {};
@@ -471,6 +475,32 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
   Readings_.clear();
   if (!Detectors_.empty())
     Readings_ = ReadDistributedDetectors(Comm_, Piece(material), Detectors_, fluence, &irradiance);
+
+  // 5. The power balance: this rank's tets and physical faces, summed.
+  std::array<double, 4 * NumberOfChannels> sums{};
+  if (numTets > 0)
+  {
+    const PowerBalance local =
+      ComputePowerBalance(Mesh_, material, fluence, &irradiance, Fresnel::BoundaryRule::Fit,
+        &PhysicalFace_);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      sums[c] = local.Absorbed[c];
+      sums[NumberOfChannels + c] = local.Escaped[c];
+      sums[2 * NumberOfChannels + c] = local.BoundaryInjected[c];
+    }
+  }
+  for (int c = 0; c < NumberOfChannels; ++c)
+    sums[3 * NumberOfChannels + c] = localSourcePower[c];
+  MPI_Allreduce(MPI_IN_PLACE, sums.data(), static_cast<int>(sums.size()), MPI_DOUBLE, MPI_SUM,
+    Comm_);
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    Balance_.Absorbed[c] = sums[c];
+    Balance_.Escaped[c] = sums[NumberOfChannels + c];
+    Balance_.BoundaryInjected[c] = sums[2 * NumberOfChannels + c];
+    SourcePower_[c] = sums[3 * NumberOfChannels + c];
+  }
 
   report.SetupMilliseconds = Timings_.Numbering + Timings_.Assembly + Timings_.AMGSetup;
   report.SolveMilliseconds = Timings_.Solve;

@@ -88,6 +88,21 @@ public:
   void SetDetectors(const std::vector<Detector>& detectors) { Detectors_ = detectors; }
   /// The readings of the last Solve (one per detector; empty without detectors).
   const std::vector<DetectorReading>& GetDetectorReadings() const { return Readings_; }
+  /**
+   * The power balance of the last Solve's fluence over the whole distributed
+   * mesh, the same on every rank: each rank's ComputePowerBalance over its
+   * owned tets and its physical boundary faces (a face shared with another
+   * rank's tet is neither escaping nor entering surface), summed over the
+   * ranks (one MPI_Allreduce at the end of Solve). Up to the order of the
+   * sums, the serial ComputePowerBalance of the whole mesh.
+   */
+  const PowerBalance& GetPowerBalance() const { return Balance_; }
+  /// Power the interior sources inject per channel (W; the sum of their
+  /// load over the ranks: Sources::InjectedPower of the whole mesh).
+  const std::array<double, NumberOfChannels>& GetInjectedSourcePower() const
+  {
+    return SourcePower_;
+  }
   /// BoomerAMG settings (default BoomerAMGOptions::Tuned()); a change
   /// rebuilds the hierarchy at the next Solve.
   void SetAMGOptions(const BoomerAMGOptions& options);
@@ -177,6 +192,8 @@ private:
   const Sources* Sources_ = nullptr;
   std::vector<Detector> Detectors_;
   std::vector<DetectorReading> Readings_;
+  PowerBalance Balance_;
+  std::array<double, NumberOfChannels> SourcePower_{};
 };
 
 } // namespace translucency

@@ -45,7 +45,7 @@ double Exitance(double phi, double q, const Fresnel::RobinCoefficients& robin,
 
 PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& material,
   const std::vector<double>& fluence, const std::vector<double>* irradiance,
-  Fresnel::BoundaryRule rule)
+  Fresnel::BoundaryRule rule, const std::vector<char>* boundaryFaces)
 {
   const int numTets = mesh.GetNumberOfTets();
   material.Validate(numTets);
@@ -72,8 +72,17 @@ PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& m
   const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
   const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
   const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
+  if (boundaryFaces &&
+    boundaryFaces->size() != static_cast<std::size_t>(mesh.GetNumberOfBoundaryTriangles()))
+  {
+    throw Error("power balance: " + std::to_string(boundaryFaces->size()) +
+      " boundary face flags for " + std::to_string(mesh.GetNumberOfBoundaryTriangles()) +
+      " boundary triangles");
+  }
   for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
   {
+    if (boundaryFaces && !(*boundaryFaces)[static_cast<std::size_t>(f)])
+      continue;
     const Fresnel::RobinCoefficients robin =
       Fresnel::BoundaryCoefficients(material.RefractiveIndex[owners[f]], rule);
     const double a = robin.A;

@@ -44,7 +44,8 @@ struct PowerBalance
  */
 PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& material,
   const std::vector<double>& fluence, const std::vector<double>* irradiance,
-  Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit);
+  Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit,
+  const std::vector<char>* boundaryFaces = nullptr);
 
 /// A detector on the surface: a point or a fibre face of radius Radius.
 struct Detector

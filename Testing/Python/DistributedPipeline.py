@@ -56,6 +56,15 @@ def path(name):
     return os.path.join(WORK, name)
 
 
+def balance(algorithm):
+    """ComputePowerBalance of a solved vtkSolveDiffusion: injected, absorbed
+    and escaped per channel (9 numbers), or None when it is not available."""
+    injected, absorbed, escaped = [0.0] * 3, [0.0] * 3, [0.0] * 3
+    if not algorithm.ComputePowerBalance(injected, absorbed, escaped):
+        return None
+    return injected + absorbed + escaped
+
+
 def solve(source, light, solver="divergence", distributed=1):
     lit = SurfaceIrradiance(Input=source, DirectionalLights=LIGHTS[light])
     return lit, SolveDiffusion(Input=lit, Solver=solver, RelTol=TOL, MaxIter=20000,
@@ -150,7 +159,7 @@ if MODE == "prepare":
     source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     import json
     import translucency  # noqa: F401  (the getters of the filter)
-    readings = {}
+    readings, balances = {}, {}
     for kind, props in SOURCES.items():
         _, solved = solve(source, "a")
         for key, value in props.items():
@@ -160,12 +169,16 @@ if MODE == "prepare":
         o = solved.GetClientSideObject()
         readings[kind] = [[o.GetDetectorFluence(k, c) for c in range(3)] +
                           [o.GetDetectorExitance(k, c) for c in range(3)] for k in range(2)]
+        balances["src_" + kind] = balance(o)
     with open(path("ref_detectors.json"), "w") as f:
         json.dump(readings, f)
     for light in LIGHTS:
         for solver in ("divergence", "fem"):
             _, solved = solve(source, light, solver)
             SaveData(path("ref_%s_%s.vtu" % (light, solver)), proxy=solved)
+            balances["%s_%s" % (light, solver)] = balance(solved.GetClientSideObject())
+    with open(path("ref_balance.json"), "w") as f:
+        json.dump(balances, f)
     print("prepared", flush=True)
 elif MODE == "run":
     from vtkmodules.vtkParallelCore import vtkMultiProcessController
@@ -182,6 +195,10 @@ elif MODE == "run":
                 case, RANK, o.GetParallelPath(), o.GetLastAssembly() or "-",
                 ",".join(str(o.GetNumberOfIterations(c)) for c in range(3)),
                 ",".join("%.6e" % o.GetFinalResidual(c) for c in range(3))))
+            if o.GetParallelPath() == "distributed":
+                # The whole object's balance, summed over the ranks in the solve.
+                f.write("balance %s rank %d %s\n" % (case, RANK, " ".join(
+                    "%.17g" % v for v in balance(o))))
 
     def case(name, source, light="a", solver="divergence", distributed=1):
         lit, solved = solve(source, light, solver, distributed)
