@@ -3,6 +3,7 @@
 #include "Error.h"
 #include "MaterialFields.h"
 #include "vtkMaterialTableReader.h"
+#include "vtkTranslucencyDistributedIrradiance.h"
 #include "vtkTranslucencyDistributedPieces.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
@@ -99,12 +100,18 @@ std::vector<double> Component0(vtkDataArray* array)
 
 /// The distance (mm) from each centroid to the closest boundary triangle of the mesh.
 bool DepthsBelowSurface(vtkAlgorithm* self, vtkUnstructuredGrid* input,
-  const std::vector<Point3>& centroids, std::vector<double>& depths)
+  const std::vector<Point3>& centroids, vtkPolyData* wholeSurface, std::vector<double>& depths)
 {
+  // The boundary faces of the mesh, or, for a piece of a distributed mesh,
+  // the whole object's (physical) boundary surface.
   vtkNew<vtkGeometryFilter> boundary;
-  boundary->SetInputData(input);
-  boundary->Update();
-  vtkPolyData* surface = boundary->GetOutput();
+  vtkPolyData* surface = wholeSurface;
+  if (!surface)
+  {
+    boundary->SetInputData(input);
+    boundary->Update();
+    surface = boundary->GetOutput();
+  }
   if (surface->GetNumberOfCells() == 0)
   {
     throw translucency::Error("the mesh has no boundary faces: cannot compute depths");
@@ -455,7 +462,7 @@ bool vtkAssignScatteringCoefficients::ComputeMaterials(
   }
   translucency::ValidateLayerThicknesses(this->LayerThicknesses);
   std::vector<double> depths;
-  if (!DepthsBelowSurface(this, input, centroids, depths))
+  if (!DepthsBelowSurface(this, input, centroids, this->WholeSurface, depths))
   {
     return false;
   }
@@ -470,9 +477,12 @@ int vtkAssignScatteringCoefficients::RequestData(
   // Under MPI: the per-tet modes on each rank's own piece (no gather);
   // otherwise gather to rank 0, run this serially there, hand the result back.
   // (Veins: a function of the tet's centroid too. Layers need the depth
-  // below the whole surface, Volume the image around every tet: gathered.)
+  // below the whole surface: it is all-gathered (O(N^(2/3))). Volume needs
+  // the image around every tet: gathered.)
+  // Layers: per piece on the all-gathered physical boundary surface.
   const bool perTet = this->MaterialMode == UNIFORM || this->MaterialMode == MATERIAL_IDS ||
-    this->MaterialMode == SPHERICAL_INCLUSION || this->MaterialMode == VEINS;
+    this->MaterialMode == SPHERICAL_INCLUSION || this->MaterialMode == VEINS ||
+    (this->MaterialMode == LAYERS && vtkTranslucencyDistributedIrradiance::CanGatherSurface());
   if (perTet && !this->Gathering && vtkTranslucencyDistributedPieces::IsAvailable())
   {
     vtkUnstructuredGrid* piece = vtkUnstructuredGrid::GetData(inputVector[0]);
@@ -548,6 +558,19 @@ int vtkAssignScatteringCoefficients::RequestPerPiece(
     vtkErrorMacro(<< "the input mesh is empty (no cells)");
     return 0;
   }
+  // Layers: every rank (an empty piece too) takes part in the surface gather.
+  vtkNew<vtkPolyData> wholeSurface;
+  if (this->MaterialMode == LAYERS)
+  {
+    std::string gatherError;
+    long long triangles = 0;
+    if (!vtkTranslucencyDistributedIrradiance::GatherSurface(
+          input, wholeSurface, triangles, gatherError))
+    {
+      vtkErrorMacro(<< gatherError);
+      return 0;
+    }
+  }
   MaterialField field;
   std::string local;
   bool aborted = false;
@@ -555,7 +578,9 @@ int vtkAssignScatteringCoefficients::RequestPerPiece(
   {
     try
     {
+      this->WholeSurface = this->MaterialMode == LAYERS ? wholeSurface.Get() : nullptr;
       aborted = !this->ComputeMaterials(input, nullptr, field); // Veins may abort
+      this->WholeSurface = nullptr;
       if (!aborted)
       {
         field.Scale(this->ScaleFactor);
@@ -564,6 +589,7 @@ int vtkAssignScatteringCoefficients::RequestPerPiece(
     }
     catch (const std::exception& e)
     {
+      this->WholeSurface = nullptr;
       local = e.what();
     }
   }

@@ -73,6 +73,7 @@
 #include <vector> // for the layers
 
 class vtkImageData;
+class vtkPolyData;
 class vtkUnstructuredGrid;
 namespace translucency
 {
@@ -287,9 +288,10 @@ public:
   ///@}
 
   /// How the last execution ran: "serial" (one process), "per piece" (MPI:
-  /// the uniform, material-id, spherical-inclusion and veins modes on each
-  /// rank's own piece, no gather) or "gathered" (MPI: the other modes, or pieces
-  /// with ghost cells or cell GlobalIds and no vtkOriginalCellIds).
+  /// the uniform, material-id, spherical-inclusion, veins and layers modes on
+  /// each rank's own piece, no mesh gather; layers all-gather the physical
+  /// boundary surface for the depths) or "gathered" (MPI: the volume mode, or
+  /// pieces with ghost cells or cell GlobalIds and no vtkOriginalCellIds).
   const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
 
 protected:
@@ -314,6 +316,9 @@ protected:
     const translucency::MaterialField& field, long long firstId);
   std::string ParallelPath = "serial";
   bool Gathering = false; ///< inside RunGathered (its serial run on rank 0)
+  /// LAYERS per piece: the whole object's boundary surface (all-gathered),
+  /// set during RequestPerPiece only (not owned); null: this input's own.
+  vtkPolyData* WholeSurface = nullptr;
 
   std::string MaterialName = "marble";
   double AbsorptionCoefficient[3] = { 0.0021, 0.0041, 0.0071 };

@@ -12,13 +12,17 @@
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyPieceFaces.h"
 
+#include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
 #include <vtkDataSetAttributes.h>
 #include <vtkMPI.h>
 #include <vtkMPICommunicator.h>
 #include <vtkMultiProcessController.h>
+#include <vtkNew.h>
 #include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
@@ -138,6 +142,65 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
   return true;
 }
 
+bool vtkTranslucencyDistributedIrradiance::CanGatherSurface()
+{
+  return GlobalCommunicator() != nullptr;
+}
+
+bool vtkTranslucencyDistributedIrradiance::GatherSurface(
+  vtkUnstructuredGrid* input, vtkPolyData* surface, long long& triangles, std::string& error)
+{
+  MPI_Comm comm = *GlobalCommunicator();
+  std::string local;
+  vtkTranslucency::PieceFaces faces;
+  try
+  {
+    vtkTranslucency::ExtractPieceFaces(input, faces, false);
+  }
+  catch (const std::exception& e)
+  {
+    local = e.what();
+  }
+  std::vector<translucency::PointKey> keys;
+  const int allIds =
+    vtkTranslucency::MakePointKeys(comm, input, faces.Points, !local.empty(), keys);
+  try
+  {
+    translucency::AgreeOnError(comm, local);
+    translucency::BoundarySurface gathered;
+    std::vector<int> surfacePoint;
+    std::vector<double> rotations;
+    translucency::BoundarySurfaceReport report;
+    translucency::GatherBoundarySurface(comm, faces.Points, keys, allIds != 0, faces.Used,
+      faces.Triangles, faces.TriangleEta, faces.TriangleTets, gathered, surfacePoint, rotations,
+      report);
+    triangles = report.Triangles;
+    vtkNew<vtkPoints> points;
+    points->SetDataTypeToDouble();
+    points->SetNumberOfPoints(static_cast<vtkIdType>(gathered.GetNumberOfPoints()));
+    for (size_t i = 0; i < gathered.GetNumberOfPoints(); ++i)
+    {
+      points->SetPoint(static_cast<vtkIdType>(i), gathered.Points.data() + 3 * i);
+    }
+    vtkNew<vtkCellArray> polys;
+    for (size_t f = 0; f < gathered.GetNumberOfTriangles(); ++f)
+    {
+      const vtkIdType ids[3] = { gathered.Triangles[3 * f], gathered.Triangles[3 * f + 1],
+        gathered.Triangles[3 * f + 2] };
+      polys->InsertNextCell(3, ids);
+    }
+    surface->Initialize();
+    surface->SetPoints(points);
+    surface->SetPolys(polys);
+  }
+  catch (const translucency::Error& e)
+  {
+    error = e.what(); // the same on every rank (AgreeOnError)
+    return false;
+  }
+  return true;
+}
+
 #else // no distributed path in this build
 
 bool vtkTranslucencyDistributedIrradiance::IsAvailable()
@@ -150,6 +213,18 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid*,
   const std::function<bool()>&, std::vector<double>&, Report&, std::string& error)
 {
   error = "this build has no distributed surface irradiance (hypre or VTK's ParallelMPI missing)";
+  return false;
+}
+
+bool vtkTranslucencyDistributedIrradiance::CanGatherSurface()
+{
+  return false;
+}
+
+bool vtkTranslucencyDistributedIrradiance::GatherSurface(
+  vtkUnstructuredGrid*, vtkPolyData*, long long&, std::string& error)
+{
+  error = "this build has no distributed boundary surface (hypre or VTK's ParallelMPI missing)";
   return false;
 }
 

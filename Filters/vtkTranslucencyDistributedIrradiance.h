@@ -32,6 +32,7 @@
 #include <string>
 #include <vector>
 
+class vtkPolyData;
 class vtkUnstructuredGrid;
 
 namespace vtkTranslucencyDistributedIrradiance
@@ -62,6 +63,23 @@ bool Compute(vtkUnstructuredGrid* input, const std::vector<translucency::LightSo
   double uniformIrradiance, int uniformSamples, bool shadows,
   const std::function<bool()>& abort, std::vector<double>& q, Report& report,
   std::string& error);
+
+/**
+ * Collective. The physical boundary surface of the distributed mesh (every
+ * rank's boundary triangles that no other rank's tet shares), the same on
+ * every rank, as triangles in `surface` (outward; the points in global-row
+ * order): the serial mesh's boundary surface, for queries against the whole
+ * object's surface from a rank's own piece (Assign's Layers: the depth of a
+ * centroid). Needs no RefractiveIndex. Available whenever the global
+ * controller is MPI with more than one process (TRANSLUCENCY_GATHERED_IRRADIANCE
+ * does not apply). Returns false with `error` (the same on every rank).
+ */
+bool GatherSurface(vtkUnstructuredGrid* input, vtkPolyData* surface, long long& triangles,
+  std::string& error);
+
+/// True if this build can GatherSurface() (hypre and VTK's ParallelMPI) and
+/// the global controller runs more than one MPI process.
+bool CanGatherSurface();
 }
 
 #endif

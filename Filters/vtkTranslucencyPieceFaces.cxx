@@ -12,7 +12,8 @@
 #include <memory>
 #include <string>
 
-void vtkTranslucency::ExtractPieceFaces(vtkUnstructuredGrid* input, PieceFaces& faces)
+void vtkTranslucency::ExtractPieceFaces(
+  vtkUnstructuredGrid* input, PieceFaces& faces, bool readEta)
 {
   faces = PieceFaces();
   const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
@@ -32,7 +33,11 @@ void vtkTranslucency::ExtractPieceFaces(vtkUnstructuredGrid* input, PieceFaces& 
     return;
   }
   std::vector<double> eta;
-  if (!vtkTranslucency::ReadRefractiveIndex(input, eta, error))
+  if (!readEta)
+  {
+    eta.assign(static_cast<size_t>(numCells), 1.0);
+  }
+  else if (!vtkTranslucency::ReadRefractiveIndex(input, eta, error))
   {
     throw translucency::Error(error);
   }

@@ -34,9 +34,11 @@ struct PieceFaces
  * flagged vtkGhostType DUPLICATECELL left out; the cached topology when the
  * piece has no ghost cells) and their boundary triangles. Throws
  * translucency::Error for a cell that is not a linear tet or a missing
- * RefractiveIndex.
+ * RefractiveIndex. `readEta` false: TriangleEta is 1 (for callers that need
+ * only the geometry, e.g. the depths of Assign's Layers before any
+ * RefractiveIndex exists).
  */
-void ExtractPieceFaces(vtkUnstructuredGrid* input, PieceFaces& faces);
+void ExtractPieceFaces(vtkUnstructuredGrid* input, PieceFaces& faces, bool readEta = true);
 
 /**
  * Collective. The key of every point of `input` (`points`: its

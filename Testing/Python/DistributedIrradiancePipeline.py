@@ -83,8 +83,15 @@ def paint(source, original=None):
                                        StrokeIsPolyline=1, Width=1.5, **extra)
 
 
-def assign(source, veins=False):
-    # A spherical inclusion, or veins (per tet: computed on each piece under MPI).
+def assign(source, veins=False, layers=False):
+    # A spherical inclusion, or veins (per tet: computed on each piece under MPI),
+    # or layers by depth (per piece on the all-gathered boundary surface; the
+    # thicknesses keep the layer boundaries, 1.1 and 3.7 mm deep, away from the
+    # centroids' depths, multiples of 0.25 mm in this box).
+    if layers:
+        return AssignScatteringCoefficients(Input=source, MaterialMode="Layers by Depth",
+                                            Layers=["1.1", "skin1", "2.6", "ketchup",
+                                                    "1", "marble"])
     if veins:
         return AssignScatteringCoefficients(Input=source, MaterialMode=4, VeinFrequency=0.3,
                                             VeinTurbulence=2.0, VeinSeed=3)
@@ -230,6 +237,7 @@ if MODE == "prepare":
     source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     SaveData(path("ref_assign.vtu"), proxy=assign(source))
     SaveData(path("ref_assignveins.vtu"), proxy=assign(source, veins=True))
+    SaveData(path("ref_assignlayers.vtu"), proxy=assign(source, layers=True))
     _, painted = chain(paint(source), "B")
     SaveData(path("ref_paint.vtu"), proxy=painted)
     for kind in ("plane", "sphere"):
@@ -296,8 +304,13 @@ elif MODE == "run":
             FileName=[path("mesh1.pvtu")])), ("assign_pvtu2", XMLPartitionedUnstructuredGridReader(
             FileName=[path("mesh2g.pvtu")])), ("assignveins_pvtu3", pvtu3),
             ("assignveins_redist", RedistributeDataSet(Input=XMLUnstructuredGridReader(
+                FileName=[path("mesh.vtu")]))), ("assignlayers_pvtu3", pvtu3),
+            ("assignlayers_pvtu1", XMLPartitionedUnstructuredGridReader(
+                FileName=[path("mesh1.pvtu")])),
+            ("assignlayers_redist", RedistributeDataSet(Input=XMLUnstructuredGridReader(
                 FileName=[path("mesh.vtu")])))):
-        assigned = assign(source, veins=name.startswith("assignveins"))
+        assigned = assign(source, veins=name.startswith("assignveins"),
+                          layers=name.startswith("assignlayers"))
         assigned.UpdatePipeline()
         with open(path("irr_%d.txt" % RANK), "a") as f:
             f.write("assign %s rank %d path %s\n" % (

@@ -216,7 +216,7 @@ class DistributedIrradianceTest(unittest.TestCase):
                 (vtk_to_numpy(ghosts) & 1) == 0
             return keys, values, vtk_to_numpy(data.GetArray("vtkOriginalCellIds")), owned
         refs = {}
-        for name in ("assign", "assignveins"):
+        for name in ("assign", "assignveins", "assignlayers"):
             reader = vtkXMLUnstructuredGridReader()
             reader.SetFileName(os.path.join(self.work, "ref_%s.vtu" % name))
             reader.Update()
@@ -225,7 +225,10 @@ class DistributedIrradianceTest(unittest.TestCase):
             self.assertGreater(len({tuple(v) for v in values}), 1, "two materials or more")
         for case, expected in (("assign_pvtu3", "per-piece"), ("assign_pvtu1", "per-piece"),
                                ("assign_pvtu2", "gathered"), ("assignveins_pvtu3", "per-piece"),
-                               ("assignveins_redist", "per-piece")):
+                               ("assignveins_redist", "per-piece"),
+                               ("assignlayers_pvtu3", "per-piece"),
+                               ("assignlayers_pvtu1", "per-piece"),
+                               ("assignlayers_redist", "per-piece")):
             ref = refs[case.split("_")[0]]
             paths = self.assign_paths.get(case, {})
             self.assertEqual(sorted(paths), list(range(RANKS)), case)
