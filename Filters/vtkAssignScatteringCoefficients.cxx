@@ -9,6 +9,7 @@
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkTranslucencyParallel.h"
 
+#include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
 #include <vtkDoubleArray.h>
@@ -22,6 +23,7 @@
 #include <vtkNew.h>
 #include <vtkObjectFactory.h>
 #include <vtkPerlinNoise.h>
+#include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkStaticCellLocator.h>
 #include <vtkUnstructuredGrid.h>
@@ -563,13 +565,28 @@ int vtkAssignScatteringCoefficients::RequestPerPiece(
   if (this->MaterialMode == LAYERS)
   {
     std::string gatherError;
-    long long triangles = 0;
-    if (!vtkTranslucencyDistributedIrradiance::GatherSurface(
-          input, wholeSurface, triangles, gatherError))
+    translucency::BoundarySurface gathered;
+    if (!vtkTranslucencyDistributedIrradiance::GatherSurface(input, gathered, gatherError))
     {
       vtkErrorMacro(<< gatherError);
       return 0;
     }
+    vtkNew<vtkPoints> points;
+    points->SetDataTypeToDouble();
+    points->SetNumberOfPoints(static_cast<vtkIdType>(gathered.GetNumberOfPoints()));
+    for (size_t i = 0; i < gathered.GetNumberOfPoints(); ++i)
+    {
+      points->SetPoint(static_cast<vtkIdType>(i), gathered.Points.data() + 3 * i);
+    }
+    vtkNew<vtkCellArray> polys;
+    for (size_t f = 0; f < gathered.GetNumberOfTriangles(); ++f)
+    {
+      const vtkIdType ids[3] = { gathered.Triangles[3 * f], gathered.Triangles[3 * f + 1],
+        gathered.Triangles[3 * f + 2] };
+      polys->InsertNextCell(3, ids);
+    }
+    wholeSurface->SetPoints(points);
+    wholeSurface->SetPolys(polys);
   }
   MaterialField field;
   std::string local;

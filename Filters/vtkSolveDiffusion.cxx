@@ -12,6 +12,7 @@
 #include "TetMesh.h"
 #include "Timer.h"
 #include "VertexDiffusionSolver.h"
+#include "vtkTranslucencyDistributedIrradiance.h"
 #include "vtkTranslucencyDistributedSolve.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
@@ -545,8 +546,7 @@ int vtkSolveDiffusion::RequestData(
   // result back.
   const bool vertexSolver =
     this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
-  if (this->DistributedSolve && vertexSolver && !this->InteractivePencilBeam &&
-    this->ModulationFrequency == 0.0 &&
+  if (this->DistributedSolve && vertexSolver && this->ModulationFrequency == 0.0 &&
     this->TimeGatesCount == 0 && !ExtendedCollimatedModel(inputVector[0]) &&
     vtkTranslucencyDistributedSolve::IsAllowedByEnvironment() &&
     vtkTranslucencyDistributedSolve::IsAvailable())
@@ -1210,9 +1210,9 @@ int vtkSolveDiffusion::RequestDistributed(
   in.ReadingErrors.clear();
   in.GateErrors.clear();
   in.TimeResolved = translucency::TimeResolvedResult();
-  // The listed sources and the interactive point source (the interactive
-  // pencil beam, aimed by a ray cast over the whole surface, is gathered).
+  // The listed sources and the interactive ones.
   in.SolvedSources = in.Sources;
+  std::fill(this->InteractivePencilBeamEntry, this->InteractivePencilBeamEntry + 3, 0.0);
   if (this->InteractivePointSource)
   {
     translucency::PointSource source;
@@ -1220,6 +1220,36 @@ int vtkSolveDiffusion::RequestDistributed(
     std::copy_n(this->InteractivePointSourcePower, 3, source.Power.begin());
     source.Label = "interactive point source";
     in.SolvedSources.AddPointSource(source);
+  }
+  if (this->InteractivePencilBeam)
+  {
+    // Aimed by a ray cast over the whole object's surface: the physical
+    // boundary all-gathered (every rank casts the same ray on the same
+    // triangles, so every rank finds the same entry, or the same error).
+    std::string error;
+    translucency::BoundarySurface surface;
+    if (!vtkTranslucencyDistributedIrradiance::GatherSurface(input, surface, error))
+    {
+      vtkErrorMacro(<< error);
+      return 0;
+    }
+    try
+    {
+      std::array<double, 3> point1, point2, power;
+      std::copy_n(this->InteractivePencilBeamPoint1, 3, point1.begin());
+      std::copy_n(this->InteractivePencilBeamPoint2, 3, point2.begin());
+      std::copy_n(this->InteractivePencilBeamPower, 3, power.begin());
+      const translucency::PencilBeam beam = translucency::AimPencilBeam(surface.Points,
+        surface.Triangles, translucency::SurfaceTolerance(surface.Points, surface.Triangles),
+        point1, point2, power, "interactive pencil beam");
+      in.SolvedSources.AddPencilBeam(beam);
+      std::copy_n(beam.Position.begin(), 3, this->InteractivePencilBeamEntry);
+    }
+    catch (const translucency::Error& e)
+    {
+      vtkErrorMacro(<< e.what());
+      return 0;
+    }
   }
   std::vector<double> fluence;
   std::string error;

@@ -301,7 +301,8 @@ public:
   vtkSetVector3Macro(InteractivePencilBeamPower, double);
   vtkGetVector3Macro(InteractivePencilBeamPower, double);
   /// The entry point (mm) of the interactive pencil beam in the last
-  /// execution; (0, 0, 0) when it was off or failed.
+  /// execution; (0, 0, 0) when it was off or failed. Under MPI: on every
+  /// rank with the distributed solve, on rank 0 with the gathered one.
   vtkGetVector3Macro(InteractivePencilBeamEntry, double);
   ///@}
 
@@ -371,9 +372,9 @@ public:
   /// BoomerAMG-PCG system (Documentation/Parallel.md), instead of gathering
   /// the mesh to rank 0. Default on. Off (or the environment variable
   /// TRANSLUCENCY_GATHERED_SOLVE=1) gathers, as do a modulation frequency,
-  /// time gates, the interactive pencil beam, the extended collimated
-  /// models, the other solvers and builds without hypre (point sources,
-  /// listed pencil beams and detectors are distributed). The distributed path always uses hypre's BoomerAMG-PCG
+  /// time gates, the extended collimated models, the other solvers and
+  /// builds without hypre (point sources, listed and interactive pencil
+  /// beams and detectors are distributed). The distributed path always uses hypre's BoomerAMG-PCG
   /// (LinearSolver, IncrementalAssembly and NumberOfThreads' effect on the
   /// solve do not apply).
   vtkSetMacro(DistributedSolve, bool);

@@ -12,17 +12,13 @@
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyPieceFaces.h"
 
-#include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
 #include <vtkDataSetAttributes.h>
 #include <vtkMPI.h>
 #include <vtkMPICommunicator.h>
 #include <vtkMultiProcessController.h>
-#include <vtkNew.h>
 #include <vtkPointData.h>
-#include <vtkPoints.h>
-#include <vtkPolyData.h>
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
@@ -148,14 +144,15 @@ bool vtkTranslucencyDistributedIrradiance::CanGatherSurface()
 }
 
 bool vtkTranslucencyDistributedIrradiance::GatherSurface(
-  vtkUnstructuredGrid* input, vtkPolyData* surface, long long& triangles, std::string& error)
+  vtkUnstructuredGrid* input, translucency::BoundarySurface& surface, std::string& error)
 {
   MPI_Comm comm = *GlobalCommunicator();
   std::string local;
   vtkTranslucency::PieceFaces faces;
+  const bool eta = input && input->GetCellData()->GetArray(vtkTranslucency::RefractiveIndexName);
   try
   {
-    vtkTranslucency::ExtractPieceFaces(input, faces, false);
+    vtkTranslucency::ExtractPieceFaces(input, faces, eta);
   }
   catch (const std::exception& e)
   {
@@ -167,31 +164,12 @@ bool vtkTranslucencyDistributedIrradiance::GatherSurface(
   try
   {
     translucency::AgreeOnError(comm, local);
-    translucency::BoundarySurface gathered;
     std::vector<int> surfacePoint;
     std::vector<double> rotations;
     translucency::BoundarySurfaceReport report;
     translucency::GatherBoundarySurface(comm, faces.Points, keys, allIds != 0, faces.Used,
-      faces.Triangles, faces.TriangleEta, faces.TriangleTets, gathered, surfacePoint, rotations,
+      faces.Triangles, faces.TriangleEta, faces.TriangleTets, surface, surfacePoint, rotations,
       report);
-    triangles = report.Triangles;
-    vtkNew<vtkPoints> points;
-    points->SetDataTypeToDouble();
-    points->SetNumberOfPoints(static_cast<vtkIdType>(gathered.GetNumberOfPoints()));
-    for (size_t i = 0; i < gathered.GetNumberOfPoints(); ++i)
-    {
-      points->SetPoint(static_cast<vtkIdType>(i), gathered.Points.data() + 3 * i);
-    }
-    vtkNew<vtkCellArray> polys;
-    for (size_t f = 0; f < gathered.GetNumberOfTriangles(); ++f)
-    {
-      const vtkIdType ids[3] = { gathered.Triangles[3 * f], gathered.Triangles[3 * f + 1],
-        gathered.Triangles[3 * f + 2] };
-      polys->InsertNextCell(3, ids);
-    }
-    surface->Initialize();
-    surface->SetPoints(points);
-    surface->SetPolys(polys);
   }
   catch (const translucency::Error& e)
   {
@@ -222,7 +200,7 @@ bool vtkTranslucencyDistributedIrradiance::CanGatherSurface()
 }
 
 bool vtkTranslucencyDistributedIrradiance::GatherSurface(
-  vtkUnstructuredGrid*, vtkPolyData*, long long&, std::string& error)
+  vtkUnstructuredGrid*, translucency::BoundarySurface&, std::string& error)
 {
   error = "this build has no distributed boundary surface (hypre or VTK's ParallelMPI missing)";
   return false;

@@ -27,12 +27,12 @@
 #define vtkTranslucencyDistributedIrradiance_h
 
 #include "LightSources.h" // for translucency::LightSource
+#include "SurfaceLightKernel.h" // for translucency::BoundarySurface
 
 #include <functional>
 #include <string>
 #include <vector>
 
-class vtkPolyData;
 class vtkUnstructuredGrid;
 
 namespace vtkTranslucencyDistributedIrradiance
@@ -70,11 +70,12 @@ bool Compute(vtkUnstructuredGrid* input, const std::vector<translucency::LightSo
  * every rank, as triangles in `surface` (outward; the points in global-row
  * order): the serial mesh's boundary surface, for queries against the whole
  * object's surface from a rank's own piece (Assign's Layers: the depth of a
- * centroid). Needs no RefractiveIndex. Available whenever the global
+ * centroid; the interactive pencil beam's ray cast). Needs no RefractiveIndex
+ * (surface.TriangleEta is then 1 where the input has none). Available whenever the global
  * controller is MPI with more than one process (TRANSLUCENCY_GATHERED_IRRADIANCE
  * does not apply). Returns false with `error` (the same on every rank).
  */
-bool GatherSurface(vtkUnstructuredGrid* input, vtkPolyData* surface, long long& triangles,
+bool GatherSurface(vtkUnstructuredGrid* input, translucency::BoundarySurface& surface,
   std::string& error);
 
 /// True if this build can GatherSurface() (hypre and VTK's ParallelMPI) and

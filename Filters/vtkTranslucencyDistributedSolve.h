@@ -7,7 +7,8 @@
  *
  * Used for the divergence and fem solvers in continuous wave (point
  * sources, listed pencil beams and detectors included; no modulation, time
- * gates, interactive pencil beam or extended collimated model), whenever the global controller is an MPI
+ * gates or extended collimated model; the interactive pencil beam is aimed by
+ * vtkSolveDiffusion on the all-gathered surface and arrives as a listed beam), whenever the global controller is an MPI
  * controller with more than one process (every rank takes part, a rank
  * with an empty piece too), unless vtkSolveDiffusion's DistributedSolve is
  * off or the environment variable TRANSLUCENCY_GATHERED_SOLVE is set to a

@@ -25,6 +25,14 @@ PencilBeam AimPencilBeam(const TetMesh& mesh, const std::array<double, 3>& start
   const std::array<double, 3>& towards, const std::array<double, NumberOfChannels>& power,
   const std::string& label)
 {
+  return AimPencilBeam(mesh.GetPoints(), mesh.GetBoundaryTriangles(), SurfaceTolerance(mesh),
+    start, towards, power, label);
+}
+
+PencilBeam AimPencilBeam(const std::vector<double>& points, const std::vector<int>& triangles,
+  double tolerance, const std::array<double, 3>& start, const std::array<double, 3>& towards,
+  const std::array<double, NumberOfChannels>& power, const std::string& label)
+{
   const std::string where =
     label + ": from Point 1 " + Format(start) + " towards Point 2 " + Format(towards);
   double direction[3];
@@ -49,9 +57,9 @@ PencilBeam AimPencilBeam(const TetMesh& mesh, const std::array<double, 3>& start
   // (ParaView places it on the data bounds: the face of a box) or within the
   // surface tolerance of it is its own entry point.
   const double length = std::sqrt(length2);
-  const double backOff = SurfaceTolerance(mesh);
+  const double backOff = tolerance;
   RayCaster caster;
-  caster.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
+  caster.Build(points, triangles);
   double t = 0.0;
   int triangle = -1;
   double origin[3];
@@ -66,10 +74,10 @@ PencilBeam AimPencilBeam(const TetMesh& mesh, const std::array<double, 3>& start
   }
   // Outward normal (p1 - p0) x (p2 - p0) of the hit triangle: an entering
   // beam travels against it.
-  const int* ids = &mesh.GetBoundaryTriangles()[3 * static_cast<std::size_t>(triangle)];
-  const double* p0 = mesh.GetPoint(ids[0]);
-  const double* p1 = mesh.GetPoint(ids[1]);
-  const double* p2 = mesh.GetPoint(ids[2]);
+  const int* ids = &triangles[3 * static_cast<std::size_t>(triangle)];
+  const double* p0 = &points[3 * static_cast<std::size_t>(ids[0])];
+  const double* p1 = &points[3 * static_cast<std::size_t>(ids[1])];
+  const double* p2 = &points[3 * static_cast<std::size_t>(ids[2])];
   const double e1[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
   const double e2[3] = { p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2] };
   const double normal[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <string>
+#include <vector>
 
 namespace translucency
 {
@@ -34,5 +35,15 @@ class TetMesh;
 PencilBeam AimPencilBeam(const TetMesh& mesh, const std::array<double, 3>& start,
   const std::array<double, 3>& towards, const std::array<double, NumberOfChannels>& power,
   const std::string& label);
+
+/**
+ * The same, on a boundary surface given by its triangles (`points`: 3
+ * coordinates each, mm; `triangles`: 3 point ids each, outward), e.g. the
+ * physical boundary all-gathered from a distributed mesh; `tolerance` takes
+ * the place of SurfaceTolerance(mesh) (SurfaceTolerance of the triangles).
+ */
+PencilBeam AimPencilBeam(const std::vector<double>& points, const std::vector<int>& triangles,
+  double tolerance, const std::array<double, 3>& start, const std::array<double, 3>& towards,
+  const std::array<double, NumberOfChannels>& power, const std::string& label);
 
 } // namespace translucency

@@ -175,22 +175,26 @@ SurfacePoint FindSurfacePoint(const TetMesh& mesh, const double x[3])
   return best;
 }
 
-double SurfaceTolerance(const TetMesh& mesh)
+double SurfaceTolerance(const std::vector<double>& points, const std::vector<int>& triangles)
 {
-  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
-  const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+  const std::size_t numTriangles = triangles.size() / 3;
   double sum = 0.0;
-  for (int f = 0; f < numTriangles; ++f)
+  for (std::size_t f = 0; f < numTriangles; ++f)
   {
     for (int e = 0; e < 3; ++e)
     {
-      const double* a = mesh.GetPoint(triangles[3 * f + e]);
-      const double* b = mesh.GetPoint(triangles[3 * f + (e + 1) % 3]);
+      const double* a = &points[3 * static_cast<std::size_t>(triangles[3 * f + e])];
+      const double* b = &points[3 * static_cast<std::size_t>(triangles[3 * f + (e + 1) % 3])];
       sum += std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
         (a[2] - b[2]) * (a[2] - b[2]));
     }
   }
-  return numTriangles > 0 ? 0.5 * sum / (3.0 * numTriangles) : 0.0;
+  return numTriangles > 0 ? 0.5 * sum / (3.0 * static_cast<double>(numTriangles)) : 0.0;
+}
+
+double SurfaceTolerance(const TetMesh& mesh)
+{
+  return SurfaceTolerance(mesh.GetPoints(), mesh.GetBoundaryTriangles());
 }
 
 PencilEntry LocatePencilEntry(const TetMesh& mesh, const OpticalProperties& material,

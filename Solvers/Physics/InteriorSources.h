@@ -164,5 +164,8 @@ PencilEntry LocatePencilEntry(const TetMesh& mesh, const OpticalProperties& mate
  * point inside the object more than half an edge deep does not.
  */
 double SurfaceTolerance(const TetMesh& mesh);
+/// The same for a surface given by its triangles (`points`: 3 coordinates
+/// each; `triangles`: 3 point ids each), e.g. a gathered physical boundary.
+double SurfaceTolerance(const std::vector<double>& points, const std::vector<int>& triangles);
 
 } // namespace translucency

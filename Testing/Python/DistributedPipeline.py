@@ -21,7 +21,8 @@ DataSet), fem (fem solver on pvtu3), relight (pvtu3 relit: hierarchy kept),
 warm (the relit system again: warm start), gathered (pvtu3 with DistributedSolve off, the gathered path in
 the same run), an invalid mu_a on rank 1 only (the same error on every rank),
 after_error (a solve after it); src_point (a point source on mesh2g, 3
-ranks: an empty piece) and src_pencil (a pencil beam on mesh3id), each with
+ranks: an empty piece), src_pencil (a pencil beam on mesh3id) and src_aimed
+(the interactive pencil beam, aimed by the line widget's points, on mesh3id), each with
 a point and a fibre detector (readings per rank in detectors_<rank>.txt;
 serial references ref_<kind>_divergence.vtu and ref_detectors.json); a
 point source outside the object (its errors, caught by observers, in
@@ -48,7 +49,12 @@ def on_sphere(x, y, z):
 # beam entering inside a surface triangle, a point detector and a 1.5 mm fibre.
 ENTRY = on_sphere(0.3, 0.2, 0.93)
 SOURCES = {"point": {"PointSources": [0.5, -0.7, 1.1, 1.0, 2.0, 0.5]},
-           "pencil": {"PencilBeams": ENTRY + [-v for v in ENTRY] + [1.0, 1.0, 2.0]}}
+           "pencil": {"PencilBeams": ENTRY + [-v for v in ENTRY] + [1.0, 1.0, 2.0]},
+           # The interactive pencil beam (the line widget's two points): aimed
+           # by a ray cast over the whole (all-gathered) surface.
+           "aimed": {"InteractivePencilBeam": 1, "InteractivePencilBeamPoint1": [0.6, 0.4, 9.0],
+                     "InteractivePencilBeamPoint2": [0.5, 0.5, 0.0],
+                     "InteractivePencilBeamPower": [1.0, 2.0, 1.5]}}
 DETECTORS = on_sphere(-0.5, 0.3, 0.8) + [0.0] + on_sphere(0.6, -0.6, -0.5) + [1.5]
 
 
@@ -242,7 +248,7 @@ if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
     # 2-piece .pvtu (3 ranks: one empty piece), a pencil beam on the 3-piece
     # one; each rank writes its detector readings.
     for kind, reader in (("point", XMLPartitionedUnstructuredGridReader(
-            FileName=[path("mesh2g.pvtu")])), ("pencil", pvtu3)):
+            FileName=[path("mesh2g.pvtu")])), ("pencil", pvtu3), ("aimed", pvtu3)):
         _, solved = solve(reader, "a")
         for key, value in SOURCES[kind].items():
             setattr(solved, key, value)

@@ -47,7 +47,8 @@ CASES = {"pvtu3": "ref_a_divergence", "relight": "ref_b_divergence",
          "pvtu2": "ref_a_divergence", "redist": "ref_a_divergence", "fem": "ref_a_fem",
          "gathered": "ref_a_divergence"}
 # Interior sources and detectors: case -> (reference, pieces written).
-SOURCE_CASES = {"src_point": "ref_point_divergence", "src_pencil": "ref_pencil_divergence"}
+SOURCE_CASES = {"src_point": "ref_point_divergence", "src_pencil": "ref_pencil_divergence",
+                "src_aimed": "ref_aimed_divergence"}
 
 
 def pieces_of(name):
@@ -226,7 +227,7 @@ class DistributedSolveTest(unittest.TestCase):
                     float(v) for v in m.group(3).split()]
         cases = {"pvtu3": "a_divergence", "pvtu2": "a_divergence", "redist": "a_divergence",
                  "fem": "a_fem", "relight": "b_divergence", "src_point": "src_point",
-                 "src_pencil": "src_pencil"}
+                 "src_pencil": "src_pencil", "src_aimed": "src_aimed"}
         for case, ref_name in cases.items():
             expected = np.array(refs[ref_name], dtype=float)
             per_rank = balances.get(case, {})
