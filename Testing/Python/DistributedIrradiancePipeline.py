@@ -15,7 +15,10 @@ for two lightings, shadows on:
   A: a point light beside the well and a uniform light with 16 occlusion
      samples per point (the samples follow the point's index / global id),
   B: a directional and a point light and the exact uniform light (0 samples);
-and boundary.txt, the number of boundary triangles.
+and boundary.txt, the number of boundary triangles; the serial cuts
+ref_cut<kind>.vtu (lit with B and solved; kind: plane, sphere without
+relaxation, relax, stroke with it, relax1 the relax cut of mesh1.pvtu) and
+their statistics (cutstats.txt).
 
 run (every rank): for each case reader -> Surface Irradiance -> Solve
 Diffusion, saved as <case>.pvtu, and per rank one line in irr_<rank>.txt:
@@ -25,7 +28,10 @@ after_error_B (a run after it), then Assign Scattering Coefficients (a spherical
 1-piece and ghost-cell .pvtu (assign_<case>.pvtu; the serial ref_assign.vtu),
 veins on the 3-piece .pvtu and Redistribute DataSet (assignveins_<case>.pvtu;
 ref_assignveins.vtu),
-with a line "assign <case> rank <r> path <path>", and Paint Scattering
+with a line "assign <case> rank <r> path <path>", Stroke Cut (cut_<case>.pvtu,
+lines "cut <case> rank <r> path <path> in <cells> out <cells>" and "cutstats
+<case> rank <r> movable .. moved .. blocked .. front <tets> <points> bytes .."),
+and Paint Scattering
 Coefficients per piece (paint_<case>.pvtu; the serial ref_paint.vtu, painted
 then lit with B and solved), with a line "paint <case> rank <r> path <path>";
 Outgoing Radiance of pvtu3_B, pvtu2_B, redist_B and pvtu1_B per piece and of

@@ -25,12 +25,16 @@ mesh with GlobalIds (A) and without (B: coordinate keys), a .pvtu in 2 pieces
 with a ghost level (B; 3 ranks: one rank with an empty piece), a .pvtu of
 one piece (B: empty pieces on the other ranks), and the gathered path
 (TRANSLUCENCY_GATHERED_IRRADIANCE=1) on the 3 pieces (A).
-Stroke Cut per piece (implicit cutters, relaxation off) then the distributed
-chain (B): a plane cut removing all of piece 0 (one rank loses all its tets)
-and a sphere cut of the 3 pieces, a plane cut of the one-piece .pvtu (empty
-pieces), and the plane cut gathered (TRANSLUCENCY_GATHERED_CUT=1): the cut
-mesh's points (ids, coordinates) and tets (as id quadruples) equal the serial
-cut's, Fluence the serial one to 1e-6.
+Stroke Cut per piece then the distributed chain (B). Relaxation off: a plane
+cut removing all of piece 0 (one rank loses all its tets) and a sphere cut of
+the 3 pieces, a plane cut of the one-piece .pvtu (empty pieces), and the plane
+cut gathered (TRANSLUCENCY_GATHERED_CUT=1). Relaxation on (the cut front
+all-gathered): a tilted plane across the 3 slabs (ids), the same on the
+one-piece .pvtu (coordinate keys, empty pieces elsewhere) and a stroke on the 3
+pieces. The cut mesh's points (ids, exact coordinates: relaxed bit for bit)
+and tets (as id quadruples) equal the serial cut's, Fluence the serial one to
+1e-6; with the relaxation every rank reports the serial movable, moved and
+blocked counts and the same front.
 """
 
 import os
