@@ -7,6 +7,7 @@
 #include "Timer.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
+#include "vtkTranslucencyDistributedCut.h"
 #include "vtkTranslucencyDistributedPieces.h"
 #include "vtkTranslucencyParallel.h"
 
@@ -28,6 +29,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -90,25 +92,72 @@ bool vtkStrokeCut::UseGatheredPath()
 }
 
 //------------------------------------------------------------------------------
+struct vtkStrokeCut::PieceCut
+{
+  std::shared_ptr<const translucency::TetMesh> Mesh;
+  translucency::StrokeSurface Surface;
+  translucency::TetCut::SideFunction Side; ///< F > 0 on the removed side
+  std::vector<double> Values;              ///< F at the mesh points
+  translucency::TetCut Cut;
+  std::vector<double> Positions; ///< the kept points' coordinates (3 each, mm)
+};
+
+//------------------------------------------------------------------------------
+std::vector<double> vtkStrokeCut::StrokePoints(vtkPolyData* stroke)
+{
+  // The first line of the stroke, or its points in order.
+  std::vector<double> strokePoints;
+  if (!stroke)
+  {
+    return strokePoints;
+  }
+  vtkCellArray* lines = stroke->GetLines();
+  vtkIdType count = 0;
+  const vtkIdType* ids = nullptr;
+  if (lines && lines->GetNumberOfCells() > 0)
+  {
+    lines->GetCellAtId(0, count, ids);
+  }
+  else
+  {
+    count = stroke->GetNumberOfPoints();
+  }
+  for (vtkIdType k = 0; k < count; ++k)
+  {
+    double p[3];
+    stroke->GetPoint(ids ? ids[k] : k, p);
+    strokePoints.insert(strokePoints.end(), p, p + 3);
+  }
+  return strokePoints;
+}
+
+//------------------------------------------------------------------------------
 int vtkStrokeCut::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   vtkPolyData* stroke = inputVector[1]->GetNumberOfInformationObjects() > 0
     ? vtkPolyData::GetData(inputVector[1], 0)
     : nullptr;
-  // Under MPI: an implicit cutter without relaxation on each rank's own piece
-  // (a tet is kept or removed by its own vertices; nothing moves); otherwise
-  // gather to rank 0, run this serially there, hand the result back.
+  this->NumberOfFrontTets = this->NumberOfFrontPoints = this->FrontBytes = 0;
+  // Under MPI: each rank cuts its own piece (a tet is kept or removed by its
+  // own vertices; the relaxation runs on the all-gathered cut front, as in
+  // serial); with TRANSLUCENCY_GATHERED_CUT=1, or a stroke split over the
+  // ranks, gather to rank 0, run this serially there, hand the result back.
   if (!this->Gathering && vtkTranslucencyDistributedPieces::IsAvailable())
   {
-    const bool relaxes = this->NumberOfRelaxationIterations > 0 && this->RelaxationFactor > 0.0;
-    // Every rank decides alike (a stroke or the variable on any rank gathers).
-    const bool gather = vtkTranslucencyDistributedPieces::Any(
-      stroke != nullptr || !this->CutFunction || relaxes || UseGatheredPath());
+    // Every rank decides alike (the variable on any rank gathers).
+    bool gather = vtkTranslucencyDistributedPieces::Any(UseGatheredPath());
+    const bool useStroke = vtkTranslucencyDistributedPieces::Any(stroke != nullptr);
+    std::vector<double> strokePoints;
+    if (!gather && useStroke)
+    {
+      // The same stroke on every rank (a source gives it to rank 0 or to all).
+      gather = !vtkTranslucencyDistributedCut::ShareStroke(StrokePoints(stroke), strokePoints);
+    }
     if (!gather)
     {
       this->ParallelPath = "per piece";
-      return this->RequestPerPiece(inputVector, outputVector);
+      return this->RequestPerPiece(inputVector, outputVector, useStroke ? &strokePoints : nullptr);
     }
   }
   this->ParallelPath = "serial";
@@ -129,7 +178,8 @@ int vtkStrokeCut::RequestData(
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   std::string error;
-  const int status = this->CutPiece(input, stroke, output, error);
+  const std::vector<double> strokePoints = StrokePoints(stroke);
+  const int status = this->CutPiece(input, stroke ? &strokePoints : nullptr, output, error);
   if (status != 1)
   {
     if (status == 0)
@@ -146,8 +196,8 @@ int vtkStrokeCut::RequestData(
 }
 
 //------------------------------------------------------------------------------
-int vtkStrokeCut::RequestPerPiece(
-  vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+int vtkStrokeCut::RequestPerPiece(vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector, const std::vector<double>* strokePoints)
 {
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
@@ -155,6 +205,7 @@ int vtkStrokeCut::RequestPerPiece(
   this->NumberOfMovableVertices = this->NumberOfMovedVertices = 0;
   this->NumberOfBlockedVertices = 0;
   this->CutTime = 0.0;
+  const translucency::Timer timer;
   const long long cells = input ? input->GetNumberOfCells() : 0;
   // Every rank takes part in every collective below, an empty piece too.
   if (vtkTranslucencyDistributedPieces::Sum(cells) == 0)
@@ -162,11 +213,61 @@ int vtkStrokeCut::RequestPerPiece(
     vtkErrorMacro(<< "input is not a tet mesh: the input mesh is empty (no points or no cells)");
     return 0;
   }
+  const bool relaxes = this->NumberOfRelaxationIterations > 0 && this->RelaxationFactor > 0.0;
   std::string local;
   int status = 1;
-  if (cells > 0)
+  if (!relaxes)
   {
-    status = this->CutPiece(input, nullptr, output, local);
+    // Nothing moves: each piece is cut on its own.
+    if (cells > 0)
+    {
+      status = this->CutPiece(input, strokePoints, output, local);
+    }
+  }
+  else
+  {
+    PieceCut piece;
+    // Every rank sets F up (the relaxation evaluates it), cuts its piece
+    // without relaxing, then all relax the gathered front together.
+    status = this->MakeSide(strokePoints, piece, local);
+    if (status == 1 && cells > 0)
+    {
+      status = this->PrepareCut(input, piece, 0, local);
+    }
+    const std::string error =
+      vtkTranslucencyDistributedPieces::AgreeOnError(status == 0 ? local : std::string());
+    if (!error.empty())
+    {
+      vtkErrorMacro(<< error);
+      return 0;
+    }
+    if (vtkTranslucencyDistributedPieces::Any(status == 2))
+    {
+      return 1; // aborted on some rank: empty outputs on every rank
+    }
+    translucency::TetCut relax;
+    relax.SetRelaxationFactor(this->RelaxationFactor);
+    relax.SetNumberOfIterations(this->NumberOfRelaxationIterations);
+    relax.SetMinimumDihedralAngle(this->MinimumDihedralAngle);
+    vtkTranslucencyDistributedCut::FrontStatistics front;
+    std::string relaxError;
+    if (!vtkTranslucencyDistributedCut::RelaxFront(input, cells > 0 ? piece.Mesh.get() : nullptr,
+          piece.Values, piece.Cut, relax, piece.Side, piece.Positions, front, relaxError))
+    {
+      vtkErrorMacro(<< relaxError);
+      return 0;
+    }
+    this->NumberOfMovableVertices = relax.GetNumberOfMovableVertices();
+    this->NumberOfMovedVertices = relax.GetNumberOfMovedVertices();
+    this->NumberOfBlockedVertices = relax.GetNumberOfBlockedVertices();
+    this->NumberOfFrontTets = static_cast<vtkIdType>(front.Tets);
+    this->NumberOfFrontPoints = static_cast<vtkIdType>(front.Points);
+    this->FrontBytes = static_cast<vtkIdType>(front.Bytes);
+    if (cells > 0)
+    {
+      this->WriteCut(input, piece, output);
+    }
+    this->CutTime = timer.GetMilliseconds();
   }
   const std::string error =
     vtkTranslucencyDistributedPieces::AgreeOnError(status == 0 ? local : std::string());
@@ -185,104 +286,87 @@ int vtkStrokeCut::RequestPerPiece(
 }
 
 //------------------------------------------------------------------------------
-int vtkStrokeCut::CutPiece(vtkUnstructuredGrid* input, vtkPolyData* stroke,
-  vtkUnstructuredGrid* output, std::string& error)
+int vtkStrokeCut::MakeSide(
+  const std::vector<double>* strokePoints, PieceCut& piece, std::string& error)
 {
-  this->NumberOfMovableVertices = this->NumberOfMovedVertices = 0;
-  this->NumberOfBlockedVertices = 0;
-  this->CutTime = 0.0;
-  const translucency::Timer timer;
-
-  if (!stroke && !this->CutFunction)
+  if (!strokePoints && !this->CutFunction)
   {
     error = "no cut function: SetCutFunction or a stroke is required";
     return 0;
   }
-  auto mesh = vtkTranslucency::AcquireTetMesh(input, error);
-  if (!mesh)
-  {
-    error = "input is not a tet mesh: " + error;
-    return 0;
-  }
-  this->UpdateProgress(0.1);
-
   // F > 0 on the removed side.
   const double sign = this->InsideOut ? -1.0 : 1.0;
-  translucency::StrokeSurface surface;
-  translucency::TetCut::SideFunction side;
-  if (stroke)
+  if (strokePoints)
   {
-    // The first line of the stroke, or its points in order.
-    std::vector<double> strokePoints;
-    vtkCellArray* lines = stroke->GetLines();
-    vtkIdType count = 0;
-    const vtkIdType* ids = nullptr;
-    if (lines && lines->GetNumberOfCells() > 0)
-    {
-      lines->GetCellAtId(0, count, ids);
-    }
-    else
-    {
-      count = stroke->GetNumberOfPoints();
-    }
-    for (vtkIdType k = 0; k < count; ++k)
-    {
-      double p[3];
-      stroke->GetPoint(ids ? ids[k] : k, p);
-      strokePoints.insert(strokePoints.end(), p, p + 3);
-    }
     try
     {
-      surface.SetStroke(strokePoints, this->ViewDirection);
+      piece.Surface.SetStroke(*strokePoints, this->ViewDirection);
     }
     catch (const translucency::Error& e)
     {
       error = std::string("bad stroke: ") + e.what();
       return 0;
     }
-    side = [&surface, sign](const double* x) { return sign * surface.Evaluate(x); };
+    const translucency::StrokeSurface* surface = &piece.Surface;
+    piece.Side = [surface, sign](const double* x) { return sign * surface->Evaluate(x); };
   }
   else
   {
     vtkImplicitFunction* function = this->CutFunction;
-    side = [function, sign](const double* x) {
+    piece.Side = [function, sign](const double* x) {
       double p[3] = { x[0], x[1], x[2] };
       return sign * function->FunctionValue(p);
     };
   }
-  const std::vector<double>& points = mesh->GetPoints();
-  std::vector<double> values(mesh->GetNumberOfPoints());
-  for (int i = 0; i < mesh->GetNumberOfPoints(); ++i)
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+int vtkStrokeCut::PrepareCut(
+  vtkUnstructuredGrid* input, PieceCut& piece, int iterations, std::string& error)
+{
+  piece.Mesh = vtkTranslucency::AcquireTetMesh(input, error);
+  if (!piece.Mesh)
   {
-    values[i] = side(&points[3 * static_cast<std::size_t>(i)]);
+    error = "input is not a tet mesh: " + error;
+    return 0;
+  }
+  this->UpdateProgress(0.1);
+  const std::vector<double>& points = piece.Mesh->GetPoints();
+  piece.Values.resize(static_cast<size_t>(piece.Mesh->GetNumberOfPoints()));
+  for (int i = 0; i < piece.Mesh->GetNumberOfPoints(); ++i)
+  {
+    piece.Values[i] = piece.Side(&points[3 * static_cast<std::size_t>(i)]);
   }
   if (this->CheckAbort())
   {
     return 2;
   }
   this->UpdateProgress(0.2);
-
-  translucency::TetCut cut;
-  cut.SetRelaxationFactor(this->RelaxationFactor);
-  cut.SetNumberOfIterations(this->NumberOfRelaxationIterations);
-  cut.SetMinimumDihedralAngle(this->MinimumDihedralAngle);
+  piece.Cut.SetRelaxationFactor(this->RelaxationFactor);
+  piece.Cut.SetNumberOfIterations(iterations);
+  piece.Cut.SetMinimumDihedralAngle(this->MinimumDihedralAngle);
   try
   {
-    cut.Cut(points, mesh->GetTets(), values, side);
+    piece.Cut.Cut(points, piece.Mesh->GetTets(), piece.Values, piece.Side);
   }
   catch (const translucency::Error& e)
   {
     error = e.what();
     return 0;
   }
-  this->NumberOfMovableVertices = cut.GetNumberOfMovableVertices();
-  this->NumberOfMovedVertices = cut.GetNumberOfMovedVertices();
-  this->NumberOfBlockedVertices = cut.GetNumberOfBlockedVertices();
+  piece.Positions = piece.Cut.GetPoints();
   this->UpdateProgress(0.8);
+  return 1;
+}
 
+//------------------------------------------------------------------------------
+void vtkStrokeCut::WriteCut(
+  vtkUnstructuredGrid* input, const PieceCut& piece, vtkUnstructuredGrid* output)
+{
   // Geometry.
-  const std::vector<double>& outPoints = cut.GetPoints();
-  const vtkIdType numPoints = static_cast<vtkIdType>(cut.GetKeptPoints().size());
+  const std::vector<double>& outPoints = piece.Positions;
+  const vtkIdType numPoints = static_cast<vtkIdType>(piece.Cut.GetKeptPoints().size());
   vtkNew<vtkPoints> pts;
   pts->SetDataTypeToDouble();
   pts->SetNumberOfPoints(numPoints);
@@ -291,21 +375,44 @@ int vtkStrokeCut::CutPiece(vtkUnstructuredGrid* input, vtkPolyData* stroke,
     pts->SetPoint(k, &outPoints[3 * k]);
   }
   output->SetPoints(pts);
-  vtkTranslucency::SetTets(output, cut.GetTets());
+  vtkTranslucency::SetTets(output, piece.Cut.GetTets());
 
   // Attributes, with the id maps to the original mesh. The kept points and
   // tets are a subset: their GlobalIds stay valid (VTK does not copy them by
   // default), so a distributed solve downstream matches the pieces by id.
   output->GetPointData()->CopyGlobalIdsOn();
   output->GetCellData()->CopyGlobalIdsOn();
-  CopyAttributes(input->GetPointData(), output->GetPointData(), cut.GetKeptPoints(),
+  CopyAttributes(input->GetPointData(), output->GetPointData(), piece.Cut.GetKeptPoints(),
     OriginalPointIdsName);
-  CopyAttributes(input->GetCellData(), output->GetCellData(), cut.GetKeptTets(),
+  CopyAttributes(input->GetCellData(), output->GetCellData(), piece.Cut.GetKeptTets(),
     vtkTranslucency::OriginalCellIdsName);
   output->GetFieldData()->PassData(input->GetFieldData());
-
-  this->CutTime = timer.GetMilliseconds();
   this->UpdateProgress(1.0);
+}
+
+//------------------------------------------------------------------------------
+int vtkStrokeCut::CutPiece(vtkUnstructuredGrid* input, const std::vector<double>* strokePoints,
+  vtkUnstructuredGrid* output, std::string& error)
+{
+  this->NumberOfMovableVertices = this->NumberOfMovedVertices = 0;
+  this->NumberOfBlockedVertices = 0;
+  this->CutTime = 0.0;
+  const translucency::Timer timer;
+  PieceCut piece;
+  int status = this->MakeSide(strokePoints, piece, error);
+  if (status == 1)
+  {
+    status = this->PrepareCut(input, piece, this->NumberOfRelaxationIterations, error);
+  }
+  if (status != 1)
+  {
+    return status;
+  }
+  this->NumberOfMovableVertices = piece.Cut.GetNumberOfMovableVertices();
+  this->NumberOfMovedVertices = piece.Cut.GetNumberOfMovedVertices();
+  this->NumberOfBlockedVertices = piece.Cut.GetNumberOfBlockedVertices();
+  this->WriteCut(input, piece, output);
+  this->CutTime = timer.GetMilliseconds();
   return 1;
 }
 

@@ -41,6 +41,7 @@
 #include "TranslucencyFiltersModule.h" // for export macro
 #include "vtkUnstructuredGridAlgorithm.h"
 #include <string> // for std::string
+#include <vector> // for std::vector
 
 class vtkAlgorithmOutput;
 class vtkImplicitFunction;
@@ -113,13 +114,25 @@ public:
 
   /**
    * The path of the last execution: "serial" (one process), "per piece" (MPI:
-   * an implicit cutter with the relaxation off, NumberOfRelaxationIterations 0
-   * or RelaxationFactor 0, cut on each rank's own piece, no gather; the
-   * statistics above are then this rank's) or "gathered" (MPI: a stroke, the
-   * relaxation on, or TRANSLUCENCY_GATHERED_CUT=1 on some rank: the pieces
-   * are cut on rank 0, the output is there). Documentation/Parallel.md.
+   * each rank cuts its own piece, no gather; with the relaxation on, the cut
+   * front, the kept tets with a vertex on the removed side, is all-gathered
+   * and relaxed on every rank as in serial) or "gathered" (MPI:
+   * TRANSLUCENCY_GATHERED_CUT=1 on some rank, or a stroke split over the
+   * ranks: the pieces are cut on rank 0, the output is there).
+   * Per piece the statistics above are those of the whole relaxation (the
+   * serial ones) when the relaxation is on, else this rank's.
+   * Documentation/Parallel.md.
    */
   const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+
+  ///@{
+  /// The cut front of the last per-piece relaxation (MPI, relaxation on):
+  /// its tets and points (each once) and the bytes every rank received when
+  /// it was all-gathered. 0 on the other paths.
+  vtkGetMacro(NumberOfFrontTets, vtkIdType);
+  vtkGetMacro(NumberOfFrontPoints, vtkIdType);
+  vtkGetMacro(FrontBytes, vtkIdType);
+  ///@}
 
   /// Modification time including the cut function's.
   vtkMTimeType GetMTime() override;
@@ -130,12 +143,25 @@ protected:
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
-  /// The MPI per-piece path (collective: every rank calls it).
-  int RequestPerPiece(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
-  /// Cut `input` (a stroke, or CutFunction when `stroke` is null) into
-  /// `output`: 1 done, 0 failed (`error` says why), 2 aborted. Not collective.
-  int CutPiece(vtkUnstructuredGrid* input, vtkPolyData* stroke, vtkUnstructuredGrid* output,
-    std::string& error);
+  /// The MPI per-piece path (collective: every rank calls it). `strokePoints`:
+  /// the stroke shared by every rank, or null to use CutFunction.
+  int RequestPerPiece(vtkInformationVector** inputVector, vtkInformationVector* outputVector,
+    const std::vector<double>* strokePoints);
+  /// Cut `input` (with the stroke `strokePoints`, 3 coordinates per point, or
+  /// CutFunction when null) into `output`: 1 done, 0 failed (`error` says
+  /// why), 2 aborted. Not collective.
+  int CutPiece(vtkUnstructuredGrid* input, const std::vector<double>* strokePoints,
+    vtkUnstructuredGrid* output, std::string& error);
+  /// The points of a stroke: its first line, or its points in order.
+  static std::vector<double> StrokePoints(vtkPolyData* stroke);
+  struct PieceCut; // the state of one piece's cut (vtkStrokeCut.cxx)
+  /// Set up F (piece.Side) from the stroke or CutFunction: 1 done, 0 failed.
+  int MakeSide(const std::vector<double>* strokePoints, PieceCut& piece, std::string& error);
+  /// Cut `input` with piece.Side, relaxing with `iterations` sweeps: 1 done,
+  /// 0 failed, 2 aborted.
+  int PrepareCut(vtkUnstructuredGrid* input, PieceCut& piece, int iterations, std::string& error);
+  /// The output of a prepared cut (its points at piece.Positions).
+  void WriteCut(vtkUnstructuredGrid* input, const PieceCut& piece, vtkUnstructuredGrid* output);
   /// True if TRANSLUCENCY_GATHERED_CUT is "1" in this process.
   static bool UseGatheredPath();
 
@@ -149,6 +175,9 @@ protected:
   vtkIdType NumberOfMovedVertices = 0;
   vtkIdType NumberOfBlockedVertices = 0;
   double CutTime = 0.0;
+  vtkIdType NumberOfFrontTets = 0;
+  vtkIdType NumberOfFrontPoints = 0;
+  vtkIdType FrontBytes = 0;
   std::string ParallelPath = "serial";
   bool Gathering = false; // true while the gathered serial run executes
 

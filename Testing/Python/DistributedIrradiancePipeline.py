@@ -15,7 +15,10 @@ for two lightings, shadows on:
   A: a point light beside the well and a uniform light with 16 occlusion
      samples per point (the samples follow the point's index / global id),
   B: a directional and a point light and the exact uniform light (0 samples);
-and boundary.txt, the number of boundary triangles.
+and boundary.txt, the number of boundary triangles; the serial cuts
+ref_cut<kind>.vtu (lit with B and solved; kind: plane, sphere without
+relaxation, relax, stroke with it, relax1 the relax cut of mesh1.pvtu) and
+their statistics (cutstats.txt).
 
 run (every rank): for each case reader -> Surface Irradiance -> Solve
 Diffusion, saved as <case>.pvtu, and per rank one line in irr_<rank>.txt:
@@ -25,7 +28,10 @@ after_error_B (a run after it), then Assign Scattering Coefficients (a spherical
 1-piece and ghost-cell .pvtu (assign_<case>.pvtu; the serial ref_assign.vtu),
 veins on the 3-piece .pvtu and Redistribute DataSet (assignveins_<case>.pvtu;
 ref_assignveins.vtu),
-with a line "assign <case> rank <r> path <path>", and Paint Scattering
+with a line "assign <case> rank <r> path <path>", Stroke Cut (cut_<case>.pvtu,
+lines "cut <case> rank <r> path <path> in <cells> out <cells>" and "cutstats
+<case> rank <r> movable .. moved .. blocked .. front <tets> <points> bytes .."),
+and Paint Scattering
 Coefficients per piece (paint_<case>.pvtu; the serial ref_paint.vtu, painted
 then lit with B and solved), with a line "paint <case> rank <r> path <path>";
 Outgoing Radiance of pvtu3_B, pvtu2_B, redist_B and pvtu1_B per piece and of
@@ -59,20 +65,41 @@ def chain(source, lights):
 
 
 def cut(source, kind):
-    """Stroke Cut with an implicit cutter, relaxation off (per piece under MPI):
-    plane: removes x < (the largest x of mesh3x.pvtu's piece 0) + 0.5, so all
-    of that piece's tets; sphere: keeps the tets touching a ball in the box."""
+    """Stroke Cut per piece under MPI. Relaxation off: plane removes x <
+    (the largest x of mesh3x.pvtu's piece 0) + 0.5, so all of that piece's
+    tets; sphere keeps the tets touching a ball in the box. Relaxation on (the
+    defaults: 10 sweeps, factor 0.1): relax, a tilted plane removing the
+    bottom (its cross-section crosses every slab of mesh3x.pvtu); stroke, a
+    free-hand polyline across the box seen from above."""
     if kind == "plane":
         with open(path("cutplane.txt")) as f:
             x0 = float(f.read().split()[0])
         result = StrokeCut(Input=source, CutType="Plane", NumberOfRelaxationIterations=0)
         result.CutType.Origin = [x0 + 0.5, 0.0, 0.0]
         result.CutType.Normal = [-1.0, 0.0, 0.0]
-    else:
+    elif kind == "sphere":
         result = StrokeCut(Input=source, CutType="Sphere", NumberOfRelaxationIterations=0)
         result.CutType.Center = [8.0, 7.0, 5.0]
         result.CutType.Radius = 6.5
+    elif kind == "relax":
+        result = StrokeCut(Input=source, CutType="Plane")
+        result.CutType.Origin = [8.0, 8.0, 4.5]
+        result.CutType.Normal = [0.35, 0.2, -1.0]
+    else:
+        stroke = PolyLineSource(Points=[-1.0, 2.2, 30.0, 7.3, 9.1, 30.0, 17.0, 11.4, 30.0])
+        result = StrokeCut(Input=source, Stroke=stroke)
     return result
+
+
+def cut_statistics(cutter):
+    # The relaxation's statistics and the front's size (per piece: of the
+    # whole relaxation, the same on every rank).
+    import translucency  # noqa: F401  (the getters of the filters)
+    o = cutter.GetClientSideObject()
+    return "movable %d moved %d blocked %d front %d %d bytes %d" % (
+        o.GetNumberOfMovableVertices(), o.GetNumberOfMovedVertices(),
+        o.GetNumberOfBlockedVertices(), o.GetNumberOfFrontTets(), o.GetNumberOfFrontPoints(),
+        o.GetFrontBytes())
 
 
 def paint(source, original=None):
@@ -240,9 +267,19 @@ if MODE == "prepare":
     SaveData(path("ref_assignlayers.vtu"), proxy=assign(source, layers=True))
     _, painted = chain(paint(source), "B")
     SaveData(path("ref_paint.vtu"), proxy=painted)
-    for kind in ("plane", "sphere"):
-        _, solved = chain(cut(source, kind), "B")
+    for kind in ("plane", "sphere", "relax", "stroke"):
+        cutter = cut(source, kind)
+        _, solved = chain(cutter, "B")
         SaveData(path("ref_cut%s.vtu" % kind), proxy=solved)
+        with open(path("cutstats.txt"), "a") as f:
+            f.write("cutstats %s %s\n" % (kind, cut_statistics(cutter)))
+    # Without ids the relaxation follows the piece's point order: the one-piece
+    # .pvtu (vtkExtractUnstructuredGridPiece renumbered its points) cut serially.
+    cutter = cut(XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")]), "relax")
+    _, solved = chain(cutter, "B")
+    SaveData(path("ref_cutrelax1.vtu"), proxy=solved)
+    with open(path("cutstats.txt"), "a") as f:
+        f.write("cutstats relax1 %s\n" % cut_statistics(cutter))
     for lights in LIGHTS:
         _, solved = chain(source, lights)
         SaveData(path("ref_%s.vtu" % lights), proxy=solved)
@@ -337,14 +374,19 @@ elif MODE == "run":
             f.write("paint %s rank %d path %s\n" % (
                 name, RANK, source.GetClientSideObject().GetParallelPath().replace(" ", "-")))
         SaveData(path(name + ".pvtu"), proxy=proxy)
-    # Stroke Cut per piece (implicit cutters, no relaxation) -> the distributed
-    # chain; with TRANSLUCENCY_GATHERED_CUT=1 gathered (the cut mesh on rank 0).
+    # Stroke Cut per piece -> the distributed chain: implicit cutters without
+    # relaxation; with the relaxation a tilted plane (3 slabs with ids; one
+    # piece, coordinate keys, empty pieces elsewhere) and a stroke (3 pieces
+    # with ids); with TRANSLUCENCY_GATHERED_CUT=1 gathered (the cut mesh on rank 0).
     pvtu1 = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh1.pvtu")])
     pvtu3x = XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3x.pvtu")])
     for name, source, kind, gathered in (("cut_plane3", pvtu3x, "plane", False),
                                          ("cut_sphere3", pvtu3, "sphere", False),
                                          ("cut_plane1", pvtu1, "plane", False),
-                                         ("cut_gathered3", pvtu3x, "plane", True)):
+                                         ("cut_gathered3", pvtu3x, "plane", True),
+                                         ("cut_relax3", pvtu3x, "relax", False),
+                                         ("cut_relax1", pvtu1, "relax", False),
+                                         ("cut_stroke3", pvtu3, "stroke", False)):
         if gathered:
             os.environ["TRANSLUCENCY_GATHERED_CUT"] = "1"
         cutter = cut(source, kind)
@@ -357,6 +399,7 @@ elif MODE == "run":
                 name, RANK, o.GetParallelPath().replace(" ", "-"),
                 o.GetInputDataObject(0, 0).GetNumberOfCells(),
                 o.GetOutputDataObject(0).GetNumberOfCells()))
+            f.write("cutstats %s rank %d %s\n" % (name, RANK, cut_statistics(cutter)))
         SaveData(path(name + ".pvtu"), proxy=solved)
     # An invalid RefractiveIndex on rank 1 only: every rank reports rank 1's
     # error and nobody hangs; the next run works.

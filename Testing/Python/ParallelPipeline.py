@@ -227,8 +227,8 @@ elif MODE == "run":
         Input=plane_cut(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))), surface=False)
     chain("par_paint", paint(redistributed), surface=False)
     detector_table(redistributed)
-    # With point and cell GlobalIds (made in the serial order) the gathered
-    # mesh is in the serial order: the order-dependent cut relaxation and
+    # With point and cell GlobalIds (made in the serial order) the
+    # order-dependent cut relaxation (per piece: the cut front in id order) and
     # uniform-light sampling give the serial result.
     chain("par_cutids", plane_cut(
         XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")])),

@@ -25,12 +25,16 @@ mesh with GlobalIds (A) and without (B: coordinate keys), a .pvtu in 2 pieces
 with a ghost level (B; 3 ranks: one rank with an empty piece), a .pvtu of
 one piece (B: empty pieces on the other ranks), and the gathered path
 (TRANSLUCENCY_GATHERED_IRRADIANCE=1) on the 3 pieces (A).
-Stroke Cut per piece (implicit cutters, relaxation off) then the distributed
-chain (B): a plane cut removing all of piece 0 (one rank loses all its tets)
-and a sphere cut of the 3 pieces, a plane cut of the one-piece .pvtu (empty
-pieces), and the plane cut gathered (TRANSLUCENCY_GATHERED_CUT=1): the cut
-mesh's points (ids, coordinates) and tets (as id quadruples) equal the serial
-cut's, Fluence the serial one to 1e-6.
+Stroke Cut per piece then the distributed chain (B). Relaxation off: a plane
+cut removing all of piece 0 (one rank loses all its tets) and a sphere cut of
+the 3 pieces, a plane cut of the one-piece .pvtu (empty pieces), and the plane
+cut gathered (TRANSLUCENCY_GATHERED_CUT=1). Relaxation on (the cut front
+all-gathered): a tilted plane across the 3 slabs (ids), the same on the
+one-piece .pvtu (coordinate keys, empty pieces elsewhere) and a stroke on the 3
+pieces. The cut mesh's points (ids, exact coordinates: relaxed bit for bit)
+and tets (as id quadruples) equal the serial cut's, Fluence the serial one to
+1e-6; with the relaxation every rank reports the serial movable, moved and
+blocked counts and the same front.
 """
 
 import os
@@ -425,8 +429,23 @@ class DistributedIrradianceTest(unittest.TestCase):
             fluence = vtk_to_numpy(piece.GetPointData().GetArray("Fluence"))
             return ids.tolist(), x, tets, fluence
 
+        stats = {}
+        for rank in range(RANKS):
+            name = os.path.join(self.work, "irr_%d.txt" % rank)
+            with open(name) as f:
+                text = f.read()
+            for m in re.finditer(r"^cutstats (\S+) rank (\d+) (.*)$", text, re.M):
+                stats.setdefault(m.group(1), {})[int(m.group(2))] = m.group(3).split()
+        serial_stats = {}
+        with open(os.path.join(self.work, "cutstats.txt")) as f:
+            for line in f:
+                words = line.split()
+                serial_stats[words[1]] = words[2:]
+
         for case, kind in (("cut_plane3", "plane"), ("cut_sphere3", "sphere"),
-                           ("cut_plane1", "plane"), ("cut_gathered3", "plane")):
+                           ("cut_plane1", "plane"), ("cut_gathered3", "plane"),
+                           ("cut_relax3", "relax"), ("cut_relax1", "relax1"),
+                           ("cut_stroke3", "stroke")):
             per_rank = report.get(case, {})
             self.assertEqual(sorted(per_rank), list(range(RANKS)), case)
             expected = "gathered" if "gathered" in case else "per-piece"
@@ -463,6 +482,25 @@ class DistributedIrradianceTest(unittest.TestCase):
                 self.assertTrue(any(v[1] == 0 for v in per_rank.values()), "an empty piece")
             if case == "cut_gathered3":
                 self.assertEqual(sum(1 for v in per_rank.values() if v[2] > 0), 1, per_rank)
+            if kind in ("relax", "relax1", "stroke"):
+                # The relaxation moved vertices (the coordinates above are the
+                # serial relaxed ones, by global id), with the serial
+                # statistics on every rank; the front is a thin layer.
+                ref_stats = serial_stats[kind]
+                ref_numbers = dict(zip(ref_stats[0::2], ref_stats[1::2]))
+                self.assertGreater(int(ref_numbers["moved"]), 50, ref_stats)
+                case_stats = stats.get(case, {})
+                self.assertEqual(sorted(case_stats), list(range(RANKS)), case)
+                for rank, words in case_stats.items():
+                    self.assertEqual(words[:6], ref_stats[:6], "statistics, %s rank %d" % (case, rank))
+                    self.assertEqual(words, case_stats[0], "the same front on every rank, " + case)
+                    front_tets = int(words[7])
+                    self.assertGreater(front_tets, 0, case)
+                    self.assertLess(front_tets, len(ref_tets) // 4, "the front is a layer, " + case)
+            if case in ("cut_relax3", "cut_stroke3"):
+                self.assertGreater(nonempty, 1, "the pieces stay distributed, " + case)
+            if case == "cut_relax1":
+                self.assertTrue(any(v[1] == 0 for v in per_rank.values()), "an empty piece")
 
 
 if __name__ == "__main__":
