@@ -53,7 +53,7 @@ from TestParallel import run  # noqa: E402  (the time-limited runner that ends h
 
 PLUGIN = sys.argv[1] if len(sys.argv) > 1 else ""
 RANKS = int(sys.argv[2]) if len(sys.argv) > 2 else 2
-TIME_LIMIT = {"prepare": 120, "run": 280}  # seconds: hang ceilings for a loaded machine
+TIME_LIMIT = {"prepare": 200, "run": 280}  # seconds: hang ceilings for a loaded machine
 CASES = {"pvtu3_A": "A", "pvtu3_B": "B", "redistid_A": "A", "pvtu2_B": "B", "redist_B": "B",
          "pvtu1_B": "B", "gathered_A": "A", "after_error_B": "B"}
 
