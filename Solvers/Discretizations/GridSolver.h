@@ -88,6 +88,11 @@ struct GridLevel
   }
   /// Position (mm) of unknown u (interior, or boundary node u - interior count).
   void Position(int u, double x[3]) const;
+  /// Extents (mm) along x, y, z of the control volume of interior node u:
+  /// (h+ + h-) / 2 per axis, h+- the distance to the neighbour (h, or the
+  /// link length of a boundary node). Its product is the volume an interior
+  /// source's power is divided by.
+  void ControlExtents(int u, double extent[3]) const;
   /// Bytes held by the arrays of this level.
   std::size_t MemoryBytes() const;
 };
@@ -327,6 +332,9 @@ private:
   /// returns the number of ray fallbacks.
   int BuildLevel(const TetMesh& mesh, GridLevel& level) const;
   void Assemble(const TetMesh& mesh, const OpticalProperties& material, int levelIndex);
+  /// Adds the interior sources to the right-hand side of a level's interior
+  /// rows (after Assemble): trilinear weights, power / control volume.
+  void AddInteriorSources(int levelIndex, const std::vector<PlacedSource>& sources);
   bool SolveLevel(GridLevel& level,
     bool guess,
     std::array<int, NumberOfChannels>& iterations,

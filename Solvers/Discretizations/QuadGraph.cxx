@@ -124,6 +124,9 @@ struct LevelCoefficients
 {
   std::array<std::vector<double>, NumberOfChannels> CellKappa, CellMu;
   std::array<std::vector<double>, NumberOfChannels> SurfaceKappa, SurfaceRhs;
+  /// Interior sources: the power of the sources in each cell divided by
+  /// its volume (W/mm^3), the cell's right-hand side (QuadGraphSolver::Solve).
+  std::array<std::vector<double>, NumberOfChannels> CellSource;
   std::vector<double> SurfaceA;
 
   void Resize(int cells, int surface)
@@ -132,6 +135,7 @@ struct LevelCoefficients
     {
       CellKappa[c].assign(cells, 0.0);
       CellMu[c].assign(cells, 0.0);
+      CellSource[c].assign(cells, 0.0);
       SurfaceKappa[c].assign(surface, 0.0);
       SurfaceRhs[c].assign(surface, 0.0);
     }
@@ -169,6 +173,10 @@ void AssembleLevel(const QuadGraphSolver::Level& level,
       int pos = level.RowOffsets[i];
       int diagonalPos = -1;
       double diagonal = 0.0, rhs = 0.0;
+      if (i < numCells)
+      {
+        rhs = k.CellSource[c][i]; // interior sources (both weightings)
+      }
       if (i < numCells && twoPointFlux)
       {
         // Not the paper's eq. 5 (QuadGraphSolver::SetTwoPointFlux): the
@@ -255,6 +263,7 @@ void RestrictCoefficients(const QuadGraphSolver::Level& fine,
     {
       kc.CellKappa[c][g] += v * kf.CellKappa[c][i];
       kc.CellMu[c][g] += v * kf.CellMu[c][i];
+      kc.CellSource[c][g] += v * kf.CellSource[c][i]; // the power: kept on every level
     }
   }
   for (int g = 0; g < coarse.NumberOfCells; ++g)
@@ -263,6 +272,7 @@ void RestrictCoefficients(const QuadGraphSolver::Level& fine,
     {
       kc.CellKappa[c][g] /= coarse.CellVolumes[g];
       kc.CellMu[c][g] /= coarse.CellVolumes[g];
+      kc.CellSource[c][g] /= coarse.CellVolumes[g];
     }
   }
   for (int s = 0; s < fine.NumberOfSurfaceNodes; ++s)
@@ -314,6 +324,35 @@ void Prolongate(
 struct QuadGraphSolver::Coefficients : LevelCoefficients
 {
 };
+
+int QuadGraphSolver::FindCell(int tet, const double weights[4]) const
+{
+  const std::vector<int>& tets = Graph_.CellTets;
+  const auto first = std::lower_bound(tets.begin(), tets.end(), tet);
+  if (first == tets.end() || *first != tet)
+  {
+    throw Error("quadgraph: tet " + std::to_string(tet) + " is not in the graph (" +
+      std::to_string(tets.empty() ? 0 : tets.back() + 1) + " tets)");
+  }
+  const int cell = static_cast<int>(first - tets.begin());
+  if (Graph_.CellFaces[cell] < 0)
+  {
+    return cell; // not split
+  }
+  // Split at the centroid: the point with barycentric coordinates lambda is
+  // in the sub-tet on face k (vertex k replaced by the centroid) where
+  // lambda_k is smallest (its coordinates there are 4 lambda_k and
+  // lambda_a - lambda_k, all >= 0 exactly then).
+  int k = 0;
+  for (int a = 1; a < 4; ++a)
+  {
+    if (weights[a] < weights[k])
+    {
+      k = a;
+    }
+  }
+  return cell + k;
+}
 
 QuadGraphSolver::QuadGraphSolver() = default;
 QuadGraphSolver::~QuadGraphSolver() = default;
@@ -1024,7 +1063,6 @@ bool QuadGraphSolver::Solve(
   {
     throw Error("quadgraph: the problem needs a mesh, a material and an irradiance");
   }
-  RequireNoInteriorSources(problem, "quadgraph");
   RequireSurfaceCollimatedModel(problem, "quadgraph");
   const TetMesh& mesh = *problem.Mesh;
   const int numTets = mesh.GetNumberOfTets();
@@ -1068,6 +1106,13 @@ bool QuadGraphSolver::Solve(
       throw Error(os.str());
     }
   }
+  // Interior sources placed first: a source outside the object is an error
+  // (Sources::Place, the vertex solvers' messages) before any work.
+  std::vector<PlacedSource> placed;
+  if (problem.HasInteriorSources())
+  {
+    placed = problem.InteriorSources->Place(mesh, material);
+  }
   const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
 
   report = SolverReport();
@@ -1102,6 +1147,16 @@ bool QuadGraphSolver::Solve(
   }
   Coefficients coefficients;
   ComputeFineCoefficients(mesh, material, q, coefficients, numThreads);
+  // Each source's power into the cell containing it, as a density (the
+  // finite-volume source term: its integral over the cell, over the volume).
+  for (const PlacedSource& source : placed)
+  {
+    const int cell = FindCell(source.Tet, source.Weights);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      coefficients.CellSource[c][cell] += source.Source.Power[c] / Graph_.Fine.CellVolumes[cell];
+    }
+  }
   AssembleLevel(Graph_.Fine, coefficients, System_, numThreads, TwoPointFlux_);
   // Coarse systems for the multi-level initialisation.
   std::vector<DiffusionSystem> coarseSystems;

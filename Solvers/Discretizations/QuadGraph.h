@@ -182,6 +182,13 @@ public:
 
   /// The graph of the last Solve (empty before).
   const Graph& GetGraph() const { return Graph_; }
+  /**
+   * The cell (inner node) of the graph containing the point with barycentric
+   * coordinates `weights` (TetMesh::GetTet order) in mesh tet `tet`: the
+   * tet's cell, or of a tet split at its centroid the sub-tet containing
+   * the point. Throws translucency::Error for a tet not in the graph.
+   */
+  int FindCell(int tet, const double weights[4]) const;
   /// Node values (cells then surface nodes) of the last Solve, per channel (W/mm^2).
   const std::array<Eigen::VectorXd, NumberOfChannels>& GetNodeFluence() const { return Solution_; }
   /// The fine system of the last Solve.
