@@ -325,33 +325,42 @@ struct QuadGraphSolver::Coefficients : LevelCoefficients
 {
 };
 
-int QuadGraphSolver::FindCell(int tet, const double weights[4]) const
+void QuadGraphSolver::AddSourceLoad(
+  const TetMesh& mesh, const std::vector<PlacedSource>& placed, Coefficients& k) const
 {
-  const std::vector<int>& tets = Graph_.CellTets;
-  const auto first = std::lower_bound(tets.begin(), tets.end(), tet);
-  if (first == tets.end() || *first != tet)
+  // The transpose of the vertex map: the P1 load of the source (P times its
+  // barycentric weights on the tet's vertices, the FEM load) carried to the
+  // nodes by the weights through which those vertices read the nodes. A
+  // cell's share enters its row as a density (share / V_i: the rows are
+  // balances per unit volume); a surface node's share as a flux through its
+  // face in eq. 6, like q (2A share / S_s on the right-hand side).
+  const Level& fine = Graph_.Fine;
+  for (const PlacedSource& source : placed)
   {
-    throw Error("quadgraph: tet " + std::to_string(tet) + " is not in the graph (" +
-      std::to_string(tets.empty() ? 0 : tets.back() + 1) + " tets)");
-  }
-  const int cell = static_cast<int>(first - tets.begin());
-  if (Graph_.CellFaces[cell] < 0)
-  {
-    return cell; // not split
-  }
-  // Split at the centroid: the point with barycentric coordinates lambda is
-  // in the sub-tet on face k (vertex k replaced by the centroid) where
-  // lambda_k is smallest (its coordinates there are 4 lambda_k and
-  // lambda_a - lambda_k, all >= 0 exactly then).
-  int k = 0;
-  for (int a = 1; a < 4; ++a)
-  {
-    if (weights[a] < weights[k])
+    const int* tet = mesh.GetTet(source.Tet);
+    for (int a = 0; a < 4; ++a)
     {
-      k = a;
+      const int v = tet[a];
+      for (int m = Graph_.VertexOffsets[v]; m < Graph_.VertexOffsets[v + 1]; ++m)
+      {
+        const int node = Graph_.VertexNodes[m];
+        const double w = source.Weights[a] * Graph_.VertexWeights[m];
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          const double share = w * source.Source.Power[c];
+          if (node < fine.NumberOfCells)
+          {
+            k.CellSource[c][node] += share / fine.CellVolumes[node];
+          }
+          else
+          {
+            const int s = node - fine.NumberOfCells;
+            k.SurfaceRhs[c][s] += 2.0 * k.SurfaceA[s] * share / fine.SurfaceAreas[s];
+          }
+        }
+      }
     }
   }
-  return cell + k;
 }
 
 QuadGraphSolver::QuadGraphSolver() = default;
@@ -1147,16 +1156,7 @@ bool QuadGraphSolver::Solve(
   }
   Coefficients coefficients;
   ComputeFineCoefficients(mesh, material, q, coefficients, numThreads);
-  // Each source's power into the cell containing it, as a density (the
-  // finite-volume source term: its integral over the cell, over the volume).
-  for (const PlacedSource& source : placed)
-  {
-    const int cell = FindCell(source.Tet, source.Weights);
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      coefficients.CellSource[c][cell] += source.Source.Power[c] / Graph_.Fine.CellVolumes[cell];
-    }
-  }
+  AddSourceLoad(mesh, placed, coefficients);
   AssembleLevel(Graph_.Fine, coefficients, System_, numThreads, TwoPointFlux_);
   // Coarse systems for the multi-level initialisation.
   std::vector<DiffusionSystem> coarseSystems;

@@ -182,13 +182,6 @@ public:
 
   /// The graph of the last Solve (empty before).
   const Graph& GetGraph() const { return Graph_; }
-  /**
-   * The cell (inner node) of the graph containing the point with barycentric
-   * coordinates `weights` (TetMesh::GetTet order) in mesh tet `tet`: the
-   * tet's cell, or of a tet split at its centroid the sub-tet containing
-   * the point. Throws translucency::Error for a tet not in the graph.
-   */
-  int FindCell(int tet, const double weights[4]) const;
   /// Node values (cells then surface nodes) of the last Solve, per channel (W/mm^2).
   const std::array<Eigen::VectorXd, NumberOfChannels>& GetNodeFluence() const { return Solution_; }
   /// The fine system of the last Solve.
@@ -207,6 +200,10 @@ private:
   void BuildCoarseLevels(int numThreads);
   void ComputeFineCoefficients(const TetMesh& mesh, const OpticalProperties& material,
     const std::vector<double>& irradiance, Coefficients& coefficients, int numThreads) const;
+  /// Adds the interior sources to the fine coefficients (after
+  /// ComputeFineCoefficients): see the class comment.
+  void AddSourceLoad(
+    const TetMesh& mesh, const std::vector<PlacedSource>& placed, Coefficients& k) const;
   /// Solve one channel of one level's system from the guess in x; returns
   /// false if aborted.
   bool SolveChannel(const DiffusionSystem& system, int channel, Eigen::VectorXd& x,
