@@ -145,6 +145,14 @@ struct GridLevel
  * Unknowns: interior nodes in grid order (x fastest), then boundary nodes.
  * The matrix is an M-matrix (probe weights are >= 0), non-symmetric.
  *
+ * Interior sources (DiffusionProblem::InteriorSources, continuous wave):
+ * each placed point source's power P is shared among the 8 corners of the
+ * grid cell containing it by trilinear weights, renormalised over the
+ * corners that are interior nodes (none: all to the nearest interior node of
+ * the 4^3, then 6^3 block; none there: an Error naming the source), and a
+ * node's share p enters its row as h^2 p / V_u, V_u the node's control box
+ * (ControlExtents). Every level gets them. Documentation/DiffuseOptics.md.
+ *
  * Linear solvers (SetLinearSolver, case-insensitive): "bicgstab" (default;
  * BiCGSTAB with the diagonal preconditioner on the right, as Eigen's, with
  * deterministic parallel products and sums) or "relaxation" (Gauss-Seidel
