@@ -43,9 +43,10 @@ struct DiffusionProblem
   /// Sources inside the object (point sources, pencil beams), borrowed; null
   /// or empty = none. Every solver takes them in continuous wave: the vertex
   /// discretisations (divergence, fem: the consistent FEM load, also in the
-  /// frequency and time domains), quadgraph (the power of a source into the
-  /// cell containing it), grid (trilinear weights over the grid cell's
-  /// corners) and montecarlo (photons launched there). DiffuseOptics.md.
+  /// frequency and time domains), quadgraph (the P1 load carried to its
+  /// nodes by the transpose of its vertex map), grid (trilinear weights over
+  /// the grid cell's corners) and montecarlo (photons launched there).
+  /// Documentation/DiffuseOptics.md.
   const Sources* InteriorSources = nullptr;
 
   /// How the directional lights enter (DiffuseOptics.md): Surface (the

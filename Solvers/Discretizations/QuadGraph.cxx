@@ -124,8 +124,8 @@ struct LevelCoefficients
 {
   std::array<std::vector<double>, NumberOfChannels> CellKappa, CellMu;
   std::array<std::vector<double>, NumberOfChannels> SurfaceKappa, SurfaceRhs;
-  /// Interior sources: the power of the sources in each cell divided by
-  /// its volume (W/mm^3), the cell's right-hand side (QuadGraphSolver::Solve).
+  /// Interior sources: the sources' share of each cell divided by its
+  /// volume (W/mm^3), the cell's right-hand side (AddSourceLoad).
   std::array<std::vector<double>, NumberOfChannels> CellSource;
   std::vector<double> SurfaceA;
 
