@@ -670,7 +670,7 @@ TEST(DiffuseOptics, BadInputIsAnError)
       ErrorMessage([&] { ReadDetectors(mesh, material, detectors, fluence, nullptr); }),
       "fibre radius -1 mm"));
   }
-  // Frequencies, and the solvers that have no interior sources.
+  // Frequencies, and quadgraph and grid with interior sources.
   Sources sources;
   PointSource source;
   source.Position = { 5, 5, 0.25 };
