@@ -325,7 +325,8 @@ void DiffuseOpticsOptions::Report(vtkSolveDiffusion* solve, nlohmann::json& j) c
 void AddDiffuseOpticsOptions(CLI::App* command, DiffuseOpticsOptions& options)
 {
   const std::string group =
-    "Diffuse optics (divergence, fem; montecarlo but --frequency; --detector: every solver)";
+    "Diffuse optics (divergence, fem; montecarlo but --frequency; --source, --detector: every "
+    "solver)";
   DiffuseOpticsOptions* o = &options;
   command
     ->add_option_function<std::vector<std::string>>(

@@ -810,16 +810,16 @@ int vtkSolveDiffusion::RequestData(
                       << " solver: it applies to montecarlo only (the diffusion solvers use the "
                          "reduced scattering coefficient, in which g is already folded)");
     }
-    // Detectors read the vertex Fluence every solver writes (the continuous-
-    // wave branch below), so they work for quadgraph and grid too; the rest
-    // needs the vertex systems (or the photons).
-    if ((frequencyDomain || timeResolved || !in.SolvedSources.Empty()) &&
-      !entry.Properties.UnknownsAtVertices && !monteCarlo)
+    // Detectors read the vertex Fluence every solver writes and every solver
+    // takes interior sources (the continuous-wave branch below), so both
+    // work for quadgraph and grid too; the frequency and time domains need
+    // the vertex systems (or the photons).
+    if ((frequencyDomain || timeResolved) && !entry.Properties.UnknownsAtVertices && !monteCarlo)
     {
       vtkErrorMacro(<< "the " << entry.Name
-                    << " solver has no interior sources, frequency domain or time "
-                       "gates: they are implemented for the divergence, fem and (but the "
-                       "frequency domain) montecarlo solvers");
+                    << " solver has no frequency domain or time gates: they are implemented "
+                       "for the divergence, fem and (but the frequency domain) montecarlo "
+                       "solvers");
       return 0;
     }
     // The detectors read the material and the irradiance after the solve.

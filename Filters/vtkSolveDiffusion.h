@@ -40,7 +40,8 @@
  * incremental update (fem) always assemble in full.
  *
  * Diffuse optics (divergence and fem solvers; Documentation/DiffuseOptics.md):
- *  - interior sources: isotropic point sources (AddPointSource) and pencil
+ *  - interior sources, with every solver (quadgraph and grid in continuous
+ *    wave only): isotropic point sources (AddPointSource) and pencil
  *    beams (AddPencilBeam: the Farrell et al. 1992 equivalent source one
  *    transport mean free path below the entry point), in W per channel, on
  *    top of the boundary irradiance (give an all-zero `Irradiance`, e.g.
@@ -242,7 +243,7 @@ public:
   ///@}
 
   ///@{
-  /// Interior sources (divergence, fem), W per channel (>= 0), positions
+  /// Interior sources (every solver), W per channel (>= 0), positions
   /// and directions in mm. A pencil beam enters at (x, y, z), on the
   /// surface, travelling along (dx, dy, dz) into the object. None by
   /// default.

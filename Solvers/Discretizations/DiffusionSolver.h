@@ -41,9 +41,12 @@ struct DiffusionProblem
   double UniformIrradiance = 0.0; ///< W/mm^2, see LightSource
   bool Shadows = true;
   /// Sources inside the object (point sources, pencil beams), borrowed; null
-  /// or empty = none. Only the vertex discretisations (divergence, fem)
-  /// implement them; the other solvers throw translucency::Error when
-  /// given any (RequireNoInteriorSources).
+  /// or empty = none. Every solver takes them in continuous wave: the vertex
+  /// discretisations (divergence, fem: the consistent FEM load, also in the
+  /// frequency and time domains), quadgraph (the P1 load carried to its
+  /// nodes by the transpose of its vertex map), grid (trilinear weights over
+  /// the grid cell's corners) and montecarlo (photons launched there).
+  /// Documentation/DiffuseOptics.md.
   const Sources* InteriorSources = nullptr;
 
   /// How the directional lights enter (DiffuseOptics.md): Surface (the
@@ -68,18 +71,6 @@ inline void RequireSurfaceCollimatedModel(const DiffusionProblem& problem, const
     throw Error(solver +
       ": the extended collimated-source model is implemented for the \"divergence\" and "
       "\"fem\" solvers only (use the surface model)");
-  }
-}
-
-/// Throws translucency::Error naming `solver` if the problem has interior
-/// sources (for the solvers that do not implement them).
-inline void RequireNoInteriorSources(const DiffusionProblem& problem, const std::string& solver)
-{
-  if (problem.HasInteriorSources())
-  {
-    throw Error(solver +
-      ": interior sources (point sources, pencil beams) are implemented for the "
-      "\"divergence\" and \"fem\" solvers only");
   }
 }
 

@@ -4,6 +4,7 @@
 #include "Error.h"
 #include "Fresnel.h"
 #include "Relaxation.h"
+#include "Strings.h"
 #include "TetMesh.h"
 #include "TriangleGeometry.h"
 #include "Timer.h"
@@ -281,6 +282,122 @@ void EvaluateLevel(const GridLevel& level, const double x[3], double out[NumberO
   }
 }
 
+/**
+ * The interior sources' share of each interior node of a level (W per
+ * channel, added to `power`, 3 per interior node): trilinear weights over
+ * the 8 corners of the grid cell containing the source, renormalised over
+ * the corners that are interior nodes; if none is, all the power to the
+ * nearest interior node of the 4^3, then 6^3 block around it. Throws
+ * translucency::Error naming the source if that finds none (a part of the
+ * object thinner than the spacing).
+ */
+void DistributeSources(
+  const GridLevel& level, const std::vector<PlacedSource>& sources, std::vector<double>& power)
+{
+  const double h = level.Spacing;
+  auto unknownAt = [&level](int i, int j, int k)
+  {
+    if (i < 0 || j < 0 || k < 0 || i >= level.Dims[0] || j >= level.Dims[1] || k >= level.Dims[2])
+    {
+      return -1;
+    }
+    return level.NodeUnknown[i +
+      static_cast<size_t>(level.Dims[0]) * (j + static_cast<size_t>(level.Dims[1]) * k)];
+  };
+  for (const PlacedSource& placed : sources)
+  {
+    const double* x = placed.Source.Position.data();
+    int base[3];
+    double t[3];
+    for (int d = 0; d < 3; ++d)
+    {
+      const double u = (x[d] - level.Origin[d]) / h;
+      base[d] = static_cast<int>(std::floor(u));
+      t[d] = u - base[d];
+    }
+    int nodes[8];
+    double weights[8];
+    double total = 0.0;
+    for (int corner = 0; corner < 8; ++corner)
+    {
+      const int b[3] = { corner & 1, (corner >> 1) & 1, (corner >> 2) & 1 };
+      nodes[corner] = unknownAt(base[0] + b[0], base[1] + b[1], base[2] + b[2]);
+      weights[corner] = 1.0;
+      for (int d = 0; d < 3; ++d)
+      {
+        weights[corner] *= b[d] ? t[d] : 1.0 - t[d];
+      }
+      if (nodes[corner] < 0)
+      {
+        weights[corner] = 0.0;
+      }
+      total += weights[corner];
+    }
+    if (!(total > 1e-12))
+    {
+      // No interior corner (or only at weight ~0): the nearest interior node.
+      int best = -1;
+      double bestDistance = std::numeric_limits<double>::infinity();
+      for (int half : { 2, 3 })
+      {
+        for (int k = base[2] - half + 1; k <= base[2] + half; ++k)
+        {
+          for (int j = base[1] - half + 1; j <= base[1] + half; ++j)
+          {
+            for (int i = base[0] - half + 1; i <= base[0] + half; ++i)
+            {
+              const int u = unknownAt(i, j, k);
+              if (u < 0)
+              {
+                continue;
+              }
+              const double dx = level.Origin[0] + i * h - x[0];
+              const double dy = level.Origin[1] + j * h - x[1];
+              const double dz = level.Origin[2] + k * h - x[2];
+              const double distance = dx * dx + dy * dy + dz * dz;
+              if (distance < bestDistance || (distance == bestDistance && u < best))
+              {
+                best = u;
+                bestDistance = distance;
+              }
+            }
+          }
+        }
+        if (best >= 0)
+        {
+          break;
+        }
+      }
+      if (best < 0)
+      {
+        std::ostringstream os;
+        os << "grid: " << (placed.Source.Label.empty() ? "point source" : placed.Source.Label)
+           << " at " << FormatPoint(x) << " has no grid node inside the object within 3 grid "
+           << "spacings (" << h << " mm): the object is thinner than the grid there; use a "
+           << "smaller grid spacing";
+        throw Error(os.str());
+      }
+      std::fill(nodes, nodes + 8, -1);
+      std::fill(weights, weights + 8, 0.0);
+      nodes[0] = best;
+      weights[0] = 1.0;
+      total = 1.0;
+    }
+    for (int corner = 0; corner < 8; ++corner)
+    {
+      if (nodes[corner] < 0 || weights[corner] == 0.0)
+      {
+        continue;
+      }
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        power[3 * static_cast<size_t>(nodes[corner]) + c] +=
+          placed.Source.Power[c] * weights[corner] / total;
+      }
+    }
+  }
+}
+
 } // namespace
 
 // ---- GridLevel ----
@@ -299,6 +416,22 @@ void GridLevel::Position(int u, double x[3]) const
   {
     const BoundaryNode& node = Boundary[u - numInterior];
     x[Axis[node.Direction]] += Sign[node.Direction] * node.Distance;
+  }
+}
+
+void GridLevel::ControlExtents(int u, double extent[3]) const
+{
+  const int numInterior = NumberOfInterior();
+  const int* neighbours = &Neighbours[6 * static_cast<size_t>(u)];
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    double sum = 0.0;
+    for (int dir = 2 * axis; dir < 2 * axis + 2; ++dir)
+    {
+      const int v = neighbours[dir];
+      sum += v < numInterior ? Spacing : Boundary[v - numInterior].Distance;
+    }
+    extent[axis] = 0.5 * sum;
   }
 }
 
@@ -1152,6 +1285,36 @@ void GridSolver::Assemble(const TetMesh& mesh, const OpticalProperties& material
   }
 }
 
+void GridSolver::AddInteriorSources(int levelIndex, const std::vector<PlacedSource>& sources)
+{
+  if (sources.empty())
+  {
+    return;
+  }
+  GridLevel& level = Levels_[levelIndex];
+  std::vector<double> power(3 * static_cast<size_t>(level.NumberOfInterior()), 0.0);
+  DistributeSources(level, sources, power);
+  // The interior rows are the balance of the node's control volume (the
+  // box of extents (h+ + h-)/2 around it) divided by its volume, times h^2:
+  // the source term is the node's power / V, times h^2.
+  const double h2 = level.Spacing * level.Spacing;
+  for (int u = 0; u < level.NumberOfInterior(); ++u)
+  {
+    const double* p = &power[3 * static_cast<size_t>(u)];
+    if (p[0] == 0.0 && p[1] == 0.0 && p[2] == 0.0)
+    {
+      continue;
+    }
+    double extent[3];
+    level.ControlExtents(u, extent);
+    const double volume = extent[0] * extent[1] * extent[2];
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      level.System.RightHandSide[c][u] += h2 * p[c] / volume;
+    }
+  }
+}
+
 // ---- solve ----
 
 void GridSolver::CheckProblem(const DiffusionProblem& problem, bool needIrradiance) const
@@ -1192,7 +1355,6 @@ bool GridSolver::Solve(const DiffusionProblem& problem,
   std::vector<double>& fluence,
   SolverReport& report)
 {
-  RequireNoInteriorSources(problem, "grid");
   RequireSurfaceCollimatedModel(problem, "grid");
   return SolveImpl(problem, nullptr, fluence, report);
 }
@@ -1202,7 +1364,6 @@ bool GridSolver::SolveWithNodeIrradiance(const DiffusionProblem& problem,
   std::vector<double>& fluence,
   SolverReport& report)
 {
-  RequireNoInteriorSources(problem, "grid");
   RequireSurfaceCollimatedModel(problem, "grid");
   return SolveImpl(problem, &nodeIrradiance, fluence, report);
 }
@@ -1255,6 +1416,14 @@ bool GridSolver::SolveImpl(const DiffusionProblem& problem,
   report = SolverReport();
   report.Solver = GetName();
   report.LinearSolver = solverName;
+
+  // Interior sources placed first: a source outside the object is an error
+  // (Sources::Place, the vertex solvers' messages) before any work.
+  std::vector<PlacedSource> placed;
+  if (problem.HasInteriorSources())
+  {
+    placed = problem.InteriorSources->Place(mesh, material);
+  }
 
   auto start = Clock::now();
   PrepareGrid(mesh);
@@ -1315,6 +1484,7 @@ bool GridSolver::SolveImpl(const DiffusionProblem& problem,
     }
   }
   Assemble(mesh, material, 0);
+  AddInteriorSources(0, placed);
   const bool multi = MultiLevel_ && Levels_.size() > 1;
   const bool warm = WarmStart_ && HaveSolution_;
   const bool useCoarse = multi && !warm;
@@ -1380,6 +1550,7 @@ bool GridSolver::SolveImpl(const DiffusionProblem& problem,
         }
       }
       Assemble(mesh, material, static_cast<int>(l));
+      AddInteriorSources(static_cast<int>(l), placed);
     }
   }
   report.SetupMilliseconds = MillisecondsSince(start);

@@ -88,6 +88,11 @@ struct GridLevel
   }
   /// Position (mm) of unknown u (interior, or boundary node u - interior count).
   void Position(int u, double x[3]) const;
+  /// Extents (mm) along x, y, z of the control volume of interior node u:
+  /// (h+ + h-) / 2 per axis, h+- the distance to the neighbour (h, or the
+  /// link length of a boundary node). Its product is the volume an interior
+  /// source's power is divided by.
+  void ControlExtents(int u, double extent[3]) const;
   /// Bytes held by the arrays of this level.
   std::size_t MemoryBytes() const;
 };
@@ -139,6 +144,14 @@ struct GridLevel
  *   (l/(2A) + kappa_b) phi_b - kappa_b phi_p = l/(2A) 4 q_b / (1 - Fdr).
  * Unknowns: interior nodes in grid order (x fastest), then boundary nodes.
  * The matrix is an M-matrix (probe weights are >= 0), non-symmetric.
+ *
+ * Interior sources (DiffusionProblem::InteriorSources, continuous wave):
+ * each placed point source's power P is shared among the 8 corners of the
+ * grid cell containing it by trilinear weights, renormalised over the
+ * corners that are interior nodes (none: all to the nearest interior node of
+ * the 4^3, then 6^3 block; none there: an Error naming the source), and a
+ * node's share p enters its row as h^2 p / V_u, V_u the node's control box
+ * (ControlExtents). Every level gets them. Documentation/DiffuseOptics.md.
  *
  * Linear solvers (SetLinearSolver, case-insensitive): "bicgstab" (default;
  * BiCGSTAB with the diagonal preconditioner on the right, as Eigen's, with
@@ -327,6 +340,9 @@ private:
   /// returns the number of ray fallbacks.
   int BuildLevel(const TetMesh& mesh, GridLevel& level) const;
   void Assemble(const TetMesh& mesh, const OpticalProperties& material, int levelIndex);
+  /// Adds the interior sources to the right-hand side of a level's interior
+  /// rows (after Assemble): trilinear weights, power / control volume.
+  void AddInteriorSources(int levelIndex, const std::vector<PlacedSource>& sources);
   bool SolveLevel(GridLevel& level,
     bool guess,
     std::array<int, NumberOfChannels>& iterations,

@@ -124,6 +124,9 @@ struct LevelCoefficients
 {
   std::array<std::vector<double>, NumberOfChannels> CellKappa, CellMu;
   std::array<std::vector<double>, NumberOfChannels> SurfaceKappa, SurfaceRhs;
+  /// Interior sources: the sources' share of each cell divided by its
+  /// volume (W/mm^3), the cell's right-hand side (AddSourceLoad).
+  std::array<std::vector<double>, NumberOfChannels> CellSource;
   std::vector<double> SurfaceA;
 
   void Resize(int cells, int surface)
@@ -132,6 +135,7 @@ struct LevelCoefficients
     {
       CellKappa[c].assign(cells, 0.0);
       CellMu[c].assign(cells, 0.0);
+      CellSource[c].assign(cells, 0.0);
       SurfaceKappa[c].assign(surface, 0.0);
       SurfaceRhs[c].assign(surface, 0.0);
     }
@@ -169,6 +173,10 @@ void AssembleLevel(const QuadGraphSolver::Level& level,
       int pos = level.RowOffsets[i];
       int diagonalPos = -1;
       double diagonal = 0.0, rhs = 0.0;
+      if (i < numCells)
+      {
+        rhs = k.CellSource[c][i]; // interior sources (both weightings)
+      }
       if (i < numCells && twoPointFlux)
       {
         // Not the paper's eq. 5 (QuadGraphSolver::SetTwoPointFlux): the
@@ -255,6 +263,7 @@ void RestrictCoefficients(const QuadGraphSolver::Level& fine,
     {
       kc.CellKappa[c][g] += v * kf.CellKappa[c][i];
       kc.CellMu[c][g] += v * kf.CellMu[c][i];
+      kc.CellSource[c][g] += v * kf.CellSource[c][i]; // the power: kept on every level
     }
   }
   for (int g = 0; g < coarse.NumberOfCells; ++g)
@@ -263,6 +272,7 @@ void RestrictCoefficients(const QuadGraphSolver::Level& fine,
     {
       kc.CellKappa[c][g] /= coarse.CellVolumes[g];
       kc.CellMu[c][g] /= coarse.CellVolumes[g];
+      kc.CellSource[c][g] /= coarse.CellVolumes[g];
     }
   }
   for (int s = 0; s < fine.NumberOfSurfaceNodes; ++s)
@@ -314,6 +324,44 @@ void Prolongate(
 struct QuadGraphSolver::Coefficients : LevelCoefficients
 {
 };
+
+void QuadGraphSolver::AddSourceLoad(
+  const TetMesh& mesh, const std::vector<PlacedSource>& placed, Coefficients& k) const
+{
+  // The transpose of the vertex map: the P1 load of the source (P times its
+  // barycentric weights on the tet's vertices, the FEM load) carried to the
+  // nodes by the weights through which those vertices read the nodes. A
+  // cell's share enters its row as a density (share / V_i: the rows are
+  // balances per unit volume); a surface node's share as a flux through its
+  // face in eq. 6, like q (2A share / S_s on the right-hand side).
+  const Level& fine = Graph_.Fine;
+  for (const PlacedSource& source : placed)
+  {
+    const int* tet = mesh.GetTet(source.Tet);
+    for (int a = 0; a < 4; ++a)
+    {
+      const int v = tet[a];
+      for (int m = Graph_.VertexOffsets[v]; m < Graph_.VertexOffsets[v + 1]; ++m)
+      {
+        const int node = Graph_.VertexNodes[m];
+        const double w = source.Weights[a] * Graph_.VertexWeights[m];
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          const double share = w * source.Source.Power[c];
+          if (node < fine.NumberOfCells)
+          {
+            k.CellSource[c][node] += share / fine.CellVolumes[node];
+          }
+          else
+          {
+            const int s = node - fine.NumberOfCells;
+            k.SurfaceRhs[c][s] += 2.0 * k.SurfaceA[s] * share / fine.SurfaceAreas[s];
+          }
+        }
+      }
+    }
+  }
+}
 
 QuadGraphSolver::QuadGraphSolver() = default;
 QuadGraphSolver::~QuadGraphSolver() = default;
@@ -1024,7 +1072,6 @@ bool QuadGraphSolver::Solve(
   {
     throw Error("quadgraph: the problem needs a mesh, a material and an irradiance");
   }
-  RequireNoInteriorSources(problem, "quadgraph");
   RequireSurfaceCollimatedModel(problem, "quadgraph");
   const TetMesh& mesh = *problem.Mesh;
   const int numTets = mesh.GetNumberOfTets();
@@ -1068,6 +1115,13 @@ bool QuadGraphSolver::Solve(
       throw Error(os.str());
     }
   }
+  // Interior sources placed first: a source outside the object is an error
+  // (Sources::Place, the vertex solvers' messages) before any work.
+  std::vector<PlacedSource> placed;
+  if (problem.HasInteriorSources())
+  {
+    placed = problem.InteriorSources->Place(mesh, material);
+  }
   const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
 
   report = SolverReport();
@@ -1102,6 +1156,7 @@ bool QuadGraphSolver::Solve(
   }
   Coefficients coefficients;
   ComputeFineCoefficients(mesh, material, q, coefficients, numThreads);
+  AddSourceLoad(mesh, placed, coefficients);
   AssembleLevel(Graph_.Fine, coefficients, System_, numThreads, TwoPointFlux_);
   // Coarse systems for the multi-level initialisation.
   std::vector<DiffusionSystem> coarseSystems;

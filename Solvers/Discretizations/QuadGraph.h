@@ -37,6 +37,14 @@
  * nearest coarse inner nodes / 4 nearest coarse surface nodes (searched in
  * the coarse parent's one-ring) and used there as the initial guess.
  *
+ * Interior sources (DiffusionProblem::InteriorSources, continuous wave):
+ * each placed point source's P1 load (P times its barycentric weights on
+ * its tet's vertices) is carried to the nodes by the transpose of the vertex
+ * map below: node k gets P sum_a lambda_a W(v_a, k), a cell as the density
+ * share / V_k in its row, a surface node as the flux 2 A share / S_s on the
+ * right-hand side of eq. 6 (like q). The two-point-flux scheme is then
+ * reciprocal. Documentation/DiffuseOptics.md.
+ *
  * Fluence at the mesh vertices (the output): for each vertex, a linear
  * least-squares fit, weighted by 1/distance^2, over the nodes of the cells
  * containing it and (boundary vertices) the surface nodes of the boundary
@@ -68,7 +76,8 @@ public:
   /**
    * Build the graph (when the mesh changed), assemble and solve the three
    * channels, map to the mesh points. Throws translucency::Error for a
-   * missing or empty mesh, invalid material or irradiance, an unknown
+   * missing or empty mesh, invalid material or irradiance, an interior
+   * source outside the object (Sources::Place's messages), an unknown
    * GetLinearSolver() name, RelTol <= 0 or MaxIter <= 0. Returns false if the
    * progress callback aborted.
    */
@@ -200,6 +209,10 @@ private:
   void BuildCoarseLevels(int numThreads);
   void ComputeFineCoefficients(const TetMesh& mesh, const OpticalProperties& material,
     const std::vector<double>& irradiance, Coefficients& coefficients, int numThreads) const;
+  /// Adds the interior sources to the fine coefficients (after
+  /// ComputeFineCoefficients): see the class comment.
+  void AddSourceLoad(
+    const TetMesh& mesh, const std::vector<PlacedSource>& placed, Coefficients& k) const;
   /// Solve one channel of one level's system from the guess in x; returns
   /// false if aborted.
   bool SolveChannel(const DiffusionSystem& system, int channel, Eigen::VectorXd& x,

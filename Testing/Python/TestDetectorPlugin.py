@@ -25,6 +25,9 @@ How to run (ctest does this):
 5. Surface Irradiance's ColouredDirectionalLights and SpotLights tables:
    a red-only spot and a coloured directional light give the expected
    channel ratios.
+6. quadgraph and grid take the interactive point source and a listed pencil
+   beam: the brightest vertex is next to the source, the detectors' order
+   follows it.
 
 Exits non-zero on failure (unittest). No rendering.
 """
@@ -133,6 +136,32 @@ class DetectorPluginTest(unittest.TestCase):
         self.assertEqual(self.fetch(table, 1).GetNumberOfRows(), 0)
         Delete(table)
         Delete(solve)
+
+    def test_6_sources_with_quadgraph_and_grid(self):
+        # Interior sources with every solver (issue 19): the interactive
+        # point source, then a listed pencil beam, with quadgraph and grid.
+        for solver in ("quadgraph", "grid"):
+            solve = SolveDiffusion(Input=self.dark, Solver=solver, Detectors=NEAR + FAR,
+                                   InteractivePointSource=1,
+                                   InteractivePointSourcePosition=[8.0, 0.0, 1.5])
+            data = self.fetch(solve)
+            self.assertGreater(data.GetNumberOfPoints(), 0, solver)
+            fluence = vtk_to_numpy(data.GetPointData().GetArray("Fluence"))[:, 0]
+            points = vtk_to_numpy(data.GetPoints().GetData())
+            brightest = points[int(np.argmax(fluence))]
+            self.assertLess(np.linalg.norm(brightest - [8.0, 0.0, 1.5]), 2.5, solver)
+            readings = vtk_to_numpy(data.GetFieldData().GetArray("DetectorFluence"))[:, 0]
+            self.assertGreater(readings[1], 2.0 * readings[0], solver)
+            solve.InteractivePointSource = 0
+            solve.PencilBeams = [0.0, 0.0, 3.0, 0.0, 0.0, -1.0, 1.0, 1.0, 1.0]
+            data = self.fetch(solve)
+            fluence = vtk_to_numpy(data.GetPointData().GetArray("Fluence"))[:, 0]
+            points = vtk_to_numpy(data.GetPoints().GetData())
+            brightest = points[int(np.argmax(fluence))]
+            self.assertLess(np.linalg.norm(brightest[:2]), 2.5, solver)
+            readings = vtk_to_numpy(data.GetFieldData().GetArray("DetectorFluence"))[:, 0]
+            self.assertGreater(readings[0], readings[1], solver)
+            Delete(solve)
 
     def test_5_coloured_and_spot_light_tables(self):
         lights = SurfaceIrradiance(Input=self.assign, DirectionalLights=[],

@@ -207,7 +207,7 @@ class TimeResolvedCLI(BoxRenderTest):
             (["--steps-per-gate", "3"], "--steps-per-gate requires --time-gates"),
             (["--time-gates", "0,1,4", "--steps-per-gate", "1001"], "--steps-per-gate must be"),
             (["--time-gates", "0,1,4", "--solver", "quadgraph"],
-             "no interior sources, frequency domain or time gates"),
+             "the quadgraph solver has no frequency domain or time gates"),
             (["--time-gates", "0,1,4", "--time-snapshots", "1", "--solver", "montecarlo"],
              "no fluence snapshots per gate"),
         ]

@@ -16,6 +16,7 @@
 #include "TestMeshes.h"
 #include "TestProblems.h"
 #include "TestReferenceAssembly.h"
+#include "TetGenMeshes.h"
 #include "TetMesh.h"
 #include "VertexDiffusionSolver.h"
 
@@ -26,7 +27,6 @@
 #ifndef TETLIBRARY
 #define TETLIBRARY
 #endif
-#include <tetgen.h>
 
 #include <algorithm>
 #include <chrono>
@@ -900,54 +900,6 @@ void ReadPly(const std::string& path, std::vector<double>& points, std::vector<i
   {
     throw std::runtime_error("truncated PLY file " + path);
   }
-}
-
-/// TetGen on a closed triangle surface; returns points and tets (0-based).
-MeshData Tetrahedralize(
-  const std::vector<double>& surfacePoints, const std::vector<int>& triangles, std::string switches)
-{
-  tetgenio in, out;
-  in.firstnumber = 0;
-  in.numberofpoints = static_cast<int>(surfacePoints.size() / 3);
-  in.pointlist = new REAL[surfacePoints.size()];
-  std::copy(surfacePoints.begin(), surfacePoints.end(), in.pointlist);
-  in.numberoffacets = static_cast<int>(triangles.size() / 3);
-  in.facetlist = new tetgenio::facet[in.numberoffacets];
-  for (int f = 0; f < in.numberoffacets; ++f)
-  {
-    tetgenio::facet& facet = in.facetlist[f];
-    tetgenio::init(&facet);
-    facet.numberofpolygons = 1;
-    facet.polygonlist = new tetgenio::polygon[1];
-    tetgenio::init(&facet.polygonlist[0]);
-    facet.polygonlist[0].numberofvertices = 3;
-    facet.polygonlist[0].vertexlist = new int[3];
-    for (int k = 0; k < 3; ++k)
-    {
-      facet.polygonlist[0].vertexlist[k] = triangles[3 * f + k];
-    }
-  }
-  std::vector<char> sw(switches.begin(), switches.end());
-  sw.push_back('\0');
-  try
-  {
-    tetrahedralize(sw.data(), &in, &out);
-  }
-  catch (int code)
-  {
-    throw std::runtime_error("TetGen failed with code " + std::to_string(code));
-  }
-  MeshData mesh;
-  mesh.Points.assign(out.pointlist, out.pointlist + 3 * static_cast<size_t>(out.numberofpoints));
-  mesh.Tets.resize(4 * static_cast<size_t>(out.numberoftetrahedra));
-  for (int t = 0; t < out.numberoftetrahedra; ++t)
-  {
-    for (int k = 0; k < 4; ++k)
-    {
-      mesh.Tets[4 * t + k] = out.tetrahedronlist[out.numberofcorners * t + k] - out.firstnumber;
-    }
-  }
-  return mesh;
 }
 
 /// Minimum dihedral angle of tet t (degrees).
