@@ -87,6 +87,10 @@ MeasuredFile ReadMeasuredTpsf(const std::string& path, std::size_t detectors)
   while (std::getline(in, line))
   {
     ++lineNumber;
+    if (lineNumber == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0)
+    {
+      line.erase(0, 3); // a UTF-8 byte-order mark (spreadsheet exports)
+    }
     const std::string trimmed = Trim(line);
     if (trimmed.empty() || trimmed[0] == '#')
     {
