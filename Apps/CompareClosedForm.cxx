@@ -191,7 +191,18 @@ void AddClosedForm(TpsfTable& table, vtkUnstructuredGrid* lit, vtkUnstructuredGr
     Vec x{};
     positions->GetTuple(static_cast<vtkIdType>(d), x.data());
     const double radius = radii->GetComponent(static_cast<vtkIdType>(d), 0);
-    const translucency::SurfacePoint surface = translucency::FindSurfacePoint(*mesh, x.data());
+    translucency::SurfacePoint surface;
+    try
+    {
+      surface = translucency::FindSurfacePoint(*mesh, x.data());
+    }
+    catch (const translucency::Error& e)
+    {
+      overlay.SkipReason = e.what();
+      overlay.Fluence.assign(detectors, {});
+      overlay.Exitance.assign(detectors, {});
+      return;
+    }
     std::vector<std::array<double, 3>> fluence(static_cast<std::size_t>(gates.Count)),
       exitance(static_cast<std::size_t>(gates.Count));
     for (const Placed& p : placed)
