@@ -4,8 +4,11 @@
 // error against wall time for the iterative solvers, and a .vtm multiblock.
 // With the diffuse-optics options (sources, detectors, time gates): every
 // solver's detector readings, and with --time-gates one TPSF plot overlaying
-// the solvers (CompareTpsf.h).
+// the solvers (CompareTpsf.h), a measured curve (--measured, CompareMeasured.h)
+// and the closed form where it applies (CompareClosedForm.h).
 
+#include "CompareClosedForm.h"
+#include "CompareMeasured.h"
 #include "CompareTpsf.h"
 #include "DiffuseOpticsOptions.h"
 #include "Options.h"
@@ -69,6 +72,9 @@ struct CompareOptions
   bool NoPictures = false, NSquaredLaw = false;
   const CLI::App* App = nullptr; ///< for the provenance of the JSON
   DiffuseOpticsOptions Optics;   ///< --source, --detector, --time-gates, ...
+  std::string MeasuredPath;      ///< --measured: a measured TPSF per detector (CSV)
+  std::string MeasuredNormalise = "area"; ///< --measured-normalise area|peak|none
+  bool NoClosedForm = false;     ///< --no-closed-form
 };
 
 struct SolverResult
@@ -371,6 +377,14 @@ int Compare(CompareOptions& o)
   std::vector<std::string> solvers = SplitList(solverList);
   if (solvers.empty())
     throw UsageError("--solvers lists no solver");
+  // The measured curves, read before minutes of solving (fail fast).
+  MeasuredFile measured;
+  if (!o.MeasuredPath.empty())
+  {
+    if (o.Optics.TimeGates.Count == 0 || o.Optics.Detectors.empty())
+      throw UsageError("--measured needs --time-gates and at least one --detector");
+    measured = ReadMeasuredTpsf(o.MeasuredPath, o.Optics.Detectors.size());
+  }
   // Before minutes of solving: the pictures need an X server (one
   // connection held for the whole run, see Pictures.h).
   if (pictures)
@@ -421,6 +435,19 @@ int Compare(CompareOptions& o)
     for (const DetectorSpec& d : o.Optics.Detectors)
       specs.push_back(d.Spec);
     tpsf = CollectTpsf(order, volumes, specs);
+    if (!o.MeasuredPath.empty())
+      AddMeasured(tpsf, measured, o.MeasuredNormalise, reference, image.Channel);
+    if (!o.NoClosedForm)
+    {
+      AddClosedForm(tpsf, lit, ref.Volume, o.Optics.Sources, o.Optics.TimeGates);
+      if (!tpsf.ClosedForm.SkipReason.empty())
+        std::cout << "closed form not drawn: " << tpsf.ClosedForm.SkipReason << "\n";
+      else
+        for (size_t d = 0; d < tpsf.ClosedForm.DetectorSkipReasons.size(); ++d)
+          if (!tpsf.ClosedForm.DetectorSkipReasons[d].empty())
+            std::cout << "closed form not drawn for detector " << d + 1 << " (" << specs[d]
+                      << "): " << tpsf.ClosedForm.DetectorSkipReasons[d] << "\n";
+    }
   }
   vtkDataArray* refFluence = ref.Surface->GetPointData()->GetArray("Fluence");
   vtkSmartPointer<vtkDataArray> refRadiance = SurfaceRadiance(ref);
@@ -673,6 +700,10 @@ int Compare(CompareOptions& o)
       caption << "TPSF per detector, " << o.Optics.TimeGates.Count << " gates of "
               << (o.Optics.TimeGates.End - o.Optics.TimeGates.Start) / o.Optics.TimeGates.Count
               << " ns; lines: diffusion, markers: Monte Carlo";
+      if (!tpsf.ClosedForm.Name.empty() && tpsf.ClosedForm.SkipReason.empty())
+        caption << ", grey dashed: closed form";
+      if (!tpsf.Measured.Series.empty())
+        caption << ", black: measured";
       if (!WriteTpsfPNG(tpsf, image.Channel, caption.str(), outputDir + "/tpsf.png", error))
         throw translucency::Error(error);
     }
@@ -747,6 +778,20 @@ Command AddCompareCommand(CLI::App& app)
      "pictures and again with the error-vs-time curves")->type_name("FILE");
   AddImageOptions(c, o->Image);
   AddDiffuseOpticsOptions(c, o->Optics);
+  c->add_option("--measured", o->MeasuredPath,
+     "a measured TPSF to overlay (CSV: header t_ns or t_ps, then\n"
+     "one column per --detector, in their order; needs\n"
+     "--time-gates); on tpsf.png and in tpsf.csv and the JSON")
+    ->type_name("FILE");
+  c->add_option("--measured-normalise", o->MeasuredNormalise,
+     "scale the measured curves to the reference solver's exitance\n"
+     "(channel --channel) over the gates they overlap: area, peak,\n"
+     "or none (as in the file)")
+    ->type_name("MODE")
+    ->capture_default_str()
+    ->check(CLI::IsMember({ "area", "peak", "none" }));
+  c->add_flag("--no-closed-form", o->NoClosedForm,
+    "leave the closed form (Patterson et al. 1989) off the TPSF plot");
   return { c, [o]() { return Compare(*o); } };
 }
 

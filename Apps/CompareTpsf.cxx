@@ -108,6 +108,25 @@ std::string TpsfCsv(const TpsfTable& table)
       }
     }
   }
+  for (const MeasuredSeries& m : table.Measured.Series)
+  {
+    csv << ",measured_d" << m.Detector + 1;
+  }
+  const ClosedFormOverlay& closed = table.ClosedForm;
+  for (size_t d = 0; d < closed.Fluence.size(); ++d)
+  {
+    if (closed.Fluence[d].empty())
+    {
+      continue;
+    }
+    for (const char* quantity : { "fluence", "exitance" })
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        csv << ",closedform_d" << d + 1 << "_" << quantity << "_" << ChannelNames[c];
+      }
+    }
+  }
   csv << "\n" << std::setprecision(10);
   for (size_t g = 0; g < table.GateCentres.size(); ++g)
   {
@@ -125,6 +144,32 @@ std::string TpsfCsv(const TpsfTable& table)
           {
             csv << "," << errors[g][c];
           }
+        }
+      }
+    }
+    for (const MeasuredSeries& m : table.Measured.Series)
+    {
+      if (std::isfinite(m.AtGates[g]))
+      {
+        csv << "," << m.AtGates[g];
+      }
+      else
+      {
+        csv << ",nan";
+      }
+    }
+    for (size_t d = 0; d < closed.Fluence.size(); ++d)
+    {
+      if (closed.Fluence[d].empty())
+      {
+        continue;
+      }
+      for (int q = 0; q < 2; ++q)
+      {
+        const auto& values = q == 0 ? closed.Fluence[d] : closed.Exitance[d];
+        for (int c = 0; c < 3; ++c)
+        {
+          csv << "," << values[g][c];
         }
       }
     }
@@ -169,6 +214,65 @@ nlohmann::json TpsfJson(const TpsfTable& table)
     }
     j["series"].push_back(entry);
   }
+  const MeasuredOverlay& measured = table.Measured;
+  if (!measured.Series.empty())
+  {
+    nlohmann::json m;
+    m["file"] = measured.File;
+    m["time_unit_in_file"] = measured.TimeUnit;
+    m["normalise"] = measured.Normalise;
+    m["reference_solver"] = measured.Reference;
+    m["channel"] = ChannelNames[measured.Channel];
+    m["series"] = nlohmann::json::array();
+    for (const MeasuredSeries& series : measured.Series)
+    {
+      std::vector<nlohmann::json> atGates;
+      for (double value : series.AtGates)
+      {
+        atGates.push_back(std::isfinite(value) ? nlohmann::json(value) : nlohmann::json());
+      }
+      m["series"].push_back({ { "detector", series.Detector + 1 }, { "column", series.Column },
+        { "scale", series.Scale }, { "times_ns", series.Times }, { "values_raw", series.Raw },
+        { "scaled_at_gate_centres", atGates } });
+    }
+    j["measured"] = m;
+  }
+  const ClosedFormOverlay& closed = table.ClosedForm;
+  if (!closed.Name.empty())
+  {
+    nlohmann::json c;
+    c["name"] = closed.Name;
+    c["assumption"] = closed.Assumption;
+    c["computed"] = closed.SkipReason.empty();
+    if (!closed.SkipReason.empty())
+    {
+      c["skipped_because"] = closed.SkipReason;
+    }
+    c["detectors"] = nlohmann::json::array();
+    for (size_t d = 0; d < closed.Fluence.size() && closed.SkipReason.empty(); ++d)
+    {
+      nlohmann::json entry = { { "detector", d + 1 } };
+      if (closed.Fluence[d].empty())
+      {
+        entry["skipped_because"] = closed.DetectorSkipReasons[d];
+      }
+      for (int q = 0; q < 2 && !closed.Fluence[d].empty(); ++q)
+      {
+        const auto& values = q == 0 ? closed.Fluence[d] : closed.Exitance[d];
+        for (int ch = 0; ch < 3; ++ch)
+        {
+          std::vector<double> v;
+          for (const auto& gate : values)
+          {
+            v.push_back(gate[ch]);
+          }
+          entry[std::string(q == 0 ? "fluence" : "exitance") + "_j_mm2_ns"][ChannelNames[ch]] = v;
+        }
+      }
+      c["detectors"].push_back(entry);
+    }
+    j["closed_form"] = c;
+  }
   return j;
 }
 
@@ -197,6 +301,65 @@ bool WriteTpsfPNG(const TpsfTable& table, int channel, const std::string& captio
       if (value > 0.0 && std::isfinite(value))
       {
         curve.X.push_back(table.GateCentres[g]);
+        curve.Y.push_back(value);
+      }
+    }
+    curves.push_back(curve);
+  }
+  const ClosedFormOverlay& closed = table.ClosedForm;
+  for (size_t d = 0; d < closed.Exitance.size(); ++d)
+  {
+    if (closed.Exitance[d].empty())
+    {
+      continue;
+    }
+    PlotSeries curve;
+    curve.Name = "closed form, detector " + std::to_string(d + 1) + " (" + closed.Assumption +
+      "; " + closed.Name + ")";
+    curve.Colour = PlotGrey;
+    curve.Dashed = true;
+    curve.DashDot = d % 2 == 1;
+    for (size_t g = 0; g < table.GateCentres.size(); ++g)
+    {
+      const double value = closed.Exitance[d][g][channel];
+      if (value > 0.0 && std::isfinite(value))
+      {
+        curve.X.push_back(table.GateCentres[g]);
+        curve.Y.push_back(value);
+      }
+    }
+    curves.push_back(curve);
+  }
+  const MeasuredOverlay& measured = table.Measured;
+  for (const MeasuredSeries& m : measured.Series)
+  {
+    PlotSeries curve;
+    std::ostringstream name;
+    name << "measured, detector " << m.Detector + 1 << " ('" << m.Column << "'), ";
+    if (measured.Normalise == "none")
+    {
+      name << "as in the file";
+    }
+    else
+    {
+      name << "scaled to " << measured.Reference << "'s " << measured.Normalise << " (x "
+           << std::setprecision(3) << m.Scale << ")";
+    }
+    curve.Name = name.str();
+    curve.Colour = PlotBlack;
+    curve.Markers = true;
+    curve.Dashed = m.Detector % 2 == 1;
+    // Drawn over the gates' span only (the axis is the solvers').
+    const size_t n = table.GateCentres.size();
+    const double half = n > 1 ? 0.5 * (table.GateCentres[1] - table.GateCentres[0]) : 0.0;
+    const double t0 = n ? table.GateCentres.front() - half : 0.0;
+    const double t1 = n ? table.GateCentres.back() + half : 0.0;
+    for (size_t i = 0; i < m.Times.size(); ++i)
+    {
+      const double value = m.Scale * m.Raw[i];
+      if (value > 0.0 && std::isfinite(value) && m.Times[i] >= t0 && m.Times[i] <= t1)
+      {
+        curve.X.push_back(m.Times[i]);
         curve.Y.push_back(value);
       }
     }

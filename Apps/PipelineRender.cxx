@@ -370,7 +370,8 @@ bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTit
   chart->GetAxis(vtkAxis::LEFT)->SetTitle(yTitle);
   chart->GetAxis(vtkAxis::LEFT)->SetLogScale(true);
   static const unsigned char colours[][3] = { { 31, 119, 180 }, { 255, 127, 14 },
-    { 44, 160, 44 }, { 214, 39, 40 }, { 148, 103, 189 }, { 140, 86, 75 } };
+    { 44, 160, 44 }, { 214, 39, 40 }, { 148, 103, 189 }, { 140, 86, 75 }, { 0, 0, 0 },
+    { 120, 120, 120 } };
   int k = 0;
   std::vector<vtkSmartPointer<vtkTable>> tables;
   for (const PlotSeries& s : series)
@@ -393,7 +394,11 @@ bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTit
     tables.push_back(table);
     vtkPlot* line = chart->AddPlot(s.Markers ? vtkChart::POINTS : vtkChart::LINE);
     line->SetInputData(table, 0, 1);
-    const unsigned char* c = colours[(s.Colour >= 0 ? s.Colour : k) % 6];
+    // The 6 series colours cycle; PlotBlack and PlotGrey are named.
+    const int index = s.Colour == PlotBlack || s.Colour == PlotGrey
+      ? s.Colour
+      : (s.Colour >= 0 ? s.Colour : k) % 6;
+    const unsigned char* c = colours[index];
     ++k;
     line->SetColor(c[0], c[1], c[2], 255);
     line->SetWidth(2.0);
@@ -402,7 +407,11 @@ bool WritePlotPNG(const std::vector<PlotSeries>& series, const std::string& xTit
       points->SetMarkerStyle(s.Dashed ? vtkPlotPoints::DIAMOND : vtkPlotPoints::CIRCLE);
       points->SetMarkerSize(7.0);
     }
-    if (s.Dashed)
+    if (s.DashDot)
+    {
+      line->GetPen()->SetLineType(vtkPen::DASH_DOT_LINE);
+    }
+    else if (s.Dashed)
     {
       line->GetPen()->SetLineType(vtkPen::DASH_LINE);
     }

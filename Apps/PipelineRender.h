@@ -79,10 +79,16 @@ struct PlotSeries
   std::string Name;
   std::vector<double> X;
   std::vector<double> Y;
-  int Colour = -1;      ///< palette index (6 colours); -1 = the series' position
+  /// Palette index: 0-5 the series colours (cycling), or PlotBlack, PlotGrey;
+  /// -1 = the series' position.
+  int Colour = -1;
   bool Dashed = false;  ///< a dashed line (with Markers: diamonds instead of circles)
+  bool DashDot = false; ///< a dash-dot line (overrides Dashed for a line)
   bool Markers = false; ///< circles at the points, no line (e.g. Monte Carlo)
 };
+/// Palette indices beyond the 6 series colours (measured data, closed forms).
+constexpr int PlotBlack = 6;
+constexpr int PlotGrey = 7;
 
 /**
  * A line plot (log-scale y) of several series, e.g. relative error against

@@ -89,6 +89,8 @@ struct vtkSolveDiffusion::Internals
   /// The sources of the last execution: Sources plus the interactive ones.
   translucency::Sources SolvedSources;
   std::vector<translucency::Detector> Detectors;
+  /// The detectors of the last execution: Detectors plus the interactive one.
+  std::vector<translucency::Detector> SolvedDetectors;
   /// Readings of the last solve (amplitudes) and their phases (radians).
   std::vector<translucency::DetectorReading> Readings;
   /// Monte Carlo: standard errors of Readings (continuous wave) and of the
@@ -546,7 +548,8 @@ int vtkSolveDiffusion::RequestData(
   // result back.
   const bool vertexSolver =
     this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
-  if (this->DistributedSolve && vertexSolver && this->ModulationFrequency == 0.0 &&
+  if (this->DistributedSolve && vertexSolver && !this->InteractiveDetector &&
+    this->ModulationFrequency == 0.0 &&
     this->TimeGatesCount == 0 && !ExtendedCollimatedModel(inputVector[0]) &&
     vtkTranslucencyDistributedSolve::IsAllowedByEnvironment() &&
     vtkTranslucencyDistributedSolve::IsAvailable())
@@ -689,6 +692,37 @@ int vtkSolveDiffusion::RequestData(
     return 0;
   }
   light.InteriorSources = &in.SolvedSources;
+  // The listed detectors and, while on, the interactive one (projected).
+  in.SolvedDetectors = in.Detectors;
+  std::fill(
+    this->InteractiveDetectorSurfacePosition, this->InteractiveDetectorSurfacePosition + 3, 0.0);
+  if (this->InteractiveDetector)
+  {
+    const double* x = this->InteractiveDetectorPosition;
+    if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]) ||
+      !std::isfinite(this->InteractiveDetectorRadius) || this->InteractiveDetectorRadius < 0.0)
+    {
+      vtkErrorMacro(<< "interactive detector at (" << x[0] << ", " << x[1] << ", " << x[2]
+                    << "), radius " << this->InteractiveDetectorRadius
+                    << " mm: expected a finite position and a finite radius >= 0");
+      return 0;
+    }
+    try
+    {
+      const translucency::SurfacePoint surface = translucency::FindSurfacePoint(*mesh, x);
+      translucency::Detector detector;
+      detector.Position = surface.Position;
+      detector.Radius = this->InteractiveDetectorRadius;
+      detector.Label = "interactive detector";
+      in.SolvedDetectors.push_back(detector);
+      std::copy_n(surface.Position.begin(), 3, this->InteractiveDetectorSurfacePosition);
+    }
+    catch (const translucency::Error& e)
+    {
+      vtkErrorMacro(<< "interactive detector: " << e.what());
+      return 0;
+    }
+  }
 
   try
   {
@@ -787,7 +821,7 @@ int vtkSolveDiffusion::RequestData(
       // Henyey-Greenstein g, interior sources, detectors and time-of-flight
       // gates; no frequency domain, no fluence snapshots per gate.
       monteCarlo->SetAnisotropy(this->Anisotropy);
-      monteCarlo->SetDetectors(in.Detectors);
+      monteCarlo->SetDetectors(in.SolvedDetectors);
       monteCarlo->SetTimeGates(timeResolved ? gates : translucency::TimeGates());
       if (frequencyDomain)
       {
@@ -825,7 +859,7 @@ int vtkSolveDiffusion::RequestData(
     // The detectors read the material and the irradiance after the solve.
     translucency::OpticalProperties detectorMaterial;
     std::vector<double> detectorIrradiance;
-    if (!in.Detectors.empty())
+    if (!in.SolvedDetectors.empty())
     {
       detectorMaterial = material;
       detectorIrradiance = irradiance;
@@ -876,7 +910,7 @@ int vtkSolveDiffusion::RequestData(
         in.TimeResolved.Readings = monteCarlo->GetGateReadings();
         in.TimeResolved.IntegratedFluence = fluence; // all time (the photons' CW fluence)
         in.GateErrors = monteCarlo->GetGateStandardErrors();
-        if (!in.Detectors.empty())
+        if (!in.SolvedDetectors.empty())
         {
           integrateGates();
           in.ReadingErrors.clear(); // those are of the all-time readings
@@ -894,12 +928,12 @@ int vtkSolveDiffusion::RequestData(
       problem.Irradiance = &irradiance;
       if (!vertex ||
         !vertex->SolveTimeResolved(
-          problem, gates, in.Detectors, in.TimeSnapshots, in.TimeResolved, in.Report))
+          problem, gates, in.SolvedDetectors, in.TimeSnapshots, in.TimeResolved, in.Report))
       {
         return 0; // aborted by the user
       }
       fluence = in.TimeResolved.IntegratedFluence;
-      if (!in.Detectors.empty())
+      if (!in.SolvedDetectors.empty())
       {
         integrateGates();
         in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
@@ -931,15 +965,16 @@ int vtkSolveDiffusion::RequestData(
         phase[i] = std::arg(complexFluence[i]);
       }
       fluence = amplitude;
-      if (!in.Detectors.empty())
+      if (!in.SolvedDetectors.empty())
       {
         // The readings are linear in (phi, q): read the real part with q
         // (modulated in phase with the sources) and the imaginary part
         // without, then take amplitude and phase.
         const auto re = translucency::ReadDetectors(
-          *mesh, detectorMaterial, in.Detectors, real, &detectorIrradiance);
+          *mesh, detectorMaterial, in.SolvedDetectors, real, &detectorIrradiance);
         const auto im =
-          translucency::ReadDetectors(*mesh, detectorMaterial, in.Detectors, imag, nullptr);
+          translucency::ReadDetectors(
+            *mesh, detectorMaterial, in.SolvedDetectors, imag, nullptr);
         in.Readings = re;
         in.FluencePhase.resize(re.size());
         in.ExitancePhase.resize(re.size());
@@ -971,7 +1006,7 @@ int vtkSolveDiffusion::RequestData(
       {
         in.SolvedRule = translucency::Fresnel::BoundaryRule::Moments;
       }
-      if (!in.Detectors.empty())
+      if (!in.SolvedDetectors.empty())
       {
         // The detectors read the diffuse fluence (the unscattered beam of
         // the extended model does not leave as diffuse exitance).
@@ -980,8 +1015,8 @@ int vtkSolveDiffusion::RequestData(
         {
           diffuse[k] -= in.Report.CollimatedFluence[k];
         }
-        in.Readings = translucency::ReadDetectors(*mesh, detectorMaterial, in.Detectors, diffuse,
-          &detectorIrradiance,
+        in.Readings = translucency::ReadDetectors(*mesh, detectorMaterial, in.SolvedDetectors,
+          diffuse, &detectorIrradiance,
           light.Collimated == translucency::CollimatedModel::ExtendedMoments
             ? translucency::Fresnel::BoundaryRule::Moments
             : translucency::Fresnel::BoundaryRule::Fit);
@@ -1049,7 +1084,7 @@ int vtkSolveDiffusion::RequestData(
         centres->InsertNextValue(timeResult.Gates.GetGateCentre(g));
       }
       output->GetFieldData()->AddArray(centres);
-      for (std::size_t k = 0; k < in.Detectors.size(); ++k)
+      for (std::size_t k = 0; k < in.SolvedDetectors.size(); ++k)
       {
         std::vector<double> tpsfFluence, tpsfExitance, tpsfFluenceError, tpsfExitanceError;
         for (const auto& gate : timeResult.Readings)
@@ -1085,8 +1120,18 @@ int vtkSolveDiffusion::RequestData(
         }
       }
     }
-    AttachDetectorArrays(output, in.Detectors, in.Readings, in.ReadingErrors, in.FluencePhase,
-      in.ExitancePhase, frequencyDomain);
+    AttachDetectorArrays(output, in.SolvedDetectors, in.Readings, in.ReadingErrors,
+      in.FluencePhase, in.ExitancePhase, frequencyDomain);
+    if (this->InteractiveDetector && !in.Readings.empty())
+    {
+      // What was asked for: the handle's position (DetectorPosition has the surface point).
+      if (vtkDataArray* requested =
+            output->GetFieldData()->GetArray("DetectorRequestedPosition"))
+      {
+        requested->SetTuple(
+          requested->GetNumberOfTuples() - 1, this->InteractiveDetectorPosition);
+      }
+    }
   }
   catch (const translucency::Error& e)
   {
@@ -1312,6 +1357,7 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Sources: " << this->GetNumberOfSources() << "\n";
   os << indent << "InteractivePointSource: " << this->InteractivePointSource << "\n";
   os << indent << "InteractivePencilBeam: " << this->InteractivePencilBeam << "\n";
+  os << indent << "InteractiveDetector: " << this->InteractiveDetector << "\n";
   os << indent << "Detectors: " << this->GetNumberOfDetectors() << "\n";
   os << indent << "ModulationFrequency: " << this->ModulationFrequency << " Hz\n";
   os << indent << "DistributedSolve: " << this->DistributedSolve << "\n";

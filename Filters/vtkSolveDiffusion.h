@@ -308,6 +308,31 @@ public:
   ///@}
 
   ///@{
+  /**
+   * The plugin's interactive detector (ParaView's handle widget), read
+   * after the listed detectors while on (off by default): a detector of
+   * radius InteractiveDetectorRadius (mm, >= 0; default 0, a point) at the
+   * surface point closest to InteractiveDetectorPosition (mm; anywhere,
+   * inside or outside the object: it is projected, as a listed detector's
+   * position is, but without the listed detectors' distance limit). Its
+   * readings are detector index GetNumberOfDetectors() (the last row of the
+   * detector field arrays); DetectorRequestedPosition holds the handle's
+   * position, DetectorPosition the surface point. Under MPI a solve with it
+   * on is gathered to rank 0 (the closest point over the whole surface).
+   */
+  vtkSetMacro(InteractiveDetector, bool);
+  vtkGetMacro(InteractiveDetector, bool);
+  vtkBooleanMacro(InteractiveDetector, bool);
+  vtkSetVector3Macro(InteractiveDetectorPosition, double);
+  vtkGetVector3Macro(InteractiveDetectorPosition, double);
+  vtkSetMacro(InteractiveDetectorRadius, double);
+  vtkGetMacro(InteractiveDetectorRadius, double);
+  /// The surface point (mm) the interactive detector read in the last
+  /// execution; (0, 0, 0) when it was off or failed.
+  vtkGetVector3Macro(InteractiveDetectorSurfacePosition, double);
+  ///@}
+
+  ///@{
   /// Readings of the last solve for detector k, channel c (0 if out of
   /// range): fluence and exitance (W/mm^2; amplitudes in the frequency
   /// domain), their phases (radians; 0 for a continuous-wave solve), and the
@@ -505,6 +530,10 @@ protected:
   double InteractivePencilBeamPoint2[3] = { 0.0, 0.0, 0.0 };
   double InteractivePencilBeamPower[3] = { 1.0, 1.0, 1.0 };
   double InteractivePencilBeamEntry[3] = { 0.0, 0.0, 0.0 };
+  bool InteractiveDetector = false;
+  double InteractiveDetectorPosition[3] = { 0.0, 0.0, 0.0 };
+  double InteractiveDetectorRadius = 0.0;
+  double InteractiveDetectorSurfacePosition[3] = { 0.0, 0.0, 0.0 };
 
   double TopologyTime = 0.0;
   double AssemblyTime = 0.0;

@@ -6,6 +6,7 @@
 // gates summing to the continuous-wave readings, detectors reading the
 // point tallies as ReadDetectors does), and the errors for bad input.
 
+#include "ClosedFormTPSF.h"
 #include "DiffusionSolverFactory.h"
 #include "Error.h"
 #include "Fresnel.h"
@@ -279,37 +280,20 @@ TEST(MonteCarloSources, PencilBeamOnASlabMatchesDiffusionAndPatterson)
   // Patterson's extrapolated-boundary reflectance averaged over the disc
   // (polar grid) and over each gate (Simpson).
   const double kappa = 1.0 / (3.0 * (muA + muS)), z0 = 1.0 / (muA + muS);
-  const double zb = 2.0 * Fresnel::MismatchA(eta) * kappa, z2 = z0 + 2.0 * zb;
+  const double zb = 2.0 * Fresnel::MismatchA(eta) * kappa;
   const double transmitted = 1.0 - Fresnel::Reflectance(1.0, eta);
-  auto extrapolated = [&](double rho, double t) {
-    const double dct = kappa * cm * t;
-    return transmitted * 0.5 * std::pow(4.0 * Pi * kappa * cm, -1.5) * std::pow(t, -2.5) *
-      std::exp(-muA * cm * t) *
-      (z0 * std::exp(-(rho * rho + z0 * z0) / (4.0 * dct)) +
-        z2 * std::exp(-(rho * rho + z2 * z2) / (4.0 * dct)));
-  };
+  // ClosedFormTPSF.h (shared with compare's TPSF plot): 16 Simpson intervals
+  // per gate, an 8 x 16 polar grid over the disc.
+  const ClosedFormMedium medium{ muA, kappa, cm };
   auto discGate = [&](double rho, double t0, double t1) {
-    double sum = 0.0, weight = 0.0;
-    for (int i = 0; i < 8; ++i)
-    {
-      const double s = fibre * (i + 0.5) / 8.0;
-      for (int j = 0; j < 16; ++j)
-      {
-        const double phi = 2.0 * Pi * (j + 0.5) / 16.0;
-        const double x = rho + s * std::cos(phi), y = s * std::sin(phi);
-        const double d = std::sqrt(x * x + y * y);
-        double integral = 0.0;
-        for (int m = 0; m <= 16; ++m)
-        {
-          const double w = (m == 0 || m == 16) ? 1.0 : (m % 2 ? 4.0 : 2.0);
-          const double t = t0 + (t1 - t0) * m / 16.0;
-          integral += t > 0.0 ? w * extrapolated(d, t) : 0.0;
-        }
-        sum += s * integral / 48.0;
-        weight += s;
-      }
-    }
-    return sum / weight;
+    return transmitted *
+      DiscAverage(
+        [&](double d) {
+          return GateAverage(
+            [&](double t) { return SemiInfiniteReflectanceExtrapolated(d, t, medium, z0, zb); },
+            t0, t1, 16);
+        },
+        rho, fibre);
   };
   std::vector<double> times, mcTpsf, mcVariance, reference;
   for (int g = 0; g < gates.Count; ++g)

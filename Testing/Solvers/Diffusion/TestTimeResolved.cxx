@@ -10,6 +10,7 @@
 //  - the power identity: the time integral of the impulse response is the
 //    continuous-wave solution (fluence and detector readings);
 //  - bad gates: each a translucency::Error naming the value.
+#include "ClosedFormTPSF.h"
 #include "Detectors.h"
 #include "DiffusionSolverFactory.h"
 #include "Fresnel.h"
@@ -36,32 +37,14 @@ using translucency::testing::GradedSlab;
 namespace
 {
 
-constexpr double Pi = 3.14159265358979323846;
 constexpr double C = SpeedOfLightMillimetresPerNanosecond;
 
-/// Patterson et al. 1989, eq. 2: the fluence rate of a pulse of energy P at
-/// r = 0, t = 0 in an infinite medium, c_m the speed in the medium (mm/ns),
-/// D = kappa: P c_m (4 pi D c_m t)^(-3/2) exp(-r^2 / (4 D c_m t) - mu_a c_m t).
+/// Patterson et al. 1989, eq. 2 (ClosedFormTPSF.h, shared with compare's
+/// TPSF plot): the fluence rate of a pulse of energy P at r = 0, t = 0 in an
+/// infinite medium, c_m the speed in the medium (mm/ns), D = kappa.
 double InfiniteGreen(double r, double t, double muA, double kappa, double cm, double power)
 {
-  const double dct = kappa * cm * t;
-  return power * cm * std::pow(4.0 * Pi * dct, -1.5) * std::exp(-r * r / (4.0 * dct) - muA * cm * t);
-}
-
-/// The average over [t0, t1] of a function of time (Simpson, 64 intervals).
-template <typename F>
-double GateAverage(F f, double t0, double t1)
-{
-  const int n = 64;
-  const double h = (t1 - t0) / n;
-  double sum = 0.0;
-  for (int i = 0; i <= n; ++i)
-  {
-    const double t = t0 + i * h;
-    const double value = t > 0.0 ? f(t) : 0.0;
-    sum += (i == 0 || i == n ? 1.0 : (i % 2 ? 4.0 : 2.0)) * value;
-  }
-  return sum * h / 3.0 / (t1 - t0);
+  return InfiniteMediumFluence(r, t, ClosedFormMedium{ muA, kappa, cm }, power);
 }
 
 // The infinite-medium problem of TestDiffuseOptics: mu_s' 1/mm, mu_a 0.02,
@@ -260,18 +243,11 @@ struct SlabReference
   double Rho, MuA, Kappa, Cm, Z0, Zb;
   double Patterson(double t) const
   {
-    const double dct = Kappa * Cm * t;
-    return std::pow(4.0 * Pi * Kappa * Cm, -1.5) * Z0 * std::pow(t, -2.5) *
-      std::exp(-MuA * Cm * t - (Rho * Rho + Z0 * Z0) / (4.0 * dct));
+    return SemiInfiniteReflectance(Rho, t, ClosedFormMedium{ MuA, Kappa, Cm }, Z0);
   }
   double Extrapolated(double t) const
   {
-    const double dct = Kappa * Cm * t;
-    const double z2 = Z0 + 2.0 * Zb;
-    return 0.5 * std::pow(4.0 * Pi * Kappa * Cm, -1.5) * std::pow(t, -2.5) *
-      std::exp(-MuA * Cm * t) *
-      (Z0 * std::exp(-(Rho * Rho + Z0 * Z0) / (4.0 * dct)) +
-        z2 * std::exp(-(Rho * Rho + z2 * z2) / (4.0 * dct)));
+    return SemiInfiniteReflectanceExtrapolated(Rho, t, ClosedFormMedium{ MuA, Kappa, Cm }, Z0, Zb);
   }
 };
 
