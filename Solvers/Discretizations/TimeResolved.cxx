@@ -251,6 +251,10 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   result.SnapshotGates = snapshotGates;
 
   auto start = Clock::now();
+  // The detectors' footprints, located once (not at every gate; a detector
+  // off the surface is an error before the stepping).
+  const std::vector<DetectorFootprint> footprints =
+    detectors.empty() ? std::vector<DetectorFootprint>() : LocateDetectors(mesh, detectors);
   std::vector<double> sourceLoad;
   if (problem.HasInteriorSources())
   {
@@ -633,7 +637,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     Discretization_->ToPointFluence(mesh, system, average, points);
     if (!detectors.empty())
     {
-      result.Readings.push_back(ReadDetectors(mesh, material, detectors, points,
+      result.Readings.push_back(ReadDetectorFootprints(mesh, material, footprints, points,
         g == 0 && !irradianceOverWidth.empty() ? &irradianceOverWidth : nullptr));
     }
     if (snapshot != snapshotGates.end())
