@@ -361,7 +361,8 @@ Command AddBenchCommand(CLI::App& app)
     "frequency-domain solves (COCG with Jacobi and with the\n"
     "multigrid of the real part) against the CW cold solve at\n"
     "--tets (default 1000000), and --gates time gates at\n"
-    "--gate-tets with the cg-jacobi and multigrid step solvers;\n"
+    "--gate-tets with the cg-jacobi and multigrid step solvers\n"
+    "(the multigrid with and without recycled step solutions);\n"
     "--runs default 3")->group(opticsGroup);
   CLI::Option* frequency = AddNumber(c, "--frequency", optics->Frequency,
     "modulation frequency of the frequency-domain solves (Hz)", "HZ",
@@ -375,7 +376,12 @@ Command AddBenchCommand(CLI::App& app)
     "time gates over 0-5 ns", "N",
     [](double n) { return n >= 1 && n <= translucency::TimeGates::MaximumTimeGates; },
     "--gates must be from 1 to 10000")->group(opticsGroup);
-  for (CLI::Option* only : { frequency, gateTets, gateCount })
+  CLI::Option* stepsPerGate = AddNumber(c, "--steps-per-gate", optics->StepsPerGate,
+    "time steps per gate of the time-gate table (0: automatic,\n"
+    "as render's --steps-per-gate)", "K",
+    [](double k) { return k >= 0 && k <= translucency::TimeGates::MaximumStepsPerGate; },
+    "--steps-per-gate must be from 0 to 1000")->group(opticsGroup);
+  for (CLI::Option* only : { frequency, gateTets, gateCount, stepsPerGate })
     only->needs(diffuseOptics);
   for (CLI::Option* other : { linearSolvers, meshers, edit })
     diffuseOptics->excludes(other);

@@ -205,13 +205,14 @@ json FrequencyTable(const Scene& scene, double target, double frequency, int run
     { "fd_multigrid", multigrid.Json(cwSolve, cwTotal) } };
 }
 
-json GateTable(const Scene& scene, double target, int gates, int runs)
+json GateTable(const Scene& scene, double target, int gates, int stepsPerGate, int runs)
 {
   const DiffusionProblem problem = scene.Problem();
   translucency::TimeGates timeGates;
   timeGates.Start = 0.0;
   timeGates.End = 5.0;
   timeGates.Count = gates;
+  timeGates.StepsPerGate = stepsPerGate;
   // Two detectors on the boundary (the first and the middle boundary point).
   std::vector<translucency::Detector> detectors(2);
   const std::vector<int>& boundary = scene.Mesh.GetBoundaryPoints();
@@ -220,38 +221,46 @@ json GateTable(const Scene& scene, double target, int gates, int runs)
     const double* x = scene.Mesh.GetPoint(boundary[k * (boundary.size() / 2)]);
     detectors[k].Position = { x[0], x[1], x[2] };
   }
-  std::array<Timing, 2> timing;
-  std::array<long long, 2> steps{};
-  const char* names[2] = { "cg-jacobi", "multigrid-agg" };
+  // The step solvers: cg-jacobi, multigrid-agg from the extrapolation alone
+  // (before session 21), multigrid-agg with the recycled step solutions
+  // (the default).
+  constexpr int Rows = 3;
+  const char* names[Rows] = { "cg-jacobi", "multigrid-agg", "multigrid-agg" };
+  const int recycled[Rows] = { 0, 0, 4 };
+  std::array<Timing, Rows> timing;
+  std::array<long long, Rows> steps{};
   for (int r = 0; r < runs; ++r)
   {
-    for (int k = 0; k < 2; ++k)
+    for (int k = 0; k < Rows; ++k)
     {
       auto solver = translucency::CreateDiffusionSolver("divergence");
       solver->SetLinearSolver(names[k]);
+      auto& vertex = dynamic_cast<VertexDiffusionSolver&>(*solver);
+      vertex.SetTimeStepRecycledSolutions(recycled[k]);
       translucency::TimeResolvedResult result;
       SolverReport report;
       const std::clock_t cpu = std::clock();
-      dynamic_cast<VertexDiffusionSolver&>(*solver).SolveTimeResolved(
-        problem, timeGates, detectors, {}, result, report);
+      vertex.SolveTimeResolved(problem, timeGates, detectors, {}, result, report);
       timing[k].Add(report, cpu);
       steps[k] = result.NumberOfSteps;
     }
   }
-  const double oldSolve = Median(timing[0].Solve), oldTotal = Median(timing[0].Total);
+  const double oldSolve = Median(timing[1].Solve), oldTotal = Median(timing[1].Total);
   std::cout << "  " << static_cast<long>(target) << " target: " << scene.Mesh.GetNumberOfTets()
             << " tets, " << scene.Mesh.GetNumberOfPoints() << " unknowns per channel, "
-            << gates << " gates over 0-5 ns, " << steps[1] << " steps\n";
+            << gates << " gates over 0-5 ns, " << steps[2] << " steps\n";
   std::cout << "    " << std::left << std::setw(30) << "time gates" << std::setw(22)
             << "step solver" << std::right << std::setw(14) << "iters R/G/B" << std::setw(10)
             << "setup" << std::setw(10) << "solve" << std::setw(10) << "total" << std::setw(9)
-            << "/Jacobi" << std::setw(9) << "/Jacobi" << std::setw(10) << "cpu" << "   (ms)\n";
-  PrintRow("previous step solver", timing[0], oldSolve, oldTotal);
-  PrintRow("multigrid step solver", timing[1], oldSolve, oldTotal);
+            << "/before" << std::setw(9) << "/before" << std::setw(10) << "cpu" << "   (ms)\n";
+  PrintRow("Jacobi step solver", timing[0], oldSolve, oldTotal);
+  PrintRow("multigrid, extrapolated", timing[1], oldSolve, oldTotal);
+  PrintRow("multigrid, recycled (default)", timing[2], oldSolve, oldTotal);
   return { { "target_tets", target }, { "tets", scene.Mesh.GetNumberOfTets() },
-    { "unknowns", scene.Mesh.GetNumberOfPoints() }, { "gates", gates }, { "steps", steps[1] },
+    { "unknowns", scene.Mesh.GetNumberOfPoints() }, { "gates", gates }, { "steps", steps[2] },
     { "cg_jacobi", timing[0].Json(oldSolve, oldTotal) },
-    { "multigrid_agg", timing[1].Json(oldSolve, oldTotal) } };
+    { "multigrid_agg_extrapolated", timing[1].Json(oldSolve, oldTotal) },
+    { "multigrid_agg", timing[2].Json(oldSolve, oldTotal) } };
 }
 
 } // namespace
@@ -284,7 +293,7 @@ int BenchDiffuseOptics(const DiffuseOpticsBenchOptions& o)
     Scene scene;
     MakeScene(surface, o.GateTets, scene);
     std::cout << "\n";
-    results["time_gates"] = GateTable(scene, o.GateTets, o.Gates, o.Runs);
+    results["time_gates"] = GateTable(scene, o.GateTets, o.Gates, o.StepsPerGate, o.Runs);
   }
   std::cout << "load average at the end: " << LoadAverage() << "\n";
   results["load_average_end"] = LoadAverage();

@@ -8,8 +8,11 @@
  *   linear solver: multigrid-agg at these sizes) as the baseline; the
  *   frequency-domain solve with COCG-Jacobi and with COCG preconditioned by
  *   the multigrid cycle of the real part; each one's ratio to the CW solve;
- * - at --gate-tets: --gates time gates over 0-5 ns with the cg-jacobi step
- *   solver (the previous one) and the multigrid-agg one.
+ * - at --gate-tets: --gates time gates over 0-5 ns (--steps-per-gate) with
+ *   the cg-jacobi step solver, the multigrid-agg one from the extrapolated
+ *   guess alone (before session 21) and with the recycled step solutions
+ *   (the default, VertexDiffusionSolver::SetTimeStepRecycledSolutions); the
+ *   ratios are to the extrapolated multigrid row.
  *
  * Medians of --runs; every figure of a table comes from the same run, so the
  * ratios hold on a loaded machine (the load average is printed).
@@ -32,6 +35,7 @@ struct DiffuseOpticsBenchOptions
   double Frequency = 100e6; ///< Hz
   double GateTets = 200000; ///< size of the time-gate table; 0: skip it
   int Gates = 100;          ///< gates over 0-5 ns
+  int StepsPerGate = 0;     ///< time steps per gate (0: automatic, TimeGates)
 };
 
 /// Runs the bench and prints its tables; 0 on success.

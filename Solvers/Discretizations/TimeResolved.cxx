@@ -7,6 +7,9 @@
 #include "Timer.h"
 #include "VertexDiffusionSolver.h"
 
+#include "AggregationMultigrid.h"
+#include "SolutionRecycler.h"
+
 #include "Strings.h"
 
 #include <Eigen/IterativeLinearSolvers>
@@ -111,28 +114,92 @@ using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
 using JacobiCG = Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper,
   Eigen::DiagonalPreconditioner<double>>;
 
-/// y = M x for the mass values on the system's pattern (OpenMP rows).
-void MassTimes(const DiffusionSystem& system, const std::vector<double>& mass,
-  const Eigen::VectorXd& x, Eigen::VectorXd& y)
+using Channels = std::array<Eigen::VectorXd, NumberOfChannels>;
+
+/// Loops over fewer unknowns than this run on one thread (a parallel region
+/// costs more than the work; blocked::ParallelThreshold's rule).
+constexpr int StepParallelThreshold = 8192;
+
+/**
+ * The mass matrix M on the system's pattern, and its diagonal when every
+ * off-diagonal value is 0 (the lumped mass of divergence): M x is then one
+ * product per value instead of a pass over the pattern.
+ */
+struct MassMatrix
 {
-  const int n = system.NumberOfUnknowns;
-  y.resize(n);
-  const int* rows = system.RowOffsets.data();
-  const int* cols = system.ColumnIndices.data();
-  const double* values = mass.data();
-#pragma omp parallel for schedule(static)
-  for (int i = 0; i < n; ++i)
+  const DiffusionSystem* System = nullptr;
+  std::vector<double> Values;   ///< one per non-zero of System's pattern
+  std::vector<double> Diagonal; ///< n values if M is diagonal, else empty
+
+  void Set(const DiffusionSystem& system, std::vector<double> values)
   {
-    double sum = 0.0;
+    System = &system;
+    Values = std::move(values);
+    Diagonal.assign(static_cast<std::size_t>(system.NumberOfUnknowns), 0.0);
+    for (int i = 0; i < system.NumberOfUnknowns; ++i)
+    {
+      for (int k = system.RowOffsets[i]; k < system.RowOffsets[i + 1]; ++k)
+      {
+        if (system.ColumnIndices[k] == i)
+        {
+          Diagonal[i] += Values[k];
+        }
+        else if (Values[k] != 0.0)
+        {
+          Diagonal.clear();
+          return;
+        }
+      }
+    }
+  }
+
+  /// Row i of M x for the three channels.
+  void Row(int i, const std::array<const double*, NumberOfChannels>& x, double* y) const
+  {
+    if (!Diagonal.empty())
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        y[c] = Diagonal[i] * x[c][i];
+      }
+      return;
+    }
+    const int* rows = System->RowOffsets.data();
+    const int* cols = System->ColumnIndices.data();
+    double sum[NumberOfChannels] = {};
     for (int k = rows[i]; k < rows[i + 1]; ++k)
     {
-      sum += values[k] * x[cols[k]];
+      const double m = Values[k];
+      const int j = cols[k];
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        sum[c] += m * x[c][j];
+      }
     }
-    y[i] = sum;
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      y[c] = sum[c];
+    }
   }
+};
+
+/// Pointers to the channels' data.
+std::array<const double*, NumberOfChannels> Data(const Channels& v)
+{
+  return { v[0].data(), v[1].data(), v[2].data() };
 }
 
 } // namespace
+
+void VertexDiffusionSolver::SetTimeStepRecycledSolutions(int k)
+{
+  if (k < 0 || k > SolutionRecycler::MaxCapacity)
+  {
+    throw Error(GetName() + ": time-step recycled solutions " + std::to_string(k) +
+      " (expected 0.." + std::to_string(SolutionRecycler::MaxCapacity) + ")");
+  }
+  TimeStepRecycled_ = k;
+}
 
 bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   const TimeGates& gates, const std::vector<Detector>& detectors,
@@ -184,6 +251,10 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   result.SnapshotGates = snapshotGates;
 
   auto start = Clock::now();
+  // The detectors' footprints, located once (not at every gate; a detector
+  // off the surface is an error before the stepping).
+  const std::vector<DetectorFootprint> footprints =
+    detectors.empty() ? std::vector<DetectorFootprint>() : LocateDetectors(mesh, detectors);
   std::vector<double> sourceLoad;
   if (problem.HasInteriorSources())
   {
@@ -215,7 +286,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
       coefficient[3 * static_cast<std::size_t>(t) + c] = value;
     }
   }
-  std::vector<double> mass;
+  MassMatrix mass;
   {
     std::array<std::vector<double>, NumberOfChannels> masses;
     for (auto& values : masses)
@@ -226,7 +297,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     {
       throw Error(GetName() + ": this discretisation has no time-resolved solve");
     }
-    mass = std::move(masses[0]);
+    mass.Set(system, std::move(masses[0]));
   }
   // The step matrices a M / dt + K share K's pattern. They are solved, the
   // three channels together, by the linear solver a continuous-wave Solve()
@@ -243,6 +314,14 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
       : LinearSolver_)); // throws, listing the known names
   linear->SetRelTol(RelTol_);
   linear->SetMaxIter(MaxIter_);
+  if (auto* agg = dynamic_cast<AggregationMultigridSolver*>(linear.get()))
+  {
+    // Each step starts from the A-norm-best combination of the extrapolated
+    // guess and the last solutions of the same step matrix (forgotten when
+    // the matrix changes: Setup); double precision, so exact at any RelTol.
+    agg->SetRecycleInDoublePrecision(true);
+    agg->SetRecycledSolutions(TimeStepRecycled_);
+  }
   report.LinearSolver = linear->GetName();
   // cg-jacobi: Eigen's CG per channel with its diagonal kept per step matrix
   // (the registry's cg-jacobi rebuilds it at every Solve, one more pass over
@@ -280,7 +359,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
       step.Values[c].resize(nnz);
       for (std::size_t k = 0; k < nnz; ++k)
       {
-        step.Values[c][k] = system.Values[c][k] + factor * mass[k];
+        step.Values[c][k] = system.Values[c][k] + factor * mass.Values[k];
       }
       step.RightHandSide[c].setZero(system.NumberOfUnknowns);
     }
@@ -401,6 +480,23 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     }
   };
   std::array<Eigen::VectorXd, NumberOfChannels> next, massNext;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    next[c].setZero(n);
+    massNext[c].setZero(n);
+    lastEuler[c].setZero(n);
+  }
+  // The per-step vector work in one pass over the unknowns each, the three
+  // channels together (one OpenMP region instead of one per channel and
+  // operation, no temporaries): `before(i)` before the solve, `after(i)`
+  // after it.
+  const auto forEachUnknown = [n](const auto& body) {
+#pragma omp parallel for schedule(static) if (n > StepParallelThreshold)
+    for (int i = 0; i < n; ++i)
+    {
+      body(i);
+    }
+  };
   const auto runSegment = [&](long long steps, double dt, bool add,
                             const std::function<void(long long)>& afterStep) -> bool {
     // From the pulse: TimeGates::PulseEulerSteps backward-Euler steps of
@@ -410,6 +506,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     const long long eulerSteps = fromPulse ? TimeGates::PulseEulerSteps : 1;
     const int subSteps = fromPulse ? TimeGates::PulseEulerSubSteps : 1;
     const double h = dt / subSteps;
+    const double halfDt = 0.5 * dt;
     for (long long s = 0; s < steps; ++s)
     {
       const bool euler = s < eulerSteps;
@@ -418,54 +515,68 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
       if (euler)
       {
         // (M / h + K) x' = M x / h, subSteps times; the right rectangle.
-        for (int c = 0; c < NumberOfChannels; ++c)
-        {
-          massNext[c] = massPhi[c];
-          next[c] = phi[c];
-          lastEuler[c].setZero(n);
-        }
         for (int j = 0; j < subSteps; ++j)
         {
-          for (int c = 0; c < NumberOfChannels; ++c)
-          {
-            step.RightHandSide[c] = massNext[c] / h;
-            if (pulse && j == 0)
+          const bool zeroGuess = pulse && j == 0;
+          // The first sub-step starts from phi and M phi.
+          const Channels& massFrom = j == 0 ? massPhi : massNext;
+          forEachUnknown([&](int i) {
+            for (int c = 0; c < NumberOfChannels; ++c)
             {
-              next[c].setZero(n);
+              step.RightHandSide[c][i] = massFrom[c][i] / h;
+              if (j == 0)
+              {
+                next[c][i] = zeroGuess ? 0.0 : phi[c][i];
+                lastEuler[c][i] = 0.0;
+              }
             }
-          }
+          });
           solve(next);
-          for (int c = 0; c < NumberOfChannels; ++c)
-          {
-            lastEuler[c] += h * next[c];
-            MassTimes(system, mass, next[c], massNext[c]);
-          }
-        }
-        for (int c = 0; c < NumberOfChannels && add; ++c)
-        {
-          gate[c] += lastEuler[c];
+          const auto x = Data(next);
+          forEachUnknown([&](int i) {
+            double m[NumberOfChannels];
+            mass.Row(i, x, m);
+            for (int c = 0; c < NumberOfChannels; ++c)
+            {
+              lastEuler[c][i] += h * next[c][i];
+              massNext[c][i] = m[c];
+              if (add && j + 1 == subSteps)
+              {
+                gate[c][i] += lastEuler[c][i];
+              }
+            }
+          });
         }
       }
       else
       {
         // BDF2: (3/2 M / dt + K) phi' = M (2 phi - phi_prev / 2) / dt;
-        // the trapezoid.
-        for (int c = 0; c < NumberOfChannels; ++c)
-        {
-          step.RightHandSide[c] = (2.0 * massPhi[c] - 0.5 * massPhiPrevious[c]) / dt;
-          next[c] = s == eulerSteps ? Eigen::VectorXd(phi[c])
-                                    : Eigen::VectorXd(2.0 * phi[c] - phiPrevious[c]);
-        }
-        solve(next);
-        for (int c = 0; c < NumberOfChannels; ++c)
-        {
-          MassTimes(system, mass, next[c], massNext[c]);
-          if (add)
+        // the trapezoid. The guess: the extrapolation 2 phi - phi_prev (the
+        // multigrid step solver then combines it with its recycled
+        // solutions).
+        const bool first = s == eulerSteps;
+        forEachUnknown([&](int i) {
+          for (int c = 0; c < NumberOfChannels; ++c)
           {
-            gate[c] += s == eulerSteps ? (0.5 * lastEuler[c] + 0.5 * dt * next[c]).eval()
-                                       : (0.5 * dt * (phi[c] + next[c])).eval();
+            step.RightHandSide[c][i] = (2.0 * massPhi[c][i] - 0.5 * massPhiPrevious[c][i]) / dt;
+            next[c][i] = first ? phi[c][i] : 2.0 * phi[c][i] - phiPrevious[c][i];
           }
-        }
+        });
+        solve(next);
+        const auto x = Data(next);
+        forEachUnknown([&](int i) {
+          double m[NumberOfChannels];
+          mass.Row(i, x, m);
+          for (int c = 0; c < NumberOfChannels; ++c)
+          {
+            massNext[c][i] = m[c];
+            if (add)
+            {
+              gate[c][i] += first ? 0.5 * lastEuler[c][i] + halfDt * next[c][i]
+                                  : halfDt * (phi[c][i] + next[c][i]);
+            }
+          }
+        });
       }
       for (int c = 0; c < NumberOfChannels; ++c)
       {
@@ -526,7 +637,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     Discretization_->ToPointFluence(mesh, system, average, points);
     if (!detectors.empty())
     {
-      result.Readings.push_back(ReadDetectors(mesh, material, detectors, points,
+      result.Readings.push_back(ReadDetectorFootprints(mesh, material, footprints, points,
         g == 0 && !irradianceOverWidth.empty() ? &irradianceOverWidth : nullptr));
     }
     if (snapshot != snapshotGates.end())

@@ -24,7 +24,10 @@
  * (a M / dt + K) phi = rhs (a = 1 or 3/2) from the extrapolated previous
  * values, the three channels by the linear solver a continuous-wave solve
  * would use (multigrid-agg from VertexDiffusionSolver::LargeSystemUnknowns
- * unknowns on, its hierarchy built once per run; cg-jacobi below). Gate averages: the backward-Euler steps
+ * unknowns on, its hierarchy built once per run, each step starting from the
+ * A-norm-best combination of the extrapolation and the last step solutions:
+ * VertexDiffusionSolver::SetTimeStepRecycledSolutions; cg-jacobi below).
+ * Gate averages: the backward-Euler steps
  * contribute h phi (right rectangle), the BDF2 steps the trapezoid rule (the
  * first one with half the last Euler step's integral for dt phi / 2).
  * With these weights the sum over all steps of the step integrals equals

@@ -87,6 +87,18 @@ public:
   bool SolveTimeResolved(const DiffusionProblem& problem, const TimeGates& gates,
     const std::vector<Detector>& detectors, const std::vector<int>& snapshotGates,
     TimeResolvedResult& result, SolverReport& report);
+  /**
+   * Earlier step solutions of the same step matrix whose A-norm-best
+   * combination with the extrapolated guess starts each time step
+   * (SolutionRecycler in double precision: exact, no extra product),
+   * 0..SolutionRecycler::MaxCapacity (4); default 4. 0: the extrapolation
+   * 2 phi^n - phi^(n-1) alone (before session 21). Used by the multigrid-agg
+   * step solver; the cg-jacobi steps start from the extrapolation. Measured
+   * (DiffuseOptics.md, Performance): 100 gates at 200k tets need 0.3x the
+   * iterations of the extrapolation alone.
+   */
+  void SetTimeStepRecycledSolutions(int k);
+  int GetTimeStepRecycledSolutions() const { return TimeStepRecycled_; }
 
   /**
    * Painting (TransCut Sec. 5.2): the next Solve() only rebuilds the rows of
@@ -131,6 +143,7 @@ private:
   std::unique_ptr<LinearSolver> Linear_;
   std::string LinearName_; ///< lower-case name Linear_ was created for
   bool LinearReady_ = false;
+  int TimeStepRecycled_ = 4; ///< SetTimeStepRecycledSolutions
   /// The values of the previous assembly, to detect value-only changes.
   std::array<std::vector<double>, NumberOfChannels> PreviousValues_;
   std::array<Eigen::VectorXd, NumberOfChannels> Solution_;

@@ -955,9 +955,12 @@ bool AggregationMultigridSolver::Solve(const DiffusionSystem& system,
   const double flops =
     static_cast<double>(system.ColumnIndices.size()) + 5.0 * n + Internal_->VCycleFlops;
   const float* single = UsesSinglePrecisionProduct() ? Internal_->Levels[0].Single.data() : nullptr;
-  // Recycled solutions only with the single-precision products (their floor).
-  SolutionRecycler* recycler =
-    single && Internal_->Recycler.GetCapacity() > 0 ? &Internal_->Recycler : nullptr;
+  // Recycled solutions in single precision only with the single-precision
+  // products (their floor); in double precision always.
+  SolutionRecycler* recycler = (single || Internal_->Recycler.GetDoublePrecision()) &&
+      Internal_->Recycler.GetCapacity() > 0
+    ? &Internal_->Recycler
+    : nullptr;
   return FusedBlockedPCG(
     system, single, [this](const double* r, double* z) { return Precondition(r, z); }, x,
     warmStart, RelTol_, MaxIter_, stats, flops, Progress_, Internal_->Work, recycler);
@@ -976,6 +979,16 @@ int AggregationMultigridSolver::GetRecycledSolutions() const
 void AggregationMultigridSolver::ClearRecycledSolutions()
 {
   Internal_->Recycler.Clear();
+}
+
+void AggregationMultigridSolver::SetRecycleInDoublePrecision(bool on)
+{
+  Internal_->Recycler.SetDoublePrecision(on);
+}
+
+bool AggregationMultigridSolver::GetRecycleInDoublePrecision() const
+{
+  return Internal_->Recycler.GetDoublePrecision();
 }
 
 bool AggregationMultigridSolver::UsesSinglePrecisionProduct() const

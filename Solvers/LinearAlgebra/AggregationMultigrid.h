@@ -148,6 +148,13 @@ public:
   int GetRecycledSolutions() const;
   /// Forget the kept solutions (e.g. before timing a solve).
   void ClearRecycledSolutions();
+  /// Keep the recycled solutions in double precision (default false:
+  /// single). Then they are used at every tolerance, also with the
+  /// double-precision products: the projection is exact up to round-off
+  /// (the time stepper's sequence of solves, TimeResolved.h). Forgets the
+  /// kept solutions.
+  void SetRecycleInDoublePrecision(bool on);
+  bool GetRecycleInDoublePrecision() const;
 
   /// One V-cycle z = B r on the three channels (interleaved, 3 values per
   /// vertex) — the preconditioner, exposed for tests. The cycle works on

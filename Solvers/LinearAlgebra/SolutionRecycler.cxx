@@ -14,11 +14,37 @@ void SolutionRecycler::SetCapacity(int k)
 {
   Capacity_ = std::min(std::max(k, 0), MaxCapacity);
   Size_ = std::min(Size_, Capacity_);
-  X_.resize(Capacity_);
-  W_.resize(Capacity_);
+  X_.resize(Double_ ? 0 : Capacity_);
+  W_.resize(Double_ ? 0 : Capacity_);
+  XD_.resize(Double_ ? Capacity_ : 0);
+  WD_.resize(Double_ ? Capacity_ : 0);
+}
+
+void SolutionRecycler::SetDoublePrecision(bool on)
+{
+  if (on == Double_)
+  {
+    return;
+  }
+  Double_ = on;
+  Size_ = 0;
+  X_.clear();
+  W_.clear();
+  XD_.clear();
+  WD_.clear();
+  SetCapacity(Capacity_);
 }
 
 std::array<double, NumberOfChannels> SolutionRecycler::Project(int n,
+  const std::array<const double*, NumberOfChannels>& b,
+  const std::array<double*, NumberOfChannels>& x, double* r) const
+{
+  return Double_ ? ProjectWith(XD_, WD_, n, b, x, r) : ProjectWith(X_, W_, n, b, x, r);
+}
+
+template <typename T>
+std::array<double, NumberOfChannels> SolutionRecycler::ProjectWith(
+  const std::vector<std::vector<T>>& xs, const std::vector<std::vector<T>>& ws, int n,
   const std::array<const double*, NumberOfChannels>& b,
   const std::array<double*, NumberOfChannels>& x, double* r) const
 {
@@ -37,12 +63,12 @@ std::array<double, NumberOfChannels> SolutionRecycler::Project(int n,
   const int m = k + 1;
   // Per channel: G (M x M, row-major; basis 0 = x0, i = X_{i-1}) and g = V^T b.
   constexpr int PerChannel = M * M + M;
-  const float* X[K] = {};
-  const float* W[K] = {};
+  const T* X[K] = {};
+  const T* W[K] = {};
   for (int i = 0; i < k; ++i)
   {
-    X[i] = X_[i].data();
-    W[i] = W_[i].data();
+    X[i] = xs[i].data();
+    W[i] = ws[i].data();
   }
   const auto sums = blocked::ChunkedSums<NumberOfChannels * PerChannel>(n,
     [&](long long begin, long long end, double* out)
@@ -159,12 +185,27 @@ void SolutionRecycler::Store(int n, const std::array<const double*, NumberOfChan
     Size_ = 0;
     N_ = n;
   }
+  if (Double_)
+  {
+    StoreIn(XD_, WD_, n, b, x, r);
+  }
+  else
+  {
+    StoreIn(X_, W_, n, b, x, r);
+  }
+}
+
+template <typename T>
+void SolutionRecycler::StoreIn(std::vector<std::vector<T>>& xs, std::vector<std::vector<T>>& ws,
+  int n, const std::array<const double*, NumberOfChannels>& b,
+  const std::array<const double*, NumberOfChannels>& x, const double* r)
+{
   // The oldest buffers become the newest.
-  std::rotate(X_.begin(), X_.begin() + (Capacity_ - 1), X_.end());
-  std::rotate(W_.begin(), W_.begin() + (Capacity_ - 1), W_.end());
+  std::rotate(xs.begin(), xs.begin() + (Capacity_ - 1), xs.end());
+  std::rotate(ws.begin(), ws.begin() + (Capacity_ - 1), ws.end());
   Size_ = std::min(Size_ + 1, Capacity_);
-  std::vector<float>& X = X_[0];
-  std::vector<float>& W = W_[0];
+  std::vector<T>& X = xs[0];
+  std::vector<T>& W = ws[0];
   X.resize(3 * static_cast<std::size_t>(n));
   W.resize(3 * static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(static) if(n > blocked::ParallelThreshold)
@@ -173,8 +214,8 @@ void SolutionRecycler::Store(int n, const std::array<const double*, NumberOfChan
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       const std::size_t q = 3 * static_cast<std::size_t>(v) + c;
-      X[q] = static_cast<float>(x[c][v]);
-      W[q] = static_cast<float>(b[c][v] - r[q]);
+      X[q] = static_cast<T>(x[c][v]);
+      W[q] = static_cast<T>(b[c][v] - r[q]);
     }
   }
 }
@@ -182,9 +223,13 @@ void SolutionRecycler::Store(int n, const std::array<const double*, NumberOfChan
 std::size_t SolutionRecycler::GetMemoryBytes() const
 {
   std::size_t bytes = 0;
-  for (int i = 0; i < Capacity_; ++i)
+  for (std::size_t i = 0; i < X_.size(); ++i)
   {
     bytes += (X_[i].capacity() + W_[i].capacity()) * sizeof(float);
+  }
+  for (std::size_t i = 0; i < XD_.size(); ++i)
+  {
+    bytes += (XD_[i].capacity() + WD_[i].capacity()) * sizeof(double);
   }
   return bytes;
 }

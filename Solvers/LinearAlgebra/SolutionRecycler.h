@@ -9,11 +9,15 @@
  *
  * No extra product: A x0 comes from the solve's initial residual
  * r0 = b - A x0, and w_i from the final residual of the solve that found
- * x_i (w = b - r). The stored vectors are single precision, so the new
- * residual matches the new x to about 1e-7 |b|: use it with tolerances well
- * above that (multigrid-agg uses it with its single-precision products,
- * which have the same floor). Cost: two passes over x0, r0, b and the 2k
- * stored vectors, and a copy of x and b - r after the solve.
+ * x_i (w = b - r). The stored vectors are single precision by default, so
+ * the new residual matches the new x to about 1e-7 |b|: use it with
+ * tolerances well above that (multigrid-agg uses it with its
+ * single-precision products, which have the same floor). With
+ * SetDoublePrecision(true) they are kept in double precision (twice the
+ * memory): the new residual then matches the new x to round-off, at any
+ * tolerance (the time stepper's sequence of solves, TimeResolved.h). Cost:
+ * two passes over x0, r0, b and the 2k stored vectors, and a copy of x and
+ * b - r after the solve.
  */
 #pragma once
 
@@ -35,6 +39,10 @@ public:
   static constexpr int MaxCapacity = 4;
   /// Solutions currently kept.
   int GetSize() const { return Size_; }
+  /// Keep the solutions in double precision (default false: single). A
+  /// change forgets the kept solutions.
+  void SetDoublePrecision(bool on);
+  bool GetDoublePrecision() const { return Double_; }
   /// Forget every solution (the matrix changed).
   void Clear() { Size_ = 0; }
 
@@ -55,11 +63,24 @@ public:
   std::size_t GetMemoryBytes() const;
 
 private:
+  template <typename T>
+  std::array<double, NumberOfChannels> ProjectWith(const std::vector<std::vector<T>>& xs,
+    const std::vector<std::vector<T>>& ws, int n,
+    const std::array<const double*, NumberOfChannels>& b,
+    const std::array<double*, NumberOfChannels>& x, double* r) const;
+  template <typename T>
+  void StoreIn(std::vector<std::vector<T>>& xs, std::vector<std::vector<T>>& ws, int n,
+    const std::array<const double*, NumberOfChannels>& b,
+    const std::array<const double*, NumberOfChannels>& x, const double* r);
+
   int Capacity_ = 0;
   int Size_ = 0;
   int N_ = -1;
-  /// Newest first: X_[i], W_[i] interleaved single precision (3n).
+  bool Double_ = false;
+  /// Newest first: X_[i], W_[i] interleaved single precision (3n), or
+  /// XD_[i], WD_[i] in double precision (SetDoublePrecision).
   std::vector<std::vector<float>> X_, W_;
+  std::vector<std::vector<double>> XD_, WD_;
 };
 
 } // namespace translucency

@@ -267,8 +267,19 @@ std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
   material.Validate(mesh.GetNumberOfTets());
   CheckPointArray(mesh, &fluence, "fluence");
   CheckPointArray(mesh, irradiance, "irradiance");
+  return ReadDetectorFootprints(
+    mesh, material, LocateDetectors(mesh, detectors), fluence, irradiance, rule);
+}
+
+std::vector<DetectorReading> ReadDetectorFootprints(const TetMesh& mesh,
+  const OpticalProperties& material, const std::vector<DetectorFootprint>& footprints,
+  const std::vector<double>& fluence, const std::vector<double>* irradiance,
+  Fresnel::BoundaryRule rule)
+{
+  CheckPointArray(mesh, &fluence, "fluence");
+  CheckPointArray(mesh, irradiance, "irradiance");
   std::vector<DetectorReading> readings;
-  for (const DetectorFootprint& footprint : LocateDetectors(mesh, detectors))
+  for (const DetectorFootprint& footprint : footprints)
   {
     DetectorReading reading;
     reading.SurfacePosition = footprint.SurfacePosition;

@@ -138,4 +138,14 @@ std::vector<DetectorReading> ReadDetectors(const TetMesh& mesh,
   const std::vector<double>& fluence, const std::vector<double>* irradiance,
   Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit);
 
+/**
+ * ReadDetectors with the footprints located once (LocateDetectors), for
+ * many solutions on the same mesh (the time gates): the same readings. The
+ * material is not validated again (the caller did); the arrays are checked.
+ */
+std::vector<DetectorReading> ReadDetectorFootprints(const TetMesh& mesh,
+  const OpticalProperties& material, const std::vector<DetectorFootprint>& footprints,
+  const std::vector<double>& fluence, const std::vector<double>* irradiance,
+  Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit);
+
 } // namespace translucency

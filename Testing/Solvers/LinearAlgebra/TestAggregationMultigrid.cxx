@@ -546,6 +546,55 @@ TEST(AggregationMultigrid, RecycledSolutionsOnALightSweep)
   }
 }
 
+// Recycled solutions kept in double precision (SetRecycleInDoublePrecision,
+// the time stepper's setting): used at a tight tolerance too (double
+// products, where the single-precision ones are not), with fewer iterations
+// on the same light sweep and the accuracy of the plain solver.
+TEST(AggregationMultigrid, DoublePrecisionRecyclingAtTightTolerance)
+{
+  Problem p(CubeMesh(12, 5.0, 0.3, 71), 72);
+  DiffusionSystem other;
+  DiscreteDivergence().Assemble(p.Mesh, p.Material, RandomIrradiance(p.Mesh, 73), other);
+  const auto ba = p.System.RightHandSide;
+  const auto bb = other.RightHandSide;
+  auto sweep = [&](AggregationMultigridSolver& solver, std::array<Eigen::VectorXd, 3>& x,
+                 std::array<LinearSolveStats, 3>& last)
+  {
+    solver.SetRelTol(1e-9);
+    for (int f = 0; f < 4; ++f)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        p.System.RightHandSide[c] = std::cos(0.1 * f) * ba[c] + std::sin(0.1 * f) * bb[c];
+      }
+      ASSERT_TRUE(solver.Solve(p.System, x, f > 0, last));
+    }
+  };
+  auto recycling = MakeSolver();
+  EXPECT_FALSE(recycling->GetRecycleInDoublePrecision());
+  recycling->SetRecycledSolutions(3);
+  recycling->SetRecycleInDoublePrecision(true);
+  EXPECT_TRUE(recycling->GetRecycleInDoublePrecision());
+  recycling->Setup(p.System, &p.Mesh, true);
+  EXPECT_FALSE(recycling->UsesSinglePrecisionProduct());
+  auto plain = MakeSolver();
+  plain->Setup(p.System, &p.Mesh, true);
+  std::array<Eigen::VectorXd, 3> x, y;
+  std::array<LinearSolveStats, 3> s, t;
+  sweep(*recycling, x, s);
+  sweep(*plain, y, t);
+  const auto reference = Cholesky(p.System);
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_TRUE(s[c].Converged);
+    EXPECT_LT(s[c].Iterations, t[c].Iterations) << "channel " << c;
+    const double trueResidual = (p.System.RightHandSide[c] - p.System.Matrix(c) * x[c]).norm() /
+      p.System.RightHandSide[c].norm();
+    EXPECT_LT(trueResidual, 1e-8) << "channel " << c;
+    EXPECT_LT(RelativeError(x[c], reference[c]), 1e-6) << "channel " << c;
+  }
+}
+
 // The build and the solve give bit-identical results on 1 and 2 threads.
 TEST(AggregationMultigrid, OneAndTwoThreadsIdentical)
 {
