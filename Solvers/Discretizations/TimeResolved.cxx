@@ -206,7 +206,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   // delayed pulse per point (CollimatedSource.h). Its load is split between
   // the two solve times around tau (ComputeCollimatedTimeLoad): the end
   // time of every linear solve of the run, sub-steps included, times[0] = 0
-  // the pulse (DiffuseOptics.md, "Frequency and time domain").
+  // the pulse (DiffuseOptics.md, "Collimated beams in the frequency and time domain").
   const long long before = used.GetStepsBeforeStart();
   const bool extended = IsExtendedCollimatedModel(problem.Collimated);
   CollimatedSource collimated;
@@ -665,6 +665,13 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
         used.GetTimeStep(), true, closeGate))
   {
     return false;
+  }
+  if (nextDeposit != deposits.size())
+  {
+    // The schedule above and runSegment disagree: a bug, not an input error.
+    throw Error(GetName() + ": internal error: " +
+      std::to_string(deposits.size() - nextDeposit) +
+      " collimated deposits were not injected (time-step schedule mismatch)");
   }
   Discretization_->ToPointFluence(mesh, system, integral, result.IntegratedFluence);
   for (std::size_t k = 0; k < report.CollimatedFluence.size(); ++k)

@@ -540,9 +540,9 @@ std::vector<CollimatedDeposit> ComputeCollimatedTimeLoad(const TetMesh& mesh,
               double share1 = 0.0;
               if (j > last)
               {
-                j0 = j1 = last;
+                return; // arrives after the last time: not in this run
               }
-              else if (j > 0)
+              if (j > 0)
               {
                 j0 = j - 1;
                 j1 = j;

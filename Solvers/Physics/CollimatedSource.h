@@ -30,7 +30,8 @@
  * Star's split above; the modulation convention exp(+i omega t) is that of
  * the frequency-domain diffusion equation (Arridge 1999, Inverse Problems
  * 15, R41-R93).
- * Documentation/DiffuseOptics.md, "Frequency and time domain".
+ * Documentation/DiffuseOptics.md, "Collimated beams in the frequency and time
+ * domain".
  */
 #pragma once
 
@@ -133,8 +134,8 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
 
 /**
  * Frequency domain: the beams of `source` modulated at omega with phase 0 at
- * their entry points (Documentation/DiffuseOptics.md, "Frequency and time
- * domain"). Per point, the complex collimated fluence
+ * their entry points (Documentation/DiffuseOptics.md, "Collimated beams in
+ * the frequency and time domain"). Per point, the complex collimated fluence
  *   E_c~(x) = sum over beams E_b(x) exp(-i k eta s_b(x)),  k = omega / c (rad/mm),
  * and the complex load, the integral of mu_s' E_c~ phi_i dV (W), per tet and
  * beam by ComputeCollimatedSource's rule with the exponent ln E_b - i k
@@ -167,8 +168,9 @@ struct CollimatedDeposit
  * between the two neighbouring times of `times` (ascending, times[0] = 0,
  * ns): (t1 - tau) / (t1 - t0) at t0 and the rest at t1, which keeps the
  * total and the mean arrival time (a hat-function projection in time).
- * Past the last time: the last time. Returned sorted by (Time, Point),
- * one deposit per pair; the loads sum to ComputeCollimatedSource's Load.
+ * Arrivals after the last time are left out (they come after the run).
+ * Returned sorted by (Time, Point), one deposit per pair; when the times
+ * reach past every arrival, the loads sum to ComputeCollimatedSource's Load.
  */
 std::vector<CollimatedDeposit> ComputeCollimatedTimeLoad(const TetMesh& mesh,
   const OpticalProperties& material, const CollimatedSource& source,
