@@ -278,7 +278,8 @@ void AddSceneOptions(CLI::App* command, SceneOptions& scene)
       "how directional lights enter the diffusion model:\n"
       "surface   boundary irradiance (default)\n"
       "extended  unscattered beam exp(-mu_t' s) + volume source\n"
-      "          mu_s' E_c (divergence and fem; DiffuseOptics.md)\n"
+      "          mu_s' E_c (divergence and fem; also with --frequency\n"
+      "          and --time-gates: the beam's delay; DiffuseOptics.md)\n"
       "extended-moments  extended, with the boundary condition's A\n"
       "          from the Fresnel moments (closer to Monte Carlo)")
     ->type_name("MODEL")

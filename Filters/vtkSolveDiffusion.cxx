@@ -933,6 +933,10 @@ int vtkSolveDiffusion::RequestData(
         return 0; // aborted by the user
       }
       fluence = in.TimeResolved.IntegratedFluence;
+      if (light.Collimated == translucency::CollimatedModel::ExtendedMoments)
+      {
+        in.SolvedRule = translucency::Fresnel::BoundaryRule::Moments;
+      }
       if (!in.SolvedDetectors.empty())
       {
         integrateGates();
@@ -954,27 +958,44 @@ int vtkSolveDiffusion::RequestData(
       {
         return 0; // aborted by the user
       }
+      // The extended collimated model: the total Phi = Phi_d + the
+      // modulated beam; real and imag hold the diffuse Phi_d (what the
+      // detectors read, as in continuous wave), and Fluence is |Phi_d| +
+      // |E_c| so that Fluence - CollimatedFluence is the diffuse amplitude
+      // downstream (vtkOutgoingRadiance); FluenceAmplitude and FluencePhase
+      // are those of the total.
+      const translucency::SolverReport& report = in.Report;
+      const bool beam = report.CollimatedFluence.size() == complexFluence.size() &&
+        report.CollimatedFluencePhase.size() == complexFluence.size();
+      if (light.Collimated == translucency::CollimatedModel::ExtendedMoments)
+      {
+        in.SolvedRule = translucency::Fresnel::BoundaryRule::Moments;
+      }
       std::vector<double> real(complexFluence.size()), imag(complexFluence.size());
       amplitude.resize(complexFluence.size());
       phase.resize(complexFluence.size());
+      fluence.resize(complexFluence.size());
       for (std::size_t i = 0; i < complexFluence.size(); ++i)
       {
-        real[i] = complexFluence[i].real();
-        imag[i] = complexFluence[i].imag();
+        const std::complex<double> diffuse = beam
+          ? complexFluence[i] -
+            std::polar(report.CollimatedFluence[i], report.CollimatedFluencePhase[i])
+          : complexFluence[i];
+        real[i] = diffuse.real();
+        imag[i] = diffuse.imag();
         amplitude[i] = std::abs(complexFluence[i]);
         phase[i] = std::arg(complexFluence[i]);
+        fluence[i] = beam ? std::abs(diffuse) + report.CollimatedFluence[i] : amplitude[i];
       }
-      fluence = amplitude;
       if (!in.SolvedDetectors.empty())
       {
         // The readings are linear in (phi, q): read the real part with q
         // (modulated in phase with the sources) and the imaginary part
         // without, then take amplitude and phase.
         const auto re = translucency::ReadDetectors(
-          *mesh, detectorMaterial, in.SolvedDetectors, real, &detectorIrradiance);
-        const auto im =
-          translucency::ReadDetectors(
-            *mesh, detectorMaterial, in.SolvedDetectors, imag, nullptr);
+          *mesh, detectorMaterial, in.SolvedDetectors, real, &detectorIrradiance, in.SolvedRule);
+        const auto im = translucency::ReadDetectors(
+          *mesh, detectorMaterial, in.SolvedDetectors, imag, nullptr, in.SolvedRule);
         in.Readings = re;
         in.FluencePhase.resize(re.size());
         in.ExitancePhase.resize(re.size());
@@ -1052,6 +1073,7 @@ int vtkSolveDiffusion::RequestData(
     attach(vtkTranslucency::FluenceName, fluence);
     attach("FluenceStandardError", in.Report.FluenceStandardError);
     attach("CollimatedFluence", in.Report.CollimatedFluence);
+    attach("CollimatedFluencePhase", in.Report.CollimatedFluencePhase);
     if (in.SolvedRule == translucency::Fresnel::BoundaryRule::Moments)
     {
       // Read by vtkOutgoingRadiance: the radiance of this solve's boundary

@@ -74,8 +74,13 @@
  *    `TranslucencyLights` enter as the unscattered beam E_c and its volume
  *    source mu_s' E_c; `Fluence` is then phi_d + E_c and the point array
  *    `CollimatedFluence` holds E_c (the detectors and vtkOutgoingRadiance
- *    read phi_d = Fluence - CollimatedFluence). Quadgraph, grid and the
- *    frequency domain refuse it; Monte Carlo (transport) ignores it.
+ *    read phi_d = Fluence - CollimatedFluence). With a ModulationFrequency
+ *    the beam is modulated with its delay, exp(-i omega eta s / c):
+ *    `CollimatedFluence` is its amplitude, `CollimatedFluencePhase` its
+ *    phase (rad), `Fluence` = |Phi_d| + E_c (FluenceAmplitude/Phase: of the
+ *    total); with TimeGates it is a delayed pulse per point (the integrals
+ *    include E_c where it arrives within [T0, T1]). Quadgraph and grid
+ *    refuse it; Monte Carlo (transport) ignores it.
  * A source outside the object, a pencil beam pointing out of the surface, a
  * detector off the surface, a negative frequency or invalid time gates make
  * RequestData fail with an error naming it; so do sources, a frequency or

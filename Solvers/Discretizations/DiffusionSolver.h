@@ -100,8 +100,14 @@ struct SolverReport
   /// phi_d + E_c) and the beams' power balance (W per channel):
   /// transmitted into the object, scattered into the diffuse field (the
   /// volume source's injected power) and absorbed directly. Empty / zero
-  /// otherwise.
+  /// otherwise. Frequency domain: CollimatedFluence is the amplitude of the
+  /// modulated beam and CollimatedFluencePhase its phase (radians, 3 per
+  /// mesh point; the beam lags by omega eta s / c), the powers those of
+  /// continuous wave. Time domain: CollimatedFluence is E_c integrated over
+  /// the gates (E_c where the beam arrives within [T0, T1]), the powers
+  /// those of continuous wave (the integral over all time).
   std::vector<double> CollimatedFluence;
+  std::vector<double> CollimatedFluencePhase;
   std::array<double, NumberOfChannels> CollimatedEntering{};
   std::array<double, NumberOfChannels> CollimatedScattered{};
   std::array<double, NumberOfChannels> CollimatedAbsorbed{};

@@ -210,12 +210,6 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     throw Error(GetName() + ": the problem needs a mesh, a material and an irradiance");
   }
   gates.Validate();
-  if (IsExtendedCollimatedModel(problem.Collimated))
-  {
-    throw Error(GetName() +
-      ": the extended collimated-source model is not implemented in the time domain "
-      "(use the surface model)");
-  }
   const OpticalProperties& material = *problem.Material;
   material.Validate(problem.Mesh->GetNumberOfTets());
   double absorptionRate = 0.0; // the largest mu_a c_m, 1/ns
@@ -261,7 +255,12 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     sourceLoad = problem.InteriorSources->ComputeLoad(mesh, material);
   }
   DiffusionSystem system; // K and b of the continuous-wave solve
-  Discretization_->SetBoundaryRule(Fresnel::BoundaryRule::Fit); // surface model only
+  // The Robin coefficients of the model (the Fresnel moments with
+  // extended-moments; the detectors read with the same).
+  const Fresnel::BoundaryRule rule = problem.Collimated == CollimatedModel::ExtendedMoments
+    ? Fresnel::BoundaryRule::Moments
+    : Fresnel::BoundaryRule::Fit;
+  Discretization_->SetBoundaryRule(rule);
   Discretization_->Assemble(mesh, material, irradiance, system);
   if (!sourceLoad.empty())
   {
@@ -272,6 +271,44 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
         system.RightHandSide[c][i] += 4.0 * sourceLoad[3 * static_cast<std::size_t>(i) + c];
       }
     }
+  }
+  // The extended collimated model: the beam enters at t = 0 and reaches
+  // the optical path eta s at tau = eta s / c, so its volume source is a
+  // delayed pulse per point (CollimatedSource.h). Its load is split between
+  // the two solve times around tau (ComputeCollimatedTimeLoad): the end
+  // time of every linear solve of the run, sub-steps included, times[0] = 0
+  // the pulse (DiffuseOptics.md, "Collimated beams in the frequency and time domain").
+  const long long before = used.GetStepsBeforeStart();
+  const bool extended = IsExtendedCollimatedModel(problem.Collimated);
+  CollimatedSource collimated;
+  std::vector<CollimatedDeposit> deposits;
+  if (extended)
+  {
+    collimated = ComputeCollimatedSource(mesh, material, problem.Lights, problem.Shadows);
+    std::vector<double> times(1, 0.0);
+    const auto schedule = [&times](long long steps, double dt, bool fromPulse, double t0) {
+      const long long eulerSteps = fromPulse ? TimeGates::PulseEulerSteps : 1;
+      const int subSteps = fromPulse ? TimeGates::PulseEulerSubSteps : 1;
+      const double h = dt / subSteps;
+      for (long long s = 0; s < steps; ++s)
+      {
+        for (int j = 0; s < eulerSteps && j < subSteps; ++j)
+        {
+          times.push_back(t0 + static_cast<double>(s) * dt + (j + 1) * h);
+        }
+        if (s >= eulerSteps)
+        {
+          times.push_back(t0 + static_cast<double>(s + 1) * dt);
+        }
+      }
+    };
+    if (before > 0)
+    {
+      schedule(before, used.Start / static_cast<double>(before), true, 0.0);
+    }
+    schedule(static_cast<long long>(used.Count) * used.StepsPerGate, used.GetTimeStep(),
+      before == 0, used.Start);
+    deposits = ComputeCollimatedTimeLoad(mesh, material, collimated, times);
   }
   // M: the mass matrix times 1 / c_m = eta / c (ns/mm), the same for the
   // three channels (eta is per tet).
@@ -397,16 +434,43 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   // the integral over the current gate and over [T0, T1].
   std::array<Eigen::VectorXd, NumberOfChannels> phi, phiPrevious, massPhi, massPhiPrevious, gate,
     integral;
+  // The collimated deposits: the next one to inject, the solve counter
+  // (deposit Time j enters solve j; 0 is the pulse), and what the current
+  // backward-Euler step injected (see runSegment).
+  std::size_t nextDeposit = 0;
+  long long solveIndex = 0;
+  std::array<Eigen::VectorXd, NumberOfChannels> eulerInjected;
+  // Adds 4 x the deposits of solve `j` (times `factor`) to `target` and,
+  // if given, 4 x them to `injected` (the discretisations' systems are 4 x
+  // the weak form, FiniteElement.h).
+  const auto inject = [&](long long j, double factor,
+                        std::array<Eigen::VectorXd, NumberOfChannels>& target,
+                        std::array<Eigen::VectorXd, NumberOfChannels>* injected) {
+    for (; nextDeposit < deposits.size() && deposits[nextDeposit].Time <= j; ++nextDeposit)
+    {
+      const CollimatedDeposit& d = deposits[nextDeposit];
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        target[c][d.Point] += 4.0 * factor * d.Load[c];
+        if (injected)
+        {
+          (*injected)[c][d.Point] += 4.0 * d.Load[c];
+        }
+      }
+    }
+  };
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     phi[c].setZero(n);
     phiPrevious[c].setZero(n);
     massPhi[c] = system.RightHandSide[c]; // M phi(0+) = b: the pulse
     massPhiPrevious[c].setZero(n);
+    eulerInjected[c].setZero(extended ? n : 0);
     gate[c].setZero(n);
     integral[c].setZero(n);
     report.Converged[c] = true;
   }
+  inject(0, 1.0, massPhi, nullptr); // the beam at t = 0 (the entry points)
   const long long totalSteps = used.GetNumberOfSteps();
   long long stepsDone = 0;
   std::array<long long, NumberOfChannels> iterations{};
@@ -515,6 +579,13 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
       if (euler)
       {
         // (M / h + K) x' = M x / h, subSteps times; the right rectangle.
+        if (extended)
+        {
+          for (int c = 0; c < NumberOfChannels; ++c)
+          {
+            eulerInjected[c].setZero(n);
+          }
+        }
         for (int j = 0; j < subSteps; ++j)
         {
           const bool zeroGuess = pulse && j == 0;
@@ -531,6 +602,9 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
               }
             }
           });
+          // (M / h + K) x' = (M x + w) / h: the beam's deposits w of this
+          // sub-step.
+          inject(++solveIndex, 1.0 / h, step.RightHandSide, &eulerInjected);
           solve(next);
           const auto x = Data(next);
           forEachUnknown([&](int i) {
@@ -562,6 +636,7 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
             next[c][i] = first ? phi[c][i] : 2.0 * phi[c][i] - phiPrevious[c][i];
           }
         });
+        inject(++solveIndex, 1.0 / dt, step.RightHandSide, nullptr); // + w / dt
         solve(next);
         const auto x = Data(next);
         forEachUnknown([&](int i) {
@@ -584,6 +659,15 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
         phi[c].swap(next[c]);
         massPhiPrevious[c].swap(massPhi[c]);
         massPhi[c].swap(massNext[c]);
+        if (euler && extended)
+        {
+          // BDF2's first history term takes the state at the start of the
+          // last backward-Euler step with that step's deposits in it: then
+          // the gate weights (half that step's integral for the first BDF2
+          // interval) still sum to exactly K^-1 (b + all deposits), the
+          // continuous-wave solution (DiffuseOptics.md).
+          massPhiPrevious[c] += eulerInjected[c];
+        }
       }
       pulse = false;
       ++stepsDone;
@@ -597,7 +681,6 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   };
 
   // [0, T0]: steps of at most the gate step, nothing recorded.
-  const long long before = used.GetStepsBeforeStart();
   if (before > 0 &&
     !runSegment(before, used.Start / static_cast<double>(before), false, [](long long) {}))
   {
@@ -614,6 +697,35 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     {
       q /= width;
     }
+  }
+  // The unscattered beam itself, E_c delta(t - tau) per point: its gate
+  // (-1 outside [T0, T1]) per beam and point, for the snapshots and the
+  // integral; the detectors read the diffuse field (as in continuous wave).
+  std::vector<std::vector<int>> beamGate(collimated.Beams.size());
+  if (extended)
+  {
+    report.CollimatedFluence.assign(3 * static_cast<std::size_t>(mesh.GetNumberOfPoints()), 0.0);
+    for (std::size_t b = 0; b < collimated.Beams.size(); ++b)
+    {
+      const CollimatedSource::Beam& beam = collimated.Beams[b];
+      beamGate[b].assign(beam.OpticalPath.size(), -1);
+      for (std::size_t i = 0; i < beam.OpticalPath.size(); ++i)
+      {
+        const double tau = beam.OpticalPath[i] / SpeedOfLightMillimetresPerNanosecond;
+        const double g = std::floor((tau - used.Start) / width);
+        if (tau >= used.Start && g < used.Count)
+        {
+          beamGate[b][i] = static_cast<int>(g);
+          for (int c = 0; c < NumberOfChannels; ++c)
+          {
+            report.CollimatedFluence[3 * i + c] += beam.Fluence[3 * i + c];
+          }
+        }
+      }
+    }
+    report.CollimatedEntering = collimated.Entering;
+    report.CollimatedScattered = collimated.Scattered;
+    report.CollimatedAbsorbed = collimated.Absorbed;
   }
   std::vector<double> points;
   std::array<Eigen::VectorXd, NumberOfChannels> average;
@@ -638,10 +750,21 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     if (!detectors.empty())
     {
       result.Readings.push_back(ReadDetectorFootprints(mesh, material, footprints, points,
-        g == 0 && !irradianceOverWidth.empty() ? &irradianceOverWidth : nullptr));
+        g == 0 && !irradianceOverWidth.empty() ? &irradianceOverWidth : nullptr, rule));
     }
     if (snapshot != snapshotGates.end())
     {
+      // The gate average of the unscattered pulses arriving in this gate.
+      for (std::size_t b = 0; b < collimated.Beams.size(); ++b)
+      {
+        for (std::size_t i = 0; i < beamGate[b].size(); ++i)
+        {
+          for (int c = 0; c < NumberOfChannels && beamGate[b][i] == g; ++c)
+          {
+            points[3 * i + c] += collimated.Beams[b].Fluence[3 * i + c] / width;
+          }
+        }
+      }
       result.Snapshots.resize(snapshotGates.size());
       for (std::size_t k = 0; k < snapshotGates.size(); ++k)
       {
@@ -657,7 +780,18 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   {
     return false;
   }
+  if (nextDeposit != deposits.size())
+  {
+    // The schedule above and runSegment disagree: a bug, not an input error.
+    throw Error(GetName() + ": internal error: " +
+      std::to_string(deposits.size() - nextDeposit) +
+      " collimated deposits were not injected (time-step schedule mismatch)");
+  }
   Discretization_->ToPointFluence(mesh, system, integral, result.IntegratedFluence);
+  for (std::size_t k = 0; k < report.CollimatedFluence.size(); ++k)
+  {
+    result.IntegratedFluence[k] += report.CollimatedFluence[k]; // phi_d + E_c, as in CW
+  }
   result.NumberOfSteps = stepsDone;
   report.SolveMilliseconds = MillisecondsSince(start);
   report.NumberOfUnknowns = n;

@@ -50,9 +50,6 @@
 namespace translucency
 {
 
-/// The speed of light in vacuum, mm/ns.
-constexpr double SpeedOfLightMillimetresPerNanosecond = 299.792458;
-
 /// The time gates: Count equal gates covering [Start, End] (ns).
 struct TimeGates
 {

@@ -274,12 +274,6 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   report.Solver = GetName();
   report.Assembly = "full";
 
-  if (IsExtendedCollimatedModel(problem.Collimated))
-  {
-    throw Error(GetName() +
-      ": the extended collimated-source model is not implemented in the frequency domain "
-      "(use the surface model)");
-  }
   auto start = Clock::now();
   std::vector<double> sourceLoad;
   if (problem.HasInteriorSources())
@@ -287,17 +281,44 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
     sourceLoad = problem.InteriorSources->ComputeLoad(mesh, material);
   }
   DiffusionSystem system;
-  // The surface model only (checked above): the fit's Robin coefficients,
-  // whatever the last continuous-wave solve used.
-  Discretization_->SetBoundaryRule(Fresnel::BoundaryRule::Fit);
+  // The Robin coefficients of the model (the Fresnel moments with
+  // extended-moments), whatever the last continuous-wave solve used.
+  Discretization_->SetBoundaryRule(problem.Collimated == CollimatedModel::ExtendedMoments
+      ? Fresnel::BoundaryRule::Moments
+      : Fresnel::BoundaryRule::Fit);
   Discretization_->Assemble(mesh, material, *problem.Irradiance, system);
   if (!sourceLoad.empty())
   {
     AddSourceLoad(sourceLoad, system);
   }
-  // The imaginary absorption omega eta_t / c (1/mm) per tet and channel.
   const int numTets = mesh.GetNumberOfTets();
   const double omega = 2.0 * 3.14159265358979323846 * frequency;
+  // The extended collimated model: the beam's volume source carries its
+  // own modulation exp(-i omega eta s / c) (CollimatedSource.h): a complex
+  // right-hand side, 4 x the load as for the interior sources.
+  const bool extended = IsExtendedCollimatedModel(problem.Collimated);
+  CollimatedSource collimated;
+  std::vector<std::complex<double>> collimatedFluence;
+  std::array<Eigen::VectorXd, NumberOfChannels> imaginaryRight;
+  if (extended)
+  {
+    collimated =
+      ComputeCollimatedSource(mesh, material, problem.Lights, problem.Shadows);
+    std::vector<std::complex<double>> load;
+    ComputeCollimatedFrequencyLoad(
+      mesh, material, collimated, omega / SpeedOfLight, load, collimatedFluence);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      imaginaryRight[c].setZero(system.NumberOfUnknowns);
+      for (int i = 0; i < system.NumberOfUnknowns; ++i)
+      {
+        const std::complex<double> value = 4.0 * load[3 * static_cast<std::size_t>(i) + c];
+        system.RightHandSide[c][i] += value.real();
+        imaginaryRight[c][i] = value.imag();
+      }
+    }
+  }
+  // The imaginary absorption omega eta_t / c (1/mm) per tet and channel.
   std::vector<double> coefficient(3 * static_cast<std::size_t>(numTets));
   for (int t = 0; t < numTets; ++t)
   {
@@ -355,7 +376,7 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
           [preconditioner](const double* r, double* z) {
             preconditioner->ApplyPreconditioner(r, z);
           },
-          x, RelTol_, MaxIter_, stats, progress))
+          x, RelTol_, MaxIter_, stats, progress, extended ? &imaginaryRight : nullptr))
     {
       return false;
     }
@@ -376,7 +397,11 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
       return ReportProgress((c + static_cast<double>(iteration) / std::max(1, MaxIter_)) /
         NumberOfChannels);
     };
-    const Eigen::VectorXcd b = system.RightHandSide[c].cast<std::complex<double>>();
+    Eigen::VectorXcd b = system.RightHandSide[c].cast<std::complex<double>>();
+    if (extended)
+    {
+      b.imag() = imaginaryRight[c];
+    }
     if (!SolveComplexSymmetricCOCG(system.NumberOfUnknowns, system.RowOffsets.data(),
           system.ColumnIndices.data(), system.Values[c].data(), imaginary[c].data(), b, x,
           RelTol_, MaxIter_, stats, progress))
@@ -405,6 +430,23 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   for (std::size_t i = 0; i < re.size(); ++i)
   {
     fluence[i] = std::complex<double>(re[i], im[i]);
+  }
+  if (extended)
+  {
+    // The total: diffuse plus the modulated unscattered beam; the report
+    // keeps the beam's amplitude and phase (the detectors read the diffuse
+    // part) and its continuous-wave powers.
+    report.CollimatedFluence.resize(fluence.size());
+    report.CollimatedFluencePhase.resize(fluence.size());
+    for (std::size_t k = 0; k < fluence.size(); ++k)
+    {
+      fluence[k] += collimatedFluence[k];
+      report.CollimatedFluence[k] = std::abs(collimatedFluence[k]);
+      report.CollimatedFluencePhase[k] = std::arg(collimatedFluence[k]);
+    }
+    report.CollimatedEntering = collimated.Entering;
+    report.CollimatedScattered = collimated.Scattered;
+    report.CollimatedAbsorbed = collimated.Absorbed;
   }
   return true;
 }

@@ -52,7 +52,11 @@ public:
    * and imaginary parts (the three channels together; report.LinearSolver
    * "cocg-multigrid-agg"); any other -> the Jacobi preconditioner of the
    * complex diagonal, per channel ("cocg-jacobi"). A hierarchy is built per
-   * call (set-up time in report.SetupMilliseconds).
+   * call (set-up time in report.SetupMilliseconds). The extended collimated
+   * models: the beam and its volume source carry the beam's own modulation
+   * exp(-i omega eta s / c) (ComputeCollimatedFrequencyLoad; a complex
+   * right-hand side); `fluence` is then Phi_d + E_c~, and report has the
+   * beam's amplitude and phase (CollimatedFluence, CollimatedFluencePhase).
    * @param frequency modulation frequency f in Hz (finite, > 0; else
    *        translucency::Error naming the value)
    * @param fluence complex Phi, 3 values per mesh point (W/mm^2 per W of
@@ -74,7 +78,10 @@ public:
    * (SetLinearSolver's name, or by size GetDefaultLinearSolverName(unknowns):
    * multigrid-agg, its hierarchy built once per call and its values set up
    * again only when the step changes, from LargeSystemUnknowns on; cg-jacobi
-   * below). Implemented in TimeResolved.cxx.
+   * below). The extended collimated models: the beam's volume source is a
+   * delayed pulse per point (ComputeCollimatedTimeLoad), the integrated
+   * fluence and the snapshots include E_c where the pulse arrives.
+   * Implemented in TimeResolved.cxx.
    * @param gates validated (TimeGates::Validate throws translucency::Error)
    * @param detectors read at every gate (ReadDetectors); may be empty
    * @param snapshotGates gates (0-based) whose gate-averaged fluence is kept

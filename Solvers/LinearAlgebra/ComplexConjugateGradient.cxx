@@ -154,7 +154,8 @@ bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
   const std::array<std::vector<double>, NumberOfChannels>& imagValues,
   const std::function<void(const double*, double*)>& precondition,
   std::array<Eigen::VectorXcd, NumberOfChannels>& x, double relTol, int maxIter,
-  std::array<LinearSolveStats, NumberOfChannels>& stats, const std::function<bool(int)>& progress)
+  std::array<LinearSolveStats, NumberOfChannels>& stats, const std::function<bool(int)>& progress,
+  const std::array<Eigen::VectorXd, NumberOfChannels>* imagRightHandSide)
 {
   const int n = system.NumberOfUnknowns;
   const std::size_t nnz = system.ColumnIndices.size();
@@ -163,7 +164,8 @@ bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
   for (int c = 0; c < NC && ok; ++c)
   {
     ok = system.Values[c].size() == nnz && imagValues[c].size() == nnz &&
-      system.RightHandSide[c].size() == n;
+      system.RightHandSide[c].size() == n &&
+      (!imagRightHandSide || (*imagRightHandSide)[c].size() == n);
   }
   if (!ok)
   {
@@ -186,6 +188,15 @@ bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
       rr[3 * static_cast<std::size_t>(i) + c] = b[i];
     }
     normB[c] = b.norm();
+    if (imagRightHandSide)
+    {
+      const Eigen::VectorXd& bi = (*imagRightHandSide)[c];
+      for (int i = 0; i < n; ++i)
+      {
+        ri[3 * static_cast<std::size_t>(i) + c] = bi[i];
+      }
+      normB[c] = std::hypot(normB[c], bi.norm());
+    }
     active[c] = normB[c] > 0.0;
     stats[c].Converged = !active[c];
   }
@@ -361,7 +372,8 @@ bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
       row(xr.data(), xi.data(), i, axr, axi);
       for (int c = 0; c < NC; ++c)
       {
-        const double er = system.RightHandSide[c][i] - axr[c], ei = -axi[c];
+        const double er = system.RightHandSide[c][i] - axr[c],
+                     ei = (imagRightHandSide ? (*imagRightHandSide)[c][i] : 0.0) - axi[c];
         sums[c] += er * er + ei * ei;
       }
     }

@@ -47,7 +47,9 @@ bool SolveComplexSymmetricCOCG(int n, const int* rowOffsets, const int* columns,
  * Preconditioned COCG on the three channels of a DiffusionSystem together:
  * (A_c + i B_c) x_c = b_c, A_c = system.Values[c] (the real SPD matrix),
  * B_c = imagValues[c] on the same pattern (zeros allowed: they are dropped),
- * b_c = system.RightHandSide[c] (real: sources modulated with phase 0).
+ * b_c = system.RightHandSide[c] + i imagRightHandSide[c] (real when
+ * imagRightHandSide is null: sources modulated with phase 0; the extended
+ * collimated beam's delayed source is complex).
  * precondition(r, z) computes z = P r on 3 n interleaved real values (channel
  * c of unknown i at 3 i + c) with P a fixed real symmetric positive definite
  * operator, e.g. the multigrid cycle of A (LinearSolver::ApplyPreconditioner);
@@ -70,6 +72,7 @@ bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
   const std::function<void(const double*, double*)>& precondition,
   std::array<Eigen::VectorXcd, NumberOfChannels>& x, double relTol, int maxIter,
   std::array<LinearSolveStats, NumberOfChannels>& stats,
-  const std::function<bool(int)>& progress = {});
+  const std::function<bool(int)>& progress = {},
+  const std::array<Eigen::VectorXd, NumberOfChannels>* imagRightHandSide = nullptr);
 
 } // namespace translucency

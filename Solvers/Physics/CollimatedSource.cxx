@@ -90,6 +90,77 @@ struct TetRules
   }
 };
 
+const TetRules& Rules()
+{
+  static const TetRules rules;
+  return rules;
+}
+
+/**
+ * The quadrature of one beam and channel over one tet: E_c interpolated
+ * log-linearly between the vertex values e[4] (linearly if one is 0), the
+ * optical path linearly between path[4]; the level the smallest (<= 4) at
+ * which the exponent ln E_c - i k path varies by at most 0.5 across a
+ * sub-tet (k = 0: the real range alone, as the continuous-wave load).
+ * Calls visit(g, l, pathAtPoint, weight) per point (g the interpolated E_c,
+ * l the barycentric coordinates, weight = volume / points) and returns the
+ * weight, or 0 if E_c is 0 at all four vertices (no call).
+ */
+template <class Visit>
+double VisitTet(const double e[4], const double path[4], double wavenumber, double volume,
+  Visit&& visit)
+{
+  double logE[4];
+  bool positive = true, any = false;
+  for (int k = 0; k < 4; ++k)
+  {
+    positive = positive && e[k] > 0.0;
+    any = any || e[k] > 0.0;
+    logE[k] = e[k] > 0.0 ? std::log(e[k]) : 0.0;
+  }
+  if (!any)
+  {
+    return 0.0;
+  }
+  // Finer rules where E_c (or its phase) varies more across the tet.
+  int level = 1;
+  if (positive)
+  {
+    const double real = std::max(std::max(logE[0], logE[1]), std::max(logE[2], logE[3])) -
+      std::min(std::min(logE[0], logE[1]), std::min(logE[2], logE[3]));
+    const double imaginary = wavenumber *
+      (std::max(std::max(path[0], path[1]), std::max(path[2], path[3])) -
+        std::min(std::min(path[0], path[1]), std::min(path[2], path[3])));
+    const double range = imaginary > 0.0 ? std::hypot(real, imaginary) : real;
+    level = 0;
+    while (level < TetRules::MaxLevel && range > 0.5 * (1 << level))
+    {
+      ++level;
+    }
+  }
+  const std::vector<std::array<double, 4>>& points = Rules().Points[level];
+  const double weight = volume / static_cast<double>(points.size());
+  for (const std::array<double, 4>& l : points)
+  {
+    const double g = positive
+      ? std::exp(l[0] * logE[0] + l[1] * logE[1] + l[2] * logE[2] + l[3] * logE[3])
+      : l[0] * e[0] + l[1] * e[1] + l[2] * e[2] + l[3] * e[3];
+    visit(g, l, l[0] * path[0] + l[1] * path[1] + l[2] * path[2] + l[3] * path[3], weight);
+  }
+  return weight;
+}
+
+/// The vertex values of beam `beam`, channel c, on tet v: E_c and the path.
+void TetValues(const CollimatedSource::Beam& beam, const int* v, int c, double e[4],
+  double path[4])
+{
+  for (int k = 0; k < 4; ++k)
+  {
+    e[k] = beam.Fluence[3 * static_cast<size_t>(v[k]) + c];
+    path[k] = beam.OpticalPath[v[k]];
+  }
+}
+
 } // namespace
 
 std::vector<LightSource> NonCollimatedLights(const std::vector<LightSource>& lights)
@@ -123,6 +194,12 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
   CollimatedSource out;
   out.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
   out.Load.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  out.Beams.resize(beams.size());
+  for (CollimatedSource::Beam& beam : out.Beams)
+  {
+    beam.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+    beam.OpticalPath.assign(static_cast<size_t>(numPoints), 0.0);
+  }
   if (beams.empty() || mesh.GetNumberOfBoundaryTriangles() == 0)
   {
     return out;
@@ -184,8 +261,10 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
         origin[k] -= offset * n[k]; // just inside
       }
     }
-    for (const LightSource& beam : beams)
+    for (size_t index = 0; index < beams.size(); ++index)
     {
+      const LightSource& beam = beams[index];
+      CollimatedSource::Beam& field = out.Beams[index];
       const double len = std::sqrt(beam.Direction[0] * beam.Direction[0] +
         beam.Direction[1] * beam.Direction[1] + beam.Direction[2] * beam.Direction[2]);
       const double w[3] = { -beam.Direction[0] / len, -beam.Direction[1] / len,
@@ -239,18 +318,20 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
         std::max(0.0, (n[0] * (a[0] - x[0]) + n[1] * (a[1] - x[1]) + n[2] * (a[2] - x[2])) / nl);
       const double s = depth / cosT;
       const double entering = cosIn * Fresnel::Transmittance(cosIn, eta) / cosT;
+      field.OpticalPath[i] = eta * s;
       for (int c = 0; c < NumberOfChannels; ++c)
       {
         const double muT = muA[3 * static_cast<size_t>(tet) + c] +
           muS[3 * static_cast<size_t>(tet) + c];
-        out.Fluence[3 * static_cast<size_t>(i) + c] +=
-          beam.Power[c] * entering * std::exp(-muT * s);
+        const double value = beam.Power[c] * entering * std::exp(-muT * s);
+        field.Fluence[3 * static_cast<size_t>(i) + c] = value;
+        out.Fluence[3 * static_cast<size_t>(i) + c] += value;
       }
     }
   }
 
-  // Loads: integral of mu_s' E_c phi_a per tet, then scattered to the points.
-  static const TetRules rules;
+  // Loads: integral of mu_s' E_c phi_a per tet and beam, then scattered to
+  // the points.
   std::vector<double> tetLoad(12 * static_cast<size_t>(numTets), 0.0);
   std::vector<double> tetAbsorbed(3 * static_cast<size_t>(numTets), 0.0);
 #pragma omp parallel for schedule(static)
@@ -258,55 +339,33 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
   {
     const int* v = mesh.GetTet(t);
     const double volume = mesh.GetTetVolume(t);
-    for (int c = 0; c < NumberOfChannels; ++c)
+    for (const CollimatedSource::Beam& beam : out.Beams)
     {
-      double e[4], logE[4];
-      bool positive = true, any = false;
-      for (int k = 0; k < 4; ++k)
+      for (int c = 0; c < NumberOfChannels; ++c)
       {
-        e[k] = out.Fluence[3 * static_cast<size_t>(v[k]) + c];
-        positive = positive && e[k] > 0.0;
-        any = any || e[k] > 0.0;
-        logE[k] = e[k] > 0.0 ? std::log(e[k]) : 0.0;
-      }
-      if (!any)
-      {
-        continue;
-      }
-      // Finer rules where E_c varies more across the tet: the log range per
-      // sub-tet at most 0.5 (level <= 4).
-      int level = 1;
-      if (positive)
-      {
-        const double range = std::max(std::max(logE[0], logE[1]), std::max(logE[2], logE[3])) -
-          std::min(std::min(logE[0], logE[1]), std::min(logE[2], logE[3]));
-        level = 0;
-        while (level < TetRules::MaxLevel && range > 0.5 * (1 << level))
+        double e[4], path[4];
+        TetValues(beam, v, c, e, path);
+        double moment[4] = { 0.0, 0.0, 0.0, 0.0 }, total = 0.0;
+        const double scale = VisitTet(e, path, 0.0, volume,
+          [&](double g, const std::array<double, 4>& l, double, double) {
+            total += g;
+            for (int k = 0; k < 4; ++k)
+            {
+              moment[k] += g * l[k];
+            }
+          });
+        if (scale == 0.0)
         {
-          ++level;
+          continue;
         }
-      }
-      const std::vector<std::array<double, 4>>& points = rules.Points[level];
-      double moment[4] = { 0.0, 0.0, 0.0, 0.0 }, total = 0.0;
-      for (const std::array<double, 4>& l : points)
-      {
-        const double g = positive
-          ? std::exp(l[0] * logE[0] + l[1] * logE[1] + l[2] * logE[2] + l[3] * logE[3])
-          : l[0] * e[0] + l[1] * e[1] + l[2] * e[2] + l[3] * e[3];
-        total += g;
+        const double sigma = muS[3 * static_cast<size_t>(t) + c];
         for (int k = 0; k < 4; ++k)
         {
-          moment[k] += g * l[k];
+          tetLoad[12 * static_cast<size_t>(t) + 3 * k + c] += sigma * scale * moment[k];
         }
+        tetAbsorbed[3 * static_cast<size_t>(t) + c] +=
+          muA[3 * static_cast<size_t>(t) + c] * scale * total;
       }
-      const double scale = volume / static_cast<double>(points.size());
-      const double sigma = muS[3 * static_cast<size_t>(t) + c];
-      for (int k = 0; k < 4; ++k)
-      {
-        tetLoad[12 * static_cast<size_t>(t) + 3 * k + c] = sigma * scale * moment[k];
-      }
-      tetAbsorbed[3 * static_cast<size_t>(t) + c] =
-        muA[3 * static_cast<size_t>(t) + c] * scale * total;
     }
   }
   for (int t = 0; t < numTets; ++t)
@@ -324,6 +383,227 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
     }
   }
   return out;
+}
+
+void ComputeCollimatedFrequencyLoad(const TetMesh& mesh, const OpticalProperties& material,
+  const CollimatedSource& source, double wavenumber, std::vector<std::complex<double>>& load,
+  std::vector<std::complex<double>>& fluence)
+{
+  if (!std::isfinite(wavenumber) || wavenumber < 0.0)
+  {
+    std::ostringstream out;
+    out << "collimated source: wavenumber omega / c = " << wavenumber
+        << " rad/mm (expected a finite value >= 0)";
+    throw Error(out.str());
+  }
+  const int numPoints = mesh.GetNumberOfPoints();
+  const int numTets = mesh.GetNumberOfTets();
+  material.Validate(numTets);
+  load.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  for (const CollimatedSource::Beam& beam : source.Beams)
+  {
+    if (beam.Fluence.size() != 3 * static_cast<size_t>(numPoints) ||
+      beam.OpticalPath.size() != static_cast<size_t>(numPoints))
+    {
+      throw Error("collimated source: the beams do not match the mesh's points");
+    }
+    for (int i = 0; i < numPoints; ++i)
+    {
+      const std::complex<double> phase = std::polar(1.0, -wavenumber * beam.OpticalPath[i]);
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        fluence[3 * static_cast<size_t>(i) + c] += beam.Fluence[3 * static_cast<size_t>(i) + c] * phase;
+      }
+    }
+  }
+  const std::vector<double>& muS = material.ReducedScatteringCoefficient;
+  std::vector<std::complex<double>> tetLoad(12 * static_cast<size_t>(numTets), 0.0);
+#pragma omp parallel for schedule(static)
+  for (int t = 0; t < numTets; ++t)
+  {
+    const int* v = mesh.GetTet(t);
+    const double volume = mesh.GetTetVolume(t);
+    for (const CollimatedSource::Beam& beam : source.Beams)
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        double e[4], path[4];
+        TetValues(beam, v, c, e, path);
+        std::complex<double> moment[4] = { 0.0, 0.0, 0.0, 0.0 };
+        const double scale = VisitTet(e, path, wavenumber, volume,
+          [&](double g, const std::array<double, 4>& l, double p, double) {
+            // The beam's own modulation: exp(-i omega eta s / c).
+            const std::complex<double> value = g * std::polar(1.0, -wavenumber * p);
+            for (int k = 0; k < 4; ++k)
+            {
+              moment[k] += value * l[k];
+            }
+          });
+        const double sigma = muS[3 * static_cast<size_t>(t) + c];
+        for (int k = 0; k < 4 && scale > 0.0; ++k)
+        {
+          tetLoad[12 * static_cast<size_t>(t) + 3 * k + c] += sigma * scale * moment[k];
+        }
+      }
+    }
+  }
+  for (int t = 0; t < numTets; ++t)
+  {
+    const int* v = mesh.GetTet(t);
+    for (int k = 0; k < 4; ++k)
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        load[3 * static_cast<size_t>(v[k]) + c] += tetLoad[12 * static_cast<size_t>(t) + 3 * k + c];
+      }
+    }
+  }
+}
+
+std::vector<CollimatedDeposit> ComputeCollimatedTimeLoad(const TetMesh& mesh,
+  const OpticalProperties& material, const CollimatedSource& source,
+  const std::vector<double>& times)
+{
+  if (times.empty() || times.front() != 0.0 || !std::is_sorted(times.begin(), times.end()))
+  {
+    throw Error("collimated source: the step times must start at 0 and ascend");
+  }
+  const int numPoints = mesh.GetNumberOfPoints();
+  const int numTets = mesh.GetNumberOfTets();
+  material.Validate(numTets);
+  for (const CollimatedSource::Beam& beam : source.Beams)
+  {
+    if (beam.Fluence.size() != 3 * static_cast<size_t>(numPoints) ||
+      beam.OpticalPath.size() != static_cast<size_t>(numPoints))
+    {
+      throw Error("collimated source: the beams do not match the mesh's points");
+    }
+  }
+  const std::vector<double>& muS = material.ReducedScatteringCoefficient;
+  const int last = static_cast<int>(times.size()) - 1;
+  // Per tet (in tet order, so the sums below do not depend on the threads).
+  std::vector<std::vector<CollimatedDeposit>> perTet(static_cast<size_t>(numTets));
+#pragma omp parallel
+  {
+    // The tet's deposits, dense over the times its arrivals span: weights
+    // [(j - first) * 12 + 3 k + c] for time j, vertex k, channel c.
+    std::vector<double> dense;
+#pragma omp for schedule(static)
+    for (int t = 0; t < numTets; ++t)
+    {
+      const int* v = mesh.GetTet(t);
+      const double volume = mesh.GetTetVolume(t);
+      // The arrivals in the tet lie between its lit vertices' (linear in
+      // the barycentric coordinates): the times around them. (In a tet a
+      // beam lights partly, the points near an unlit vertex, whose path is
+      // 0, are clamped to that range: the beam has reached the tet by then.)
+      int first = last, end = 0;
+      for (const CollimatedSource::Beam& beam : source.Beams)
+      {
+        for (int k = 0; k < 4; ++k)
+        {
+          const double* lit = &beam.Fluence[3 * static_cast<size_t>(v[k])];
+          if (!(lit[0] > 0.0 || lit[1] > 0.0 || lit[2] > 0.0))
+          {
+            continue;
+          }
+          const double tau = beam.OpticalPath[v[k]] / SpeedOfLightMillimetresPerNanosecond;
+          const int j = static_cast<int>(
+            std::upper_bound(times.begin(), times.end(), tau) - times.begin());
+          first = std::min(first, std::max(0, std::min(j, last + 1) - 1));
+          end = std::max(end, std::min(j, last) + 1);
+        }
+      }
+      if (end <= first)
+      {
+        continue;
+      }
+      dense.assign(12 * static_cast<size_t>(end - first), 0.0);
+      for (const CollimatedSource::Beam& beam : source.Beams)
+      {
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          double e[4], path[4];
+          TetValues(beam, v, c, e, path);
+          // Exactly the continuous-wave quadrature (wavenumber 0), each
+          // point's weight split between the two step times around its
+          // arrival (a hat function in time).
+          const double sigma = muS[3 * static_cast<size_t>(t) + c];
+          double* w = dense.data() + c;
+          VisitTet(e, path, 0.0, volume,
+            [&](double g, const std::array<double, 4>& l, double p, double weight) {
+              const double tau = p / SpeedOfLightMillimetresPerNanosecond;
+              const int j = static_cast<int>(
+                std::upper_bound(times.begin(), times.end(), tau) - times.begin());
+              int j0 = 0, j1 = 0;
+              double share1 = 0.0;
+              if (j > last)
+              {
+                return; // arrives after the last time: not in this run
+              }
+              if (j > 0)
+              {
+                j0 = j - 1;
+                j1 = j;
+                share1 = (tau - times[j0]) / (times[j1] - times[j0]);
+              }
+              // (Inside [first, end) up to rounding of the interpolation.)
+              j0 = std::max(first, std::min(j0, end - 1));
+              j1 = std::max(first, std::min(j1, end - 1));
+              const double scaled = sigma * weight * g;
+              for (int k = 0; k < 4; ++k)
+              {
+                w[12 * static_cast<size_t>(j0 - first) + 3 * k] += (1.0 - share1) * scaled * l[k];
+                w[12 * static_cast<size_t>(j1 - first) + 3 * k] += share1 * scaled * l[k];
+              }
+            });
+        }
+      }
+      std::vector<CollimatedDeposit>& out = perTet[static_cast<size_t>(t)];
+      for (int j = first; j < end; ++j)
+      {
+        for (int k = 0; k < 4; ++k)
+        {
+          const double* w = &dense[12 * static_cast<size_t>(j - first) + 3 * k];
+          if (w[0] != 0.0 || w[1] != 0.0 || w[2] != 0.0)
+          {
+            CollimatedDeposit d;
+            d.Time = j;
+            d.Point = v[k];
+            d.Load = { w[0], w[1], w[2] };
+            out.push_back(d);
+          }
+        }
+      }
+    }
+  }
+  std::vector<CollimatedDeposit> deposits;
+  for (std::vector<CollimatedDeposit>& list : perTet)
+  {
+    deposits.insert(deposits.end(), list.begin(), list.end());
+    std::vector<CollimatedDeposit>().swap(list);
+  }
+  std::stable_sort(deposits.begin(), deposits.end(),
+    [](const CollimatedDeposit& a, const CollimatedDeposit& b) {
+      return a.Time != b.Time ? a.Time < b.Time : a.Point < b.Point;
+    });
+  std::vector<CollimatedDeposit> merged;
+  for (const CollimatedDeposit& d : deposits)
+  {
+    if (!merged.empty() && merged.back().Time == d.Time && merged.back().Point == d.Point)
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        merged.back().Load[c] += d.Load[c];
+      }
+    }
+    else
+    {
+      merged.push_back(d);
+    }
+  }
+  return merged;
 }
 
 } // namespace translucency

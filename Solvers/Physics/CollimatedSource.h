@@ -15,6 +15,23 @@
  * first-moment source and its boundary term vanish; DiffuseOptics.md derives
  * the general term for our boundary condition). The total fluence rate is
  * phi_d + E_c.
+ *
+ * Frequency and time domain (ComputeCollimatedFrequencyLoad,
+ * ComputeCollimatedTimeLoad): the unscattered beam is a wave (a pulse) that
+ * enters at the entry point at phase 0 (at t = 0) and reaches the path
+ * length s at t = eta s / c, so its fluence and volume source carry the
+ * delay: E_c exp(-i omega eta s / c) modulated, E_c delta(t - eta s / c) for
+ * a pulse. This is the unscattered (reduced-intensity) solution of the
+ * time-dependent transport equation, (1/c_m d/dt + d/ds + mu_t) I = 0, whose
+ * solution is the entering intensity delayed by s / c_m and attenuated by
+ * exp(-mu_t s) (Ishimaru 1978, "Wave Propagation and Scattering in Random
+ * Media", vol. 1, Academic Press, the time-dependent transport equation; no
+ * section cited: the book was not at hand), with the reduced mu_t' of
+ * Star's split above; the modulation convention exp(+i omega t) is that of
+ * the frequency-domain diffusion equation (Arridge 1999, Inverse Problems
+ * 15, R41-R93).
+ * Documentation/DiffuseOptics.md, "Collimated beams in the frequency and time
+ * domain".
  */
 #pragma once
 
@@ -22,6 +39,7 @@
 #include "OpticalProperties.h"
 
 #include <array>
+#include <complex>
 #include <vector>
 
 namespace translucency
@@ -65,6 +83,21 @@ struct CollimatedSource
   /// of E cos(theta_i) F_t(theta_i) (ComputeTriangleCornerIrradiance of the
   /// directional lights).
   std::array<double, NumberOfChannels> Entering{};
+
+  /// One directional light's own beam (the frequency and time domains need
+  /// its delay; the loads are integrated beam by beam).
+  struct Beam
+  {
+    /// E_c of this beam (W/mm^2), 3 per mesh point; 0 where it does not
+    /// arrive.
+    std::vector<double> Fluence;
+    /// The optical path eta s (mm) from the entry point to the mesh point
+    /// along the refracted ray (eta of the entry tet, as mu_t'): the beam
+    /// arrives eta s / c after it entered. 1 per mesh point.
+    std::vector<double> OpticalPath;
+  };
+  /// The directional lights' beams, in their order in `lights`.
+  std::vector<Beam> Beams;
 };
 
 /**
@@ -90,12 +123,58 @@ struct CollimatedSource
  * has E_c = 0, by a composite rule: the tet split L times into 8 by its
  * edge midpoints, 4 points of degree 2 in each sub-tet, L the smallest
  * level (<= 4) at which ln E_c varies by at most 0.5 across a sub-tet.
+ * Each beam is integrated on its own (Beams) and the loads are summed:
+ * exact per beam where several beams light one tet.
  *
  * Throws translucency::Error on invalid lights or material (sizes,
  * values). OpenMP-parallel over the points.
  */
 CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalProperties& material,
   const std::vector<LightSource>& lights, bool shadows);
+
+/**
+ * Frequency domain: the beams of `source` modulated at omega with phase 0 at
+ * their entry points (Documentation/DiffuseOptics.md, "Collimated beams in
+ * the frequency and time domain"). Per point, the complex collimated fluence
+ *   E_c~(x) = sum over beams E_b(x) exp(-i k eta s_b(x)),  k = omega / c (rad/mm),
+ * and the complex load, the integral of mu_s' E_c~ phi_i dV (W), per tet and
+ * beam by ComputeCollimatedSource's rule with the exponent ln E_b - i k
+ * eta s_b interpolated linearly (exact for one beam through a flat face
+ * into a homogeneous medium); the level also keeps k eta s from varying by
+ * more than 0.5 rad per sub-tet. k = 0 gives ComputeCollimatedSource's
+ * Load and Fluence exactly.
+ * @param wavenumber k = omega / c in rad per mm of optical path (>= 0)
+ * @param load, fluence 3 per mesh point (R, G, B)
+ */
+void ComputeCollimatedFrequencyLoad(const TetMesh& mesh, const OpticalProperties& material,
+  const CollimatedSource& source, double wavenumber, std::vector<std::complex<double>>& load,
+  std::vector<std::complex<double>>& fluence);
+
+/// One piece of the time-domain volume source: Load (W x ns = J per J of
+/// pulse, per channel) enters the vertex Point at the time Times[Time].
+struct CollimatedDeposit
+{
+  int Time = 0;
+  int Point = 0;
+  std::array<double, NumberOfChannels> Load{};
+};
+
+/**
+ * Time domain: the beams of `source` as pulses entering at t = 0: the
+ * volume source mu_s' E_b(x) delta(t - eta s_b(x) / c). Its space integral
+ * is taken with exactly ComputeCollimatedSource's quadrature points and
+ * weights; the pulse of each quadrature point, at its arrival time tau (ns;
+ * interpolated linearly from the tet's vertices), is split linearly
+ * between the two neighbouring times of `times` (ascending, times[0] = 0,
+ * ns): (t1 - tau) / (t1 - t0) at t0 and the rest at t1, which keeps the
+ * total and the mean arrival time (a hat-function projection in time).
+ * Arrivals after the last time are left out (they come after the run).
+ * Returned sorted by (Time, Point), one deposit per pair; when the times
+ * reach past every arrival, the loads sum to ComputeCollimatedSource's Load.
+ */
+std::vector<CollimatedDeposit> ComputeCollimatedTimeLoad(const TetMesh& mesh,
+  const OpticalProperties& material, const CollimatedSource& source,
+  const std::vector<double>& times);
 
 /// The lights without the directional ones (what stays boundary irradiance
 /// under the extended model).

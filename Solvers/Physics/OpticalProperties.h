@@ -13,6 +13,10 @@ namespace translucency
 /// Number of colour channels (R, G, B) solved for.
 constexpr int NumberOfChannels = 3;
 
+/// The speed of light in vacuum, mm/ns (the time-resolved solves, the Monte
+/// Carlo time of flight and the collimated beam's delay).
+constexpr double SpeedOfLightMillimetresPerNanosecond = 299.792458;
+
 /**
  * Per-tet optical coefficients (TransCut, eq. 1). Arrays are owned here.
  * AbsorptionCoefficient and ReducedScatteringCoefficient hold 3 values per
