@@ -157,6 +157,21 @@ class DistributedSolveTest(unittest.TestCase):
             self.assertTrue(all(int(k) > 0 for k in iterations.split(",")), case)
             self.assertTrue(all(float(r) <= 2e-13 for r in residuals.split(",")), case)
 
+    def numbers_per_rank(self, stem, key):
+        """{case: {rank: [numbers]}} from the lines "<key> <case> rank <r> <numbers>"
+        of every rank's <stem>_<rank>.txt."""
+        found = {}
+        for rank in range(RANKS):
+            name = os.path.join(self.work, "%s_%d.txt" % (stem, rank))
+            text = ""
+            if os.path.exists(name):
+                with open(name) as f:
+                    text = f.read()
+            for m in re.finditer(r"^%s (\S+) rank (\d+) (.*)$" % key, text, re.M):
+                found.setdefault(m.group(1), {})[int(m.group(2))] = [
+                    float(v) for v in m.group(3).split()]
+        return found
+
     def test_sources_and_detectors_equal_serial(self):
         import json
         for case, ref_name in SOURCE_CASES.items():
@@ -183,16 +198,7 @@ class DistributedSolveTest(unittest.TestCase):
         # Detector readings: the serial ones to 1e-6, the same on every rank.
         with open(os.path.join(self.work, "ref_detectors.json")) as f:
             refs = json.load(f)
-        lines = {}
-        for rank in range(RANKS):
-            name = os.path.join(self.work, "detectors_%d.txt" % rank)
-            text = ""
-            if os.path.exists(name):
-                with open(name) as f:
-                    text = f.read()
-            for m in re.finditer(r"^detectors (\S+) rank (\d+) (.*)$", text, re.M):
-                lines.setdefault(m.group(1), {})[int(m.group(2))] = [float(v) for v in
-                                                                    m.group(3).split()]
+        lines = self.numbers_per_rank("detectors", "detectors")
         for kind, ref in refs.items():
             expected = np.array(ref, dtype=float).ravel()
             self.assertEqual(sorted(lines.get(kind, {})), list(range(RANKS)), kind)
@@ -215,16 +221,7 @@ class DistributedSolveTest(unittest.TestCase):
         import json
         with open(os.path.join(self.work, "ref_balance.json")) as f:
             refs = json.load(f)
-        balances = {}
-        for rank in range(RANKS):
-            name = os.path.join(self.work, "solves_%d.txt" % rank)
-            text = ""
-            if os.path.exists(name):
-                with open(name) as f:
-                    text = f.read()
-            for m in re.finditer(r"^balance (\S+) rank (\d+) (.*)$", text, re.M):
-                balances.setdefault(m.group(1), {})[int(m.group(2))] = [
-                    float(v) for v in m.group(3).split()]
+        balances = self.numbers_per_rank("solves", "balance")
         cases = {"pvtu3": "a_divergence", "pvtu2": "a_divergence", "redist": "a_divergence",
                  "fem": "a_fem", "relight": "b_divergence", "src_point": "src_point",
                  "src_pencil": "src_pencil", "src_aimed": "src_aimed"}
