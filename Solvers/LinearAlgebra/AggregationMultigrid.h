@@ -69,8 +69,8 @@ public:
   /// weight 1 / (0.5 (1 + fraction)) = 1.67). 0.2 with the scale 1.4 below
   /// (before: 0.3 and 1.5) gives a smaller error after 3 and 4 iterations
   /// from zero on the 1M-tet bunny for marble, skin, ketchup and two light
-  /// directions (Performance.md, "Issue 22, section 3: assembly and cold
-  /// solve"), and no more iterations to 1e-3 or 1e-6.
+  /// directions (Notes/Performance.md, "3-channel assembly input checks
+  /// and the multigrid-agg defaults"), and no more iterations to 1e-3 or 1e-6.
   void SetSmootherFraction(double f) { Fraction_ = f; }
   /// Factor of the coarse correction x += s P x_c, in (0, 2) (default 1.4).
   void SetCoarseCorrectionScale(double s) { CorrectionScale_ = s; }
