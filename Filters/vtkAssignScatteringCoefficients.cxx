@@ -1,13 +1,14 @@
 #include "vtkAssignScatteringCoefficients.h"
 
+#include "vtkTranslucencyDispatch.h"
 #include "Error.h"
 #include "MaterialFields.h"
 #include "vtkMaterialTableReader.h"
 #include "vtkTranslucencyDistributedIrradiance.h"
-#include "vtkTranslucencyDistributedPieces.h"
+#include "vtkTranslucencyGhosts.h"
+#include "vtkTranslucencyMPI.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
-#include "vtkTranslucencyParallel.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -476,45 +477,52 @@ bool vtkAssignScatteringCoefficients::ComputeMaterials(
 int vtkAssignScatteringCoefficients::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: the per-tet modes on each rank's own piece (no gather);
-  // otherwise gather to rank 0, run this serially there, hand the result back.
-  // (Veins: a function of the tet's centroid too. Layers need the depth
-  // below the whole surface: it is all-gathered (O(N^(2/3))). Volume needs
-  // the image around every tet: gathered.)
-  // Layers: per piece on the all-gathered physical boundary surface.
-  const bool perTet = this->MaterialMode == UNIFORM || this->MaterialMode == MATERIAL_IDS ||
-    this->MaterialMode == SPHERICAL_INCLUSION || this->MaterialMode == VEINS ||
-    (this->MaterialMode == LAYERS && vtkTranslucencyDistributedIrradiance::CanGatherSurface());
-  if (perTet && !this->Gathering && vtkTranslucencyDistributedPieces::IsAvailable())
+  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+    { return this->PlanParallel(i, c); },
+    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestSerial(r, i, o); },
+      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
+      { return this->RequestPerPiece(i, o, c); }  },
+    { this->ParallelPath, this->ParallelPlan });
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkAssignScatteringCoefficients::PlanParallel(
+  vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm)
+{
+  using Plan = vtkTranslucencyParallelPlan;
+  const Plan::GatherMode mode = Plan::GatherMode::SameMesh;
+  if (this->MaterialMode == VOLUME)
   {
-    vtkUnstructuredGrid* piece = vtkUnstructuredGrid::GetData(inputVector[0]);
-    const bool hasCells = piece && piece->GetNumberOfCells() > 0;
-    // vtkOriginalCellIds (added when missing) number the gathered mesh's
-    // cells: the rank order unless ghost cells or cell GlobalIds reorder them.
-    const bool reordered = vtkTranslucencyDistributedPieces::Any(hasCells &&
-      !piece->GetCellData()->GetArray(vtkTranslucency::OriginalCellIdsName) &&
-      (vtkTranslucencyDistributedPieces::HasGhostCells(piece) ||
-        piece->GetCellData()->GetGlobalIds()));
-    if (!reordered)
-    {
-      this->ParallelPath = "per piece";
-      return this->RequestPerPiece(inputVector, outputVector);
-    }
+    return Plan::Gathered(mode, "the Volume mode needs the image around every tet");
   }
-  this->ParallelPath = "serial";
-  int parallelResult = 0;
-  this->Gathering = true; // the serial run on rank 0 must not go per piece
-  const bool gathered = vtkTranslucencyParallel::RunGathered(this, request, inputVector,
-    outputVector, vtkTranslucencyParallel::GatherMode::SameMesh,
-    [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-    { return this->RequestData(r, i, o); },
-    parallelResult);
-  this->Gathering = false;
-  if (gathered)
+  if (this->MaterialMode == LAYERS && !vtkTranslucency::CanDistribute(comm))
   {
-    this->ParallelPath = "gathered";
-    return parallelResult;
+    return Plan::Gathered(mode, "the Layers mode needs the distributed boundary surface "
+                                "(a build with hypre and VTK's ParallelMPI)");
   }
+  // vtkOriginalCellIds (added when missing) number the gathered mesh's
+  // cells: the rank order unless ghost cells or cell GlobalIds reorder them.
+  vtkUnstructuredGrid* piece = vtkUnstructuredGrid::GetData(inputVector[0]);
+  const bool hasCells = piece && piece->GetNumberOfCells() > 0;
+  const bool reordered = comm.Any(hasCells &&
+    !piece->GetCellData()->GetArray(vtkTranslucency::OriginalCellIdsName) &&
+    (vtkTranslucency::HasGhostCells(piece) || piece->GetCellData()->GetGlobalIds()));
+  if (reordered)
+  {
+    return Plan::Gathered(mode, "vtkOriginalCellIds are missing and ghost cells or cell "
+                                "GlobalIds reorder the cells: numbered on the gathered mesh");
+  }
+  return Plan::PerPiece(mode, this->MaterialMode == LAYERS
+      ? "the depths below the all-gathered physical boundary surface, per tet"
+      : "per-tet values, no gather");
+}
+
+//------------------------------------------------------------------------------
+int vtkAssignScatteringCoefficients::RequestSerial(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
@@ -545,16 +553,16 @@ int vtkAssignScatteringCoefficients::RequestData(
 }
 
 //------------------------------------------------------------------------------
-int vtkAssignScatteringCoefficients::RequestPerPiece(
-  vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+int vtkAssignScatteringCoefficients::RequestPerPiece(vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector, const vtkTranslucencyCommunicator& comm)
 {
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   const long long cells = input ? input->GetNumberOfCells() : 0;
   // Every rank takes part in every collective below, an empty piece too.
-  const long long total = vtkTranslucencyDistributedPieces::Sum(cells);
-  const long long offset = vtkTranslucencyDistributedPieces::ExclusiveSum(cells);
+  const long long total = comm.Sum(cells);
+  const long long offset = comm.ExclusiveSum(cells);
   if (total == 0)
   {
     vtkErrorMacro(<< "the input mesh is empty (no cells)");
@@ -610,13 +618,13 @@ int vtkAssignScatteringCoefficients::RequestPerPiece(
       local = e.what();
     }
   }
-  const std::string error = vtkTranslucencyDistributedPieces::AgreeOnError(local);
+  const std::string error = comm.AgreeOnError(local);
   if (!error.empty())
   {
     vtkErrorMacro(<< error);
     return 0;
   }
-  if (vtkTranslucencyDistributedPieces::Any(aborted))
+  if (comm.Any(aborted))
   {
     return 0; // aborted on some rank: every rank stops
   }
@@ -707,4 +715,6 @@ void vtkAssignScatteringCoefficients::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "VolumeAbsorptionArrayName: " << this->VolumeAbsorptionArrayName << "\n";
   os << indent << "VolumeScatteringArrayName: " << this->VolumeScatteringArrayName << "\n";
   os << indent << "VolumeMaterialIdArrayName: " << this->VolumeMaterialIdArrayName << "\n";
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
+  os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
 }

@@ -81,6 +81,9 @@ struct MaterialField;
 }
 
 
+class vtkTranslucencyCommunicator;
+struct vtkTranslucencyParallelPlan;
+
 class TRANSLUCENCYFILTERS_EXPORT vtkAssignScatteringCoefficients
   : public vtkUnstructuredGridAlgorithm
 {
@@ -287,18 +290,32 @@ public:
   vtkGetMacro(VeinSeed, int);
   ///@}
 
-  /// How the last execution ran: "serial" (one process), "per piece" (MPI:
-  /// the uniform, material-id, spherical-inclusion, veins and layers modes on
-  /// each rank's own piece, no mesh gather; layers all-gather the physical
-  /// boundary surface for the depths) or "gathered" (MPI: the volume mode, or
-  /// pieces with ghost cells or cell GlobalIds and no vtkOriginalCellIds).
+  ///@{
+  /**
+   * The parallel seam (Documentation/Parallel.md, "What runs where").
+   * GetParallelPath(): the path the last execution took: "serial" (one
+   * process), "per piece", "distributed" or "gathered".
+   * GetParallelPlan(): the plan this filter declares for more than one MPI
+   * process, with its reason ("per piece: ..."); set by every execution, a
+   * one-process one included ("" before the first).
+   */
   const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  const char* GetParallelPlan() const { return this->ParallelPlan.c_str(); }
+  ///@}
 
 protected:
   vtkAssignScatteringCoefficients();
   ~vtkAssignScatteringCoefficients() override = default;
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// The plan for more than one process (vtkTranslucencyDispatch: called on
+  /// every rank; collective over `comm`).
+  vtkTranslucencyParallelPlan PlanParallel(
+    vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm);
+  /// The serial path (one process, or rank 0 of a gathered run).
+  int RequestSerial(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
+  std::string ParallelPath = "serial";
+  std::string ParallelPlan;
 
   /**
    * The materials of MaterialMode on the tets of input (volume: the second
@@ -309,13 +326,12 @@ protected:
     vtkUnstructuredGrid* input, vtkImageData* volume, translucency::MaterialField& field);
   int FillInputPortInformation(int port, vtkInformation* info) override;
   /// Under MPI, the per-tet modes on this rank's piece (collective).
-  int RequestPerPiece(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
+  int RequestPerPiece(vtkInformationVector** inputVector, vtkInformationVector* outputVector,
+    const vtkTranslucencyCommunicator& comm);
   /// output = input with the material arrays of `field`, and vtkOriginalCellIds
   /// firstId, firstId + 1, ... if the input has none.
   void AttachMaterials(vtkUnstructuredGrid* input, vtkUnstructuredGrid* output,
     const translucency::MaterialField& field, long long firstId);
-  std::string ParallelPath = "serial";
-  bool Gathering = false; ///< inside RunGathered (its serial run on rank 0)
   /// LAYERS per piece: the whole object's boundary surface (all-gathered),
   /// set during RequestPerPiece only (not owned); null: this input's own.
   vtkPolyData* WholeSurface = nullptr;

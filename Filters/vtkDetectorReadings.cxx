@@ -1,5 +1,6 @@
 #include "vtkDetectorReadings.h"
 
+#include "vtkTranslucencyDispatch.h"
 #include "vtkTranslucencyOutputGuard.h"
 
 #include <vtkDataArray.h>
@@ -9,7 +10,6 @@
 #include <vtkIdTypeArray.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
-#include <vtkMultiProcessController.h>
 #include <vtkNew.h>
 #include <vtkObjectFactory.h>
 #include <vtkTable.h>
@@ -75,6 +75,35 @@ int vtkDetectorReadings::FillInputPortInformation(int, vtkInformation* info)
 
 //------------------------------------------------------------------------------
 int vtkDetectorReadings::RequestData(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+    { return this->PlanParallel(i, c); },
+    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestSerial(r, i, o); },
+      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
+      {
+        if (c.GetRank() > 0)
+        {
+          vtkTranslucencyOutputGuard empty(o); // empty tables on the other ranks
+          return empty.Succeed();
+        }
+        return this->RequestSerial(nullptr, i, o);
+      }  },
+    { this->ParallelPath, this->ParallelPlan });
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkDetectorReadings::PlanParallel(
+  vtkInformationVector**, const vtkTranslucencyCommunicator&)
+{
+  return vtkTranslucencyParallelPlan::PerPiece(vtkTranslucencyParallelPlan::GatherMode::RankZero,
+    "the readings are field data, the same on every rank: the tables come out on rank 0");
+}
+
+//------------------------------------------------------------------------------
+int vtkDetectorReadings::RequestSerial(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   vtkTranslucencyOutputGuard outputs(outputVector); // empty tables on every failure
@@ -85,14 +114,6 @@ int vtkDetectorReadings::RequestData(
   {
     vtkErrorMacro(<< "no input");
     return 0;
-  }
-
-  // The field data are the same on every rank (vtkTranslucencyParallel
-  // broadcasts them): the rows come out once, on rank 0.
-  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  if (controller && controller->GetLocalProcessId() > 0)
-  {
-    return outputs.Succeed();
   }
 
   vtkFieldData* fd = input->GetFieldData();
@@ -215,4 +236,6 @@ int vtkDetectorReadings::RequestData(
 void vtkDetectorReadings::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
+  os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
 }

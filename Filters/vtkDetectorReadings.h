@@ -36,6 +36,10 @@
 
 #include "TranslucencyFiltersModule.h" // for export macro
 #include "vtkTableAlgorithm.h"
+#include <string> // for the parallel path
+
+class vtkTranslucencyCommunicator;
+struct vtkTranslucencyParallelPlan;
 
 class TRANSLUCENCYFILTERS_EXPORT vtkDetectorReadings : public vtkTableAlgorithm
 {
@@ -47,6 +51,19 @@ public:
   /// Name of the time column of the time-gate table (port 1): "Time (ns)".
   static const char* GetTimeColumnName() { return "Time (ns)"; }
 
+  ///@{
+  /**
+   * The parallel seam (Documentation/Parallel.md, "What runs where").
+   * GetParallelPath(): the path the last execution took: "serial" (one
+   * process), "per piece", "distributed" or "gathered".
+   * GetParallelPlan(): the plan this filter declares for more than one MPI
+   * process, with its reason ("per piece: ..."); set by every execution, a
+   * one-process one included ("" before the first).
+   */
+  const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  const char* GetParallelPlan() const { return this->ParallelPlan.c_str(); }
+  ///@}
+
 protected:
   vtkDetectorReadings();
   ~vtkDetectorReadings() override = default;
@@ -54,6 +71,14 @@ protected:
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
+  /// The plan for more than one process (vtkTranslucencyDispatch: called on
+  /// every rank; collective over `comm`).
+  vtkTranslucencyParallelPlan PlanParallel(
+    vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm);
+  /// The serial path (one process, or rank 0 of a gathered run).
+  int RequestSerial(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
+  std::string ParallelPath = "serial";
+  std::string ParallelPlan;
 
 private:
   vtkDetectorReadings(const vtkDetectorReadings&) = delete;

@@ -1,11 +1,11 @@
 #include "vtkFractureTetMesh.h"
 
+#include "vtkTranslucencyDispatch.h"
 #include "Error.h"
 #include "TetFracture.h"
 #include "TetMesh.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
-#include "vtkTranslucencyParallel.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -87,16 +87,26 @@ int vtkFractureTetMesh::FillInputPortInformation(int, vtkInformation* info)
 int vtkFractureTetMesh::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: gather to rank 0, run this serially there, hand the result back.
-  int parallelResult = 0;
-  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
-        vtkTranslucencyParallel::GatherMode::RankZero,
-        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-        { return this->RequestData(r, i, o); },
-        parallelResult))
-  {
-    return parallelResult;
-  }
+  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+    { return this->PlanParallel(i, c); },
+    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestSerial(r, i, o); } },
+    { this->ParallelPath, this->ParallelPlan });
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkFractureTetMesh::PlanParallel(
+  vtkInformationVector**, const vtkTranslucencyCommunicator&)
+{
+  return vtkTranslucencyParallelPlan::Gathered(
+    vtkTranslucencyParallelPlan::GatherMode::RankZero, "new topology: the pieces (a multiblock) are built from the whole mesh");
+}
+
+//------------------------------------------------------------------------------
+int vtkFractureTetMesh::RequestSerial(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkMultiBlockDataSet* output = vtkMultiBlockDataSet::GetData(outputVector);
@@ -188,4 +198,6 @@ void vtkFractureTetMesh::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfRandomSeeds: " << this->NumberOfRandomSeeds << "\n";
   os << indent << "RandomSeed: " << this->RandomSeed << "\n";
   os << indent << "NumberOfPieces: " << this->NumberOfPieces << "\n";
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
+  os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
 }

@@ -43,6 +43,10 @@
 #include "vtkMultiBlockDataSetAlgorithm.h"
 
 #include <vector> // for the seed list
+#include <string> // for the parallel path
+
+class vtkTranslucencyCommunicator;
+struct vtkTranslucencyParallelPlan;
 
 class TRANSLUCENCYFILTERS_EXPORT vtkFractureTetMesh : public vtkMultiBlockDataSetAlgorithm
 {
@@ -70,12 +74,33 @@ public:
   /// Number of pieces of the last update (non-empty Voronoi cells).
   vtkGetMacro(NumberOfPieces, int);
 
+  ///@{
+  /**
+   * The parallel seam (Documentation/Parallel.md, "What runs where").
+   * GetParallelPath(): the path the last execution took: "serial" (one
+   * process), "per piece", "distributed" or "gathered".
+   * GetParallelPlan(): the plan this filter declares for more than one MPI
+   * process, with its reason ("per piece: ..."); set by every execution, a
+   * one-process one included ("" before the first).
+   */
+  const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  const char* GetParallelPlan() const { return this->ParallelPlan.c_str(); }
+  ///@}
+
 protected:
   vtkFractureTetMesh();
   ~vtkFractureTetMesh() override = default;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// The plan for more than one process (vtkTranslucencyDispatch: called on
+  /// every rank; collective over `comm`).
+  vtkTranslucencyParallelPlan PlanParallel(
+    vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm);
+  /// The serial path (one process, or rank 0 of a gathered run).
+  int RequestSerial(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
+  std::string ParallelPath = "serial";
+  std::string ParallelPlan;
 
   std::vector<double> SeedPoints;
   int NumberOfRandomSeeds = 0;

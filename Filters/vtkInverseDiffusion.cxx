@@ -1,8 +1,8 @@
 #include "vtkInverseDiffusion.h"
 
+#include "vtkTranslucencyDispatch.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
-#include "vtkTranslucencyParallel.h"
 
 #include "DiffusionForwardModel.h"
 #include "Error.h"
@@ -51,6 +51,8 @@ void vtkInverseDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "GaussNewtonLineSearch: " << this->GaussNewtonLineSearch << "\n";
   os << indent << "ElementArrayName: " << this->ElementArrayName << "\n";
   os << indent << "DefaultRefractiveIndex: " << this->DefaultRefractiveIndex << "\n";
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
+  os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
 }
 
 int vtkInverseDiffusion::FillInputPortInformation(int, vtkInformation* info)
@@ -90,16 +92,26 @@ int CountIndexed(vtkPointData* pd, const char* base)
 int vtkInverseDiffusion::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: gather to rank 0, run this serially there, hand the result back.
-  int parallelResult = 0;
-  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
-        vtkTranslucencyParallel::GatherMode::SameMesh,
-        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-        { return this->RequestData(r, i, o); },
-        parallelResult))
-  {
-    return parallelResult;
-  }
+  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+    { return this->PlanParallel(i, c); },
+    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestSerial(r, i, o); } },
+    { this->ParallelPath, this->ParallelPlan });
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkInverseDiffusion::PlanParallel(
+  vtkInformationVector**, const vtkTranslucencyCommunicator&)
+{
+  return vtkTranslucencyParallelPlan::Gathered(
+    vtkTranslucencyParallelPlan::GatherMode::SameMesh, "the adjoint optimisation needs every tet and every pattern; the history is one table");
+}
+
+//------------------------------------------------------------------------------
+int vtkInverseDiffusion::RequestSerial(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);

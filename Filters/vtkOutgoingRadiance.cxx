@@ -1,9 +1,9 @@
 #include "vtkOutgoingRadiance.h"
 
+#include "vtkTranslucencyDispatch.h"
 #include "ResourceLimits.h"
-#include "vtkTranslucencyDistributedPieces.h"
+#include "vtkTranslucencyMPI.h"
 #include "vtkTranslucencyDistributedRadiance.h"
-#include "vtkTranslucencyParallel.h"
 
 #include "Error.h"
 #include "Radiance.h"
@@ -83,25 +83,37 @@ int vtkOutgoingRadiance::FillInputPortInformation(int, vtkInformation* info)
 int vtkOutgoingRadiance::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: each rank its own piece's physical boundary (no gather), or,
-  // with TRANSLUCENCY_GATHERED_RADIANCE=1 or without the distributed path,
-  // gather to rank 0, run this serially there, the surface on rank 0.
-  if (vtkTranslucencyDistributedRadiance::IsAvailable() && !vtkTranslucencyParallel::IsGathering())
+  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+    { return this->PlanParallel(i, c); },
+    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestSerial(r, i, o); },
+      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
+      { return this->RequestPerPiece(i, o, c); }  },
+    { this->ParallelPath, this->ParallelPlan });
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkOutgoingRadiance::PlanParallel(
+  vtkInformationVector**, const vtkTranslucencyCommunicator& comm)
+{
+  using Plan = vtkTranslucencyParallelPlan;
+  if (!vtkTranslucency::CanDistribute(comm))
   {
-    this->ParallelPath = "per piece";
-    return this->RequestPerPiece(inputVector, outputVector);
+    return Plan::Gathered(Plan::GatherMode::RankZero,
+      "the physical boundary needs the distributed numbering (a build with hypre and VTK's "
+      "ParallelMPI)");
   }
-  this->ParallelPath = "serial";
-  int parallelResult = 0;
-  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
-        vtkTranslucencyParallel::GatherMode::RankZero,
-        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-        { return this->RequestData(r, i, o); },
-        parallelResult))
-  {
-    this->ParallelPath = "gathered";
-    return parallelResult;
-  }
+  Plan plan = Plan::PerPiece(Plan::GatherMode::RankZero,
+    "each rank outputs the physical boundary faces of its own tets; together the serial surface");
+  plan.DeprecatedVariable = "TRANSLUCENCY_GATHERED_RADIANCE";
+  return plan;
+}
+
+//------------------------------------------------------------------------------
+int vtkOutgoingRadiance::RequestSerial(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkPolyData* output = vtkPolyData::GetData(outputVector);
@@ -267,10 +279,9 @@ int vtkOutgoingRadiance::RequestData(
 }
 
 //------------------------------------------------------------------------------
-int vtkOutgoingRadiance::RequestPerPiece(
-  vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+int vtkOutgoingRadiance::RequestPerPiece(vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector, const vtkTranslucencyCommunicator& comm)
 {
-  namespace pieces = vtkTranslucencyDistributedPieces;
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkPolyData* output = vtkPolyData::GetData(outputVector);
@@ -354,7 +365,7 @@ int vtkOutgoingRadiance::RequestPerPiece(
       local = e.what();
     }
   }
-  error = pieces::AgreeOnError(local);
+  error = comm.AgreeOnError(local);
   if (!error.empty())
   {
     vtkErrorMacro(<< error);
@@ -362,7 +373,7 @@ int vtkOutgoingRadiance::RequestPerPiece(
   }
   std::vector<double> reduced(extremes, extremes + 8);
   vtkTranslucencyDistributedRadiance::AllMax(reduced);
-  if (reduced[0] > 0.0 && reduced[1] == 0.0 && pieces::GetRank() == 0)
+  if (reduced[0] > 0.0 && reduced[1] == 0.0 && comm.GetRank() == 0)
   {
     // As the serial path: light enters but no radiance leaves anywhere.
     const double diagonal = std::sqrt((reduced[3] + reduced[2]) * (reduced[3] + reduced[2]) +
@@ -479,9 +490,10 @@ int vtkOutgoingRadiance::RequestPerPiece(
 void vtkOutgoingRadiance::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
   os << indent << "UseViewPoint: " << this->UseViewPoint << "\n";
   os << indent << "NSquaredLaw: " << this->NSquaredLaw << "\n";
   os << indent << "ViewPoint: " << this->ViewPoint[0] << ", " << this->ViewPoint[1] << ", "
      << this->ViewPoint[2] << "\n";
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
+  os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
 }

@@ -45,6 +45,9 @@
 #include <memory>
 #include <string> // for the parallel path
 
+class vtkTranslucencyCommunicator;
+struct vtkTranslucencyParallelPlan;
+
 class TRANSLUCENCYFILTERS_EXPORT vtkOutgoingRadiance : public vtkPolyDataAlgorithm
 {
 public:
@@ -91,12 +94,19 @@ public:
   vtkGetVector3Macro(ViewPoint, double);
   ///@}
 
+  ///@{
   /**
-   * After an execution: "per piece" (under MPI each rank output the
-   * physical boundary faces of its own piece, no gather), "gathered" (the
-   * surface on rank 0) or "serial".
+   * The parallel seam (Documentation/Parallel.md, "What runs where").
+   * GetParallelPath(): the path the last execution took: "serial" (one
+   * process), "per piece", "distributed" or "gathered".
+   * GetParallelPlan(): the plan this filter declares for more than one MPI
+   * process, with its reason ("per piece: ..."); set by every execution, a
+   * one-process one included ("" before the first).
    */
   const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  const char* GetParallelPlan() const { return this->ParallelPlan.c_str(); }
+  ///@}
+
   /// After a per-piece execution: the physical boundary faces over every rank.
   long long GetNumberOfSurfaceTriangles() const { return this->NumberOfSurfaceTriangles; }
 
@@ -106,18 +116,26 @@ protected:
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// The plan for more than one process (vtkTranslucencyDispatch: called on
+  /// every rank; collective over `comm`).
+  vtkTranslucencyParallelPlan PlanParallel(
+    vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm);
+  /// The serial path (one process, or rank 0 of a gathered run).
+  int RequestSerial(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
+  std::string ParallelPath = "serial";
+  std::string ParallelPlan;
 
   bool UseViewPoint = false;
   bool NSquaredLaw = false;
   double ViewPoint[3] = { 0.0, 0.0, 0.0 };
   double Exposure = 0.0;
   double ExposureUsed = 1.0;
-  std::string ParallelPath = "serial";
   long long NumberOfSurfaceTriangles = 0;
 
 private:
   /// The per-piece path under MPI (vtkTranslucencyDistributedRadiance).
-  int RequestPerPiece(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
+  int RequestPerPiece(vtkInformationVector** inputVector, vtkInformationVector* outputVector,
+    const vtkTranslucencyCommunicator& comm);
 
   vtkOutgoingRadiance(const vtkOutgoingRadiance&) = delete;
   void operator=(const vtkOutgoingRadiance&) = delete;

@@ -2,8 +2,8 @@
 
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
-#include "vtkTranslucencyDistributedPieces.h"
-#include "vtkTranslucencyParallel.h"
+#include "vtkTranslucencyDispatch.h"
+#include "vtkTranslucencyGhosts.h"
 
 #include "TetPaint.h"
 #include "Error.h"
@@ -91,26 +91,6 @@ void vtkPaintScatteringCoefficients::RemoveAllStrokePoints()
 //------------------------------------------------------------------------------
 namespace
 {
-/// Cells not flagged vtkGhostType DUPLICATECELL (all cells without ghosts).
-long long OwnedCells(vtkUnstructuredGrid* grid)
-{
-  if (!grid)
-  {
-    return 0;
-  }
-  auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
-    grid->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()));
-  long long owned = grid->GetNumberOfCells();
-  for (vtkIdType c = 0; ghosts && c < ghosts->GetNumberOfTuples(); ++c)
-  {
-    if (ghosts->GetValue(c) & vtkDataSetAttributes::DUPLICATECELL)
-    {
-      --owned;
-    }
-  }
-  return owned;
-}
-
 /// "" if `cut` (port 0) maps into the original mesh (port 1) of
 /// `numOriginal` tets, else the error. `numCut`: the cut mesh's tets (all
 /// pieces' owned cells under MPI); `withoutIds`: some piece with cells has
@@ -161,7 +141,36 @@ std::string CheckCutMapping(
 
 //------------------------------------------------------------------------------
 int vtkPaintScatteringCoefficients::RequestData(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+    { return this->PlanParallel(i, c); },
+    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestSerial(r, i, o); },
+      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
+      { return this->RequestPerPiece(i, o, c); } },
+    { this->ParallelPath, this->ParallelPlan });
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkPaintScatteringCoefficients::PlanParallel(
+  vtkInformationVector**, const vtkTranslucencyCommunicator&)
+{
+  return vtkTranslucencyParallelPlan::PerPiece(vtkTranslucencyParallelPlan::GatherMode::SameMesh,
+    "per-tet weights; the cut/original check counts over the ranks");
+}
+
+//------------------------------------------------------------------------------
+int vtkPaintScatteringCoefficients::RequestSerial(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return this->RequestPerPiece(inputVector, outputVector, vtkTranslucencyCommunicator::Self());
+}
+
+//------------------------------------------------------------------------------
+int vtkPaintScatteringCoefficients::RequestPerPiece(vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector, const vtkTranslucencyCommunicator& comm)
 {
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* cut = vtkUnstructuredGrid::GetData(inputVector[0]);
@@ -176,11 +185,8 @@ int vtkPaintScatteringCoefficients::RequestData(
   // its centroid only; a ghost cell gets the same value as the tet it copies);
   // the checks that need the whole mesh use totals over the ranks, and every
   // rank reports the same error.
-  const bool perPiece =
-    vtkTranslucencyDistributedPieces::IsAvailable() && !vtkTranslucencyParallel::IsGathering();
-  this->ParallelPath = perPiece ? "per piece" : "serial";
-  auto sum = [perPiece](long long value)
-  { return perPiece ? vtkTranslucencyDistributedPieces::Sum(value) : value; };
+  const bool perPiece = comm.IsParallel();
+  auto sum = [&comm](long long value) { return comm.Sum(value); };
   // Every rank takes part in every collective below, an empty piece too.
   const long long totalInput = sum(input ? input->GetNumberOfCells() : 0);
   long long numCut = 0, numOriginal = 0;
@@ -189,9 +195,9 @@ int vtkPaintScatteringCoefficients::RequestData(
   {
     cutWithoutIds = cut && cut->GetNumberOfCells() > 0 &&
       !cut->GetCellData()->GetArray("vtkOriginalCellIds");
-    cutWithoutIds = perPiece ? vtkTranslucencyDistributedPieces::Any(cutWithoutIds) : cutWithoutIds;
-    numCut = sum(perPiece ? OwnedCells(cut) : (cut ? cut->GetNumberOfCells() : 0));
-    numOriginal = sum(perPiece ? OwnedCells(original) : (original ? original->GetNumberOfCells() : 0));
+    cutWithoutIds = comm.Any(cutWithoutIds);
+    numCut = sum(perPiece ? vtkTranslucency::OwnedCellCount(cut) : (cut ? cut->GetNumberOfCells() : 0));
+    numOriginal = sum(perPiece ? vtkTranslucency::OwnedCellCount(original) : (original ? original->GetNumberOfCells() : 0));
   }
   std::string error;
   if (hasOriginal && !original)
@@ -215,15 +221,15 @@ int vtkPaintScatteringCoefficients::RequestData(
   }
   if (perPiece)
   {
-    error = vtkTranslucencyDistributedPieces::AgreeOnError(error);
-    keptChannels = vtkTranslucencyDistributedPieces::Sum(keptChannels);
+    error = comm.AgreeOnError(error);
+    keptChannels = comm.Sum(keptChannels);
   }
   if (!error.empty())
   {
     vtkErrorMacro(<< error);
     return 0;
   }
-  if (keptChannels > 0 && vtkTranslucencyDistributedPieces::GetRank() == 0)
+  if (keptChannels > 0 && comm.GetRank() == 0)
   {
     vtkWarningMacro(<< keptChannels << " tet channel(s) would have had mu_a + sigma_s' = 0 "
                     << "and kept their old values");
@@ -419,7 +425,6 @@ void vtkPaintScatteringCoefficients::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "OriginalMesh: "
      << (this->GetNumberOfInputConnections(1) > 0 ? "connected" : "(none)") << "\n";
-  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
   os << indent << "NumberOfStrokePoints: " << this->GetNumberOfStrokePoints() << "\n";
   os << indent << "StrokeIsPolyline: " << this->StrokeIsPolyline << "\n";
   os << indent << "Width: " << this->Width << "\n";
@@ -435,4 +440,6 @@ void vtkPaintScatteringCoefficients::PrintSelf(ostream& os, vtkIndent indent)
      << this->TargetReducedScatteringCoefficient[2] << "\n";
   os << indent << "ChannelMask: " << this->ChannelMask[0] << ", " << this->ChannelMask[1] << ", "
      << this->ChannelMask[2] << "\n";
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
+  os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
 }

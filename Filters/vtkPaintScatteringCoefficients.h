@@ -81,6 +81,9 @@
 #include <string> // for the parallel path
 #include <vector> // for the stroke points
 
+class vtkTranslucencyCommunicator;
+struct vtkTranslucencyParallelPlan;
+
 class TRANSLUCENCYFILTERS_EXPORT vtkPaintScatteringCoefficients
   : public vtkUnstructuredGridAlgorithm
 {
@@ -180,9 +183,18 @@ public:
   vtkGetVector3Macro(ChannelMask, int);
   ///@}
 
-  /// "per piece" (under MPI: each rank painted its own piece) or "serial",
-  /// after the last execution.
+  ///@{
+  /**
+   * The parallel seam (Documentation/Parallel.md, "What runs where").
+   * GetParallelPath(): the path the last execution took: "serial" (one
+   * process), "per piece", "distributed" or "gathered".
+   * GetParallelPlan(): the plan this filter declares for more than one MPI
+   * process, with its reason ("per piece: ..."); set by every execution, a
+   * one-process one included ("" before the first).
+   */
   const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  const char* GetParallelPlan() const { return this->ParallelPlan.c_str(); }
+  ///@}
 
 protected:
   vtkPaintScatteringCoefficients();
@@ -190,6 +202,18 @@ protected:
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// The plan for more than one process (vtkTranslucencyDispatch: called on
+  /// every rank; collective over `comm`).
+  vtkTranslucencyParallelPlan PlanParallel(
+    vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm);
+  /// The serial path (one process, or rank 0 of a gathered run).
+  int RequestSerial(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
+  std::string ParallelPath = "serial";
+  std::string ParallelPlan;
+  /// Paint this rank's piece; the whole-mesh checks count over `comm`
+  /// (collective; size one: the serial run).
+  int RequestPerPiece(vtkInformationVector** inputVector, vtkInformationVector* outputVector,
+    const vtkTranslucencyCommunicator& comm);
 
   std::vector<double> StrokePoints;
   bool StrokeIsPolyline = false;
@@ -200,7 +224,6 @@ protected:
   double TargetAbsorptionCoefficient[3] = { 0.061, 0.97, 1.45 };
   double TargetReducedScatteringCoefficient[3] = { 0.18, 0.07, 0.03 };
   int ChannelMask[3] = { 1, 1, 1 };
-  std::string ParallelPath = "serial";
 
 private:
   /// Paint `input` (may be null or empty: an empty output with empty arrays)

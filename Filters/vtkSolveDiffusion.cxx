@@ -16,7 +16,8 @@
 #include "vtkTranslucencyDistributedSolve.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
-#include "vtkTranslucencyParallel.h"
+#include "vtkTranslucencyDispatch.h"
+#include "vtkTranslucencyMPI.h"
 
 #include <vtkDataArray.h>
 #include <vtkDoubleArray.h>
@@ -25,7 +26,6 @@
 #include <vtkIntArray.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
-#include <vtkMultiProcessController.h>
 #include <vtkObjectFactory.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
@@ -54,23 +54,16 @@ namespace
 /// Whether the input asks for the extended collimated-source model
 /// (vtkSurfaceIrradiance's CollimatedModel, in the field data): the
 /// distributed path does not implement it, so such inputs are gathered.
-bool ExtendedCollimatedModel(vtkInformationVector* inputs)
+bool ExtendedCollimatedModel(vtkInformationVector* inputs, const vtkTranslucencyCommunicator& comm)
 {
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputs);
   vtkDataArray* model =
     input ? input->GetFieldData()->GetArray("TranslucencyCollimatedModel") : nullptr;
-  int extended =
-    model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) != 0.0 ? 1 : 0;
+  const bool extended =
+    model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) != 0.0;
   // A collective decision: an empty piece may carry no field data, and every
   // rank must take the same path (or the others hang in its collectives).
-  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  if (controller && controller->GetNumberOfProcesses() > 1)
-  {
-    int any = 0;
-    controller->AllReduce(&extended, &any, 1, vtkCommunicator::MAX_OP);
-    extended = any;
-  }
-  return extended != 0;
+  return comm.Any(extended);
 }
 }
 
@@ -109,7 +102,6 @@ struct vtkSolveDiffusion::Internals
   vtkMTimeType RangeAbsorptionTime = 0, RangeScatteringTime = 0;
   /// The distributed path's solver (kept: hierarchy and warm start).
   vtkTranslucencyDistributedSolve Distributed;
-  std::string ParallelPath;
   /// Time gates: the snapshots asked for and the last time-resolved result.
   std::vector<int> TimeSnapshots;
   translucency::TimeResolvedResult TimeResolved;
@@ -181,11 +173,6 @@ bool vtkSolveDiffusion::GetConverged(int channel) const
 const char* vtkSolveDiffusion::GetLinearSolverUsed() const
 {
   return this->Internal->Report.LinearSolver.c_str();
-}
-
-const char* vtkSolveDiffusion::GetParallelPath() const
-{
-  return this->Internal->ParallelPath.c_str();
 }
 
 const char* vtkSolveDiffusion::GetLastAssembly() const
@@ -543,35 +530,64 @@ int vtkSolveDiffusion::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   this->Internal->HasMonteCarloBalance = false; // set again by a montecarlo solve
-  // Under MPI: the divergence and fem systems distributed over the ranks
-  // (hypre), or else gather to rank 0, run this serially there, hand the
-  // result back.
-  const bool vertexSolver =
-    this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
-  if (this->DistributedSolve && vertexSolver && !this->InteractiveDetector &&
-    this->ModulationFrequency == 0.0 &&
-    this->TimeGatesCount == 0 && !ExtendedCollimatedModel(inputVector[0]) &&
-    vtkTranslucencyDistributedSolve::IsAllowedByEnvironment() &&
-    vtkTranslucencyDistributedSolve::IsAvailable())
+  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+    { return this->PlanParallel(i, c); },
+    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestSerial(r, i, o); },
+      nullptr,
+      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator&)
+      { return this->RequestDistributed(i, o); } },
+    { this->ParallelPath, this->ParallelPlan });
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkSolveDiffusion::PlanParallel(
+  vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm)
+{
+  using Plan = vtkTranslucencyParallelPlan;
+  const Plan::GatherMode mode = Plan::GatherMode::SameMesh;
+  // Collective first: every rank takes part whatever the settings.
+  const bool extended = ExtendedCollimatedModel(inputVector[0], comm);
+  const bool vertexSolver = this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
+  if (!vertexSolver)
   {
-    return this->RequestDistributed(inputVector, outputVector);
+    return Plan::Gathered(mode, "the solver is serial (only divergence and fem run distributed)");
   }
-  int parallelResult = 0;
-  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
-        vtkTranslucencyParallel::GatherMode::SameMesh,
-        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-        { return this->RequestData(r, i, o); },
-        parallelResult))
+  if (!this->DistributedSolve)
   {
-    this->Internal->ParallelPath = "gathered";
-    return parallelResult;
+    return Plan::Gathered(mode, "DistributedSolve is off");
   }
-  // (On rank 0 inside a gathered run the outer call sets "gathered" after this.)
-  if (vtkMultiProcessController::GetGlobalController() == nullptr ||
-    vtkMultiProcessController::GetGlobalController()->GetNumberOfProcesses() <= 1)
+  if (this->ModulationFrequency != 0.0)
   {
-    this->Internal->ParallelPath = "serial";
+    return Plan::Gathered(mode, "a modulation frequency (the distributed solve is real)");
   }
+  if (this->TimeGatesCount != 0)
+  {
+    return Plan::Gathered(mode, "time gates (the distributed solve is continuous wave)");
+  }
+  if (this->InteractiveDetector)
+  {
+    return Plan::Gathered(mode, "the interactive detector");
+  }
+  if (extended)
+  {
+    return Plan::Gathered(mode, "the extended collimated model");
+  }
+  if (!vtkTranslucency::CanDistribute(comm))
+  {
+    return Plan::Gathered(mode, "this build has no distributed solve (hypre and VTK's ParallelMPI)");
+  }
+  Plan plan = Plan::Distributed(
+    mode, "one hypre system over the ranks' pieces (divergence or fem, continuous wave)");
+  plan.DeprecatedVariable = "TRANSLUCENCY_GATHERED_SOLVE";
+  return plan;
+}
+
+//------------------------------------------------------------------------------
+int vtkSolveDiffusion::RequestSerial(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
@@ -1171,7 +1187,7 @@ bool vtkSolveDiffusion::ComputePowerBalance(
 {
   vtkUnstructuredGrid* output = this->GetOutput();
   std::string error;
-  if (this->Internal->ParallelPath == "distributed")
+  if (this->ParallelPath == "distributed")
   {
     // Summed over the ranks inside the collective solve: the whole object's
     // balance on every rank (DistributedVertexSolver::GetPowerBalance).
@@ -1267,7 +1283,6 @@ int vtkSolveDiffusion::RequestDistributed(
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   Internals& in = *this->Internal;
-  in.ParallelPath = "distributed";
   in.Report = translucency::SolverReport();
   in.Readings.clear();
   in.FluencePhase.clear();
@@ -1386,4 +1401,6 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "TimeGates: " << this->TimeGatesStart << ", " << this->TimeGatesEnd << " ns, "
      << this->TimeGatesCount << " gates\n";
   os << indent << "TimeStepsPerGate: " << this->TimeStepsPerGate << "\n";
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
+  os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
 }

@@ -104,6 +104,9 @@
 
 class vtkStringArray;
 
+class vtkTranslucencyCommunicator;
+struct vtkTranslucencyParallelPlan;
+
 class TRANSLUCENCYFILTERS_EXPORT vtkSolveDiffusion : public vtkUnstructuredGridAlgorithm
 {
 public:
@@ -413,10 +416,18 @@ public:
   vtkBooleanMacro(DistributedSolve, bool);
   ///@}
 
-  /// Where the last execution solved: "serial" (one process), "gathered"
-  /// (MPI, the mesh gathered to rank 0) or "distributed" (MPI, hypre on
-  /// every rank); empty before the first one.
-  const char* GetParallelPath() const;
+  ///@{
+  /**
+   * The parallel seam (Documentation/Parallel.md, "What runs where").
+   * GetParallelPath(): the path the last execution took: "serial" (one
+   * process), "per piece", "distributed" or "gathered".
+   * GetParallelPlan(): the plan this filter declares for more than one MPI
+   * process, with its reason ("per piece: ..."); set by every execution, a
+   * one-process one included ("" before the first).
+   */
+  const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  const char* GetParallelPlan() const { return this->ParallelPlan.c_str(); }
+  ///@}
 
   ///@{
   /// Time gates: N gates covering [T0, T1] ns (T0 >= 0, T1 > T0, N in
@@ -500,6 +511,14 @@ protected:
   ~vtkSolveDiffusion() override;
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// The plan for more than one process (vtkTranslucencyDispatch: called on
+  /// every rank; collective over `comm`).
+  vtkTranslucencyParallelPlan PlanParallel(
+    vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm);
+  /// The serial path (one process, or rank 0 of a gathered run).
+  int RequestSerial(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
+  std::string ParallelPath = "serial";
+  std::string ParallelPlan;
   /// The distributed path (vtkTranslucencyDistributedSolve), on every rank.
   int RequestDistributed(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
 

@@ -8,8 +8,7 @@
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkTranslucencyDistributedCut.h"
-#include "vtkTranslucencyDistributedPieces.h"
-#include "vtkTranslucencyParallel.h"
+#include "vtkTranslucencyDispatch.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -85,13 +84,6 @@ vtkMTimeType vtkStrokeCut::GetMTime()
 }
 
 //------------------------------------------------------------------------------
-bool vtkStrokeCut::UseGatheredPath()
-{
-  const char* value = std::getenv("TRANSLUCENCY_GATHERED_CUT");
-  return value && std::string(value) == "1";
-}
-
-//------------------------------------------------------------------------------
 struct vtkStrokeCut::PieceCut
 {
   std::shared_ptr<const translucency::TetMesh> Mesh;
@@ -135,45 +127,50 @@ std::vector<double> vtkStrokeCut::StrokePoints(vtkPolyData* stroke)
 int vtkStrokeCut::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  this->NumberOfFrontTets = this->NumberOfFrontPoints = this->FrontBytes = 0;
+  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+    { return this->PlanParallel(i, c); },
+    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestSerial(r, i, o); },
+      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
+      { return this->RequestPerPiece(i, o, this->HasSharedStroke ? &this->SharedStroke : nullptr, c); } },
+    { this->ParallelPath, this->ParallelPlan });
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkStrokeCut::PlanParallel(
+  vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm)
+{
+  using Plan = vtkTranslucencyParallelPlan;
   vtkPolyData* stroke = inputVector[1]->GetNumberOfInformationObjects() > 0
     ? vtkPolyData::GetData(inputVector[1], 0)
     : nullptr;
-  this->NumberOfFrontTets = this->NumberOfFrontPoints = this->FrontBytes = 0;
-  // Under MPI: each rank cuts its own piece (a tet is kept or removed by its
-  // own vertices; the relaxation runs on the all-gathered cut front, as in
-  // serial); with TRANSLUCENCY_GATHERED_CUT=1, or a stroke split over the
-  // ranks, gather to rank 0, run this serially there, hand the result back.
-  if (!this->Gathering && vtkTranslucencyDistributedPieces::IsAvailable())
+  // The same stroke on every rank (a source gives it to rank 0 or to all).
+  this->HasSharedStroke = comm.Any(stroke != nullptr);
+  this->SharedStroke.clear();
+  if (this->HasSharedStroke &&
+    !vtkTranslucencyDistributedCut::ShareStroke(StrokePoints(stroke), this->SharedStroke))
   {
-    // Every rank decides alike (the variable on any rank gathers).
-    bool gather = vtkTranslucencyDistributedPieces::Any(UseGatheredPath());
-    const bool useStroke = vtkTranslucencyDistributedPieces::Any(stroke != nullptr);
-    std::vector<double> strokePoints;
-    if (!gather && useStroke)
-    {
-      // The same stroke on every rank (a source gives it to rank 0 or to all).
-      gather = !vtkTranslucencyDistributedCut::ShareStroke(StrokePoints(stroke), strokePoints);
-    }
-    if (!gather)
-    {
-      this->ParallelPath = "per piece";
-      return this->RequestPerPiece(inputVector, outputVector, useStroke ? &strokePoints : nullptr);
-    }
+    return Plan::Gathered(Plan::GatherMode::RankZero,
+      "the stroke is split over the ranks: the pieces are cut on rank 0");
   }
-  this->ParallelPath = "serial";
-  int parallelResult = 0;
-  this->Gathering = true; // the serial run on rank 0 must not go per piece
-  const bool gathered = vtkTranslucencyParallel::RunGathered(this, request, inputVector,
-    outputVector, vtkTranslucencyParallel::GatherMode::RankZero,
-    [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-    { return this->RequestData(r, i, o); },
-    parallelResult);
-  this->Gathering = false;
-  if (gathered)
-  {
-    this->ParallelPath = "gathered";
-    return parallelResult;
-  }
+  const bool relaxes = this->NumberOfRelaxationIterations > 0 && this->RelaxationFactor > 0.0;
+  Plan plan = Plan::PerPiece(Plan::GatherMode::RankZero, relaxes
+      ? "a tet is kept or removed by its own vertices; the relaxation runs on the all-gathered "
+        "cut front"
+      : "a tet is kept or removed by its own vertices");
+  plan.DeprecatedVariable = "TRANSLUCENCY_GATHERED_CUT";
+  return plan;
+}
+
+//------------------------------------------------------------------------------
+int vtkStrokeCut::RequestSerial(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkPolyData* stroke = inputVector[1]->GetNumberOfInformationObjects() > 0
+    ? vtkPolyData::GetData(inputVector[1], 0)
+    : nullptr;
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
@@ -197,7 +194,8 @@ int vtkStrokeCut::RequestData(
 
 //------------------------------------------------------------------------------
 int vtkStrokeCut::RequestPerPiece(vtkInformationVector** inputVector,
-  vtkInformationVector* outputVector, const std::vector<double>* strokePoints)
+  vtkInformationVector* outputVector, const std::vector<double>* strokePoints,
+  const vtkTranslucencyCommunicator& comm)
 {
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
@@ -208,7 +206,7 @@ int vtkStrokeCut::RequestPerPiece(vtkInformationVector** inputVector,
   const translucency::Timer timer;
   const long long cells = input ? input->GetNumberOfCells() : 0;
   // Every rank takes part in every collective below, an empty piece too.
-  if (vtkTranslucencyDistributedPieces::Sum(cells) == 0)
+  if (comm.Sum(cells) == 0)
   {
     vtkErrorMacro(<< "input is not a tet mesh: the input mesh is empty (no points or no cells)");
     return 0;
@@ -235,13 +233,13 @@ int vtkStrokeCut::RequestPerPiece(vtkInformationVector** inputVector,
       status = this->PrepareCut(input, piece, 0, local);
     }
     const std::string error =
-      vtkTranslucencyDistributedPieces::AgreeOnError(status == 0 ? local : std::string());
+      comm.AgreeOnError(status == 0 ? local : std::string());
     if (!error.empty())
     {
       vtkErrorMacro(<< error);
       return 0;
     }
-    if (vtkTranslucencyDistributedPieces::Any(status == 2))
+    if (comm.Any(status == 2))
     {
       return 1; // aborted on some rank: empty outputs on every rank
     }
@@ -270,15 +268,15 @@ int vtkStrokeCut::RequestPerPiece(vtkInformationVector** inputVector,
     this->CutTime = timer.GetMilliseconds();
   }
   const std::string error =
-    vtkTranslucencyDistributedPieces::AgreeOnError(status == 0 ? local : std::string());
+    comm.AgreeOnError(status == 0 ? local : std::string());
   if (!error.empty())
   {
     vtkErrorMacro(<< error);
     return 0;
   }
-  const long long kept = vtkTranslucencyDistributedPieces::Sum(
+  const long long kept = comm.Sum(
     status == 1 ? output->GetNumberOfCells() : 1);
-  if (kept == 0 && vtkTranslucencyDistributedPieces::GetRank() == 0)
+  if (kept == 0 && comm.GetRank() == 0)
   {
     vtkWarningMacro(<< "the cut removed the whole mesh: the output is empty");
   }
@@ -428,4 +426,6 @@ void vtkStrokeCut::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfRelaxationIterations: " << this->NumberOfRelaxationIterations << "\n";
   os << indent << "MinimumDihedralAngle: " << this->MinimumDihedralAngle << "\n";
   os << indent << "NumberOfBlockedVertices: " << this->NumberOfBlockedVertices << "\n";
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
+  os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
 }

@@ -48,6 +48,9 @@ class vtkImplicitFunction;
 class vtkPolyData;
 class vtkUnstructuredGrid;
 
+class vtkTranslucencyCommunicator;
+struct vtkTranslucencyParallelPlan;
+
 class TRANSLUCENCYFILTERS_EXPORT vtkStrokeCut : public vtkUnstructuredGridAlgorithm
 {
 public:
@@ -112,18 +115,20 @@ public:
   vtkGetMacro(CutTime, double);
   ///@}
 
+  /// Per piece the statistics above are those of the whole relaxation (the
+  /// serial ones) when the relaxation is on, else this rank's.
+  ///@{
   /**
-   * The path of the last execution: "serial" (one process), "per piece" (MPI:
-   * each rank cuts its own piece, no gather; with the relaxation on, the cut
-   * front, the kept tets with a vertex on the removed side, is all-gathered
-   * and relaxed on every rank as in serial) or "gathered" (MPI:
-   * TRANSLUCENCY_GATHERED_CUT=1 on some rank, or a stroke split over the
-   * ranks: the pieces are cut on rank 0, the output is there).
-   * Per piece the statistics above are those of the whole relaxation (the
-   * serial ones) when the relaxation is on, else this rank's.
-   * Documentation/Parallel.md.
+   * The parallel seam (Documentation/Parallel.md, "What runs where").
+   * GetParallelPath(): the path the last execution took: "serial" (one
+   * process), "per piece", "distributed" or "gathered".
+   * GetParallelPlan(): the plan this filter declares for more than one MPI
+   * process, with its reason ("per piece: ..."); set by every execution, a
+   * one-process one included ("" before the first).
    */
   const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  const char* GetParallelPlan() const { return this->ParallelPlan.c_str(); }
+  ///@}
 
   ///@{
   /// The cut front of the last per-piece relaxation (MPI, relaxation on):
@@ -143,10 +148,22 @@ protected:
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// The plan for more than one process (vtkTranslucencyDispatch: called on
+  /// every rank; collective over `comm`).
+  vtkTranslucencyParallelPlan PlanParallel(
+    vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm);
+  /// The serial path (one process, or rank 0 of a gathered run).
+  int RequestSerial(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
+  std::string ParallelPath = "serial";
+  std::string ParallelPlan;
+  /// The stroke every rank cuts with (set by PlanParallel; MPI only).
+  std::vector<double> SharedStroke;
+  bool HasSharedStroke = false;
   /// The MPI per-piece path (collective: every rank calls it). `strokePoints`:
   /// the stroke shared by every rank, or null to use CutFunction.
   int RequestPerPiece(vtkInformationVector** inputVector, vtkInformationVector* outputVector,
-    const std::vector<double>* strokePoints);
+    const std::vector<double>* strokePoints,
+    const vtkTranslucencyCommunicator& comm);
   /// Cut `input` (with the stroke `strokePoints`, 3 coordinates per point, or
   /// CutFunction when null) into `output`: 1 done, 0 failed (`error` says
   /// why), 2 aborted. Not collective.
@@ -162,8 +179,6 @@ protected:
   int PrepareCut(vtkUnstructuredGrid* input, PieceCut& piece, int iterations, std::string& error);
   /// The output of a prepared cut (its points at piece.Positions).
   void WriteCut(vtkUnstructuredGrid* input, const PieceCut& piece, vtkUnstructuredGrid* output);
-  /// True if TRANSLUCENCY_GATHERED_CUT is "1" in this process.
-  static bool UseGatheredPath();
 
   vtkImplicitFunction* CutFunction = nullptr;
   bool InsideOut = false;
@@ -178,8 +193,6 @@ protected:
   vtkIdType NumberOfFrontTets = 0;
   vtkIdType NumberOfFrontPoints = 0;
   vtkIdType FrontBytes = 0;
-  std::string ParallelPath = "serial";
-  bool Gathering = false; // true while the gathered serial run executes
 
 private:
   vtkStrokeCut(const vtkStrokeCut&) = delete;

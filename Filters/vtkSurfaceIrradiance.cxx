@@ -10,7 +10,8 @@
 #include "vtkTranslucencyDistributedIrradiance.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
-#include "vtkTranslucencyParallel.h"
+#include "vtkTranslucencyDispatch.h"
+#include "vtkTranslucencyMPI.h"
 
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
@@ -163,22 +164,45 @@ int vtkSurfaceIrradiance::GetNumberOfSpotLights() const
 int vtkSurfaceIrradiance::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: each rank computes its own piece on the gathered boundary
-  // surface (distributed); or, without that path, gather the mesh to rank 0,
-  // run this serially there, hand the result back.
-  const bool distributed = vtkTranslucencyDistributedIrradiance::IsAvailable();
-  int parallelResult = 0;
-  if (!distributed &&
-    vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
-      vtkTranslucencyParallel::GatherMode::SameMesh,
-      [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-      { return this->RequestData(r, i, o); },
-      parallelResult))
+  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+    { return this->PlanParallel(i, c); },
+    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestSerial(r, i, o); },
+      nullptr,
+      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator&)
+      { return this->RequestLights(i, o, true); } },
+    { this->ParallelPath, this->ParallelPlan });
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkSurfaceIrradiance::PlanParallel(
+  vtkInformationVector**, const vtkTranslucencyCommunicator& comm)
+{
+  using Plan = vtkTranslucencyParallelPlan;
+  if (!vtkTranslucency::CanDistribute(comm))
   {
-    this->ParallelPath = "gathered";
-    return parallelResult;
+    return Plan::Gathered(Plan::GatherMode::SameMesh,
+      "the boundary surface needs the distributed numbering (a build with hypre and VTK's "
+      "ParallelMPI)");
   }
-  this->ParallelPath = distributed ? "distributed" : "serial";
+  Plan plan = Plan::Distributed(Plan::GatherMode::SameMesh,
+    "the physical boundary surface all-gathered (O(N^(2/3))), each rank lights its own points");
+  plan.DeprecatedVariable = "TRANSLUCENCY_GATHERED_IRRADIANCE";
+  return plan;
+}
+
+//------------------------------------------------------------------------------
+int vtkSurfaceIrradiance::RequestSerial(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return this->RequestLights(inputVector, outputVector, false);
+}
+
+//------------------------------------------------------------------------------
+int vtkSurfaceIrradiance::RequestLights(
+  vtkInformationVector** inputVector, vtkInformationVector* outputVector, bool distributed)
+{
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
@@ -399,4 +423,6 @@ void vtkSurfaceIrradiance::PrintSelf(ostream& os, vtkIndent indent)
           : this->CollimatedModel == COLLIMATED_EXTENDED   ? "extended"
                                                            : "surface")
      << "\n";
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
+  os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
 }

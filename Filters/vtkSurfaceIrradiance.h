@@ -70,6 +70,9 @@ namespace translucency
 struct LightSource;
 }
 
+class vtkTranslucencyCommunicator;
+struct vtkTranslucencyParallelPlan;
+
 class TRANSLUCENCYFILTERS_EXPORT vtkSurfaceIrradiance : public vtkUnstructuredGridAlgorithm
 {
 public:
@@ -217,12 +220,19 @@ public:
   /// execution; 0 when the topology came from the shared cache.
   double GetTopologyTime() const { return this->TopologyTime; }
 
-  /// How the last execution ran: "serial" (one process), "distributed"
-  /// (MPI: each rank its own piece on the all-gathered boundary surface,
-  /// Documentation/Parallel.md) or "gathered" (MPI: the mesh gathered to
-  /// rank 0; TRANSLUCENCY_GATHERED_IRRADIANCE=1 or a build without the
-  /// distributed path).
+  ///@{
+  /**
+   * The parallel seam (Documentation/Parallel.md, "What runs where").
+   * GetParallelPath(): the path the last execution took: "serial" (one
+   * process), "per piece", "distributed" or "gathered".
+   * GetParallelPlan(): the plan this filter declares for more than one MPI
+   * process, with its reason ("per piece: ..."); set by every execution, a
+   * one-process one included ("" before the first).
+   */
   const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  const char* GetParallelPlan() const { return this->ParallelPlan.c_str(); }
+  ///@}
+
   /// The distributed path's boundary surface in the last execution (0 on
   /// the other paths): its triangles, the bytes every rank received for it,
   /// and the wall time (ms) of the numbering, face count and gather.
@@ -235,6 +245,18 @@ protected:
   ~vtkSurfaceIrradiance() override;
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// The plan for more than one process (vtkTranslucencyDispatch: called on
+  /// every rank; collective over `comm`).
+  vtkTranslucencyParallelPlan PlanParallel(
+    vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm);
+  /// The serial path (one process, or rank 0 of a gathered run).
+  int RequestSerial(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
+  std::string ParallelPath = "serial";
+  std::string ParallelPlan;
+  /// The lights on this rank's piece: the serial code, or (`distributed`,
+  /// collective) the distributed path on the all-gathered boundary surface.
+  int RequestLights(
+    vtkInformationVector** inputVector, vtkInformationVector* outputVector, bool distributed);
 
   double UniformLightIrradiance = 0.0;
   int UniformLightSamples = 32;
@@ -248,7 +270,6 @@ protected:
   int CollimatedModel = COLLIMATED_SURFACE;
   double TopologyTime = 0.0;
   std::string LightsDescription;
-  std::string ParallelPath = "serial";
   long long BoundarySurfaceTriangles = 0;
   long long BoundarySurfaceBytes = 0;
   double BoundarySurfaceTime = 0.0;

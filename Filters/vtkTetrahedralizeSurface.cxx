@@ -1,5 +1,6 @@
 #include "vtkTetrahedralizeSurface.h"
 
+#include "vtkTranslucencyDispatch.h"
 #include "Error.h"
 #include "ResourceLimits.h"
 #include "Strings.h"
@@ -8,7 +9,6 @@
 #include "TranslucencyHxtMesher.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
-#include "vtkTranslucencyParallel.h"
 
 #include <vtkCellArray.h>
 #include <vtkCellArrayIterator.h>
@@ -419,16 +419,26 @@ int vtkTetrahedralizeSurface::FillInputPortInformation(int, vtkInformation* info
 int vtkTetrahedralizeSurface::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: gather to rank 0, run this serially there, hand the result back.
-  int parallelResult = 0;
-  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
-        vtkTranslucencyParallel::GatherMode::RankZero,
-        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-        { return this->RequestData(r, i, o); },
-        parallelResult))
-  {
-    return parallelResult;
-  }
+  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+    { return this->PlanParallel(i, c); },
+    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestSerial(r, i, o); } },
+    { this->ParallelPath, this->ParallelPlan });
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkTetrahedralizeSurface::PlanParallel(
+  vtkInformationVector**, const vtkTranslucencyCommunicator&)
+{
+  return vtkTranslucencyParallelPlan::Gathered(
+    vtkTranslucencyParallelPlan::GatherMode::RankZero, "TetGen is serial: the tets on rank 0 (follow with Redistribute DataSet)");
+}
+
+//------------------------------------------------------------------------------
+int vtkTetrahedralizeSurface::RequestSerial(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkPolyData* input = vtkPolyData::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
@@ -817,6 +827,8 @@ void vtkTetrahedralizeSurface::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "GradingFactor: " << this->GradingFactor << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
   os << indent << "HxtOptimization: " << this->HxtOptimization << "\n";
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
+  os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
 }
 
 //------------------------------------------------------------------------------

@@ -63,6 +63,9 @@
 
 #include <string> // for the mesher's name
 
+class vtkTranslucencyCommunicator;
+struct vtkTranslucencyParallelPlan;
+
 class TRANSLUCENCYFILTERS_EXPORT vtkTetrahedralizeSurface : public vtkUnstructuredGridAlgorithm
 {
 public:
@@ -186,12 +189,33 @@ public:
   vtkBooleanMacro(SpatialReordering, bool);
   ///@}
 
+  ///@{
+  /**
+   * The parallel seam (Documentation/Parallel.md, "What runs where").
+   * GetParallelPath(): the path the last execution took: "serial" (one
+   * process), "per piece", "distributed" or "gathered".
+   * GetParallelPlan(): the plan this filter declares for more than one MPI
+   * process, with its reason ("per piece: ..."); set by every execution, a
+   * one-process one included ("" before the first).
+   */
+  const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  const char* GetParallelPlan() const { return this->ParallelPlan.c_str(); }
+  ///@}
+
 protected:
   vtkTetrahedralizeSurface();
   ~vtkTetrahedralizeSurface() override = default;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// The plan for more than one process (vtkTranslucencyDispatch: called on
+  /// every rank; collective over `comm`).
+  vtkTranslucencyParallelPlan PlanParallel(
+    vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm);
+  /// The serial path (one process, or rank 0 of a gathered run).
+  int RequestSerial(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
+  std::string ParallelPath = "serial";
+  std::string ParallelPlan;
 
   double Quality = 1.414;
   double MaxTetVolume = 0.0;

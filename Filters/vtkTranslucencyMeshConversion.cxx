@@ -1,5 +1,7 @@
 #include "vtkTranslucencyMeshConversion.h"
 
+#include "vtkTranslucencyGhosts.h"
+
 #include "Error.h"
 
 #include <vtkCellArray.h>
@@ -175,13 +177,11 @@ std::vector<vtkIdType> OwnedTets(
   vtkUnstructuredGrid* grid, const std::vector<int>& cells, std::vector<int>& tets)
 {
   const vtkIdType numCells = grid ? grid->GetNumberOfCells() : 0;
-  auto* ghosts = numCells > 0 ? vtkUnsignedCharArray::SafeDownCast(grid->GetCellData()->GetArray(
-                                  vtkDataSetAttributes::GhostArrayName()))
-                              : nullptr;
+  vtkUnsignedCharArray* ghosts = numCells > 0 ? vtkTranslucency::GhostCells(grid) : nullptr;
   std::vector<vtkIdType> kept;
   for (vtkIdType c = 0; c < numCells; ++c)
   {
-    if (!ghosts || !(ghosts->GetValue(c) & vtkDataSetAttributes::DUPLICATECELL))
+    if (!vtkTranslucency::IsGhostCell(ghosts, c))
     {
       kept.push_back(c);
       tets.insert(tets.end(), cells.begin() + 4 * c, cells.begin() + 4 * c + 4);

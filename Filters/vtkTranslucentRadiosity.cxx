@@ -1,8 +1,8 @@
 #include "vtkTranslucentRadiosity.h"
 
+#include "vtkTranslucencyDispatch.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
-#include "vtkTranslucencyParallel.h"
 
 #include "Error.h"
 #include "LightSources.h"
@@ -464,16 +464,26 @@ vtkStringArray* vtkTranslucentRadiosity::GetAvailableLinearSolvers()
 int vtkTranslucentRadiosity::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  // Under MPI: gather to rank 0, run this serially there, hand the result back.
-  int parallelResult = 0;
-  if (vtkTranslucencyParallel::RunGathered(this, request, inputVector, outputVector,
-        vtkTranslucencyParallel::GatherMode::RankZero,
-        [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-        { return this->RequestData(r, i, o); },
-        parallelResult))
-  {
-    return parallelResult;
-  }
+  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+    { return this->PlanParallel(i, c); },
+    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+      { return this->RequestSerial(r, i, o); } },
+    { this->ParallelPath, this->ParallelPlan });
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkTranslucentRadiosity::PlanParallel(
+  vtkInformationVector**, const vtkTranslucencyCommunicator&)
+{
+  return vtkTranslucencyParallelPlan::Gathered(
+    vtkTranslucencyParallelPlan::GatherMode::RankZero, "the form factors need the whole scene");
+}
+
+//------------------------------------------------------------------------------
+int vtkTranslucentRadiosity::RequestSerial(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   auto* input = vtkCompositeDataSet::GetData(inputVector[0], 0);
   auto* output = vtkCompositeDataSet::GetData(outputVector, 0);
@@ -557,4 +567,6 @@ void vtkTranslucentRadiosity::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Shadows: " << this->Shadows << "\n";
   os << indent << "ComputeHeuristics: " << this->ComputeHeuristics << "\n";
   os << indent << "Lights: " << this->Internal->Lights.size() << "\n";
+  os << indent << "ParallelPath: " << this->ParallelPath << "\n";
+  os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
 }

@@ -56,6 +56,9 @@ class RadiosityScene;
 class TranslucentRadiosity;
 }
 
+class vtkTranslucencyCommunicator;
+struct vtkTranslucencyParallelPlan;
+
 class TRANSLUCENCYFILTERS_EXPORT vtkTranslucentRadiosity : public vtkDataObjectAlgorithm
 {
 public:
@@ -186,6 +189,19 @@ public:
   vtkTypeInt64 GetSubsurfaceMemory() const;
   ///@}
 
+  ///@{
+  /**
+   * The parallel seam (Documentation/Parallel.md, "What runs where").
+   * GetParallelPath(): the path the last execution took: "serial" (one
+   * process), "per piece", "distributed" or "gathered".
+   * GetParallelPlan(): the plan this filter declares for more than one MPI
+   * process, with its reason ("per piece: ..."); set by every execution, a
+   * one-process one included ("" before the first).
+   */
+  const char* GetParallelPath() const { return this->ParallelPath.c_str(); }
+  const char* GetParallelPlan() const { return this->ParallelPlan.c_str(); }
+  ///@}
+
 protected:
   vtkTranslucentRadiosity();
   ~vtkTranslucentRadiosity() override;
@@ -193,6 +209,14 @@ protected:
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestDataObject(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// The plan for more than one process (vtkTranslucencyDispatch: called on
+  /// every rank; collective over `comm`).
+  vtkTranslucencyParallelPlan PlanParallel(
+    vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm);
+  /// The serial path (one process, or rank 0 of a gathered run).
+  int RequestSerial(vtkInformation*, vtkInformationVector**, vtkInformationVector*);
+  std::string ParallelPath = "serial";
+  std::string ParallelPlan;
 
   int SubsurfaceMethod = SUBSURFACE_DIFFUSION;
   int Iteration = ITERATION_GAUSS_SEIDEL;

@@ -10,8 +10,10 @@
 #include <vtkNew.h>
 #include <vtkObjectFactory.h>
 #include <vtkStringArray.h>
+#include <vtkStreamingDemandDrivenPipeline.h>
 #include <vtkTable.h>
 
+#include "vtkTranslucencyCommunicator.h"
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtk_nlohmannjson.h"
 #include VTK_NLOHMANN_JSON(json.hpp)
@@ -272,11 +274,35 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
 }
 
 //------------------------------------------------------------------------------
+int vtkMaterialTableReader::RequestInformation(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
+{
+  // Rank 0 reads the whole file, the others return an empty piece: all of
+  // them execute, so that they agree on the outcome (RunReaderAgreed).
+  vtkTranslucencyCommunicator::ExecuteEveryPiece(outputVector);
+  return 1;
+}
+
+//------------------------------------------------------------------------------
 int vtkMaterialTableReader::RequestData(
   vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
 {
+  // Under MPI every rank agrees on the outcome (rank 0 reads the file).
+  return vtkTranslucencyCommunicator::RunReaderAgreed(
+    this, outputVector, [this, outputVector]() { return this->ReadPiece(outputVector); });
+}
+
+//------------------------------------------------------------------------------
+int vtkMaterialTableReader::ReadPiece(vtkInformationVector* outputVector)
+{
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkTable* output = vtkTable::GetData(outputVector);
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) &&
+    outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) > 0)
+  {
+    return outputs.Succeed(); // the whole table is piece 0: an empty piece
+  }
   std::vector<Material> materials;
   try
   {

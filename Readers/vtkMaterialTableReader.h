@@ -82,6 +82,10 @@ protected:
   ~vtkMaterialTableReader() override = default;
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// Every piece executes (vtkTranslucencyCommunicator::ExecuteEveryPiece).
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// RequestData's body: read this rank's piece (1 on success, 0 on failure).
+  int ReadPiece(vtkInformationVector* outputVector);
 
   std::string FileName;
 

@@ -11,6 +11,7 @@
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkTranslucencyCommunicator.h"
 #include "vtkTranslucencyOutputGuard.h"
 
 #include <algorithm>
@@ -1420,8 +1421,26 @@ int vtkSurfaceReader::CanReadFile(const char* fileName)
 }
 
 //------------------------------------------------------------------------------
+int vtkSurfaceReader::RequestInformation(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
+{
+  // Rank 0 reads the whole file, the others return an empty piece: all of
+  // them execute, so that they agree on the outcome (RunReaderAgreed).
+  vtkTranslucencyCommunicator::ExecuteEveryPiece(outputVector);
+  return 1;
+}
+
+//------------------------------------------------------------------------------
 int vtkSurfaceReader::RequestData(
   vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
+{
+  // Under MPI every rank agrees on the outcome (rank 0 reads the file).
+  return vtkTranslucencyCommunicator::RunReaderAgreed(
+    this, outputVector, [this, outputVector]() { return this->ReadPiece(outputVector); });
+}
+
+//------------------------------------------------------------------------------
+int vtkSurfaceReader::ReadPiece(vtkInformationVector* outputVector)
 {
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkPolyData* output = vtkPolyData::GetData(outputVector, 0);

@@ -93,6 +93,10 @@ protected:
   ~vtkSurfaceReader() override = default;
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// Every piece executes (vtkTranslucencyCommunicator::ExecuteEveryPiece).
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// RequestData's body: read this rank's piece (1 on success, 0 on failure).
+  int ReadPiece(vtkInformationVector* outputVector);
 
   std::string FileName;
   int Format = FORMAT_FROM_EXTENSION;

@@ -14,6 +14,7 @@
 #include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkTranslucencyCommunicator.h"
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkUnstructuredGrid.h"
 
@@ -918,9 +919,26 @@ int vtkTetGenReader::CanReadFile(const char* fname)
 }
 
 //------------------------------------------------------------------------------
-int vtkTetGenReader::RequestData(vtkInformation* vtkNotUsed(request),
-                                 vtkInformationVector** vtkNotUsed(inputVector),
-                                 vtkInformationVector* outputVector)
+int vtkTetGenReader::RequestInformation(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
+{
+  // Rank 0 reads the whole file, the others return an empty piece: all of
+  // them execute, so that they agree on the outcome (RunReaderAgreed).
+  vtkTranslucencyCommunicator::ExecuteEveryPiece(outputVector);
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+int vtkTetGenReader::RequestData(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
+{
+  // Under MPI every rank agrees on the outcome (rank 0 reads the file).
+  return vtkTranslucencyCommunicator::RunReaderAgreed(
+    this, outputVector, [this, outputVector]() { return this->ReadPiece(outputVector); });
+}
+
+//------------------------------------------------------------------------------
+int vtkTetGenReader::ReadPiece(vtkInformationVector* outputVector)
 {
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector, 0);

@@ -138,6 +138,10 @@ protected:
 
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
                   vtkInformationVector* outputVector) override;
+  /// Every piece executes (vtkTranslucencyCommunicator::ExecuteEveryPiece).
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// RequestData's body: read this rank's piece (1 on success, 0 on failure).
+  int ReadPiece(vtkInformationVector* outputVector);
 
   /**
    * Reads the files named by FileName into @a output. Returns 1 on success or

@@ -3,7 +3,8 @@
 #include "CutFront.h"
 #include "Error.h"
 #include "TetMesh.h"
-#include "vtkTranslucencyDistributedPieces.h"
+#include "vtkTranslucencyCommunicator.h"
+#include "vtkTranslucencyGhosts.h"
 
 #include <vtkCellData.h>
 #include <vtkCommunicator.h>
@@ -22,7 +23,7 @@ namespace
 {
 vtkMultiProcessController* Controller()
 {
-  return vtkMultiProcessController::GetGlobalController();
+  return vtkTranslucencyCommunicator::World().GetController();
 }
 
 /// All ranks' `local` values, concatenated in rank order; `counts` gets each
@@ -55,8 +56,14 @@ std::vector<T> AllGatherV(const std::vector<T>& local, std::vector<vtkIdType>& c
 bool vtkTranslucencyDistributedCut::ShareStroke(
   const std::vector<double>& local, std::vector<double>& shared)
 {
-  vtkMultiProcessController* controller = Controller();
-  const int rank = controller->GetLocalProcessId();
+  const vtkTranslucencyCommunicator comm = vtkTranslucencyCommunicator::World();
+  vtkMultiProcessController* controller = comm.GetController();
+  if (!controller)
+  {
+    shared = local; // one process: its own stroke
+    return true;
+  }
+  const int rank = comm.GetRank();
   int mine = local.empty() ? INT_MAX : rank, first = INT_MAX;
   controller->AllReduce(&mine, &first, 1, vtkCommunicator::MIN_OP);
   shared.clear();
@@ -72,7 +79,7 @@ bool vtkTranslucencyDistributedCut::ShareStroke(
     shared = local;
   }
   controller->Broadcast(shared.data(), static_cast<vtkIdType>(length), first);
-  return !vtkTranslucencyDistributedPieces::Any(!local.empty() && local != shared);
+  return !vtkTranslucencyCommunicator::World().Any(!local.empty() && local != shared);
 }
 
 //------------------------------------------------------------------------------
@@ -86,7 +93,7 @@ bool vtkTranslucencyDistributedCut::RelaxFront(vtkUnstructuredGrid* piece,
   const bool hasPoints = mesh && mesh->GetNumberOfPoints() > 0;
   vtkDataArray* ids = hasPoints && piece ? piece->GetPointData()->GetGlobalIds() : nullptr;
   // One rule on every rank: ids only if every rank with points has them.
-  const bool byId = !vtkTranslucencyDistributedPieces::Any(hasPoints && !ids);
+  const bool byId = !vtkTranslucencyCommunicator::World().Any(hasPoints && !ids);
 
   // 1. This rank's front: its owned kept tets with a vertex of F > 0.
   std::vector<long long> frontIds, frontTets;
@@ -95,14 +102,13 @@ bool vtkTranslucencyDistributedCut::RelaxFront(vtkUnstructuredGrid* piece,
   if (hasPoints)
   {
     std::vector<char> owned;
-    auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
-      piece->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()));
+    vtkUnsignedCharArray* ghosts = vtkTranslucency::GhostCells(piece);
     if (ghosts && ghosts->GetNumberOfTuples() == mesh->GetNumberOfTets())
     {
       owned.resize(static_cast<size_t>(mesh->GetNumberOfTets()));
       for (vtkIdType c = 0; c < ghosts->GetNumberOfTuples(); ++c)
       {
-        owned[static_cast<size_t>(c)] = !(ghosts->GetValue(c) & vtkDataSetAttributes::DUPLICATECELL);
+        owned[static_cast<size_t>(c)] = !vtkTranslucency::IsGhostCell(ghosts, c);
       }
     }
     std::vector<int> points, tets;
@@ -127,7 +133,7 @@ bool vtkTranslucencyDistributedCut::RelaxFront(vtkUnstructuredGrid* piece,
     }
     frontTets.assign(tets.begin(), tets.end());
   }
-  error = vtkTranslucencyDistributedPieces::AgreeOnError(localError);
+  error = vtkTranslucencyCommunicator::World().AgreeOnError(localError);
   if (!error.empty())
   {
     return false;
@@ -169,7 +175,7 @@ bool vtkTranslucencyDistributedCut::RelaxFront(vtkUnstructuredGrid* piece,
   }
   statistics.Points = front.GetNumberOfPoints();
   statistics.Tets = front.GetNumberOfTets();
-  error = vtkTranslucencyDistributedPieces::AgreeOnError(localError);
+  error = vtkTranslucencyCommunicator::World().AgreeOnError(localError);
   if (!error.empty())
   {
     return false;

@@ -1,13 +1,12 @@
 #include "vtkTranslucencyDistributedSolve.h"
 
-#include <cstdlib>
-#include <cstring>
 
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
 #include "DistributedVertexSolver.h"
 #include "Error.h"
-#include "vtkTranslucencyGlobalCommunicator.h"
+#include "vtkTranslucencyMPI.h"
 #include "vtkTranslucencyMeshConversion.h"
+#include "vtkTranslucencyPieceFaces.h"
 
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
@@ -19,21 +18,11 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
-namespace
-{
-using vtkTranslucency::GlobalCommunicator;
-}
-
 struct vtkTranslucencyDistributedSolve::Impl
 {
   std::unique_ptr<translucency::DistributedVertexSolver> Solver;
   std::string Discretization;
 };
-
-bool vtkTranslucencyDistributedSolve::IsAvailable()
-{
-  return GlobalCommunicator() != nullptr;
-}
 
 bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   const std::string& discretization, double relTol, int maxIter, bool warmStart, int threads,
@@ -42,7 +31,7 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   translucency::SolverReport& report, std::string& error)
 {
   readings.clear();
-  MPI_Comm comm = *GlobalCommunicator();
+  MPI_Comm comm = *vtkTranslucency::MPIHandle(vtkTranslucencyCommunicator::World());
   std::string local;
   std::vector<double> points;
   std::vector<int> cells;
@@ -51,7 +40,6 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   std::vector<double> irradiance;
   std::vector<translucency::PointKey> keys;
   const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
-  vtkDataArray* globalIds = input ? input->GetPointData()->GetGlobalIds() : nullptr;
   try
   {
     if (numPoints > 0 && !vtkTranslucency::ToTetArrays(input, points, cells, local))
@@ -101,15 +89,8 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   {
     local = e.what();
   }
-  // Global ids when every rank with points has them.
-  int haveIds = (numPoints == 0 || globalIds) ? 1 : 0, allIds = 0;
-  MPI_Allreduce(&haveIds, &allIds, 1, MPI_INT, MPI_MIN, comm);
-  keys.resize(static_cast<size_t>(numPoints));
-  for (vtkIdType i = 0; i < numPoints && local.empty(); ++i)
-  {
-    keys[i] = allIds ? translucency::PointKeyFromId(static_cast<std::int64_t>(globalIds->GetComponent(i, 0)))
-                     : translucency::PointKeyFromCoordinates(points.data() + 3 * i);
-  }
+  // Global ids when every rank with points has them, else coordinates.
+  vtkTranslucency::MakePointKeys(comm, input, points, !local.empty(), keys);
   try
   {
     translucency::AgreeOnError(comm, local);
@@ -163,11 +144,6 @@ struct vtkTranslucencyDistributedSolve::Impl
 {
 };
 
-bool vtkTranslucencyDistributedSolve::IsAvailable()
-{
-  return false;
-}
-
 bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid*, const std::string&, double,
   int, bool, int, const translucency::Sources*, const std::vector<translucency::Detector>&,
   std::vector<double>&, std::vector<translucency::DetectorReading>&, translucency::SolverReport&,
@@ -191,8 +167,3 @@ vtkTranslucencyDistributedSolve::vtkTranslucencyDistributedSolve()
 
 vtkTranslucencyDistributedSolve::~vtkTranslucencyDistributedSolve() = default;
 
-bool vtkTranslucencyDistributedSolve::IsAllowedByEnvironment()
-{
-  const char* value = std::getenv("TRANSLUCENCY_GATHERED_SOLVE");
-  return !value || !*value || std::strcmp(value, "0") == 0;
-}

@@ -6,11 +6,10 @@
  *         Irradiance of its own piece's points on it
  *         (translucency::ComputeSurfacePointIrradiance).
  *
- * Used whenever the global controller is an MPI controller with more than
- * one process (every rank takes part, a rank with an empty piece too),
- * unless the environment variable TRANSLUCENCY_GATHERED_IRRADIANCE is set to
- * a value other than 0 (then the filter gathers, as before). A build without
- * the Parallel layer (hypre) or VTK's ParallelMPI gathers.
+ * Used when vtkSurfaceIrradiance's plan says "distributed"
+ * (vtkTranslucencyDispatch: every rank takes part, a rank with an empty
+ * piece too). A build without the Parallel layer (hypre) or VTK's
+ * ParallelMPI gathers (vtkTranslucency::CanDistribute).
  *
  * The piece: its owned cells (vtkGhostType DUPLICATECELL cells are left out)
  * must be linear tets; points are identified across ranks by the point
@@ -37,11 +36,6 @@ class vtkUnstructuredGrid;
 
 namespace vtkTranslucencyDistributedIrradiance
 {
-/// True if this build has the distributed path, the global controller runs
-/// more than one MPI process and TRANSLUCENCY_GATHERED_IRRADIANCE is unset
-/// (or "0").
-bool IsAvailable();
-
 /// What the last Compute() gathered (the same numbers on every rank).
 struct Report
 {
@@ -71,16 +65,11 @@ bool Compute(vtkUnstructuredGrid* input, const std::vector<translucency::LightSo
  * order): the serial mesh's boundary surface, for queries against the whole
  * object's surface from a rank's own piece (Assign's Layers: the depth of a
  * centroid; the interactive pencil beam's ray cast). Needs no RefractiveIndex
- * (surface.TriangleEta is then 1 where the input has none). Available whenever the global
- * controller is MPI with more than one process (TRANSLUCENCY_GATHERED_IRRADIANCE
- * does not apply). Returns false with `error` (the same on every rank).
+ * (surface.TriangleEta is then 1 where the input has none). Needs vtkTranslucency::CanDistribute and
+ * more than one process. Returns false with `error` (the same on every rank).
  */
 bool GatherSurface(vtkUnstructuredGrid* input, translucency::BoundarySurface& surface,
   std::string& error);
-
-/// True if this build can GatherSurface() (hypre and VTK's ParallelMPI) and
-/// the global controller runs more than one MPI process.
-bool CanGatherSurface();
 }
 
 #endif

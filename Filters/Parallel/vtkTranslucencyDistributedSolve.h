@@ -8,12 +8,10 @@
  * Used for the divergence and fem solvers in continuous wave (point
  * sources, listed pencil beams and detectors included; no modulation, time
  * gates or extended collimated model; the interactive pencil beam is aimed by
- * vtkSolveDiffusion on the all-gathered surface and arrives as a listed beam), whenever the global controller is an MPI
- * controller with more than one process (every rank takes part, a rank
- * with an empty piece too), unless vtkSolveDiffusion's DistributedSolve is
- * off or the environment variable TRANSLUCENCY_GATHERED_SOLVE is set to a
- * value other than 0. A build without hypre or without VTK's ParallelMPI
- * module has no distributed path (IsAvailable() is false).
+ * vtkSolveDiffusion on the all-gathered surface and arrives as a listed beam), when vtkSolveDiffusion's plan says
+ * "distributed" (vtkTranslucencyDispatch: every rank takes part, a rank with
+ * an empty piece too). A build without hypre or without VTK's ParallelMPI
+ * module has no distributed path (vtkTranslucency::CanDistribute).
  *
  * The piece: its owned cells (cells flagged vtkGhostType DUPLICATECELL are
  * left out) must be linear tets; points are identified across ranks by the
@@ -37,12 +35,6 @@ class vtkTranslucencyDistributedSolve
 public:
   vtkTranslucencyDistributedSolve();
   ~vtkTranslucencyDistributedSolve();
-
-  /// True if this build has the distributed solve and the global
-  /// controller runs more than one MPI process.
-  static bool IsAvailable();
-  /// True unless TRANSLUCENCY_GATHERED_SOLVE is set (and not "0").
-  static bool IsAllowedByEnvironment();
 
   /**
    * Collective. Solve on this rank's piece `input` ("divergence" or "fem");

@@ -1,5 +1,8 @@
 #include "vtkTranslucencyParallel.h"
 
+#include "vtkTranslucencyCommunicator.h"
+#include "vtkTranslucencyGhosts.h"
+
 #include <vtkAlgorithm.h>
 #include <vtkCallbackCommand.h>
 #include <vtkCellData.h>
@@ -33,6 +36,7 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
+#include <exception>
 #include <map>
 #include <string>
 #include <unordered_map>
@@ -56,10 +60,6 @@ struct PieceMaps
   std::vector<std::vector<vtkIdType>> Cells;
 };
 
-/// The algorithms whose serial RequestData runs inside RunGathered on this
-/// thread (on rank 0 only): neither they nor any filter they run may gather.
-thread_local std::vector<vtkAlgorithm*> ActiveAlgorithms;
-
 bool IsEmpty(vtkDataObject* data)
 {
   if (!data)
@@ -77,11 +77,8 @@ bool IsEmpty(vtkDataObject* data)
   return false;
 }
 
-/// True if cell `c` of a piece is a ghost (owned by another piece).
-bool IsGhostCell(vtkUnsignedCharArray* ghosts, vtkIdType c)
-{
-  return ghosts && (ghosts->GetValue(c) & vtkDataSetAttributes::DUPLICATECELL);
-}
+using vtkTranslucency::GhostCells;
+using vtkTranslucency::IsGhostCell;
 
 /// A point's identity across pieces: its global id, or its exact coordinates.
 struct PointKey
@@ -228,8 +225,7 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
       continue;
     }
     vtkDataArray* globalIds = useGlobalIds ? s->GetPointData()->GetGlobalIds() : nullptr;
-    auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
-      s->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()));
+    vtkUnsignedCharArray* ghosts = GhostCells(s);
     const vtkIdType n = s->GetNumberOfPoints();
     std::vector<char> owned(static_cast<size_t>(n), 0), used(static_cast<size_t>(n), 0);
     for (vtkIdType c = 0; c < s->GetNumberOfCells(); ++c)
@@ -332,8 +328,7 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
     {
       continue;
     }
-    auto* ghosts = vtkUnsignedCharArray::SafeDownCast(
-      s->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()));
+    vtkUnsignedCharArray* ghosts = GhostCells(s);
     vtkDataArray* cellIds = useCellGlobalIds ? s->GetCellData()->GetGlobalIds() : nullptr;
     for (vtkIdType c = 0; c < s->GetNumberOfCells(); ++c)
     {
@@ -387,9 +382,7 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
   for (size_t r = 0; anyGhost && r < sets.size(); ++r)
   {
     vtkPointSet* s = sets[r];
-    auto* ghosts = inputIndex[r] < 0 ? nullptr
-                                     : vtkUnsignedCharArray::SafeDownCast(s->GetCellData()->GetArray(
-                                         vtkDataSetAttributes::GhostArrayName()));
+    vtkUnsignedCharArray* ghosts = inputIndex[r] < 0 ? nullptr : GhostCells(s);
     for (vtkIdType c = 0; ghosts && c < s->GetNumberOfCells(); ++c)
     {
       if (!IsGhostCell(ghosts, c))
@@ -697,21 +690,11 @@ void CaptureError(vtkObject*, unsigned long, void* clientData, void* callData)
 } // namespace
 
 //------------------------------------------------------------------------------
-bool IsGathering()
+int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector, GatherMode mode, const SerialRequest& serial,
+  const vtkTranslucencyCommunicator& comm)
 {
-  return !ActiveAlgorithms.empty();
-}
-
-//------------------------------------------------------------------------------
-bool RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
-  vtkInformationVector* outputVector, GatherMode mode, const SerialRequest& serial, int& result)
-{
-  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  // Inside a gathered run (rank 0 alone), any of our filters runs serially.
-  if (!controller || controller->GetNumberOfProcesses() <= 1 || !ActiveAlgorithms.empty())
-  {
-    return false;
-  }
+  vtkMultiProcessController* controller = comm.GetController();
   const int rank = controller->GetLocalProcessId();
   const int size = controller->GetNumberOfProcesses();
   const int numInputs = self->GetNumberOfInputPorts();
@@ -791,18 +774,21 @@ bool RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVect
       capture->SetCallback(CaptureError);
       capture->SetClientData(&error);
       const unsigned long observer = self->AddObserver(vtkCommand::ErrorEvent, capture);
-      ActiveAlgorithms.push_back(self);
       try
       {
+        // Alone on rank 0: every filter run here (this one's serial path
+        // included) sees a communicator of size one.
+        const vtkTranslucencyCommunicator::LocalScope alone;
         status = serial(request, inputPointers.data(), outputs);
       }
-      catch (...)
+      catch (const std::exception& e)
       {
-        ActiveAlgorithms.pop_back();
-        self->RemoveObserver(observer);
-        throw;
+        status = 0;
+        if (error.empty())
+        {
+          error = e.what();
+        }
       }
-      ActiveAlgorithms.pop_back();
       self->RemoveObserver(observer);
       if (status && mode == GatherMode::SameMesh)
       {
@@ -845,8 +831,7 @@ bool RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVect
     {
       vtkErrorWithObjectMacro(self, << error);
     }
-    result = 0;
-    return true;
+    return 0;
   }
 
   for (int port = 0; port < numOutputs; ++port)
@@ -896,7 +881,6 @@ bool RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVect
       out->Initialize();
     }
   }
-  result = 1;
-  return true;
+  return 1;
 }
 }

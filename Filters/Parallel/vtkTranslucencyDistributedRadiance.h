@@ -4,11 +4,10 @@
  *         the physical boundary faces of its own tets (a face shared with a
  *         tet of another rank is not boundary), no gather.
  *
- * Used whenever the global controller is an MPI controller with more than
- * one process (every rank takes part, a rank with an empty piece too),
- * unless the environment variable TRANSLUCENCY_GATHERED_RADIANCE is set to a
- * value other than 0 (then the filter gathers to rank 0, as before). A build
- * without the Parallel layer (hypre) or VTK's ParallelMPI gathers.
+ * Used when vtkOutgoingRadiance's plan says "per piece"
+ * (vtkTranslucencyDispatch: every rank takes part, a rank with an empty
+ * piece too). A build without the Parallel layer (hypre) or VTK's
+ * ParallelMPI gathers (vtkTranslucency::CanDistribute).
  *
  * The faces are found as by the distributed Surface Irradiance
  * (vtkTranslucency::ExtractPieceFaces, translucency::FindPieceBoundary:
@@ -27,11 +26,6 @@ class vtkUnstructuredGrid;
 
 namespace vtkTranslucencyDistributedRadiance
 {
-/// True if this build has the per-piece path, the global controller runs
-/// more than one MPI process and TRANSLUCENCY_GATHERED_RADIANCE is unset
-/// (or "0").
-bool IsAvailable();
-
 /// A rank's part of the boundary surface (local point ids of the piece).
 struct Surface
 {

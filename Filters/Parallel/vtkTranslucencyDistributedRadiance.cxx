@@ -1,26 +1,19 @@
 #include "vtkTranslucencyDistributedRadiance.h"
 
-#include <cstdlib>
-#include <cstring>
-
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
 #include "DistributedBoundarySurface.h"
 #include "Error.h"
-#include "vtkTranslucencyGlobalCommunicator.h"
+#include "vtkTranslucencyMPI.h"
 #include "vtkTranslucencyPieceFaces.h"
 
 #include <vtkUnstructuredGrid.h>
 
 namespace
 {
-using vtkTranslucency::GlobalCommunicator;
-}
-
-bool vtkTranslucencyDistributedRadiance::IsAvailable()
+MPI_Comm* GlobalCommunicator()
 {
-  const char* value = std::getenv("TRANSLUCENCY_GATHERED_RADIANCE");
-  const bool allowed = !value || !*value || std::strcmp(value, "0") == 0;
-  return allowed && GlobalCommunicator() != nullptr;
+  return vtkTranslucency::MPIHandle(vtkTranslucencyCommunicator::World());
+}
 }
 
 bool vtkTranslucencyDistributedRadiance::FindSurface(
@@ -98,11 +91,6 @@ void vtkTranslucencyDistributedRadiance::AllMax(std::vector<double>& values)
 }
 
 #else // no per-piece path in this build
-
-bool vtkTranslucencyDistributedRadiance::IsAvailable()
-{
-  return false;
-}
 
 bool vtkTranslucencyDistributedRadiance::FindSurface(vtkUnstructuredGrid*, Surface&, std::string& error)
 {

@@ -1,14 +1,12 @@
 #include "vtkTranslucencyDistributedIrradiance.h"
 
-#include <cstdlib>
-#include <cstring>
 
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
 #include "DistributedBoundarySurface.h"
 #include "Error.h"
 #include "TetMesh.h"
 #include "Timer.h"
-#include "vtkTranslucencyGlobalCommunicator.h"
+#include "vtkTranslucencyMPI.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyPieceFaces.h"
 
@@ -25,28 +23,12 @@
 #include <algorithm>
 #include <memory>
 
-namespace
-{
-using vtkTranslucency::GlobalCommunicator;
-
-bool AllowedByEnvironment()
-{
-  const char* value = std::getenv("TRANSLUCENCY_GATHERED_IRRADIANCE");
-  return !value || !*value || std::strcmp(value, "0") == 0;
-}
-}
-
-bool vtkTranslucencyDistributedIrradiance::IsAvailable()
-{
-  return AllowedByEnvironment() && GlobalCommunicator() != nullptr;
-}
-
 bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
   const std::vector<translucency::LightSource>& lights, double uniformIrradiance,
   int uniformSamples, bool shadows, const std::function<bool()>& abort, std::vector<double>& q,
   Report& report, std::string& error)
 {
-  MPI_Comm comm = *GlobalCommunicator();
+  MPI_Comm comm = *vtkTranslucency::MPIHandle(vtkTranslucencyCommunicator::World());
   report = Report();
   std::string local;
   const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
@@ -138,15 +120,10 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
   return true;
 }
 
-bool vtkTranslucencyDistributedIrradiance::CanGatherSurface()
-{
-  return GlobalCommunicator() != nullptr;
-}
-
 bool vtkTranslucencyDistributedIrradiance::GatherSurface(
   vtkUnstructuredGrid* input, translucency::BoundarySurface& surface, std::string& error)
 {
-  MPI_Comm comm = *GlobalCommunicator();
+  MPI_Comm comm = *vtkTranslucency::MPIHandle(vtkTranslucencyCommunicator::World());
   std::string local;
   vtkTranslucency::PieceFaces faces;
   const bool eta = input && input->GetCellData()->GetArray(vtkTranslucency::RefractiveIndexName);
@@ -181,21 +158,11 @@ bool vtkTranslucencyDistributedIrradiance::GatherSurface(
 
 #else // no distributed path in this build
 
-bool vtkTranslucencyDistributedIrradiance::IsAvailable()
-{
-  return false;
-}
-
 bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid*,
   const std::vector<translucency::LightSource>&, double, int, bool,
   const std::function<bool()>&, std::vector<double>&, Report&, std::string& error)
 {
   error = "this build has no distributed surface irradiance (hypre or VTK's ParallelMPI missing)";
-  return false;
-}
-
-bool vtkTranslucencyDistributedIrradiance::CanGatherSurface()
-{
   return false;
 }
 

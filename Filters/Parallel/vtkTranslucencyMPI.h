@@ -1,0 +1,32 @@
+/**
+ * @file   vtkTranslucencyMPI.h
+ * @brief  The MPI handle of the one communicator (vtkTranslucencyCommunicator),
+ *         for the distributed paths that call the core's MPI code
+ *         (Solvers/Parallel). Private to the filters.
+ */
+#ifndef vtkTranslucencyMPI_h
+#define vtkTranslucencyMPI_h
+
+#include "vtkTranslucencyCommunicator.h"
+
+#ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
+#include <vtkMPI.h>
+#endif
+
+namespace vtkTranslucency
+{
+/**
+ * True if this build has the distributed paths (hypre and VTK's ParallelMPI)
+ * and `comm` can run them: size one (a plan declared in one process) or an
+ * MPI controller. False otherwise: those stages gather.
+ */
+bool CanDistribute(const vtkTranslucencyCommunicator& comm);
+
+#ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
+/// The MPI communicator of `comm`, or nullptr (size one, or a controller
+/// that is not MPI).
+MPI_Comm* MPIHandle(const vtkTranslucencyCommunicator& comm);
+#endif
+}
+
+#endif
