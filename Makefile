@@ -1,6 +1,8 @@
 # Translucency: the two commands a new user needs.
 #   make demo   install missing Debian packages, configure, build, render the bunny into out/
-#   make test   install missing Debian packages, configure, build, run every test with ctest
+#   make test   install missing Debian packages, configure, build, run every test but
+#               the slow tier with ctest (ctest -LE slow; tiers: Testing/TestTiers.cmake)
+#   make test-all   the same with every test, the slow tier included (what CI runs)
 # Reliability (Documentation/Reliability.md), each in its own build tree:
 #   make test-sanitize   the core's GoogleTests under ASan + UBSan (gcc, build-sanitize)
 #   make test-fuzz       a short run of every libFuzzer target (clang, build-fuzz)
@@ -14,7 +16,7 @@ CMAKE_ARGS ?=
 SANITIZE_DIR ?= build-sanitize
 FUZZ_DIR ?= build-fuzz
 
-.PHONY: all deps configure build demo test test-sanitize test-fuzz test-soak bench clean
+.PHONY: all deps configure build demo test test-all test-sanitize test-fuzz test-soak bench clean
 
 all: build
 
@@ -32,7 +34,12 @@ build: configure
 demo: build
 	bash scripts/demo.sh $(BUILD_DIR)
 
+# Test tiers (ctest LABELS unit, integration, mpi, gui, slow): e.g.
+# `cd build && ctest -L unit` for the core alone, `ctest -L slow` for the rest.
 test: build
+	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) -LE slow
+
+test-all: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
 # The core and its GoogleTests only (no VTK): every ASan/UBSan finding fails.
