@@ -18,27 +18,66 @@ namespace
 {
 DiffusionSolverRegistry MakeRegistry()
 {
+  using namespace DiffusionTrait;
   DiffusionSolverRegistry registry("solver");
-  //                   linear choice, stochastic, vertices, options
   registry.Add({ "divergence",
     [] { return std::make_unique<VertexDiffusionSolver>(std::make_unique<DiscreteDivergence>()); },
-    { true, false, true, {} },
+    MakeDiffusionSolverTraits(LinearSolverChoice | AtVertices | Frequency | Time,
+      { DiffusionOption::TimeStepRecycled }),
     "TransCut discrete divergence at the vertices (TransCut, eq. 10-14), CG (default)" });
   registry.Add({ "fem",
     [] { return std::make_unique<VertexDiffusionSolver>(std::make_unique<FiniteElement>()); },
-    { true, false, true, {} }, "linear finite elements (Galerkin) at the vertices, CG" });
+    MakeDiffusionSolverTraits(LinearSolverChoice | AtVertices | Frequency | Time,
+      { DiffusionOption::TimeStepRecycled }),
+    "linear finite elements (Galerkin) at the vertices, CG" });
   registry.Add({ "quadgraph", [] { return std::make_unique<QuadGraphSolver>(); },
-    { true, false, false, { DiffusionOption::MultiLevel, DiffusionOption::TwoPointFlux } },
+    MakeDiffusionSolverTraits(
+      LinearSolverChoice, { DiffusionOption::MultiLevel, DiffusionOption::TwoPointFlux }),
     "finite differences on the tet dual graph (QuadGraph, eq. 5-6), BiCGSTAB" });
   registry.Add({ "grid", [] { return std::make_unique<GridSolver>(); },
-    { true, false, false, { DiffusionOption::GridSpacing, DiffusionOption::MultiLevel } },
+    MakeDiffusionSolverTraits(
+      LinearSolverChoice, { DiffusionOption::GridSpacing, DiffusionOption::MultiLevel }),
     "regular-grid finite differences (Polygrid), BiCGSTAB" });
   registry.Add({ "montecarlo", [] { return std::make_unique<MonteCarloSolver>(); },
-    { false, true, false, { DiffusionOption::Photons, DiffusionOption::Seed } },
+    MakeDiffusionSolverTraits(Stochastic | Time,
+      { DiffusionOption::Photons, DiffusionOption::Seed, DiffusionOption::Anisotropy }),
     "photon random walk, the reference (slow, with standard errors)" });
   return registry;
 }
 } // namespace
+
+DiffusionSolverTraits MakeDiffusionSolverTraits(unsigned flags, std::vector<std::string> options)
+{
+  DiffusionSolverTraits traits;
+  traits.HasLinearSolverChoice = (flags & DiffusionTrait::LinearSolverChoice) != 0;
+  traits.IsStochastic = (flags & DiffusionTrait::Stochastic) != 0;
+  traits.UnknownsAtVertices = (flags & DiffusionTrait::AtVertices) != 0;
+  traits.SupportsFrequency = (flags & DiffusionTrait::Frequency) != 0;
+  traits.SupportsTime = (flags & DiffusionTrait::Time) != 0;
+  traits.Distributed = (flags & DiffusionTrait::Distributed) != 0;
+  traits.Options = std::move(options);
+  return traits;
+}
+
+std::vector<std::string> GetDiffusionSolverNamesWith(unsigned flags)
+{
+  std::vector<std::string> names;
+  for (const auto& entry : GetDiffusionSolverRegistry().GetEntries())
+  {
+    const DiffusionSolverTraits& t = entry.Properties;
+    const unsigned has = (t.HasLinearSolverChoice ? DiffusionTrait::LinearSolverChoice : 0u) |
+      (t.IsStochastic ? DiffusionTrait::Stochastic : 0u) |
+      (t.UnknownsAtVertices ? DiffusionTrait::AtVertices : 0u) |
+      (t.SupportsFrequency ? DiffusionTrait::Frequency : 0u) |
+      (t.SupportsTime ? DiffusionTrait::Time : 0u) |
+      (t.Distributed ? DiffusionTrait::Distributed : 0u);
+    if ((has & flags) == flags)
+    {
+      names.push_back(entry.Name);
+    }
+  }
+  return names;
+}
 
 const DiffusionSolverRegistry& GetDiffusionSolverRegistry()
 {

@@ -31,9 +31,38 @@ struct DiffusionSolverTraits
   /// The unknowns are the mesh vertices (VertexDiffusionSolver): incremental
   /// assembly after a paint (SetChangedTets) applies.
   bool UnknownsAtVertices = false;
+  /// SolveFrequencyDomain is implemented (else the interface refuses it).
+  bool SupportsFrequency = false;
+  /// SolveTimeResolved is implemented (else the interface refuses it).
+  bool SupportsTime = false;
+  /// One system distributed over the ranks of a communicator (MPI): every
+  /// rank solves with its own piece of the mesh (Solvers/Parallel/).
+  bool Distributed = false;
   /// The options its SetOptions reads (DiffusionOption names).
   std::vector<std::string> Options;
 };
+
+/// The boolean traits as flags, to register an entry on one line:
+/// MakeDiffusionSolverTraits(LinearSolverChoice | AtVertices | Frequency, {options}).
+namespace DiffusionTrait
+{
+enum : unsigned
+{
+  LinearSolverChoice = 1u << 0, ///< HasLinearSolverChoice
+  Stochastic = 1u << 1,         ///< IsStochastic
+  AtVertices = 1u << 2,         ///< UnknownsAtVertices
+  Frequency = 1u << 3,          ///< SupportsFrequency
+  Time = 1u << 4,               ///< SupportsTime
+  Distributed = 1u << 5         ///< Distributed
+};
+}
+
+/// Traits from DiffusionTrait flags and the option names.
+DiffusionSolverTraits MakeDiffusionSolverTraits(
+  unsigned flags, std::vector<std::string> options = {});
+
+/// Names of the registered solvers with every trait of `flags` (listing order).
+std::vector<std::string> GetDiffusionSolverNamesWith(unsigned flags);
 
 using DiffusionSolverRegistry = Registry<DiffusionSolver, DiffusionSolverTraits>;
 

@@ -137,7 +137,8 @@ public:
   void SetMaxPhotons(long long n) { MaxPhotons_ = n; }
   long long GetMaxPhotons() const { return MaxPhotons_; }
 
-  /// Reads "photons" (integer >= 1) and "seed" (integer >= 0), see
+  /// Reads "photons" (integer >= 1), "seed" (integer >= 0) and
+  /// "anisotropy" (g, checked by Solve: in (-1, 1)), see
   /// DiffusionSolver::SetOptions.
   void SetOptions(const SolverOptions& options) override
   {
@@ -145,7 +146,23 @@ public:
       "the number of photons must be an integer >= 1", NumberOfPhotons_);
     options.ReadInteger(GetName(), DiffusionOption::Seed, 0.0,
       "the seed must be an integer >= 0", Seed_);
+    options.ReadNumber(GetName(), DiffusionOption::Anisotropy, -1.0,
+      "the anisotropy g must be in (-1, 1)", Anisotropy_);
   }
+
+  /**
+   * Time of flight through the interface: SetTimeGates(gates) and
+   * SetDetectors(detectors), then Solve(); result gets the gates, the gate
+   * readings (GetGateReadings) and, as IntegratedFluence, the photons' fluence
+   * of all time. No fluence snapshots per gate (`snapshotGates` must be
+   * empty, else translucency::Error).
+   */
+  bool SolveTimeResolved(const DiffusionProblem& problem, const TimeGates& gates,
+    const std::vector<Detector>& detectors, const std::vector<int>& snapshotGates,
+    TimeResolvedResult& result, SolverReport& report) override;
+
+  /// The detector, gate and power tallies of the last Solve (always true).
+  bool GetTalliedReadouts(TalliedReadouts& readouts) const override;
 
   ///@{
   /// Henyey-Greenstein mean cosine g in (-1, 1), default 0. The scattering
@@ -164,7 +181,7 @@ public:
   ///@{
   /// OpenMP threads (default 0: omp_get_max_threads()). Does not change
   /// the results.
-  void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+  void SetNumberOfThreads(int n) override { NumberOfThreads_ = n; }
   int GetNumberOfThreads() const { return NumberOfThreads_; }
   ///@}
 
@@ -178,7 +195,7 @@ public:
 
   ///@{
   /// Detectors read by the next Solve() (default none; Detectors.h).
-  void SetDetectors(const std::vector<Detector>& detectors) { Detectors_ = detectors; }
+  void SetDetectors(const std::vector<Detector>& detectors) override { Detectors_ = detectors; }
   const std::vector<Detector>& GetDetectors() const { return Detectors_; }
   ///@}
 

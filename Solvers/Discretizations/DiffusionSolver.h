@@ -14,8 +14,10 @@
 #include "OpticalProperties.h"
 #include "Error.h"
 #include "SolverOptions.h"
+#include "TimeResolved.h"
 
 #include <array>
+#include <complex>
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -91,6 +93,10 @@ struct SolverReport
   std::array<int, NumberOfChannels> Iterations{};
   std::array<double, NumberOfChannels> Residual{}; ///< relative residual
   std::array<bool, NumberOfChannels> Converged{};
+  /// The first attempt did not converge and this report is of the re-solve
+  /// after a full set-up (a new hierarchy, no warm start) in the same call
+  /// (DiffusionFrontEnd::Solve, DistributedVertexSolver::Solve).
+  bool Resolved = false;
   /// Monte Carlo only: standard error of Fluence (3 per mesh point) and the
   /// tallied exitant Radiance with its standard error (3 per mesh point,
   /// boundary points only; W/mm^2/sr). Empty for the diffusion solvers.
@@ -123,7 +129,25 @@ constexpr const char* MultiLevel = "multilevel";    ///< GridSolver, QuadGraphSo
 constexpr const char* TwoPointFlux = "two-point-flux"; ///< QuadGraphSolver: 0 or 1 (not the paper's)
 constexpr const char* Photons = "photons";          ///< MonteCarloSolver: photon budget
 constexpr const char* Seed = "seed";                ///< MonteCarloSolver: random seed
+constexpr const char* Anisotropy = "anisotropy";    ///< MonteCarloSolver: Henyey-Greenstein g
+/// VertexDiffusionSolver: recycled step solutions of the time domain, 0..4
+constexpr const char* TimeStepRecycled = "time-step-recycled";
 }
+
+/**
+ * What a stochastic solver (registry trait IsStochastic) tallied during its
+ * last solve, beside the fluence: its detector readings with standard
+ * errors (continuous wave: all time), the time-of-flight readings per gate
+ * ([gate][detector], with time gates) and its own power bookkeeping (W per
+ * channel). The deterministic solvers have none: the front end reads their
+ * detectors from the fluence (ReadDetectors) and computes their balance.
+ */
+struct TalliedReadouts
+{
+  std::vector<DetectorReading> Readings, ReadingErrors;
+  std::vector<std::vector<DetectorReading>> GateReadings, GateErrors;
+  std::array<double, NumberOfChannels> Injected{}, Absorbed{}, Escaped{};
+};
 
 class DiffusionSolver
 {
@@ -144,6 +168,56 @@ public:
 
   /// Forget any state kept for a warm start (call when the mesh changes).
   virtual void Reset() {}
+
+  /**
+   * Frequency domain (registry trait SupportsFrequency): the complex fluence
+   * Phi (3 per mesh point) of sources and irradiance modulated at
+   * `frequency` Hz (VertexDiffusionSolver.h has the equation). The default
+   * refuses: throws translucency::Error("the <name> solver has no frequency
+   * domain"). Returns false if the progress callback aborted.
+   */
+  virtual bool SolveFrequencyDomain(const DiffusionProblem& problem, double frequency,
+    std::vector<std::complex<double>>& fluence, SolverReport& report);
+
+  /**
+   * Time domain (registry trait SupportsTime): the response to a pulse at
+   * t = 0 averaged over `gates`, `detectors` read at every gate, the
+   * gate-averaged fluence of `snapshotGates` kept (TimeResolved.h). The
+   * default refuses: throws translucency::Error("the <name> solver has no
+   * time gates"). Returns false if the progress callback aborted.
+   */
+  virtual bool SolveTimeResolved(const DiffusionProblem& problem, const TimeGates& gates,
+    const std::vector<Detector>& detectors, const std::vector<int>& snapshotGates,
+    TimeResolvedResult& result, SolverReport& report);
+
+  /**
+   * Painting (TransCut Sec. 5.2): the caller guarantees that, since the
+   * last successful Solve() on the same mesh, only the material of
+   * `changedTets` changed (same irradiance). Solvers with an incremental
+   * update (registry trait UnknownsAtVertices: VertexDiffusionSolver) rebuild
+   * only those rows at the next Solve(); the default ignores it (a full
+   * solve, the same result).
+   */
+  virtual void SetChangedTets(std::vector<int> changedTets) { (void)changedTets; }
+
+  /// OpenMP threads of the solver's parallel loops (0, the default: OpenMP's
+  /// default). Does not change the results. The base (no threads) ignores it.
+  virtual void SetNumberOfThreads(int n) { (void)n; }
+
+  /**
+   * Detectors a stochastic solver tallies while it runs (photons crossing
+   * the fibre); the others ignore them (their detectors are read from the
+   * fluence by the caller). Default: ignored.
+   */
+  virtual void SetDetectors(const std::vector<Detector>& detectors) { (void)detectors; }
+
+  /// The read-outs the last solve tallied (stochastic solvers); false (the
+  /// default) when the solver tallies none.
+  virtual bool GetTalliedReadouts(TalliedReadouts& readouts) const
+  {
+    (void)readouts;
+    return false;
+  }
 
   ///@{
   /// Iterative solvers: relative residual to reach (default 1e-6) and the
@@ -181,7 +255,10 @@ public:
    *  - "two-point-flux" (QuadGraphSolver): two-point finite-volume link
    *    weights instead of the paper's eq. 5, 0 or 1;
    *  - "photons", "seed" (MonteCarloSolver): photon budget >= 1, random seed
-   *    >= 0 (integers).
+   *    >= 0 (integers); "anisotropy" (MonteCarloSolver): Henyey-Greenstein
+   *    g in (-1, 1);
+   *  - "time-step-recycled" (VertexDiffusionSolver): earlier step solutions
+   *    that start each time step, integer 0..4 (SetTimeStepRecycledSolutions).
    *
    * Decision: a value this solver reads but refuses throws
    * translucency::Error naming the solver, the option and the value (the

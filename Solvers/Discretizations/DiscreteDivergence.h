@@ -59,7 +59,7 @@ public:
   std::size_t GetCacheMemoryBytes() const { return GeometryCache_.GetMemoryBytes(); }
 
   /// OpenMP threads for assembly (0 = OpenMP default). Default 0.
-  void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+  void SetNumberOfThreads(int n) override { NumberOfThreads_ = n; }
   int GetNumberOfThreads() const { return NumberOfThreads_; }
 
 private:

@@ -35,6 +35,9 @@ public:
   virtual void Assemble(const TetMesh& mesh, const OpticalProperties& material,
     const std::vector<double>& irradiance, DiffusionSystem& system) = 0;
 
+  /// OpenMP threads of the assembly (0 = OpenMP's default); default: ignored.
+  virtual void SetNumberOfThreads(int /*n*/) {}
+
   /**
    * Incremental update after the material of some tets changed (painting,
    * TransCut Sec. 5.2): rebuild only the rows of the vertices of

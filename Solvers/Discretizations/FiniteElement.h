@@ -79,7 +79,7 @@ public:
     std::vector<double>& fluence) const override;
 
   /// OpenMP threads for assembly (0 = OpenMP default). Default 0.
-  void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+  void SetNumberOfThreads(int n) override { NumberOfThreads_ = n; }
   int GetNumberOfThreads() const { return NumberOfThreads_; }
 
 private:

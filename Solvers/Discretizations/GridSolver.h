@@ -254,7 +254,7 @@ public:
   ///@{
   /// OpenMP threads of every loop of the solver (default 0: automatic, see
   /// the class comment). Results do not depend on it.
-  void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+  void SetNumberOfThreads(int n) override { NumberOfThreads_ = n; }
   int GetNumberOfThreads() const { return NumberOfThreads_; }
   ///@}
 

@@ -123,7 +123,7 @@ public:
   /// both linear solvers and the vertex map (0 = OpenMP default). Default 0.
   /// Products and sweeps use one thread below 32,768 unknowns. Results do not
   /// depend on the number of threads (bit-identical).
-  void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+  void SetNumberOfThreads(int n) override { NumberOfThreads_ = n; }
   int GetNumberOfThreads() const { return NumberOfThreads_; }
 
   /**

@@ -35,6 +35,8 @@ public:
   bool Solve(const DiffusionProblem& problem, std::vector<double>& fluence,
     SolverReport& report) override;
   void Reset() override;
+  /// The discretisation's assembly threads (Discretization::SetNumberOfThreads).
+  void SetNumberOfThreads(int n) override { Discretization_->SetNumberOfThreads(n); }
 
   /**
    * Frequency domain: solve the complex diffusion equation
@@ -65,7 +67,7 @@ public:
    * Returns false if the progress callback aborted.
    */
   bool SolveFrequencyDomain(const DiffusionProblem& problem, double frequency,
-    std::vector<std::complex<double>>& fluence, SolverReport& report);
+    std::vector<std::complex<double>>& fluence, SolverReport& report) override;
 
   /**
    * Time-resolved (TimeResolved.h has the equation, the scheme and the
@@ -93,7 +95,7 @@ public:
    */
   bool SolveTimeResolved(const DiffusionProblem& problem, const TimeGates& gates,
     const std::vector<Detector>& detectors, const std::vector<int>& snapshotGates,
-    TimeResolvedResult& result, SolverReport& report);
+    TimeResolvedResult& result, SolverReport& report) override;
   /**
    * Earlier step solutions of the same step matrix whose A-norm-best
    * combination with the extrapolated guess starts each time step
@@ -105,6 +107,17 @@ public:
    * iterations of the extrapolation alone.
    */
   void SetTimeStepRecycledSolutions(int k);
+  /// Reads "time-step-recycled" (DiffusionOption::TimeStepRecycled, an
+  /// integer 0..4), see DiffusionSolver::SetOptions.
+  void SetOptions(const SolverOptions& options) override
+  {
+    int k = TimeStepRecycled_;
+    if (options.ReadInteger(GetName(), DiffusionOption::TimeStepRecycled, 0.0,
+          "the recycled step solutions must be an integer 0..4", k))
+    {
+      SetTimeStepRecycledSolutions(k);
+    }
+  }
   int GetTimeStepRecycledSolutions() const { return TimeStepRecycled_; }
 
   /**
@@ -119,7 +132,7 @@ public:
    * update. One-shot: cleared
    * by the next Solve() or Reset().
    */
-  void SetChangedTets(std::vector<int> changedTets);
+  void SetChangedTets(std::vector<int> changedTets) override;
 
   /// The discretisation (e.g. to set its number of threads).
   Discretization& GetDiscretization() { return *Discretization_; }

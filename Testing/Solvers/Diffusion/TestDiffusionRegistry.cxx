@@ -56,7 +56,8 @@ TEST(DiffusionRegistry, OptionTraitsAreWhatEachSolverReads)
     all.Set(name, 1.0); // valid for every option
   }
   EXPECT_EQ(GetDiffusionSolverOptionNames(),
-    (std::vector<std::string>{ "grid-spacing", "multilevel", "photons", "seed", "two-point-flux" }));
+    (std::vector<std::string>{ "anisotropy", "grid-spacing", "multilevel", "photons", "seed",
+      "time-step-recycled", "two-point-flux" }));
   for (const auto& entry : GetDiffusionSolverRegistry().GetEntries())
   {
     SCOPED_TRACE(entry.Name);
@@ -127,7 +128,7 @@ TEST(DiffusionSolverOptions, BadValueIsRefusedNamingIt)
   // A name no solver reads is a typo, refused with the known names.
   EXPECT_EQ(
     ErrorMessage([] { CheckDiffusionSolverOptions(SolverOptions{ { "gridspacing", 0.2 } }); }),
-    "unknown solver option 'gridspacing' (known options: grid-spacing, multilevel, photons, "
-    "seed, two-point-flux)");
+    "unknown solver option 'gridspacing' (known options: anisotropy, grid-spacing, multilevel, "
+    "photons, seed, time-step-recycled, two-point-flux)");
   EXPECT_NO_THROW(CheckDiffusionSolverOptions(SolverOptions{ { "Seed", 3 }, { "photons", 9 } }));
 }
