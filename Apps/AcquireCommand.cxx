@@ -8,6 +8,7 @@
 
 #include "DiffusionForwardModel.h"
 #include "Error.h"
+#include "InputFiles.h"
 #include "InverseDiffusion.h"
 #include "TetMesh.h"
 #include "vtkInverseDiffusion.h"
@@ -37,6 +38,7 @@
 #include VTK_NLOHMANN_JSON(json.hpp)
 
 #include <algorithm>
+#include <filesystem>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -70,6 +72,7 @@ vtkDataArray* NewTriple(const std::string& name, const std::vector<double>& valu
 vtkSmartPointer<vtkUnstructuredGrid> ReadGrid(const std::string& path)
 {
   vtkNew<vtkXMLUnstructuredGridReader> reader;
+  translucency::CheckInputFile(path, "mesh file"); // before any read: not a FIFO
   if (Extension(path) != "vtu" || !reader->CanReadFile(path.c_str()))
   {
     throw translucency::Error(path + ": not a readable .vtu file");
@@ -157,6 +160,34 @@ void AttachPatterns(vtkUnstructuredGrid* sample, const std::string& patterns)
   }
 }
 
+/// Every measurement array of `sample` (Irradiance_<k>, Radiance_<k>) must
+/// be finite: a -inf or NaN measurement made the fit meaningless while the
+/// run exited 0. Throws translucency::Error naming the array, point and value.
+void CheckMeasurementsFinite(vtkUnstructuredGrid* sample, const std::string& patterns)
+{
+  vtkPointData* pd = sample->GetPointData();
+  for (int a = 0; a < pd->GetNumberOfArrays(); ++a)
+  {
+    vtkDataArray* array = pd->GetArray(a);
+    const std::string name = array && array->GetName() ? array->GetName() : "";
+    if (name.rfind("Irradiance_", 0) != 0 && name.rfind("Radiance_", 0) != 0)
+      continue;
+    for (vtkIdType i = 0; i < array->GetNumberOfTuples(); ++i)
+      for (int c = 0; c < array->GetNumberOfComponents(); ++c)
+      {
+        const double value = array->GetComponent(i, c);
+        if (!std::isfinite(value))
+        {
+          std::ostringstream os;
+          os << "--patterns " << patterns << ": measurement '" << name << "' holds " << value
+             << " at point " << i << " (component " << c
+             << "): every measurement must be a finite number";
+          throw translucency::Error(os.str());
+        }
+      }
+  }
+}
+
 /// The synthetic problem: block mesh, truth per voxel, measurements.
 struct Synthetic
 {
@@ -174,6 +205,7 @@ vtkSmartPointer<vtkDataSet> ReadTruth(const std::string& path)
   if (ext == "vti")
   {
     vtkNew<vtkXMLImageDataReader> reader;
+    translucency::CheckInputFile(path, "--synthetic-truth file"); // before any read
     if (!reader->CanReadFile(path.c_str()))
       throw translucency::Error(path + ": not a readable .vti file");
     CheckVtkXmlFile(path);
@@ -378,18 +410,22 @@ struct Mosaic
         &Pixels[3 * static_cast<size_t>(Height - y) * Width],
         rgb->GetPointer(3 * static_cast<vtkIdType>(y) * Width));
     image->GetPointData()->SetScalars(rgb);
-    const std::string tmp = path + ".tmp.png";
+    TemporaryFile tmp(path); // unique, exclusive, renamed over `path` (OutputFiles.h)
+    if (tmp.Path().empty())
+    {
+      error = tmp.Error();
+      return false;
+    }
     vtkNew<vtkPNGWriter> writer;
-    writer->SetFileName(tmp.c_str());
+    writer->SetFileName(tmp.Path().c_str());
     writer->SetInputData(image);
     writer->Write();
-    if (writer->GetErrorCode() != 0 || std::rename(tmp.c_str(), path.c_str()) != 0)
+    if (writer->GetErrorCode() != 0)
     {
-      std::remove(tmp.c_str());
       error = "cannot write " + path;
       return false;
     }
-    return true;
+    return tmp.Commit(error);
   }
 };
 
@@ -575,7 +611,27 @@ int Acquire(const AcquireOptions& o)
     throw UsageError("acquire: --sample FILE (or --synthetic-truth FILE) is required");
   if (synthetic && gridArg.empty())
     throw UsageError("acquire: --synthetic-truth needs --grid NXxNYxNZ");
-  EnsureParentDirectory(outputPrefix + ".vtu");
+  // Before any work: no output may be an input or another output, and a
+  // second run into the same prefix is refused (OutputFiles.h).
+  OutputPlan plan;
+  plan.Input(samplePath, "--sample");
+  plan.Input(truthPath, "--synthetic-truth");
+  if (!synthetic && !std::filesystem::is_directory(patternsArg))
+    plan.Input(patternsArg, "--patterns");
+  plan.Output(outputPrefix + ".vtu", "--output");
+  if (synthetic)
+  {
+    plan.Output(outputPrefix + "_measurements.vtu", "--output", false);
+    if (png)
+    {
+      plan.Output(outputPrefix + "_radiance.png", "--output", false);
+      plan.Output(outputPrefix + "_slices.png", "--output", false);
+    }
+  }
+  if (png)
+    plan.Output(outputPrefix + "_objective.png", "--output", false);
+  plan.Output(jsonPath, "--json", false);
+  plan.Check();
 
   const auto start = Clock::now();
   std::vector<Stage> stages;
@@ -654,6 +710,7 @@ int Acquire(const AcquireOptions& o)
   {
     input = ReadGrid(samplePath);
     AttachPatterns(input, patternsArg);
+    CheckMeasurementsFinite(input, patternsArg);
     if (elementArray.empty() && input->GetCellData()->GetArray("VoxelId"))
       elementArray = "VoxelId";
     stages.push_back({ "read", MillisecondsSince(start) });
@@ -685,10 +742,12 @@ int Acquire(const AcquireOptions& o)
     std::cerr << "\racquire [" << std::string(done, '#') << std::string(width - done, '.') << "] "
               << static_cast<int>(100 * f + 0.5) << "%" << std::flush;
   });
-  inverse->AddObserver(vtkCommand::ProgressEvent, progress);
+  if (!IsQuiet()) // --quiet: no progress bar
+    inverse->AddObserver(vtkCommand::ProgressEvent, progress);
   const auto fitStart = Clock::now();
   inverse->Update();
-  std::cerr << "\n";
+  if (!IsQuiet())
+    std::cerr << "\n";
   if (!messages.Errors.empty())
     throw translucency::Error(messages.Last());
   const double fitMs = MillisecondsSince(fitStart);
@@ -696,6 +755,9 @@ int Acquire(const AcquireOptions& o)
   vtkUnstructuredGrid* result = inverse->GetOutput();
   vtkTable* history = vtkTable::SafeDownCast(inverse->GetHistoryOutput());
 
+  // No exit 0 with NaN: the recovered coefficients and fitted radiance
+  // must be finite before anything is written.
+  RequireFiniteResult(result, "the recovered material");
   std::string error;
   {
     vtkNew<vtkXMLUnstructuredGridWriter> writer;

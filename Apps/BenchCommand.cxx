@@ -302,7 +302,10 @@ Command AddBenchCommand(CLI::App& app)
   AddNumberList(c, "--tets", *tets, "target sizes (default 100000,1000000; with\n--linear-solvers 100000,500000,1000000)", "N1,N2,...")
     ->check(CLI::Validator(
       [](std::string& text) {
-        for (double n : ParseNumbers(text, "--tets"))
+        const std::vector<double> sizes = ParseNumbers(text, "--tets");
+        if (sizes.empty())
+          throw UsageError("--tets: no size given (e.g. --tets 100000,1000000)");
+        for (double n : sizes)
         {
           if (ToNumber<long long>(n, "--tets") < 1)
             throw UsageError("--tets: every size must be >= 1, not " + DefaultText(n));
@@ -386,6 +389,16 @@ Command AddBenchCommand(CLI::App& app)
   for (CLI::Option* other : { linearSolvers, meshers, edit })
     diffuseOptics->excludes(other);
   return { c, [=]() {
+            // Before any work: no output may be the input or another output.
+            OutputPlan plan;
+            plan.Input(linear->MeshPath, "--mesh");
+            plan.Output(linear->JsonPath, "--json");
+            if (!linear->PlotPath.empty())
+            {
+              plan.Output(linear->PlotPath, "--plot");
+              plan.Output(PlotDataPath(linear->PlotPath), "--plot (its data, .csv)");
+            }
+            plan.Check();
             if (linearSolvers->count() > 0)
             {
               for (const std::string& list : *solvers)

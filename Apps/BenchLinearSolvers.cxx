@@ -48,6 +48,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -1053,6 +1054,11 @@ void PrintRows(const std::vector<SolverRow>& rows, double topologyMs)
 
 } // namespace
 
+std::string PlotDataPath(const std::string& plotPath)
+{
+  return std::filesystem::path(plotPath).replace_extension(".csv").string();
+}
+
 int BenchLinearSolvers(const LinearSolverBenchOptions& options)
 {
   const std::string& meshPath = options.MeshPath;
@@ -1239,7 +1245,7 @@ int BenchLinearSolvers(const LinearSolverBenchOptions& options)
   if (!plotPath.empty())
   {
     EnsureParentDirectory(plotPath);
-    const std::string csvPath = plotPath.substr(0, plotPath.find_last_of('.')) + ".csv";
+    const std::string csvPath = PlotDataPath(plotPath);
     std::string text;
     for (const std::string& line : csv)
       text += line + "\n";

@@ -38,6 +38,10 @@ struct LinearSolverBenchOptions
   bool DoCut = true;    ///< the cut -> new fluence figure
 };
 
+/// The data file of `--plot FILE`: FILE with its extension replaced by .csv
+/// (the folder's name may hold dots).
+std::string PlotDataPath(const std::string& plotPath);
+
 /// `translucency bench --linear-solvers ...`.
 int BenchLinearSolvers(const LinearSolverBenchOptions& options);
 

@@ -43,8 +43,11 @@
 #include VTK_NLOHMANN_JSON(json.hpp)
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -192,6 +195,9 @@ SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double
   if (!messages.Errors.empty())
     throw translucency::Error(name + ": " + messages.Last());
   result.Surface = radiance->GetOutput();
+  // No exit 0 with NaN: every array of the results must be finite.
+  RequireFiniteResult(result.Volume, "the " + name + " solution");
+  RequireFiniteResult(result.Surface, "the " + name + " surface radiance");
   json& s = result.Stats;
   s["solver"] = name;
   s["linear_solver"] = solve->GetLinearSolverUsed();
@@ -374,6 +380,22 @@ int Compare(CompareOptions& o)
   scene.Finish("compare");
   if (outputDir.empty())
     throw UsageError("compare needs --output DIR");
+  // Before any work: no output may be an input or another output; one lock
+  // (DIR/compare.lock) per output folder (OutputFiles.h).
+  OutputPlan plan;
+  scene.AddInputs(plan);
+  plan.Input(o.MeasuredPath, "--measured");
+  plan.Output(outputDir + "/compare.vtm", "--output");
+  plan.Output(jsonPath, "--json", false);
+  {
+    std::error_code ec;
+    const auto pieces = std::filesystem::symlink_status(outputDir + "/compare", ec);
+    if (std::filesystem::exists(pieces) && !std::filesystem::is_directory(pieces))
+      throw UsageError("--output " + outputDir + ": '" + outputDir +
+        "/compare' exists and is not a folder (compare writes the pieces of compare.vtm "
+        "there): move it or choose another --output");
+  }
+  plan.Check();
   std::vector<std::string> solvers = SplitList(solverList);
   if (solvers.empty())
     throw UsageError("--solvers lists no solver");
@@ -629,33 +651,59 @@ int Compare(CompareOptions& o)
     ++block;
   }
   // The .vtm refers to a folder of pieces next to it: write both into a
-  // staging folder, then move them into place (a failure leaves old results).
-  // Removed: only what this command writes (the staging folder it made, its
-  // pieces, and the previous run's pieces folder that the new one replaces).
+  // staging folder of a unique name made by this run (mkdtemp), then move
+  // them into place: each piece renamed into DIR/compare/ (over a piece of
+  // the same name only), then compare.vtm. Removed: only what this run
+  // wrote; whatever else DIR/compare/ holds stays.
   {
     namespace fs = std::filesystem;
-    const fs::path dir(outputDir), staging = dir / ".compare-staging";
-    std::error_code ec;
-    fs::remove_all(staging / "compare", ec);
-    fs::remove(staging / "compare.vtm", ec);
-    fs::create_directories(staging, ec);
+    const fs::path dir(outputDir);
+    std::string name = (dir / ".compare-XXXXXX").string();
+    if (!mkdtemp(&name[0]))
+      throw translucency::Error("cannot create a staging folder in '" + outputDir + "': " +
+        std::strerror(errno));
+    const fs::path staging(name), stagingPieces = staging / "compare";
+    // What the writer makes (compare/compare_<block>.vtu|vtp), for removal on a signal.
+    std::vector<int> slots = { RegisterCleanup(staging.string(), true),
+      RegisterCleanup(stagingPieces.string(), true),
+      RegisterCleanup((staging / "compare.vtm").string()) };
+    for (unsigned int b = 0; b < block; ++b)
+      for (const char* ext : { ".vtu", ".vtp" })
+        slots.push_back(RegisterCleanup(
+          (stagingPieces / ("compare_" + std::to_string(b) + ext)).string()));
+    std::vector<fs::path> written; // the files this run made in the staging folder
     const auto removeStaging = [&]() {
-      fs::remove_all(staging / "compare", ec);
+      std::error_code ec;
+      for (const fs::path& f : written)
+        fs::remove(f, ec);
       fs::remove(staging / "compare.vtm", ec);
-      fs::remove(staging, ec); // only if empty: nothing else of the user's goes
+      fs::remove(stagingPieces, ec); // only if empty
+      fs::remove(staging, ec);       // only if empty
+      for (int slot : slots)
+        UnregisterCleanup(slot);
     };
     vtkNew<vtkXMLMultiBlockDataWriter> writer;
     writer->SetInputData(blocks);
     writer->SetFileName((staging / "compare.vtm").c_str());
     writer->SetDataModeToAppended();
     writer->SetCompressorTypeToZLib();
-    if (writer->Write() == 0)
+    const bool wrote = writer->Write() != 0;
+    std::error_code ec;
+    for (fs::directory_iterator it(stagingPieces, ec), end; !ec && it != end; it.increment(ec))
+      written.push_back(it->path());
+    if (!wrote)
     {
       removeStaging();
       throw translucency::Error("cannot write '" + outputDir + "/compare.vtm'");
     }
-    fs::remove_all(dir / "compare", ec);
-    fs::rename(staging / "compare", dir / "compare", ec);
+    fs::create_directory(dir / "compare", ec);
+    ec.clear();
+    for (const fs::path& f : written)
+    {
+      fs::rename(f, dir / "compare" / f.filename(), ec);
+      if (ec)
+        break;
+    }
     if (!ec)
       fs::rename(staging / "compare.vtm", dir / "compare.vtm", ec);
     if (ec)
@@ -663,6 +711,7 @@ int Compare(CompareOptions& o)
       removeStaging();
       throw translucency::Error("cannot move the results into '" + outputDir + "': " + ec.message());
     }
+    written.clear();
     removeStaging();
   }
 

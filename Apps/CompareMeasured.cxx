@@ -1,6 +1,7 @@
 #include "CompareMeasured.h"
 
 #include "Error.h"
+#include "InputFiles.h"
 #include "Strings.h"
 
 #include <algorithm>
@@ -71,6 +72,8 @@ std::string TimeUnitOf(const std::string& header)
 MeasuredFile ReadMeasuredTpsf(const std::string& path, std::size_t detectors)
 {
   const std::string where = "--measured " + path;
+  // A regular file within the size bound (not a FIFO or /dev/zero).
+  translucency::CheckInputFile(path, "--measured file");
   std::ifstream in(path);
   if (!in)
   {

@@ -2,6 +2,7 @@
 #include "Utilities.h"
 
 #include "Error.h"
+#include "InputFiles.h"
 #include "Strings.h"
 
 #include "vtkAssignScatteringCoefficients.h"
@@ -32,13 +33,14 @@ namespace
 /// NaN fluence.
 constexpr double MaxCoefficient = 1e6;
 
-/// Parse the JSON text of `in`; `what` names the file in messages. Nesting
-/// deeper than translucency::MaxJsonNesting is refused before parsing.
-json ParseJsonFile(std::istream& in, const std::string& what)
+/// Parse the JSON file `path` (a regular file within the size bound,
+/// translucency::ReadInputFile); `kind` ("material file") names it in
+/// messages. Nesting deeper than translucency::MaxJsonNesting is refused
+/// before parsing.
+json ParseJsonFile(const std::string& path, const std::string& kind)
 {
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  const std::string text = buffer.str();
+  const std::string text = translucency::ReadInputFile(path, kind);
+  const std::string what = kind + " '" + path + "'";
   if (translucency::JsonNestingDepth(text) > translucency::MaxJsonNesting)
   {
     throw translucency::Error(what + ": arrays/objects nested deeper than " +
@@ -68,12 +70,7 @@ void ApplyMaterial(vtkAssignScatteringCoefficients* assign, const std::string& m
     assign->SetMaterialName(material.c_str());
     return;
   }
-  std::ifstream in(material);
-  if (!in)
-  {
-    throw translucency::Error("cannot open material file '" + material + "'");
-  }
-  const json j = ParseJsonFile(in, "material file '" + material + "'");
+  const json j = ParseJsonFile(material, "material file");
   auto triple = [&](const char* key, double out[3]) {
     if (!j.contains(key) || !j[key].is_array() || j[key].size() != 3)
     {
@@ -160,12 +157,7 @@ namespace
 /// Read `path` as a JSON object; `what` names the option in messages.
 json ReadJsonObject(const std::string& path, const std::string& what)
 {
-  std::ifstream in(path);
-  if (!in)
-  {
-    throw translucency::Error("cannot open " + what + " file '" + path + "'");
-  }
-  json j = ParseJsonFile(in, what + " file '" + path + "'");
+  json j = ParseJsonFile(path, what + " file");
   if (!j.is_object())
   {
     throw translucency::Error(what + " file '" + path + "' must hold a JSON object {...}");

@@ -7,6 +7,7 @@
 #include "vtkTranslucencyMeshConversion.h"
 
 #include "Error.h"
+#include "InputFiles.h"
 #include "Strings.h"
 
 #include <vtkAlgorithm.h>
@@ -618,12 +619,8 @@ void CheckVtkXmlFile(const std::string& path)
                                         : "";
   if (type.empty())
     throw translucency::Error("'" + path + "': not a .vtu, .vtp or .vti file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw translucency::Error("cannot open '" + path + "'");
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  const std::string text = buffer.str();
+  // A regular file within the size bound (not a FIFO or /dev/zero).
+  const std::string text = translucency::ReadInputFile(path, "mesh file");
   if (text.empty())
     throw translucency::Error("'" + path + "' is empty");
   XmlChecker(path, text).Run(type);
@@ -665,6 +662,16 @@ void CheckSurface(vtkPolyData* surface, const std::string& path)
 bool ReadMesh(const std::string& path, vtkSmartPointer<vtkPolyData>& surface,
   vtkSmartPointer<vtkUnstructuredGrid>& grid, std::string& error)
 {
+  try
+  {
+    // A regular file within the size bound (not a FIFO or /dev/zero).
+    translucency::CheckInputFile(path, "mesh file");
+  }
+  catch (const translucency::Error& e)
+  {
+    error = e.what();
+    return false;
+  }
   std::ifstream probe(path);
   if (!probe)
   {

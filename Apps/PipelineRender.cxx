@@ -1,5 +1,6 @@
 #include "PipelineRender.h"
 
+#include "OutputFiles.h"
 #include "Pictures.h"
 #include "ToneMap.h"
 
@@ -69,24 +70,24 @@ bool Snapshot(vtkRenderWindow* window, const std::string& fileName, std::string&
   grab->SetInputBufferTypeToRGB();
   grab->ReadFrontBufferOff();
   grab->Update();
-  const std::string tmp = fileName + ".tmp.png";
+  // A unique temporary created exclusively next to the target, renamed over
+  // it (OutputFiles.h); removed on a failure or a signal.
+  TemporaryFile tmp(fileName);
+  if (tmp.Path().empty())
+  {
+    error = tmp.Error();
+    return false;
+  }
   vtkNew<vtkPNGWriter> writer;
-  writer->SetFileName(tmp.c_str());
+  writer->SetFileName(tmp.Path().c_str());
   writer->SetInputConnection(grab->GetOutputPort());
   writer->Write();
   if (writer->GetErrorCode() != 0)
   {
-    std::remove(tmp.c_str());
     error = "cannot write " + fileName;
     return false;
   }
-  if (std::rename(tmp.c_str(), fileName.c_str()) != 0)
-  {
-    std::remove(tmp.c_str());
-    error = "cannot rename the temporary image to " + fileName;
-    return false;
-  }
-  return true;
+  return tmp.Commit(error);
 }
 
 double ToneMapRadiance(vtkPolyData* surface, double exposure)

@@ -215,6 +215,14 @@ int Radiosity(const RadiosityOptions& o)
   const bool heuristics = o.Heuristics;
   std::vector<Stage> stages;
   const auto wallStart = Clock::now();
+  // Before any work: no output may be an input or another output, and a
+  // second run into the same prefix is refused (OutputFiles.h).
+  OutputPlan plan;
+  plan.Input(scenePath, "--scene");
+  plan.Output(prefix + "_0.vtp", "--output");
+  plan.Output(png, "--png", false);
+  plan.Output(jsonPath, "--json", false);
+  plan.Check();
   if (!png.empty())
     RequirePictureDisplay("no --png"); // before the solve (Pictures.h)
   auto start = Clock::now();
@@ -302,6 +310,8 @@ int Radiosity(const RadiosityOptions& o)
   {
     std::string error;
     start = Clock::now();
+    // No exit 0 with NaN: every array of every object must be finite.
+    RequireFiniteResult(result, "the radiosity");
     const auto leaves = Leaves(result);
     EnsureParentDirectory(prefix + "_0.vtp");
     for (size_t k = 0; k < leaves.size(); ++k)

@@ -98,6 +98,20 @@ int Render(RenderOptions& o)
   const RadianceImageOptions& image = o.Image;
   if (!tpsfPath.empty() && (o.Optics.TimeGates.Count == 0 || o.Optics.Detectors.empty()))
     throw UsageError("--tpsf-png needs --time-gates and at least one --detector");
+  // Before any work: no output may be an input or another output, and a
+  // second run into the same prefix is refused (OutputFiles.h).
+  OutputPlan plan;
+  scene.AddInputs(plan);
+  if (!outputPrefix.empty())
+  {
+    plan.Output(outputPrefix + ".vtu", "--output");
+    plan.Output(outputPrefix + ".vtp", "--output");
+  }
+  plan.Output(pngPath, "--png");
+  plan.Output(slicePath, "--slice-png");
+  plan.Output(tpsfPath, "--tpsf-png");
+  plan.Output(jsonPath, "--json");
+  plan.Check();
   // Before the solve: the pictures need an X server (Pictures.h).
   if (!pngPath.empty() || !slicePath.empty() || !tpsfPath.empty())
     RequirePictureDisplay("no --png/--slice-png/--tpsf-png");
@@ -144,6 +158,10 @@ int Render(RenderOptions& o)
     throw translucency::Error(messages.Last());
   vtkPolyData* outSurface = radiance->GetOutput();
   stages.push_back({ "radiance", MillisecondsSince(start) });
+  // No exit 0 with NaN: every array of the results (fluence, radiance,
+  // detector readings and TPSF) must be finite before anything is written.
+  RequireFiniteResult(solved, "the " + solverName + " solution");
+  RequireFiniteResult(outSurface, "the surface radiance");
 
   // 7. Outputs: all new or all old (OutputBatch), committed after the report.
   OutputBatch outputs;

@@ -17,6 +17,8 @@
 #include <vtkNew.h>
 #include <vtkPlane.h>
 #include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkStaticCellLocator.h>
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
@@ -189,6 +191,15 @@ void SceneOptions::Finish(const std::string& command)
   }
 }
 
+void SceneOptions::AddInputs(OutputPlan& plan) const
+{
+  plan.Input(this->MeshPath, "--mesh");
+  if (Extension(this->Material) == "json")
+    plan.Input(this->Material, "--material");
+  plan.Input(this->Paint, "--paint");
+  plan.Input(this->CutStroke, "--cut-stroke");
+}
+
 vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   std::vector<Stage>& stages, double& topologyMs, EditStats* edits)
 {
@@ -317,7 +328,29 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
     stages.push_back({ "cut", stats.CutMs });
   }
 
-  // 6. Irradiance.
+  // 6. Irradiance. A point or spot light inside the object faces no
+  // surface from outside: the fluence would be all zero without a word.
+  {
+    vtkSmartPointer<vtkStaticCellLocator> locator;
+    for (const Light& l : options.Lights)
+    {
+      if (l.Type != "point" && l.Type != "spot")
+        continue;
+      if (!locator)
+      {
+        locator = vtkSmartPointer<vtkStaticCellLocator>::New();
+        locator->SetDataSet(withMaterial);
+        locator->BuildLocator();
+      }
+      double x[3] = { l.Values[0], l.Values[1], l.Values[2] };
+      const vtkIdType tet = locator->FindCell(x);
+      if (tet >= 0)
+        throw translucency::Error("--light " + l.Type + " at " + translucency::FormatPoint(x) +
+          " mm is inside the object (in tet " + std::to_string(tet) +
+          "): a --light shines on the surface from outside, so it would light nothing; "
+          "move it outside, or use --source point:x,y,z for a source inside the object");
+    }
+  }
   start = Clock::now();
   vtkNew<vtkSurfaceIrradiance> irradiance;
   messages.Watch(irradiance);

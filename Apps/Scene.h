@@ -66,6 +66,10 @@ struct SceneOptions
   /// given and there are no interior sources; `--light none` (alone) means
   /// no light.
   void Finish(const std::string& command);
+
+  /// The files the scene reads (--mesh, a --material .json, --paint,
+  /// --cut-stroke) as inputs of `plan` (no output may be one of them).
+  void AddInputs(OutputPlan& plan) const;
 };
 
 /// Statistics of the optional --paint and --cut-* edits (for the JSON report).

@@ -7,6 +7,7 @@
 #include "Utilities.h"
 
 #include "Error.h"
+#include "InputFiles.h"
 #include "Strings.h"
 #include "RadiosityScene.h"
 
@@ -255,14 +256,8 @@ LoadedScene LoadSceneUnchecked(const std::string& path, double cellSizeOverride,
   ctx.File = path;
   const size_t slash = path.find_last_of('/');
   ctx.Directory = slash == std::string::npos ? std::string() : path.substr(0, slash);
-  std::ifstream in(path);
-  if (!in)
-  {
-    ctx.Fail("cannot open the scene file");
-  }
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  const std::string text = buffer.str();
+  // A regular file within the size bound (not a FIFO or /dev/zero).
+  const std::string text = translucency::ReadInputFile(path, "scene file");
   if (translucency::JsonNestingDepth(text) > translucency::MaxJsonNesting)
   {
     ctx.Fail("arrays/objects nested deeper than " + std::to_string(translucency::MaxJsonNesting) +

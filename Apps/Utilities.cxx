@@ -1,10 +1,20 @@
 #include "Utilities.h"
 
+#include "Error.h"
+#include "OutputFiles.h"
 #include "Strings.h"
 
 #include <vtkAlgorithm.h>
 #include <vtkCommand.h>
 #include <vtkExecutive.h>
+#include <vtkCellData.h>
+#include <vtkCompositeDataIterator.h>
+#include <vtkCompositeDataSet.h>
+#include <vtkDataArray.h>
+#include <vtkDataSet.h>
+#include <vtkFieldData.h>
+#include <vtkPointData.h>
+#include <vtkSmartPointer.h>
 #include <vtkXMLWriter.h>
 
 #include <algorithm>
@@ -17,6 +27,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <regex>
 #include <sstream>
 #include <system_error>
@@ -70,6 +81,32 @@ std::vector<double> ParseNumbers(const std::string& text, const std::string& wha
     values.push_back(value);
   }
   return values;
+}
+
+std::string EscapeControl(const std::string& text)
+{
+  static const char* hex = "0123456789abcdef";
+  std::string out;
+  out.reserve(text.size());
+  for (const char ch : text)
+  {
+    const unsigned char c = static_cast<unsigned char>(ch);
+    if (c >= 0x20 && c != 0x7f)
+      out += ch;
+    else if (c == '\n')
+      out += "\\n";
+    else if (c == '\t')
+      out += "\\t";
+    else if (c == '\r')
+      out += "\\r";
+    else
+    {
+      out += "\\x";
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    }
+  }
+  return out;
 }
 
 std::string Extension(const std::string& path)
@@ -169,8 +206,8 @@ MessageCollector::MessageCollector()
     collector->Errors += static_cast<const char*>(data);
   });
   this->WarningCallback->SetCallback([](vtkObject*, unsigned long, void*, void* data) {
-    std::cerr << "translucency: warning: " << StripVtkHeader(static_cast<const char*>(data))
-              << "\n";
+    std::cerr << "translucency: warning: "
+              << EscapeControl(StripVtkHeader(static_cast<const char*>(data))) << "\n";
   });
 }
 
@@ -200,64 +237,63 @@ std::string MessageCollector::Last() const
 bool WriteAtomically(vtkXMLWriter* writer, vtkDataObject* data, const std::string& path,
   std::string& error)
 {
-  const std::string tmp = path + ".tmp";
-  writer->SetInputData(data);
-  writer->SetFileName(tmp.c_str());
-  writer->SetDataModeToAppended();
-  writer->SetCompressorTypeToZLib();
-  if (writer->Write() == 0)
+  TemporaryFile tmp(path);
+  if (tmp.Path().empty())
   {
-    std::remove(tmp.c_str());
-    error = "cannot write '" + path + "'";
+    error = tmp.Error();
     return false;
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0)
+  writer->SetInputData(data);
+  writer->SetFileName(tmp.Path().c_str());
+  writer->SetDataModeToAppended();
+  writer->SetCompressorTypeToZLib();
+  if (writer->Write() == 0 || writer->GetErrorCode() != 0)
   {
-    std::remove(tmp.c_str());
-    error = "cannot rename the temporary file to '" + path + "'";
+    error = "cannot write '" + path + "'";
+    return false; // the temporary's destructor removes it
+  }
+  return tmp.Commit(error);
+}
+
+namespace
+{
+bool WriteTextTo(const std::string& tmp, const std::string& path, const std::string& text,
+  std::string& error)
+{
+  std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+  out << text;
+  out.close();
+  if (!out)
+  {
+    error = "cannot write '" + path + "' (no output changed)";
     return false;
   }
   return true;
 }
+} // namespace
 
 bool WriteText(const std::string& path, const std::string& text, std::string& error)
 {
-  const std::string tmp = path + ".tmp";
+  TemporaryFile tmp(path);
+  if (tmp.Path().empty())
   {
-    std::ofstream out(tmp);
-    out << text;
-    if (!out)
-    {
-      error = "cannot write '" + path + "'";
-      return false;
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0)
-  {
-    std::remove(tmp.c_str());
-    error = "cannot rename the temporary file to '" + path + "'";
+    error = tmp.Error();
     return false;
   }
-  return true;
+  return WriteTextTo(tmp.Path(), path, text, error) && tmp.Commit(error);
 }
 
-OutputBatch::~OutputBatch()
-{
-  for (const std::string& path : this->Targets)
-  {
-    // Only a file (a directory of that name is not ours).
-    std::error_code ec;
-    if (std::filesystem::is_regular_file(path + ".part", ec))
-    {
-      std::filesystem::remove(path + ".part", ec);
-    }
-  }
-}
+OutputBatch::~OutputBatch() = default; // each TemporaryFile removes its file
 
 std::string OutputBatch::Add(const std::string& path)
 {
-  this->Targets.push_back(path);
-  return path + ".part";
+  auto tmp = std::make_unique<TemporaryFile>(path);
+  if (tmp->Path().empty())
+  {
+    throw translucency::Error(tmp->Error());
+  }
+  this->Targets.push_back(std::move(tmp));
+  return this->Targets.back()->Path();
 }
 
 bool OutputBatch::Write(
@@ -278,39 +314,90 @@ bool OutputBatch::Write(
 
 bool OutputBatch::WriteText(const std::string& path, const std::string& text, std::string& error)
 {
-  const std::string tmp = this->Add(path);
-  std::ofstream out(tmp);
-  out << text;
-  out.close();
-  if (!out)
-  {
-    error = "cannot write '" + path + "' (no output changed)";
-    return false;
-  }
-  return true;
+  return WriteTextTo(this->Add(path), path, text, error);
 }
 
 bool OutputBatch::Commit(std::string& error)
 {
   for (size_t k = 0; k < this->Targets.size(); ++k)
   {
-    const std::string& path = this->Targets[k];
-    if (std::rename((path + ".part").c_str(), path.c_str()) != 0)
+    const std::string path = this->Targets[k]->Target();
+    std::string why;
+    if (!this->Targets[k]->Commit(why))
     {
       std::string done, kept;
       for (size_t i = 0; i < this->Targets.size(); ++i)
       {
         std::string& list = i < k ? done : kept;
-        list += (list.empty() ? "'" : ", '") + this->Targets[i] + "'";
+        list += (list.empty() ? "'" : ", '") + this->Targets[i]->Target() + "'";
       }
-      error = "cannot rename '" + path + ".part' to '" + path + "': " +
+      error = why + ": " +
         (done.empty() ? std::string("no output changed") : "replaced " + done + "; left as they were " + kept);
-      this->Targets.erase(this->Targets.begin(), this->Targets.begin() + static_cast<long>(k));
-      return false; // the destructor removes the remaining temporaries
+      this->Targets.clear(); // the rest of the temporaries are removed
+      return false;
     }
   }
   this->Targets.clear();
   return true;
+}
+
+namespace
+{
+void RequireFiniteAttributes(vtkFieldData* fields, const char* element, const std::string& what)
+{
+  if (!fields)
+  {
+    return;
+  }
+  for (int a = 0; a < fields->GetNumberOfArrays(); ++a)
+  {
+    vtkDataArray* array = fields->GetArray(a);
+    if (!array || array->GetDataTypeSize() == 0 || !(array->IsA("vtkFloatArray") ||
+          array->IsA("vtkDoubleArray")))
+    {
+      continue; // integers cannot be NaN
+    }
+    const int components = array->GetNumberOfComponents();
+    for (vtkIdType i = 0; i < array->GetNumberOfTuples(); ++i)
+    {
+      for (int c = 0; c < components; ++c)
+      {
+        const double value = array->GetComponent(i, c);
+        if (!std::isfinite(value))
+        {
+          std::ostringstream os;
+          os << what << ": array '" << (array->GetName() ? array->GetName() : "") << "' holds "
+             << value << " at " << element << " " << i << " of " << array->GetNumberOfTuples()
+             << " (component " << c << "): a non-finite result is not written";
+          throw translucency::Error(os.str());
+        }
+      }
+    }
+  }
+}
+} // namespace
+
+void RequireFiniteResult(vtkDataObject* data, const std::string& what)
+{
+  if (auto* composite = vtkCompositeDataSet::SafeDownCast(data))
+  {
+    vtkSmartPointer<vtkCompositeDataIterator> iter =
+      vtk::TakeSmartPointer(composite->NewIterator());
+    for (iter->InitTraversal(); !iter->IsDoneWithTraversal(); iter->GoToNextItem())
+    {
+      RequireFiniteResult(iter->GetCurrentDataObject(), what);
+    }
+    return;
+  }
+  if (auto* set = vtkDataSet::SafeDownCast(data))
+  {
+    RequireFiniteAttributes(set->GetPointData(), "point", what);
+    RequireFiniteAttributes(set->GetCellData(), "cell", what);
+  }
+  if (data)
+  {
+    RequireFiniteAttributes(data->GetFieldData(), "row", what);
+  }
 }
 
 void EnsureParentDirectory(const std::string& path)

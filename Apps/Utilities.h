@@ -6,12 +6,14 @@
  */
 #pragma once
 
+#include "OutputFiles.h"
 #include "Timer.h"
 
 #include <vtkCallbackCommand.h>
 #include <vtkNew.h>
 
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -47,6 +49,11 @@ void PrintStages(const std::vector<Stage>& stages);
 /// Comma-separated finite numbers; a UsageError "'x' in <what> is not a number" otherwise.
 std::vector<double> ParseNumbers(const std::string& text, const std::string& what);
 
+/// `text` with its control bytes (newline, tab, escape, DEL, ...) written as
+/// \n, \t, \r or \xNN: every message the command prints is one line, and a
+/// file's bytes quoted in it cannot drive the terminal.
+std::string EscapeControl(const std::string& text);
+
 /// The lower-case extension of `path`, without the dot ("" if none).
 std::string Extension(const std::string& path);
 
@@ -74,21 +81,23 @@ struct MessageCollector
   std::string Last() const;
 };
 
-/// Write `data` with `writer` to a temporary file, then rename it to `path`:
-/// a failure leaves any existing `path` untouched.
+/// Write `data` with `writer` to a unique temporary next to `path`
+/// (TemporaryFile, OutputFiles.h), then rename it to `path`: a failure
+/// leaves any existing `path` untouched and removes the temporary.
 bool WriteAtomically(vtkXMLWriter* writer, vtkDataObject* data, const std::string& path,
   std::string& error);
 /// The same for a text file.
 bool WriteText(const std::string& path, const std::string& text, std::string& error);
 /**
  * Outputs that must change together (render's .vtu, .vtp, .png and .json):
- * each is written to a temporary "<path>.part" first; Commit() renames them
+ * each is written to its own TemporaryFile (a unique name created
+ * exclusively next to it, OutputFiles.h) first; Commit() renames them
  * all only once every write succeeded, so a failed write leaves every old
  * output as it was. A batch destroyed without Commit() removes its
- * temporaries. A rename failure inside Commit() (rare: the temporaries sit
- * next to their targets) cannot be undone: the error names the outputs
- * already replaced and those left as they were, and the rest of the
- * temporaries are removed.
+ * temporaries (and a signal does, through InstallOutputCleanup). A rename
+ * failure inside Commit() (rare: the temporaries sit next to their targets)
+ * cannot be undone: the error names the outputs already replaced and those
+ * left as they were, and the rest of the temporaries are removed.
  */
 class OutputBatch
 {
@@ -97,7 +106,8 @@ public:
   OutputBatch(const OutputBatch&) = delete;
   OutputBatch& operator=(const OutputBatch&) = delete;
   ~OutputBatch();
-  /// The temporary to write instead of `path` (a writer of its own, e.g. a PNG snapshot).
+  /// The temporary to write instead of `path` (a writer of its own, e.g. a
+  /// PNG snapshot); throws translucency::Error if it cannot be created.
   std::string Add(const std::string& path);
   /// Write `data` with `writer` (appended, zlib) to the temporary of `path`.
   bool Write(vtkXMLWriter* writer, vtkDataObject* data, const std::string& path, std::string& error);
@@ -107,8 +117,14 @@ public:
   bool Commit(std::string& error);
 
 private:
-  std::vector<std::string> Targets;
+  std::vector<std::unique_ptr<TemporaryFile>> Targets;
 };
+
+/// Throw translucency::Error if a numeric array of `data` (point, cell and
+/// field data; every leaf of a composite data set) holds NaN or inf: "<what>:
+/// array 'Fluence' holds a non-finite value (nan at point 12 of 345, component
+/// 0): not written". Every command calls it on its results before writing them.
+void RequireFiniteResult(vtkDataObject* data, const std::string& what);
 
 /// Create the directory holding `path` and its parents (std::filesystem; a
 /// failure only warns: the write that follows reports it).

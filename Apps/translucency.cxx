@@ -14,6 +14,7 @@
 // and 2 for a mistake in the command line.
 
 #include "Options.h"
+#include "OutputFiles.h"
 #include "Provenance.h"
 
 #include "Error.h"
@@ -66,6 +67,8 @@ int main(int argc, char* argv[])
 {
   // Filter messages are reported through observers, not VTK's output window.
   vtkOutputWindow::GetInstance()->SetDisplayModeToNever();
+  // SIGINT/SIGTERM/SIGHUP remove the temporaries and locks of the outputs.
+  InstallOutputCleanup();
 
   CLI::App app("Translucency: light diffusion in translucent objects", "translucency");
   app.formatter(std::make_shared<Formatter>());
@@ -148,12 +151,13 @@ int main(int argc, char* argv[])
   }
   catch (const UsageError& e)
   {
-    std::cerr << "translucency: usage error: " << e.what() << "\n";
+    // One line each, whatever bytes of a file the message quotes.
+    std::cerr << "translucency: usage error: " << EscapeControl(e.what()) << "\n";
     return 2;
   }
   catch (const std::exception& e)
   {
-    std::cerr << "translucency: error: " << e.what() << "\n";
+    std::cerr << "translucency: error: " << EscapeControl(e.what()) << "\n";
     return 1;
   }
 }

@@ -1,5 +1,6 @@
 #include "vtkMaterialTableReader.h"
 
+#include "InputFiles.h"
 #include "OpticalProperties.h"
 #include "Strings.h"
 
@@ -97,14 +98,16 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
   {
     throw std::runtime_error("material table: no file name given");
   }
-  std::ifstream in(fileName);
-  if (!in)
+  // A regular file within the size bound (not a FIFO or /dev/zero).
+  std::string text;
+  try
   {
-    Fail(fileName, "cannot open the file");
+    text = translucency::ReadInputFile(fileName, "material table");
   }
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  const std::string text = buffer.str();
+  catch (const translucency::Error& e)
+  {
+    throw std::runtime_error(e.what());
+  }
   if (translucency::JsonNestingDepth(text) > translucency::MaxJsonNesting)
   {
     Fail(fileName, "arrays/objects nested deeper than " +

@@ -496,6 +496,22 @@ double GridSolver::ComputeSpacing(const TetMesh& mesh) const
   }
   if (h > 0.0)
   {
+    // A spacing larger than the object puts at most one node in it: no
+    // Laplacian to speak of (1e300 mm gave NaN with exit 0).
+    double bounds[6];
+    TetBounds(mesh, bounds);
+    const double largest =
+      std::max({ bounds[3] - bounds[0], bounds[4] - bounds[1], bounds[5] - bounds[2] });
+    if (h > largest)
+    {
+      std::ostringstream os;
+      os << std::setprecision(4) << "grid: grid spacing " << h
+         << " mm is larger than the object (its bounding box is " << bounds[3] - bounds[0]
+         << " x " << bounds[4] - bounds[1] << " x " << bounds[5] - bounds[2]
+         << " mm): the grid cannot resolve it; use a spacing of a fraction of " << largest
+         << " mm (or 0 for automatic)";
+      throw Error(os.str());
+    }
     return h;
   }
   double volume = 0.0;

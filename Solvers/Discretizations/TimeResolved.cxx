@@ -79,9 +79,18 @@ std::string TimeGates::Check() const
     out << StepsPerGate << " steps per gate (expected 1.." << MaximumStepsPerGate
         << ", or 0 for automatic)";
   }
-  else if (!(GetTimeStep() > 0.0) || !std::isfinite(Start / GetTimeStep()))
+  else if (End > MaximumEnd)
   {
-    out << "the gates are too narrow: step " << GetTimeStep() << " ns";
+    out << "T1 = " << End << " ns is later than " << MaximumEnd
+        << " ns (1 ms): light in a diffusing object is absorbed or has left it within "
+           "microseconds, so the gates would hold nothing but zeros (or overflow)";
+  }
+  else if (!(GetTimeStep() >= MinimumTimeStep) || !std::isfinite(Start / GetTimeStep()))
+  {
+    out << "the gates are too narrow: the time step " << GetTimeStep() << " ns (gate width "
+        << GetWidth() << " ns / " << StepsPerGate << " steps) is below " << MinimumTimeStep
+        << " ns (1 fs), where light moves less than a micrometre and the diffusion model "
+           "(valid after a few mean free times, picoseconds) says nothing";
   }
   else if (Start / GetTimeStep() + 1.0 * Count * StepsPerGate > MaximumTimeSteps)
   {

@@ -54,7 +54,7 @@ namespace translucency
 struct TimeGates
 {
   double Start = 0.0; ///< T0, ns, finite, >= 0
-  double End = 0.0;   ///< T1, ns, finite, > Start
+  double End = 0.0;   ///< T1, ns, finite, > Start, <= MaximumEnd
   int Count = 0;      ///< N, 1..MaximumTimeGates
   /**
    * Time steps per gate: 1..MaximumStepsPerGate, or 0 (the default) for
@@ -89,6 +89,12 @@ struct TimeGates
    * the slowest decay; Documentation/DiffuseOptics.md).
    */
   static constexpr double MaximumDecayPerStep = 0.05;
+  /// Latest End (ns, 1 ms): light in a diffusing object is gone within
+  /// microseconds; later gates hold only zeros (T1 = 1e308 overflowed).
+  static constexpr double MaximumEnd = 1e6;
+  /// Shortest time step (ns, 1 fs): a step of 1e-321 ns (gates 0,1e-320,10)
+  /// made 1/dt overflow; the diffusion model is meaningless far above it.
+  static constexpr double MinimumTimeStep = 1e-6;
   /// Largest Count.
   static constexpr int MaximumTimeGates = 10000;
   /// Largest StepsPerGate.

@@ -9,6 +9,9 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <complex>
+#include <iomanip>
+#include <limits>
 #include <sstream>
 
 namespace translucency
@@ -254,6 +257,66 @@ bool VertexDiffusionSolver::Solve(
   return true;
 }
 
+void VertexDiffusionSolver::CheckFrequencyResolution(const TetMesh& mesh,
+  const OpticalProperties& material, double frequency, double omega) const
+{
+  // The diffusion wave exp(-k r), k = sqrt((mu_a + i omega eta / c) / kappa)
+  // per tet and channel, oscillates with the wavelength 2 pi / Im k. A mesh
+  // whose edges are longer than the shortest wavelength cannot carry its
+  // phase (and omega eta / c overflows for absurd frequencies): refused with
+  // both lengths, not solved into nonsense or NaN.
+  const int numTets = mesh.GetNumberOfTets();
+  double volume = 0.0;
+  for (double v : mesh.GetTetVolumes())
+  {
+    volume += v;
+  }
+  // The edge of a regular tet of the mean volume (V = a^3 / (6 sqrt 2)).
+  const double edge = std::cbrt(6.0 * std::sqrt(2.0) * volume / std::max(numTets, 1));
+  double shortest = std::numeric_limits<double>::infinity();
+  bool finite = true;
+  for (int t = 0; t < numTets && finite; ++t)
+  {
+    const double q = omega * material.RefractiveIndex[t] / SpeedOfLight; // 1/mm
+    finite = std::isfinite(q);
+    for (int c = 0; c < NumberOfChannels && finite; ++c)
+    {
+      const std::size_t i = 3 * static_cast<std::size_t>(t) + c;
+      const double attenuation =
+        material.AbsorptionCoefficient[i] + material.ReducedScatteringCoefficient[i];
+      if (!(attenuation > 0.0))
+      {
+        continue;
+      }
+      const double kappa = 1.0 / (3.0 * attenuation);
+      const std::complex<double> k =
+        std::sqrt(std::complex<double>(material.AbsorptionCoefficient[i], q) / kappa);
+      finite = std::isfinite(k.imag());
+      if (finite && k.imag() > 0.0)
+      {
+        shortest = std::min(shortest, 2.0 * 3.14159265358979323846 / k.imag());
+      }
+    }
+  }
+  if (!finite || shortest < edge)
+  {
+    std::ostringstream out;
+    out << std::setprecision(4) << GetName() << ": modulation frequency " << frequency << " Hz: ";
+    if (!finite)
+    {
+      out << "omega eta / c overflows (not finite)";
+    }
+    else
+    {
+      out << "the diffusion wave's shortest wavelength in the medium, " << shortest
+          << " mm, is below the mesh's typical edge, " << edge
+          << " mm: the mesh cannot resolve its phase";
+    }
+    out << " (use a lower frequency or a finer mesh)";
+    throw Error(out.str());
+  }
+}
+
 bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem,
   double frequency, std::vector<std::complex<double>>& fluence, SolverReport& report)
 {
@@ -293,6 +356,7 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   }
   const int numTets = mesh.GetNumberOfTets();
   const double omega = 2.0 * 3.14159265358979323846 * frequency;
+  CheckFrequencyResolution(mesh, material, frequency, omega);
   // The extended collimated model: the beam's volume source carries its
   // own modulation exp(-i omega eta s / c) (CollimatedSource.h): a complex
   // right-hand side, 4 x the load as for the interior sources.

@@ -60,7 +60,11 @@ public:
    * right-hand side); `fluence` is then Phi_d + E_c~, and report has the
    * beam's amplitude and phase (CollimatedFluence, CollimatedFluencePhase).
    * @param frequency modulation frequency f in Hz (finite, > 0; else
-   *        translucency::Error naming the value)
+   *        translucency::Error naming the value); refused too when the
+   *        diffusion wave's shortest wavelength 2 pi / Im k, k = sqrt((mu_a
+   *        + i 2 pi f eta / c) / kappa), is below the mesh's typical edge
+   *        (the edge of a regular tet of the mean volume): the mesh cannot
+   *        carry the phase (CheckFrequencyResolution)
    * @param fluence complex Phi, 3 values per mesh point (W/mm^2 per W of
    *        source modulation amplitude); amplitude |Phi|, phase arg(Phi)
    *        (negative: the fluence lags the source)
@@ -68,6 +72,11 @@ public:
    */
   bool SolveFrequencyDomain(const DiffusionProblem& problem, double frequency,
     std::vector<std::complex<double>>& fluence, SolverReport& report) override;
+
+  /// Throw translucency::Error naming both lengths when the mesh cannot
+  /// resolve the diffusion wave of modulation `frequency` (Hz, omega = 2 pi f).
+  void CheckFrequencyResolution(const TetMesh& mesh, const OpticalProperties& material,
+    double frequency, double omega) const;
 
   /**
    * Time-resolved (TimeResolved.h has the equation, the scheme and the

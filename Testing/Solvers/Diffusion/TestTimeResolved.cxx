@@ -766,6 +766,12 @@ TEST(TimeResolved, BadGatesAreErrors)
   EXPECT_TRUE(Contains(message(2.0, 1.0, 10), "time gates 2,1,10"));
   EXPECT_EQ(message(0.0, 5.0, 10000, 10), ""); // 100000 steps: at the limit
   EXPECT_TRUE(Contains(message(0.0, 5.0, 10000, 11), "the limit is 100000"));
+  // Degenerate gates that gave NaN or zeros with exit 0 (issue 34).
+  EXPECT_TRUE(Contains(message(0.0, 1e308, 10), "T1 = 1e+308 ns is later than 1000000 ns"));
+  EXPECT_TRUE(Contains(message(0.0, 1e-320, 10), "is below 1e-06 ns")) << message(0.0, 1e-320, 10);
+  EXPECT_TRUE(Contains(message(0.0, 1e-5, 10, 4), "the time step 2.5e-07 ns"));
+  EXPECT_EQ(message(0.0, 1e6, 10, 1), "");  // at the latest end
+  EXPECT_EQ(message(0.0, 8e-5, 10, 4), ""); // steps of 2e-6 ns: above the limit
 
   // A snapshot gate out of range, and the other solvers have no
   // time-resolved solve (VertexDiffusionSolver only).

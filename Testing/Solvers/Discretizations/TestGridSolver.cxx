@@ -971,6 +971,14 @@ TEST(GridSolverErrors, BadInput)
   solver.SetGridSpacing(std::numeric_limits<double>::infinity());
   message = solve(MakeProblem(mesh, material, q));
   EXPECT_TRUE(Contains(message, "grid spacing inf mm")) << message;
+  // Larger than the 1 mm cube (issue 34: 1e300 gave NaN with exit 0).
+  solver.SetGridSpacing(1e300);
+  message = solve(MakeProblem(mesh, material, q));
+  EXPECT_TRUE(Contains(message, "grid spacing 1e+300 mm is larger than the object")) << message;
+  EXPECT_TRUE(Contains(message, "1 x 1 x 1 mm")) << message;
+  solver.SetGridSpacing(1.5);
+  message = solve(MakeProblem(mesh, material, q));
+  EXPECT_TRUE(Contains(message, "larger than the object")) << message;
 
   // 0 = automatic: (volume / tets)^(1/3).
   solver.SetGridSpacing(0.0);
