@@ -3,6 +3,7 @@
 #include "DefaultLights.h"
 #include "Error.h"
 #include "CollimatedSource.h"
+#include "IrradianceCache.h"
 #include "LightSources.h"
 #include "Radiance.h"
 #include "TetMesh.h"
@@ -40,6 +41,9 @@ struct vtkSurfaceIrradiance::Internals
   std::vector<translucency::LightSource> ColouredDirectional;
   std::vector<translucency::LightSource> ColouredPoint;
   std::shared_ptr<const translucency::TetMesh> Mesh;
+  /// Each light's term and the uniform light's, kept across executions
+  /// (a relight recomputes the changed light only).
+  translucency::IrradianceCache Cache;
 };
 
 //------------------------------------------------------------------------------
@@ -232,6 +236,8 @@ int vtkSurfaceIrradiance::RequestData(
   const std::vector<translucency::LightSource>& computed =
     this->CollimatedModel != COLLIMATED_SURFACE ? translucency::NonCollimatedLights(lights)
                                                  : lights;
+  this->LightsComputed = static_cast<int>(computed.size());
+  this->UniformComputed = true;
   if (distributed)
   {
     this->TopologyTime = 0.0;
@@ -278,9 +284,12 @@ int vtkSurfaceIrradiance::RequestData(
     // Per boundary triangle (each corner with the triangle's own normal),
     // projected to the points: the solvers' loads are triangle-integrated.
     // The extended model leaves the directional lights to the solver.
-    const bool completed = translucency::ComputeProjectedIrradiance(mesh, tetEta, computed,
+    // The terms of unchanged lights come from the cache (IrradianceCache.h).
+    const bool completed = this->Internal->Cache.Compute(mesh, tetEta, computed,
       uniformIrradiance, this->UniformLightSamples, this->Shadows, q,
       [this]() { return this->GetAbortExecute() != 0; });
+    this->LightsComputed = this->Internal->Cache.GetNumberOfLightsComputed();
+    this->UniformComputed = this->Internal->Cache.GetUniformComputed();
     if (!completed)
     {
       return 0;
@@ -288,6 +297,7 @@ int vtkSurfaceIrradiance::RequestData(
   }
   catch (const translucency::Error& e)
   {
+    this->Internal->Cache.Clear();
     vtkErrorMacro(<< e.what());
     return 0;
   }

@@ -217,6 +217,19 @@ public:
   /// execution; 0 when the topology came from the shared cache.
   double GetTopologyTime() const { return this->TopologyTime; }
 
+  ///@{
+  /**
+   * What the last execution computed: the number of directional, point and
+   * spot lights, and whether the uniform light's occlusion. Serial runs keep
+   * each light's term and the uniform light's across executions
+   * (translucency::IrradianceCache, keyed on the mesh geometry, the
+   * refractive index and the light's parameters), so turning one light
+   * recomputes that light only; the distributed path computes everything.
+   */
+  int GetNumberOfLightsComputed() const { return this->LightsComputed; }
+  bool GetUniformComputed() const { return this->UniformComputed; }
+  ///@}
+
   /// How the last execution ran: "serial" (one process), "distributed"
   /// (MPI: each rank its own piece on the all-gathered boundary surface,
   /// Documentation/Parallel.md) or "gathered" (MPI: the mesh gathered to
@@ -252,6 +265,8 @@ protected:
   long long BoundarySurfaceTriangles = 0;
   long long BoundarySurfaceBytes = 0;
   double BoundarySurfaceTime = 0.0;
+  int LightsComputed = 0;
+  bool UniformComputed = false;
 
 private:
   vtkSurfaceIrradiance(const vtkSurfaceIrradiance&) = delete;
