@@ -3,6 +3,7 @@
 #include "DefaultLights.h"
 #include "Error.h"
 #include "CollimatedSource.h"
+#include "IrradianceCache.h"
 #include "LightSources.h"
 #include "Radiance.h"
 #include "TetMesh.h"
@@ -41,6 +42,9 @@ struct vtkSurfaceIrradiance::Internals
   std::vector<translucency::LightSource> ColouredDirectional;
   std::vector<translucency::LightSource> ColouredPoint;
   std::shared_ptr<const translucency::TetMesh> Mesh;
+  /// Each light's term and the uniform light's, kept across executions
+  /// (a relight recomputes the changed light only).
+  translucency::IrradianceCache Cache;
 };
 
 //------------------------------------------------------------------------------
@@ -256,6 +260,8 @@ int vtkSurfaceIrradiance::RequestLights(
   const std::vector<translucency::LightSource>& computed =
     this->CollimatedModel != COLLIMATED_SURFACE ? translucency::NonCollimatedLights(lights)
                                                  : lights;
+  this->LightsComputed = static_cast<int>(computed.size());
+  this->UniformComputed = true;
   if (distributed)
   {
     this->TopologyTime = 0.0;
@@ -302,9 +308,12 @@ int vtkSurfaceIrradiance::RequestLights(
     // Per boundary triangle (each corner with the triangle's own normal),
     // projected to the points: the solvers' loads are triangle-integrated.
     // The extended model leaves the directional lights to the solver.
-    const bool completed = translucency::ComputeProjectedIrradiance(mesh, tetEta, computed,
+    // The terms of unchanged lights come from the cache (IrradianceCache.h).
+    const bool completed = this->Internal->Cache.Compute(mesh, tetEta, computed,
       uniformIrradiance, this->UniformLightSamples, this->Shadows, q,
       [this]() { return this->GetAbortExecute() != 0; });
+    this->LightsComputed = this->Internal->Cache.GetNumberOfLightsComputed();
+    this->UniformComputed = this->Internal->Cache.GetUniformComputed();
     if (!completed)
     {
       return 0;
@@ -312,6 +321,7 @@ int vtkSurfaceIrradiance::RequestLights(
   }
   catch (const translucency::Error& e)
   {
+    this->Internal->Cache.Clear();
     vtkErrorMacro(<< e.what());
     return 0;
   }

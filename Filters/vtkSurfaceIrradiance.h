@@ -222,6 +222,19 @@ public:
 
   ///@{
   /**
+   * What the last execution computed: the number of directional, point and
+   * spot lights, and whether the uniform light's occlusion. Serial runs keep
+   * each light's term and the uniform light's across executions
+   * (translucency::IrradianceCache, keyed on the mesh geometry, the
+   * refractive index and the light's parameters), so turning one light
+   * recomputes that light only; the distributed path computes everything.
+   */
+  int GetNumberOfLightsComputed() const { return this->LightsComputed; }
+  bool GetUniformComputed() const { return this->UniformComputed; }
+  ///@}
+
+  ///@{
+  /**
    * The parallel seam (Documentation/Parallel.md, "What runs where").
    * GetParallelPath(): the path the last execution took: "serial" (one
    * process), "per piece", "distributed" or "gathered".
@@ -273,6 +286,8 @@ protected:
   long long BoundarySurfaceTriangles = 0;
   long long BoundarySurfaceBytes = 0;
   double BoundarySurfaceTime = 0.0;
+  int LightsComputed = 0;
+  bool UniformComputed = false;
 
 private:
   vtkSurfaceIrradiance(const vtkSurfaceIrradiance&) = delete;

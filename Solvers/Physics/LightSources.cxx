@@ -202,23 +202,7 @@ bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& p
   }
 
   // Bounding box diagonal (mm): scale of the ray offset and reach.
-  double lo[3], hi[3];
-  for (int k = 0; k < 3; ++k)
-  {
-    lo[k] = std::numeric_limits<double>::infinity();
-    hi[k] = -lo[k];
-  }
-  for (int i = 0; i < numPoints; ++i)
-  {
-    const double* x = mesh.GetPoint(i);
-    for (int k = 0; k < 3; ++k)
-    {
-      lo[k] = std::min(lo[k], x[k]);
-      hi[k] = std::max(hi[k], x[k]);
-    }
-  }
-  const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
-    (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const double diag = BoundingBoxDiagonal(mesh);
   const double offset = 1e-5 * diag;
 
   const bool needRays =
@@ -308,9 +292,28 @@ bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& p
 }
 
 
-bool ComputeTriangleCornerIrradiance(const TetMesh& mesh, const std::vector<double>& tetEta,
-  const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
-  bool shadows, std::vector<double>& cornerQ, const std::function<bool()>& abort)
+double BoundingBoxDiagonal(const TetMesh& mesh)
+{
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    lo[k] = std::numeric_limits<double>::infinity();
+    hi[k] = -lo[k];
+  }
+  for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    const double* x = mesh.GetPoint(i);
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], x[k]);
+      hi[k] = std::max(hi[k], x[k]);
+    }
+  }
+  return std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+    (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
+void CheckBoundaryTriangleEta(const TetMesh& mesh, const std::vector<double>& tetEta)
 {
   const int numTets = mesh.GetNumberOfTets();
   if (tetEta.size() != static_cast<size_t>(numTets))
@@ -321,7 +324,6 @@ bool ComputeTriangleCornerIrradiance(const TetMesh& mesh, const std::vector<doub
     throw Error(msg.str());
   }
   const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
-  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
   const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
   for (int f = 0; f < numTriangles; ++f)
   {
@@ -334,28 +336,14 @@ bool ComputeTriangleCornerIrradiance(const TetMesh& mesh, const std::vector<doub
       throw Error(msg.str());
     }
   }
-  // The uniform light per point, and every check of the arguments, by the
-  // point version (no directional or point light: no rays for them there).
-  const std::vector<double> pointEta = PointRefractiveIndex(mesh, tetEta);
-  std::vector<double> uniform;
-  for (size_t l = 0; l < lights.size(); ++l)
-  {
-    ValidateLight(lights[l], l);
-  }
-  if (!ComputeBoundaryIrradiance(
-        mesh, pointEta, {}, uniformIrradiance, uniformSamples, shadows, uniform, abort))
-  {
-    return false;
-  }
-  cornerQ.assign(9 * static_cast<size_t>(numTriangles), 0.0);
-  const std::vector<int>& boundary = mesh.GetBoundaryPoints();
-  if (boundary.empty())
-  {
-    return true;
-  }
+}
 
+std::vector<double> BoundaryTriangleNormals(const TetMesh& mesh)
+{
   // Unit outward normals of the triangles (TetMesh orients them outwards:
   // the area vector (b - a) x (c - a) / 2 points out of the object).
+  const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
   std::vector<double> normals(3 * static_cast<size_t>(numTriangles), 0.0);
   for (int f = 0; f < numTriangles; ++f)
   {
@@ -375,34 +363,26 @@ bool ComputeTriangleCornerIrradiance(const TetMesh& mesh, const std::vector<doub
       n[k] = length > 0.0 ? n[k] / length : 0.0;
     }
   }
+  return normals;
+}
 
-  double lo[3], hi[3];
-  for (int k = 0; k < 3; ++k)
-  {
-    lo[k] = std::numeric_limits<double>::infinity();
-    hi[k] = -lo[k];
-  }
-  for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
-  {
-    const double* x = mesh.GetPoint(i);
-    for (int k = 0; k < 3; ++k)
-    {
-      lo[k] = std::min(lo[k], x[k]);
-      hi[k] = std::max(hi[k], x[k]);
-    }
-  }
-  const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
-    (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-  const double offset = 1e-5 * diag;
-  RayCaster caster;
-  if (shadows && !lights.empty())
-  {
-    caster.Build(mesh.GetPoints(), triangles);
-  }
+bool AddLightCornerIrradiance(const TetMesh& mesh, const std::vector<double>& tetEta,
+  const std::vector<double>& triangleNormals, const LightSource& light, bool shadows,
+  const RayCaster* caster, double diagonal, std::vector<double>& cornerQ,
+  const std::function<bool()>& abort)
+{
+  const std::vector<int>& boundary = mesh.GetBoundaryPoints();
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
   const std::vector<double>& pointNormals = mesh.GetPointNormals();
   const std::vector<int>& offsets = mesh.GetBoundaryPointTriangleOffsets();
   const std::vector<int>& incident = mesh.GetBoundaryPointTriangles();
   const int numBoundary = static_cast<int>(boundary.size());
+  if (shadows && !caster)
+  {
+    throw Error("boundary irradiance: shadows need a ray caster over the boundary triangles");
+  }
+  const double offset = 1e-5 * diagonal;
   if (abort && abort())
   {
     return false;
@@ -424,52 +404,94 @@ bool ComputeTriangleCornerIrradiance(const TetMesh& mesh, const std::vector<doub
     const int i = boundary[k];
     const double* x = mesh.GetPoint(i);
     const double* ni = &pointNormals[3 * static_cast<size_t>(i)];
+    int visible = -1; // unknown until a triangle faces the light
     for (int m = offsets[k]; m < offsets[k + 1]; ++m)
     {
       const int f = incident[m];
+      const double* n = &triangleNormals[3 * static_cast<size_t>(f)];
+      double ql[3], w[3], distance;
+      if (!DirectIrradiance(light, x, n, tetEta[triangleTets[f]], ql, w, distance))
+      {
+        continue;
+      }
+      if (shadows && visible < 0)
+      {
+        // The point's shadow ray, as in ComputeBoundaryIrradiance.
+        const double reach = std::min(distance, 2.0 * diagonal);
+        const double origin[3] = { x[0] + offset * (ni[0] + w[0]), x[1] + offset * (ni[1] + w[1]),
+          x[2] + offset * (ni[2] + w[2]) };
+        visible = caster->Occluded(origin, w, reach) ? 0 : 1;
+      }
+      if (shadows && visible == 0)
+      {
+        break;
+      }
       const int* tri = &triangles[3 * static_cast<size_t>(f)];
       const int corner = tri[0] == i ? 0 : (tri[1] == i ? 1 : 2);
       double* qc = &cornerQ[9 * static_cast<size_t>(f) + 3 * static_cast<size_t>(corner)];
       for (int c = 0; c < 3; ++c)
       {
-        qc[c] = uniform[3 * static_cast<size_t>(i) + c];
-      }
-    }
-    for (const auto& light : lights)
-    {
-      int visible = -1; // unknown until a triangle faces the light
-      for (int m = offsets[k]; m < offsets[k + 1]; ++m)
-      {
-        const int f = incident[m];
-        const double* n = &normals[3 * static_cast<size_t>(f)];
-        double ql[3], w[3], distance;
-        if (!DirectIrradiance(light, x, n, tetEta[triangleTets[f]], ql, w, distance))
-        {
-          continue;
-        }
-        if (shadows && visible < 0)
-        {
-          // The point's shadow ray, as in ComputeBoundaryIrradiance.
-          const double reach = std::min(distance, 2.0 * diag);
-          const double origin[3] = { x[0] + offset * (ni[0] + w[0]),
-            x[1] + offset * (ni[1] + w[1]), x[2] + offset * (ni[2] + w[2]) };
-          visible = caster.Occluded(origin, w, reach) ? 0 : 1;
-        }
-        if (shadows && visible == 0)
-        {
-          break;
-        }
-        const int* tri = &triangles[3 * static_cast<size_t>(f)];
-        const int corner = tri[0] == i ? 0 : (tri[1] == i ? 1 : 2);
-        double* qc = &cornerQ[9 * static_cast<size_t>(f) + 3 * static_cast<size_t>(corner)];
-        for (int c = 0; c < 3; ++c)
-        {
-          qc[c] += ql[c];
-        }
+        qc[c] += ql[c];
       }
     }
   }
   return !aborted.load();
+}
+
+bool ComputeTriangleCornerIrradiance(const TetMesh& mesh, const std::vector<double>& tetEta,
+  const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
+  bool shadows, std::vector<double>& cornerQ, const std::function<bool()>& abort)
+{
+  CheckBoundaryTriangleEta(mesh, tetEta);
+  const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  // The uniform light per point, and every check of the arguments, by the
+  // point version (no directional or point light: no rays for them there).
+  const std::vector<double> pointEta = PointRefractiveIndex(mesh, tetEta);
+  std::vector<double> uniform;
+  for (size_t l = 0; l < lights.size(); ++l)
+  {
+    ValidateLight(lights[l], l);
+  }
+  if (!ComputeBoundaryIrradiance(
+        mesh, pointEta, {}, uniformIrradiance, uniformSamples, shadows, uniform, abort))
+  {
+    return false;
+  }
+  cornerQ.assign(9 * static_cast<size_t>(numTriangles), 0.0);
+  if (mesh.GetBoundaryPoints().empty())
+  {
+    return true;
+  }
+  // Every corner starts with the uniform light of its point, then each light
+  // adds its own contribution, in the order of `lights`.
+  for (int f = 0; f < numTriangles; ++f)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      const int i = triangles[3 * static_cast<size_t>(f) + k];
+      for (int c = 0; c < 3; ++c)
+      {
+        cornerQ[9 * static_cast<size_t>(f) + 3 * k + c] = uniform[3 * static_cast<size_t>(i) + c];
+      }
+    }
+  }
+  const std::vector<double> normals = BoundaryTriangleNormals(mesh);
+  const double diag = BoundingBoxDiagonal(mesh);
+  RayCaster caster;
+  if (shadows && !lights.empty())
+  {
+    caster.Build(mesh.GetPoints(), triangles);
+  }
+  for (const auto& light : lights)
+  {
+    if (!AddLightCornerIrradiance(
+          mesh, tetEta, normals, light, shadows, &caster, diag, cornerQ, abort))
+    {
+      return false;
+    }
+  }
+  return true;
 }
 
 void ProjectCornerIrradiance(

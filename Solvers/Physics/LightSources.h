@@ -17,6 +17,7 @@
 namespace translucency
 {
 
+class RayCaster;
 class TetMesh;
 
 /// A white or coloured light. Units per type:
@@ -180,6 +181,37 @@ bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& p
 bool ComputeTriangleCornerIrradiance(const TetMesh& mesh, const std::vector<double>& tetEta,
   const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
   bool shadows, std::vector<double>& cornerQ, const std::function<bool()>& abort = {});
+
+/// Diagonal (mm) of the bounding box of every mesh point: the scale of the
+/// shadow rays' offset (1e-5 of it) and reach (twice it).
+double BoundingBoxDiagonal(const TetMesh& mesh);
+
+/// Throw translucency::Error unless `tetEta` has one value per tet and the
+/// tets under the boundary triangles have a finite index > 0.
+void CheckBoundaryTriangleEta(const TetMesh& mesh, const std::vector<double>& tetEta);
+
+/// Unit outward normals of mesh.GetBoundaryTriangles(), 3 per triangle (0
+/// for a triangle of zero area).
+std::vector<double> BoundaryTriangleNormals(const TetMesh& mesh);
+
+/**
+ * One directional, point or spot light's term of
+ * ComputeTriangleCornerIrradiance(): adds to `cornerQ` (9 values per
+ * boundary triangle) the light's DirectIrradiance() at each corner with the
+ * triangle's normal, times the visibility of the light from the corner's
+ * point (one shadow ray per point, cast with `caster`, built over
+ * mesh.GetBoundaryTriangles(), when `shadows` is set; it may be null
+ * otherwise). `triangleNormals` from BoundaryTriangleNormals(), `diagonal`
+ * from BoundingBoxDiagonal(); the light and tetEta must be valid
+ * (ValidateLight(), CheckBoundaryTriangleEta()). OpenMP-parallel over the
+ * boundary points; abort as in ComputeBoundaryIrradiance(). Returns false if
+ * aborted (cornerQ is then incomplete). This is the one implementation of
+ * a light's term: the full computation and IrradianceCache both call it.
+ */
+bool AddLightCornerIrradiance(const TetMesh& mesh, const std::vector<double>& tetEta,
+  const std::vector<double>& triangleNormals, const LightSource& light, bool shadows,
+  const RayCaster* caster, double diagonal, std::vector<double>& cornerQ,
+  const std::function<bool()>& abort = {});
 
 /**
  * The point irradiance the solvers read, from corner values:
