@@ -6,6 +6,7 @@
 #include "GridSolver.h"
 #include "MonteCarlo.h"
 #include "QuadGraph.h"
+#include "Sp3Solver.h"
 #include "Strings.h"
 #include "VertexDiffusionSolver.h"
 
@@ -42,6 +43,9 @@ DiffusionSolverRegistry MakeRegistry()
     MakeDiffusionSolverTraits(Stochastic | Time,
       { DiffusionOption::Photons, DiffusionOption::Seed, DiffusionOption::Anisotropy }),
     "photon random walk, the reference (slow, with standard errors)" });
+  registry.Add({ "sp3", [] { return std::make_unique<Sp3Solver>(); }, { true, false, false, {} },
+    "simplified spherical harmonics SP3 (Klose & Larsen 2006) at the vertices, anisotropy g, "
+    "Fresnel boundary; continuous wave only" });
   return registry;
 }
 } // namespace

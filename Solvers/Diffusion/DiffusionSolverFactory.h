@@ -68,7 +68,7 @@ using DiffusionSolverRegistry = Registry<DiffusionSolver, DiffusionSolverTraits>
 
 /**
  * The table, in listing order (the first is the default): "divergence",
- * "fem", "quadgraph", "grid", "montecarlo". vtkSolveDiffusion's SOLVER_*
+ * "fem", "quadgraph", "grid", "montecarlo", "sp3". vtkSolveDiffusion's SOLVER_*
  * constants are indices into it.
  */
 const DiffusionSolverRegistry& GetDiffusionSolverRegistry();

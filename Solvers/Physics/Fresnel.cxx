@@ -172,6 +172,53 @@ double ReflectanceMomentJ(double eta)
   return ReflectanceMoments(eta)[1];
 }
 
+std::array<double, 7> ReflectanceHalfRangeMoments(double eta)
+{
+  const GaussLegendre& rule = Quadrature();
+  std::array<double, 7> r{};
+  if (eta == 1.0)
+  {
+    return r; // index matched: R = 0
+  }
+  if (eta > 1.0)
+  {
+    // Totally reflected below mu_c = sqrt(1 - 1/eta^2): int_0^mu_c mu^m dmu
+    // = mu_c^(m+1) / (m+1); the rest on the outside cosine c as in
+    // ReflectanceMoments (mu dmu = c dc / eta^2, R(c) smooth).
+    const double muC = std::sqrt(1.0 - 1.0 / (eta * eta));
+    double power = muC;
+    for (int m = 0; m < 7; ++m)
+    {
+      r[m] = power / (m + 1);
+      power *= muC;
+    }
+    for (int i = 0; i < QuadratureOrder; ++i)
+    {
+      const double c = rule.Nodes[i];
+      const double mu = std::sqrt(1.0 - (1.0 - c * c) / (eta * eta));
+      double term = rule.Weights[i] * Reflectance(c, eta) * c / (eta * eta * mu); // mu^(m-1), m = 0
+      for (int m = 0; m < 7; ++m)
+      {
+        r[m] += term;
+        term *= mu;
+      }
+    }
+    return r;
+  }
+  // eta < 1: no total internal reflection, R smooth in mu.
+  for (int i = 0; i < QuadratureOrder; ++i)
+  {
+    const double mu = rule.Nodes[i];
+    double term = rule.Weights[i] * Reflectance(std::sqrt(1.0 - eta * eta * (1.0 - mu * mu)), eta);
+    for (int m = 0; m < 7; ++m)
+    {
+      r[m] += term;
+      term *= mu;
+    }
+  }
+  return r;
+}
+
 RobinCoefficients BoundaryCoefficients(double eta, BoundaryRule rule)
 {
   RobinCoefficients out;

@@ -9,6 +9,8 @@
  */
 #pragma once
 
+#include <array>
+
 namespace translucency
 {
 namespace Fresnel
@@ -45,6 +47,17 @@ double Transmittance(double cosOutside, double eta);
  */
 double ReflectanceMomentPhi(double eta);
 double ReflectanceMomentJ(double eta);
+
+/**
+ * The half-range moments r_m = int_0^1 R(mu) mu^m dmu, m = 0..6, of the
+ * Fresnel reflectance seen from inside the medium (relative index eta > 0;
+ * total internal reflection counted as R = 1; mu the cosine of the internal
+ * direction against the normal), by the quadrature of ReflectanceMomentPhi
+ * (so R_phi = 2 r_1 and R_J = 3 r_2). The SP3 partly reflecting boundary
+ * conditions (Klose & Larsen 2006; Sp3Solver.h) are built from r_1..r_6.
+ * All 0 at eta = 1.
+ */
+std::array<double, 7> ReflectanceHalfRangeMoments(double eta);
 
 /// Which boundary coefficients the Robin condition
 /// phi + 2 A kappa dphi/dn = 4 q / (1 - Fdr) uses.

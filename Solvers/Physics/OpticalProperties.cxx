@@ -131,6 +131,20 @@ void OpticalProperties::Validate(int numTets) const
           "diffusion coefficient kappa = 1/(3 (mu_a + sigma_s')) would be infinite";
     throw Error(os.str());
   }
+  if (!Anisotropy.empty())
+  {
+    checkSize(Anisotropy, "Anisotropy", 3);
+    for (size_t k = 0; k < Anisotropy.size(); ++k)
+    {
+      if (!(std::isfinite(Anisotropy[k]) && Anisotropy[k] > -1.0 && Anisotropy[k] < 1.0))
+      {
+        std::ostringstream os;
+        os << "Anisotropy of tet " << k / 3 << ", channel " << ChannelNames[k % 3] << " is "
+           << Anisotropy[k] << ": must be finite and in (-1, 1)";
+        throw Error(os.str());
+      }
+    }
+  }
 }
 
 const std::vector<MaterialPreset>& GetMaterialPresets()

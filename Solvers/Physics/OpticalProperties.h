@@ -4,6 +4,7 @@
  */
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,20 @@ struct OpticalProperties
   std::vector<double> AbsorptionCoefficient;        ///< mu_a, 1/mm, >= 0
   std::vector<double> ReducedScatteringCoefficient; ///< sigma_s', 1/mm, >= 0
   std::vector<double> RefractiveIndex;              ///< eta, > 0
+  /**
+   * Optional anisotropy g of the phase function (mean cosine of the
+   * scattering angle, dimensionless), 3 per tet (R, G, B), in (-1, 1);
+   * empty (the default) = 0 everywhere. Only the SP3 solver reads it: with
+   * it, the scattering coefficient is mu_s = sigma_s' / (1 - g) (so
+   * sigma_s' stays the reduced one every other solver uses).
+   */
+  std::vector<double> Anisotropy;
+
+  /// g of tet t, channel c (0 when Anisotropy is empty).
+  double GetAnisotropy(int t, int c) const
+  {
+    return Anisotropy.empty() ? 0.0 : Anisotropy[3 * static_cast<std::size_t>(t) + c];
+  }
 
   /// Uniform material on numTets tets.
   static OpticalProperties Uniform(
@@ -35,7 +50,8 @@ struct OpticalProperties
   /**
    * Throw translucency::Error unless the arrays have the sizes for numTets
    * tets and every value is finite, mu_a >= 0, mu_a + sigma_s' > 0 and
-   * eta > 0. The message names the array, the tet, the channel and the value.
+   * eta > 0, and Anisotropy is empty or has 3 finite values per tet in
+   * (-1, 1). The message names the array, the tet, the channel and the value.
    */
   void Validate(int numTets) const;
 

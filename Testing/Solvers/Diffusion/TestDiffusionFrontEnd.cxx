@@ -173,7 +173,7 @@ TEST(DiffusionFrontEnd, SolverByNameAndNoIncrementalForOtherSolvers)
   front.SetSolver("DIVERGENCE"); // the same solver: its settings are kept
   EXPECT_EQ(front.GetSolver().GetRelTol(), 1e-9);
   EXPECT_EQ(ErrorMessage([&] { front.SetSolver("voxels"); }),
-    "unknown solver 'voxels' (known solvers: divergence, fem, quadgraph, grid, montecarlo)");
+    "unknown solver 'voxels' (known solvers: divergence, fem, quadgraph, grid, montecarlo, sp3)");
   EXPECT_EQ(front.GetSolverName(), "divergence");
 
   front.SetSolver("quadgraph"); // a new solver, default settings

@@ -20,7 +20,7 @@ TEST(DiffusionRegistry, ServesTheFactoryInListingOrder)
 {
   const DiffusionSolverRegistry& registry = GetDiffusionSolverRegistry();
   EXPECT_EQ(GetDiffusionSolverNames(),
-    (std::vector<std::string>{ "divergence", "fem", "quadgraph", "grid", "montecarlo" }));
+    (std::vector<std::string>{ "divergence", "fem", "quadgraph", "grid", "montecarlo", "sp3" }));
   EXPECT_EQ(registry.GetNames(), GetDiffusionSolverNames());
   for (const auto& entry : registry.GetEntries())
   {
@@ -44,7 +44,7 @@ TEST(DiffusionRegistry, ServesTheFactoryInListingOrder)
     static_cast<long>(registry.GetEntries().size()));
   const std::string message = ErrorMessage([] { CreateDiffusionSolver("voxels"); });
   EXPECT_EQ(message,
-    "unknown solver 'voxels' (known solvers: divergence, fem, quadgraph, grid, montecarlo)");
+    "unknown solver 'voxels' (known solvers: divergence, fem, quadgraph, grid, montecarlo, sp3)");
 }
 
 // The options each entry lists are exactly those its solver reads.

@@ -1,0 +1,182 @@
+/**
+ * @file Sp3Solver.h
+ * @brief The simplified spherical harmonics equations of order 3 (SP3;
+ * Klose & Larsen 2006, J. Comput. Phys. 220:441-470) on the tet mesh: P1
+ * finite elements for the two composite moments phi_1, phi_2 at the mesh
+ * vertices, with anisotropic scattering (OpticalProperties::Anisotropy) and
+ * the partly reflecting (Fresnel) Marshak boundary conditions.
+ * Documentation/Solvers.md ("SP3") has the equations and the measured
+ * accuracy against Monte Carlo.
+ */
+#pragma once
+
+#include "DiffusionSolver.h"
+#include "DiffusionSystem.h"
+#include "LinearSolver.h"
+#include "TetGeometry.h"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace translucency
+{
+
+/**
+ * The boundary conditions of the SP3 equations at a boundary with relative
+ * refractive index eta (medium / outside), n the outward normal
+ * (Klose & Larsen 2006, the SP3 case of their Marshak conditions):
+ *
+ *   (1/2 + A1) phi_1 + (1 + B1)/(3 mu_a1) n.grad phi_1
+ *       = (1/8 + C1) phi_2 + (D1 / mu_a3) n.grad phi_2 + 2 q,
+ *   (7/24 + A2) phi_2 + (1 + B2)/(7 mu_a3) n.grad phi_2
+ *       = (1/8 + C2) phi_1 + (D2 / mu_a1) n.grad phi_1 - q / 2,
+ *
+ * with, from the half-range moments r_m = int_0^1 R(mu) mu^m dmu of the
+ * Fresnel reflectance (Fresnel::ReflectanceHalfRangeMoments):
+ *   A1 = -r1,  B1 = 3 r2,  C1 = C2 = (5 r3 - 3 r1) / 2,  D1 = D2 = (3 r2 - 5 r4) / 2,
+ *   A2 = -9 r1 / 4 + 15 r3 / 2 - 25 r5 / 4,  B2 = 63 r2 / 4 - 105 r4 / 2 + 175 r6 / 4.
+ * Derived here from the Marshak conditions int_0^1 (psi(mu) - R(mu)
+ * psi(-mu) - S(mu)) P_k(mu) dmu = 0, k = 1, 3, for the P3 radiance, with the
+ * transmitted boundary source S uniform over the inward hemisphere
+ * (S = q / pi, q the transmitted irradiance DiffusionProblem::Irradiance,
+ * as in the diffusion solvers' Robin condition). At eta = 1 all eight are 0.
+ *
+ * Solved for the currents J_1 = -(1/(3 mu_a1)) n.grad phi_1 and
+ * J_2 = -(1/(7 mu_a3)) n.grad phi_2 (what the weak form needs):
+ *   J_1 = F11 phi_1 + F12 phi_2 + S1 q,   J_2 = F21 phi_1 + F22 phi_2 + S2 q
+ * (at eta = 1: 1/2, -1/8, -2 and -1/8, 7/24, 1/2). F12 != F21 when
+ * eta != 1 (e.g. 0.0866 and 0.0905 at eta = 1.3), so the SP3 system is not
+ * symmetric then.
+ *
+ * The exitance (power per area leaving through the boundary, W/mm^2) is
+ * J_out = E1 phi_1 + E2 phi_2 + E3 q: the transmitted part of the outgoing
+ * P3 radiance, 2 pi int_0^1 (1 - R(mu)) psi(-mu) mu dmu.
+ */
+struct Sp3BoundaryCoefficients
+{
+  double A1 = 0, B1 = 0, C1 = 0, D1 = 0, A2 = 0, B2 = 0, C2 = 0, D2 = 0;
+  double F11 = 0.5, F12 = -0.125, F21 = -0.125, F22 = 7.0 / 24.0, S1 = -2.0, S2 = 0.5;
+  double E1 = 0, E2 = 0, E3 = 0;
+
+  /// The coefficients for relative index eta (finite, > 0).
+  static Sp3BoundaryCoefficients Compute(double eta);
+};
+
+class Sources;
+struct OpticalProperties;
+
+/**
+ * The isotropic source Q of the SP3 equations (weak-form load, W, 3 per mesh
+ * point) from interior sources: point sources as given; a pencil beam by its
+ * first-collision source along the refracted beam, mu_s' exp(-mu_t' s) per
+ * mm of path s times the transmitted power (1 - R_sp) P (LocatePencilEntry),
+ * mu_s', mu_t' = mu_a + mu_s' of the tet under the entry point (the
+ * homogeneous approximation of the extended collimated model, whose
+ * similarity rule g* = 0 this is; exact for isotropic scattering, g = 0:
+ * then it is the transport equation's own first-collision source), as point
+ * sources at the midpoints of segments of 0.1 / mu_t' (max over channels)
+ * carrying each segment's exact power, up to 12 / mu_t' (min) or where the
+ * beam leaves the object. The unscattered beam itself (a line singularity)
+ * is not in the fluence; its direct absorption, the fraction mu_a / mu_t',
+ * is not injected. Throws translucency::Error as Sources::Place does.
+ */
+std::vector<double> ComputeSp3SourceLoad(
+  const TetMesh& mesh, const OpticalProperties& material, const Sources& sources);
+
+/**
+ * The SP3 solver (registry name "sp3"). Unknowns: phi_1 = phi_0 + 2 phi_2
+ * and phi_2 := 3 phi_2 (the composite moments of Klose & Larsen) at the mesh
+ * vertices, 2 N per channel; the fluence is phi_0 = phi_1 - (2/3) phi_2.
+ *
+ * Equations (per channel; mu_an = mu_a + mu_s (1 - g^n), mu_s =
+ * sigma_s' / (1 - g), so mu_a1 = mu_a + sigma_s', mu_a2 = mu_a + sigma_s'
+ * (1 + g), mu_a3 = mu_a + sigma_s' (1 + g + g^2)):
+ *   -div(1/(3 mu_a1) grad phi_1) + mu_a phi_1 - (2/3) mu_a phi_2 = Q,
+ *   -div(1/(7 mu_a3) grad phi_2) + ((4/9) mu_a + (5/9) mu_a2) phi_2
+ *       - (2/3) mu_a phi_1 = -(2/3) Q,
+ * with Q the isotropic interior sources (point sources, pencil beams by
+ * their equivalent point source: InteriorSources.h) and the boundary
+ * conditions of Sp3BoundaryCoefficients (q enters there).
+ *
+ * Discretisation: consistent P1 Galerkin on the tets (exact element
+ * stiffness, consistent mass, consistent boundary mass and load per boundary
+ * triangle with the eta of its tet), the same integrals as FiniteElement.
+ *
+ * Linear solve: the 2 x 2 block system is symmetric in its interior part
+ * (and positive definite: the mass block's determinant is (5/9) mu_a mu_a2)
+ * but its Fresnel boundary coupling is not (F12 != F21), so it is solved by
+ * BiCGSTAB, preconditioned by the block diagonal: Jacobi ("jacobi", the
+ * default below VertexDiffusionSolver::LargeSystemUnknowns vertices) or one
+ * multigrid-agg cycle on each diagonal block ("multigrid-agg", the default
+ * from there on), the three channels together; warm start from the last
+ * solution on the same mesh. SetLinearSolver: "" (by size), "jacobi" (or
+ * "cg-jacobi"), "multigrid-agg"; others are an error.
+ *
+ * Sources: the boundary irradiance q (diffusive, in the boundary
+ * conditions); point sources as isotropic delta sources Q; pencil beams by
+ * their first-collision source (ComputeSp3SourceLoad); the extended
+ * collimated models (CollimatedSource.h: the reduced beam's volume source
+ * mu_s' E_c as Q, E_c added to the fluence) with either boundary rule.
+ * No frequency or time domain (the registry's traits; the filter refuses).
+ */
+class Sp3Solver : public DiffusionSolver
+{
+public:
+  Sp3Solver();
+  ~Sp3Solver() override;
+
+  std::string GetName() const override { return "sp3"; }
+  bool Solve(const DiffusionProblem& problem, std::vector<double>& fluence,
+    SolverReport& report) override;
+  void Reset() override;
+
+  /// The composite moments of the last Solve, 3 values (R, G, B) per mesh
+  /// point each (W/mm^2).
+  const std::vector<double>& GetPhi1() const { return Phi1_; }
+  const std::vector<double>& GetPhi2() const { return Phi2_; }
+  /// The exitance of the last Solve, 3 values per mesh point (W/mm^2; 0 at
+  /// interior points): Sp3BoundaryCoefficients E1 phi_1 + E2 phi_2 + E3 q
+  /// with the area-weighted mean eta of the boundary triangles at the point.
+  const std::vector<double>& GetExitance() const { return Exitance_; }
+
+  /**
+   * An additional right-hand side of the weak form (W): load1 and load2
+   * hold 3 values (R, G, B) per mesh point for the phi_1 and the phi_2
+   * equation, int f_k beta_i dV + int g_k beta_i dS for volume sources f_k
+   * and boundary-current data g_k that the problem's q and interior sources
+   * cannot express (manufactured solutions). Empty vectors (the default) =
+   * none; kept for every following Solve until changed; a size other than
+   * 3 per point is a translucency::Error at Solve.
+   */
+  void SetAdditionalLoad(std::vector<double> load1, std::vector<double> load2)
+  {
+    AdditionalLoad1_ = std::move(load1);
+    AdditionalLoad2_ = std::move(load2);
+  }
+
+  /// OpenMP threads for assembly and solve (0 = OpenMP default). Default 0.
+  void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+
+private:
+  struct Blocks;
+  void Assemble(const DiffusionProblem& problem, const std::vector<double>& sourceLoad);
+  bool SolveBlocks(const TetMesh& mesh, bool warm, const std::string& preconditioner,
+    SolverReport& report);
+  void ComputeExitance(const DiffusionProblem& problem);
+
+  std::unique_ptr<Blocks> Blocks_;
+  int NumberOfThreads_ = 0;
+  std::vector<double> Phi1_, Phi2_, Exitance_;
+  std::vector<double> AdditionalLoad1_, AdditionalLoad2_;
+  std::vector<double> X_; ///< the last solution, 2 N x 3 interleaved (warm start)
+  const TetMesh* LastMesh_ = nullptr;
+  int LastPoints_ = -1;
+  int LastTets_ = -1;
+  std::uint64_t LastRevision_ = 0;
+  TetGeometryCache GeometryCache_;
+  std::vector<int> TriangleHead_, TriangleNext_;
+};
+
+} // namespace translucency

@@ -1,0 +1,503 @@
+// The SP3 solver against the project's Monte Carlo (issue 35's targets; the
+// Monte Carlo agrees with an independent mesh Monte Carlo within 1-3 %):
+// fluence by depth and transmittance under a collimated beam, the exitance
+// at low albedo, an isotropic point source in a large medium, and (by hand:
+// DISABLED_, about a minute) the pencil-beam slab's R(rho). Each prints a
+// table (Documentation/Solvers.md, "SP3", has the measured numbers) with the
+// FEM diffusion solver's errors beside SP3's.
+//
+// Run the disabled one with
+//   build/Testing/Solvers/TestDiffusion --gtest_also_run_disabled_tests \
+//     --gtest_filter='Sp3Validation.*'
+
+#include "DiffusionSolverFactory.h"
+#include "Detectors.h"
+#include "Fresnel.h"
+#include "GradedMeshes.h"
+#include "InteriorSources.h"
+#include "LightSources.h"
+#include "MonteCarlo.h"
+#include "Sp3Solver.h"
+#include "TestMeshes.h"
+#include "TetMesh.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace
+{
+
+using namespace translucency;
+using namespace translucency::testing;
+
+/// Mean and standard error of the mean of runs.
+struct Estimate
+{
+  double Mean = 0.0, Error = 0.0;
+};
+
+Estimate MeanOf(const std::vector<double>& runs)
+{
+  Estimate e;
+  for (double r : runs)
+  {
+    e.Mean += r / runs.size();
+  }
+  double spread = 0.0;
+  for (double r : runs)
+  {
+    spread += (r - e.Mean) * (r - e.Mean);
+  }
+  e.Error = std::sqrt(spread / (runs.size() - 1) / runs.size());
+  return e;
+}
+
+/// Volume-weighted mean of channel-0 tet values over the tets `select`s.
+double TetMean(const TetMesh& mesh, const std::vector<double>& tetValues,
+  const std::function<bool(const double*)>& select)
+{
+  double sum = 0.0, volume = 0.0;
+  for (int t = 0; t < mesh.GetNumberOfTets(); ++t)
+  {
+    double c[3] = { 0, 0, 0 };
+    for (int a = 0; a < 4; ++a)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        c[k] += 0.25 * mesh.GetPoint(mesh.GetTet(t)[a])[k];
+      }
+    }
+    if (select(c))
+    {
+      sum += mesh.GetTetVolume(t) * tetValues[3 * static_cast<std::size_t>(t)];
+      volume += mesh.GetTetVolume(t);
+    }
+  }
+  return sum / volume;
+}
+
+/// The exact tet means of a P1 field (3 per point): the mean of the corners.
+std::vector<double> TetMeansOf(const TetMesh& mesh, const std::vector<double>& pointValues)
+{
+  std::vector<double> out(3 * static_cast<std::size_t>(mesh.GetNumberOfTets()), 0.0);
+  for (int t = 0; t < mesh.GetNumberOfTets(); ++t)
+  {
+    for (int a = 0; a < 4; ++a)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        out[3 * static_cast<std::size_t>(t) + c] +=
+          0.25 * pointValues[3 * static_cast<std::size_t>(mesh.GetTet(t)[a]) + c];
+      }
+    }
+  }
+  return out;
+}
+
+/// The P1 integral of channel-0 point values over the boundary triangles
+/// whose centroid `select`s, divided by their area.
+double FaceMean(const TetMesh& mesh, const std::vector<double>& pointValues,
+  const std::function<bool(const double*)>& select, double* areaOut = nullptr)
+{
+  double sum = 0.0, area = 0.0;
+  for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+  {
+    const int* tri = &mesh.GetBoundaryTriangles()[3 * static_cast<std::size_t>(f)];
+    double c[3] = { 0, 0, 0 }, mean = 0.0;
+    for (int a = 0; a < 3; ++a)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        c[k] += mesh.GetPoint(tri[a])[k] / 3.0;
+      }
+      mean += pointValues[3 * static_cast<std::size_t>(tri[a])] / 3.0;
+    }
+    if (select(c))
+    {
+      sum += mesh.GetBoundaryTriangleAreas()[f] * mean;
+      area += mesh.GetBoundaryTriangleAreas()[f];
+    }
+  }
+  if (areaOut)
+  {
+    *areaOut = area;
+  }
+  return sum / area;
+}
+
+/// SP3 (default linear solver) on `problem`: fluence and exitance.
+void RunSp3(const DiffusionProblem& problem, std::vector<double>& fluence,
+  std::vector<double>& exitance)
+{
+  Sp3Solver solver;
+  solver.SetRelTol(1e-9);
+  solver.SetMaxIter(20000);
+  SolverReport report;
+  ASSERT_TRUE(solver.Solve(problem, fluence, report));
+  ASSERT_TRUE(report.Converged[0]) << report.Residual[0];
+  exitance = solver.GetExitance();
+}
+
+/// FEM diffusion: fluence (total) and the diffuse fluence's exitance per
+/// point, (phi_d - 4 q / (1 - Fdr)) / (2 A) + q with the coefficients of the
+/// model's boundary rule (Detectors.h).
+void RunFem(const DiffusionProblem& problem, std::vector<double>& fluence,
+  std::vector<double>& exitance)
+{
+  std::unique_ptr<DiffusionSolver> fem = CreateDiffusionSolver("fem");
+  fem->SetRelTol(1e-9);
+  fem->SetMaxIter(20000);
+  SolverReport report;
+  ASSERT_TRUE(fem->Solve(problem, fluence, report));
+  ASSERT_TRUE(report.Converged[0]);
+  const Fresnel::BoundaryRule rule = problem.Collimated == CollimatedModel::ExtendedMoments
+    ? Fresnel::BoundaryRule::Moments
+    : Fresnel::BoundaryRule::Fit;
+  const Fresnel::RobinCoefficients k =
+    Fresnel::BoundaryCoefficients(problem.Material->RefractiveIndex[0], rule);
+  const std::vector<double>& q = *problem.Irradiance;
+  exitance.assign(fluence.size(), 0.0);
+  for (std::size_t m = 0; m < fluence.size(); ++m)
+  {
+    const double diffuse =
+      fluence[m] - (report.CollimatedFluence.empty() ? 0.0 : report.CollimatedFluence[m]);
+    exitance[m] = q[m] + (diffuse - 4.0 * q[m] / (1.0 - k.Fdr)) / (2.0 * k.A);
+  }
+}
+
+// ---- Collimated beam on the issue's box (20 x 20 x 10 mm, mu_a 0.01, mu_s'
+// 1/mm, g = 0, eta 1.3, face-on, 1 W/mm^2): the mean fluence in layers 1 mm
+// thick around depths 1-9 mm within 4 mm of the axis (exact tet means of the
+// P1 solutions against the Monte Carlo tet tallies: the same estimator), and
+// the transmittance (the exitance integrated over the bottom face, per
+// W entering). SP3 with the extended collimated model (its first-collision
+// source: exact for g = 0); fem with the surface model and with
+// extended-moments (diffusion's best). Monte Carlo: 4 runs x 40k photons.
+TEST(Sp3Validation, CollimatedBoxFluenceByDepthAndTransmittance)
+{
+  const double eta = 1.3;
+  const auto data = BoxMesh(10, 10, 40, 20.0, 20.0, 10.0);
+  TetMesh mesh;
+  mesh.SetGeometry(data.Points, data.Tets);
+  const double muA[3] = { 0.01, 0.01, 0.01 }, muS[3] = { 1.0, 1.0, 1.0 };
+  const OpticalProperties material =
+    OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, muS, eta);
+  const std::vector<LightSource> lights = { DirectionalLight({ 0, 0, -1 }, { 1, 0, 0 }) };
+  DiffusionProblem problem;
+  problem.Mesh = &mesh;
+  problem.Material = &material;
+  problem.Lights = lights;
+  problem.Shadows = false;
+  std::vector<double> q;
+  ASSERT_TRUE(ComputeProjectedIrradiance(mesh, material.RefractiveIndex, lights, 0.0, 0, false, q));
+  const std::vector<double> zero(q.size(), 0.0);
+  problem.Irradiance = &q;
+  const double entering = 400.0 * (1.0 - Fresnel::Reflectance(1.0, eta)); // W
+
+  const int depths = 9;
+  auto layer = [&](int d) {
+    return [d](const double* c) {
+      return std::abs(10.0 - c[2] - d) <= 0.5 && std::abs(c[0] - 10.0) <= 4.0 &&
+        std::abs(c[1] - 10.0) <= 4.0;
+    };
+  };
+  auto bottom = [](const double* c) { return c[2] < 1e-9; };
+  std::vector<std::vector<double>> mcLayers(depths);
+  std::vector<double> mcTransmittance;
+  for (int run = 0; run < 4; ++run)
+  {
+    MonteCarloSolver mc;
+    mc.SetNumberOfPhotons(40000);
+    mc.SetSeed(31 + run);
+    std::vector<double> fluence;
+    SolverReport report;
+    ASSERT_TRUE(mc.Solve(problem, fluence, report));
+    for (int d = 0; d < depths; ++d)
+    {
+      mcLayers[d].push_back(TetMean(mesh, mc.GetTetFluence(), layer(d + 1)));
+    }
+    double area = 0.0;
+    const double mean = FaceMean(mesh, mc.GetExitance(), bottom, &area);
+    mcTransmittance.push_back(mean * area / entering);
+  }
+  struct Model
+  {
+    const char* Name;
+    std::vector<double> Layers;
+    double Transmittance;
+  };
+  std::vector<Model> models;
+  for (int m = 0; m < 3; ++m)
+  {
+    DiffusionProblem p = problem;
+    std::vector<double> fluence, exitance;
+    if (m == 0)
+    {
+      p.Collimated = CollimatedModel::Extended;
+      p.Irradiance = &zero;
+      RunSp3(p, fluence, exitance);
+    }
+    else
+    {
+      if (m == 2)
+      {
+        p.Collimated = CollimatedModel::ExtendedMoments;
+        p.Irradiance = &zero;
+      }
+      RunFem(p, fluence, exitance);
+    }
+    Model model{ m == 0 ? "sp3" : (m == 1 ? "fem surface" : "fem extended-moments"), {}, 0.0 };
+    const std::vector<double> tets = TetMeansOf(mesh, fluence);
+    for (int d = 0; d < depths; ++d)
+    {
+      model.Layers.push_back(TetMean(mesh, tets, layer(d + 1)));
+    }
+    double area = 0.0;
+    model.Transmittance = FaceMean(mesh, exitance, bottom, &area) * area / entering;
+    models.push_back(model);
+  }
+  std::printf("depth | Monte Carlo (SE %%) | sp3 / MC | fem surface / MC | fem extended-moments / MC\n");
+  for (int d = 0; d < depths; ++d)
+  {
+    const Estimate mc = MeanOf(mcLayers[d]);
+    std::printf("%d mm | %.4f (%.2f %%) | %.4f | %.4f | %.4f\n", d + 1, mc.Mean,
+      100.0 * mc.Error / mc.Mean, models[0].Layers[d] / mc.Mean, models[1].Layers[d] / mc.Mean,
+      models[2].Layers[d] / mc.Mean);
+    // The issue's target: within 3 % from 1 mm deep to the bottom (plus
+    // three standard errors of the reference).
+    EXPECT_NEAR(models[0].Layers[d] / mc.Mean, 1.0, 0.03 + 3.0 * mc.Error / mc.Mean)
+      << "depth " << d + 1;
+  }
+  const Estimate t = MeanOf(mcTransmittance);
+  std::printf("transmittance | %.5f (%.2f %%) | %.4f | %.4f | %.4f\n", t.Mean,
+    100.0 * t.Error / t.Mean, models[0].Transmittance / t.Mean, models[1].Transmittance / t.Mean,
+    models[2].Transmittance / t.Mean);
+  // The issue's target: within 2 %.
+  EXPECT_NEAR(models[0].Transmittance / t.Mean, 1.0, 0.02 + 3.0 * t.Error / t.Mean);
+}
+
+// ---- Low albedo (mu_a = mu_s' / 2: 0.5 and 1/mm, g = 0, eta 1.3): the same
+// box and beam; the exitance on the top face within 4 mm of the axis per W
+// entering there (the diffuse reflectance; the beam's specular reflection is
+// in neither). Monte Carlo: 4 runs x 40k photons.
+TEST(Sp3Validation, LowAlbedoExitance)
+{
+  const double eta = 1.3;
+  const auto data = BoxMesh(10, 10, 40, 20.0, 20.0, 10.0);
+  TetMesh mesh;
+  mesh.SetGeometry(data.Points, data.Tets);
+  const double muA[3] = { 0.5, 0.5, 0.5 }, muS[3] = { 1.0, 1.0, 1.0 };
+  const OpticalProperties material =
+    OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, muS, eta);
+  const std::vector<LightSource> lights = { DirectionalLight({ 0, 0, -1 }, { 1, 0, 0 }) };
+  DiffusionProblem problem;
+  problem.Mesh = &mesh;
+  problem.Material = &material;
+  problem.Lights = lights;
+  problem.Shadows = false;
+  std::vector<double> q;
+  ASSERT_TRUE(ComputeProjectedIrradiance(mesh, material.RefractiveIndex, lights, 0.0, 0, false, q));
+  const std::vector<double> zero(q.size(), 0.0);
+  problem.Irradiance = &q;
+  const double transmitted = 1.0 - Fresnel::Reflectance(1.0, eta); // W/mm^2 entering
+  auto top = [](const double* c) {
+    return c[2] > 10.0 - 1e-9 && std::abs(c[0] - 10.0) <= 4.0 && std::abs(c[1] - 10.0) <= 4.0;
+  };
+  std::vector<double> runs;
+  for (int run = 0; run < 4; ++run)
+  {
+    MonteCarloSolver mc;
+    mc.SetNumberOfPhotons(40000);
+    mc.SetSeed(51 + run);
+    std::vector<double> fluence;
+    SolverReport report;
+    ASSERT_TRUE(mc.Solve(problem, fluence, report));
+    runs.push_back(FaceMean(mesh, mc.GetExitance(), top) / transmitted);
+  }
+  const Estimate mc = MeanOf(runs);
+  double ratio[3];
+  const char* names[3] = { "sp3 (extended)", "fem surface", "fem extended-moments" };
+  for (int m = 0; m < 3; ++m)
+  {
+    DiffusionProblem p = problem;
+    std::vector<double> fluence, exitance;
+    if (m != 1)
+    {
+      p.Collimated = m == 0 ? CollimatedModel::Extended : CollimatedModel::ExtendedMoments;
+      p.Irradiance = &zero;
+    }
+    if (m == 0)
+    {
+      RunSp3(p, fluence, exitance);
+    }
+    else
+    {
+      RunFem(p, fluence, exitance);
+    }
+    // The exitance of the surface model includes nothing of the beam's
+    // specular part either: q is the transmitted irradiance.
+    ratio[m] = FaceMean(mesh, exitance, top) / transmitted / mc.Mean;
+    std::printf("%s: diffuse reflectance / Monte Carlo %.4f\n", names[m], ratio[m]);
+  }
+  std::printf("Monte Carlo diffuse reflectance %.5f (SE %.2f %%)\n", mc.Mean,
+    100.0 * mc.Error / mc.Mean);
+  // The issue's target: within 10 % where diffusion is off by more.
+  EXPECT_NEAR(ratio[0], 1.0, 0.10 + 3.0 * mc.Error / mc.Mean);
+  EXPECT_LT(std::abs(ratio[0] - 1.0), std::abs(ratio[1] - 1.0));
+  EXPECT_LT(std::abs(ratio[0] - 1.0), std::abs(ratio[2] - 1.0));
+}
+
+// ---- An isotropic point source (1 W) at the centre of a cube of half side
+// 15 mm (mu_a 0.05, mu_s' 1/mm, g = 0, eta 1.4): the fluence averaged over
+// spherical shells of tets 1-2, 2-3, 3-4, 4-5 mm from the source (1.05 to
+// 5.3 transport lengths), SP3 and fem (exact tet means of the P1 solutions)
+// against the Monte Carlo tet tallies (4 runs x 15k photons).
+TEST(Sp3Validation, PointSourceInALargeMedium)
+{
+  const std::unique_ptr<TetMesh> mesh = GradedCube(24, 4.0, 15.0, 0.5);
+  const double muA[3] = { 0.05, 0.05, 0.05 }, muS[3] = { 1.0, 1.0, 1.0 };
+  const OpticalProperties material =
+    OpticalProperties::Uniform(mesh->GetNumberOfTets(), muA, muS, 1.4);
+  const std::array<double, 3> source = { 0.013, 0.021, -0.017 };
+  Sources sources;
+  PointSource point;
+  point.Position = source;
+  point.Power = { 1.0, 0.0, 0.0 };
+  sources.AddPointSource(point);
+  const std::vector<double> q(3 * static_cast<std::size_t>(mesh->GetNumberOfPoints()), 0.0);
+  DiffusionProblem problem;
+  problem.Mesh = mesh.get();
+  problem.Material = &material;
+  problem.Irradiance = &q;
+  problem.InteriorSources = &sources;
+  const double shells[] = { 1.0, 2.0, 3.0, 4.0, 5.0 };
+  auto shell = [&](int s) {
+    return [&, s](const double* c) {
+      const double r = std::sqrt((c[0] - source[0]) * (c[0] - source[0]) +
+        (c[1] - source[1]) * (c[1] - source[1]) + (c[2] - source[2]) * (c[2] - source[2]));
+      return r >= shells[s] && r < shells[s + 1];
+    };
+  };
+  std::vector<std::vector<double>> runs(4);
+  for (int run = 0; run < 4; ++run)
+  {
+    MonteCarloSolver mc;
+    mc.SetNumberOfPhotons(15000);
+    mc.SetSeed(71 + run);
+    std::vector<double> fluence;
+    SolverReport report;
+    ASSERT_TRUE(mc.Solve(problem, fluence, report));
+    for (int s = 0; s < 4; ++s)
+    {
+      runs[s].push_back(TetMean(*mesh, mc.GetTetFluence(), shell(s)));
+    }
+  }
+  std::vector<double> sp3, fem, exitance;
+  RunSp3(problem, sp3, exitance);
+  RunFem(problem, fem, exitance);
+  const std::vector<double> sp3Tets = TetMeansOf(*mesh, sp3), femTets = TetMeansOf(*mesh, fem);
+  std::printf("shell | Monte Carlo (SE %%) | sp3 / MC | fem / MC\n");
+  for (int s = 0; s < 4; ++s)
+  {
+    const Estimate mc = MeanOf(runs[s]);
+    const double a = TetMean(*mesh, sp3Tets, shell(s)) / mc.Mean;
+    const double b = TetMean(*mesh, femTets, shell(s)) / mc.Mean;
+    std::printf("%g-%g mm | %.5f (%.2f %%) | %.4f | %.4f\n", shells[s], shells[s + 1], mc.Mean,
+      100.0 * mc.Error / mc.Mean, a, b);
+    // The issue's target: within 5 % from one transport length.
+    EXPECT_NEAR(a, 1.0, 0.05 + 3.0 * mc.Error / mc.Mean) << "shell " << s;
+  }
+}
+
+// ---- The pencil-beam slab of the issue (60 x 60 x 30 mm, mu_a 0.01, mu_s'
+// 1/mm, g = 0, eta 1.3, normal incidence, 1 W): R(rho) read by fibre
+// detectors (radius 0.5 mm at 2 mm, 1 mm at 4 and 6 mm, 2 mm from 10 mm;
+// six azimuths averaged) from the Monte Carlo point tallies and from the
+// solutions' exitance fields through the same footprints (LocateDetectors).
+// SP3: the beam's first-collision source (ComputeSp3SourceLoad); fem:
+// Farrell's equivalent point source (the diffusion solvers' model).
+// About a minute: run by hand (see the top of the file).
+TEST(Sp3Validation, DISABLED_PencilSlabReflectance)
+{
+  const double eta = 1.3;
+  const std::unique_ptr<TetMesh> mesh = GradedSlab(40, 20, 30.0, 30.0, 0.2);
+  const double muA[3] = { 0.01, 0.01, 0.01 }, muS[3] = { 1.0, 1.0, 1.0 };
+  const OpticalProperties material =
+    OpticalProperties::Uniform(mesh->GetNumberOfTets(), muA, muS, eta);
+  const std::vector<double> q(3 * static_cast<std::size_t>(mesh->GetNumberOfPoints()), 0.0);
+  Sources sources;
+  PencilBeam beam;
+  beam.Position = { 0.0, 0.0, 0.0 };
+  beam.Direction = { 0.0, 0.0, -1.0 };
+  beam.Power = { 1.0, 0.0, 0.0 };
+  sources.AddPencilBeam(beam);
+  DiffusionProblem problem;
+  problem.Mesh = mesh.get();
+  problem.Material = &material;
+  problem.Irradiance = &q;
+  problem.InteriorSources = &sources;
+  const double radii[] = { 2.0, 4.0, 6.0, 10.0, 15.0, 20.0 };
+  const double fibres[] = { 0.5, 1.0, 1.0, 2.0, 2.0, 2.0 };
+  const int azimuths = 6;
+  const double pi = 3.14159265358979323846;
+  std::vector<Detector> detectors;
+  for (int r = 0; r < 6; ++r)
+  {
+    for (int a = 0; a < azimuths; ++a)
+    {
+      const double angle = 0.2 + 2.0 * pi * a / azimuths;
+      Detector detector;
+      detector.Position = { radii[r] * std::cos(angle), radii[r] * std::sin(angle), 0.0 };
+      detector.Radius = fibres[r];
+      detectors.push_back(detector);
+    }
+  }
+  MonteCarloSolver mc;
+  mc.SetNumberOfPhotons(400000);
+  mc.SetSeed(5);
+  mc.SetDetectors(detectors);
+  std::vector<double> fluence;
+  SolverReport report;
+  ASSERT_TRUE(mc.Solve(problem, fluence, report));
+  std::vector<double> sp3, sp3Exitance, fem, femExitance;
+  RunSp3(problem, sp3, sp3Exitance);
+  RunFem(problem, fem, femExitance);
+  const std::vector<DetectorFootprint> footprints = LocateDetectors(*mesh, detectors);
+  auto read = [&](const std::vector<double>& values, std::size_t k) {
+    double sum = 0.0;
+    for (const auto& [point, weight] : footprints[k].GetPointWeights(*mesh))
+    {
+      sum += weight * values[3 * static_cast<std::size_t>(point)];
+    }
+    return sum;
+  };
+  std::printf("rho | Monte Carlo (SE %%) | sp3 / MC | fem / MC\n");
+  for (int r = 0; r < 6; ++r)
+  {
+    double value = 0.0, variance = 0.0, a = 0.0, b = 0.0;
+    for (int z = 0; z < azimuths; ++z)
+    {
+      const std::size_t k = static_cast<std::size_t>(r) * azimuths + z;
+      value += mc.GetDetectorReadings()[k].Exitance[0] / azimuths;
+      const double e = mc.GetDetectorStandardErrors()[k].Exitance[0];
+      variance += e * e / (azimuths * azimuths);
+      a += read(sp3Exitance, k) / azimuths;
+      b += read(femExitance, k) / azimuths;
+    }
+    const double se = std::sqrt(variance);
+    std::printf("%g mm | %.4e (%.2f %%) | %.4f | %.4f\n", radii[r], value, 100.0 * se / value,
+      a / value, b / value);
+    // The issue's targets: 5 % from 2 mm, 2 % from 6 mm (plus 3 SE).
+    EXPECT_NEAR(a / value, 1.0, (radii[r] < 6.0 ? 0.05 : 0.02) + 3.0 * se / value) << radii[r];
+  }
+}
+
+} // namespace
