@@ -6,6 +6,7 @@
 # Reliability (Documentation/Reliability.md), each in its own build tree:
 #   make test-sanitize   the core's GoogleTests under ASan + UBSan (gcc, build-sanitize)
 #   make test-fuzz       a short run of every libFuzzer target (clang, build-fuzz)
+#   make fuzz-long       >= 20,000 fuzzed and mutated inputs, summarised (long)
 #   make test-soak       the 1,000-step kept-pipeline soak on a 200k-tet sphere (long)
 # ccache (scripts/install-deps.sh) shares compiled objects between clones: paths
 # below this checkout are hashed relative to it, wherever it is cloned.
@@ -16,7 +17,7 @@ CMAKE_ARGS ?=
 SANITIZE_DIR ?= build-sanitize
 FUZZ_DIR ?= build-fuzz
 
-.PHONY: all deps configure build demo test test-all test-sanitize test-fuzz test-soak bench clean
+.PHONY: all deps configure build demo test test-all test-sanitize fuzz-build test-fuzz fuzz-long test-soak bench clean
 
 all: build
 
@@ -58,12 +59,23 @@ test-sanitize: deps
 	  ctest --output-on-failure -j $(JOBS) $(if $(SANITIZE_EXCLUDE),-E '$(SANITIZE_EXCLUDE)')
 
 # The libFuzzer targets (clang), each fuzzed for a few seconds plus its regressions.
-test-fuzz: deps
+fuzz-build: deps
 	cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 	  -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
 	  -DTRANSLUCENCY_BUILD_FUZZERS=ON
 	cmake --build $(FUZZ_DIR) -j $(JOBS)
+
+test-fuzz: fuzz-build
 	cd $(FUZZ_DIR) && ctest --output-on-failure -j $(JOBS)
+
+# The long campaign (not in CI; hours on a loaded machine): every libFuzzer
+# target for FUZZ_RUNS inputs, then the command-line mutation loops of
+# scripts/, >= 20,000 cases in all; the table goes to $(FUZZ_DIR)/fuzz-long.md
+# (Documentation/Reliability.md).
+FUZZ_RUNS ?= 2500
+fuzz-long: build fuzz-build
+	nice -n 10 /usr/bin/python3 scripts/fuzz_long.py --cli $(BUILD_DIR)/bin/translucency \
+	  --fuzz-dir $(FUZZ_DIR) --runs $(FUZZ_RUNS) --jobs $(JOBS) --summary $(FUZZ_DIR)/fuzz-long.md
 
 # 1,000 seeded cuts, paints, relights and solver switches through one kept
 # pipeline on a 200k-tet sphere, every invariant after every step and a cold

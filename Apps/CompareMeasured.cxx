@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -72,8 +73,11 @@ std::string TimeUnitOf(const std::string& header)
 MeasuredFile ReadMeasuredTpsf(const std::string& path, std::size_t detectors)
 {
   const std::string where = "--measured " + path;
-  // A regular file within the size bound (not a FIFO or /dev/zero).
-  translucency::CheckInputFile(path, "--measured file");
+  // A regular file within the size bound (not a FIFO or /dev/zero); a
+  // missing file is reported below with the system's reason.
+  std::error_code missing;
+  if (std::filesystem::exists(path, missing))
+    translucency::CheckInputFile(path, "--measured file");
   std::ifstream in(path);
   if (!in)
   {

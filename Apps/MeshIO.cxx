@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 namespace translucency_app
@@ -436,6 +437,9 @@ void XmlChecker::Run(const std::string& expectedType)
   // Elements below <VTKFile>: the number of tuples an array must hold follows
   // from the enclosing <Piece> and section (<Points>, <PointData>, <CellData>, <Cells>).
   std::vector<std::string> stack{ "VTKFile" };
+  // The array names of each open element: VTK 9.2's reader segfaults on two
+  // arrays of one name in a section (a duplicated <DataArray> line).
+  std::vector<std::set<std::string>> names(1);
   double points = -1.0, cells = -1.0;
   bool sawPiece = false;
   // The open <DataArray>: its tag, the tuples it must hold, its character data
@@ -466,6 +470,7 @@ void XmlChecker::Run(const std::string& expectedType)
         arrayText.clear();
       }
       stack.pop_back();
+      names.pop_back();
       if (stack.empty())
         break;
       continue;
@@ -521,6 +526,10 @@ void XmlChecker::Run(const std::string& expectedType)
         }
       }
     }
+    if ((tag.Name == "DataArray" || tag.Name == "Array") && arrayDepth == 0 && tag.Has("Name") &&
+      !names.back().insert(tag.Get("Name")).second)
+      this->Fail(this->Element(tag) + " appears twice in <" + stack.back() +
+        "> (two arrays of one name: a duplicated line?)");
     if (tag.Name == "DataArray" && arrayDepth == 0)
     {
       if (!sawPiece && std::find(stack.begin(), stack.end(), "FieldData") == stack.end())
@@ -544,11 +553,15 @@ void XmlChecker::Run(const std::string& expectedType)
       arrayTuples = tuples;
       arrayText.clear();
       stack.push_back(tag.Name);
+      names.emplace_back();
       arrayDepth = stack.size();
       continue;
     }
     if (!selfClosing)
+    {
       stack.push_back(tag.Name);
+      names.emplace_back();
+    }
   }
   if (!sawPiece)
     this->Fail("no <Piece> element");

@@ -43,7 +43,8 @@ inline std::uintmax_t CheckInputFile(const std::string& path, const std::string&
   const fs::file_status status = fs::status(path, ec);
   if (ec || !fs::exists(status))
   {
-    throw Error(name + ": no such file" + (ec ? " (" + ec.message() + ")" : std::string()));
+    throw Error(name + ": cannot open it: no such file" +
+      (ec ? " (" + ec.message() + ")" : std::string()));
   }
   if (!fs::is_regular_file(status))
   {

@@ -37,10 +37,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     }
     catch (const translucency::Error&)
     {
+      Tally("clean error");
       continue;
     }
     assign->SetInputData(grid);
     assign->Update();
+    Tally("success");
   }
   return 0;
 }

@@ -34,6 +34,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
   if (!translucency_app::ReadMesh(path, surface, grid, error))
   {
     Check(!error.empty(), "a failed read says why");
+    Tally("clean error");
     return 0;
   }
   Check(surface || grid, "a successful read gives a surface or a grid");
@@ -54,7 +55,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     }
     catch (const translucency::Error&)
     {
+      Tally("clean error");
+      return 0;
     }
   }
+  Tally("success");
   return 0;
 }

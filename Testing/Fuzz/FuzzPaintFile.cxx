@@ -25,9 +25,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
   }
   catch (const translucency::Error&)
   {
+    Tally("clean error");
     return 0;
   }
   paint->SetInputData(painted);
   paint->Update();
+  Tally("success");
   return 0;
 }

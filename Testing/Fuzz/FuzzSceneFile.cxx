@@ -14,9 +14,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
   try
   {
     translucency_app::LoadScene(path, 4.0);
+    Tally("success");
   }
   catch (const translucency::Error&)
   {
+    Tally("clean error");
   }
   return 0;
 }

@@ -18,9 +18,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
   }
   catch (const translucency::Error&)
   {
+    Tally("clean error");
     return 0;
   }
   cut->SetInputData(grid);
   cut->Update();
+  Tally("success");
   return 0;
 }

@@ -55,6 +55,32 @@ inline std::string WriteInput(const std::string& name, const uint8_t* data, size
   return path.string();
 }
 
+/// Count one input's outcome ("clean error" or "success") for a long run
+/// (scripts/fuzz_long.py, `make fuzz-long`): with TRANSLUCENCY_FUZZ_TALLY=FILE
+/// the counts are added to FILE at exit ("<outcome>: <count>" lines).
+inline void Tally(const char* outcome)
+{
+  static const char* file = std::getenv("TRANSLUCENCY_FUZZ_TALLY");
+  if (!file)
+  {
+    return;
+  }
+  static long counts[2] = { 0, 0 };
+  static const bool registered = []
+  {
+    std::atexit([] {
+      if (FILE* out = std::fopen(std::getenv("TRANSLUCENCY_FUZZ_TALLY"), "a"))
+      {
+        std::fprintf(out, "clean error: %ld\nsuccess: %ld\n", counts[0], counts[1]);
+        std::fclose(out);
+      }
+    });
+    return true;
+  }();
+  (void)registered;
+  ++counts[std::string(outcome) == "success" ? 1 : 0];
+}
+
 /// Abort (a libFuzzer finding) when `condition` is false.
 inline void Check(bool condition, const char* what)
 {

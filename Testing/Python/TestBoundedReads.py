@@ -14,9 +14,10 @@ How to run (from a build tree; ctest sets the variable itself):
    message that names the file and says it is not a regular file.
 2. A sparse .vtu larger than a quarter of --memory-limit is refused by its
    size before it is read (in well under the time reading it would take).
-3. The project's own binary .vtu output with one <CellData> line duplicated
-   (VTK 9.2's XML reader segfaulted on it) is a clean error naming the file,
-   through render, compare and acquire.
+3. The project's own binary .vtu output with one line of its <CellData>
+   section duplicated (a second <DataArray> of one name made VTK 9.2's XML
+   reader segfault) is a clean error naming the file, through render, compare
+   and acquire.
 
 Exits non-zero on failure (unittest).
 """
@@ -131,21 +132,27 @@ class BoundedReads(unittest.TestCase):
     def test_duplicated_cell_data_line(self):
         with open(self.mesh, "rb") as f:
             lines = f.read().split(b"\n")
-        index = next(i for i, line in enumerate(lines) if line.strip().startswith(b"<CellData"))
-        damaged = os.path.join(self.dir, "damaged.vtu")
-        with open(damaged, "wb") as f:
-            f.write(b"\n".join(lines[:index + 1] + [lines[index]] + lines[index + 1:]))
+        start = next(i for i, line in enumerate(lines) if line.strip().startswith(b"<CellData"))
+        end = next(i for i, line in enumerate(lines) if line.strip().startswith(b"</CellData"))
         out = os.path.join(self.dir, "damaged_out")
-        for args in (["render", "--mesh", damaged, "--output", out],
-                     ["compare", "--mesh", damaged, "--no-png", "--solvers", "fem",
-                      "--output", out],
-                     ["acquire", "--sample", damaged, "--patterns", self.mesh, "--output", out,
-                      "--no-png"]):
-            with self.subTest(command=args[0]):
-                result, _ = self.run_cli(args)
-                self.assertEqual(result.returncode, 1, result.stderr)  # not -11 (SIGSEGV)
-                self.assertIn("damaged.vtu", result.stderr)
-                self.assertIn("CellData", result.stderr)
+        # Each line of the section duplicated: <CellData> itself and each
+        # <DataArray> (two arrays of one name made VTK 9.2's reader segfault).
+        for index in range(start, end + 1):
+            damaged = os.path.join(self.dir, "damaged_%d.vtu" % index)
+            with open(damaged, "wb") as f:
+                f.write(b"\n".join(lines[:index + 1] + [lines[index]] + lines[index + 1:]))
+            commands = [["render", "--mesh", damaged, "--output", out]]
+            if index == start + 1:
+                commands += [["compare", "--mesh", damaged, "--no-png", "--solvers", "fem",
+                              "--output", out],
+                             ["acquire", "--sample", damaged, "--patterns", self.mesh,
+                              "--output", out, "--no-png"]]
+            for args in commands:
+                with self.subTest(line=index, command=args[0]):
+                    result, _ = self.run_cli(args)
+                    self.assertEqual(result.returncode, 1, result.stderr)  # not -11 (SIGSEGV)
+                    self.assertIn("damaged_%d.vtu" % index, result.stderr)
+                    self.assertIn("CellData", result.stderr)
 
 
 if __name__ == "__main__":

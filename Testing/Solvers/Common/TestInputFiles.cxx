@@ -69,7 +69,7 @@ TEST_F(InputFiles, RefusesWhatIsNotARegularFile)
   EXPECT_TRUE(Contains(m, "is a directory")) << m;
   m = MessageOf([&] { CheckInputFile((Dir / "missing.json").string(), "paint file"); });
   EXPECT_TRUE(Contains(m, "paint file '")) << m;
-  EXPECT_TRUE(Contains(m, "no such file")) << m;
+  EXPECT_TRUE(Contains(m, "cannot open it: no such file")) << m;
 }
 
 TEST_F(InputFiles, SizeBoundFollowsTheMemoryLimit)
