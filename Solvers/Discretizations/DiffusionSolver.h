@@ -79,10 +79,16 @@ struct SolverReport
 {
   std::string Solver;             ///< name, e.g. "divergence"
   std::string LinearSolver;       ///< e.g. "cg-jacobi", "bicgstab", "relaxation"
-  /// Vertex discretisations: "full" (Assemble) or "incremental" (only the
-  /// rows of changed tets rebuilt, VertexDiffusionSolver::SetChangedTets);
-  /// empty for the other solvers.
+  /// Vertex discretisations: "full" (Assemble), "incremental" (only the
+  /// rows of changed tets rebuilt, VertexDiffusionSolver::SetChangedTets)
+  /// or "right-hand side" (a relight: only the load rebuilt); empty for the
+  /// other solvers.
   std::string Assembly;
+  /// Vertex discretisations: what the linear solver's set-up did, "rebuilt"
+  /// (structure and values: a new mesh or solver), "values" (values only),
+  /// "rows" (the rows of changed tets, LinearSolver::SetupChangedRows) or
+  /// "kept" (the matrices did not change: a relight); empty for the others.
+  std::string LinearSetup;
   long long NumberOfUnknowns = 0; ///< per channel
   long long NumberOfNonZeros = 0; ///< per channel matrix (0 for Monte Carlo)
   std::size_t MemoryBytes = 0;    ///< system (matrix, vectors) or tallies
