@@ -242,6 +242,7 @@ std::string vtkPaintScatteringCoefficients::Paint(
   vtkUnstructuredGrid* input, vtkUnstructuredGrid* output, long long& keptChannels)
 {
   std::ostringstream msg;
+  this->LastExecutionReused = false;
   const vtkIdType n = input ? input->GetNumberOfCells() : 0;
   vtkDataArray* oldArrays[2] = { nullptr, nullptr };
   const char* names[2] = { vtkTranslucency::AbsorptionName, vtkTranslucency::ScatteringName };
@@ -283,6 +284,29 @@ std::string vtkPaintScatteringCoefficients::Paint(
       return msg.str();
     }
   }
+
+  // Nothing this painting reads changed since the last one (a light turned
+  // upstream): hand on the kept arrays, no per-tet work.
+  vtkDataArray* keys[4];
+  vtkMTimeType times[4];
+  this->KeyOf(input, keys, times);
+  bool same = this->Kept.Outputs[0] && this->Kept.FilterTime == this->GetMTime() &&
+    this->Kept.Cells == n;
+  for (int k = 0; k < 4 && same; ++k)
+  {
+    same = this->Kept.Inputs[k].GetPointer() == keys[k] && this->Kept.InputTimes[k] == times[k];
+  }
+  if (same)
+  {
+    vtkDataArray* const arrays[3] = { this->Kept.Outputs[0], this->Kept.Outputs[1],
+      this->Kept.Outputs[2] };
+    AttachPaint(input, output, arrays, this->Kept.ChangedIds);
+    keptChannels = this->Kept.KeptChannels;
+    this->LastExecutionReused = true;
+    return std::string();
+  }
+  this->LastExecutionReused = false;
+  this->Kept = KeptPaint();
 
   // New double arrays, copies of the old ones (one memcpy for double input),
   // painted in place by the core.
@@ -401,13 +425,60 @@ std::string vtkPaintScatteringCoefficients::Paint(
     std::copy(changed.begin(), changed.end(), changedIds->GetPointer(0));
   }
 
+  vtkDataArray* const arrays[3] = { newArrays[0], newArrays[1], weights };
+  AttachPaint(input, output, arrays, changedIds);
+  keptChannels = n > 0 ? painter.GetNumberOfKeptChannels() : 0;
+  ++this->NumberOfPaintings;
+  // Kept for the next execution (the arrays are shared with the output,
+  // whose consumers never modify their inputs).
+  for (int k = 0; k < 4; ++k)
+  {
+    this->Kept.Inputs[k] = keys[k];
+    this->Kept.InputTimes[k] = times[k];
+  }
+  this->Kept.Cells = n;
+  this->Kept.FilterTime = this->GetMTime();
+  for (int k = 0; k < 3; ++k)
+  {
+    this->Kept.Outputs[k] = arrays[k];
+  }
+  this->Kept.ChangedIds = changedIds.GetPointer();
+  this->Kept.KeptChannels = keptChannels;
+  return std::string();
+}
+
+//------------------------------------------------------------------------------
+void vtkPaintScatteringCoefficients::KeyOf(
+  vtkUnstructuredGrid* input, vtkDataArray* keys[4], vtkMTimeType times[4]) const
+{
+  vtkCellArray* cells = input ? input->GetCells() : nullptr;
+  keys[0] = input ? input->GetCellData()->GetArray(vtkTranslucency::AbsorptionName) : nullptr;
+  keys[1] = input ? input->GetCellData()->GetArray(vtkTranslucency::ScatteringName) : nullptr;
+  keys[2] = input && input->GetPoints() ? input->GetPoints()->GetData() : nullptr;
+  keys[3] = cells ? cells->GetConnectivityArray() : nullptr;
+  for (int k = 0; k < 4; ++k)
+  {
+    times[k] = keys[k] ? keys[k]->GetMTime() : 0;
+  }
+  // The offsets array changes with the connectivity's (vtkCellArray owns both).
+  if (cells)
+  {
+    times[3] = std::max(times[3], cells->GetMTime());
+  }
+}
+
+//------------------------------------------------------------------------------
+void vtkPaintScatteringCoefficients::AttachPaint(vtkUnstructuredGrid* input,
+  vtkUnstructuredGrid* output, vtkDataArray* const arrays[3], vtkDataArray* changedIds)
+{
   if (input)
   {
     output->ShallowCopy(input);
   }
-  output->GetCellData()->AddArray(newArrays[0]);
-  output->GetCellData()->AddArray(newArrays[1]);
-  output->GetCellData()->AddArray(weights);
+  for (int k = 0; k < 3; ++k)
+  {
+    output->GetCellData()->AddArray(arrays[k]);
+  }
   vtkNew<vtkFieldData> fieldData;
   if (input)
   {
@@ -415,8 +486,6 @@ std::string vtkPaintScatteringCoefficients::Paint(
   }
   fieldData->AddArray(changedIds);
   output->SetFieldData(fieldData);
-  keptChannels = n > 0 ? painter.GetNumberOfKeptChannels() : 0;
-  return std::string();
 }
 
 //------------------------------------------------------------------------------
@@ -425,6 +494,7 @@ void vtkPaintScatteringCoefficients::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "OriginalMesh: "
      << (this->GetNumberOfInputConnections(1) > 0 ? "connected" : "(none)") << "\n";
+  os << indent << "LastExecutionReused: " << this->LastExecutionReused << "\n";
   os << indent << "NumberOfStrokePoints: " << this->GetNumberOfStrokePoints() << "\n";
   os << indent << "StrokeIsPolyline: " << this->StrokeIsPolyline << "\n";
   os << indent << "Width: " << this->Width << "\n";

@@ -70,6 +70,13 @@
  * by rank 0 with the total over the pieces (ghost copies counted too).
  * Documentation/Parallel.md.
  *
+ * **No needless re-execution** (Documentation/Pipeline.md): when the
+ * filter executes again with the same painted mesh (the same points, cells
+ * and coefficient arrays: the same objects, unmodified) and none of its own
+ * properties changed, e.g. because a light upstream was turned, it does not
+ * paint again: the output is a shallow copy of the input carrying the
+ * arrays of the previous execution, in O(1) (GetLastExecutionReused()).
+ *
  * @sa vtkAssignScatteringCoefficients vtkSolveDiffusion
  */
 #ifndef vtkPaintScatteringCoefficients_h
@@ -77,6 +84,9 @@
 
 #include "TranslucencyFiltersModule.h" // for export macro
 #include "vtkUnstructuredGridAlgorithm.h"
+
+#include <vtkSmartPointer.h> // for the kept arrays
+#include <vtkWeakPointer.h>  // for the inputs of the kept arrays
 
 #include <string> // for the parallel path
 #include <vector> // for the stroke points
@@ -196,6 +206,17 @@ public:
   const char* GetParallelPlan() const { return this->ParallelPlan.c_str(); }
   ///@}
 
+  ///@{
+  /**
+   * Whether the last execution re-used the arrays of the one before (same
+   * painted mesh and coefficient arrays, same properties: no per-tet work),
+   * and how many executions painted (did the per-tet work) since the
+   * filter was created.
+   */
+  bool GetLastExecutionReused() const { return this->LastExecutionReused; }
+  vtkIdType GetNumberOfPaintings() const { return this->NumberOfPaintings; }
+  ///@}
+
 protected:
   vtkPaintScatteringCoefficients();
   ~vtkPaintScatteringCoefficients() override = default;
@@ -224,8 +245,28 @@ protected:
   double TargetAbsorptionCoefficient[3] = { 0.061, 0.97, 1.45 };
   double TargetReducedScatteringCoefficient[3] = { 0.18, 0.07, 0.03 };
   int ChannelMask[3] = { 1, 1, 1 };
+  bool LastExecutionReused = false;
+  vtkIdType NumberOfPaintings = 0;
 
 private:
+  /// The arrays of the last painting and what they were computed from.
+  struct KeptPaint
+  {
+    vtkWeakPointer<vtkDataArray> Inputs[4]; ///< mu_a, sigma_s', point coordinates, connectivity
+    vtkMTimeType InputTimes[4] = { 0, 0, 0, 0 };
+    vtkIdType Cells = -1;
+    vtkMTimeType FilterTime = 0;
+    vtkSmartPointer<vtkDataArray> Outputs[3]; ///< mu_a, sigma_s', PaintWeight
+    vtkSmartPointer<vtkDataArray> ChangedIds;
+    long long KeptChannels = 0;
+  };
+  KeptPaint Kept;
+  /// Fill Kept's keys from `input` (nullptr entries for missing arrays).
+  void KeyOf(vtkUnstructuredGrid* input, vtkDataArray* keys[4], vtkMTimeType times[4]) const;
+  /// The output: `input` shallow-copied with the painted arrays.
+  static void AttachPaint(vtkUnstructuredGrid* input, vtkUnstructuredGrid* output,
+    vtkDataArray* const arrays[3], vtkDataArray* changedIds);
+
   /// Paint `input` (may be null or empty: an empty output with empty arrays)
   /// into `output`; returns the error ("" on success) and the channels kept.
   std::string Paint(vtkUnstructuredGrid* input, vtkUnstructuredGrid* output,

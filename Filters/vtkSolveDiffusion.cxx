@@ -7,6 +7,7 @@
 #include "DiffusionFrontEnd.h"
 #include "DiffusionSolverFactory.h"
 #include "DiscreteDivergence.h"
+#include "InteractiveAccuracy.h"
 #include "Error.h"
 #include "Strings.h"
 #include "TetMesh.h"
@@ -178,6 +179,16 @@ const char* vtkSolveDiffusion::GetLinearSolverUsed() const
 const char* vtkSolveDiffusion::GetLastAssembly() const
 {
   return this->Internal->Report.Assembly.c_str();
+}
+
+double vtkSolveDiffusion::GetInteractiveRelTol()
+{
+  return translucency::InteractiveRelTol;
+}
+
+const char* vtkSolveDiffusion::GetLastLinearSetup() const
+{
+  return this->Internal->Report.LinearSetup.c_str();
 }
 
 vtkIdType vtkSolveDiffusion::GetNumberOfChangedTets() const

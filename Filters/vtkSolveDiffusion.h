@@ -143,10 +143,17 @@ public:
   const char* GetSolverName() const;
 
   ///@{
-  /// Iterative solvers: relative residual ||b - M phi|| / ||b|| to reach per
-  /// channel. Default 1e-6.
+  /**
+   * Iterative solvers: relative residual ||b - M phi|| / ||b|| to reach per
+   * channel. Default 1e-3, the interactive stopping rule: the boundary
+   * fluence within 1 % of the converged solution, cold and warm-started
+   * (translucency::InteractiveRelTol, Documentation/Solvers.md). Set it
+   * (e.g. 1e-10) for a tighter solve.
+   */
   vtkSetClampMacro(RelTol, double, 1e-16, 1.0);
   vtkGetMacro(RelTol, double);
+  /// The default RelTol: translucency::InteractiveRelTol.
+  static double GetInteractiveRelTol();
   ///@}
 
   ///@{
@@ -468,15 +475,22 @@ public:
   double GetDetectorExitanceTPSF(int detector, int gate, int channel) const;
   ///@}
 
-  /// How the last vertex solve (divergence, fem) built its system: "full" or
-  /// "incremental"; the distributed path: "full" or "unchanged" (matrix
+  /// How the last vertex solve (divergence, fem) built its system: "full",
+  /// "incremental" (the rows of the changed tets) or "right-hand side" (a
+  /// relight: same material, only the load rebuilt); the distributed path:
+  /// "full" or "unchanged" (matrix
   /// values as in the last solve on every rank, e.g. a relight: the hypre
   /// hierarchies kept); empty for the other solvers and before the first solve.
   const char* GetLastAssembly() const;
 
+  /// What the last serial vertex solve's linear solver set-up did: "rebuilt",
+  /// "values", "rows" (a paint: the touched rows) or "kept" (a relight: the
+  /// multigrid hierarchy kept); translucency::SolverReport::LinearSetup.
+  const char* GetLastLinearSetup() const;
+
   /// Tets found changed for the last incremental update (-1 if the filter
-  /// did not look: no cached coefficients, new mesh, other irradiance, too
-  /// many changes, or IncrementalAssembly off).
+  /// did not look: no cached coefficients, new mesh, too many changes, or
+  /// IncrementalAssembly off).
   vtkIdType GetNumberOfChangedTets() const;
 
   ///@{
@@ -523,7 +537,7 @@ protected:
   int RequestDistributed(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
 
   int Solver = SOLVER_DIVERGENCE;
-  double RelTol = 1e-6;
+  double RelTol = 1e-3; // translucency::InteractiveRelTol (checked by a test)
   int MaxIter = 2000;
   bool WarmStart = true;
   double GridSpacing = 0.0;

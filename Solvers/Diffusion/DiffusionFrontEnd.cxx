@@ -90,24 +90,25 @@ bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProper
   ChangedTets_ = -1;
   if (vertex)
   {
-    // Same mesh (topology and points), same irradiance, only some tets'
-    // coefficients changed since the last successful solve: found by
-    // comparing with the coefficients cached from that solve.
+    // Same mesh (topology and points), only some tets' coefficients
+    // changed since the last successful solve: found by comparing with the
+    // coefficients cached from that solve. Another irradiance (a relight)
+    // rebuilds the right-hand side too.
     const std::size_t numTets = material.RefractiveIndex.size();
     const auto limit = static_cast<std::size_t>(MaximumChangedFraction_ * numTets);
     if (IncrementalAssembly_ && HaveLast_ && LastMaterial_.RefractiveIndex.size() == numTets &&
       LastMaterial_.AbsorptionCoefficient.size() == material.AbsorptionCoefficient.size() &&
       LastMaterial_.ReducedScatteringCoefficient.size() ==
         material.ReducedScatteringCoefficient.size() &&
-      LastIrradiance_.size() == irradiance.size() &&
-      std::memcmp(LastIrradiance_.data(), irradiance.data(), irradiance.size() * sizeof(double)) ==
-        0)
+      LastIrradiance_.size() == irradiance.size())
     {
+      const bool relit = std::memcmp(LastIrradiance_.data(), irradiance.data(),
+                           irradiance.size() * sizeof(double)) != 0;
       std::vector<int> changed = FindChangedTets(LastMaterial_, material, limit);
       if (changed.size() <= limit)
       {
         ChangedTets_ = static_cast<long long>(changed.size());
-        vertex->SetChangedTets(std::move(changed));
+        vertex->SetChangedTets(std::move(changed), relit);
       }
     }
   }

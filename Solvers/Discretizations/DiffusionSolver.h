@@ -81,10 +81,16 @@ struct SolverReport
 {
   std::string Solver;             ///< name, e.g. "divergence"
   std::string LinearSolver;       ///< e.g. "cg-jacobi", "bicgstab", "relaxation"
-  /// Vertex discretisations: "full" (Assemble) or "incremental" (only the
-  /// rows of changed tets rebuilt, VertexDiffusionSolver::SetChangedTets);
-  /// empty for the other solvers.
+  /// Vertex discretisations: "full" (Assemble), "incremental" (only the
+  /// rows of changed tets rebuilt, VertexDiffusionSolver::SetChangedTets)
+  /// or "right-hand side" (a relight: only the load rebuilt); empty for the
+  /// other solvers.
   std::string Assembly;
+  /// Vertex discretisations: what the linear solver's set-up did, "rebuilt"
+  /// (structure and values: a new mesh or solver), "values" (values only),
+  /// "rows" (the rows of changed tets, LinearSolver::SetupChangedRows) or
+  /// "kept" (the matrices did not change: a relight); empty for the others.
+  std::string LinearSetup;
   long long NumberOfUnknowns = 0; ///< per channel
   long long NumberOfNonZeros = 0; ///< per channel matrix (0 for Monte Carlo)
   std::size_t MemoryBytes = 0;    ///< system (matrix, vectors) or tallies
@@ -196,9 +202,15 @@ public:
    * `changedTets` changed (same irradiance). Solvers with an incremental
    * update (registry trait UnknownsAtVertices: VertexDiffusionSolver) rebuild
    * only those rows at the next Solve(); the default ignores it (a full
-   * solve, the same result).
+   * solve, the same result). With `irradianceChanged` (a relight, possibly
+   * with a paint) the irradiance may differ too (VertexDiffusionSolver then
+   * rebuilds the right-hand side and keeps the matrices).
    */
-  virtual void SetChangedTets(std::vector<int> changedTets) { (void)changedTets; }
+  virtual void SetChangedTets(std::vector<int> changedTets, bool irradianceChanged = false)
+  {
+    (void)changedTets;
+    (void)irradianceChanged;
+  }
 
   /// OpenMP threads of the solver's parallel loops (0, the default: OpenMP's
   /// default). Does not change the results. The base (no threads) ignores it.

@@ -237,6 +237,46 @@ bool DiscreteDivergence::UpdateTets(const TetMesh& mesh,
   return true;
 }
 
+bool DiscreteDivergence::UpdateRightHandSide(const TetMesh& mesh,
+  const OpticalProperties& material, const std::vector<double>& irradiance,
+  DiffusionSystem& system) const
+{
+  const int numPoints = mesh.GetNumberOfPoints();
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    if (system.NumberOfUnknowns != numPoints ||
+      system.RightHandSide[c].size() != static_cast<size_t>(numPoints))
+    {
+      std::ostringstream os;
+      os << "DiscreteDivergence::UpdateRightHandSide: the system (" << system.NumberOfUnknowns
+         << " unknowns) does not match the mesh (" << numPoints << " points): call Assemble first";
+      throw Error(os.str());
+    }
+  }
+  CheckAssemblySizes(mesh, material, irradiance);
+  CheckIrradiance(mesh, irradiance);
+  const double* tetEta = material.RefractiveIndex.data();
+  const double* q = irradiance.data();
+  const std::vector<int>& boundaryPoints = mesh.GetBoundaryPoints();
+  const std::vector<double>& boundaryArea = mesh.GetBoundaryAreas();
+  const int numBoundary = static_cast<int>(boundaryPoints.size());
+  // Interior rows have no load; the boundary rows' as in Assemble (eq. 12).
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < numBoundary; ++k)
+  {
+    const int i = boundaryPoints[k];
+    const Fresnel::RobinCoefficients robinCoefficients = Fresnel::BoundaryCoefficients(
+      BoundaryPointRefractiveIndexAt(mesh, tetEta, k), BoundaryRule_);
+    const double s = boundaryArea[i];
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      system.RightHandSide[c][i] = DivergenceRobinLoad(
+        s, q[3 * static_cast<size_t>(i) + c], robinCoefficients.A, robinCoefficients.Fdr);
+    }
+  }
+  return true;
+}
+
 void DiscreteDivergence::ToPointFluence(const TetMesh& mesh,
   const DiffusionSystem& system,
   const std::array<Eigen::VectorXd, NumberOfChannels>& solution,

@@ -46,6 +46,11 @@ public:
     const std::vector<double>& irradiance, const std::vector<int>& changedTets,
     DiffusionSystem& system) const override;
 
+  /// The boundary rows' load of TransCut eq. 12 for a new irradiance, as in
+  /// Assemble() (interior rows are 0): O(boundary points), OpenMP-parallel.
+  bool UpdateRightHandSide(const TetMesh& mesh, const OpticalProperties& material,
+    const std::vector<double>& irradiance, DiffusionSystem& system) const override;
+
   /// The lumped mass of TransCut eq. 13 (V_t per vertex of tet t, 4 x V_t/4).
   bool AddMass(const TetMesh& mesh, const std::vector<double>& coefficient,
     std::array<std::vector<double>, NumberOfChannels>& values) const override;

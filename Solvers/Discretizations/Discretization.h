@@ -54,6 +54,20 @@ public:
   }
 
   /**
+   * Relighting: rebuild only the right-hand side of a `system` assembled by
+   * Assemble() (or kept up to date by UpdateTets()) on the same mesh with the
+   * same `material`, for the new `irradiance` (3 per point). The result
+   * equals Assemble() with the new irradiance bit for bit; the matrices are
+   * untouched. Returns false (and leaves `system` alone) if the
+   * discretisation has no such update: then call Assemble(). Default: false.
+   */
+  virtual bool UpdateRightHandSide(const TetMesh& /*mesh*/, const OpticalProperties& /*material*/,
+    const std::vector<double>& /*irradiance*/, DiffusionSystem& /*system*/) const
+  {
+    return false;
+  }
+
+  /**
    * Add, for every tet t and channel c, coefficient[3 t + c] (1/mm) times
    * this discretisation's (scaled) mass matrix of tet t to values[c], the
    * value arrays of a system assembled by Assemble() on `mesh`: the change

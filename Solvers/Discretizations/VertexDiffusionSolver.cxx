@@ -67,13 +67,15 @@ void VertexDiffusionSolver::Reset()
   LinearReady_ = false;
   LastRevision_ = 0;
   HasChangedTets_ = false;
+  IrradianceChanged_ = false;
   ChangedTets_.clear();
 }
 
-void VertexDiffusionSolver::SetChangedTets(std::vector<int> changedTets)
+void VertexDiffusionSolver::SetChangedTets(std::vector<int> changedTets, bool irradianceChanged)
 {
   ChangedTets_ = std::move(changedTets);
   HasChangedTets_ = true;
+  IrradianceChanged_ = irradianceChanged;
 }
 
 bool VertexDiffusionSolver::Solve(
@@ -140,16 +142,24 @@ bool VertexDiffusionSolver::Solve(
   // with its current geometry. The request is one-shot, also when the update
   // throws.
   const bool requested = HasChangedTets_;
+  const bool newIrradiance = IrradianceChanged_;
   std::vector<int> changedTets;
   changedTets.swap(ChangedTets_);
   HasChangedTets_ = false;
+  IrradianceChanged_ = false;
   const bool sameGeometry = LastMesh_ == &mesh && LastPoints_ == mesh.GetNumberOfPoints() &&
     LastTets_ == mesh.GetNumberOfTets() && LastRevision_ == mesh.GetGeometryRevision();
   // The incremental update rebuilds right-hand-side rows from q only: not
   // with interior sources in this or the last system.
-  const bool incremental = requested && sameGeometry && sameRule && LinearReady_ && !hasSources &&
-    !SystemHasSources_ &&
-    Discretization_->UpdateTets(mesh, *problem.Material, *problem.Irradiance, changedTets, System_);
+  // A relight also rebuilds the right-hand side (before UpdateTets, which
+  // leaves System_ alone when it returns false: nothing is half updated).
+  const bool canUpdate = requested && sameGeometry && sameRule && LinearReady_ && !hasSources &&
+    !SystemHasSources_;
+  const bool incremental = canUpdate &&
+    (!newIrradiance ||
+      Discretization_->UpdateRightHandSide(mesh, *problem.Material, *problem.Irradiance, System_)) &&
+    (changedTets.empty() ||
+      Discretization_->UpdateTets(mesh, *problem.Material, *problem.Irradiance, changedTets, System_));
   if (!incremental)
   {
     // Keep the previous values (swap, no copy) to see whether they changed.
@@ -159,7 +169,9 @@ bool VertexDiffusionSolver::Solve(
     }
     Discretization_->Assemble(mesh, *problem.Material, *problem.Irradiance, System_);
   }
-  report.Assembly = incremental ? "incremental" : "full";
+  report.Assembly = !incremental ? "full"
+    : newIrradiance && changedTets.empty() ? "right-hand side"
+                                           : "incremental";
   SystemHasSources_ = hasSources;
   if (hasSources)
   {
@@ -182,9 +194,11 @@ bool VertexDiffusionSolver::Solve(
     // New solver object, new mesh or moved points (the hierarchy's eq. 16
     // weights depend on edge lengths): rebuild everything.
     Linear_->Setup(System_, &mesh, true);
+    report.LinearSetup = "rebuilt";
   }
   else
   {
+    report.LinearSetup = "kept";
     bool valuesChanged = incremental && !changedTets.empty();
     for (int c = 0; !incremental && c < NumberOfChannels && !valuesChanged; ++c)
     {
@@ -204,10 +218,12 @@ bool VertexDiffusionSolver::Solve(
         }
       }
       Linear_->SetupChangedRows(System_, &mesh, rows);
+      report.LinearSetup = "rows";
     }
     else if (valuesChanged)
     {
       Linear_->Setup(System_, &mesh, false); // same pattern, new values
+      report.LinearSetup = "values";
     }
     // Otherwise only the right-hand side changed (relight): no Setup.
   }

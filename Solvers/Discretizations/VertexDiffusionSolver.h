@@ -140,8 +140,15 @@ public:
    * (TetMesh::GetGeometryRevision) or the discretisation has no incremental
    * update. One-shot: cleared
    * by the next Solve() or Reset().
+   *
+   * With `irradianceChanged` (a relight, possibly with a paint) the
+   * irradiance may differ too: the right-hand side is then rebuilt for it
+   * (Discretization::UpdateRightHandSide, O(boundary points)) and the
+   * matrices and the linear solver's set-up are kept when no tet changed
+   * (SolverReport::Assembly "right-hand side"). Falls back to a full
+   * assembly as above, or when the discretisation has no such update.
    */
-  void SetChangedTets(std::vector<int> changedTets) override;
+  void SetChangedTets(std::vector<int> changedTets, bool irradianceChanged = false) override;
 
   /// The discretisation (e.g. to set its number of threads).
   Discretization& GetDiscretization() { return *Discretization_; }
@@ -182,6 +189,7 @@ private:
   std::size_t LastNonZeros_ = 0;
   std::uint64_t LastRevision_ = 0; ///< TetMesh::GetGeometryRevision of the last solve
   bool HasChangedTets_ = false;
+  bool IrradianceChanged_ = false; ///< SetChangedTets' second argument
   /// System_'s right-hand side holds interior sources (no incremental update).
   bool SystemHasSources_ = false;
   std::vector<int> ChangedTets_;

@@ -10,9 +10,11 @@ How to run (from a build tree; ctest sets the variables itself):
    exactly the tets the paint filter lists in PaintedCellIds, and its fluence
    equals a from-scratch solve by a new filter (both to RelTol 1e-12).
 2. Coefficients changed by hand (not by the paint filter) are detected too.
-3. Falls back to a full assembly: another light (other irradiance), a cut
-   (topology change), too many changed tets (beyond MaximumChangedFraction),
-   IncrementalAssembly off.
+3. Another light (other irradiance, same material): only the right-hand
+   side is rebuilt ("right-hand side"), the fluence equals a from-scratch
+   solve, and the paint filter did not paint again (its arrays re-used).
+4. Falls back to a full assembly: a cut (topology change), too many changed
+   tets (beyond MaximumChangedFraction), IncrementalAssembly off.
 
 Exits non-zero on failure (unittest).
 """
@@ -122,11 +124,17 @@ class IncrementalSolveTest(unittest.TestCase):
 
     def test_falls_back_to_full_assembly(self):
         run(self.lights, self.paint, self.solve)
-        # Another light: other irradiance.
+        # Another light: other irradiance, the same material: only the
+        # right-hand side is rebuilt (issue 31), and Paint re-used its arrays.
+        painted = self.paint.GetNumberOfPaintings()
         self.lights.AddDirectionalLight(1.0, 0.0, 0.0, 0.5)
         run(self.lights, self.paint, self.solve)
-        self.assertEqual(self.solve.GetLastAssembly(), "full")
-        self.assertEqual(self.solve.GetNumberOfChangedTets(), -1)
+        self.assertEqual(self.solve.GetLastAssembly(), "right-hand side")
+        self.assertEqual(self.solve.GetNumberOfChangedTets(), 0)
+        self.assertTrue(self.paint.GetLastExecutionReused())
+        self.assertEqual(self.paint.GetNumberOfPaintings(), painted)
+        np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
+                                   self.reference(self.paint.GetOutput()), rtol=1e-7)
         # Nothing changed: incremental with no changed tet.
         self.solve.Modified()
         run(self.lights, self.paint, self.solve)

@@ -723,6 +723,8 @@ class PipelineTest(unittest.TestCase):
                         absorption=(0.0, 0.0, 0.0), scattering=(1.0, 2.0, 3.0), eta=eta)
         pipe.irradiance.AddDirectionalLight(0.3, -1.0, 0.2, 1.0)
         pipe.irradiance.SetShadows(0)
+        # An identity to 1e-6: a tight solve, not the interactive default.
+        pipe.solve.SetRelTol(1e-10)
         ratios = {}
         for law in (False, True):
             pipe.radiance.SetNSquaredLaw(law)

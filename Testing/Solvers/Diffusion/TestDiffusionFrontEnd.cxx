@@ -144,12 +144,32 @@ TEST(DiffusionFrontEnd, PaintIsIncrementalAndEqualsAFullAssembly)
   EXPECT_EQ(report.Assembly, "incremental");
   EXPECT_EQ(front.GetNumberOfChangedTets(), 200);
 
-  // Another irradiance (relight): full.
+  // Another irradiance (relight): only the right-hand side is rebuilt, the
+  // fluence is a solve from scratch of the relit scene.
   std::vector<double> relit = s.Irradiance;
   relit[3 * s.Mesh->GetBoundaryPoints()[0]] += 0.5;
+  for (int i : s.Mesh->GetBoundaryPoints())
+    relit[3 * static_cast<size_t>(i) + 1] *= 0.7;
   ASSERT_TRUE(front.Solve(s.Mesh, wider, relit, {}, fluence, report));
-  EXPECT_EQ(front.GetNumberOfChangedTets(), -1);
-  EXPECT_EQ(report.Assembly, "full");
+  EXPECT_EQ(front.GetNumberOfChangedTets(), 0);
+  EXPECT_EQ(report.Assembly, "right-hand side");
+  problem.Material = &wider;
+  problem.Irradiance = &relit;
+  ASSERT_TRUE(fresh->Solve(problem, reference, freshReport));
+  EXPECT_LT(MaxRelativeDifference(fluence, reference), 1e-7);
+  // Relit and painted at once: the changed rows and the right-hand side.
+  OpticalProperties widest = wider;
+  const std::vector<int> more = Paint(widest, 2, 41, 20);
+  std::vector<double> relit2 = relit;
+  for (int i : s.Mesh->GetBoundaryPoints())
+    relit2[3 * static_cast<size_t>(i)] *= 1.3;
+  ASSERT_TRUE(front.Solve(s.Mesh, widest, relit2, {}, fluence, report));
+  EXPECT_EQ(front.GetNumberOfChangedTets(), static_cast<long long>(more.size()));
+  EXPECT_EQ(report.Assembly, "incremental");
+  problem.Material = &widest;
+  problem.Irradiance = &relit2;
+  ASSERT_TRUE(fresh->Solve(problem, reference, freshReport));
+  EXPECT_LT(MaxRelativeDifference(fluence, reference), 1e-7);
 
   // Another mesh object (a cut, even with the same geometry): full, cold.
   Scene other = MakeScene(6);
