@@ -837,6 +837,15 @@ int vtkSolveDiffusion::RequestData(
         return 0;
       }
     }
+    else if (entry.Name == "sp3")
+    {
+      // SP3 resolves the phase function's moments: g per tet and channel
+      // (mu_s = mu_s' / (1 - g)); checked by OpticalProperties::Validate.
+      if (this->Anisotropy != 0.0)
+      {
+        material.Anisotropy.assign(material.AbsorptionCoefficient.size(), this->Anisotropy);
+      }
+    }
     else if (this->Anisotropy != 0.0)
     {
       vtkWarningMacro(<< "Anisotropy g = " << this->Anisotropy << " is ignored by the "
