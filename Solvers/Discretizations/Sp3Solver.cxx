@@ -765,9 +765,14 @@ bool Sp3Solver::Solve(
 
   auto start = Clock::now();
   std::vector<double> sourceLoad;
+  SourcePower_ = {};
   if (problem.HasInteriorSources())
   {
     sourceLoad = ComputeSp3SourceLoad(mesh, *problem.Material, *problem.InteriorSources);
+    for (std::size_t k = 0; k < sourceLoad.size(); ++k)
+    {
+      SourcePower_[k % 3] += sourceLoad[k];
+    }
   }
   // The extended collimated models: the reduced beam's isotropic volume
   // source mu_s' E_c (CollimatedSource.h) is Q; the SP3 boundary
