@@ -12,6 +12,7 @@
 #include "Options.h"
 
 #include "ConjugateGradient.h"
+#include "DiffusionSolverFactory.h"
 #include "DiscreteDivergence.h"
 #include "Error.h"
 #include "LinearSolver.h"
@@ -63,6 +64,7 @@ struct BenchOptions
   int Runs = 7;
   std::string JsonPath;
   bool Edit = false;
+  bool Sp3 = false;
 };
 
 /// Cut and paint timings on one lit mesh (medians of `runs`): a plane cut
@@ -182,6 +184,63 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
     { "full_assembly_ms_median", Median(fullAsmMs) } };
 }
 
+/// SP3 against the divergence solve on one lit mesh (issue 35's cost
+/// target: SP3 <= 3x divergence, cold and warm), each with its default
+/// linear solver (by size: multigrid-agg from 20k vertices) at rel-tol 1e-6:
+/// cold = a new solver object (assembly, set-up, solve from zero), warm = the
+/// same object after the light moved (`q2`: a second directional light;
+/// warm start from the previous solution). Medians of `runs`.
+json BenchSp3(const translucency::TetMesh& mesh, const translucency::OpticalProperties& material,
+  const std::vector<double>& q, const std::vector<double>& q2, int runs)
+{
+  json out;
+  double ratio[2] = { 0.0, 0.0 };
+  std::array<double, 2> divergence{}, sp3{};
+  for (const char* name : { "divergence", "sp3" })
+  {
+    std::vector<double> cold, warm;
+    int coldIterations = 0, warmIterations = 0;
+    for (int r = 0; r < runs; ++r)
+    {
+      std::unique_ptr<translucency::DiffusionSolver> solver =
+        translucency::CreateDiffusionSolver(name);
+      solver->SetRelTol(1e-6);
+      translucency::DiffusionProblem problem;
+      problem.Mesh = &mesh;
+      problem.Material = &material;
+      problem.Irradiance = &q;
+      std::vector<double> fluence;
+      translucency::SolverReport report;
+      auto start = Clock::now();
+      if (!solver->Solve(problem, fluence, report) || !report.Converged[0])
+        throw translucency::Error(std::string("bench: the ") + name + " cold solve did not converge");
+      cold.push_back(MillisecondsSince(start));
+      coldIterations = report.Iterations[0];
+      problem.Irradiance = &q2;
+      start = Clock::now();
+      if (!solver->Solve(problem, fluence, report) || !report.Converged[0])
+        throw translucency::Error(std::string("bench: the ") + name + " warm solve did not converge");
+      warm.push_back(MillisecondsSince(start));
+      warmIterations = report.Iterations[0];
+    }
+    const bool isSp3 = std::string(name) == "sp3";
+    std::array<double, 2>& times = isSp3 ? sp3 : divergence;
+    times = { Median(cold), Median(warm) };
+    std::cout << std::fixed << std::setprecision(1) << "    " << name << ": cold " << times[0]
+              << " ms (" << coldIterations << " iterations in R), warm " << times[1] << " ms ("
+              << warmIterations << ")\n" << std::defaultfloat;
+    out[name] = { { "cold_ms_median", times[0] }, { "warm_ms_median", times[1] },
+      { "cold_iterations_R", coldIterations }, { "warm_iterations_R", warmIterations } };
+  }
+  ratio[0] = sp3[0] / divergence[0];
+  ratio[1] = sp3[1] / divergence[1];
+  std::cout << std::fixed << std::setprecision(2) << "    sp3 / divergence: cold " << ratio[0]
+            << "x, warm " << ratio[1] << "x\n" << std::defaultfloat;
+  out["sp3_over_divergence_cold"] = ratio[0];
+  out["sp3_over_divergence_warm"] = ratio[1];
+  return out;
+}
+
 int Bench(const BenchOptions& o)
 {
     const std::string& meshPath = o.MeshPath;
@@ -278,6 +337,23 @@ int Bench(const BenchOptions& o)
       { "assembly_over_spmv", a / s }, { "solve_over_spmv", so / s } });
     if (o.Edit)
       results.back()["edit"] = BenchEdit(g, runs);
+    if (o.Sp3)
+    {
+      // The second light for the warm solves: the first one turned by 45
+      // degrees about the vertical.
+      vtkNew<vtkSurfaceIrradiance> turned;
+      turned->SetInputConnection(assign->GetOutputPort());
+      turned->AddDirectionalLight(0.7071, -0.7071, -1, 1.0);
+      turned->SetUniformLightIrradiance(0.1);
+      turned->SetUniformLightSamples(0);
+      turned->Update();
+      vtkDataArray* qb = turned->GetOutput()->GetPointData()->GetArray("Irradiance");
+      std::vector<double> q2(q.size());
+      for (vtkIdType i = 0; i < g->GetNumberOfPoints(); ++i)
+        for (int c = 0; c < 3; ++c)
+          q2[3 * i + c] = qb->GetComponent(i, c);
+      results.back()["sp3"] = BenchSp3(mesh, material, q, q2, runs);
+    }
   }
   if (!o.JsonPath.empty() && !WriteText(o.JsonPath, results.dump(2) + "\n", error))
     throw translucency::Error(error);
@@ -321,6 +397,10 @@ Command AddBenchCommand(CLI::App& app)
   CLI::Option* edit = c->add_flag("--edit", plain->Edit,
     "also time a plane cut (+ topology + assembly) and a paint\n"
     "stroke on ~1 % of the tets (+ incremental row update)");
+  CLI::Option* sp3 = c->add_flag("--sp3", plain->Sp3,
+    "also time the sp3 solver against divergence (default linear\n"
+    "solvers, rel-tol 1e-6): cold (new solver) and warm (the\n"
+    "light turned 45 degrees, warm start), medians of --runs");
   const std::string group = "Linear solvers (bench --linear-solvers)";
   CLI::Option* linearSolvers =
     c->add_option("--linear-solvers", *solvers,
@@ -355,6 +435,8 @@ Command AddBenchCommand(CLI::App& app)
   meshers->excludes(linearSolvers);
   edit->excludes(meshers);
   edit->excludes(linearSolvers);
+  sp3->excludes(meshers);
+  sp3->excludes(linearSolvers);
   for (CLI::Option* only : { plot, ranks, noCut })
     only->needs(linearSolvers);
   // Diffuse optics (issue 19's performance targets).
@@ -387,7 +469,7 @@ Command AddBenchCommand(CLI::App& app)
     "--steps-per-gate must be from 0 to 1000")->group(opticsGroup);
   for (CLI::Option* only : { frequency, gateTets, gateCount, stepsPerGate })
     only->needs(diffuseOptics);
-  for (CLI::Option* other : { linearSolvers, meshers, edit })
+  for (CLI::Option* other : { linearSolvers, meshers, edit, sp3 })
     diffuseOptics->excludes(other);
   // The ParaView chain, filter by filter (issue 31).
   auto pipelineFlag = std::make_shared<bool>(false);

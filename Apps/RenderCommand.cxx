@@ -82,10 +82,11 @@ int Render(RenderOptions& o)
   scene.InteriorSources = !o.Optics.Sources.empty();
   scene.Finish("render");
   const std::string &solverName = o.SolverName, &linearSolver = o.LinearSolver;
-  if (o.Anisotropy != 0.0 && translucency::ToLower(solverName) != "montecarlo")
+  if (o.Anisotropy != 0.0 && translucency::ToLower(solverName) != "montecarlo" &&
+    translucency::ToLower(solverName) != "sp3")
   {
     std::ostringstream message;
-    message << "--anisotropy " << o.Anisotropy << " applies to --solver montecarlo only (the "
+    message << "--anisotropy " << o.Anisotropy << " applies to --solver montecarlo and sp3 only (the "
             << solverName << " solver uses mu_s', in which g is already folded)";
     throw UsageError(message.str());
   }
@@ -327,7 +328,8 @@ Command AddRenderCommand(CLI::App& app)
     ->type_name("NAME");
   AddGridAndPhotonOptions(c, o->GridSpacing, o->Photons);
   AddNumber(c, "--anisotropy", o->Anisotropy,
-    "Henyey-Greenstein g of montecarlo, in (-1, 1): mu_s = mu_s' / (1 - g)\n"
+    "Henyey-Greenstein g of montecarlo (sp3: the phase function's g), in (-1, 1):\n"
+    "mu_s = mu_s' / (1 - g)\n"
     "(the material's mu_s' is kept)", "G", [](double g) { return g > -1 && g < 1; },
     "--anisotropy must be in (-1, 1)");
   c->add_flag("--two-point-flux", o->TwoPointFlux,

@@ -4,6 +4,7 @@
 #include "Detectors.h"
 #include "ModelRange.h"
 #include "MonteCarlo.h"
+#include "Sp3Solver.h"
 #include "DiffusionFrontEnd.h"
 #include "DiffusionSolverFactory.h"
 #include "DiscreteDivergence.h"
@@ -91,6 +92,11 @@ struct vtkSolveDiffusion::Internals
   /// gate readings ([gate][detector]); empty otherwise.
   std::vector<translucency::DetectorReading> ReadingErrors;
   /// The photons' power bookkeeping after a montecarlo solve (else unset).
+  /// The sp3 solver's own read-outs of the last solve (Sp3Solver): its
+  /// exitance (3 per point) and its interior sources' injected power.
+  bool HasSp3Balance = false;
+  std::vector<double> Sp3Exitance;
+  std::array<double, 3> Sp3SourcePower{};
   bool HasMonteCarloBalance = false;
   std::array<translucency::MonteCarloSolver::PowerBalance, 3> MonteCarloBalance{};
   std::vector<std::vector<translucency::DetectorReading>> GateErrors;
@@ -541,6 +547,7 @@ int vtkSolveDiffusion::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   this->Internal->HasMonteCarloBalance = false; // set again by a montecarlo solve
+  this->Internal->HasSp3Balance = false;        // set again by an sp3 solve
   return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
     [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
     { return this->PlanParallel(i, c); },
@@ -864,6 +871,15 @@ int vtkSolveDiffusion::RequestSerial(
         return 0;
       }
     }
+    else if (entry.Name == "sp3")
+    {
+      // SP3 resolves the phase function's moments: g per tet and channel
+      // (mu_s = mu_s' / (1 - g)); checked by OpticalProperties::Validate.
+      if (this->Anisotropy != 0.0)
+      {
+        material.Anisotropy.assign(material.AbsorptionCoefficient.size(), this->Anisotropy);
+      }
+    }
     else if (this->Anisotropy != 0.0)
     {
       vtkWarningMacro(<< "Anisotropy g = " << this->Anisotropy << " is ignored by the "
@@ -1071,6 +1087,30 @@ int vtkSolveDiffusion::RequestSerial(
         in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
         in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
       }
+      if (auto* sp3 = dynamic_cast<translucency::Sp3Solver*>(&solver))
+      {
+        // SP3's exitance is its own (the outgoing half of the P3 radiance),
+        // read through the detectors' footprints; the power balance uses it.
+        in.HasSp3Balance = true;
+        in.Sp3Exitance = sp3->GetExitance();
+        in.Sp3SourcePower = sp3->GetSourcePower();
+        if (!in.SolvedDetectors.empty())
+        {
+          const auto footprints = translucency::LocateDetectors(*mesh, in.SolvedDetectors);
+          for (std::size_t k = 0; k < footprints.size() && k < in.Readings.size(); ++k)
+          {
+            in.Readings[k].Exitance = { 0.0, 0.0, 0.0 };
+            for (const auto& [point, weight] : footprints[k].GetPointWeights(*mesh))
+            {
+              for (int c = 0; c < 3; ++c)
+              {
+                in.Readings[k].Exitance[c] +=
+                  weight * in.Sp3Exitance[3 * static_cast<std::size_t>(point) + c];
+              }
+            }
+          }
+        }
+      }
     }
     this->AssemblyTime = in.Report.SetupMilliseconds;
     this->SolveTime = in.Report.SolveMilliseconds;
@@ -1261,9 +1301,33 @@ bool vtkSolveDiffusion::ComputePowerBalance(
         fluence[k] -= report.CollimatedFluence[k];
       }
     }
-    const translucency::PowerBalance balance = translucency::ComputePowerBalance(
+    translucency::PowerBalance balance = translucency::ComputePowerBalance(
       *mesh, material, fluence, &irradiance, this->Internal->SolvedRule);
-    const auto sources = this->Internal->SolvedSources.InjectedPower(*mesh, material);
+    auto sources = this->Internal->SolvedSources.InjectedPower(*mesh, material);
+    const std::vector<double>& sp3Exitance = this->Internal->Sp3Exitance;
+    if (this->Internal->HasSp3Balance && sp3Exitance.size() == fluence.size())
+    {
+      // sp3: its exitance (P1 integral over the surface) and the power its
+      // sources injected (a pencil beam's first-collision source).
+      balance.Escaped = { 0.0, 0.0, 0.0 };
+      const std::vector<int>& triangles = mesh->GetBoundaryTriangles();
+      for (int f = 0; f < mesh->GetNumberOfBoundaryTriangles(); ++f)
+      {
+        const double third = mesh->GetBoundaryTriangleAreas()[f] / 3.0;
+        for (int a = 0; a < 3; ++a)
+        {
+          const std::size_t p = static_cast<std::size_t>(triangles[3 * static_cast<std::size_t>(f) + a]);
+          for (int c = 0; c < 3; ++c)
+          {
+            balance.Escaped[c] += third * sp3Exitance[3 * p + c];
+          }
+        }
+      }
+      for (int c = 0; c < 3; ++c)
+      {
+        sources[c] = this->Internal->Sp3SourcePower[c];
+      }
+    }
     for (int c = 0; c < 3; ++c)
     {
       injected[c] = balance.BoundaryInjected[c] + sources[c];

@@ -16,7 +16,9 @@
  *  - SOLVER_FEM ("fem"): consistent linear Galerkin (the Arbree et al. role);
  *  - SOLVER_QUADGRAPH ("quadgraph"): finite differences on the tet dual graph;
  *  - SOLVER_GRID ("grid"): regular-grid finite differences of spacing GridSpacing;
- *  - SOLVER_MONTECARLO ("montecarlo"): a photon random walk, the ground truth.
+ *  - SOLVER_MONTECARLO ("montecarlo"): a photon random walk, the ground truth;
+ *  - SOLVER_SP3 ("sp3"): the simplified spherical harmonics SP3 equations
+ *    (Klose & Larsen 2006) at the vertices, with Anisotropy g; continuous wave.
  *    It needs the lights, which vtkSurfaceIrradiance records in the field data
  *    (`TranslucencyLights`); it adds `FluenceStandardError`,
  *    `MonteCarloRadiance` and `MonteCarloRadianceStandardError` point arrays.
@@ -123,12 +125,13 @@ public:
     SOLVER_FEM = 1,
     SOLVER_QUADGRAPH = 2,
     SOLVER_GRID = 3,
-    SOLVER_MONTECARLO = 4
+    SOLVER_MONTECARLO = 4,
+    SOLVER_SP3 = 5
   };
 
   ///@{
   /// The solver (one of Solvers). Default SOLVER_DIVERGENCE.
-  vtkSetClampMacro(Solver, int, SOLVER_DIVERGENCE, SOLVER_MONTECARLO);
+  vtkSetClampMacro(Solver, int, SOLVER_DIVERGENCE, SOLVER_SP3);
   vtkGetMacro(Solver, int);
   ///@}
 
@@ -191,7 +194,8 @@ public:
   ///@{
   /// Monte Carlo: Henyey-Greenstein mean cosine g in (-1, 1) (default 0:
   /// isotropic scattering with mu_s = mu_s'); mu_s = mu_s' / (1 - g), so the
-  /// reduced scattering coefficient stays the material's. The diffusion
+  /// reduced scattering coefficient stays the material's. SP3: the same g
+  /// in every tet and channel (OpticalProperties::Anisotropy). The diffusion
   /// solvers ignore it (with a warning when it is not 0): g is already
   /// folded into mu_s'. A value outside (-1, 1) makes RequestData fail.
   vtkSetMacro(Anisotropy, double);

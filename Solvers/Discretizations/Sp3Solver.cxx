@@ -232,12 +232,13 @@ void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
       const double s = sigmaS[3 * t + c]; // sigma_s' = mu_s (1 - g)
       const double aniso = material.GetAnisotropy(static_cast<int>(t), c);
       // mu_an = mu_a + mu_s (1 - g^n) with mu_s = sigma_s' / (1 - g)
-      // (Klose & Larsen 2006, eq. 13 of the SP_N equations):
+      // (Klose & Larsen 2006, the SP_N absorption moments; equation number
+      // unverified: the paper is not in shared/papers, see Solvers.md "SP3"):
       const double muA1 = a + s;
       const double muA2 = a + s * (1.0 + aniso);
       const double muA3 = a + s * (1.0 + aniso + aniso * aniso);
-      // Klose & Larsen 2006, the SP3 equations (eq. 15a-b in their
-      // composite moments): diffusion coefficients 1/(3 mu_a1), 1/(7 mu_a3);
+      // Klose & Larsen 2006, the SP3 equations in their composite moments
+      // (equation number unverified, restated from the P3 derivation): diffusion coefficients 1/(3 mu_a1), 1/(7 mu_a3);
       // mass coefficients mu_a, (4/9) mu_a + (5/9) mu_a2 and the coupling
       // -(2/3) mu_a.
       const double d1 = 1.0 / (3.0 * muA1), d2 = 1.0 / (7.0 * muA3);
@@ -765,9 +766,14 @@ bool Sp3Solver::Solve(
 
   auto start = Clock::now();
   std::vector<double> sourceLoad;
+  SourcePower_ = {};
   if (problem.HasInteriorSources())
   {
     sourceLoad = ComputeSp3SourceLoad(mesh, *problem.Material, *problem.InteriorSources);
+    for (std::size_t k = 0; k < sourceLoad.size(); ++k)
+    {
+      SourcePower_[k % 3] += sourceLoad[k];
+    }
   }
   // The extended collimated models: the reduced beam's isotropic volume
   // source mu_s' E_c (CollimatedSource.h) is Q; the SP3 boundary

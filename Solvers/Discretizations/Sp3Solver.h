@@ -156,6 +156,13 @@ public:
     AdditionalLoad2_ = std::move(load2);
   }
 
+  /// The power the interior sources of the last Solve injected into the
+  /// SP3 field (W per channel; the sum of ComputeSp3SourceLoad). The
+  /// balance: int mu_a phi_0 + int_surface GetExitance() = int_surface q +
+  /// this (+ the extended model's scattered beam power), to the solver's
+  /// tolerance (P1 integrals; uniform eta on the surface).
+  const std::array<double, NumberOfChannels>& GetSourcePower() const { return SourcePower_; }
+
   /// OpenMP threads for assembly and solve (0 = OpenMP default). Default 0.
   void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
 
@@ -170,6 +177,7 @@ private:
   int NumberOfThreads_ = 0;
   std::vector<double> Phi1_, Phi2_, Exitance_;
   std::vector<double> AdditionalLoad1_, AdditionalLoad2_;
+  std::array<double, NumberOfChannels> SourcePower_{};
   std::vector<double> X_; ///< the last solution, 2 N x 3 interleaved (warm start)
   const TetMesh* LastMesh_ = nullptr;
   int LastPoints_ = -1;

@@ -23,10 +23,11 @@ TEST(SolveDiffusionRegistry, EnumOrderIsTheRegistryOrder)
     { vtkSolveDiffusion::SOLVER_QUADGRAPH, "quadgraph" },
     { vtkSolveDiffusion::SOLVER_GRID, "grid" },
     { vtkSolveDiffusion::SOLVER_MONTECARLO, "montecarlo" },
+    { vtkSolveDiffusion::SOLVER_SP3, "sp3" },
   };
   // One constant per solver, the last one the largest (SetSolver clamps to it).
   ASSERT_EQ(names.size(), std::size(constants));
-  EXPECT_EQ(vtkSolveDiffusion::SOLVER_MONTECARLO + 1, static_cast<int>(names.size()));
+  EXPECT_EQ(vtkSolveDiffusion::SOLVER_SP3 + 1, static_cast<int>(names.size()));
   vtkNew<vtkSolveDiffusion> solve;
   for (const auto& constant : constants)
   {
