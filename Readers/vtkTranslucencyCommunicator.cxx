@@ -119,27 +119,33 @@ bool vtkTranslucencyCommunicator::Any(bool value) const
 }
 
 //------------------------------------------------------------------------------
-std::string vtkTranslucencyCommunicator::AgreeOnError(const std::string& localError) const
+std::string vtkTranslucencyCommunicator::FirstMessage(
+  const std::string& local, bool prefix) const
 {
   if (!this->Controller)
   {
-    return localError;
+    return local;
   }
-  const int first = this->Min(localError.empty() ? INT_MAX : this->Rank);
+  const int first = this->Min(local.empty() ? INT_MAX : this->Rank);
   if (first == INT_MAX)
   {
     return std::string();
   }
-  int length = this->Rank == first ? static_cast<int>(localError.size()) : 0;
+  int length = this->Rank == first ? static_cast<int>(local.size()) : 0;
   this->Controller->Broadcast(&length, 1, first);
   std::vector<char> text(static_cast<size_t>(length) + 1, '\0');
   if (this->Rank == first)
   {
-    localError.copy(text.data(), localError.size());
+    local.copy(text.data(), local.size());
   }
   this->Controller->Broadcast(text.data(), length + 1, first);
-  return "rank " + std::to_string(first) + ": " +
-    std::string(text.data(), static_cast<size_t>(length));
+  const std::string body(text.data(), static_cast<size_t>(length));
+  return prefix ? "rank " + std::to_string(first) + ": " + body : body;
+}
+
+std::string vtkTranslucencyCommunicator::AgreeOnError(const std::string& localError) const
+{
+  return this->FirstMessage(localError, true);
 }
 
 //------------------------------------------------------------------------------
@@ -174,13 +180,14 @@ int vtkTranslucencyCommunicator::RunAgreed(
   {
     return status;
   }
-  // Every rank failed: each has the same agreed message already (or its own
-  // for a failure before any collective); else the lowest failing rank's.
-  const std::string message = failed == this->Size ? captured
-                                                   : this->AgreeOnError(status ? std::string()
-                                                       : captured.empty()
-                                                       ? std::string("failed (no message)")
-                                                       : captured);
+  // Every rank failed: the step agreed on its message (or each rank found
+  // its own before any collective): the lowest rank's text as it is. Else
+  // the lowest failing rank's, "rank r: ...".
+  const std::string own =
+    status || !captured.empty() ? captured : std::string("failed (no message)");
+  const std::string message = failed == this->Size
+    ? this->FirstMessage(captured, false)
+    : this->AgreeOnError(status ? std::string() : own);
   if (!message.empty())
   {
     vtkErrorWithObjectMacro(self, << message);

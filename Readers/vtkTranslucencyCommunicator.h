@@ -68,9 +68,10 @@ public:
   /**
    * Collective. Run `step` (a RequestData body returning 1 or 0) and agree
    * on its outcome: if it failed on some rank, every rank reports one error
-   * on `self` (the failing ranks' own message when every rank failed, else
-   * the lowest failing rank's, "rank r: ..."), empties the outputs of
-   * `outputs` and returns 0. The step's errors are held back meanwhile (an
+   * on `self`, the same text on every rank (when every rank failed, the
+   * lowest rank's message as it is: the step agreed on it, or each rank
+   * found one on its own; else the lowest failing rank's, "rank r: ..."),
+   * empties the outputs of `outputs` and returns 0. The step's errors are held back meanwhile (an
    * ErrorEvent observer on `self`) so each rank reports exactly one.
    * With size one: `step()`, nothing else.
    */
@@ -107,6 +108,9 @@ public:
 
 private:
   vtkTranslucencyCommunicator() = default;
+  /// Collective: the lowest rank's non-empty `local` on every rank ("" if
+  /// none), prefixed "rank r: " if `prefix`.
+  std::string FirstMessage(const std::string& local, bool prefix) const;
   vtkMultiProcessController* Controller = nullptr;
   int Size = 1;
   int Rank = 0;
