@@ -1,6 +1,8 @@
 # Translucency: the two commands a new user needs.
-#   make demo   install missing Debian packages, configure, build, render the bunny into out/
-#   make test   install missing Debian packages, configure, build, run every test with ctest
+#   make demo   install missing Debian packages, configure, build what the demo needs (the
+#               core, the VTK modules, the CLI, the plugin: CMake target TranslucencyDemo,
+#               no test programs), render the bunny into out/
+#   make test   install missing Debian packages, configure, build everything, run every test
 # Reliability (Documentation/Reliability.md), each in its own build tree:
 #   make test-sanitize   the core's GoogleTests under ASan + UBSan (gcc, build-sanitize)
 #   make test-fuzz       a short run of every libFuzzer target (clang, build-fuzz)
@@ -29,7 +31,8 @@ configure: deps
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
-demo: build
+demo: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target TranslucencyDemo
 	bash scripts/demo.sh $(BUILD_DIR)
 
 test: build
