@@ -218,7 +218,8 @@ def run():
     data = servermanager.Fetch(radiance)
     results["radiance_points"] = data.GetNumberOfPoints()
     results["radiance_range"] = list(data.GetPointData().GetArray("Radiance").GetRange(-1))
-    results["radiance_readout"] = str(radiance.RadianceReadout)
+    # The proxy's read-out, by its enumeration text.
+    results["radiance_readout"] = radiance.GetProperty("RadianceReadout").GetElement(0)
     results["probed_points_after"] = servermanager.Fetch(line).GetNumberOfPoints()
     SaveScreenshot(os.path.join(OUT, "render_view.png"), view, ImageResolution=[640, 480],
                    TransparentBackground=0)
