@@ -1,6 +1,8 @@
 # Translucency: the two commands a new user needs.
-#   make demo   install missing Debian packages, configure, build, render the bunny into out/
-#   make test   install missing Debian packages, configure, build, run every test but
+#   make demo   install missing Debian packages, configure, build what the demo needs (the
+#               core, the VTK modules, the CLI, the plugin: CMake target TranslucencyDemo,
+#               no test programs), render the bunny into out/
+#   make test   install missing Debian packages, configure, build everything, run every test but
 #               the slow tier with ctest (ctest -LE slow; tiers: Testing/TestTiers.cmake)
 #   make test-all   the same with every test, the slow tier included (what CI runs)
 # Reliability (Documentation/Reliability.md), each in its own build tree:
@@ -32,7 +34,8 @@ configure: deps
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
-demo: build
+demo: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target TranslucencyDemo
 	bash scripts/demo.sh $(BUILD_DIR)
 
 # Test tiers (ctest LABELS unit, integration, mpi, gui, slow): e.g.

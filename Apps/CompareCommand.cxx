@@ -72,7 +72,8 @@ struct CompareOptions
   double GridSpacing = 0.0, RelTol = 1e-8;
   long long Photons = 1000000;
   int Seed = 1;
-  bool NoPictures = false, NSquaredLaw = false;
+  bool NoPictures = false;
+  RadianceReadoutOption Readout;
   const CLI::App* App = nullptr; ///< for the provenance of the JSON
   DiffuseOpticsOptions Optics;   ///< --source, --detector, --time-gates, ...
   std::string MeasuredPath;      ///< --measured: a measured TPSF per detector (CSV)
@@ -163,7 +164,7 @@ vtkSmartPointer<vtkDataArray> SurfaceRadiance(const SolverResult& result)
 }
 
 SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double relTol,
-  int maxIter, double gridSpacing, long long photons, int seed, bool nSquaredLaw,
+  int maxIter, double gridSpacing, long long photons, int seed, bool paperReadout,
   const DiffuseOpticsOptions& optics)
 {
   MessageCollector messages;
@@ -190,7 +191,8 @@ SolverResult RunSolver(const std::string& name, vtkUnstructuredGrid* lit, double
   vtkNew<vtkOutgoingRadiance> radiance;
   messages.Watch(radiance);
   radiance->SetInputData(result.Volume);
-  radiance->SetNSquaredLaw(nSquaredLaw);
+  radiance->SetRadianceReadout(
+    paperReadout ? vtkOutgoingRadiance::PAPER : vtkOutgoingRadiance::ENERGY_CONSERVING);
   radiance->Update();
   if (!messages.Errors.empty())
     throw translucency::Error(name + ": " + messages.Last());
@@ -375,7 +377,7 @@ int Compare(CompareOptions& o)
   const double gridSpacing = o.GridSpacing, relTol = o.RelTol;
   const long long photons = o.Photons;
   const int seed = o.Seed;
-  const bool pictures = !o.NoPictures, nSquaredLaw = o.NSquaredLaw;
+  const bool pictures = !o.NoPictures, paperReadout = o.Readout.IsPaper();
   scene.InteriorSources = !o.Optics.Sources.empty();
   scene.Finish("compare");
   if (outputDir.empty())
@@ -442,7 +444,7 @@ int Compare(CompareOptions& o)
     Progress("solving with " + name + " (" + std::to_string(k + 1) + " of " +
       std::to_string(order.size()) + ")...");
     results[name] =
-      RunSolver(name, lit, relTol, 20000, gridSpacing, photons, seed, nSquaredLaw, o.Optics);
+      RunSolver(name, lit, relTol, 20000, gridSpacing, photons, seed, paperReadout, o.Optics);
   }
   const SolverResult& ref = results[reference];
   // The TPSF of every solver at every detector, on the same gates.
@@ -600,9 +602,9 @@ int Compare(CompareOptions& o)
       }
       std::cout << std::defaultfloat << "\n";
     }
-    if (!nSquaredLaw)
+    if (paperReadout)
       std::cout << "  note: radiance against " << monteCarlo->Name
-                << " without --n-squared-law differs by about eta^2 by the read-out\n"
+                << " with --radiance-readout paper differs by about eta^2 by the read-out\n"
                    "  convention (TransCut eq. 3), not by an error (Documentation/Solvers.md)\n";
   }
   std::cout.flush();
@@ -819,9 +821,7 @@ Command AddCompareCommand(CLI::App& app)
      "per detector, channel --channel) and tpsf.csv (its data)")
     ->type_name("DIR");
   c->add_flag("--no-png", o->NoPictures, "skip the pictures and the plot (no X needed)");
-  c->add_flag("--n-squared-law", o->NSquaredLaw,
-    "energy-conserving radiance read-out (eq. 3 / eta^2); use it\n"
-    "when the reference is montecarlo (see Documentation/Solvers.md)");
+  AddRadianceReadoutOption(c, o->Readout);
   c->add_option("--json", o->JsonPath,
      "the table as JSON (with provenance), written before the\n"
      "pictures and again with the error-vs-time curves")->type_name("FILE");

@@ -4,6 +4,7 @@
 #include "Scene.h"
 
 #include "DiffusionSolverFactory.h"
+#include "Radiance.h"
 #include "Strings.h"
 
 #include <algorithm>
@@ -418,6 +419,21 @@ void AddGridAndPhotonOptions(CLI::App* command, double& gridSpacing, long long& 
     ->default_str("automatic");
   AddNumber(command, "--photons", photons, "photon budget of montecarlo", "N",
     [](double n) { return n >= 1; }, "--photons must be >= 1");
+}
+
+void AddRadianceReadoutOption(CLI::App* command, RadianceReadoutOption& readout)
+{
+  CLI::Option* name = command->add_option("--radiance-readout", readout.Name,
+      "energy-conserving: TransCut eq. 3 / eta^2 (the n^2 law;\n"
+      "a non-absorbing object emits what it receives, as Monte\n"
+      "Carlo does); paper: eq. 3 as printed (eta^2 x the light,\n"
+      "1.69x at eta 1.3), to reproduce TransCut's figures")
+    ->type_name("NAME")
+    ->capture_default_str()
+    ->check(OneOf("--radiance-readout", translucency::GetRadianceReadoutNames()));
+  command->add_flag("--n-squared-law", readout.NSquaredLaw,
+      "same as --radiance-readout energy-conserving (the default)")
+    ->excludes(name);
 }
 
 } // namespace translucency_app

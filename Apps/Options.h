@@ -148,6 +148,20 @@ void AddImageOptions(CLI::App* command, RadianceImageOptions& image);
 /// default: --grid-spacing (grid) and --photons (montecarlo).
 void AddGridAndPhotonOptions(CLI::App* command, double& gridSpacing, long long& photons);
 
+/// The radiance read-out of render and compare (translucency::RadianceReadout).
+struct RadianceReadoutOption
+{
+  std::string Name = "energy-conserving"; ///< --radiance-readout
+  bool NSquaredLaw = false;               ///< the earlier --n-squared-law flag
+  /// True for "paper" (TransCut eq. 3 as printed), false for the default.
+  bool IsPaper() const { return this->Name == "paper"; }
+};
+
+/// --radiance-readout energy-conserving|paper (default energy-conserving) and
+/// the earlier --n-squared-law, kept as a synonym of the default (it excludes
+/// --radiance-readout).
+void AddRadianceReadoutOption(CLI::App* command, RadianceReadoutOption& readout);
+
 /// A validator: the value (or each of a comma-separated list) names a
 /// diffusion solver of translucency::GetDiffusionSolverNames(), any case.
 CLI::Validator DiffusionSolverCheck(const std::string& option);

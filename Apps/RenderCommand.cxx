@@ -50,7 +50,7 @@ struct RenderOptions
   std::string OutputPrefix, PngPath, SlicePath, TpsfPath, JsonPath;
   double RelTol = 1e-6;
   int MaxIter = 2000;
-  bool NSquaredLaw = false;
+  RadianceReadoutOption Readout;
   double GridSpacing = 0.0;
   long long Photons = 1000000;
   double Anisotropy = 0.0; ///< Henyey-Greenstein g of montecarlo
@@ -153,7 +153,8 @@ int Render(RenderOptions& o)
   vtkNew<vtkOutgoingRadiance> radiance;
   messages.Watch(radiance);
   radiance->SetInputData(solved);
-  radiance->SetNSquaredLaw(o.NSquaredLaw);
+  radiance->SetRadianceReadout(
+    o.Readout.IsPaper() ? vtkOutgoingRadiance::PAPER : vtkOutgoingRadiance::ENERGY_CONSERVING);
   radiance->Update();
   if (!messages.Errors.empty())
     throw translucency::Error(messages.Last());
@@ -340,9 +341,7 @@ Command AddRenderCommand(CLI::App& app)
     [](double t) { return t > 0 && t < 1; }, "--rel-tol must be in (0, 1)");
   AddNumber(c, "--max-iter", o->MaxIter, "iteration limit", "N", [](double n) { return n >= 1; },
     "--max-iter must be >= 1");
-  c->add_flag("--n-squared-law", o->NSquaredLaw,
-    "divide the radiance by eta^2 (energy-conserving read-out;\n"
-    "TransCut eq. 3 as printed omits it)");
+  AddRadianceReadoutOption(c, o->Readout);
   c->add_option("--output", o->OutputPrefix,
      "write PREFIX.vtu (tet mesh, Fluence, coefficients) and\n"
      "PREFIX.vtp (surface, Radiance, Irradiance, Fluence)")

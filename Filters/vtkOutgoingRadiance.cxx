@@ -57,6 +57,13 @@ void AttachDisplayColours(vtkPolyData* output, const std::vector<double>& values
   output->GetFieldData()->AddArray(exposureArray);
   output->GetPointData()->SetActiveScalars(vtkTranslucency::RadianceName);
 }
+
+/// The core's read-out for the filter's RadianceReadout property.
+translucency::RadianceReadout ToReadout(int readout)
+{
+  return readout == vtkOutgoingRadiance::PAPER ? translucency::RadianceReadout::Paper
+                                               : translucency::RadianceReadout::EnergyConserving;
+}
 }
 
 struct vtkOutgoingRadiance::Internals
@@ -168,7 +175,7 @@ int vtkOutgoingRadiance::RequestSerial(
       ? translucency::Fresnel::BoundaryRule::Moments
       : translucency::Fresnel::BoundaryRule::Fit;
     values = translucency::BoundaryRadiance(mesh, fluence, irradiance, pointEta,
-      this->UseViewPoint ? this->ViewPoint : nullptr, this->NSquaredLaw, rule);
+      this->UseViewPoint ? this->ViewPoint : nullptr, ToReadout(this->RadianceReadout), rule);
   }
   catch (const translucency::Error& e)
   {
@@ -351,7 +358,7 @@ int vtkOutgoingRadiance::RequestPerPiece(vtkInformationVector** inputVector,
       {
         const size_t k = 3 * static_cast<size_t>(i) + c;
         values[k] = translucency::OutgoingRadiance(
-          fluence[k], irradiance[k], surface.Eta[i], cosOut, this->NSquaredLaw);
+          fluence[k], irradiance[k], surface.Eta[i], cosOut, ToReadout(this->RadianceReadout));
         extremes[0] = std::max(extremes[0], irradiance[k]);
         extremes[1] = std::max(extremes[1], values[k]);
       }
@@ -491,7 +498,8 @@ void vtkOutgoingRadiance::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "UseViewPoint: " << this->UseViewPoint << "\n";
-  os << indent << "NSquaredLaw: " << this->NSquaredLaw << "\n";
+  os << indent << "RadianceReadout: " << translucency::RadianceReadoutName(ToReadout(this->RadianceReadout))
+     << "\n";
   os << indent << "ViewPoint: " << this->ViewPoint[0] << ", " << this->ViewPoint[1] << ", "
      << this->ViewPoint[2] << "\n";
   os << indent << "ParallelPath: " << this->ParallelPath << "\n";

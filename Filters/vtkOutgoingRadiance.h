@@ -4,8 +4,10 @@
  *
  * Extracts the boundary triangles of the input tetrahedral mesh (outward
  * oriented) as a vtkPolyData and evaluates, at every surface point,
- * L_o(x, w_o) = F_t(w_o)/(4 pi) [ (1 + 1/A) phi(x) - 4/(1 + Fdr) q(x) ]
- * (TransCut eq. 3, after Arbree et al.) from the input's point arrays
+ * L_o(x, w_o) = F_t(w_o)/(4 pi eta^2) [ (1 + 1/A) phi(x) - 4/(1 + Fdr) q(x) ]
+ * (TransCut eq. 3, after Arbree et al., with the n^2 law that conserves
+ * energy; SetRadianceReadoutToPaper() drops the 1/eta^2 as the paper prints
+ * it) from the input's point arrays
  * `Fluence` (phi) and `Irradiance` (q) and the cell array `RefractiveIndex`.
  *
  * Output point data: `Radiance` (3 components, W/mm^2/sr, linear, not tone
@@ -62,17 +64,37 @@ public:
   vtkBooleanMacro(UseViewPoint, bool);
   ///@}
 
+  /// The read-outs (translucency::RadianceReadout, in the same order).
+  enum Readout
+  {
+    ENERGY_CONSERVING = 0, ///< eq. 3 / eta^2 (the n^2 law): conserves energy
+    PAPER = 1              ///< TransCut eq. 3 as printed: eta^2 times too much light
+  };
+
   ///@{
   /**
-   * Divide the radiance by eta^2 (the n^2 law for radiance leaving the
-   * medium). TransCut eq. 3 as printed omits it and then returns eta^2 times
-   * too much light (a non-absorbing object would emit 1.69x the power it
-   * receives at eta = 1.3); the Monte Carlo reference agrees with the
-   * corrected read-out. Default off: the paper's formula.
+   * Which read-out evaluates the radiance. ENERGY_CONSERVING (the default)
+   * divides eq. 3 by eta^2, the n^2 law for radiance leaving a denser medium:
+   * a non-absorbing object emits the power it receives, and the Monte Carlo
+   * reference agrees with it. PAPER is eq. 3 as printed (it omits the 1/eta^2
+   * and so emits 1.69x the power received at eta = 1.3): use it only to
+   * reproduce TransCut's figures.
    */
-  vtkSetMacro(NSquaredLaw, bool);
-  vtkGetMacro(NSquaredLaw, bool);
-  vtkBooleanMacro(NSquaredLaw, bool);
+  vtkSetClampMacro(RadianceReadout, int, ENERGY_CONSERVING, PAPER);
+  vtkGetMacro(RadianceReadout, int);
+  void SetRadianceReadoutToEnergyConserving() { this->SetRadianceReadout(ENERGY_CONSERVING); }
+  void SetRadianceReadoutToPaper() { this->SetRadianceReadout(PAPER); }
+  ///@}
+
+  ///@{
+  /**
+   * The earlier switch of the same choice, kept for scripts: on =
+   * ENERGY_CONSERVING (now the default), off = PAPER.
+   */
+  void SetNSquaredLaw(bool on) { this->SetRadianceReadout(on ? ENERGY_CONSERVING : PAPER); }
+  bool GetNSquaredLaw() const { return this->RadianceReadout == ENERGY_CONSERVING; }
+  void NSquaredLawOn() { this->SetNSquaredLaw(true); }
+  void NSquaredLawOff() { this->SetNSquaredLaw(false); }
   ///@}
 
   ///@{
@@ -126,7 +148,7 @@ protected:
   std::string ParallelPlan;
 
   bool UseViewPoint = false;
-  bool NSquaredLaw = false;
+  int RadianceReadout = ENERGY_CONSERVING;
   double ViewPoint[3] = { 0.0, 0.0, 0.0 };
   double Exposure = 0.0;
   double ExposureUsed = 1.0;

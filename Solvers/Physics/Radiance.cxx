@@ -3,6 +3,7 @@
 
 #include "Error.h"
 #include "Fresnel.h"
+#include "Strings.h"
 #include "TetMesh.h"
 
 #include <algorithm>
@@ -30,7 +31,31 @@ void CheckTetEta(const TetMesh& mesh, const std::vector<double>& tetEta)
 
 } // namespace
 
-double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nSquaredLaw,
+const char* RadianceReadoutName(RadianceReadout readout)
+{
+  return readout == RadianceReadout::Paper ? "paper" : "energy-conserving";
+}
+
+std::vector<std::string> GetRadianceReadoutNames()
+{
+  return { RadianceReadoutName(RadianceReadout::EnergyConserving),
+    RadianceReadoutName(RadianceReadout::Paper) };
+}
+
+RadianceReadout RadianceReadoutFromName(const std::string& name)
+{
+  for (RadianceReadout r : { RadianceReadout::EnergyConserving, RadianceReadout::Paper })
+  {
+    if (ToLower(name) == RadianceReadoutName(r))
+    {
+      return r;
+    }
+  }
+  throw Error("unknown radiance read-out '" + name + "': use 'energy-conserving' (eq. 3 / eta^2, " +
+    "conserves energy) or 'paper' (TransCut eq. 3 as printed)");
+}
+
+double OutgoingRadiance(double phi, double q, double eta, double cosOut, RadianceReadout readout,
   Fresnel::BoundaryRule rule)
 {
   if (!(cosOut > 0.0))
@@ -53,9 +78,9 @@ double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nS
     const Fresnel::RobinCoefficients robin = Fresnel::BoundaryCoefficients(eta, rule);
     radiance = ft / (4.0 * Pi) * (phi + (phi - 4.0 * q / (1.0 - robin.Fdr)) / robin.A);
   }
-  if (nSquaredLaw)
+  if (readout == RadianceReadout::EnergyConserving)
   {
-    radiance /= eta * eta; // radiance from inside to vacuum scales by 1/eta^2
+    radiance /= eta * eta; // radiance from inside to vacuum scales by 1/eta^2 (n^2 law)
   }
   return std::max(0.0, radiance);
 }
@@ -77,7 +102,7 @@ std::vector<double> BoundaryPointRefractiveIndex(const TetMesh& mesh,
 
 std::vector<double> BoundaryRadiance(const TetMesh& mesh, const std::vector<double>& fluence,
   const std::vector<double>& irradiance, const std::vector<double>& pointEta,
-  const double* viewPoint, bool nSquaredLaw, Fresnel::BoundaryRule rule)
+  const double* viewPoint, RadianceReadout readout, Fresnel::BoundaryRule rule)
 {
   const size_t numPoints = static_cast<size_t>(mesh.GetNumberOfPoints());
   if (fluence.size() != 3 * numPoints || irradiance.size() != 3 * numPoints ||
@@ -109,7 +134,7 @@ std::vector<double> BoundaryRadiance(const TetMesh& mesh, const std::vector<doub
     for (int c = 0; c < 3; ++c)
     {
       radiance[3 * k + c] = OutgoingRadiance(
-        fluence[3 * i + c], irradiance[3 * i + c], pointEta[i], cosOut, nSquaredLaw, rule);
+        fluence[3 * i + c], irradiance[3 * i + c], pointEta[i], cosOut, readout, rule);
     }
   }
   RequireFinite(radiance, "Radiance", OverflowCause());

@@ -8,13 +8,41 @@
 #include "TetMesh.h"
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 namespace translucency
 {
 
 /**
- * L_o = F_t(w_o)/(4 pi) [ (1 + 1/A) phi - 4/(1 + Fdr) q ]   (TransCut eq. 3)
+ * Which form of the radiance read-out to evaluate.
+ *  - EnergyConserving (the default): TransCut eq. 3 divided by eta^2, the n^2
+ *    law of radiance leaving a medium of index eta into vacuum. A
+ *    non-absorbing object then emits the power it receives (up to the Fdr
+ *    fit); the Monte Carlo reference agrees with it.
+ *  - Paper: eq. 3 as printed, which omits the 1/eta^2 and so emits eta^2
+ *    times the power that entered (1.69x at eta = 1.3; Documentation/Solvers.md).
+ *    Kept by name to reproduce TransCut's figures.
+ */
+enum class RadianceReadout
+{
+  EnergyConserving,
+  Paper
+};
+
+/// "energy-conserving" or "paper" (the CLI's and the plugin's names).
+const char* RadianceReadoutName(RadianceReadout readout);
+/// The names of RadianceReadoutName(), the default first.
+std::vector<std::string> GetRadianceReadoutNames();
+/**
+ * The read-out named `name` (case-insensitive). Throws translucency::Error
+ * naming the valid choices for any other name.
+ */
+RadianceReadout RadianceReadoutFromName(const std::string& name);
+
+/**
+ * L_o = F_t(w_o)/(4 pi) [ (1 + 1/A) phi - 4/(1 + Fdr) q ]   (TransCut eq. 3),
+ * divided by eta^2 unless `readout` is RadianceReadout::Paper,
  * with the fit's A = (1 + Fdr)/(1 - Fdr) (Fresnel::BoundaryRule::Fit). With
  * another rule (`rule`, the Robin coefficients the solve used: Moments for
  * the "extended-moments" collimated model) the same read-out is written
@@ -25,14 +53,12 @@ namespace translucency
  * @param eta refractive index at the point
  * @param cosOut cosine between the outgoing direction and the outward normal
  *        (<= 0 gives 0: the point is not seen from that side)
- * @param nSquaredLaw divide by eta^2 (radiance leaving a medium of index eta
- *        into vacuum, the n^2 law). Eq. 3 as printed omits it, and then does
- *        not conserve energy: with mu_a = 0 its exitance is eta^2 times the
- *        power that entered (1.69x at eta = 1.3; see Documentation/Solvers.md).
- *        Default false (the paper's formula).
+ * @param readout EnergyConserving (default: divide by eta^2, the n^2 law) or
+ *        Paper (eq. 3 as printed; see RadianceReadout)
  * @return radiance (W/mm^2/sr), clamped below at 0
  */
-double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nSquaredLaw = false,
+double OutgoingRadiance(double phi, double q, double eta, double cosOut,
+  RadianceReadout readout = RadianceReadout::EnergyConserving,
   Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit);
 
 /**
@@ -43,13 +69,13 @@ double OutgoingRadiance(double phi, double q, double eta, double cosOut, bool nS
  * @param viewPoint null: every point seen along its normal (cosOut = 1);
  *        else seen from this point (mm): cosOut is the cosine between the
  *        point normal and the direction to it (0 at the view point itself)
- * @param nSquaredLaw, rule see OutgoingRadiance()
+ * @param readout, rule see OutgoingRadiance()
  * OpenMP-parallel over the points (each value independent: same bits at any
  * thread count). Throws translucency::Error on wrong array sizes.
  */
 std::vector<double> BoundaryRadiance(const TetMesh& mesh, const std::vector<double>& fluence,
   const std::vector<double>& irradiance, const std::vector<double>& pointEta,
-  const double* viewPoint, bool nSquaredLaw = false,
+  const double* viewPoint, RadianceReadout readout = RadianceReadout::EnergyConserving,
   Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit);
 
 /**

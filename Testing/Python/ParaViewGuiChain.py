@@ -196,7 +196,11 @@ def run():
     ColorBy(display, ("POINTS", "Radiance", "Magnitude"))
     lut = GetColorTransferFunction("Radiance")
     lut.ApplyPreset("Inferno (matplotlib)", True)
-    lut.RescaleTransferFunction(0.0, 1.0)  # W/(mm^2 sr); the bunny: about 0.08 to 0.91
+    # W/(mm^2 sr). The default read-out is energy-conserving, eq. 3 / eta^2 (marble:
+    # eta 1.3), the bunny about 0.05 to 0.54: on 0..1/eta^2 it draws the same picture
+    # as eq. 3 as printed on 0..1, the baseline's (a default without the 1/eta^2
+    # would draw it 1.69x brighter and fail the comparison).
+    lut.RescaleTransferFunction(0.0, 1.0 / 1.3 ** 2)
     display.SetScalarBarVisibility(view, False)
     display.Ambient = 1.0  # the solver's light only, not the view's
     display.Diffuse = 0.0
@@ -214,6 +218,8 @@ def run():
     data = servermanager.Fetch(radiance)
     results["radiance_points"] = data.GetNumberOfPoints()
     results["radiance_range"] = list(data.GetPointData().GetArray("Radiance").GetRange(-1))
+    # The proxy's read-out, by its enumeration text.
+    results["radiance_readout"] = radiance.GetProperty("RadianceReadout").GetElement(0)
     results["probed_points_after"] = servermanager.Fetch(line).GetNumberOfPoints()
     SaveScreenshot(os.path.join(OUT, "render_view.png"), view, ImageResolution=[640, 480],
                    TransparentBackground=0)

@@ -251,9 +251,11 @@ class LightsAndPowerTest(unittest.TestCase):
         r_phi, r_j = self.fresnel_moments(eta)
         a = (1.0 + r_j) / (1.0 - r_phi)
         f_t = 1.0 - ((eta - 1.0) / (eta + 1.0)) ** 2  # seen along the normal
-        expected = np.maximum(0.0, f_t / (4 * np.pi) * (phi + (phi - 4 * q / (1 - r_phi)) / a))
-        fit = np.maximum(0.0, f_t / (4 * np.pi) * ((1 + 1 / tp.mismatch_a(eta)) * phi -
-                                                   4 / (1 + tp.fdr(eta)) * q))
+        # The default read-out: the Robin flux divided by eta^2 (the n^2 law).
+        expected = np.maximum(0.0, f_t / (4 * np.pi * eta ** 2) *
+                              (phi + (phi - 4 * q / (1 - r_phi)) / a))
+        fit = np.maximum(0.0, f_t / (4 * np.pi * eta ** 2) *
+                         ((1 + 1 / tp.mismatch_a(eta)) * phi - 4 / (1 + tp.fdr(eta)) * q))
         got = vtk_to_numpy(out.GetPointData().GetArray("Radiance"))
         scale = expected.max()
         self.assertLess(abs(got - expected).max() / scale, 1e-9)

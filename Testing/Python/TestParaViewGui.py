@@ -19,7 +19,7 @@ How to run (ctest does this; needs an X display, e.g. Xvfb):
    empty vtkUnstructuredGrid (vtkPoints present, no arrays) and Outgoing
    Radiance downstream empty; after the repair, Radiance again.
 4. Compares the render view (640 x 480, Outgoing Radiance magnitude on a fixed
-   0..1 W/(mm^2 sr) Inferno scale, fixed camera) with the baseline
+   0..1/1.3^2 W/(mm^2 sr) Inferno scale, fixed camera) with the baseline
    Testing/Baselines/paraview_gui_bunny.png (vtkImageDifference, the
    tolerances of TestDemoImage). The baseline was made by this test with
    --update-baseline and looked at: the marble bunny lit from above-front,
@@ -188,7 +188,8 @@ class ParaViewGuiTest(unittest.TestCase):
         self.assertGreater(results["radiance_points"], 1000)
         low, high = results["radiance_range"]
         self.assertGreater(low, 0.0)
-        self.assertLess(high, 1.0)  # inside the fixed colour range of the picture
+        self.assertLess(high, 1.0 / 1.3 ** 2)  # inside the fixed colour range of the picture
+        self.assertEqual(results["radiance_readout"], "energy-conserving")  # the default
 
     def test_render_view_matches_baseline(self):
         png = self.file("render_view.png")

@@ -240,6 +240,7 @@ class PicturesTest(unittest.TestCase):
         self.assertEqual(p["options"]["--target-tets"], "800")
         self.assertEqual(p["options"]["--solver"], "divergence")  # a default, recorded
         self.assertIs(p["options"]["--n-squared-law"], False)
+        self.assertEqual(p["options"]["--radiance-readout"], "energy-conserving")  # the default
         self.assertTrue(p["scene"]["default_lights"])
         self.assertEqual([l["type"] for l in p["scene"]["lights"]], ["directional", "uniform"])
         self.assertEqual(p["scene"]["lights"][1]["irradiance_W_per_mm2"], 0.1)

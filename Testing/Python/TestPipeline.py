@@ -582,10 +582,14 @@ class PipelineTest(unittest.TestCase):
         phi = array(out, "Fluence")
         q = array(out, "Irradiance")
 
-        def eq3(ft):
-            # TransCut eq. 3; the filter does not output negative radiance.
+        def eq3(ft, readout="energy-conserving"):
+            # TransCut eq. 3; the filter does not output negative radiance. The
+            # default read-out divides it by eta^2 (the n^2 law of radiance
+            # leaving a denser medium), "paper" is eq. 3 as printed.
             value = ft[:, None] / (4.0 * math.pi) * (
                 (1.0 + 1.0 / mismatch_a(eta)) * phi - 4.0 / (1.0 + fdr(eta)) * q)
+            if readout != "paper":
+                value /= eta ** 2
             return np.maximum(value, 0.0)
 
         normal_exit = np.full(len(phi), 1.0 - ((eta - 1.0) / (eta + 1.0)) ** 2)
@@ -594,6 +598,10 @@ class PipelineTest(unittest.TestCase):
         scale = np.max(expected)
         self.assertAllClose(array(out, "Radiance"), expected, 1e-10, 1e-14 * scale,
                             msg="Radiance along the normal")
+        pipe.radiance.SetRadianceReadoutToPaper()
+        out = pipe.update(self)
+        self.assertAllClose(array(out, "Radiance"), eq3(normal_exit, "paper"), 1e-10,
+                            1e-14 * scale * eta ** 2, msg="Radiance along the normal, paper")
 
         # Towards a view point, on the faces of a box (exact normals).
         box = Pipeline(box_surface(), target_tets=2000)
@@ -717,7 +725,8 @@ class PipelineTest(unittest.TestCase):
         # and the discrete balance sum S_i phi_i = sum S_i 4 q_i / (1 - Fdr) gives
         # emitted / entering = T / (1 - Fdr) for the paper's eq. 3, which is
         # eta^2 by reciprocity (T / eta^2 = 1 - Fdr, up to the accuracy of the
-        # Fdr fit): eq. 3 as printed creates energy; the n^2 law fixes it.
+        # Fdr fit: 0.5 % at eta 1.3): eq. 3 as printed creates energy; the n^2
+        # law of the default read-out fixes it.
         eta = 1.3
         pipe = Pipeline(sphere_surface(), target_tets=3000, material="",
                         absorption=(0.0, 0.0, 0.0), scattering=(1.0, 2.0, 3.0), eta=eta)
@@ -725,9 +734,17 @@ class PipelineTest(unittest.TestCase):
         pipe.irradiance.SetShadows(0)
         # An identity to 1e-6: a tight solve, not the interactive default.
         pipe.solve.SetRelTol(1e-10)
+        self.assertEqual(pipe.radiance.GetRadianceReadout(),
+                         translucency.vtkOutgoingRadiance.ENERGY_CONSERVING, "the default")
         ratios = {}
-        for law in (False, True):
-            pipe.radiance.SetNSquaredLaw(law)
+        for readout in ("default", "paper", "n-squared-law off", "n-squared-law on"):
+            if readout == "paper":
+                pipe.radiance.SetRadianceReadoutToPaper()
+            elif readout == "n-squared-law off":  # the earlier switch, kept for scripts
+                pipe.radiance.SetRadianceReadoutToEnergyConserving()
+                pipe.radiance.SetNSquaredLaw(False)
+            elif readout == "n-squared-law on":
+                pipe.radiance.SetNSquaredLaw(True)
             surface = pipe.update(self)
             phi = array(surface, "Fluence")
             q = array(surface, "Irradiance")
@@ -738,11 +755,17 @@ class PipelineTest(unittest.TestCase):
             # L along the normal = F_t(1) M / (pi T): back to exitance.
             exitance = normal_radiance * np.pi * hemispherical_transmittance(eta) / \
                 fresnel_transmittance(1.0, eta)
-            ratios[law] = (area[:, None] * exitance).sum(axis=0) / (area[:, None] * q).sum(axis=0)
+            ratios[readout] = (area[:, None] * exitance).sum(axis=0) / \
+                (area[:, None] * q).sum(axis=0)
         t = hemispherical_transmittance(eta)
-        self.assertAllClose(ratios[False], t / (1 - fdr(eta)), 1e-6, msg="eq. 3 exitance / influx")
-        self.assertAllClose(ratios[False], eta ** 2, 0.02, msg="eq. 3 creates eta^2 x the energy")
-        self.assertAllClose(ratios[True], 1.0, 0.02, msg="with the n^2 law, energy is conserved")
+        self.assertAllClose(ratios["paper"], t / (1 - fdr(eta)), 1e-6, msg="eq. 3 exitance / influx")
+        self.assertAllClose(ratios["paper"], eta ** 2, 0.02, msg="eq. 3 creates eta^2 x the energy")
+        self.assertAllClose(ratios["default"], t / (1 - fdr(eta)) / eta ** 2, 1e-6,
+                            msg="the default read-out is eq. 3 / eta^2")
+        self.assertAllClose(ratios["default"], 1.0, 0.01,
+                            msg="by default a non-absorbing sphere emits what it receives")
+        self.assertAllClose(ratios["n-squared-law off"], ratios["paper"], 1e-12)
+        self.assertAllClose(ratios["n-squared-law on"], ratios["default"], 1e-12)
 
     def test_g_script_supplied_irradiance(self):
         eta = 1.3

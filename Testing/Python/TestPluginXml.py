@@ -184,6 +184,41 @@ class PluginXmlTest(unittest.TestCase):
                 self.assertEqual(info.get("command"), "GetAvailableLinearSolvers")
                 self.assertIsNotNone(info.find("StringArrayHelper"))
 
+    def test_tables_have_a_label_and_column_headers(self):
+        # Every repeatable property with several numbers per row (a table in the
+        # panel: Point Sources, Pencil Beams, Detectors, light lists...) has a
+        # label and one column header per number (ShowComponentLabels).
+        tables = 0
+        for name, proxy in proxies():
+            for prop in properties(proxy):
+                per_row = int(prop.get("number_of_elements_per_command", "1"))
+                if prop.get("repeat_command") != "1" or prop.get("information_only") == "1":
+                    continue
+                if prop.get("name") not in ("PointSources", "PencilBeams", "Detectors",
+                                            "TimeSnapshots"):
+                    continue
+                tables += 1
+                where = "%s %s" % (name, prop.get("name"))
+                self.assertTrue(prop.get("label"), where + ": no label")
+                hints = prop.find("Hints")
+                self.assertIsNotNone(hints, where + ": no hints")
+                self.assertIsNotNone(hints.find("ShowLabel"), where + ": label not shown")
+                labels = hints.find("ShowComponentLabels")
+                self.assertIsNotNone(labels, where + ": no column headers")
+                components = sorted(int(c.get("component")) for c in labels)
+                self.assertEqual(components, list(range(per_row)), where)
+                self.assertTrue(all(c.get("label") for c in labels), where)
+        self.assertEqual(tables, 4)
+
+    def test_radiance_readout_defaults_to_energy_conserving(self):
+        prop = next(p for name, proxy in proxies() if proxy.get("name") == "OutgoingRadiance"
+                    for p in properties(proxy) if p.get("name") == "RadianceReadout")
+        entries = {e.get("value"): e.get("text")
+                   for e in prop.find("EnumerationDomain").findall("Entry")}
+        # The values are vtkOutgoingRadiance::ENERGY_CONSERVING (0) and PAPER (1).
+        self.assertEqual(entries, {"0": "energy-conserving", "1": "paper"})
+        self.assertEqual(entries[prop.get("default_values")], "energy-conserving")
+
     def test_help_pages_hold_every_property(self):
         binary = os.environ.get("TRANSLUCENCY_BINARY_DIR")
         if not binary:

@@ -47,7 +47,7 @@ TEST(BoundaryRadiance, EqualsOutgoingRadianceAtEachBoundaryPoint)
   for (const double* viewPoint : { static_cast<const double*>(nullptr), view })
   {
     const std::vector<double> L =
-      BoundaryRadiance(c.Mesh, c.Fluence, c.Irradiance, c.Eta, viewPoint, true);
+      BoundaryRadiance(c.Mesh, c.Fluence, c.Irradiance, c.Eta, viewPoint, RadianceReadout::EnergyConserving);
     const std::vector<int>& boundary = c.Mesh.GetBoundaryPoints();
     ASSERT_EQ(L.size(), 3 * boundary.size());
     int seen = 0;
@@ -67,7 +67,8 @@ TEST(BoundaryRadiance, EqualsOutgoingRadianceAtEachBoundaryPoint)
       for (int ch = 0; ch < 3; ++ch)
       {
         EXPECT_EQ(L[3 * k + ch],
-          OutgoingRadiance(c.Fluence[3 * i + ch], c.Irradiance[3 * i + ch], c.Eta[i], cosOut, true));
+          OutgoingRadiance(c.Fluence[3 * i + ch], c.Irradiance[3 * i + ch], c.Eta[i], cosOut,
+            RadianceReadout::EnergyConserving));
       }
     }
     EXPECT_GT(seen, 0);

@@ -1,12 +1,15 @@
 // Fresnel helpers and the outgoing-radiance read-out, against values computed
 // here from first principles (hand formulas, an independent quadrature).
 
+#include "Error.h"
 #include "Fresnel.h"
 #include "Radiance.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 namespace
 {
@@ -237,15 +240,41 @@ TEST(Radiance, OutgoingRadianceFormula)
   const double r0 = (eta - 1.0) / (eta + 1.0);
   const double ft = 1.0 - r0 * r0;
   const double phi = 2.0, q = 0.1;
-  // TransCut eq. 3 at normal exit.
+  // TransCut eq. 3 at normal exit, as printed ("paper").
   const double expected = ft / (4.0 * Pi) * ((1.0 + 1.0 / a) * phi - 4.0 / (1.0 + fdr) * q);
-  EXPECT_NEAR(OutgoingRadiance(phi, q, eta, 1.0), expected, 1e-14);
+  EXPECT_NEAR(OutgoingRadiance(phi, q, eta, 1.0, RadianceReadout::Paper), expected, 1e-14);
+  // The default read-out adds the n^2 law: eq. 3 / eta^2, per channel.
+  EXPECT_NEAR(OutgoingRadiance(phi, q, eta, 1.0), expected / (eta * eta), 1e-14);
+  EXPECT_EQ(OutgoingRadiance(phi, q, eta, 1.0),
+    OutgoingRadiance(phi, q, eta, 1.0, RadianceReadout::EnergyConserving));
   // Not visible from behind, grazing exit transmits nothing.
   EXPECT_EQ(OutgoingRadiance(phi, q, eta, 0.0), 0.0);
   EXPECT_EQ(OutgoingRadiance(phi, q, eta, -0.5), 0.0);
   EXPECT_NEAR(OutgoingRadiance(phi, q, eta, 1e-12), 0.0, 1e-10);
   // Clamped at zero when the source term dominates.
   EXPECT_EQ(OutgoingRadiance(0.0, 1.0, eta, 1.0), 0.0);
+  EXPECT_EQ(OutgoingRadiance(0.0, 1.0, eta, 1.0, RadianceReadout::Paper), 0.0);
+}
+
+TEST(Radiance, ReadoutNames)
+{
+  EXPECT_EQ(GetRadianceReadoutNames(), (std::vector<std::string>{ "energy-conserving", "paper" }));
+  EXPECT_EQ(RadianceReadoutFromName("paper"), RadianceReadout::Paper);
+  EXPECT_EQ(RadianceReadoutFromName("Energy-Conserving"), RadianceReadout::EnergyConserving);
+  for (RadianceReadout r : { RadianceReadout::EnergyConserving, RadianceReadout::Paper })
+  {
+    EXPECT_EQ(RadianceReadoutFromName(RadianceReadoutName(r)), r);
+  }
+  try
+  {
+    RadianceReadoutFromName("n-squared");
+    FAIL() << "an unknown read-out must throw";
+  }
+  catch (const Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("'n-squared'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("energy-conserving"), std::string::npos) << e.what();
+  }
 }
 
 } // namespace

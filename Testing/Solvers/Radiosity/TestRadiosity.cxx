@@ -530,7 +530,7 @@ TEST(Radiosity, ExitanceMatchesEquation3WithNSquaredLaw)
       for (int k = 0; k < m; ++k)
       {
         const double mu = (k + 0.5) / m;
-        integral += OutgoingRadiance(phi, q, eta, mu, true) * mu / m;
+        integral += OutgoingRadiance(phi, q, eta, mu, RadianceReadout::EnergyConserving) * mu / m;
       }
       integral *= 2 * Pi;
       EXPECT_NEAR(ours, integral, 0.03 * integral) << "eta " << eta << " phi " << phi;
