@@ -49,7 +49,7 @@ test-all: build
 # The core and its GoogleTests only (no VTK): every ASan/UBSan finding fails.
 # The three refinement studies below run 30-75 s each under ASan and exercise
 # no code the other sanitized tests do not (Documentation/Reliability.md);
-# they run in `make test`.
+# they run in `make test-all` (the slow tier).
 SANITIZE_EXCLUDE ?= ^(QuadGraph\.RefinementStudyShowsTheSchemeIsInconsistent|FiniteElement\.DivergenceMatchesFemOnTheBunny|FiniteElement\.ConvergenceToManufacturedSolution)$$
 test-sanitize: deps
 	cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo \

@@ -129,12 +129,10 @@ def assign(source, veins=False, layers=False):
 if MODE == "prepare":
     import numpy as np
     from vtkmodules.util.numpy_support import numpy_to_vtk
-    from vtkmodules.vtkCommonCore import vtkIdTypeArray, vtkPoints
+    from vtkmodules.vtkCommonCore import vtkPoints
     from vtkmodules.vtkCommonDataModel import VTK_TETRA, vtkCellArray, vtkUnstructuredGrid
-    from vtkmodules.vtkFiltersParallel import vtkExtractUnstructuredGridPiece
-    from vtkmodules.vtkIOParallelXML import vtkXMLPUnstructuredGridWriter
-    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader, vtkXMLUnstructuredGridWriter
     from vtkmodules.util.numpy_support import numpy_to_vtkIdTypeArray
+    from mpi_harness import add_ids, mark_global_ids, write_mesh, write_pieces
 
     nx, ny, nz, h = 16, 16, 14, 1.0
     keep = np.ones((nx, ny, nz), bool)
@@ -183,12 +181,7 @@ if MODE == "prepare":
     tet_ids = numpy_to_vtk(np.arange(len(tets), dtype=np.int64) * 3 + 5, deep=True)
     tet_ids.SetName("TetIds")  # a cell identity that survives partitioning
     mesh.GetCellData().AddArray(tet_ids)
-    ids = vtkIdTypeArray()
-    ids.SetName("PointIds")
-    ids.SetNumberOfTuples(mesh.GetNumberOfPoints())
-    for i in range(mesh.GetNumberOfPoints()):
-        ids.SetValue(i, 1000 + 7 * i)  # growing with the serial order
-    mesh.GetPointData().AddArray(ids)
+    add_ids(mesh.GetPointData(), "PointIds", mesh.GetNumberOfPoints(), 1000, 7)  # serial order
     # Boundary triangles: faces of one tet only.
     faces = np.sort(np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]],
                                     tets[:, [0, 1, 2]]]), axis=1)
@@ -196,43 +189,15 @@ if MODE == "prepare":
     with open(path("boundary.txt"), "w") as f:
         f.write("%d %d\n" % (int((counts == 1).sum()), len(tets)))
 
-    writer = vtkXMLUnstructuredGridWriter()
-    writer.SetInputData(mesh)
-    writer.SetFileName(path("mesh.vtu"))
-    writer.Write()
+    write_mesh(mesh, path("mesh.vtu"))
     with_ids = mesh.NewInstance()
     with_ids.ShallowCopy(mesh)
     with_ids.GetPointData().SetActiveGlobalIds("PointIds")
-    writer.SetInputData(with_ids)
-    writer.SetFileName(path("meshid.vtu"))
-    writer.Write()
-    for name, source, pieces, ghosts in (("mesh1", mesh, 1, 0), ("mesh2g", mesh, 2, 1),
-                                          ("mesh3id", mesh, 3, 0)):
-        split = vtkExtractUnstructuredGridPiece()
-        split.SetInputData(source)
-        pwriter = vtkXMLPUnstructuredGridWriter()
-        pwriter.SetInputConnection(split.GetOutputPort())
-        pwriter.SetFileName(path(name + ".pvtu"))
-        pwriter.SetNumberOfPieces(pieces)
-        pwriter.SetStartPiece(0)
-        pwriter.SetEndPiece(pieces - 1)
-        pwriter.SetGhostLevel(ghosts)
-        pwriter.Write()
-
-    # (vtkExtractUnstructuredGridPiece drops the GlobalIds attribute: set it again.)
-    with open(path("mesh3id.pvtu")) as f:
-        text = f.read()
-    with open(path("mesh3id.pvtu"), "w") as f:
-        f.write(text.replace("<PPointData>", '<PPointData GlobalIds="PointIds">'))
-    for k in range(3):
-        piece_reader = vtkXMLUnstructuredGridReader()
-        piece_reader.SetFileName(path("mesh3id_%d.vtu" % k))
-        piece_reader.Update()
-        piece = piece_reader.GetOutput()
-        piece.GetPointData().SetActiveGlobalIds("PointIds")
-        writer.SetInputData(piece)
-        writer.SetFileName(path("mesh3id_%d.vtu" % k))
-        writer.Write()
+    write_mesh(with_ids, path("meshid.vtu"))
+    write_pieces(mesh, path("mesh1"), 1, 0)
+    write_pieces(mesh, path("mesh2g"), 2, 1)
+    write_pieces(mesh, path("mesh3id"), 3, 0)
+    mark_global_ids(path("mesh3id"), 3, point="PointIds")
 
     # 3 slabs in x with GlobalIds (mesh3x.pvtu): piece 0 is x <= x0.
     from vtkmodules.vtkFiltersCore import vtkThreshold
@@ -253,9 +218,7 @@ if MODE == "prepare":
         if k == 0:
             with open(path("cutplane.txt"), "w") as f:
                 f.write("%r\n" % piece.GetBounds()[1])
-        writer.SetInputData(piece)
-        writer.SetFileName(path("mesh3x_%d.vtu" % k))
-        writer.Write()
+        write_mesh(piece, path("mesh3x_%d.vtu" % k))
     with_ids.GetCellData().RemoveArray("Slab")
     with open(path("mesh3id.pvtu")) as f:
         text = f.read()

@@ -80,38 +80,19 @@ def solve(source, light, solver="divergence", distributed=1):
 if MODE == "prepare":
     import numpy as np
     from vtkmodules.numpy_interface import dataset_adapter as dsa
-    from vtkmodules.vtkCommonCore import vtkIdTypeArray, vtkPoints
-    from vtkmodules.vtkFiltersCore import vtkTriangleFilter
-    from vtkmodules.vtkFiltersParallel import vtkExtractUnstructuredGridPiece
-    from vtkmodules.vtkFiltersSources import vtkSphereSource
-    from vtkmodules.vtkIOParallelXML import vtkXMLPUnstructuredGridWriter
-    from vtkmodules.vtkIOPLY import vtkPLYWriter
-    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader, vtkXMLUnstructuredGridWriter
+    from cli_under_test import write_sphere
+    from mpi_harness import (add_ids, mark_global_ids, read_mesh, use_float_points, write_mesh,
+                             write_pieces)
 
-    sphere = vtkSphereSource()
-    sphere.SetRadius(4.0)
-    sphere.SetThetaResolution(20)
-    sphere.SetPhiResolution(20)
-    triangles = vtkTriangleFilter()
-    triangles.SetInputConnection(sphere.GetOutputPort())
-    ply = vtkPLYWriter()
-    ply.SetInputConnection(triangles.GetOutputPort())
-    ply.SetFileName(path("surface.ply"))
-    ply.Write()
+    write_sphere(path("surface.ply"), 4.0, 20)
     assign = AssignScatteringCoefficients(Input=TetrahedralizeSurface(
         Input=TranslucencySurfaceReader(FileName=path("surface.ply")), TargetNumberOfTets=8000))
     SaveData(path("tets.vtu"), proxy=assign)
 
-    reader = vtkXMLUnstructuredGridReader()
-    reader.SetFileName(path("tets.vtu"))
-    reader.Update()
-    mesh = reader.GetOutput()
+    mesh = read_mesh(path("tets.vtu"))
     # Float points (vtkExtractUnstructuredGridPiece writes float points: every
     # case then has the very same coordinates).
-    float_points = vtkPoints()
-    float_points.SetDataTypeToFloat()
-    float_points.DeepCopy(mesh.GetPoints())
-    mesh.SetPoints(float_points)
+    use_float_points(mesh)
     # A heterogeneous material from the cell centres.
     wrapped = dsa.WrapDataObject(mesh)
     x = np.asarray(wrapped.Points, dtype=float)
@@ -126,41 +107,11 @@ if MODE == "prepare":
                          ("RefractiveIndex", eta)):
         mesh.GetCellData().RemoveArray(name)
         wrapped.CellData.append(values, name)
-    ids = vtkIdTypeArray()
-    ids.SetName("PointIds")
-    ids.SetNumberOfTuples(mesh.GetNumberOfPoints())
-    for i in range(mesh.GetNumberOfPoints()):
-        ids.SetValue(i, 500 + 3 * i)
-    mesh.GetPointData().AddArray(ids)
-    writer = vtkXMLUnstructuredGridWriter()
-    writer.SetInputData(mesh)
-    writer.SetFileName(path("mesh.vtu"))
-    writer.Write()
-    for name, pieces, ghosts in (("mesh2g", 2, 1), ("mesh3id", 3, 0)):
-        split = vtkExtractUnstructuredGridPiece()
-        split.SetInputData(mesh)
-        pwriter = vtkXMLPUnstructuredGridWriter()
-        pwriter.SetInputConnection(split.GetOutputPort())
-        pwriter.SetFileName(path(name + ".pvtu"))
-        pwriter.SetNumberOfPieces(pieces)
-        pwriter.SetStartPiece(0)
-        pwriter.SetEndPiece(pieces - 1)
-        pwriter.SetGhostLevel(ghosts)
-        pwriter.Write()
-    with open(path("mesh3id.pvtu")) as f:
-        text = f.read()
-    with open(path("mesh3id.pvtu"), "w") as f:
-        f.write(text.replace("<PPointData>", '<PPointData GlobalIds="PointIds">'))
-    for k in range(3):
-        piece_reader = vtkXMLUnstructuredGridReader()
-        piece_reader.SetFileName(path("mesh3id_%d.vtu" % k))
-        piece_reader.Update()
-        piece = piece_reader.GetOutput()
-        piece.GetPointData().SetActiveGlobalIds("PointIds")
-        piece_writer = vtkXMLUnstructuredGridWriter()
-        piece_writer.SetInputData(piece)
-        piece_writer.SetFileName(path("mesh3id_%d.vtu" % k))
-        piece_writer.Write()
+    add_ids(mesh.GetPointData(), "PointIds", mesh.GetNumberOfPoints(), 500, 3)
+    write_mesh(mesh, path("mesh.vtu"))
+    write_pieces(mesh, path("mesh2g"), 2, 1)
+    write_pieces(mesh, path("mesh3id"), 3, 0)
+    mark_global_ids(path("mesh3id"), 3, point="PointIds")
 
     source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     import json

@@ -122,25 +122,11 @@ def chain(name, source, surface=True, samples=0):
 
 
 if MODE == "prepare":
-    from vtkmodules.vtkCommonCore import vtkIdTypeArray, vtkPoints
-    from vtkmodules.vtkFiltersCore import vtkTriangleFilter
-    from vtkmodules.vtkFiltersParallel import vtkExtractUnstructuredGridPiece
-    from vtkmodules.vtkFiltersSources import vtkSphereSource
-    from vtkmodules.vtkIOParallelXML import vtkXMLPUnstructuredGridWriter
-    from vtkmodules.vtkIOPLY import vtkPLYWriter
-    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader, vtkXMLUnstructuredGridWriter
+    from cli_under_test import write_sphere
+    from mpi_harness import (add_ids, mark_global_ids, read_mesh, use_float_points, write_mesh,
+                             write_pieces)
 
-    sphere = vtkSphereSource()
-    sphere.SetRadius(4.0)
-    sphere.SetThetaResolution(16)
-    sphere.SetPhiResolution(16)
-    triangles = vtkTriangleFilter()
-    triangles.SetInputConnection(sphere.GetOutputPort())
-    ply = vtkPLYWriter()
-    ply.SetInputConnection(triangles.GetOutputPort())
-    ply.SetFileName(path("surface.ply"))
-    ply.Write()
-
+    write_sphere(path("surface.ply"), 4.0, 16)
     reader = TranslucencySurfaceReader(FileName=path("surface.ply"))
     assign = AssignScatteringCoefficients(
         Input=TetrahedralizeSurface(Input=reader, TargetNumberOfTets=3000))
@@ -150,60 +136,19 @@ if MODE == "prepare":
     # The same tets in pieces, written here with plain VTK (one process).
     # vtkExtractUnstructuredGridPiece makes float points: mesh.vtu gets float
     # points too, so that every case has the very same coordinates.
-    mesh_reader = vtkXMLUnstructuredGridReader()
-    mesh_reader.SetFileName(path("mesh.vtu"))
-    mesh_reader.Update()
-    mesh = mesh_reader.GetOutput()
-    float_points = vtkPoints()
-    float_points.SetDataTypeToFloat()
-    float_points.DeepCopy(mesh.GetPoints())
-    mesh.SetPoints(float_points)
-    mesh_writer = vtkXMLUnstructuredGridWriter()
-    mesh_writer.SetInputData(mesh)
-    mesh_writer.SetFileName(path("mesh.vtu"))
-    mesh_writer.Write()
+    mesh = read_mesh(path("mesh.vtu"))
+    use_float_points(mesh)
+    write_mesh(mesh, path("mesh.vtu"))
     # mesh3id: point and cell ids in the serial order (plain arrays through
     # vtkExtractUnstructuredGridPiece, which drops the GlobalIds attribute,
     # marked as GlobalIds in the written files afterwards).
     with_ids = mesh.NewInstance()
     with_ids.ShallowCopy(mesh)
-    for data, count, name, scale in (
-            (with_ids.GetPointData(), mesh.GetNumberOfPoints(), "PointIds", 7),
-            (with_ids.GetCellData(), mesh.GetNumberOfCells(), "CellIds", 3)):
-        ids = vtkIdTypeArray()
-        ids.SetName(name)
-        ids.SetNumberOfTuples(count)
-        for i in range(count):
-            ids.SetValue(i, 1000 + scale * i)
-        data.AddArray(ids)
-    for name, data, pieces, ghosts in (("mesh2g", mesh, 2, 1), ("mesh3id", with_ids, 3, 0)):
-        split = vtkExtractUnstructuredGridPiece()
-        split.SetInputData(data)
-        writer = vtkXMLPUnstructuredGridWriter()
-        writer.SetInputConnection(split.GetOutputPort())
-        writer.SetFileName(path(name + ".pvtu"))
-        writer.SetNumberOfPieces(pieces)
-        writer.SetStartPiece(0)
-        writer.SetEndPiece(pieces - 1)
-        writer.SetGhostLevel(ghosts)
-        writer.Write()
-    for k in range(3):
-        piece_reader = vtkXMLUnstructuredGridReader()
-        piece_reader.SetFileName(path("mesh3id_%d.vtu" % k))
-        piece_reader.Update()
-        piece = piece_reader.GetOutput()
-        piece.GetPointData().SetActiveGlobalIds("PointIds")
-        piece.GetCellData().SetActiveGlobalIds("CellIds")
-        piece_writer = vtkXMLUnstructuredGridWriter()
-        piece_writer.SetInputData(piece)
-        piece_writer.SetFileName(path("mesh3id_%d.vtu" % k))
-        piece_writer.Write()
-    with open(path("mesh3id.pvtu")) as f:
-        text = f.read()
-    text = text.replace("<PPointData>", '<PPointData GlobalIds="PointIds">')
-    text = text.replace("<PCellData>", '<PCellData GlobalIds="CellIds">')
-    with open(path("mesh3id.pvtu"), "w") as f:
-        f.write(text)
+    add_ids(with_ids.GetPointData(), "PointIds", mesh.GetNumberOfPoints(), 1000, 7)
+    add_ids(with_ids.GetCellData(), "CellIds", mesh.GetNumberOfCells(), 1000, 3)
+    write_pieces(mesh, path("mesh2g"), 2, 1)
+    write_pieces(with_ids, path("mesh3id"), 3, 0)
+    mark_global_ids(path("mesh3id"), 3, point="PointIds", cell="CellIds")
 
     mesh_source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     chain("ref_mesh", mesh_source)

@@ -42,7 +42,10 @@ import vtk
 import translucency
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 
-CLI = os.environ.get("TRANSLUCENCY_CLI", "translucency")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import find_cli  # noqa: E402
+
+CLI = find_cli("TestAcquire")
 
 
 def run(*args):

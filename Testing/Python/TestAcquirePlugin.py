@@ -27,6 +27,8 @@ PLUGIN = sys.argv.pop(1)
 LoadPlugin(PLUGIN, ns=globals())
 
 import numpy as np  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import find_cli  # noqa: E402
 from vtkmodules.vtkCommonDataModel import vtkImageData  # noqa: E402
 from vtkmodules.vtkIOXML import vtkXMLImageDataWriter  # noqa: E402
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy  # noqa: E402
@@ -54,8 +56,7 @@ class AcquirePluginTest(unittest.TestCase):
         writer.SetInputData(image)
         writer.Write()
         prefix = os.path.join(folder, "m")
-        cli = os.environ.get("TRANSLUCENCY_CLI", "translucency")
-        subprocess.run([cli, "acquire", "--synthetic-truth", truth, "--grid", "6x6x3",
+        subprocess.run([find_cli("TestAcquirePlugin"), "acquire", "--synthetic-truth", truth, "--grid", "6x6x3",
                         "--patterns", "2x2", "--max-iter", "0", "--output", prefix, "--no-png"],
                        check=True, capture_output=True)
         reader = XMLUnstructuredGridReader(FileName=[prefix + "_measurements.vtu"])

@@ -27,22 +27,14 @@ Exits non-zero on failure (unittest).
 import json
 import os
 import subprocess
+import sys
 import tempfile
 import unittest
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import find_cli  # noqa: E402
 
-def find_cli():
-    cli = os.environ.get("TRANSLUCENCY_CLI")
-    if not cli:
-        binary = os.environ.get("TRANSLUCENCY_BINARY_DIR")
-        if binary:
-            cli = os.path.join(binary, "bin", "translucency")
-    if not cli or not os.path.exists(cli):
-        raise SystemExit("set TRANSLUCENCY_CLI to the translucency executable")
-    return cli
-
-
-CLI = find_cli()
+CLI = find_cli("TestBadMeshInputs")
 TIME_LIMIT = 60  # seconds per run; the good cases take well under one
 
 # A 2 x 2 x 2 block of 5 mm cubes, each in 6 tets: 27 points, 48 tets.

@@ -21,15 +21,10 @@ import time
 import unittest
 
 
-def find_cli():
-    cli = os.environ.get("TRANSLUCENCY_CLI")
-    if not cli:
-        binary = os.environ.get("TRANSLUCENCY_BINARY_DIR", "build")
-        cli = os.path.join(binary, "bin", "translucency")
-    return cli
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import find_cli  # noqa: E402
 
-
-CLI = find_cli()
+CLI = find_cli("TestBadNumbers")
 CUBE_OBJ = """v 0 0 0
 v 10 0 0
 v 10 10 0

@@ -29,11 +29,10 @@ import sys
 import tempfile
 import unittest
 
-from vtkmodules.vtkFiltersCore import vtkTriangleFilter
-from vtkmodules.vtkFiltersSources import vtkSphereSource
-from vtkmodules.vtkIOGeometry import vtkSTLWriter
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import find_cli, write_sphere  # noqa: E402
 
-CLI = os.environ["TRANSLUCENCY_CLI"]
+CLI = find_cli("TestBenchDiffuseOptics")
 
 
 class BenchDiffuseOptics(unittest.TestCase):
@@ -42,16 +41,7 @@ class BenchDiffuseOptics(unittest.TestCase):
         cls.tmp = tempfile.TemporaryDirectory()
         cls.json_path = os.path.join(cls.tmp.name, "bench.json")
         mesh = cls.mesh = os.path.join(cls.tmp.name, "sphere.stl")
-        sphere = vtkSphereSource()
-        sphere.SetRadius(10.0)
-        sphere.SetThetaResolution(16)
-        sphere.SetPhiResolution(16)
-        triangles = vtkTriangleFilter()
-        triangles.SetInputConnection(sphere.GetOutputPort())
-        writer = vtkSTLWriter()
-        writer.SetFileName(mesh)
-        writer.SetInputConnection(triangles.GetOutputPort())
-        writer.Write()
+        write_sphere(mesh, 10.0, 16)
         cmd = [CLI, "bench", "--diffuse-optics", "--mesh", mesh, "--tets", "3000",
                "--gate-tets", "3000", "--gates", "10", "--runs", "1", "--json", cls.json_path]
         cls.run_result = subprocess.run(cmd, capture_output=True, text=True, timeout=240)

@@ -35,11 +35,10 @@ import sys
 import tempfile
 import unittest
 
-from vtkmodules.vtkFiltersCore import vtkTriangleFilter
-from vtkmodules.vtkFiltersSources import vtkSphereSource
-from vtkmodules.vtkIOGeometry import vtkSTLWriter
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import find_cli, write_sphere  # noqa: E402
 
-CLI = os.environ["TRANSLUCENCY_CLI"]
+CLI = find_cli("TestBenchLinearSolvers")
 
 
 class BenchLinearSolvers(unittest.TestCase):
@@ -49,16 +48,7 @@ class BenchLinearSolvers(unittest.TestCase):
         cls.json_path = os.path.join(cls.tmp.name, "bench.json")
         cls.png_path = os.path.join(cls.tmp.name, "curve.png")
         mesh = cls.mesh = os.path.join(cls.tmp.name, "sphere.stl")
-        sphere = vtkSphereSource()
-        sphere.SetRadius(10.0)
-        sphere.SetThetaResolution(16)
-        sphere.SetPhiResolution(16)
-        triangles = vtkTriangleFilter()
-        triangles.SetInputConnection(sphere.GetOutputPort())
-        writer = vtkSTLWriter()
-        writer.SetFileName(mesh)
-        writer.SetInputConnection(triangles.GetOutputPort())
-        writer.Write()
+        write_sphere(mesh, 10.0, 16)
         cmd = [CLI, "bench", "--linear-solvers", "--mesh", mesh, "--tets", "3000", "--runs", "1", "--json", cls.json_path, "--plot", cls.png_path]
         cls.run_result = subprocess.run(cmd, capture_output=True, text=True, timeout=240)
         print(cls.run_result.stdout)

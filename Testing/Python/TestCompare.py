@@ -29,11 +29,12 @@ import unittest
 import numpy as np
 
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkFiltersCore import vtkCleanPolyData, vtkTriangleFilter
-from vtkmodules.vtkFiltersSources import vtkSphereSource
-from vtkmodules.vtkIOXML import vtkXMLMultiBlockDataReader, vtkXMLPolyDataWriter
+from vtkmodules.vtkIOXML import vtkXMLMultiBlockDataReader
 
-CLI = os.environ.get("TRANSLUCENCY_CLI") or sys.exit("set TRANSLUCENCY_CLI")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import find_cli, write_sphere  # noqa: E402
+
+CLI = find_cli("TestCompare")
 
 
 def run(*args):
@@ -44,19 +45,8 @@ class CompareTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.tmp = tempfile.TemporaryDirectory()
-        sphere = vtkSphereSource()
-        sphere.SetRadius(5.0)
-        sphere.SetThetaResolution(16)
-        sphere.SetPhiResolution(16)
-        tri = vtkTriangleFilter()
-        tri.SetInputConnection(sphere.GetOutputPort())
-        clean = vtkCleanPolyData()
-        clean.SetInputConnection(tri.GetOutputPort())
-        writer = vtkXMLPolyDataWriter()
-        writer.SetInputConnection(clean.GetOutputPort())
         cls.mesh = os.path.join(cls.tmp.name, "sphere.vtp")
-        writer.SetFileName(cls.mesh)
-        writer.Write()
+        write_sphere(cls.mesh, 5.0, 16, clean=True)
         cls.material = os.path.join(cls.tmp.name, "nonabsorbing.json")
         with open(cls.material, "w") as f:
             json.dump({"absorption": [0, 0, 0], "reduced_scattering": [1.0, 2.0, 3.0],

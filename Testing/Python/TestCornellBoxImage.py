@@ -35,6 +35,9 @@ from vtkmodules.vtkImagingCore import vtkImageDifference
 from vtkmodules.vtkIOImage import vtkPNGReader
 from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import find_cli  # noqa: E402
+
 SOURCE_DIR = os.environ.get("TRANSLUCENCY_SOURCE_DIR") or os.path.abspath(
     os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 BASELINE = os.path.join(SOURCE_DIR, "Testing", "Baselines", "cornell_box.png")
@@ -44,19 +47,10 @@ IMAGE_TOLERANCE = 10.0
 MEAN_TOLERANCE = 2.0
 
 
-def find_cli():
-    for cli in (os.environ.get("TRANSLUCENCY_CLI"),
-                os.path.join(os.environ.get("TRANSLUCENCY_BINARY_DIR", ""), "bin", "translucency"),
-                os.path.join(SOURCE_DIR, "build", "bin", "translucency")):
-        if cli and os.access(cli, os.X_OK):
-            return cli
-    sys.exit("TestCornellBoxImage: cannot find the translucency executable: set TRANSLUCENCY_CLI")
-
-
 def run(out_dir):
     png = os.path.join(out_dir, "cornell.png")
     report = os.path.join(out_dir, "cornell.json")
-    command = [find_cli(), "radiosity", "--scene", SCENE, "--output",
+    command = [find_cli("TestCornellBoxImage"), "radiosity", "--scene", SCENE, "--output",
                os.path.join(out_dir, "cornell"), "--png", png, "--json", report]
     if not os.environ.get("DISPLAY") and shutil.which("xvfb-run"):
         command = ["xvfb-run", "-a", "-s", "-screen 0 1024x768x24"] + command

@@ -41,6 +41,9 @@ from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkImagingCore import vtkImageDifference
 from vtkmodules.vtkIOImage import vtkPNGReader
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import find_cli  # noqa: E402
+
 SOURCE_DIR = os.environ.get("TRANSLUCENCY_SOURCE_DIR") or os.path.abspath(
     os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 BASELINE = os.path.join(SOURCE_DIR, "Testing", "Baselines", "demo.png")
@@ -74,17 +77,6 @@ MIN_FOREGROUND = 0.10
 TARGET_TETS = 200000
 
 
-def find_cli():
-    candidates = [os.environ.get("TRANSLUCENCY_CLI")]
-    if os.environ.get("TRANSLUCENCY_BINARY_DIR"):
-        candidates.append(os.path.join(os.environ["TRANSLUCENCY_BINARY_DIR"], "bin", "translucency"))
-    candidates.append(os.path.join(SOURCE_DIR, "build", "bin", "translucency"))
-    for cli in candidates:
-        if cli and os.access(cli, os.X_OK):
-            return cli
-    sys.exit("TestDemoImage: cannot find the translucency executable: set TRANSLUCENCY_CLI")
-
-
 def demo_arguments(out_dir):
     """The arguments of `translucency` in scripts/demo.sh, out/ -> out_dir."""
     with open(DEMO_SCRIPT) as f:
@@ -105,7 +97,7 @@ def option(args, name):
 
 def run_demo(out_dir):
     args = demo_arguments(out_dir)
-    command = [find_cli()] + args
+    command = [find_cli("TestDemoImage")] + args
     if not os.environ.get("DISPLAY") and shutil.which("xvfb-run"):
         command = ["xvfb-run", "-a", "-s", "-screen 0 1024x768x24"] + command
     result = subprocess.run(command, cwd=SOURCE_DIR, capture_output=True, text=True, timeout=800)

@@ -38,37 +38,17 @@ blocked counts and the same front.
 """
 
 import os
-import re
 import sys
-import tempfile
-import unittest
 
 import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkIOXML import vtkXMLPUnstructuredGridReader, vtkXMLUnstructuredGridReader
+from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-from TestParallel import run  # noqa: E402  (the time-limited runner that ends hung ranks)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from mpi_harness import RANKS, MpiSuite, main, pieces_of, worst_relative  # noqa: E402
 
-PLUGIN = sys.argv[1] if len(sys.argv) > 1 else ""
-RANKS = int(sys.argv[2]) if len(sys.argv) > 2 else 2
-TIME_LIMIT = {"prepare": 200, "run": 280}  # seconds: hang ceilings for a loaded machine
 CASES = {"pvtu3_A": "A", "pvtu3_B": "B", "redistid_A": "A", "pvtu2_B": "B", "redist_B": "B",
          "pvtu1_B": "B", "gathered_A": "A", "after_error_B": "B"}
-
-
-def pieces_of(name):
-    reader = vtkXMLPUnstructuredGridReader()
-    reader.SetFileName(name)
-    reader.Update()
-    pieces = []
-    for k in range(reader.GetNumberOfPieces()):
-        reader.UpdatePiece(k, reader.GetNumberOfPieces(), 0)
-        piece = reader.GetOutput().NewInstance()
-        piece.DeepCopy(reader.GetOutput())
-        pieces.append(piece)
-    return pieces
 
 
 def arrays(piece):
@@ -77,58 +57,28 @@ def arrays(piece):
             vtk_to_numpy(data.GetArray("Fluence")))
 
 
-def worst_relative(value, reference, scale):
-    return float(np.max(np.abs(value - reference) /
-                        np.maximum(np.abs(reference), 1e-12 * scale)))
-
-
-class DistributedIrradianceTest(unittest.TestCase):
+class DistributedIrradianceTest(MpiSuite):
+    SCRIPT = "DistributedIrradiancePipeline.py"
+    TIME_LIMIT = {"prepare": 200, "run": 280}  # seconds: hang ceilings for a loaded machine
 
     @classmethod
-    def setUpClass(cls):
-        cls.tmp = tempfile.TemporaryDirectory()
-        cls.work = cls.tmp.name
-        script = os.path.join(HERE, "DistributedIrradiancePipeline.py")
-        prepare = run(["pvbatch", script, PLUGIN, cls.work, "prepare"], cls.work,
-                      TIME_LIMIT["prepare"])
-        if prepare.returncode != 0 or "prepared" not in prepare.stdout:
-            cls.tmp.cleanup()
-            raise AssertionError("prepare failed:\n" + prepare.stdout + prepare.stderr)
-        cls.result = run(["mpiexec", "--allow-run-as-root", "--oversubscribe", "-n", str(RANKS),
-                          "pvbatch", "--symmetric", script, PLUGIN, cls.work, "run"], cls.work,
-                         TIME_LIMIT["run"])
-        cls.reports = {}
-        for rank in range(RANKS):
-            name = os.path.join(cls.work, "irr_%d.txt" % rank)
-            text = open(name).read() if os.path.exists(name) else ""
-            for m in re.finditer(r"^irr (\S+) rank (\d+) path (\S+) triangles (\d+) bytes (\d+) "
-                                 r"ms (\S+)$", text, re.M):
-                cls.reports.setdefault(m.group(1), {})[int(m.group(2))] = m.groups()[2:]
-        cls.assign_paths = {}
-        for rank in range(RANKS):
-            name = os.path.join(cls.work, "irr_%d.txt" % rank)
-            text = open(name).read() if os.path.exists(name) else ""
-            for m in re.finditer(r"^assign (\S+) rank (\d+) path (\S+)$", text, re.M):
-                cls.assign_paths.setdefault(m.group(1), {})[int(m.group(2))] = m.group(3)
-        cls.paint_paths = {}
-        for rank in range(RANKS):
-            name = os.path.join(cls.work, "irr_%d.txt" % rank)
-            text = open(name).read() if os.path.exists(name) else ""
-            for m in re.finditer(r"^paint (\S+) rank (\d+) path (\S+)$", text, re.M):
-                cls.paint_paths.setdefault(m.group(1), {})[int(m.group(2))] = m.group(3)
-        cls.radiance_reports = {}
-        for rank in range(RANKS):
-            name = os.path.join(cls.work, "irr_%d.txt" % rank)
-            text = open(name).read() if os.path.exists(name) else ""
-            for m in re.finditer(r"^radiance (\S+) rank (\d+) path (\S+) triangles (\d+) "
-                                 r"exposure (\S+)$", text, re.M):
-                cls.radiance_reports.setdefault(m.group(1), {})[int(m.group(2))] = m.groups()[2:]
+    def parse(cls):
+        """The rank reports of irr_<rank>.txt (DistributedIrradiancePipeline.py)."""
+        def groups(pattern, first=2):
+            return {case: {rank: m.groups()[first:] for rank, m in per_rank.items()}
+                    for case, per_rank in cls.rank_reports("irr", pattern).items()}
+        cls.reports = groups(r"^irr (\S+) rank (\d+) path (\S+) triangles (\d+) bytes (\d+) "
+                             r"ms (\S+)$")
+        cls.assign_paths = {case: {rank: path[0] for rank, path in per_rank.items()}
+                            for case, per_rank in groups(
+                                r"^assign (\S+) rank (\d+) path (\S+)$").items()}
+        cls.paint_paths = {case: {rank: path[0] for rank, path in per_rank.items()}
+                           for case, per_rank in groups(
+                               r"^paint (\S+) rank (\d+) path (\S+)$").items()}
+        cls.radiance_reports = groups(r"^radiance (\S+) rank (\d+) path (\S+) triangles (\d+) "
+                                      r"exposure (\S+)$")
         with open(os.path.join(cls.work, "boundary.txt")) as f:
             cls.boundary = int(f.read().split()[0])
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.tmp.cleanup()
 
     def test_0_runs(self):
         self.assertIsNotNone(self.result.returncode, self.result.stderr)
@@ -137,15 +87,8 @@ class DistributedIrradianceTest(unittest.TestCase):
         self.assertNotIn("Warning", self.result.stderr)
         # The one expected error (eta < 0 on rank 1), once per rank with the
         # same text; no other.
-        lines = [line for line in self.result.stderr.splitlines() if "ERR|" in line]
-        message = "rank 1: RefractiveIndex of tet 5 is -1: must be finite and > 0"
-        for rank in range(RANKS):
-            self.assertEqual(sum(1 for line in lines
-                                 if "pvbatch.%d " % rank in line and message in line), 1,
-                             "rank %d reports the error once" % rank)
-        unexpected = [line for line in lines
-                      if message not in line and "returned failure for request" not in line]
-        self.assertEqual(unexpected, [])
+        self.assert_error_on_every_rank(
+            "rank 1: RefractiveIndex of tet 5 is -1: must be finite and > 0", once=True)
 
     def reference(self, lights):
         reader = vtkXMLUnstructuredGridReader()
@@ -401,14 +344,10 @@ class DistributedIrradianceTest(unittest.TestCase):
 
     def test_cut_per_piece(self):
         from vtkmodules.numpy_interface import dataset_adapter as dsa
-        report = {}
-        for rank in range(RANKS):
-            name = os.path.join(self.work, "irr_%d.txt" % rank)
-            text = open(name).read() if os.path.exists(name) else ""
-            for m in re.finditer(r"^cut (\S+) rank (\d+) path (\S+) in (\d+) out (\d+)$",
-                                 text, re.M):
-                report.setdefault(m.group(1), {})[int(m.group(2))] = (
-                    m.group(3), int(m.group(4)), int(m.group(5)))
+        report = {case: {rank: (m.group(3), int(m.group(4)), int(m.group(5)))
+                         for rank, m in per_rank.items()}
+                  for case, per_rank in self.rank_reports(
+                      "irr", r"^cut (\S+) rank (\d+) path (\S+) in (\d+) out (\d+)$").items()}
 
         by_coordinates = {}
 
@@ -429,13 +368,9 @@ class DistributedIrradianceTest(unittest.TestCase):
             fluence = vtk_to_numpy(piece.GetPointData().GetArray("Fluence"))
             return ids.tolist(), x, tets, fluence
 
-        stats = {}
-        for rank in range(RANKS):
-            name = os.path.join(self.work, "irr_%d.txt" % rank)
-            with open(name) as f:
-                text = f.read()
-            for m in re.finditer(r"^cutstats (\S+) rank (\d+) (.*)$", text, re.M):
-                stats.setdefault(m.group(1), {})[int(m.group(2))] = m.group(3).split()
+        stats = {case: {rank: m.group(3).split() for rank, m in per_rank.items()}
+                 for case, per_rank in self.rank_reports(
+                     "irr", r"^cutstats (\S+) rank (\d+) (.*)$").items()}
         serial_stats = {}
         with open(os.path.join(self.work, "cutstats.txt")) as f:
             for line in f:
@@ -504,4 +439,4 @@ class DistributedIrradianceTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    unittest.main(argv=sys.argv[:1], verbosity=2)
+    main()

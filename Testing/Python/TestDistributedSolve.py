@@ -27,22 +27,15 @@ How to run (ctest does this, with 2 and with 3 ranks):
 """
 
 import os
-import re
 import sys
-import tempfile
-import unittest
 
 import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkIOXML import vtkXMLPUnstructuredGridReader, vtkXMLUnstructuredGridReader
+from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-from TestParallel import run  # noqa: E402  (the time-limited runner that ends hung ranks)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from mpi_harness import RANKS, MpiSuite, main, pieces_of, worst_relative  # noqa: E402
 
-PLUGIN = sys.argv[1] if len(sys.argv) > 1 else ""
-RANKS = int(sys.argv[2]) if len(sys.argv) > 2 else 2
-TIME_LIMIT = {"prepare": 150, "run": 200}  # seconds: hang ceilings for a loaded machine
 CASES = {"pvtu3": "ref_a_divergence", "relight": "ref_b_divergence",
          "pvtu2": "ref_a_divergence", "redist": "ref_a_divergence", "fem": "ref_a_fem",
          "gathered": "ref_a_divergence"}
@@ -51,50 +44,21 @@ SOURCE_CASES = {"src_point": "ref_point_divergence", "src_pencil": "ref_pencil_d
                 "src_aimed": "ref_aimed_divergence"}
 
 
-def pieces_of(name):
-    reader = vtkXMLPUnstructuredGridReader()
-    reader.SetFileName(name)
-    reader.Update()
-    pieces = []
-    for k in range(reader.GetNumberOfPieces()):
-        reader.UpdatePiece(k, reader.GetNumberOfPieces(), 0)
-        piece = reader.GetOutput().NewInstance()
-        piece.DeepCopy(reader.GetOutput())
-        pieces.append(piece)
-    return pieces
-
-
 def by_id(piece):
     ids = vtk_to_numpy(piece.GetPointData().GetArray("PointIds"))
     return ids, vtk_to_numpy(piece.GetPointData().GetArray("Fluence"))
 
 
-class DistributedSolveTest(unittest.TestCase):
+class DistributedSolveTest(MpiSuite):
+    SCRIPT = "DistributedPipeline.py"
+    TIME_LIMIT = {"prepare": 150, "run": 200}  # seconds: hang ceilings for a loaded machine
 
     @classmethod
-    def setUpClass(cls):
-        cls.tmp = tempfile.TemporaryDirectory()
-        cls.work = cls.tmp.name
-        script = os.path.join(HERE, "DistributedPipeline.py")
-        prepare = run(["pvbatch", script, PLUGIN, cls.work, "prepare"], cls.work,
-                      TIME_LIMIT["prepare"])
-        if prepare.returncode != 0 or "prepared" not in prepare.stdout:
-            cls.tmp.cleanup()
-            raise AssertionError("prepare failed:\n" + prepare.stdout + prepare.stderr)
-        cls.result = run(["mpiexec", "--allow-run-as-root", "--oversubscribe", "-n", str(RANKS),
-                          "pvbatch", "--symmetric", script, PLUGIN, cls.work, "run"], cls.work,
-                         TIME_LIMIT["run"])
-        cls.solves = {}
-        for rank in range(RANKS):
-            name = os.path.join(cls.work, "solves_%d.txt" % rank)
-            text = open(name).read() if os.path.exists(name) else ""
-            for m in re.finditer(r"^solve (\S+) rank (\d+) path (\S+) assembly (\S+) "
-                                 r"iterations (\S+) residuals (\S+)$", text, re.M):
-                cls.solves.setdefault(m.group(1), {})[int(m.group(2))] = m.groups()[2:]
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.tmp.cleanup()
+    def parse(cls):
+        cls.solves = {case: {rank: m.groups()[2:] for rank, m in per_rank.items()}
+                      for case, per_rank in cls.rank_reports(
+                          "solves", r"^solve (\S+) rank (\d+) path (\S+) assembly (\S+) "
+                          r"iterations (\S+) residuals (\S+)$").items()}
 
     def test_0_runs(self):
         self.assertIsNotNone(self.result.returncode, self.result.stderr)
@@ -102,15 +66,8 @@ class DistributedSolveTest(unittest.TestCase):
         self.assertEqual(self.result.stdout.count("run done"), RANKS)
         # The one expected error (mu_a < 0 on rank 1), once per rank with the
         # same text; no other.
-        lines = [line for line in self.result.stderr.splitlines() if "ERR|" in line]
-        message = "rank 1: AbsorptionCoefficient of tet 5, channel G is -1 1/mm"
-        for rank in range(RANKS):
-            self.assertTrue(any("pvbatch.%d " % rank in line and message in line
-                                for line in lines), "rank %d reports the error" % rank)
-        unexpected = [line for line in lines
-                      if message not in line and "returned failure for request" not in line]
-        self.assertEqual(unexpected, [])
-        self.assertEqual(len(re.findall("returned failure", self.result.stderr)), RANKS)
+        self.assert_error_on_every_rank(
+            "rank 1: AbsorptionCoefficient of tet 5, channel G is -1 1/mm", failures=RANKS)
 
     def reference(self, name):
         reader = vtkXMLUnstructuredGridReader()
@@ -131,9 +88,7 @@ class DistributedSolveTest(unittest.TestCase):
                 if piece.GetNumberOfPoints() == 0:
                     continue
                 for i, v in zip(*by_id(piece)):
-                    r = ref[int(i)]
-                    worst = max(worst, float(np.max(np.abs(v - r) /
-                                                     np.maximum(np.abs(r), 1e-12 * scale))))
+                    worst = max(worst, worst_relative(v, ref[int(i)], scale))
                     seen.add(int(i))
             self.assertEqual(seen, set(ref), "every point of case " + case)
             self.assertLessEqual(worst, 1e-6, "max relative Fluence difference, case " + case)
@@ -160,17 +115,10 @@ class DistributedSolveTest(unittest.TestCase):
     def numbers_per_rank(self, stem, key):
         """{case: {rank: [numbers]}} from the lines "<key> <case> rank <r> <numbers>"
         of every rank's <stem>_<rank>.txt."""
-        found = {}
-        for rank in range(RANKS):
-            name = os.path.join(self.work, "%s_%d.txt" % (stem, rank))
-            text = ""
-            if os.path.exists(name):
-                with open(name) as f:
-                    text = f.read()
-            for m in re.finditer(r"^%s (\S+) rank (\d+) (.*)$" % key, text, re.M):
-                found.setdefault(m.group(1), {})[int(m.group(2))] = [
-                    float(v) for v in m.group(3).split()]
-        return found
+        return {case: {rank: [float(v) for v in m.group(3).split()]
+                       for rank, m in per_rank.items()}
+                for case, per_rank in self.rank_reports(
+                    stem, r"^%s (\S+) rank (\d+) (.*)$" % key).items()}
 
     def test_sources_and_detectors_equal_serial(self):
         import json
@@ -183,9 +131,7 @@ class DistributedSolveTest(unittest.TestCase):
                     continue
                 nonempty += piece.GetNumberOfCells() > 0
                 for i, v in zip(*by_id(piece)):
-                    r = ref[int(i)]
-                    worst = max(worst, float(np.max(np.abs(v - r) /
-                                                     np.maximum(np.abs(r), 1e-12 * scale))))
+                    worst = max(worst, worst_relative(v, ref[int(i)], scale))
                     seen.add(int(i))
             self.assertEqual(seen, set(ref), "every point of case " + case)
             self.assertLessEqual(worst, 1e-6, "max relative Fluence difference, case " + case)
@@ -240,14 +186,7 @@ class DistributedSolveTest(unittest.TestCase):
                                  (case, got, expected))
 
     def test_source_outside_same_error_everywhere(self):
-        texts = []
-        for rank in range(RANKS):
-            name = os.path.join(self.work, "outside_%d.txt" % rank)
-            if os.path.exists(name):
-                with open(name) as f:
-                    texts.append(f.read())
-            else:
-                texts.append("")
+        texts = [self.rank_text("outside", rank) for rank in range(RANKS)]
         self.assertIn("path distributed", texts[0])
         self.assertIn("point source 1: position (20, 0, 0) is outside the object", texts[0])
         self.assertIn("executive: returned failure", texts[0])
@@ -269,4 +208,4 @@ class DistributedSolveTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    unittest.main(argv=sys.argv[:1], verbosity=2)
+    main()

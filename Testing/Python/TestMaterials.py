@@ -626,9 +626,8 @@ class MaterialsTest(unittest.TestCase):
 
     # 8. The command line: --material TABLE.json --material-ids ARRAY.
     def test_command_line(self):
-        cli = os.environ.get("TRANSLUCENCY_CLI")
-        if not cli:
-            self.skipTest("TRANSLUCENCY_CLI is not set")
+        from cli_under_test import find_cli
+        cli = find_cli("TestMaterials")
         grid = box_mesh()
         base = os.path.join(self.tmp.name, "box")
         with open(base + ".node", "w") as f:

@@ -31,62 +31,14 @@ Exits non-zero on failure (unittest).
 """
 
 import os
-import re
-import signal
-import subprocess
 import sys
-import tempfile
-import unittest
 
 import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkFiltersVerdict import vtkCellSizeFilter
-from vtkmodules.vtkIOXML import vtkXMLPPolyDataReader, vtkXMLPUnstructuredGridReader
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-PLUGIN = sys.argv[1] if len(sys.argv) > 1 else ""
-RANKS = int(sys.argv[2]) if len(sys.argv) > 2 else 2
-# Ceilings that tell a hang from a slow run: idle, prepare takes ~10 s and run
-# ~15 s; at a load average of 15 on 2 cores prepare alone took over 60 s.
-TIME_LIMIT = {"prepare": 150, "run": 200}  # seconds (ctest allows 400 in all)
-
-
-def run(command, work, limit):
-    """The finished process, or one with returncode None that says it hung.
-    A hung mpiexec gets SIGTERM (it ends its ranks), then its process group
-    SIGKILL, so that no rank is left running."""
-    process = subprocess.Popen(command, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               text=True, start_new_session=True)
-    try:
-        out, err = process.communicate(timeout=limit)
-        return subprocess.CompletedProcess(command, process.returncode, out, err)
-    except subprocess.TimeoutExpired:
-        process.terminate()
-        try:
-            out, err = process.communicate(timeout=10)
-        except subprocess.TimeoutExpired:
-            out, err = "", ""
-        try:
-            os.killpg(process.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-        if process.poll() is None:
-            out, err = process.communicate()
-        return subprocess.CompletedProcess(
-            command, None, out, err + "\nHUNG: no end after %d s: %s" % (limit, " ".join(command)))
-
-
-def read(name):
-    reader = vtkXMLPPolyDataReader() if name.endswith(".pvtp") else vtkXMLPUnstructuredGridReader()
-    reader.SetFileName(name)
-    reader.Update()
-    pieces = []
-    for k in range(reader.GetNumberOfPieces()):
-        reader.UpdatePiece(k, reader.GetNumberOfPieces(), 0)
-        piece = reader.GetOutput().NewInstance()
-        piece.DeepCopy(reader.GetOutput())
-        pieces.append(piece)
-    return pieces
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from mpi_harness import RANKS, MpiSuite, main, pieces_of  # noqa: E402
 
 
 def by_point(pieces, name):
@@ -116,32 +68,20 @@ def surface_area(pieces):
     return area
 
 
-class ParallelTest(unittest.TestCase):
-
-    @classmethod
-    def setUpClass(cls):
-        cls.tmp = tempfile.TemporaryDirectory()
-        cls.work = cls.tmp.name
-        script = os.path.join(HERE, "ParallelPipeline.py")
-        cls.prepare = prepare = run(["pvbatch", script, PLUGIN, cls.work, "prepare"], cls.work,
-                                    TIME_LIMIT["prepare"])
-        if prepare.returncode != 0 or "summary radiosity" not in prepare.stdout:
-            cls.tmp.cleanup()
-            raise AssertionError("prepare failed:\n" + prepare.stdout + prepare.stderr)
-        cls.result = run(["mpiexec", "--allow-run-as-root", "--oversubscribe", "-n", str(RANKS),
-                          "pvbatch", script, PLUGIN, cls.work, "run"], cls.work,
-                         TIME_LIMIT["run"])
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.tmp.cleanup()
+class ParallelTest(MpiSuite):
+    SCRIPT = "ParallelPipeline.py"
+    PREPARED = "summary radiosity"
+    SYMMETRIC = False
+    # Ceilings that tell a hang from a slow run: idle, prepare takes ~10 s and
+    # run ~15 s; at a load average of 15 on 2 cores prepare alone took over 60 s.
+    TIME_LIMIT = {"prepare": 150, "run": 200}
 
     def path(self, name):
         return os.path.join(self.work, name)
 
     def check_fluence(self, case, reference, split):
-        pieces = read(self.path("par_%s.pvtu" % case))
-        ref_pieces = read(self.path("ref_%s.pvtu" % reference))
+        pieces = pieces_of(self.path("par_%s.pvtu" % case))
+        ref_pieces = pieces_of(self.path("ref_%s.pvtu" % reference))
         ref = {x: v[0] for x, v in by_point(ref_pieces, "Fluence").items()}
         self.assertEqual(len(ref), sum(p.GetNumberOfPoints() for p in ref_pieces))
         got = by_point(pieces, "Fluence")
@@ -157,8 +97,8 @@ class ParallelTest(unittest.TestCase):
         return worst
 
     def check_surface(self, case, reference):
-        got = read(self.path("par_%s_surface.pvtp" % case))
-        ref = read(self.path("ref_%s_surface.pvtp" % reference))
+        got = pieces_of(self.path("par_%s_surface.pvtp" % case))
+        ref = pieces_of(self.path("ref_%s_surface.pvtp" % reference))
         faces = lambda pieces: sum(p.GetNumberOfCells() for p in pieces)  # noqa: E731
         self.assertEqual(faces(got), faces(ref), "boundary faces, case " + case)
         self.assertAlmostEqual(surface_area(got) / surface_area(ref), 1.0, delta=1e-6)
@@ -217,16 +157,9 @@ class ParallelTest(unittest.TestCase):
 
     def test_errors(self):
         # The one expected error, once per rank with the same text; no other.
-        lines = [line for line in self.result.stderr.splitlines() if "ERR|" in line]
-        message = "the input has no point array 'Irradiance'"
-        for rank in range(RANKS):
-            self.assertTrue(any("pvbatch.%d " % rank in line and message in line
-                                for line in lines), "rank %d reports the error" % rank)
-        unexpected = [line for line in lines
-                      if message not in line and "returned failure for request" not in line]
-        self.assertEqual(unexpected, [])
-        self.assertEqual(len(re.findall("returned failure", self.result.stderr)), RANKS)
+        self.assert_error_on_every_rank("the input has no point array 'Irradiance'",
+                                        failures=RANKS)
 
 
 if __name__ == "__main__":
-    unittest.main(argv=sys.argv[:1], verbosity=2)
+    main()

@@ -88,27 +88,18 @@ def free_port():
 
 
 def main(plugin):
-    from vtkmodules.vtkFiltersCore import vtkTriangleFilter
-    from vtkmodules.vtkFiltersSources import vtkSphereSource
-    from vtkmodules.vtkIOPLY import vtkPLYWriter
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from cli_under_test import write_sphere
+    from mpi_harness import MPIEXEC, run
     with tempfile.TemporaryDirectory() as work:
         surface = os.path.join(work, "sphere.ply")
-        sphere = vtkSphereSource()
-        sphere.SetRadius(4.0)
-        sphere.SetThetaResolution(12)
-        sphere.SetPhiResolution(12)
-        triangles = vtkTriangleFilter()
-        triangles.SetInputConnection(sphere.GetOutputPort())
-        writer = vtkPLYWriter()
-        writer.SetInputConnection(triangles.GetOutputPort())
-        writer.SetFileName(surface)
-        writer.Write()
+        write_sphere(surface, 4.0, 12)
 
         port = free_port()
         log = open(os.path.join(work, "server.log"), "w+")
         server = subprocess.Popen(
-            ["mpiexec", "--allow-run-as-root", "--oversubscribe", "-n", "2", "pvserver",
-             "--server-port=%d" % port, "--force-offscreen-rendering"],
+            MPIEXEC + ["-n", "2", "pvserver", "--server-port=%d" % port,
+                       "--force-offscreen-rendering"],
             stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
         try:
             deadline = time.time() + 60
@@ -118,12 +109,10 @@ def main(plugin):
                 time.sleep(0.5)
             command = ["pvpython", "--force-offscreen-rendering", os.path.abspath(__file__),
                        plugin, "client", str(port), surface]
-            try:
-                result = subprocess.run(command, capture_output=True, text=True,
-                                        timeout=TIME_LIMIT)
-            except subprocess.TimeoutExpired as e:
+            result = run(command, work, TIME_LIMIT)
+            if result.returncode is None:
                 sys.exit("HUNG: the client did not end within %d s; its output:\n%s\n%s" % (
-                    TIME_LIMIT, e.stdout, e.stderr))
+                    TIME_LIMIT, result.stdout, result.stderr))
             print(result.stdout)
             if result.returncode != 0 or "client-server chain equals serial" not in result.stdout:
                 sys.exit("client failed:\n" + result.stderr[-4000:])

@@ -41,15 +41,15 @@ import unittest
 import numpy as np
 
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkFiltersCore import vtkCleanPolyData, vtkTriangleFilter
-from vtkmodules.vtkFiltersSources import vtkSphereSource
 from vtkmodules.vtkImagingCore import vtkImageDifference
 from vtkmodules.vtkIOImage import vtkPNGReader
-from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
 SOURCE_DIR = os.environ.get("TRANSLUCENCY_SOURCE_DIR") or os.path.abspath(
     os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
-CLI = os.environ.get("TRANSLUCENCY_CLI") or sys.exit("set TRANSLUCENCY_CLI")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import find_cli, write_sphere  # noqa: E402
+
+CLI = find_cli("TestPictures")
 BASELINE = os.path.join(SOURCE_DIR, "Testing", "Baselines", "render_slice.png")
 SOLVERS = "divergence,fem,quadgraph,grid,montecarlo"
 PIXEL_THRESHOLD = 16
@@ -96,19 +96,8 @@ class PicturesTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.tmp = tempfile.TemporaryDirectory()
-        sphere = vtkSphereSource()
-        sphere.SetRadius(5.0)
-        sphere.SetThetaResolution(12)
-        sphere.SetPhiResolution(12)
-        tri = vtkTriangleFilter()
-        tri.SetInputConnection(sphere.GetOutputPort())
-        clean = vtkCleanPolyData()
-        clean.SetInputConnection(tri.GetOutputPort())
-        writer = vtkXMLPolyDataWriter()
-        writer.SetInputConnection(clean.GetOutputPort())
         cls.mesh = os.path.join(cls.tmp.name, "sphere.vtp")
-        writer.SetFileName(cls.mesh)
-        writer.Write()
+        write_sphere(cls.mesh, 5.0, 12, clean=True)
 
     @classmethod
     def tearDownClass(cls):

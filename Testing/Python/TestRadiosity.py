@@ -264,8 +264,9 @@ class TestRadiosity(unittest.TestCase):
 
 class TestRadiosityCommandLine(unittest.TestCase):
     def run_cli(self, *args):
-        cli = os.environ["TRANSLUCENCY_CLI"]
-        return subprocess.run([cli, "radiosity", *args], capture_output=True, text=True)
+        from cli_under_test import find_cli
+        return subprocess.run([find_cli("TestRadiosity"), "radiosity", *args],
+                              capture_output=True, text=True)
 
     def test_missing_mesh_and_tiny_scene(self):
         with tempfile.TemporaryDirectory() as tmp:

@@ -49,7 +49,10 @@ from vtkmodules.vtkIOPLY import vtkPLYReader, vtkPLYWriter
 SOURCE_DIR = os.environ.get("TRANSLUCENCY_SOURCE_DIR",
                             os.path.join(os.path.dirname(__file__), "..", ".."))
 BUNNY = os.path.join(SOURCE_DIR, "Data", "bunny.ply")
-CLI = os.environ.get("TRANSLUCENCY_CLI")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import find_cli  # noqa: E402
+
+CLI = find_cli("TestSurfaceReaders")
 
 
 def read_ours(path):
@@ -497,7 +500,6 @@ class SurfaceReaderTest(unittest.TestCase):
         self.assertEqual(reader.CanReadFile(self.dir + "/x.PLY"), 0)  # no such file
 
     # ------------------------------------------------------------------ CLI
-    @unittest.skipUnless(CLI, "TRANSLUCENCY_CLI not set")
     def test_cli_bad_surfaces(self):
         prefix = os.path.join(self.dir, "out", "result")
         os.makedirs(os.path.dirname(prefix), exist_ok=True)

@@ -9,17 +9,45 @@ import unittest
 
 
 def find_cli(test_name):
-    """$TRANSLUCENCY_CLI, else $TRANSLUCENCY_BINARY_DIR/bin/translucency; exits
-    with a message naming `test_name` when neither is an executable."""
+    """$TRANSLUCENCY_CLI, else $TRANSLUCENCY_BINARY_DIR/bin/translucency, else
+    build/bin/translucency of this source tree (a test run by hand after
+    `make build`); exits with a message naming `test_name` when that is not
+    an executable."""
     cli = os.environ.get("TRANSLUCENCY_CLI")
     if not cli:
-        binary = os.environ.get("TRANSLUCENCY_BINARY_DIR")
-        if binary:
-            cli = os.path.join(binary, "bin", "translucency")
-    if not cli or not os.access(cli, os.X_OK):
+        binary = os.environ.get("TRANSLUCENCY_BINARY_DIR") or os.path.join(
+            os.path.dirname(os.path.abspath(__file__)), "..", "..", "build")
+        cli = os.path.join(binary, "bin", "translucency")
+    if not os.access(cli, os.X_OK):
         sys.exit("%s: set TRANSLUCENCY_CLI to the built translucency executable (got %r)"
                  % (test_name, cli))
     return cli
+
+
+def write_sphere(name, radius, resolution, clean=False):
+    """A closed triangulated sphere (vtkSphereSource, `resolution` in theta
+    and phi; merged points if `clean`) written as STL, PLY or VTP by the
+    extension of `name`: the surface input of many tests."""
+    from vtkmodules.vtkFiltersCore import vtkCleanPolyData, vtkTriangleFilter
+    from vtkmodules.vtkFiltersSources import vtkSphereSource
+    from vtkmodules.vtkIOGeometry import vtkSTLWriter
+    from vtkmodules.vtkIOPLY import vtkPLYWriter
+    from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+    sphere = vtkSphereSource()
+    sphere.SetRadius(radius)
+    sphere.SetThetaResolution(resolution)
+    sphere.SetPhiResolution(resolution)
+    surface = vtkTriangleFilter()
+    surface.SetInputConnection(sphere.GetOutputPort())
+    if clean:
+        merged = vtkCleanPolyData()
+        merged.SetInputConnection(surface.GetOutputPort())
+        surface = merged
+    writers = {".stl": vtkSTLWriter, ".ply": vtkPLYWriter, ".vtp": vtkXMLPolyDataWriter}
+    writer = writers[os.path.splitext(name)[1].lower()]()
+    writer.SetInputConnection(surface.GetOutputPort())
+    writer.SetFileName(name)
+    writer.Write()
 
 
 class BoxRenderTest(unittest.TestCase):

@@ -10,10 +10,12 @@
  * orders over a refinement study. Each test keeps its own mesh, boundary data
  * placement, assertions and tolerances; this header holds only the pieces they
  * share. It also holds the ErrorMessage / Contains helpers of the input-check
- * tests.
+ * tests, and MakeProblem, the one builder of the DiffusionProblem the solver
+ * tests fill in by hand.
  */
 #pragma once
 
+#include "DiffusionSolver.h"
 #include "Error.h"
 #include "OpticalProperties.h"
 
@@ -30,6 +32,40 @@ namespace translucency
 {
 namespace testing
 {
+
+/// The DiffusionProblem of a solver test: borrows `mesh` and `material`, and
+/// `irradiance` (q, 3 values per point, W/mm^2) and the interior `sources`
+/// when given; every other member keeps its default (no lights, no uniform
+/// irradiance, shadows on, the surface collimated model), for the test to set.
+/// The borrowed objects must outlive the problem (temporaries are refused).
+inline DiffusionProblem MakeProblem(const TetMesh& mesh, const OpticalProperties& material)
+{
+  DiffusionProblem problem;
+  problem.Mesh = &mesh;
+  problem.Material = &material;
+  return problem;
+}
+
+inline DiffusionProblem MakeProblem(
+  const TetMesh& mesh, const OpticalProperties& material, const std::vector<double>& irradiance)
+{
+  DiffusionProblem problem = MakeProblem(mesh, material);
+  problem.Irradiance = &irradiance;
+  return problem;
+}
+
+inline DiffusionProblem MakeProblem(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<double>& irradiance, const Sources& sources)
+{
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance);
+  problem.InteriorSources = &sources;
+  return problem;
+}
+
+DiffusionProblem MakeProblem(
+  const TetMesh&, const OpticalProperties&, std::vector<double>&&) = delete;
+DiffusionProblem MakeProblem(
+  const TetMesh&, const OpticalProperties&, std::vector<double>&&, const Sources&) = delete;
 
 /// Absorption mu_a and reduced scattering sigma_s' (1/mm) of the three
 /// channels of the convergence tests: skin1 red, marble red and apple blue

@@ -12,6 +12,7 @@
 #include "MonteCarlo.h"
 #include "Radiance.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetMesh.h"
 #include "VertexDiffusionSolver.h"
 
@@ -30,6 +31,7 @@ namespace
 {
 
 using translucency::testing::BoxMesh;
+using translucency::testing::MakeProblem;
 
 const double BoxEta = 1.3;
 
@@ -263,10 +265,7 @@ TEST(CollimatedSource, PowerBalanceHolds)
     std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver(name);
     solver->SetRelTol(1e-12);
     solver->SetMaxIter(20000);
-    DiffusionProblem problem;
-    problem.Mesh = &mesh;
-    problem.Material = &material;
-    problem.Irradiance = &q;
+    DiffusionProblem problem = MakeProblem(mesh, material, q);
     problem.Lights = lights;
     problem.Collimated = model;
     std::vector<double> fluence;
@@ -304,10 +303,7 @@ TEST(CollimatedSource, PowerBalanceHolds)
   for (CollimatedModel model : { CollimatedModel::Extended, CollimatedModel::ExtendedMoments })
   {
     std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver(name);
-    DiffusionProblem problem;
-    problem.Mesh = &mesh;
-    problem.Material = &material;
-    problem.Irradiance = &q;
+    DiffusionProblem problem = MakeProblem(mesh, material, q);
     problem.Lights = lights;
     problem.Collimated = model;
     std::vector<double> fluence;
@@ -340,10 +336,7 @@ TEST(CollimatedSource, BoundaryRuleFollowsTheModel)
   for (const char* name : { "divergence", "fem" })
   {
     SCOPED_TRACE(name);
-    DiffusionProblem problem;
-    problem.Mesh = &mesh;
-    problem.Material = &material;
-    problem.Irradiance = &q;
+    DiffusionProblem problem = MakeProblem(mesh, material, q);
     problem.Lights = lights;
     const auto solve = [&](DiffusionSolver& solver, CollimatedModel model) {
       solver.SetRelTol(1e-12);
@@ -457,9 +450,7 @@ TEST(CollimatedSource, GapToMonteCarloOnTheIssuesBox)
     return sum / column.size();
   };
 
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   problem.Lights = lights;
   problem.Shadows = false;
   std::vector<double> q;

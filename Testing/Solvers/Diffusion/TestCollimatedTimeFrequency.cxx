@@ -16,6 +16,7 @@
 #include "Fresnel.h"
 #include "LightSources.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetMesh.h"
 #include "VertexDiffusionSolver.h"
 
@@ -32,6 +33,8 @@ namespace translucency
 {
 namespace
 {
+
+using translucency::testing::MakeProblem;
 
 constexpr double Pi = 3.14159265358979323846;
 
@@ -83,10 +86,7 @@ TEST(CollimatedFrequency, ZeroFrequencyIsContinuousWave)
   for (const char* name : { "divergence", "fem" })
   {
     SCOPED_TRACE(name);
-    DiffusionProblem problem;
-    problem.Mesh = &mesh;
-    problem.Material = &material;
-    problem.Irradiance = &q;
+    DiffusionProblem problem = MakeProblem(mesh, material, q);
     problem.Lights = lights;
     problem.Collimated = model;
     std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver(name);
@@ -231,10 +231,7 @@ TEST(CollimatedTime, TimeIntegralIsContinuousWave)
     const Fresnel::BoundaryRule rule = model == CollimatedModel::ExtendedMoments
       ? Fresnel::BoundaryRule::Moments
       : Fresnel::BoundaryRule::Fit;
-    DiffusionProblem problem;
-    problem.Mesh = &mesh;
-    problem.Material = &material;
-    problem.Irradiance = &irradiance;
+    DiffusionProblem problem = MakeProblem(mesh, material, irradiance);
     problem.Lights = lights;
     problem.Collimated = model;
     auto solver = CreateDiffusionSolver(name);
@@ -353,10 +350,7 @@ TEST(CollimatedTime, FourierTransformIsFrequencyDomain)
   for (const char* name : { "fem", "divergence" })
   {
     SCOPED_TRACE(name);
-    DiffusionProblem problem;
-    problem.Mesh = &mesh;
-    problem.Material = &material;
-    problem.Irradiance = &q;
+    DiffusionProblem problem = MakeProblem(mesh, material, q);
     problem.Lights = lights;
     problem.Collimated = CollimatedModel::Extended;
     auto solver = CreateDiffusionSolver(name);

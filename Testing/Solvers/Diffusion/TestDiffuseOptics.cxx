@@ -32,6 +32,7 @@ using translucency::testing::ErrorMessage;
 
 using translucency::testing::GradedCube;
 using translucency::testing::GradedSlab;
+using translucency::testing::MakeProblem;
 
 namespace
 {
@@ -80,11 +81,7 @@ InfiniteResult SolveInfinite(const std::string& solverName, int cells, double fr
   source.Position = { 0.0, 0.0, 0.0 };
   source.Power = InfinitePower;
   sources.AddPointSource(source);
-  DiffusionProblem problem;
-  problem.Mesh = mesh.get();
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(*mesh, material, irradiance, sources);
   auto solver = CreateDiffusionSolver(solverName);
   solver->SetRelTol(1e-8);
   solver->SetMaxIter(20000);
@@ -317,11 +314,7 @@ TEST(DiffuseOptics, FrequencyDomainMultigridMatchesJacobi)
   source.Position = { 3.1, -2.2, 1.7 };
   source.Power = { 0.5, 0.0, 1.5 };
   sources.AddPointSource(source);
-  DiffusionProblem problem;
-  problem.Mesh = mesh.get();
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(*mesh, material, irradiance, sources);
   for (const char* name : { "fem", "divergence" })
   {
     std::array<std::vector<std::complex<double>>, 2> fluence;
@@ -378,10 +371,7 @@ TEST(DiffuseOptics, PreconditionerHook)
   const std::vector<double> irradiance(3 * static_cast<std::size_t>(mesh->GetNumberOfPoints()), 0.1);
   auto solver = CreateDiffusionSolver("divergence");
   solver->SetLinearSolver("multigrid-agg");
-  DiffusionProblem problem;
-  problem.Mesh = mesh.get();
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
+  DiffusionProblem problem = MakeProblem(*mesh, material, irradiance);
   std::vector<double> fluence;
   SolverReport report;
   ASSERT_TRUE(solver->Solve(problem, fluence, report));
@@ -455,11 +445,7 @@ void CheckPowerBalance(const std::string& solverName, const BalanceCase& test)
       }
     }
   }
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &test.Interior;
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance, test.Interior);
   auto solver = CreateDiffusionSolver(solverName);
   solver->SetRelTol(1e-12);
   solver->SetMaxIter(10000);
@@ -676,11 +662,7 @@ TEST(DiffuseOptics, BadInputIsAnError)
   source.Position = { 5, 5, 0.25 };
   sources.AddPointSource(source);
   const std::vector<double> irradiance(fluence.size(), 0.0);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance, sources);
   for (double frequency : { 0.0, -100e6, std::nan("") })
   {
     std::vector<std::complex<double>> result;
@@ -797,11 +779,7 @@ TEST(DiffuseOptics, PencilBeamReflectanceFarrell)
   beam.Position = { 0.0, 0.0, 0.0 };
   beam.Direction = { 0.0, 0.0, -1.0 };
   sources.AddPencilBeam(beam);
-  DiffusionProblem problem;
-  problem.Mesh = mesh.get();
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(*mesh, material, irradiance, sources);
   const double transmitted = 1.0 - Fresnel::Reflectance(1.0, eta);
   const double radii[5] = { 5.0, 7.5, 10.0, 15.0, 20.0 };
   const double farrellTolerance[5] = { 0.25 + 0.08, 0.12 + 0.08, 0.06 + 0.08, 0.08, 0.08 };

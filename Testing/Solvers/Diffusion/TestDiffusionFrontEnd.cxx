@@ -15,6 +15,7 @@
 
 using namespace translucency;
 using translucency::testing::ErrorMessage;
+using translucency::testing::MakeProblem;
 
 namespace
 {
@@ -111,10 +112,7 @@ TEST(DiffusionFrontEnd, PaintIsIncrementalAndEqualsAFullAssembly)
   // The same fluence as a full assembly from scratch, to the solver tolerance.
   const std::unique_ptr<DiffusionSolver> fresh = CreateDiffusionSolver("divergence");
   fresh->SetRelTol(tol);
-  DiffusionProblem problem;
-  problem.Mesh = s.Mesh.get();
-  problem.Material = &painted;
-  problem.Irradiance = &s.Irradiance;
+  DiffusionProblem problem = MakeProblem(*s.Mesh, painted, s.Irradiance);
   std::vector<double> reference;
   SolverReport freshReport;
   ASSERT_TRUE(fresh->Solve(problem, reference, freshReport));

@@ -11,6 +11,7 @@
 #include "MonteCarlo.h"
 #include "Radiance.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetMesh.h"
 
 #include <gtest/gtest.h>
@@ -31,6 +32,7 @@ using namespace translucency;
 using translucency::testing::BoxMesh;
 using translucency::testing::CubeMesh;
 using translucency::testing::MeshData;
+using translucency::testing::MakeProblem;
 
 constexpr double Pi = 3.14159265358979323846;
 
@@ -154,9 +156,7 @@ TEST(MonteCarlo, NonScatteringSlabMatchesBeerLambertWithFresnelReflections)
   const double muA[3] = { 0.5, 0.3, 0.2 }, sigmaS[3] = { 0.0, 0.0, 0.0 };
   const OpticalProperties material =
     OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigmaS, eta);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   problem.Lights = { Directional(0.0, 0.0, -1.0, 1.0, 2.0, 0.0) }; // blue dark
   problem.Shadows = false;
 
@@ -244,9 +244,7 @@ TEST(MonteCarlo, PowerBalanceIsExact)
   const double muA[3] = { 0.05, 0.2, 0.8 }, sigmaS[3] = { 1.5, 1.0, 0.6 };
   const OpticalProperties material =
     OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigmaS, 1.4);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   LightSource point;
   point.Type = LightSource::Kind::Point;
   point.Position = { 12.0, 3.0, 12.0 };
@@ -324,9 +322,7 @@ TEST(MonteCarlo, SameSeedIsBitIdenticalForOneAndTwoThreads)
   const MaterialPreset& marble = FindMaterialPreset("marble");
   const OpticalProperties material = OpticalProperties::Uniform(
     mesh.GetNumberOfTets(), marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   problem.Lights = { Directional(-1.0, 0.2, -1.0, 1.0, 1.0, 1.0) };
   problem.UniformIrradiance = 0.2;
 
@@ -368,9 +364,7 @@ TEST(MonteCarlo, StandardErrorMatchesSpreadOverSeeds)
   const double muA[3] = { 0.1, 0.1, 0.1 }, sigmaS[3] = { 1.0, 1.0, 1.0 };
   const OpticalProperties material =
     OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigmaS, 1.3);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   problem.Lights = { Directional(-0.3, -0.2, -1.0, 1.0, 0.0, 0.0) };
 
   const int seeds = 8;
@@ -495,9 +489,7 @@ TEST(MonteCarlo, HalfSpaceAlbedoMatchesChandrasekhar)
   const double muA[3] = { 1.0 - omega, 0.1, 0.1 }, sigmaS[3] = { omega, 1.0, 1.0 };
   const OpticalProperties material =
     OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigmaS, 1.0);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   const double e = 2.0; // W/mm^2
   problem.Lights = { Directional(0.0, 0.0, -1.0, e, 0.0, 0.0) };
   MonteCarloSolver solver;
@@ -553,8 +545,7 @@ struct DiffusionComparison
     const double muA[3] = { 0.03, 0.03, 0.03 }, sigmaS[3] = { 3.0, 3.0, 3.0 };
     LPrime = 1.0 / (muA[0] + sigmaS[0]);
     Material = OpticalProperties::Uniform(Mesh.GetNumberOfTets(), muA, sigmaS, 1.3);
-    Problem.Mesh = &Mesh;
-    Problem.Material = &Material;
+    Problem = MakeProblem(Mesh, Material);
     if (uniformLight)
     {
       Problem.UniformIrradiance = 1.0;
@@ -715,9 +706,7 @@ TEST(MonteCarlo, SpotLightPowerBalanceIsExact)
   const double muA[3] = { 0.02, 0.1, 0.3 }, sigmaS[3] = { 1.5, 1.0, 0.6 };
   const OpticalProperties material =
     OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigmaS, 1.4);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   problem.Lights = { SpotLight(
     { 4.0, 4.0, 14.0 }, { 0.0, 0.0, -1.0 }, 15.0, 4.0, { 50.0, 30.0, 20.0 }) };
   std::vector<double> q;
@@ -773,9 +762,7 @@ TEST(MonteCarlo, FactoryProgressAndAbort)
   const double muA[3] = { 0.1, 0.1, 0.1 }, sigmaS[3] = { 1.0, 1.0, 1.0 };
   const OpticalProperties material =
     OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigmaS, 1.3);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   problem.Lights = { Directional(0.0, 0.0, -1.0, 1.0, 1.0, 1.0) };
   solver->SetOptions(SolverOptions{ { DiffusionOption::Photons, 5000 } });
   std::vector<double> progress;
@@ -809,9 +796,7 @@ TEST(MonteCarlo, FewerPhotonsThanBatches)
   const double muA[3] = { 0.1, 0.1, 0.1 }, sigmaS[3] = { 1.0, 1.0, 1.0 };
   const OpticalProperties material =
     OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigmaS, 1.3);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   problem.Lights = { Directional(0.0, 0.0, -1.0, 1.0, 0.0, 0.0) };
   MonteCarloSolver solver;
   solver.SetNumberOfPhotons(5);
@@ -836,9 +821,7 @@ TEST(MonteCarlo, InvalidInputThrows)
   const double muA[3] = { 0.1, 0.1, 0.1 }, sigmaS[3] = { 1.0, 1.0, 1.0 };
   const OpticalProperties material =
     OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigmaS, 1.3);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   problem.Lights = { Directional(0.0, 0.0, -1.0, 1.0, 1.0, 1.0) };
   std::vector<double> fluence;
   SolverReport report;

@@ -13,6 +13,7 @@
 #include "GradedMeshes.h"
 #include "MonteCarlo.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetMesh.h"
 
 #include <gtest/gtest.h>
@@ -31,6 +32,7 @@ namespace
 using namespace translucency;
 using translucency::testing::GradedCube;
 using translucency::testing::GradedSlab;
+using translucency::testing::MakeProblem;
 
 constexpr double Pi = 3.14159265358979323846;
 constexpr double C = SpeedOfLightMillimetresPerNanosecond;
@@ -97,9 +99,7 @@ TEST(MonteCarloSources, PointSourceInALargeCubeMatchesDiffusion)
   point.Position = source;
   point.Power = { 1.0, 0.0, 0.0 };
   sources.AddPointSource(point);
-  DiffusionProblem problem;
-  problem.Mesh = mesh.get();
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(*mesh, material);
   problem.InteriorSources = &sources;
 
   const double kappa = 1.0 / (3.0 * (muA + muS)), muEff = std::sqrt(muA / kappa);
@@ -211,11 +211,7 @@ TEST(MonteCarloSources, PencilBeamOnASlabMatchesDiffusionAndPatterson)
   beam.Direction = { 0.0, 0.0, -1.0 };
   beam.Power = { 1.0, 0.0, 0.0 };
   sources.AddPencilBeam(beam);
-  DiffusionProblem problem;
-  problem.Mesh = mesh.get();
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(*mesh, material, irradiance, sources);
   const double radii[3] = { 5.0, 10.0, 15.0 };
   const int azimuths = 6;
   const double fibre = 2.0;
@@ -381,9 +377,7 @@ TEST(MonteCarloSources, TalliesAreConsistent)
   light.Type = LightSource::Kind::Directional;
   light.Direction = { 0.0, -1.0, 0.0 };
   light.Power = { 0.002, 0.001, 0.0 };
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   problem.Lights = { light };
   problem.InteriorSources = &sources;
   std::vector<Detector> detectors(3);
@@ -472,9 +466,7 @@ TEST(MonteCarloSources, BadInputIsAnError)
   const OpticalProperties material = OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, muS, 1.4);
   auto expectError = [&](const Sources& sources, const std::vector<Detector>& detectors,
                        const TimeGates& gates, const std::string& message) {
-    DiffusionProblem problem;
-    problem.Mesh = &mesh;
-    problem.Material = &material;
+    DiffusionProblem problem = MakeProblem(mesh, material);
     problem.InteriorSources = &sources;
     MonteCarloSolver solver;
     solver.SetNumberOfPhotons(100);

@@ -34,6 +34,7 @@ using translucency::testing::ErrorMessage;
 
 using translucency::testing::GradedCube;
 using translucency::testing::GradedSlab;
+using translucency::testing::MakeProblem;
 
 namespace
 {
@@ -80,11 +81,7 @@ InfiniteRun RunInfinite(const std::string& solverName, int cells, int stepsPerGa
   source.Position = { 0.0, 0.0, 0.0 };
   source.Power = InfinitePower;
   sources.AddPointSource(source);
-  DiffusionProblem problem;
-  problem.Mesh = mesh.get();
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(*mesh, material, irradiance, sources);
   auto solver = CreateDiffusionSolver(solverName);
   solver->SetRelTol(1e-8);
   solver->SetMaxIter(5000);
@@ -306,11 +303,7 @@ TEST(TimeResolved, PencilBeamReflectancePatterson)
   beam.Position = { 0.0, 0.0, 0.0 };
   beam.Direction = { 0.0, 0.0, -1.0 };
   sources.AddPencilBeam(beam);
-  DiffusionProblem problem;
-  problem.Mesh = mesh.get();
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(*mesh, material, irradiance, sources);
   const double radii[2] = { 10.0, 15.0 };
   std::vector<Detector> detectors(2);
   for (int k = 0; k < 2; ++k)
@@ -411,11 +404,7 @@ TEST(TimeResolved, TimeIntegralIsContinuousWave)
   beam.Position = { 5.2, 4.9, 10.0 };
   beam.Direction = { 0.3, 0.1, -1.0 };
   sources.AddPencilBeam(beam);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance, sources);
   std::vector<Detector> detectors(2);
   detectors[0].Position = { 2.0, 3.0, 10.0 }; // on the lit face
   detectors[1].Position = { 10.0, 4.0, 3.0 };
@@ -491,11 +480,7 @@ TEST(TimeResolved, MultigridStepSolverMatchesJacobi)
   point.Position = { 4.3, 5.1, 6.2 };
   point.Power = { 1.0, 0.5, 2.0 };
   sources.AddPointSource(point);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance, sources);
   std::vector<Detector> detectors(2);
   detectors[0].Position = { 2.0, 3.0, 10.0 };
   detectors[1].Position = { 10.0, 4.0, 3.0 };
@@ -595,11 +580,7 @@ TEST(TimeResolved, RecycledStepSolutionsMatchExtrapolation)
   point.Position = { 4.3, 5.1, 6.2 };
   point.Power = { 1.0, 0.5, 2.0 };
   sources.AddPointSource(point);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance, sources);
   std::vector<Detector> detectors(2);
   detectors[0].Position = { 2.0, 3.0, 10.0 };
   detectors[1].Position = { 10.0, 4.0, 3.0 };
@@ -704,11 +685,7 @@ TEST(TimeResolved, LateStartMatchesFullRun)
   PointSource point;
   point.Position = { 4.3, 5.1, 6.2 };
   sources.AddPointSource(point);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance, sources);
   std::vector<Detector> detectors(1);
   detectors[0].Position = { 10.0, 4.0, 3.0 };
   auto solver = CreateDiffusionSolver("fem");
@@ -781,10 +758,7 @@ TEST(TimeResolved, BadGatesAreErrors)
   const double muA[3] = { 0.1, 0.1, 0.1 }, muS[3] = { 1.0, 1.0, 1.0 };
   const OpticalProperties material = OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, muS, 1.4);
   const std::vector<double> irradiance(3 * static_cast<std::size_t>(mesh.GetNumberOfPoints()), 0.0);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance);
   auto solver = CreateDiffusionSolver("divergence");
   TimeGates gates;
   gates.End = 1.0;

@@ -18,6 +18,7 @@
 #include "QuadGraph.h"
 #include "RayCaster.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetMesh.h"
 
 #include <benchmark/benchmark.h>
@@ -33,6 +34,7 @@ namespace
 {
 
 using namespace translucency;
+using translucency::testing::MakeProblem;
 
 struct Problem
 {
@@ -197,10 +199,7 @@ void BM_VertexSolver(benchmark::State& state, const char* name)
   Problem& p = GetProblem(static_cast<int>(state.range(0)));
   std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver(name);
   solver->SetWarmStart(false);
-  DiffusionProblem problem;
-  problem.Mesh = &p.Mesh;
-  problem.Material = &p.Material;
-  problem.Irradiance = &p.Irradiance;
+  DiffusionProblem problem = MakeProblem(p.Mesh, p.Material, p.Irradiance);
   std::vector<double> fluence;
   SolverReport report;
   double setup = 0.0, solve = 0.0;
@@ -229,10 +228,7 @@ void BM_MonteCarlo(benchmark::State& state)
   MonteCarloSolver solver;
   solver.SetNumberOfPhotons(20000);
   solver.SetNumberOfThreads(static_cast<int>(state.range(1)));
-  DiffusionProblem problem;
-  problem.Mesh = &p.Mesh;
-  problem.Material = &p.Material;
-  problem.Irradiance = &p.Irradiance;
+  DiffusionProblem problem = MakeProblem(p.Mesh, p.Material, p.Irradiance);
   LightSource light;
   light.Direction = { 0.0, 0.0, -1.0 };
   problem.Lights = { light };
@@ -271,10 +267,7 @@ void BM_MonteCarlo(benchmark::State& state)
 void BM_GridSolver(benchmark::State& state)
 {
   Problem& p = GetProblem(static_cast<int>(state.range(0)));
-  DiffusionProblem problem;
-  problem.Mesh = &p.Mesh;
-  problem.Material = &p.Material;
-  problem.Irradiance = &p.Irradiance;
+  DiffusionProblem problem = MakeProblem(p.Mesh, p.Material, p.Irradiance);
   std::vector<double> fluence;
   SolverReport report;
   double setup = 0.0, solve = 0.0;
@@ -310,10 +303,7 @@ void BM_GridSolver(benchmark::State& state)
 void BM_QuadGraph(benchmark::State& state)
 {
   Problem& p = GetProblem(static_cast<int>(state.range(0)));
-  DiffusionProblem problem;
-  problem.Mesh = &p.Mesh;
-  problem.Material = &p.Material;
-  problem.Irradiance = &p.Irradiance;
+  DiffusionProblem problem = MakeProblem(p.Mesh, p.Material, p.Irradiance);
   std::vector<double> fluence;
   SolverReport report;
   double setup = 0.0, solve = 0.0, graph = 0.0;

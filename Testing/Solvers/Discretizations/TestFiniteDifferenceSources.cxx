@@ -228,11 +228,7 @@ TEST(QuadGraphSources, TwoPointFluxPowerBalanceIsExact)
   sources.AddPencilBeam({ { 5.2, 4.9, 10.0 }, { 0.3, -0.1, -1.0 }, { 1.0, 1.0, 1.0 }, "" });
   const double q = 0.01;
   std::vector<double> irradiance(3 * static_cast<std::size_t>(mesh.GetNumberOfPoints()), q);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance, sources);
   const auto injected = sources.InjectedPower(mesh, material);
   for (bool twoPoint : { true, false })
   {
@@ -310,11 +306,7 @@ TEST(QuadGraphSources, TwoPointFluxIsReciprocal)
     {
       Sources sources;
       sources.AddPointSource({ { points[a][0], points[a][1], points[a][2] }, { 1, 1, 1 }, "" });
-      DiffusionProblem problem;
-      problem.Mesh = &mesh;
-      problem.Material = &material;
-      problem.Irradiance = &irradiance;
-      problem.InteriorSources = &sources;
+      DiffusionProblem problem = MakeProblem(mesh, material, irradiance, sources);
       QuadGraphSolver solver;
       solver.SetTwoPointFlux(twoPoint);
       solver.SetRelTol(1e-13);
@@ -359,11 +351,7 @@ TEST(QuadGraphSources, PointSourceInALargeBall)
   Sources sources;
   sources.AddPointSource({ { 0.13, -0.07, 0.05 }, power, "" });
   std::vector<double> irradiance(3 * static_cast<std::size_t>(mesh.GetNumberOfPoints()), 0.0);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance, sources);
   std::cout << "ball: " << mesh.GetNumberOfTets() << " tets\n";
   for (bool twoPoint : { true, false })
   {
@@ -495,11 +483,7 @@ TEST(GridSources, PowerBalanceIsExactOnAnAlignedBox)
   sources.AddPencilBeam({ { 3.0, 2.0, 4.0 }, { 0.2, 0.1, -1.0 }, { 1.0, 1.0, 1.0 }, "" });
   const double q = 0.02;
   std::vector<double> irradiance(3 * static_cast<std::size_t>(mesh.GetNumberOfPoints()), q);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance, sources);
   const auto injected = sources.InjectedPower(mesh, material);
   for (bool multiLevel : { false, true })
   {
@@ -540,11 +524,7 @@ TEST(GridSources, PointSourceInALargeCube)
   Sources sources;
   sources.AddPointSource({ { source[0], source[1], source[2] }, power, "" });
   std::vector<double> irradiance(3 * static_cast<std::size_t>(mesh.GetNumberOfPoints()), 0.0);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &irradiance;
-  problem.InteriorSources = &sources;
+  DiffusionProblem problem = MakeProblem(mesh, material, irradiance, sources);
   GridSolver solver;
   solver.SetGridSpacing(0.4);
   solver.SetRelTol(1e-9);
@@ -614,11 +594,7 @@ TEST(GridSources, Reciprocity)
   {
     Sources sources;
     sources.AddPointSource({ { points[a][0], points[a][1], points[a][2] }, { 1, 1, 1 }, "" });
-    DiffusionProblem problem;
-    problem.Mesh = &mesh;
-    problem.Material = &material;
-    problem.Irradiance = &irradiance;
-    problem.InteriorSources = &sources;
+    DiffusionProblem problem = MakeProblem(mesh, material, irradiance, sources);
     GridSolver solver;
     solver.SetGridSpacing(0.5);
     solver.SetRelTol(1e-13);
@@ -667,11 +643,7 @@ TEST(FiniteDifferenceSources, PencilBeamIsItsEquivalentPointSources)
       solver->SetOptions(SolverOptions{ { DiffusionOption::GridSpacing, 0.5 } });
       solver->SetRelTol(1e-12);
       solver->SetMaxIter(20000);
-      DiffusionProblem problem;
-      problem.Mesh = &mesh;
-      problem.Material = &material;
-      problem.Irradiance = &irradiance;
-      problem.InteriorSources = k == 0 ? &pencil : &points;
+      DiffusionProblem problem = MakeProblem(mesh, material, irradiance, k == 0 ? pencil : points);
       SolverReport report;
       ASSERT_TRUE(solver->Solve(problem, fluence[k], report)) << name;
     }

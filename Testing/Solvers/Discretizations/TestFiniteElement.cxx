@@ -730,10 +730,7 @@ TEST(FiniteElement, FactoryAndVertexSolver)
   const TetMesh mesh = Build(CubeMesh(6, 2.0, 0.2, 71));
   const OpticalProperties material = RandomMaterial(mesh.GetNumberOfTets(), 72);
   const std::vector<double> q = RandomIrradiance(mesh, 73);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &q;
+  DiffusionProblem problem = MakeProblem(mesh, material, q);
   solver->SetRelTol(1e-12);
   std::vector<double> fluence;
   SolverReport report;
@@ -819,9 +816,7 @@ TEST(FiniteElementErrors, InvalidInputThrows)
 
   // Through the common interface: a missing irradiance.
   std::unique_ptr<DiffusionSolver> solver = CreateDiffusionSolver("fem");
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &good;
+  DiffusionProblem problem = MakeProblem(mesh, good);
   SolverReport report;
   message = ErrorMessage([&] { solver->Solve(problem, fluence, report); });
   EXPECT_TRUE(Contains(message, "irradiance")) << message;
@@ -952,10 +947,7 @@ BunnyDifference CompareOnBunny(const TetMesh& mesh,
     0,
     false,
     q));
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &q;
+  DiffusionProblem problem = MakeProblem(mesh, material, q);
   std::vector<double> phiDiv, phiFem;
   SolverReport divReport, femReport;
   std::unique_ptr<DiffusionSolver> div = CreateDiffusionSolver("divergence");

@@ -100,17 +100,6 @@ std::vector<double> TopIrradiance(const TetMesh& mesh, double zAbove)
   return q;
 }
 
-DiffusionProblem MakeProblem(const TetMesh& mesh,
-  const OpticalProperties& material,
-  const std::vector<double>& q)
-{
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &q;
-  return problem;
-}
-
 // ---- tet locator ----
 
 TEST(TetLocator, MatchesBruteForce)
@@ -278,9 +267,7 @@ GridErrors ManufacturedErrors(double h,
       EXPECT_GE(nodeQ[3 * b + c], 0.0); // the setup must keep q physical
     }
   }
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   std::vector<double> fluence;
   SolverReport report;
   EXPECT_TRUE(solver.SolveWithNodeIrradiance(problem, nodeQ, fluence, report));
@@ -735,9 +722,7 @@ TEST(GridSolver, LinearFieldIsExactOnAnAxisAlignedBox)
         (phi(Eigen::Vector3d(p[0], p[1], p[2])) + 2.0 * bigA * kappa * gradient.dot(normal));
     }
   }
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
+  DiffusionProblem problem = MakeProblem(mesh, material);
   std::vector<double> fluence;
   SolverReport report;
   ASSERT_TRUE(solver.SolveWithNodeIrradiance(problem, nodeQ, fluence, report));
@@ -904,9 +889,7 @@ TEST(GridSolver, RotatedBoxRmsConvergence)
         ASSERT_GE(nodeQ[3 * b + c], 0.0);
       }
     }
-    DiffusionProblem problem;
-    problem.Mesh = &mesh;
-    problem.Material = &material;
+    DiffusionProblem problem = MakeProblem(mesh, material);
     std::vector<double> fluence;
     SolverReport report;
     ASSERT_TRUE(solver.SolveWithNodeIrradiance(problem, nodeQ, fluence, report));

@@ -8,6 +8,7 @@
 #include "VertexDiffusionSolver.h"
 #include "Error.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetMesh.h"
 
 #include <gtest/gtest.h>
@@ -20,6 +21,7 @@ namespace
 {
 
 using namespace translucency;
+using translucency::testing::MakeProblem;
 
 /// Every value of the two systems is the same double (EXPECT_EQ, no tolerance).
 void ExpectIdentical(const DiffusionSystem& a, const DiffusionSystem& b)
@@ -196,10 +198,7 @@ TEST(IncrementalAssembly, SolverUpdatesOnlyTheChangedRows)
   auto* vertex = dynamic_cast<VertexDiffusionSolver*>(solver.get());
   ASSERT_NE(vertex, nullptr);
   solver->SetRelTol(tol);
-  DiffusionProblem problem;
-  problem.Mesh = &s.Mesh;
-  problem.Material = &s.Material;
-  problem.Irradiance = &s.Irradiance;
+  DiffusionProblem problem = MakeProblem(s.Mesh, s.Material, s.Irradiance);
   std::vector<double> fluence;
   SolverReport report;
   ASSERT_TRUE(solver->Solve(problem, fluence, report));
@@ -253,10 +252,7 @@ TEST(IncrementalAssembly, SolverUpdatesOnlyTheChangedRows)
   // A request without a previous solve on that mesh: another mesh object
   // (as after a cut) falls back to a full assembly.
   Scene other = MakeScene(7, 9);
-  DiffusionProblem otherProblem;
-  otherProblem.Mesh = &other.Mesh;
-  otherProblem.Material = &other.Material;
-  otherProblem.Irradiance = &other.Irradiance;
+  DiffusionProblem otherProblem = MakeProblem(other.Mesh, other.Material, other.Irradiance);
   vertex->SetChangedTets({ 0, 1, 2 });
   ASSERT_TRUE(solver->Solve(otherProblem, fluence, report));
   EXPECT_EQ(report.Assembly, "full");
@@ -272,10 +268,7 @@ TEST(IncrementalAssembly, FemFallsBackToFullAssembly)
   auto solver = CreateDiffusionSolver("fem");
   auto* vertex = dynamic_cast<VertexDiffusionSolver*>(solver.get());
   ASSERT_NE(vertex, nullptr);
-  DiffusionProblem problem;
-  problem.Mesh = &s.Mesh;
-  problem.Material = &s.Material;
-  problem.Irradiance = &s.Irradiance;
+  DiffusionProblem problem = MakeProblem(s.Mesh, s.Material, s.Irradiance);
   std::vector<double> fluence;
   SolverReport report;
   ASSERT_TRUE(solver->Solve(problem, fluence, report));

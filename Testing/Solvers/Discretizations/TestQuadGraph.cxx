@@ -102,10 +102,7 @@ struct Outcome
 Outcome SolveWith(QuadGraphSolver& solver, const TetMesh& mesh, const OpticalProperties& material,
   const std::vector<double>& q)
 {
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &q;
+  DiffusionProblem problem = MakeProblem(mesh, material, q);
   Outcome run;
   EXPECT_TRUE(solver.Solve(problem, run.Fluence, run.Report));
   return run;
@@ -549,10 +546,7 @@ Errors ManufacturedErrors(int cells, double length, const double muA[3], const d
   auto divergence = CreateDiffusionSolver("divergence");
   divergence->SetRelTol(1e-9);
   divergence->SetMaxIter(20000);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &q;
+  DiffusionProblem problem = MakeProblem(mesh, material, q);
   std::vector<double> reference;
   SolverReport referenceReport;
   divergence->Solve(problem, reference, referenceReport);
@@ -1173,10 +1167,7 @@ TEST(QuadGraph, FactoryAndAbort)
   const TetMesh mesh = Build(CubeMesh(3, 1.0));
   const OpticalProperties material = RandomMaterial(mesh.GetNumberOfTets(), 32);
   const std::vector<double> q = RandomIrradiance(mesh, 33);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &q;
+  DiffusionProblem problem = MakeProblem(mesh, material, q);
   std::vector<double> fluence;
   SolverReport report;
   int calls = 0;
@@ -1193,10 +1184,7 @@ TEST(QuadGraphErrors, BadInputThrows)
   const TetMesh mesh = Build(CubeMesh(2, 1.0));
   const OpticalProperties material = RandomMaterial(mesh.GetNumberOfTets(), 34);
   std::vector<double> q = RandomIrradiance(mesh, 35);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &q;
+  DiffusionProblem problem = MakeProblem(mesh, material, q);
   std::vector<double> fluence;
   SolverReport report;
   QuadGraphSolver solver;

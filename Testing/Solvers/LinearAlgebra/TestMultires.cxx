@@ -32,6 +32,7 @@ namespace
 using namespace translucency;
 using translucency::testing::CubeMesh;
 using translucency::testing::MeshData;
+using translucency::testing::MakeProblem;
 using translucency::testing::Uniform01;
 using translucency::testing::RandomIrradiance;
 using translucency::testing::RandomMaterial;
@@ -663,10 +664,7 @@ TEST(MultiresSolvers, VertexSolverKeepsTheHierarchy)
   EXPECT_EQ(solver->GetLinearSolver(), "");
   solver->SetLinearSolver("Multigrid-CG");
   solver->SetRelTol(1e-10);
-  DiffusionProblem problem;
-  problem.Mesh = &mesh;
-  problem.Material = &material;
-  problem.Irradiance = &q;
+  DiffusionProblem problem = MakeProblem(mesh, material, q);
   std::vector<double> fluence;
   SolverReport report;
   auto check = [&](const TetMesh& m)
