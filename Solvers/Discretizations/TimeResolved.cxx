@@ -12,8 +12,6 @@
 
 #include "Strings.h"
 
-#include <Eigen/IterativeLinearSolvers>
-
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -119,10 +117,6 @@ void TimeGates::Validate() const
 namespace
 {
 
-using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
-using JacobiCG = Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper,
-  Eigen::DiagonalPreconditioner<double>>;
-
 using Channels = std::array<Eigen::VectorXd, NumberOfChannels>;
 
 /// Loops over fewer unknowns than this run on one thread (a parallel region
@@ -210,17 +204,17 @@ void VertexDiffusionSolver::SetTimeStepRecycledSolutions(int k)
   TimeStepRecycled_ = k;
 }
 
-bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
-  const TimeGates& gates, const std::vector<Detector>& detectors,
-  const std::vector<int>& snapshotGates, TimeResolvedResult& result, SolverReport& report)
+namespace
 {
-  if (!problem.Mesh || !problem.Material || !problem.Irradiance)
-  {
-    throw Error(GetName() + ": the problem needs a mesh, a material and an irradiance");
-  }
-  gates.Validate();
-  const OpticalProperties& material = *problem.Material;
-  material.Validate(problem.Mesh->GetNumberOfTets());
+
+using Progress = std::function<bool(double)>;
+
+/// Schedule: the gates with their steps per gate chosen for the largest
+/// absorption rate mu_a c_m (TimeGates::ChooseStepsPerGate), checked, and
+/// the snapshot gates checked against them.
+TimeGates ScheduleGates(const std::string& who, const OpticalProperties& material,
+  const TimeGates& gates, const std::vector<int>& snapshotGates)
+{
   double absorptionRate = 0.0; // the largest mu_a c_m, 1/ns
   for (std::size_t t = 0; t < material.RefractiveIndex.size(); ++t)
   {
@@ -238,39 +232,80 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     if (g < 0 || g >= gates.Count)
     {
       std::ostringstream out;
-      out << GetName() << ": snapshot gate " << g << " (expected 0.." << gates.Count - 1
+      out << who << ": snapshot gate " << g << " (expected 0.." << gates.Count - 1
           << ", the gates are numbered from 0)";
       throw Error(out.str());
     }
   }
-  const TetMesh& mesh = *problem.Mesh;
-  const std::vector<double>& irradiance = *problem.Irradiance;
-  report = SolverReport();
-  report.Solver = GetName();
-  report.Assembly = "full";
-  result = TimeResolvedResult();
-  result.Gates = used;
-  result.TimeStep = used.GetTimeStep();
-  result.SnapshotGates = snapshotGates;
+  return used;
+}
 
-  auto start = Clock::now();
-  // The detectors' footprints, located once (not at every gate; a detector
-  // off the surface is an error before the stepping).
-  const std::vector<DetectorFootprint> footprints =
-    detectors.empty() ? std::vector<DetectorFootprint>() : LocateDetectors(mesh, detectors);
+/// Schedule: the end time of every linear solve of the run (ns), sub-steps
+/// included, times[0] = 0 the pulse: the time steps runSegment takes
+/// (Stepper::RunSegment), for the extended collimated model's deposits.
+std::vector<double> SolveTimes(const TimeGates& used)
+{
+  std::vector<double> times(1, 0.0);
+  const auto schedule = [&times](long long steps, double dt, bool fromPulse, double t0) {
+    const long long eulerSteps = fromPulse ? TimeGates::PulseEulerSteps : 1;
+    const int subSteps = fromPulse ? TimeGates::PulseEulerSubSteps : 1;
+    const double h = dt / subSteps;
+    for (long long s = 0; s < steps; ++s)
+    {
+      for (int j = 0; s < eulerSteps && j < subSteps; ++j)
+      {
+        times.push_back(t0 + static_cast<double>(s) * dt + (j + 1) * h);
+      }
+      if (s >= eulerSteps)
+      {
+        times.push_back(t0 + static_cast<double>(s + 1) * dt);
+      }
+    }
+  };
+  const long long before = used.GetStepsBeforeStart();
+  if (before > 0)
+  {
+    schedule(before, used.Start / static_cast<double>(before), true, 0.0);
+  }
+  schedule(static_cast<long long>(used.Count) * used.StepsPerGate, used.GetTimeStep(),
+    before == 0, used.Start);
+  return times;
+}
+
+/// What the stepping solves with: K and b of the continuous-wave solve (with
+/// the interior sources' load), the mass matrix, the Robin rule, and the
+/// extended collimated model's source with its deposits per solve.
+struct TimeResolvedSystem
+{
+  DiffusionSystem System;
+  MassMatrix Mass;
+  Fresnel::BoundaryRule Rule = Fresnel::BoundaryRule::Fit;
+  bool Extended = false;
+  CollimatedSource Collimated;
+  std::vector<CollimatedDeposit> Deposits;
+};
+
+/// Step matrices (assembly): K and b, the deposits, and M = the mass matrix
+/// times 1 / c_m = eta / c (ns/mm), the same for the three channels (eta
+/// is per tet).
+void AssembleTimeResolved(const std::string& who, Discretization& discretization,
+  const DiffusionProblem& problem, const TimeGates& used, TimeResolvedSystem& out)
+{
+  const TetMesh& mesh = *problem.Mesh;
+  const OpticalProperties& material = *problem.Material;
   std::vector<double> sourceLoad;
   if (problem.HasInteriorSources())
   {
     sourceLoad = problem.InteriorSources->ComputeLoad(mesh, material);
   }
-  DiffusionSystem system; // K and b of the continuous-wave solve
+  DiffusionSystem& system = out.System;
   // The Robin coefficients of the model (the Fresnel moments with
   // extended-moments; the detectors read with the same).
-  const Fresnel::BoundaryRule rule = problem.Collimated == CollimatedModel::ExtendedMoments
+  out.Rule = problem.Collimated == CollimatedModel::ExtendedMoments
     ? Fresnel::BoundaryRule::Moments
     : Fresnel::BoundaryRule::Fit;
-  Discretization_->SetBoundaryRule(rule);
-  Discretization_->Assemble(mesh, material, irradiance, system);
+  discretization.SetBoundaryRule(out.Rule);
+  discretization.Assemble(mesh, material, *problem.Irradiance, system);
   if (!sourceLoad.empty())
   {
     for (int c = 0; c < NumberOfChannels; ++c)
@@ -285,42 +320,14 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
   // the optical path eta s at tau = eta s / c, so its volume source is a
   // delayed pulse per point (CollimatedSource.h). Its load is split between
   // the two solve times around tau (ComputeCollimatedTimeLoad): the end
-  // time of every linear solve of the run, sub-steps included, times[0] = 0
-  // the pulse (DiffuseOptics.md, "Collimated beams in the frequency and time domain").
-  const long long before = used.GetStepsBeforeStart();
-  const bool extended = IsExtendedCollimatedModel(problem.Collimated);
-  CollimatedSource collimated;
-  std::vector<CollimatedDeposit> deposits;
-  if (extended)
+  // time of every linear solve of the run (DiffuseOptics.md, "Collimated
+  // beams in the frequency and time domain").
+  out.Extended = IsExtendedCollimatedModel(problem.Collimated);
+  if (out.Extended)
   {
-    collimated = ComputeCollimatedSource(mesh, material, problem.Lights, problem.Shadows);
-    std::vector<double> times(1, 0.0);
-    const auto schedule = [&times](long long steps, double dt, bool fromPulse, double t0) {
-      const long long eulerSteps = fromPulse ? TimeGates::PulseEulerSteps : 1;
-      const int subSteps = fromPulse ? TimeGates::PulseEulerSubSteps : 1;
-      const double h = dt / subSteps;
-      for (long long s = 0; s < steps; ++s)
-      {
-        for (int j = 0; s < eulerSteps && j < subSteps; ++j)
-        {
-          times.push_back(t0 + static_cast<double>(s) * dt + (j + 1) * h);
-        }
-        if (s >= eulerSteps)
-        {
-          times.push_back(t0 + static_cast<double>(s + 1) * dt);
-        }
-      }
-    };
-    if (before > 0)
-    {
-      schedule(before, used.Start / static_cast<double>(before), true, 0.0);
-    }
-    schedule(static_cast<long long>(used.Count) * used.StepsPerGate, used.GetTimeStep(),
-      before == 0, used.Start);
-    deposits = ComputeCollimatedTimeLoad(mesh, material, collimated, times);
+    out.Collimated = ComputeCollimatedSource(mesh, material, problem.Lights, problem.Shadows);
+    out.Deposits = ComputeCollimatedTimeLoad(mesh, material, out.Collimated, SolveTimes(used));
   }
-  // M: the mass matrix times 1 / c_m = eta / c (ns/mm), the same for the
-  // three channels (eta is per tet).
   const int numTets = mesh.GetNumberOfTets();
   const std::size_t nnz = system.ColumnIndices.size();
   std::vector<double> coefficient(3 * static_cast<std::size_t>(numTets));
@@ -332,132 +339,316 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
       coefficient[3 * static_cast<std::size_t>(t) + c] = value;
     }
   }
-  MassMatrix mass;
+  std::array<std::vector<double>, NumberOfChannels> masses;
+  for (auto& values : masses)
   {
-    std::array<std::vector<double>, NumberOfChannels> masses;
-    for (auto& values : masses)
+    values.assign(nnz, 0.0);
+  }
+  if (!discretization.AddMass(mesh, coefficient, masses))
+  {
+    throw Error(who + ": this discretisation has no time-resolved solve");
+  }
+  out.Mass.Set(system, std::move(masses[0]));
+}
+
+/// The registry's entry with the given Krylov method and preconditioner
+/// (traits, not a name).
+const LinearSolverRegistry::Entry& FindLinearSolver(
+  const std::string& krylov, const std::string& preconditioner)
+{
+  for (const auto& entry : GetLinearSolverRegistry().GetEntries())
+  {
+    if (entry.Properties.Built && entry.Properties.Krylov == krylov &&
+      entry.Properties.Preconditioner == preconditioner)
     {
-      values.assign(nnz, 0.0);
+      return entry;
     }
-    if (!Discretization_->AddMass(mesh, coefficient, masses))
+  }
+  throw Error("no linear solver " + krylov + " x " + preconditioner + " in the registry");
+}
+
+/**
+ * Step matrices and their solver: a M / dt + K on K's pattern, solved, the
+ * three channels together, by the linear solver a continuous-wave Solve()
+ * would use (SetLinearSolver's name, or by size: multigrid-agg from
+ * LargeSystemUnknowns on), set up once for the pattern (its hierarchy is
+ * kept for the whole run) and again for the values when a / dt changes
+ * (twice per run, three times with T0 > 0).
+ *
+ * The default (no name given) at sizes whose default is not Jacobi-CG
+ * starts with Jacobi-CG (the registry's cg x jacobi entry): when the mass
+ * term a M / dt dominates the steps, Jacobi-CG needs as few iterations as
+ * the multigrid (5-6 per step on the time-resolved tests' meshes) and the
+ * cycle is pure extra cost (4x slower there); when it does not (18 per
+ * step on the 200k-tet bunny with 100 gates), the multigrid is 3x faster.
+ * So the first AdaptiveSteps BDF2 steps decide: a mean above
+ * AdaptiveIterations Jacobi iterations per channel switches to the
+ * multigrid for the rest of the run (DiffuseOptics.md).
+ */
+class StepSolver
+{
+public:
+  static constexpr int AdaptiveSteps = 4;
+  static constexpr double AdaptiveIterations = 10.0;
+
+  StepSolver(const std::string& who, const TimeResolvedSystem& base, const TetMesh& mesh,
+    const std::string& linearName, bool defaultChoice, double relTol, int maxIter,
+    int recycled, TimeResolvedResult& result, SolverReport& report)
+    : Who_(who)
+    , Base_(base)
+    , Mesh_(mesh)
+    , Result_(result)
+    , Report_(report)
+  {
+    const DiffusionSystem& system = base.System;
+    Step.NumberOfUnknowns = system.NumberOfUnknowns;
+    Step.RowOffsets = system.RowOffsets;
+    Step.ColumnIndices = system.ColumnIndices;
+    Linear_ = CreateLinearSolver(linearName); // throws, listing the known names
+    Linear_->SetRelTol(relTol);
+    Linear_->SetMaxIter(maxIter);
+    if (auto* agg = dynamic_cast<AggregationMultigridSolver*>(Linear_.get()))
     {
-      throw Error(GetName() + ": this discretisation has no time-resolved solve");
+      // Each step starts from the A-norm-best combination of the
+      // extrapolated guess and the last solutions of the same step matrix
+      // (forgotten when the matrix changes: Setup); double precision, so
+      // exact at any RelTol.
+      agg->SetRecycleInDoublePrecision(true);
+      agg->SetRecycledSolutions(recycled);
     }
-    mass.Set(system, std::move(masses[0]));
+    report.LinearSolver = Linear_->GetName();
+    const LinearSolverRegistry::Entry& jacobi = FindLinearSolver("cg", "jacobi");
+    const LinearSolverTraits& chosen =
+      GetLinearSolverRegistry().Find(linearName)->Properties;
+    Adaptive_ = defaultChoice &&
+      !(chosen.Krylov == jacobi.Properties.Krylov &&
+        chosen.Preconditioner == jacobi.Properties.Preconditioner);
+    if (Adaptive_)
+    {
+      First_ = jacobi.Create();
+      First_->SetRelTol(relTol);
+      First_->SetMaxIter(maxIter);
+      report.LinearSolver = First_->GetName();
+    }
+    Current_ = Adaptive_ ? First_.get() : Linear_.get();
   }
-  // The step matrices a M / dt + K share K's pattern. They are solved, the
-  // three channels together, by the linear solver a continuous-wave Solve()
-  // would use (SetLinearSolver's name, or by size: multigrid-agg from
-  // LargeSystemUnknowns on), set up once for the pattern (its hierarchy is
-  // kept for the whole run) and again for the values when a / dt changes
-  // (twice per run, three times with T0 > 0).
-  DiffusionSystem step;
-  step.NumberOfUnknowns = system.NumberOfUnknowns;
-  step.RowOffsets = system.RowOffsets;
-  step.ColumnIndices = system.ColumnIndices;
-  std::unique_ptr<LinearSolver> linear = CreateLinearSolver(ToLower(LinearSolver_.empty()
-      ? GetDefaultLinearSolverName(system.NumberOfUnknowns)
-      : LinearSolver_)); // throws, listing the known names
-  linear->SetRelTol(RelTol_);
-  linear->SetMaxIter(MaxIter_);
-  if (auto* agg = dynamic_cast<AggregationMultigridSolver*>(linear.get()))
+
+  /// The step matrix a M / dt + K for factor = a / dt (1/ns), with a zero
+  /// right-hand side, and its solver set up (nothing when unchanged).
+  void SetMatrix(double factor)
   {
-    // Each step starts from the A-norm-best combination of the extrapolated
-    // guess and the last solutions of the same step matrix (forgotten when
-    // the matrix changes: Setup); double precision, so exact at any RelTol.
-    agg->SetRecycleInDoublePrecision(true);
-    agg->SetRecycledSolutions(TimeStepRecycled_);
-  }
-  report.LinearSolver = linear->GetName();
-  // cg-jacobi: Eigen's CG per channel with its diagonal kept per step matrix
-  // (the registry's cg-jacobi rebuilds it at every Solve, one more pass over
-  // the matrix per step).
-  bool jacobi = linear->GetName() == "cg-jacobi";
-  // The default (no name given) at multigrid-agg sizes starts with Jacobi:
-  // when the mass term a M / dt dominates the steps, Jacobi-CG needs as few
-  // iterations as the multigrid (5-6 per step on the time-resolved tests'
-  // meshes) and the cycle is pure extra cost (4x slower there); when it does
-  // not (18 per step on the 200k-tet bunny with 100 gates), the multigrid
-  // is 3x faster. So the first AdaptiveSteps BDF2 steps decide:
-  // a mean above AdaptiveIterations Jacobi iterations per channel switches
-  // to the multigrid for the rest of the run (DiffuseOptics.md).
-  constexpr int AdaptiveSteps = 4;
-  constexpr double AdaptiveIterations = 10.0;
-  const bool adaptive = !jacobi && LinearSolver_.empty();
-  if (adaptive)
-  {
-    jacobi = true;
-    report.LinearSolver = "cg-jacobi";
-  }
-  long long adaptiveSolves = 0, adaptiveIterations = 0;
-  bool linearSetUp = false;
-  bool bdf2Step = false; // the solve is a BDF2 step (set by runSegment)
-  std::array<JacobiCG, NumberOfChannels> cg;
-  double matrixFactor = -1.0; // a / dt of step.Values
-  bool structure = true;      // the first set-up builds the structure
-  const auto setMatrix = [&](double factor) {
-    if (factor == matrixFactor)
+    if (factor == MatrixFactor_)
     {
       return;
     }
+    const DiffusionSystem& system = Base_.System;
+    const std::size_t nnz = system.ColumnIndices.size();
     for (int c = 0; c < NumberOfChannels; ++c)
     {
-      step.Values[c].resize(nnz);
+      Step.Values[c].resize(nnz);
       for (std::size_t k = 0; k < nnz; ++k)
       {
-        step.Values[c][k] = system.Values[c][k] + factor * mass.Values[k];
+        Step.Values[c][k] = system.Values[c][k] + factor * Base_.Mass.Values[k];
       }
-      step.RightHandSide[c].setZero(system.NumberOfUnknowns);
-    }
-    for (int c = 0; c < NumberOfChannels && (jacobi || adaptive); ++c)
-    {
-      cg[c].setTolerance(RelTol_);
-      cg[c].setMaxIterations(MaxIter_);
-      cg[c].compute(step.Matrix(c));
-      if (cg[c].info() != Eigen::Success)
-      {
-        throw Error(GetName() + ": the time-step matrix has a zero or non-finite diagonal");
-      }
+      Step.RightHandSide[c].setZero(system.NumberOfUnknowns);
     }
     try
     {
-      if (!jacobi)
-      {
-        linear->Setup(step, &mesh, structure || !linearSetUp);
-        linearSetUp = true;
-      }
+      Current_->Setup(Step, &Mesh_, Structure_);
     }
     catch (const Error& e)
     {
-      throw Error(GetName() + ": the time-step matrix (a M / dt + K, a / dt = " +
+      throw Error(Who_ + ": the time-step matrix (a M / dt + K, a / dt = " +
         std::to_string(factor) + "/ns) is not SPD: " + e.what());
     }
-    structure = false;
-    matrixFactor = factor;
-  };
-  report.SetupMilliseconds = MillisecondsSince(start);
+    Structure_ = false;
+    MatrixFactor_ = factor;
+  }
 
-  start = Clock::now();
-  const int n = system.NumberOfUnknowns;
-  // Per channel: phi at the last two steps, M phi at the last two steps,
-  // the integral over the current gate and over [T0, T1].
-  std::array<Eigen::VectorXd, NumberOfChannels> phi, phiPrevious, massPhi, massPhiPrevious, gate,
-    integral;
-  // The collimated deposits: the next one to inject, the solve counter
-  // (deposit Time j enters solve j; 0 is the pulse), and what the current
-  // backward-Euler step injected (see runSegment).
-  std::size_t nextDeposit = 0;
-  long long solveIndex = 0;
-  std::array<Eigen::VectorXd, NumberOfChannels> eulerInjected;
-  // Adds 4 x the deposits of solve `j` (times `factor`) to `target` and,
-  // if given, 4 x them to `injected` (the discretisations' systems are 4 x
-  // the weak form, FiniteElement.h).
-  const auto inject = [&](long long j, double factor,
-                        std::array<Eigen::VectorXd, NumberOfChannels>& target,
-                        std::array<Eigen::VectorXd, NumberOfChannels>* injected) {
-    for (; nextDeposit < deposits.size() && deposits[nextDeposit].Time <= j; ++nextDeposit)
+  /// One linear solve of the three channels (right-hand sides in
+  /// Step.RightHandSide) from `next` (the guess), with the statistics;
+  /// `bdf2Step` says whether it is a BDF2 step (the adaptive choice counts
+  /// those).
+  void Solve(Channels& next, bool bdf2Step)
+  {
+    Current_->Solve(Step, next, true, Stats_);
+    if (Adaptive_ && Current_ == First_.get() && bdf2Step)
     {
-      const CollimatedDeposit& d = deposits[nextDeposit];
+      // The adaptive choice (above): after AdaptiveSteps BDF2 solves,
+      // switch to the multigrid if Jacobi needed many.
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        AdaptiveIterations_ += Stats_[c].Iterations;
+      }
+      if (++AdaptiveSolves_ == AdaptiveSteps)
+      {
+        const double mean = static_cast<double>(AdaptiveIterations_) /
+          (static_cast<double>(AdaptiveSteps) * NumberOfChannels);
+        if (mean > AdaptiveIterations)
+        {
+          Current_ = Linear_.get();
+          Linear_->Setup(Step, &Mesh_, true);
+          Report_.LinearSolver = First_->GetName() + ", then " + Linear_->GetName();
+        }
+      }
+    }
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      const int used = Stats_[c].Iterations;
+      Iterations[c] += used;
+      Result_.MaximumStepIterations[c] = std::max(Result_.MaximumStepIterations[c], used);
+      Report_.Residual[c] = std::max(Report_.Residual[c], Stats_[c].RelativeResidual);
+      if (!Stats_[c].Converged || !next[c].allFinite())
+      {
+        Report_.Converged[c] = false;
+      }
+    }
+  }
+
+  /// The linear solvers' own memory (bytes).
+  std::size_t GetMemoryBytes() const
+  {
+    return Linear_->GetMemoryBytes() + (First_ ? First_->GetMemoryBytes() : 0);
+  }
+
+  DiffusionSystem Step; ///< the step matrix and right-hand sides
+  std::array<long long, NumberOfChannels> Iterations{};
+
+private:
+  std::string Who_;
+  const TimeResolvedSystem& Base_;
+  const TetMesh& Mesh_;
+  TimeResolvedResult& Result_;
+  SolverReport& Report_;
+  std::unique_ptr<LinearSolver> Linear_; ///< the named (or default) solver
+  std::unique_ptr<LinearSolver> First_;  ///< Jacobi-CG of the adaptive choice
+  LinearSolver* Current_ = nullptr;
+  bool Adaptive_ = false;
+  long long AdaptiveSolves_ = 0, AdaptiveIterations_ = 0;
+  double MatrixFactor_ = -1.0; ///< a / dt of Step.Values
+  bool Structure_ = true;      ///< the first set-up builds the structure
+  std::array<LinearSolveStats, NumberOfChannels> Stats_;
+};
+
+/**
+ * Stepping: phi and M phi at the last two steps, the integral over the
+ * current gate and over [T0, T1], per channel, advanced segment by segment
+ * (RunSegment) by backward Euler from the pulse, then BDF2.
+ */
+class Stepper
+{
+public:
+  Stepper(const TimeResolvedSystem& base, StepSolver& solver, long long totalSteps,
+    Progress progress)
+    : Base_(base)
+    , Solver_(solver)
+    , TotalSteps_(totalSteps)
+    , Progress_(std::move(progress))
+    , N_(base.System.NumberOfUnknowns)
+  {
+    const int n = N_;
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      Phi[c].setZero(n);
+      PhiPrevious[c].setZero(n);
+      MassPhi[c] = base.System.RightHandSide[c]; // M phi(0+) = b: the pulse
+      MassPhiPrevious[c].setZero(n);
+      EulerInjected[c].setZero(base.Extended ? n : 0);
+      Gate[c].setZero(n);
+      Integral[c].setZero(n);
+    }
+    Inject(0, 1.0, MassPhi, nullptr); // the beam at t = 0 (the entry points)
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      Next[c].setZero(n);
+      MassNext[c].setZero(n);
+      LastEuler[c].setZero(n);
+    }
+  }
+
+  /**
+   * One segment: `steps` steps of dt, the first backward Euler (from the
+   * pulse: TimeGates::PulseEulerSteps steps of PulseEulerSubSteps
+   * sub-steps each; a restart from a smooth field: one step), the others
+   * BDF2; `add` the step integrals to the current gate; `afterStep(step)`
+   * after every step (to close gates). False if the progress callback
+   * asked to abort.
+   */
+  bool RunSegment(long long steps, double dt, bool add,
+    const std::function<void(long long)>& afterStep)
+  {
+    const bool fromPulse = Pulse_;
+    const long long eulerSteps = fromPulse ? TimeGates::PulseEulerSteps : 1;
+    const int subSteps = fromPulse ? TimeGates::PulseEulerSubSteps : 1;
+    const double h = dt / subSteps;
+    for (long long s = 0; s < steps; ++s)
+    {
+      const bool euler = s < eulerSteps;
+      Solver_.SetMatrix(euler ? 1.0 / h : 1.5 / dt);
+      if (euler)
+      {
+        EulerStep(h, subSteps, add);
+      }
+      else
+      {
+        Bdf2Step(dt, s == eulerSteps, add);
+      }
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        PhiPrevious[c].swap(Phi[c]);
+        Phi[c].swap(Next[c]);
+        MassPhiPrevious[c].swap(MassPhi[c]);
+        MassPhi[c].swap(MassNext[c]);
+        if (euler && Base_.Extended)
+        {
+          // BDF2's first history term takes the state at the start of the
+          // last backward-Euler step with that step's deposits in it: then
+          // the gate weights (half that step's integral for the first BDF2
+          // interval) still sum to exactly K^-1 (b + all deposits), the
+          // continuous-wave solution (DiffuseOptics.md).
+          MassPhiPrevious[c] += EulerInjected[c];
+        }
+      }
+      Pulse_ = false;
+      ++StepsDone;
+      afterStep(s);
+      if (!Progress_(static_cast<double>(StepsDone) / static_cast<double>(TotalSteps_)))
+      {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  /// Moves the current gate's integral into the whole run's and returns
+  /// the gate average (the integral / width) in `average`.
+  void CloseGate(double width, Channels& average)
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      Integral[c] += Gate[c];
+      average[c] = Gate[c] / width;
+      Gate[c].setZero();
+    }
+  }
+
+  /// Deposits not injected by the end of the run (0 unless the schedule of
+  /// SolveTimes and RunSegment disagree).
+  std::size_t GetUninjectedDeposits() const { return Base_.Deposits.size() - NextDeposit_; }
+
+  Channels Integral; ///< over [T0, T1]
+  long long StepsDone = 0;
+
+private:
+  /// Adds 4 x the deposits of solve `j` (times `factor`) to `target` and,
+  /// if given, 4 x them to `injected` (the discretisations' systems are 4 x
+  /// the weak form, FiniteElement.h).
+  void Inject(long long j, double factor, Channels& target, Channels* injected)
+  {
+    const std::vector<CollimatedDeposit>& deposits = Base_.Deposits;
+    for (; NextDeposit_ < deposits.size() && deposits[NextDeposit_].Time <= j; ++NextDeposit_)
+    {
+      const CollimatedDeposit& d = deposits[NextDeposit_];
       for (int c = 0; c < NumberOfChannels; ++c)
       {
         target[c][d.Point] += 4.0 * factor * d.Load[c];
@@ -467,264 +658,226 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
         }
       }
     }
-  };
-  for (int c = 0; c < NumberOfChannels; ++c)
-  {
-    phi[c].setZero(n);
-    phiPrevious[c].setZero(n);
-    massPhi[c] = system.RightHandSide[c]; // M phi(0+) = b: the pulse
-    massPhiPrevious[c].setZero(n);
-    eulerInjected[c].setZero(extended ? n : 0);
-    gate[c].setZero(n);
-    integral[c].setZero(n);
-    report.Converged[c] = true;
   }
-  inject(0, 1.0, massPhi, nullptr); // the beam at t = 0 (the entry points)
-  const long long totalSteps = used.GetNumberOfSteps();
-  long long stepsDone = 0;
-  std::array<long long, NumberOfChannels> iterations{};
-  bool pulse = true; // the next step starts from the pulse (phi is a delta)
 
-  // One segment: `steps` steps of dt, the first backward Euler, the others
-  // BDF2; `add` the step integrals to the current gate; `gateEnd(step)` after
-  // every step (to close gates).
-  // The integral of the last backward-Euler step, per channel: the first
-  // BDF2 interval takes half of it in place of dt phi / 2, which keeps the
-  // sum over the steps exactly K^-1 b (Documentation/DiffuseOptics.md).
-  std::array<Eigen::VectorXd, NumberOfChannels> lastEuler;
-  // One linear solve of the three channels (right-hand sides in
-  // step.RightHandSide) from `next` (the guess), with the statistics.
-  std::array<LinearSolveStats, NumberOfChannels> stats;
-  const auto solve = [&](std::array<Eigen::VectorXd, NumberOfChannels>& next) {
-    if (jacobi)
-    {
-      for (int c = 0; c < NumberOfChannels; ++c)
-      {
-        stats[c] = LinearSolveStats();
-        const Eigen::VectorXd& right = step.RightHandSide[c];
-        if (right.squaredNorm() == 0.0)
-        {
-          next[c].setZero(n);
-          stats[c].Converged = true;
-          continue;
-        }
-        const Eigen::VectorXd guess = next[c];
-        next[c] = cg[c].solveWithGuess(right, guess);
-        stats[c].Iterations = static_cast<int>(cg[c].iterations());
-        stats[c].RelativeResidual = cg[c].error();
-        stats[c].Converged = cg[c].info() == Eigen::Success;
-      }
-    }
-    else
-    {
-      linear->Solve(step, next, true, stats);
-    }
-    if (adaptive && jacobi && bdf2Step)
-    {
-      // The adaptive choice (above): after AdaptiveSteps BDF2 solves,
-      // switch to the multigrid if Jacobi needed many.
-      for (int c = 0; c < NumberOfChannels; ++c)
-      {
-        adaptiveIterations += stats[c].Iterations;
-      }
-      if (++adaptiveSolves == AdaptiveSteps)
-      {
-        const double mean = static_cast<double>(adaptiveIterations) /
-          (static_cast<double>(AdaptiveSteps) * NumberOfChannels);
-        if (mean > AdaptiveIterations)
-        {
-          jacobi = false;
-          linear->Setup(step, &mesh, true);
-          linearSetUp = true;
-          report.LinearSolver = "cg-jacobi, then " + linear->GetName();
-        }
-      }
-    }
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      const int used = stats[c].Iterations;
-      iterations[c] += used;
-      result.MaximumStepIterations[c] = std::max(result.MaximumStepIterations[c], used);
-      report.Residual[c] = std::max(report.Residual[c], stats[c].RelativeResidual);
-      if (!stats[c].Converged || !next[c].allFinite())
-      {
-        report.Converged[c] = false;
-      }
-    }
-  };
-  std::array<Eigen::VectorXd, NumberOfChannels> next, massNext;
-  for (int c = 0; c < NumberOfChannels; ++c)
+  /// The per-step vector work in one pass over the unknowns each, the
+  /// three channels together (one OpenMP region instead of one per channel
+  /// and operation, no temporaries).
+  template <typename Body>
+  void ForEachUnknown(const Body& body) const
   {
-    next[c].setZero(n);
-    massNext[c].setZero(n);
-    lastEuler[c].setZero(n);
-  }
-  // The per-step vector work in one pass over the unknowns each, the three
-  // channels together (one OpenMP region instead of one per channel and
-  // operation, no temporaries): `before(i)` before the solve, `after(i)`
-  // after it.
-  const auto forEachUnknown = [n](const auto& body) {
+    const int n = N_;
 #pragma omp parallel for schedule(static) if (n > StepParallelThreshold)
     for (int i = 0; i < n; ++i)
     {
       body(i);
     }
-  };
-  const auto runSegment = [&](long long steps, double dt, bool add,
-                            const std::function<void(long long)>& afterStep) -> bool {
-    // From the pulse: TimeGates::PulseEulerSteps backward-Euler steps of
-    // PulseEulerSubSteps sub-steps each (see there); a restart from a
-    // smooth field: one step.
-    const bool fromPulse = pulse;
-    const long long eulerSteps = fromPulse ? TimeGates::PulseEulerSteps : 1;
-    const int subSteps = fromPulse ? TimeGates::PulseEulerSubSteps : 1;
-    const double h = dt / subSteps;
-    const double halfDt = 0.5 * dt;
-    for (long long s = 0; s < steps; ++s)
+  }
+
+  /// A backward-Euler step: (M / h + K) x' = M x / h, subSteps times; the
+  /// right rectangle. The integral of the step is kept in LastEuler: the
+  /// first BDF2 interval takes half of it in place of dt phi / 2, which
+  /// keeps the sum over the steps exactly K^-1 b (DiffuseOptics.md).
+  void EulerStep(double h, int subSteps, bool add)
+  {
+    DiffusionSystem& step = Solver_.Step;
+    if (Base_.Extended)
     {
-      const bool euler = s < eulerSteps;
-      setMatrix(euler ? 1.0 / h : 1.5 / dt);
-      bdf2Step = !euler;
-      if (euler)
-      {
-        // (M / h + K) x' = M x / h, subSteps times; the right rectangle.
-        if (extended)
-        {
-          for (int c = 0; c < NumberOfChannels; ++c)
-          {
-            eulerInjected[c].setZero(n);
-          }
-        }
-        for (int j = 0; j < subSteps; ++j)
-        {
-          const bool zeroGuess = pulse && j == 0;
-          // The first sub-step starts from phi and M phi.
-          const Channels& massFrom = j == 0 ? massPhi : massNext;
-          forEachUnknown([&](int i) {
-            for (int c = 0; c < NumberOfChannels; ++c)
-            {
-              step.RightHandSide[c][i] = massFrom[c][i] / h;
-              if (j == 0)
-              {
-                next[c][i] = zeroGuess ? 0.0 : phi[c][i];
-                lastEuler[c][i] = 0.0;
-              }
-            }
-          });
-          // (M / h + K) x' = (M x + w) / h: the beam's deposits w of this
-          // sub-step.
-          inject(++solveIndex, 1.0 / h, step.RightHandSide, &eulerInjected);
-          solve(next);
-          const auto x = Data(next);
-          forEachUnknown([&](int i) {
-            double m[NumberOfChannels];
-            mass.Row(i, x, m);
-            for (int c = 0; c < NumberOfChannels; ++c)
-            {
-              lastEuler[c][i] += h * next[c][i];
-              massNext[c][i] = m[c];
-              if (add && j + 1 == subSteps)
-              {
-                gate[c][i] += lastEuler[c][i];
-              }
-            }
-          });
-        }
-      }
-      else
-      {
-        // BDF2: (3/2 M / dt + K) phi' = M (2 phi - phi_prev / 2) / dt;
-        // the trapezoid. The guess: the extrapolation 2 phi - phi_prev (the
-        // multigrid step solver then combines it with its recycled
-        // solutions).
-        const bool first = s == eulerSteps;
-        forEachUnknown([&](int i) {
-          for (int c = 0; c < NumberOfChannels; ++c)
-          {
-            step.RightHandSide[c][i] = (2.0 * massPhi[c][i] - 0.5 * massPhiPrevious[c][i]) / dt;
-            next[c][i] = first ? phi[c][i] : 2.0 * phi[c][i] - phiPrevious[c][i];
-          }
-        });
-        inject(++solveIndex, 1.0 / dt, step.RightHandSide, nullptr); // + w / dt
-        solve(next);
-        const auto x = Data(next);
-        forEachUnknown([&](int i) {
-          double m[NumberOfChannels];
-          mass.Row(i, x, m);
-          for (int c = 0; c < NumberOfChannels; ++c)
-          {
-            massNext[c][i] = m[c];
-            if (add)
-            {
-              gate[c][i] += first ? 0.5 * lastEuler[c][i] + halfDt * next[c][i]
-                                  : halfDt * (phi[c][i] + next[c][i]);
-            }
-          }
-        });
-      }
       for (int c = 0; c < NumberOfChannels; ++c)
       {
-        phiPrevious[c].swap(phi[c]);
-        phi[c].swap(next[c]);
-        massPhiPrevious[c].swap(massPhi[c]);
-        massPhi[c].swap(massNext[c]);
-        if (euler && extended)
+        EulerInjected[c].setZero(N_);
+      }
+    }
+    for (int j = 0; j < subSteps; ++j)
+    {
+      const bool zeroGuess = Pulse_ && j == 0;
+      // The first sub-step starts from phi and M phi.
+      const Channels& massFrom = j == 0 ? MassPhi : MassNext;
+      ForEachUnknown([&](int i) {
+        for (int c = 0; c < NumberOfChannels; ++c)
         {
-          // BDF2's first history term takes the state at the start of the
-          // last backward-Euler step with that step's deposits in it: then
-          // the gate weights (half that step's integral for the first BDF2
-          // interval) still sum to exactly K^-1 (b + all deposits), the
-          // continuous-wave solution (DiffuseOptics.md).
-          massPhiPrevious[c] += eulerInjected[c];
+          step.RightHandSide[c][i] = massFrom[c][i] / h;
+          if (j == 0)
+          {
+            Next[c][i] = zeroGuess ? 0.0 : Phi[c][i];
+            LastEuler[c][i] = 0.0;
+          }
+        }
+      });
+      // (M / h + K) x' = (M x + w) / h: the beam's deposits w of this
+      // sub-step.
+      Inject(++SolveIndex_, 1.0 / h, step.RightHandSide, &EulerInjected);
+      Solver_.Solve(Next, false);
+      const auto x = Data(Next);
+      ForEachUnknown([&](int i) {
+        double m[NumberOfChannels];
+        Base_.Mass.Row(i, x, m);
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          LastEuler[c][i] += h * Next[c][i];
+          MassNext[c][i] = m[c];
+          if (add && j + 1 == subSteps)
+          {
+            Gate[c][i] += LastEuler[c][i];
+          }
+        }
+      });
+    }
+  }
+
+  /// A BDF2 step: (3/2 M / dt + K) phi' = M (2 phi - phi_prev / 2) / dt;
+  /// the trapezoid. The guess: the extrapolation 2 phi - phi_prev (the
+  /// multigrid step solver then combines it with its recycled solutions).
+  void Bdf2Step(double dt, bool first, bool add)
+  {
+    DiffusionSystem& step = Solver_.Step;
+    const double halfDt = 0.5 * dt;
+    ForEachUnknown([&](int i) {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        step.RightHandSide[c][i] = (2.0 * MassPhi[c][i] - 0.5 * MassPhiPrevious[c][i]) / dt;
+        Next[c][i] = first ? Phi[c][i] : 2.0 * Phi[c][i] - PhiPrevious[c][i];
+      }
+    });
+    Inject(++SolveIndex_, 1.0 / dt, step.RightHandSide, nullptr); // + w / dt
+    Solver_.Solve(Next, true);
+    const auto x = Data(Next);
+    ForEachUnknown([&](int i) {
+      double m[NumberOfChannels];
+      Base_.Mass.Row(i, x, m);
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        MassNext[c][i] = m[c];
+        if (add)
+        {
+          Gate[c][i] += first ? 0.5 * LastEuler[c][i] + halfDt * Next[c][i]
+                              : halfDt * (Phi[c][i] + Next[c][i]);
         }
       }
-      pulse = false;
-      ++stepsDone;
-      afterStep(s);
-      if (!ReportProgress(static_cast<double>(stepsDone) / static_cast<double>(totalSteps)))
+    });
+  }
+
+  const TimeResolvedSystem& Base_;
+  StepSolver& Solver_;
+  long long TotalSteps_;
+  Progress Progress_;
+  int N_;
+  Channels Phi, PhiPrevious, MassPhi, MassPhiPrevious, Gate, Next, MassNext;
+  /// What the current backward-Euler step injected, and its integral.
+  Channels EulerInjected, LastEuler;
+  /// The collimated deposits: the next one to inject and the solve counter
+  /// (deposit Time j enters solve j; 0 is the pulse).
+  std::size_t NextDeposit_ = 0;
+  long long SolveIndex_ = 0;
+  bool Pulse_ = true; ///< the next step starts from the pulse (phi is a delta)
+};
+
+/**
+ * Read-outs: at the end of each gate, the gate average of the fluence at
+ * the points for the detectors and the snapshots. The unscattered beam
+ * itself, E_c delta(t - tau) per point, has its gate (-1 outside
+ * [T0, T1]) per beam and point, for the snapshots and the integral; the
+ * detectors read the diffuse field (as in continuous wave).
+ */
+class GateReadout
+{
+public:
+  GateReadout(const DiffusionProblem& problem, const TimeResolvedSystem& base,
+    Discretization& discretization, const TimeGates& used,
+    const std::vector<Detector>& detectors, const std::vector<int>& snapshotGates,
+    std::vector<DetectorFootprint> footprints, TimeResolvedResult& result, SolverReport& report)
+    : Problem_(problem)
+    , Base_(base)
+    , Discretization_(discretization)
+    , Used_(used)
+    , Width_(used.GetWidth())
+    , HasDetectors_(!detectors.empty())
+    , SnapshotGates_(snapshotGates)
+    , Footprints_(std::move(footprints))
+    , Result_(result)
+  {
+    if (HasDetectors_ && used.GetStepsBeforeStart() == 0)
+    {
+      // The q delta(t) term of the exitance, averaged over the first gate.
+      IrradianceOverWidth_ = *problem.Irradiance;
+      for (double& q : IrradianceOverWidth_)
       {
-        return false;
+        q /= Width_;
       }
     }
-    return true;
-  };
-
-  // [0, T0]: steps of at most the gate step, nothing recorded.
-  if (before > 0 &&
-    !runSegment(before, used.Start / static_cast<double>(before), false, [](long long) {}))
-  {
-    return false;
-  }
-  // The gates.
-  const double width = used.GetWidth();
-  std::vector<double> irradianceOverWidth;
-  if (!detectors.empty() && before == 0)
-  {
-    // The q delta(t) term of the exitance, averaged over the first gate.
-    irradianceOverWidth = irradiance;
-    for (double& q : irradianceOverWidth)
+    if (base.Extended)
     {
-      q /= width;
+      AssignBeamGates(report);
     }
   }
-  // The unscattered beam itself, E_c delta(t - tau) per point: its gate
-  // (-1 outside [T0, T1]) per beam and point, for the snapshots and the
-  // integral; the detectors read the diffuse field (as in continuous wave).
-  std::vector<std::vector<int>> beamGate(collimated.Beams.size());
-  if (extended)
+
+  /// After step s of the gates: closes the gate it ends, if any.
+  void AfterStep(long long s, Stepper& stepper)
   {
-    report.CollimatedFluence.assign(3 * static_cast<std::size_t>(mesh.GetNumberOfPoints()), 0.0);
+    if ((s + 1) % Used_.StepsPerGate != 0)
+    {
+      return;
+    }
+    const int g = static_cast<int>(s / Used_.StepsPerGate);
+    stepper.CloseGate(Width_, Average_);
+    const auto snapshot = std::find(SnapshotGates_.begin(), SnapshotGates_.end(), g);
+    if (!HasDetectors_ && snapshot == SnapshotGates_.end())
+    {
+      return;
+    }
+    const TetMesh& mesh = *Problem_.Mesh;
+    Discretization_.ToPointFluence(mesh, Base_.System, Average_, Points_);
+    if (HasDetectors_)
+    {
+      Result_.Readings.push_back(ReadDetectorFootprints(mesh, *Problem_.Material, Footprints_,
+        Points_, g == 0 && !IrradianceOverWidth_.empty() ? &IrradianceOverWidth_ : nullptr,
+        Base_.Rule));
+    }
+    if (snapshot != SnapshotGates_.end())
+    {
+      // The gate average of the unscattered pulses arriving in this gate.
+      const CollimatedSource& collimated = Base_.Collimated;
+      for (std::size_t b = 0; b < collimated.Beams.size(); ++b)
+      {
+        for (std::size_t i = 0; i < BeamGate_[b].size(); ++i)
+        {
+          for (int c = 0; c < NumberOfChannels && BeamGate_[b][i] == g; ++c)
+          {
+            Points_[3 * i + c] += collimated.Beams[b].Fluence[3 * i + c] / Width_;
+          }
+        }
+      }
+      Result_.Snapshots.resize(SnapshotGates_.size());
+      for (std::size_t k = 0; k < SnapshotGates_.size(); ++k)
+      {
+        if (SnapshotGates_[k] == g)
+        {
+          Result_.Snapshots[k] = Points_;
+        }
+      }
+    }
+  }
+
+private:
+  /// Each beam's gate per point, and the unscattered fluence of the pulses
+  /// arriving within [T0, T1] in the report (with the beam's power terms).
+  void AssignBeamGates(SolverReport& report)
+  {
+    const CollimatedSource& collimated = Base_.Collimated;
+    BeamGate_.resize(collimated.Beams.size());
+    report.CollimatedFluence.assign(
+      3 * static_cast<std::size_t>(Problem_.Mesh->GetNumberOfPoints()), 0.0);
     for (std::size_t b = 0; b < collimated.Beams.size(); ++b)
     {
       const CollimatedSource::Beam& beam = collimated.Beams[b];
-      beamGate[b].assign(beam.OpticalPath.size(), -1);
+      BeamGate_[b].assign(beam.OpticalPath.size(), -1);
       for (std::size_t i = 0; i < beam.OpticalPath.size(); ++i)
       {
         const double tau = beam.OpticalPath[i] / SpeedOfLightMillimetresPerNanosecond;
-        const double g = std::floor((tau - used.Start) / width);
-        if (tau >= used.Start && g < used.Count)
+        const double g = std::floor((tau - Used_.Start) / Width_);
+        if (tau >= Used_.Start && g < Used_.Count)
         {
-          beamGate[b][i] = static_cast<int>(g);
+          BeamGate_[b][i] = static_cast<int>(g);
           for (int c = 0; c < NumberOfChannels; ++c)
           {
             report.CollimatedFluence[3 * i + c] += beam.Fluence[3 * i + c];
@@ -736,84 +889,113 @@ bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
     report.CollimatedScattered = collimated.Scattered;
     report.CollimatedAbsorbed = collimated.Absorbed;
   }
-  std::vector<double> points;
-  std::array<Eigen::VectorXd, NumberOfChannels> average;
-  const auto closeGate = [&](long long s) {
-    if ((s + 1) % used.StepsPerGate != 0)
-    {
-      return;
-    }
-    const int g = static_cast<int>(s / used.StepsPerGate);
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      integral[c] += gate[c];
-      average[c] = gate[c] / width;
-      gate[c].setZero();
-    }
-    const auto snapshot = std::find(snapshotGates.begin(), snapshotGates.end(), g);
-    if (detectors.empty() && snapshot == snapshotGates.end())
-    {
-      return;
-    }
-    Discretization_->ToPointFluence(mesh, system, average, points);
-    if (!detectors.empty())
-    {
-      result.Readings.push_back(ReadDetectorFootprints(mesh, material, footprints, points,
-        g == 0 && !irradianceOverWidth.empty() ? &irradianceOverWidth : nullptr, rule));
-    }
-    if (snapshot != snapshotGates.end())
-    {
-      // The gate average of the unscattered pulses arriving in this gate.
-      for (std::size_t b = 0; b < collimated.Beams.size(); ++b)
-      {
-        for (std::size_t i = 0; i < beamGate[b].size(); ++i)
-        {
-          for (int c = 0; c < NumberOfChannels && beamGate[b][i] == g; ++c)
-          {
-            points[3 * i + c] += collimated.Beams[b].Fluence[3 * i + c] / width;
-          }
-        }
-      }
-      result.Snapshots.resize(snapshotGates.size());
-      for (std::size_t k = 0; k < snapshotGates.size(); ++k)
-      {
-        if (snapshotGates[k] == g)
-        {
-          result.Snapshots[k] = points;
-        }
-      }
-    }
-  };
-  if (!runSegment(static_cast<long long>(used.Count) * used.StepsPerGate,
-        used.GetTimeStep(), true, closeGate))
+
+  const DiffusionProblem& Problem_;
+  const TimeResolvedSystem& Base_;
+  Discretization& Discretization_;
+  const TimeGates& Used_;
+  double Width_;
+  bool HasDetectors_;
+  const std::vector<int>& SnapshotGates_;
+  std::vector<DetectorFootprint> Footprints_;
+  TimeResolvedResult& Result_;
+  std::vector<double> IrradianceOverWidth_;
+  std::vector<std::vector<int>> BeamGate_;
+  std::vector<double> Points_;
+  Channels Average_;
+};
+
+} // namespace
+
+bool VertexDiffusionSolver::SolveTimeResolved(const DiffusionProblem& problem,
+  const TimeGates& gates, const std::vector<Detector>& detectors,
+  const std::vector<int>& snapshotGates, TimeResolvedResult& result, SolverReport& report)
+{
+  // ---- Schedule: checks, steps per gate.
+  if (!problem.Mesh || !problem.Material || !problem.Irradiance)
+  {
+    throw Error(GetName() + ": the problem needs a mesh, a material and an irradiance");
+  }
+  gates.Validate();
+  const OpticalProperties& material = *problem.Material;
+  material.Validate(problem.Mesh->GetNumberOfTets());
+  const TimeGates used = ScheduleGates(GetName(), material, gates, snapshotGates);
+  const TetMesh& mesh = *problem.Mesh;
+  report = SolverReport();
+  report.Solver = GetName();
+  report.Assembly = "full";
+  result = TimeResolvedResult();
+  result.Gates = used;
+  result.TimeStep = used.GetTimeStep();
+  result.SnapshotGates = snapshotGates;
+
+  // ---- Step matrices: K, b, M and the step solver.
+  auto start = Clock::now();
+  // The detectors' footprints, located once (not at every gate; a detector
+  // off the surface is an error before the stepping).
+  std::vector<DetectorFootprint> footprints =
+    detectors.empty() ? std::vector<DetectorFootprint>() : LocateDetectors(mesh, detectors);
+  TimeResolvedSystem base;
+  AssembleTimeResolved(GetName(), *Discretization_, problem, used, base);
+  const DiffusionSystem& system = base.System;
+  StepSolver solver(GetName(), base, mesh,
+    ToLower(LinearSolver_.empty() ? GetDefaultLinearSolverName(system.NumberOfUnknowns)
+                                  : LinearSolver_),
+    LinearSolver_.empty(), RelTol_, MaxIter_, TimeStepRecycled_, result, report);
+  report.SetupMilliseconds = MillisecondsSince(start);
+
+  // ---- Stepping: [0, T0] (steps of at most the gate step, nothing
+  // recorded), then the gates with their read-outs.
+  start = Clock::now();
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    report.Converged[c] = true;
+  }
+  Stepper stepper(base, solver, used.GetNumberOfSteps(),
+    [this](double fraction) { return ReportProgress(fraction); });
+  const long long before = used.GetStepsBeforeStart();
+  if (before > 0 &&
+    !stepper.RunSegment(before, used.Start / static_cast<double>(before), false, [](long long) {}))
   {
     return false;
   }
-  if (nextDeposit != deposits.size())
+  GateReadout readout(problem, base, *Discretization_, used, detectors, snapshotGates,
+    std::move(footprints), result, report);
+  if (!stepper.RunSegment(static_cast<long long>(used.Count) * used.StepsPerGate,
+        used.GetTimeStep(), true, [&](long long s) { readout.AfterStep(s, stepper); }))
   {
-    // The schedule above and runSegment disagree: a bug, not an input error.
+    return false;
+  }
+  if (stepper.GetUninjectedDeposits() != 0)
+  {
+    // The schedule and RunSegment disagree: a bug, not an input error.
     throw Error(GetName() + ": internal error: " +
-      std::to_string(deposits.size() - nextDeposit) +
+      std::to_string(stepper.GetUninjectedDeposits()) +
       " collimated deposits were not injected (time-step schedule mismatch)");
   }
-  Discretization_->ToPointFluence(mesh, system, integral, result.IntegratedFluence);
+
+  // ---- Read-outs of the whole run.
+  Discretization_->ToPointFluence(mesh, system, stepper.Integral, result.IntegratedFluence);
   for (std::size_t k = 0; k < report.CollimatedFluence.size(); ++k)
   {
     result.IntegratedFluence[k] += report.CollimatedFluence[k]; // phi_d + E_c, as in CW
   }
-  result.NumberOfSteps = stepsDone;
+  result.NumberOfSteps = stepper.StepsDone;
   report.SolveMilliseconds = MillisecondsSince(start);
+  const int n = system.NumberOfUnknowns;
+  const std::size_t nnz = system.ColumnIndices.size();
   report.NumberOfUnknowns = n;
   report.NumberOfNonZeros = static_cast<long long>(nnz);
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    report.Iterations[c] = static_cast<int>(std::min<long long>(iterations[c], 2147483647LL));
+    report.Iterations[c] =
+      static_cast<int>(std::min<long long>(solver.Iterations[c], 2147483647LL));
   }
   // The system, the mass and step values, 10 vectors per channel, the
-  // linear solver's own memory and the snapshots.
+  // linear solvers' own memory and the snapshots.
   report.MemoryBytes = system.GetMemoryBytes() + (1 + NumberOfChannels) * nnz * sizeof(double) +
     10 * NumberOfChannels * static_cast<std::size_t>(n) * sizeof(double) +
-    linear->GetMemoryBytes() +
+    solver.GetMemoryBytes() +
     result.Snapshots.size() * 3 * static_cast<std::size_t>(n) * sizeof(double);
   return true;
 }

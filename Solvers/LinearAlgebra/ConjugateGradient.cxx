@@ -36,7 +36,71 @@ void CheckSystem(const DiffusionSystem& system)
   }
 }
 
+using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+using JacobiCG =
+  Eigen::ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>>;
+
+/// Builds the diagonal preconditioner of channel c into `solver`.
+void ComputePreconditioner(JacobiCG& solver, const DiffusionSystem& system, int c)
+{
+  solver.compute(system.Matrix(c));
+  if (solver.info() != Eigen::Success)
+  {
+    std::ostringstream os;
+    os << "ConjugateGradient: the preconditioner of channel " << c
+       << " could not be built (zero or non-finite diagonal?)";
+    throw Error(os.str());
+  }
+}
+
 } // namespace
+
+/// The preconditioners of Prepare and the value arrays they belong to.
+struct ConjugateGradient::Prepared
+{
+  std::array<JacobiCG, NumberOfChannels> Solvers;
+  std::array<const double*, NumberOfChannels> Values{};
+  const int* RowOffsets = nullptr;
+  const int* ColumnIndices = nullptr;
+  int Unknowns = -1;
+  std::size_t NonZeros = 0;
+
+  bool Matches(const DiffusionSystem& system, int c) const
+  {
+    return Unknowns == system.NumberOfUnknowns && NonZeros == system.ColumnIndices.size() &&
+      Values[c] == system.Values[c].data() && RowOffsets == system.RowOffsets.data() &&
+      ColumnIndices == system.ColumnIndices.data();
+  }
+};
+
+ConjugateGradient::ConjugateGradient() = default;
+ConjugateGradient::~ConjugateGradient() = default;
+ConjugateGradient::ConjugateGradient(ConjugateGradient&&) noexcept = default;
+ConjugateGradient& ConjugateGradient::operator=(ConjugateGradient&&) noexcept = default;
+
+void ConjugateGradient::Prepare(const DiffusionSystem& system)
+{
+  CheckSystem(system);
+  Prepared_.reset();
+  auto prepared = std::make_unique<Prepared>();
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    ComputePreconditioner(prepared->Solvers[c], system, c);
+    prepared->Values[c] = system.Values[c].data();
+  }
+  prepared->RowOffsets = system.RowOffsets.data();
+  prepared->ColumnIndices = system.ColumnIndices.data();
+  prepared->Unknowns = system.NumberOfUnknowns;
+  prepared->NonZeros = system.ColumnIndices.size();
+  Prepared_ = std::move(prepared);
+}
+
+std::size_t ConjugateGradient::GetMemoryBytes() const
+{
+  return Prepared_ ? NumberOfChannels * static_cast<std::size_t>(Prepared_->Unknowns) *
+      sizeof(double)
+                   : 0;
+}
 
 bool ConjugateGradient::Solve(const DiffusionSystem& system,
   std::array<Eigen::VectorXd, NumberOfChannels>& x,
@@ -51,12 +115,7 @@ bool ConjugateGradient::Solve(const DiffusionSystem& system,
   // Eigen binds the Map to a Ref<const SparseMatrix> without copying;
   // Lower|Upper makes it use the full row-major product, which Eigen runs on
   // OpenMP threads.
-  using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
-  Eigen::
-    ConjugateGradient<Matrix, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>>
-      solver;
-  solver.setTolerance(RelTol_);
-  solver.setMaxIterations(MaxIter_);
+  JacobiCG own;
 
   for (int c = 0; c < NumberOfChannels; ++c)
   {
@@ -77,14 +136,14 @@ bool ConjugateGradient::Solve(const DiffusionSystem& system,
       Converged_[c] = true;
       continue;
     }
-    solver.compute(system.Matrix(c));
-    if (solver.info() != Eigen::Success)
+    const bool prepared = Prepared_ && Prepared_->Matches(system, c);
+    JacobiCG& solver = prepared ? Prepared_->Solvers[c] : own;
+    if (!prepared)
     {
-      std::ostringstream os;
-      os << "ConjugateGradient: the preconditioner of channel " << c
-         << " could not be built (zero or non-finite diagonal?)";
-      throw Error(os.str());
+      ComputePreconditioner(solver, system, c);
     }
+    solver.setTolerance(RelTol_);
+    solver.setMaxIterations(MaxIter_);
     if (guess)
     {
       const Eigen::VectorXd x0 = x[c];

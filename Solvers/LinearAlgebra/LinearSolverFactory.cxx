@@ -54,10 +54,17 @@ public:
     return done;
   }
 
+  std::size_t GetMemoryBytes() const override { return CG_.GetMemoryBytes(); }
+
 protected:
-  // No set-up: the preconditioner is built per solve; ConjugateGradient
-  // checks the system itself.
+  // ConjugateGradient checks the system itself.
   void CheckSetup(const DiffusionSystem&, const TetMesh*) const override {}
+  // Set-up keeps the diagonal of the values it was given (a Solve on other
+  // value arrays builds its own, as a Solve without Setup does).
+  void SetupValues(const DiffusionSystem& system, const TetMesh*) override
+  {
+    CG_.Prepare(system);
+  }
 
 private:
   ConjugateGradient CG_;
