@@ -3,14 +3,10 @@
 #include "Error.h"
 #include "Fresnel.h"
 #include "Radiance.h"
+#include "SparseFactorization.h"
 #include "TetGeometry.h"
 #include "TetMesh.h"
 #include "VertexAssembly.h"
-
-#ifdef TRANSLUCENCY_HAVE_CHOLMOD
-#include <Eigen/CholmodSupport>
-#endif
-#include <Eigen/SparseCholesky>
 
 #include <algorithm>
 #include <array>
@@ -26,11 +22,79 @@ namespace
 {
 constexpr double Pi = 3.14159265358979323846;
 
-#ifdef TRANSLUCENCY_HAVE_CHOLMOD
-using DirectSolver = Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower>;
-#else
-using DirectSolver = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower>;
-#endif
+/// The constructor's neighbouring elements: tets sharing a face, in
+/// different elements, each pair once with its finite-volume weight
+/// A_ef / d_ef (shared area over the distance of the element centroids).
+void FindElementNeighbours(const TetMesh& mesh, const std::vector<int>& tetElement,
+  const std::vector<double>& centroid, std::vector<int>& neighbours, std::vector<double>& weights)
+{
+  const int numTets = mesh.GetNumberOfTets();
+  const double* pts = mesh.GetPoints().data();
+  std::vector<std::array<int, 4>> faces;
+  faces.reserve(4 * static_cast<size_t>(numTets));
+  for (int t = 0; t < numTets; ++t)
+  {
+    const int* tv = mesh.GetTet(t);
+    for (int skip = 0; skip < 4; ++skip)
+    {
+      std::array<int, 4> f;
+      int k = 0;
+      for (int a = 0; a < 4; ++a)
+      {
+        if (a != skip)
+        {
+          f[k++] = tv[a];
+        }
+      }
+      std::sort(f.begin(), f.begin() + 3);
+      f[3] = t;
+      faces.push_back(f);
+    }
+  }
+  std::sort(faces.begin(), faces.end());
+  // (e, f, area of the shared triangle) for every face between two elements.
+  std::vector<std::tuple<int, int, double>> shared;
+  for (size_t k = 0; k + 1 < faces.size(); ++k)
+  {
+    const auto& a = faces[k];
+    const auto& b = faces[k + 1];
+    if (a[0] == b[0] && a[1] == b[1] && a[2] == b[2])
+    {
+      const int ea = tetElement[a[3]], eb = tetElement[b[3]];
+      if (ea != eb)
+      {
+        const double* p0 = pts + 3 * a[0];
+        const double* p1 = pts + 3 * a[1];
+        const double* p2 = pts + 3 * a[2];
+        const double u[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
+        const double v[3] = { p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2] };
+        const double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2],
+                     cz = u[0] * v[1] - u[1] * v[0];
+        shared.emplace_back(
+          std::min(ea, eb), std::max(ea, eb), 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz));
+      }
+    }
+  }
+  std::sort(shared.begin(), shared.end());
+  for (size_t k = 0; k < shared.size();)
+  {
+    const int e = std::get<0>(shared[k]), f = std::get<1>(shared[k]);
+    double area = 0.0;
+    for (; k < shared.size() && std::get<0>(shared[k]) == e && std::get<1>(shared[k]) == f; ++k)
+    {
+      area += std::get<2>(shared[k]);
+    }
+    const double dx = centroid[3 * e] - centroid[3 * f];
+    const double dy = centroid[3 * e + 1] - centroid[3 * f + 1];
+    const double dz = centroid[3 * e + 2] - centroid[3 * f + 2];
+    neighbours.push_back(e);
+    neighbours.push_back(f);
+    // Finite-volume weight A_ef / d_ef: sum_pairs w (k_e - k_f)^2 approximates
+    // the integral of |grad kappa|^2 over the volume (mm), whatever the grid size.
+    weights.push_back(area / std::sqrt(dx * dx + dy * dy + dz * dz));
+  }
+}
+
 } // namespace
 
 // OpenBLAS thread control, resolved at run time if OpenBLAS is the BLAS in use.
@@ -53,7 +117,8 @@ int DiffusionForwardModel::SetBlasThreads(int n)
 
 struct DiffusionForwardModel::Factor::Impl
 {
-  DirectSolver Solver;
+  /// The registry's default factorisation (GetFactorizationName).
+  std::unique_ptr<SparseFactorization> Solver = CreateSparseFactorization();
   Eigen::SparseMatrix<double> Matrix;
   bool Analysed = false;
   bool Valid = false;
@@ -78,7 +143,7 @@ void DiffusionForwardModel::Factor::Solve(const Eigen::VectorXd& rhs, Eigen::Vec
   {
     throw Error("DiffusionForwardModel::Factor::Solve: the system is not factorised");
   }
-  x = Impl_->Solver.solve(rhs);
+  Impl_->Solver->Solve(rhs, x);
 }
 
 void DiffusionForwardModel::Factor::Solve(const Eigen::MatrixXd& rhs, Eigen::MatrixXd& x) const
@@ -87,16 +152,12 @@ void DiffusionForwardModel::Factor::Solve(const Eigen::MatrixXd& rhs, Eigen::Mat
   {
     throw Error("DiffusionForwardModel::Factor::Solve: the system is not factorised");
   }
-  x = Impl_->Solver.solve(rhs);
+  Impl_->Solver->Solve(rhs, x);
 }
 
 std::string DiffusionForwardModel::GetFactorizationName()
 {
-#ifdef TRANSLUCENCY_HAVE_CHOLMOD
-  return "cholmod-supernodal";
-#else
-  return "eigen-simplicial-ldlt";
-#endif
+  return GetDefaultSparseFactorizationName();
 }
 
 std::vector<int> DiffusionForwardModel::DenseElements(
@@ -215,71 +276,7 @@ DiffusionForwardModel::DiffusionForwardModel(const TetMesh& mesh, std::vector<in
   }
 
   // Neighbouring elements: tets sharing a face, in different elements.
-  {
-    std::vector<std::array<int, 4>> faces;
-    faces.reserve(4 * static_cast<size_t>(numTets));
-    for (int t = 0; t < numTets; ++t)
-    {
-      const int* tv = mesh.GetTet(t);
-      for (int skip = 0; skip < 4; ++skip)
-      {
-        std::array<int, 4> f;
-        int k = 0;
-        for (int a = 0; a < 4; ++a)
-        {
-          if (a != skip)
-          {
-            f[k++] = tv[a];
-          }
-        }
-        std::sort(f.begin(), f.begin() + 3);
-        f[3] = t;
-        faces.push_back(f);
-      }
-    }
-    std::sort(faces.begin(), faces.end());
-    // (e, f, area of the shared triangle) for every face between two elements.
-    std::vector<std::tuple<int, int, double>> shared;
-    for (size_t k = 0; k + 1 < faces.size(); ++k)
-    {
-      const auto& a = faces[k];
-      const auto& b = faces[k + 1];
-      if (a[0] == b[0] && a[1] == b[1] && a[2] == b[2])
-      {
-        const int ea = TetElement_[a[3]], eb = TetElement_[b[3]];
-        if (ea != eb)
-        {
-          const double* p0 = pts + 3 * a[0];
-          const double* p1 = pts + 3 * a[1];
-          const double* p2 = pts + 3 * a[2];
-          const double u[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
-          const double v[3] = { p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2] };
-          const double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2],
-                       cz = u[0] * v[1] - u[1] * v[0];
-          shared.emplace_back(
-            std::min(ea, eb), std::max(ea, eb), 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz));
-        }
-      }
-    }
-    std::sort(shared.begin(), shared.end());
-    for (size_t k = 0; k < shared.size();)
-    {
-      const int e = std::get<0>(shared[k]), f = std::get<1>(shared[k]);
-      double area = 0.0;
-      for (; k < shared.size() && std::get<0>(shared[k]) == e && std::get<1>(shared[k]) == f; ++k)
-      {
-        area += std::get<2>(shared[k]);
-      }
-      const double dx = ElementCentroid_[3 * e] - ElementCentroid_[3 * f];
-      const double dy = ElementCentroid_[3 * e + 1] - ElementCentroid_[3 * f + 1];
-      const double dz = ElementCentroid_[3 * e + 2] - ElementCentroid_[3 * f + 2];
-      Neighbours_.push_back(e);
-      Neighbours_.push_back(f);
-      // Finite-volume weight A_ef / d_ef: sum_pairs w (k_e - k_f)^2 approximates
-      // the integral of |grad kappa|^2 over the volume (mm), whatever the grid size.
-      NeighbourWeights_.push_back(area / std::sqrt(dx * dx + dy * dy + dz * dz));
-    }
-  }
+  FindElementNeighbours(mesh, TetElement_, ElementCentroid_, Neighbours_, NeighbourWeights_);
 
   // Boundary terms and read-out weights.
   const std::vector<double> pointEta = BoundaryPointRefractiveIndex(mesh, tetEta);
@@ -404,11 +401,10 @@ void DiffusionForwardModel::Factorize(const double* kappa, const double* mu, Fac
   impl.Matrix = Matrix(kappa, mu);
   if (!impl.Analysed)
   {
-    impl.Solver.analyzePattern(impl.Matrix);
+    impl.Solver->AnalyzePattern(impl.Matrix);
     impl.Analysed = true;
   }
-  impl.Solver.factorize(impl.Matrix);
-  if (impl.Solver.info() != Eigen::Success)
+  if (!impl.Solver->Factorize(impl.Matrix))
   {
     throw Error("DiffusionForwardModel: the Cholesky factorisation failed (matrix not positive "
                 "definite: check the coefficients)");
