@@ -319,82 +319,34 @@ void Prolongate(
   }
 }
 
-} // namespace
 
-struct QuadGraphSolver::Coefficients : LevelCoefficients
+/// The face topology of the tet mesh that BuildGraph's phases share.
+struct FaceTopology
 {
+  std::vector<int> Across;             ///< per tet face (4 t + k): the tet across, or -1
+  std::vector<signed char> AcrossFace; ///< that tet's local face, or -1
+  std::vector<int> FaceTriangle;       ///< per tet face: its boundary triangle, or -1
+  std::vector<int> NumBoundaryFaces;   ///< per tet
+  std::vector<int> CellStart;          ///< per tet: its first cell (4 cells when split)
+
+  /// The cell of tet t on its face k (the tet's only cell if not split).
+  int CellOf(int t, int k) const
+  {
+    return CellStart[t] + (CellStart[t + 1] - CellStart[t] == 4 ? k : 0);
+  }
 };
 
-void QuadGraphSolver::AddSourceLoad(
-  const TetMesh& mesh, const std::vector<PlacedSource>& placed, Coefficients& k) const
+/// BuildGraph, 1. The tet across each face (and that tet's local face), or -1.
+void FindFaceNeighbours(const TetMesh& mesh, int numThreads, FaceTopology& topology)
 {
-  // The transpose of the vertex map: the P1 load of the source (P times its
-  // barycentric weights on the tet's vertices, the FEM load) carried to the
-  // nodes by the weights through which those vertices read the nodes. A
-  // cell's share enters its row as a density (share / V_i: the rows are
-  // balances per unit volume); a surface node's share as a flux through its
-  // face in eq. 6, like q (2A share / S_s on the right-hand side).
-  const Level& fine = Graph_.Fine;
-  for (const PlacedSource& source : placed)
-  {
-    const int* tet = mesh.GetTet(source.Tet);
-    for (int a = 0; a < 4; ++a)
-    {
-      const int v = tet[a];
-      for (int m = Graph_.VertexOffsets[v]; m < Graph_.VertexOffsets[v + 1]; ++m)
-      {
-        const int node = Graph_.VertexNodes[m];
-        const double w = source.Weights[a] * Graph_.VertexWeights[m];
-        for (int c = 0; c < NumberOfChannels; ++c)
-        {
-          const double share = w * source.Source.Power[c];
-          if (node < fine.NumberOfCells)
-          {
-            k.CellSource[c][node] += share / fine.CellVolumes[node];
-          }
-          else
-          {
-            const int s = node - fine.NumberOfCells;
-            k.SurfaceRhs[c][s] += 2.0 * k.SurfaceA[s] * share / fine.SurfaceAreas[s];
-          }
-        }
-      }
-    }
-  }
-}
-
-QuadGraphSolver::QuadGraphSolver() = default;
-QuadGraphSolver::~QuadGraphSolver() = default;
-
-void QuadGraphSolver::Reset()
-{
-  Graph_ = Graph();
-  System_ = DiffusionSystem();
-  for (auto& x : Solution_)
-  {
-    x.resize(0);
-  }
-  GraphMesh_ = nullptr;
-  GraphPoints_.clear();
-  GraphTets_.clear();
-  HaveSolution_ = false;
-}
-
-void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
-{
-  Graph_ = Graph();
-  Graph& g = Graph_;
-  Level& fine = g.Fine;
   const int numTets = mesh.GetNumberOfTets();
-  const int numPoints = mesh.GetNumberOfPoints();
   const std::vector<int>& tets = mesh.GetTets();
-  const std::vector<double>& points = mesh.GetPoints();
   const std::vector<int>& pointTetOffsets = mesh.GetPointTetOffsets();
   const std::vector<int>& pointTets = mesh.GetPointTets();
-
-  // 1. The tet across each face (and that tet's local face), or -1.
-  std::vector<int> across(4 * static_cast<size_t>(numTets), -1);
-  std::vector<signed char> acrossFace(4 * static_cast<size_t>(numTets), -1);
+  std::vector<int>& across = topology.Across;
+  std::vector<signed char>& acrossFace = topology.AcrossFace;
+  across.assign(4 * static_cast<size_t>(numTets), -1);
+  acrossFace.assign(4 * static_cast<size_t>(numTets), -1);
 #pragma omp parallel for schedule(static) num_threads(numThreads)
   for (int t = 0; t < numTets; ++t)
   {
@@ -440,13 +392,22 @@ void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
       }
     }
   }
+}
 
-  // 2. Boundary triangles: the local face of their owner tet.
+/// BuildGraph, 2. Boundary triangles: the local face of their owner tet; a
+/// face neither shared nor a boundary triangle (or both) is an error.
+void FindBoundaryFaces(const TetMesh& mesh, FaceTopology& topology)
+{
+  const int numTets = mesh.GetNumberOfTets();
+  const std::vector<int>& tets = mesh.GetTets();
   const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
   const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
   const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
-  std::vector<int> faceTriangle(4 * static_cast<size_t>(numTets), -1);
-  std::vector<int> numBoundaryFaces(numTets, 0);
+  const std::vector<int>& across = topology.Across;
+  std::vector<int>& faceTriangle = topology.FaceTriangle;
+  std::vector<int>& numBoundaryFaces = topology.NumBoundaryFaces;
+  faceTriangle.assign(4 * static_cast<size_t>(numTets), -1);
+  numBoundaryFaces.assign(numTets, 0);
   for (int f = 0; f < numTriangles; ++f)
   {
     const int t = owners[f];
@@ -475,10 +436,23 @@ void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
       throw Error(os.str());
     }
   }
+}
 
-  // 3. Split tets with 2 or 3 boundary faces at their centroid (paper
-  // Sec. 4.1, Fig. 4); a cell per tet of the split mesh.
-  std::vector<int> cellStart(numTets + 1, 0);
+/// BuildGraph, 3. Split tets with 2 or 3 boundary faces at their centroid
+/// (paper Sec. 4.1, Fig. 4); a cell per tet of the split mesh.
+void SplitCells(const TetMesh& mesh, int numThreads, FaceTopology& topology,
+  QuadGraphSolver::Graph& graph)
+{
+  const int numTets = mesh.GetNumberOfTets();
+  const int numPoints = mesh.GetNumberOfPoints();
+  const std::vector<int>& tets = mesh.GetTets();
+  const std::vector<double>& points = mesh.GetPoints();
+  const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+  QuadGraphSolver::Graph& g = graph;
+  QuadGraphSolver::Level& fine = graph.Fine;
+  const std::vector<int>& numBoundaryFaces = topology.NumBoundaryFaces;
+  std::vector<int>& cellStart = topology.CellStart;
+  cellStart.assign(numTets + 1, 0);
   for (int t = 0; t < numTets; ++t)
   {
     const bool split = numBoundaryFaces[t] >= 2;
@@ -486,8 +460,6 @@ void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
     cellStart[t + 1] = cellStart[t] + (split ? 4 : 1);
   }
   const int numCells = cellStart[numTets];
-  auto cellOf = [&](int t, int k)
-  { return cellStart[t] + (cellStart[t + 1] - cellStart[t] == 4 ? k : 0); };
   fine.NumberOfCells = numCells;
   fine.NumberOfSurfaceNodes = numTriangles;
   const int numNodes = numCells + numTriangles;
@@ -550,10 +522,24 @@ void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
     const double v = mesh.GetTetVolume(g.CellTets[i]);
     fine.CellVolumes[i] = g.CellFaces[i] < 0 ? v : 0.25 * v;
   }
+}
 
-  // 4. Surface nodes: at the foot of the perpendicular from the owner cell's
-  // centroid to the boundary face (the link along the face normal meets the
-  // face there), q interpolated at the closest point of the face.
+/// BuildGraph, 4. Surface nodes: at the foot of the perpendicular from the
+/// owner cell's centroid to the boundary face (the link along the face
+/// normal meets the face there), q interpolated at the closest point of the
+/// face.
+void PlaceSurfaceNodes(
+  const TetMesh& mesh, int numThreads, const FaceTopology& topology, QuadGraphSolver::Graph& graph)
+{
+  const std::vector<double>& points = mesh.GetPoints();
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const std::vector<int>& owners = mesh.GetBoundaryTriangleTets();
+  const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+  QuadGraphSolver::Graph& g = graph;
+  QuadGraphSolver::Level& fine = graph.Fine;
+  const std::vector<int>& faceTriangle = topology.FaceTriangle;
+  const int numCells = graph.Fine.NumberOfCells;
+  auto cellOf = [&topology](int t, int k) { return topology.CellOf(t, k); };
   fine.SurfaceAreas = mesh.GetBoundaryTriangleAreas();
   fine.SurfaceCells.resize(numTriangles);
   g.SurfaceTriangles.resize(numTriangles);
@@ -583,9 +569,22 @@ void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
     // unless it falls outside the triangle.
     ClosestPointOnTriangle(foot, p0, p1, p2, &g.SurfaceWeights[3 * static_cast<size_t>(f)]);
   }
+}
 
-  // 5. Links: four per cell (the cell or surface node across each face of
-  // its split-mesh tet), one per surface node.
+/// BuildGraph, 5. Links: four per cell (the cell or surface node across each
+/// face of its split-mesh tet), one per surface node; sorted, with the
+/// matrix pattern.
+void BuildLinks(int numThreads, const FaceTopology& topology, QuadGraphSolver::Graph& graph)
+{
+  QuadGraphSolver::Graph& g = graph;
+  QuadGraphSolver::Level& fine = graph.Fine;
+  const std::vector<int>& across = topology.Across;
+  const std::vector<signed char>& acrossFace = topology.AcrossFace;
+  const std::vector<int>& faceTriangle = topology.FaceTriangle;
+  const std::vector<int>& cellStart = topology.CellStart;
+  const int numCells = graph.Fine.NumberOfCells;
+  const int numNodes = graph.Fine.NumberOfCells + graph.Fine.NumberOfSurfaceNodes;
+  auto cellOf = [&topology](int t, int k) { return topology.CellOf(t, k); };
   fine.LinkOffsets.resize(numNodes + 1);
   for (int i = 0; i <= numNodes; ++i)
   {
@@ -674,9 +673,25 @@ void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
   }
   SortLinks(fine, numThreads);
   BuildPattern(fine);
+}
 
-  // 6. Vertex map: a weighted linear least-squares fit over the nodes of the
-  // cells containing each point and the surface nodes of its boundary faces.
+/// BuildGraph, 6. Vertex map: a weighted linear least-squares fit over the
+/// nodes of the cells containing each point and the surface nodes of its
+/// boundary faces.
+void BuildVertexMap(
+  const TetMesh& mesh, int numThreads, const FaceTopology& topology, QuadGraphSolver::Graph& graph)
+{
+  const int numPoints = mesh.GetNumberOfPoints();
+  const std::vector<int>& tets = mesh.GetTets();
+  const std::vector<double>& points = mesh.GetPoints();
+  const std::vector<int>& pointTetOffsets = mesh.GetPointTetOffsets();
+  const std::vector<int>& pointTets = mesh.GetPointTets();
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+  QuadGraphSolver::Graph& g = graph;
+  QuadGraphSolver::Level& fine = graph.Fine;
+  const std::vector<int>& cellStart = topology.CellStart;
+  const int numCells = graph.Fine.NumberOfCells;
   std::vector<int> pointTriangleOffsets(numPoints + 1, 0), pointTriangles;
   for (int f = 0; f < numTriangles; ++f)
   {
@@ -792,6 +807,211 @@ void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
   }
 }
 
+} // namespace
+
+struct QuadGraphSolver::Coefficients : LevelCoefficients
+{
+};
+
+void QuadGraphSolver::AddSourceLoad(
+  const TetMesh& mesh, const std::vector<PlacedSource>& placed, Coefficients& k) const
+{
+  // The transpose of the vertex map: the P1 load of the source (P times its
+  // barycentric weights on the tet's vertices, the FEM load) carried to the
+  // nodes by the weights through which those vertices read the nodes. A
+  // cell's share enters its row as a density (share / V_i: the rows are
+  // balances per unit volume); a surface node's share as a flux through its
+  // face in eq. 6, like q (2A share / S_s on the right-hand side).
+  const Level& fine = Graph_.Fine;
+  for (const PlacedSource& source : placed)
+  {
+    const int* tet = mesh.GetTet(source.Tet);
+    for (int a = 0; a < 4; ++a)
+    {
+      const int v = tet[a];
+      for (int m = Graph_.VertexOffsets[v]; m < Graph_.VertexOffsets[v + 1]; ++m)
+      {
+        const int node = Graph_.VertexNodes[m];
+        const double w = source.Weights[a] * Graph_.VertexWeights[m];
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          const double share = w * source.Source.Power[c];
+          if (node < fine.NumberOfCells)
+          {
+            k.CellSource[c][node] += share / fine.CellVolumes[node];
+          }
+          else
+          {
+            const int s = node - fine.NumberOfCells;
+            k.SurfaceRhs[c][s] += 2.0 * k.SurfaceA[s] * share / fine.SurfaceAreas[s];
+          }
+        }
+      }
+    }
+  }
+}
+
+QuadGraphSolver::QuadGraphSolver() = default;
+QuadGraphSolver::~QuadGraphSolver() = default;
+
+void QuadGraphSolver::Reset()
+{
+  Graph_ = Graph();
+  System_ = DiffusionSystem();
+  for (auto& x : Solution_)
+  {
+    x.resize(0);
+  }
+  GraphMesh_ = nullptr;
+  GraphPoints_.clear();
+  GraphTets_.clear();
+  HaveSolution_ = false;
+}
+
+void QuadGraphSolver::BuildGraph(const TetMesh& mesh, int numThreads)
+{
+  Graph_ = Graph();
+  FaceTopology topology;
+  FindFaceNeighbours(mesh, numThreads, topology);
+  FindBoundaryFaces(mesh, topology);
+  SplitCells(mesh, numThreads, topology, Graph_);
+  PlaceSurfaceNodes(mesh, numThreads, topology, Graph_);
+  BuildLinks(numThreads, topology, Graph_);
+  BuildVertexMap(mesh, numThreads, topology, Graph_);
+}
+
+namespace
+{
+/// BuildCoarseLevels: the coarse links (groups joined by a fine link, and
+/// each group's surface node) and their lengths.
+void CoarseLinks(const QuadGraphSolver::Level& fine, const std::vector<int>& order,
+  QuadGraphSolver::Level& coarse)
+{
+  const int nf = fine.NumberOfCells;
+  const int nc = coarse.NumberOfCells, ns = coarse.NumberOfSurfaceNodes;
+  std::vector<std::vector<int>> links(nc + ns);
+  for (int r = 0; r < nf; ++r)
+  {
+    const int i = order[r], gi = r / GroupSize;
+    for (int l = fine.LinkOffsets[i]; l < fine.LinkOffsets[i + 1]; ++l)
+    {
+      const int j = fine.LinkNodes[l];
+      if (j < nf && coarse.FineParents[j] != gi)
+      {
+        links[gi].push_back(coarse.FineParents[j]);
+      }
+    }
+  }
+  for (int cs = 0; cs < ns; ++cs)
+  {
+    links[coarse.SurfaceCells[cs]].push_back(nc + cs);
+    links[nc + cs].push_back(coarse.SurfaceCells[cs]);
+  }
+  coarse.LinkOffsets.assign(nc + ns + 1, 0);
+  for (int i = 0; i < nc + ns; ++i)
+  {
+    std::sort(links[i].begin(), links[i].end());
+    links[i].erase(std::unique(links[i].begin(), links[i].end()), links[i].end());
+    coarse.LinkOffsets[i + 1] = coarse.LinkOffsets[i] + static_cast<int>(links[i].size());
+  }
+  coarse.LinkNodes.resize(coarse.LinkOffsets.back());
+  coarse.LinkLengths.resize(coarse.LinkOffsets.back());
+  for (int i = 0; i < nc + ns; ++i)
+  {
+    const Vec3 x = At(coarse.Positions, i);
+    for (size_t m = 0; m < links[i].size(); ++m)
+    {
+      const int l = coarse.LinkOffsets[i] + static_cast<int>(m);
+      coarse.LinkNodes[l] = links[i][m];
+      // A zero length (coincident centroids) would make the weight infinite.
+      coarse.LinkLengths[l] =
+        std::max((At(coarse.Positions, links[i][m]) - x).norm(), 1e-12);
+    }
+  }
+}
+
+/// BuildCoarseLevels, eq. 10 weights: Shepard over the b nearest coarse
+/// nodes among the parent group, its neighbour groups (inner nodes, b = 8)
+/// and their surface nodes (surface nodes, b = 4).
+void ProlongationWeights(
+  const QuadGraphSolver::Level& fine, int numThreads, QuadGraphSolver::Level& coarse)
+{
+  const int nf = fine.NumberOfCells;
+  const int nc = coarse.NumberOfCells;
+  const int nfNodes = fine.GetNumberOfNodes();
+  std::vector<int> count(nfNodes);
+  std::vector<std::array<int, InnerStencil>> chosen(nfNodes);
+  std::vector<std::array<double, InnerStencil>> chosenWeights(nfNodes);
+#pragma omp parallel for schedule(static) num_threads(numThreads)
+  for (int i = 0; i < nfNodes; ++i)
+  {
+    const bool surface = i >= nf;
+    const int parent = coarse.FineParents[i];
+    const int group = surface ? coarse.SurfaceCells[parent - nc] : parent;
+    const Vec3 x = At(fine.Positions, i);
+    std::vector<std::pair<double, int>> candidates;
+    auto consider = [&](int gi)
+    {
+      if (!surface)
+      {
+        candidates.emplace_back((At(coarse.Positions, gi) - x).squaredNorm(), gi);
+        return;
+      }
+      // The group's surface node is its last link (ids >= nc sort last).
+      const int last = coarse.LinkOffsets[gi + 1] - 1;
+      if (last >= coarse.LinkOffsets[gi] && coarse.LinkNodes[last] >= nc)
+      {
+        const int node = coarse.LinkNodes[last];
+        candidates.emplace_back((At(coarse.Positions, node) - x).squaredNorm(), node);
+      }
+    };
+    consider(group);
+    for (int l = coarse.LinkOffsets[group]; l < coarse.LinkOffsets[group + 1]; ++l)
+    {
+      if (coarse.LinkNodes[l] < nc)
+      {
+        consider(coarse.LinkNodes[l]);
+      }
+    }
+    int b = std::min<int>(surface ? SurfaceStencil : InnerStencil,
+      static_cast<int>(candidates.size()));
+    std::partial_sort(candidates.begin(), candidates.begin() + b, candidates.end());
+    if (candidates[0].first == 0.0)
+    {
+      b = 1; // coincident nodes: Shepard interpolation takes that value
+    }
+    count[i] = b;
+    double total = 0.0;
+    for (int m = 0; m < b; ++m)
+    {
+      chosen[i][m] = candidates[m].second;
+      chosenWeights[i][m] = b == 1 ? 1.0 : 1.0 / candidates[m].first; // eq. 10: w'_xy = |n_x - n_y|^-2
+      total += chosenWeights[i][m];
+    }
+    for (int m = 0; m < b; ++m)
+    {
+      chosenWeights[i][m] /= total; // eq. 10: w_xy = w'_xy / sum_y w'_xy
+    }
+  }
+  coarse.ProlongationOffsets.assign(nfNodes + 1, 0);
+  for (int i = 0; i < nfNodes; ++i)
+  {
+    coarse.ProlongationOffsets[i + 1] = coarse.ProlongationOffsets[i] + count[i];
+  }
+  coarse.ProlongationNodes.resize(coarse.ProlongationOffsets.back());
+  coarse.ProlongationWeights.resize(coarse.ProlongationOffsets.back());
+  for (int i = 0; i < nfNodes; ++i)
+  {
+    for (int m = 0; m < count[i]; ++m)
+    {
+      coarse.ProlongationNodes[coarse.ProlongationOffsets[i] + m] = chosen[i][m];
+      coarse.ProlongationWeights[coarse.ProlongationOffsets[i] + m] = chosenWeights[i][m];
+    }
+  }
+}
+
+} // namespace
+
 void QuadGraphSolver::BuildCoarseLevels(int numThreads)
 {
   Graph_.Coarse.clear();
@@ -873,120 +1093,13 @@ void QuadGraphSolver::BuildCoarseLevels(int numThreads)
     coarse.Positions = std::move(positions);
 
     // Coarse links: groups joined by a fine link, and each group's surface node.
-    std::vector<std::vector<int>> links(nc + ns);
-    for (int r = 0; r < nf; ++r)
-    {
-      const int i = order[r], gi = r / GroupSize;
-      for (int l = fine.LinkOffsets[i]; l < fine.LinkOffsets[i + 1]; ++l)
-      {
-        const int j = fine.LinkNodes[l];
-        if (j < nf && coarse.FineParents[j] != gi)
-        {
-          links[gi].push_back(coarse.FineParents[j]);
-        }
-      }
-    }
-    for (int cs = 0; cs < ns; ++cs)
-    {
-      links[coarse.SurfaceCells[cs]].push_back(nc + cs);
-      links[nc + cs].push_back(coarse.SurfaceCells[cs]);
-    }
-    coarse.LinkOffsets.assign(nc + ns + 1, 0);
-    for (int i = 0; i < nc + ns; ++i)
-    {
-      std::sort(links[i].begin(), links[i].end());
-      links[i].erase(std::unique(links[i].begin(), links[i].end()), links[i].end());
-      coarse.LinkOffsets[i + 1] = coarse.LinkOffsets[i] + static_cast<int>(links[i].size());
-    }
-    coarse.LinkNodes.resize(coarse.LinkOffsets.back());
-    coarse.LinkLengths.resize(coarse.LinkOffsets.back());
-    for (int i = 0; i < nc + ns; ++i)
-    {
-      const Vec3 x = At(coarse.Positions, i);
-      for (size_t m = 0; m < links[i].size(); ++m)
-      {
-        const int l = coarse.LinkOffsets[i] + static_cast<int>(m);
-        coarse.LinkNodes[l] = links[i][m];
-        // A zero length (coincident centroids) would make the weight infinite.
-        coarse.LinkLengths[l] =
-          std::max((At(coarse.Positions, links[i][m]) - x).norm(), 1e-12);
-      }
-    }
+    CoarseLinks(fine, order, coarse);
     BuildPattern(coarse);
 
     // eq. 10 weights: Shepard over the b nearest coarse nodes among the
     // parent group, its neighbour groups (inner nodes, b = 8) and their
     // surface nodes (surface nodes, b = 4).
-    const int nfNodes = fine.GetNumberOfNodes();
-    std::vector<int> count(nfNodes);
-    std::vector<std::array<int, InnerStencil>> chosen(nfNodes);
-    std::vector<std::array<double, InnerStencil>> chosenWeights(nfNodes);
-#pragma omp parallel for schedule(static) num_threads(numThreads)
-    for (int i = 0; i < nfNodes; ++i)
-    {
-      const bool surface = i >= nf;
-      const int parent = coarse.FineParents[i];
-      const int group = surface ? coarse.SurfaceCells[parent - nc] : parent;
-      const Vec3 x = At(fine.Positions, i);
-      std::vector<std::pair<double, int>> candidates;
-      auto consider = [&](int gi)
-      {
-        if (!surface)
-        {
-          candidates.emplace_back((At(coarse.Positions, gi) - x).squaredNorm(), gi);
-          return;
-        }
-        // The group's surface node is its last link (ids >= nc sort last).
-        const int last = coarse.LinkOffsets[gi + 1] - 1;
-        if (last >= coarse.LinkOffsets[gi] && coarse.LinkNodes[last] >= nc)
-        {
-          const int node = coarse.LinkNodes[last];
-          candidates.emplace_back((At(coarse.Positions, node) - x).squaredNorm(), node);
-        }
-      };
-      consider(group);
-      for (int l = coarse.LinkOffsets[group]; l < coarse.LinkOffsets[group + 1]; ++l)
-      {
-        if (coarse.LinkNodes[l] < nc)
-        {
-          consider(coarse.LinkNodes[l]);
-        }
-      }
-      int b = std::min<int>(surface ? SurfaceStencil : InnerStencil,
-        static_cast<int>(candidates.size()));
-      std::partial_sort(candidates.begin(), candidates.begin() + b, candidates.end());
-      if (candidates[0].first == 0.0)
-      {
-        b = 1; // coincident nodes: Shepard interpolation takes that value
-      }
-      count[i] = b;
-      double total = 0.0;
-      for (int m = 0; m < b; ++m)
-      {
-        chosen[i][m] = candidates[m].second;
-        chosenWeights[i][m] = b == 1 ? 1.0 : 1.0 / candidates[m].first; // eq. 10: w'_xy = |n_x - n_y|^-2
-        total += chosenWeights[i][m];
-      }
-      for (int m = 0; m < b; ++m)
-      {
-        chosenWeights[i][m] /= total; // eq. 10: w_xy = w'_xy / sum_y w'_xy
-      }
-    }
-    coarse.ProlongationOffsets.assign(nfNodes + 1, 0);
-    for (int i = 0; i < nfNodes; ++i)
-    {
-      coarse.ProlongationOffsets[i + 1] = coarse.ProlongationOffsets[i] + count[i];
-    }
-    coarse.ProlongationNodes.resize(coarse.ProlongationOffsets.back());
-    coarse.ProlongationWeights.resize(coarse.ProlongationOffsets.back());
-    for (int i = 0; i < nfNodes; ++i)
-    {
-      for (int m = 0; m < count[i]; ++m)
-      {
-        coarse.ProlongationNodes[coarse.ProlongationOffsets[i] + m] = chosen[i][m];
-        coarse.ProlongationWeights[coarse.ProlongationOffsets[i] + m] = chosenWeights[i][m];
-      }
-    }
+    ProlongationWeights(fine, numThreads, coarse);
     Graph_.Coarse.push_back(std::move(coarse));
   }
 }
@@ -1065,35 +1178,24 @@ bool QuadGraphSolver::SolveChannel(const DiffusionSystem& system,
   return done;
 }
 
-bool QuadGraphSolver::Solve(
-  const DiffusionProblem& problem, std::vector<double>& fluence, SolverReport& report)
+namespace
 {
-  if (!problem.Mesh || !problem.Material || !problem.Irradiance)
-  {
-    throw Error("quadgraph: the problem needs a mesh, a material and an irradiance");
-  }
-  RequireSurfaceCollimatedModel(problem, "quadgraph");
+/// Solve's checks after the linear solver's name: RelTol, MaxIter, the
+/// material and the Irradiance (3 finite values >= 0 per point).
+void CheckSolveInputs(const DiffusionProblem& problem, double relTol, int maxIter)
+{
   const TetMesh& mesh = *problem.Mesh;
   const int numTets = mesh.GetNumberOfTets();
   const int numPoints = mesh.GetNumberOfPoints();
-  if (numTets == 0)
-  {
-    throw Error("quadgraph: the mesh has no tetrahedra (" + std::to_string(numPoints) +
-      " points, 0 tets)");
-  }
-  // The linear solver from the registry's non-symmetric entries (throws
-  // "quadgraph: unknown linear solver 'x' (known: bicgstab, relaxation)").
-  Linear_ = CreateNonSymmetricLinearSolver(LinearSolver_, "quadgraph");
-  const std::string linearSolver = Linear_->GetName();
-  if (!(RelTol_ > 0.0) || !std::isfinite(RelTol_))
+  if (!(relTol > 0.0) || !std::isfinite(relTol))
   {
     std::ostringstream os;
-    os << "quadgraph: RelTol is " << RelTol_ << ": must be > 0";
+    os << "quadgraph: RelTol is " << relTol << ": must be > 0";
     throw Error(os.str());
   }
-  if (MaxIter_ <= 0)
+  if (maxIter <= 0)
   {
-    throw Error("quadgraph: MaxIter is " + std::to_string(MaxIter_) + ": must be > 0");
+    throw Error("quadgraph: MaxIter is " + std::to_string(maxIter) + ": must be > 0");
   }
   const OpticalProperties& material = *problem.Material;
   material.Validate(numTets);
@@ -1115,6 +1217,86 @@ bool QuadGraphSolver::Solve(
       throw Error(os.str());
     }
   }
+}
+
+/// Solve: the fluence at the mesh points through the vertex map (clamped at
+/// 0).
+void VertexFluence(const QuadGraphSolver::Graph& g,
+  const std::array<Eigen::VectorXd, NumberOfChannels>& solution, int numPoints, int numThreads,
+  std::vector<double>& fluence)
+{
+  fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+#pragma omp parallel for schedule(static) num_threads(numThreads)
+  for (int v = 0; v < numPoints; ++v)
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      double sum = 0.0;
+      for (int k = g.VertexOffsets[v]; k < g.VertexOffsets[v + 1]; ++k)
+      {
+        sum += g.VertexWeights[k] * solution[c][g.VertexNodes[k]];
+      }
+      fluence[3 * static_cast<size_t>(v) + c] = std::max(sum, 0.0);
+    }
+  }
+}
+
+/// Solve's memory report: the system, 2 work vectors per channel, the
+/// graph and its coarse levels.
+std::size_t GraphMemoryBytes(const QuadGraphSolver::Graph& g, const DiffusionSystem& system, int n)
+{
+  using Level = QuadGraphSolver::Level;
+  const Level& fine = g.Fine;
+  std::size_t bytes = (system.RowOffsets.size() + system.ColumnIndices.size()) * sizeof(int) +
+    NumberOfChannels * system.ColumnIndices.size() * sizeof(double) +
+    2 * NumberOfChannels * static_cast<std::size_t>(n) * sizeof(double);
+  bytes += (fine.Positions.size() + fine.LinkLengths.size() + fine.CellVolumes.size() +
+             fine.SurfaceAreas.size() + g.SurfaceWeights.size() + g.VertexWeights.size() +
+             g.SplitPoints.size()) *
+      sizeof(double) +
+    (fine.LinkOffsets.size() + fine.LinkNodes.size() + fine.SurfaceCells.size() +
+      fine.RowOffsets.size() + fine.ColumnIndices.size() + g.CellTets.size() +
+      g.CellFaces.size() + g.SurfaceTriangles.size() + g.SplitTets.size() +
+      g.VertexOffsets.size() + g.VertexNodes.size()) *
+      sizeof(int);
+  for (const Level& level : g.Coarse)
+  {
+    bytes += (level.Positions.size() + level.LinkLengths.size() + level.CellVolumes.size() +
+               level.SurfaceAreas.size() + level.ProlongationWeights.size()) *
+        sizeof(double) +
+      (level.LinkOffsets.size() + level.LinkNodes.size() + level.SurfaceCells.size() +
+        level.FineParents.size() + level.ProlongationOffsets.size() +
+        level.ProlongationNodes.size() + level.RowOffsets.size() + level.ColumnIndices.size()) *
+        sizeof(int);
+  }
+  return bytes;
+}
+
+} // namespace
+
+bool QuadGraphSolver::Solve(
+  const DiffusionProblem& problem, std::vector<double>& fluence, SolverReport& report)
+{
+  if (!problem.Mesh || !problem.Material || !problem.Irradiance)
+  {
+    throw Error("quadgraph: the problem needs a mesh, a material and an irradiance");
+  }
+  RequireSurfaceCollimatedModel(problem, "quadgraph");
+  const TetMesh& mesh = *problem.Mesh;
+  const int numTets = mesh.GetNumberOfTets();
+  const int numPoints = mesh.GetNumberOfPoints();
+  if (numTets == 0)
+  {
+    throw Error("quadgraph: the mesh has no tetrahedra (" + std::to_string(numPoints) +
+      " points, 0 tets)");
+  }
+  // The linear solver from the registry's non-symmetric entries (throws
+  // "quadgraph: unknown linear solver 'x' (known: bicgstab, relaxation)").
+  Linear_ = CreateNonSymmetricLinearSolver(LinearSolver_, "quadgraph");
+  const std::string linearSolver = Linear_->GetName();
+  CheckSolveInputs(problem, RelTol_, MaxIter_);
+  const OpticalProperties& material = *problem.Material;
+  const std::vector<double>& q = *problem.Irradiance;
   // Interior sources placed first: a source outside the object is an error
   // (Sources::Place, the vertex solvers' messages) before any work.
   std::vector<PlacedSource> placed;
@@ -1224,48 +1406,13 @@ bool QuadGraphSolver::Solve(
   HaveSolution_ = true;
 
   // Fluence at the mesh points through the vertex map (clamped at 0).
-  fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
   const Graph& g = Graph_;
-#pragma omp parallel for schedule(static) num_threads(numThreads)
-  for (int v = 0; v < numPoints; ++v)
-  {
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      double sum = 0.0;
-      for (int k = g.VertexOffsets[v]; k < g.VertexOffsets[v + 1]; ++k)
-      {
-        sum += g.VertexWeights[k] * Solution_[c][g.VertexNodes[k]];
-      }
-      fluence[3 * static_cast<size_t>(v) + c] = std::max(sum, 0.0);
-    }
-  }
+  VertexFluence(g, Solution_, numPoints, numThreads, fluence);
   report.SolveMilliseconds = MillisecondsSince(start);
 
   report.NumberOfUnknowns = n;
   report.NumberOfNonZeros = static_cast<long long>(System_.ColumnIndices.size());
-  const Level& fine = g.Fine;
-  std::size_t bytes = (System_.RowOffsets.size() + System_.ColumnIndices.size()) * sizeof(int) +
-    NumberOfChannels * System_.ColumnIndices.size() * sizeof(double) +
-    2 * NumberOfChannels * static_cast<std::size_t>(n) * sizeof(double);
-  bytes += (fine.Positions.size() + fine.LinkLengths.size() + fine.CellVolumes.size() +
-             fine.SurfaceAreas.size() + g.SurfaceWeights.size() + g.VertexWeights.size() +
-             g.SplitPoints.size()) *
-      sizeof(double) +
-    (fine.LinkOffsets.size() + fine.LinkNodes.size() + fine.SurfaceCells.size() +
-      fine.RowOffsets.size() + fine.ColumnIndices.size() + g.CellTets.size() +
-      g.CellFaces.size() + g.SurfaceTriangles.size() + g.SplitTets.size() +
-      g.VertexOffsets.size() + g.VertexNodes.size()) *
-      sizeof(int);
-  for (const Level& level : g.Coarse)
-  {
-    bytes += (level.Positions.size() + level.LinkLengths.size() + level.CellVolumes.size() +
-               level.SurfaceAreas.size() + level.ProlongationWeights.size()) *
-        sizeof(double) +
-      (level.LinkOffsets.size() + level.LinkNodes.size() + level.SurfaceCells.size() +
-        level.FineParents.size() + level.ProlongationOffsets.size() +
-        level.ProlongationNodes.size() + level.RowOffsets.size() + level.ColumnIndices.size()) *
-        sizeof(int);
-  }
+  std::size_t bytes = GraphMemoryBytes(g, System_, n);
   bytes += GraphPoints_.size() * sizeof(double) + GraphTets_.size() * sizeof(int); // change check
   report.MemoryBytes = bytes;
   ReportProgress(1.0);
