@@ -770,14 +770,41 @@ void GridSolver::PrepareGrid(const TetMesh& mesh)
   }
 }
 
-int GridSolver::BuildLevel(const TetMesh& mesh, GridLevel& level) const
+namespace
 {
-  const int nx = level.Dims[0], ny = level.Dims[1], nz = level.Dims[2];
-  const long long numNodes = static_cast<long long>(nx) * ny * nz;
-  // Locating a node and casting rays cost ~10 relaxation rows.
-  const int threads = Threads(10 * numNodes);
+
+/// The unknown of the grid neighbour of node ijk in direction dir, or -1
+/// (outside the grid or the mesh).
+int NeighbourUnknown(const GridLevel& level, const int ijk[3], int dir)
+{
+  const int nx = level.Dims[0], ny = level.Dims[1];
+  const int* unknown = level.NodeUnknown.data();
+  int n[3] = { ijk[0], ijk[1], ijk[2] };
+  n[Axis[dir]] += Sign[dir];
+  if (n[Axis[dir]] < 0 || n[Axis[dir]] >= level.Dims[Axis[dir]])
+  {
+    return -1;
+  }
+  return unknown[n[0] + static_cast<size_t>(nx) * (n[1] + static_cast<size_t>(ny) * n[2])];
+}
+
+/// Corner m of boundary triangle f.
+Eigen::Vector3d TriangleVertex(const TetMesh& mesh, int f, int m)
+{
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  return Eigen::Vector3d(mesh.GetPoint(triangles[3 * f + m]));
+}
+
+/// BuildLevel, 1. Locate every grid node (tet id, or -1 outside); 2. number
+/// the interior nodes in grid order (NodeUnknown then holds the unknowns).
+void LocateNodes(const TetLocator& locator, int threads, GridLevel& level)
+{
+  const int nx = level.Dims[0];
+  const int ny = level.Dims[1];
+  const int nz = level.Dims[2];
+  const long long numNodes =
+    static_cast<long long>(level.Dims[0]) * level.Dims[1] * level.Dims[2];
   const double h = level.Spacing;
-  // 1. Locate every grid node (tet id, or -1 outside).
   level.NodeUnknown.assign(static_cast<size_t>(numNodes), -1);
   int* nodeTet = level.NodeUnknown.data();
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
@@ -791,7 +818,7 @@ int GridSolver::BuildLevel(const TetMesh& mesh, GridLevel& level) const
           level.Origin[0] + i * h, level.Origin[1] + j * h, level.Origin[2] + k * h
         };
         nodeTet[i + static_cast<size_t>(nx) * (j + static_cast<size_t>(ny) * k)] =
-          Locator_.Locate(x);
+          locator.Locate(x);
       }
     }
   }
@@ -813,20 +840,18 @@ int GridSolver::BuildLevel(const TetMesh& mesh, GridLevel& level) const
       nodeTet[g] = next++;
     }
   }
-  const int numInterior = next;
-  const int* unknown = level.NodeUnknown.data();
-  auto neighbourUnknown = [&](const int ijk[3], int dir)
-  {
-    int n[3] = { ijk[0], ijk[1], ijk[2] };
-    n[Axis[dir]] += Sign[dir];
-    if (n[Axis[dir]] < 0 || n[Axis[dir]] >= level.Dims[Axis[dir]])
-    {
-      return -1;
-    }
-    return unknown[n[0] + static_cast<size_t>(nx) * (n[1] + static_cast<size_t>(ny) * n[2])];
-  };
+}
 
-  // 3. Boundary nodes: one per outside link, numbered by interior node, then direction.
+/// BuildLevel, 3. Boundary nodes: one per outside link, numbered by interior
+/// node, then direction, on the first surface crossing of the link.
+/// Returns the number of links that needed a fallback.
+int PlaceBoundaryNodes(
+  const TetMesh& mesh, const RayCaster& caster, int threads, GridLevel& level)
+{
+  const double h = level.Spacing;
+  const int numInterior = static_cast<int>(level.InteriorGrid.size());
+  auto neighbourUnknown = [&level](const int ijk[3], int dir)
+  { return NeighbourUnknown(level, ijk, dir); };
   level.BoundaryOffsets.assign(static_cast<size_t>(numInterior) + 1, 0);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int u = 0; u < numInterior; ++u)
@@ -874,7 +899,7 @@ int GridSolver::BuildLevel(const TetMesh& mesh, GridLevel& level) const
       double t = 0.0, d = 0.0;
       int triangle = -1;
       Eigen::Vector3d hit(x[0], x[1], x[2]);
-      if (Caster_.FirstHit(x, e, reach, t, triangle))
+      if (caster.FirstHit(x, e, reach, t, triangle))
       {
         // The first surface crossing on the link from the node outwards.
         d = t;
@@ -887,7 +912,7 @@ int GridSolver::BuildLevel(const TetMesh& mesh, GridLevel& level) const
         // look back from the outside neighbour.
         const double xo[3] = { x[0] + h * e[0], x[1] + h * e[1], x[2] + h * e[2] };
         const double back[3] = { -e[0], -e[1], -e[2] };
-        if (Caster_.FirstHit(xo, back, reach, t, triangle))
+        if (caster.FirstHit(xo, back, reach, t, triangle))
         {
           d = h - t;
           hit = Eigen::Vector3d(xo[0], xo[1], xo[2]) - t * Eigen::Vector3d(e[0], e[1], e[2]);
@@ -926,15 +951,27 @@ int GridSolver::BuildLevel(const TetMesh& mesh, GridLevel& level) const
       }
     }
   }
+  return fallbacks;
+}
 
-  // 4. Probes of the normal derivative at the boundary nodes. Where the
-  // link is along the normal (|e . n| = 1 to rounding) the interior node of
-  // the link itself, at delta = d (polygrid eq. 9). Elsewhere the link is
-  // not along the normal and (phi_b - phi_i) / delta would miss the
-  // tangential gradient (an O(1) error on slanted faces), so phi is read at
-  // x_b - l n, l = h, 1.5 h, ... 3 h, by trilinear interpolation in the
-  // first grid cell there whose 8 corners are interior nodes; if none is,
-  // the interior node of the link after all.
+/// BuildLevel, 4. Probes of the normal derivative at the boundary nodes. Where the
+/// link is along the normal (|e . n| = 1 to rounding) the interior node of
+/// the link itself, at delta = d (polygrid eq. 9). Elsewhere the link is
+/// not along the normal and (phi_b - phi_i) / delta would miss the
+/// tangential gradient (an O(1) error on slanted faces), so phi is read at
+/// x_b - l n, l = h, 1.5 h, ... 3 h, by trilinear interpolation in the
+/// first grid cell there whose 8 corners are interior nodes; if none is,
+/// the interior node of the link after all.
+void PlaceProbes(const TetMesh& mesh, int threads, GridLevel& level)
+{
+  const int nx = level.Dims[0];
+  const int ny = level.Dims[1];
+  const int nz = level.Dims[2];
+  const double h = level.Spacing;
+  const int numInterior = static_cast<int>(level.InteriorGrid.size());
+  const int* unknown = level.NodeUnknown.data();
+  const int numBoundary = static_cast<int>(level.Boundary.size());
+  auto vertex = [&mesh](int f, int m) { return TriangleVertex(mesh, f, m); };
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int b = 0; b < numBoundary; ++b)
   {
@@ -1061,8 +1098,16 @@ int GridSolver::BuildLevel(const TetMesh& mesh, GridLevel& level) const
       node.ProbeCount = found;
     }
   }
+}
 
-  // 5. Neighbours, CSR pattern and the slot of each direction in its row.
+/// BuildLevel, 5. Neighbours, CSR pattern and the slot of each direction in
+/// its row.
+void BuildLevelPattern(int threads, GridLevel& level)
+{
+  const int numInterior = static_cast<int>(level.InteriorGrid.size());
+  const int numBoundary = static_cast<int>(level.Boundary.size());
+  auto neighbourUnknown = [&level](const int ijk[3], int dir)
+  { return NeighbourUnknown(level, ijk, dir); };
   const int numUnknowns = numInterior + numBoundary;
   level.Neighbours.resize(6 * static_cast<size_t>(numInterior));
   level.Slots.resize(7 * static_cast<size_t>(numInterior));
@@ -1122,10 +1167,16 @@ int GridSolver::BuildLevel(const TetMesh& mesh, GridLevel& level) const
     }
     system.ColumnIndices[row + node.ProbeCount] = numInterior + b;
   }
+}
 
-  // 6. Relaxation colours: parity of i + j + k for interior nodes (their
-  // interior neighbours have the other parity), boundary nodes last (they
-  // are coupled to interior nodes only).
+/// BuildLevel, 6. Relaxation colours: parity of i + j + k for interior nodes (their
+/// interior neighbours have the other parity), boundary nodes last (they
+/// are coupled to interior nodes only).
+/// The level's solutions are cleared.
+void ColourNodes(GridLevel& level)
+{
+  const int numInterior = static_cast<int>(level.InteriorGrid.size());
+  const int numBoundary = static_cast<int>(level.Boundary.size());
   for (auto& colour : level.Colours)
   {
     colour.clear();
@@ -1145,6 +1196,21 @@ int GridSolver::BuildLevel(const TetMesh& mesh, GridLevel& level) const
   {
     level.Solution[c].resize(0);
   }
+}
+
+} // namespace
+
+int GridSolver::BuildLevel(const TetMesh& mesh, GridLevel& level) const
+{
+  const long long numNodes =
+    static_cast<long long>(level.Dims[0]) * level.Dims[1] * level.Dims[2];
+  // Locating a node and casting rays cost ~10 relaxation rows.
+  const int threads = Threads(10 * numNodes);
+  LocateNodes(Locator_, threads, level);
+  const int fallbacks = PlaceBoundaryNodes(mesh, Caster_, threads, level);
+  PlaceProbes(mesh, threads, level);
+  BuildLevelPattern(threads, level);
+  ColourNodes(level);
   return fallbacks;
 }
 
@@ -1416,6 +1482,155 @@ bool GridSolver::SolveLevel(GridLevel& level,
   return done;
 }
 
+namespace
+{
+/// SolveImpl: the node irradiance given by the caller, checked (3 finite
+/// values >= 0 per boundary node).
+void CheckNodeIrradiance(const std::vector<double>* nodeIrradiance, int numBoundary)
+{
+  const size_t expected = 3 * static_cast<size_t>(numBoundary);
+  if (nodeIrradiance->size() != expected)
+  {
+    std::ostringstream os;
+    os << "grid: the node irradiance has " << nodeIrradiance->size()
+       << " values but the grid has " << numBoundary << " boundary nodes (" << expected
+       << " values expected, 3 per node)";
+    throw Error(os.str());
+  }
+  for (size_t k = 0; k < expected; ++k)
+  {
+    const double v = (*nodeIrradiance)[k];
+    if (!(std::isfinite(v) && v >= 0.0))
+    {
+      std::ostringstream os;
+      os << "grid: node irradiance of boundary node " << k / 3 << ", channel "
+         << ChannelNames[k % 3] << " is " << v << " W/mm^2: must be finite and >= 0";
+      throw Error(os.str());
+    }
+  }
+}
+
+/// SolveImpl: the fine level's sources, q at the boundary nodes (given, or
+/// interpolated on the hit triangle from the problem's Irradiance).
+void SetFineSources(const DiffusionProblem& problem, const std::vector<double>* nodeIrradiance,
+  int threads, GridLevel& fine)
+{
+  const TetMesh& mesh = *problem.Mesh;
+  const int numBoundary = fine.NumberOfBoundary();
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    fine.BoundarySource[c].resize(static_cast<size_t>(numBoundary));
+  }
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int b = 0; b < numBoundary; ++b)
+  {
+    const GridLevel::BoundaryNode& node = fine.Boundary[b];
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      double q = 0.0;
+      if (nodeIrradiance)
+      {
+        q = (*nodeIrradiance)[3 * static_cast<size_t>(b) + c];
+      }
+      else
+      {
+        // Linear (barycentric) interpolation on the hit triangle.
+        for (int m = 0; m < 3; ++m)
+        {
+          q += node.Weights[m] *
+            (*problem.Irradiance)[3 * static_cast<size_t>(triangles[3 * node.Triangle + m]) + c];
+        }
+      }
+      fine.BoundarySource[c][b] = q;
+    }
+  }
+}
+
+/// SolveImpl: the sources of a coarse level: mean q of the children's
+/// boundary nodes on the same side; else of all their boundary nodes; else
+/// the mean of the level.
+void RestrictSources(const GridLevel& finer, int threads, GridLevel& level)
+{
+  const int nb = level.NumberOfBoundary();
+  double mean[NumberOfChannels] = { 0, 0, 0 };
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    for (double q : finer.BoundarySource[c])
+    {
+      mean[c] += q;
+    }
+    mean[c] /= std::max(1, finer.NumberOfBoundary());
+    level.BoundarySource[c].resize(static_cast<size_t>(nb));
+  }
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int b = 0; b < nb; ++b)
+  {
+    const GridLevel::BoundaryNode& node = level.Boundary[b];
+    int ijk[3];
+    level.InteriorIndex(node.Interior, ijk);
+    double same[NumberOfChannels] = { 0, 0, 0 }, any[NumberOfChannels] = { 0, 0, 0 };
+    int numSame = 0, numAny = 0;
+    for (int child = 0; child < 8; ++child)
+    {
+      const int f[3] = { 2 * ijk[0] + (child & 1),
+        2 * ijk[1] + ((child >> 1) & 1),
+        2 * ijk[2] + ((child >> 2) & 1) };
+      if (f[0] >= finer.Dims[0] || f[1] >= finer.Dims[1] || f[2] >= finer.Dims[2])
+      {
+        continue;
+      }
+      const int v = finer.NodeUnknown[f[0] +
+        static_cast<size_t>(finer.Dims[0]) *
+          (f[1] + static_cast<size_t>(finer.Dims[1]) * f[2])];
+      if (v < 0)
+      {
+        continue;
+      }
+      for (int fb = finer.BoundaryOffsets[v]; fb < finer.BoundaryOffsets[v + 1]; ++fb)
+      {
+        const bool sameSide = finer.Boundary[fb].Direction == node.Direction;
+        numSame += sameSide;
+        ++numAny;
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          any[c] += finer.BoundarySource[c][fb];
+          same[c] += sameSide ? finer.BoundarySource[c][fb] : 0.0;
+        }
+      }
+    }
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      level.BoundarySource[c][b] =
+        numSame > 0 ? same[c] / numSame : (numAny > 0 ? any[c] / numAny : mean[c]);
+    }
+  }
+}
+
+/// SolveImpl, prolongation: the coarse solution interpolated at the finer
+/// level's nodes.
+void Prolongate(const GridLevel& coarse, int threads, GridLevel& finer)
+{
+  const int n = finer.NumberOfUnknowns();
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    finer.Solution[c].resize(n);
+  }
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int u = 0; u < n; ++u)
+  {
+    double x[3], value[NumberOfChannels];
+    finer.Position(u, x);
+    EvaluateLevel(coarse, x, value);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      finer.Solution[c][u] = value[c];
+    }
+  }
+}
+} // namespace
+
+
 bool GridSolver::SolveImpl(const DiffusionProblem& problem,
   const std::vector<double>* nodeIrradiance,
   std::vector<double>& fluence,
@@ -1449,56 +1664,10 @@ bool GridSolver::SolveImpl(const DiffusionProblem& problem,
   const int threads = Threads(std::max(fine.NumberOfUnknowns(), mesh.GetNumberOfPoints()));
   if (nodeIrradiance)
   {
-    const size_t expected = 3 * static_cast<size_t>(numBoundary);
-    if (nodeIrradiance->size() != expected)
-    {
-      std::ostringstream os;
-      os << "grid: the node irradiance has " << nodeIrradiance->size()
-         << " values but the grid has " << numBoundary << " boundary nodes (" << expected
-         << " values expected, 3 per node)";
-      throw Error(os.str());
-    }
-    for (size_t k = 0; k < expected; ++k)
-    {
-      const double v = (*nodeIrradiance)[k];
-      if (!(std::isfinite(v) && v >= 0.0))
-      {
-        std::ostringstream os;
-        os << "grid: node irradiance of boundary node " << k / 3 << ", channel "
-           << ChannelNames[k % 3] << " is " << v << " W/mm^2: must be finite and >= 0";
-        throw Error(os.str());
-      }
-    }
+    CheckNodeIrradiance(nodeIrradiance, numBoundary);
   }
   // Fine-level sources: q at the boundary nodes.
-  for (int c = 0; c < NumberOfChannels; ++c)
-  {
-    fine.BoundarySource[c].resize(static_cast<size_t>(numBoundary));
-  }
-  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
-#pragma omp parallel for schedule(static) num_threads(threads)
-  for (int b = 0; b < numBoundary; ++b)
-  {
-    const GridLevel::BoundaryNode& node = fine.Boundary[b];
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      double q = 0.0;
-      if (nodeIrradiance)
-      {
-        q = (*nodeIrradiance)[3 * static_cast<size_t>(b) + c];
-      }
-      else
-      {
-        // Linear (barycentric) interpolation on the hit triangle.
-        for (int m = 0; m < 3; ++m)
-        {
-          q += node.Weights[m] *
-            (*problem.Irradiance)[3 * static_cast<size_t>(triangles[3 * node.Triangle + m]) + c];
-        }
-      }
-      fine.BoundarySource[c][b] = q;
-    }
-  }
+  SetFineSources(problem, nodeIrradiance, threads, fine);
   Assemble(mesh, material, 0);
   AddInteriorSources(0, placed);
   const bool multi = MultiLevel_ && Levels_.size() > 1;
@@ -1510,61 +1679,7 @@ bool GridSolver::SolveImpl(const DiffusionProblem& problem,
     {
       // Coarse sources: mean q of the children's boundary nodes on the same
       // side; else of all their boundary nodes; else the mean of the level.
-      GridLevel& level = Levels_[l];
-      const GridLevel& finer = Levels_[l - 1];
-      const int nb = level.NumberOfBoundary();
-      double mean[NumberOfChannels] = { 0, 0, 0 };
-      for (int c = 0; c < NumberOfChannels; ++c)
-      {
-        for (double q : finer.BoundarySource[c])
-        {
-          mean[c] += q;
-        }
-        mean[c] /= std::max(1, finer.NumberOfBoundary());
-        level.BoundarySource[c].resize(static_cast<size_t>(nb));
-      }
-#pragma omp parallel for schedule(static) num_threads(threads)
-      for (int b = 0; b < nb; ++b)
-      {
-        const GridLevel::BoundaryNode& node = level.Boundary[b];
-        int ijk[3];
-        level.InteriorIndex(node.Interior, ijk);
-        double same[NumberOfChannels] = { 0, 0, 0 }, any[NumberOfChannels] = { 0, 0, 0 };
-        int numSame = 0, numAny = 0;
-        for (int child = 0; child < 8; ++child)
-        {
-          const int f[3] = { 2 * ijk[0] + (child & 1),
-            2 * ijk[1] + ((child >> 1) & 1),
-            2 * ijk[2] + ((child >> 2) & 1) };
-          if (f[0] >= finer.Dims[0] || f[1] >= finer.Dims[1] || f[2] >= finer.Dims[2])
-          {
-            continue;
-          }
-          const int v = finer.NodeUnknown[f[0] +
-            static_cast<size_t>(finer.Dims[0]) *
-              (f[1] + static_cast<size_t>(finer.Dims[1]) * f[2])];
-          if (v < 0)
-          {
-            continue;
-          }
-          for (int fb = finer.BoundaryOffsets[v]; fb < finer.BoundaryOffsets[v + 1]; ++fb)
-          {
-            const bool sameSide = finer.Boundary[fb].Direction == node.Direction;
-            numSame += sameSide;
-            ++numAny;
-            for (int c = 0; c < NumberOfChannels; ++c)
-            {
-              any[c] += finer.BoundarySource[c][fb];
-              same[c] += sameSide ? finer.BoundarySource[c][fb] : 0.0;
-            }
-          }
-        }
-        for (int c = 0; c < NumberOfChannels; ++c)
-        {
-          level.BoundarySource[c][b] =
-            numSame > 0 ? same[c] / numSame : (numAny > 0 ? any[c] / numAny : mean[c]);
-        }
-      }
+      RestrictSources(Levels_[l - 1], threads, Levels_[l]);
       Assemble(mesh, material, static_cast<int>(l));
       AddInteriorSources(static_cast<int>(l), placed);
     }
@@ -1594,24 +1709,7 @@ bool GridSolver::SolveImpl(const DiffusionProblem& problem,
         CoarseIterations_[c] += iterations[c];
       }
       // Prolongation: interpolate at the finer level's nodes.
-      GridLevel& finer = Levels_[l - 1];
-      const GridLevel& coarse = Levels_[l];
-      const int n = finer.NumberOfUnknowns();
-      for (int c = 0; c < NumberOfChannels; ++c)
-      {
-        finer.Solution[c].resize(n);
-      }
-#pragma omp parallel for schedule(static) num_threads(threads)
-      for (int u = 0; u < n; ++u)
-      {
-        double x[3], value[NumberOfChannels];
-        finer.Position(u, x);
-        EvaluateLevel(coarse, x, value);
-        for (int c = 0; c < NumberOfChannels; ++c)
-        {
-          finer.Solution[c][u] = value[c];
-        }
-      }
+      Prolongate(Levels_[l], threads, Levels_[l - 1]);
     }
   }
   if (!SolveLevel(fine, warm || useCoarse, iterations, residual, converged, 1.0 - fineShare, 1.0))
