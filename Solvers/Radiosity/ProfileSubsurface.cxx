@@ -34,39 +34,38 @@ struct Entry
   unsigned char Near;
   std::array<float, MaxMaterials> Fractions;
 };
-} // namespace
 
-double DipoleProfile(double r, double muA, double sigmaS, double eta)
+/// The voxel grid of Setup (paper Sec. 5.2): voxels of size H over the
+/// bounding box from Lo, the inside ones (centre in a tet) numbered.
+struct VoxelGrid
 {
-  // Jensen et al. 2001, dipole diffuse reflectance R_d(r).
-  const double sigmaT = muA + sigmaS;
-  const double alpha = sigmaS / sigmaT;
-  const double sigmaTr = std::sqrt(3.0 * muA * sigmaT);
-  const double a = Fresnel::MismatchA(eta);
-  const double zr = 1.0 / sigmaT;
-  const double zv = zr * (1.0 + 4.0 * a / 3.0);
-  const double dr = std::sqrt(r * r + zr * zr);
-  const double dv = std::sqrt(r * r + zv * zv);
-  return alpha / (4.0 * Pi) *
-    (zr * (sigmaTr * dr + 1.0) * std::exp(-sigmaTr * dr) / (dr * dr * dr) +
-      zv * (sigmaTr * dv + 1.0) * std::exp(-sigmaTr * dv) / (dv * dv * dv));
-}
+  double Lo[3] = { 0.0, 0.0, 0.0 };
+  double H = 0.0;
+  int Dims[3] = { 1, 1, 1 };
+  long long NumVoxels = 0;
+  std::vector<int> VoxelIndex;    ///< per voxel: its inside number, or -1
+  std::vector<int> InsideVoxel;   ///< per inside voxel: its voxel
+  std::vector<int> VoxelMaterial; ///< per inside voxel: its material
+};
 
-void ProfileSubsurface::Setup(const RadiosityScene& scene, int object)
+/// The patches of one object on the voxel grid: the inside voxel of each
+/// patch, the patches of each inside voxel and the voxels that have some.
+struct PatchVoxels
 {
-  const RadiosityObject& obj = scene.GetObject(object);
-  if (!obj.Translucent || !obj.Mesh)
-  {
-    throw Error("profile S: object " + std::to_string(object) + " is not translucent");
-  }
+  std::vector<std::vector<int>> VoxelPatches;
+  std::vector<int> Sources;
+};
+
+/// Setup: the distinct coefficient sets (materials) of the object, the
+/// material of each tet and one tet per material.
+void FindMaterials(
+  const RadiosityObject& obj, std::vector<int>& tetMaterial, std::vector<int>& materialTet)
+{
   const TetMesh& mesh = *obj.Mesh;
   const OpticalProperties& mat = obj.Material;
   const int numTets = mesh.GetNumberOfTets();
-
-  // Materials: distinct coefficient sets.
+  tetMaterial.assign(numTets, 0);
   std::map<std::array<double, 7>, int> materialIds;
-  std::vector<int> tetMaterial(numTets);
-  std::vector<int> materialTet;
   for (int t = 0; t < numTets; ++t)
   {
     std::array<double, 7> key;
@@ -92,91 +91,46 @@ void ProfileSubsurface::Setup(const RadiosityScene& scene, int object)
     }
     tetMaterial[t] = it->second;
   }
-  // Same mesh and the same material layout: reuse the distances (paper
-  // Sec. 4: "by simply recomputing the 1-D profiles, we can vary the
-  // translucency"); only the profile values change.
-  if (Mesh_ == &mesh && tetMaterial == TetMaterial_ && !RowOffsets_.empty())
-  {
-    MaterialTet_ = materialTet;
-    Evaluate(scene, object);
-    return;
-  }
-  Mesh_ = &mesh;
-  TetMaterial_ = tetMaterial;
-  MaterialTet_ = materialTet;
-  NumberOfMaterials_ = static_cast<int>(materialTet.size());
+}
 
-  // Voxel grid over the bounding box.
-  double lo[3], hi[3];
-  for (int d = 0; d < 3; ++d)
+/// Setup: max_d where every material's profile has fallen below 1e-4 of its
+/// value at r = h (capped at the bounding-box diagonal).
+double ProfileCutOff(
+  const OpticalProperties& mat, const std::vector<int>& materialTet, double h, double diagonal)
+{
+  double maxd = h;
+  for (int m : materialTet)
   {
-    lo[d] = std::numeric_limits<double>::infinity();
-    hi[d] = -lo[d];
-  }
-  for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
-  {
-    for (int d = 0; d < 3; ++d)
+    for (int c = 0; c < 3; ++c)
     {
-      lo[d] = std::min(lo[d], mesh.GetPoint(i)[d]);
-      hi[d] = std::max(hi[d], mesh.GetPoint(i)[d]);
-    }
-  }
-  const double largest = std::max({ hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2] });
-  const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
-    (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-  if (!(VoxelSize_ >= 0.0) || !(MaxDistance_ >= 0.0))
-  {
-    throw Error("profile S: the voxel size and max_d must be >= 0 (0 = automatic)");
-  }
-  const double h = VoxelSize_ > 0.0 ? VoxelSize_ : largest / 32.0;
-  UsedVoxelSize_ = h;
-  int dims[3];
-  for (int d = 0; d < 3; ++d)
-  {
-    dims[d] = std::max(1, static_cast<int>(std::ceil((hi[d] - lo[d]) / h)));
-  }
-  const long long numVoxels = static_cast<long long>(dims[0]) * dims[1] * dims[2];
-  if (numVoxels > 20000000LL)
-  {
-    std::ostringstream os;
-    os << "profile S: voxel size " << h << " mm gives " << numVoxels
-       << " voxels (limit 2e7): choose a larger voxel size";
-    throw Error(os.str());
-  }
-  // max_d: where every profile has fallen below 1e-4 of its value at r = h.
-  if (MaxDistance_ > 0.0)
-  {
-    UsedMaxDistance_ = MaxDistance_;
-  }
-  else
-  {
-    double maxd = h;
-    for (int m : materialTet)
-    {
-      for (int c = 0; c < 3; ++c)
+      const double a = mat.AbsorptionCoefficient[3 * m + c];
+      const double s = mat.ReducedScatteringCoefficient[3 * m + c];
+      const double eta = mat.RefractiveIndex[m];
+      const double ref = DipoleProfile(h, a, s, eta);
+      double r = h;
+      while (r < diagonal && DipoleProfile(r, a, s, eta) > 1e-4 * ref)
       {
-        const double a = mat.AbsorptionCoefficient[3 * m + c];
-        const double s = mat.ReducedScatteringCoefficient[3 * m + c];
-        const double eta = mat.RefractiveIndex[m];
-        const double ref = DipoleProfile(h, a, s, eta);
-        double r = h;
-        while (r < diagonal && DipoleProfile(r, a, s, eta) > 1e-4 * ref)
-        {
-          r += 0.25 * h;
-        }
-        maxd = std::max(maxd, r);
+        r += 0.25 * h;
       }
+      maxd = std::max(maxd, r);
     }
-    UsedMaxDistance_ = std::min(maxd, diagonal);
   }
-  const double maxd = UsedMaxDistance_;
+  return std::min(maxd, diagonal);
+}
 
-  // Inside voxels (centre in a tet) and their material.
+/// Setup: the inside voxels (centre in a tet) and their material.
+void FindInsideVoxels(const TetMesh& mesh, const std::vector<int>& tetMaterial, VoxelGrid& grid)
+{
+  const double* lo = grid.Lo;
+  const double h = grid.H;
+  const int* dims = grid.Dims;
+  const long long numVoxels = grid.NumVoxels;
+  std::vector<int>& voxelIndex = grid.VoxelIndex;
+  std::vector<int>& insideVoxel = grid.InsideVoxel;
+  std::vector<int>& voxelMaterial = grid.VoxelMaterial;
+  voxelIndex.assign(numVoxels, -1);
   TetLocator locator;
   locator.Build(mesh);
-  std::vector<int> voxelIndex(numVoxels, -1);
-  std::vector<int> insideVoxel;
-  std::vector<int> voxelMaterial;
   for (long long v = 0; v < numVoxels; ++v)
   {
     const int i = static_cast<int>(v % dims[0]);
@@ -191,9 +145,19 @@ void ProfileSubsurface::Setup(const RadiosityScene& scene, int object)
       voxelMaterial.push_back(tetMaterial[tet]);
     }
   }
-  NumberOfInside_ = static_cast<int>(insideVoxel.size());
+}
 
-  // Patch -> nearest inside voxel of its centroid (looked up just inside).
+/// Setup: patch -> nearest inside voxel of its centroid (looked up just
+/// inside), then the patches of each voxel and the voxels with patches.
+PatchVoxels MatchPatchVoxels(const RadiosityScene& scene, int object, const VoxelGrid& grid)
+{
+  const RadiosityObject& obj = scene.GetObject(object);
+  const TetMesh& mesh = *obj.Mesh;
+  const double* lo = grid.Lo;
+  const double h = grid.H;
+  const int* dims = grid.Dims;
+  const std::vector<int>& voxelIndex = grid.VoxelIndex;
+  const int numInside = static_cast<int>(grid.InsideVoxel.size());
   const int begin = scene.GetPatchOffset(object);
   const int numPatches = mesh.GetNumberOfBoundaryTriangles();
   const std::vector<double>& centroids = scene.GetCentroids();
@@ -242,13 +206,15 @@ void ProfileSubsurface::Setup(const RadiosityScene& scene, int object)
       throw Error(os.str());
     }
   }
-  std::vector<std::vector<int>> voxelPatches(NumberOfInside_);
+  PatchVoxels out;
+  std::vector<std::vector<int>>& voxelPatches = out.VoxelPatches;
+  std::vector<int>& sources = out.Sources;
+  voxelPatches.resize(numInside);
   for (int p = 0; p < numPatches; ++p)
   {
     voxelPatches[patchVoxel[p]].push_back(p);
   }
-  std::vector<int> sources;
-  for (int v = 0; v < NumberOfInside_; ++v)
+  for (int v = 0; v < numInside; ++v)
   {
     if (!voxelPatches[v].empty())
     {
@@ -256,13 +222,31 @@ void ProfileSubsurface::Setup(const RadiosityScene& scene, int object)
     }
   }
 
-  // Dijkstra from every source voxel, cut off at max_d (paper Sec. 5.2).
-  const int nm = NumberOfMaterials_;
+  return out;
+}
+
+/// Setup: Dijkstra from every source voxel, cut off at max_d (paper Sec.
+/// 5.2): the entries S_ji (exit patch j, entry patch i) with their distance
+/// and the material fractions along the path, per source.
+std::vector<std::vector<Entry>> ShortestPathEntries(const RadiosityScene& scene, int object,
+  const VoxelGrid& grid, const PatchVoxels& patches, int nm, double maxd)
+{
+  const TetMesh& mesh = *scene.GetObject(object).Mesh;
+  const int begin = scene.GetPatchOffset(object);
+  const std::vector<double>& centroids = scene.GetCentroids();
+  const double h = grid.H;
+  const int* dims = grid.Dims;
+  const std::vector<int>& voxelIndex = grid.VoxelIndex;
+  const std::vector<int>& insideVoxel = grid.InsideVoxel;
+  const std::vector<int>& voxelMaterial = grid.VoxelMaterial;
+  const std::vector<std::vector<int>>& voxelPatches = patches.VoxelPatches;
+  const std::vector<int>& sources = patches.Sources;
+  const int numInside = static_cast<int>(insideVoxel.size());
   std::vector<std::vector<Entry>> perSource(sources.size());
 #pragma omp parallel
   {
-    std::vector<double> dist(NumberOfInside_, std::numeric_limits<double>::infinity());
-    std::vector<std::array<float, MaxMaterials>> lengths(nm > 1 ? NumberOfInside_ : 0);
+    std::vector<double> dist(numInside, std::numeric_limits<double>::infinity());
+    std::vector<std::array<float, MaxMaterials>> lengths(nm > 1 ? numInside : 0);
     std::vector<int> touched;
 #pragma omp for schedule(dynamic, 4)
     for (int s = 0; s < static_cast<int>(sources.size()); ++s)
@@ -366,6 +350,111 @@ void ProfileSubsurface::Setup(const RadiosityScene& scene, int object)
       touched.clear();
     }
   }
+  return perSource;
+}
+
+} // namespace
+
+double DipoleProfile(double r, double muA, double sigmaS, double eta)
+{
+  // Jensen et al. 2001, dipole diffuse reflectance R_d(r).
+  const double sigmaT = muA + sigmaS;
+  const double alpha = sigmaS / sigmaT;
+  const double sigmaTr = std::sqrt(3.0 * muA * sigmaT);
+  const double a = Fresnel::MismatchA(eta);
+  const double zr = 1.0 / sigmaT;
+  const double zv = zr * (1.0 + 4.0 * a / 3.0);
+  const double dr = std::sqrt(r * r + zr * zr);
+  const double dv = std::sqrt(r * r + zv * zv);
+  return alpha / (4.0 * Pi) *
+    (zr * (sigmaTr * dr + 1.0) * std::exp(-sigmaTr * dr) / (dr * dr * dr) +
+      zv * (sigmaTr * dv + 1.0) * std::exp(-sigmaTr * dv) / (dv * dv * dv));
+}
+
+void ProfileSubsurface::Setup(const RadiosityScene& scene, int object)
+{
+  const RadiosityObject& obj = scene.GetObject(object);
+  if (!obj.Translucent || !obj.Mesh)
+  {
+    throw Error("profile S: object " + std::to_string(object) + " is not translucent");
+  }
+  const TetMesh& mesh = *obj.Mesh;
+  const OpticalProperties& mat = obj.Material;
+  std::vector<int> tetMaterial, materialTet;
+  FindMaterials(obj, tetMaterial, materialTet);
+  // Same mesh and the same material layout: reuse the distances (paper
+  // Sec. 4: "by simply recomputing the 1-D profiles, we can vary the
+  // translucency"); only the profile values change.
+  if (Mesh_ == &mesh && tetMaterial == TetMaterial_ && !RowOffsets_.empty())
+  {
+    MaterialTet_ = materialTet;
+    Evaluate(scene, object);
+    return;
+  }
+  Mesh_ = &mesh;
+  TetMaterial_ = tetMaterial;
+  MaterialTet_ = materialTet;
+  NumberOfMaterials_ = static_cast<int>(materialTet.size());
+
+  // Voxel grid over the bounding box.
+  VoxelGrid grid;
+  double* lo = grid.Lo;
+  double hi[3];
+  for (int d = 0; d < 3; ++d)
+  {
+    lo[d] = std::numeric_limits<double>::infinity();
+    hi[d] = -lo[d];
+  }
+  for (int i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    for (int d = 0; d < 3; ++d)
+    {
+      lo[d] = std::min(lo[d], mesh.GetPoint(i)[d]);
+      hi[d] = std::max(hi[d], mesh.GetPoint(i)[d]);
+    }
+  }
+  const double largest = std::max({ hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2] });
+  const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
+    (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  if (!(VoxelSize_ >= 0.0) || !(MaxDistance_ >= 0.0))
+  {
+    throw Error("profile S: the voxel size and max_d must be >= 0 (0 = automatic)");
+  }
+  const double h = VoxelSize_ > 0.0 ? VoxelSize_ : largest / 32.0;
+  UsedVoxelSize_ = h;
+  grid.H = h;
+  int* dims = grid.Dims;
+  for (int d = 0; d < 3; ++d)
+  {
+    dims[d] = std::max(1, static_cast<int>(std::ceil((hi[d] - lo[d]) / h)));
+  }
+  const long long numVoxels = static_cast<long long>(dims[0]) * dims[1] * dims[2];
+  if (numVoxels > 20000000LL)
+  {
+    std::ostringstream os;
+    os << "profile S: voxel size " << h << " mm gives " << numVoxels
+       << " voxels (limit 2e7): choose a larger voxel size";
+    throw Error(os.str());
+  }
+  // max_d: where every profile has fallen below 1e-4 of its value at r = h.
+  if (MaxDistance_ > 0.0)
+  {
+    UsedMaxDistance_ = MaxDistance_;
+  }
+  else
+  {
+    UsedMaxDistance_ = ProfileCutOff(mat, materialTet, h, diagonal);
+  }
+  const double maxd = UsedMaxDistance_;
+
+  grid.NumVoxels = numVoxels;
+  FindInsideVoxels(mesh, tetMaterial, grid);
+  NumberOfInside_ = static_cast<int>(grid.InsideVoxel.size());
+  const PatchVoxels patches = MatchPatchVoxels(scene, object, grid);
+  const int numPatches = mesh.GetNumberOfBoundaryTriangles();
+  const int nm = NumberOfMaterials_;
+  std::vector<std::vector<Entry>> perSource =
+    ShortestPathEntries(scene, object, grid, patches, nm, maxd);
 
   // CSR by exit patch.
   std::vector<Entry> all;
