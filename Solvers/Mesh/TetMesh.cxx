@@ -202,6 +202,284 @@ void CheckTetIds(const std::vector<int>& tets, int numPoints)
   }
 }
 
+
+/// A boundary face found at its smallest vertex, keyed by its two other
+/// vertices (BuildTopology).
+struct FaceEntry
+{
+  int Lo, Hi, Tet, Face;
+  bool operator<(const FaceEntry& o) const
+  {
+    return Lo != o.Lo ? Lo < o.Lo : (Hi != o.Hi ? Hi < o.Hi : Tet < o.Tet);
+  }
+};
+
+/// BuildTopology: throws the error for a face of `mesh` shared by more than
+/// two tets, the one with the smallest vertex `badVertex` (deterministic),
+/// naming the tets.
+void ThrowNonManifoldFace(const TetMesh& mesh, int badVertex)
+{
+  const std::vector<int>& pointTetOffsets = mesh.GetPointTetOffsets();
+  const std::vector<int>& pointTets = mesh.GetPointTets();
+  std::vector<FaceEntry> faces;
+  for (int k = pointTetOffsets[badVertex]; k < pointTetOffsets[badVertex + 1]; ++k)
+  {
+    const int t = pointTets[k];
+    const int* tv = mesh.GetTet(t);
+    for (int f = 0; f < 4; ++f)
+    {
+      const int* fv = FaceVertices[f];
+      const int a = tv[fv[0]], b = tv[fv[1]], c = tv[fv[2]];
+      if ((a == badVertex || b == badVertex || c == badVertex) &&
+        std::min({ a, b, c }) == badVertex)
+      {
+        const int o1 = a == badVertex ? b : a;
+        const int o2 = c == badVertex ? b : c;
+        faces.push_back({ std::min(o1, o2), std::max(o1, o2), t, f });
+      }
+    }
+  }
+  std::sort(faces.begin(), faces.end());
+  for (size_t s = 0; s < faces.size();)
+  {
+    size_t e = s + 1;
+    while (e < faces.size() && faces[e].Lo == faces[s].Lo && faces[e].Hi == faces[s].Hi)
+    {
+      ++e;
+    }
+    if (e - s > 2)
+    {
+      std::ostringstream os;
+      os << "face (" << badVertex << ", " << faces[s].Lo << ", " << faces[s].Hi
+         << ") is shared by " << e - s << " tets (";
+      for (size_t k = s; k < e; ++k)
+      {
+        os << (k == s ? "tet " : ", tet ") << faces[k].Tet;
+      }
+      os << "): a face can belong to at most two tets";
+      throw Error(os.str());
+    }
+    s = e;
+  }
+}
+
+/// The per-thread outputs of BuildTopology's adjacency pass (threads own
+/// contiguous vertex ranges: concatenated in thread order they do not
+/// depend on the thread count).
+struct TopologyScratch
+{
+  explicit TopologyScratch(int maxThreads, int numPoints)
+    : BoundaryPerThread(maxThreads)
+    , FirstNonManifold(maxThreads, INT_MAX)
+    , ColumnsPerThread(maxThreads)
+    , FirstPointOfThread(maxThreads, -1)
+    , RowCount(numPoints, 0)
+  {
+  }
+  std::vector<std::vector<std::pair<int, int>>> BoundaryPerThread; ///< (tet, face)
+  std::vector<int> FirstNonManifold; ///< smallest vertex of a face in > 2 tets
+  std::vector<std::vector<int>> ColumnsPerThread;
+  std::vector<int> FirstPointOfThread;
+  std::vector<int> RowCount;
+};
+
+/// BuildTopology, 1. (inside its parallel region: orphaned worksharing)
+/// point -> tets incidence of `tets`, tets ascending in each list;
+/// `counts`: maxThreads x points.
+void CountPointTetsInParallel(const std::vector<int>& tets, int numPoints,
+  std::vector<int>& pointTetOffsets, std::vector<int>& pointTets, std::vector<int>& counts)
+{
+  const int numTets = static_cast<int>(tets.size() / 4);
+  const int tid = omp_get_thread_num();
+  const int numThreads = omp_get_num_threads();
+
+  // 1. Point -> tets incidence, tets ascending in each list: a counting
+  //    sort in which each thread counts, then places, the tets of its own
+  //    contiguous range (thread ranges in increasing order).
+  int* count = counts.data() + static_cast<size_t>(tid) * numPoints; // no &v[k] of an empty vector
+  std::fill(count, count + numPoints, 0);
+  const int tetBegin = static_cast<int>(static_cast<long long>(numTets) * tid / numThreads);
+  const int tetEnd = static_cast<int>(static_cast<long long>(numTets) * (tid + 1) / numThreads);
+  for (size_t k = 4 * static_cast<size_t>(tetBegin); k < 4 * static_cast<size_t>(tetEnd); ++k)
+  {
+    ++count[tets[k]];
+  }
+#pragma omp barrier
+#pragma omp for schedule(static)
+  for (int i = 0; i < numPoints; ++i)
+  {
+    int total = 0;
+    for (int s = 0; s < numThreads; ++s)
+    {
+      total += counts[static_cast<size_t>(s) * numPoints + i];
+    }
+    pointTetOffsets[i + 1] = total;
+  }
+#pragma omp single
+  for (int i = 0; i < numPoints; ++i)
+  {
+    pointTetOffsets[i + 1] += pointTetOffsets[i];
+  }
+  // Cursor of thread tid for point i: the list start plus the incidences
+  // of the lower threads.
+#pragma omp for schedule(static)
+  for (int i = 0; i < numPoints; ++i)
+  {
+    int cursor = pointTetOffsets[i];
+    for (int s = 0; s < numThreads; ++s)
+    {
+      const int c = counts[static_cast<size_t>(s) * numPoints + i];
+      counts[static_cast<size_t>(s) * numPoints + i] = cursor;
+      cursor += c;
+    }
+  }
+  for (int t = tetBegin; t < tetEnd; ++t)
+  {
+    for (int a = 0; a < 4; ++a)
+    {
+      pointTets[count[tets[4 * static_cast<size_t>(t) + a]]++] = t;
+    }
+  }
+#pragma omp barrier
+}
+
+/// BuildTopology, 2. (inside its parallel region: orphaned worksharing)
+/// boundary faces and the adjacency rows, per thread.
+void CollectRowsInParallel(const std::vector<int>& tets, const std::vector<int>& pointTetOffsets,
+  const std::vector<int>& pointTets, std::vector<int>& diagonalPositions,
+  TopologyScratch& scratch)
+{
+  const int numPoints = static_cast<int>(pointTetOffsets.size()) - 1;
+  const int tid = omp_get_thread_num();
+  std::vector<int>& firstNonManifold = scratch.FirstNonManifold;
+  std::vector<int>& firstPointOfThread = scratch.FirstPointOfThread;
+  std::vector<int>& rowCount = scratch.RowCount;
+  // 2. Boundary faces and the adjacency rows (sorted, unique, diagonal
+  //    included). The faces of v are those in which v is the smallest
+  //    vertex: keyed by their two other vertices (lo, hi), collected
+  //    branch-free while the row is gathered, then counted in a small
+  //    (row length)^2 table indexed by the ranks of lo and hi in the sorted
+  //    row; a face seen once is on the boundary, more than twice is an
+  //    error. (The comparisons of vertex ids are unpredictable, so the code
+  //    selects and masks instead of branching.)
+  struct FaceCandidate
+  {
+    int Lo, Hi, Tet, Opposite;
+  };
+  std::vector<FaceCandidate> candidates;
+  std::vector<FaceEntry> boundaryFaces;
+  std::vector<int> row;
+  // mark[u] == v: u is already in row v; rank[u]: index of u in the sorted
+  // row of the current v; counts: the face table, zero between vertices.
+  std::vector<int> mark(static_cast<size_t>(numPoints), -1);
+  std::vector<int> rank(static_cast<size_t>(numPoints));
+  std::vector<std::uint16_t> counts;
+  auto& boundary = scratch.BoundaryPerThread[tid];
+  auto& columns = scratch.ColumnsPerThread[tid];
+#pragma omp for schedule(static)
+  for (int v = 0; v < numPoints; ++v)
+  {
+    if (firstPointOfThread[tid] < 0)
+    {
+      firstPointOfThread[tid] = v;
+    }
+    const int tetBegin = pointTetOffsets[v], tetEnd = pointTetOffsets[v + 1];
+    // Row of v: every vertex of its tets once (marker array, branch-free:
+    // always store, advance only for a vertex not yet in the row).
+    const size_t numTetsOfV = static_cast<size_t>(tetEnd - tetBegin);
+    if (row.size() < 4 * numTetsOfV + 1)
+    {
+      row.resize(4 * numTetsOfV + 1);
+    }
+    // Up to 3 faces per tet, plus one slot for the masked writes.
+    if (candidates.size() < 3 * numTetsOfV + 1)
+    {
+      candidates.resize(3 * numTetsOfV + 1);
+    }
+    int length = 1;
+    row[0] = v;
+    mark[v] = v;
+    int numCandidates = 0;
+    for (int k = tetBegin; k < tetEnd; ++k)
+    {
+      const int t = pointTets[k];
+      const int* tv = &tets[4 * static_cast<size_t>(t)];
+      for (int b = 0; b < 4; ++b)
+      {
+        const int u = tv[b];
+        row[length] = u;
+        length += mark[u] != v ? 1 : 0;
+        mark[u] = v;
+      }
+      // Sorted vertices s0 < s1 < s2 < s3 (sorting network). If v = s0, its
+      // faces are (s1, s2), (s1, s3), (s2, s3), opposite s3, s2, s1; if
+      // v = s1, the face (s2, s3) opposite s0; otherwise none.
+      int s0 = std::min(tv[0], tv[1]), s1 = std::max(tv[0], tv[1]);
+      int s2 = std::min(tv[2], tv[3]), s3 = std::max(tv[2], tv[3]);
+      const int lowest = std::min(s0, s2), highest = std::max(s1, s3);
+      const int m1 = std::max(s0, s2), m2 = std::min(s1, s3);
+      s0 = lowest;
+      s1 = std::min(m1, m2);
+      s2 = std::max(m1, m2);
+      s3 = highest;
+      const int first = v == s0 ? 1 : 0;
+      const int second = v == s1 ? 1 : 0;
+      candidates[numCandidates] = { s2, s3, t, first ? s1 : s0 };
+      numCandidates += first | second;
+      candidates[numCandidates] = { s1, s2, t, s3 };
+      numCandidates += first;
+      candidates[numCandidates] = { s1, s3, t, s2 };
+      numCandidates += first;
+    }
+    int* const rowBegin = row.data();
+    int* const rowEnd = rowBegin + length;
+    std::sort(rowBegin, rowEnd); // unique already
+    for (int k = 0; k < length; ++k)
+    {
+      rank[rowBegin[k]] = k;
+    }
+    const size_t tableSize = static_cast<size_t>(length) * static_cast<size_t>(length);
+    if (counts.size() < tableSize)
+    {
+      counts.assign(tableSize, 0);
+    }
+    for (int c = 0; c < numCandidates; ++c)
+    {
+      const FaceCandidate& f = candidates[c];
+      ++counts[static_cast<size_t>(rank[f.Lo]) * length + rank[f.Hi]];
+    }
+    // Read and reset the table: the first candidate of a key sees its
+    // count, later ones see 0.
+    boundaryFaces.clear();
+    for (int c = 0; c < numCandidates; ++c)
+    {
+      const FaceCandidate& f = candidates[c];
+      std::uint16_t& count = counts[static_cast<size_t>(rank[f.Lo]) * length + rank[f.Hi]];
+      if (count == 1)
+      {
+        const int* tv = &tets[4 * static_cast<size_t>(f.Tet)];
+        const int face = tv[0] == f.Opposite ? 0 : (tv[1] == f.Opposite ? 1 : (tv[2] == f.Opposite ? 2 : 3));
+        boundaryFaces.push_back({ f.Lo, f.Hi, f.Tet, face });
+      }
+      else if (count > 2 && firstNonManifold[tid] == INT_MAX)
+      {
+        firstNonManifold[tid] = v;
+      }
+      count = 0;
+    }
+    // Boundary faces of v in (lo, hi) order (as a sort of all faces would
+    // give).
+    std::sort(boundaryFaces.begin(), boundaryFaces.end());
+    for (const FaceEntry& e : boundaryFaces)
+    {
+      boundary.emplace_back(e.Tet, e.Face);
+    }
+    diagonalPositions[v] = rank[v];
+    rowCount[v] = length;
+    columns.insert(columns.end(), rowBegin, rowEnd);
+  }
+}
+
 } // namespace
 
 namespace
@@ -307,26 +585,18 @@ void TetMesh::ComputeTetVolumes(bool allowReorient)
 void TetMesh::BuildTopology()
 {
   const int numPoints = GetNumberOfPoints();
-  const int numTets = GetNumberOfTets();
   const int maxThreads = omp_get_max_threads();
 
   // Face keys are grouped by their smallest vertex: vertex v matches the
   // faces of its tets in which it is the smallest id. Threads own contiguous
   // vertex ranges (static schedule), so concatenating their outputs in thread
   // order gives a result independent of the thread count.
-  struct FaceEntry
-  {
-    int Lo, Hi, Tet, Face;
-    bool operator<(const FaceEntry& o) const
-    {
-      return Lo != o.Lo ? Lo < o.Lo : (Hi != o.Hi ? Hi < o.Hi : Tet < o.Tet);
-    }
-  };
-  std::vector<std::vector<std::pair<int, int>>> boundaryPerThread(maxThreads);
-  std::vector<int> firstNonManifold(maxThreads, INT_MAX);
-  std::vector<std::vector<int>> columnsPerThread(maxThreads);
-  std::vector<int> firstPointOfThread(maxThreads, -1);
-  std::vector<int> rowCount(numPoints, 0);
+  TopologyScratch scratch(maxThreads, numPoints);
+  std::vector<std::vector<std::pair<int, int>>>& boundaryPerThread = scratch.BoundaryPerThread;
+  std::vector<int>& firstNonManifold = scratch.FirstNonManifold;
+  std::vector<std::vector<int>>& columnsPerThread = scratch.ColumnsPerThread;
+  std::vector<int>& firstPointOfThread = scratch.FirstPointOfThread;
+  std::vector<int>& rowCount = scratch.RowCount;
   DiagonalPositions_.resize(numPoints);
   PointTetOffsets_.assign(static_cast<size_t>(numPoints) + 1, 0);
   PointTets_.resize(Tets_.size());
@@ -336,182 +606,10 @@ void TetMesh::BuildTopology()
 
 #pragma omp parallel
   {
-    const int tid = omp_get_thread_num();
-    const int numThreads = omp_get_num_threads();
-
-    // 1. Point -> tets incidence, tets ascending in each list: a counting
-    //    sort in which each thread counts, then places, the tets of its own
-    //    contiguous range (thread ranges in increasing order).
-    int* count = counts.data() + static_cast<size_t>(tid) * numPoints; // no &v[k] of an empty vector
-    std::fill(count, count + numPoints, 0);
-    const int tetBegin = static_cast<int>(static_cast<long long>(numTets) * tid / numThreads);
-    const int tetEnd = static_cast<int>(static_cast<long long>(numTets) * (tid + 1) / numThreads);
-    for (size_t k = 4 * static_cast<size_t>(tetBegin); k < 4 * static_cast<size_t>(tetEnd); ++k)
-    {
-      ++count[Tets_[k]];
-    }
-#pragma omp barrier
-#pragma omp for schedule(static)
-    for (int i = 0; i < numPoints; ++i)
-    {
-      int total = 0;
-      for (int s = 0; s < numThreads; ++s)
-      {
-        total += counts[static_cast<size_t>(s) * numPoints + i];
-      }
-      PointTetOffsets_[i + 1] = total;
-    }
-#pragma omp single
-    for (int i = 0; i < numPoints; ++i)
-    {
-      PointTetOffsets_[i + 1] += PointTetOffsets_[i];
-    }
-    // Cursor of thread tid for point i: the list start plus the incidences
-    // of the lower threads.
-#pragma omp for schedule(static)
-    for (int i = 0; i < numPoints; ++i)
-    {
-      int cursor = PointTetOffsets_[i];
-      for (int s = 0; s < numThreads; ++s)
-      {
-        const int c = counts[static_cast<size_t>(s) * numPoints + i];
-        counts[static_cast<size_t>(s) * numPoints + i] = cursor;
-        cursor += c;
-      }
-    }
-    for (int t = tetBegin; t < tetEnd; ++t)
-    {
-      for (int a = 0; a < 4; ++a)
-      {
-        PointTets_[count[Tets_[4 * static_cast<size_t>(t) + a]]++] = t;
-      }
-    }
-#pragma omp barrier
-
-    // 2. Boundary faces and the adjacency rows (sorted, unique, diagonal
-    //    included). The faces of v are those in which v is the smallest
-    //    vertex: keyed by their two other vertices (lo, hi), collected
-    //    branch-free while the row is gathered, then counted in a small
-    //    (row length)^2 table indexed by the ranks of lo and hi in the sorted
-    //    row; a face seen once is on the boundary, more than twice is an
-    //    error. (The comparisons of vertex ids are unpredictable, so the code
-    //    selects and masks instead of branching.)
-    struct FaceCandidate
-    {
-      int Lo, Hi, Tet, Opposite;
-    };
-    std::vector<FaceCandidate> candidates;
-    std::vector<FaceEntry> boundaryFaces;
-    std::vector<int> row;
-    // mark[u] == v: u is already in row v; rank[u]: index of u in the sorted
-    // row of the current v; counts: the face table, zero between vertices.
-    std::vector<int> mark(static_cast<size_t>(numPoints), -1);
-    std::vector<int> rank(static_cast<size_t>(numPoints));
-    std::vector<std::uint16_t> counts;
-    auto& boundary = boundaryPerThread[tid];
-    auto& columns = columnsPerThread[tid];
-#pragma omp for schedule(static)
-    for (int v = 0; v < numPoints; ++v)
-    {
-      if (firstPointOfThread[tid] < 0)
-      {
-        firstPointOfThread[tid] = v;
-      }
-      const int tetBegin = PointTetOffsets_[v], tetEnd = PointTetOffsets_[v + 1];
-      // Row of v: every vertex of its tets once (marker array, branch-free:
-      // always store, advance only for a vertex not yet in the row).
-      const size_t numTetsOfV = static_cast<size_t>(tetEnd - tetBegin);
-      if (row.size() < 4 * numTetsOfV + 1)
-      {
-        row.resize(4 * numTetsOfV + 1);
-      }
-      // Up to 3 faces per tet, plus one slot for the masked writes.
-      if (candidates.size() < 3 * numTetsOfV + 1)
-      {
-        candidates.resize(3 * numTetsOfV + 1);
-      }
-      int length = 1;
-      row[0] = v;
-      mark[v] = v;
-      int numCandidates = 0;
-      for (int k = tetBegin; k < tetEnd; ++k)
-      {
-        const int t = PointTets_[k];
-        const int* tv = &Tets_[4 * static_cast<size_t>(t)];
-        for (int b = 0; b < 4; ++b)
-        {
-          const int u = tv[b];
-          row[length] = u;
-          length += mark[u] != v ? 1 : 0;
-          mark[u] = v;
-        }
-        // Sorted vertices s0 < s1 < s2 < s3 (sorting network). If v = s0, its
-        // faces are (s1, s2), (s1, s3), (s2, s3), opposite s3, s2, s1; if
-        // v = s1, the face (s2, s3) opposite s0; otherwise none.
-        int s0 = std::min(tv[0], tv[1]), s1 = std::max(tv[0], tv[1]);
-        int s2 = std::min(tv[2], tv[3]), s3 = std::max(tv[2], tv[3]);
-        const int lowest = std::min(s0, s2), highest = std::max(s1, s3);
-        const int m1 = std::max(s0, s2), m2 = std::min(s1, s3);
-        s0 = lowest;
-        s1 = std::min(m1, m2);
-        s2 = std::max(m1, m2);
-        s3 = highest;
-        const int first = v == s0 ? 1 : 0;
-        const int second = v == s1 ? 1 : 0;
-        candidates[numCandidates] = { s2, s3, t, first ? s1 : s0 };
-        numCandidates += first | second;
-        candidates[numCandidates] = { s1, s2, t, s3 };
-        numCandidates += first;
-        candidates[numCandidates] = { s1, s3, t, s2 };
-        numCandidates += first;
-      }
-      int* const rowBegin = row.data();
-      int* const rowEnd = rowBegin + length;
-      std::sort(rowBegin, rowEnd); // unique already
-      for (int k = 0; k < length; ++k)
-      {
-        rank[rowBegin[k]] = k;
-      }
-      const size_t tableSize = static_cast<size_t>(length) * static_cast<size_t>(length);
-      if (counts.size() < tableSize)
-      {
-        counts.assign(tableSize, 0);
-      }
-      for (int c = 0; c < numCandidates; ++c)
-      {
-        const FaceCandidate& f = candidates[c];
-        ++counts[static_cast<size_t>(rank[f.Lo]) * length + rank[f.Hi]];
-      }
-      // Read and reset the table: the first candidate of a key sees its
-      // count, later ones see 0.
-      boundaryFaces.clear();
-      for (int c = 0; c < numCandidates; ++c)
-      {
-        const FaceCandidate& f = candidates[c];
-        std::uint16_t& count = counts[static_cast<size_t>(rank[f.Lo]) * length + rank[f.Hi]];
-        if (count == 1)
-        {
-          const int* tv = &Tets_[4 * static_cast<size_t>(f.Tet)];
-          const int face = tv[0] == f.Opposite ? 0 : (tv[1] == f.Opposite ? 1 : (tv[2] == f.Opposite ? 2 : 3));
-          boundaryFaces.push_back({ f.Lo, f.Hi, f.Tet, face });
-        }
-        else if (count > 2 && firstNonManifold[tid] == INT_MAX)
-        {
-          firstNonManifold[tid] = v;
-        }
-        count = 0;
-      }
-      // Boundary faces of v in (lo, hi) order (as a sort of all faces would
-      // give).
-      std::sort(boundaryFaces.begin(), boundaryFaces.end());
-      for (const FaceEntry& e : boundaryFaces)
-      {
-        boundary.emplace_back(e.Tet, e.Face);
-      }
-      DiagonalPositions_[v] = rank[v];
-      rowCount[v] = length;
-      columns.insert(columns.end(), rowBegin, rowEnd);
-    }
+    // The two passes share one thread team (their loops are orphaned
+    // worksharing constructs of this region).
+    CountPointTetsInParallel(Tets_, numPoints, PointTetOffsets_, PointTets_, counts);
+    CollectRowsInParallel(Tets_, PointTetOffsets_, PointTets_, DiagonalPositions_, scratch);
   }
 
   // A face shared by more than two tets: report the one with the smallest
@@ -519,46 +617,7 @@ void TetMesh::BuildTopology()
   const int badVertex = *std::min_element(firstNonManifold.begin(), firstNonManifold.end());
   if (badVertex != INT_MAX)
   {
-    std::vector<FaceEntry> faces;
-    for (int k = PointTetOffsets_[badVertex]; k < PointTetOffsets_[badVertex + 1]; ++k)
-    {
-      const int t = PointTets_[k];
-      const int* tv = GetTet(t);
-      for (int f = 0; f < 4; ++f)
-      {
-        const int* fv = FaceVertices[f];
-        const int a = tv[fv[0]], b = tv[fv[1]], c = tv[fv[2]];
-        if ((a == badVertex || b == badVertex || c == badVertex) &&
-          std::min({ a, b, c }) == badVertex)
-        {
-          const int o1 = a == badVertex ? b : a;
-          const int o2 = c == badVertex ? b : c;
-          faces.push_back({ std::min(o1, o2), std::max(o1, o2), t, f });
-        }
-      }
-    }
-    std::sort(faces.begin(), faces.end());
-    for (size_t s = 0; s < faces.size();)
-    {
-      size_t e = s + 1;
-      while (e < faces.size() && faces[e].Lo == faces[s].Lo && faces[e].Hi == faces[s].Hi)
-      {
-        ++e;
-      }
-      if (e - s > 2)
-      {
-        std::ostringstream os;
-        os << "face (" << badVertex << ", " << faces[s].Lo << ", " << faces[s].Hi
-           << ") is shared by " << e - s << " tets (";
-        for (size_t k = s; k < e; ++k)
-        {
-          os << (k == s ? "tet " : ", tet ") << faces[k].Tet;
-        }
-        os << "): a face can belong to at most two tets";
-        throw Error(os.str());
-      }
-      s = e;
-    }
+    ThrowNonManifoldFace(*this, badVertex);
   }
 
   // Boundary triangles, outward (tets are positively oriented here).
