@@ -251,7 +251,9 @@ vtkSmartPointer<vtkUnstructuredGrid> Tetrahedralize(
 
 namespace
 {
-LoadedScene LoadSceneUnchecked(const std::string& path, double cellSizeOverride, Context& ctx)
+/// LoadScene: the scene file read and parsed (nesting checked first), with
+/// at least one object.
+json ReadSceneJson(const std::string& path, Context& ctx)
 {
   ctx.File = path;
   const size_t slash = path.find_last_of('/');
@@ -277,6 +279,191 @@ LoadedScene LoadSceneUnchecked(const std::string& path, double cellSizeOverride,
   {
     ctx.Fail("needs \"objects\": [ ... ] with at least one object");
   }
+  return j;
+}
+
+/// LoadScene: object `index` of the file (a box or a tetrahedralised mesh)
+/// as partition `index` of the scene.
+void LoadSceneObject(const json& object, unsigned int index, double defaultCell,
+  double cellSizeOverride, Context& ctx, LoadedScene& scene)
+{
+  const std::string name =
+    object.contains("name") && object["name"].is_string() ? object["name"].get<std::string>()
+                                                          : "object " + std::to_string(index);
+  ctx.Where = "object " + std::to_string(index) + " '" + translucency::Abbreviate(name) + "'";
+  if (!object.is_object())
+  {
+    ctx.Fail("every object must be a JSON object");
+  }
+  const bool translucent = object.value("translucent", false);
+  const std::string type = object.value("type", object.contains("file") ? "mesh" : "box");
+  const double cell =
+    cellSizeOverride > 0.0 ? cellSizeOverride : Number(object, "cell_size", defaultCell, ctx);
+  vtkSmartPointer<vtkDataObject> data;
+  if (type == "box")
+  {
+    const std::vector<double> lo = Numbers(object, "min", 3, ctx);
+    const std::vector<double> hi = Numbers(object, "max", 3, ctx);
+    const bool inward = object.value("inward", false);
+    const int open = object.contains("open_face")
+      ? FaceId(object["open_face"].get<std::string>(), ctx)
+      : -1;
+    if (cell > 0.0)
+    {
+      double d[3], patches = 0.0;
+      for (int k = 0; k < 3; ++k)
+        d[k] = std::ceil(std::abs(hi[k] - lo[k]) / cell);
+      patches = 2.0 * (d[0] * d[1] + d[1] * d[2] + d[0] * d[2]);
+      if (patches > MaxBoxPatches)
+      {
+        std::ostringstream os;
+        os << "the box would have about " << patches << " patches at cell_size " << cell
+           << " mm (at most " << MaxBoxPatches << "): raise cell_size";
+        ctx.Fail(os.str());
+      }
+    }
+    std::vector<double> points;
+    std::vector<int> triangles, faces;
+    try
+    {
+      translucency::RadiosityScene::BoxSurface(
+        lo.data(), hi.data(), cell, inward, open, points, triangles, &faces);
+    }
+    catch (const translucency::Error& e)
+    {
+      ctx.Fail(e.what());
+    }
+    vtkSmartPointer<vtkPolyData> surface = ToPolyData(points, triangles);
+    if (translucent)
+    {
+      if (inward || open >= 0)
+      {
+        ctx.Fail("a translucent box must be closed and face outwards");
+      }
+      data = AssignMaterial(Tetrahedralize(surface, object, ctx), object, ctx);
+    }
+    else
+    {
+      std::vector<double> colour = Colour(object, "albedo", ctx);
+      std::map<int, std::vector<double>> faceColour;
+      if (object.contains("face_albedo"))
+      {
+        if (!object["face_albedo"].is_object())
+        {
+          ctx.Fail("\"face_albedo\" must map face names to colours");
+        }
+        for (auto it = object["face_albedo"].begin(); it != object["face_albedo"].end(); ++it)
+        {
+          faceColour[FaceId(it.key(), ctx)] = Colour(object["face_albedo"], it.key().c_str(), ctx);
+        }
+      }
+      vtkNew<vtkDoubleArray> albedo;
+      albedo->SetName("Albedo");
+      albedo->SetNumberOfComponents(3);
+      for (int f : faces)
+      {
+        auto it = faceColour.find(f);
+        const std::vector<double>& c = it != faceColour.end() ? it->second : colour;
+        albedo->InsertNextTuple(c.data());
+      }
+      surface->GetCellData()->AddArray(albedo);
+      data = surface;
+    }
+  }
+  else if (type == "mesh")
+  {
+    if (!object.contains("file") || !object["file"].is_string())
+    {
+      ctx.Fail("a mesh object needs \"file\"");
+    }
+    const std::string file = Resolve(ctx.Directory, object["file"].get<std::string>());
+    vtkSmartPointer<vtkPolyData> surface;
+    vtkSmartPointer<vtkUnstructuredGrid> grid;
+    std::string error;
+    if (!ReadMesh(file, surface, grid, error))
+    {
+      ctx.Fail(error);
+    }
+    if (translucent)
+    {
+      if (!grid)
+      {
+        grid = Tetrahedralize(surface, object, ctx);
+      }
+      data = AssignMaterial(grid, object, ctx);
+    }
+    else
+    {
+      if (!surface)
+      {
+        ctx.Fail("an opaque object needs a surface file (.ply .stl .obj .vtp), not a tet mesh");
+      }
+      vtkNew<vtkTriangleFilter> triangulate;
+      triangulate->SetInputData(surface);
+      triangulate->PassVertsOff();
+      triangulate->PassLinesOff();
+      triangulate->Update();
+      vtkSmartPointer<vtkPolyData> tris = triangulate->GetOutput();
+      if (!tris->GetCellData()->GetArray("Albedo"))
+      {
+        const std::vector<double> colour = Colour(object, "albedo", ctx);
+        vtkNew<vtkDoubleArray> albedo;
+        albedo->SetName("Albedo");
+        albedo->SetNumberOfComponents(3);
+        for (vtkIdType c = 0; c < tris->GetNumberOfCells(); ++c)
+        {
+          albedo->InsertNextTuple(colour.data());
+        }
+        tris->GetCellData()->AddArray(albedo);
+      }
+      data = tris;
+    }
+  }
+  else
+  {
+    ctx.Fail("unknown type '" + type + "' (box or mesh)");
+  }
+  scene.Objects->SetPartition(index, 0, data);
+  scene.Objects->GetMetaData(index)->Set(vtkCompositeDataSet::NAME(), name.c_str());
+  scene.Names.push_back(name);
+  scene.Translucent.push_back(translucent);
+}
+
+/// LoadScene: a light of the file (point, spot or directional).
+translucency::LightSource LoadSceneLight(const json& l, Context& ctx)
+{
+  translucency::LightSource light;
+  const std::string type = l.value("type", "point");
+  const std::vector<double> power = Colour(l, "power", ctx);
+  light.Power = { power[0], power[1], power[2] };
+  if (type == "point" || type == "spot")
+  {
+    const std::vector<double> p = Numbers(l, "position", 3, ctx);
+    light.Position = { p[0], p[1], p[2] };
+    light.Type = translucency::LightSource::Kind::Point;
+  }
+  if (type == "directional" || type == "spot")
+  {
+    const std::vector<double> d = Numbers(l, "direction", 3, ctx);
+    light.Direction = { d[0], d[1], d[2] };
+    light.Type = translucency::LightSource::Kind::Directional;
+  }
+  if (type == "spot")
+  {
+    light.Type = translucency::LightSource::Kind::Spot;
+    light.SpotCutoff = Number(l, "cutoff", 30.0, ctx);
+    light.SpotExponent = Number(l, "exponent", 0.0, ctx);
+  }
+  else if (type != "point" && type != "directional")
+  {
+    ctx.Fail("unknown light type '" + type + "' (point, spot or directional)");
+  }
+  return light;
+}
+
+LoadedScene LoadSceneUnchecked(const std::string& path, double cellSizeOverride, Context& ctx)
+{
+  json j = ReadSceneJson(path, ctx);
 
   LoadedScene scene;
   scene.Objects = vtkSmartPointer<vtkPartitionedDataSetCollection>::New();
@@ -284,146 +471,7 @@ LoadedScene LoadSceneUnchecked(const std::string& path, double cellSizeOverride,
   unsigned int index = 0;
   for (const json& object : j["objects"])
   {
-    const std::string name =
-      object.contains("name") && object["name"].is_string() ? object["name"].get<std::string>()
-                                                            : "object " + std::to_string(index);
-    ctx.Where = "object " + std::to_string(index) + " '" + translucency::Abbreviate(name) + "'";
-    if (!object.is_object())
-    {
-      ctx.Fail("every object must be a JSON object");
-    }
-    const bool translucent = object.value("translucent", false);
-    const std::string type = object.value("type", object.contains("file") ? "mesh" : "box");
-    const double cell =
-      cellSizeOverride > 0.0 ? cellSizeOverride : Number(object, "cell_size", defaultCell, ctx);
-    vtkSmartPointer<vtkDataObject> data;
-    if (type == "box")
-    {
-      const std::vector<double> lo = Numbers(object, "min", 3, ctx);
-      const std::vector<double> hi = Numbers(object, "max", 3, ctx);
-      const bool inward = object.value("inward", false);
-      const int open = object.contains("open_face")
-        ? FaceId(object["open_face"].get<std::string>(), ctx)
-        : -1;
-      if (cell > 0.0)
-      {
-        double d[3], patches = 0.0;
-        for (int k = 0; k < 3; ++k)
-          d[k] = std::ceil(std::abs(hi[k] - lo[k]) / cell);
-        patches = 2.0 * (d[0] * d[1] + d[1] * d[2] + d[0] * d[2]);
-        if (patches > MaxBoxPatches)
-        {
-          std::ostringstream os;
-          os << "the box would have about " << patches << " patches at cell_size " << cell
-             << " mm (at most " << MaxBoxPatches << "): raise cell_size";
-          ctx.Fail(os.str());
-        }
-      }
-      std::vector<double> points;
-      std::vector<int> triangles, faces;
-      try
-      {
-        translucency::RadiosityScene::BoxSurface(
-          lo.data(), hi.data(), cell, inward, open, points, triangles, &faces);
-      }
-      catch (const translucency::Error& e)
-      {
-        ctx.Fail(e.what());
-      }
-      vtkSmartPointer<vtkPolyData> surface = ToPolyData(points, triangles);
-      if (translucent)
-      {
-        if (inward || open >= 0)
-        {
-          ctx.Fail("a translucent box must be closed and face outwards");
-        }
-        data = AssignMaterial(Tetrahedralize(surface, object, ctx), object, ctx);
-      }
-      else
-      {
-        std::vector<double> colour = Colour(object, "albedo", ctx);
-        std::map<int, std::vector<double>> faceColour;
-        if (object.contains("face_albedo"))
-        {
-          if (!object["face_albedo"].is_object())
-          {
-            ctx.Fail("\"face_albedo\" must map face names to colours");
-          }
-          for (auto it = object["face_albedo"].begin(); it != object["face_albedo"].end(); ++it)
-          {
-            faceColour[FaceId(it.key(), ctx)] = Colour(object["face_albedo"], it.key().c_str(), ctx);
-          }
-        }
-        vtkNew<vtkDoubleArray> albedo;
-        albedo->SetName("Albedo");
-        albedo->SetNumberOfComponents(3);
-        for (int f : faces)
-        {
-          auto it = faceColour.find(f);
-          const std::vector<double>& c = it != faceColour.end() ? it->second : colour;
-          albedo->InsertNextTuple(c.data());
-        }
-        surface->GetCellData()->AddArray(albedo);
-        data = surface;
-      }
-    }
-    else if (type == "mesh")
-    {
-      if (!object.contains("file") || !object["file"].is_string())
-      {
-        ctx.Fail("a mesh object needs \"file\"");
-      }
-      const std::string file = Resolve(ctx.Directory, object["file"].get<std::string>());
-      vtkSmartPointer<vtkPolyData> surface;
-      vtkSmartPointer<vtkUnstructuredGrid> grid;
-      std::string error;
-      if (!ReadMesh(file, surface, grid, error))
-      {
-        ctx.Fail(error);
-      }
-      if (translucent)
-      {
-        if (!grid)
-        {
-          grid = Tetrahedralize(surface, object, ctx);
-        }
-        data = AssignMaterial(grid, object, ctx);
-      }
-      else
-      {
-        if (!surface)
-        {
-          ctx.Fail("an opaque object needs a surface file (.ply .stl .obj .vtp), not a tet mesh");
-        }
-        vtkNew<vtkTriangleFilter> triangulate;
-        triangulate->SetInputData(surface);
-        triangulate->PassVertsOff();
-        triangulate->PassLinesOff();
-        triangulate->Update();
-        vtkSmartPointer<vtkPolyData> tris = triangulate->GetOutput();
-        if (!tris->GetCellData()->GetArray("Albedo"))
-        {
-          const std::vector<double> colour = Colour(object, "albedo", ctx);
-          vtkNew<vtkDoubleArray> albedo;
-          albedo->SetName("Albedo");
-          albedo->SetNumberOfComponents(3);
-          for (vtkIdType c = 0; c < tris->GetNumberOfCells(); ++c)
-          {
-            albedo->InsertNextTuple(colour.data());
-          }
-          tris->GetCellData()->AddArray(albedo);
-        }
-        data = tris;
-      }
-    }
-    else
-    {
-      ctx.Fail("unknown type '" + type + "' (box or mesh)");
-    }
-    scene.Objects->SetPartition(index, 0, data);
-    scene.Objects->GetMetaData(index)->Set(vtkCompositeDataSet::NAME(), name.c_str());
-    scene.Names.push_back(name);
-    scene.Translucent.push_back(translucent);
+    LoadSceneObject(object, index, defaultCell, cellSizeOverride, ctx, scene);
     ++index;
   }
 
@@ -436,33 +484,7 @@ LoadedScene LoadSceneUnchecked(const std::string& path, double cellSizeOverride,
   for (const json& l : j["lights"])
   {
     ctx.Where = "light " + std::to_string(index++);
-    translucency::LightSource light;
-    const std::string type = l.value("type", "point");
-    const std::vector<double> power = Colour(l, "power", ctx);
-    light.Power = { power[0], power[1], power[2] };
-    if (type == "point" || type == "spot")
-    {
-      const std::vector<double> p = Numbers(l, "position", 3, ctx);
-      light.Position = { p[0], p[1], p[2] };
-      light.Type = translucency::LightSource::Kind::Point;
-    }
-    if (type == "directional" || type == "spot")
-    {
-      const std::vector<double> d = Numbers(l, "direction", 3, ctx);
-      light.Direction = { d[0], d[1], d[2] };
-      light.Type = translucency::LightSource::Kind::Directional;
-    }
-    if (type == "spot")
-    {
-      light.Type = translucency::LightSource::Kind::Spot;
-      light.SpotCutoff = Number(l, "cutoff", 30.0, ctx);
-      light.SpotExponent = Number(l, "exponent", 0.0, ctx);
-    }
-    else if (type != "point" && type != "directional")
-    {
-      ctx.Fail("unknown light type '" + type + "' (point, spot or directional)");
-    }
-    scene.Lights.push_back(light);
+    scene.Lights.push_back(LoadSceneLight(l, ctx));
   }
   ctx.Where.clear();
   if (j.contains("camera"))
