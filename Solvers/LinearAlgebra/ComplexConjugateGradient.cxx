@@ -148,68 +148,69 @@ CompressedImaginary Compress(const DiffusionSystem& system,
   return b;
 }
 
-} // namespace
-
-bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
-  const std::array<std::vector<double>, NumberOfChannels>& imagValues,
-  const std::function<void(const double*, double*)>& precondition,
-  std::array<Eigen::VectorXcd, NumberOfChannels>& x, double relTol, int maxIter,
-  std::array<LinearSolveStats, NumberOfChannels>& stats, const std::function<bool(int)>& progress,
-  const std::array<Eigen::VectorXd, NumberOfChannels>* imagRightHandSide)
+/**
+ * The state of one blocked COCG solve: interleaved work vectors, real and
+ * imaginary parts apart (the preconditioner takes each part as one real
+ * interleaved vector), the active channels and the kernels of A + i B.
+ */
+struct BlockedCOCG
 {
-  const int n = system.NumberOfUnknowns;
-  const std::size_t nnz = system.ColumnIndices.size();
-  bool ok = n >= 0 && system.RowOffsets.size() == static_cast<std::size_t>(n) + 1 &&
-    static_cast<std::size_t>(system.RowOffsets.back()) == nnz;
-  for (int c = 0; c < NC && ok; ++c)
+  BlockedCOCG(const DiffusionSystem& system,
+    const std::array<std::vector<double>, NumberOfChannels>& imagValues)
+    : System(system)
+    , Imag(Compress(system, imagValues))
+    , n(system.NumberOfUnknowns)
+    , xr(3 * static_cast<long long>(n), 0.0)
+    , xi(3 * static_cast<long long>(n), 0.0)
+    , rr(3 * static_cast<long long>(n))
+    , ri(3 * static_cast<long long>(n), 0.0)
+    , zr(3 * static_cast<long long>(n))
+    , zi(3 * static_cast<long long>(n))
+    , pr(3 * static_cast<long long>(n))
+    , pi(3 * static_cast<long long>(n))
+    , qr(3 * static_cast<long long>(n))
+    , qi(3 * static_cast<long long>(n))
   {
-    ok = system.Values[c].size() == nnz && imagValues[c].size() == nnz &&
-      system.RightHandSide[c].size() == n &&
-      (!imagRightHandSide || (*imagRightHandSide)[c].size() == n);
   }
-  if (!ok)
+
+  /// r = b (real and imaginary parts) and ||b|| per channel; a channel with
+  /// b = 0 is inactive and converged.
+  void LoadRightHandSides(const std::array<Eigen::VectorXd, NumberOfChannels>* imagRightHandSide,
+    std::array<LinearSolveStats, NumberOfChannels>& stats)
   {
-    throw Error("COCG: the imaginary values or the right-hand sides do not match the system");
-  }
-  const CompressedImaginary imag = Compress(system, imagValues);
-  const long long n3 = 3 * static_cast<long long>(n);
-  // Interleaved work vectors, real and imaginary parts apart (the
-  // preconditioner takes each part as one real interleaved vector).
-  std::vector<double> xr(n3, 0.0), xi(n3, 0.0), rr(n3), ri(n3, 0.0), zr(n3), zi(n3), pr(n3),
-    pi(n3), qr(n3), qi(n3);
-  std::array<double, NC> normB{};
-  std::array<bool, NC> active{};
-  for (int c = 0; c < NC; ++c)
-  {
-    stats[c] = LinearSolveStats();
-    const Eigen::VectorXd& b = system.RightHandSide[c];
-    for (int i = 0; i < n; ++i)
+    for (int c = 0; c < NC; ++c)
     {
-      rr[3 * static_cast<std::size_t>(i) + c] = b[i];
-    }
-    normB[c] = b.norm();
-    if (imagRightHandSide)
-    {
-      const Eigen::VectorXd& bi = (*imagRightHandSide)[c];
+      stats[c] = LinearSolveStats();
+      const Eigen::VectorXd& b = System.RightHandSide[c];
       for (int i = 0; i < n; ++i)
       {
-        ri[3 * static_cast<std::size_t>(i) + c] = bi[i];
+        rr[3 * static_cast<std::size_t>(i) + c] = b[i];
       }
-      normB[c] = std::hypot(normB[c], bi.norm());
+      normB[c] = b.norm();
+      if (imagRightHandSide)
+      {
+        const Eigen::VectorXd& bi = (*imagRightHandSide)[c];
+        for (int i = 0; i < n; ++i)
+        {
+          ri[3 * static_cast<std::size_t>(i) + c] = bi[i];
+        }
+        normB[c] = std::hypot(normB[c], bi.norm());
+      }
+      active[c] = normB[c] > 0.0;
+      stats[c].Converged = !active[c];
     }
-    active[c] = normB[c] > 0.0;
-    stats[c].Converged = !active[c];
   }
-  const int* ro = system.RowOffsets.data();
-  const int* ci = system.ColumnIndices.data();
-  const double* a[NC] = { system.Values[0].data(), system.Values[1].data(),
-    system.Values[2].data() };
-  const int* bo = imag.Offsets.data();
-  const int* bc = imag.Columns.data();
-  const double* bv = imag.Values.data();
-  // Row i of (A + i B) v into (outR, outI)[3 i ...].
-  const auto row = [&](const double* vr, const double* vi, long long i, double* outR,
-                     double* outI) {
+
+  /// Row i of (A + i B) v into (outR, outI)[3 i ...].
+  void Row(const double* vr, const double* vi, long long i, double* outR, double* outI) const
+  {
+    const int* ro = System.RowOffsets.data();
+    const int* ci = System.ColumnIndices.data();
+    const double* a[NC] = { System.Values[0].data(), System.Values[1].data(),
+      System.Values[2].data() };
+    const int* bo = Imag.Offsets.data();
+    const int* bc = Imag.Columns.data();
+    const double* bv = Imag.Values.data();
     double sr[NC] = { 0.0, 0.0, 0.0 }, si[NC] = { 0.0, 0.0, 0.0 };
     for (int k = ro[i]; k < ro[i + 1]; ++k)
     {
@@ -235,15 +236,16 @@ bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
       outR[c] = sr[c];
       outI[c] = si[c];
     }
-  };
-  // u^T v (unconjugated) per channel: sums 0-2 real, 3-5 imaginary parts.
-  const auto bilinear = [n](const std::vector<double>& ur, const std::vector<double>& ui,
-                          const std::vector<double>& vr, const std::vector<double>& vi) {
+  }
+
+  /// r^T z (unconjugated) per channel.
+  std::array<std::complex<double>, NC> RhoOfResidual() const
+  {
     const auto s = ChunkedSums<6>(n, [&](long long begin, long long end, double* sums) {
       for (long long k = 3 * begin; k < 3 * end; ++k)
       {
-        sums[k % 3] += ur[k] * vr[k] - ui[k] * vi[k];
-        sums[3 + k % 3] += ur[k] * vi[k] + ui[k] * vr[k];
+        sums[k % 3] += rr[k] * zr[k] - ri[k] * zi[k];
+        sums[3 + k % 3] += rr[k] * zi[k] + ri[k] * zr[k];
       }
     });
     std::array<std::complex<double>, NC> out;
@@ -252,30 +254,16 @@ bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
       out[c] = std::complex<double>(s[c], s[3 + c]);
     }
     return out;
-  };
-  const auto anyActive = [&]() { return active[0] || active[1] || active[2]; };
-  const double imagShare = static_cast<double>(imag.Columns.size()) / std::max<double>(1.0, nnz);
-  std::array<std::complex<double>, NC> rho{};
-  if (anyActive())
-  {
-    precondition(rr.data(), zr.data());
-    precondition(ri.data(), zi.data());
-    pr = zr;
-    pi = zi;
-    rho = bilinear(rr, ri, zr, zi);
   }
-  int iteration = 0;
-  for (; iteration < maxIter && anyActive(); ++iteration)
+
+  /// q = (A + i B) p; returns p^T q per channel (sums 0-2 real, 3-5
+  /// imaginary parts).
+  auto ApplyToDirection()
   {
-    if (progress && !progress(iteration))
-    {
-      return false;
-    }
-    // q = (A + i B) p with p^T q.
-    const auto pqSums = ChunkedSums<6>(n, [&](long long begin, long long end, double* sums) {
+    return ChunkedSums<6>(n, [&](long long begin, long long end, double* sums) {
       for (long long i = begin; i < end; ++i)
       {
-        row(pr.data(), pi.data(), i, qr.data() + 3 * i, qi.data() + 3 * i);
+        Row(pr.data(), pi.data(), i, qr.data() + 3 * i, qi.data() + 3 * i);
         for (int c = 0; c < NC; ++c)
         {
           const long long k = 3 * i + c;
@@ -284,6 +272,123 @@ bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
         }
       }
     });
+  }
+
+  /// x += alpha p, r -= alpha q; returns ||r||^2 per channel.
+  auto UpdateSolution(const std::array<std::complex<double>, NC>& alpha)
+  {
+    return ChunkedSums<3>(n, [&](long long begin, long long end, double* sums) {
+      for (long long i = begin; i < end; ++i)
+      {
+        for (int c = 0; c < NC; ++c)
+        {
+          const long long k = 3 * i + c;
+          const double ar = alpha[c].real(), ai = alpha[c].imag();
+          xr[k] += ar * pr[k] - ai * pi[k];
+          xi[k] += ar * pi[k] + ai * pr[k];
+          rr[k] -= ar * qr[k] - ai * qi[k];
+          ri[k] -= ar * qi[k] + ai * qr[k];
+          sums[c] += rr[k] * rr[k] + ri[k] * ri[k];
+        }
+      }
+    });
+  }
+
+  /// p = z + beta p on the active channels.
+  void UpdateDirection(const std::array<std::complex<double>, NC>& beta)
+  {
+#pragma omp parallel for schedule(static) if(n > blocked::ParallelThreshold)
+    for (long long i = 0; i < n; ++i)
+    {
+      for (int c = 0; c < NC; ++c)
+      {
+        if (!active[c])
+        {
+          continue;
+        }
+        const long long k = 3 * i + c;
+        const double br = beta[c].real(), bi = beta[c].imag();
+        const double p0 = pr[k], p1 = pi[k];
+        pr[k] = zr[k] + br * p0 - bi * p1;
+        pi[k] = zi[k] + br * p1 + bi * p0;
+      }
+    }
+  }
+
+  /// ||b - (A + i B) x||^2 per channel: the true residuals (the
+  /// recurrence's may drift).
+  auto TrueResidualSums(const std::array<Eigen::VectorXd, NumberOfChannels>* imagRightHandSide) const
+  {
+    return ChunkedSums<3>(n, [&](long long begin, long long end, double* sums) {
+      for (long long i = begin; i < end; ++i)
+      {
+        double axr[NC], axi[NC];
+        Row(xr.data(), xi.data(), i, axr, axi);
+        for (int c = 0; c < NC; ++c)
+        {
+          const double er = System.RightHandSide[c][i] - axr[c],
+                       ei = (imagRightHandSide ? (*imagRightHandSide)[c][i] : 0.0) - axi[c];
+          sums[c] += er * er + ei * ei;
+        }
+      }
+    });
+  }
+
+  bool AnyActive() const { return active[0] || active[1] || active[2]; }
+
+  const DiffusionSystem& System;
+  const CompressedImaginary Imag;
+  const int n;
+  std::vector<double> xr, xi, rr, ri, zr, zi, pr, pi, qr, qi;
+  std::array<double, NC> normB{};
+  std::array<bool, NC> active{};
+};
+
+} // namespace
+
+bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
+  const std::array<std::vector<double>, NumberOfChannels>& imagValues,
+  const std::function<void(const double*, double*)>& precondition,
+  std::array<Eigen::VectorXcd, NumberOfChannels>& x, double relTol, int maxIter,
+  std::array<LinearSolveStats, NumberOfChannels>& stats, const std::function<bool(int)>& progress,
+  const std::array<Eigen::VectorXd, NumberOfChannels>* imagRightHandSide)
+{
+  const int n = system.NumberOfUnknowns;
+  const std::size_t nnz = system.ColumnIndices.size();
+  bool ok = n >= 0 && system.RowOffsets.size() == static_cast<std::size_t>(n) + 1 &&
+    static_cast<std::size_t>(system.RowOffsets.back()) == nnz;
+  for (int c = 0; c < NC && ok; ++c)
+  {
+    ok = system.Values[c].size() == nnz && imagValues[c].size() == nnz &&
+      system.RightHandSide[c].size() == n &&
+      (!imagRightHandSide || (*imagRightHandSide)[c].size() == n);
+  }
+  if (!ok)
+  {
+    throw Error("COCG: the imaginary values or the right-hand sides do not match the system");
+  }
+  BlockedCOCG s(system, imagValues);
+  s.LoadRightHandSides(imagRightHandSide, stats);
+  std::array<bool, NC>& active = s.active;
+  const double imagShare = static_cast<double>(s.Imag.Columns.size()) / std::max<double>(1.0, nnz);
+  std::array<std::complex<double>, NC> rho{};
+  if (s.AnyActive())
+  {
+    precondition(s.rr.data(), s.zr.data());
+    precondition(s.ri.data(), s.zi.data());
+    s.pr = s.zr;
+    s.pi = s.zi;
+    rho = s.RhoOfResidual();
+  }
+  int iteration = 0;
+  for (; iteration < maxIter && s.AnyActive(); ++iteration)
+  {
+    if (progress && !progress(iteration))
+    {
+      return false;
+    }
+    // q = (A + i B) p with p^T q.
+    const auto pqSums = s.ApplyToDirection();
     std::array<std::complex<double>, NC> alpha{};
     for (int c = 0; c < NC; ++c)
     {
@@ -302,40 +407,26 @@ bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
       stats[c].SpMVEquivalents += 2.0 + 2.0 * imagShare;
     }
     // x += alpha p, r -= alpha q, with ||r||^2.
-    const auto rrSums = ChunkedSums<3>(n, [&](long long begin, long long end, double* sums) {
-      for (long long i = begin; i < end; ++i)
-      {
-        for (int c = 0; c < NC; ++c)
-        {
-          const long long k = 3 * i + c;
-          const double ar = alpha[c].real(), ai = alpha[c].imag();
-          xr[k] += ar * pr[k] - ai * pi[k];
-          xi[k] += ar * pi[k] + ai * pr[k];
-          rr[k] -= ar * qr[k] - ai * qi[k];
-          ri[k] -= ar * qi[k] + ai * qr[k];
-          sums[c] += rr[k] * rr[k] + ri[k] * ri[k];
-        }
-      }
-    });
+    const auto rrSums = s.UpdateSolution(alpha);
     for (int c = 0; c < NC; ++c)
     {
       if (active[c])
       {
-        stats[c].RelativeResidual = std::sqrt(rrSums[c]) / normB[c];
+        stats[c].RelativeResidual = std::sqrt(rrSums[c]) / s.normB[c];
         if (stats[c].RelativeResidual <= relTol)
         {
           active[c] = false;
         }
       }
     }
-    if (!anyActive())
+    if (!s.AnyActive())
     {
       ++iteration;
       break;
     }
-    precondition(rr.data(), zr.data());
-    precondition(ri.data(), zi.data());
-    const auto rhoNext = bilinear(rr, ri, zr, zi);
+    precondition(s.rr.data(), s.zr.data());
+    precondition(s.ri.data(), s.zi.data());
+    const auto rhoNext = s.RhoOfResidual();
     std::array<std::complex<double>, NC> beta{};
     for (int c = 0; c < NC; ++c)
     {
@@ -346,49 +437,22 @@ bool SolveComplexSymmetricBlockedCOCG(const DiffusionSystem& system,
       }
     }
     // p = z + beta p on the active channels.
-#pragma omp parallel for schedule(static) if(n > blocked::ParallelThreshold)
-    for (long long i = 0; i < n; ++i)
-    {
-      for (int c = 0; c < NC; ++c)
-      {
-        if (!active[c])
-        {
-          continue;
-        }
-        const long long k = 3 * i + c;
-        const double br = beta[c].real(), bi = beta[c].imag();
-        const double p0 = pr[k], p1 = pi[k];
-        pr[k] = zr[k] + br * p0 - bi * p1;
-        pi[k] = zi[k] + br * p1 + bi * p0;
-      }
-    }
+    s.UpdateDirection(beta);
     rho = rhoNext;
   }
   // The true residuals (the recurrence's may drift).
-  const auto trueSums = ChunkedSums<3>(n, [&](long long begin, long long end, double* sums) {
-    for (long long i = begin; i < end; ++i)
-    {
-      double axr[NC], axi[NC];
-      row(xr.data(), xi.data(), i, axr, axi);
-      for (int c = 0; c < NC; ++c)
-      {
-        const double er = system.RightHandSide[c][i] - axr[c],
-                     ei = (imagRightHandSide ? (*imagRightHandSide)[c][i] : 0.0) - axi[c];
-        sums[c] += er * er + ei * ei;
-      }
-    }
-  });
+  const auto trueSums = s.TrueResidualSums(imagRightHandSide);
   for (int c = 0; c < NC; ++c)
   {
     x[c].resize(n);
     for (int i = 0; i < n; ++i)
     {
       const std::size_t k = 3 * static_cast<std::size_t>(i) + c;
-      x[c][i] = std::complex<double>(xr[k], xi[k]);
+      x[c][i] = std::complex<double>(s.xr[k], s.xi[k]);
     }
-    if (normB[c] > 0.0)
+    if (s.normB[c] > 0.0)
     {
-      const double residual = std::sqrt(trueSums[c]) / normB[c];
+      const double residual = std::sqrt(trueSums[c]) / s.normB[c];
       stats[c].RelativeResidual = residual;
       stats[c].Converged = std::isfinite(residual) && residual <= relTol * 1.000001 + 1e-15;
       stats[c].SpMVEquivalents += 2.0 + 2.0 * imagShare;
