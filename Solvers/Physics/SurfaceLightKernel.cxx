@@ -14,21 +14,12 @@
 namespace translucency
 {
 
-std::size_t BoundarySurface::GetMemoryBytes() const
+namespace
 {
-  return Points.capacity() * sizeof(double) + Triangles.capacity() * sizeof(int) +
-    TriangleEta.capacity() * sizeof(double);
-}
-
-double UniformSampleRotation(double index)
-{
-  return std::fmod(0.6180339887498949 * index, 1.0);
-}
-
-bool ComputeSurfacePointIrradiance(const BoundarySurface& surface,
-  const std::vector<int>& points, const std::vector<double>& rotations,
-  const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
-  bool shadows, std::vector<double>& q, const std::function<bool()>& abort)
+/// ComputeSurfacePointIrradiance's input checks (the errors it lists).
+void CheckSurfaceLightInputs(const BoundarySurface& surface, const std::vector<int>& points,
+  const std::vector<double>& rotations, const std::vector<LightSource>& lights,
+  double uniformIrradiance, int uniformSamples, bool shadows)
 {
   const int numPoints = static_cast<int>(surface.GetNumberOfPoints());
   const int numTriangles = static_cast<int>(surface.GetNumberOfTriangles());
@@ -83,15 +74,34 @@ bool ComputeSurfacePointIrradiance(const BoundarySurface& surface,
   {
     ValidateLight(lights[l], l);
   }
+}
 
-  // Per triangle: area vector / 2 (TetMesh::ComputeMeasures) and unit normal
-  // (ComputeTriangleCornerIrradiance); per point: area and normal sums in
-  // triangle order.
-  std::vector<double> areas(static_cast<std::size_t>(numTriangles));
-  std::vector<double> unitNormals(3 * static_cast<std::size_t>(numTriangles));
-  std::vector<double> pointArea(static_cast<std::size_t>(numPoints), 0.0);
-  std::vector<double> pointNormal(3 * static_cast<std::size_t>(numPoints), 0.0);
-  std::vector<int> offsets(static_cast<std::size_t>(numPoints) + 1, 0);
+/// ComputeSurfacePointIrradiance: per triangle, area vector / 2
+/// (TetMesh::ComputeMeasures) and unit normal (ComputeTriangleCornerIrradiance);
+/// per point, area and normal sums in triangle order and its triangles in
+/// increasing order (as TetMesh's incidence).
+struct SurfaceMeasures
+{
+  std::vector<double> Areas, UnitNormals, PointArea, PointNormal;
+  std::vector<int> Offsets, Incident;
+};
+
+SurfaceMeasures MeasureSurface(const BoundarySurface& surface)
+{
+  const int numPoints = static_cast<int>(surface.GetNumberOfPoints());
+  const int numTriangles = static_cast<int>(surface.GetNumberOfTriangles());
+  SurfaceMeasures out;
+  std::vector<double>& areas = out.Areas;
+  std::vector<double>& unitNormals = out.UnitNormals;
+  std::vector<double>& pointArea = out.PointArea;
+  std::vector<double>& pointNormal = out.PointNormal;
+  std::vector<int>& offsets = out.Offsets;
+  std::vector<int>& incident = out.Incident;
+  areas.assign(static_cast<std::size_t>(numTriangles), 0.0);
+  unitNormals.assign(3 * static_cast<std::size_t>(numTriangles), 0.0);
+  pointArea.assign(static_cast<std::size_t>(numPoints), 0.0);
+  pointNormal.assign(3 * static_cast<std::size_t>(numPoints), 0.0);
+  offsets.assign(static_cast<std::size_t>(numPoints) + 1, 0);
   for (int f = 0; f < numTriangles; ++f)
   {
     const int* tri = &surface.Triangles[3 * static_cast<std::size_t>(f)];
@@ -134,7 +144,7 @@ bool ComputeSurfacePointIrradiance(const BoundarySurface& surface,
     offsets[i + 1] += offsets[i];
   }
   // Each point's triangles in increasing order (as TetMesh's incidence).
-  std::vector<int> incident(static_cast<std::size_t>(offsets.back()));
+  incident.assign(static_cast<std::size_t>(offsets.back()), 0);
   {
     std::vector<int> cursor(offsets.begin(), offsets.end() - 1);
     for (int f = 0; f < numTriangles; ++f)
@@ -145,6 +155,37 @@ bool ComputeSurfacePointIrradiance(const BoundarySurface& surface,
       }
     }
   }
+  return out;
+}
+
+} // namespace
+
+std::size_t BoundarySurface::GetMemoryBytes() const
+{
+  return Points.capacity() * sizeof(double) + Triangles.capacity() * sizeof(int) +
+    TriangleEta.capacity() * sizeof(double);
+}
+
+double UniformSampleRotation(double index)
+{
+  return std::fmod(0.6180339887498949 * index, 1.0);
+}
+
+bool ComputeSurfacePointIrradiance(const BoundarySurface& surface,
+  const std::vector<int>& points, const std::vector<double>& rotations,
+  const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
+  bool shadows, std::vector<double>& q, const std::function<bool()>& abort)
+{
+  CheckSurfaceLightInputs(surface, points, rotations, lights, uniformIrradiance, uniformSamples,
+    shadows);
+  const int numTriangles = static_cast<int>(surface.GetNumberOfTriangles());
+  const SurfaceMeasures measures = MeasureSurface(surface);
+  const std::vector<double>& areas = measures.Areas;
+  const std::vector<double>& unitNormals = measures.UnitNormals;
+  const std::vector<double>& pointArea = measures.PointArea;
+  const std::vector<double>& pointNormal = measures.PointNormal;
+  const std::vector<int>& offsets = measures.Offsets;
+  const std::vector<int>& incident = measures.Incident;
 
   const double diag = surface.Diagonal;
   const double offset = 1e-5 * diag;
