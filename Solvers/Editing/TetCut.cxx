@@ -130,34 +130,17 @@ double TetCut::LargestDihedralCosine(
   return largest;
 }
 
-//------------------------------------------------------------------------------
-void TetCut::Cut(const std::vector<double>& points, const std::vector<int>& tets,
-  const std::vector<double>& side, const SideFunction& F)
+namespace
 {
-  const int numPoints = static_cast<int>(points.size() / 3);
+/// Cut, 1. The tets to keep (not all four vertices on the removed side)
+/// and the points they use; the first tet with a point id out of range
+/// (in tet order) is an error.
+void MarkKept(int numPoints, const std::vector<int>& tets, const std::vector<double>& side,
+  std::vector<char>& keepTet, std::vector<char>& keepPoint)
+{
   const int numTets = static_cast<int>(tets.size() / 4);
-  if (points.size() % 3 != 0 || tets.size() % 4 != 0)
-  {
-    throw Error("TetCut: points must hold 3 and tets 4 values per entry");
-  }
-  if (static_cast<int>(side.size()) != numPoints)
-  {
-    throw Error("TetCut: " + std::to_string(side.size()) + " side values for " +
-      std::to_string(numPoints) + " points");
-  }
-  if (!(Rho_ >= 0.0 && Rho_ <= 1.0))
-  {
-    throw Error("TetCut: relaxation factor " + std::to_string(Rho_) + " is not in [0, 1]");
-  }
-  KeptTets_.clear();
-  KeptPoints_.clear();
-  Points_.clear();
-  Tets_.clear();
-  Movable_ = Moved_ = Blocked_ = Sweeps_ = 0;
-
-  // 1. Delete the tets with all four vertices on the removed side (in
-  // parallel; the first bad id, in tet order, is reported).
-  std::vector<char> keepTet(numTets), keepPoint(numPoints, 0);
+  keepTet.assign(numTets, 0);
+  keepPoint.assign(numPoints, 0);
   std::int64_t firstBad = numTets;
 #pragma omp parallel for schedule(static) reduction(min : firstBad)
   for (std::int64_t t = 0; t < numTets; ++t)
@@ -202,6 +185,207 @@ void TetCut::Cut(const std::vector<double>& points, const std::vector<int>& tets
       }
     }
   }
+}
+
+/// Cut, 3. The neighbourhood of the movable vertices: their tets (CSR,
+/// tets ascending; only kept tets straddling the cut have any) and their
+/// one-rings (unique neighbours through those tets).
+struct MovableRings
+{
+  std::vector<int> Offsets, Incident;   ///< movable vertex j -> its tets
+  std::vector<int> RingOffsets, Ring; ///< movable vertex j -> its neighbours
+};
+
+MovableRings BuildMovableRings(const std::vector<int>& tets, int m, int n,
+  const std::vector<char>& isMovable, const std::vector<int>& movable)
+{
+  MovableRings rings;
+  std::vector<int>& offsets = rings.Offsets;
+  std::vector<int>& incident = rings.Incident;
+  std::vector<int>& ringOffsets = rings.RingOffsets;
+  std::vector<int>& ring = rings.Ring;
+  // The tets a movable vertex belongs to all straddle the cut (kept, with a
+  // vertex on the removed side): only those are needed, in kept order.
+  std::vector<char> isStraddling(m);
+#pragma omp parallel for schedule(static)
+  for (int t = 0; t < m; ++t)
+  {
+    const int* v = &tets[4 * static_cast<std::size_t>(t)];
+    isStraddling[t] = isMovable[v[0]] || isMovable[v[1]] || isMovable[v[2]] || isMovable[v[3]];
+  }
+  const std::vector<int> straddling = Compact(isStraddling);
+  // Movable vertex -> its tets (CSR over the movable vertices, tets ascending).
+  std::vector<int> movableId(n, -1);
+  for (std::size_t j = 0; j < movable.size(); ++j)
+  {
+    movableId[movable[j]] = static_cast<int>(j);
+  }
+  offsets.assign(movable.size() + 1, 0);
+  for (int t : straddling)
+  {
+    for (int a = 0; a < 4; ++a)
+    {
+      const int j = movableId[tets[4 * static_cast<std::size_t>(t) + a]];
+      if (j >= 0)
+      {
+        ++offsets[j + 1];
+      }
+    }
+  }
+  for (std::size_t j = 0; j < movable.size(); ++j)
+  {
+    offsets[j + 1] += offsets[j];
+  }
+  incident.assign(offsets.back(), 0);
+  {
+    std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+    for (int t : straddling)
+    {
+      for (int a = 0; a < 4; ++a)
+      {
+        const int j = movableId[tets[4 * static_cast<std::size_t>(t) + a]];
+        if (j >= 0)
+        {
+          incident[fill[j]++] = t;
+        }
+      }
+    }
+  }
+  // One-ring of each movable vertex (unique neighbours through its tets).
+  ringOffsets.assign(movable.size() + 1, 0);
+  for (std::size_t j = 0; j < movable.size(); ++j)
+  {
+    const int i = movable[j];
+    const std::size_t begin = ring.size();
+    for (int e = offsets[j]; e < offsets[j + 1]; ++e)
+    {
+      for (int a = 0; a < 4; ++a)
+      {
+        const int w = tets[4 * static_cast<std::size_t>(incident[e]) + a];
+        if (w != i)
+        {
+          ring.push_back(w);
+        }
+      }
+    }
+    std::sort(ring.begin() + begin, ring.end());
+    ring.erase(std::unique(ring.begin() + begin, ring.end()), ring.end());
+    ringOffsets[j + 1] = static_cast<int>(ring.size());
+  }
+  return rings;
+}
+
+/// Cut, 3. The relaxation sweeps (paper Sec. 5.1): each movable vertex
+/// toward the mean of its one-ring by rho, unless that crosses the cutting
+/// surface, inverts a tet or makes its smallest dihedral angle smaller than
+/// minDihedral (degrees) and smaller than before. Returns the number of
+/// vertices moved at least once; `blocked` counts the refusals of the last
+/// sweep, `sweeps` the sweeps done.
+int RelaxSweeps(std::vector<double>& points, const std::vector<int>& tets,
+  const std::vector<int>& movable, const MovableRings& rings, const TetCut::SideFunction& F,
+  double rho, int iterations, double minDihedral, int& blocked, int& sweeps)
+{
+  const std::vector<int>& offsets = rings.Offsets;
+  const std::vector<int>& incident = rings.Incident;
+  const std::vector<int>& ringOffsets = rings.RingOffsets;
+  const std::vector<int>& ring = rings.Ring;
+  const double minDihedralCosine = std::cos(minDihedral * Pi / 180.0);
+  std::vector<char> everMoved(movable.size(), 0);
+  auto P = [&points](int k) { return &points[3 * static_cast<std::size_t>(k)]; };
+  for (int sweep = 0; sweep < iterations; ++sweep)
+  {
+    int movedThisSweep = 0;
+    blocked = 0;
+    for (std::size_t j = 0; j < movable.size(); ++j)
+    {
+      const int i = movable[j];
+      double mean[3] = { 0.0, 0.0, 0.0 };
+      const int count = ringOffsets[j + 1] - ringOffsets[j];
+      for (int r = ringOffsets[j]; r < ringOffsets[j + 1]; ++r)
+      {
+        const double* q = P(ring[r]);
+        mean[0] += q[0];
+        mean[1] += q[1];
+        mean[2] += q[2];
+      }
+      double* x = P(i);
+      const double old[3] = { x[0], x[1], x[2] };
+      double trial[3];
+      for (int c = 0; c < 3; ++c)
+      {
+        trial[c] = old[c] + rho * (mean[c] / count - old[c]);
+      }
+      if (trial[0] == old[0] && trial[1] == old[1] && trial[2] == old[2])
+      {
+        continue; // at the mean already: nothing to do, not blocked
+      }
+      // Never cross the cutting surface. Angles are compared by their
+      // cosines (acos is decreasing): the smallest dihedral angle has the
+      // largest cosine.
+      bool accept = F(trial) >= 0.0;
+      for (int e = offsets[j]; accept && e < offsets[j + 1]; ++e)
+      {
+        const int* v = &tets[4 * static_cast<std::size_t>(incident[e])];
+        std::copy_n(trial, 3, x);
+        const double volume = TetCut::SignedVolume(P(v[0]), P(v[1]), P(v[2]), P(v[3]));
+        const double after =
+          volume > 0.0 ? TetCut::LargestDihedralCosine(P(v[0]), P(v[1]), P(v[2]), P(v[3])) : 1.0;
+        std::copy_n(old, 3, x);
+        accept = volume > 0.0 &&
+          (after <= minDihedralCosine ||
+            after <= TetCut::LargestDihedralCosine(P(v[0]), P(v[1]), P(v[2]), P(v[3])));
+      }
+      if (accept)
+      {
+        std::copy_n(trial, 3, x);
+        everMoved[j] = 1;
+        ++movedThisSweep;
+      }
+      else
+      {
+        ++blocked;
+      }
+    }
+    ++sweeps;
+    if (movedThisSweep == 0)
+    {
+      break;
+    }
+  }
+  return static_cast<int>(std::count(everMoved.begin(), everMoved.end(), 1));
+}
+} // namespace
+
+
+//------------------------------------------------------------------------------
+void TetCut::Cut(const std::vector<double>& points, const std::vector<int>& tets,
+  const std::vector<double>& side, const SideFunction& F)
+{
+  const int numPoints = static_cast<int>(points.size() / 3);
+  const int numTets = static_cast<int>(tets.size() / 4);
+  if (points.size() % 3 != 0 || tets.size() % 4 != 0)
+  {
+    throw Error("TetCut: points must hold 3 and tets 4 values per entry");
+  }
+  if (static_cast<int>(side.size()) != numPoints)
+  {
+    throw Error("TetCut: " + std::to_string(side.size()) + " side values for " +
+      std::to_string(numPoints) + " points");
+  }
+  if (!(Rho_ >= 0.0 && Rho_ <= 1.0))
+  {
+    throw Error("TetCut: relaxation factor " + std::to_string(Rho_) + " is not in [0, 1]");
+  }
+  KeptTets_.clear();
+  KeptPoints_.clear();
+  Points_.clear();
+  Tets_.clear();
+  Movable_ = Moved_ = Blocked_ = Sweeps_ = 0;
+
+  // 1. Delete the tets with all four vertices on the removed side (in
+  // parallel; the first bad id, in tet order, is reported).
+  std::vector<char> keepTet, keepPoint;
+  MarkKept(numPoints, tets, side, keepTet, keepPoint);
   KeptTets_ = Compact(keepTet);
   // 2. Drop the orphan vertices and renumber (ids in input order).
   KeptPoints_ = Compact(keepPoint);
@@ -239,140 +423,9 @@ void TetCut::Cut(const std::vector<double>& points, const std::vector<int>& tets
   {
     return;
   }
-  // The tets a movable vertex belongs to all straddle the cut (kept, with a
-  // vertex on the removed side): only those are needed, in kept order.
-  std::vector<char> isStraddling(m);
-#pragma omp parallel for schedule(static)
-  for (int t = 0; t < m; ++t)
-  {
-    const int* v = &Tets_[4 * static_cast<std::size_t>(t)];
-    isStraddling[t] = isMovable[v[0]] || isMovable[v[1]] || isMovable[v[2]] || isMovable[v[3]];
-  }
-  const std::vector<int> straddling = Compact(isStraddling);
-  // Movable vertex -> its tets (CSR over the movable vertices, tets ascending).
-  std::vector<int> movableId(n, -1);
-  for (std::size_t j = 0; j < movable.size(); ++j)
-  {
-    movableId[movable[j]] = static_cast<int>(j);
-  }
-  std::vector<int> offsets(movable.size() + 1, 0);
-  for (int t : straddling)
-  {
-    for (int a = 0; a < 4; ++a)
-    {
-      const int j = movableId[Tets_[4 * static_cast<std::size_t>(t) + a]];
-      if (j >= 0)
-      {
-        ++offsets[j + 1];
-      }
-    }
-  }
-  for (std::size_t j = 0; j < movable.size(); ++j)
-  {
-    offsets[j + 1] += offsets[j];
-  }
-  std::vector<int> incident(offsets.back());
-  {
-    std::vector<int> fill(offsets.begin(), offsets.end() - 1);
-    for (int t : straddling)
-    {
-      for (int a = 0; a < 4; ++a)
-      {
-        const int j = movableId[Tets_[4 * static_cast<std::size_t>(t) + a]];
-        if (j >= 0)
-        {
-          incident[fill[j]++] = t;
-        }
-      }
-    }
-  }
-  // One-ring of each movable vertex (unique neighbours through its tets).
-  std::vector<int> ringOffsets(movable.size() + 1, 0);
-  std::vector<int> ring;
-  for (std::size_t j = 0; j < movable.size(); ++j)
-  {
-    const int i = movable[j];
-    const std::size_t begin = ring.size();
-    for (int e = offsets[j]; e < offsets[j + 1]; ++e)
-    {
-      for (int a = 0; a < 4; ++a)
-      {
-        const int w = Tets_[4 * static_cast<std::size_t>(incident[e]) + a];
-        if (w != i)
-        {
-          ring.push_back(w);
-        }
-      }
-    }
-    std::sort(ring.begin() + begin, ring.end());
-    ring.erase(std::unique(ring.begin() + begin, ring.end()), ring.end());
-    ringOffsets[j + 1] = static_cast<int>(ring.size());
-  }
-
-  const double minDihedralCosine = std::cos(MinDihedral_ * Pi / 180.0);
-  std::vector<char> everMoved(movable.size(), 0);
-  auto P = [this](int k) { return &Points_[3 * static_cast<std::size_t>(k)]; };
-  for (int sweep = 0; sweep < Iterations_; ++sweep)
-  {
-    int movedThisSweep = 0;
-    Blocked_ = 0;
-    for (std::size_t j = 0; j < movable.size(); ++j)
-    {
-      const int i = movable[j];
-      double mean[3] = { 0.0, 0.0, 0.0 };
-      const int count = ringOffsets[j + 1] - ringOffsets[j];
-      for (int r = ringOffsets[j]; r < ringOffsets[j + 1]; ++r)
-      {
-        const double* q = P(ring[r]);
-        mean[0] += q[0];
-        mean[1] += q[1];
-        mean[2] += q[2];
-      }
-      double* x = P(i);
-      const double old[3] = { x[0], x[1], x[2] };
-      double trial[3];
-      for (int c = 0; c < 3; ++c)
-      {
-        trial[c] = old[c] + Rho_ * (mean[c] / count - old[c]);
-      }
-      if (trial[0] == old[0] && trial[1] == old[1] && trial[2] == old[2])
-      {
-        continue; // at the mean already: nothing to do, not blocked
-      }
-      // Never cross the cutting surface. Angles are compared by their
-      // cosines (acos is decreasing): the smallest dihedral angle has the
-      // largest cosine.
-      bool accept = F(trial) >= 0.0;
-      for (int e = offsets[j]; accept && e < offsets[j + 1]; ++e)
-      {
-        const int* v = &Tets_[4 * static_cast<std::size_t>(incident[e])];
-        std::copy_n(trial, 3, x);
-        const double volume = SignedVolume(P(v[0]), P(v[1]), P(v[2]), P(v[3]));
-        const double after =
-          volume > 0.0 ? LargestDihedralCosine(P(v[0]), P(v[1]), P(v[2]), P(v[3])) : 1.0;
-        std::copy_n(old, 3, x);
-        accept = volume > 0.0 &&
-          (after <= minDihedralCosine ||
-            after <= LargestDihedralCosine(P(v[0]), P(v[1]), P(v[2]), P(v[3])));
-      }
-      if (accept)
-      {
-        std::copy_n(trial, 3, x);
-        everMoved[j] = 1;
-        ++movedThisSweep;
-      }
-      else
-      {
-        ++Blocked_;
-      }
-    }
-    ++Sweeps_;
-    if (movedThisSweep == 0)
-    {
-      break;
-    }
-  }
-  Moved_ = static_cast<int>(std::count(everMoved.begin(), everMoved.end(), 1));
+  const MovableRings rings = BuildMovableRings(Tets_, m, n, isMovable, movable);
+  Moved_ = RelaxSweeps(
+    Points_, Tets_, movable, rings, F, Rho_, Iterations_, MinDihedral_, Blocked_, Sweeps_);
 }
 
 } // namespace translucency
