@@ -54,6 +54,198 @@ void ToCsr(std::vector<std::vector<int>>& rows, CsrPattern& out)
   }
 }
 
+
+/// BuildLevels, Sec. 4.1.3 (graph enhancement): mark both ends of every
+/// edge of dropped vertices i, j with N(i) ∩ N(j) ∩ P^{l+1} empty, select
+/// an independent set among the marked vertices, add it to P^{l+1};
+/// repeat until nothing is marked. Returns the number of rounds.
+int EnhanceRetained(const CsrPattern& g, int l, int nt, std::vector<char>& retained)
+{
+  const int n = g.Size;
+  int rounds = 0;
+  for (;;)
+  {
+    std::vector<char> marked(n, 0);
+    long long count = 0;
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 1024) reduction(+ : count)
+    for (int i = 0; i < n; ++i)
+    {
+      if (retained[i])
+      {
+        continue;
+      }
+      const int* ni = &g.Columns[g.Offsets[i]];
+      const int* niEnd = &g.Columns[0] + g.Offsets[i + 1];
+      for (const int* pj = ni; pj != niEnd && !marked[i]; ++pj)
+      {
+        const int j = *pj;
+        if (j == i || retained[j])
+        {
+          continue;
+        }
+        bool shared = false;
+        for (const int* pk = ni; pk != niEnd && !shared; ++pk)
+        {
+          const int k = *pk;
+          shared = retained[k] &&
+            std::binary_search(&g.Columns[g.Offsets[j]], &g.Columns[0] + g.Offsets[j + 1], k);
+        }
+        if (!shared)
+        {
+          marked[i] = 1; // j marks itself in its own iteration (symmetric test)
+          ++count;
+        }
+      }
+    }
+    if (count == 0)
+    {
+      break;
+    }
+    ++rounds;
+    std::vector<char> extra;
+    MultiresHierarchy::IndependentSet(g, std::move(marked), l + 1000 * rounds, extra, nt);
+    for (int i = 0; i < n; ++i)
+    {
+      retained[i] = retained[i] || extra[i];
+    }
+  }
+  return rounds;
+}
+
+/// BuildLevels, eq. 16: P row i = 1 at i if retained, else lambda_ij /
+/// lambda_i over R(i) = N(i) ∩ P^{l+1}, lambda_ij = 1 / |x_i - x_j|.
+void BuildInterpolation(const std::vector<double>& points, const std::vector<char>& retained,
+  int l, int nt, MultiresHierarchy::Level& fine)
+{
+  const CsrPattern& g = fine.Graph;
+  const int n = g.Size;
+  auto distance = [&points](int a, int b)
+  {
+    double d2 = 0.0;
+    for (int d = 0; d < 3; ++d)
+    {
+      const double t = points[3 * static_cast<std::size_t>(a) + d] -
+        points[3 * static_cast<std::size_t>(b) + d];
+      d2 += t * t;
+    }
+    return std::sqrt(d2);
+  };
+  fine.InterpolationOffsets.assign(n + 1, 0);
+  for (int i = 0; i < n; ++i)
+  {
+    int count = 1;
+    if (!retained[i])
+    {
+      count = 0;
+      for (int k = g.Offsets[i]; k < g.Offsets[i + 1]; ++k)
+      {
+        count += retained[g.Columns[k]] ? 1 : 0;
+      }
+      if (count == 0)
+      {
+        throw Error("MultiresHierarchy: internal error, dropped vertex " + std::to_string(i) +
+          " of level " + std::to_string(l) + " has no retained neighbour");
+      }
+    }
+    fine.InterpolationOffsets[i + 1] = fine.InterpolationOffsets[i] + count;
+  }
+  fine.InterpolationColumns.resize(fine.InterpolationOffsets.back());
+  fine.InterpolationWeights.resize(fine.InterpolationOffsets.back());
+  std::vector<int> badVertex(nt, -1);
+#pragma omp parallel for num_threads(nt) schedule(static)
+  for (int i = 0; i < n; ++i)
+  {
+    int p = fine.InterpolationOffsets[i];
+    if (retained[i])
+    {
+      fine.InterpolationColumns[p] = fine.CoarseIds[i];
+      fine.InterpolationWeights[p] = 1.0;
+      continue;
+    }
+    double sum = 0.0;
+    for (int k = g.Offsets[i]; k < g.Offsets[i + 1]; ++k)
+    {
+      const int j = g.Columns[k];
+      if (retained[j])
+      {
+        const double length = distance(fine.MeshIds[i], fine.MeshIds[j]);
+        const double lambda = length > 0.0 ? 1.0 / length : 0.0;
+        if (!(length > 0.0))
+        {
+          badVertex[omp_get_thread_num()] = fine.MeshIds[i];
+        }
+        fine.InterpolationColumns[p] = fine.CoarseIds[j];
+        fine.InterpolationWeights[p] = lambda;
+        sum += lambda;
+        ++p;
+      }
+    }
+    for (int q = fine.InterpolationOffsets[i]; q < p; ++q)
+    {
+      fine.InterpolationWeights[q] /= sum;
+    }
+  }
+  for (int b : badVertex)
+  {
+    if (b >= 0)
+    {
+      throw Error("MultiresHierarchy: point " + std::to_string(b) +
+        " has a neighbour at the same position (eq. 16 weight 1/|x_i - x_j| undefined)");
+    }
+  }
+}
+
+/// BuildLevels, Sec. 4.1.2-4.1.3: E^{l+1} joins two retained vertices that
+/// are both one-ring neighbours of a dropped vertex, or neighbours at level
+/// l. Built row by row (row a of the coarse graph collects its retained
+/// neighbours and the retained neighbours of its dropped neighbours), each
+/// row sorted and deduplicated: the same edge set as sorting and
+/// deduplicating the list of all added edges.
+MultiresHierarchy::Level CoarseLevel(
+  const MultiresHierarchy::Level& fine, const std::vector<char>& retained, int nc, int nt)
+{
+  using Level = MultiresHierarchy::Level;
+  const CsrPattern& g = fine.Graph;
+  const int n = g.Size;
+  Level coarse;
+  coarse.MeshIds.resize(nc);
+  std::vector<int> fineOf(nc);
+  for (int i = 0; i < n; ++i)
+  {
+    if (retained[i])
+    {
+      fineOf[fine.CoarseIds[i]] = i;
+      coarse.MeshIds[fine.CoarseIds[i]] = fine.MeshIds[i];
+    }
+  }
+  std::vector<std::vector<int>> rows(nc);
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 256)
+  for (int a = 0; a < nc; ++a)
+  {
+    const int f = fineOf[a];
+    std::vector<int>& row = rows[a];
+    for (int k = g.Offsets[f]; k < g.Offsets[f + 1]; ++k)
+    {
+      const int j = g.Columns[k];
+      if (retained[j])
+      {
+        row.push_back(fine.CoarseIds[j]);
+      }
+      else
+      {
+        for (int p = fine.InterpolationOffsets[j]; p < fine.InterpolationOffsets[j + 1]; ++p)
+        {
+          row.push_back(fine.InterpolationColumns[p]);
+        }
+      }
+    }
+    std::sort(row.begin(), row.end());
+    row.erase(std::unique(row.begin(), row.end()), row.end());
+  }
+  ToCsr(rows, coarse.Graph);
+  return coarse;
+}
+
 } // namespace
 
 std::uint64_t MultiresHierarchy::Code(int i, int level)
@@ -236,17 +428,6 @@ void MultiresHierarchy::BuildLevels(const std::vector<double>& points, CsrPatter
     Levels_[0].MeshIds[i] = i;
   }
   const int maxLevels = MaxLevels_ > 0 ? std::min(MaxLevels_, 25) : 25;
-  auto distance = [&points](int a, int b)
-  {
-    double d2 = 0.0;
-    for (int d = 0; d < 3; ++d)
-    {
-      const double t = points[3 * static_cast<std::size_t>(a) + d] -
-        points[3 * static_cast<std::size_t>(b) + d];
-      d2 += t * t;
-    }
-    return std::sqrt(d2);
-  };
 
   for (int l = 0; static_cast<int>(Levels_.size()) < maxLevels; ++l)
   {
@@ -265,53 +446,7 @@ void MultiresHierarchy::BuildLevels(const std::vector<double>& points, CsrPatter
     // Sec. 4.1.3: mark both ends of every edge of dropped vertices i, j with
     // N(i) ∩ N(j) ∩ P^{l+1} empty, select an independent set among the
     // marked vertices, add it to P^{l+1}; repeat until nothing is marked.
-    fine.EnhancementRounds = 0;
-    for (;;)
-    {
-      std::vector<char> marked(n, 0);
-      long long count = 0;
-#pragma omp parallel for num_threads(nt) schedule(dynamic, 1024) reduction(+ : count)
-      for (int i = 0; i < n; ++i)
-      {
-        if (retained[i])
-        {
-          continue;
-        }
-        const int* ni = &g.Columns[g.Offsets[i]];
-        const int* niEnd = &g.Columns[0] + g.Offsets[i + 1];
-        for (const int* pj = ni; pj != niEnd && !marked[i]; ++pj)
-        {
-          const int j = *pj;
-          if (j == i || retained[j])
-          {
-            continue;
-          }
-          bool shared = false;
-          for (const int* pk = ni; pk != niEnd && !shared; ++pk)
-          {
-            const int k = *pk;
-            shared = retained[k] &&
-              std::binary_search(&g.Columns[g.Offsets[j]], &g.Columns[0] + g.Offsets[j + 1], k);
-          }
-          if (!shared)
-          {
-            marked[i] = 1; // j marks itself in its own iteration (symmetric test)
-            ++count;
-          }
-        }
-      }
-      if (count == 0)
-      {
-        break;
-      }
-      ++fine.EnhancementRounds;
-      std::vector<char> extra;
-      IndependentSet(g, std::move(marked), l + 1000 * fine.EnhancementRounds, extra, nt);
-      for (int i = 0; i < n; ++i)
-      {
-        retained[i] = retained[i] || extra[i];
-      }
-    }
+    fine.EnhancementRounds = EnhanceRetained(g, l, nt, retained);
 
     // Coarse ids in the order of the fine ids (keeps the spatial order).
     fine.CoarseIds.assign(n, -1);
@@ -333,113 +468,9 @@ void MultiresHierarchy::BuildLevels(const std::vector<double>& points, CsrPatter
 
     // Eq. 16: P row i = 1 at i if retained, else lambda_ij / lambda_i over
     // R(i) = N(i) ∩ P^{l+1}, lambda_ij = 1 / |x_i - x_j|.
-    fine.InterpolationOffsets.assign(n + 1, 0);
-    for (int i = 0; i < n; ++i)
-    {
-      int count = 1;
-      if (!retained[i])
-      {
-        count = 0;
-        for (int k = g.Offsets[i]; k < g.Offsets[i + 1]; ++k)
-        {
-          count += retained[g.Columns[k]] ? 1 : 0;
-        }
-        if (count == 0)
-        {
-          throw Error("MultiresHierarchy: internal error, dropped vertex " + std::to_string(i) +
-            " of level " + std::to_string(l) + " has no retained neighbour");
-        }
-      }
-      fine.InterpolationOffsets[i + 1] = fine.InterpolationOffsets[i] + count;
-    }
-    fine.InterpolationColumns.resize(fine.InterpolationOffsets.back());
-    fine.InterpolationWeights.resize(fine.InterpolationOffsets.back());
-    std::vector<int> badVertex(nt, -1);
-#pragma omp parallel for num_threads(nt) schedule(static)
-    for (int i = 0; i < n; ++i)
-    {
-      int p = fine.InterpolationOffsets[i];
-      if (retained[i])
-      {
-        fine.InterpolationColumns[p] = fine.CoarseIds[i];
-        fine.InterpolationWeights[p] = 1.0;
-        continue;
-      }
-      double sum = 0.0;
-      for (int k = g.Offsets[i]; k < g.Offsets[i + 1]; ++k)
-      {
-        const int j = g.Columns[k];
-        if (retained[j])
-        {
-          const double length = distance(fine.MeshIds[i], fine.MeshIds[j]);
-          const double lambda = length > 0.0 ? 1.0 / length : 0.0;
-          if (!(length > 0.0))
-          {
-            badVertex[omp_get_thread_num()] = fine.MeshIds[i];
-          }
-          fine.InterpolationColumns[p] = fine.CoarseIds[j];
-          fine.InterpolationWeights[p] = lambda;
-          sum += lambda;
-          ++p;
-        }
-      }
-      for (int q = fine.InterpolationOffsets[i]; q < p; ++q)
-      {
-        fine.InterpolationWeights[q] /= sum;
-      }
-    }
-    for (int b : badVertex)
-    {
-      if (b >= 0)
-      {
-        throw Error("MultiresHierarchy: point " + std::to_string(b) +
-          " has a neighbour at the same position (eq. 16 weight 1/|x_i - x_j| undefined)");
-      }
-    }
+    BuildInterpolation(points, retained, l, nt, fine);
 
-    // Sec. 4.1.2-4.1.3: E^{l+1} joins two retained vertices that are both
-    // one-ring neighbours of a dropped vertex, or neighbours at level l.
-    // Built row by row (row a of the coarse graph collects its retained
-    // neighbours and the retained neighbours of its dropped neighbours),
-    // each row sorted and deduplicated: the same edge set as sorting and
-    // deduplicating the list of all added edges.
-    Level coarse;
-    coarse.MeshIds.resize(nc);
-    std::vector<int> fineOf(nc);
-    for (int i = 0; i < n; ++i)
-    {
-      if (retained[i])
-      {
-        fineOf[fine.CoarseIds[i]] = i;
-        coarse.MeshIds[fine.CoarseIds[i]] = fine.MeshIds[i];
-      }
-    }
-    std::vector<std::vector<int>> rows(nc);
-#pragma omp parallel for num_threads(nt) schedule(dynamic, 256)
-    for (int a = 0; a < nc; ++a)
-    {
-      const int f = fineOf[a];
-      std::vector<int>& row = rows[a];
-      for (int k = g.Offsets[f]; k < g.Offsets[f + 1]; ++k)
-      {
-        const int j = g.Columns[k];
-        if (retained[j])
-        {
-          row.push_back(fine.CoarseIds[j]);
-        }
-        else
-        {
-          for (int p = fine.InterpolationOffsets[j]; p < fine.InterpolationOffsets[j + 1]; ++p)
-          {
-            row.push_back(fine.InterpolationColumns[p]);
-          }
-        }
-      }
-      std::sort(row.begin(), row.end());
-      row.erase(std::unique(row.begin(), row.end()), row.end());
-    }
-    ToCsr(rows, coarse.Graph);
-    Levels_.push_back(std::move(coarse));
+    Levels_.push_back(CoarseLevel(fine, retained, nc, nt));
   }
   // The coarsest level has no interpolation.
   Levels_.back().CoarseIds.clear();
