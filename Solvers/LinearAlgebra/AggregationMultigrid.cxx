@@ -113,6 +113,16 @@ struct AggregationMultigridSolver::Internals
     mutable std::vector<float> B, X, Y, R, D, T, Saved, Sum;
   };
   std::vector<Level> Levels;
+  /// BuildHierarchy: the aggregates of level `fine` (each dropped vertex
+  /// joins its nearest retained neighbour, coarse ids `coarseId`) and their
+  /// members.
+  static void BuildAggregates(Level& fine, const std::vector<char>& retained,
+    const std::vector<int>& coarseId, int nc, const std::vector<double>& points, int nt);
+  /// BuildHierarchy: the pattern of the coarse level (P^T A P) and the slot
+  /// of each fine non-zero in it.
+  static Level CoarsePattern(Level& fine, const std::vector<char>& retained, int nc, int nt);
+  /// ComputeValues: the Galerkin values of level l >= 1 (interleaved).
+  static void GalerkinValues(const DiffusionSystem& system, int l, std::vector<Level>& levels);
   std::array<Eigen::SimplicialLDLT<ColMatrix>, NC> Coarsest;
   ColMatrix CoarsestTemplate; ///< pattern of the coarsest level (values rewritten)
   std::size_t CoarsestFactorNonZeros = 0;
@@ -244,6 +254,150 @@ int AggregationMultigridSolver::GetNumberOfStaleRows() const
   return Internal_->StaleCount;
 }
 
+
+void AggregationMultigridSolver::Internals::BuildAggregates(Level& fine, const std::vector<char>& retained,
+  const std::vector<int>& coarseId, int nc, const std::vector<double>& points, int nt)
+{
+  const CsrPattern& g = fine.Pattern;
+  const int n = g.Size;
+  // Aggregation: a dropped vertex i joins the retained neighbour j with the
+  // largest eq. 16 weight lambda_ij = 1 / |x_i - x_j| (TransCut eq. 16),
+  // i.e. the nearest one (ties: the smaller coarse id).
+  fine.Aggregate.assign(n, -1);
+  const std::vector<int>& meshIds = fine.MeshIds;
+#pragma omp parallel for num_threads(nt) schedule(static) if(n > ParallelThreshold)
+  for (int i = 0; i < n; ++i)
+  {
+    if (retained[i])
+    {
+      fine.Aggregate[i] = coarseId[i];
+      continue;
+    }
+    const double* xi = points.data() + 3 * static_cast<std::size_t>(meshIds[i]);
+    double best = std::numeric_limits<double>::infinity();
+    int bestId = -1;
+    for (int k = g.Offsets[i]; k < g.Offsets[i + 1]; ++k)
+    {
+      const int j = g.Columns[k];
+      if (!retained[j])
+      {
+        continue;
+      }
+      const double* xj = points.data() + 3 * static_cast<std::size_t>(meshIds[j]);
+      const double d2 = (xi[0] - xj[0]) * (xi[0] - xj[0]) + (xi[1] - xj[1]) * (xi[1] - xj[1]) +
+        (xi[2] - xj[2]) * (xi[2] - xj[2]);
+      if (d2 < best || (d2 == best && coarseId[j] < bestId))
+      {
+        best = d2;
+        bestId = coarseId[j];
+      }
+    }
+    fine.Aggregate[i] = bestId; // >= 0: the independent set is maximal
+  }
+  // Members of each aggregate (counting sort, ascending fine ids).
+  fine.MemberOffsets.assign(nc + 1, 0);
+  for (int i = 0; i < n; ++i)
+  {
+    ++fine.MemberOffsets[fine.Aggregate[i] + 1];
+  }
+  for (int a = 0; a < nc; ++a)
+  {
+    fine.MemberOffsets[a + 1] += fine.MemberOffsets[a];
+  }
+  fine.Members.resize(n);
+  {
+    std::vector<int> fill(fine.MemberOffsets.begin(), fine.MemberOffsets.end() - 1);
+    for (int i = 0; i < n; ++i)
+    {
+      fine.Members[fill[fine.Aggregate[i]]++] = i;
+    }
+  }
+}
+
+AggregationMultigridSolver::Internals::Level AggregationMultigridSolver::Internals::CoarsePattern(
+  Level& fine, const std::vector<char>& retained, int nc, int nt)
+{
+  const CsrPattern& g = fine.Pattern;
+  const std::vector<int>& meshIds = fine.MeshIds;
+  // Coarse pattern: row a = aggregates adjacent to a member of a (the
+  // pattern of P^T A P), per-thread marker arrays, rows sorted.
+  Level coarse;
+  coarse.Pattern.Size = nc;
+  coarse.Pattern.Offsets.assign(nc + 1, 0);
+  coarse.MeshIds.resize(nc);
+  // Rows are gathered into one buffer per thread (no allocation per row):
+  // row a is rowBuffer[rowThread[a]][rowStart[a] ...] (Offsets[a + 1] long).
+  const int* agg = fine.Aggregate.data();
+  const int rowThreads = nc > ParallelThreshold ? nt : 1;
+  std::vector<std::vector<int>> rowBuffer(rowThreads);
+  std::vector<int> rowStart(nc), rowThread(nc);
+#pragma omp parallel num_threads(rowThreads)
+  {
+    const int tid = omp_get_thread_num();
+    std::vector<int>& buffer = rowBuffer[tid];
+    buffer.reserve(g.Columns.size() / rowThreads / 4 + 16);
+    std::vector<int> mark(nc, -1);
+#pragma omp for schedule(dynamic, 512)
+    for (int a = 0; a < nc; ++a)
+    {
+      const std::size_t start = buffer.size();
+      for (int m = fine.MemberOffsets[a]; m < fine.MemberOffsets[a + 1]; ++m)
+      {
+        const int i = fine.Members[m];
+        if (retained[i])
+        {
+          coarse.MeshIds[a] = meshIds[i];
+        }
+        for (int k = g.Offsets[i]; k < g.Offsets[i + 1]; ++k)
+        {
+          const int b = agg[g.Columns[k]];
+          if (mark[b] != a)
+          {
+            mark[b] = a;
+            buffer.push_back(b);
+          }
+        }
+      }
+      std::sort(buffer.begin() + start, buffer.end());
+      rowStart[a] = static_cast<int>(start);
+      rowThread[a] = tid;
+      coarse.Pattern.Offsets[a + 1] = static_cast<int>(buffer.size() - start);
+    }
+  }
+  for (int a = 0; a < nc; ++a)
+  {
+    coarse.Pattern.Offsets[a + 1] += coarse.Pattern.Offsets[a];
+  }
+  coarse.Pattern.Columns.resize(coarse.Pattern.Offsets.back());
+  fine.CoarseSlot.resize(g.Columns.size());
+#pragma omp parallel num_threads(nt) if(nc > ParallelThreshold)
+  {
+    std::vector<int> slot(nc, -1);
+#pragma omp for schedule(dynamic, 512)
+    for (int a = 0; a < nc; ++a)
+    {
+      const int begin = coarse.Pattern.Offsets[a];
+      const int length = coarse.Pattern.Offsets[a + 1] - begin;
+      const int* row = rowBuffer[rowThread[a]].data() + rowStart[a];
+      for (int q = 0; q < length; ++q)
+      {
+        coarse.Pattern.Columns[begin + q] = row[q];
+        slot[row[q]] = begin + q;
+      }
+      for (int m = fine.MemberOffsets[a]; m < fine.MemberOffsets[a + 1]; ++m)
+      {
+        const int i = fine.Members[m];
+        for (int k = g.Offsets[i]; k < g.Offsets[i + 1]; ++k)
+        {
+          fine.CoarseSlot[k] = slot[agg[g.Columns[k]]];
+        }
+      }
+    }
+  }
+  return coarse;
+}
+
+
 void AggregationMultigridSolver::BuildHierarchy(
   const DiffusionSystem& system, const std::vector<double>& points)
 {
@@ -330,134 +484,8 @@ void AggregationMultigridSolver::BuildHierarchy(
     {
       break; // coarsening stalls (e.g. isolated vertices)
     }
-    // Aggregation: a dropped vertex i joins the retained neighbour j with the
-    // largest eq. 16 weight lambda_ij = 1 / |x_i - x_j| (TransCut eq. 16),
-    // i.e. the nearest one (ties: the smaller coarse id).
-    fine.Aggregate.assign(n, -1);
-    const std::vector<int>& meshIds = fine.MeshIds;
-#pragma omp parallel for num_threads(nt) schedule(static) if(n > ParallelThreshold)
-    for (int i = 0; i < n; ++i)
-    {
-      if (retained[i])
-      {
-        fine.Aggregate[i] = coarseId[i];
-        continue;
-      }
-      const double* xi = points.data() + 3 * static_cast<std::size_t>(meshIds[i]);
-      double best = std::numeric_limits<double>::infinity();
-      int bestId = -1;
-      for (int k = g.Offsets[i]; k < g.Offsets[i + 1]; ++k)
-      {
-        const int j = g.Columns[k];
-        if (!retained[j])
-        {
-          continue;
-        }
-        const double* xj = points.data() + 3 * static_cast<std::size_t>(meshIds[j]);
-        const double d2 = (xi[0] - xj[0]) * (xi[0] - xj[0]) + (xi[1] - xj[1]) * (xi[1] - xj[1]) +
-          (xi[2] - xj[2]) * (xi[2] - xj[2]);
-        if (d2 < best || (d2 == best && coarseId[j] < bestId))
-        {
-          best = d2;
-          bestId = coarseId[j];
-        }
-      }
-      fine.Aggregate[i] = bestId; // >= 0: the independent set is maximal
-    }
-    // Members of each aggregate (counting sort, ascending fine ids).
-    fine.MemberOffsets.assign(nc + 1, 0);
-    for (int i = 0; i < n; ++i)
-    {
-      ++fine.MemberOffsets[fine.Aggregate[i] + 1];
-    }
-    for (int a = 0; a < nc; ++a)
-    {
-      fine.MemberOffsets[a + 1] += fine.MemberOffsets[a];
-    }
-    fine.Members.resize(n);
-    {
-      std::vector<int> fill(fine.MemberOffsets.begin(), fine.MemberOffsets.end() - 1);
-      for (int i = 0; i < n; ++i)
-      {
-        fine.Members[fill[fine.Aggregate[i]]++] = i;
-      }
-    }
-    // Coarse pattern: row a = aggregates adjacent to a member of a (the
-    // pattern of P^T A P), per-thread marker arrays, rows sorted.
-    Internals::Level coarse;
-    coarse.Pattern.Size = nc;
-    coarse.Pattern.Offsets.assign(nc + 1, 0);
-    coarse.MeshIds.resize(nc);
-    // Rows are gathered into one buffer per thread (no allocation per row):
-    // row a is rowBuffer[rowThread[a]][rowStart[a] ...] (Offsets[a + 1] long).
-    const int* agg = fine.Aggregate.data();
-    const int rowThreads = nc > ParallelThreshold ? nt : 1;
-    std::vector<std::vector<int>> rowBuffer(rowThreads);
-    std::vector<int> rowStart(nc), rowThread(nc);
-#pragma omp parallel num_threads(rowThreads)
-    {
-      const int tid = omp_get_thread_num();
-      std::vector<int>& buffer = rowBuffer[tid];
-      buffer.reserve(g.Columns.size() / rowThreads / 4 + 16);
-      std::vector<int> mark(nc, -1);
-#pragma omp for schedule(dynamic, 512)
-      for (int a = 0; a < nc; ++a)
-      {
-        const std::size_t start = buffer.size();
-        for (int m = fine.MemberOffsets[a]; m < fine.MemberOffsets[a + 1]; ++m)
-        {
-          const int i = fine.Members[m];
-          if (retained[i])
-          {
-            coarse.MeshIds[a] = meshIds[i];
-          }
-          for (int k = g.Offsets[i]; k < g.Offsets[i + 1]; ++k)
-          {
-            const int b = agg[g.Columns[k]];
-            if (mark[b] != a)
-            {
-              mark[b] = a;
-              buffer.push_back(b);
-            }
-          }
-        }
-        std::sort(buffer.begin() + start, buffer.end());
-        rowStart[a] = static_cast<int>(start);
-        rowThread[a] = tid;
-        coarse.Pattern.Offsets[a + 1] = static_cast<int>(buffer.size() - start);
-      }
-    }
-    for (int a = 0; a < nc; ++a)
-    {
-      coarse.Pattern.Offsets[a + 1] += coarse.Pattern.Offsets[a];
-    }
-    coarse.Pattern.Columns.resize(coarse.Pattern.Offsets.back());
-    fine.CoarseSlot.resize(g.Columns.size());
-#pragma omp parallel num_threads(nt) if(nc > ParallelThreshold)
-    {
-      std::vector<int> slot(nc, -1);
-#pragma omp for schedule(dynamic, 512)
-      for (int a = 0; a < nc; ++a)
-      {
-        const int begin = coarse.Pattern.Offsets[a];
-        const int length = coarse.Pattern.Offsets[a + 1] - begin;
-        const int* row = rowBuffer[rowThread[a]].data() + rowStart[a];
-        for (int q = 0; q < length; ++q)
-        {
-          coarse.Pattern.Columns[begin + q] = row[q];
-          slot[row[q]] = begin + q;
-        }
-        for (int m = fine.MemberOffsets[a]; m < fine.MemberOffsets[a + 1]; ++m)
-        {
-          const int i = fine.Members[m];
-          for (int k = g.Offsets[i]; k < g.Offsets[i + 1]; ++k)
-          {
-            fine.CoarseSlot[k] = slot[agg[g.Columns[k]]];
-          }
-        }
-      }
-    }
-    levels.push_back(std::move(coarse));
+    Internals::BuildAggregates(fine, retained, coarseId, nc, points, nt);
+    levels.push_back(Internals::CoarsePattern(fine, retained, nc, nt));
   }
   // The coarsest level: symbolic LDL^T analysis once per hierarchy.
   auto& last = levels.back();
@@ -473,6 +501,55 @@ void AggregationMultigridSolver::BuildHierarchy(
   for (int c = 0; c < NC; ++c)
   {
     Internal_->Coarsest[c].analyzePattern(Internal_->CoarsestTemplate);
+  }
+}
+
+/// ComputeValues: level l >= 1's values by Galerkin P^T A P with
+/// piecewise-constant P: coarse (a, b) = sum of the fine a_ij with i in
+/// aggregate a, j in aggregate b. Parallel over coarse rows, each summed in
+/// a fixed order (deterministic). Level 1 reads the system's values.
+void AggregationMultigridSolver::Internals::GalerkinValues(
+  const DiffusionSystem& system, int l, std::vector<Level>& levels)
+{
+  auto& lev = levels[l];
+  const int n = lev.Pattern.Size;
+  const std::size_t nnz = lev.Pattern.Columns.size();
+  const auto& fine = levels[l - 1];
+  const CsrPattern& fp = fine.Pattern;
+  lev.Values.assign(3 * nnz, 0.0);
+  // Fine values: channel c of non-zero k is f[c][k * fs].
+  const double* f[NC];
+  std::size_t fs = 3;
+  if (l == 1)
+  {
+    f[0] = system.Values[0].data();
+    f[1] = system.Values[1].data();
+    f[2] = system.Values[2].data();
+    fs = 1;
+  }
+  else
+  {
+    f[0] = fine.Values.data();
+    f[1] = f[0] + 1;
+    f[2] = f[0] + 2;
+  }
+  double* cv = lev.Values.data();
+  const int* slots = fine.CoarseSlot.data();
+#pragma omp parallel for schedule(dynamic, 256) if(n > ParallelThreshold)
+  for (int a = 0; a < n; ++a)
+  {
+    for (int m = fine.MemberOffsets[a]; m < fine.MemberOffsets[a + 1]; ++m)
+    {
+      const int i = fine.Members[m];
+      for (int k = fp.Offsets[i]; k < fp.Offsets[i + 1]; ++k)
+      {
+        double* out = cv + 3 * static_cast<std::size_t>(slots[k]);
+        const std::size_t q = static_cast<std::size_t>(k) * fs;
+        out[0] += f[0][q];
+        out[1] += f[1][q];
+        out[2] += f[2][q];
+      }
+    }
   }
 }
 
@@ -493,46 +570,7 @@ void AggregationMultigridSolver::ComputeValues(const DiffusionSystem& system)
     const std::size_t nnz = p.Columns.size();
     if (l >= 1)
     {
-      // Galerkin P^T A P with piecewise-constant P: coarse (a, b) = sum of the
-      // fine a_ij with i in aggregate a, j in aggregate b. Parallel over
-      // coarse rows, each summed in a fixed order (deterministic).
-      const auto& fine = levels[l - 1];
-      const CsrPattern& fp = fine.Pattern;
-      lev.Values.assign(3 * nnz, 0.0);
-      // Fine values: channel c of non-zero k is f[c][k * fs].
-      const double* f[NC];
-      std::size_t fs = 3;
-      if (l == 1)
-      {
-        f[0] = system.Values[0].data();
-        f[1] = system.Values[1].data();
-        f[2] = system.Values[2].data();
-        fs = 1;
-      }
-      else
-      {
-        f[0] = fine.Values.data();
-        f[1] = f[0] + 1;
-        f[2] = f[0] + 2;
-      }
-      double* cv = lev.Values.data();
-      const int* slots = fine.CoarseSlot.data();
-#pragma omp parallel for schedule(dynamic, 256) if(n > ParallelThreshold)
-      for (int a = 0; a < n; ++a)
-      {
-        for (int m = fine.MemberOffsets[a]; m < fine.MemberOffsets[a + 1]; ++m)
-        {
-          const int i = fine.Members[m];
-          for (int k = fp.Offsets[i]; k < fp.Offsets[i + 1]; ++k)
-          {
-            double* out = cv + 3 * static_cast<std::size_t>(slots[k]);
-            const std::size_t q = static_cast<std::size_t>(k) * fs;
-            out[0] += f[0][q];
-            out[1] += f[1][q];
-            out[2] += f[2][q];
-          }
-        }
-      }
+      Internals::GalerkinValues(system, l, levels);
     }
     auto value = [&](std::size_t k, int c)
     { return l == 0 ? system.Values[c][k] : lev.Values[3 * k + c]; };
