@@ -73,6 +73,104 @@ std::string Heterogeneity(const translucency::OpticalProperties& m)
   return "";
 }
 
+/// AddClosedForm: per source, the equivalent source's position and the
+/// plane the semi-infinite form assumes (pencil beams), or the source
+/// (point sources).
+struct Placed
+{
+  Vec Entry{}, Normal{}, Refracted{};
+  double Transmitted = 1.0;
+  Vec Position{};
+  std::array<double, 3> Power{};
+};
+
+/// AddClosedForm: the sources placed on the mesh (pencil beams at their
+/// entry points); throws translucency::Error naming the source.
+std::vector<Placed> PlaceSources(const translucency::TetMesh& mesh,
+  const translucency::OpticalProperties& material, const std::vector<SourceSpec>& sources,
+  double tolerance)
+{
+  std::vector<Placed> placed;
+  for (std::size_t s = 0; s < sources.size(); ++s)
+  {
+    Placed p;
+    p.Power = sources[s].Power;
+    if (sources[s].Pencil)
+    {
+      translucency::PencilBeam beam;
+      beam.Position = sources[s].Position;
+      beam.Direction = sources[s].Direction;
+      beam.Power = sources[s].Power;
+      const translucency::PencilEntry entry = translucency::LocatePencilEntry(
+        mesh, material, beam, "pencil beam " + std::to_string(s + 1), tolerance);
+      p.Entry = entry.Surface.Position;
+      p.Normal = entry.Surface.Normal;
+      p.Refracted = entry.Refracted;
+      p.Transmitted = entry.Transmitted;
+    }
+    else
+    {
+      p.Position = sources[s].Position;
+    }
+    placed.push_back(p);
+  }
+  return placed;
+}
+
+/// AddClosedForm: the gate averages of the closed form (fluence and
+/// exitance at a disc of `radius` around rho, at `depth` from the source),
+/// times `power`, added to channel c of every gate.
+void AddGateAverages(const translucency::ClosedFormMedium& medium, bool pencils, double depth,
+  double zb, double a, double rho, double radius, double power, int c, const TimeGatesSpec& gates,
+  std::vector<std::array<double, 3>>& fluence, std::vector<std::array<double, 3>>& exitance)
+{
+  const double width = (gates.End - gates.Start) / gates.Count;
+  for (int g = 0; g < gates.Count; ++g)
+  {
+    const double t0 = gates.Start + g * width, t1 = gates.Start + (g + 1) * width;
+    double phi = 0.0, flux = 0.0;
+    if (pencils)
+    {
+      phi = translucency::DiscAverage(
+        [&](double s) {
+          return translucency::GateAverage(
+            [&](double t) {
+              return translucency::SemiInfiniteSurfaceFluenceExtrapolated(
+                s, t, medium, depth, zb);
+            },
+            t0, t1);
+        },
+        rho, radius);
+      flux = translucency::DiscAverage(
+        [&](double s) {
+          return translucency::GateAverage(
+            [&](double t) {
+              return translucency::SemiInfiniteReflectanceExtrapolated(
+                s, t, medium, depth, zb);
+            },
+            t0, t1);
+        },
+        rho, radius);
+    }
+    else
+    {
+      phi = translucency::DiscAverage(
+        [&](double s) {
+          const double distance = std::sqrt(s * s + depth * depth);
+          return translucency::GateAverage(
+            [&](double t) {
+              return translucency::InfiniteMediumFluence(distance, t, medium, 1.0);
+            },
+            t0, t1);
+        },
+        rho, radius);
+      flux = phi / (2.0 * a);
+    }
+    fluence[static_cast<std::size_t>(g)][static_cast<std::size_t>(c)] += power * phi;
+    exitance[static_cast<std::size_t>(g)][static_cast<std::size_t>(c)] += power * flux;
+  }
+}
+
 } // namespace
 
 void AddClosedForm(TpsfTable& table, vtkUnstructuredGrid* lit, vtkUnstructuredGrid* solved,
@@ -141,44 +239,11 @@ void AddClosedForm(TpsfTable& table, vtkUnstructuredGrid* lit, vtkUnstructuredGr
   const double eta = material.RefractiveIndex[0];
   const double a = translucency::Fresnel::MismatchA(eta);
   const double cm = translucency::SpeedOfLightMillimetresPerNanosecond / eta;
-  const double width = (gates.End - gates.Start) / gates.Count;
   const double tolerance = translucency::SurfaceTolerance(*mesh);
-
-  // Per source: the equivalent source's position and the plane the
-  // semi-infinite form assumes (pencil beams), or the source (point sources).
-  struct Placed
-  {
-    Vec Entry{}, Normal{}, Refracted{};
-    double Transmitted = 1.0;
-    Vec Position{};
-    std::array<double, 3> Power{};
-  };
   std::vector<Placed> placed;
   try
   {
-    for (std::size_t s = 0; s < sources.size(); ++s)
-    {
-      Placed p;
-      p.Power = sources[s].Power;
-      if (sources[s].Pencil)
-      {
-        translucency::PencilBeam beam;
-        beam.Position = sources[s].Position;
-        beam.Direction = sources[s].Direction;
-        beam.Power = sources[s].Power;
-        const translucency::PencilEntry entry = translucency::LocatePencilEntry(
-          *mesh, material, beam, "pencil beam " + std::to_string(s + 1), tolerance);
-        p.Entry = entry.Surface.Position;
-        p.Normal = entry.Surface.Normal;
-        p.Refracted = entry.Refracted;
-        p.Transmitted = entry.Transmitted;
-      }
-      else
-      {
-        p.Position = sources[s].Position;
-      }
-      placed.push_back(p);
-    }
+    placed = PlaceSources(*mesh, material, sources, tolerance);
   }
   catch (const translucency::Error& e)
   {
@@ -240,50 +305,8 @@ void AddClosedForm(TpsfTable& table, vtkUnstructuredGrid* lit, vtkUnstructuredGr
         const double depth = std::abs(Dot(r, normal));
         const double rho = std::sqrt(std::max(0.0, Dot(r, r) - depth * depth));
         const double power = p.Power[static_cast<std::size_t>(c)] * p.Transmitted;
-        for (int g = 0; g < gates.Count; ++g)
-        {
-          const double t0 = gates.Start + g * width, t1 = gates.Start + (g + 1) * width;
-          double phi = 0.0, flux = 0.0;
-          if (pencils)
-          {
-            phi = translucency::DiscAverage(
-              [&](double s) {
-                return translucency::GateAverage(
-                  [&](double t) {
-                    return translucency::SemiInfiniteSurfaceFluenceExtrapolated(
-                      s, t, medium, depth, zb);
-                  },
-                  t0, t1);
-              },
-              rho, radius);
-            flux = translucency::DiscAverage(
-              [&](double s) {
-                return translucency::GateAverage(
-                  [&](double t) {
-                    return translucency::SemiInfiniteReflectanceExtrapolated(
-                      s, t, medium, depth, zb);
-                  },
-                  t0, t1);
-              },
-              rho, radius);
-          }
-          else
-          {
-            phi = translucency::DiscAverage(
-              [&](double s) {
-                const double distance = std::sqrt(s * s + depth * depth);
-                return translucency::GateAverage(
-                  [&](double t) {
-                    return translucency::InfiniteMediumFluence(distance, t, medium, 1.0);
-                  },
-                  t0, t1);
-              },
-              rho, radius);
-            flux = phi / (2.0 * a);
-          }
-          fluence[static_cast<std::size_t>(g)][static_cast<std::size_t>(c)] += power * phi;
-          exitance[static_cast<std::size_t>(g)][static_cast<std::size_t>(c)] += power * flux;
-        }
+        AddGateAverages(
+          medium, pencils, depth, zb, a, rho, radius, power, c, gates, fluence, exitance);
       }
     }
     if (overlay.DetectorSkipReasons[d].empty())
