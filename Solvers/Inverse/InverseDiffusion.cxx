@@ -22,6 +22,54 @@ namespace
 const char* const ChannelNames[3] = { "R", "G", "B" };
 constexpr double Infinity = std::numeric_limits<double>::infinity();
 
+/**
+ * Minimise's line search, the golden section (Press et al. 1992, as the
+ * paper cites) of the bracket a < b < c (f(b) < f(a), f(b) <= f(c)) until
+ * it is narrower than `tolerance` x the mean of the inner points (at most 40
+ * steps). `f` keeps the best point itself.
+ */
+template <typename Objective>
+void GoldenSection(Objective& f, double a, double b, double c, double fb, double tolerance)
+{
+  const double R = 0.618034, C = 1.0 - R;
+  double x0 = a, x1, x2, x3 = c, f1, f2;
+  if (std::abs(c - b) > std::abs(b - a))
+  {
+    x1 = b;
+    f1 = fb;
+    x2 = b + C * (c - b);
+    f2 = f(x2);
+  }
+  else
+  {
+    x2 = b;
+    f2 = fb;
+    x1 = b - C * (b - a);
+    f1 = f(x1);
+  }
+  for (int k = 0; k < 40 &&
+       std::abs(x3 - x0) > tolerance * 0.5 * (std::abs(x1) + std::abs(x2));
+       ++k)
+  {
+    if (f2 < f1)
+    {
+      x0 = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = R * x2 + C * x3;
+      f2 = f(x2);
+    }
+    else
+    {
+      x3 = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = R * x1 + C * x0;
+      f1 = f(x1);
+    }
+  }
+}
+
 } // namespace
 
 /// The measurements of one colour channel, in solver form.
@@ -498,44 +546,7 @@ public:
       }
       if (fb < fa)
       {
-        // Golden section (Press et al. 1992, as the paper cites).
-        const double R = 0.618034, C = 1.0 - R;
-        double x0 = a, x1, x2, x3 = c, f1, f2;
-        if (std::abs(c - b) > std::abs(b - a))
-        {
-          x1 = b;
-          f1 = fb;
-          x2 = b + C * (c - b);
-          f2 = f(x2);
-        }
-        else
-        {
-          x2 = b;
-          f2 = fb;
-          x1 = b - C * (b - a);
-          f1 = f(x1);
-        }
-        for (int k = 0; k < 40 &&
-             std::abs(x3 - x0) > Owner_.LineSearchTolerance_ * 0.5 * (std::abs(x1) + std::abs(x2));
-             ++k)
-        {
-          if (f2 < f1)
-          {
-            x0 = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = R * x2 + C * x3;
-            f2 = f(x2);
-          }
-          else
-          {
-            x3 = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = R * x1 + C * x0;
-            f1 = f(x1);
-          }
-        }
+        GoldenSection(f, a, b, c, fb, Owner_.LineSearchTolerance_);
       }
       if (bestStep == 0.0)
       {
@@ -568,6 +579,61 @@ public:
     }
     const std::string stop = CheckStop(*current, 0, threshold, nullptr, converged);
     return stop.empty() ? "iteration limit" : stop;
+  }
+
+  /**
+   * Run, the starting point of channel c in x (log kappa, then log mu per
+   * element): the per-element start if given, else the homogeneous start
+   * kappa = 1 / (3 (mu_a + sigma_s')), refined by a homogeneous fit (paper
+   * Sec. 4.2; `current` then holds its last forward pass). `tick` reports
+   * the progress of the fit.
+   */
+  void StartingPoint(int c, bool perElementStart, double threshold, Eigen::VectorXd& x,
+    std::unique_ptr<Workspace>& current, std::vector<InverseDiffusionIteration>& history,
+    const std::function<bool(double)>& tick, bool& converged)
+  {
+    const int numElements = NumElements_;
+    std::vector<double> kappa, mu;
+    if (perElementStart)
+    {
+      for (int e = 0; e < numElements; ++e)
+      {
+        x[e] = std::log(Owner_.InitialKappa_[3 * e + c]);
+        x[numElements + e] = std::log(Owner_.InitialMuPerElement_[3 * e + c]);
+      }
+    }
+    else
+    {
+      // Homogeneous start: kappa = 1 / (3 (mu_a + sigma_s')).
+      Eigen::VectorXd h(2);
+      h[0] = std::log(1.0 / (3.0 * (Owner_.InitialMu_[c] + Owner_.InitialSigmaS_[c])));
+      h[1] = std::log(Owner_.InitialMu_[c]);
+      if (Owner_.HomogeneousFit_ && Owner_.HomogeneousMaxIter_ > 0)
+      {
+        // Paper Sec. 4.2: initialise by a homogeneous fit of the two scalars
+        // with the same conjugate-gradient procedure.
+        Expand(h, true, kappa, mu);
+        Evaluate(kappa, mu, *current);
+        if (!std::isfinite(current->Objective))
+        {
+          throw Error("the objective is not finite at the initial values");
+        }
+        int homogeneousIterations = 0;
+        auto homogeneousTick = [&](int it) { return tick(0.1 * it / Owner_.HomogeneousMaxIter_); };
+        if (Owner_.HomogeneousMethod_ == HomogeneousMethod::GaussNewton)
+        {
+          FitHomogeneous(h, Owner_.HomogeneousMaxIter_, threshold, current, history,
+            homogeneousTick, homogeneousIterations, converged);
+        }
+        else
+        {
+          Minimise(h, true, Owner_.HomogeneousMaxIter_, threshold, current, history,
+            homogeneousTick, homogeneousIterations, converged);
+        }
+      }
+      x.head(numElements).setConstant(h[0]);
+      x.tail(numElements).setConstant(h[1]);
+    }
   }
 
 private:
@@ -779,6 +845,57 @@ double InverseDiffusion::Objective(int channel, const std::vector<double>& kappa
   return ws.Objective;
 }
 
+namespace
+{
+/// Run: the starting values, checked (per element: 3 values of kappa and
+/// mu_a per element, all > 0; else per channel: mu_a and sigma_s' > 0).
+void CheckInitialValues(int numElements, bool perElementStart,
+  const std::vector<double>& initialKappa, const std::vector<double>& initialMuPerElement,
+  const std::array<double, 3>& initialMu, const std::array<double, 3>& initialSigmaS)
+{
+  if (perElementStart)
+  {
+    if (initialKappa.size() != 3 * static_cast<size_t>(numElements) ||
+      initialMuPerElement.size() != 3 * static_cast<size_t>(numElements))
+    {
+      std::ostringstream os;
+      os << "InverseDiffusion: initial parameters need 3 values per element (" << numElements
+         << " elements); got " << initialKappa.size() << " kappa and "
+         << initialMuPerElement.size() << " mu_a values";
+      throw Error(os.str());
+    }
+    for (size_t k = 0; k < initialKappa.size(); ++k)
+    {
+      if (!(std::isfinite(initialKappa[k]) && initialKappa[k] > 0.0 &&
+            std::isfinite(initialMuPerElement[k]) && initialMuPerElement[k] > 0.0))
+      {
+        std::ostringstream os;
+        os << "InverseDiffusion: initial value of element " << k / 3 << ", channel "
+           << ChannelNames[k % 3] << ": kappa = " << initialKappa[k]
+           << " mm, mu_a = " << initialMuPerElement[k] << " 1/mm; both must be > 0";
+        throw Error(os.str());
+      }
+    }
+  }
+  else
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      if (!(std::isfinite(initialMu[c]) && initialMu[c] > 0.0 &&
+            std::isfinite(initialSigmaS[c]) && initialSigmaS[c] > 0.0))
+      {
+        std::ostringstream os;
+        os << "InverseDiffusion: initial value of channel " << ChannelNames[c]
+           << ": mu_a = " << initialMu[c] << " 1/mm, sigma_s' = " << initialSigmaS[c]
+           << " 1/mm; both must be finite and > 0";
+        throw Error(os.str());
+      }
+    }
+  }
+}
+
+} // namespace
+
 InverseDiffusionResult InverseDiffusion::Run()
 {
   if (Irradiance_.empty())
@@ -797,45 +914,8 @@ InverseDiffusionResult InverseDiffusion::Run()
   }
   const int numElements = Model_.GetNumberOfElements();
   const bool perElementStart = !InitialKappa_.empty() || !InitialMuPerElement_.empty();
-  if (perElementStart)
-  {
-    if (InitialKappa_.size() != 3 * static_cast<size_t>(numElements) ||
-      InitialMuPerElement_.size() != 3 * static_cast<size_t>(numElements))
-    {
-      std::ostringstream os;
-      os << "InverseDiffusion: initial parameters need 3 values per element (" << numElements
-         << " elements); got " << InitialKappa_.size() << " kappa and "
-         << InitialMuPerElement_.size() << " mu_a values";
-      throw Error(os.str());
-    }
-    for (size_t k = 0; k < InitialKappa_.size(); ++k)
-    {
-      if (!(std::isfinite(InitialKappa_[k]) && InitialKappa_[k] > 0.0 &&
-            std::isfinite(InitialMuPerElement_[k]) && InitialMuPerElement_[k] > 0.0))
-      {
-        std::ostringstream os;
-        os << "InverseDiffusion: initial value of element " << k / 3 << ", channel "
-           << ChannelNames[k % 3] << ": kappa = " << InitialKappa_[k]
-           << " mm, mu_a = " << InitialMuPerElement_[k] << " 1/mm; both must be > 0";
-        throw Error(os.str());
-      }
-    }
-  }
-  else
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      if (!(std::isfinite(InitialMu_[c]) && InitialMu_[c] > 0.0 &&
-            std::isfinite(InitialSigmaS_[c]) && InitialSigmaS_[c] > 0.0))
-      {
-        std::ostringstream os;
-        os << "InverseDiffusion: initial value of channel " << ChannelNames[c]
-           << ": mu_a = " << InitialMu_[c] << " 1/mm, sigma_s' = " << InitialSigmaS_[c]
-           << " 1/mm; both must be finite and > 0";
-        throw Error(os.str());
-      }
-    }
-  }
+  CheckInitialValues(numElements, perElementStart, InitialKappa_, InitialMuPerElement_,
+    InitialMu_, InitialSigmaS_);
 
   InverseDiffusionResult result;
   result.Kappa.assign(3 * static_cast<size_t>(numElements), 0.0);
@@ -889,46 +969,7 @@ InverseDiffusionResult InverseDiffusion::Run()
       Eigen::VectorXd x(2 * numElements);
       int iterations = 0;
       bool converged = false;
-      if (perElementStart)
-      {
-        for (int e = 0; e < numElements; ++e)
-        {
-          x[e] = std::log(InitialKappa_[3 * e + c]);
-          x[numElements + e] = std::log(InitialMuPerElement_[3 * e + c]);
-        }
-      }
-      else
-      {
-        // Homogeneous start: kappa = 1 / (3 (mu_a + sigma_s')).
-        Eigen::VectorXd h(2);
-        h[0] = std::log(1.0 / (3.0 * (InitialMu_[c] + InitialSigmaS_[c])));
-        h[1] = std::log(InitialMu_[c]);
-        if (HomogeneousFit_ && HomogeneousMaxIter_ > 0)
-        {
-          // Paper Sec. 4.2: initialise by a homogeneous fit of the two scalars
-          // with the same conjugate-gradient procedure.
-          opt.Expand(h, true, kappa, mu);
-          opt.Evaluate(kappa, mu, *current);
-          if (!std::isfinite(current->Objective))
-          {
-            throw Error("the objective is not finite at the initial values");
-          }
-          int homogeneousIterations = 0;
-          auto homogeneousTick = [&](int it) { return tick(0.1 * it / HomogeneousMaxIter_); };
-          if (HomogeneousMethod_ == HomogeneousMethod::GaussNewton)
-          {
-            opt.FitHomogeneous(h, HomogeneousMaxIter_, threshold, current, history[c],
-              homogeneousTick, homogeneousIterations, converged);
-          }
-          else
-          {
-            opt.Minimise(h, true, HomogeneousMaxIter_, threshold, current, history[c],
-              homogeneousTick, homogeneousIterations, converged);
-          }
-        }
-        x.head(numElements).setConstant(h[0]);
-        x.tail(numElements).setConstant(h[1]);
-      }
+      opt.StartingPoint(c, perElementStart, threshold, x, current, history[c], tick, converged);
       // After a homogeneous fit `current` already holds the forward pass at x
       // (the same parameters, broadcast): no second factorisation.
       const bool reused = std::isfinite(current->Objective) && !current->Kappa.empty();
