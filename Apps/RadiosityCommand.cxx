@@ -205,6 +205,100 @@ struct RadiosityOptions
   const CLI::App* App = nullptr; ///< for the provenance of the JSON
 };
 
+/// Radiosity: the filter's lights, replaced by `lights`.
+void SetRadiosityLights(
+  vtkTranslucentRadiosity* radiosity, const std::vector<translucency::LightSource>& lights)
+{
+  radiosity->RemoveAllLights();
+  for (const auto& l : lights)
+  {
+    if (l.Type == translucency::LightSource::Kind::Point)
+      radiosity->AddPointLight(
+        l.Position[0], l.Position[1], l.Position[2], l.Power[0], l.Power[1], l.Power[2]);
+    else if (l.Type == translucency::LightSource::Kind::Directional)
+      radiosity->AddDirectionalLight(
+        l.Direction[0], l.Direction[1], l.Direction[2], l.Power[0], l.Power[1], l.Power[2]);
+    else
+      radiosity->AddSpotLight(l.Position[0], l.Position[1], l.Position[2], l.Direction[0],
+        l.Direction[1], l.Direction[2], l.SpotCutoff, l.SpotExponent, l.Power[0], l.Power[1],
+        l.Power[2]);
+  }
+}
+
+/// Radiosity --bench: `bench` relights (the first light moved a little each
+/// time: form factors and S kept, warm-started diffusion solves) and
+/// translucency changes (every translucent object's coefficients scaled),
+/// their median times in the report.
+void RunRadiosityBench(vtkTranslucentRadiosity* radiosity, LoadedScene& scene, int bench,
+  MessageCollector& messages, json& report, std::vector<Stage>& stages)
+{
+  auto addLights = [&](const std::vector<translucency::LightSource>& lights) {
+    SetRadiosityLights(radiosity, lights);
+  };
+  auto start = Clock::now();
+  // Relight: move the first light a little each time (form factors and S
+  // are kept; warm-started diffusion solves).
+  std::vector<double> relightTotal, relightCore, changeTotal, changeCore;
+  std::vector<int> relightIterations, changeIterations;
+  for (int r = 0; r < bench; ++r)
+  {
+    std::vector<translucency::LightSource> lights = scene.Lights;
+    lights[0].Position[0] += (r % 2 ? -1.0 : 1.0) * 0.02 * (r + 1);
+    addLights(lights);
+    start = Clock::now();
+    radiosity->Update();
+    relightTotal.push_back(MillisecondsSince(start));
+    relightCore.push_back(radiosity->GetDirectTime() + radiosity->GetSolveTime());
+    relightIterations.push_back(radiosity->GetNumberOfIterations());
+  }
+  addLights(scene.Lights);
+  // Translucency change: scale the coefficients of every translucent object.
+  bool anyTranslucent = false;
+  for (int r = 0; r < bench; ++r)
+  {
+    const double factor = r % 2 ? 2.0 : 0.5;
+    for (unsigned int k = 0; k < scene.Objects->GetNumberOfPartitionedDataSets(); ++k)
+    {
+      if (!scene.Translucent[k])
+        continue;
+      anyTranslucent = true;
+      auto* grid = vtkUnstructuredGrid::SafeDownCast(scene.Objects->GetPartition(k, 0));
+      for (const char* name : { "AbsorptionCoefficient", "ReducedScatteringCoefficient" })
+      {
+        vtkDataArray* a = grid->GetCellData()->GetArray(name);
+        for (vtkIdType t = 0; t < a->GetNumberOfTuples(); ++t)
+          for (int c = 0; c < 3; ++c)
+            a->SetComponent(t, c, a->GetComponent(t, c) * factor);
+        a->Modified();
+      }
+      grid->Modified();
+    }
+    if (!anyTranslucent)
+      break;
+    radiosity->Modified();
+    start = Clock::now();
+    radiosity->Update();
+    changeTotal.push_back(MillisecondsSince(start));
+    changeCore.push_back(
+      radiosity->GetSetupTime() + radiosity->GetDirectTime() + radiosity->GetSolveTime());
+    changeIterations.push_back(radiosity->GetNumberOfIterations());
+  }
+  if (!messages.Errors.empty())
+    throw translucency::Error(messages.Last());
+  report["bench"] = { { "repeats", bench },
+    { "relight_filter_ms_median", MedianOf(relightTotal) },
+    { "relight_core_ms_median", MedianOf(relightCore) },
+    { "relight_iterations", relightIterations },
+    { "translucency_change_filter_ms_median", MedianOf(changeTotal) },
+    { "translucency_change_core_ms_median", MedianOf(changeCore) },
+    { "translucency_change_iterations", changeIterations } };
+  stages.push_back({ "bench", MillisecondsSince(start) });
+  std::cout << "relight: median " << MedianOf(relightTotal) << " ms (filter), "
+            << MedianOf(relightCore) << " ms (direct light + iteration)\n"
+            << "translucency change: median " << MedianOf(changeTotal) << " ms (filter), "
+            << MedianOf(changeCore) << " ms (S set-up + direct + iteration)\n";
+}
+
 int Radiosity(const RadiosityOptions& o)
 {
   const std::string &scenePath = o.ScenePath, &prefix = o.Prefix, &png = o.Png,
@@ -260,20 +354,7 @@ int Radiosity(const RadiosityOptions& o)
   radiosity->SetComputeHeuristics(heuristics);
   radiosity->SetLinearSolver(s.LinearSolver.c_str());
   auto addLights = [&](const std::vector<translucency::LightSource>& lights) {
-    radiosity->RemoveAllLights();
-    for (const auto& l : lights)
-    {
-      if (l.Type == translucency::LightSource::Kind::Point)
-        radiosity->AddPointLight(
-          l.Position[0], l.Position[1], l.Position[2], l.Power[0], l.Power[1], l.Power[2]);
-      else if (l.Type == translucency::LightSource::Kind::Directional)
-        radiosity->AddDirectionalLight(
-          l.Direction[0], l.Direction[1], l.Direction[2], l.Power[0], l.Power[1], l.Power[2]);
-      else
-        radiosity->AddSpotLight(l.Position[0], l.Position[1], l.Position[2], l.Direction[0],
-          l.Direction[1], l.Direction[2], l.SpotCutoff, l.SpotExponent, l.Power[0], l.Power[1],
-          l.Power[2]);
-    }
+    SetRadiosityLights(radiosity, lights);
   };
   addLights(scene.Lights);
   start = Clock::now();
@@ -337,68 +418,7 @@ int Radiosity(const RadiosityOptions& o)
 
   if (bench > 0)
   {
-    start = Clock::now();
-    // Relight: move the first light a little each time (form factors and S
-    // are kept; warm-started diffusion solves).
-    std::vector<double> relightTotal, relightCore, changeTotal, changeCore;
-    std::vector<int> relightIterations, changeIterations;
-    for (int r = 0; r < bench; ++r)
-    {
-      std::vector<translucency::LightSource> lights = scene.Lights;
-      lights[0].Position[0] += (r % 2 ? -1.0 : 1.0) * 0.02 * (r + 1);
-      addLights(lights);
-      start = Clock::now();
-      radiosity->Update();
-      relightTotal.push_back(MillisecondsSince(start));
-      relightCore.push_back(radiosity->GetDirectTime() + radiosity->GetSolveTime());
-      relightIterations.push_back(radiosity->GetNumberOfIterations());
-    }
-    addLights(scene.Lights);
-    // Translucency change: scale the coefficients of every translucent object.
-    bool anyTranslucent = false;
-    for (int r = 0; r < bench; ++r)
-    {
-      const double factor = r % 2 ? 2.0 : 0.5;
-      for (unsigned int k = 0; k < scene.Objects->GetNumberOfPartitionedDataSets(); ++k)
-      {
-        if (!scene.Translucent[k])
-          continue;
-        anyTranslucent = true;
-        auto* grid = vtkUnstructuredGrid::SafeDownCast(scene.Objects->GetPartition(k, 0));
-        for (const char* name : { "AbsorptionCoefficient", "ReducedScatteringCoefficient" })
-        {
-          vtkDataArray* a = grid->GetCellData()->GetArray(name);
-          for (vtkIdType t = 0; t < a->GetNumberOfTuples(); ++t)
-            for (int c = 0; c < 3; ++c)
-              a->SetComponent(t, c, a->GetComponent(t, c) * factor);
-          a->Modified();
-        }
-        grid->Modified();
-      }
-      if (!anyTranslucent)
-        break;
-      radiosity->Modified();
-      start = Clock::now();
-      radiosity->Update();
-      changeTotal.push_back(MillisecondsSince(start));
-      changeCore.push_back(
-        radiosity->GetSetupTime() + radiosity->GetDirectTime() + radiosity->GetSolveTime());
-      changeIterations.push_back(radiosity->GetNumberOfIterations());
-    }
-    if (!messages.Errors.empty())
-      throw translucency::Error(messages.Last());
-    report["bench"] = { { "repeats", bench },
-      { "relight_filter_ms_median", MedianOf(relightTotal) },
-      { "relight_core_ms_median", MedianOf(relightCore) },
-      { "relight_iterations", relightIterations },
-      { "translucency_change_filter_ms_median", MedianOf(changeTotal) },
-      { "translucency_change_core_ms_median", MedianOf(changeCore) },
-      { "translucency_change_iterations", changeIterations } };
-    stages.push_back({ "bench", MillisecondsSince(start) });
-    std::cout << "relight: median " << MedianOf(relightTotal) << " ms (filter), "
-              << MedianOf(relightCore) << " ms (direct light + iteration)\n"
-              << "translucency change: median " << MedianOf(changeTotal) << " ms (filter), "
-              << MedianOf(changeCore) << " ms (S set-up + direct + iteration)\n";
+    RunRadiosityBench(radiosity, scene, bench, messages, report, stages);
   }
 
   std::cout << radiosity->GetNumberOfPatches() << " patches, " << radiosity->GetNumberOfIterations()
