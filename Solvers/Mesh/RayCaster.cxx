@@ -102,6 +102,174 @@ inline void GrowBox(double b[6], const double other[6])
   }
 }
 
+/// Build: the box and centroid of every triangle (in parallel; the first
+/// bad triangle in input order, a point id out of range or a non-finite
+/// coordinate, is then named by a serial check of it), the scene box
+/// (lo, hi) and the largest coordinate magnitude.
+void TriangleBoxes(const std::vector<double>& points, const std::vector<int>& triangles,
+  std::vector<double>& boxes, std::vector<double>& centroids, double sceneBox[6], double& maxAbsOut)
+{
+  const long long numPoints = static_cast<long long>(points.size() / 3);
+  const int numTriangles = static_cast<int>(triangles.size() / 3);
+  boxes.resize(6 * static_cast<size_t>(numTriangles));
+  centroids.resize(3 * static_cast<size_t>(numTriangles));
+  // Boxes and centroids in parallel; the first bad triangle (in input
+  // order) is then named by a serial check of it.
+  double lo[3] = { std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+    std::numeric_limits<double>::infinity() };
+  double hi[3] = { -lo[0], -lo[1], -lo[2] };
+  double maxAbs = 0.0;
+  int firstBad = numTriangles;
+#pragma omp parallel for schedule(static) reduction(min : lo[:3], firstBad) \
+  reduction(max : hi[:3], maxAbs)
+  for (int f = 0; f < numTriangles; ++f)
+  {
+    double* box = &boxes[6 * static_cast<size_t>(f)];
+    EmptyBox(box);
+    bool bad = false;
+    for (int v = 0; v < 3 && !bad; ++v)
+    {
+      const int id = triangles[3 * static_cast<size_t>(f) + v];
+      if (id < 0 || id >= numPoints)
+      {
+        bad = true;
+        break;
+      }
+      const double* x = &points[3 * static_cast<size_t>(id)];
+      for (int k = 0; k < 3; ++k)
+      {
+        bad = bad || !std::isfinite(x[k]);
+        box[k] = std::min(box[k], x[k]);
+        box[k + 3] = std::max(box[k + 3], x[k]);
+        maxAbs = std::max(maxAbs, std::abs(x[k]));
+      }
+    }
+    if (bad)
+    {
+      firstBad = std::min(firstBad, f);
+      continue;
+    }
+    for (int k = 0; k < 3; ++k)
+    {
+      centroids[3 * static_cast<size_t>(f) + k] = 0.5 * (box[k] + box[k + 3]);
+      lo[k] = std::min(lo[k], box[k]);
+      hi[k] = std::max(hi[k], box[k + 3]);
+    }
+  }
+  if (firstBad < numTriangles)
+  {
+    const int f = firstBad;
+    for (int v = 0; v < 3; ++v)
+    {
+      const int id = triangles[3 * static_cast<size_t>(f) + v];
+      if (id < 0 || id >= numPoints)
+      {
+        std::ostringstream msg;
+        msg << "RayCaster: triangle " << f << " has point id " << id << ", out of range [0, "
+            << numPoints << ")";
+        throw Error(msg.str());
+      }
+      const double* x = &points[3 * static_cast<size_t>(id)];
+      if (!(std::isfinite(x[0]) && std::isfinite(x[1]) && std::isfinite(x[2])))
+      {
+        std::ostringstream msg;
+        msg << "RayCaster: triangle " << f << " uses point " << id
+            << " whose coordinates are not finite";
+        throw Error(msg.str());
+      }
+    }
+  }
+  for (int k = 0; k < 3; ++k)
+  {
+    sceneBox[k] = lo[k];
+    sceneBox[k + 3] = hi[k];
+  }
+  maxAbsOut = maxAbs;
+}
+
+/**
+ * BuildSubtree's split plane by binned SAH (Wald 2007): bins along each
+ * axis, cost of each of the NumberOfBins - 1 planes = N_left A_left +
+ * N_right A_right. Partitions order[begin, end) at the best plane and
+ * returns the split index, or -1 if no plane splits the centroids.
+ */
+int PartitionBySah(std::vector<int>& order, const std::vector<double>& centroids,
+  const std::vector<double>& boxes, int begin, int end, const double centroidBox[6])
+{
+  double bestCost = std::numeric_limits<double>::infinity();
+  int bestAxis = -1, bestPlane = -1;
+  double bestScale = 0.0;
+  for (int axis = 0; axis < 3; ++axis)
+  {
+    const double extent = centroidBox[axis + 3] - centroidBox[axis];
+    if (!(extent > 0.0))
+    {
+      continue;
+    }
+    const double lo = centroidBox[axis];
+    const double scale = NumberOfBins / extent;
+    int binCount[NumberOfBins] = {};
+    double binBox[NumberOfBins][6];
+    for (auto& b : binBox)
+    {
+      EmptyBox(b);
+    }
+    for (int k = begin; k < end; ++k)
+    {
+      const size_t f = static_cast<size_t>(order[k]);
+      const int bin = std::min(NumberOfBins - 1,
+        static_cast<int>((centroids[3 * f + axis] - lo) * scale));
+      ++binCount[bin];
+      GrowBox(binBox[bin], &boxes[6 * f]);
+    }
+    // Sweep from the right for the right-hand costs, then from the left.
+    double rightArea[NumberOfBins];
+    int rightCount[NumberOfBins];
+    double acc[6];
+    EmptyBox(acc);
+    int n = 0;
+    for (int b = NumberOfBins - 1; b > 0; --b)
+    {
+      GrowBox(acc, binBox[b]);
+      n += binCount[b];
+      rightCount[b] = n;
+      rightArea[b] = n > 0 ? HalfArea(acc) : 0.0;
+    }
+    EmptyBox(acc);
+    n = 0;
+    for (int plane = 1; plane < NumberOfBins; ++plane)
+    {
+      GrowBox(acc, binBox[plane - 1]);
+      n += binCount[plane - 1];
+      if (n == 0 || rightCount[plane] == 0)
+      {
+        continue;
+      }
+      const double cost = n * HalfArea(acc) + rightCount[plane] * rightArea[plane];
+      if (cost < bestCost)
+      {
+        bestCost = cost;
+        bestAxis = axis;
+        bestPlane = plane;
+        bestScale = scale;
+      }
+    }
+  }
+  if (bestAxis >= 0)
+  {
+    const double lo = centroidBox[bestAxis];
+    const int* splitPoint = std::partition(
+      order.data() + begin, order.data() + end, [&](int f) {
+        const int bin = std::min(NumberOfBins - 1,
+          static_cast<int>((centroids[3 * static_cast<size_t>(f) + bestAxis] - lo) *
+            bestScale));
+        return bin < bestPlane;
+      });
+    return static_cast<int>(splitPoint - order.data());
+  }
+  return -1;
+}
+
 } // namespace
 
 /// Scratch data of Build(): per triangle box and centroid, and the order.
@@ -143,75 +311,9 @@ void RayCaster::Build(const std::vector<double>& points, const std::vector<int>&
   const int numTriangles = static_cast<int>(triangles.size() / 3);
 
   BuildState state;
-  state.Boxes.resize(6 * static_cast<size_t>(numTriangles));
-  state.Centroids.resize(3 * static_cast<size_t>(numTriangles));
-  // Boxes and centroids in parallel; the first bad triangle (in input
-  // order) is then named by a serial check of it.
-  double lo[3] = { std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-    std::numeric_limits<double>::infinity() };
-  double hi[3] = { -lo[0], -lo[1], -lo[2] };
+  double scene[6];
   double maxAbs = 0.0;
-  int firstBad = numTriangles;
-#pragma omp parallel for schedule(static) reduction(min : lo[:3], firstBad) \
-  reduction(max : hi[:3], maxAbs)
-  for (int f = 0; f < numTriangles; ++f)
-  {
-    double* box = &state.Boxes[6 * static_cast<size_t>(f)];
-    EmptyBox(box);
-    bool bad = false;
-    for (int v = 0; v < 3 && !bad; ++v)
-    {
-      const int id = triangles[3 * static_cast<size_t>(f) + v];
-      if (id < 0 || id >= numPoints)
-      {
-        bad = true;
-        break;
-      }
-      const double* x = &points[3 * static_cast<size_t>(id)];
-      for (int k = 0; k < 3; ++k)
-      {
-        bad = bad || !std::isfinite(x[k]);
-        box[k] = std::min(box[k], x[k]);
-        box[k + 3] = std::max(box[k + 3], x[k]);
-        maxAbs = std::max(maxAbs, std::abs(x[k]));
-      }
-    }
-    if (bad)
-    {
-      firstBad = std::min(firstBad, f);
-      continue;
-    }
-    for (int k = 0; k < 3; ++k)
-    {
-      state.Centroids[3 * static_cast<size_t>(f) + k] = 0.5 * (box[k] + box[k + 3]);
-      lo[k] = std::min(lo[k], box[k]);
-      hi[k] = std::max(hi[k], box[k + 3]);
-    }
-  }
-  if (firstBad < numTriangles)
-  {
-    const int f = firstBad;
-    for (int v = 0; v < 3; ++v)
-    {
-      const int id = triangles[3 * static_cast<size_t>(f) + v];
-      if (id < 0 || id >= numPoints)
-      {
-        std::ostringstream msg;
-        msg << "RayCaster: triangle " << f << " has point id " << id << ", out of range [0, "
-            << numPoints << ")";
-        throw Error(msg.str());
-      }
-      const double* x = &points[3 * static_cast<size_t>(id)];
-      if (!(std::isfinite(x[0]) && std::isfinite(x[1]) && std::isfinite(x[2])))
-      {
-        std::ostringstream msg;
-        msg << "RayCaster: triangle " << f << " uses point " << id
-            << " whose coordinates are not finite";
-        throw Error(msg.str());
-      }
-    }
-  }
-  const double scene[6] = { lo[0], lo[1], lo[2], hi[0], hi[1], hi[2] };
+  TriangleBoxes(points, triangles, state.Boxes, state.Centroids, scene, maxAbs);
   if (numTriangles == 0)
   {
     return;
@@ -331,80 +433,8 @@ RayCaster::Child RayCaster::BuildSubtree(BuildState& state, std::vector<Node>& n
     bool split = false;
     if (depth < SahDepthLimit)
     {
-      // Binned SAH (Wald 2007): bins along each axis, cost of each of the
-      // NumberOfBins - 1 planes = N_left A_left + N_right A_right.
-      double bestCost = std::numeric_limits<double>::infinity();
-      int bestAxis = -1, bestPlane = -1;
-      double bestScale = 0.0;
-      for (int axis = 0; axis < 3; ++axis)
-      {
-        const double extent = centroidBox[axis + 3] - centroidBox[axis];
-        if (!(extent > 0.0))
-        {
-          continue;
-        }
-        const double lo = centroidBox[axis];
-        const double scale = NumberOfBins / extent;
-        int binCount[NumberOfBins] = {};
-        double binBox[NumberOfBins][6];
-        for (auto& b : binBox)
-        {
-          EmptyBox(b);
-        }
-        for (int k = begin; k < end; ++k)
-        {
-          const size_t f = static_cast<size_t>(state.Order[k]);
-          const int bin = std::min(NumberOfBins - 1,
-            static_cast<int>((state.Centroids[3 * f + axis] - lo) * scale));
-          ++binCount[bin];
-          GrowBox(binBox[bin], &state.Boxes[6 * f]);
-        }
-        // Sweep from the right for the right-hand costs, then from the left.
-        double rightArea[NumberOfBins];
-        int rightCount[NumberOfBins];
-        double acc[6];
-        EmptyBox(acc);
-        int n = 0;
-        for (int b = NumberOfBins - 1; b > 0; --b)
-        {
-          GrowBox(acc, binBox[b]);
-          n += binCount[b];
-          rightCount[b] = n;
-          rightArea[b] = n > 0 ? HalfArea(acc) : 0.0;
-        }
-        EmptyBox(acc);
-        n = 0;
-        for (int plane = 1; plane < NumberOfBins; ++plane)
-        {
-          GrowBox(acc, binBox[plane - 1]);
-          n += binCount[plane - 1];
-          if (n == 0 || rightCount[plane] == 0)
-          {
-            continue;
-          }
-          const double cost = n * HalfArea(acc) + rightCount[plane] * rightArea[plane];
-          if (cost < bestCost)
-          {
-            bestCost = cost;
-            bestAxis = axis;
-            bestPlane = plane;
-            bestScale = scale;
-          }
-        }
-      }
-      if (bestAxis >= 0)
-      {
-        const double lo = centroidBox[bestAxis];
-        const int* splitPoint = std::partition(
-          state.Order.data() + begin, state.Order.data() + end, [&](int f) {
-            const int bin = std::min(NumberOfBins - 1,
-              static_cast<int>((state.Centroids[3 * static_cast<size_t>(f) + bestAxis] - lo) *
-                bestScale));
-            return bin < bestPlane;
-          });
-        mid = static_cast<int>(splitPoint - state.Order.data());
-        split = mid > begin && mid < end;
-      }
+      mid = PartitionBySah(state.Order, state.Centroids, state.Boxes, begin, end, centroidBox);
+      split = mid > begin && mid < end;
     }
     if (!split)
     {
