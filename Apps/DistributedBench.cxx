@@ -285,6 +285,101 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
   return result;
 }
 
+/// Compares the gathered fluence of every rank (ids, 3 values per id) with
+/// one rank's run of the same box on rank 0.
+void CompareWithSingleRank(const std::vector<long long>& ids, const std::vector<double>& fluence,
+  int size, int n, double sizeMm, const std::string& solver, bool coordinates,
+  const translucency::BoomerAMGOptions& options, double tol, int threads)
+{
+  const Result one =
+    Run("single", MPI_COMM_SELF, n, sizeMm, solver, coordinates, options, tol, threads);
+  std::vector<size_t> where(one.Ids.size());
+  for (size_t k = 0; k < one.Ids.size(); ++k)
+    where[static_cast<size_t>(one.Ids[k])] = k;
+  double worst = 0.0;
+  for (size_t k = 0; k < ids.size(); ++k)
+    for (int c = 0; c < 3; ++c)
+    {
+      const double a = fluence[3 * k + c],
+                   b = one.Fluence[3 * where[static_cast<size_t>(ids[k])] + c];
+      worst = std::max(worst, std::abs(a - b) / std::abs(b));
+    }
+  std::printf("max relative difference, %d ranks vs 1 (relit, twice painted fluence, every "
+              "point of every rank): %.2e\n", size, worst);
+  std::fflush(stdout);
+}
+
+/// The serial core path (Solve Diffusion with one process) on the whole
+/// box: the relit fluence after both paint strokes, to RelTol `tol` (the
+/// last distributed solve used the values-only set-up), against the
+/// gathered distributed fluence, and the power balances.
+void CompareWithSerial(const std::vector<long long>& ids, const std::vector<double>& fluence,
+  const Result& all, int size, int n, double sizeMm, const std::string& solver, bool coordinates,
+  double tol)
+{
+  Piece whole = MakeSlab(n, 0, n, sizeMm, coordinates);
+  Paint(whole, sizeMm, 1);
+  Paint(whole, sizeMm, 2);
+  translucency::TetMesh mesh;
+  mesh.SetGeometry(whole.Points, whole.Tets);
+  const std::vector<double> q = Irradiance(whole, sizeMm, true);
+  auto reference = translucency::CreateDiffusionSolver(solver);
+  reference->SetRelTol(tol);
+  reference->SetMaxIter(100000);
+  translucency::DiffusionProblem problem;
+  problem.Mesh = &mesh;
+  problem.Material = &whole.Material;
+  problem.Irradiance = &q;
+  std::vector<double> expected;
+  translucency::SolverReport report;
+  const double start = MPI_Wtime();
+  reference->Solve(problem, expected, report);
+  std::vector<size_t> where(whole.Ids.size());
+  for (size_t k = 0; k < whole.Ids.size(); ++k)
+    where[static_cast<size_t>(whole.Ids[k])] = k;
+  double worst = 0.0;
+  for (size_t k = 0; k < ids.size(); ++k)
+    for (int c = 0; c < 3; ++c)
+    {
+      const double b = expected[3 * where[static_cast<size_t>(ids[k])] + c];
+      worst = std::max(worst, std::abs(fluence[3 * k + c] - b) / std::abs(b));
+    }
+  std::printf("serial %s (%s, %.0f ms): max relative difference, %d ranks vs serial: %.2e\n",
+    solver.c_str(), report.LinearSolver.c_str(), 1000.0 * (MPI_Wtime() - start), size, worst);
+  // The power balance summed over the ranks (physical faces only) vs
+  // the serial ComputePowerBalance of the whole box on the serial
+  // solution: equal up to the solver tolerance (both fluences are
+  // within `tol` of the same system's solution).
+  const translucency::PowerBalance serialBalance =
+    translucency::ComputePowerBalance(mesh, whole.Material, expected, &q);
+  double balanceWorst = 0.0;
+  for (int c = 0; c < 3; ++c)
+  {
+    const double scale = serialBalance.BoundaryInjected[c];
+    balanceWorst = std::max({ balanceWorst,
+      std::abs(all.Balance.BoundaryInjected[c] - serialBalance.BoundaryInjected[c]) / scale,
+      std::abs(all.Balance.Absorbed[c] - serialBalance.Absorbed[c]) / scale,
+      std::abs(all.Balance.Escaped[c] - serialBalance.Escaped[c]) / scale });
+  }
+  double gap = 0.0;
+  for (int c = 0; c < 3; ++c)
+    gap = std::max(gap, std::abs(all.Balance.Absorbed[c] + all.Balance.Escaped[c] -
+                          all.Balance.BoundaryInjected[c]) / all.Balance.BoundaryInjected[c]);
+  std::printf("power balance, %d ranks vs serial (injected, absorbed, escaped; relative to "
+              "the injected power), max difference: %.2e\n", size, balanceWorst);
+  // fem's Robin terms use each face's own eta, as the balance does: it
+  // closes to the solver tolerance. The divergence's use the
+  // area-weighted eta of the vertex (paper's S_i), so with a varying
+  // eta its gap is a discretisation difference, not an error.
+  if (solver == "fem")
+    std::printf("power balance, %d ranks: absorbed + escaped vs injected, max relative "
+                "difference: %.2e\n", size, gap);
+  else
+    std::printf("power balance, %d ranks: absorbed + escaped - injected, relative gap "
+                "%.2e (vertex-averaged boundary eta)\n", size, gap);
+  std::fflush(stdout);
+}
+
 } // namespace
 
 int main(int argc, char* argv[])
@@ -374,89 +469,12 @@ int main(int argc, char* argv[])
         offsets.data(), MPI_DOUBLE, 0, MPI_COMM_WORLD);
       if (rank == 0 && single && size > 1)
       {
-        const Result one =
-          Run("single", MPI_COMM_SELF, n, sizeMm, solver, coordinates, options, tol, threads);
-        std::vector<size_t> where(one.Ids.size());
-        for (size_t k = 0; k < one.Ids.size(); ++k)
-          where[static_cast<size_t>(one.Ids[k])] = k;
-        double worst = 0.0;
-        for (size_t k = 0; k < ids.size(); ++k)
-          for (int c = 0; c < 3; ++c)
-          {
-            const double a = fluence[3 * k + c],
-                         b = one.Fluence[3 * where[static_cast<size_t>(ids[k])] + c];
-            worst = std::max(worst, std::abs(a - b) / std::abs(b));
-          }
-        std::printf("max relative difference, %d ranks vs 1 (relit, twice painted fluence, every "
-                    "point of every rank): %.2e\n", size, worst);
-        std::fflush(stdout);
+        CompareWithSingleRank(
+          ids, fluence, size, n, sizeMm, solver, coordinates, options, tol, threads);
       }
       if (rank == 0 && serial)
       {
-        // The serial core path (Solve Diffusion with one process) on the
-        // whole box: the relit fluence after both paint strokes, to RelTol
-        // `tol` (the last distributed solve used the values-only set-up).
-        Piece whole = MakeSlab(n, 0, n, sizeMm, coordinates);
-        Paint(whole, sizeMm, 1);
-        Paint(whole, sizeMm, 2);
-        translucency::TetMesh mesh;
-        mesh.SetGeometry(whole.Points, whole.Tets);
-        const std::vector<double> q = Irradiance(whole, sizeMm, true);
-        auto reference = translucency::CreateDiffusionSolver(solver);
-        reference->SetRelTol(tol);
-        reference->SetMaxIter(100000);
-        translucency::DiffusionProblem problem;
-        problem.Mesh = &mesh;
-        problem.Material = &whole.Material;
-        problem.Irradiance = &q;
-        std::vector<double> expected;
-        translucency::SolverReport report;
-        const double start = MPI_Wtime();
-        reference->Solve(problem, expected, report);
-        std::vector<size_t> where(whole.Ids.size());
-        for (size_t k = 0; k < whole.Ids.size(); ++k)
-          where[static_cast<size_t>(whole.Ids[k])] = k;
-        double worst = 0.0;
-        for (size_t k = 0; k < ids.size(); ++k)
-          for (int c = 0; c < 3; ++c)
-          {
-            const double b = expected[3 * where[static_cast<size_t>(ids[k])] + c];
-            worst = std::max(worst, std::abs(fluence[3 * k + c] - b) / std::abs(b));
-          }
-        std::printf("serial %s (%s, %.0f ms): max relative difference, %d ranks vs serial: %.2e\n",
-          solver.c_str(), report.LinearSolver.c_str(), 1000.0 * (MPI_Wtime() - start), size, worst);
-        // The power balance summed over the ranks (physical faces only) vs
-        // the serial ComputePowerBalance of the whole box on the serial
-        // solution: equal up to the solver tolerance (both fluences are
-        // within `tol` of the same system's solution).
-        const translucency::PowerBalance serialBalance =
-          translucency::ComputePowerBalance(mesh, whole.Material, expected, &q);
-        double balanceWorst = 0.0;
-        for (int c = 0; c < 3; ++c)
-        {
-          const double scale = serialBalance.BoundaryInjected[c];
-          balanceWorst = std::max({ balanceWorst,
-            std::abs(all.Balance.BoundaryInjected[c] - serialBalance.BoundaryInjected[c]) / scale,
-            std::abs(all.Balance.Absorbed[c] - serialBalance.Absorbed[c]) / scale,
-            std::abs(all.Balance.Escaped[c] - serialBalance.Escaped[c]) / scale });
-        }
-        double gap = 0.0;
-        for (int c = 0; c < 3; ++c)
-          gap = std::max(gap, std::abs(all.Balance.Absorbed[c] + all.Balance.Escaped[c] -
-                                all.Balance.BoundaryInjected[c]) / all.Balance.BoundaryInjected[c]);
-        std::printf("power balance, %d ranks vs serial (injected, absorbed, escaped; relative to "
-                    "the injected power), max difference: %.2e\n", size, balanceWorst);
-        // fem's Robin terms use each face's own eta, as the balance does: it
-        // closes to the solver tolerance. The divergence's use the
-        // area-weighted eta of the vertex (paper's S_i), so with a varying
-        // eta its gap is a discretisation difference, not an error.
-        if (solver == "fem")
-          std::printf("power balance, %d ranks: absorbed + escaped vs injected, max relative "
-                      "difference: %.2e\n", size, gap);
-        else
-          std::printf("power balance, %d ranks: absorbed + escaped - injected, relative gap "
-                      "%.2e (vertex-averaged boundary eta)\n", size, gap);
-        std::fflush(stdout);
+        CompareWithSerial(ids, fluence, all, size, n, sizeMm, solver, coordinates, tol);
       }
       // The other ranks wait without spinning (a busy MPI wait would take a
       // core from rank 0's single-rank run).
