@@ -257,6 +257,100 @@ double TetPaint::GetCutoffRadius() const
   return Width_ * std::sqrt(2.0 * std::log(Strength_ / CutoffWeight_));
 }
 
+namespace
+{
+/// Paint: the bounding box of the stroke points grown by `radius`.
+void StrokeBox(const std::vector<double>& strokePoints, double radius, double boxLo[3],
+  double boxHi[3])
+{
+  const double* stroke = strokePoints.data();
+  const size_t numStroke = strokePoints.size() / 3;
+  for (int a = 0; a < 3; ++a)
+  {
+    boxLo[a] = boxHi[a] = stroke[a];
+    for (size_t s = 1; s < numStroke; ++s)
+    {
+      boxLo[a] = std::min(boxLo[a], stroke[3 * s + a]);
+      boxHi[a] = std::max(boxHi[a], stroke[3 * s + a]);
+    }
+    boxLo[a] -= radius;
+    boxHi[a] += radius;
+  }
+}
+
+/// Paint: the blend of weight w toward the targets (TransCut Sec. 5.2: set,
+/// multiply or add; modeIndex 0, 1, 2) of one cell's unmasked channels,
+/// clamped at 0; a channel whose two values would both be 0 is kept (counted
+/// in `kept`). Returns whether a value changed.
+inline bool BlendCell(double w, double* const x[2], const double* const target[2],
+  const bool mask[3], int modeIndex, long long& kept)
+{
+  bool modified = false;
+  for (int c = 0; c < 3; ++c)
+  {
+    if (!mask[c])
+    {
+      continue;
+    }
+    double v[2];
+    for (int k = 0; k < 2; ++k)
+    {
+      const double old = x[k][c];
+      const double tk = target[k][c];
+      switch (modeIndex)
+      {
+        case 0: // Set
+          v[k] = (1.0 - w) * old + w * tk;
+          break;
+        case 1: // Multiply
+          v[k] = old * (1.0 + w * (tk - 1.0));
+          break;
+        default: // Add
+          v[k] = old + w * tk;
+          break;
+      }
+      v[k] = v[k] > 0.0 ? v[k] : 0.0;
+    }
+    if (v[0] + v[1] > 0.0)
+    {
+      modified = modified || v[0] != x[0][c] || v[1] != x[1][c];
+      x[0][c] = v[0];
+      x[1][c] = v[1];
+    }
+    else
+    {
+      ++kept;
+    }
+  }
+  return modified;
+}
+
+/// Paint: the error for cell `firstBad` (no points, or a point id out of
+/// range).
+template <typename IdT>
+[[noreturn]] void ThrowBadCell(std::int64_t firstBad, const IdT* offsets, const IdT* connectivity,
+  std::int64_t numberOfPoints)
+{
+  std::ostringstream os;
+  os << "TetPaint: cell " << firstBad << " has ";
+  const std::int64_t first = static_cast<std::int64_t>(offsets[firstBad]);
+  const std::int64_t last = static_cast<std::int64_t>(offsets[firstBad + 1]);
+  if (last <= first)
+  {
+    os << "no points";
+  }
+  else
+  {
+    os << "a point id out of range (the mesh has " << numberOfPoints << " points):";
+    for (std::int64_t k = first; k < last; ++k)
+    {
+      os << ' ' << static_cast<std::int64_t>(connectivity[k]);
+    }
+  }
+  throw Error(os.str());
+}
+} // namespace
+
 template <typename PointT, typename IdT>
 void TetPaint::Paint(const PointT* points, std::int64_t numberOfPoints, const IdT* offsets,
   const IdT* connectivity, std::int64_t numberOfCells, double* absorption, double* scattering,
@@ -281,17 +375,7 @@ void TetPaint::Paint(const PointT* points, std::int64_t numberOfPoints, const Id
   if (paints && cutoff)
   {
     grid.Build(Stroke_, radius);
-    for (int a = 0; a < 3; ++a)
-    {
-      boxLo[a] = boxHi[a] = stroke[a];
-      for (size_t s = 1; s < numStroke; ++s)
-      {
-        boxLo[a] = std::min(boxLo[a], stroke[3 * s + a]);
-        boxHi[a] = std::max(boxHi[a], stroke[3 * s + a]);
-      }
-      boxLo[a] -= radius;
-      boxHi[a] += radius;
-    }
+    StrokeBox(Stroke_, radius, boxLo, boxHi);
   }
   const int modeIndex = static_cast<int>(Mode_);
   const double* target[2] = { TargetAbsorption_.data(), TargetScattering_.data() };
@@ -387,44 +471,7 @@ void TetPaint::Paint(const PointT* points, std::int64_t numberOfPoints, const Id
         continue;
       }
       double* x[2] = { absorption + 3 * t, scattering + 3 * t };
-      bool modified = false;
-      for (int c = 0; c < 3; ++c)
-      {
-        if (!mask[c])
-        {
-          continue;
-        }
-        double v[2];
-        for (int k = 0; k < 2; ++k)
-        {
-          const double old = x[k][c];
-          const double tk = target[k][c];
-          switch (modeIndex)
-          {
-            case 0: // Set
-              v[k] = (1.0 - w) * old + w * tk;
-              break;
-            case 1: // Multiply
-              v[k] = old * (1.0 + w * (tk - 1.0));
-              break;
-            default: // Add
-              v[k] = old + w * tk;
-              break;
-          }
-          v[k] = v[k] > 0.0 ? v[k] : 0.0;
-        }
-        if (v[0] + v[1] > 0.0)
-        {
-          modified = modified || v[0] != x[0][c] || v[1] != x[1][c];
-          x[0][c] = v[0];
-          x[1][c] = v[1];
-        }
-        else
-        {
-          ++kept;
-        }
-      }
-      if (modified)
+      if (BlendCell(w, x, target, mask, modeIndex, kept))
       {
         changed.push_back(static_cast<int>(t));
       }
@@ -432,23 +479,7 @@ void TetPaint::Paint(const PointT* points, std::int64_t numberOfPoints, const Id
   }
   if (firstBad != std::numeric_limits<std::int64_t>::max())
   {
-    std::ostringstream os;
-    os << "TetPaint: cell " << firstBad << " has ";
-    const std::int64_t first = static_cast<std::int64_t>(offsets[firstBad]);
-    const std::int64_t last = static_cast<std::int64_t>(offsets[firstBad + 1]);
-    if (last <= first)
-    {
-      os << "no points";
-    }
-    else
-    {
-      os << "a point id out of range (the mesh has " << numberOfPoints << " points):";
-      for (std::int64_t k = first; k < last; ++k)
-      {
-        os << ' ' << static_cast<std::int64_t>(connectivity[k]);
-      }
-    }
-    throw Error(os.str());
+    ThrowBadCell(firstBad, offsets, connectivity, numberOfPoints);
   }
   size_t total = 0;
   for (const auto& list : changedPerThread)
