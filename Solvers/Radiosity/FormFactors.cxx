@@ -78,6 +78,74 @@ double FormFactorMatrix::Get(int i, int j) const
   return it != end && *it == j ? Values[it - Columns.begin()] : 0.0;
 }
 
+namespace
+{
+/// Compute: ray r's cosine-weighted direction in the patch frame (dx, dy,
+/// dz): stratified square (the first `stratified` = side^2 rays) ->
+/// concentric disk, rotated by patchRotation -> hemisphere; h hashes the
+/// ray.
+inline void CosineDirection(int r, int side, int stratified, std::uint64_t h,
+  double patchRotation, double& dx, double& dy, double& dz)
+{
+  double u1 = ToUnit(Mix(h + 3)), u2 = ToUnit(h);
+  if (r < stratified)
+  {
+    u1 = ((r % side) + u1) / side;
+    u2 = ((r / side) + u2) / side;
+  }
+  const double sx = 2.0 * u1 - 1.0, sy = 2.0 * u2 - 1.0;
+  double dr = 0.0, phi = 0.0;
+  if (sx != 0.0 || sy != 0.0)
+  {
+    if (std::abs(sx) > std::abs(sy))
+    {
+      dr = sx;
+      phi = (Pi / 4.0) * (sy / sx);
+    }
+    else
+    {
+      dr = sy;
+      phi = (Pi / 2.0) - (Pi / 4.0) * (sx / sy);
+    }
+  }
+  phi += patchRotation;
+  dx = dr * std::cos(phi);
+  dy = dr * std::sin(phi);
+  dz = std::sqrt(std::max(0.0, 1.0 - dx * dx - dy * dy));
+}
+
+/// Compute: the per-row results merged into the CSR matrix F; returns the
+/// sum of the dropped fractions.
+double MergeRows(std::vector<std::vector<std::pair<int, float>>>& rows,
+  const std::vector<double>& dropped, FormFactorMatrix& F)
+{
+  const int numPatches = static_cast<int>(rows.size());
+  F.NumberOfPatches = numPatches;
+  F.RowOffsets.assign(numPatches + 1, 0);
+  for (int i = 0; i < numPatches; ++i)
+  {
+    F.RowOffsets[i + 1] = F.RowOffsets[i] + static_cast<int>(rows[i].size());
+  }
+  F.Columns.resize(F.RowOffsets.back());
+  F.Values.resize(F.RowOffsets.back());
+  double droppedSum = 0.0;
+  for (int i = 0; i < numPatches; ++i)
+  {
+    int k = F.RowOffsets[i];
+    for (const auto& e : rows[i])
+    {
+      F.Columns[k] = e.first;
+      F.Values[k] = e.second;
+      ++k;
+    }
+    droppedSum += dropped[i];
+    std::vector<std::pair<int, float>>().swap(rows[i]);
+  }
+  return droppedSum;
+}
+
+} // namespace
+
 bool FormFactorComputer::Compute(const RadiosityScene& scene, FormFactorMatrix& F)
 {
   if (RaysPerPatch_ < 1)
@@ -168,30 +236,8 @@ bool FormFactorComputer::Compute(const RadiosityScene& scene, FormFactorMatrix& 
         const double sq = std::sqrt(r1);
         const double wa = 1.0 - sq, wb = sq * (1.0 - r2), wc = sq * r2;
         // Cosine-weighted direction: stratified square -> concentric disk -> hemisphere.
-        double u1 = ToUnit(Mix(h + 3)), u2 = ToUnit(h);
-        if (r < stratified)
-        {
-          u1 = ((r % side) + u1) / side;
-          u2 = ((r / side) + u2) / side;
-        }
-        const double sx = 2.0 * u1 - 1.0, sy = 2.0 * u2 - 1.0;
-        double dr = 0.0, phi = 0.0;
-        if (sx != 0.0 || sy != 0.0)
-        {
-          if (std::abs(sx) > std::abs(sy))
-          {
-            dr = sx;
-            phi = (Pi / 4.0) * (sy / sx);
-          }
-          else
-          {
-            dr = sy;
-            phi = (Pi / 2.0) - (Pi / 4.0) * (sx / sy);
-          }
-        }
-        phi += patchRotation;
-        const double dx = dr * std::cos(phi), dy = dr * std::sin(phi);
-        const double dz = std::sqrt(std::max(0.0, 1.0 - dx * dx - dy * dy));
+        double dx, dy, dz;
+        CosineDirection(r, side, stratified, h, patchRotation, dx, dy, dz);
         double origin[3], dir[3];
         for (int d = 0; d < 3; ++d)
         {
@@ -238,27 +284,7 @@ bool FormFactorComputer::Compute(const RadiosityScene& scene, FormFactorMatrix& 
   {
     return false;
   }
-  F.NumberOfPatches = numPatches;
-  F.RowOffsets.assign(numPatches + 1, 0);
-  for (int i = 0; i < numPatches; ++i)
-  {
-    F.RowOffsets[i + 1] = F.RowOffsets[i] + static_cast<int>(rows[i].size());
-  }
-  F.Columns.resize(F.RowOffsets.back());
-  F.Values.resize(F.RowOffsets.back());
-  double droppedSum = 0.0;
-  for (int i = 0; i < numPatches; ++i)
-  {
-    int k = F.RowOffsets[i];
-    for (const auto& e : rows[i])
-    {
-      F.Columns[k] = e.first;
-      F.Values[k] = e.second;
-      ++k;
-    }
-    droppedSum += dropped[i];
-    std::vector<std::pair<int, float>>().swap(rows[i]);
-  }
+  const double droppedSum = MergeRows(rows, dropped, F);
   NumberOfRays_ = static_cast<long long>(numPatches) * n;
   NumberOfNonZeros_ = static_cast<long long>(F.Columns.size());
   DroppedFraction_ = numPatches > 0 ? droppedSum / numPatches : 0.0;
