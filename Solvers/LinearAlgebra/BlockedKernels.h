@@ -494,6 +494,107 @@ struct FusedPCGWorkspace
   Eigen::VectorXd R, Z, P, Q;
 };
 
+/// FusedBlockedPCG's initial residual r = b - A x (from x = 0 when not
+/// warm: no product) with b.b (sums 0-2) and r.r (sums 3-5); S: the single-
+/// precision values.
+template <bool S>
+inline auto FusedInitialResidual(const DiffusionSystem& system, const float* single,
+  const double* const bc[NC], const double* const xc[NC], bool warm, double* r)
+{
+  const int n = system.NumberOfUnknowns;
+  return ChunkedSums<6>(n,
+    [&](long long begin, long long end, double* sums)
+    {
+      double local[6] = { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 };
+      for (long long i = begin; i < end; ++i)
+      {
+        double ax[3] = { 0.0, 0.0, 0.0 };
+        if (warm)
+        {
+          // Row i of A x with x in the channel arrays.
+          const int* ro = system.RowOffsets.data();
+          const int* ci = system.ColumnIndices.data();
+          for (int k = ro[i]; k < ro[i + 1]; ++k)
+          {
+            const int j = ci[k];
+            for (int c = 0; c < NC; ++c)
+            {
+              const double a = S ? static_cast<double>(single[3 * static_cast<std::size_t>(k) + c])
+                                 : system.Values[c][k];
+              ax[c] += a * xc[c][j];
+            }
+          }
+        }
+        for (int c = 0; c < NC; ++c)
+        {
+          const double b = bc[c][i];
+          const double ri = b - ax[c];
+          r[3 * i + c] = ri;
+          local[c] += b * b;
+          local[3 + c] += ri * ri;
+        }
+      }
+      for (int c = 0; c < 6; ++c)
+      {
+        sums[c] += local[c];
+      }
+    });
+}
+
+/// FusedBlockedPCG: q = A p with p.q per channel; S: the single-precision
+/// values.
+template <bool S>
+inline auto FusedProduct(const DiffusionSystem& system, const float* single, const double* p, double* q)
+{
+  const int n = system.NumberOfUnknowns;
+  return ChunkedSums<3>(n,
+    [&](long long begin, long long end, double* sums)
+    {
+      double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+      for (long long i = begin; i < end; ++i)
+      {
+        double* qi = q + 3 * i;
+        SystemRow<S>(system, single, p, static_cast<int>(i), qi);
+        s0 += p[3 * i] * qi[0];
+        s1 += p[3 * i + 1] * qi[1];
+        s2 += p[3 * i + 2] * qi[2];
+      }
+      sums[0] += s0;
+      sums[1] += s1;
+      sums[2] += s2;
+    });
+}
+
+/// FusedBlockedPCG: x += alpha p (x in the channel arrays x0, x1, x2),
+/// r -= alpha q, with r.r per channel.
+inline auto FusedUpdate(int n, const std::array<double, NC>& alpha, const double* p, const double* q,
+  double* x0, double* x1, double* x2, double* r)
+{
+  return ChunkedSums<3>(n,
+    [&](long long begin, long long end, double* sums)
+    {
+      double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+      for (long long i = begin; i < end; ++i)
+      {
+        x0[i] += alpha[0] * p[3 * i];
+        x1[i] += alpha[1] * p[3 * i + 1];
+        x2[i] += alpha[2] * p[3 * i + 2];
+        const double r0 = r[3 * i] - alpha[0] * q[3 * i];
+        const double r1 = r[3 * i + 1] - alpha[1] * q[3 * i + 1];
+        const double r2 = r[3 * i + 2] - alpha[2] * q[3 * i + 2];
+        r[3 * i] = r0;
+        r[3 * i + 1] = r1;
+        r[3 * i + 2] = r2;
+        s0 += r0 * r0;
+        s1 += r1 * r1;
+        s2 += r2 * r2;
+      }
+      sums[0] += s0;
+      sums[1] += s1;
+      sums[2] += s2;
+    });
+}
+
 /**
  * BlockedPCG with fused passes over the vectors (the same iteration and the
  * same per-channel scalars; each dot product is computed, in the chunked
@@ -554,48 +655,8 @@ inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
   const double* bc[NC] = { system.RightHandSide[0].data(), system.RightHandSide[1].data(),
     system.RightHandSide[2].data() };
   const double* xc[NC] = { x[0].data(), x[1].data(), x[2].data() };
-  auto initial = [&](auto singleTag)
-  {
-    constexpr bool S = decltype(singleTag)::value;
-    return ChunkedSums<6>(n,
-      [&](long long begin, long long end, double* sums)
-      {
-        double local[6] = { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 };
-        for (long long i = begin; i < end; ++i)
-        {
-          double ax[3] = { 0.0, 0.0, 0.0 };
-          if (warm)
-          {
-            // Row i of A x with x in the channel arrays.
-            const int* ro = system.RowOffsets.data();
-            const int* ci = system.ColumnIndices.data();
-            for (int k = ro[i]; k < ro[i + 1]; ++k)
-            {
-              const int j = ci[k];
-              for (int c = 0; c < NC; ++c)
-              {
-                const double a = S ? static_cast<double>(single[3 * static_cast<std::size_t>(k) + c])
-                                   : system.Values[c][k];
-                ax[c] += a * xc[c][j];
-              }
-            }
-          }
-          for (int c = 0; c < NC; ++c)
-          {
-            const double b = bc[c][i];
-            const double ri = b - ax[c];
-            r[3 * i + c] = ri;
-            local[c] += b * b;
-            local[3 + c] += ri * ri;
-          }
-        }
-        for (int c = 0; c < 6; ++c)
-        {
-          sums[c] += local[c];
-        }
-      });
-  };
-  std::array<double, 6> start = single ? initial(std::true_type()) : initial(std::false_type());
+  std::array<double, 6> start = single ? FusedInitialResidual<true>(system, single, bc, xc, warm, r)
+                                       : FusedInitialResidual<false>(system, single, bc, xc, warm, r);
   double recycleSpMV = 0.0;
   if (recycler && warm && recycler->GetSize() > 0)
   {
@@ -630,62 +691,16 @@ inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
     rz = precondition(static_cast<const double*>(r), w.Z.data());
     w.P.swap(w.Z); // p = z
   }
-  auto product = [&](auto singleTag)
-  {
-    constexpr bool S = decltype(singleTag)::value;
-    const double* p = w.P.data();
-    return ChunkedSums<3>(n,
-      [&](long long begin, long long end, double* sums)
-      {
-        double s0 = 0.0, s1 = 0.0, s2 = 0.0;
-        for (long long i = begin; i < end; ++i)
-        {
-          double* qi = q + 3 * i;
-          SystemRow<S>(system, single, p, static_cast<int>(i), qi);
-          s0 += p[3 * i] * qi[0];
-          s1 += p[3 * i + 1] * qi[1];
-          s2 += p[3 * i + 2] * qi[2];
-        }
-        sums[0] += s0;
-        sums[1] += s1;
-        sums[2] += s2;
-      });
-  };
   for (int it = 0; it < maxIter && anyActive(); ++it)
   {
     if (progress && !progress(static_cast<double>(it) / maxIter))
     {
       return false;
     }
-    const auto pq = single ? product(std::true_type()) : product(std::false_type());
+    const auto pq = single ? FusedProduct<true>(system, single, w.P.data(), q)
+                           : FusedProduct<false>(system, single, w.P.data(), q);
     const std::array<double, NC> alpha = StepLengths(active, rz, pq);
-    const double* p = w.P.data();
-    double* x0 = x[0].data();
-    double* x1 = x[1].data();
-    double* x2 = x[2].data();
-    const auto rr = ChunkedSums<3>(n,
-      [&](long long begin, long long end, double* sums)
-      {
-        double s0 = 0.0, s1 = 0.0, s2 = 0.0;
-        for (long long i = begin; i < end; ++i)
-        {
-          x0[i] += alpha[0] * p[3 * i];
-          x1[i] += alpha[1] * p[3 * i + 1];
-          x2[i] += alpha[2] * p[3 * i + 2];
-          const double r0 = r[3 * i] - alpha[0] * q[3 * i];
-          const double r1 = r[3 * i + 1] - alpha[1] * q[3 * i + 1];
-          const double r2 = r[3 * i + 2] - alpha[2] * q[3 * i + 2];
-          r[3 * i] = r0;
-          r[3 * i + 1] = r1;
-          r[3 * i + 2] = r2;
-          s0 += r0 * r0;
-          s1 += r1 * r1;
-          s2 += r2 * r2;
-        }
-        sums[0] += s0;
-        sums[1] += s1;
-        sums[2] += s2;
-      });
+    const auto rr = FusedUpdate(n, alpha, w.P.data(), q, x[0].data(), x[1].data(), x[2].data(), r);
     UpdateChannels(pq, rr, normB, tol, flopsPerIteration / nnz, active, stats);
     if (!anyActive())
     {
