@@ -237,6 +237,89 @@ int vtkPaintScatteringCoefficients::RequestPerPiece(vtkInformationVector** input
   return outputs.Succeed();
 }
 
+namespace
+{
+/// Paint: the core's paint on raw views of the input's points (float or
+/// double) and cells (32 or 64-bit ids), into a, s (3 per cell) and the
+/// weights w; "" or the error.
+std::string PaintCells(translucency::TetPaint& painter, vtkUnstructuredGrid* input, vtkIdType n,
+  double* a, double* s, double* w)
+{
+  // Raw views of the points (float or double) and cells (32 or 64-bit ids).
+  vtkSmartPointer<vtkDoubleArray> converted;
+  vtkDataArray* pointData = input->GetPoints() ? input->GetPoints()->GetData() : nullptr;
+  const vtkIdType numPoints = input->GetNumberOfPoints();
+  vtkFloatArray* floatPoints = vtkFloatArray::FastDownCast(pointData);
+  vtkDoubleArray* doublePoints = vtkDoubleArray::FastDownCast(pointData);
+  if (pointData && !floatPoints && !doublePoints)
+  {
+    converted = vtkSmartPointer<vtkDoubleArray>::New();
+    converted->DeepCopy(pointData);
+    doublePoints = converted;
+  }
+  vtkCellArray* cells = input->GetCells();
+  if (!cells || (!floatPoints && !doublePoints))
+  {
+    return "the input mesh has no points or no cells";
+  }
+  auto paint = [&](auto* offsets, auto* connectivity) {
+    if (floatPoints)
+    {
+      painter.Paint(floatPoints->GetPointer(0), numPoints, offsets, connectivity, n, a, s, w);
+    }
+    else
+    {
+      painter.Paint(doublePoints->GetPointer(0), numPoints, offsets, connectivity, n, a, s, w);
+    }
+  };
+  if (cells->IsStorage64Bit())
+  {
+    paint(reinterpret_cast<const long long*>(cells->GetOffsetsArray64()->GetPointer(0)),
+      reinterpret_cast<const long long*>(cells->GetConnectivityArray64()->GetPointer(0)));
+  }
+  else
+  {
+    paint(reinterpret_cast<const int*>(cells->GetOffsetsArray32()->GetPointer(0)),
+      reinterpret_cast<const int*>(cells->GetConnectivityArray32()->GetPointer(0)));
+  }
+  return std::string();
+}
+
+/// Paint: new double arrays `names`, copies of the old ones (one memcpy
+/// for double input), to be painted in place by the core.
+void CopyCoefficients(vtkDataArray* const oldArrays[2], const char* const names[2], vtkIdType n,
+  vtkDoubleArray* const newArrays[2])
+{
+  for (int k = 0; k < 2; ++k)
+  {
+    newArrays[k]->SetName(names[k]);
+    newArrays[k]->SetNumberOfComponents(3);
+    vtkTranslucency::SetRGBComponentNames(newArrays[k]);
+    newArrays[k]->SetNumberOfTuples(n);
+    if (n == 0)
+    {
+      continue;
+    }
+    double* dst = newArrays[k]->GetPointer(0);
+    if (vtkDoubleArray* src = vtkDoubleArray::FastDownCast(oldArrays[k]))
+    {
+      std::memcpy(dst, src->GetPointer(0), sizeof(double) * 3 * static_cast<size_t>(n));
+    }
+    else
+    {
+      vtkDataArray* from = oldArrays[k];
+      vtkSMPTools::For(0, n, [from, dst](vtkIdType begin, vtkIdType end) {
+        for (vtkIdType i = begin; i < end; ++i)
+        {
+          from->GetTuple(i, dst + 3 * i);
+        }
+      });
+    }
+  }
+}
+
+} // namespace
+
 //------------------------------------------------------------------------------
 std::string vtkPaintScatteringCoefficients::Paint(
   vtkUnstructuredGrid* input, vtkUnstructuredGrid* output, long long& keptChannels)
@@ -311,32 +394,8 @@ std::string vtkPaintScatteringCoefficients::Paint(
   // New double arrays, copies of the old ones (one memcpy for double input),
   // painted in place by the core.
   vtkNew<vtkDoubleArray> newArrays[2];
-  for (int k = 0; k < 2; ++k)
-  {
-    newArrays[k]->SetName(names[k]);
-    newArrays[k]->SetNumberOfComponents(3);
-    vtkTranslucency::SetRGBComponentNames(newArrays[k]);
-    newArrays[k]->SetNumberOfTuples(n);
-    if (n == 0)
-    {
-      continue;
-    }
-    double* dst = newArrays[k]->GetPointer(0);
-    if (vtkDoubleArray* src = vtkDoubleArray::FastDownCast(oldArrays[k]))
-    {
-      std::memcpy(dst, src->GetPointer(0), sizeof(double) * 3 * static_cast<size_t>(n));
-    }
-    else
-    {
-      vtkDataArray* from = oldArrays[k];
-      vtkSMPTools::For(0, n, [from, dst](vtkIdType begin, vtkIdType end) {
-        for (vtkIdType i = begin; i < end; ++i)
-        {
-          from->GetTuple(i, dst + 3 * i);
-        }
-      });
-    }
-  }
+  vtkDoubleArray* const newPointers[2] = { newArrays[0], newArrays[1] };
+  CopyCoefficients(oldArrays, names, n, newPointers);
   vtkNew<vtkDoubleArray> weights;
   weights->SetName("PaintWeight");
   weights->SetNumberOfComponents(1);
@@ -368,45 +427,11 @@ std::string vtkPaintScatteringCoefficients::Paint(
   {
     try
     {
-      // Raw views of the points (float or double) and cells (32 or 64-bit ids).
-      vtkSmartPointer<vtkDoubleArray> converted;
-      vtkDataArray* pointData = input->GetPoints() ? input->GetPoints()->GetData() : nullptr;
-      const vtkIdType numPoints = input->GetNumberOfPoints();
-      vtkFloatArray* floatPoints = vtkFloatArray::FastDownCast(pointData);
-      vtkDoubleArray* doublePoints = vtkDoubleArray::FastDownCast(pointData);
-      if (pointData && !floatPoints && !doublePoints)
+      const std::string error = PaintCells(painter, input, n, newArrays[0]->GetPointer(0),
+        newArrays[1]->GetPointer(0), weights->GetPointer(0));
+      if (!error.empty())
       {
-        converted = vtkSmartPointer<vtkDoubleArray>::New();
-        converted->DeepCopy(pointData);
-        doublePoints = converted;
-      }
-      vtkCellArray* cells = input->GetCells();
-      if (!cells || (!floatPoints && !doublePoints))
-      {
-        return "the input mesh has no points or no cells";
-      }
-      double* a = newArrays[0]->GetPointer(0);
-      double* s = newArrays[1]->GetPointer(0);
-      double* w = weights->GetPointer(0);
-      auto paint = [&](auto* offsets, auto* connectivity) {
-        if (floatPoints)
-        {
-          painter.Paint(floatPoints->GetPointer(0), numPoints, offsets, connectivity, n, a, s, w);
-        }
-        else
-        {
-          painter.Paint(doublePoints->GetPointer(0), numPoints, offsets, connectivity, n, a, s, w);
-        }
-      };
-      if (cells->IsStorage64Bit())
-      {
-        paint(reinterpret_cast<const long long*>(cells->GetOffsetsArray64()->GetPointer(0)),
-          reinterpret_cast<const long long*>(cells->GetConnectivityArray64()->GetPointer(0)));
-      }
-      else
-      {
-        paint(reinterpret_cast<const int*>(cells->GetOffsetsArray32()->GetPointer(0)),
-          reinterpret_cast<const int*>(cells->GetConnectivityArray32()->GetPointer(0)));
+        return error;
       }
     }
     catch (const translucency::Error& e)
