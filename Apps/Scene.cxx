@@ -190,6 +190,84 @@ void SceneOptions::Finish(const std::string& command)
     }
   }
 }
+/// BuildLitMesh, 2. Tetrahedralize the surface (the mesher's own name in
+/// the messages); a tet count far from the target is noted.
+vtkSmartPointer<vtkUnstructuredGrid> Tetrahedralize(
+  const SceneOptions& options, vtkPolyData* surface, std::vector<Stage>& stages)
+{
+  MessageCollector messages;
+  const auto start = Clock::now();
+  vtkNew<vtkTetrahedralizeSurface> tetra;
+  // The mesher's own name in the messages (--mesher: tetgen or hxt).
+  const std::string mesher =
+    translucency::ToLower(options.Mesher) == "hxt" ? "gmsh HXT" : "TetGen";
+  messages.Watch(tetra, "tetrahedralizing (" + mesher + ")");
+  Progress("tetrahedralizing " + options.MeshPath + " (" + mesher + ")...");
+  tetra->SetInputData(surface);
+  tetra->SetQuality(options.Quality);
+  tetra->SetMesher(options.Mesher.c_str());
+  tetra->SetUniformSizing(options.UniformSizing);
+  tetra->SetGradingFactor(options.GradingFactor);
+  if (options.MaxTetVolume > 0 && !options.TargetGiven)
+    tetra->SetMaxTetVolume(options.MaxTetVolume);
+  else
+    tetra->SetTargetNumberOfTets(options.TargetTets);
+  tetra->Update();
+  if (!messages.Errors.empty())
+    throw translucency::Error("'" + options.MeshPath + "': " + messages.Last());
+  vtkSmartPointer<vtkUnstructuredGrid> grid = tetra->GetOutput();
+  stages.push_back({ "tetrahedralize", MillisecondsSince(start) });
+  // TetGen meets a tet count only roughly: say so when it is far off.
+  const double made = static_cast<double>(grid->GetNumberOfCells());
+  if ((options.TargetGiven || options.MaxTetVolume <= 0) && options.TargetTets > 0 &&
+    std::abs(made - options.TargetTets) > 0.2 * options.TargetTets)
+    std::cerr << "translucency: note: --target-tets " << options.TargetTets << ": TetGen made "
+              << grid->GetNumberOfCells() << " tets ("
+              << std::lround(100.0 * (made - options.TargetTets) / options.TargetTets)
+              << " %; a tet count is only approximate)\n";
+  return grid;
+}
+
+/// BuildLitMesh, 5. Cut (--cut-plane or --cut-stroke); the statistics in
+/// `stats`.
+vtkSmartPointer<vtkUnstructuredGrid> CutMesh(const SceneOptions& options,
+  vtkUnstructuredGrid* withMaterialIn, std::vector<Stage>& stages, EditStats& stats)
+{
+  MessageCollector messages;
+  vtkSmartPointer<vtkUnstructuredGrid> withMaterial = withMaterialIn;
+  const auto start = Clock::now();
+  vtkNew<vtkStrokeCut> cut;
+  messages.Watch(cut);
+  vtkNew<vtkPlane> plane;
+  std::string what;
+  if (!options.CutPlane.empty())
+  {
+    plane->SetOrigin(options.CutPlane[0], options.CutPlane[1], options.CutPlane[2]);
+    plane->SetNormal(options.CutPlane[3], options.CutPlane[4], options.CutPlane[5]);
+    cut->SetCutFunction(plane);
+    what = "--cut-plane";
+  }
+  else
+  {
+    ApplyStrokeFile(cut, options.CutStroke);
+    what = "--cut-stroke '" + options.CutStroke + "'";
+  }
+  cut->SetInputData(withMaterial);
+  cut->Update();
+  if (!messages.Errors.empty())
+    throw translucency::Error(what + ": " + messages.Last());
+  if (cut->GetOutput()->GetNumberOfCells() == 0)
+    throw translucency::Error(what + " removes the whole mesh");
+  withMaterial = cut->GetOutput();
+  stats.Cut = true;
+  stats.KeptTets = withMaterial->GetNumberOfCells();
+  stats.MovedVertices = cut->GetNumberOfMovedVertices();
+  stats.BlockedVertices = cut->GetNumberOfBlockedVertices();
+  stats.CutMs = MillisecondsSince(start);
+  stages.push_back({ "cut", stats.CutMs });
+  return withMaterial;
+}
+
 
 void SceneOptions::AddInputs(OutputPlan& plan) const
 {
@@ -219,35 +297,7 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   // 2. Tetrahedralize.
   if (surface)
   {
-    start = Clock::now();
-    vtkNew<vtkTetrahedralizeSurface> tetra;
-    // The mesher's own name in the messages (--mesher: tetgen or hxt).
-    const std::string mesher =
-      translucency::ToLower(options.Mesher) == "hxt" ? "gmsh HXT" : "TetGen";
-    messages.Watch(tetra, "tetrahedralizing (" + mesher + ")");
-    Progress("tetrahedralizing " + options.MeshPath + " (" + mesher + ")...");
-    tetra->SetInputData(surface);
-    tetra->SetQuality(options.Quality);
-    tetra->SetMesher(options.Mesher.c_str());
-    tetra->SetUniformSizing(options.UniformSizing);
-    tetra->SetGradingFactor(options.GradingFactor);
-    if (options.MaxTetVolume > 0 && !options.TargetGiven)
-      tetra->SetMaxTetVolume(options.MaxTetVolume);
-    else
-      tetra->SetTargetNumberOfTets(options.TargetTets);
-    tetra->Update();
-    if (!messages.Errors.empty())
-      throw translucency::Error("'" + options.MeshPath + "': " + messages.Last());
-    grid = tetra->GetOutput();
-    stages.push_back({ "tetrahedralize", MillisecondsSince(start) });
-    // TetGen meets a tet count only roughly: say so when it is far off.
-    const double made = static_cast<double>(grid->GetNumberOfCells());
-    if ((options.TargetGiven || options.MaxTetVolume <= 0) && options.TargetTets > 0 &&
-      std::abs(made - options.TargetTets) > 0.2 * options.TargetTets)
-      std::cerr << "translucency: note: --target-tets " << options.TargetTets << ": TetGen made "
-                << grid->GetNumberOfCells() << " tets ("
-                << std::lround(100.0 * (made - options.TargetTets) / options.TargetTets)
-                << " %; a tet count is only approximate)\n";
+    grid = Tetrahedralize(options, surface, stages);
   }
 
   // 3. Coefficients.
@@ -296,36 +346,7 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   // 5. Cut (--cut-plane or --cut-stroke).
   if (!options.CutPlane.empty() || !options.CutStroke.empty())
   {
-    start = Clock::now();
-    vtkNew<vtkStrokeCut> cut;
-    messages.Watch(cut);
-    vtkNew<vtkPlane> plane;
-    std::string what;
-    if (!options.CutPlane.empty())
-    {
-      plane->SetOrigin(options.CutPlane[0], options.CutPlane[1], options.CutPlane[2]);
-      plane->SetNormal(options.CutPlane[3], options.CutPlane[4], options.CutPlane[5]);
-      cut->SetCutFunction(plane);
-      what = "--cut-plane";
-    }
-    else
-    {
-      ApplyStrokeFile(cut, options.CutStroke);
-      what = "--cut-stroke '" + options.CutStroke + "'";
-    }
-    cut->SetInputData(withMaterial);
-    cut->Update();
-    if (!messages.Errors.empty())
-      throw translucency::Error(what + ": " + messages.Last());
-    if (cut->GetOutput()->GetNumberOfCells() == 0)
-      throw translucency::Error(what + " removes the whole mesh");
-    withMaterial = cut->GetOutput();
-    stats.Cut = true;
-    stats.KeptTets = withMaterial->GetNumberOfCells();
-    stats.MovedVertices = cut->GetNumberOfMovedVertices();
-    stats.BlockedVertices = cut->GetNumberOfBlockedVertices();
-    stats.CutMs = MillisecondsSince(start);
-    stages.push_back({ "cut", stats.CutMs });
+    withMaterial = CutMesh(options, withMaterial, stages, stats);
   }
 
   // 6. Irradiance. A point or spot light inside the object faces no
