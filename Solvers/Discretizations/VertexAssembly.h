@@ -141,6 +141,57 @@ inline void ResizeVertexSystem(const TetMesh& mesh, DiffusionSystem& system)
 constexpr int PrefetchDistance = 8;
 
 /**
+ * AssembleVertexSystem, 4. (inside its parallel region: orphaned work-
+ * sharing) the tets: colour classes in turn; within a class, vertex-
+ * disjoint chunks in parallel, each chunk's tets in order, each given to
+ * `tetKernel` with its geometry (computed and stored in `cache` when
+ * `fill`, else read from it).
+ */
+template <typename TetKernel>
+inline void ScatterTets(const TetMesh& mesh, bool fill, TetGeometryCache& cache,
+  double* const* values, TetKernel&& tetKernel)
+{
+  const TetMesh::ScatterSchedule& schedule = mesh.GetScatterSchedule();
+  const int numColours = schedule.GetNumberOfColours();
+  const double* points = mesh.GetPoints().data();
+  const int* tets = mesh.GetTets().data();
+  const int* positions = mesh.GetTetNonZeroPositions().data();
+  for (int colour = 0; colour < numColours; ++colour)
+  {
+#pragma omp for schedule(dynamic, 1)
+    for (int chunk = schedule.ColourOffsets[colour]; chunk < schedule.ColourOffsets[colour + 1];
+         ++chunk)
+    {
+      const int chunkEnd = schedule.ChunkOffsets[chunk + 1];
+      for (int s = schedule.ChunkOffsets[chunk]; s < chunkEnd; ++s)
+      {
+        const size_t t = static_cast<size_t>(schedule.Tets[s]);
+        if (s + PrefetchDistance < chunkEnd)
+        {
+          // The entries the tet PrefetchDistance ahead will add to: much
+          // of the scatter's time is waiting on these misses, far below
+          // the bandwidth (the rows are not in an order a hardware
+          // prefetcher follows).
+          const int* ahead =
+            positions + 16 * static_cast<size_t>(schedule.Tets[s + PrefetchDistance]);
+          for (int c = 0; c < NumberOfChannels; ++c)
+          {
+            for (int e = 0; e < 16; ++e)
+            {
+              __builtin_prefetch(values[c] + ahead[e], 1);
+            }
+          }
+        }
+        const int* tv = tets + 4 * t;
+        const TetGeometry geometry =
+          fill ? cache.ComputeAndStore(points, tv, t) : cache.Get(t);
+        tetKernel(t, tv, positions + 16 * t, geometry);
+      }
+    }
+  }
+}
+
+/**
  * Assemble a vertex system on the mesh's CSR pattern: sizes `system`
  * (ResizeVertexSystem: a caller may size it first to take pointers into it),
  * then one OpenMP parallel region that
@@ -179,11 +230,6 @@ bool AssembleVertexSystem(const TetMesh& mesh, const OpticalProperties& material
     cache.BeginFill(mesh);
   }
 
-  const TetMesh::ScatterSchedule& schedule = mesh.GetScatterSchedule();
-  const int numColours = schedule.GetNumberOfColours();
-  const double* points = mesh.GetPoints().data();
-  const int* tets = mesh.GetTets().data();
-  const int* positions = mesh.GetTetNonZeroPositions().data();
   const double* muA = material.AbsorptionCoefficient.data();
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
   const double* tetEta = material.RefractiveIndex.data();
@@ -281,39 +327,7 @@ bool AssembleVertexSystem(const TetMesh& mesh, const OpticalProperties& material
 #pragma omp barrier
       // 4. Tets: colour classes in turn; within a class, vertex-disjoint
       // chunks in parallel, each chunk's tets in order.
-      for (int colour = 0; colour < numColours; ++colour)
-      {
-#pragma omp for schedule(dynamic, 1)
-        for (int chunk = schedule.ColourOffsets[colour]; chunk < schedule.ColourOffsets[colour + 1];
-             ++chunk)
-        {
-          const int chunkEnd = schedule.ChunkOffsets[chunk + 1];
-          for (int s = schedule.ChunkOffsets[chunk]; s < chunkEnd; ++s)
-          {
-            const size_t t = static_cast<size_t>(schedule.Tets[s]);
-            if (s + PrefetchDistance < chunkEnd)
-            {
-              // The entries the tet PrefetchDistance ahead will add to: much
-              // of the scatter's time is waiting on these misses, far below
-              // the bandwidth (the rows are not in an order a hardware
-              // prefetcher follows).
-              const int* ahead =
-                positions + 16 * static_cast<size_t>(schedule.Tets[s + PrefetchDistance]);
-              for (int c = 0; c < NumberOfChannels; ++c)
-              {
-                for (int e = 0; e < 16; ++e)
-                {
-                  __builtin_prefetch(values[c] + ahead[e], 1);
-                }
-              }
-            }
-            const int* tv = tets + 4 * t;
-            const TetGeometry geometry =
-              fill ? cache.ComputeAndStore(points, tv, t) : cache.Get(t);
-            tetKernel(t, tv, positions + 16 * t, geometry);
-          }
-        }
-      }
+      ScatterTets(mesh, fill, cache, values, tetKernel);
       // 5.
       finish();
     }
