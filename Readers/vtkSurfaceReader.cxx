@@ -1214,6 +1214,58 @@ void ReadStl(const std::string& bytes, Surface& surface)
 //------------------------------------------------------------------------------
 // OBJ.
 
+/// ReadObj: the corner `token` of face `face` (line n): v, v/vt, v/vt/vn or
+/// v//vn, relative (negative) indices resolved against `counts` (vertices,
+/// texture coordinates, normals defined so far); 0 for a missing index.
+void ResolveObjCorner(std::string_view token, size_t face, size_t n, const long long counts[3],
+  long long resolved[3])
+{
+  // v, v/vt, v/vt/vn or v//vn.
+  std::string_view parts[3];
+  int numParts = 0;
+  std::string_view rest = token;
+  for (;;)
+  {
+    const size_t slash = rest.find('/');
+    if (numParts == 3)
+    {
+      FailAtLine(n, "face " + std::to_string(face) + ": bad corner " + Quote(token));
+    }
+    parts[numParts++] = rest.substr(0, slash);
+    if (slash == std::string_view::npos)
+    {
+      break;
+    }
+    rest = rest.substr(slash + 1);
+  }
+  for (int part = 0; part < numParts; ++part)
+  {
+    if (part == 1 && parts[1].empty() && numParts == 3)
+    {
+      continue; // v//vn
+    }
+    long long index;
+    if (!ParseInteger(parts[part], index) || index == 0)
+    {
+      FailAtLine(n,
+        "face " + std::to_string(face) + ": bad corner " + Quote(token) +
+          " (indices are non-zero integers)");
+    }
+    if (index < 0)
+    {
+      if (index < -counts[part])
+      {
+        FailAtLine(n,
+          "face " + std::to_string(face) + ": the relative index " + std::to_string(index) +
+            " in " + Quote(token) + " reaches before the first of the " +
+            std::to_string(counts[part]) + " defined so far");
+      }
+      index = counts[part] + index + 1;
+    }
+    resolved[part] = index;
+  }
+}
+
 void ReadObj(const std::string& bytes, Surface& surface)
 {
   LineReader lines(bytes, 0, 1);
@@ -1283,52 +1335,9 @@ void ReadObj(const std::string& bytes, Surface& surface)
       const long long numPoints = static_cast<long long>(surface.Points.size() / 3);
       for (size_t k = 1; k < tokens.size(); ++k)
       {
-        // v, v/vt, v/vt/vn or v//vn.
-        std::string_view parts[3];
-        int numParts = 0;
-        std::string_view rest = tokens[k];
-        for (;;)
-        {
-          const size_t slash = rest.find('/');
-          if (numParts == 3)
-          {
-            FailAtLine(n, "face " + std::to_string(face) + ": bad corner " + Quote(tokens[k]));
-          }
-          parts[numParts++] = rest.substr(0, slash);
-          if (slash == std::string_view::npos)
-          {
-            break;
-          }
-          rest = rest.substr(slash + 1);
-        }
         const long long counts[3] = { numPoints, texCoords, normals };
         long long resolved[3] = { 0, 0, 0 };
-        for (int part = 0; part < numParts; ++part)
-        {
-          if (part == 1 && parts[1].empty() && numParts == 3)
-          {
-            continue; // v//vn
-          }
-          long long index;
-          if (!ParseInteger(parts[part], index) || index == 0)
-          {
-            FailAtLine(n,
-              "face " + std::to_string(face) + ": bad corner " + Quote(tokens[k]) +
-                " (indices are non-zero integers)");
-          }
-          if (index < 0)
-          {
-            if (index < -counts[part])
-            {
-              FailAtLine(n,
-                "face " + std::to_string(face) + ": the relative index " + std::to_string(index) +
-                  " in " + Quote(tokens[k]) + " reaches before the first of the " +
-                  std::to_string(counts[part]) + " defined so far");
-            }
-            index = counts[part] + index + 1;
-          }
-          resolved[part] = index;
-        }
+        ResolveObjCorner(tokens[k], face, n, counts, resolved);
         surface.Connectivity.push_back(static_cast<vtkIdType>(resolved[0] - 1));
         if (resolved[1] > maxTexCoord)
         {
