@@ -79,36 +79,21 @@ void DiscreteDivergence::Assemble(const TetMesh& mesh,
   }
 }
 
-bool DiscreteDivergence::UpdateTets(const TetMesh& mesh,
-  const OpticalProperties& material,
-  const std::vector<double>& irradiance,
-  const std::vector<int>& changedTets,
-  DiffusionSystem& system) const
+namespace
 {
-  const int numPoints = mesh.GetNumberOfPoints();
+/// UpdateTets: the rows to rebuild (the vertices of the changed tets, in
+/// order of first use; flagged in rowFlag), each changed tet's id and
+/// coefficients checked.
+void ChangedRows(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<int>& changedTets, std::vector<char>& rowFlag, std::vector<int>& rows)
+{
   const int numTets = mesh.GetNumberOfTets();
-  const size_t tetCount = static_cast<size_t>(numTets);
-  const size_t nnz = mesh.GetColumnIndices().size();
-  if (system.NumberOfUnknowns != numPoints || system.RowOffsets.size() != mesh.GetRowOffsets().size() ||
-    system.ColumnIndices.size() != nnz || system.Values[0].size() != nnz ||
-    system.Values[1].size() != nnz || system.Values[2].size() != nnz ||
-    system.RightHandSide[0].size() != numPoints)
-  {
-    std::ostringstream os;
-    os << "DiscreteDivergence::UpdateTets: the system (" << system.NumberOfUnknowns
-       << " unknowns, " << system.ColumnIndices.size() << " non-zeros) does not match the mesh ("
-       << numPoints << " points, " << nnz << " non-zeros): call Assemble first";
-    throw Error(os.str());
-  }
-  CheckAssemblySizes(mesh, material, irradiance);
   const double* muA = material.AbsorptionCoefficient.data();
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
   const double* tetEta = material.RefractiveIndex.data();
   const int* tets = mesh.GetTets().data();
-
-  // Rows to rebuild: the vertices of the changed tets.
-  std::vector<char> rowFlag(static_cast<size_t>(numPoints), 0);
-  std::vector<int> rows;
+  rowFlag.assign(static_cast<size_t>(mesh.GetNumberOfPoints()), 0);
+  rows.clear();
   for (int t : changedTets)
   {
     if (t < 0 || t >= numTets)
@@ -141,6 +126,41 @@ bool DiscreteDivergence::UpdateTets(const TetMesh& mesh,
       }
     }
   }
+}
+
+} // namespace
+
+bool DiscreteDivergence::UpdateTets(const TetMesh& mesh,
+  const OpticalProperties& material,
+  const std::vector<double>& irradiance,
+  const std::vector<int>& changedTets,
+  DiffusionSystem& system) const
+{
+  const int numPoints = mesh.GetNumberOfPoints();
+  const int numTets = mesh.GetNumberOfTets();
+  const size_t tetCount = static_cast<size_t>(numTets);
+  const size_t nnz = mesh.GetColumnIndices().size();
+  if (system.NumberOfUnknowns != numPoints || system.RowOffsets.size() != mesh.GetRowOffsets().size() ||
+    system.ColumnIndices.size() != nnz || system.Values[0].size() != nnz ||
+    system.Values[1].size() != nnz || system.Values[2].size() != nnz ||
+    system.RightHandSide[0].size() != numPoints)
+  {
+    std::ostringstream os;
+    os << "DiscreteDivergence::UpdateTets: the system (" << system.NumberOfUnknowns
+       << " unknowns, " << system.ColumnIndices.size() << " non-zeros) does not match the mesh ("
+       << numPoints << " points, " << nnz << " non-zeros): call Assemble first";
+    throw Error(os.str());
+  }
+  CheckAssemblySizes(mesh, material, irradiance);
+  const double* muA = material.AbsorptionCoefficient.data();
+  const double* sigmaS = material.ReducedScatteringCoefficient.data();
+  const double* tetEta = material.RefractiveIndex.data();
+  const int* tets = mesh.GetTets().data();
+
+  // Rows to rebuild: the vertices of the changed tets.
+  std::vector<char> rowFlag;
+  std::vector<int> rows;
+  ChangedRows(mesh, material, changedTets, rowFlag, rows);
   if (rows.empty())
   {
     return true;
