@@ -100,21 +100,10 @@ std::vector<int> ClassifyTriangles(MPI_Comm comm, const DistributedNumbering& nu
   return seen;
 }
 
-} // namespace
-
-void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
-  const std::vector<PointKey>& keys, bool ids, const std::vector<char>& used,
-  const std::vector<int>& triangles, const std::vector<double>& triangleEta,
-  const std::vector<int>& triangleTets, BoundarySurface& surface,
-  std::vector<int>& surfacePoint, std::vector<double>& rotations,
-  BoundarySurfaceReport& report)
+/// GatherBoundarySurface: the diagonal of the bounding box of every rank's
+/// points (the serial one: every point), 0 without points (collective).
+double GlobalDiagonal(MPI_Comm comm, const std::vector<double>& points, std::size_t numPoints)
 {
-  const Timer timer;
-  report = BoundarySurfaceReport();
-  const std::size_t numPoints = keys.size();
-  const std::size_t numTriangles = triangles.size() / 3;
-
-  // The bounding box of every rank's points (the serial one: every point).
   double box[6];
   for (int k = 0; k < 3; ++k)
   {
@@ -136,10 +125,28 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
     lo[k] = box[k];
     hi[k] = -box[3 + k];
   }
-  surface.Diagonal = std::isfinite(lo[0])
+  return std::isfinite(lo[0])
     ? std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
         (hi[2] - lo[2]) * (hi[2] - lo[2]))
     : 0.0;
+}
+
+} // namespace
+
+void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
+  const std::vector<PointKey>& keys, bool ids, const std::vector<char>& used,
+  const std::vector<int>& triangles, const std::vector<double>& triangleEta,
+  const std::vector<int>& triangleTets, BoundarySurface& surface,
+  std::vector<int>& surfacePoint, std::vector<double>& rotations,
+  BoundarySurfaceReport& report)
+{
+  const Timer timer;
+  report = BoundarySurfaceReport();
+  const std::size_t numPoints = keys.size();
+  const std::size_t numTriangles = triangles.size() / 3;
+
+  // The bounding box of every rank's points (the serial one: every point).
+  surface.Diagonal = GlobalDiagonal(comm, points, numPoints);
 
   // Global rows, and the physical triangles: those no other rank has.
   DistributedNumbering numbering;
