@@ -165,21 +165,12 @@ void DistributedVertexSolver::BuildGeometry(
   HaveGeometry_ = true;
 }
 
-void DistributedVertexSolver::Solve(const std::vector<double>& points,
+void DistributedVertexSolver::CheckPiece(const std::vector<double>& points,
   const std::vector<PointKey>& keys, const std::vector<int>& tets,
-  const OpticalProperties& material, const std::vector<double>& irradiance,
-  std::vector<double>& fluence, SolverReport& report)
+  const OpticalProperties& material, const std::vector<double>& irradiance) const
 {
-  Timings_ = Timings();
-  Readings_.clear();
-  report = SolverReport();
-  report.Solver = Name_;
-  report.LinearSolver = "hypre-amg (distributed)";
-  report.Assembly = "full";
+  // Sizes and ids (the values are checked by the assembly).
   const std::size_t numPoints = keys.size();
-  const int numTets = static_cast<int>(tets.size() / 4);
-
-  // 0. Sizes and ids (the values are checked by the assembly).
   std::string error;
   try
   {
@@ -202,34 +193,24 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
         throw Error(os.str());
       }
     }
-    material.Validate(numTets);
+    material.Validate(static_cast<int>(tets.size() / 4));
   }
   catch (const Error& e)
   {
     error = e.what();
   }
   AgreeOnError(Comm_, error);
+}
 
-  // 1. The global identity and boundary, unless the mesh is the last one.
-  double start = MPI_Wtime();
-  int same = HaveGeometry_ && points == Points_ && keys == Keys_ && tets == Tets_ ? 1 : 0;
-  int allSame = 0;
-  MPI_Allreduce(&same, &allSame, 1, MPI_INT, MPI_MIN, Comm_);
-  if (!allSame)
-  {
-    BuildGeometry(points, keys, tets);
-    Timings_.Numbering = Milliseconds(start);
-  }
-
-  // 2. The local system: element matrices of the owned tets, boundary terms
-  // of the physical faces.
-  start = MPI_Wtime();
-  DiffusionSystem system;
-  const int* tetPositions = Mesh_.GetTetNonZeroPositions().data();
+void DistributedVertexSolver::AssembleLocal(const OpticalProperties& material,
+  const std::vector<double>& irradiance, DiffusionSystem& system)
+{
+  // The element matrices of the owned tets (TetContributions.h, the serial
+  // assemblies' expressions).
+  std::string error;
+  const int numTets = static_cast<int>(Tets_.size() / 4);
   const double* muA = material.AbsorptionCoefficient.data();
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
-  const double* tetEta = material.RefractiveIndex.data();
-  const double* q = irradiance.data();
   if (numTets > 0)
   {
     const int threads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
@@ -263,14 +244,20 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
     }
   }
   AgreeOnError(Comm_, error);
+}
 
+void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material,
+  const std::vector<double>& irradiance, DiffusionSystem& system, std::vector<double>& localRhs)
+{
   const std::vector<int>& triangles = Mesh_.GetBoundaryTriangles();
   const std::vector<int>& triangleTets = Mesh_.GetBoundaryTriangleTets();
   const std::vector<double>& areas = Mesh_.GetBoundaryTriangleAreas();
-  std::vector<double> localRhs(3 * numPoints, 0.0);
+  const double* tetEta = material.RefractiveIndex.data();
+  const double* q = irradiance.data();
   if (Fem_)
   {
     // Each physical face with its tet, on the tet's rank (TransCut eq. 2).
+    const int* tetPositions = Mesh_.GetTetNonZeroPositions().data();
     for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
     {
       if (!PhysicalFace_[f])
@@ -299,63 +286,70 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
         }
       }
     }
+    return;
   }
-  else
+  // S_i and sum of S_f eta_f around i over every rank's physical faces, at
+  // the owner, which adds the lumped Robin term (eq. 12-13).
+  const std::size_t numPoints = Keys_.size();
+  std::vector<double> measures(2 * numPoints, 0.0);
+  for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
   {
-    // S_i and sum of S_f eta_f around i over every rank's physical faces,
-    // at the owner, which adds the lumped Robin term (eq. 12-13).
-    std::vector<double> measures(2 * numPoints, 0.0);
-    for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
+    if (!PhysicalFace_[f])
+      continue;
+    const double eta = tetEta[triangleTets[f]];
+    for (int a = 0; a < 3; ++a)
     {
-      if (!PhysicalFace_[f])
-        continue;
-      const double eta = tetEta[triangleTets[f]];
-      for (int a = 0; a < 3; ++a)
-      {
-        const std::size_t i = static_cast<std::size_t>(triangles[3 * f + a]);
-        measures[2 * i] += areas[f];
-        measures[2 * i + 1] += areas[f] * eta;
-      }
-    }
-    const std::vector<double> owned = Numbering_.SumToOwners(Comm_, measures, 2);
-    const int* diagonal = Mesh_.GetDiagonalPositions().data();
-    for (std::size_t r = 0; r < FirstLocal_.size(); ++r)
-    {
-      const double s = owned[2 * r];
-      if (!(s > 0.0))
-        continue;
-      const std::size_t i = static_cast<std::size_t>(FirstLocal_[r]);
-      const double eta = owned[2 * r + 1] / s;
-      const double a = Fresnel::MismatchA(eta), fdr = Fresnel::DiffuseReflectance(eta);
-      for (int c = 0; c < NumberOfChannels; ++c)
-      {
-        system.Values[c][static_cast<std::size_t>(diagonal[i])] += DivergenceRobinDiagonal(s, a);
-        localRhs[3 * i + c] = DivergenceRobinLoad(s, q[3 * i + c], a, fdr);
-      }
+      const std::size_t i = static_cast<std::size_t>(triangles[3 * f + a]);
+      measures[2 * i] += areas[f];
+      measures[2 * i + 1] += areas[f] * eta;
     }
   }
-  std::array<double, NumberOfChannels> localSourcePower{};
-  // Interior sources: their load on the rank owning each source's tet,
-  // times 4 as every right-hand side (FiniteElement.h).
-  if (Sources_ && !Sources_->Empty())
+  const std::vector<double> owned = Numbering_.SumToOwners(Comm_, measures, 2);
+  const int* diagonal = Mesh_.GetDiagonalPositions().data();
+  for (std::size_t r = 0; r < FirstLocal_.size(); ++r)
   {
-    const std::vector<double> load =
-      ComputeDistributedSourceLoad(Comm_, Piece(material), *Sources_);
-    for (std::size_t k = 0; k < load.size(); ++k)
+    const double s = owned[2 * r];
+    if (!(s > 0.0))
+      continue;
+    const std::size_t i = static_cast<std::size_t>(FirstLocal_[r]);
+    const double eta = owned[2 * r + 1] / s;
+    const double a = Fresnel::MismatchA(eta), fdr = Fresnel::DiffuseReflectance(eta);
+    for (int c = 0; c < NumberOfChannels; ++c)
     {
-      localRhs[k] += 4.0 * load[k];
-      localSourcePower[k % 3] += load[k];
+      system.Values[c][static_cast<std::size_t>(diagonal[i])] += DivergenceRobinDiagonal(s, a);
+      localRhs[3 * i + c] = DivergenceRobinLoad(s, q[3 * i + c], a, fdr);
     }
   }
-  const std::vector<double> rhs = Numbering_.SumToOwners(Comm_, localRhs, 3);
-  localRhs = {};
+}
 
-  // 3. The matrices: rebuilt (values added, hierarchy set up) when changed,
-  // or, on the same mesh, new values under the kept hierarchy.
-  const int owned = Numbering_.GetNumberOfOwnedRows();
-  double hierarchyMs = 0.0;
+void DistributedVertexSolver::SetUpChannel(int c)
+{
+  std::string error;
+  ForceFull_[c] = false;
+  FullIterations_[c] = -1; // set by this Solve's PCG
+  try
+  {
+    if (!Channels_[c] || OptionsChanged_)
+      Channels_[c] = std::make_unique<HypreBoomerAMGPCG>(Comm_, Options_);
+    Channels_[c]->SetupAddTo(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), SendRows_,
+      SendSizes_, SendColumns_, Contributions_[c], RowSizeHints_.data());
+  }
+  catch (const Error& e)
+  {
+    error = e.what();
+  }
+  AgreeOnError(Comm_, error);
+}
+
+std::array<DistributedVertexSolver::ChannelSetup, NumberOfChannels>
+DistributedVertexSolver::SetUpMatrices(
+  bool sameMesh, DiffusionSystem& system, std::string& assembly, double& hierarchyMs)
+{
+  // Rebuilt (values added, hierarchy set up) when changed, or, on the same
+  // mesh, new values under the kept hierarchy. Returns what each channel got.
+  std::array<ChannelSetup, NumberOfChannels> setup{};
   bool rebuilt = false, updated = false;
-  std::array<bool, NumberOfChannels> valuesOnly{};
+  std::string error;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     std::vector<double> values(SendPositions_.size());
@@ -366,7 +360,7 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
     MPI_Allreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, Comm_);
     system.Values[c] = {};
     // Values only when every rank can (the same branch on every rank).
-    int canUpdate = allSame && Channels_[c] && !OptionsChanged_ && !ForceFull_[c] &&
+    int canUpdate = sameMesh && Channels_[c] && !OptionsChanged_ && !ForceFull_[c] &&
         values.size() == Contributions_[c].size()
       ? 1
       : 0;
@@ -392,41 +386,35 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
       }
       AgreeOnError(Comm_, error);
       updated = true;
-      valuesOnly[c] = true;
+      setup[c] = ChannelSetup::ValuesOnly;
       Contributions_[c].swap(values);
     }
     else if (anyChanged)
     {
-      ForceFull_[c] = false;
-      FullIterations_[c] = -1; // set by this Solve's PCG
-      try
-      {
-        if (!Channels_[c])
-          Channels_[c] = std::make_unique<HypreBoomerAMGPCG>(Comm_, Options_);
-        else if (OptionsChanged_)
-          Channels_[c] = std::make_unique<HypreBoomerAMGPCG>(Comm_, Options_);
-        Channels_[c]->SetupAddTo(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), SendRows_,
-          SendSizes_, SendColumns_, values, RowSizeHints_.data());
-      }
-      catch (const Error& e)
-      {
-        error = e.what();
-      }
-      AgreeOnError(Comm_, error);
-      rebuilt = true;
-      hierarchyMs += Channels_[c]->GetHierarchyMilliseconds();
       Contributions_[c].swap(values);
+      SetUpChannel(c);
+      rebuilt = true;
+      setup[c] = ChannelSetup::Fresh;
+      hierarchyMs += Channels_[c]->GetHierarchyMilliseconds();
     }
   }
   OptionsChanged_ = false;
-  report.Assembly = rebuilt ? "full" : updated ? "values-only" : "unchanged";
-  system = DiffusionSystem();
-  Timings_.Assembly = Milliseconds(start) - hierarchyMs;
-  Timings_.AMGSetup = hierarchyMs;
+  assembly = rebuilt ? "full" : updated ? "values-only" : "unchanged";
+  return setup;
+}
 
-  // 4. PCG per channel, from the previous solution on the same unknowns.
-  start = MPI_Wtime();
-  std::vector<double> solution(3 * static_cast<std::size_t>(owned), 0.0);
+void DistributedVertexSolver::SolveChannels(const std::vector<double>& rhs,
+  const std::array<ChannelSetup, NumberOfChannels>& setup, std::vector<double>& solution,
+  SolverReport& report, double& hierarchyMs)
+{
+  // PCG per channel, from the previous solution on the same unknowns.
+  // Never a non-converged result from a kept hierarchy: a channel that does
+  // not converge under a hierarchy set up before this Solve (values-only
+  // update after a paint, a relight) is set up from scratch and solved
+  // again, cold (issue 32: a kept hierarchy broke down after 1 iteration).
+  const int owned = Numbering_.GetNumberOfOwnedRows();
+  solution.assign(3 * static_cast<std::size_t>(owned), 0.0);
+  std::string error;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     std::vector<double> b(static_cast<std::size_t>(owned));
@@ -439,7 +427,7 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
     double globalNorm = 0.0;
     MPI_Allreduce(&norm, &globalNorm, 1, MPI_DOUBLE, MPI_SUM, Comm_);
     std::vector<double>& x = Solution_[c];
-    const bool guess = WarmStart_ && x.size() == static_cast<std::size_t>(owned);
+    bool guess = WarmStart_ && x.size() == static_cast<std::size_t>(owned);
     if (!guess)
       x.assign(static_cast<std::size_t>(owned), 0.0);
     if (globalNorm == 0.0)
@@ -447,42 +435,55 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
       std::fill(x.begin(), x.end(), 0.0);
       report.Converged[c] = true;
     }
-    else
+    for (int attempt = 0; globalNorm != 0.0 && attempt < 2; ++attempt)
     {
       double residual = 0.0;
       try
       {
-        report.Iterations[c] = Channels_[c]->Solve(b.data(), x.data(), guess, RelTol_, MaxIter_, residual);
+        report.Iterations[c] =
+          Channels_[c]->Solve(b.data(), x.data(), guess, RelTol_, MaxIter_, residual);
       }
       catch (const Error& e)
       {
         error = e.what();
       }
       AgreeOnError(Comm_, error);
-      report.Residual[c] = residual;
+      report.Residual[c] = residual; // global: the same on every rank
       report.Converged[c] = residual <= RelTol_;
-      const int iterations = report.Iterations[c]; // global: the same on every rank
-      if (FullIterations_[c] < 0)
-        FullIterations_[c] = iterations;
-      else if (valuesOnly[c] && iterations > 2 * std::max(FullIterations_[c], 5))
-        ForceFull_[c] = true; // the kept hierarchy has aged: rebuild at the next change
+      const int iterations = report.Iterations[c];
+      if (report.Converged[c] || setup[c] == ChannelSetup::Fresh || attempt > 0)
+      {
+        if (FullIterations_[c] < 0)
+          FullIterations_[c] = iterations;
+        else if (setup[c] == ChannelSetup::ValuesOnly && iterations > 2 * std::max(FullIterations_[c], 5))
+          ForceFull_[c] = true; // the kept hierarchy has aged: rebuild at the next change
+        break;
+      }
+      SetUpChannel(c); // the kept hierarchy failed: set up from scratch, solve again cold
+      hierarchyMs += Channels_[c]->GetHierarchyMilliseconds();
+      report.Resolved = true;
+      guess = false;
+      std::fill(x.begin(), x.end(), 0.0);
     }
     for (int r = 0; r < owned; ++r)
       solution[3 * static_cast<std::size_t>(r) + c] = x[static_cast<std::size_t>(r)];
   }
-  fluence = Numbering_.FetchFromOwners(Comm_, solution, 3);
-  Timings_.Solve = Milliseconds(start);
+}
+
+void DistributedVertexSolver::ReadOuts(const OpticalProperties& material,
+  const std::vector<double>& irradiance, const std::vector<double>& fluence,
+  const std::array<double, NumberOfChannels>& localSourcePower)
+{
   Readings_.clear();
   if (!Detectors_.empty())
     Readings_ = ReadDistributedDetectors(Comm_, Piece(material), Detectors_, fluence, &irradiance);
 
-  // 5. The power balance: this rank's tets and physical faces, summed.
+  // The power balance: this rank's tets and physical faces, summed.
   std::array<double, 4 * NumberOfChannels> sums{};
-  if (numTets > 0)
+  if (!Tets_.empty())
   {
-    const PowerBalance local =
-      ComputePowerBalance(Mesh_, material, fluence, &irradiance, Fresnel::BoundaryRule::Fit,
-        &PhysicalFace_);
+    const PowerBalance local = ComputePowerBalance(
+      Mesh_, material, fluence, &irradiance, Fresnel::BoundaryRule::Fit, &PhysicalFace_);
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       sums[c] = local.Absorbed[c];
@@ -501,7 +502,11 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
     Balance_.BoundaryInjected[c] = sums[2 * NumberOfChannels + c];
     SourcePower_[c] = sums[3 * NumberOfChannels + c];
   }
+}
 
+void DistributedVertexSolver::FillStatistics(SolverReport& report) const
+{
+  const int owned = Numbering_.GetNumberOfOwnedRows();
   report.SetupMilliseconds = Timings_.Numbering + Timings_.Assembly + Timings_.AMGSetup;
   report.SolveMilliseconds = Timings_.Solve;
   report.NumberOfUnknowns = Numbering_.GetNumberOfRows();
@@ -521,6 +526,75 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
     }
   }
   report.MemoryBytes = bytes;
+}
+
+void DistributedVertexSolver::Solve(const std::vector<double>& points,
+  const std::vector<PointKey>& keys, const std::vector<int>& tets,
+  const OpticalProperties& material, const std::vector<double>& irradiance,
+  std::vector<double>& fluence, SolverReport& report)
+{
+  Timings_ = Timings();
+  Readings_.clear();
+  report = SolverReport();
+  report.Solver = Name_;
+  report.LinearSolver = "hypre-amg (distributed)";
+  report.Assembly = "full";
+
+  // 0. The piece's sizes and ids.
+  CheckPiece(points, keys, tets, material, irradiance);
+
+  // 1. The global identity and boundary, unless the mesh is the last one.
+  double start = MPI_Wtime();
+  int same = HaveGeometry_ && points == Points_ && keys == Keys_ && tets == Tets_ ? 1 : 0;
+  int allSame = 0;
+  MPI_Allreduce(&same, &allSame, 1, MPI_INT, MPI_MIN, Comm_);
+  if (!allSame)
+  {
+    BuildGeometry(points, keys, tets);
+    Timings_.Numbering = Milliseconds(start);
+  }
+
+  // 2. The local system: element matrices of the owned tets, boundary terms
+  // of the physical faces, interior sources (their load on the rank owning
+  // each source's tet, times 4 as every right-hand side: FiniteElement.h).
+  start = MPI_Wtime();
+  DiffusionSystem system;
+  AssembleLocal(material, irradiance, system);
+  std::vector<double> localRhs(3 * keys.size(), 0.0);
+  AddBoundaryTerms(material, irradiance, system, localRhs);
+  std::array<double, NumberOfChannels> localSourcePower{};
+  if (Sources_ && !Sources_->Empty())
+  {
+    const std::vector<double> load =
+      ComputeDistributedSourceLoad(Comm_, Piece(material), *Sources_);
+    for (std::size_t k = 0; k < load.size(); ++k)
+    {
+      localRhs[k] += 4.0 * load[k];
+      localSourcePower[k % 3] += load[k];
+    }
+  }
+  const std::vector<double> rhs = Numbering_.SumToOwners(Comm_, localRhs, 3);
+  localRhs = {};
+
+  // 3. The hypre matrices and their hierarchies.
+  double hierarchyMs = 0.0;
+  const std::array<ChannelSetup, NumberOfChannels> setup =
+    SetUpMatrices(allSame != 0, system, report.Assembly, hierarchyMs);
+  system = DiffusionSystem();
+  Timings_.Assembly = Milliseconds(start) - hierarchyMs;
+
+  // 4. PCG per channel (again after a full set-up if a kept hierarchy fails).
+  start = MPI_Wtime();
+  double retryMs = 0.0;
+  std::vector<double> solution;
+  SolveChannels(rhs, setup, solution, report, retryMs);
+  fluence = Numbering_.FetchFromOwners(Comm_, solution, 3);
+  Timings_.Solve = Milliseconds(start) - retryMs;
+  Timings_.AMGSetup = hierarchyMs + retryMs;
+
+  // 5. Detectors and the power balance, summed over the ranks.
+  ReadOuts(material, irradiance, fluence, localSourcePower);
+  FillStatistics(report);
 }
 
 } // namespace translucency

@@ -68,8 +68,12 @@ public:
    * (HypreBoomerAMGPCG::UpdateValuesAddTo): no set-up, PCG still converges
    * to RelTol on the new matrix. A channel whose PCG then needs more than
    * twice the iterations of its last solve after a full set-up (at least
-   * 10) gets a full set-up at the next change. Off: every change of values
-   * rebuilds the hierarchies.
+   * 10) gets a full set-up at the next change. A channel whose PCG does not
+   * converge under a kept hierarchy (values-only or unchanged matrix) is set
+   * up from scratch and solved again, cold, in the same Solve
+   * (report.Resolved); the report then has the second solve's iterations
+   * and residual, and the caller refuses a result that still did not
+   * converge. Off: every change of values rebuilds the hierarchies.
    */
   void SetValuesOnlySetup(bool on) { ValuesOnly_ = on; }
   bool GetValuesOnlySetup() const { return ValuesOnly_; }
@@ -148,6 +152,30 @@ public:
   double GetOperatorComplexity(int c) const;
 
 private:
+  /// What a channel's hierarchy got in this Solve.
+  enum class ChannelSetup
+  {
+    Kept,       ///< the matrix is unchanged (a relight)
+    ValuesOnly, ///< new values under the kept hierarchy (a paint)
+    Fresh       ///< set up from scratch
+  };
+  // The phases of Solve (each collective).
+  void CheckPiece(const std::vector<double>& points, const std::vector<PointKey>& keys,
+    const std::vector<int>& tets, const OpticalProperties& material,
+    const std::vector<double>& irradiance) const;
+  void AssembleLocal(const OpticalProperties& material, const std::vector<double>& irradiance,
+    DiffusionSystem& system);
+  void AddBoundaryTerms(const OpticalProperties& material, const std::vector<double>& irradiance,
+    DiffusionSystem& system, std::vector<double>& localRhs);
+  std::array<ChannelSetup, NumberOfChannels> SetUpMatrices(
+    bool sameMesh, DiffusionSystem& system, std::string& assembly, double& hierarchyMs);
+  void SetUpChannel(int c);
+  void SolveChannels(const std::vector<double>& rhs,
+    const std::array<ChannelSetup, NumberOfChannels>& setup, std::vector<double>& solution,
+    SolverReport& report, double& hierarchyMs);
+  void ReadOuts(const OpticalProperties& material, const std::vector<double>& irradiance,
+    const std::vector<double>& fluence, const std::array<double, NumberOfChannels>& localSourcePower);
+  void FillStatistics(SolverReport& report) const;
   void BuildGeometry(const std::vector<double>& points, const std::vector<PointKey>& keys,
     const std::vector<int>& tets);
 
