@@ -11,7 +11,6 @@
 #include "TetMesh.h"
 #include "TimeResolved.h"
 #include "Timer.h"
-#include "VertexDiffusionSolver.h"
 
 #include "vtkAssignScatteringCoefficients.h"
 #include "vtkSurfaceIrradiance.h"
@@ -46,7 +45,6 @@ namespace
 using json = nlohmann::json;
 using translucency::DiffusionProblem;
 using translucency::SolverReport;
-using translucency::VertexDiffusionSolver;
 
 /// The 1-, 5- and 15-minute load averages (/proc/loadavg), "?" if unreadable.
 std::string LoadAverage()
@@ -183,8 +181,7 @@ json FrequencyTable(const Scene& scene, double target, double frequency, int run
       solver->SetLinearSolver(t == &jacobi ? "cg-jacobi" : "multigrid-agg");
       std::vector<std::complex<double>> fluence;
       const std::clock_t cpu = std::clock();
-      dynamic_cast<VertexDiffusionSolver&>(*solver).SolveFrequencyDomain(
-        problem, frequency, fluence, report);
+      solver->SolveFrequencyDomain(problem, frequency, fluence, report);
       t->Add(report, cpu);
     }
   }
@@ -235,12 +232,12 @@ json GateTable(const Scene& scene, double target, int gates, int stepsPerGate, i
     {
       auto solver = translucency::CreateDiffusionSolver("divergence");
       solver->SetLinearSolver(names[k]);
-      auto& vertex = dynamic_cast<VertexDiffusionSolver&>(*solver);
-      vertex.SetTimeStepRecycledSolutions(recycled[k]);
+      solver->SetOptions(translucency::SolverOptions{
+        { translucency::DiffusionOption::TimeStepRecycled, static_cast<double>(recycled[k]) } });
       translucency::TimeResolvedResult result;
       SolverReport report;
       const std::clock_t cpu = std::clock();
-      vertex.SolveTimeResolved(problem, timeGates, detectors, {}, result, report);
+      solver->SolveTimeResolved(problem, timeGates, detectors, {}, result, report);
       timing[k].Add(report, cpu);
       steps[k] = result.NumberOfSteps;
     }

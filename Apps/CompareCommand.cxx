@@ -331,6 +331,7 @@ PlotSeries ErrorVersusTime(const std::string& name, vtkUnstructuredGrid* lit,
     solve->SetRelTol(1e-8);
     solve->SetMaxIter(k);
     solve->SetWarmStart(false);
+    solve->AcceptUnconvergedOn(); // the study of early-stopped solves (never a result)
     solve->SetGridSpacing(gridSpacing);
     optics.Apply(solve); // the same sources (never time gates or a frequency: see Compare)
     // Not converging is the point here: the warnings are ignored, not logged.

@@ -3,12 +3,10 @@
 #include "AimedPencilBeam.h"
 #include "Detectors.h"
 #include "ModelRange.h"
-#include "MonteCarlo.h"
-#include "Sp3Solver.h"
 #include "DiffusionFrontEnd.h"
 #include "DiffusionSolverFactory.h"
-#include "DiscreteDivergence.h"
 #include "InteractiveAccuracy.h"
+#include "Sp3Solver.h"
 #include "Error.h"
 #include "Strings.h"
 #include "TetMesh.h"
@@ -38,6 +36,7 @@
 #include <array>
 #include <cmath>
 #include <complex>
+#include <sstream>
 
 vtkStandardNewMacro(vtkSolveDiffusion);
 
@@ -71,13 +70,13 @@ bool ExtendedCollimatedModel(vtkInformationVector* inputs, const vtkTranslucency
 
 struct vtkSolveDiffusion::Internals
 {
-  /// The solver, the changed-tet detection and the warm-start bookkeeping.
+  /// The solver, the domain and read-outs, the changed-tet detection and
+  /// the warm-start bookkeeping (the core's one solve front end).
   translucency::DiffusionFrontEnd FrontEnd;
-  translucency::SolverReport Report;
-  /// The Robin rule of the last solve (Moments after a divergence/fem solve
-  /// with the "extended-moments" collimated model), for the power balance
-  /// and, through the field array TranslucencyBoundaryRule, the radiance.
-  translucency::Fresnel::BoundaryRule SolvedRule = translucency::Fresnel::BoundaryRule::Fit;
+  /// The last execution's result (its Fluence moved into the output) and
+  /// domain.
+  translucency::SolveResult Result;
+  translucency::SolveDomain SolvedDomain = translucency::SolveDomain::ContinuousWave;
   /// GetAvailableLinearSolvers()'s array.
   vtkNew<vtkStringArray> LinearSolverNames;
   translucency::Sources Sources;
@@ -86,21 +85,6 @@ struct vtkSolveDiffusion::Internals
   std::vector<translucency::Detector> Detectors;
   /// The detectors of the last execution: Detectors plus the interactive one.
   std::vector<translucency::Detector> SolvedDetectors;
-  /// Readings of the last solve (amplitudes) and their phases (radians).
-  std::vector<translucency::DetectorReading> Readings;
-  /// Monte Carlo: standard errors of Readings (continuous wave) and of the
-  /// gate readings ([gate][detector]); empty otherwise.
-  std::vector<translucency::DetectorReading> ReadingErrors;
-  /// The photons' power bookkeeping after a montecarlo solve (else unset).
-  /// The sp3 solver's own read-outs of the last solve (Sp3Solver): its
-  /// exitance (3 per point) and its interior sources' injected power.
-  bool HasSp3Balance = false;
-  std::vector<double> Sp3Exitance;
-  std::array<double, 3> Sp3SourcePower{};
-  bool HasMonteCarloBalance = false;
-  std::array<translucency::MonteCarloSolver::PowerBalance, 3> MonteCarloBalance{};
-  std::vector<std::vector<translucency::DetectorReading>> GateErrors;
-  std::vector<std::array<double, 3>> FluencePhase, ExitancePhase;
   /// The model-range check's inputs last time: the mesh (its TetSizes) and
   /// the modification times of the coefficient arrays. A relight changes
   /// neither, so it does not repeat the check.
@@ -109,9 +93,25 @@ struct vtkSolveDiffusion::Internals
   vtkMTimeType RangeAbsorptionTime = 0, RangeScatteringTime = 0;
   /// The distributed path's solver (kept: hierarchy and warm start).
   vtkTranslucencyDistributedSolve Distributed;
-  /// Time gates: the snapshots asked for and the last time-resolved result.
+  /// Time gates: the snapshots asked for.
   std::vector<int> TimeSnapshots;
-  translucency::TimeResolvedResult TimeResolved;
+
+  // The phases of RequestData (below it): validate, convert, configure,
+  // attach. Each throws translucency::Error with a message for the user.
+  translucency::SolveRequest MakeRequest(const vtkSolveDiffusion& self) const;
+  void AddInteractiveSources(vtkSolveDiffusion& self, const translucency::TetMesh* mesh,
+    vtkUnstructuredGrid* piece);
+  void AddInteractiveDetector(vtkSolveDiffusion& self, const translucency::TetMesh& mesh);
+  void Configure(vtkSolveDiffusion& self, int numberOfPoints);
+  void CheckModelRange(vtkSolveDiffusion& self, vtkUnstructuredGrid* input,
+    const std::shared_ptr<const translucency::TetMesh>& mesh,
+    const translucency::OpticalProperties& material);
+  void WarnUnconverged(vtkSolveDiffusion& self) const;
+  /// sp3: its own exitance (the outgoing half of the P3 radiance) at the
+  /// detectors, and the power balance from it and its sources' power.
+  void Sp3Readouts(const translucency::Sp3Solver& sp3, const translucency::TetMesh& mesh,
+    const translucency::OpticalProperties& material, const std::vector<double>& irradiance);
+  void Attach(vtkSolveDiffusion& self, vtkUnstructuredGrid* input, vtkUnstructuredGrid* output);
 };
 
 //------------------------------------------------------------------------------
@@ -164,27 +164,22 @@ const char* vtkSolveDiffusion::GetSolverName() const
 //------------------------------------------------------------------------------
 int vtkSolveDiffusion::GetNumberOfIterations(int channel) const
 {
-  return (channel >= 0 && channel < 3) ? this->Internal->Report.Iterations[channel] : 0;
+  return (channel >= 0 && channel < 3) ? this->Internal->Result.Report.Iterations[channel] : 0;
 }
 
 double vtkSolveDiffusion::GetFinalResidual(int channel) const
 {
-  return (channel >= 0 && channel < 3) ? this->Internal->Report.Residual[channel] : 0.0;
+  return (channel >= 0 && channel < 3) ? this->Internal->Result.Report.Residual[channel] : 0.0;
 }
 
 bool vtkSolveDiffusion::GetConverged(int channel) const
 {
-  return (channel >= 0 && channel < 3) && this->Internal->Report.Converged[channel];
+  return (channel >= 0 && channel < 3) && this->Internal->Result.Report.Converged[channel];
 }
 
 const char* vtkSolveDiffusion::GetLinearSolverUsed() const
 {
-  return this->Internal->Report.LinearSolver.c_str();
-}
-
-const char* vtkSolveDiffusion::GetLastAssembly() const
-{
-  return this->Internal->Report.Assembly.c_str();
+  return this->Internal->Result.Report.LinearSolver.c_str();
 }
 
 double vtkSolveDiffusion::GetInteractiveRelTol()
@@ -194,7 +189,12 @@ double vtkSolveDiffusion::GetInteractiveRelTol()
 
 const char* vtkSolveDiffusion::GetLastLinearSetup() const
 {
-  return this->Internal->Report.LinearSetup.c_str();
+  return this->Internal->Result.Report.LinearSetup.c_str();
+}
+
+const char* vtkSolveDiffusion::GetLastAssembly() const
+{
+  return this->Internal->Result.Report.Assembly.c_str();
 }
 
 vtkIdType vtkSolveDiffusion::GetNumberOfChangedTets() const
@@ -204,17 +204,17 @@ vtkIdType vtkSolveDiffusion::GetNumberOfChangedTets() const
 
 vtkTypeInt64 vtkSolveDiffusion::GetNumberOfUnknowns() const
 {
-  return this->Internal->Report.NumberOfUnknowns;
+  return this->Internal->Result.Report.NumberOfUnknowns;
 }
 
 vtkTypeInt64 vtkSolveDiffusion::GetNumberOfNonZeros() const
 {
-  return this->Internal->Report.NumberOfNonZeros;
+  return this->Internal->Result.Report.NumberOfNonZeros;
 }
 
 vtkTypeInt64 vtkSolveDiffusion::GetMemoryBytes() const
 {
-  return static_cast<vtkTypeInt64>(this->Internal->Report.MemoryBytes);
+  return static_cast<vtkTypeInt64>(this->Internal->Result.Report.MemoryBytes);
 }
 
 //------------------------------------------------------------------------------
@@ -305,31 +305,31 @@ bool InRange(int k, int c, std::size_t n)
 
 double vtkSolveDiffusion::GetDetectorFluence(int detector, int channel) const
 {
-  const auto& r = this->Internal->Readings;
+  const auto& r = this->Internal->Result.Readings;
   return InRange(detector, channel, r.size()) ? r[detector].Fluence[channel] : 0.0;
 }
 
 double vtkSolveDiffusion::GetDetectorExitance(int detector, int channel) const
 {
-  const auto& r = this->Internal->Readings;
+  const auto& r = this->Internal->Result.Readings;
   return InRange(detector, channel, r.size()) ? r[detector].Exitance[channel] : 0.0;
 }
 
 double vtkSolveDiffusion::GetDetectorFluencePhase(int detector, int channel) const
 {
-  const auto& p = this->Internal->FluencePhase;
+  const auto& p = this->Internal->Result.FluencePhase;
   return InRange(detector, channel, p.size()) ? p[detector][channel] : 0.0;
 }
 
 double vtkSolveDiffusion::GetDetectorExitancePhase(int detector, int channel) const
 {
-  const auto& p = this->Internal->ExitancePhase;
+  const auto& p = this->Internal->Result.ExitancePhase;
   return InRange(detector, channel, p.size()) ? p[detector][channel] : 0.0;
 }
 
 void vtkSolveDiffusion::GetDetectorSurfacePosition(int detector, double position[3]) const
 {
-  const auto& r = this->Internal->Readings;
+  const auto& r = this->Internal->Result.Readings;
   for (int d = 0; d < 3; ++d)
   {
     position[d] = InRange(detector, 0, r.size()) ? r[detector].SurfacePosition[d] : 0.0;
@@ -379,24 +379,24 @@ void vtkSolveDiffusion::RemoveAllTimeSnapshots()
 
 int vtkSolveDiffusion::GetNumberOfTimeGates() const
 {
-  const auto& r = this->Internal->TimeResolved;
+  const auto& r = this->Internal->Result.Time;
   return r.IntegratedFluence.empty() ? 0 : r.Gates.Count;
 }
 
 double vtkSolveDiffusion::GetTimeGateCentre(int gate) const
 {
-  const auto& r = this->Internal->TimeResolved;
+  const auto& r = this->Internal->Result.Time;
   return gate >= 0 && gate < this->GetNumberOfTimeGates() ? r.Gates.GetGateCentre(gate) : 0.0;
 }
 
 int vtkSolveDiffusion::GetTimeStepsPerGateUsed() const
 {
-  return this->GetNumberOfTimeGates() > 0 ? this->Internal->TimeResolved.Gates.StepsPerGate : 0;
+  return this->GetNumberOfTimeGates() > 0 ? this->Internal->Result.Time.Gates.StepsPerGate : 0;
 }
 
 double vtkSolveDiffusion::GetDetectorFluenceTPSF(int detector, int gate, int channel) const
 {
-  const auto& r = this->Internal->TimeResolved.Readings;
+  const auto& r = this->Internal->Result.Time.Readings;
   return gate >= 0 && static_cast<std::size_t>(gate) < r.size() &&
       InRange(detector, channel, r[gate].size())
     ? r[gate][detector].Fluence[channel]
@@ -405,7 +405,7 @@ double vtkSolveDiffusion::GetDetectorFluenceTPSF(int detector, int gate, int cha
 
 double vtkSolveDiffusion::GetDetectorExitanceTPSF(int detector, int gate, int channel) const
 {
-  const auto& r = this->Internal->TimeResolved.Readings;
+  const auto& r = this->Internal->Result.Time.Readings;
   return gate >= 0 && static_cast<std::size_t>(gate) < r.size() &&
       InRange(detector, channel, r[gate].size())
     ? r[gate][detector].Exitance[channel]
@@ -546,8 +546,6 @@ void AttachDetectorArrays(vtkUnstructuredGrid* output,
 int vtkSolveDiffusion::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  this->Internal->HasMonteCarloBalance = false; // set again by a montecarlo solve
-  this->Internal->HasSp3Balance = false;        // set again by an sp3 solve
   return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
     [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
     { return this->PlanParallel(i, c); },
@@ -606,630 +604,518 @@ vtkTranslucencyParallelPlan vtkSolveDiffusion::PlanParallel(
 int vtkSolveDiffusion::RequestSerial(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
+  // Validate -> convert -> the core's front end -> attach.
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   Internals& in = *this->Internal;
-  std::string error;
   this->TopologyTime = this->AssemblyTime = this->SolveTime = 0.0;
-  in.Report = translucency::SolverReport();
-  in.SolvedRule = translucency::Fresnel::BoundaryRule::Fit;
-  in.Readings.clear();
-  in.FluencePhase.clear();
-  in.ExitancePhase.clear();
-  in.TimeResolved = translucency::TimeResolvedResult();
-  if (!std::isfinite(this->ModulationFrequency) || this->ModulationFrequency < 0.0)
-  {
-    vtkErrorMacro(<< "ModulationFrequency " << this->ModulationFrequency
-                  << " Hz: expected a finite value >= 0 (0 = continuous wave)");
-    return 0;
-  }
-  if (!(std::isfinite(this->TimeGatesCountText) &&
-        this->TimeGatesCountText == std::floor(this->TimeGatesCountText)))
-  {
-    vtkErrorMacro(<< "TimeGates: the number of gates must be a whole number, got "
-                  << this->TimeGatesCountText);
-    return 0;
-  }
-  const bool timeResolved = this->TimeGatesCount != 0;
-  translucency::TimeGates gates;
-  gates.Start = this->TimeGatesStart;
-  gates.End = this->TimeGatesEnd;
-  gates.Count = this->TimeGatesCount;
-  gates.StepsPerGate = this->TimeStepsPerGate;
-  if (timeResolved)
-  {
-    const std::string fault = gates.Check();
-    if (!fault.empty())
-    {
-      vtkErrorMacro(<< "TimeGates (" << gates.Start << ", " << gates.End << ", " << gates.Count
-                    << "): " << fault);
-      return 0;
-    }
-    if (this->ModulationFrequency > 0.0)
-    {
-      vtkErrorMacro(<< "ModulationFrequency " << this->ModulationFrequency
-                    << " Hz and TimeGates together: choose the frequency domain or the time "
-                       "domain");
-      return 0;
-    }
-  }
-  else if (!in.TimeSnapshots.empty())
-  {
-    vtkErrorMacro(<< "time snapshots without TimeGates: call SetTimeGates(T0, T1, N) first");
-    return 0;
-  }
-
-  // Convert: the shared mesh, the material, the irradiance and the lights.
-  auto start = translucency::Clock::now();
-  bool built = false;
-  std::string warning;
-  auto mesh = vtkTranslucency::AcquireTetMesh(input, error, &built, &warning);
-  if (!warning.empty())
-  {
-    vtkWarningMacro(<< warning);
-  }
-  if (!mesh)
-  {
-    in.FrontEnd.Reset();
-    vtkErrorMacro(<< error);
-    return 0;
-  }
-  if (built)
-  {
-    this->TopologyTime = translucency::MillisecondsSince(start);
-  }
-  this->UpdateProgress(0.05);
-
-  translucency::OpticalProperties material;
-  std::vector<double> irradiance;
-  if (!vtkTranslucency::ToOpticalProperties(input, material, error) ||
-    !vtkTranslucency::ReadPointArray(input, vtkTranslucency::IrradianceName, 3, irradiance, error))
-  {
-    if (error.find("no point array") != std::string::npos)
-    {
-      error += ": compute it with vtkSurfaceIrradiance or supply your own";
-    }
-    vtkErrorMacro(<< error);
-    return 0;
-  }
-  translucency::DiffusionProblem light;
-  ReadLights(input, light);
-  // The listed sources and, while on, the interactive ones (the plugin's widgets).
-  in.SolvedSources = in.Sources;
-  std::fill(this->InteractivePencilBeamEntry, this->InteractivePencilBeamEntry + 3, 0.0);
+  in.Result = translucency::SolveResult();
   try
   {
-    if (this->InteractivePointSource)
-    {
-      translucency::PointSource source;
-      std::copy_n(this->InteractivePointSourcePosition, 3, source.Position.begin());
-      std::copy_n(this->InteractivePointSourcePower, 3, source.Power.begin());
-      source.Label = "interactive point source";
-      in.SolvedSources.AddPointSource(source);
-    }
-    if (this->InteractivePencilBeam)
-    {
-      std::array<double, 3> point1, point2, power;
-      std::copy_n(this->InteractivePencilBeamPoint1, 3, point1.begin());
-      std::copy_n(this->InteractivePencilBeamPoint2, 3, point2.begin());
-      std::copy_n(this->InteractivePencilBeamPower, 3, power.begin());
-      const translucency::PencilBeam beam =
-        translucency::AimPencilBeam(*mesh, point1, point2, power, "interactive pencil beam");
-      in.SolvedSources.AddPencilBeam(beam);
-      std::copy_n(beam.Position.begin(), 3, this->InteractivePencilBeamEntry);
-    }
-  }
-  catch (const translucency::Error& e)
-  {
-    vtkErrorMacro(<< e.what());
-    return 0;
-  }
-  light.InteriorSources = &in.SolvedSources;
-  // The listed detectors and, while on, the interactive one (projected).
-  in.SolvedDetectors = in.Detectors;
-  std::fill(
-    this->InteractiveDetectorSurfacePosition, this->InteractiveDetectorSurfacePosition + 3, 0.0);
-  if (this->InteractiveDetector)
-  {
-    const double* x = this->InteractiveDetectorPosition;
-    if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]) ||
-      !std::isfinite(this->InteractiveDetectorRadius) || this->InteractiveDetectorRadius < 0.0)
-    {
-      vtkErrorMacro(<< "interactive detector at (" << x[0] << ", " << x[1] << ", " << x[2]
-                    << "), radius " << this->InteractiveDetectorRadius
-                    << " mm: expected a finite position and a finite radius >= 0");
-      return 0;
-    }
-    try
-    {
-      const translucency::SurfacePoint surface = translucency::FindSurfacePoint(*mesh, x);
-      translucency::Detector detector;
-      detector.Position = surface.Position;
-      detector.Radius = this->InteractiveDetectorRadius;
-      detector.Label = "interactive detector";
-      in.SolvedDetectors.push_back(detector);
-      std::copy_n(surface.Position.begin(), 3, this->InteractiveDetectorSurfacePosition);
-    }
-    catch (const translucency::Error& e)
-    {
-      vtkErrorMacro(<< "interactive detector: " << e.what());
-      return 0;
-    }
-  }
+    // Validate the settings.
+    translucency::SolveRequest solveRequest = in.MakeRequest(*this);
+    in.SolvedDomain = solveRequest.Domain;
 
-  try
-  {
-    // Validate: a vertex solver's linear solver must be one of this build's.
-    const auto& entry = SolverEntry(this->Solver);
-    const std::string linearSolver =
-      translucency::ToLower(this->LinearSolver) == "default" ? "" : this->LinearSolver;
-    if (entry.Properties.UnknownsAtVertices && !linearSolver.empty())
+    // Convert: the shared mesh, the material, the irradiance and the lights.
+    auto start = translucency::Clock::now();
+    bool built = false;
+    std::string error, warning;
+    auto mesh = vtkTranslucency::AcquireTetMesh(input, error, &built, &warning);
+    if (!warning.empty())
     {
-      const std::vector<std::string> names = translucency::GetLinearSolverNames();
-      if (std::find(names.begin(), names.end(), translucency::ToLower(linearSolver)) ==
-        names.end())
-      {
-        vtkErrorMacro(<< "unknown LinearSolver '" << this->LinearSolver << "' for the "
-                      << entry.Name << " solver (this build has: "
-                      << translucency::JoinNames(names) << "; empty or \"default\" = "
-                      << translucency::VertexDiffusionSolver::GetDefaultLinearSolverName(
-                           mesh->GetNumberOfPoints())
-                      << " for this mesh)");
-        return 0;
-      }
+      vtkWarningMacro(<< warning);
     }
+    if (!mesh)
+    {
+      throw translucency::Error(error);
+    }
+    this->TopologyTime = built ? translucency::MillisecondsSince(start) : 0.0;
+    this->UpdateProgress(0.05);
+    translucency::OpticalProperties material;
+    std::vector<double> irradiance;
+    if (!vtkTranslucency::ToOpticalProperties(input, material, error) ||
+      !vtkTranslucency::ReadPointArray(
+        input, vtkTranslucency::IrradianceName, 3, irradiance, error))
+    {
+      if (error.find("no point array") != std::string::npos)
+      {
+        error += ": compute it with vtkSurfaceIrradiance or supply your own";
+      }
+      in.FrontEnd.Reset(); // as a failed solve: no warm start from before it
+      throw translucency::Error(error);
+    }
+    translucency::DiffusionProblem light;
+    ReadLights(input, light);
+    in.AddInteractiveSources(*this, mesh.get(), nullptr);
+    light.InteriorSources = &in.SolvedSources;
+    in.AddInteractiveDetector(*this, *mesh);
+    solveRequest.Detectors = in.SolvedDetectors;
 
-    // The core: the front end keeps the solver, detects the changed tets
-    // and warm-starts; the settings go through the options hook.
-    translucency::DiffusionFrontEnd& frontEnd = in.FrontEnd;
-    frontEnd.SetSolver(entry.Name);
-    frontEnd.SetIncrementalAssembly(this->IncrementalAssembly);
-    frontEnd.SetMaximumChangedFraction(this->MaximumChangedFraction);
-    translucency::DiffusionSolver& solver = frontEnd.GetSolver();
-    if (auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver))
-    {
-      if (auto* divergence =
-            dynamic_cast<translucency::DiscreteDivergence*>(&vertex->GetDiscretization()))
-      {
-        divergence->SetNumberOfThreads(this->NumberOfThreads);
-      }
-    }
-    solver.SetRelTol(this->RelTol);
-    solver.SetMaxIter(this->MaxIter);
-    solver.SetWarmStart(this->WarmStart);
-    solver.SetLinearSolver(linearSolver);
-    // Every solver-specific property; the selected solver reads its own and
-    // leaves the others unused (they do not apply to it).
-    solver.SetOptions(translucency::SolverOptions{
-      { translucency::DiffusionOption::GridSpacing, this->GridSpacing },
-      { translucency::DiffusionOption::MultiLevel, this->MultiLevel ? 1.0 : 0.0 },
-      { translucency::DiffusionOption::TwoPointFlux, this->QuadGraphTwoPointFlux ? 1.0 : 0.0 },
-      { translucency::DiffusionOption::Photons, static_cast<double>(this->NumberOfPhotons) },
-      { translucency::DiffusionOption::Seed, static_cast<double>(this->Seed) } });
-    solver.SetProgressCallback([this](double fraction) {
-      this->UpdateProgress(0.05 + 0.9 * fraction);
-      return !this->CheckAbort();
-    });
-
-    // The diffusion model's range (Monte Carlo solves the transport itself):
-    // a warning when the verdict changes (not at every paint stroke); the
-    // mesh resolution is a note (GetMeshResolutionNote), printed by the CLI.
-    vtkDataArray* absorption =
-      input->GetCellData()->GetArray(vtkTranslucency::AbsorptionName);
-    vtkDataArray* scattering =
-      input->GetCellData()->GetArray(vtkTranslucency::ScatteringName);
-    const vtkMTimeType absorptionTime = absorption ? absorption->GetMTime() : 0;
-    const vtkMTimeType scatteringTime = scattering ? scattering->GetMTime() : 0;
-    if (entry.Name == "montecarlo")
-    {
-      this->ModelRangeWarning.clear();
-      this->MeshResolutionNote.clear();
-      in.RangeMesh.reset(); // checked again when a diffusion solver returns
-    }
-    else if (in.RangeMesh.lock() != mesh || absorptionTime != in.RangeAbsorptionTime ||
-      scatteringTime != in.RangeScatteringTime)
-    {
-      if (in.RangeMesh.lock() != mesh)
-      {
-        in.Sizes = translucency::TetSizes(*mesh);
-      }
-      in.RangeMesh = mesh;
-      in.RangeAbsorptionTime = absorptionTime;
-      in.RangeScatteringTime = scatteringTime;
-      const translucency::ModelRangeReport range =
-        translucency::CheckModelRange(*mesh, material, &in.Sizes);
-      const std::string warning = range.AlbedoMessage();
-      if (!warning.empty() && warning != this->ModelRangeWarning)
-      {
-        vtkWarningMacro(<< warning);
-      }
-      this->ModelRangeWarning = warning;
-      this->MeshResolutionNote = range.ResolutionMessage();
-    }
-
-    const bool frequencyDomain = this->ModulationFrequency > 0.0;
-    auto* monteCarlo = dynamic_cast<translucency::MonteCarloSolver*>(&solver);
-    if (monteCarlo)
-    {
-      // Henyey-Greenstein g, interior sources, detectors and time-of-flight
-      // gates; no frequency domain, no fluence snapshots per gate.
-      monteCarlo->SetAnisotropy(this->Anisotropy);
-      monteCarlo->SetDetectors(in.SolvedDetectors);
-      monteCarlo->SetTimeGates(timeResolved ? gates : translucency::TimeGates());
-      if (frequencyDomain)
-      {
-        vtkErrorMacro(<< "the montecarlo solver has no frequency domain (ModulationFrequency "
-                      << this->ModulationFrequency
-                      << " Hz): use the divergence or fem solver, or time gates");
-        return 0;
-      }
-      if (!in.TimeSnapshots.empty())
-      {
-        vtkErrorMacro(<< "the montecarlo solver tallies the time gates at the detectors only: "
-                         "no fluence snapshots per gate (use the divergence or fem solver)");
-        return 0;
-      }
-    }
-    else if (entry.Name == "sp3")
+    // The core: the solver by name with its settings, then the one solve.
+    in.Configure(*this, mesh->GetNumberOfPoints());
+    in.FrontEnd.CheckDomain(solveRequest);
+    in.CheckModelRange(*this, input, mesh, material);
+    auto* sp3 = dynamic_cast<translucency::Sp3Solver*>(&in.FrontEnd.GetSolver());
+    if (sp3 && this->Anisotropy != 0.0)
     {
       // SP3 resolves the phase function's moments: g per tet and channel
       // (mu_s = mu_s' / (1 - g)); checked by OpticalProperties::Validate.
-      if (this->Anisotropy != 0.0)
-      {
-        material.Anisotropy.assign(material.AbsorptionCoefficient.size(), this->Anisotropy);
-      }
+      material.Anisotropy.assign(material.AbsorptionCoefficient.size(), this->Anisotropy);
     }
-    else if (this->Anisotropy != 0.0)
+    const translucency::OpticalProperties sp3Material =
+      sp3 ? material : translucency::OpticalProperties();
+    const std::vector<double> sp3Irradiance = sp3 ? irradiance : std::vector<double>();
+    if (!in.FrontEnd.Solve(mesh, std::move(material), std::move(irradiance), light, solveRequest,
+          in.Result))
     {
-      vtkWarningMacro(<< "Anisotropy g = " << this->Anisotropy << " is ignored by the "
-                      << entry.Name
-                      << " solver: it applies to montecarlo only (the diffusion solvers use the "
-                         "reduced scattering coefficient, in which g is already folded)");
+      return 0; // aborted by the user
     }
-    // Detectors read the vertex Fluence every solver writes and every solver
-    // takes interior sources (the continuous-wave branch below), so both
-    // work for quadgraph and grid too; the frequency and time domains need
-    // the vertex systems (or the photons).
-    if ((frequencyDomain || timeResolved) && !entry.Properties.UnknownsAtVertices && !monteCarlo)
+    if (sp3)
     {
-      vtkErrorMacro(<< "the " << entry.Name
-                    << " solver has no frequency domain or time gates: they are implemented "
-                       "for the divergence, fem and (but the frequency domain) montecarlo "
-                       "solvers");
-      return 0;
+      in.Sp3Readouts(*sp3, *mesh, sp3Material, sp3Irradiance);
     }
-    // The detectors read the material and the irradiance after the solve.
-    translucency::OpticalProperties detectorMaterial;
-    std::vector<double> detectorIrradiance;
-    if (!in.SolvedDetectors.empty())
-    {
-      detectorMaterial = material;
-      detectorIrradiance = irradiance;
-    }
-    std::vector<double> fluence;
-    std::vector<double> amplitude, phase;
-    // The detector readings of a time-resolved run: the time integrals of
-    // the gate averages (the continuous-wave readings when the gates cover
-    // the whole response).
-    auto integrateGates = [&in]() {
-      const double width = in.TimeResolved.Gates.GetWidth();
-      in.Readings = in.TimeResolved.Readings.front();
-      for (std::size_t k = 0; k < in.Readings.size(); ++k)
-      {
-        in.Readings[k].Fluence.fill(0.0);
-        in.Readings[k].Exitance.fill(0.0);
-        for (const auto& gate : in.TimeResolved.Readings)
-        {
-          for (int c = 0; c < 3; ++c)
-          {
-            in.Readings[k].Fluence[c] += width * gate[k].Fluence[c];
-            in.Readings[k].Exitance[c] += width * gate[k].Exitance[c];
-          }
-        }
-      }
-    };
-    in.ReadingErrors.clear();
-    in.GateErrors.clear();
-    in.HasMonteCarloBalance = false;
-    if (monteCarlo)
-    {
-      if (!frontEnd.Solve(mesh, std::move(material), std::move(irradiance), light, fluence,
-            in.Report))
-      {
-        return 0; // aborted by the user
-      }
-      in.HasMonteCarloBalance = true;
-      for (int c = 0; c < 3; ++c)
-      {
-        in.MonteCarloBalance[c] = monteCarlo->GetPowerBalance(c);
-      }
-      in.Readings = monteCarlo->GetDetectorReadings();
-      in.ReadingErrors = monteCarlo->GetDetectorStandardErrors();
-      in.TimeResolved = translucency::TimeResolvedResult();
-      if (timeResolved)
-      {
-        in.TimeResolved.Gates = gates;
-        in.TimeResolved.Readings = monteCarlo->GetGateReadings();
-        in.TimeResolved.IntegratedFluence = fluence; // all time (the photons' CW fluence)
-        in.GateErrors = monteCarlo->GetGateStandardErrors();
-        if (!in.SolvedDetectors.empty())
-        {
-          integrateGates();
-          in.ReadingErrors.clear(); // those are of the all-time readings
-        }
-      }
-      in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
-      in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
-    }
-    else if (timeResolved)
-    {
-      auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver);
-      translucency::DiffusionProblem problem = light;
-      problem.Mesh = mesh.get();
-      problem.Material = &material;
-      problem.Irradiance = &irradiance;
-      if (!vertex ||
-        !vertex->SolveTimeResolved(
-          problem, gates, in.SolvedDetectors, in.TimeSnapshots, in.TimeResolved, in.Report))
-      {
-        return 0; // aborted by the user
-      }
-      fluence = in.TimeResolved.IntegratedFluence;
-      if (light.Collimated == translucency::CollimatedModel::ExtendedMoments)
-      {
-        in.SolvedRule = translucency::Fresnel::BoundaryRule::Moments;
-      }
-      if (!in.SolvedDetectors.empty())
-      {
-        integrateGates();
-        in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
-        in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
-      }
-    }
-    else if (frequencyDomain)
-    {
-      auto* vertex = dynamic_cast<translucency::VertexDiffusionSolver*>(&solver);
-      translucency::DiffusionProblem problem = light;
-      problem.Mesh = mesh.get();
-      problem.Material = &material;
-      problem.Irradiance = &irradiance;
-      std::vector<std::complex<double>> complexFluence;
-      if (!vertex ||
-        !vertex->SolveFrequencyDomain(problem, this->ModulationFrequency, complexFluence,
-          in.Report))
-      {
-        return 0; // aborted by the user
-      }
-      // The extended collimated model: the total Phi = Phi_d + the
-      // modulated beam; real and imag hold the diffuse Phi_d (what the
-      // detectors read, as in continuous wave), and Fluence is |Phi_d| +
-      // |E_c| so that Fluence - CollimatedFluence is the diffuse amplitude
-      // downstream (vtkOutgoingRadiance); FluenceAmplitude and FluencePhase
-      // are those of the total.
-      const translucency::SolverReport& report = in.Report;
-      const bool beam = report.CollimatedFluence.size() == complexFluence.size() &&
-        report.CollimatedFluencePhase.size() == complexFluence.size();
-      if (light.Collimated == translucency::CollimatedModel::ExtendedMoments)
-      {
-        in.SolvedRule = translucency::Fresnel::BoundaryRule::Moments;
-      }
-      std::vector<double> real(complexFluence.size()), imag(complexFluence.size());
-      amplitude.resize(complexFluence.size());
-      phase.resize(complexFluence.size());
-      fluence.resize(complexFluence.size());
-      for (std::size_t i = 0; i < complexFluence.size(); ++i)
-      {
-        const std::complex<double> diffuse = beam
-          ? complexFluence[i] -
-            std::polar(report.CollimatedFluence[i], report.CollimatedFluencePhase[i])
-          : complexFluence[i];
-        real[i] = diffuse.real();
-        imag[i] = diffuse.imag();
-        amplitude[i] = std::abs(complexFluence[i]);
-        phase[i] = std::arg(complexFluence[i]);
-        fluence[i] = beam ? std::abs(diffuse) + report.CollimatedFluence[i] : amplitude[i];
-      }
-      if (!in.SolvedDetectors.empty())
-      {
-        // The readings are linear in (phi, q): read the real part with q
-        // (modulated in phase with the sources) and the imaginary part
-        // without, then take amplitude and phase.
-        const auto re = translucency::ReadDetectors(
-          *mesh, detectorMaterial, in.SolvedDetectors, real, &detectorIrradiance, in.SolvedRule);
-        const auto im = translucency::ReadDetectors(
-          *mesh, detectorMaterial, in.SolvedDetectors, imag, nullptr, in.SolvedRule);
-        in.Readings = re;
-        in.FluencePhase.resize(re.size());
-        in.ExitancePhase.resize(re.size());
-        for (std::size_t k = 0; k < re.size(); ++k)
-        {
-          for (int c = 0; c < 3; ++c)
-          {
-            const std::complex<double> f(re[k].Fluence[c], im[k].Fluence[c]);
-            const std::complex<double> j(re[k].Exitance[c], im[k].Exitance[c]);
-            in.Readings[k].Fluence[c] = std::abs(f);
-            in.Readings[k].Exitance[c] = std::abs(j);
-            in.FluencePhase[k][c] = std::arg(f);
-            in.ExitancePhase[k][c] = std::arg(j);
-          }
-        }
-      }
-    }
-    else
-    {
-      if (!frontEnd.Solve(mesh, std::move(material), std::move(irradiance), light, fluence,
-            in.Report))
-      {
-        return 0; // aborted by the user
-      }
-      // divergence and fem solve the extended-moments model with the Robin
-      // rule of the Fresnel moments (VertexDiffusionSolver; quadgraph and
-      // grid refuse the extended models).
-      if (light.Collimated == translucency::CollimatedModel::ExtendedMoments)
-      {
-        in.SolvedRule = translucency::Fresnel::BoundaryRule::Moments;
-      }
-      if (!in.SolvedDetectors.empty())
-      {
-        // The detectors read the diffuse fluence (the unscattered beam of
-        // the extended model does not leave as diffuse exitance).
-        std::vector<double> diffuse = fluence;
-        for (std::size_t k = 0; k < in.Report.CollimatedFluence.size(); ++k)
-        {
-          diffuse[k] -= in.Report.CollimatedFluence[k];
-        }
-        in.Readings = translucency::ReadDetectors(*mesh, detectorMaterial, in.SolvedDetectors,
-          diffuse, &detectorIrradiance,
-          light.Collimated == translucency::CollimatedModel::ExtendedMoments
-            ? translucency::Fresnel::BoundaryRule::Moments
-            : translucency::Fresnel::BoundaryRule::Fit);
-        in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
-        in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
-      }
-      if (auto* sp3 = dynamic_cast<translucency::Sp3Solver*>(&solver))
-      {
-        // SP3's exitance is its own (the outgoing half of the P3 radiance),
-        // read through the detectors' footprints; the power balance uses it.
-        in.HasSp3Balance = true;
-        in.Sp3Exitance = sp3->GetExitance();
-        in.Sp3SourcePower = sp3->GetSourcePower();
-        if (!in.SolvedDetectors.empty())
-        {
-          const auto footprints = translucency::LocateDetectors(*mesh, in.SolvedDetectors);
-          for (std::size_t k = 0; k < footprints.size() && k < in.Readings.size(); ++k)
-          {
-            in.Readings[k].Exitance = { 0.0, 0.0, 0.0 };
-            for (const auto& [point, weight] : footprints[k].GetPointWeights(*mesh))
-            {
-              for (int c = 0; c < 3; ++c)
-              {
-                in.Readings[k].Exitance[c] +=
-                  weight * in.Sp3Exitance[3 * static_cast<std::size_t>(point) + c];
-              }
-            }
-          }
-        }
-      }
-    }
-    this->AssemblyTime = in.Report.SetupMilliseconds;
-    this->SolveTime = in.Report.SolveMilliseconds;
-
-    static const char* channelNames[3] = { "R", "G", "B" };
-    for (int c = 0; c < 3; ++c)
-    {
-      if (!in.Report.Converged[c] && in.Report.Iterations[c] > 0)
-      {
-        vtkWarningMacro(<< "channel " << channelNames[c] << " did not converge: relative residual "
-                        << in.Report.Residual[c] << " after " << in.Report.Iterations[c]
-                        << " iterations (RelTol " << this->RelTol << ", MaxIter "
-                        << this->MaxIter << ")");
-      }
-    }
+    this->AssemblyTime = in.Result.Report.SetupMilliseconds;
+    this->SolveTime = in.Result.Report.SolveMilliseconds;
+    in.WarnUnconverged(*this); // only with AcceptUnconverged (else the solve threw)
 
     // Attach.
-    output->ShallowCopy(input);
-    auto attach = [output](const char* name, const std::vector<double>& values) {
-      if (values.size() == 3 * static_cast<size_t>(output->GetNumberOfPoints()))
-      {
-        vtkDataArray* array = vtkTranslucency::NewTripleArray(name, values);
-        output->GetPointData()->AddArray(array);
-        array->Delete();
-      }
-    };
-    attach(vtkTranslucency::FluenceName, fluence);
-    attach("FluenceStandardError", in.Report.FluenceStandardError);
-    attach("CollimatedFluence", in.Report.CollimatedFluence);
-    attach("CollimatedFluencePhase", in.Report.CollimatedFluencePhase);
-    if (in.SolvedRule == translucency::Fresnel::BoundaryRule::Moments)
-    {
-      // Read by vtkOutgoingRadiance: the radiance of this solve's boundary
-      // condition (Fresnel-moment A and Fdr), not eq. 3's fit.
-      vtkNew<vtkIntArray> rule;
-      rule->SetName("TranslucencyBoundaryRule");
-      rule->InsertNextValue(1);
-      output->GetFieldData()->AddArray(rule);
-    }
-    else
-    {
-      output->GetFieldData()->RemoveArray("TranslucencyBoundaryRule"); // not this solve's
-    }
-    attach("MonteCarloRadiance", in.Report.Radiance);
-    attach("MonteCarloRadianceStandardError", in.Report.RadianceStandardError);
-    attach("FluenceAmplitude", amplitude);
-    attach("FluencePhase", phase);
-    const translucency::TimeResolvedResult& timeResult = in.TimeResolved;
-    for (std::size_t k = 0; k < timeResult.Snapshots.size(); ++k)
-    {
-      attach(("FluenceGate" + std::to_string(timeResult.SnapshotGates[k])).c_str(),
-        timeResult.Snapshots[k]);
-    }
-    if (timeResolved)
-    {
-      vtkNew<vtkDoubleArray> centres;
-      centres->SetName("TimeGateCentres");
-      for (int g = 0; g < timeResult.Gates.Count; ++g)
-      {
-        centres->InsertNextValue(timeResult.Gates.GetGateCentre(g));
-      }
-      output->GetFieldData()->AddArray(centres);
-      for (std::size_t k = 0; k < in.SolvedDetectors.size(); ++k)
-      {
-        std::vector<double> tpsfFluence, tpsfExitance, tpsfFluenceError, tpsfExitanceError;
-        for (const auto& gate : timeResult.Readings)
-        {
-          for (int c = 0; c < 3; ++c)
-          {
-            tpsfFluence.push_back(gate[k].Fluence[c]);
-            tpsfExitance.push_back(gate[k].Exitance[c]);
-          }
-        }
-        for (const auto& gate : in.GateErrors) // Monte Carlo only
-        {
-          for (int c = 0; c < 3; ++c)
-          {
-            tpsfFluenceError.push_back(gate[k].Fluence[c]);
-            tpsfExitanceError.push_back(gate[k].Exitance[c]);
-          }
-        }
-        for (const auto& [name, values] :
-          { std::make_pair("DetectorFluenceTPSF", &tpsfFluence),
-            std::make_pair("DetectorExitanceTPSF", &tpsfExitance),
-            std::make_pair("DetectorFluenceTPSFStandardError", &tpsfFluenceError),
-            std::make_pair("DetectorExitanceTPSFStandardError", &tpsfExitanceError) })
-        {
-          if (values->empty())
-          {
-            continue;
-          }
-          vtkDataArray* array = vtkTranslucency::NewTripleArray(
-            (std::string(name) + std::to_string(k)).c_str(), *values);
-          output->GetFieldData()->AddArray(array);
-          array->Delete();
-        }
-      }
-    }
-    AttachDetectorArrays(output, in.SolvedDetectors, in.Readings, in.ReadingErrors,
-      in.FluencePhase, in.ExitancePhase, frequencyDomain);
-    if (this->InteractiveDetector && !in.Readings.empty())
-    {
-      // What was asked for: the handle's position (DetectorPosition has the surface point).
-      if (vtkDataArray* requested =
-            output->GetFieldData()->GetArray("DetectorRequestedPosition"))
-      {
-        requested->SetTuple(
-          requested->GetNumberOfTuples() - 1, this->InteractiveDetectorPosition);
-      }
-    }
+    in.Attach(*this, input, output);
   }
   catch (const translucency::Error& e)
   {
     in.FrontEnd.Reset(); // no warm start nor incremental update from a failed solve
+    in.Result.Fluence.clear();
     vtkErrorMacro(<< e.what());
     return 0;
   }
   this->UpdateProgress(1.0);
   return outputs.Succeed();
+}
+
+//------------------------------------------------------------------------------
+// The phases of RequestData.
+
+translucency::SolveRequest vtkSolveDiffusion::Internals::MakeRequest(
+  const vtkSolveDiffusion& self) const
+{
+  translucency::SolveRequest request;
+  std::ostringstream os;
+  if (!std::isfinite(self.ModulationFrequency) || self.ModulationFrequency < 0.0)
+  {
+    os << "ModulationFrequency " << self.ModulationFrequency
+       << " Hz: expected a finite value >= 0 (0 = continuous wave)";
+    throw translucency::Error(os.str());
+  }
+  if (!(std::isfinite(self.TimeGatesCountText) &&
+        self.TimeGatesCountText == std::floor(self.TimeGatesCountText)))
+  {
+    os << "TimeGates: the number of gates must be a whole number, got "
+       << self.TimeGatesCountText;
+    throw translucency::Error(os.str());
+  }
+  request.Gates.Start = self.TimeGatesStart;
+  request.Gates.End = self.TimeGatesEnd;
+  request.Gates.Count = self.TimeGatesCount;
+  request.Gates.StepsPerGate = self.TimeStepsPerGate;
+  if (self.TimeGatesCount != 0)
+  {
+    const std::string fault = request.Gates.Check();
+    if (!fault.empty())
+    {
+      os << "TimeGates (" << request.Gates.Start << ", " << request.Gates.End << ", "
+         << request.Gates.Count << "): " << fault;
+      throw translucency::Error(os.str());
+    }
+    if (self.ModulationFrequency > 0.0)
+    {
+      os << "ModulationFrequency " << self.ModulationFrequency
+         << " Hz and TimeGates together: choose the frequency domain or the time domain";
+      throw translucency::Error(os.str());
+    }
+    request.Domain = translucency::SolveDomain::Time;
+    request.Snapshots = this->TimeSnapshots;
+  }
+  else if (!this->TimeSnapshots.empty())
+  {
+    throw translucency::Error(
+      "time snapshots without TimeGates: call SetTimeGates(T0, T1, N) first");
+  }
+  else if (self.ModulationFrequency > 0.0)
+  {
+    request.Domain = translucency::SolveDomain::Frequency;
+    request.Frequency = self.ModulationFrequency;
+  }
+  request.AcceptUnconverged = self.AcceptUnconverged;
+  return request;
+}
+
+void vtkSolveDiffusion::Internals::AddInteractiveSources(
+  vtkSolveDiffusion& self, const translucency::TetMesh* mesh, vtkUnstructuredGrid* piece)
+{
+  // The listed sources and, while on, the interactive ones (the plugin's widgets).
+  this->SolvedSources = this->Sources;
+  std::fill(self.InteractivePencilBeamEntry, self.InteractivePencilBeamEntry + 3, 0.0);
+  if (self.InteractivePointSource)
+  {
+    translucency::PointSource source;
+    std::copy_n(self.InteractivePointSourcePosition, 3, source.Position.begin());
+    std::copy_n(self.InteractivePointSourcePower, 3, source.Power.begin());
+    source.Label = "interactive point source";
+    this->SolvedSources.AddPointSource(source);
+  }
+  if (!self.InteractivePencilBeam)
+  {
+    return;
+  }
+  std::array<double, 3> point1, point2, power;
+  std::copy_n(self.InteractivePencilBeamPoint1, 3, point1.begin());
+  std::copy_n(self.InteractivePencilBeamPoint2, 3, point2.begin());
+  std::copy_n(self.InteractivePencilBeamPower, 3, power.begin());
+  translucency::PencilBeam beam;
+  if (mesh)
+  {
+    beam = translucency::AimPencilBeam(*mesh, point1, point2, power, "interactive pencil beam");
+  }
+  else
+  {
+    // A piece of a distributed mesh: aimed by a ray cast over the whole
+    // object's surface, the physical boundary all-gathered (every rank casts
+    // the same ray on the same triangles: the same entry, or the same error).
+    std::string error;
+    translucency::BoundarySurface surface;
+    if (!vtkTranslucencyDistributedIrradiance::GatherSurface(piece, surface, error))
+    {
+      throw translucency::Error(error);
+    }
+    beam = translucency::AimPencilBeam(surface.Points, surface.Triangles,
+      translucency::SurfaceTolerance(surface.Points, surface.Triangles), point1, point2, power,
+      "interactive pencil beam");
+  }
+  this->SolvedSources.AddPencilBeam(beam);
+  std::copy_n(beam.Position.begin(), 3, self.InteractivePencilBeamEntry);
+}
+
+void vtkSolveDiffusion::Internals::AddInteractiveDetector(
+  vtkSolveDiffusion& self, const translucency::TetMesh& mesh)
+{
+  // The listed detectors and, while on, the interactive one (projected).
+  this->SolvedDetectors = this->Detectors;
+  std::fill(
+    self.InteractiveDetectorSurfacePosition, self.InteractiveDetectorSurfacePosition + 3, 0.0);
+  if (!self.InteractiveDetector)
+  {
+    return;
+  }
+  const double* x = self.InteractiveDetectorPosition;
+  if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]) ||
+    !std::isfinite(self.InteractiveDetectorRadius) || self.InteractiveDetectorRadius < 0.0)
+  {
+    std::ostringstream os;
+    os << "interactive detector at (" << x[0] << ", " << x[1] << ", " << x[2] << "), radius "
+       << self.InteractiveDetectorRadius
+       << " mm: expected a finite position and a finite radius >= 0";
+    throw translucency::Error(os.str());
+  }
+  try
+  {
+    const translucency::SurfacePoint surface = translucency::FindSurfacePoint(mesh, x);
+    translucency::Detector detector;
+    detector.Position = surface.Position;
+    detector.Radius = self.InteractiveDetectorRadius;
+    detector.Label = "interactive detector";
+    this->SolvedDetectors.push_back(detector);
+    std::copy_n(surface.Position.begin(), 3, self.InteractiveDetectorSurfacePosition);
+  }
+  catch (const translucency::Error& e)
+  {
+    throw translucency::Error(std::string("interactive detector: ") + e.what());
+  }
+}
+
+void vtkSolveDiffusion::Internals::Configure(vtkSolveDiffusion& self, int numberOfPoints)
+{
+  // Validate: a vertex solver's linear solver must be one of this build's.
+  const auto& entry = SolverEntry(self.Solver);
+  const std::string linearSolver =
+    translucency::ToLower(self.LinearSolver) == "default" ? "" : self.LinearSolver;
+  if (entry.Properties.UnknownsAtVertices && !linearSolver.empty())
+  {
+    const std::vector<std::string> names = translucency::GetLinearSolverNames();
+    if (std::find(names.begin(), names.end(), translucency::ToLower(linearSolver)) == names.end())
+    {
+      throw translucency::Error("unknown LinearSolver '" + self.LinearSolver + "' for the " +
+        entry.Name + " solver (this build has: " + translucency::JoinNames(names) +
+        "; empty or \"default\" = " +
+        translucency::VertexDiffusionSolver::GetDefaultLinearSolverName(numberOfPoints) +
+        " for this mesh)");
+    }
+  }
+  // The front end keeps the solver, detects the changed tets and
+  // warm-starts; the settings go through the interface and its options hook.
+  this->FrontEnd.SetSolver(entry.Name);
+  this->FrontEnd.SetIncrementalAssembly(self.IncrementalAssembly);
+  this->FrontEnd.SetMaximumChangedFraction(self.MaximumChangedFraction);
+  translucency::DiffusionSolver& solver = this->FrontEnd.GetSolver();
+  solver.SetNumberOfThreads(self.NumberOfThreads);
+  solver.SetRelTol(self.RelTol);
+  solver.SetMaxIter(self.MaxIter);
+  solver.SetWarmStart(self.WarmStart);
+  solver.SetLinearSolver(linearSolver);
+  // Every solver-specific property; the selected solver reads its own and
+  // leaves the others unused (they do not apply to it).
+  translucency::SolverOptions options{
+    { translucency::DiffusionOption::GridSpacing, self.GridSpacing },
+    { translucency::DiffusionOption::MultiLevel, self.MultiLevel ? 1.0 : 0.0 },
+    { translucency::DiffusionOption::TwoPointFlux, self.QuadGraphTwoPointFlux ? 1.0 : 0.0 },
+    { translucency::DiffusionOption::Photons, static_cast<double>(self.NumberOfPhotons) },
+    { translucency::DiffusionOption::Seed, static_cast<double>(self.Seed) },
+    { translucency::DiffusionOption::Anisotropy, self.Anisotropy } };
+  solver.SetOptions(options);
+  const auto& read = entry.Properties.Options;
+  if (self.Anisotropy != 0.0 &&
+    std::find(read.begin(), read.end(), translucency::DiffusionOption::Anisotropy) == read.end())
+  {
+    std::vector<std::string> readers;
+    for (const auto& other : translucency::GetDiffusionSolverRegistry().GetEntries())
+    {
+      const auto& o = other.Properties.Options;
+      if (std::find(o.begin(), o.end(), translucency::DiffusionOption::Anisotropy) != o.end())
+      {
+        readers.push_back(other.Name);
+      }
+    }
+    vtkWarningWithObjectMacro(&self, << "Anisotropy g = " << self.Anisotropy
+      << " is ignored by the " << entry.Name << " solver: it applies to "
+      << translucency::JoinNames(readers)
+      << " only (the diffusion solvers use the reduced scattering coefficient, in which g is "
+         "already folded)");
+  }
+  solver.SetProgressCallback([&self](double fraction) {
+    self.UpdateProgress(0.05 + 0.9 * fraction);
+    return !self.CheckAbort();
+  });
+}
+
+void vtkSolveDiffusion::Internals::CheckModelRange(vtkSolveDiffusion& self,
+  vtkUnstructuredGrid* input, const std::shared_ptr<const translucency::TetMesh>& mesh,
+  const translucency::OpticalProperties& material)
+{
+  // The diffusion model's range (a stochastic solver solves the transport
+  // itself): a warning when the verdict changes (not at every paint stroke);
+  // the mesh resolution is a note (GetMeshResolutionNote), printed by the CLI.
+  vtkDataArray* absorption = input->GetCellData()->GetArray(vtkTranslucency::AbsorptionName);
+  vtkDataArray* scattering = input->GetCellData()->GetArray(vtkTranslucency::ScatteringName);
+  const vtkMTimeType absorptionTime = absorption ? absorption->GetMTime() : 0;
+  const vtkMTimeType scatteringTime = scattering ? scattering->GetMTime() : 0;
+  if (SolverEntry(self.Solver).Properties.IsStochastic)
+  {
+    self.ModelRangeWarning.clear();
+    self.MeshResolutionNote.clear();
+    this->RangeMesh.reset(); // checked again when a diffusion solver returns
+    return;
+  }
+  if (this->RangeMesh.lock() == mesh && absorptionTime == this->RangeAbsorptionTime &&
+    scatteringTime == this->RangeScatteringTime)
+  {
+    return;
+  }
+  if (this->RangeMesh.lock() != mesh)
+  {
+    this->Sizes = translucency::TetSizes(*mesh);
+  }
+  this->RangeMesh = mesh;
+  this->RangeAbsorptionTime = absorptionTime;
+  this->RangeScatteringTime = scatteringTime;
+  const translucency::ModelRangeReport range =
+    translucency::CheckModelRange(*mesh, material, &this->Sizes);
+  const std::string warning = range.AlbedoMessage();
+  if (!warning.empty() && warning != self.ModelRangeWarning)
+  {
+    vtkWarningWithObjectMacro(&self, << warning);
+  }
+  self.ModelRangeWarning = warning;
+  self.MeshResolutionNote = range.ResolutionMessage();
+}
+
+void vtkSolveDiffusion::Internals::Sp3Readouts(const translucency::Sp3Solver& sp3,
+  const translucency::TetMesh& mesh, const translucency::OpticalProperties& material,
+  const std::vector<double>& irradiance)
+{
+  const std::vector<double>& exitance = sp3.GetExitance();
+  if (exitance.size() != this->Result.Fluence.size())
+  {
+    return;
+  }
+  if (!this->SolvedDetectors.empty())
+  {
+    const auto footprints = translucency::LocateDetectors(mesh, this->SolvedDetectors);
+    for (std::size_t k = 0; k < footprints.size() && k < this->Result.Readings.size(); ++k)
+    {
+      this->Result.Readings[k].Exitance = { 0.0, 0.0, 0.0 };
+      for (const auto& [point, weight] : footprints[k].GetPointWeights(mesh))
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          this->Result.Readings[k].Exitance[c] +=
+            weight * exitance[3 * static_cast<std::size_t>(point) + c];
+        }
+      }
+    }
+  }
+  // The balance: absorbed and the boundary's injected power as for the
+  // diffusion solvers, escaped from SP3's exitance (P1 integral over the
+  // surface), the interior sources' power as SP3 injected it.
+  const translucency::PowerBalance balance = translucency::ComputePowerBalance(
+    mesh, material, this->Result.Fluence, &irradiance, this->Result.Rule);
+  const std::array<double, 3> sources = sp3.GetSourcePower();
+  std::array<double, 3> escaped{ 0.0, 0.0, 0.0 };
+  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+  for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+  {
+    const double third = mesh.GetBoundaryTriangleAreas()[f] / 3.0;
+    for (int a = 0; a < 3; ++a)
+    {
+      const std::size_t p = static_cast<std::size_t>(triangles[3 * static_cast<std::size_t>(f) + a]);
+      for (int c = 0; c < 3; ++c)
+      {
+        escaped[c] += third * exitance[3 * p + c];
+      }
+    }
+  }
+  this->Result.HasTalliedBalance = true;
+  for (int c = 0; c < 3; ++c)
+  {
+    this->Result.TalliedInjected[c] = balance.BoundaryInjected[c] + sources[c];
+    this->Result.TalliedAbsorbed[c] = balance.Absorbed[c];
+    this->Result.TalliedEscaped[c] = escaped[c];
+  }
+}
+
+void vtkSolveDiffusion::Internals::WarnUnconverged(vtkSolveDiffusion& self) const
+{
+  static const char* channelNames[3] = { "R", "G", "B" };
+  const translucency::SolverReport& report = this->Result.Report;
+  for (int c = 0; c < 3; ++c)
+  {
+    if (!report.Converged[c] && report.Iterations[c] > 0)
+    {
+      vtkWarningWithObjectMacro(&self, << "channel " << channelNames[c]
+        << " did not converge: relative residual " << report.Residual[c] << " after "
+        << report.Iterations[c] << " iterations (RelTol " << self.RelTol << ", MaxIter "
+        << self.MaxIter << "; kept because AcceptUnconverged is on)");
+    }
+  }
+}
+
+namespace
+{
+/// The time-of-flight field arrays: gate centres and, per detector k,
+/// DetectorFluenceTPSF<k>, DetectorExitanceTPSF<k> (and their standard
+/// errors for a stochastic solver).
+void AttachGateArrays(vtkUnstructuredGrid* output, const translucency::SolveResult& result,
+  std::size_t numberOfDetectors)
+{
+  const translucency::TimeResolvedResult& time = result.Time;
+  vtkNew<vtkDoubleArray> centres;
+  centres->SetName("TimeGateCentres");
+  for (int g = 0; g < time.Gates.Count; ++g)
+  {
+    centres->InsertNextValue(time.Gates.GetGateCentre(g));
+  }
+  output->GetFieldData()->AddArray(centres);
+  for (std::size_t k = 0; k < numberOfDetectors; ++k)
+  {
+    std::vector<double> fluence, exitance, fluenceError, exitanceError;
+    for (const auto& gate : time.Readings)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        fluence.push_back(gate[k].Fluence[c]);
+        exitance.push_back(gate[k].Exitance[c]);
+      }
+    }
+    for (const auto& gate : result.GateErrors) // stochastic solvers only
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        fluenceError.push_back(gate[k].Fluence[c]);
+        exitanceError.push_back(gate[k].Exitance[c]);
+      }
+    }
+    for (const auto& [name, values] : { std::make_pair("DetectorFluenceTPSF", &fluence),
+           std::make_pair("DetectorExitanceTPSF", &exitance),
+           std::make_pair("DetectorFluenceTPSFStandardError", &fluenceError),
+           std::make_pair("DetectorExitanceTPSFStandardError", &exitanceError) })
+    {
+      if (values->empty())
+      {
+        continue;
+      }
+      vtkDataArray* array = vtkTranslucency::NewTripleArray(
+        (std::string(name) + std::to_string(k)).c_str(), *values);
+      output->GetFieldData()->AddArray(array);
+      array->Delete();
+    }
+  }
+}
+}
+
+void vtkSolveDiffusion::Internals::Attach(
+  vtkSolveDiffusion& self, vtkUnstructuredGrid* input, vtkUnstructuredGrid* output)
+{
+  translucency::SolveResult& result = this->Result;
+  output->ShallowCopy(input);
+  auto attach = [output](const char* name, const std::vector<double>& values) {
+    if (values.size() == 3 * static_cast<size_t>(output->GetNumberOfPoints()))
+    {
+      vtkDataArray* array = vtkTranslucency::NewTripleArray(name, values);
+      output->GetPointData()->AddArray(array);
+      array->Delete();
+    }
+  };
+  attach(vtkTranslucency::FluenceName, result.Fluence);
+  result.Fluence = std::vector<double>(); // held by the output
+  attach("FluenceStandardError", result.Report.FluenceStandardError);
+  attach("CollimatedFluence", result.Report.CollimatedFluence);
+  attach("CollimatedFluencePhase", result.Report.CollimatedFluencePhase);
+  if (result.Rule == translucency::Fresnel::BoundaryRule::Moments)
+  {
+    // Read by vtkOutgoingRadiance: the radiance of this solve's boundary
+    // condition (Fresnel-moment A and Fdr), not eq. 3's fit.
+    vtkNew<vtkIntArray> rule;
+    rule->SetName("TranslucencyBoundaryRule");
+    rule->InsertNextValue(1);
+    output->GetFieldData()->AddArray(rule);
+  }
+  else
+  {
+    output->GetFieldData()->RemoveArray("TranslucencyBoundaryRule"); // not this solve's
+  }
+  attach("MonteCarloRadiance", result.Report.Radiance);
+  attach("MonteCarloRadianceStandardError", result.Report.RadianceStandardError);
+  attach("FluenceAmplitude", result.Amplitude);
+  attach("FluencePhase", result.Phase);
+  const translucency::TimeResolvedResult& time = result.Time;
+  for (std::size_t k = 0; k < time.Snapshots.size(); ++k)
+  {
+    attach(("FluenceGate" + std::to_string(time.SnapshotGates[k])).c_str(), time.Snapshots[k]);
+  }
+  if (this->SolvedDomain == translucency::SolveDomain::Time)
+  {
+    AttachGateArrays(output, result, this->SolvedDetectors.size());
+  }
+  AttachDetectorArrays(output, this->SolvedDetectors, result.Readings, result.ReadingErrors,
+    result.FluencePhase, result.ExitancePhase,
+    this->SolvedDomain == translucency::SolveDomain::Frequency);
+  if (self.InteractiveDetector && !result.Readings.empty())
+  {
+    // What was asked for: the handle's position (DetectorPosition has the surface point).
+    if (vtkDataArray* requested = output->GetFieldData()->GetArray("DetectorRequestedPosition"))
+    {
+      requested->SetTuple(requested->GetNumberOfTuples() - 1, self.InteractiveDetectorPosition);
+    }
+  }
 }
 
 //------------------------------------------------------------------------------
@@ -1263,17 +1149,6 @@ bool vtkSolveDiffusion::ComputePowerBalance(
                      "leaves an empty output)");
     return false;
   }
-  if (this->Internal->HasMonteCarloBalance)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      const auto& balance = this->Internal->MonteCarloBalance[c];
-      injected[c] = balance.Injected;
-      absorbed[c] = balance.Absorbed;
-      escaped[c] = balance.Escaped;
-    }
-    return true;
-  }
   auto mesh = vtkTranslucency::AcquireTetMesh(output, error);
   translucency::OpticalProperties material;
   std::vector<double> fluence, irradiance;
@@ -1287,60 +1162,13 @@ bool vtkSolveDiffusion::ComputePowerBalance(
   }
   try
   {
-    // The extended collimated model: Fluence = phi_d + E_c. The diffuse
-    // field's balance is read from phi_d with the solve's Robin rule; the
-    // beam adds what entered (injected), what it deposited directly
-    // (absorbed) and what leaves unscattered, entering - scattered -
-    // absorbed (escaped; DiffuseOptics.md, "Power balance").
-    const translucency::SolverReport& report = this->Internal->Report;
-    const bool beam = report.CollimatedFluence.size() == fluence.size();
-    if (beam)
-    {
-      for (std::size_t k = 0; k < fluence.size(); ++k)
-      {
-        fluence[k] -= report.CollimatedFluence[k];
-      }
-    }
-    translucency::PowerBalance balance = translucency::ComputePowerBalance(
-      *mesh, material, fluence, &irradiance, this->Internal->SolvedRule);
-    auto sources = this->Internal->SolvedSources.InjectedPower(*mesh, material);
-    const std::vector<double>& sp3Exitance = this->Internal->Sp3Exitance;
-    if (this->Internal->HasSp3Balance && sp3Exitance.size() == fluence.size())
-    {
-      // sp3: its exitance (P1 integral over the surface) and the power its
-      // sources injected (a pencil beam's first-collision source).
-      balance.Escaped = { 0.0, 0.0, 0.0 };
-      const std::vector<int>& triangles = mesh->GetBoundaryTriangles();
-      for (int f = 0; f < mesh->GetNumberOfBoundaryTriangles(); ++f)
-      {
-        const double third = mesh->GetBoundaryTriangleAreas()[f] / 3.0;
-        for (int a = 0; a < 3; ++a)
-        {
-          const std::size_t p = static_cast<std::size_t>(triangles[3 * static_cast<std::size_t>(f) + a]);
-          for (int c = 0; c < 3; ++c)
-          {
-            balance.Escaped[c] += third * sp3Exitance[3 * p + c];
-          }
-        }
-      }
-      for (int c = 0; c < 3; ++c)
-      {
-        sources[c] = this->Internal->Sp3SourcePower[c];
-      }
-    }
-    for (int c = 0; c < 3; ++c)
-    {
-      injected[c] = balance.BoundaryInjected[c] + sources[c];
-      absorbed[c] = balance.Absorbed[c];
-      escaped[c] = balance.Escaped[c];
-      if (beam)
-      {
-        injected[c] += report.CollimatedEntering[c];
-        absorbed[c] += report.CollimatedAbsorbed[c];
-        escaped[c] +=
-          report.CollimatedEntering[c] - report.CollimatedScattered[c] - report.CollimatedAbsorbed[c];
-      }
-    }
+    std::array<double, 3> in{}, abs{}, esc{};
+    translucency::DiffusionFrontEnd::ComputePowerBalance(*mesh, material, fluence, irradiance,
+      &this->Internal->SolvedSources, this->Internal->Result, this->Internal->SolvedDomain, in,
+      abs, esc);
+    std::copy_n(in.begin(), 3, injected);
+    std::copy_n(abs.begin(), 3, absorbed);
+    std::copy_n(esc.begin(), 3, escaped);
   }
   catch (const translucency::Error& e)
   {
@@ -1358,92 +1186,74 @@ int vtkSolveDiffusion::RequestDistributed(
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
   Internals& in = *this->Internal;
-  in.Report = translucency::SolverReport();
-  in.Readings.clear();
-  in.FluencePhase.clear();
-  in.ExitancePhase.clear();
+  in.Result = translucency::SolveResult();
+  in.SolvedDomain = translucency::SolveDomain::ContinuousWave;
   in.FrontEnd.Reset();
   this->TopologyTime = this->AssemblyTime = this->SolveTime = 0.0;
-  in.ReadingErrors.clear();
-  in.GateErrors.clear();
-  in.TimeResolved = translucency::TimeResolvedResult();
-  // The listed sources and the interactive ones.
-  in.SolvedSources = in.Sources;
-  std::fill(this->InteractivePencilBeamEntry, this->InteractivePencilBeamEntry + 3, 0.0);
-  if (this->InteractivePointSource)
-  {
-    translucency::PointSource source;
-    std::copy_n(this->InteractivePointSourcePosition, 3, source.Position.begin());
-    std::copy_n(this->InteractivePointSourcePower, 3, source.Power.begin());
-    source.Label = "interactive point source";
-    in.SolvedSources.AddPointSource(source);
-  }
-  if (this->InteractivePencilBeam)
-  {
-    // Aimed by a ray cast over the whole object's surface: the physical
-    // boundary all-gathered (every rank casts the same ray on the same
-    // triangles, so every rank finds the same entry, or the same error).
-    std::string error;
-    translucency::BoundarySurface surface;
-    if (!vtkTranslucencyDistributedIrradiance::GatherSurface(input, surface, error))
-    {
-      vtkErrorMacro(<< error);
-      return 0;
-    }
-    try
-    {
-      std::array<double, 3> point1, point2, power;
-      std::copy_n(this->InteractivePencilBeamPoint1, 3, point1.begin());
-      std::copy_n(this->InteractivePencilBeamPoint2, 3, point2.begin());
-      std::copy_n(this->InteractivePencilBeamPower, 3, power.begin());
-      const translucency::PencilBeam beam = translucency::AimPencilBeam(surface.Points,
-        surface.Triangles, translucency::SurfaceTolerance(surface.Points, surface.Triangles),
-        point1, point2, power, "interactive pencil beam");
-      in.SolvedSources.AddPencilBeam(beam);
-      std::copy_n(beam.Position.begin(), 3, this->InteractivePencilBeamEntry);
-    }
-    catch (const translucency::Error& e)
-    {
-      vtkErrorMacro(<< e.what());
-      return 0;
-    }
-  }
-  std::vector<double> fluence;
   std::string error;
-  if (!in.Distributed.Solve(input, SolverEntry(this->Solver).Name, this->RelTol, this->MaxIter,
-        this->WarmStart, this->NumberOfThreads, &in.SolvedSources, in.Detectors, fluence,
-        in.Readings, in.Report, error))
+  try
   {
-    in.Report = translucency::SolverReport();
-    in.Readings.clear();
+    // The listed sources and the interactive ones (the pencil beam aimed on
+    // the all-gathered surface: the same on every rank).
+    in.AddInteractiveSources(*this, nullptr, input);
+  }
+  catch (const translucency::Error& e)
+  {
+    error = e.what(); // the same on every rank (collective aim)
+  }
+  if (!error.empty())
+  {
     vtkErrorMacro(<< error);
     return 0;
   }
-  in.FluencePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
-  in.ExitancePhase.assign(in.Readings.size(), { 0.0, 0.0, 0.0 });
-  this->AssemblyTime = in.Report.SetupMilliseconds;
-  this->SolveTime = in.Report.SolveMilliseconds;
+  in.SolvedDetectors = in.Detectors;
+  std::vector<double> fluence;
+  translucency::SolverReport& report = in.Result.Report;
+  if (!in.Distributed.Solve(input, SolverEntry(this->Solver).Name, this->RelTol, this->MaxIter,
+        this->WarmStart, this->NumberOfThreads, &in.SolvedSources, in.Detectors, fluence,
+        in.Result.Readings, report, error))
+  {
+    in.Result = translucency::SolveResult();
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  // Never a non-converged result: the distributed solver re-solved after a
+  // full set-up; iterations and residuals are global, so every rank agrees.
   static const char* channelNames[3] = { "R", "G", "B" };
+  std::ostringstream unconverged;
   for (int c = 0; c < 3; ++c)
   {
-    if (!in.Report.Converged[c] && in.Report.Iterations[c] > 0)
+    if (!report.Converged[c] && report.Iterations[c] > 0)
     {
-      vtkWarningMacro(<< "channel " << channelNames[c] << " did not converge: relative residual "
-                      << in.Report.Residual[c] << " after " << in.Report.Iterations[c]
-                      << " iterations (RelTol " << this->RelTol << ", MaxIter " << this->MaxIter
-                      << ")");
+      unconverged << (unconverged.tellp() > 0 ? "; " : "") << "channel " << channelNames[c]
+                  << ": relative residual " << report.Residual[c] << " after "
+                  << report.Iterations[c] << " iterations";
     }
   }
+  if (unconverged.tellp() > 0 && !this->AcceptUnconverged)
+  {
+    vtkErrorMacro(<< "the distributed " << report.Solver
+                  << " solve did not converge, also after a full set-up (" << unconverged.str()
+                  << "; RelTol " << this->RelTol << ", MaxIter " << this->MaxIter
+                  << "): no result. Raise MaxIter or RelTol");
+    return 0;
+  }
+  in.Result.FluencePhase.assign(in.Result.Readings.size(), { 0.0, 0.0, 0.0 });
+  in.Result.ExitancePhase.assign(in.Result.Readings.size(), { 0.0, 0.0, 0.0 });
+  this->AssemblyTime = report.SetupMilliseconds;
+  this->SolveTime = report.SolveMilliseconds;
+  in.WarnUnconverged(*this);
   if (input)
   {
-    output->ShallowCopy(input);
-    vtkDataArray* array = vtkTranslucency::NewTripleArray(vtkTranslucency::FluenceName, fluence);
-    output->GetPointData()->AddArray(array);
-    array->Delete();
+    in.Result.Fluence = std::move(fluence);
+    in.Attach(*this, input, output);
   }
-  // On every rank (an empty piece too): the field arrays vtkDetectorReadings reads.
-  AttachDetectorArrays(output, in.Detectors, in.Readings, in.ReadingErrors, in.FluencePhase,
-    in.ExitancePhase, false);
+  else
+  {
+    // On every rank (an empty piece too): the field arrays vtkDetectorReadings reads.
+    AttachDetectorArrays(output, in.Detectors, in.Result.Readings, in.Result.ReadingErrors,
+      in.Result.FluencePhase, in.Result.ExitancePhase, false);
+  }
   this->UpdateProgress(1.0);
   return outputs.Succeed();
 }
@@ -1473,6 +1283,7 @@ void vtkSolveDiffusion::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Detectors: " << this->GetNumberOfDetectors() << "\n";
   os << indent << "ModulationFrequency: " << this->ModulationFrequency << " Hz\n";
   os << indent << "DistributedSolve: " << this->DistributedSolve << "\n";
+  os << indent << "AcceptUnconverged: " << this->AcceptUnconverged << "\n";
   os << indent << "TimeGates: " << this->TimeGatesStart << ", " << this->TimeGatesEnd << " ns, "
      << this->TimeGatesCount << " gates\n";
   os << indent << "TimeStepsPerGate: " << this->TimeStepsPerGate << "\n";

@@ -166,6 +166,23 @@ public:
   ///@}
 
   ///@{
+  /**
+   * A solve that does not converge (RelTol within MaxIter) is done again in
+   * the same execution after a full set-up (a new hierarchy, a full
+   * assembly, no warm start); if it still does not converge, RequestData
+   * fails with an error naming each channel's residual and iterations and
+   * the output is empty, on every rank under MPI (translucency::
+   * DiffusionFrontEnd). AcceptUnconverged (default off) keeps the
+   * unconverged field with a warning instead: for convergence studies only
+   * (translucency compare's error against time stops solves early on
+   * purpose), never for a result. Not in the plugin.
+   */
+  vtkSetMacro(AcceptUnconverged, bool);
+  vtkGetMacro(AcceptUnconverged, bool);
+  vtkBooleanMacro(AcceptUnconverged, bool);
+  ///@}
+
+  ///@{
   /// Start from the previous solution when the unknowns are unchanged (default on).
   vtkSetMacro(WarmStart, bool);
   vtkGetMacro(WarmStart, bool);
@@ -544,6 +561,7 @@ protected:
   double RelTol = 1e-3; // translucency::InteractiveRelTol (checked by a test)
   int MaxIter = 2000;
   bool WarmStart = true;
+  bool AcceptUnconverged = false;
   double GridSpacing = 0.0;
   vtkTypeInt64 NumberOfPhotons = 1000000;
   int Seed = 1;

@@ -3,12 +3,14 @@
 
 #include "DiffusionSolverFactory.h"
 #include "Strings.h"
-#include "VertexDiffusionSolver.h"
 
+#include <complex>
 #include <cstring>
+#include <sstream>
 
 namespace translucency
 {
+
 
 DiffusionFrontEnd::DiffusionFrontEnd()
 {
@@ -76,41 +78,108 @@ std::vector<int> DiffusionFrontEnd::FindChangedTets(
   return changed;
 }
 
+void DiffusionFrontEnd::CheckDomain(const SolveRequest& request) const
+{
+  const DiffusionSolverTraits& traits = GetDiffusionSolverRegistry().Get(SolverName_).Properties;
+  if (request.Domain == SolveDomain::Frequency && !traits.SupportsFrequency)
+  {
+    throw Error("the " + SolverName_ + " solver has no frequency domain (modulation frequency " +
+      FormatNumber(request.Frequency) + " Hz): solvers with one: " +
+      JoinNames(GetDiffusionSolverNamesWith(DiffusionTrait::Frequency)));
+  }
+  if (request.Domain == SolveDomain::Time && !traits.SupportsTime)
+  {
+    throw Error("the " + SolverName_ +
+      " solver has no frequency domain or time gates: time gates are implemented by " +
+      JoinNames(GetDiffusionSolverNamesWith(DiffusionTrait::Time)) +
+      ", the frequency domain by " +
+      JoinNames(GetDiffusionSolverNamesWith(DiffusionTrait::Frequency)));
+  }
+  if (request.Domain != SolveDomain::Time && !request.Snapshots.empty())
+  {
+    throw Error("time snapshots without time gates");
+  }
+}
+
+void DiffusionFrontEnd::DetectChangedTets(
+  const OpticalProperties& material, const std::vector<double>& irradiance)
+{
+  // Same mesh (topology and points), only some tets' coefficients changed
+  // since the last successful solve: found by comparing with the
+  // coefficients cached from that solve. Another irradiance (a relight)
+  // rebuilds the right-hand side too.
+  const std::size_t numTets = material.RefractiveIndex.size();
+  const auto limit = static_cast<std::size_t>(MaximumChangedFraction_ * numTets);
+  if (IncrementalAssembly_ && HaveLast_ && LastMaterial_.RefractiveIndex.size() == numTets &&
+    LastMaterial_.AbsorptionCoefficient.size() == material.AbsorptionCoefficient.size() &&
+    LastMaterial_.ReducedScatteringCoefficient.size() ==
+      material.ReducedScatteringCoefficient.size() &&
+    LastIrradiance_.size() == irradiance.size())
+  {
+    const bool relit = std::memcmp(LastIrradiance_.data(), irradiance.data(),
+                         irradiance.size() * sizeof(double)) != 0;
+    std::vector<int> changed = FindChangedTets(LastMaterial_, material, limit);
+    if (changed.size() <= limit)
+    {
+      ChangedTets_ = static_cast<long long>(changed.size());
+      Solver_->SetChangedTets(std::move(changed), relit);
+    }
+  }
+}
+
 bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProperties material,
   std::vector<double> irradiance, const DiffusionProblem& light, std::vector<double>& fluence,
   SolverReport& report)
 {
+  SolveResult result;
+  if (!Solve(std::move(mesh), std::move(material), std::move(irradiance), light, SolveRequest(),
+        result))
+  {
+    return false;
+  }
+  fluence = std::move(result.Fluence);
+  report = std::move(result.Report);
+  return true;
+}
+
+namespace
+{
+/// "channel G: relative residual 0.66 after 1 iterations; ..." for the
+/// channels that did not converge ("" if all did).
+std::string UnconvergedChannels(const SolverReport& report)
+{
+  static const char* names[NumberOfChannels] = { "R", "G", "B" };
+  std::string text;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    if (!report.Converged[c] && report.Iterations[c] > 0)
+    {
+      text += std::string(text.empty() ? "" : "; ") + "channel " + names[c] +
+        ": relative residual " + FormatNumber(report.Residual[c]) + " after " +
+        std::to_string(report.Iterations[c]) + " iterations";
+    }
+  }
+  return text;
+}
+}
+
+bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProperties material,
+  std::vector<double> irradiance, const DiffusionProblem& light, const SolveRequest& request,
+  SolveResult& result)
+{
+  CheckDomain(request);
+  const DiffusionSolverTraits& traits = GetDiffusionSolverRegistry().Get(SolverName_).Properties;
   if (mesh != Mesh_)
   {
     Solver_->Reset(); // a new geometry: the previous solution is no start point
     Mesh_ = mesh;
     ForgetLast();
   }
-  auto* vertex = dynamic_cast<VertexDiffusionSolver*>(Solver_.get());
+  const bool continuous = request.Domain == SolveDomain::ContinuousWave;
   ChangedTets_ = -1;
-  if (vertex)
+  if (traits.UnknownsAtVertices && continuous)
   {
-    // Same mesh (topology and points), only some tets' coefficients
-    // changed since the last successful solve: found by comparing with the
-    // coefficients cached from that solve. Another irradiance (a relight)
-    // rebuilds the right-hand side too.
-    const std::size_t numTets = material.RefractiveIndex.size();
-    const auto limit = static_cast<std::size_t>(MaximumChangedFraction_ * numTets);
-    if (IncrementalAssembly_ && HaveLast_ && LastMaterial_.RefractiveIndex.size() == numTets &&
-      LastMaterial_.AbsorptionCoefficient.size() == material.AbsorptionCoefficient.size() &&
-      LastMaterial_.ReducedScatteringCoefficient.size() ==
-        material.ReducedScatteringCoefficient.size() &&
-      LastIrradiance_.size() == irradiance.size())
-    {
-      const bool relit = std::memcmp(LastIrradiance_.data(), irradiance.data(),
-                           irradiance.size() * sizeof(double)) != 0;
-      std::vector<int> changed = FindChangedTets(LastMaterial_, material, limit);
-      if (changed.size() <= limit)
-      {
-        ChangedTets_ = static_cast<long long>(changed.size());
-        vertex->SetChangedTets(std::move(changed), relit);
-      }
-    }
+    DetectChangedTets(material, irradiance);
   }
   ForgetLast(); // until this solve succeeds
 
@@ -118,34 +187,277 @@ bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProper
   problem.Mesh = mesh.get();
   problem.Material = &material;
   problem.Irradiance = &irradiance;
-  bool solved = false;
+  result = SolveResult();
   try
   {
-    solved = Solver_->Solve(problem, fluence, report);
-    if (solved)
+    if (!SolveOnce(problem, request, result))
     {
-      // Never hand on a NaN/inf fluence as a result (e.g. a light power of
-      // 1e300 overflows the right-hand side).
-      RequireFinite(irradiance, "the boundary irradiance", OverflowCause());
-      RequireFinite(fluence, "Fluence (" + SolverName_ + " solver)", OverflowCause());
+      return false; // aborted by the progress callback
     }
+    std::string unconverged = traits.IsStochastic ? "" : UnconvergedChannels(result.Report);
+    if (!unconverged.empty())
+    {
+      // Never a non-converged result: a kept hierarchy (values-only set-up
+      // after a paint, a relight) or a warm start may be what failed, so
+      // solve again after a full set-up, cold.
+      Solver_->Reset();
+      ChangedTets_ = -1;
+      result = SolveResult();
+      if (!SolveOnce(problem, request, result))
+      {
+        return false;
+      }
+      result.Report.Resolved = true;
+      unconverged = UnconvergedChannels(result.Report);
+      if (!unconverged.empty() && !request.AcceptUnconverged)
+      {
+        throw Error("the " + SolverName_ + " solve did not converge, also after a full set-up (" +
+          unconverged + "; RelTol " + FormatNumber(Solver_->GetRelTol()) + ", MaxIter " +
+          std::to_string(Solver_->GetMaxIter()) + ", linear solver " +
+          result.Report.LinearSolver +
+          "): no result. Raise MaxIter or RelTol, or choose another LinearSolver");
+      }
+    }
+    // Never hand on a NaN/inf fluence as a result (e.g. a light power of
+    // 1e300 overflows the right-hand side).
+    RequireFinite(irradiance, "the boundary irradiance", OverflowCause());
+    RequireFinite(result.Fluence, "Fluence (" + SolverName_ + " solver)", OverflowCause());
+    ReadOut(problem, request, result);
   }
   catch (...)
   {
     Solver_->Reset();
+    ForgetLast();
     throw;
   }
-  if (!solved)
-  {
-    return false; // aborted by the progress callback
-  }
-  if (vertex && IncrementalAssembly_)
+  if (traits.UnknownsAtVertices && IncrementalAssembly_ && continuous)
   {
     LastMaterial_ = std::move(material);
     LastIrradiance_ = std::move(irradiance);
     HaveLast_ = true;
   }
   return true;
+}
+
+bool DiffusionFrontEnd::SolveOnce(
+  const DiffusionProblem& problem, const SolveRequest& request, SolveResult& result)
+{
+  if (problem.Collimated == CollimatedModel::ExtendedMoments &&
+    !GetDiffusionSolverRegistry().Get(SolverName_).Properties.IsStochastic)
+  {
+    // divergence and fem solve the extended-moments model with the Robin
+    // rule of the Fresnel moments (quadgraph and grid refuse the model; the
+    // photons solve the transport, no Robin rule).
+    result.Rule = Fresnel::BoundaryRule::Moments;
+  }
+  switch (request.Domain)
+  {
+    case SolveDomain::Frequency:
+      return SolveFrequency(problem, request, result);
+    case SolveDomain::Time:
+      Solver_->SetDetectors(request.Detectors);
+      if (!Solver_->SolveTimeResolved(problem, request.Gates, request.Detectors,
+            request.Snapshots, result.Time, result.Report))
+      {
+        return false;
+      }
+      result.Fluence = result.Time.IntegratedFluence;
+      return true;
+    case SolveDomain::ContinuousWave:
+    default:
+      Solver_->SetDetectors(request.Detectors);
+      return Solver_->Solve(problem, result.Fluence, result.Report);
+  }
+}
+
+bool DiffusionFrontEnd::SolveFrequency(
+  const DiffusionProblem& problem, const SolveRequest& request, SolveResult& result)
+{
+  std::vector<std::complex<double>> complexFluence;
+  if (!Solver_->SolveFrequencyDomain(problem, request.Frequency, complexFluence, result.Report))
+  {
+    return false;
+  }
+  // The extended collimated model: the total Phi = Phi_d + the modulated
+  // beam; Fluence is |Phi_d| + |E_c| so that Fluence - CollimatedFluence is
+  // the diffuse amplitude downstream (vtkOutgoingRadiance); Amplitude and
+  // Phase are those of the total. The detectors read the diffuse Phi_d.
+  const SolverReport& report = result.Report;
+  const std::size_t n = complexFluence.size();
+  const bool beam =
+    report.CollimatedFluence.size() == n && report.CollimatedFluencePhase.size() == n;
+  result.Amplitude.resize(n);
+  result.Phase.resize(n);
+  result.Fluence.resize(n);
+  std::vector<double> real(n), imag(n);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const std::complex<double> diffuse = beam
+      ? complexFluence[i] - std::polar(report.CollimatedFluence[i], report.CollimatedFluencePhase[i])
+      : complexFluence[i];
+    real[i] = diffuse.real();
+    imag[i] = diffuse.imag();
+    result.Amplitude[i] = std::abs(complexFluence[i]);
+    result.Phase[i] = std::arg(complexFluence[i]);
+    result.Fluence[i] = beam ? std::abs(diffuse) + report.CollimatedFluence[i] : result.Amplitude[i];
+  }
+  if (!request.Detectors.empty())
+  {
+    // The readings are linear in (phi, q): read the real part with q
+    // (modulated in phase with the sources) and the imaginary part without,
+    // then take amplitude and phase.
+    const auto re = ReadDetectors(*problem.Mesh, *problem.Material, request.Detectors, real,
+      problem.Irradiance, result.Rule);
+    const auto im = ReadDetectors(
+      *problem.Mesh, *problem.Material, request.Detectors, imag, nullptr, result.Rule);
+    result.Readings = re;
+    result.FluencePhase.resize(re.size());
+    result.ExitancePhase.resize(re.size());
+    for (std::size_t k = 0; k < re.size(); ++k)
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        const std::complex<double> f(re[k].Fluence[c], im[k].Fluence[c]);
+        const std::complex<double> j(re[k].Exitance[c], im[k].Exitance[c]);
+        result.Readings[k].Fluence[c] = std::abs(f);
+        result.Readings[k].Exitance[c] = std::abs(j);
+        result.FluencePhase[k][c] = std::arg(f);
+        result.ExitancePhase[k][c] = std::arg(j);
+      }
+    }
+  }
+  return true;
+}
+
+namespace
+{
+/// The detector readings of a time-resolved run: the time integrals of the
+/// gate averages (the continuous-wave readings when the gates cover the
+/// whole response).
+std::vector<DetectorReading> IntegrateGates(const TimeResolvedResult& time)
+{
+  const double width = time.Gates.GetWidth();
+  std::vector<DetectorReading> readings = time.Readings.front();
+  for (std::size_t k = 0; k < readings.size(); ++k)
+  {
+    readings[k].Fluence.fill(0.0);
+    readings[k].Exitance.fill(0.0);
+    for (const auto& gate : time.Readings)
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        readings[k].Fluence[c] += width * gate[k].Fluence[c];
+        readings[k].Exitance[c] += width * gate[k].Exitance[c];
+      }
+    }
+  }
+  return readings;
+}
+}
+
+void DiffusionFrontEnd::ReadOut(
+  const DiffusionProblem& problem, const SolveRequest& request, SolveResult& result)
+{
+  TalliedReadouts tallied;
+  const bool hasTallies = Solver_->GetTalliedReadouts(tallied);
+  if (hasTallies)
+  {
+    result.HasTalliedBalance = true;
+    result.TalliedInjected = tallied.Injected;
+    result.TalliedAbsorbed = tallied.Absorbed;
+    result.TalliedEscaped = tallied.Escaped;
+  }
+  const bool detectors = !request.Detectors.empty();
+  if (request.Domain == SolveDomain::Time)
+  {
+    if (hasTallies)
+    {
+      result.GateErrors = std::move(tallied.GateErrors);
+    }
+    if (detectors && !result.Time.Readings.empty())
+    {
+      result.Readings = IntegrateGates(result.Time);
+    }
+  }
+  else if (request.Domain == SolveDomain::ContinuousWave && detectors)
+  {
+    if (hasTallies)
+    {
+      result.Readings = std::move(tallied.Readings);
+      result.ReadingErrors = std::move(tallied.ReadingErrors);
+    }
+    else
+    {
+      // The detectors read the diffuse fluence (the unscattered beam of the
+      // extended model does not leave as diffuse exitance).
+      std::vector<double> diffuse = result.Fluence;
+      for (std::size_t k = 0; k < result.Report.CollimatedFluence.size(); ++k)
+      {
+        diffuse[k] -= result.Report.CollimatedFluence[k];
+      }
+      result.Readings = ReadDetectors(*problem.Mesh, *problem.Material, request.Detectors,
+        diffuse, problem.Irradiance, result.Rule);
+    }
+  }
+  if (request.Domain != SolveDomain::Frequency)
+  {
+    result.FluencePhase.assign(result.Readings.size(), { 0.0, 0.0, 0.0 });
+    result.ExitancePhase.assign(result.Readings.size(), { 0.0, 0.0, 0.0 });
+  }
+}
+
+void DiffusionFrontEnd::ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<double>& resultFluence, const std::vector<double>& irradiance,
+  const Sources* sources, const SolveResult& result,
+  SolveDomain domain, std::array<double, NumberOfChannels>& injected,
+  std::array<double, NumberOfChannels>& absorbed, std::array<double, NumberOfChannels>& escaped)
+{
+  if (domain == SolveDomain::Frequency)
+  {
+    throw Error("no power balance in the frequency domain: the fluence is complex");
+  }
+  if (result.HasTalliedBalance)
+  {
+    injected = result.TalliedInjected;
+    absorbed = result.TalliedAbsorbed;
+    escaped = result.TalliedEscaped;
+    return;
+  }
+  // The extended collimated model: Fluence = phi_d + E_c. The diffuse
+  // field's balance is read from phi_d with the solve's Robin rule; the beam
+  // adds what entered (injected), what it deposited directly (absorbed) and
+  // what leaves unscattered, entering - scattered - absorbed (escaped;
+  // DiffuseOptics.md, "Power balance").
+  const SolverReport& report = result.Report;
+  std::vector<double> fluence = resultFluence;
+  const bool beam = report.CollimatedFluence.size() == fluence.size();
+  if (beam)
+  {
+    for (std::size_t k = 0; k < fluence.size(); ++k)
+    {
+      fluence[k] -= report.CollimatedFluence[k];
+    }
+  }
+  const PowerBalance balance =
+    translucency::ComputePowerBalance(mesh, material, fluence, &irradiance, result.Rule);
+  std::array<double, NumberOfChannels> sourcePower{};
+  if (sources)
+  {
+    sourcePower = sources->InjectedPower(mesh, material);
+  }
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    injected[c] = balance.BoundaryInjected[c] + sourcePower[c];
+    absorbed[c] = balance.Absorbed[c];
+    escaped[c] = balance.Escaped[c];
+    if (beam)
+    {
+      injected[c] += report.CollimatedEntering[c];
+      absorbed[c] += report.CollimatedAbsorbed[c];
+      escaped[c] +=
+        report.CollimatedEntering[c] - report.CollimatedScattered[c] - report.CollimatedAbsorbed[c];
+    }
+  }
 }
 
 } // namespace translucency

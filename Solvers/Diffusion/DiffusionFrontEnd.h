@@ -19,6 +19,20 @@
  * assembly) and the solve warm-starts from the previous fluence. Beyond the
  * fraction a parallel full assembly is faster than the serial row update.
  *
+ * One front end for every domain and read-out: Solve(..., request, result)
+ * takes the domain (continuous wave, frequency f, time gates) and the
+ * read-outs (detectors, snapshots; the power balance by
+ * ComputePowerBalance) and decides by the registry traits of the solver
+ * (SupportsFrequency, SupportsTime, IsStochastic), never by its name or
+ * type: a domain the solver lacks is refused with the solvers that have it.
+ *
+ * Never a non-converged result: a solve that does not converge is done
+ * again in the same call after a full set-up (DiffusionSolver::Reset: a new
+ * hierarchy or factor, a full assembly, no warm start); if that does not
+ * converge either, Solve throws translucency::Error naming every channel's
+ * residual and iterations (SolveRequest::AcceptUnconverged is the one
+ * exception, for convergence studies).
+ *
  * Why here and not in VertexDiffusionSolver: the cache is a policy of
  * interactive use (memory for a copy of the material, a comparison per
  * solve) that the other users of the solver (inverse diffusion, tests,
@@ -29,13 +43,72 @@
 #pragma once
 
 #include "DiffusionSolver.h"
+#include "Fresnel.h"
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
 
 namespace translucency
 {
+
+/// The domain of a solve.
+enum class SolveDomain
+{
+  ContinuousWave, ///< DiffusionSolver::Solve
+  Frequency,      ///< DiffusionSolver::SolveFrequencyDomain (trait SupportsFrequency)
+  Time            ///< DiffusionSolver::SolveTimeResolved (trait SupportsTime)
+};
+
+/// What DiffusionFrontEnd::Solve solves and reads out.
+struct SolveRequest
+{
+  SolveDomain Domain = SolveDomain::ContinuousWave;
+  double Frequency = 0.0;          ///< Hz, finite and > 0 for SolveDomain::Frequency
+  TimeGates Gates;                 ///< SolveDomain::Time (validated by the solver)
+  std::vector<int> Snapshots;      ///< SolveDomain::Time: gates whose fluence is kept
+  std::vector<Detector> Detectors; ///< read after the solve, any domain (may be empty)
+  /**
+   * Hand on a solve that did not converge (after the re-solve) instead of
+   * throwing: for convergence studies only (translucency compare's error
+   * against time stops solves early on purpose). Default false.
+   */
+  bool AcceptUnconverged = false;
+};
+
+/// What DiffusionFrontEnd::Solve returns (valid after a successful Solve).
+struct SolveResult
+{
+  SolverReport Report;
+  /**
+   * 3 per mesh point (W/mm^2). Continuous wave: phi. Frequency: |Phi_d| +
+   * E_c (the diffuse amplitude plus the beam's, so that Fluence -
+   * CollimatedFluence is the diffuse amplitude downstream). Time: the
+   * integral of phi over the gates (J/mm^2 per J).
+   */
+  std::vector<double> Fluence;
+  /// Frequency domain: amplitude |Phi| and phase arg(Phi) (radians) of the
+  /// total fluence, 3 per point; empty otherwise.
+  std::vector<double> Amplitude, Phase;
+  /// One per detector: continuous wave the readings; frequency their
+  /// amplitudes (phases in FluencePhase / ExitancePhase, radians, 0 in the
+  /// other domains); time the integrals of the gate readings.
+  std::vector<DetectorReading> Readings;
+  std::vector<std::array<double, 3>> FluencePhase, ExitancePhase;
+  /// Time domain: gates, gate readings, snapshots (TimeResolved.h).
+  TimeResolvedResult Time;
+  /// Stochastic solvers (trait IsStochastic): the standard errors of
+  /// Readings (continuous wave) and of Time.Readings ([gate][detector]),
+  /// and the photons' own power bookkeeping (HasTalliedBalance).
+  std::vector<DetectorReading> ReadingErrors;
+  std::vector<std::vector<DetectorReading>> GateErrors;
+  bool HasTalliedBalance = false;
+  std::array<double, NumberOfChannels> TalliedInjected{}, TalliedAbsorbed{}, TalliedEscaped{};
+  /// The Robin rule of the solve (Moments for the extended-moments
+  /// collimated model), for the power balance and the radiance.
+  Fresnel::BoundaryRule Rule = Fresnel::BoundaryRule::Fit;
+};
 
 class DiffusionFrontEnd
 {
@@ -84,6 +157,41 @@ public:
     std::vector<double> irradiance, const DiffusionProblem& light, std::vector<double>& fluence,
     SolverReport& report);
 
+  /**
+   * The one solve of every caller (the filter, the CLI, the benches): as the
+   * Solve above, in the domain of `request`, with its read-outs, decided by
+   * the solver's registry traits. Throws translucency::Error for a domain
+   * the solver lacks ("the grid solver has no frequency domain (...):
+   * solvers with one: divergence, fem"), for invalid input (the solver's
+   * messages) and for a solve that did not converge also after a full
+   * set-up (see the file comment). Only continuous-wave solves feed the
+   * incremental assembly of the next paint.
+   */
+  bool Solve(std::shared_ptr<const TetMesh> mesh, OpticalProperties material,
+    std::vector<double> irradiance, const DiffusionProblem& light, const SolveRequest& request,
+    SolveResult& result);
+
+  /**
+   * Throws translucency::Error unless the current solver has the domain of
+   * `request` (its registry traits), naming the solvers that have it. Solve
+   * calls it first; callers may call it before converting their input.
+   */
+  void CheckDomain(const SolveRequest& request) const;
+
+  /**
+   * The power balance of `result` (a continuous-wave or time solve, its
+   * Fluence passed as `fluence`; W per channel): the photons' own bookkeeping for a stochastic solver, else
+   * ComputePowerBalance of the diffuse fluence with the solve's Robin rule
+   * plus the interior sources' power and the extended model's beam
+   * (DiffuseOptics.md, "Power balance"). Throws translucency::Error for a
+   * frequency-domain result (the fluence is complex).
+   */
+  static void ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& material,
+    const std::vector<double>& fluence, const std::vector<double>& irradiance,
+    const Sources* sources, const SolveResult& result,
+    SolveDomain domain, std::array<double, NumberOfChannels>& injected,
+    std::array<double, NumberOfChannels>& absorbed, std::array<double, NumberOfChannels>& escaped);
+
   /// Tets found changed for the last solve's incremental update; -1 if it
   /// did not look (not a vertex solver, IncrementalAssembly off, no cached
   /// solve, another mesh, another irradiance, or more changed tets than
@@ -104,6 +212,11 @@ public:
 
 private:
   void ForgetLast();
+  void DetectChangedTets(const OpticalProperties& material, const std::vector<double>& irradiance);
+  bool SolveOnce(const DiffusionProblem& problem, const SolveRequest& request, SolveResult& result);
+  bool SolveFrequency(const DiffusionProblem& problem, const SolveRequest& request,
+    SolveResult& result);
+  void ReadOut(const DiffusionProblem& problem, const SolveRequest& request, SolveResult& result);
 
   std::string SolverName_;
   std::unique_ptr<DiffusionSolver> Solver_;

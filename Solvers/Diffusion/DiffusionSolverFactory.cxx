@@ -43,7 +43,8 @@ DiffusionSolverRegistry MakeRegistry()
     MakeDiffusionSolverTraits(Stochastic | Time,
       { DiffusionOption::Photons, DiffusionOption::Seed, DiffusionOption::Anisotropy }),
     "photon random walk, the reference (slow, with standard errors)" });
-  registry.Add({ "sp3", [] { return std::make_unique<Sp3Solver>(); }, { true, false, false, {} },
+  registry.Add({ "sp3", [] { return std::make_unique<Sp3Solver>(); },
+    MakeDiffusionSolverTraits(LinearSolverChoice, { DiffusionOption::Anisotropy }),
     "simplified spherical harmonics SP3 (Klose & Larsen 2006) at the vertices, anisotropy g, "
     "Fresnel boundary; continuous wave only" });
   return registry;

@@ -56,6 +56,20 @@ SOURCES = {"point": {"PointSources": [0.5, -0.7, 1.1, 1.0, 2.0, 0.5]},
                      "InteractivePencilBeamPoint2": [0.5, 0.5, 0.0],
                      "InteractivePencilBeamPower": [1.0, 2.0, 1.5]}}
 DETECTORS = on_sphere(-0.5, 0.3, 0.8) + [0.0] + on_sphere(0.6, -0.6, -0.5) + [1.5]
+# Paint (issue 32): a stroke through the middle with the Paint filter's
+# default targets (the ketchup-like absorber), and the same stroke with
+# mu_a x 1000.
+STROKE = [-3.0, -0.5, 0.2, 3.0, 0.6, -0.2]
+PAINTS = {"paint": None, "paint_extreme": [61.0, 970.0, 1450.0]}
+
+
+def painted(source, target):
+    """reader -> Surface Irradiance -> Paint (stroke STROKE) -> Solve Diffusion."""
+    lit = SurfaceIrradiance(Input=source, DirectionalLights=LIGHTS["a"])
+    paint = PaintScatteringCoefficients(Input=lit, StrokePoints=STROKE, Width=1.0)
+    if target:
+        paint.TargetAbsorptionCoefficient = target
+    return paint, SolveDiffusion(Input=paint, RelTol=TOL, MaxIter=20000)
 
 
 def path(name):
@@ -129,6 +143,9 @@ if MODE == "prepare":
         balances["src_" + kind] = balance(o)
     with open(path("ref_detectors.json"), "w") as f:
         json.dump(readings, f)
+    for name, target in PAINTS.items():
+        _, solved = painted(source, target)
+        SaveData(path("ref_%s.vtu" % name), proxy=solved)
     for light in LIGHTS:
         for solver in ("divergence", "fem"):
             _, solved = solve(source, light, solver)
@@ -239,6 +256,37 @@ if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
                 message = "executive: returned failure"
             f.write(" ".join(re.sub(r"0x[0-9a-fA-F]+", "0x", message).split()) + "\n")
     report("src_after_error", solve(pvtu3, "a")[1])
+
+    # Paint (issue 32): the unpainted chain first (Strength 0: the hierarchy
+    # is set up), then the stroke, then mu_a x 1000: values-only set-ups
+    # under the kept BoomerAMG hierarchies must still give the serial field
+    # (a kept hierarchy that does not converge is set up again and re-solved).
+    paint, solved = painted(pvtu3, None)
+    paint.Strength = 0.0
+    report("unpainted", solved)
+    paint.Strength = 1.0
+    report("paint", solved)
+    SaveData(path("paint.pvtu"), proxy=solved)
+    paint.TargetAbsorptionCoefficient = PAINTS["paint_extreme"]
+    report("paint_extreme", solved)
+    SaveData(path("paint_extreme.pvtu"), proxy=solved)
+    # A solve that cannot converge (MaxIter 1): an error on every rank and
+    # an empty output, never a field (caught by observers, written per rank).
+    _, stuck = solve(pvtu3, "a")
+    stuck.MaxIter = 1
+    caught = []
+    algorithm = stuck.GetClientSideObject()
+    algorithm.AddObserver("ErrorEvent", on_error)
+    algorithm.GetExecutive().AddObserver("ErrorEvent", on_error)
+    stuck.UpdatePipeline()
+    with open(path("stuck_%d.txt" % RANK), "w") as f:
+        f.write("path %s points %d fluence %s\n" % (
+            algorithm.GetParallelPath(), algorithm.GetOutput().GetNumberOfPoints(),
+            algorithm.GetOutput().GetPointData().GetArray("Fluence") is not None))
+        for message in caught:
+            if "returned failure" in message:
+                message = "executive: returned failure"
+            f.write(" ".join(re.sub(r"0x[0-9a-fA-F]+", "0x", message).split()) + "\n")
     print("run done", flush=True)
 else:
     sys.exit("mode must be prepare or run, not " + MODE)

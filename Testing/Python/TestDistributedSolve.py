@@ -23,7 +23,11 @@ How to run (ctest does this, with 2 and with 3 ranks):
    and nothing hangs; with a point source (one empty piece at 3 ranks) and
    a pencil beam, Fluence and the readings of a point and a fibre detector
    equal the serial ones to 1e-6 (the readings the same on every rank); a
-   point source outside the object is the same error on every rank.
+   point source outside the object is the same error on every rank;
+   painted (issue 32: the Paint filter's default targets, then mu_a x 1000,
+   after an unpainted solve, so the hierarchy is kept and the values change)
+   Fluence equals the serial painted Fluence to 1e-6; a solve that cannot
+   converge (MaxIter 1) is an error on every rank with an empty output.
 """
 
 import os
@@ -38,7 +42,8 @@ from mpi_harness import RANKS, MpiSuite, main, pieces_of, worst_relative  # noqa
 
 CASES = {"pvtu3": "ref_a_divergence", "relight": "ref_b_divergence",
          "pvtu2": "ref_a_divergence", "redist": "ref_a_divergence", "fem": "ref_a_fem",
-         "gathered": "ref_a_divergence"}
+         "gathered": "ref_a_divergence", "paint": "ref_paint",
+         "paint_extreme": "ref_paint_extreme"}
 # Interior sources and detectors: case -> (reference, pieces written).
 SOURCE_CASES = {"src_point": "ref_point_divergence", "src_pencil": "ref_pencil_divergence",
                 "src_aimed": "ref_aimed_divergence"}
@@ -51,7 +56,7 @@ def by_id(piece):
 
 class DistributedSolveTest(MpiSuite):
     SCRIPT = "DistributedPipeline.py"
-    TIME_LIMIT = {"prepare": 150, "run": 200}  # seconds: hang ceilings for a loaded machine
+    TIME_LIMIT = {"prepare": 200, "run": 300}  # seconds: hang ceilings for a loaded machine
 
     @classmethod
     def parse(cls):
@@ -197,6 +202,25 @@ class DistributedSolveTest(MpiSuite):
         per_rank = self.solves.get("src_after_error", {})
         self.assertEqual(sorted(per_rank), list(range(RANKS)))
         self.assertEqual(per_rank[0][0], "distributed")
+
+    def test_nonconverged_is_an_error_everywhere(self):
+        # Issue 32: never a non-converged field, on any rank.
+        texts = []
+        for rank in range(RANKS):
+            name = os.path.join(self.work, "stuck_%d.txt" % rank)
+            texts.append(open(name).read() if os.path.exists(name) else "")
+        self.assertIn("path distributed points 0 fluence False", texts[0])
+        self.assertIn("did not converge, also after a full set-up", texts[0])
+        self.assertIn("MaxIter 1", texts[0])
+        self.assertIn("executive: returned failure", texts[0])
+        for rank in range(1, RANKS):
+            self.assertEqual(texts[rank], texts[0], "rank %d" % rank)
+
+    def test_paint_is_values_only_and_converged(self):
+        # The paint reused the hierarchy of the unpainted solve (the path of
+        # issue 32's bug) and still gave the serial field (test above).
+        self.assertEqual(self.solves["unpainted"][0][1], "full")
+        self.assertEqual(self.solves["paint"][0][1], "values-only")
 
     def test_hierarchy_kept_and_warm_start(self):
         self.assertEqual(self.solves["pvtu3"][0][1], "full")

@@ -10,10 +10,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <memory>
 
 using namespace translucency;
+using translucency::testing::Contains;
 using translucency::testing::ErrorMessage;
 using translucency::testing::MakeProblem;
 
@@ -213,4 +215,182 @@ TEST(DiffusionFrontEnd, SolverByNameAndNoIncrementalForOtherSolvers)
   ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, fluence, report));
   EXPECT_EQ(front.GetNumberOfChangedTets(), -1);
   EXPECT_EQ(report.Assembly, "full");
+}
+
+// ---- One front end for every domain, decided by the registry traits.
+
+TEST(DiffusionFrontEnd, DomainsAreRefusedByTraitsNamingTheSolversWithThem)
+{
+  Scene s = MakeScene(3);
+  DiffusionFrontEnd front;
+  SolveRequest frequency;
+  frequency.Domain = SolveDomain::Frequency;
+  frequency.Frequency = 1e8;
+  SolveRequest time;
+  time.Domain = SolveDomain::Time;
+  time.Gates.Start = 0.0;
+  time.Gates.End = 1.0;
+  time.Gates.Count = 4;
+  SolveResult result;
+  for (const auto& entry : GetDiffusionSolverRegistry().GetEntries())
+  {
+    SCOPED_TRACE(entry.Name);
+    front.SetSolver(entry.Name);
+    const std::string f = ErrorMessage([&] { front.CheckDomain(frequency); });
+    const std::string t = ErrorMessage([&] { front.CheckDomain(time); });
+    EXPECT_EQ(f.empty(), entry.Properties.SupportsFrequency) << f;
+    EXPECT_EQ(t.empty(), entry.Properties.SupportsTime) << t;
+    if (!f.empty())
+    {
+      EXPECT_EQ(f,
+        "the " + entry.Name +
+          " solver has no frequency domain (modulation frequency 1e+08 Hz): solvers with one: "
+          "divergence, fem");
+      // The solve refuses it before any work, and so does the interface.
+      EXPECT_EQ(ErrorMessage([&] {
+        front.Solve(s.Mesh, s.Material, s.Irradiance, {}, frequency, result);
+      }),
+        f);
+      std::vector<std::complex<double>> phi;
+      SolverReport report;
+      DiffusionProblem problem;
+      EXPECT_TRUE(Contains(ErrorMessage([&] {
+        entry.Create()->SolveFrequencyDomain(problem, 1e8, phi, report);
+      }),
+        "the " + entry.Name + " solver has no frequency domain"));
+    }
+    if (!t.empty())
+    {
+      EXPECT_TRUE(Contains(t, "the " + entry.Name + " solver has no frequency domain or time gates"));
+      EXPECT_TRUE(Contains(t, "time gates are implemented by divergence, fem, montecarlo"));
+    }
+    EXPECT_FALSE(entry.Properties.Distributed);
+  }
+}
+
+TEST(DiffusionFrontEnd, EveryDomainThroughTheFrontEndEqualsTheSolverItself)
+{
+  Scene s = MakeScene(4);
+  DiffusionProblem problem;
+  problem.Mesh = s.Mesh.get();
+  problem.Material = &s.Material;
+  problem.Irradiance = &s.Irradiance;
+  std::vector<Detector> detectors(1);
+  const double* x = s.Mesh->GetPoint(s.Mesh->GetBoundaryPoints()[5]);
+  detectors[0].Position = { x[0], x[1], x[2] };
+  detectors[0].Radius = 0.5;
+
+  DiffusionFrontEnd front;
+  front.GetSolver().SetRelTol(1e-10);
+  auto direct = CreateDiffusionSolver("divergence");
+  direct->SetRelTol(1e-10);
+
+  // Continuous wave: the detectors read the solver's fluence.
+  SolveRequest cw;
+  cw.Detectors = detectors;
+  SolveResult result;
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, cw, result));
+  std::vector<double> fluence;
+  SolverReport report;
+  ASSERT_TRUE(direct->Solve(problem, fluence, report));
+  EXPECT_LT(MaxRelativeDifference(result.Fluence, fluence), 1e-8);
+  const auto readings = ReadDetectors(*s.Mesh, s.Material, detectors, fluence, &s.Irradiance,
+    Fresnel::BoundaryRule::Fit);
+  ASSERT_EQ(result.Readings.size(), 1u);
+  ASSERT_EQ(result.FluencePhase.size(), 1u);
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_NEAR(result.Readings[0].Fluence[c], readings[0].Fluence[c],
+      1e-7 * std::abs(readings[0].Fluence[c]));
+    EXPECT_EQ(result.FluencePhase[0][c], 0.0);
+  }
+
+  // Frequency domain: amplitude and phase of the solver's complex fluence.
+  SolveRequest fd;
+  fd.Domain = SolveDomain::Frequency;
+  fd.Frequency = 2e8;
+  fd.Detectors = detectors;
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, fd, result));
+  std::vector<std::complex<double>> phi;
+  ASSERT_TRUE(direct->SolveFrequencyDomain(problem, 2e8, phi, report));
+  ASSERT_EQ(result.Amplitude.size(), phi.size());
+  for (std::size_t i = 0; i < phi.size(); i += 17)
+  {
+    EXPECT_NEAR(result.Amplitude[i], std::abs(phi[i]), 1e-7 * std::abs(phi[i]));
+    EXPECT_NEAR(result.Phase[i], std::arg(phi[i]), 1e-6);
+    EXPECT_EQ(result.Fluence[i], result.Amplitude[i]); // no beam: Fluence is the amplitude
+  }
+  EXPECT_LT(result.FluencePhase[0][0], 0.0); // the detector lags the source
+
+  // Time domain: the readings are the integrals of the gate readings.
+  SolveRequest td;
+  td.Domain = SolveDomain::Time;
+  td.Gates.Start = 0.0;
+  td.Gates.End = 0.5;
+  td.Gates.Count = 5;
+  td.Snapshots = { 2 };
+  td.Detectors = detectors;
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, td, result));
+  ASSERT_EQ(result.Time.Readings.size(), 5u);
+  ASSERT_EQ(result.Time.Snapshots.size(), 1u);
+  EXPECT_EQ(result.Fluence, result.Time.IntegratedFluence);
+  double integral = 0.0;
+  for (const auto& gate : result.Time.Readings)
+  {
+    integral += td.Gates.GetWidth() * gate[0].Fluence[1];
+  }
+  EXPECT_NEAR(result.Readings[0].Fluence[1], integral, 1e-12 * std::abs(integral));
+
+  // Snapshots need time gates.
+  cw.Snapshots = { 0 };
+  EXPECT_EQ(ErrorMessage([&] { front.CheckDomain(cw); }), "time snapshots without time gates");
+}
+
+// Issue 32: a solve that does not converge is solved again after a full
+// set-up; if that fails too, no result (an error naming the numbers).
+TEST(DiffusionFrontEnd, NeverHandsOnANonConvergedSolve)
+{
+  Scene s = MakeScene(4);
+  DiffusionFrontEnd front;
+  front.GetSolver().SetRelTol(1e-12);
+  front.GetSolver().SetMaxIter(2);
+  SolveResult result;
+  const std::string message =
+    ErrorMessage([&] { front.Solve(s.Mesh, s.Material, s.Irradiance, {}, SolveRequest(), result); });
+  EXPECT_TRUE(Contains(message, "the divergence solve did not converge, also after a full set-up"))
+    << message;
+  EXPECT_TRUE(Contains(message, "channel R: relative residual")) << message;
+  EXPECT_TRUE(Contains(message, "after 2 iterations")) << message;
+  EXPECT_TRUE(Contains(message, "MaxIter 2")) << message;
+
+  // For convergence studies only: kept, and marked as the re-solve.
+  SolveRequest study;
+  study.AcceptUnconverged = true;
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, study, result));
+  EXPECT_TRUE(result.Report.Resolved);
+  EXPECT_FALSE(result.Report.Converged[0]);
+  EXPECT_EQ(result.Report.Iterations[0], 2);
+
+  // A converged solve is not solved twice, and equals the solver's own.
+  front.GetSolver().SetMaxIter(2000);
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, SolveRequest(), result));
+  EXPECT_FALSE(result.Report.Resolved);
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_TRUE(result.Report.Converged[c]);
+  }
+
+  // Every solver with a linear solver obeys the rule (the stochastic one
+  // has no iterations to converge).
+  for (const std::string name : { "fem", "quadgraph", "grid" })
+  {
+    SCOPED_TRACE(name);
+    front.SetSolver(name);
+    front.GetSolver().SetRelTol(1e-13);
+    front.GetSolver().SetMaxIter(1);
+    EXPECT_TRUE(Contains(ErrorMessage([&] {
+      front.Solve(s.Mesh, s.Material, s.Irradiance, {}, SolveRequest(), result);
+    }),
+      "solve did not converge, also after a full set-up"));
+  }
 }
