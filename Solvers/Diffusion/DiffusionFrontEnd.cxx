@@ -190,6 +190,9 @@ bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProper
   result = SolveResult();
   try
   {
+    // Never solve with (nor hand on) a NaN/inf: a light power of 1e300
+    // overflows the irradiance, and the solve would only report a NaN residual.
+    RequireFinite(irradiance, "the boundary irradiance", OverflowCause());
     if (!SolveOnce(problem, request, result))
     {
       return false; // aborted by the progress callback
@@ -211,6 +214,8 @@ bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProper
       unconverged = UnconvergedChannels(result.Report);
       if (!unconverged.empty() && !request.AcceptUnconverged)
       {
+        // A NaN/inf field says more than "did not converge" (an overflow).
+        RequireFinite(result.Fluence, "Fluence (" + SolverName_ + " solver)", OverflowCause());
         throw Error("the " + SolverName_ + " solve did not converge, also after a full set-up (" +
           unconverged + "; RelTol " + FormatNumber(Solver_->GetRelTol()) + ", MaxIter " +
           std::to_string(Solver_->GetMaxIter()) + ", linear solver " +

@@ -255,7 +255,7 @@ class TestAcquire(unittest.TestCase):
             nan.point = i
         path = variant("nan", nan)
         expect_failure(["--sample", path, "--patterns", path],
-                       "pattern 2, point %d, channel G is nan" % nan.point)
+                       "measurement 'Radiance_2' holds nan at point %d (component 1)" % nan.point)
 
         def empty(g):
             mask = g.GetPointData().GetArray("ObservedMask_4")

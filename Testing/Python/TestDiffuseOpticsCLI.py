@@ -219,7 +219,7 @@ class DiffuseOpticsCLI(BoxRenderTest):
             (["--source", "pencil:0,0,5:0,0,1", "--solver", "grid"],
              "does not point into the object"),
             (["--source", "point:0,0,0", "--anisotropy", "0.8"],
-             "--anisotropy 0.8 applies to --solver montecarlo only"),
+             "--anisotropy 0.8 applies to --solver montecarlo and sp3 only"),
             (["--source", "point:0,0,0", "--solver", "montecarlo", "--anisotropy", "1"],
              "--anisotropy must be in (-1, 1)"),
             (["--light", "none", "--light", "uniform"], "--light none cannot be combined"),
