@@ -190,9 +190,6 @@ bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProper
   result = SolveResult();
   try
   {
-    // Never solve with (nor hand on) a NaN/inf: a light power of 1e300
-    // overflows the irradiance, and the solve would only report a NaN residual.
-    RequireFinite(irradiance, "the boundary irradiance", OverflowCause());
     if (!SolveOnce(problem, request, result))
     {
       return false; // aborted by the progress callback

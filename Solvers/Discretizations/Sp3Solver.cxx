@@ -723,11 +723,20 @@ std::vector<double> ComputeSp3SourceLoad(
 }
 
 bool Sp3Solver::Solve(
-  const DiffusionProblem& problem, std::vector<double>& fluence, SolverReport& report)
+  const DiffusionProblem& given, std::vector<double>& fluence, SolverReport& report)
 {
-  if (!problem.Mesh || !problem.Material || !problem.Irradiance)
+  if (!given.Mesh || !given.Material || !given.Irradiance)
   {
     throw Error("sp3: the problem needs a mesh, a material and an irradiance");
+  }
+  // The option's g on every tet when the material carries none.
+  OpticalProperties withAnisotropy;
+  DiffusionProblem problem = given;
+  if (Anisotropy_ != 0.0 && given.Material->Anisotropy.empty())
+  {
+    withAnisotropy = *given.Material;
+    withAnisotropy.Anisotropy.assign(withAnisotropy.AbsorptionCoefficient.size(), Anisotropy_);
+    problem.Material = &withAnisotropy;
   }
   const TetMesh& mesh = *problem.Mesh;
   if (mesh.GetNumberOfTets() == 0)

@@ -128,6 +128,13 @@ public:
   ~Sp3Solver() override;
 
   std::string GetName() const override { return "sp3"; }
+  /// "anisotropy": g for every tet and channel when the material carries
+  /// none (OpticalProperties::Anisotropy, which wins when set); default 0.
+  void SetOptions(const SolverOptions& options) override
+  {
+    options.ReadNumber(GetName(), DiffusionOption::Anisotropy, -1.0,
+      "the anisotropy g must be in (-1, 1)", Anisotropy_);
+  }
   bool Solve(const DiffusionProblem& problem, std::vector<double>& fluence,
     SolverReport& report) override;
   void Reset() override;
@@ -167,6 +174,7 @@ public:
   void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
 
 private:
+  double Anisotropy_ = 0.0; ///< SetOptions' g (used when the material has none)
   struct Blocks;
   void Assemble(const DiffusionProblem& problem, const std::vector<double>& sourceLoad);
   bool SolveBlocks(const TetMesh& mesh, bool warm, const std::string& preconditioner,

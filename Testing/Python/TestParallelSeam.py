@@ -38,7 +38,7 @@ import unittest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from TestParallel import run  # noqa: E402  (the time-limited runner that ends hung ranks)
+from mpi_harness import run  # noqa: E402  (the time-limited runner that ends hung ranks)
 
 PLUGIN = sys.argv[1] if len(sys.argv) > 1 else ""
 RANKS = int(sys.argv[2]) if len(sys.argv) > 2 else 2
