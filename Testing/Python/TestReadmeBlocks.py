@@ -137,7 +137,8 @@ class ReadmeBlocksTest(unittest.TestCase):
         print("ran %d commands; not run: %s" % (
             ran, "; ".join("%s (%s)" % (c, r) for c, r in skipped)))
         self.assertGreaterEqual(ran, 10)
-        self.assertEqual(len(skipped), 4, skipped)
+        # make demo, make test, make test-all, paraview, cmake --install: each says why.
+        self.assertEqual(len(skipped), 5, skipped)
 
 
 if __name__ == "__main__":
