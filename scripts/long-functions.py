@@ -42,8 +42,6 @@ ALLOWED = {
     "XmlChecker::Run": "the .vtu/.vtp pre-parser (Apps/MeshIO.cxx), to split",
     # Split into named phases on a branch whose split conflicted with the
     # same functions' other changes of the same round: redo the split.
-    "MonteCarloSolver::Solve": "split conflicted with LightSources changes: redo at its ---- markers",
-    "Compare": "split conflicted with the output-safety changes: redo",
     "vtkTetrahedralizeSurface::RequestSerial": "split conflicted with the seam's rename: redo",
     "Acquire": "split conflicted with the output-safety changes: redo",
     "Render": "split conflicted with the output-safety changes: redo",
@@ -56,10 +54,7 @@ ALLOWED = {
     # Grew or arrived in the same round: to split.
     "Sp3Solver::SolveBlocks": "new (SP3): to split",
     "Sp3Solver::Assemble": "new (SP3): to split",
-    "ComputeCollimatedSource": "to split",
     "AddBenchCommand": "grew with bench --pipeline: to split",
-    "Trace": "the photon walk's inner loop: to split",
-    "Build": "MonteCarlo.cxx's scene build: to split",
 }
 
 
