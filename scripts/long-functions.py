@@ -44,8 +44,6 @@ ALLOWED = {
     "vtkTetrahedralizeSurface::RequestSerial": "split conflicted with the seam's rename: redo",
     "vtkOutgoingRadiance::RequestPerPiece": "split conflicted with the read-out default: redo",
     "vtkOutgoingRadiance::RequestSerial": "grew with the seam's rename: split",
-    "VertexDiffusionSolver::Solve": "split conflicted with the relight's right-hand side: redo",
-    "VertexDiffusionSolver::SolveFrequencyDomain": "to split (schedule of the COCG set-up)",
     # Grew or arrived in the same round: to split.
     "Sp3Solver::SolveBlocks": "new (SP3): to split",
     "Sp3Solver::Assemble": "new (SP3): to split",
