@@ -1,6 +1,5 @@
 #include "MonteCarlo.h"
 
-#include "BoundingBox.h"
 #include "Error.h"
 #include "Fresnel.h"
 #include "InteriorSources.h"

@@ -1,6 +1,5 @@
 #include "CollimatedSource.h"
 
-#include "BoundingBox.h"
 #include "Error.h"
 #include "Fresnel.h"
 #include "RayCaster.h"
