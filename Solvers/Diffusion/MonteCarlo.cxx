@@ -1159,6 +1159,33 @@ struct BatchPlan
   std::size_t DetectorItems = 0, GateItems = 0;
 };
 
+/// Tracing: the sizes of the run of `solver` (its photons, threads,
+/// batches and time gates) on `mesh` with the sources of `tables` and
+/// `detectors` detectors.
+BatchPlan MakeBatchPlan(const MonteCarloSolver& solver, const TetMesh& mesh,
+  const LaunchTables& tables, int detectors)
+{
+  const TimeGates& gates = solver.GetTimeGates();
+  BatchPlan plan;
+  plan.Photons = solver.GetNumberOfPhotons();
+  plan.Threads =
+    solver.GetNumberOfThreads() > 0 ? solver.GetNumberOfThreads() : omp_get_max_threads();
+  int litChannels = 0;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    litChannels += tables.Sources[c].Power > 0.0 ? 1 : 0;
+  }
+  plan.TotalPhotons = static_cast<double>(plan.Photons) * std::max(1, litChannels);
+  plan.NumTets = mesh.GetNumberOfTets();
+  plan.NumPoints = mesh.GetNumberOfPoints();
+  plan.DetectorItems = 2 * static_cast<std::size_t>(detectors);
+  plan.GateItems = gates.Count != 0 ? plan.DetectorItems * gates.Count : 0;
+  plan.Batches =
+    static_cast<int>(std::min<long long>(solver.GetNumberOfBatches(), plan.Photons));
+  plan.Slots = std::min(plan.Threads, plan.Batches);
+  return plan;
+}
+
 /// Sums over the batches b (photons n_b, tallies T_b): A1 = sum T_b and
 /// A2 = sum T_b^2 / n_b, per tet (A1 only), per point and per detector item.
 struct BatchSums
@@ -1596,21 +1623,7 @@ bool MonteCarloSolver::Solve(
 
   // ---- Tracing.
   start = Clock::now();
-  BatchPlan plan;
-  plan.Photons = NumberOfPhotons_;
-  plan.Threads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
-  int litChannels = 0;
-  for (int c = 0; c < NumberOfChannels; ++c)
-  {
-    litChannels += tables.Sources[c].Power > 0.0 ? 1 : 0;
-  }
-  plan.TotalPhotons = static_cast<double>(plan.Photons) * std::max(1, litChannels);
-  plan.NumTets = numTets;
-  plan.NumPoints = numPoints;
-  plan.DetectorItems = 2 * static_cast<std::size_t>(detectorMap.Count);
-  plan.GateItems = timed ? plan.DetectorItems * Gates_.Count : 0;
-  plan.Batches = static_cast<int>(std::min<long long>(NumberOfBatches_, plan.Photons));
-  plan.Slots = std::min(plan.Threads, plan.Batches);
+  const BatchPlan plan = MakeBatchPlan(*this, mesh, tables, detectorMap.Count);
   std::atomic<long long> done(0);
   std::atomic<bool> stop(false);
   Estimates estimates(plan, footprints, timed ? Gates_.Count : 0);
