@@ -2,6 +2,7 @@
 
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkTranslucencyParallel.h"
+#include "vtkTranslucencyThreads.h"
 
 #include <vtkAlgorithm.h>
 #include <vtkDataObject.h>
@@ -77,6 +78,8 @@ int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
     record.Path = "serial";
     return paths.Serial(request, inputVector, outputVector);
   }
+  // OpenMP threads per rank = cores / ranks on the node (collective).
+  const vtkTranslucency::ThreadsPerRankScope threads(comm);
   switch (plan.Kind)
   {
     case vtkTranslucencyParallelPlan::Kinds::PerPiece:
