@@ -54,8 +54,6 @@ ALLOWED = {
     "VertexDiffusionSolver::Solve": "split conflicted with the relight's right-hand side: redo",
     "VertexDiffusionSolver::SolveFrequencyDomain": "to split (schedule of the COCG set-up)",
     # Grew or arrived in the same round: to split.
-    "Sp3Solver::SolveBlocks": "new (SP3): to split",
-    "Sp3Solver::Assemble": "new (SP3): to split",
     "ComputeCollimatedSource": "to split",
     "AddBenchCommand": "grew with bench --pipeline: to split",
     "Trace": "the photon walk's inner loop: to split",
