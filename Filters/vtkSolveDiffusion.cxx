@@ -947,6 +947,33 @@ void vtkSolveDiffusion::Internals::Sp3Readouts(const translucency::Sp3Solver& sp
   {
     return;
   }
+  const std::vector<std::complex<double>>& modulated = sp3.GetComplexExitance();
+  if (!modulated.empty())
+  {
+    // Frequency domain: the detectors' exitance amplitude and phase from
+    // SP3's complex exitance; no power balance (it holds for continuous
+    // wave only).
+    const auto footprints = translucency::LocateDetectors(mesh, this->SolvedDetectors);
+    for (std::size_t k = 0; k < footprints.size() && k < this->Result.Readings.size() &&
+         k < this->Result.ExitancePhase.size();
+         ++k)
+    {
+      std::complex<double> reading[3];
+      for (const auto& [point, weight] : footprints[k].GetPointWeights(mesh))
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          reading[c] += weight * modulated[3 * static_cast<std::size_t>(point) + c];
+        }
+      }
+      for (int c = 0; c < 3; ++c)
+      {
+        this->Result.Readings[k].Exitance[c] = std::abs(reading[c]);
+        this->Result.ExitancePhase[k][c] = std::arg(reading[c]);
+      }
+    }
+    return;
+  }
   if (!this->SolvedDetectors.empty())
   {
     const auto footprints = translucency::LocateDetectors(mesh, this->SolvedDetectors);

@@ -18,7 +18,8 @@
  *  - SOLVER_GRID ("grid"): regular-grid finite differences of spacing GridSpacing;
  *  - SOLVER_MONTECARLO ("montecarlo"): a photon random walk, the ground truth;
  *  - SOLVER_SP3 ("sp3"): the simplified spherical harmonics SP3 equations
- *    (Klose & Larsen 2006) at the vertices, with Anisotropy g; continuous wave.
+ *    (Klose & Larsen 2006) at the vertices, with Anisotropy g; continuous wave
+ *    and ModulationFrequency (its own exitance for the detectors, amplitude and phase).
  *    It needs the lights, which vtkSurfaceIrradiance records in the field data
  *    (`TranslucencyLights`); it adds `FluenceStandardError`,
  *    `MonteCarloRadiance` and `MonteCarloRadianceStandardError` point arrays.
