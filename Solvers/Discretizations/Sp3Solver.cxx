@@ -153,16 +153,17 @@ struct TetCoefficients
 TetCoefficients ComputeTetCoefficients(double muA, double sigmaS, double g, double alpha)
 {
   // mu_an = mu_a + mu_s (1 - g^n) with mu_s = sigma_s' / (1 - g) (Klose &
-  // Larsen 2006, Sec. 2, the SP_N absorption moments; equation number
-  // unverified: the paper is not in shared/papers, see Solvers.md "SP3").
+  // Larsen 2006, the SP_N absorption moments; section and equation numbers
+  // unverified: the paper is not in shared/papers, Solvers.md "SP3" derives
+  // what is used here).
   // The frequency domain: the time derivative (eta / c) d/dt of the
   // transport equation adds i omega eta / c to mu_t, hence to every mu_an.
   const std::complex<double> a(muA, alpha);
   const std::complex<double> muA1 = a + sigmaS;
   const std::complex<double> muA2 = a + sigmaS * (1.0 + g);
   const std::complex<double> muA3 = a + sigmaS * (1.0 + g + g * g);
-  // The SP3 equations in their composite moments (Klose & Larsen 2006,
-  // Sec. 3; restated from the P3 derivation, Solvers.md "SP3"): diffusion
+  // The SP3 equations in their composite moments (Klose & Larsen 2006;
+  // derived from the planar P3 equations in Solvers.md "SP3"): diffusion
   // coefficients 1/(3 mu_a1), 1/(7 mu_a3); mass coefficients mu_a,
   // (4/9) mu_a + (5/9) mu_a2 and the coupling -(2/3) mu_a.
   TetCoefficients k;
