@@ -1119,6 +1119,18 @@ void vtkSolveDiffusion::Internals::Attach(
   {
     output->GetFieldData()->RemoveArray("TranslucencyBoundaryRule"); // not this solve's
   }
+  // sp3 in continuous wave: its composite moments, which vtkOutgoingRadiance
+  // reads for the P3 radiance (Sp3OutgoingRadiance) instead of eq. 3.
+  output->GetPointData()->RemoveArray("SP3Phi1"); // not this solve's
+  output->GetPointData()->RemoveArray("SP3Phi2");
+  if (const auto* sp3 = dynamic_cast<const translucency::Sp3Solver*>(&this->FrontEnd.GetSolver()))
+  {
+    if (result.Amplitude.empty() && sp3->GetComplexExitance().empty())
+    {
+      attach("SP3Phi1", sp3->GetPhi1());
+      attach("SP3Phi2", sp3->GetPhi2());
+    }
+  }
   attach("MonteCarloRadiance", result.Report.Radiance);
   attach("MonteCarloRadianceStandardError", result.Report.RadianceStandardError);
   attach("FluenceAmplitude", result.Amplitude);

@@ -2,6 +2,7 @@
 
 #include "Error.h"
 #include "Fresnel.h"
+#include "ResourceLimits.h"
 #include "Strings.h"
 #include "TetMesh.h"
 #include "TetLocator.h"
@@ -73,6 +74,80 @@ Sp3BoundaryCoefficients Sp3BoundaryCoefficients::Compute(double eta)
   k.E2 = 0.5 * (-2.0 / 3.0 * t0 + 3.0 * k.F12 * t1 + 5.0 / 3.0 * t2 + 7.0 * k.F22 * t3);
   k.E3 = 0.5 * (3.0 * k.S1 * t1 + 7.0 * k.S2 * t3);
   return k;
+}
+
+double Sp3OutgoingRadiance(const Sp3BoundaryCoefficients& k, double eta, double phi1, double phi2,
+  double q, double cosOut, RadianceReadout readout)
+{
+  if (!(cosOut > 0.0))
+  {
+    return 0.0;
+  }
+  const double c = std::min(cosOut, 1.0);
+  // Snell: the internal cosine of the direction that leaves at cosOut.
+  const double mu = std::sqrt(std::max(0.0, 1.0 - (1.0 - c * c) / (eta * eta)));
+  const double transmitted = 1.0 - Fresnel::Reflectance(c, eta);
+  const double j1 = k.F11 * phi1 + k.F12 * phi2 + k.S1 * q;
+  const double j2 = k.F21 * phi1 + k.F22 * phi2 + k.S2 * q;
+  const double p2 = 0.5 * (3.0 * mu * mu - 1.0);
+  const double p3 = 0.5 * (5.0 * mu * mu * mu - 3.0 * mu);
+  const double inside = (phi1 - (2.0 / 3.0) * phi2 + 3.0 * j1 * mu + (5.0 / 3.0) * phi2 * p2 +
+                          7.0 * j2 * p3) /
+    (4.0 * 3.14159265358979323846);
+  const double scale = readout == RadianceReadout::Paper ? 1.0 : 1.0 / (eta * eta);
+  return std::max(0.0, transmitted * inside * scale);
+}
+
+std::vector<double> Sp3BoundaryRadiance(const TetMesh& mesh, const std::vector<double>& phi1,
+  const std::vector<double>& phi2, const std::vector<double>& irradiance,
+  const std::vector<double>& pointEta, const double* viewPoint, RadianceReadout readout)
+{
+  const std::size_t numPoints = static_cast<std::size_t>(mesh.GetNumberOfPoints());
+  if (phi1.size() != 3 * numPoints || phi2.size() != 3 * numPoints ||
+    irradiance.size() != 3 * numPoints || pointEta.size() != numPoints)
+  {
+    std::ostringstream os;
+    os << "sp3 radiance: the mesh has " << numPoints << " points but phi_1 has " << phi1.size()
+       << " values, phi_2 " << phi2.size() << ", irradiance " << irradiance.size() << " and eta "
+       << pointEta.size() << " (3, 3, 3 and 1 per point expected)";
+    throw Error(os.str());
+  }
+  const std::vector<int>& boundary = mesh.GetBoundaryPoints();
+  const std::vector<double>& normals = mesh.GetPointNormals();
+  // The boundary coefficients per distinct eta (serially; usually one).
+  std::map<double, Sp3BoundaryCoefficients> coefficients;
+  for (const int i : boundary)
+  {
+    const double eta = pointEta[static_cast<std::size_t>(i)];
+    if (coefficients.find(eta) == coefficients.end())
+    {
+      coefficients.emplace(eta, Sp3BoundaryCoefficients::Compute(eta));
+    }
+  }
+  const long long n = static_cast<long long>(boundary.size());
+  std::vector<double> radiance(3 * boundary.size());
+#pragma omp parallel for schedule(static)
+  for (long long k = 0; k < n; ++k)
+  {
+    const std::size_t i = static_cast<std::size_t>(boundary[static_cast<std::size_t>(k)]);
+    const double* nrm = &normals[3 * i];
+    double cosOut = 1.0;
+    if (viewPoint)
+    {
+      const double* x = mesh.GetPoint(static_cast<int>(i));
+      const double d[3] = { viewPoint[0] - x[0], viewPoint[1] - x[1], viewPoint[2] - x[2] };
+      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
+    }
+    const Sp3BoundaryCoefficients& coefficient = coefficients.find(pointEta[i])->second;
+    for (int c = 0; c < 3; ++c)
+    {
+      radiance[3 * static_cast<std::size_t>(k) + c] = Sp3OutgoingRadiance(coefficient,
+        pointEta[i], phi1[3 * i + c], phi2[3 * i + c], irradiance[3 * i + c], cosOut, readout);
+    }
+  }
+  RequireFinite(radiance, "Radiance", OverflowCause());
+  return radiance;
 }
 
 /// The assembled blocks: A11 and A22 as systems (the multigrid cycles are
@@ -463,10 +538,9 @@ struct BlockValues
   const double* V22[NumberOfChannels];
 };
 
-/// y = scale y + A x for the block matrix A, 2 N x 3 interleaved ((b N + i)
-/// 3 + c); scale 0 overwrites y.
+/// y = A x for the block matrix A, 2 N x 3 interleaved ((b N + i) 3 + c).
 void BlockProduct(int n, const int* rows, const int* cols, const BlockValues& a, const double* x,
-  double* y, double scale)
+  double* y)
 {
   const std::size_t shift = 3 * static_cast<std::size_t>(n);
 #pragma omp for schedule(static)
@@ -485,10 +559,45 @@ void BlockProduct(int n, const int* rows, const int* cols, const BlockValues& a,
     }
     for (int c = 0; c < 3; ++c)
     {
-      double& out1 = y[3 * static_cast<std::size_t>(i) + c];
-      double& out2 = y[shift + 3 * static_cast<std::size_t>(i) + c];
-      out1 = (scale == 0.0 ? 0.0 : scale * out1) + y1[c];
-      out2 = (scale == 0.0 ? 0.0 : scale * out2) + y2[c];
+      y[3 * static_cast<std::size_t>(i) + c] = y1[c];
+      y[shift + 3 * static_cast<std::size_t>(i) + c] = y2[c];
+    }
+  }
+}
+
+/// The real form of (A + i B) x for the block matrices A and B: x = (x_r,
+/// x_i), each 2 N x 3 interleaved; y_r = A x_r - B x_i, y_i = A x_i + B x_r.
+/// One pass (one barrier: a loaded machine pays for every barrier).
+void ComplexBlockProduct(int n, const int* rows, const int* cols, const BlockValues& a,
+  const BlockValues& b, const double* x, double* y)
+{
+  const std::size_t shift = 3 * static_cast<std::size_t>(n), block = 2 * shift;
+  const double* xr = x;
+  const double* xi = x + block;
+#pragma omp for schedule(static)
+  for (int i = 0; i < n; ++i)
+  {
+    double r1[3] = { 0, 0, 0 }, r2[3] = { 0, 0, 0 }, i1[3] = { 0, 0, 0 }, i2[3] = { 0, 0, 0 };
+    for (int k = rows[i]; k < rows[i + 1]; ++k)
+    {
+      const std::size_t j = 3 * static_cast<std::size_t>(cols[k]);
+      for (int c = 0; c < 3; ++c)
+      {
+        const double p1 = xr[j + c], p2 = xr[shift + j + c];
+        const double q1 = xi[j + c], q2 = xi[shift + j + c];
+        r1[c] += a.V11[c][k] * p1 + a.V12[c][k] * p2 - b.V11[c][k] * q1 - b.V12[c][k] * q2;
+        r2[c] += a.V21[c][k] * p1 + a.V22[c][k] * p2 - b.V21[c][k] * q1 - b.V22[c][k] * q2;
+        i1[c] += a.V11[c][k] * q1 + a.V12[c][k] * q2 + b.V11[c][k] * p1 + b.V12[c][k] * p2;
+        i2[c] += a.V21[c][k] * q1 + a.V22[c][k] * q2 + b.V21[c][k] * p1 + b.V22[c][k] * p2;
+      }
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      const std::size_t m = 3 * static_cast<std::size_t>(i) + c;
+      y[m] = r1[c];
+      y[shift + m] = r2[c];
+      y[block + m] = i1[c];
+      y[block + shift + m] = i2[c];
     }
   }
 }
@@ -782,24 +891,13 @@ bool Sp3Solver::SolveBlocks(
   auto product = [&](const std::vector<double>& in, std::vector<double>& out) {
 #pragma omp parallel num_threads(numThreads)
     {
-      BlockProduct(n, rows, cols, real, in.data(), out.data(), 0.0);
       if (complex)
       {
-        // Re: A x_r - B x_i; Im: A x_i + B x_r.
-        BlockProduct(n, rows, cols, real, in.data() + block, out.data() + block, 0.0);
-        const std::size_t m = block;
-#pragma omp for schedule(static)
-        for (std::size_t k = 0; k < m; ++k)
-        {
-          out[k] = -out[k];
-        }
-        BlockProduct(n, rows, cols, imaginary, in.data() + block, out.data(), 1.0);
-#pragma omp for schedule(static)
-        for (std::size_t k = 0; k < m; ++k)
-        {
-          out[k] = -out[k];
-        }
-        BlockProduct(n, rows, cols, imaginary, in.data(), out.data() + block, 1.0);
+        ComplexBlockProduct(n, rows, cols, real, imaginary, in.data(), out.data());
+      }
+      else
+      {
+        BlockProduct(n, rows, cols, real, in.data(), out.data());
       }
     }
   };

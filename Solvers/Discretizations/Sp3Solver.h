@@ -13,6 +13,7 @@
 #include "DiffusionSolver.h"
 #include "DiffusionSystem.h"
 #include "LinearSolver.h"
+#include "Radiance.h"
 #include "TetGeometry.h"
 
 #include <array>
@@ -64,6 +65,37 @@ struct Sp3BoundaryCoefficients
   /// The coefficients for relative index eta (finite, > 0).
   static Sp3BoundaryCoefficients Compute(double eta);
 };
+
+/**
+ * The radiance leaving the surface of an SP3 solution (W/mm^2/sr): the
+ * outgoing half of the P3 radiance inside, L(-mu) = (1/(4 pi)) [phi_0 +
+ * 3 J_1 mu + (5/3) Phi_2 P_2(mu) + 7 J_2 P_3(mu)] (mu the internal cosine
+ * with the outward normal, Snell's partner of cosOut; phi_0 = Phi_1 -
+ * (2/3) Phi_2, J_1, J_2 the currents of the boundary conditions `k`),
+ * times the Fresnel transmittance 1 - R, divided by eta^2 (the n^2 law)
+ * unless `readout` is RadianceReadout::Paper. The exitance (k.E1 Phi_1 +
+ * k.E2 Phi_2 + k.E3 q) is its integral over the outgoing hemisphere,
+ * 2 pi int L cosOut dcosOut. SP3's counterpart of OutgoingRadiance (TransCut
+ * eq. 3); clamped below at 0, 0 for cosOut <= 0.
+ * @param phi1, phi2 the composite moments at the point (W/mm^2)
+ * @param q the boundary irradiance at the point (W/mm^2)
+ * @param eta the refractive index at the point (k is Compute(eta))
+ */
+double Sp3OutgoingRadiance(const Sp3BoundaryCoefficients& k, double eta, double phi1, double phi2,
+  double q, double cosOut, RadianceReadout readout = RadianceReadout::EnergyConserving);
+
+/**
+ * Sp3OutgoingRadiance at every boundary point of the mesh, in the order of
+ * mesh.GetBoundaryPoints() (3 values, R, G, B), as BoundaryRadiance (whose
+ * arguments these are, with the composite moments Phi_1, Phi_2 of an SP3
+ * solve, 3 per mesh point, in place of the fluence): each point seen
+ * along its normal, or from `viewPoint`. Throws translucency::Error on
+ * wrong array sizes or a non-finite result.
+ */
+std::vector<double> Sp3BoundaryRadiance(const TetMesh& mesh, const std::vector<double>& phi1,
+  const std::vector<double>& phi2, const std::vector<double>& irradiance,
+  const std::vector<double>& pointEta, const double* viewPoint,
+  RadianceReadout readout = RadianceReadout::EnergyConserving);
 
 class Sources;
 struct OpticalProperties;

@@ -614,6 +614,39 @@ TEST(Sp3Solver, IsRegisteredAndRefusesWhatItDoesNotDo)
   }
 }
 
+TEST(Sp3Radiance, ItsHemisphereIntegralIsTheExitance)
+{
+  // The radiance read-out (Sp3OutgoingRadiance) and the exitance
+  // coefficients E1..E3 are two codings of the same outgoing P3 radiance:
+  // 2 pi int_0^1 L(c) c dc over the outside cosine (the n^2 law makes the
+  // outside and inside integrals equal) is E1 Phi_1 + E2 Phi_2 + E3 q.
+  // (eta < 1: the outside directions below the critical cosine get no
+  // light, R = 1 there.)
+  // (Phi_1, Phi_2, q) of physical size: a positive radiance at every angle
+  // (the read-out clamps at 0, which the identity would not survive).
+  const double x[3][3] = { { 1.0, 0.2, 0.1 }, { 2.0, -0.3, 0.0 }, { 0.7, 0.1, 0.05 } };
+  for (const double eta : { 1.0, 1.33, 1.4, 0.8 })
+  {
+    const Sp3BoundaryCoefficients k = Sp3BoundaryCoefficients::Compute(eta);
+    for (const auto& v : x)
+    {
+      const int order = 4000;
+      double integral = 0.0;
+      for (int j = 0; j < order; ++j) // midpoint rule in c
+      {
+        const double c = (j + 0.5) / order;
+        integral += 2.0 * 3.14159265358979323846 *
+          Sp3OutgoingRadiance(k, eta, v[0], v[1], v[2], c) * c / order;
+      }
+      const double exitance = k.E1 * v[0] + k.E2 * v[1] + k.E3 * v[2];
+      EXPECT_NEAR(integral, exitance, 1e-4 * std::abs(exitance)) << eta;
+      // The paper's read-out is eta^2 times the energy-conserving one.
+      EXPECT_NEAR(Sp3OutgoingRadiance(k, eta, v[0], v[1], v[2], 0.6, RadianceReadout::Paper),
+        eta * eta * Sp3OutgoingRadiance(k, eta, v[0], v[1], v[2], 0.6), 1e-14);
+    }
+  }
+}
+
 // ---- Frequency domain (SolveFrequencyDomain).
 
 /// A jittered box (eta 1.4, g 0.5 in G) lit by q on its top face, a point
@@ -831,7 +864,9 @@ TEST(Sp3Frequency, ReducesToFrequencyDomainDiffusionInTheDiffusiveLimit)
     const std::size_t centre = 3 * static_cast<std::size_t>(5 * 11 + 5);
     phase.push_back(std::arg(reference[centre]));
     std::cout << "eps " << eps << ": |Phi_sp3 - Phi_fem| / |Phi_fem| " << d[0] << " " << d[1]
-              << " " << d[2] << ", fem phase at the bottom centre " << phase.back() << " rad\n";
+              << " " << d[2] << ", fem phase at the bottom centre " << phase.back() << " rad ("
+              << report.Iterations[0] << " sp3 iterations, " << report.SolveMilliseconds
+              << " ms)\n";
     difference.push_back(d);
   }
   const std::size_t last = difference.size() - 1;
