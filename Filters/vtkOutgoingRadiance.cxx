@@ -1,5 +1,7 @@
 #include "vtkOutgoingRadiance.h"
 
+#include "Sp3Solver.h"
+
 #include "vtkTranslucencyDispatch.h"
 #include "ResourceLimits.h"
 #include "vtkTranslucencyMPI.h"
@@ -64,6 +66,29 @@ translucency::RadianceReadout ToReadout(int readout)
   return readout == vtkOutgoingRadiance::PAPER ? translucency::RadianceReadout::Paper
                                                : translucency::RadianceReadout::EnergyConserving;
 }
+}
+
+/// The composite moments of an sp3 solve (point arrays SP3Phi1, SP3Phi2,
+/// written by vtkSolveDiffusion): true when both are there and readable;
+/// false with `error` empty when they are absent (another solver), with
+/// `error` set when one is missing or malformed.
+static bool ReadSp3Moments(vtkUnstructuredGrid* input, std::vector<double>& phi1,
+  std::vector<double>& phi2, std::string& error)
+{
+  const bool has1 = input && input->GetPointData()->GetArray("SP3Phi1");
+  const bool has2 = input && input->GetPointData()->GetArray("SP3Phi2");
+  if (!has1 && !has2)
+  {
+    return false;
+  }
+  if (!has1 || !has2)
+  {
+    error = std::string("the sp3 moments need both point arrays SP3Phi1 and SP3Phi2 (") +
+      (has1 ? "SP3Phi2" : "SP3Phi1") + " is missing)";
+    return false;
+  }
+  return vtkTranslucency::ReadPointArray(input, "SP3Phi1", 3, phi1, error) &&
+    vtkTranslucency::ReadPointArray(input, "SP3Phi2", 3, phi2, error);
 }
 
 struct vtkOutgoingRadiance::Internals
@@ -174,8 +199,22 @@ int vtkOutgoingRadiance::RequestSerial(
       ruleArray && ruleArray->GetNumberOfTuples() > 0 && ruleArray->GetComponent(0, 0) == 1.0
       ? translucency::Fresnel::BoundaryRule::Moments
       : translucency::Fresnel::BoundaryRule::Fit;
-    values = translucency::BoundaryRadiance(mesh, fluence, irradiance, pointEta,
-      this->UseViewPoint ? this->ViewPoint : nullptr, ToReadout(this->RadianceReadout), rule);
+    std::vector<double> phi1, phi2;
+    if (ReadSp3Moments(input, phi1, phi2, error))
+    {
+      // An sp3 solve: the outgoing P3 radiance of its moments.
+      values = translucency::Sp3BoundaryRadiance(mesh, phi1, phi2, irradiance, pointEta,
+        this->UseViewPoint ? this->ViewPoint : nullptr, ToReadout(this->RadianceReadout));
+    }
+    else if (!error.empty())
+    {
+      throw translucency::Error(error);
+    }
+    else
+    {
+      values = translucency::BoundaryRadiance(mesh, fluence, irradiance, pointEta,
+        this->UseViewPoint ? this->ViewPoint : nullptr, ToReadout(this->RadianceReadout), rule);
+    }
   }
   catch (const translucency::Error& e)
   {
@@ -325,6 +364,15 @@ int vtkOutgoingRadiance::RequestPerPiece(vtkInformationVector** inputVector,
       }
     }
   }
+  // An sp3 solve: the P3 radiance of its moments (SP3Phi1, SP3Phi2).
+  std::vector<double> phi1, phi2;
+  bool sp3 = false;
+  if (local.empty() && numPoints > 0)
+  {
+    sp3 = ReadSp3Moments(input, phi1, phi2, local);
+  }
+  translucency::Sp3BoundaryCoefficients sp3Coefficients;
+  double sp3Eta = -1.0;
   // Radiance (TransCut eq. 3) at every local point on the physical boundary,
   // with the serial normal and eta (summed over every rank's faces).
   std::vector<double> values(3 * static_cast<size_t>(numPoints), 0.0);
@@ -354,11 +402,19 @@ int vtkOutgoingRadiance::RequestPerPiece(vtkInformationVector** inputVector,
         const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
       }
+      if (sp3 && surface.Eta[i] != sp3Eta)
+      {
+        sp3Eta = surface.Eta[i];
+        sp3Coefficients = translucency::Sp3BoundaryCoefficients::Compute(sp3Eta);
+      }
       for (int c = 0; c < 3; ++c)
       {
         const size_t k = 3 * static_cast<size_t>(i) + c;
-        values[k] = translucency::OutgoingRadiance(
-          fluence[k], irradiance[k], surface.Eta[i], cosOut, ToReadout(this->RadianceReadout));
+        values[k] = sp3
+          ? translucency::Sp3OutgoingRadiance(sp3Coefficients, surface.Eta[i], phi1[k], phi2[k],
+              irradiance[k], cosOut, ToReadout(this->RadianceReadout))
+          : translucency::OutgoingRadiance(
+              fluence[k], irradiance[k], surface.Eta[i], cosOut, ToReadout(this->RadianceReadout));
         extremes[0] = std::max(extremes[0], irradiance[k]);
         extremes[1] = std::max(extremes[1], values[k]);
       }

@@ -45,8 +45,6 @@ ALLOWED = {
     "vtkOutgoingRadiance::RequestPerPiece": "split conflicted with the read-out default: redo",
     "vtkOutgoingRadiance::RequestSerial": "grew with the seam's rename: split",
     # Grew or arrived in the same round: to split.
-    "Sp3Solver::SolveBlocks": "new (SP3): to split",
-    "Sp3Solver::Assemble": "new (SP3): to split",
 }
 
 
