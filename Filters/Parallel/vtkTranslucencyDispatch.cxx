@@ -22,12 +22,17 @@ int PlanCode(const vtkTranslucencyParallelPlan& plan)
 int Fail(vtkAlgorithm* self, vtkInformationVector* outputVector, const std::string& message)
 {
   vtkErrorWithObjectMacro(self, << message);
+  vtkTranslucencyDispatch::EmptyOutputs(outputVector);
+  return 0;
+}
+}
+
+void vtkTranslucencyDispatch::EmptyOutputs(vtkInformationVector* outputVector)
+{
   for (int port = 0; port < outputVector->GetNumberOfInformationObjects(); ++port)
   {
     vtkTranslucencyOutputGuard::MakeEmpty(vtkDataObject::GetData(outputVector, port));
   }
-  return 0;
-}
 }
 
 int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
