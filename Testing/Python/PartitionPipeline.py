@@ -28,6 +28,8 @@ par_<source>_<chain>.pvtu (one piece per rank):
            extended  a directional light as the extended collimated model (its
                      direction off the grid's diagonals)
            gated     time gates (4 gates in [0, 0.2] ns)
+           interactive  lit, solved with the default RelTol (the interactive
+                     stopping rule; every other chain solves to RelTol 1e-12)
 Every rank prints "case <source> done" after each source.
 """
 
@@ -84,6 +86,8 @@ def chains(prefix, source):
                                  CollimatedModel=1)
     save(prefix + "_extended", solve(extended))
     save(prefix + "_gated", solve(SurfaceIrradiance(Input=source), TimeGates=[0.0, 0.2, 4]))
+    # The interactive stopping rule: Solve Diffusion's default RelTol.
+    save(prefix + "_interactive", SolveDiffusion(Input=SurfaceIrradiance(Input=source)))
     print("case %s done" % prefix.split("_")[-1], flush=True)
 
 
