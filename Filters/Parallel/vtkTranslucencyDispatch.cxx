@@ -1,13 +1,8 @@
 #include "vtkTranslucencyDispatch.h"
 
-#include "vtkTranslucencyMPI.h"
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkTranslucencyParallel.h"
 #include "vtkTranslucencyThreads.h"
-
-#ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
-#include "RankThreads.h"
-#endif
 
 #include <vtkAlgorithm.h>
 #include <vtkDataObject.h>
@@ -15,7 +10,6 @@
 #include <vtkObject.h>
 
 #include <exception>
-#include <memory>
 
 namespace
 {
@@ -105,16 +99,6 @@ int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
           std::string("internal error: the plan is '") + plan.GetKindName() +
             "' but the filter has no such path");
       }
-#ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
-      // Every rank computes at once: the node's cores shared by its ranks
-      // (OpenMP threads per rank = cores / ranks, unless OMP_NUM_THREADS).
-      MPI_Comm* handle = vtkTranslucency::MPIHandle(comm);
-      std::unique_ptr<translucency::ScopedRankThreads> threads;
-      if (handle)
-      {
-        threads = std::make_unique<translucency::ScopedRankThreads>(*handle);
-      }
-#endif
       return comm.RunAgreed(self, outputVector,
         [&]() { return path(inputVector, outputVector, comm); });
     }
