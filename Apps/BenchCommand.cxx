@@ -189,19 +189,22 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
 /// linear solver (by size: multigrid-agg from 20k vertices) at rel-tol 1e-6:
 /// cold = a new solver object (assembly, set-up, solve from zero), warm = the
 /// same object after the light moved (`q2`: a second directional light;
-/// warm start from the previous solution). Medians of `runs`.
+/// warm start from the previous solution). Medians of `runs`, the two
+/// solvers alternating within each run.
 json BenchSp3(const translucency::TetMesh& mesh, const translucency::OpticalProperties& material,
   const std::vector<double>& q, const std::vector<double>& q2, int runs)
 {
   json out;
-  double ratio[2] = { 0.0, 0.0 };
-  std::array<double, 2> divergence{}, sp3{};
-  for (const char* name : { "divergence", "sp3" })
+  const char* names[2] = { "divergence", "sp3" };
+  // The two solvers alternate within each run (divergence, sp3, divergence,
+  // ...), so that a change of the machine's load hits both alike.
+  std::array<std::vector<double>, 2> cold, warm;
+  std::array<int, 2> coldIterations{}, warmIterations{};
+  for (int r = 0; r < runs; ++r)
   {
-    std::vector<double> cold, warm;
-    int coldIterations = 0, warmIterations = 0;
-    for (int r = 0; r < runs; ++r)
+    for (int s = 0; s < 2; ++s)
     {
+      const char* name = names[s];
       std::unique_ptr<translucency::DiffusionSolver> solver =
         translucency::CreateDiffusionSolver(name);
       solver->SetRelTol(1e-6);
@@ -214,26 +217,27 @@ json BenchSp3(const translucency::TetMesh& mesh, const translucency::OpticalProp
       auto start = Clock::now();
       if (!solver->Solve(problem, fluence, report) || !report.Converged[0])
         throw translucency::Error(std::string("bench: the ") + name + " cold solve did not converge");
-      cold.push_back(MillisecondsSince(start));
-      coldIterations = report.Iterations[0];
+      cold[s].push_back(MillisecondsSince(start));
+      coldIterations[s] = report.Iterations[0];
       problem.Irradiance = &q2;
       start = Clock::now();
       if (!solver->Solve(problem, fluence, report) || !report.Converged[0])
         throw translucency::Error(std::string("bench: the ") + name + " warm solve did not converge");
-      warm.push_back(MillisecondsSince(start));
-      warmIterations = report.Iterations[0];
+      warm[s].push_back(MillisecondsSince(start));
+      warmIterations[s] = report.Iterations[0];
     }
-    const bool isSp3 = std::string(name) == "sp3";
-    std::array<double, 2>& times = isSp3 ? sp3 : divergence;
-    times = { Median(cold), Median(warm) };
-    std::cout << std::fixed << std::setprecision(1) << "    " << name << ": cold " << times[0]
-              << " ms (" << coldIterations << " iterations in R), warm " << times[1] << " ms ("
-              << warmIterations << ")\n" << std::defaultfloat;
-    out[name] = { { "cold_ms_median", times[0] }, { "warm_ms_median", times[1] },
-      { "cold_iterations_R", coldIterations }, { "warm_iterations_R", warmIterations } };
   }
-  ratio[0] = sp3[0] / divergence[0];
-  ratio[1] = sp3[1] / divergence[1];
+  std::array<std::array<double, 2>, 2> times{};
+  for (int s = 0; s < 2; ++s)
+  {
+    times[s] = { Median(cold[s]), Median(warm[s]) };
+    std::cout << std::fixed << std::setprecision(1) << "    " << names[s] << ": cold " << times[s][0]
+              << " ms (" << coldIterations[s] << " iterations in R), warm " << times[s][1]
+              << " ms (" << warmIterations[s] << ")\n" << std::defaultfloat;
+    out[names[s]] = { { "cold_ms_median", times[s][0] }, { "warm_ms_median", times[s][1] },
+      { "cold_iterations_R", coldIterations[s] }, { "warm_iterations_R", warmIterations[s] } };
+  }
+  const double ratio[2] = { times[1][0] / times[0][0], times[1][1] / times[0][1] };
   std::cout << std::fixed << std::setprecision(2) << "    sp3 / divergence: cold " << ratio[0]
             << "x, warm " << ratio[1] << "x\n" << std::defaultfloat;
   out["sp3_over_divergence_cold"] = ratio[0];

@@ -36,17 +36,6 @@ LIMIT = 150
 # work (issue 30) that will shorten it. Key: the name as printed (a file that
 # moves keeps its entry), or "path::name" for a name used in several files.
 ALLOWED = {
-    # The plumbing of the parallel seam (Filters/Parallel/): to split next.
-    "MergePointSets": "seam plumbing: the merge of the ranks' pieces, to split",
-    "RunGathered": "seam plumbing: the gather and scatter back, to split",
-    # Split into named phases on a branch whose split conflicted with the
-    # same functions' other changes of the same round: redo the split.
-    "vtkTetrahedralizeSurface::RequestSerial": "split conflicted with the seam's rename: redo",
-    "vtkOutgoingRadiance::RequestPerPiece": "split conflicted with the read-out default: redo",
-    "vtkOutgoingRadiance::RequestSerial": "grew with the seam's rename: split",
-    # Grew or arrived in the same round: to split.
-    "Sp3Solver::SolveBlocks": "new (SP3): to split",
-    "Sp3Solver::Assemble": "new (SP3): to split",
 }
 
 

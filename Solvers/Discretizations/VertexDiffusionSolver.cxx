@@ -410,6 +410,12 @@ bool VertexDiffusionSolver::Solve(
 void VertexDiffusionSolver::CheckFrequencyResolution(const TetMesh& mesh,
   const OpticalProperties& material, double frequency, double omega) const
 {
+  translucency::CheckFrequencyResolution(GetName(), mesh, material, frequency, omega);
+}
+
+void CheckFrequencyResolution(const std::string& name, const TetMesh& mesh,
+  const OpticalProperties& material, double frequency, double omega)
+{
   // The diffusion wave exp(-k r), k = sqrt((mu_a + i omega eta / c) / kappa)
   // per tet and channel, oscillates with the wavelength 2 pi / Im k. A mesh
   // whose edges are longer than the shortest wavelength cannot carry its
@@ -451,7 +457,7 @@ void VertexDiffusionSolver::CheckFrequencyResolution(const TetMesh& mesh,
   if (!finite || shortest < edge)
   {
     std::ostringstream out;
-    out << std::setprecision(4) << GetName() << ": modulation frequency " << frequency << " Hz: ";
+    out << std::setprecision(4) << name << ": modulation frequency " << frequency << " Hz: ";
     if (!finite)
     {
       out << "omega eta / c overflows (not finite)";
