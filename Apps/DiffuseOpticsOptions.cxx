@@ -325,7 +325,8 @@ void DiffuseOpticsOptions::Report(vtkSolveDiffusion* solve, nlohmann::json& j) c
 void AddDiffuseOpticsOptions(CLI::App* command, DiffuseOpticsOptions& options)
 {
   const std::string group =
-    "Diffuse optics (divergence, fem; montecarlo but --frequency; --source, --detector: every "
+    "Diffuse optics (divergence, fem; sp3 --frequency; montecarlo but --frequency; --source, "
+    "--detector: every "
     "solver)";
   DiffuseOpticsOptions* o = &options;
   command

@@ -9,6 +9,9 @@
  * energy; SetRadianceReadoutToPaper() drops the 1/eta^2 as the paper prints
  * it) from the input's point arrays
  * `Fluence` (phi) and `Irradiance` (q) and the cell array `RefractiveIndex`.
+ * After an sp3 solve (point arrays `SP3Phi1`, `SP3Phi2`) it evaluates the
+ * outgoing P3 radiance of those moments instead
+ * (translucency::Sp3OutgoingRadiance; Documentation/Solvers.md, "SP3").
  *
  * Output point data: `Radiance` (3 components, W/mm^2/sr, linear, not tone
  * mapped; clamped below at 0 where eq. 3 would go negative, which happens under
@@ -138,6 +141,10 @@ protected:
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// Empties the outputs before anything upstream runs, so that a failure
+  /// upstream leaves them empty (vtkTranslucencyDispatch::UpdateExtent).
+  int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  friend struct vtkTranslucencyDispatchAccess; // RunFilter, UpdateExtent
   /// The plan for more than one process (vtkTranslucencyDispatch: called on
   /// every rank; collective over `comm`).
   vtkTranslucencyParallelPlan PlanParallel(

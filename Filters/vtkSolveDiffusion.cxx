@@ -546,15 +546,16 @@ void AttachDetectorArrays(vtkUnstructuredGrid* output,
 int vtkSolveDiffusion::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
-    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
-    { return this->PlanParallel(i, c); },
-    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-      { return this->RequestSerial(r, i, o); },
-      nullptr,
-      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator&)
-      { return this->RequestDistributed(i, o); } },
-    { this->ParallelPath, this->ParallelPlan });
+  return vtkTranslucencyDispatch::RunFilter(this, request, inputVector, outputVector, nullptr,
+    [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator&)
+    { return this->RequestDistributed(i, o); });
+}
+
+//------------------------------------------------------------------------------
+int vtkSolveDiffusion::RequestUpdateExtent(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::UpdateExtent(this, request, inputVector, outputVector);
 }
 
 //------------------------------------------------------------------------------
@@ -947,6 +948,33 @@ void vtkSolveDiffusion::Internals::Sp3Readouts(const translucency::Sp3Solver& sp
   {
     return;
   }
+  const std::vector<std::complex<double>>& modulated = sp3.GetComplexExitance();
+  if (!modulated.empty())
+  {
+    // Frequency domain: the detectors' exitance amplitude and phase from
+    // SP3's complex exitance; no power balance (it holds for continuous
+    // wave only).
+    const auto footprints = translucency::LocateDetectors(mesh, this->SolvedDetectors);
+    for (std::size_t k = 0; k < footprints.size() && k < this->Result.Readings.size() &&
+         k < this->Result.ExitancePhase.size();
+         ++k)
+    {
+      std::complex<double> reading[3];
+      for (const auto& [point, weight] : footprints[k].GetPointWeights(mesh))
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          reading[c] += weight * modulated[3 * static_cast<std::size_t>(point) + c];
+        }
+      }
+      for (int c = 0; c < 3; ++c)
+      {
+        this->Result.Readings[k].Exitance[c] = std::abs(reading[c]);
+        this->Result.ExitancePhase[k][c] = std::arg(reading[c]);
+      }
+    }
+    return;
+  }
   if (!this->SolvedDetectors.empty())
   {
     const auto footprints = translucency::LocateDetectors(mesh, this->SolvedDetectors);
@@ -1091,6 +1119,18 @@ void vtkSolveDiffusion::Internals::Attach(
   else
   {
     output->GetFieldData()->RemoveArray("TranslucencyBoundaryRule"); // not this solve's
+  }
+  // sp3 in continuous wave: its composite moments, which vtkOutgoingRadiance
+  // reads for the P3 radiance (Sp3OutgoingRadiance) instead of eq. 3.
+  output->GetPointData()->RemoveArray("SP3Phi1"); // not this solve's
+  output->GetPointData()->RemoveArray("SP3Phi2");
+  if (const auto* sp3 = dynamic_cast<const translucency::Sp3Solver*>(&this->FrontEnd.GetSolver()))
+  {
+    if (result.Amplitude.empty() && sp3->GetComplexExitance().empty())
+    {
+      attach("SP3Phi1", sp3->GetPhi1());
+      attach("SP3Phi2", sp3->GetPhi2());
+    }
   }
   attach("MonteCarloRadiance", result.Report.Radiance);
   attach("MonteCarloRadianceStandardError", result.Report.RadianceStandardError);

@@ -16,12 +16,16 @@
  *  - SOLVER_FEM ("fem"): consistent linear Galerkin (the Arbree et al. role);
  *  - SOLVER_QUADGRAPH ("quadgraph"): finite differences on the tet dual graph;
  *  - SOLVER_GRID ("grid"): regular-grid finite differences of spacing GridSpacing;
- *  - SOLVER_MONTECARLO ("montecarlo"): a photon random walk, the ground truth;
- *  - SOLVER_SP3 ("sp3"): the simplified spherical harmonics SP3 equations
- *    (Klose & Larsen 2006) at the vertices, with Anisotropy g; continuous wave.
+ *  - SOLVER_MONTECARLO ("montecarlo"): a photon random walk, the ground truth.
  *    It needs the lights, which vtkSurfaceIrradiance records in the field data
  *    (`TranslucencyLights`); it adds `FluenceStandardError`,
  *    `MonteCarloRadiance` and `MonteCarloRadianceStandardError` point arrays.
+ *  - SOLVER_SP3 ("sp3"): the simplified spherical harmonics SP3 equations
+ *    (Klose & Larsen 2006) at the vertices, with Anisotropy g; continuous wave
+ *    and ModulationFrequency (its own exitance for the detectors, amplitude and
+ *    phase). In continuous wave it adds the point arrays `SP3Phi1`, `SP3Phi2`
+ *    (its composite moments, W/mm^2), from which vtkOutgoingRadiance reads the
+ *    P3 radiance instead of eq. 3.
  *
  * The mesh topology is shared with the other filters of the pipeline, and with
  * WarmStart on, an iterative solve starts from the previous solution when the
@@ -546,6 +550,10 @@ protected:
   ~vtkSolveDiffusion() override;
 
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// Empties the outputs before anything upstream runs, so that a failure
+  /// upstream leaves them empty (vtkTranslucencyDispatch::UpdateExtent).
+  int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  friend struct vtkTranslucencyDispatchAccess; // RunFilter, UpdateExtent
   /// The plan for more than one process (vtkTranslucencyDispatch: called on
   /// every rank; collective over `comm`).
   vtkTranslucencyParallelPlan PlanParallel(

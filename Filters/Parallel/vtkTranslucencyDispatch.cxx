@@ -1,12 +1,8 @@
 #include "vtkTranslucencyDispatch.h"
 
-#include "vtkTranslucencyMPI.h"
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkTranslucencyParallel.h"
-
-#ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
-#include "RankThreads.h"
-#endif
+#include "vtkTranslucencyThreads.h"
 
 #include <vtkAlgorithm.h>
 #include <vtkDataObject.h>
@@ -14,7 +10,6 @@
 #include <vtkObject.h>
 
 #include <exception>
-#include <memory>
 
 namespace
 {
@@ -27,12 +22,17 @@ int PlanCode(const vtkTranslucencyParallelPlan& plan)
 int Fail(vtkAlgorithm* self, vtkInformationVector* outputVector, const std::string& message)
 {
   vtkErrorWithObjectMacro(self, << message);
+  vtkTranslucencyDispatch::EmptyOutputs(outputVector);
+  return 0;
+}
+}
+
+void vtkTranslucencyDispatch::EmptyOutputs(vtkInformationVector* outputVector)
+{
   for (int port = 0; port < outputVector->GetNumberOfInformationObjects(); ++port)
   {
     vtkTranslucencyOutputGuard::MakeEmpty(vtkDataObject::GetData(outputVector, port));
   }
-  return 0;
-}
 }
 
 int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
@@ -83,6 +83,8 @@ int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
     record.Path = "serial";
     return paths.Serial(request, inputVector, outputVector);
   }
+  // OpenMP threads per rank = cores / ranks on the node (collective).
+  const vtkTranslucency::ThreadsPerRankScope threads(comm);
   switch (plan.Kind)
   {
     case vtkTranslucencyParallelPlan::Kinds::PerPiece:
@@ -97,16 +99,6 @@ int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
           std::string("internal error: the plan is '") + plan.GetKindName() +
             "' but the filter has no such path");
       }
-#ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
-      // Every rank computes at once: the node's cores shared by its ranks
-      // (OpenMP threads per rank = cores / ranks, unless OMP_NUM_THREADS).
-      MPI_Comm* handle = vtkTranslucency::MPIHandle(comm);
-      std::unique_ptr<translucency::ScopedRankThreads> threads;
-      if (handle)
-      {
-        threads = std::make_unique<translucency::ScopedRankThreads>(*handle);
-      }
-#endif
       return comm.RunAgreed(self, outputVector,
         [&]() { return path(inputVector, outputVector, comm); });
     }

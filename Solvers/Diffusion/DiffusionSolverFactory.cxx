@@ -44,9 +44,9 @@ DiffusionSolverRegistry MakeRegistry()
       { DiffusionOption::Photons, DiffusionOption::Seed, DiffusionOption::Anisotropy }),
     "photon random walk, the reference (slow, with standard errors)" });
   registry.Add({ "sp3", [] { return std::make_unique<Sp3Solver>(); },
-    MakeDiffusionSolverTraits(LinearSolverChoice, { DiffusionOption::Anisotropy }),
+    MakeDiffusionSolverTraits(LinearSolverChoice | Frequency, { DiffusionOption::Anisotropy }),
     "simplified spherical harmonics SP3 (Klose & Larsen 2006) at the vertices, anisotropy g, "
-    "Fresnel boundary; continuous wave only" });
+    "Fresnel boundary; continuous wave and frequency domain" });
   return registry;
 }
 } // namespace

@@ -2,6 +2,7 @@
 
 #include "Error.h"
 #include "Fresnel.h"
+#include "ResourceLimits.h"
 #include "Strings.h"
 #include "TetMesh.h"
 #include "TetLocator.h"
@@ -13,6 +14,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -73,14 +76,93 @@ Sp3BoundaryCoefficients Sp3BoundaryCoefficients::Compute(double eta)
   return k;
 }
 
+double Sp3OutgoingRadiance(const Sp3BoundaryCoefficients& k, double eta, double phi1, double phi2,
+  double q, double cosOut, RadianceReadout readout)
+{
+  if (!(cosOut > 0.0))
+  {
+    return 0.0;
+  }
+  const double c = std::min(cosOut, 1.0);
+  // Snell: the internal cosine of the direction that leaves at cosOut.
+  const double mu = std::sqrt(std::max(0.0, 1.0 - (1.0 - c * c) / (eta * eta)));
+  const double transmitted = 1.0 - Fresnel::Reflectance(c, eta);
+  const double j1 = k.F11 * phi1 + k.F12 * phi2 + k.S1 * q;
+  const double j2 = k.F21 * phi1 + k.F22 * phi2 + k.S2 * q;
+  const double p2 = 0.5 * (3.0 * mu * mu - 1.0);
+  const double p3 = 0.5 * (5.0 * mu * mu * mu - 3.0 * mu);
+  const double inside = (phi1 - (2.0 / 3.0) * phi2 + 3.0 * j1 * mu + (5.0 / 3.0) * phi2 * p2 +
+                          7.0 * j2 * p3) /
+    (4.0 * 3.14159265358979323846);
+  const double scale = readout == RadianceReadout::Paper ? 1.0 : 1.0 / (eta * eta);
+  return std::max(0.0, transmitted * inside * scale);
+}
+
+std::vector<double> Sp3BoundaryRadiance(const TetMesh& mesh, const std::vector<double>& phi1,
+  const std::vector<double>& phi2, const std::vector<double>& irradiance,
+  const std::vector<double>& pointEta, const double* viewPoint, RadianceReadout readout)
+{
+  const std::size_t numPoints = static_cast<std::size_t>(mesh.GetNumberOfPoints());
+  if (phi1.size() != 3 * numPoints || phi2.size() != 3 * numPoints ||
+    irradiance.size() != 3 * numPoints || pointEta.size() != numPoints)
+  {
+    std::ostringstream os;
+    os << "sp3 radiance: the mesh has " << numPoints << " points but phi_1 has " << phi1.size()
+       << " values, phi_2 " << phi2.size() << ", irradiance " << irradiance.size() << " and eta "
+       << pointEta.size() << " (3, 3, 3 and 1 per point expected)";
+    throw Error(os.str());
+  }
+  const std::vector<int>& boundary = mesh.GetBoundaryPoints();
+  const std::vector<double>& normals = mesh.GetPointNormals();
+  // The boundary coefficients per distinct eta (serially; usually one).
+  std::map<double, Sp3BoundaryCoefficients> coefficients;
+  for (const int i : boundary)
+  {
+    const double eta = pointEta[static_cast<std::size_t>(i)];
+    if (coefficients.find(eta) == coefficients.end())
+    {
+      coefficients.emplace(eta, Sp3BoundaryCoefficients::Compute(eta));
+    }
+  }
+  const long long n = static_cast<long long>(boundary.size());
+  std::vector<double> radiance(3 * boundary.size());
+#pragma omp parallel for schedule(static)
+  for (long long k = 0; k < n; ++k)
+  {
+    const std::size_t i = static_cast<std::size_t>(boundary[static_cast<std::size_t>(k)]);
+    const double* nrm = &normals[3 * i];
+    double cosOut = 1.0;
+    if (viewPoint)
+    {
+      const double* x = mesh.GetPoint(static_cast<int>(i));
+      const double d[3] = { viewPoint[0] - x[0], viewPoint[1] - x[1], viewPoint[2] - x[2] };
+      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
+    }
+    const Sp3BoundaryCoefficients& coefficient = coefficients.find(pointEta[i])->second;
+    for (int c = 0; c < 3; ++c)
+    {
+      radiance[3 * static_cast<std::size_t>(k) + c] = Sp3OutgoingRadiance(coefficient,
+        pointEta[i], phi1[3 * i + c], phi2[3 * i + c], irradiance[3 * i + c], cosOut, readout);
+    }
+  }
+  RequireFinite(radiance, "Radiance", OverflowCause());
+  return radiance;
+}
+
 /// The assembled blocks: A11 and A22 as systems (the multigrid cycles are
-/// set up on them), A12 and A21 on the same pattern.
+/// set up on them), A12 and A21 on the same pattern; in the frequency domain
+/// the imaginary parts B of the four blocks and of the right-hand sides
+/// (empty in continuous wave).
 struct Sp3Solver::Blocks
 {
   DiffusionSystem A11, A22;
   std::array<std::vector<double>, NumberOfChannels> A12, A21;
+  std::array<std::vector<double>, NumberOfChannels> B11, B12, B21, B22;
+  std::array<std::vector<double>, NumberOfChannels> ImaginaryRhs1, ImaginaryRhs2;
   std::unique_ptr<LinearSolver> Cycle1, Cycle2; ///< multigrid-agg on A11, A22
-  std::string Preconditioner;
+  std::vector<double> InverseDiagonal;          ///< Jacobi: 2 N x 3 interleaved
+  bool Multigrid = false;
   bool CyclesReady = false;
 };
 
@@ -103,6 +185,8 @@ void Sp3Solver::Reset()
 
 namespace
 {
+
+constexpr double SpeedOfLight = SpeedOfLightMillimetresPerNanosecond * 1e9; // mm/s
 
 inline int LocalIndex(const int* tv, int id)
 {
@@ -132,9 +216,160 @@ std::vector<Sp3BoundaryCoefficients> CoefficientsPerTet(
   return out;
 }
 
+/// The coefficients of the SP3 equations of one tet and channel (complex
+/// in the frequency domain, real parts only in continuous wave).
+struct TetCoefficients
+{
+  std::complex<double> D1, D2, M1, M2, M12;
+};
+
+/// mu_a (1/mm), sigma_s' (1/mm), g, and alpha = omega eta / c (1/mm; 0 in
+/// continuous wave).
+TetCoefficients ComputeTetCoefficients(double muA, double sigmaS, double g, double alpha)
+{
+  // mu_an = mu_a + mu_s (1 - g^n) with mu_s = sigma_s' / (1 - g) (Klose &
+  // Larsen 2006, the SP_N absorption moments; section and equation numbers
+  // unverified: the paper is not in shared/papers, Solvers.md "SP3" derives
+  // what is used here).
+  // The frequency domain: the time derivative (eta / c) d/dt of the
+  // transport equation adds i omega eta / c to mu_t, hence to every mu_an.
+  const std::complex<double> a(muA, alpha);
+  const std::complex<double> muA1 = a + sigmaS;
+  const std::complex<double> muA2 = a + sigmaS * (1.0 + g);
+  const std::complex<double> muA3 = a + sigmaS * (1.0 + g + g * g);
+  // The SP3 equations in their composite moments (Klose & Larsen 2006;
+  // derived from the planar P3 equations in Solvers.md "SP3"): diffusion
+  // coefficients 1/(3 mu_a1), 1/(7 mu_a3); mass coefficients mu_a,
+  // (4/9) mu_a + (5/9) mu_a2 and the coupling -(2/3) mu_a.
+  TetCoefficients k;
+  k.D1 = 1.0 / (3.0 * muA1);
+  k.D2 = 1.0 / (7.0 * muA3);
+  k.M1 = a;
+  k.M2 = (4.0 / 9.0) * a + (5.0 / 9.0) * muA2;
+  k.M12 = -(2.0 / 3.0) * a;
+  return k;
+}
+
+/// Raw pointers to the values the assembly kernels write, per channel:
+/// the real parts of the four blocks and both right-hand sides, and in the
+/// frequency domain the imaginary parts of the blocks (else null).
+struct BlockPointers
+{
+  double* V11[NumberOfChannels]{};
+  double* V12[NumberOfChannels]{};
+  double* V21[NumberOfChannels]{};
+  double* V22[NumberOfChannels]{};
+  double* W11[NumberOfChannels]{};
+  double* W12[NumberOfChannels]{};
+  double* W21[NumberOfChannels]{};
+  double* W22[NumberOfChannels]{};
+  double* Rhs1[NumberOfChannels]{};
+  double* Rhs2[NumberOfChannels]{};
+  bool Complex = false;
+};
+
+/// A tet's stiffness and consistent mass (V_t / 20)(1 + delta_ab) into the
+/// four blocks, every channel.
+void AddTetBlocks(const BlockPointers& b, std::size_t t, const int* pos,
+  const TetGeometry& geometry, const OpticalProperties& material, double alpha)
+{
+  const double(&g)[4][4] = geometry.Stiffness;
+  const double mass = geometry.Volume / 20.0;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    const TetCoefficients k = ComputeTetCoefficients(material.AbsorptionCoefficient[3 * t + c],
+      material.ReducedScatteringCoefficient[3 * t + c],
+      material.GetAnisotropy(static_cast<int>(t), c), alpha);
+    for (int i = 0; i < 4; ++i)
+    {
+      for (int j = 0; j < 4; ++j)
+      {
+        const int p = pos[4 * i + j];
+        const double mij = i == j ? 2.0 * mass : mass;
+        b.V11[c][p] += k.D1.real() * g[i][j] + k.M1.real() * mij;
+        b.V22[c][p] += k.D2.real() * g[i][j] + k.M2.real() * mij;
+        b.V12[c][p] += k.M12.real() * mij;
+        b.V21[c][p] += k.M12.real() * mij;
+        if (b.Complex)
+        {
+          b.W11[c][p] += k.D1.imag() * g[i][j] + k.M1.imag() * mij;
+          b.W22[c][p] += k.D2.imag() * g[i][j] + k.M2.imag() * mij;
+          b.W12[c][p] += k.M12.imag() * mij;
+          b.W21[c][p] += k.M12.imag() * mij;
+        }
+      }
+    }
+  }
+}
+
+/// A boundary triangle of tet vertices `tv`: the currents J_1, J_2 of the
+/// boundary conditions (Sp3BoundaryCoefficients) as consistent boundary
+/// mass (S_f / 12)(1 + delta_ab) and load (real: the boundary data q is
+/// modulated at phase 0 in the frequency domain).
+void AddBoundaryTriangle(const BlockPointers& b, const Sp3BoundaryCoefficients& k,
+  const int* tv, const int* pos, const int* tri, double area, const double* q)
+{
+  const int local[3] = { LocalIndex(tv, tri[0]), LocalIndex(tv, tri[1]), LocalIndex(tv, tri[2]) };
+  const double m = area / 12.0;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    double qSum = 0.0;
+    for (int i = 0; i < 3; ++i)
+    {
+      qSum += q[3 * static_cast<std::size_t>(tri[i]) + c];
+    }
+    for (int i = 0; i < 3; ++i)
+    {
+      for (int j = 0; j < 3; ++j)
+      {
+        const int p = pos[4 * local[i] + local[j]];
+        const double mij = i == j ? 2.0 * m : m;
+        b.V11[c][p] += k.F11 * mij;
+        b.V12[c][p] += k.F12 * mij;
+        b.V21[c][p] += k.F21 * mij;
+        b.V22[c][p] += k.F22 * mij;
+      }
+      // int q v = m (q_i + sum_j q_j); the S q part of J moves to the
+      // right-hand side.
+      const double load = m * (qSum + q[3 * static_cast<std::size_t>(tri[i]) + c]);
+      b.Rhs1[c][tri[i]] -= k.S1 * load;
+      b.Rhs2[c][tri[i]] -= k.S2 * load;
+    }
+  }
+}
+
 } // namespace
 
-void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<double>& sourceLoad)
+void Sp3Solver::SizeBlocks(const TetMesh& mesh, bool complex)
+{
+  Blocks& b = *Blocks_;
+  ResizeVertexSystem(mesh, b.A11);
+  ResizeVertexSystem(mesh, b.A22);
+  b.A22.ColumnIndices = mesh.GetColumnIndices();
+  const std::size_t nnz = mesh.GetColumnIndices().size();
+  const std::size_t n = static_cast<std::size_t>(mesh.GetNumberOfPoints());
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    b.A12[c].resize(nnz);
+    b.A21[c].resize(nnz);
+    for (auto* values : { &b.B11, &b.B12, &b.B21, &b.B22 })
+    {
+      if (complex)
+      {
+        (*values)[c].assign(nnz, 0.0);
+      }
+      else
+      {
+        (*values)[c].clear();
+      }
+    }
+    b.ImaginaryRhs1[c].assign(complex ? n : 0, 0.0);
+    b.ImaginaryRhs2[c].assign(complex ? n : 0, 0.0);
+  }
+}
+
+void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<double>& sourceLoad,
+  const std::vector<double>& imaginaryLoad, double omega)
 {
   const TetMesh& mesh = *problem.Mesh;
   const OpticalProperties& material = *problem.Material;
@@ -145,29 +380,27 @@ void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
   std::vector<int> etaIndex;
   const std::vector<Sp3BoundaryCoefficients> coefficients =
     CoefficientsPerTet(mesh, material, etaIndex);
+  SizeBlocks(mesh, omega > 0.0);
 
-  ResizeVertexSystem(mesh, b.A11);
-  ResizeVertexSystem(mesh, b.A22);
-  b.A22.ColumnIndices = mesh.GetColumnIndices();
-  const std::size_t nnz = mesh.GetColumnIndices().size();
+  BlockPointers p;
+  p.Complex = omega > 0.0;
+  ChannelPointers channels1(b.A11);
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    b.A12[c].resize(nnz);
-    b.A21[c].resize(nnz);
+    p.V11[c] = channels1.Values[c];
+    p.Rhs1[c] = channels1.RightHandSide[c];
+    p.V22[c] = b.A22.Values[c].data();
+    p.V12[c] = b.A12[c].data();
+    p.V21[c] = b.A21[c].data();
+    p.Rhs2[c] = b.A22.RightHandSide[c].data();
+    if (p.Complex)
+    {
+      p.W11[c] = b.B11[c].data();
+      p.W12[c] = b.B12[c].data();
+      p.W21[c] = b.B21[c].data();
+      p.W22[c] = b.B22[c].data();
+    }
   }
-  double* v22[NumberOfChannels];
-  double* v12[NumberOfChannels];
-  double* v21[NumberOfChannels];
-  double* rhs2[NumberOfChannels];
-  for (int c = 0; c < NumberOfChannels; ++c)
-  {
-    v22[c] = b.A22.Values[c].data();
-    v12[c] = b.A12[c].data();
-    v21[c] = b.A21[c].data();
-    rhs2[c] = b.A22.RightHandSide[c].data();
-  }
-  const double* muA = material.AbsorptionCoefficient.data();
-  const double* sigmaS = material.ReducedScatteringCoefficient.data();
   const double* q = irradiance.data();
   const int* triangles = mesh.GetBoundaryTriangles().data();
   const int* triangleTets = mesh.GetBoundaryTriangleTets().data();
@@ -179,22 +412,21 @@ void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
   TriangleNext_.resize(static_cast<std::size_t>(numTriangles));
   int* head = TriangleHead_.data();
   int* next = TriangleNext_.data();
-  const long long numValues = static_cast<long long>(nnz);
-  double* const* rhs1 = nullptr;
-  ChannelPointers channels1(b.A11);
-  double* const* v11 = channels1.Values;
-  rhs1 = channels1.RightHandSide;
+  const long long numValues = static_cast<long long>(mesh.GetColumnIndices().size());
   const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
 
   auto prepare = [&]() {
+    // A11 is cleared by AssembleVertexSystem; the other blocks here, with
+    // identity rows of A22 at orphan points and the boundary triangles of
+    // each tet as linked lists (head, next).
 #pragma omp for schedule(static)
     for (long long k = 0; k < numValues; ++k)
     {
       for (int c = 0; c < NumberOfChannels; ++c)
       {
-        v22[c][k] = 0.0;
-        v12[c][k] = 0.0;
-        v21[c][k] = 0.0;
+        p.V22[c][k] = 0.0;
+        p.V12[c][k] = 0.0;
+        p.V21[c][k] = 0.0;
       }
     }
 #pragma omp for schedule(static)
@@ -203,10 +435,10 @@ void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
       const bool orphan = pointTetOffsets[i + 1] == pointTetOffsets[i];
       for (int c = 0; c < NumberOfChannels; ++c)
       {
-        rhs2[c][i] = 0.0;
+        p.Rhs2[c][i] = 0.0;
         if (orphan)
         {
-          v22[c][diagonal[i]] = 1.0;
+          p.V22[c][diagonal[i]] = 1.0;
         }
       }
     }
@@ -224,76 +456,13 @@ void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
     }
   };
   auto tetKernel = [&](std::size_t t, const int* tv, const int* pos, const TetGeometry& geometry) {
-    const double(&g)[4][4] = geometry.Stiffness;
-    const double volume = geometry.Volume;
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      const double a = muA[3 * t + c];
-      const double s = sigmaS[3 * t + c]; // sigma_s' = mu_s (1 - g)
-      const double aniso = material.GetAnisotropy(static_cast<int>(t), c);
-      // mu_an = mu_a + mu_s (1 - g^n) with mu_s = sigma_s' / (1 - g)
-      // (Klose & Larsen 2006, the SP_N absorption moments; equation number
-      // unverified: the paper is not in shared/papers, see Solvers.md "SP3"):
-      const double muA1 = a + s;
-      const double muA2 = a + s * (1.0 + aniso);
-      const double muA3 = a + s * (1.0 + aniso + aniso * aniso);
-      // Klose & Larsen 2006, the SP3 equations in their composite moments
-      // (equation number unverified, restated from the P3 derivation): diffusion coefficients 1/(3 mu_a1), 1/(7 mu_a3);
-      // mass coefficients mu_a, (4/9) mu_a + (5/9) mu_a2 and the coupling
-      // -(2/3) mu_a.
-      const double d1 = 1.0 / (3.0 * muA1), d2 = 1.0 / (7.0 * muA3);
-      const double m1 = a, m2 = (4.0 / 9.0) * a + (5.0 / 9.0) * muA2, m12 = -(2.0 / 3.0) * a;
-      // Consistent mass (V_t / 20)(1 + delta_ab).
-      const double mass = volume / 20.0;
-      for (int i = 0; i < 4; ++i)
-      {
-        for (int j = 0; j < 4; ++j)
-        {
-          const int p = pos[4 * i + j];
-          const double mij = i == j ? 2.0 * mass : mass;
-          v11[c][p] += d1 * g[i][j] + m1 * mij;
-          v22[c][p] += d2 * g[i][j] + m2 * mij;
-          v12[c][p] += m12 * mij;
-          v21[c][p] += m12 * mij;
-        }
-      }
-    }
-    // Boundary triangles of this tet: the currents J_1, J_2 of the boundary
-    // conditions (Sp3BoundaryCoefficients) as consistent boundary mass
-    // (S_f / 12)(1 + delta_ab) and load.
+    // alpha = omega eta_t / c (1/mm): the frequency domain's i omega / v.
+    const double alpha = omega > 0.0 ? omega * material.RefractiveIndex[t] / SpeedOfLight : 0.0;
+    AddTetBlocks(p, t, pos, geometry, material, alpha);
     for (int f = head[t]; f >= 0; f = next[f])
     {
-      const Sp3BoundaryCoefficients& k =
-        coefficients[static_cast<std::size_t>(etaIndex[t])];
-      const int* tri = triangles + 3 * static_cast<std::size_t>(f);
-      const int local[3] = { LocalIndex(tv, tri[0]), LocalIndex(tv, tri[1]),
-        LocalIndex(tv, tri[2]) };
-      const double m = triangleAreas[f] / 12.0;
-      for (int c = 0; c < NumberOfChannels; ++c)
-      {
-        double qSum = 0.0;
-        for (int i = 0; i < 3; ++i)
-        {
-          qSum += q[3 * static_cast<std::size_t>(tri[i]) + c];
-        }
-        for (int i = 0; i < 3; ++i)
-        {
-          for (int j = 0; j < 3; ++j)
-          {
-            const int p = pos[4 * local[i] + local[j]];
-            const double mij = i == j ? 2.0 * m : m;
-            v11[c][p] += k.F11 * mij;
-            v12[c][p] += k.F12 * mij;
-            v21[c][p] += k.F21 * mij;
-            v22[c][p] += k.F22 * mij;
-          }
-          // int q v = m (q_i + sum_j q_j); the S q part of J moves to the
-          // right-hand side.
-          const double load = m * (qSum + q[3 * static_cast<std::size_t>(tri[i]) + c]);
-          rhs1[c][tri[i]] -= k.S1 * load;
-          rhs2[c][tri[i]] -= k.S2 * load;
-        }
-      }
+      AddBoundaryTriangle(p, coefficients[static_cast<std::size_t>(etaIndex[t])], tv, pos,
+        triangles + 3 * static_cast<std::size_t>(f), triangleAreas[f], q);
     }
   };
   auto finish = []() {};
@@ -304,6 +473,13 @@ void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
     CheckIrradiance(mesh, irradiance);
     throw Error("sp3: invalid material or irradiance");
   }
+  AddLoads(numPoints, sourceLoad, imaginaryLoad);
+}
+
+void Sp3Solver::AddLoads(int numPoints, const std::vector<double>& sourceLoad,
+  const std::vector<double>& imaginaryLoad)
+{
+  Blocks& b = *Blocks_;
   for (int k = 0; k < 2; ++k)
   {
     const std::vector<double>& extra = k == 0 ? AdditionalLoad1_ : AdditionalLoad2_;
@@ -327,16 +503,24 @@ void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
       }
     }
   }
-  // Interior sources: Q in the first equation, -(2/3) Q in the second.
-  if (!sourceLoad.empty())
+  // Interior sources: Q in the first equation, -(2/3) Q in the second
+  // (the imaginary part of a modulated Q likewise).
+  for (int part = 0; part < 2; ++part)
   {
+    const std::vector<double>& load = part == 0 ? sourceLoad : imaginaryLoad;
+    if (load.empty())
+    {
+      continue;
+    }
     for (int c = 0; c < NumberOfChannels; ++c)
     {
+      double* rhs1 = part == 0 ? b.A11.RightHandSide[c].data() : b.ImaginaryRhs1[c].data();
+      double* rhs2 = part == 0 ? b.A22.RightHandSide[c].data() : b.ImaginaryRhs2[c].data();
       for (int i = 0; i < numPoints; ++i)
       {
-        const double load = sourceLoad[3 * static_cast<std::size_t>(i) + c];
-        b.A11.RightHandSide[c][i] += load;
-        b.A22.RightHandSide[c][i] -= (2.0 / 3.0) * load;
+        const double value = load[3 * static_cast<std::size_t>(i) + c];
+        rhs1[i] += value;
+        rhs2[i] -= (2.0 / 3.0) * value;
       }
     }
   }
@@ -345,14 +529,19 @@ void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
 namespace
 {
 
-/// y = A x for the block system, 2 N x 3 interleaved ((b N + i) 3 + c).
-void BlockProduct(const DiffusionSystem& a11, const DiffusionSystem& a22,
-  const std::array<std::vector<double>, NumberOfChannels>& a12,
-  const std::array<std::vector<double>, NumberOfChannels>& a21, const double* x, double* y)
+/// The values of a 2 x 2 block matrix on one CSR pattern, per channel.
+struct BlockValues
 {
-  const int n = a11.NumberOfUnknowns;
-  const int* rows = a11.RowOffsets.data();
-  const int* cols = a11.ColumnIndices.data();
+  const double* V11[NumberOfChannels];
+  const double* V12[NumberOfChannels];
+  const double* V21[NumberOfChannels];
+  const double* V22[NumberOfChannels];
+};
+
+/// y = A x for the block matrix A, 2 N x 3 interleaved ((b N + i) 3 + c).
+void BlockProduct(int n, const int* rows, const int* cols, const BlockValues& a, const double* x,
+  double* y)
+{
   const std::size_t shift = 3 * static_cast<std::size_t>(n);
 #pragma omp for schedule(static)
   for (int i = 0; i < n; ++i)
@@ -364,8 +553,8 @@ void BlockProduct(const DiffusionSystem& a11, const DiffusionSystem& a22,
       for (int c = 0; c < 3; ++c)
       {
         const double x1 = x[j + c], x2 = x[shift + j + c];
-        y1[c] += a11.Values[c][k] * x1 + a12[c][k] * x2;
-        y2[c] += a21[c][k] * x1 + a22.Values[c][k] * x2;
+        y1[c] += a.V11[c][k] * x1 + a.V12[c][k] * x2;
+        y2[c] += a.V21[c][k] * x1 + a.V22[c][k] * x2;
       }
     }
     for (int c = 0; c < 3; ++c)
@@ -376,8 +565,45 @@ void BlockProduct(const DiffusionSystem& a11, const DiffusionSystem& a22,
   }
 }
 
-/// Per-channel dot products of two 2 N x 3 interleaved vectors (serial
-/// order: deterministic for any thread count).
+/// The real form of (A + i B) x for the block matrices A and B: x = (x_r,
+/// x_i), each 2 N x 3 interleaved; y_r = A x_r - B x_i, y_i = A x_i + B x_r.
+/// One pass (one barrier: a loaded machine pays for every barrier).
+void ComplexBlockProduct(int n, const int* rows, const int* cols, const BlockValues& a,
+  const BlockValues& b, const double* x, double* y)
+{
+  const std::size_t shift = 3 * static_cast<std::size_t>(n), block = 2 * shift;
+  const double* xr = x;
+  const double* xi = x + block;
+#pragma omp for schedule(static)
+  for (int i = 0; i < n; ++i)
+  {
+    double r1[3] = { 0, 0, 0 }, r2[3] = { 0, 0, 0 }, i1[3] = { 0, 0, 0 }, i2[3] = { 0, 0, 0 };
+    for (int k = rows[i]; k < rows[i + 1]; ++k)
+    {
+      const std::size_t j = 3 * static_cast<std::size_t>(cols[k]);
+      for (int c = 0; c < 3; ++c)
+      {
+        const double p1 = xr[j + c], p2 = xr[shift + j + c];
+        const double q1 = xi[j + c], q2 = xi[shift + j + c];
+        r1[c] += a.V11[c][k] * p1 + a.V12[c][k] * p2 - b.V11[c][k] * q1 - b.V12[c][k] * q2;
+        r2[c] += a.V21[c][k] * p1 + a.V22[c][k] * p2 - b.V21[c][k] * q1 - b.V22[c][k] * q2;
+        i1[c] += a.V11[c][k] * q1 + a.V12[c][k] * q2 + b.V11[c][k] * p1 + b.V12[c][k] * p2;
+        i2[c] += a.V21[c][k] * q1 + a.V22[c][k] * q2 + b.V21[c][k] * p1 + b.V22[c][k] * p2;
+      }
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      const std::size_t m = 3 * static_cast<std::size_t>(i) + c;
+      y[m] = r1[c];
+      y[shift + m] = r2[c];
+      y[block + m] = i1[c];
+      y[block + shift + m] = i2[c];
+    }
+  }
+}
+
+/// Per-channel dot products of two vectors interleaved by 3 (serial order:
+/// deterministic for any thread count).
 std::array<double, 3> Dots(const std::vector<double>& a, const std::vector<double>& b)
 {
   std::array<double, 3> d{ 0, 0, 0 };
@@ -392,20 +618,217 @@ std::array<double, 3> Dots(const std::vector<double>& a, const std::vector<doubl
   return d;
 }
 
+/**
+ * BiCGSTAB (right-preconditioned) for the three channels in lockstep, each
+ * with its own scalars, on vectors interleaved by 3 (entry k is channel
+ * k % 3); restarted from the true residual when the recursive one says
+ * converged but the true one does not (drift), at most 5 times.
+ */
+class LockstepBiCgStab
+{
+public:
+  using Operator = std::function<void(const std::vector<double>&, std::vector<double>&)>;
+
+  LockstepBiCgStab(Operator product, Operator precondition, double relTol, int maxIter,
+    std::function<bool(int)> progress)
+    : Product_(std::move(product))
+    , Precondition_(std::move(precondition))
+    , RelTol_(relTol)
+    , MaxIter_(maxIter)
+    , Progress_(std::move(progress))
+  {
+  }
+
+  /// Solves A x = rhs from x (sized as rhs); false if `progress` aborted.
+  bool Solve(const std::vector<double>& rhs, std::vector<double>& x, SolverReport& report)
+  {
+    const std::size_t size = rhs.size();
+    for (std::vector<double>* v : { &R_, &P_, &V_, &PHat_, &S_, &SHat_, &T_ })
+    {
+      v->assign(size, 0.0);
+    }
+    Bb_ = Dots(rhs, rhs);
+    for (int c = 0; c < 3; ++c)
+    {
+      if (Bb_[c] == 0.0)
+      {
+        // No source in this channel: the solution is 0.
+        for (std::size_t k = static_cast<std::size_t>(c); k < size; k += 3)
+        {
+          x[k] = 0.0;
+        }
+      }
+    }
+    TrueResidual(rhs, x);
+    for (int restart = 0; restart < 5; ++restart)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        Done_[c] = Failed_[c] || Converged(c);
+      }
+      if (AllDone())
+      {
+        break;
+      }
+      if (!Cycle(x))
+      {
+        return false;
+      }
+      TrueResidual(rhs, x);
+      if (It_ >= MaxIter_)
+      {
+        break;
+      }
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      report.Iterations[c] = Iterations_[c];
+      report.Residual[c] = Bb_[c] > 0.0 ? std::sqrt(Rr_[c] / Bb_[c]) : std::sqrt(Rr_[c]);
+      report.Converged[c] = !Failed_[c] && Converged(c);
+    }
+    return true;
+  }
+
+private:
+  bool Converged(int c) const
+  {
+    return Bb_[c] == 0.0 ? Rr_[c] == 0.0 : std::sqrt(Rr_[c] / Bb_[c]) <= RelTol_;
+  }
+  bool AllDone() const { return Done_[0] && Done_[1] && Done_[2]; }
+
+  void TrueResidual(const std::vector<double>& rhs, const std::vector<double>& x)
+  {
+    Product_(x, R_);
+    for (std::size_t k = 0; k < R_.size(); ++k)
+    {
+      R_[k] = rhs[k] - R_[k];
+    }
+    Rr_ = Dots(R_, R_);
+  }
+
+  /// One BiCGSTAB cycle from the current residual until every channel is
+  /// done (converged, failed or stagnated) or MaxIter; false if aborted.
+  bool Cycle(std::vector<double>& x)
+  {
+    RHat_ = R_;
+    std::fill(P_.begin(), P_.end(), 0.0);
+    std::fill(V_.begin(), V_.end(), 0.0);
+    Rho_ = { 1, 1, 1 };
+    Alpha_ = { 1, 1, 1 };
+    Omega_ = { 1, 1, 1 };
+    for (; It_ < MaxIter_ && !AllDone(); ++It_)
+    {
+      if (Progress_ && !Progress_(It_))
+      {
+        return false;
+      }
+      Iterate(x);
+    }
+    return true;
+  }
+
+  /// Marks channel c failed (breakdown: reported as not converged) unless
+  /// `value` is a usable finite non-zero divisor.
+  bool Usable(int c, double value)
+  {
+    if (!(std::abs(value) > 0.0) || !std::isfinite(value))
+    {
+      Failed_[c] = Done_[c] = true;
+      return false;
+    }
+    return true;
+  }
+
+  void Iterate(std::vector<double>& x)
+  {
+    const std::size_t size = x.size();
+    const std::array<double, 3> rhoNew = Dots(RHat_, R_);
+    std::array<double, 3> beta{};
+    for (int c = 0; c < 3; ++c)
+    {
+      if (!Done_[c] && Usable(c, rhoNew[c]))
+      {
+        beta[c] = (rhoNew[c] / Rho_[c]) * (Alpha_[c] / Omega_[c]);
+        Rho_[c] = rhoNew[c];
+      }
+    }
+    for (std::size_t k = 0; k < size; ++k)
+    {
+      const int c = static_cast<int>(k % 3);
+      P_[k] = Done_[c] ? 0.0 : R_[k] + beta[c] * (P_[k] - Omega_[c] * V_[k]);
+    }
+    Precondition_(P_, PHat_);
+    Product_(PHat_, V_);
+    const std::array<double, 3> rv = Dots(RHat_, V_);
+    for (int c = 0; c < 3; ++c)
+    {
+      if (!Done_[c] && Usable(c, rv[c]))
+      {
+        Alpha_[c] = Rho_[c] / rv[c];
+      }
+    }
+    for (std::size_t k = 0; k < size; ++k)
+    {
+      const int c = static_cast<int>(k % 3);
+      S_[k] = Done_[c] ? 0.0 : R_[k] - Alpha_[c] * V_[k];
+    }
+    Precondition_(S_, SHat_);
+    Product_(SHat_, T_);
+    const std::array<double, 3> ts = Dots(T_, S_), tt = Dots(T_, T_);
+    for (int c = 0; c < 3; ++c)
+    {
+      if (!Done_[c])
+      {
+        Omega_[c] = tt[c] > 0.0 ? ts[c] / tt[c] : 0.0;
+      }
+    }
+    for (std::size_t k = 0; k < size; ++k)
+    {
+      const int c = static_cast<int>(k % 3);
+      if (!Done_[c])
+      {
+        x[k] += Alpha_[c] * PHat_[k] + Omega_[c] * SHat_[k];
+        R_[k] = S_[k] - Omega_[c] * T_[k];
+      }
+    }
+    const std::array<double, 3> rrNew = Dots(R_, R_);
+    for (int c = 0; c < 3; ++c)
+    {
+      if (Done_[c])
+      {
+        continue;
+      }
+      Rr_[c] = rrNew[c];
+      ++Iterations_[c];
+      if (!std::isfinite(Rr_[c]))
+      {
+        Failed_[c] = Done_[c] = true;
+      }
+      else if (Converged(c) || Omega_[c] == 0.0)
+      {
+        Done_[c] = true; // converged, or stagnation: restart from the true residual
+      }
+    }
+  }
+
+  Operator Product_, Precondition_;
+  double RelTol_;
+  int MaxIter_;
+  std::function<bool(int)> Progress_;
+  int It_ = 0;
+  std::vector<double> R_, RHat_, P_, V_, PHat_, S_, SHat_, T_;
+  std::array<double, 3> Bb_{}, Rr_{}, Rho_{}, Alpha_{}, Omega_{};
+  std::array<bool, 3> Done_{}, Failed_{};
+  std::array<int, 3> Iterations_{};
+};
+
 } // namespace
 
-bool Sp3Solver::SolveBlocks(
-  const TetMesh& mesh, bool warm, const std::string& preconditioner, SolverReport& report)
+void Sp3Solver::SetUpPreconditioner(const TetMesh& mesh, const std::string& preconditioner)
 {
   Blocks& b = *Blocks_;
-  const int n = mesh.GetNumberOfPoints();
-  const std::size_t half = 3 * static_cast<std::size_t>(n), size = 2 * half;
-  const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
-
-  // Preconditioner: block-diagonal Jacobi or a multigrid cycle per block.
-  std::vector<double> inverseDiagonal;
-  const bool multigrid = preconditioner == "multigrid-agg";
-  if (multigrid)
+  b.Multigrid = preconditioner == "multigrid-agg";
+  if (b.Multigrid)
   {
     if (!b.Cycle1 || !b.Cycle2)
     {
@@ -413,214 +836,122 @@ bool Sp3Solver::SolveBlocks(
       b.Cycle2 = CreateLinearSolver("multigrid-agg");
       b.CyclesReady = false;
     }
+    // A full set-up the first time on this mesh, values-only after.
     const bool rebuild = !b.CyclesReady;
     b.Cycle1->Setup(b.A11, &mesh, rebuild);
     b.Cycle2->Setup(b.A22, &mesh, rebuild);
     b.CyclesReady = true;
+    return;
   }
-  else
-  {
-    inverseDiagonal.resize(size);
-    const int* diagonal = mesh.GetDiagonalPositions().data();
-    for (int i = 0; i < n; ++i)
-    {
-      for (int c = 0; c < 3; ++c)
-      {
-        inverseDiagonal[3 * static_cast<std::size_t>(i) + c] =
-          1.0 / b.A11.Values[c][diagonal[i]];
-        inverseDiagonal[half + 3 * static_cast<std::size_t>(i) + c] =
-          1.0 / b.A22.Values[c][diagonal[i]];
-      }
-    }
-  }
-  auto precondition = [&](const std::vector<double>& r, std::vector<double>& z) {
-    if (multigrid)
-    {
-      b.Cycle1->ApplyPreconditioner(r.data(), z.data());
-      b.Cycle2->ApplyPreconditioner(r.data() + half, z.data() + half);
-    }
-    else
-    {
-      for (std::size_t k = 0; k < size; ++k)
-      {
-        z[k] = inverseDiagonal[k] * r[k];
-      }
-    }
-  };
-  auto product = [&](const std::vector<double>& x, std::vector<double>& y) {
-#pragma omp parallel num_threads(numThreads)
-    BlockProduct(b.A11, b.A22, b.A12, b.A21, x.data(), y.data());
-  };
-
-  std::vector<double> rhs(size);
+  const int n = mesh.GetNumberOfPoints();
+  const std::size_t half = 3 * static_cast<std::size_t>(n);
+  b.InverseDiagonal.resize(2 * half);
+  const int* diagonal = mesh.GetDiagonalPositions().data();
   for (int i = 0; i < n; ++i)
   {
     for (int c = 0; c < 3; ++c)
     {
-      rhs[3 * static_cast<std::size_t>(i) + c] = b.A11.RightHandSide[c][i];
-      rhs[half + 3 * static_cast<std::size_t>(i) + c] = b.A22.RightHandSide[c][i];
+      b.InverseDiagonal[3 * static_cast<std::size_t>(i) + c] = 1.0 / b.A11.Values[c][diagonal[i]];
+      b.InverseDiagonal[half + 3 * static_cast<std::size_t>(i) + c] =
+        1.0 / b.A22.Values[c][diagonal[i]];
     }
   }
-  if (!warm || X_.size() != size)
+}
+
+bool Sp3Solver::SolveBlocks(
+  const TetMesh& mesh, const std::string& preconditioner, std::vector<double>& x, SolverReport& report)
+{
+  Blocks& b = *Blocks_;
+  const int n = mesh.GetNumberOfPoints();
+  const std::size_t half = 3 * static_cast<std::size_t>(n), block = 2 * half;
+  const bool complex = !b.B11[0].empty();
+  // Complex: the real form [[A, -B], [B, A]] of (A + i B) on the unknowns
+  // (Re phi_1, Re phi_2, Im phi_1, Im phi_2).
+  const std::size_t size = complex ? 2 * block : block;
+  const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
+  SetUpPreconditioner(mesh, preconditioner);
+
+  BlockValues real{}, imaginary{};
+  for (int c = 0; c < NumberOfChannels; ++c)
   {
-    X_.assign(size, 0.0);
-  }
-  std::vector<double>& x = X_;
-  std::vector<double> r(size), rHat, p(size), v(size), pHat(size), s(size), sHat(size), t(size);
-  const std::array<double, 3> bb = Dots(rhs, rhs);
-  std::array<double, 3> rr{};
-  std::array<bool, 3> done{}, failed{};
-  std::array<int, 3> iterations{};
-  auto converged = [&](int c) {
-    return bb[c] == 0.0 ? rr[c] == 0.0 : std::sqrt(rr[c] / bb[c]) <= RelTol_;
-  };
-  auto trueResidual = [&]() {
-    product(x, r);
-    for (std::size_t k = 0; k < size; ++k)
+    real.V11[c] = b.A11.Values[c].data();
+    real.V12[c] = b.A12[c].data();
+    real.V21[c] = b.A21[c].data();
+    real.V22[c] = b.A22.Values[c].data();
+    if (complex)
     {
-      r[k] = rhs[k] - r[k];
+      imaginary.V11[c] = b.B11[c].data();
+      imaginary.V12[c] = b.B12[c].data();
+      imaginary.V21[c] = b.B21[c].data();
+      imaginary.V22[c] = b.B22[c].data();
     }
-    rr = Dots(r, r);
-  };
-  for (int c = 0; c < 3; ++c)
-  {
-    if (bb[c] == 0.0)
+  }
+  const int* rows = b.A11.RowOffsets.data();
+  const int* cols = b.A11.ColumnIndices.data();
+  auto product = [&](const std::vector<double>& in, std::vector<double>& out) {
+#pragma omp parallel num_threads(numThreads)
     {
-      // No source in this channel: the solution is 0.
-      for (std::size_t k = static_cast<std::size_t>(c); k < size; k += 3)
+      if (complex)
       {
-        x[k] = 0.0;
+        ComplexBlockProduct(n, rows, cols, real, imaginary, in.data(), out.data());
+      }
+      else
+      {
+        BlockProduct(n, rows, cols, real, in.data(), out.data());
       }
     }
-  }
-  trueResidual();
-  int it = 0;
-  // BiCGSTAB (right-preconditioned), the three channels in lockstep with
-  // their own scalars; restarted from the true residual when the recursive
-  // one says converged but the true one does not (drift).
-  for (int restart = 0; restart < 5; ++restart)
+  };
+  auto precondition = [&](const std::vector<double>& r, std::vector<double>& z) {
+    // The block diagonal of the real part, on the real and imaginary parts alike.
+    for (std::size_t offset = 0; offset < size; offset += block)
+    {
+      if (b.Multigrid)
+      {
+        b.Cycle1->ApplyPreconditioner(r.data() + offset, z.data() + offset);
+        b.Cycle2->ApplyPreconditioner(r.data() + offset + half, z.data() + offset + half);
+      }
+      else
+      {
+        for (std::size_t k = 0; k < block; ++k)
+        {
+          z[offset + k] = b.InverseDiagonal[k] * r[offset + k];
+        }
+      }
+    }
+  };
+
+  std::vector<double> rhs(size, 0.0);
+  for (int i = 0; i < n; ++i)
   {
     for (int c = 0; c < 3; ++c)
     {
-      done[c] = failed[c] || converged(c);
-    }
-    if (done[0] && done[1] && done[2])
-    {
-      break;
-    }
-    rHat = r;
-    std::fill(p.begin(), p.end(), 0.0);
-    std::fill(v.begin(), v.end(), 0.0);
-    std::array<double, 3> rho{ 1, 1, 1 }, alpha{ 1, 1, 1 }, omega{ 1, 1, 1 };
-    for (; it < MaxIter_ && !(done[0] && done[1] && done[2]); ++it)
-    {
-      if (!ReportProgress(static_cast<double>(it) / std::max(1, MaxIter_)))
+      const std::size_t k = 3 * static_cast<std::size_t>(i) + c;
+      rhs[k] = b.A11.RightHandSide[c][i];
+      rhs[half + k] = b.A22.RightHandSide[c][i];
+      if (complex)
       {
-        return false;
+        rhs[block + k] = b.ImaginaryRhs1[c][i];
+        rhs[block + half + k] = b.ImaginaryRhs2[c][i];
       }
-      const std::array<double, 3> rhoNew = Dots(rHat, r);
-      std::array<double, 3> beta{};
-      for (int c = 0; c < 3; ++c)
-      {
-        if (done[c])
-        {
-          continue;
-        }
-        if (!(std::abs(rhoNew[c]) > 0.0) || !std::isfinite(rhoNew[c]))
-        {
-          failed[c] = done[c] = true; // breakdown: reported as not converged
-          continue;
-        }
-        beta[c] = (rhoNew[c] / rho[c]) * (alpha[c] / omega[c]);
-        rho[c] = rhoNew[c];
-      }
-      for (std::size_t k = 0; k < size; ++k)
-      {
-        const int c = static_cast<int>(k % 3);
-        p[k] = done[c] ? 0.0 : r[k] + beta[c] * (p[k] - omega[c] * v[k]);
-      }
-      precondition(p, pHat);
-      product(pHat, v);
-      const std::array<double, 3> rv = Dots(rHat, v);
-      for (int c = 0; c < 3; ++c)
-      {
-        if (!done[c])
-        {
-          if (!(std::abs(rv[c]) > 0.0) || !std::isfinite(rv[c]))
-          {
-            failed[c] = done[c] = true;
-            continue;
-          }
-          alpha[c] = rho[c] / rv[c];
-        }
-      }
-      for (std::size_t k = 0; k < size; ++k)
-      {
-        const int c = static_cast<int>(k % 3);
-        s[k] = done[c] ? 0.0 : r[k] - alpha[c] * v[k];
-      }
-      precondition(s, sHat);
-      product(sHat, t);
-      const std::array<double, 3> ts = Dots(t, s), tt = Dots(t, t);
-      for (int c = 0; c < 3; ++c)
-      {
-        if (!done[c])
-        {
-          omega[c] = tt[c] > 0.0 ? ts[c] / tt[c] : 0.0;
-        }
-      }
-      for (std::size_t k = 0; k < size; ++k)
-      {
-        const int c = static_cast<int>(k % 3);
-        if (!done[c])
-        {
-          x[k] += alpha[c] * pHat[k] + omega[c] * sHat[k];
-          r[k] = s[k] - omega[c] * t[k];
-        }
-      }
-      const std::array<double, 3> rrNew = Dots(r, r);
-      for (int c = 0; c < 3; ++c)
-      {
-        if (!done[c])
-        {
-          rr[c] = rrNew[c];
-          ++iterations[c];
-          if (!std::isfinite(rr[c]))
-          {
-            failed[c] = done[c] = true;
-          }
-          else if (converged(c))
-          {
-            done[c] = true;
-          }
-          else if (omega[c] == 0.0)
-          {
-            done[c] = true; // stagnation: restart from the true residual
-          }
-        }
-      }
-    }
-    trueResidual();
-    if (it >= MaxIter_)
-    {
-      break;
     }
   }
-  for (int c = 0; c < 3; ++c)
+  if (x.size() != size)
   {
-    report.Iterations[c] = iterations[c];
-    report.Residual[c] = bb[c] > 0.0 ? std::sqrt(rr[c] / bb[c]) : std::sqrt(rr[c]);
-    report.Converged[c] = !failed[c] && converged(c);
+    x.assign(size, 0.0);
   }
-  return true;
+  LockstepBiCgStab solver(product, precondition, RelTol_, MaxIter_,
+    [this](int it) { return ReportProgress(static_cast<double>(it) / std::max(1, MaxIter_)); });
+  return solver.Solve(rhs, x, report);
 }
 
-void Sp3Solver::ComputeExitance(const DiffusionProblem& problem)
+void Sp3Solver::ComputeExitance(const DiffusionProblem& problem,
+  const std::vector<double>& imaginaryPhi1, const std::vector<double>& imaginaryPhi2)
 {
   const TetMesh& mesh = *problem.Mesh;
   const OpticalProperties& material = *problem.Material;
   const std::vector<double>& q = *problem.Irradiance;
   const int n = mesh.GetNumberOfPoints();
+  const bool complex = !imaginaryPhi1.empty();
   // Area-weighted mean eta of the boundary triangles at each point.
   std::vector<double> area(static_cast<std::size_t>(n), 0.0), etaSum(area.size(), 0.0);
   const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
@@ -637,6 +968,7 @@ void Sp3Solver::ComputeExitance(const DiffusionProblem& problem)
     }
   }
   Exitance_.assign(3 * static_cast<std::size_t>(n), 0.0);
+  ComplexExitance_.assign(complex ? Exitance_.size() : 0, 0.0);
   double lastEta = -1.0;
   Sp3BoundaryCoefficients k;
   for (int i = 0; i < n; ++i)
@@ -654,83 +986,171 @@ void Sp3Solver::ComputeExitance(const DiffusionProblem& problem)
     for (int c = 0; c < 3; ++c)
     {
       const std::size_t m = 3 * static_cast<std::size_t>(i) + c;
-      Exitance_[m] = k.E1 * Phi1_[m] + k.E2 * Phi2_[m] + k.E3 * q[m];
+      const double re = k.E1 * Phi1_[m] + k.E2 * Phi2_[m] + k.E3 * q[m];
+      if (complex)
+      {
+        // q is modulated at phase 0: it adds to the real part only.
+        ComplexExitance_[m] = { re, k.E1 * imaginaryPhi1[m] + k.E2 * imaginaryPhi2[m] };
+        Exitance_[m] = std::abs(ComplexExitance_[m]);
+      }
+      else
+      {
+        Exitance_[m] = re;
+      }
     }
   }
 }
 
+namespace
+{
+
+/// A pencil beam's first-collision source as point sources along the
+/// refracted beam (ComputeSp3SourceLoad), each with the optical path eta s
+/// (mm) the beam travelled to it.
+struct BeamSegment
+{
+  PointSource Source;
+  double OpticalPath = 0.0;
+};
+
+std::vector<BeamSegment> PencilSegments(
+  const TetMesh& mesh, const OpticalProperties& material, const Sources& sources)
+{
+  std::vector<BeamSegment> segments;
+  const std::vector<PencilBeam>& beams = sources.GetPencilBeams();
+  if (beams.empty())
+  {
+    return segments;
+  }
+  material.Validate(mesh.GetNumberOfTets());
+  TetLocator locator;
+  locator.Build(mesh);
+  const double tolerance = SurfaceTolerance(mesh);
+  for (std::size_t b = 0; b < beams.size(); ++b)
+  {
+    const PencilBeam& beam = beams[b];
+    const std::string name =
+      beam.Label.empty() ? "pencil beam " + std::to_string(b + 1) : beam.Label;
+    const PencilEntry entry = LocatePencilEntry(mesh, material, beam, name, tolerance);
+    const std::size_t t = static_cast<std::size_t>(entry.Tet);
+    const double eta = material.RefractiveIndex[t];
+    double muT[NumberOfChannels], albedo[NumberOfChannels];
+    double muTMax = 0.0, muTMin = 1e300;
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      muT[c] = material.AbsorptionCoefficient[3 * t + c] +
+        material.ReducedScatteringCoefficient[3 * t + c];
+      albedo[c] = material.ReducedScatteringCoefficient[3 * t + c] / muT[c];
+      muTMax = std::max(muTMax, muT[c]);
+      muTMin = std::min(muTMin, muT[c]);
+    }
+    // Segments of a tenth of the shortest mean free path, to 12 of the
+    // longest (the beam is down to exp(-12) there); each segment's exact
+    // power at its midpoint.
+    const double step = 0.1 / muTMax;
+    const int count = static_cast<int>(std::min(20000.0, std::ceil(12.0 / muTMin / step)));
+    for (int k = 0; k < count; ++k)
+    {
+      const double s0 = k * step, s1 = s0 + step, middle = 0.5 * (s0 + s1);
+      BeamSegment segment;
+      PointSource& point = segment.Source;
+      for (int i = 0; i < 3; ++i)
+      {
+        point.Position[i] = entry.Surface.Position[i] + middle * entry.Refracted[i];
+      }
+      if (locator.Locate(point.Position.data()) < 0)
+      {
+        break; // the beam left the object (what is left of it is transmitted)
+      }
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        point.Power[c] = entry.Transmitted * beam.Power[c] * albedo[c] *
+          (std::exp(-muT[c] * s0) - std::exp(-muT[c] * s1));
+      }
+      point.Label = name;
+      segment.OpticalPath = eta * middle;
+      segments.push_back(segment);
+    }
+  }
+  return segments;
+}
+
+} // namespace
+
 std::vector<double> ComputeSp3SourceLoad(
   const TetMesh& mesh, const OpticalProperties& material, const Sources& sources)
 {
+  std::vector<double> imaginary;
+  return ComputeSp3SourceLoad(mesh, material, sources, 0.0, imaginary);
+}
+
+std::vector<double> ComputeSp3SourceLoad(const TetMesh& mesh, const OpticalProperties& material,
+  const Sources& sources, double wavenumber, std::vector<double>& imaginary)
+{
   sources.Validate();
+  imaginary.clear();
   Sources points;
   for (const PointSource& point : sources.GetPointSources())
   {
     points.AddPointSource(point);
   }
-  const std::vector<PencilBeam>& beams = sources.GetPencilBeams();
-  if (!beams.empty())
+  const std::vector<BeamSegment> segments = PencilSegments(mesh, material, sources);
+  if (wavenumber == 0.0)
   {
-    material.Validate(mesh.GetNumberOfTets());
-    TetLocator locator;
-    locator.Build(mesh);
-    const double tolerance = SurfaceTolerance(mesh);
-    for (std::size_t b = 0; b < beams.size(); ++b)
+    for (const BeamSegment& segment : segments)
     {
-      const PencilBeam& beam = beams[b];
-      const std::string name =
-        beam.Label.empty() ? "pencil beam " + std::to_string(b + 1) : beam.Label;
-      const PencilEntry entry = LocatePencilEntry(mesh, material, beam, name, tolerance);
-      const std::size_t t = static_cast<std::size_t>(entry.Tet);
-      double muT[NumberOfChannels], albedo[NumberOfChannels];
-      double muTMax = 0.0, muTMin = 1e300;
+      points.AddPointSource(segment.Source);
+    }
+    return points.ComputeLoad(mesh, material);
+  }
+  // Modulated: each segment carries the beam's delay, power P exp(-i k eta
+  // s); the point sources' powers must be >= 0, so the real and imaginary
+  // parts are placed by sign: Re = (+) - (-), Im likewise.
+  Sources parts[4]; // Re+, Re-, Im+, Im-
+  for (const BeamSegment& segment : segments)
+  {
+    const double phase = -wavenumber * segment.OpticalPath;
+    const double factors[2] = { std::cos(phase), std::sin(phase) };
+    for (int part = 0; part < 2; ++part)
+    {
+      PointSource plus = segment.Source, minus = segment.Source;
       for (int c = 0; c < NumberOfChannels; ++c)
       {
-        muT[c] = material.AbsorptionCoefficient[3 * t + c] +
-          material.ReducedScatteringCoefficient[3 * t + c];
-        albedo[c] = material.ReducedScatteringCoefficient[3 * t + c] / muT[c];
-        muTMax = std::max(muTMax, muT[c]);
-        muTMin = std::min(muTMin, muT[c]);
+        const double value = factors[part] * segment.Source.Power[c];
+        plus.Power[c] = std::max(0.0, value);
+        minus.Power[c] = std::max(0.0, -value);
       }
-      // Segments of a tenth of the shortest mean free path, to 12 of the
-      // longest (the beam is down to exp(-12) there); each segment's exact
-      // power at its midpoint.
-      const double step = 0.1 / muTMax;
-      const int count = static_cast<int>(std::min(20000.0, std::ceil(12.0 / muTMin / step)));
-      for (int k = 0; k < count; ++k)
-      {
-        const double s0 = k * step, s1 = s0 + step, middle = 0.5 * (s0 + s1);
-        PointSource point;
-        for (int i = 0; i < 3; ++i)
-        {
-          point.Position[i] = entry.Surface.Position[i] + middle * entry.Refracted[i];
-        }
-        if (locator.Locate(point.Position.data()) < 0)
-        {
-          break; // the beam left the object (what is left of it is transmitted)
-        }
-        for (int c = 0; c < NumberOfChannels; ++c)
-        {
-          point.Power[c] = entry.Transmitted * beam.Power[c] * albedo[c] *
-            (std::exp(-muT[c] * s0) - std::exp(-muT[c] * s1));
-        }
-        point.Label = name;
-        points.AddPointSource(point);
-      }
+      parts[2 * part].AddPointSource(plus);
+      parts[2 * part + 1].AddPointSource(minus);
     }
   }
-  return points.ComputeLoad(mesh, material);
+  std::vector<double> real = points.ComputeLoad(mesh, material);
+  imaginary.assign(real.size(), 0.0);
+  for (int part = 0; part < 4; ++part)
+  {
+    if (parts[part].GetPointSources().empty())
+    {
+      continue;
+    }
+    const std::vector<double> load = parts[part].ComputeLoad(mesh, material);
+    std::vector<double>& target = part < 2 ? real : imaginary;
+    const double sign = part % 2 == 0 ? 1.0 : -1.0;
+    for (std::size_t k = 0; k < load.size(); ++k)
+    {
+      target[k] += sign * load[k];
+    }
+  }
+  return real;
 }
 
-bool Sp3Solver::Solve(
-  const DiffusionProblem& given, std::vector<double>& fluence, SolverReport& report)
+DiffusionProblem Sp3Solver::PrepareProblem(
+  const DiffusionProblem& given, OpticalProperties& withAnisotropy)
 {
   if (!given.Mesh || !given.Material || !given.Irradiance)
   {
     throw Error("sp3: the problem needs a mesh, a material and an irradiance");
   }
   // The option's g on every tet when the material carries none.
-  OpticalProperties withAnisotropy;
   DiffusionProblem problem = given;
   if (Anisotropy_ != 0.0 && given.Material->Anisotropy.empty())
   {
@@ -745,32 +1165,59 @@ bool Sp3Solver::Solve(
   }
   CheckAssemblySizes(mesh, *problem.Material, *problem.Irradiance);
   problem.Material->Validate(mesh.GetNumberOfTets());
-  report = SolverReport();
-  report.Solver = GetName();
-  report.Assembly = "full";
+  const bool sameMesh = LastMesh_ == &mesh && LastPoints_ == mesh.GetNumberOfPoints() &&
+    LastTets_ == mesh.GetNumberOfTets() && LastRevision_ == mesh.GetGeometryRevision();
+  if (!sameMesh)
+  {
+    Reset();
+  }
+  return problem;
+}
 
+std::string Sp3Solver::ChoosePreconditioner(const TetMesh& mesh) const
+{
   const std::string requested = ToLower(LinearSolver_);
-  std::string preconditioner;
   if (requested.empty())
   {
-    preconditioner = mesh.GetNumberOfPoints() < VertexDiffusionSolver::LargeSystemUnknowns
+    return mesh.GetNumberOfPoints() < VertexDiffusionSolver::LargeSystemUnknowns
       ? "jacobi"
       : "multigrid-agg";
   }
-  else if (requested == "jacobi" || requested == "cg-jacobi" || requested == "bicgstab")
+  if (requested == "jacobi" || requested == "cg-jacobi" || requested == "bicgstab")
   {
-    preconditioner = "jacobi";
+    return "jacobi";
   }
-  else if (requested == "multigrid-agg")
+  if (requested == "multigrid-agg")
   {
-    preconditioner = "multigrid-agg";
+    return "multigrid-agg";
   }
-  else
-  {
-    throw Error("sp3: linear solver '" + LinearSolver_ +
-      "' is not available for the SP3 block system (known: jacobi, multigrid-agg; \"\" chooses "
-      "by size)");
-  }
+  throw Error("sp3: linear solver '" + LinearSolver_ +
+    "' is not available for the SP3 block system (known: jacobi, multigrid-agg; \"\" chooses "
+    "by size)");
+}
+
+void Sp3Solver::FillReport(const TetMesh& mesh, SolverReport& report) const
+{
+  const std::size_t half = 3 * static_cast<std::size_t>(mesh.GetNumberOfPoints());
+  report.NumberOfUnknowns = 2LL * mesh.GetNumberOfPoints();
+  report.NumberOfNonZeros = 4LL * static_cast<long long>(Blocks_->A11.ColumnIndices.size());
+  report.MemoryBytes = Blocks_->A11.GetMemoryBytes() + Blocks_->A22.GetMemoryBytes() +
+    2 * NumberOfChannels * Blocks_->A11.ColumnIndices.size() * sizeof(double) +
+    9 * 2 * half * sizeof(double) +
+    (Blocks_->Cycle1 ? Blocks_->Cycle1->GetMemoryBytes() + Blocks_->Cycle2->GetMemoryBytes() : 0);
+}
+
+bool Sp3Solver::Solve(
+  const DiffusionProblem& given, std::vector<double>& fluence, SolverReport& report)
+{
+  OpticalProperties withAnisotropy;
+  const DiffusionProblem problem = PrepareProblem(given, withAnisotropy);
+  const TetMesh& mesh = *problem.Mesh;
+  const bool sameMesh = LastMesh_ == &mesh;
+  report = SolverReport();
+  report.Solver = GetName();
+  report.Assembly = "full";
+  const std::string preconditioner = ChoosePreconditioner(mesh);
   report.LinearSolver = "bicgstab-block-" + preconditioner;
 
   auto start = Clock::now();
@@ -793,29 +1240,21 @@ bool Sp3Solver::Solve(
   {
     collimated =
       ComputeCollimatedSource(mesh, *problem.Material, problem.Lights, problem.Shadows);
-    if (sourceLoad.empty())
+    sourceLoad.resize(collimated.Load.size(), 0.0);
+    for (std::size_t k = 0; k < sourceLoad.size(); ++k)
     {
-      sourceLoad.swap(collimated.Load);
-    }
-    else
-    {
-      for (std::size_t k = 0; k < sourceLoad.size(); ++k)
-      {
-        sourceLoad[k] += collimated.Load[k];
-      }
+      sourceLoad[k] += collimated.Load[k];
     }
   }
-  const bool sameMesh = LastMesh_ == &mesh && LastPoints_ == mesh.GetNumberOfPoints() &&
-    LastTets_ == mesh.GetNumberOfTets() && LastRevision_ == mesh.GetGeometryRevision();
-  if (!sameMesh)
-  {
-    Reset();
-  }
-  Assemble(problem, sourceLoad);
+  Assemble(problem, sourceLoad, {}, 0.0);
   report.SetupMilliseconds = MillisecondsSince(start);
 
   start = Clock::now();
-  if (!SolveBlocks(mesh, WarmStart_ && sameMesh, preconditioner, report))
+  if (!(WarmStart_ && sameMesh))
+  {
+    X_.clear();
+  }
+  if (!SolveBlocks(mesh, preconditioner, X_, report))
   {
     Reset();
     return false;
@@ -825,15 +1264,9 @@ bool Sp3Solver::Solve(
   LastPoints_ = mesh.GetNumberOfPoints();
   LastTets_ = mesh.GetNumberOfTets();
   LastRevision_ = mesh.GetGeometryRevision();
+  FillReport(mesh, report);
 
-  const int n = mesh.GetNumberOfPoints();
-  const std::size_t half = 3 * static_cast<std::size_t>(n);
-  report.NumberOfUnknowns = 2LL * n;
-  report.NumberOfNonZeros = 4LL * static_cast<long long>(Blocks_->A11.ColumnIndices.size());
-  report.MemoryBytes = Blocks_->A11.GetMemoryBytes() + Blocks_->A22.GetMemoryBytes() +
-    2 * NumberOfChannels * Blocks_->A11.ColumnIndices.size() * sizeof(double) +
-    9 * 2 * half * sizeof(double) +
-    (Blocks_->Cycle1 ? Blocks_->Cycle1->GetMemoryBytes() + Blocks_->Cycle2->GetMemoryBytes() : 0);
+  const std::size_t half = 3 * static_cast<std::size_t>(mesh.GetNumberOfPoints());
   Phi1_.assign(X_.begin(), X_.begin() + static_cast<std::ptrdiff_t>(half));
   Phi2_.assign(X_.begin() + static_cast<std::ptrdiff_t>(half), X_.end());
   fluence.resize(half);
@@ -843,7 +1276,7 @@ bool Sp3Solver::Solve(
     // moments phi_1 = phi_0 + 2 phi_2, phi_2 := 3 phi_2).
     fluence[k] = Phi1_[k] - (2.0 / 3.0) * Phi2_[k];
   }
-  ComputeExitance(problem);
+  ComputeExitance(problem, {}, {});
   if (extended)
   {
     // The total fluence rate: diffuse plus the unscattered beam.
@@ -852,6 +1285,114 @@ bool Sp3Solver::Solve(
       fluence[k] += collimated.Fluence[k];
     }
     report.CollimatedFluence = std::move(collimated.Fluence);
+    report.CollimatedEntering = collimated.Entering;
+    report.CollimatedScattered = collimated.Scattered;
+    report.CollimatedAbsorbed = collimated.Absorbed;
+  }
+  return true;
+}
+
+bool Sp3Solver::SolveFrequencyDomain(const DiffusionProblem& given, double frequency,
+  std::vector<std::complex<double>>& fluence, SolverReport& report)
+{
+  if (!std::isfinite(frequency) || !(frequency > 0.0))
+  {
+    std::ostringstream out;
+    out << "sp3: modulation frequency " << frequency
+        << " Hz (expected a finite value > 0; 0 is the continuous-wave Solve())";
+    throw Error(out.str());
+  }
+  OpticalProperties withAnisotropy;
+  const DiffusionProblem problem = PrepareProblem(given, withAnisotropy);
+  const TetMesh& mesh = *problem.Mesh;
+  const double omega = 2.0 * 3.14159265358979323846 * frequency;
+  CheckFrequencyResolution(GetName(), mesh, *problem.Material, frequency, omega);
+  report = SolverReport();
+  report.Solver = GetName();
+  report.Assembly = "full";
+  const std::string preconditioner = ChoosePreconditioner(mesh);
+  report.LinearSolver = "bicgstab-block-" + preconditioner;
+
+  auto start = Clock::now();
+  const double wavenumber = omega / SpeedOfLight; // rad per mm of optical path
+  std::vector<double> sourceLoad, imaginaryLoad;
+  SourcePower_ = {};
+  if (problem.HasInteriorSources())
+  {
+    sourceLoad = ComputeSp3SourceLoad(
+      mesh, *problem.Material, *problem.InteriorSources, wavenumber, imaginaryLoad);
+    const std::vector<double> unmodulated =
+      ComputeSp3SourceLoad(mesh, *problem.Material, *problem.InteriorSources);
+    for (std::size_t k = 0; k < unmodulated.size(); ++k)
+    {
+      SourcePower_[k % 3] += unmodulated[k];
+    }
+  }
+  // The extended collimated models: the beam's volume source carries its
+  // own modulation exp(-i k eta s) (ComputeCollimatedFrequencyLoad).
+  const bool extended = IsExtendedCollimatedModel(problem.Collimated);
+  std::vector<std::complex<double>> collimatedFluence;
+  CollimatedSource collimated;
+  if (extended)
+  {
+    collimated =
+      ComputeCollimatedSource(mesh, *problem.Material, problem.Lights, problem.Shadows);
+    std::vector<std::complex<double>> load;
+    ComputeCollimatedFrequencyLoad(
+      mesh, *problem.Material, collimated, wavenumber, load, collimatedFluence);
+    sourceLoad.resize(load.size(), 0.0);
+    imaginaryLoad.resize(load.size(), 0.0);
+    for (std::size_t k = 0; k < load.size(); ++k)
+    {
+      sourceLoad[k] += load[k].real();
+      imaginaryLoad[k] += load[k].imag();
+    }
+  }
+  Assemble(problem, sourceLoad, imaginaryLoad, omega);
+  report.SetupMilliseconds = MillisecondsSince(start);
+
+  start = Clock::now();
+  std::vector<double> x; // no warm start: the continuous-wave solution is kept
+  const bool solved = SolveBlocks(mesh, preconditioner, x, report);
+  // The cycles now hold the modulated blocks' real parts: the next solve
+  // sets their values up again (SetUpPreconditioner), the hierarchy stays.
+  if (!solved)
+  {
+    Reset();
+    return false;
+  }
+  report.SolveMilliseconds = MillisecondsSince(start);
+  FillReport(mesh, report);
+
+  const std::size_t half = 3 * static_cast<std::size_t>(mesh.GetNumberOfPoints());
+  const std::size_t block = 2 * half;
+  Phi1_.assign(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(half));
+  Phi2_.assign(x.begin() + static_cast<std::ptrdiff_t>(half),
+    x.begin() + static_cast<std::ptrdiff_t>(block));
+  const std::vector<double> imaginaryPhi1(x.begin() + static_cast<std::ptrdiff_t>(block),
+    x.begin() + static_cast<std::ptrdiff_t>(block + half));
+  const std::vector<double> imaginaryPhi2(
+    x.begin() + static_cast<std::ptrdiff_t>(block + half), x.end());
+  fluence.resize(half);
+  for (std::size_t k = 0; k < half; ++k)
+  {
+    // phi_0 = phi_1 - (2/3) phi_2, in real and imaginary parts.
+    fluence[k] = { Phi1_[k] - (2.0 / 3.0) * Phi2_[k],
+      imaginaryPhi1[k] - (2.0 / 3.0) * imaginaryPhi2[k] };
+  }
+  ComputeExitance(problem, imaginaryPhi1, imaginaryPhi2);
+  // The CW-only members now describe the modulated solve: no warm start
+  // from it (X_ untouched), and Phi1_/Phi2_ hold the real parts.
+  if (extended)
+  {
+    report.CollimatedFluence.resize(half);
+    report.CollimatedFluencePhase.resize(half);
+    for (std::size_t k = 0; k < half; ++k)
+    {
+      fluence[k] += collimatedFluence[k];
+      report.CollimatedFluence[k] = std::abs(collimatedFluence[k]);
+      report.CollimatedFluencePhase[k] = std::arg(collimatedFluence[k]);
+    }
     report.CollimatedEntering = collimated.Entering;
     report.CollimatedScattered = collimated.Scattered;
     report.CollimatedAbsorbed = collimated.Absorbed;

@@ -13,9 +13,11 @@
 #include "DiffusionSolver.h"
 #include "DiffusionSystem.h"
 #include "LinearSolver.h"
+#include "Radiance.h"
 #include "TetGeometry.h"
 
 #include <array>
+#include <complex>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -64,6 +66,37 @@ struct Sp3BoundaryCoefficients
   static Sp3BoundaryCoefficients Compute(double eta);
 };
 
+/**
+ * The radiance leaving the surface of an SP3 solution (W/mm^2/sr): the
+ * outgoing half of the P3 radiance inside, L(-mu) = (1/(4 pi)) [phi_0 +
+ * 3 J_1 mu + (5/3) Phi_2 P_2(mu) + 7 J_2 P_3(mu)] (mu the internal cosine
+ * with the outward normal, Snell's partner of cosOut; phi_0 = Phi_1 -
+ * (2/3) Phi_2, J_1, J_2 the currents of the boundary conditions `k`),
+ * times the Fresnel transmittance 1 - R, divided by eta^2 (the n^2 law)
+ * unless `readout` is RadianceReadout::Paper. The exitance (k.E1 Phi_1 +
+ * k.E2 Phi_2 + k.E3 q) is its integral over the outgoing hemisphere,
+ * 2 pi int L cosOut dcosOut. SP3's counterpart of OutgoingRadiance (TransCut
+ * eq. 3); clamped below at 0, 0 for cosOut <= 0.
+ * @param phi1, phi2 the composite moments at the point (W/mm^2)
+ * @param q the boundary irradiance at the point (W/mm^2)
+ * @param eta the refractive index at the point (k is Compute(eta))
+ */
+double Sp3OutgoingRadiance(const Sp3BoundaryCoefficients& k, double eta, double phi1, double phi2,
+  double q, double cosOut, RadianceReadout readout = RadianceReadout::EnergyConserving);
+
+/**
+ * Sp3OutgoingRadiance at every boundary point of the mesh, in the order of
+ * mesh.GetBoundaryPoints() (3 values, R, G, B), as BoundaryRadiance (whose
+ * arguments these are, with the composite moments Phi_1, Phi_2 of an SP3
+ * solve, 3 per mesh point, in place of the fluence): each point seen
+ * along its normal, or from `viewPoint`. Throws translucency::Error on
+ * wrong array sizes or a non-finite result.
+ */
+std::vector<double> Sp3BoundaryRadiance(const TetMesh& mesh, const std::vector<double>& phi1,
+  const std::vector<double>& phi2, const std::vector<double>& irradiance,
+  const std::vector<double>& pointEta, const double* viewPoint,
+  RadianceReadout readout = RadianceReadout::EnergyConserving);
+
 class Sources;
 struct OpticalProperties;
 
@@ -84,6 +117,18 @@ struct OpticalProperties;
  */
 std::vector<double> ComputeSp3SourceLoad(
   const TetMesh& mesh, const OpticalProperties& material, const Sources& sources);
+
+/**
+ * The same source modulated at omega (frequency domain): the point sources
+ * at phase 0, each pencil-beam segment with the beam's delay, power
+ * P exp(-i k eta s) (k = omega / c in rad per mm, eta s the optical path
+ * from the entry point, eta of the tet under it; as
+ * ComputeCollimatedFrequencyLoad does for the extended model). Returns the
+ * real part; `imaginary` gets the imaginary part (3 per point; empty when
+ * k = 0, where this is the function above).
+ */
+std::vector<double> ComputeSp3SourceLoad(const TetMesh& mesh, const OpticalProperties& material,
+  const Sources& sources, double wavenumber, std::vector<double>& imaginary);
 
 /**
  * The SP3 solver (registry name "sp3"). Unknowns: phi_1 = phi_0 + 2 phi_2
@@ -119,7 +164,16 @@ std::vector<double> ComputeSp3SourceLoad(
  * their first-collision source (ComputeSp3SourceLoad); the extended
  * collimated models (CollimatedSource.h: the reduced beam's volume source
  * mu_s' E_c as Q, E_c added to the fluence) with either boundary rule.
- * No frequency or time domain (the registry's traits; the filter refuses).
+ *
+ * Frequency domain (SolveFrequencyDomain, registry trait SupportsFrequency):
+ * every mu_an gains i omega eta / c (the transport equation's (eta / c)
+ * d/dt), so the diffusion coefficients 1/(3 mu_a1), 1/(7 mu_a3) and the
+ * mass coefficients become complex; the boundary conditions (in the
+ * currents J_1, J_2) do not change. The complex 2 x 2 block system is
+ * solved in its real form [[A, -B], [B, A]] by the same BiCGSTAB with the
+ * same block-diagonal preconditioner (built on the real part A) applied to
+ * the real and imaginary parts; no warm start. No time domain (the
+ * registry's traits; the filter refuses).
  */
 class Sp3Solver : public DiffusionSolver
 {
@@ -139,6 +193,22 @@ public:
     SolverReport& report) override;
   void Reset() override;
 
+  /**
+   * Frequency domain: the complex fluence Phi = phi_1 - (2/3) phi_2 (3 per
+   * mesh point, W/mm^2 per W of modulation amplitude; arg < 0: it lags) of
+   * the sources and the boundary irradiance modulated at `frequency` Hz with
+   * phase 0 (the class comment has the equations). Pencil beams and the
+   * extended collimated models carry the beam's own delay exp(-i omega eta
+   * s / c). `frequency` finite and > 0, else translucency::Error; refused
+   * too when the mesh cannot resolve the diffusion wave
+   * (CheckFrequencyResolution). Afterwards GetExitance() holds the
+   * amplitude of the exitance and GetComplexExitance() the complex value;
+   * GetPhi1/GetPhi2 the real parts. Returns false if the progress callback
+   * aborted.
+   */
+  bool SolveFrequencyDomain(const DiffusionProblem& problem, double frequency,
+    std::vector<std::complex<double>>& fluence, SolverReport& report) override;
+
   /// The composite moments of the last Solve, 3 values (R, G, B) per mesh
   /// point each (W/mm^2).
   const std::vector<double>& GetPhi1() const { return Phi1_; }
@@ -147,6 +217,13 @@ public:
   /// interior points): Sp3BoundaryCoefficients E1 phi_1 + E2 phi_2 + E3 q
   /// with the area-weighted mean eta of the boundary triangles at the point.
   const std::vector<double>& GetExitance() const { return Exitance_; }
+  /// The complex exitance of the last SolveFrequencyDomain (3 per point,
+  /// W/mm^2 per W of modulation; 0 at interior points); empty after a
+  /// continuous-wave Solve.
+  const std::vector<std::complex<double>>& GetComplexExitance() const
+  {
+    return ComplexExitance_;
+  }
 
   /**
    * An additional right-hand side of the weak form (W): load1 and load2
@@ -176,14 +253,30 @@ public:
 private:
   double Anisotropy_ = 0.0; ///< SetOptions' g (used when the material has none)
   struct Blocks;
-  void Assemble(const DiffusionProblem& problem, const std::vector<double>& sourceLoad);
-  bool SolveBlocks(const TetMesh& mesh, bool warm, const std::string& preconditioner,
+  /// Validation and the option's anisotropy (into `withAnisotropy`); a new
+  /// mesh resets the warm start.
+  DiffusionProblem PrepareProblem(const DiffusionProblem& given, OpticalProperties& withAnisotropy);
+  std::string ChoosePreconditioner(const TetMesh& mesh) const;
+  void SizeBlocks(const TetMesh& mesh, bool complex);
+  /// The blocks for angular frequency omega (rad/s; 0: continuous wave,
+  /// real) with the interior sources' load (real and imaginary parts).
+  void Assemble(const DiffusionProblem& problem, const std::vector<double>& sourceLoad,
+    const std::vector<double>& imaginaryLoad, double omega);
+  void AddLoads(int numPoints, const std::vector<double>& sourceLoad,
+    const std::vector<double>& imaginaryLoad);
+  void SetUpPreconditioner(const TetMesh& mesh, const std::string& preconditioner);
+  /// BiCGSTAB on the assembled blocks from `x` (resized and zeroed when its
+  /// size does not fit: 2 N x 3, or 4 N x 3 in the frequency domain).
+  bool SolveBlocks(const TetMesh& mesh, const std::string& preconditioner, std::vector<double>& x,
     SolverReport& report);
-  void ComputeExitance(const DiffusionProblem& problem);
+  void ComputeExitance(const DiffusionProblem& problem, const std::vector<double>& imaginaryPhi1,
+    const std::vector<double>& imaginaryPhi2);
+  void FillReport(const TetMesh& mesh, SolverReport& report) const;
 
   std::unique_ptr<Blocks> Blocks_;
   int NumberOfThreads_ = 0;
   std::vector<double> Phi1_, Phi2_, Exitance_;
+  std::vector<std::complex<double>> ComplexExitance_;
   std::vector<double> AdditionalLoad1_, AdditionalLoad2_;
   std::array<double, NumberOfChannels> SourcePower_{};
   std::vector<double> X_; ///< the last solution, 2 N x 3 interleaved (warm start)

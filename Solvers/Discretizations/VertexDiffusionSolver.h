@@ -25,6 +25,16 @@
 namespace translucency
 {
 
+/**
+ * Throw translucency::Error, starting with `name`, naming both lengths when
+ * the mesh cannot resolve the diffusion wave of modulation `frequency` (Hz,
+ * omega = 2 pi f): its shortest wavelength 2 pi / Im k, k = sqrt((mu_a + i
+ * omega eta / c) / kappa), below the edge of a regular tet of the mean
+ * volume, or omega eta / c not finite. Shared by the vertex solvers and sp3.
+ */
+void CheckFrequencyResolution(const std::string& name, const TetMesh& mesh,
+  const OpticalProperties& material, double frequency, double omega);
+
 class VertexDiffusionSolver : public DiffusionSolver
 {
 public:

@@ -14,6 +14,7 @@ as .pvtu / .pvtp (one piece per rank) for TestParallel.py to compare:
   ply       PLY reader (rank 0 only) -> Tetrahedralize -> Assign -> ... -> Radiance
   pvtu2     mesh2g.pvtu (ghost cells; with 3 ranks one rank has no piece)
   pvtu3     mesh3id.pvtu (GlobalIds; with 2 ranks a rank reads 2 pieces)
+  sp3       mesh2g.pvtu with Solver sp3 (gathered solve, radiance per piece)
   redist    mesh.vtu (on rank 0) -> Redistribute DataSet -> ...
   cut       mesh.vtu (on rank 0) -> Stroke Cut (plane) -> Redistribute DataSet -> ...
   paint     Redistribute DataSet -> Paint -> ...
@@ -49,8 +50,8 @@ def light(source, samples=0):
     return SurfaceIrradiance(Input=source, UniformLightSamples=samples)
 
 
-def solve(source):
-    return SolveDiffusion(Input=source, RelTol=1e-12, MaxIter=20000)
+def solve(source, solver="divergence"):
+    return SolveDiffusion(Input=source, RelTol=1e-12, MaxIter=20000, Solver=solver)
 
 
 def plane_cut(source):
@@ -113,8 +114,8 @@ def detector_table(source):
           flush=True)
 
 
-def chain(name, source, surface=True, samples=0):
-    solved = solve(light(source, samples))
+def chain(name, source, surface=True, samples=0, solver="divergence"):
+    solved = solve(light(source, samples), solver)
     SaveData(path(name + ".pvtu"), proxy=solved)
     if surface:
         SaveData(path(name + "_surface.pvtp"), proxy=OutgoingRadiance(Input=solved))
@@ -152,6 +153,7 @@ if MODE == "prepare":
 
     mesh_source = XMLUnstructuredGridReader(FileName=[path("mesh.vtu")])
     chain("ref_mesh", mesh_source)
+    chain("ref_sp3", mesh_source, solver="sp3")
     chain("ref_cut", plane_cut(mesh_source), surface=False)
     chain("ref_paint", paint(mesh_source), surface=False)
     chain("ref_cutids", plane_cut(mesh_source), surface=False, samples=32)
@@ -163,6 +165,10 @@ elif MODE == "run":
         Input=TetrahedralizeSurface(Input=reader, TargetNumberOfTets=3000)))
     chain("par_pvtu2", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")]))
     chain("par_pvtu3", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")]))
+    # sp3: solved gathered, its SP3Phi1/SP3Phi2 back on each piece, the P3
+    # radiance read per piece.
+    chain("par_sp3", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2g.pvtu")]),
+          solver="sp3")
     redistributed = RedistributeDataSet(
         Input=XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))
     chain("par_redist", redistributed)

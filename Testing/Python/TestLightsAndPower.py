@@ -261,6 +261,53 @@ class LightsAndPowerTest(unittest.TestCase):
         self.assertLess(abs(got - expected).max() / scale, 1e-9)
         self.assertGreater(abs(fit - expected).max() / scale, 1e-2)  # the rule matters
 
+    def test_sp3_radiance_is_the_p3_radiance_of_its_moments(self):
+        # sp3 writes its composite moments (SP3Phi1, SP3Phi2) and the radiance
+        # read-out uses them: the outgoing P3 radiance along the normal,
+        # T(1)/(4 pi eta^2) (phi_0 + 3 J_1 + (5/3) Phi_2 + 7 J_2), with the
+        # currents J = F Phi + S q of the Marshak conditions, restated here
+        # from the half-range Fresnel moments (Solvers.md "SP3", Derivation).
+        solve = self.solve(self.light(), "sp3")
+        radiance = translucency.vtkOutgoingRadiance()
+        radiance.SetInputConnection(solve.GetOutputPort())
+        translucency.update(radiance)
+        grid, out = solve.GetOutput(), radiance.GetOutput()
+        ids = vtk_to_numpy(out.GetPointData().GetArray("vtkOriginalPointIds"))
+        phi1 = vtk_to_numpy(grid.GetPointData().GetArray("SP3Phi1"))[ids]
+        phi2 = vtk_to_numpy(grid.GetPointData().GetArray("SP3Phi2"))[ids]
+        q = vtk_to_numpy(grid.GetPointData().GetArray("Irradiance"))[ids]
+        eta = float(vtk_to_numpy(grid.GetCellData().GetArray("RefractiveIndex"))[0])
+        mu_c = np.sqrt(1.0 - 1.0 / eta ** 2)
+        x, w = np.polynomial.legendre.leggauss(400)
+        t = 0.5 * (x + 1.0)
+        mu = mu_c + (1.0 - mu_c) * t ** 2
+        weights = 0.5 * w * 2.0 * (1.0 - mu_c) * t
+        cos_outside = np.sqrt(np.clip(1.0 - eta ** 2 * (1.0 - mu ** 2), 0.0, 1.0))
+        reflect = 1.0 - tp.fresnel_transmittance(cos_outside, eta)
+        r = [mu_c ** (m + 1) / (m + 1) + np.sum(weights * reflect * mu ** m) for m in range(7)]
+        a1, b1 = -r[1], 3 * r[2]
+        c1, d1 = 0.5 * (5 * r[3] - 3 * r[1]), 0.5 * (3 * r[2] - 5 * r[4])
+        a2 = -2.25 * r[1] + 7.5 * r[3] - 6.25 * r[5]
+        b2 = 15.75 * r[2] - 52.5 * r[4] + 43.75 * r[6]
+        m = np.array([[1 + b1, -7 * d1], [-3 * d1, 1 + b2]])
+        f11, f21 = np.linalg.solve(m, [0.5 + a1, -(0.125 + c1)])
+        f12, f22 = np.linalg.solve(m, [-(0.125 + c1), 7 / 24 + a2])
+        s1, s2 = np.linalg.solve(m, [-2.0, 0.5])
+        j1 = f11 * phi1 + f12 * phi2 + s1 * q
+        j2 = f21 * phi1 + f22 * phi2 + s2 * q
+        f_t = 1.0 - ((eta - 1.0) / (eta + 1.0)) ** 2
+        expected = np.maximum(0.0, f_t / (4 * np.pi * eta ** 2) *
+                              (phi1 - 2 * phi2 / 3 + 3 * j1 + 5 * phi2 / 3 + 7 * j2))
+        got = vtk_to_numpy(out.GetPointData().GetArray("Radiance"))
+        scale = expected.max()
+        self.assertGreater(scale, 0.0)
+        self.assertLess(abs(got - expected).max() / scale, 1e-9)
+        # Not eq. 3 of the same fluence (the read-out matters).
+        phi = vtk_to_numpy(grid.GetPointData().GetArray("Fluence"))[ids]
+        eq3 = np.maximum(0.0, f_t / (4 * np.pi * eta ** 2) *
+                         ((1 + 1 / tp.mismatch_a(eta)) * phi - 4 / (1 + tp.fdr(eta)) * q))
+        self.assertGreater(abs(eq3 - expected).max() / scale, 1e-3)
+
     def test_point_source_alone_injects_its_power(self):
         light = self.light()
         light.SetDefaultLights(False)

@@ -109,7 +109,8 @@ class ParallelTest(MpiSuite):
 
     def test_0_runs(self):
         self.assertEqual(self.result.returncode, 0, self.result.stderr[-3000:])
-        for case in ("ply", "pvtu2", "pvtu3", "redist", "cut", "paint", "cutids", "error"):
+        for case in ("ply", "pvtu2", "pvtu3", "sp3", "redist", "cut", "paint", "cutids",
+                     "error"):
             self.assertIn("case %s done" % case, self.result.stdout)
 
     def test_surface_read_by_one_rank(self):
@@ -119,6 +120,16 @@ class ParallelTest(MpiSuite):
     def test_pvtu_with_ghost_cells(self):
         self.check_fluence("pvtu2", "mesh", split=True)
         self.check_surface("pvtu2", "mesh")
+
+    def test_sp3_and_its_radiance(self):
+        # sp3 (solved gathered) gives the serial Fluence on every piece, and
+        # Outgoing Radiance per piece reads its moments (SP3Phi1, SP3Phi2)
+        # into the serial P3 radiance.
+        self.check_fluence("sp3", "sp3", split=True)
+        self.check_surface("sp3", "sp3")
+        pieces = pieces_of(self.path("par_sp3.pvtu"))
+        self.assertTrue(all(p.GetPointData().GetArray("SP3Phi1") is not None
+                            for p in pieces if p.GetNumberOfPoints() > 0))
 
     def test_pvtu_with_global_ids(self):
         self.check_fluence("pvtu3", "mesh", split=True)

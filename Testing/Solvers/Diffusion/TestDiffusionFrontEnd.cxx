@@ -245,7 +245,7 @@ TEST(DiffusionFrontEnd, DomainsAreRefusedByTraitsNamingTheSolversWithThem)
       EXPECT_EQ(f,
         "the " + entry.Name +
           " solver has no frequency domain (modulation frequency 1e+08 Hz): solvers with one: "
-          "divergence, fem");
+          "divergence, fem, sp3");
       // The solve refuses it before any work, and so does the interface.
       EXPECT_EQ(ErrorMessage([&] {
         front.Solve(s.Mesh, s.Material, s.Irradiance, {}, frequency, result);

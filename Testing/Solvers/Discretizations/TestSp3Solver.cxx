@@ -12,6 +12,7 @@
 #include "FiniteElement.h"
 #include "Fresnel.h"
 #include "InteriorSources.h"
+#include "LightSources.h"
 #include "Sp3Solver.h"
 #include "TestMeshes.h"
 #include "TetMesh.h"
@@ -21,6 +22,7 @@
 
 #include <array>
 #include <cmath>
+#include <complex>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -610,6 +612,301 @@ TEST(Sp3Solver, IsRegisteredAndRefusesWhatItDoesNotDo)
     EXPECT_EQ(message(s), "no error");
     EXPECT_TRUE(report.Converged[0]);
   }
+}
+
+TEST(Sp3Radiance, ItsHemisphereIntegralIsTheExitance)
+{
+  // The radiance read-out (Sp3OutgoingRadiance) and the exitance
+  // coefficients E1..E3 are two codings of the same outgoing P3 radiance:
+  // 2 pi int_0^1 L(c) c dc over the outside cosine (the n^2 law makes the
+  // outside and inside integrals equal) is E1 Phi_1 + E2 Phi_2 + E3 q.
+  // (eta < 1: the outside directions below the critical cosine get no
+  // light, R = 1 there.)
+  // (Phi_1, Phi_2, q) of physical size: a positive radiance at every angle
+  // (the read-out clamps at 0, which the identity would not survive).
+  const double x[3][3] = { { 1.0, 0.2, 0.1 }, { 2.0, -0.3, 0.0 }, { 0.7, 0.1, 0.05 } };
+  for (const double eta : { 1.0, 1.33, 1.4, 0.8 })
+  {
+    const Sp3BoundaryCoefficients k = Sp3BoundaryCoefficients::Compute(eta);
+    for (const auto& v : x)
+    {
+      const int order = 4000;
+      double integral = 0.0;
+      for (int j = 0; j < order; ++j) // midpoint rule in c
+      {
+        const double c = (j + 0.5) / order;
+        integral += 2.0 * 3.14159265358979323846 *
+          Sp3OutgoingRadiance(k, eta, v[0], v[1], v[2], c) * c / order;
+      }
+      const double exitance = k.E1 * v[0] + k.E2 * v[1] + k.E3 * v[2];
+      EXPECT_NEAR(integral, exitance, 1e-4 * std::abs(exitance)) << eta;
+      // The paper's read-out is eta^2 times the energy-conserving one.
+      EXPECT_NEAR(Sp3OutgoingRadiance(k, eta, v[0], v[1], v[2], 0.6, RadianceReadout::Paper),
+        eta * eta * Sp3OutgoingRadiance(k, eta, v[0], v[1], v[2], 0.6), 1e-14);
+    }
+  }
+}
+
+// ---- Frequency domain (SolveFrequencyDomain).
+
+/// A jittered box (eta 1.4, g 0.5 in G) lit by q on its top face, a point
+/// source and a pencil beam: every source the frequency domain modulates.
+struct ModulatedScene
+{
+  TetMesh Mesh = Build(BoxMesh(8, 8, 5, 8.0, 8.0, 5.0, 0.2, 11));
+  OpticalProperties Material;
+  std::vector<double> Q;
+  Sources Interior;
+  DiffusionProblem Problem;
+
+  ModulatedScene()
+  {
+    const double muA[3] = { 0.02, 0.1, 0.4 }, sigma[3] = { 1.0, 0.8, 0.6 };
+    Material = OpticalProperties::Uniform(Mesh.GetNumberOfTets(), muA, sigma, 1.4);
+    Material.Anisotropy.assign(3 * static_cast<std::size_t>(Mesh.GetNumberOfTets()), 0.0);
+    for (int t = 0; t < Mesh.GetNumberOfTets(); ++t)
+    {
+      Material.Anisotropy[3 * static_cast<std::size_t>(t) + 1] = 0.5;
+    }
+    const int n = Mesh.GetNumberOfPoints();
+    Q.assign(3 * static_cast<std::size_t>(n), 0.0);
+    for (int i = 0; i < n; ++i)
+    {
+      if (Mesh.GetPoint(i)[2] > 5.0 - 1e-9)
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          Q[3 * static_cast<std::size_t>(i) + c] = 0.2 + 0.1 * c;
+        }
+      }
+    }
+    PointSource point;
+    point.Position = { 3.1, 4.4, 2.2 };
+    point.Power = { 1.0, 0.5, 2.0 };
+    Interior.AddPointSource(point);
+    PencilBeam beam;
+    beam.Position = { 5.0, 3.5, 5.0 };
+    beam.Direction = { 0.0, 0.0, -1.0 };
+    beam.Power = { 2.0, 1.0, 1.0 };
+    Interior.AddPencilBeam(beam);
+    Problem.Mesh = &Mesh;
+    Problem.Material = &Material;
+    Problem.Irradiance = &Q;
+    Problem.InteriorSources = &Interior;
+  }
+};
+
+TEST(Sp3Frequency, LowFrequencyIsContinuousWaveAndThePhaseGrowsLinearly)
+{
+  // f -> 0: the modulated solve is the continuous-wave one (real part) and
+  // its imaginary part is first order in omega: doubling a low f doubles
+  // Im Phi (to O(omega^2)) and the fluence lags (Im < 0 where the sources
+  // are: every source is modulated at phase 0 and the beam only delays).
+  const ModulatedScene scene;
+  Sp3Solver solver;
+  solver.SetRelTol(1e-12);
+  solver.SetMaxIter(20000);
+  std::vector<double> cw;
+  SolverReport report;
+  ASSERT_TRUE(solver.Solve(scene.Problem, cw, report));
+  const std::vector<double> cwExitance = solver.GetExitance();
+  std::vector<std::complex<double>> low, f1, f2;
+  ASSERT_TRUE(solver.SolveFrequencyDomain(scene.Problem, 1e3, low, report));
+  for (int c = 0; c < 3; ++c)
+  {
+    ASSERT_TRUE(report.Converged[c]) << c;
+  }
+  EXPECT_EQ(report.LinearSolver, "bicgstab-block-jacobi");
+  std::vector<std::complex<double>> lowExitance = solver.GetComplexExitance();
+  ASSERT_TRUE(solver.SolveFrequencyDomain(scene.Problem, 10e6, f1, report));
+  ASSERT_TRUE(solver.SolveFrequencyDomain(scene.Problem, 20e6, f2, report));
+  ASSERT_EQ(low.size(), cw.size());
+  for (int c = 0; c < 3; ++c)
+  {
+    double dr = 0, di = 0, norm = 0, linear = 0, im = 0, exitance = 0, exitanceNorm = 0;
+    for (std::size_t m = static_cast<std::size_t>(c); m < cw.size(); m += 3)
+    {
+      dr += std::norm(low[m].real() - cw[m]);
+      di += std::norm(low[m].imag());
+      norm += cw[m] * cw[m];
+      linear += std::norm(f2[m].imag() - 2.0 * f1[m].imag());
+      im += std::norm(f1[m].imag());
+      exitance += std::norm(lowExitance[m] - cwExitance[m]);
+      exitanceNorm += cwExitance[m] * cwExitance[m];
+      EXPECT_LT(f1[m].imag(), 0.0) << m;
+    }
+    EXPECT_LT(std::sqrt(dr / norm), 1e-9) << c;
+    EXPECT_LT(std::sqrt(di / norm), 1e-5) << c;      // omega eta / c = 3e-8 /mm here
+    EXPECT_LT(std::sqrt(linear / im), 1e-3) << c;     // second order: (omega / omega_0)^2
+    EXPECT_LT(std::sqrt(exitance / exitanceNorm), 1e-5) << c;
+    EXPECT_GT(std::sqrt(im / norm), 1e-4) << c; // and the phase is there at 10 MHz
+  }
+  // The continuous-wave solve after a modulated one is unchanged.
+  std::vector<double> again;
+  ASSERT_TRUE(solver.Solve(scene.Problem, again, report));
+  for (std::size_t m = 0; m < cw.size(); ++m)
+  {
+    EXPECT_NEAR(again[m], cw[m], 1e-9 * std::abs(cw[m]) + 1e-14) << m;
+  }
+}
+
+TEST(Sp3Frequency, MultigridAndJacobiAgreeAndTheExtendedBeamIsModulated)
+{
+  // The two preconditioners give the same modulated solution (the extended
+  // collimated model: the beam's delayed volume source, its fluence added),
+  // and f -> 0 is the continuous-wave extended solve.
+  const TetMesh mesh = Build(BoxMesh(8, 8, 8, 8.0, 8.0, 8.0, 0.2, 5));
+  const double muA[3] = { 0.01, 0.05, 0.3 }, sigma[3] = { 1.0, 1.2, 0.7 };
+  const OpticalProperties material =
+    OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigma, 1.33);
+  const std::vector<double> zero(3 * static_cast<std::size_t>(mesh.GetNumberOfPoints()), 0.0);
+  DiffusionProblem problem;
+  problem.Mesh = &mesh;
+  problem.Material = &material;
+  problem.Irradiance = &zero;
+  problem.Lights = { DirectionalLight({ 0.2, 0.1, -1.0 }, { 1, 1, 1 }) };
+  problem.Shadows = false;
+  problem.Collimated = CollimatedModel::Extended;
+  std::vector<std::complex<double>> jacobi, multigrid, low;
+  SolverReport report;
+  Sp3Solver a, b;
+  a.SetRelTol(1e-11);
+  b.SetRelTol(1e-11);
+  a.SetMaxIter(20000);
+  b.SetMaxIter(20000);
+  a.SetLinearSolver("jacobi");
+  b.SetLinearSolver("multigrid-agg");
+  ASSERT_TRUE(a.SolveFrequencyDomain(problem, 200e6, jacobi, report));
+  EXPECT_TRUE(report.Converged[0] && report.Converged[1] && report.Converged[2]);
+  ASSERT_FALSE(report.CollimatedFluencePhase.empty());
+  ASSERT_TRUE(b.SolveFrequencyDomain(problem, 200e6, multigrid, report));
+  EXPECT_TRUE(report.Converged[0] && report.Converged[1] && report.Converged[2]);
+  EXPECT_EQ(report.LinearSolver, "bicgstab-block-multigrid-agg");
+  double diff = 0, norm = 0;
+  for (std::size_t m = 0; m < jacobi.size(); ++m)
+  {
+    diff += std::norm(jacobi[m] - multigrid[m]);
+    norm += std::norm(jacobi[m]);
+  }
+  EXPECT_LT(std::sqrt(diff / norm), 1e-8);
+  std::vector<double> cw;
+  ASSERT_TRUE(a.Solve(problem, cw, report));
+  ASSERT_TRUE(a.SolveFrequencyDomain(problem, 1e3, low, report));
+  diff = norm = 0;
+  for (std::size_t m = 0; m < cw.size(); ++m)
+  {
+    diff += std::norm(low[m] - cw[m]);
+    norm += cw[m] * cw[m];
+  }
+  EXPECT_LT(std::sqrt(diff / norm), 1e-6);
+}
+
+TEST(Sp3Frequency, ReducesToFrequencyDomainDiffusionInTheDiffusiveLimit)
+{
+  // As ReducesToDiffusionInTheDiffusiveLimit, with the modulation scaled
+  // like mu_a (omega -> eps omega: omega eta / c is an absorption): the
+  // complex SP3 fluence tends to fem's frequency-domain solution (the
+  // Marshak A = 1 of eta = 1: Fresnel::BoundaryRule::Moments, which
+  // extended-moments selects) at least linearly in eps.
+  const TetMesh mesh = Build(BoxMesh(10, 10, 6, 10.0, 10.0, 6.0));
+  const int n = mesh.GetNumberOfPoints();
+  std::vector<double> q(3 * static_cast<std::size_t>(n), 0.0);
+  for (int i = 0; i < n; ++i)
+  {
+    const double* x = mesh.GetPoint(i);
+    if (x[2] > 6.0 - 1e-9)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        q[3 * static_cast<std::size_t>(i) + c] =
+          std::exp(-0.1 * ((x[0] - 5) * (x[0] - 5) + (x[1] - 5) * (x[1] - 5)));
+      }
+    }
+  }
+  std::vector<std::array<double, 3>> difference;
+  std::vector<double> phase;
+  for (const double eps : { 1.0, 0.5, 0.25, 0.125 })
+  {
+    const double muA[3] = { 0.01 * eps, 0.05 * eps, 0.2 * eps };
+    const double sigma[3] = { 1.0 / eps, 1.0 / eps, 1.0 / eps };
+    const OpticalProperties material =
+      OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, sigma, 1.0);
+    DiffusionProblem problem;
+    problem.Mesh = &mesh;
+    problem.Material = &material;
+    problem.Irradiance = &q;
+    problem.Collimated = CollimatedModel::ExtendedMoments; // no lights: only its rule
+    const double frequency = 500e6 * eps; // omega / c = 0.0105 eps /mm
+    std::unique_ptr<DiffusionSolver> fem = CreateDiffusionSolver("fem");
+    fem->SetRelTol(1e-12);
+    fem->SetMaxIter(50000);
+    std::vector<std::complex<double>> reference, fluence;
+    SolverReport report;
+    ASSERT_TRUE(fem->SolveFrequencyDomain(problem, frequency, reference, report));
+    Sp3Solver solver;
+    solver.SetRelTol(1e-11);
+    solver.SetMaxIter(50000);
+    ASSERT_TRUE(solver.SolveFrequencyDomain(problem, frequency, fluence, report));
+    std::array<double, 3> d{};
+    for (int c = 0; c < 3; ++c)
+    {
+      ASSERT_TRUE(report.Converged[c]) << eps << " " << c;
+      double num = 0, den = 0;
+      for (int i = 0; i < n; ++i)
+      {
+        const std::size_t m = 3 * static_cast<std::size_t>(i) + c;
+        num += std::norm(fluence[m] - reference[m]);
+        den += std::norm(reference[m]);
+      }
+      d[c] = std::sqrt(num / den);
+    }
+    // The phase at the bottom centre (the modulation is really there).
+    const std::size_t centre = 3 * static_cast<std::size_t>(5 * 11 + 5);
+    phase.push_back(std::arg(reference[centre]));
+    std::cout << "eps " << eps << ": |Phi_sp3 - Phi_fem| / |Phi_fem| " << d[0] << " " << d[1]
+              << " " << d[2] << ", fem phase at the bottom centre " << phase.back() << " rad ("
+              << report.Iterations[0] << " sp3 iterations, " << report.SolveMilliseconds
+              << " ms)\n";
+    difference.push_back(d);
+  }
+  const std::size_t last = difference.size() - 1;
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_LT(difference[last][c], difference[0][c] / 8.0) << c;
+    EXPECT_LT(difference[last][c], 0.5 * difference[last - 1][c]) << c;
+    EXPECT_LT(difference[last][c], 0.005) << c;
+  }
+  EXPECT_LT(phase.back(), -0.1); // a lag of more than 0.1 rad: not a trivial comparison
+}
+
+TEST(Sp3Frequency, RefusesABadFrequency)
+{
+  const ModulatedScene scene;
+  Sp3Solver solver;
+  std::vector<std::complex<double>> fluence;
+  SolverReport report;
+  for (const double f : { 0.0, -1.0, std::nan("") })
+  {
+    try
+    {
+      solver.SolveFrequencyDomain(scene.Problem, f, fluence, report);
+      ADD_FAILURE() << "no error at " << f;
+    }
+    catch (const Error& e)
+    {
+      EXPECT_TRUE(Contains(e.what(), "sp3: modulation frequency")) << e.what();
+    }
+  }
+  try
+  {
+    solver.SolveFrequencyDomain(scene.Problem, 1e13, fluence, report);
+    ADD_FAILURE() << "no error at 10 THz";
+  }
+  catch (const Error& e)
+  {
+    EXPECT_TRUE(Contains(e.what(), "cannot resolve its phase")) << e.what();
+  }
+  EXPECT_TRUE(GetDiffusionSolverRegistry().Find("sp3")->Properties.SupportsFrequency);
 }
 
 } // namespace
