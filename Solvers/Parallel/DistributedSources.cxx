@@ -263,57 +263,18 @@ std::vector<double> ComputeDistributedSourceLoad(
   {
     const PencilBeam& beam = pencils[k];
     const std::string name = NameOf(beam.Label, "pencil beam", k);
-    // The entry (as LocatePencilEntry, on the physical surface of every rank).
-    const GlobalSurfacePoint entry = FindGlobalSurfacePoint(comm, piece, beam.Position.data());
-    if (entry.Distance > tolerance)
+    // The entry (as LocatePencilEntry, on the physical surface of every
+    // rank); its checks, optics and equivalent sources are the serial ones.
+    const GlobalSurfacePoint global = FindGlobalSurfacePoint(comm, piece, beam.Position.data());
+    SurfacePoint surface;
+    surface.Position = global.Position;
+    surface.Normal = global.Normal;
+    surface.Distance = global.Distance;
+    const PencilEntry entry = EnterPencilBeam(beam, name, surface, tolerance, global.Eta);
+    for (const EquivalentSource& equivalent :
+      PencilEquivalentSources(beam, name, entry, global.MuA.data(), global.MuS.data()))
     {
-      std::ostringstream out;
-      out << name << ": entry point " << FormatPoint(beam.Position.data()) << " is "
-          << entry.Distance << " mm from the surface (nearest surface point "
-          << FormatPoint(entry.Position.data()) << "; at most " << tolerance
-          << " mm, half the mean surface edge, is allowed)";
-      throw Error(out.str());
-    }
-    const Eigen::Vector3d d = Eigen::Map<const Eigen::Vector3d>(beam.Direction.data()).normalized();
-    const Eigen::Vector3d n = Eigen::Map<const Eigen::Vector3d>(entry.Normal.data());
-    const double cosIn = -d.dot(n);
-    if (!(cosIn > 1e-6))
-    {
-      std::ostringstream out;
-      out << name << ": direction " << FormatPoint(beam.Direction.data())
-          << " does not point into the object at " << FormatPoint(entry.Position.data())
-          << " (outward surface normal " << FormatPoint(entry.Normal.data()) << ")";
-      throw Error(out.str());
-    }
-    const double r = 1.0 / entry.Eta;
-    const double cosT = std::sqrt(std::max(0.0, 1.0 - r * r * (1.0 - cosIn * cosIn)));
-    const Eigen::Vector3d refracted = (r * d + (r * cosIn - cosT) * n).normalized();
-    const double transmitted = 1.0 - Fresnel::Reflectance(cosIn, entry.Eta);
-    // One equivalent source per distinct depth z0 = 1 / mu_t' (Sources::Place).
-    bool done[NumberOfChannels] = {};
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      if (done[c])
-        continue;
-      const double depth = 1.0 / (entry.MuA[c] + entry.MuS[c]);
-      PointSource source;
-      source.Power = { 0.0, 0.0, 0.0 };
-      for (int c2 = c; c2 < NumberOfChannels; ++c2)
-      {
-        if (1.0 / (entry.MuA[c2] + entry.MuS[c2]) == depth)
-        {
-          source.Power[c2] = transmitted * beam.Power[c2];
-          done[c2] = true;
-        }
-      }
-      for (int i = 0; i < 3; ++i)
-      {
-        source.Position[i] = entry.Position[i] + depth * refracted[i];
-      }
-      std::ostringstream what;
-      what << "the equivalent point source one transport mean free path (" << depth
-           << " mm, channel " << c << ") below the entry point, at ";
-      placer.Place(source, name, what.str(), load);
+      placer.Place(equivalent.Source, name, DescribeEquivalentSource(equivalent), load);
     }
   }
   return load;
@@ -334,28 +295,10 @@ std::vector<DetectorReading> ReadDistributedDetectors(MPI_Comm comm, const Distr
   {
     const Detector& detector = detectors[k];
     const std::string name = NameOf(detector.Label, "detector", k);
-    const double* x = detector.Position.data();
-    if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
-    {
-      throw Error(name + ": position is not finite");
-    }
-    if (!std::isfinite(detector.Radius) || detector.Radius < 0.0)
-    {
-      std::ostringstream out;
-      out << name << ": fibre radius " << detector.Radius << " mm (expected a finite value >= 0)";
-      throw Error(out.str());
-    }
-    const GlobalSurfacePoint surface = FindGlobalSurfacePoint(comm, piece, x);
-    if (surface.Distance > tolerance)
-    {
-      std::ostringstream out;
-      out.precision(6);
-      out << name << ": (" << x[0] << ", " << x[1] << ", " << x[2] << ") is off the surface, "
-          << surface.Distance << " mm from its nearest surface point (" << surface.Position[0]
-          << ", " << surface.Position[1] << ", " << surface.Position[2] << "); at most "
-          << tolerance << " mm (half the mean surface edge) is allowed";
-      throw Error(out.str());
-    }
+    CheckDetector(detector, name); // the serial checks (Detectors.h)
+    const GlobalSurfacePoint surface =
+      FindGlobalSurfacePoint(comm, piece, detector.Position.data());
+    CheckDetector(detector, name, &surface.Position, surface.Distance, tolerance);
     DetectorReading reading;
     reading.SurfacePosition = surface.Position;
     // [area, fluence R G B, exitance R G B] summed over the ranks.

@@ -165,6 +165,36 @@ void AccumulateDetectorSample(const TetMesh& mesh, const OpticalProperties& mate
   }
 }
 
+void CheckDetector(const Detector& detector, const std::string& name,
+  const std::array<double, 3>* nearest, double distance, double tolerance)
+{
+  const double* x = detector.Position.data();
+  if (!nearest)
+  {
+    if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
+    {
+      throw Error(name + ": position is not finite");
+    }
+    if (!std::isfinite(detector.Radius) || detector.Radius < 0.0)
+    {
+      std::ostringstream out;
+      out << name << ": fibre radius " << detector.Radius << " mm (expected a finite value >= 0)";
+      throw Error(out.str());
+    }
+    return;
+  }
+  if (distance > tolerance)
+  {
+    const std::array<double, 3>& p = *nearest;
+    std::ostringstream out;
+    out.precision(6);
+    out << name << ": (" << x[0] << ", " << x[1] << ", " << x[2] << ") is off the surface, "
+        << distance << " mm from its nearest surface point (" << p[0] << ", " << p[1] << ", "
+        << p[2] << "); at most " << tolerance << " mm (half the mean surface edge) is allowed";
+    throw Error(out.str());
+  }
+}
+
 std::vector<DetectorFootprint> LocateDetectors(
   const TetMesh& mesh, const std::vector<Detector>& detectors)
 {
@@ -181,28 +211,9 @@ std::vector<DetectorFootprint> LocateDetectors(
     const Detector& detector = detectors[k];
     const std::string name =
       detector.Label.empty() ? "detector " + std::to_string(k + 1) : detector.Label;
-    const double* x = detector.Position.data();
-    if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
-    {
-      throw Error(name + ": position is not finite");
-    }
-    if (!std::isfinite(detector.Radius) || detector.Radius < 0.0)
-    {
-      std::ostringstream out;
-      out << name << ": fibre radius " << detector.Radius << " mm (expected a finite value >= 0)";
-      throw Error(out.str());
-    }
-    const SurfacePoint surface = FindSurfacePoint(mesh, x);
-    if (surface.Distance > tolerance)
-    {
-      std::ostringstream out;
-      out.precision(6);
-      out << name << ": (" << x[0] << ", " << x[1] << ", " << x[2] << ") is off the surface, "
-          << surface.Distance << " mm from its nearest surface point (" << surface.Position[0]
-          << ", " << surface.Position[1] << ", " << surface.Position[2] << "); at most "
-          << tolerance << " mm (half the mean surface edge) is allowed";
-      throw Error(out.str());
-    }
+    CheckDetector(detector, name);
+    const SurfacePoint surface = FindSurfacePoint(mesh, detector.Position.data());
+    CheckDetector(detector, name, &surface.Position, surface.Distance, tolerance);
     DetectorFootprint footprint;
     footprint.SurfacePosition = surface.Position;
     const double radius = detector.Radius;

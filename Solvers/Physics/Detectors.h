@@ -116,6 +116,16 @@ void AccumulateDetectorSample(const TetMesh& mesh, const OpticalProperties& mate
   const double w[3], double weight, const std::vector<double>& fluence,
   const std::vector<double>* irradiance, Fresnel::BoundaryRule rule, DetectorReading& reading);
 
+/**
+ * The checks of a detector, once for every surface query (LocateDetectors on
+ * a mesh, the distributed read-out over the ranks' physical faces): before
+ * the search, a finite position and a finite radius >= 0 (`nearest` null);
+ * after it, the nearest surface point `nearest` at `distance` (mm) at most
+ * `tolerance` (mm) away. Throws translucency::Error starting with `name`.
+ */
+void CheckDetector(const Detector& detector, const std::string& name,
+  const std::array<double, 3>* nearest = nullptr, double distance = 0.0, double tolerance = 0.0);
+
 /// The footprints of the detectors (the checks and errors of ReadDetectors).
 std::vector<DetectorFootprint> LocateDetectors(
   const TetMesh& mesh, const std::vector<Detector>& detectors);

@@ -197,11 +197,10 @@ double SurfaceTolerance(const TetMesh& mesh)
   return SurfaceTolerance(mesh.GetPoints(), mesh.GetBoundaryTriangles());
 }
 
-PencilEntry LocatePencilEntry(const TetMesh& mesh, const OpticalProperties& material,
-  const PencilBeam& beam, const std::string& name, double tolerance)
+PencilEntry EnterPencilBeam(const PencilBeam& beam, const std::string& name,
+  const SurfacePoint& entry, double tolerance, double eta)
 {
   PencilEntry result;
-  const SurfacePoint entry = FindSurfacePoint(mesh, beam.Position.data());
   if (entry.Distance > tolerance)
   {
     std::ostringstream out;
@@ -223,8 +222,6 @@ PencilEntry LocatePencilEntry(const TetMesh& mesh, const OpticalProperties& mate
     throw Error(out.str());
   }
   result.Surface = entry;
-  result.Tet = mesh.GetBoundaryTriangleTets()[entry.Triangle];
-  const double eta = material.RefractiveIndex[result.Tet];
   // Snell's law from vacuum (index 1) into eta: the refracted direction
   // t = r d + (r cos_i - cos_t) n with r = 1/eta, n the outward normal.
   const double r = 1.0 / eta;
@@ -236,6 +233,61 @@ PencilEntry LocatePencilEntry(const TetMesh& mesh, const OpticalProperties& mate
   }
   result.Transmitted = 1.0 - Fresnel::Reflectance(cosIn, eta);
   return result;
+}
+
+PencilEntry LocatePencilEntry(const TetMesh& mesh, const OpticalProperties& material,
+  const PencilBeam& beam, const std::string& name, double tolerance)
+{
+  const SurfacePoint entry = FindSurfacePoint(mesh, beam.Position.data());
+  // The tet under the entry only when the entry is valid (the checks first).
+  const int tet = entry.Distance > tolerance ? -1 : mesh.GetBoundaryTriangleTets()[entry.Triangle];
+  PencilEntry result =
+    EnterPencilBeam(beam, name, entry, tolerance, tet >= 0 ? material.RefractiveIndex[tet] : 1.0);
+  result.Tet = tet;
+  return result;
+}
+
+std::vector<EquivalentSource> PencilEquivalentSources(const PencilBeam& beam,
+  const std::string& name, const PencilEntry& entry, const double muA[3], const double muS[3])
+{
+  std::vector<EquivalentSource> sources;
+  // One equivalent source per distinct depth (Farrell et al. 1992: z0 = 1/mu_t').
+  bool done[NumberOfChannels] = {};
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    if (done[c])
+    {
+      continue;
+    }
+    EquivalentSource equivalent;
+    equivalent.Depth = 1.0 / (muA[c] + muS[c]);
+    equivalent.Channel = c;
+    PointSource& source = equivalent.Source;
+    source.Power = { 0.0, 0.0, 0.0 };
+    for (int c2 = c; c2 < NumberOfChannels; ++c2)
+    {
+      if (1.0 / (muA[c2] + muS[c2]) == equivalent.Depth)
+      {
+        source.Power[c2] = entry.Transmitted * beam.Power[c2];
+        done[c2] = true;
+      }
+    }
+    for (int i = 0; i < 3; ++i)
+    {
+      source.Position[i] = entry.Surface.Position[i] + equivalent.Depth * entry.Refracted[i];
+    }
+    source.Label = name;
+    sources.push_back(equivalent);
+  }
+  return sources;
+}
+
+std::string DescribeEquivalentSource(const EquivalentSource& source)
+{
+  std::ostringstream what;
+  what << "the equivalent point source one transport mean free path (" << source.Depth
+       << " mm, channel " << source.Channel << ") below the entry point, at ";
+  return what.str();
 }
 
 std::vector<PlacedSource> Sources::Place(
@@ -262,43 +314,13 @@ std::vector<PlacedSource> Sources::Place(
     const PencilBeam& beam = Pencils_[k];
     const std::string name = NameOf(beam.Label, "pencil beam", k);
     const PencilEntry pencil = LocatePencilEntry(mesh, material, beam, name, tolerance);
-    const SurfacePoint& entry = pencil.Surface;
     const int tet = pencil.Tet;
-    const Eigen::Vector3d refracted = Eigen::Map<const Eigen::Vector3d>(pencil.Refracted.data());
-    const double transmitted = pencil.Transmitted;
-    // One equivalent source per distinct depth (Farrell et al. 1992: z0 = 1/mu_t').
-    bool done[NumberOfChannels] = {};
-    for (int c = 0; c < NumberOfChannels; ++c)
+    for (const EquivalentSource& equivalent : PencilEquivalentSources(beam, name, pencil,
+           &material.AbsorptionCoefficient[3 * static_cast<std::size_t>(tet)],
+           &material.ReducedScatteringCoefficient[3 * static_cast<std::size_t>(tet)]))
     {
-      if (done[c])
-      {
-        continue;
-      }
-      const double depth = 1.0 /
-        (material.AbsorptionCoefficient[3 * tet + c] +
-          material.ReducedScatteringCoefficient[3 * tet + c]);
-      PointSource source;
-      source.Power = { 0.0, 0.0, 0.0 };
-      for (int c2 = c; c2 < NumberOfChannels; ++c2)
-      {
-        const double depth2 = 1.0 /
-          (material.AbsorptionCoefficient[3 * tet + c2] +
-            material.ReducedScatteringCoefficient[3 * tet + c2]);
-        if (depth2 == depth)
-        {
-          source.Power[c2] = transmitted * beam.Power[c2];
-          done[c2] = true;
-        }
-      }
-      for (int i = 0; i < 3; ++i)
-      {
-        source.Position[i] = entry.Position[i] + depth * refracted[i];
-      }
-      source.Label = name;
-      std::ostringstream what;
-      what << "the equivalent point source one transport mean free path (" << depth
-           << " mm, channel " << c << ") below the entry point, at ";
-      placed.push_back(PlaceAt(locator, mesh, source, name, what.str()));
+      placed.push_back(PlaceAt(
+        locator, mesh, equivalent.Source, name, DescribeEquivalentSource(equivalent)));
     }
   }
   return placed;

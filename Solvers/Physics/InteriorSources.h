@@ -158,6 +158,43 @@ PencilEntry LocatePencilEntry(const TetMesh& mesh, const OpticalProperties& mate
   const PencilBeam& beam, const std::string& name, double tolerance);
 
 /**
+ * The checks and the optics of a pencil beam's entry, once for every surface
+ * query (LocatePencilEntry on a mesh; the distributed solve's closest point
+ * over the ranks' physical faces): `entry` is the closest surface point of
+ * beam.Position (Position, Normal and Distance read), `eta` the refractive
+ * index of the tet under it. Throws translucency::Error starting with `name`
+ * when the entry is more than `tolerance` (mm) from the surface or the
+ * direction does not point into the object; else the refracted direction
+ * (Snell, from vacuum) and the Fresnel transmittance (Surface = entry, Tet
+ * left -1 for the caller).
+ */
+PencilEntry EnterPencilBeam(const PencilBeam& beam, const std::string& name,
+  const SurfacePoint& entry, double tolerance, double eta);
+
+/// One of Farrell's equivalent point sources of a pencil beam.
+struct EquivalentSource
+{
+  PointSource Source; ///< Power: the transmitted power of the channels at this depth
+  double Depth = 0.0; ///< one transport mean free path 1 / (mu_a + mu_s'), mm
+  int Channel = 0;    ///< the first channel at this depth
+};
+
+/**
+ * Farrell et al. (1992)'s equivalent isotropic sources of a pencil beam
+ * entered at `entry`: one per distinct depth z0 = 1 / (mu_a + mu_s') of the
+ * tet under the entry (muA, muS: 3 channels each, 1/mm), at the entry point
+ * plus z0 along the refracted direction, carrying Transmitted times the beam
+ * power of the channels with that depth (Label = `name`). Sources::Place and
+ * the distributed solve place them.
+ */
+std::vector<EquivalentSource> PencilEquivalentSources(const PencilBeam& beam,
+  const std::string& name, const PencilEntry& entry, const double muA[3], const double muS[3]);
+
+/// "the equivalent point source one transport mean free path (z0 mm, channel
+/// c) below the entry point, at ": how placement errors name such a source.
+std::string DescribeEquivalentSource(const EquivalentSource& source);
+
+/**
  * How far a point said to be on the surface (pencil beam entry, detector) may
  * lie from the tessellated surface: half the mean boundary edge length (mm).
  * Points given on a smooth surface that the triangles approximate pass; a
