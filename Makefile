@@ -13,6 +13,15 @@
 # ccache (scripts/install-deps.sh) shares compiled objects between clones: paths
 # below this checkout are hashed relative to it, wherever it is cloned.
 export CCACHE_BASEDIR := $(CURDIR)
+# The sanitizer and fuzzer trees build with debug info, for which ccache also
+# hashes the build directory by default: a fresh clone (CI's) then missed the
+# cache for every source. Shared across clones instead; the debug info of a
+# cached object names the directory it was first compiled in.
+export CCACHE_NOHASHDIR := 1
+# Tests run two at a time (JOBS), each with OpenMP's team: a waiting OpenMP
+# thread should sleep, not spin on the core the other test needs
+# (Documentation/Performance.md, "Threads").
+export OMP_WAIT_POLICY ?= passive
 BUILD_DIR ?= build
 JOBS ?= 2
 CMAKE_ARGS ?=

@@ -584,40 +584,39 @@ struct AcquireOptions
   const CLI::App* App = nullptr; ///< for the provenance of the JSON
 };
 
-int Acquire(const AcquireOptions& o)
+/// Acquire: the checks of the options alone (before any work); the initial
+/// coefficients as 3 values each.
+void CheckAcquireOptions(
+  const AcquireOptions& o, std::vector<double>& initialMu, std::vector<double>& initialSigma)
 {
-  const std::string &samplePath = o.SamplePath, &patternsArg = o.PatternsArg,
-                    &outputPrefix = o.OutputPrefix, &jsonPath = o.JsonPath,
-                    &truthPath = o.TruthPath, &gridArg = o.GridArg, &setupName = o.SetupName;
-  std::string elementArray = o.ElementArray;
-  const int homogeneousMethod = o.HomogeneousFit == "cg" ? vtkInverseDiffusion::CONJUGATE_GRADIENT
-                                                         : vtkInverseDiffusion::GAUSS_NEWTON;
-  const bool gaussNewtonLineSearch = o.LineSearchStart == "gauss-newton";
-  const double lambda = o.Lambda, threshold = o.Threshold, noise = o.Noise;
-  const int maxIter = o.MaxIter;
-  const unsigned seed = o.Seed;
-  const bool png = !o.NoPng;
-  std::vector<double> initialMu = o.InitialMu, initialSigma = o.InitialSigma;
+  initialMu = o.InitialMu;
+  initialSigma = o.InitialSigma;
   if (initialMu.size() == 1)
     initialMu.assign(3, initialMu[0]);
   if (initialSigma.size() == 1)
     initialSigma.assign(3, initialSigma[0]);
   if (initialMu.size() != 3 || initialSigma.size() != 3)
     throw UsageError("acquire: --initial-mua and --initial-sigmas take 1 or 3 values");
-  const bool synthetic = !truthPath.empty();
-  if (patternsArg.empty())
+  const bool synthetic = !o.TruthPath.empty();
+  if (o.PatternsArg.empty())
     throw UsageError("acquire: --patterns is required");
-  if (!synthetic && samplePath.empty())
+  if (!synthetic && o.SamplePath.empty())
     throw UsageError("acquire: --sample FILE (or --synthetic-truth FILE) is required");
-  if (synthetic && gridArg.empty())
+  if (synthetic && o.GridArg.empty())
     throw UsageError("acquire: --synthetic-truth needs --grid NXxNYxNZ");
-  // Before any work: no output may be an input or another output, and a
-  // second run into the same prefix is refused (OutputFiles.h).
-  OutputPlan plan;
-  plan.Input(samplePath, "--sample");
-  plan.Input(truthPath, "--synthetic-truth");
-  if (!synthetic && !std::filesystem::is_directory(patternsArg))
-    plan.Input(patternsArg, "--patterns");
+}
+
+/// Acquire, before any work: no output may be an input or another output,
+/// and a second run into the same prefix is refused (OutputFiles.h). `plan`
+/// holds the locks: the caller keeps it for the whole run.
+void PlanAcquireOutputs(const AcquireOptions& o, OutputPlan& plan)
+{
+  const bool synthetic = !o.TruthPath.empty(), png = !o.NoPng;
+  const std::string& outputPrefix = o.OutputPrefix;
+  plan.Input(o.SamplePath, "--sample");
+  plan.Input(o.TruthPath, "--synthetic-truth");
+  if (!synthetic && !std::filesystem::is_directory(o.PatternsArg))
+    plan.Input(o.PatternsArg, "--patterns");
   plan.Output(outputPrefix + ".vtu", "--output");
   if (synthetic)
   {
@@ -630,103 +629,112 @@ int Acquire(const AcquireOptions& o)
   }
   if (png)
     plan.Output(outputPrefix + "_objective.png", "--output", false);
-  plan.Output(jsonPath, "--json", false);
+  plan.Output(o.JsonPath, "--json", false);
   plan.Check();
+}
 
-  const auto start = Clock::now();
-  std::vector<Stage> stages;
-  Synthetic syn;
-  int patternCols = 1;
-  vtkSmartPointer<vtkUnstructuredGrid> input;
-  if (synthetic)
+/// Acquire, synthetic mode: every pattern keeps its measured, forward and
+/// adjoint fields (3 channels) at every point of the block: refuse a --grid
+/// and --patterns that cannot fit, or whose fit would run for hours, before
+/// building anything.
+void CheckSyntheticBudget(const AcquireOptions& o, const std::vector<int>& grid,
+  const std::vector<int>& rc)
+{
+  const std::string &gridArg = o.GridArg, &patternsArg = o.PatternsArg;
+  const int maxIter = o.MaxIter;
+  const double points = (grid[0] + 1.0) * (grid[1] + 1.0) * (grid[2] + 1.0);
+  const double patterns = static_cast<double>(rc[0]) * rc[1];
+  if (patterns > 4096)
   {
-    const std::vector<int> grid = ParseDims(gridArg, "--grid", 3);
-    const std::vector<int> rc = ParseDims(patternsArg, "--patterns (synthetic mode)", 2);
-    patternCols = rc[1];
-    {
-      // Every pattern keeps its measured, forward and adjoint fields (3
-      // channels) at every point of the block: refuse what cannot fit before
-      // building anything.
-      const double points = (grid[0] + 1.0) * (grid[1] + 1.0) * (grid[2] + 1.0);
-      const double patterns = static_cast<double>(rc[0]) * rc[1];
-      if (patterns > 4096)
-      {
-        // Each pattern is a forward and an adjoint solve per iteration.
-        throw UsageError("acquire: --patterns " + patternsArg + " gives " +
-          translucency::FormatNumber(patterns) +
-          " patterns; at most 4096 are supported (each is a forward and an adjoint solve per "
-          "iteration)");
-      }
-      const double bytes =
-        translucency::EstimateGridBlockMemory(grid[0], grid[1], grid[2]) + patterns * points * 72.0;
-      try
-      {
-        translucency::CheckMemory("acquire: --grid " + gridArg + " with --patterns " +
-            patternsArg + " (" + translucency::FormatNumber(patterns) + " patterns)",
-          bytes, translucency::GetDefaultMemoryLimit(), "use a coarser --grid or fewer --patterns");
-      }
-      catch (const translucency::Error& e)
-      {
-        throw UsageError(e.what());
-      }
-      // Work: every inverse iteration solves forward and adjoint problems for
-      // every pattern on every point. Measured (session 17, 2 cores, under
-      // load): 16x16x4 and 32x32x8 with 2x2 patterns and --max-iter 100 took
-      // 6.6 s and 13.6 s, about 4e-6 s per point x pattern x iteration; the
-      // budget (1.5e8 units, about 10 minutes) refuses what would run for
-      // hours (100x100x100 with 2x2 patterns: about 27 minutes at least).
-      const double work = points * patterns * std::max(maxIter, 1);
-      const double workBudget = 1.5e8, secondsPerUnit = 4e-6;
-      if (work > workBudget && !translucency::GetLongRunsAllowed())
-      {
-        throw UsageError("acquire: --grid " + gridArg + " (" + translucency::FormatNumber(points) +
-          " points) with --patterns " + patternsArg + " (" + translucency::FormatNumber(patterns) +
-          " patterns) and --max-iter " +
-          std::to_string(maxIter) + " would take at least about " +
-          translucency::FormatNumber(std::round(work * secondsPerUnit / 60.0)) +
-          " minutes (budget: about " +
-          translucency::FormatNumber(std::round(workBudget * secondsPerUnit / 60.0)) +
-          "): use a coarser --grid, fewer --patterns or a lower --max-iter (or " +
-          translucency::LongRunOverride() + ")");
-      }
-    }
-    if (setupName == "back")
-      syn.Setup = translucency::AcquisitionSetup::Back;
-    else if (setupName == "front")
-      syn.Setup = translucency::AcquisitionSetup::Front;
-    else
-      throw UsageError("acquire: --setup must be back or front");
-    const int dims[3] = { grid[0], grid[1], grid[2] };
-    input = BuildSynthetic(truthPath, dims, rc[0], rc[1], noise, seed, syn);
-    if (elementArray.empty())
-      elementArray = "VoxelId";
-    vtkNew<vtkXMLUnstructuredGridWriter> writer;
-    std::string error;
-    if (!WriteAtomically(writer, input, outputPrefix + "_measurements.vtu", error))
-      throw translucency::Error(error);
-    stages.push_back({ "synthetic measurements", MillisecondsSince(start) });
+    // Each pattern is a forward and an adjoint solve per iteration.
+    throw UsageError("acquire: --patterns " + patternsArg + " gives " +
+      translucency::FormatNumber(patterns) +
+      " patterns; at most 4096 are supported (each is a forward and an adjoint solve per "
+      "iteration)");
   }
+  const double bytes =
+    translucency::EstimateGridBlockMemory(grid[0], grid[1], grid[2]) + patterns * points * 72.0;
+  try
+  {
+    translucency::CheckMemory("acquire: --grid " + gridArg + " with --patterns " +
+        patternsArg + " (" + translucency::FormatNumber(patterns) + " patterns)",
+      bytes, translucency::GetDefaultMemoryLimit(), "use a coarser --grid or fewer --patterns");
+  }
+  catch (const translucency::Error& e)
+  {
+    throw UsageError(e.what());
+  }
+  // Work: every inverse iteration solves forward and adjoint problems for
+  // every pattern on every point. Measured (session 17, 2 cores, under
+  // load): 16x16x4 and 32x32x8 with 2x2 patterns and --max-iter 100 took
+  // 6.6 s and 13.6 s, about 4e-6 s per point x pattern x iteration; the
+  // budget (1.5e8 units, about 10 minutes) refuses what would run for
+  // hours (100x100x100 with 2x2 patterns: about 27 minutes at least).
+  const double work = points * patterns * std::max(maxIter, 1);
+  const double workBudget = 1.5e8, secondsPerUnit = 4e-6;
+  if (work > workBudget && !translucency::GetLongRunsAllowed())
+  {
+    throw UsageError("acquire: --grid " + gridArg + " (" + translucency::FormatNumber(points) +
+      " points) with --patterns " + patternsArg + " (" + translucency::FormatNumber(patterns) +
+      " patterns) and --max-iter " +
+      std::to_string(maxIter) + " would take at least about " +
+      translucency::FormatNumber(std::round(work * secondsPerUnit / 60.0)) +
+      " minutes (budget: about " +
+      translucency::FormatNumber(std::round(workBudget * secondsPerUnit / 60.0)) +
+      "): use a coarser --grid, fewer --patterns or a lower --max-iter (or " +
+      translucency::LongRunOverride() + ")");
+  }
+}
+
+/// Acquire, synthetic mode: the measurements made from the truth (written to
+/// PREFIX_measurements.vtu); the columns of the pattern mosaic in
+/// `patternCols`, the element array defaulted to the voxels.
+vtkSmartPointer<vtkUnstructuredGrid> MakeSyntheticInput(const AcquireOptions& o, Synthetic& syn,
+  int& patternCols, std::string& elementArray)
+{
+  const std::vector<int> grid = ParseDims(o.GridArg, "--grid", 3);
+  const std::vector<int> rc = ParseDims(o.PatternsArg, "--patterns (synthetic mode)", 2);
+  patternCols = rc[1];
+  CheckSyntheticBudget(o, grid, rc);
+  if (o.SetupName == "back")
+    syn.Setup = translucency::AcquisitionSetup::Back;
+  else if (o.SetupName == "front")
+    syn.Setup = translucency::AcquisitionSetup::Front;
   else
-  {
-    input = ReadGrid(samplePath);
-    AttachPatterns(input, patternsArg);
-    CheckMeasurementsFinite(input, patternsArg);
-    if (elementArray.empty() && input->GetCellData()->GetArray("VoxelId"))
-      elementArray = "VoxelId";
-    stages.push_back({ "read", MillisecondsSince(start) });
-  }
+    throw UsageError("acquire: --setup must be back or front");
+  const int dims[3] = { grid[0], grid[1], grid[2] };
+  vtkSmartPointer<vtkUnstructuredGrid> input =
+    BuildSynthetic(o.TruthPath, dims, rc[0], rc[1], o.Noise, o.Seed, syn);
+  if (elementArray.empty())
+    elementArray = "VoxelId";
+  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  std::string error;
+  if (!WriteAtomically(writer, input, o.OutputPrefix + "_measurements.vtu", error))
+    throw translucency::Error(error);
+  return input;
+}
 
-  vtkNew<vtkInverseDiffusion> inverse;
+/// Acquire: the inverse diffusion filter on the measurements, with a
+/// progress bar on stderr (not with --quiet); its errors, collected by
+/// `messages` (which the caller keeps as long as the filter), thrown. The
+/// fit's time in `fitMs`.
+vtkSmartPointer<vtkInverseDiffusion> RunInverse(const AcquireOptions& o,
+  vtkUnstructuredGrid* input, const std::string& elementArray,
+  const std::vector<double>& initialMu, const std::vector<double>& initialSigma,
+  MessageCollector& messages, double& fitMs)
+{
+  const int homogeneousMethod = o.HomogeneousFit == "cg" ? vtkInverseDiffusion::CONJUGATE_GRADIENT
+                                                         : vtkInverseDiffusion::GAUSS_NEWTON;
+  auto inverse = vtkSmartPointer<vtkInverseDiffusion>::New();
   inverse->SetInputData(input);
-  inverse->SetLambda(lambda);
-  inverse->SetMaxIterations(maxIter);
-  inverse->SetRelativeThreshold(threshold);
+  inverse->SetLambda(o.Lambda);
+  inverse->SetMaxIterations(o.MaxIter);
+  inverse->SetRelativeThreshold(o.Threshold);
   inverse->SetInitialAbsorption(initialMu.data());
   inverse->SetInitialReducedScattering(initialSigma.data());
   inverse->SetHomogeneousMethod(homogeneousMethod);
-  inverse->SetGaussNewtonLineSearch(gaussNewtonLineSearch);
+  inverse->SetGaussNewtonLineSearch(o.LineSearchStart == "gauss-newton");
   inverse->SetElementArrayName(elementArray.c_str());
-  MessageCollector messages;
   messages.Watch(inverse, "inverse diffusion");
   vtkNew<vtkCallbackCommand> progress;
   int lastPercent = -1;
@@ -746,29 +754,21 @@ int Acquire(const AcquireOptions& o)
     inverse->AddObserver(vtkCommand::ProgressEvent, progress);
   const auto fitStart = Clock::now();
   inverse->Update();
+  inverse->RemoveObserver(progress); // it points at this function's lastPercent
   if (!IsQuiet())
     std::cerr << "\n";
   if (!messages.Errors.empty())
     throw translucency::Error(messages.Last());
-  const double fitMs = MillisecondsSince(fitStart);
-  stages.push_back({ "inverse diffusion", fitMs });
-  vtkUnstructuredGrid* result = inverse->GetOutput();
-  vtkTable* history = vtkTable::SafeDownCast(inverse->GetHistoryOutput());
+  fitMs = MillisecondsSince(fitStart);
+  return inverse;
+}
 
-  // No exit 0 with NaN: the recovered coefficients and fitted radiance
-  // must be finite before anything is written.
-  RequireFiniteResult(result, "the recovered material");
-  std::string error;
-  {
-    vtkNew<vtkXMLUnstructuredGridWriter> writer;
-    if (!WriteAtomically(writer, result, outputPrefix + ".vtu", error))
-      throw translucency::Error(error);
-  }
-
-  // Summary: misfit of the fitted radiance on the observed points.
-  vtkPointData* pd = result->GetPointData();
+/// Acquire, summary: the number of patterns of the result and the relative
+/// RMS misfit of the fitted radiance on the observed points (0 without data).
+double FitMisfit(vtkPointData* pd, int& numPatterns)
+{
   double num = 0.0, den = 0.0;
-  int numPatterns = 0;
+  numPatterns = 0;
   while (pd->GetArray(Indexed("Radiance", numPatterns).c_str()))
     ++numPatterns;
   for (int m = 0; m < numPatterns; ++m)
@@ -792,37 +792,39 @@ int Acquire(const AcquireOptions& o)
       }
     }
   }
-  json report;
-  report["command"] = "acquire";
-  report["provenance"] = Provenance(o.App);
-  report["provenance"]["seed"] = seed;
-  report["mode"] = synthetic ? "synthetic" : "files";
-  report["patterns"] = numPatterns;
-  report["lambda"] = lambda;
-  report["max_iter"] = maxIter;
-  report["factorization"] = translucency::DiffusionForwardModel::GetFactorizationName();
-  report["points"] = result->GetNumberOfPoints();
-  report["tets"] = result->GetNumberOfCells();
-  report["fit_relative_rms"] = den > 0 ? std::sqrt(num / den) : 0.0;
+  return den > 0 ? std::sqrt(num / den) : 0.0;
+}
+
+/// Acquire, report: the counts and costs of the inverse run's passes.
+void ReportInverseCosts(vtkInverseDiffusion* inverse, double fitMs, json& report)
+{
   report["seconds_fit"] = fitMs / 1000.0;
   report["evaluations"] = inverse->GetNumberOfEvaluations();
   report["gradients"] = inverse->GetNumberOfGradients();
   report["tangents"] = inverse->GetNumberOfTangents();
   report["seconds_per_tangent_pass"] =
     inverse->GetNumberOfTangents() > 0 ? inverse->GetTangentSeconds() / inverse->GetNumberOfTangents() : 0.0;
-  report["homogeneous_fit"] =
-    homogeneousMethod == vtkInverseDiffusion::CONJUGATE_GRADIENT ? "cg" : "gauss-newton";
-  report["line_search_start"] = gaussNewtonLineSearch ? "gauss-newton" : "previous";
+}
+
+/// Acquire, report: the forward and adjoint pass times (a gradient = one
+/// forward pass, factorisation + M solves, + one adjoint pass, M solves).
+void ReportPassTimes(vtkInverseDiffusion* inverse, json& report)
+{
   const double perEvaluation =
     inverse->GetNumberOfEvaluations() > 0 ? inverse->GetEvaluationSeconds() / inverse->GetNumberOfEvaluations() : 0.0;
   const double perAdjoint =
     inverse->GetNumberOfGradients() > 0 ? inverse->GetGradientSeconds() / inverse->GetNumberOfGradients() : 0.0;
   report["seconds_per_forward_pass"] = perEvaluation;
   report["seconds_per_adjoint_pass"] = perAdjoint;
-  // A gradient = one forward pass (factorisation + M solves) + one adjoint pass (M solves).
   report["seconds_per_gradient"] = perEvaluation + perAdjoint;
+}
+
+/// Acquire: per channel, the objective history of the fit (JSON rows and
+/// the plot series) with its final value against the threshold.
+json ChannelHistories(vtkTable* history, double threshold, std::vector<PlotSeries>& series)
+{
   json channels = json::array();
-  std::vector<PlotSeries> series(3);
+  series.assign(3, PlotSeries());
   const char* channelNames[3] = { "R", "G", "B" };
   for (int c = 0; c < 3; ++c)
   {
@@ -849,78 +851,83 @@ int Acquire(const AcquireOptions& o)
     ch["history"] = rows;
     channels.push_back(ch);
   }
-  report["channels"] = channels;
+  return channels;
+}
 
-  if (synthetic)
+/// Acquire, synthetic mode: the recovered coefficients against the truth by
+/// depth in the report and, with pictures, the radiance and slice mosaics.
+void ReportAgainstTruth(const AcquireOptions& o, const Synthetic& syn,
+  vtkUnstructuredGrid* result, int numPatterns, int patternCols, json& report)
+{
+  // Recovered per voxel (every tet of a voxel holds its values).
+  const int numVoxels = syn.N[0] * syn.N[1] * syn.N[2];
+  vtkDataArray* kappaArray = result->GetCellData()->GetArray("DiffusionCoefficient");
+  vtkDataArray* muArray = result->GetCellData()->GetArray("AbsorptionCoefficient");
+  std::vector<double> kappa(3 * numVoxels), mu(3 * numVoxels);
+  for (int v = 0; v < numVoxels; ++v)
+    for (int c = 0; c < 3; ++c)
+    {
+      kappa[3 * v + c] = kappaArray->GetComponent(6 * v, c);
+      mu[3 * v + c] = muArray->GetComponent(6 * v, c);
+    }
+  json depths = json::array();
+  for (int k : SliceLayers(syn))
   {
-    // Recovered per voxel (every tet of a voxel holds its values).
-    const int numVoxels = syn.N[0] * syn.N[1] * syn.N[2];
-    vtkDataArray* kappaArray = result->GetCellData()->GetArray("DiffusionCoefficient");
-    vtkDataArray* muArray = result->GetCellData()->GetArray("AbsorptionCoefficient");
-    std::vector<double> kappa(3 * numVoxels), mu(3 * numVoxels);
-    for (int v = 0; v < numVoxels; ++v)
+    std::vector<double> tk, rk, tm, rm;
+    for (int v = k * syn.N[0] * syn.N[1]; v < (k + 1) * syn.N[0] * syn.N[1]; ++v)
+    {
+      tk.push_back(syn.Kappa[3 * v + 1]);
+      rk.push_back(kappa[3 * v + 1]);
+      tm.push_back(syn.Mu[3 * v + 1]);
+      rm.push_back(mu[3 * v + 1]);
+    }
+    // null where the truth is constant on the layer (no correlation defined).
+    const double ck = Correlation(tk, rk), cm = Correlation(tm, rm);
+    depths.push_back({ { "layer", k },
+      { "kappa_correlation_G", std::isfinite(ck) ? json(ck) : json(nullptr) },
+      { "mua_correlation_G", std::isfinite(cm) ? json(cm) : json(nullptr) } });
+  }
+  report["truth_correlation_by_depth"] = depths;
+  report["grid"] = { syn.N[0], syn.N[1], syn.N[2] };
+  report["setup"] = o.SetupName;
+  report["noise"] = o.Noise;
+  if (o.NoPng)
+    return;
+  vtkPointData* pd = result->GetPointData();
+  std::vector<std::vector<double>> fitted(numPatterns);
+  for (int m = 0; m < numPatterns; ++m)
+  {
+    vtkDataArray* f = pd->GetArray(Indexed("FittedRadiance", m).c_str());
+    fitted[m].resize(3 * f->GetNumberOfTuples());
+    for (vtkIdType i = 0; i < f->GetNumberOfTuples(); ++i)
       for (int c = 0; c < 3; ++c)
-      {
-        kappa[3 * v + c] = kappaArray->GetComponent(6 * v, c);
-        mu[3 * v + c] = muArray->GetComponent(6 * v, c);
-      }
-    json depths = json::array();
-    for (int k : SliceLayers(syn))
-    {
-      std::vector<double> tk, rk, tm, rm;
-      for (int v = k * syn.N[0] * syn.N[1]; v < (k + 1) * syn.N[0] * syn.N[1]; ++v)
-      {
-        tk.push_back(syn.Kappa[3 * v + 1]);
-        rk.push_back(kappa[3 * v + 1]);
-        tm.push_back(syn.Mu[3 * v + 1]);
-        rm.push_back(mu[3 * v + 1]);
-      }
-      // null where the truth is constant on the layer (no correlation defined).
-      const double ck = Correlation(tk, rk), cm = Correlation(tm, rm);
-      depths.push_back({ { "layer", k },
-        { "kappa_correlation_G", std::isfinite(ck) ? json(ck) : json(nullptr) },
-        { "mua_correlation_G", std::isfinite(cm) ? json(cm) : json(nullptr) } });
-    }
-    report["truth_correlation_by_depth"] = depths;
-    report["grid"] = { syn.N[0], syn.N[1], syn.N[2] };
-    report["setup"] = setupName;
-    report["noise"] = noise;
-    if (png)
-    {
-      std::vector<std::vector<double>> fitted(numPatterns);
-      for (int m = 0; m < numPatterns; ++m)
-      {
-        vtkDataArray* f = pd->GetArray(Indexed("FittedRadiance", m).c_str());
-        fitted[m].resize(3 * f->GetNumberOfTuples());
-        for (vtkIdType i = 0; i < f->GetNumberOfTuples(); ++i)
-          for (int c = 0; c < 3; ++c)
-            fitted[m][3 * i + c] = f->GetComponent(i, c);
-      }
-      if (!WriteRadianceMosaic(syn, fitted, patternCols, outputPrefix + "_radiance.png", error) ||
-        !WriteSliceMosaic(syn, kappa, mu, outputPrefix + "_slices.png", error))
-        throw translucency::Error(error);
-    }
+        fitted[m][3 * i + c] = f->GetComponent(i, c);
   }
-  if (png)
-  {
-    // Needs an X server (xvfb-run): a failure only warns.
-    std::string plotError;
-    if (!OpenPictureDisplay("--no-png", plotError))
-      std::cerr << "translucency: warning: objective plot not written: " << plotError << "\n";
-    else if (!WritePlotPNG(series, "iteration (homogeneous fit, then heterogeneous)",
-          "normalised objective", outputPrefix + "_objective.png", plotError))
-      std::cerr << "translucency: warning: objective plot not written: " << plotError << "\n";
-  }
-  json timing = json::array();
-  for (const Stage& s : stages)
-    timing.push_back({ { "stage", s.Name }, { "ms", s.Milliseconds } });
-  report["timing"] = timing;
-  if (!jsonPath.empty())
-  {
-    EnsureParentDirectory(jsonPath);
-    if (!WriteText(jsonPath, report.dump(2) + "\n", error))
-      throw translucency::Error(error);
-  }
+  std::string error;
+  if (!WriteRadianceMosaic(syn, fitted, patternCols, o.OutputPrefix + "_radiance.png", error) ||
+    !WriteSliceMosaic(syn, kappa, mu, o.OutputPrefix + "_slices.png", error))
+    throw translucency::Error(error);
+}
+
+/// Acquire: the plot of the objective histories. Needs an X server
+/// (xvfb-run): a failure only warns.
+void WriteObjectivePlot(const std::vector<PlotSeries>& series, const std::string& outputPrefix)
+{
+  std::string plotError;
+  if (!OpenPictureDisplay("--no-png", plotError))
+    std::cerr << "translucency: warning: objective plot not written: " << plotError << "\n";
+  else if (!WritePlotPNG(series, "iteration (homogeneous fit, then heterogeneous)",
+        "normalised objective", outputPrefix + "_objective.png", plotError))
+    std::cerr << "translucency: warning: objective plot not written: " << plotError << "\n";
+}
+
+/// Acquire, on stdout: the summary line, each channel's final objective and
+/// the stage times.
+void PrintAcquireSummary(const json& report, int numPatterns, vtkUnstructuredGrid* result,
+  vtkInverseDiffusion* inverse, const std::vector<Stage>& stages, const std::string& outputPrefix)
+{
+  const json& channels = report["channels"];
+  const char* channelNames[3] = { "R", "G", "B" };
   std::cout << "acquire: " << numPatterns << " patterns, " << result->GetNumberOfCells()
             << " tets; fitted radiance relative RMS " << report["fit_relative_rms"].get<double>()
             << "; " << inverse->GetNumberOfEvaluations() << " forward passes, "
@@ -933,6 +940,95 @@ int Acquire(const AcquireOptions& o)
               << "\n";
   PrintStages(stages);
   std::cout << "wrote " << outputPrefix << ".vtu\n";
+}
+
+int Acquire(const AcquireOptions& o)
+{
+  const std::string& outputPrefix = o.OutputPrefix;
+  const bool synthetic = !o.TruthPath.empty(), png = !o.NoPng;
+  std::vector<double> initialMu, initialSigma;
+  CheckAcquireOptions(o, initialMu, initialSigma);
+  OutputPlan plan; // its locks last until the end of the run
+  PlanAcquireOutputs(o, plan);
+
+  // The measurements: synthetic from a truth, or read with their patterns.
+  const auto start = Clock::now();
+  std::vector<Stage> stages;
+  Synthetic syn;
+  int patternCols = 1;
+  std::string elementArray = o.ElementArray;
+  vtkSmartPointer<vtkUnstructuredGrid> input;
+  if (synthetic)
+  {
+    input = MakeSyntheticInput(o, syn, patternCols, elementArray);
+    stages.push_back({ "synthetic measurements", MillisecondsSince(start) });
+  }
+  else
+  {
+    input = ReadGrid(o.SamplePath);
+    AttachPatterns(input, o.PatternsArg);
+    CheckMeasurementsFinite(input, o.PatternsArg);
+    if (elementArray.empty() && input->GetCellData()->GetArray("VoxelId"))
+      elementArray = "VoxelId";
+    stages.push_back({ "read", MillisecondsSince(start) });
+  }
+
+  double fitMs = 0.0;
+  MessageCollector messages;
+  vtkSmartPointer<vtkInverseDiffusion> inverse =
+    RunInverse(o, input, elementArray, initialMu, initialSigma, messages, fitMs);
+  stages.push_back({ "inverse diffusion", fitMs });
+  vtkUnstructuredGrid* result = inverse->GetOutput();
+  vtkTable* history = vtkTable::SafeDownCast(inverse->GetHistoryOutput());
+
+  // No exit 0 with NaN: the recovered coefficients and fitted radiance
+  // must be finite before anything is written.
+  RequireFiniteResult(result, "the recovered material");
+  std::string error;
+  {
+    vtkNew<vtkXMLUnstructuredGridWriter> writer;
+    if (!WriteAtomically(writer, result, outputPrefix + ".vtu", error))
+      throw translucency::Error(error);
+  }
+
+  // Summary: misfit of the fitted radiance on the observed points.
+  int numPatterns = 0;
+  const double misfit = FitMisfit(result->GetPointData(), numPatterns);
+  json report;
+  report["command"] = "acquire";
+  report["provenance"] = Provenance(o.App);
+  report["provenance"]["seed"] = o.Seed;
+  report["mode"] = synthetic ? "synthetic" : "files";
+  report["patterns"] = numPatterns;
+  report["lambda"] = o.Lambda;
+  report["max_iter"] = o.MaxIter;
+  report["factorization"] = translucency::DiffusionForwardModel::GetFactorizationName();
+  report["points"] = result->GetNumberOfPoints();
+  report["tets"] = result->GetNumberOfCells();
+  report["fit_relative_rms"] = misfit;
+  ReportInverseCosts(inverse, fitMs, report);
+  report["homogeneous_fit"] = o.HomogeneousFit == "cg" ? "cg" : "gauss-newton";
+  report["line_search_start"] =
+    o.LineSearchStart == "gauss-newton" ? "gauss-newton" : "previous";
+  ReportPassTimes(inverse, report);
+  std::vector<PlotSeries> series;
+  report["channels"] = ChannelHistories(history, o.Threshold, series);
+
+  if (synthetic)
+    ReportAgainstTruth(o, syn, result, numPatterns, patternCols, report);
+  if (png)
+    WriteObjectivePlot(series, outputPrefix);
+  json timing = json::array();
+  for (const Stage& s : stages)
+    timing.push_back({ { "stage", s.Name }, { "ms", s.Milliseconds } });
+  report["timing"] = timing;
+  if (!o.JsonPath.empty())
+  {
+    EnsureParentDirectory(o.JsonPath);
+    if (!WriteText(o.JsonPath, report.dump(2) + "\n", error))
+      throw translucency::Error(error);
+  }
+  PrintAcquireSummary(report, numPatterns, result, inverse, stages, outputPrefix);
   return 0;
 }
 

@@ -364,23 +364,31 @@ int Bench(const BenchOptions& o)
   return 0;
 }
 
-} // namespace
-
-Command AddBenchCommand(CLI::App& app)
+/// What the options of `bench` fill in: one subcommand, several benches
+/// (the plain one, --linear-solvers, --diffuse-optics, --pipeline,
+/// --meshers) sharing --mesh, --tets, --runs and --json (each bench with its
+/// own defaults).
+struct BenchCommandState
 {
-  // One subcommand, two benches: the plain one and --linear-solvers, which
-  // share --mesh, --tets, --runs and --json (with their own defaults).
-  auto linear = std::make_shared<LinearSolverBenchOptions>();
-  auto plain = std::make_shared<BenchOptions>();
-  auto tets = std::make_shared<std::vector<double>>();
-  auto runs = std::make_shared<int>(0);
-  auto solvers = std::make_shared<std::vector<std::string>>();
-  CLI::App* c = app.add_subcommand("bench", "Median assembly and solve times at several mesh sizes."
-    "\n\nusage: translucency bench [options]\n   or: translucency bench --linear-solvers [N1,N2,...] [options]");
-  c->add_option("--mesh", linear->MeshPath, "surface to tetrahedralize")
+  LinearSolverBenchOptions Linear; ///< also holds the shared --mesh and --json
+  BenchOptions Plain;
+  DiffuseOpticsBenchOptions Optics;
+  std::vector<double> Tets; ///< --tets (empty: each bench's default)
+  int Runs = 0;             ///< --runs (0: each bench's default)
+  std::vector<std::string> Solvers; ///< --linear-solvers' values (comma lists)
+  bool Meshers = false, DiffuseOptics = false, Pipeline = false;
+  CLI::Option* LinearSolvers = nullptr; ///< set when --linear-solvers is given
+};
+
+/// bench: the options every bench shares (--mesh, --tets, --runs, --json)
+/// and the plain bench's --edit and --sp3.
+void AddSharedBenchOptions(
+  CLI::App* c, BenchCommandState& s, CLI::Option*& edit, CLI::Option*& sp3)
+{
+  c->add_option("--mesh", s.Linear.MeshPath, "surface to tetrahedralize")
     ->type_name("FILE")
     ->capture_default_str();
-  AddNumberList(c, "--tets", *tets, "target sizes (default 100000,1000000; with\n--linear-solvers 100000,500000,1000000)", "N1,N2,...")
+  AddNumberList(c, "--tets", s.Tets, "target sizes (default 100000,1000000; with\n--linear-solvers 100000,500000,1000000)", "N1,N2,...")
     ->check(CLI::Validator(
       [](std::string& text) {
         const std::vector<double> sizes = ParseNumbers(text, "--tets");
@@ -394,20 +402,26 @@ Command AddBenchCommand(CLI::App& app)
         return std::string();
       },
       ""));
-  AddNumber(c, "--runs", *runs, "repetitions per measurement (default 7; with\n--linear-solvers 5)", "N",
+  AddNumber(c, "--runs", s.Runs, "repetitions per measurement (default 7; with\n--linear-solvers 5)", "N",
     [](double n) { return n >= 1 && n <= 1000; }, "--runs must be from 1 to 1000")
     ->default_str("");
-  c->add_option("--json", linear->JsonPath, "machine-readable results")->type_name("FILE");
-  CLI::Option* edit = c->add_flag("--edit", plain->Edit,
+  c->add_option("--json", s.Linear.JsonPath, "machine-readable results")->type_name("FILE");
+  edit = c->add_flag("--edit", s.Plain.Edit,
     "also time a plane cut (+ topology + assembly) and a paint\n"
     "stroke on ~1 % of the tets (+ incremental row update)");
-  CLI::Option* sp3 = c->add_flag("--sp3", plain->Sp3,
+  sp3 = c->add_flag("--sp3", s.Plain.Sp3,
     "also time the sp3 solver against divergence (default linear\n"
     "solvers, rel-tol 1e-6): cold (new solver) and warm (the\n"
     "light turned 45 degrees, warm start), medians of --runs");
+}
+
+/// bench: --linear-solvers and the options only it takes (--plot,
+/// --hypre-ranks, --no-cut); returns --linear-solvers.
+CLI::Option* AddLinearSolverBenchOptions(CLI::App* c, BenchCommandState& s)
+{
   const std::string group = "Linear solvers (bench --linear-solvers)";
   CLI::Option* linearSolvers =
-    c->add_option("--linear-solvers", *solvers,
+    c->add_option("--linear-solvers", s.Solvers,
        "every linear solver of this build (or the named ones of\n" +
          WrapNames(translucency::GetLinearSolverNames()) +
          ")\non the bunny, marble, one directional light: set-up, cold solve\n"
@@ -417,21 +431,143 @@ Command AddBenchCommand(CLI::App& app)
       ->type_name("[N1,N2,...]")
       ->expected(0, 1) // one optional value; the comma list is split below
       ->group(group);
-  CLI::Option* plot = c->add_option("--plot", linear->PlotPath,
+  CLI::Option* plot = c->add_option("--plot", s.Linear.PlotPath,
                         "error of the boundary fluence vs solve time per solver\n"
                         "(writes FILE.csv, plotted by scripts/plot_linear_solvers.py)")
                         ->type_name("FILE.png")
                         ->group(group);
-  CLI::Option* ranks = AddNumber(c, "--hypre-ranks", linear->HypreRanks,
+  CLI::Option* ranks = AddNumber(c, "--hypre-ranks", s.Linear.HypreRanks,
     "also run hypre-amg on N MPI ranks through mpiexec and\n"
     "translucency-hypre-mpi (0 or 1: skip)",
     "N")->group(group);
+  LinearSolverBenchOptions* linear = &s.Linear;
   CLI::Option* noCut =
     c->add_flag_callback("--no-cut", [linear]() { linear->DoCut = false; },
        "skip the cut -> new fluence figure")
       ->group(group);
-  auto meshersFlag = std::make_shared<bool>(false);
-  CLI::Option* meshers = c->add_flag("--meshers", *meshersFlag,
+  for (CLI::Option* only : { plot, ranks, noCut })
+    only->needs(linearSolvers);
+  return linearSolvers;
+}
+
+/// bench: --diffuse-optics and the options only it takes (issue 19's
+/// performance targets); returns --diffuse-optics.
+CLI::Option* AddDiffuseOpticsBenchOptions(CLI::App* c, BenchCommandState& s)
+{
+  DiffuseOpticsBenchOptions& optics = s.Optics;
+  const std::string opticsGroup = "Diffuse optics (bench --diffuse-optics)";
+  CLI::Option* diffuseOptics = c->add_flag("--diffuse-optics", s.DiffuseOptics,
+    "frequency-domain solves (COCG with Jacobi and with the\n"
+    "multigrid of the real part) against the CW cold solve at\n"
+    "--tets (default 1000000), and --gates time gates at\n"
+    "--gate-tets with the cg-jacobi and multigrid step solvers\n"
+    "(the multigrid with and without recycled step solutions);\n"
+    "--runs default 3")->group(opticsGroup);
+  CLI::Option* frequency = AddNumber(c, "--frequency", optics.Frequency,
+    "modulation frequency of the frequency-domain solves (Hz)", "HZ",
+    [](double f) { return std::isfinite(f) && f > 0.0; }, "--frequency must be finite and > 0")
+    ->group(opticsGroup);
+  CLI::Option* gateTets = AddNumber(c, "--gate-tets", optics.GateTets,
+    "target size of the time-gate table (0: skip it)", "N",
+    [](double n) { return n >= 0 && n <= 1e8; }, "--gate-tets must be from 0 to 1e8")
+    ->group(opticsGroup);
+  CLI::Option* gateCount = AddNumber(c, "--gates", optics.Gates,
+    "time gates over 0-5 ns", "N",
+    [](double n) { return n >= 1 && n <= translucency::TimeGates::MaximumTimeGates; },
+    "--gates must be from 1 to 10000")->group(opticsGroup);
+  CLI::Option* stepsPerGate = AddNumber(c, "--steps-per-gate", optics.StepsPerGate,
+    "time steps per gate of the time-gate table (0: automatic,\n"
+    "as render's --steps-per-gate)", "K",
+    [](double k) { return k >= 0 && k <= translucency::TimeGates::MaximumStepsPerGate; },
+    "--steps-per-gate must be from 0 to 1000")->group(opticsGroup);
+  for (CLI::Option* only : { frequency, gateTets, gateCount, stepsPerGate })
+    only->needs(diffuseOptics);
+  return diffuseOptics;
+}
+
+/// bench, run: the outputs checked, then the bench the flags choose, with
+/// the shared --mesh, --json, --tets and --runs.
+int RunBench(BenchCommandState& s)
+{
+  LinearSolverBenchOptions& linear = s.Linear;
+  // Before any work: no output may be the input or another output.
+  OutputPlan plan;
+  plan.Input(linear.MeshPath, "--mesh");
+  plan.Output(linear.JsonPath, "--json");
+  if (!linear.PlotPath.empty())
+  {
+    plan.Output(linear.PlotPath, "--plot");
+    plan.Output(PlotDataPath(linear.PlotPath), "--plot (its data, .csv)");
+  }
+  plan.Check();
+  if (s.LinearSolvers->count() > 0)
+  {
+    for (const std::string& list : s.Solvers)
+    {
+      std::stringstream names(list);
+      std::string name;
+      while (std::getline(names, name, ','))
+        if (!name.empty())
+          linear.Names.push_back(name);
+    }
+    if (!s.Tets.empty())
+      linear.Tets = s.Tets;
+    if (s.Runs > 0)
+      linear.Runs = s.Runs;
+    return BenchLinearSolvers(linear);
+  }
+  if (s.DiffuseOptics)
+  {
+    s.Optics.MeshPath = linear.MeshPath;
+    s.Optics.JsonPath = linear.JsonPath;
+    if (!s.Tets.empty())
+      s.Optics.Tets = s.Tets;
+    if (s.Runs > 0)
+      s.Optics.Runs = s.Runs;
+    return BenchDiffuseOptics(s.Optics);
+  }
+  if (s.Pipeline)
+  {
+    PipelineBenchOptions p;
+    p.MeshPath = linear.MeshPath;
+    p.JsonPath = linear.JsonPath;
+    if (!s.Tets.empty())
+      p.Tets = s.Tets;
+    if (s.Runs > 0)
+      p.Runs = s.Runs;
+    return BenchPipeline(p);
+  }
+  if (s.Meshers)
+  {
+    MesherBenchOptions m;
+    m.MeshPath = linear.MeshPath;
+    m.JsonPath = linear.JsonPath;
+    if (!s.Tets.empty())
+      m.Tets = s.Tets;
+    if (s.Runs > 0)
+      m.Runs = s.Runs;
+    return BenchMeshers(m);
+  }
+  s.Plain.MeshPath = linear.MeshPath;
+  s.Plain.JsonPath = linear.JsonPath;
+  s.Plain.Tets = s.Tets.empty() ? std::vector<double>{ 100000, 1000000 } : s.Tets;
+  if (s.Runs > 0)
+    s.Plain.Runs = s.Runs;
+  return Bench(s.Plain);
+}
+
+} // namespace
+
+Command AddBenchCommand(CLI::App& app)
+{
+  auto s = std::make_shared<BenchCommandState>();
+  CLI::App* c = app.add_subcommand("bench", "Median assembly and solve times at several mesh sizes."
+    "\n\nusage: translucency bench [options]\n   or: translucency bench --linear-solvers [N1,N2,...] [options]");
+  CLI::Option *edit = nullptr, *sp3 = nullptr;
+  AddSharedBenchOptions(c, *s, edit, sp3);
+  CLI::Option* linearSolvers = AddLinearSolverBenchOptions(c, *s);
+  s->LinearSolvers = linearSolvers;
+  CLI::Option* meshers = c->add_flag("--meshers", s->Meshers,
     "compare the tetrahedralisers instead: tetgen and hxt (when\n"
     "built), graded and --uniform-size, at --tets (default\n"
     "1000000), --runs (default 3): time, tets/s, min dihedral\n"
@@ -441,43 +577,11 @@ Command AddBenchCommand(CLI::App& app)
   edit->excludes(linearSolvers);
   sp3->excludes(meshers);
   sp3->excludes(linearSolvers);
-  for (CLI::Option* only : { plot, ranks, noCut })
-    only->needs(linearSolvers);
-  // Diffuse optics (issue 19's performance targets).
-  auto optics = std::make_shared<DiffuseOpticsBenchOptions>();
-  auto opticsFlag = std::make_shared<bool>(false);
-  const std::string opticsGroup = "Diffuse optics (bench --diffuse-optics)";
-  CLI::Option* diffuseOptics = c->add_flag("--diffuse-optics", *opticsFlag,
-    "frequency-domain solves (COCG with Jacobi and with the\n"
-    "multigrid of the real part) against the CW cold solve at\n"
-    "--tets (default 1000000), and --gates time gates at\n"
-    "--gate-tets with the cg-jacobi and multigrid step solvers\n"
-    "(the multigrid with and without recycled step solutions);\n"
-    "--runs default 3")->group(opticsGroup);
-  CLI::Option* frequency = AddNumber(c, "--frequency", optics->Frequency,
-    "modulation frequency of the frequency-domain solves (Hz)", "HZ",
-    [](double f) { return std::isfinite(f) && f > 0.0; }, "--frequency must be finite and > 0")
-    ->group(opticsGroup);
-  CLI::Option* gateTets = AddNumber(c, "--gate-tets", optics->GateTets,
-    "target size of the time-gate table (0: skip it)", "N",
-    [](double n) { return n >= 0 && n <= 1e8; }, "--gate-tets must be from 0 to 1e8")
-    ->group(opticsGroup);
-  CLI::Option* gateCount = AddNumber(c, "--gates", optics->Gates,
-    "time gates over 0-5 ns", "N",
-    [](double n) { return n >= 1 && n <= translucency::TimeGates::MaximumTimeGates; },
-    "--gates must be from 1 to 10000")->group(opticsGroup);
-  CLI::Option* stepsPerGate = AddNumber(c, "--steps-per-gate", optics->StepsPerGate,
-    "time steps per gate of the time-gate table (0: automatic,\n"
-    "as render's --steps-per-gate)", "K",
-    [](double k) { return k >= 0 && k <= translucency::TimeGates::MaximumStepsPerGate; },
-    "--steps-per-gate must be from 0 to 1000")->group(opticsGroup);
-  for (CLI::Option* only : { frequency, gateTets, gateCount, stepsPerGate })
-    only->needs(diffuseOptics);
+  CLI::Option* diffuseOptics = AddDiffuseOpticsBenchOptions(c, *s);
   for (CLI::Option* other : { linearSolvers, meshers, edit, sp3 })
     diffuseOptics->excludes(other);
   // The ParaView chain, filter by filter (issue 31).
-  auto pipelineFlag = std::make_shared<bool>(false);
-  CLI::Option* pipeline = c->add_flag("--pipeline", *pipelineFlag,
+  CLI::Option* pipeline = c->add_flag("--pipeline", s->Pipeline,
     "time the ParaView chain filter by filter (Assign marble ->\n"
     "Surface Irradiance -> Paint -> Solve Diffusion -> Outgoing\n"
     "Radiance, read from a .vtu): cold chain, relight (15\n"
@@ -487,72 +591,7 @@ Command AddBenchCommand(CLI::App& app)
     "a solve to RelTol 1e-10");
   for (CLI::Option* other : { linearSolvers, meshers, edit, diffuseOptics })
     pipeline->excludes(other);
-  return { c, [=]() {
-            // Before any work: no output may be the input or another output.
-            OutputPlan plan;
-            plan.Input(linear->MeshPath, "--mesh");
-            plan.Output(linear->JsonPath, "--json");
-            if (!linear->PlotPath.empty())
-            {
-              plan.Output(linear->PlotPath, "--plot");
-              plan.Output(PlotDataPath(linear->PlotPath), "--plot (its data, .csv)");
-            }
-            plan.Check();
-            if (linearSolvers->count() > 0)
-            {
-              for (const std::string& list : *solvers)
-              {
-                std::stringstream names(list);
-                std::string name;
-                while (std::getline(names, name, ','))
-                  if (!name.empty())
-                    linear->Names.push_back(name);
-              }
-              if (!tets->empty())
-                linear->Tets = *tets;
-              if (*runs > 0)
-                linear->Runs = *runs;
-              return BenchLinearSolvers(*linear);
-            }
-            if (*opticsFlag)
-            {
-              optics->MeshPath = linear->MeshPath;
-              optics->JsonPath = linear->JsonPath;
-              if (!tets->empty())
-                optics->Tets = *tets;
-              if (*runs > 0)
-                optics->Runs = *runs;
-              return BenchDiffuseOptics(*optics);
-            }
-            if (*pipelineFlag)
-            {
-              PipelineBenchOptions p;
-              p.MeshPath = linear->MeshPath;
-              p.JsonPath = linear->JsonPath;
-              if (!tets->empty())
-                p.Tets = *tets;
-              if (*runs > 0)
-                p.Runs = *runs;
-              return BenchPipeline(p);
-            }
-            if (*meshersFlag)
-            {
-              MesherBenchOptions m;
-              m.MeshPath = linear->MeshPath;
-              m.JsonPath = linear->JsonPath;
-              if (!tets->empty())
-                m.Tets = *tets;
-              if (*runs > 0)
-                m.Runs = *runs;
-              return BenchMeshers(m);
-            }
-            plain->MeshPath = linear->MeshPath;
-            plain->JsonPath = linear->JsonPath;
-            plain->Tets = tets->empty() ? std::vector<double>{ 100000, 1000000 } : *tets;
-            if (*runs > 0)
-              plain->Runs = *runs;
-            return Bench(*plain);
-          } };
+  return { c, [s]() { return RunBench(*s); } };
 }
 
 } // namespace translucency_app

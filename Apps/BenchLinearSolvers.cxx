@@ -1059,15 +1059,180 @@ std::string PlotDataPath(const std::string& plotPath)
   return std::filesystem::path(plotPath).replace_extension(".csv").string();
 }
 
+namespace
+{
+
+/// The set-up figures of one mesh size (ms, medians of the runs).
+struct ProblemFigures
+{
+  double TetgenMs = 0.0, TopologyMs = 0.0, AssemblyMs = 0.0;
+  double SpmvMs = 0.0, SpmvBytes = 0.0, BoundMs = 0.0; ///< one SpMV, red channel
+  double ReferenceResidual = 0.0;
+  int Unknowns = 0;       ///< per channel
+  double NonZeros = 0.0;  ///< of one channel's matrix
+};
+
+/// BenchLinearSolvers, one size: the problem of the solvers (the surface
+/// tetrahedralized to `target` tets, marble, two lights, the assembled
+/// system, the reference solutions), the timings of its set-up, and one
+/// line about it on stdout. `disc` and `q0` (light 0's irradiance) are kept
+/// for the memory figures.
+ProblemFigures BuildBenchProblem(vtkPolyData* surface, vtkSmartPointer<vtkUnstructuredGrid>& grid,
+  double target, int runs, double bandwidth, Problem& p, translucency::DiscreteDivergence& disc,
+  std::vector<double>& q0)
+{
+  ProblemFigures f;
+  std::vector<double> points;
+  std::vector<int> tets;
+  f.TetgenMs = TetrahedralizeForBench(surface, target, grid, points, tets);
+  std::vector<double> topo;
+  for (int r = 0; r < runs; ++r)
+  {
+    const auto start = Clock::now();
+    p.Mesh.SetGeometry(points, tets);
+    topo.push_back(MillisecondsSince(start));
+  }
+  f.TopologyMs = Median(topo);
+  const translucency::MaterialPreset& marble = translucency::FindMaterialPreset("marble");
+  p.Material = translucency::OpticalProperties::Uniform(p.Mesh.GetNumberOfTets(),
+    marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
+  // Light 0 travels along (0, -1, -1) / sqrt(2) (as in `bench`); light 1
+  // is light 0 turned 10 degrees about the x axis.
+  const double s2 = std::sqrt(0.5), t10 = 10.0 * M_PI / 180.0;
+  p.Dir0[0] = 0.0;
+  p.Dir0[1] = -s2;
+  p.Dir0[2] = -s2;
+  p.Dir1[0] = 0.0;
+  p.Dir1[1] = -s2 * std::cos(t10) + s2 * std::sin(t10);
+  p.Dir1[2] = -s2 * std::sin(t10) - s2 * std::cos(t10);
+  q0 = Irradiance(p.Mesh, p.Material, p.Dir0);
+  const std::vector<double> q1 = Irradiance(p.Mesh, p.Material, p.Dir1);
+  std::vector<double> assembly;
+  for (int r = 0; r < runs; ++r)
+  {
+    const auto start = Clock::now();
+    disc.Assemble(p.Mesh, p.Material, q0, p.System);
+    assembly.push_back(MillisecondsSince(start));
+  }
+  f.AssemblyMs = Median(assembly);
+  p.Rhs0 = p.System.RightHandSide;
+  {
+    translucency::DiffusionSystem rotated;
+    disc.Assemble(p.Mesh, p.Material, q1, rotated);
+    p.Rhs1 = rotated.RightHandSide;
+  }
+  // One SpMV (red channel) and its bandwidth bound.
+  const int n = p.System.NumberOfUnknowns;
+  const double nnz = static_cast<double>(p.System.ColumnIndices.size());
+  f.Unknowns = n;
+  f.NonZeros = nnz;
+  Eigen::VectorXd x = Eigen::VectorXd::Ones(n), y(n);
+  std::vector<double> spmv;
+  for (int r = 0; r < std::max(runs, 5); ++r)
+  {
+    const auto start = Clock::now();
+    y.noalias() = p.System.Matrix(0) * x;
+    spmv.push_back(MillisecondsSince(start));
+  }
+  f.SpmvMs = Median(spmv);
+  // Values (8 B) and column indices (4 B) per nonzero, row offsets (4 B),
+  // x read once and y written once (8 B each) per row: the minimum traffic.
+  f.SpmvBytes = 12.0 * nnz + 4.0 * (n + 1) + 16.0 * n;
+  f.BoundMs = f.SpmvBytes / (bandwidth * 1e6);
+  double res0 = 0.0, res1 = 0.0;
+  p.System.RightHandSide = p.Rhs1;
+  p.Ref1 = Reference(p.System, res1);
+  p.System.RightHandSide = p.Rhs0;
+  p.Ref0 = Reference(p.System, res0);
+  f.ReferenceResidual = std::max(res0, res1);
+
+  std::cout << "\nbunny, target " << static_cast<long>(target) << ": " << p.Mesh.GetNumberOfTets()
+            << " tets, " << n << " unknowns, " << static_cast<long>(nnz) << " nonzeros; TetGen "
+            << std::fixed << std::setprecision(0) << f.TetgenMs << " ms (excluded); topology "
+            << std::setprecision(1) << f.TopologyMs << " ms; 3-channel assembly " << f.AssemblyMs
+            << " ms; one SpMV " << std::setprecision(3) << f.SpmvMs << " ms (bandwidth bound "
+            << f.BoundMs << " ms); reference residual " << std::scientific << std::setprecision(1)
+            << f.ReferenceResidual << "\n" << std::defaultfloat << std::flush;
+  return f;
+}
+
+/// BenchLinearSolvers, one size: the row of every solver (and the
+/// multi-rank hypre row after hypre-amg), their error-vs-time curves (CSV
+/// lines and JSON); the cold solution of `cutSolver` in `cutCold` (empty
+/// when it is not listed); a failed multi-rank hypre figure in
+/// `hypreRanksError`.
+std::vector<SolverRow> BenchSolverRows(const std::vector<std::string>& names, Problem& p,
+  int runs, int hypreRanks, const std::string& cutSolver, std::vector<std::string>& csv,
+  json& curveJson, Solution& cutCold, std::string& hypreRanksError)
+{
+  std::vector<SolverRow> rows;
+  for (const std::string& name : names)
+  {
+    std::vector<CurvePoint> curve;
+    Solution cold;
+    rows.push_back(BenchSolver(name, p, runs, curve, cold));
+    if (name == cutSolver)
+      cutCold = cold;
+    for (const CurvePoint& c : curve)
+    {
+      std::ostringstream line;
+      line << p.Mesh.GetNumberOfTets() << "," << name << "," << c.Tolerance << "," << c.Ms
+           << "," << c.Error << "," << c.SpMV;
+      csv.push_back(line.str());
+      curveJson.push_back({ { "solver", name }, { "tolerance", c.Tolerance },
+        { "solve_ms", c.Ms }, { "error", c.Error }, { "spmv_equivalents", c.SpMV } });
+    }
+    if (name == "hypre-amg" && hypreRanks >= 2)
+    {
+      // A missing or broken mpiexec costs the multi-rank row, not the bench.
+      try
+      {
+        rows.push_back(BenchHypreRanks(p, hypreRanks, runs, rows.back()));
+      }
+      catch (const translucency::Error& e)
+      {
+        hypreRanksError = e.what();
+        std::cerr << "translucency: warning: no " << hypreRanks << "-rank hypre figure: "
+                  << e.what() << "\n";
+      }
+    }
+  }
+  return rows;
+}
+
+/// BenchLinearSolvers: the curves as CSV next to `plotPath` and the plot
+/// drawn by scripts/plot_linear_solvers.py (a failure only warns).
+void WriteLinearSolverPlot(const std::string& plotPath, const std::vector<std::string>& csv)
+{
+  std::string error;
+  EnsureParentDirectory(plotPath);
+  const std::string csvPath = PlotDataPath(plotPath);
+  std::string text;
+  for (const std::string& line : csv)
+    text += line + "\n";
+  if (!WriteText(csvPath, text, error))
+    throw translucency::Error(error);
+  const std::string script =
+    std::string(TRANSLUCENCY_SOURCE_DIR) + "/scripts/plot_linear_solvers.py";
+  const std::vector<std::string> cmd = { TRANSLUCENCY_PYTHON, script, csvPath, plotPath };
+  std::string spawnError;
+  if (RunProgram(cmd, FilteredEnvironment({}), "", spawnError) != 0)
+    std::cerr << "translucency: warning: plotting failed (needs python3-matplotlib"
+              << (spawnError.empty() ? "" : "; " + spawnError) << "); the data is in "
+              << csvPath << ", plot it with: " << CommandText(cmd) << "\n";
+  else
+    std::cout << "wrote " << plotPath << " (data " << csvPath << ")\n";
+}
+
+} // namespace
+
 int BenchLinearSolvers(const LinearSolverBenchOptions& options)
 {
   const std::string& meshPath = options.MeshPath;
   const std::string& jsonPath = options.JsonPath;
-  const std::string& plotPath = options.PlotPath;
   const std::vector<double>& sizes = options.Tets;
   std::vector<std::string> names = options.Names;
-  const int runs = options.Runs, hypreRanks = options.HypreRanks;
-  const bool doCut = options.DoCut;
+  const int runs = options.Runs;
   const std::vector<std::string> available = translucency::GetLinearSolverNames();
   if (names.empty())
     names = available;
@@ -1099,123 +1264,28 @@ int BenchLinearSolvers(const LinearSolverBenchOptions& options)
   for (double target : sizes)
   {
     Problem p;
-    std::vector<double> points;
-    std::vector<int> tets;
-    const double tetgenMs = TetrahedralizeForBench(surface, target, grid, points, tets);
-    std::vector<double> topo;
-    for (int r = 0; r < runs; ++r)
-    {
-      const auto start = Clock::now();
-      p.Mesh.SetGeometry(points, tets);
-      topo.push_back(MillisecondsSince(start));
-    }
-    const double topologyMs = Median(topo);
-    const translucency::MaterialPreset& marble = translucency::FindMaterialPreset("marble");
-    p.Material = translucency::OpticalProperties::Uniform(p.Mesh.GetNumberOfTets(),
-      marble.Absorption, marble.ReducedScattering, marble.RefractiveIndex);
-    // Light 0 travels along (0, -1, -1) / sqrt(2) (as in `bench`); light 1
-    // is light 0 turned 10 degrees about the x axis.
-    const double s2 = std::sqrt(0.5), t10 = 10.0 * M_PI / 180.0;
-    p.Dir0[0] = 0.0;
-    p.Dir0[1] = -s2;
-    p.Dir0[2] = -s2;
-    p.Dir1[0] = 0.0;
-    p.Dir1[1] = -s2 * std::cos(t10) + s2 * std::sin(t10);
-    p.Dir1[2] = -s2 * std::sin(t10) - s2 * std::cos(t10);
-    const std::vector<double> q0 = Irradiance(p.Mesh, p.Material, p.Dir0);
-    const std::vector<double> q1 = Irradiance(p.Mesh, p.Material, p.Dir1);
     translucency::DiscreteDivergence disc;
-    std::vector<double> assembly;
-    for (int r = 0; r < runs; ++r)
-    {
-      const auto start = Clock::now();
-      disc.Assemble(p.Mesh, p.Material, q0, p.System);
-      assembly.push_back(MillisecondsSince(start));
-    }
-    const double assemblyMs = Median(assembly);
-    p.Rhs0 = p.System.RightHandSide;
-    {
-      translucency::DiffusionSystem rotated;
-      disc.Assemble(p.Mesh, p.Material, q1, rotated);
-      p.Rhs1 = rotated.RightHandSide;
-    }
-    // One SpMV (red channel) and its bandwidth bound.
-    const int n = p.System.NumberOfUnknowns;
-    const double nnz = static_cast<double>(p.System.ColumnIndices.size());
-    Eigen::VectorXd x = Eigen::VectorXd::Ones(n), y(n);
-    std::vector<double> spmv;
-    for (int r = 0; r < std::max(runs, 5); ++r)
-    {
-      const auto start = Clock::now();
-      y.noalias() = p.System.Matrix(0) * x;
-      spmv.push_back(MillisecondsSince(start));
-    }
-    const double spmvMs = Median(spmv);
-    // Values (8 B) and column indices (4 B) per nonzero, row offsets (4 B),
-    // x read once and y written once (8 B each) per row: the minimum traffic.
-    const double spmvBytes = 12.0 * nnz + 4.0 * (n + 1) + 16.0 * n;
-    const double boundMs = spmvBytes / (bandwidth * 1e6);
-    double res0 = 0.0, res1 = 0.0;
-    p.System.RightHandSide = p.Rhs1;
-    p.Ref1 = Reference(p.System, res1);
-    p.System.RightHandSide = p.Rhs0;
-    p.Ref0 = Reference(p.System, res0);
-
-    std::cout << "\nbunny, target " << static_cast<long>(target) << ": " << p.Mesh.GetNumberOfTets()
-              << " tets, " << n << " unknowns, " << static_cast<long>(nnz) << " nonzeros; TetGen "
-              << std::fixed << std::setprecision(0) << tetgenMs << " ms (excluded); topology "
-              << std::setprecision(1) << topologyMs << " ms; 3-channel assembly " << assemblyMs
-              << " ms; one SpMV " << std::setprecision(3) << spmvMs << " ms (bandwidth bound "
-              << boundMs << " ms); reference residual " << std::scientific << std::setprecision(1)
-              << std::max(res0, res1) << "\n" << std::defaultfloat << std::flush;
-
-    std::vector<SolverRow> rows;
+    std::vector<double> q0;
+    const ProblemFigures f =
+      BuildBenchProblem(surface, grid, target, runs, bandwidth, p, disc, q0);
     std::string hypreRanksError;
     json curveJson = json::array();
     Solution defaultCold;
-    for (const std::string& name : names)
-    {
-      std::vector<CurvePoint> curve;
-      Solution cold;
-      rows.push_back(BenchSolver(name, p, runs, curve, cold));
-      if (name == cutSolver)
-        defaultCold = cold;
-      for (const CurvePoint& c : curve)
-      {
-        std::ostringstream line;
-        line << p.Mesh.GetNumberOfTets() << "," << name << "," << c.Tolerance << "," << c.Ms
-             << "," << c.Error << "," << c.SpMV;
-        csv.push_back(line.str());
-        curveJson.push_back({ { "solver", name }, { "tolerance", c.Tolerance },
-          { "solve_ms", c.Ms }, { "error", c.Error }, { "spmv_equivalents", c.SpMV } });
-      }
-      if (name == "hypre-amg" && hypreRanks >= 2)
-      {
-        // A missing or broken mpiexec costs the multi-rank row, not the bench.
-        try
-        {
-          rows.push_back(BenchHypreRanks(p, hypreRanks, runs, rows.back()));
-        }
-        catch (const translucency::Error& e)
-        {
-          hypreRanksError = e.what();
-          std::cerr << "translucency: warning: no " << hypreRanks << "-rank hypre figure: "
-                    << e.what() << "\n";
-        }
-      }
-    }
-    PrintRows(rows, topologyMs);
+    const std::vector<SolverRow> rows = BenchSolverRows(names, p, runs, options.HypreRanks,
+      cutSolver, csv, curveJson, defaultCold, hypreRanksError);
+    PrintRows(rows, f.TopologyMs);
     std::cout << std::flush;
     json entry = { { "target_tets", target }, { "tets", p.Mesh.GetNumberOfTets() },
-      { "unknowns", n }, { "nonzeros", nnz }, { "tetgen_ms", tetgenMs },
-      { "topology_ms", topologyMs }, { "assembly_3ch_ms", assemblyMs },
-      { "spmv_1ch_ms", spmvMs }, { "spmv_bytes", spmvBytes },
-      { "spmv_bandwidth_bound_ms", boundMs }, { "stream_triad_gbs", bandwidth },
-      { "reference_residual", std::max(res0, res1) }, { "target_error", TargetError },
-      { "default_solver", defaultSolver }, { "cut_solver", cutSolver }, { "load_average_1min", LoadAverage() },
+      { "unknowns", f.Unknowns }, { "nonzeros", f.NonZeros },
+      { "tetgen_ms", f.TetgenMs }, { "topology_ms", f.TopologyMs },
+      { "assembly_3ch_ms", f.AssemblyMs }, { "spmv_1ch_ms", f.SpmvMs },
+      { "spmv_bytes", f.SpmvBytes }, { "spmv_bandwidth_bound_ms", f.BoundMs },
+      { "stream_triad_gbs", bandwidth }, { "reference_residual", f.ReferenceResidual },
+      { "target_error", TargetError }, { "default_solver", defaultSolver },
+      { "cut_solver", cutSolver }, { "load_average_1min", LoadAverage() },
       { "curve", curveJson } };
     for (const SolverRow& r : rows)
-      entry["solvers"].push_back(RowJson(r, topologyMs));
+      entry["solvers"].push_back(RowJson(r, f.TopologyMs));
     if (!hypreRanksError.empty())
       entry["hypre_ranks_error"] = hypreRanksError;
     if (defaultCold[0].size() == 0)
@@ -1230,9 +1300,9 @@ int BenchLinearSolvers(const LinearSolverBenchOptions& options)
     entry["paint"] = BenchPaint(cutSolver, p, defaultCold, runs);
     if (cutSolver == "multigrid-agg")
       entry["drag"] = BenchDrag(cutSolver, p, runs);
-    if (doCut)
+    if (options.DoCut)
       entry["cut"] = BenchCut(cutSolver, p, defaultCold, runs);
-    entry["targets"] = PrintTargets(rows, entry, cutSolver, spmvMs);
+    entry["targets"] = PrintTargets(rows, entry, cutSolver, f.SpmvMs);
     entry["memory"] = PrintMemory(p, disc, q0, rows, cutSolver);
     results.push_back(entry);
   }
@@ -1242,26 +1312,8 @@ int BenchLinearSolvers(const LinearSolverBenchOptions& options)
     if (!WriteText(jsonPath, results.dump(2) + "\n", error))
       throw translucency::Error(error);
   }
-  if (!plotPath.empty())
-  {
-    EnsureParentDirectory(plotPath);
-    const std::string csvPath = PlotDataPath(plotPath);
-    std::string text;
-    for (const std::string& line : csv)
-      text += line + "\n";
-    if (!WriteText(csvPath, text, error))
-      throw translucency::Error(error);
-    const std::string script =
-      std::string(TRANSLUCENCY_SOURCE_DIR) + "/scripts/plot_linear_solvers.py";
-    const std::vector<std::string> cmd = { TRANSLUCENCY_PYTHON, script, csvPath, plotPath };
-    std::string spawnError;
-    if (RunProgram(cmd, FilteredEnvironment({}), "", spawnError) != 0)
-      std::cerr << "translucency: warning: plotting failed (needs python3-matplotlib"
-                << (spawnError.empty() ? "" : "; " + spawnError) << "); the data is in "
-                << csvPath << ", plot it with: " << CommandText(cmd) << "\n";
-    else
-      std::cout << "wrote " << plotPath << " (data " << csvPath << ")\n";
-  }
+  if (!options.PlotPath.empty())
+    WriteLinearSolverPlot(options.PlotPath, csv);
   return 0;
 }
 

@@ -369,27 +369,44 @@ void WriteJson(const std::string& path, const json& j)
     throw translucency::Error(error);
 }
 
-int Compare(CompareOptions& o)
+/// What the phases of Compare share: the options, the lit mesh, the solvers
+/// in order (the reference first), their results and the error table.
+struct CompareRun
+{
+  explicit CompareRun(CompareOptions& options)
+    : Options(options)
+  {
+  }
+  CompareOptions& Options;
+  std::vector<std::string> Order;
+  vtkSmartPointer<vtkUnstructuredGrid> Lit;
+  std::map<std::string, SolverResult> Results;
+  bool TimeResolved = false; ///< time gates and detectors: a TPSF per solver
+  TpsfTable Tpsf;
+  json Table = json::array(); ///< one row of statistics per solver
+  double ErrorScale = 0.0;    ///< percent, for the error pictures
+  const SolverResult* MonteCarlo = nullptr;
+};
+
+/// Compare: the checks that can fail before minutes of solving (options, the
+/// outputs, the measured curves, the picture display) and the order of the
+/// solvers (the reference first). `plan` holds the output locks: the caller
+/// keeps it for the whole run.
+std::vector<std::string> CheckAndOrder(
+  CompareOptions& o, OutputPlan& plan, MeasuredFile& measured)
 {
   SceneOptions& scene = o.Scene;
-  const RadianceImageOptions& image = o.Image;
-  const std::string &solverList = o.SolverList, &reference = o.Reference,
-                    &outputDir = o.OutputDir, &jsonPath = o.JsonPath;
-  const double gridSpacing = o.GridSpacing, relTol = o.RelTol;
-  const long long photons = o.Photons;
-  const int seed = o.Seed;
-  const bool pictures = !o.NoPictures, paperReadout = o.Readout.IsPaper();
+  const std::string& outputDir = o.OutputDir;
   scene.InteriorSources = !o.Optics.Sources.empty();
   scene.Finish("compare");
   if (outputDir.empty())
     throw UsageError("compare needs --output DIR");
   // Before any work: no output may be an input or another output; one lock
   // (DIR/compare.lock) per output folder (OutputFiles.h).
-  OutputPlan plan;
   scene.AddInputs(plan);
   plan.Input(o.MeasuredPath, "--measured");
   plan.Output(outputDir + "/compare.vtm", "--output");
-  plan.Output(jsonPath, "--json", false);
+  plan.Output(o.JsonPath, "--json", false);
   {
     std::error_code ec;
     const auto pieces = std::filesystem::symlink_status(outputDir + "/compare", ec);
@@ -399,11 +416,10 @@ int Compare(CompareOptions& o)
         "there): move it or choose another --output");
   }
   plan.Check();
-  std::vector<std::string> solvers = SplitList(solverList);
+  std::vector<std::string> solvers = SplitList(o.SolverList);
   if (solvers.empty())
     throw UsageError("--solvers lists no solver");
   // The measured curves, read before minutes of solving (fail fast).
-  MeasuredFile measured;
   if (!o.MeasuredPath.empty())
   {
     if (o.Optics.TimeGates.Count == 0 || o.Optics.Detectors.empty())
@@ -412,77 +428,110 @@ int Compare(CompareOptions& o)
   }
   // Before minutes of solving: the pictures need an X server (one
   // connection held for the whole run, see Pictures.h).
-  if (pictures)
+  if (!o.NoPictures)
     RequirePictureDisplay("--no-png");
   // The names were checked while parsing (DiffusionSolverCheck).
-  std::vector<std::string> order = { reference };
+  std::vector<std::string> order = { o.Reference };
   for (const std::string& name : solvers)
-    if (name != reference)
+    if (name != o.Reference)
       order.push_back(name);
+  return order;
+}
 
-  // QuadGraph's eq. 5 does not conserve light on graded meshes (issue 22,
-  // Documentation/Solvers.md): say so when this command grades the mesh.
-  {
-    const std::string extension =
-      translucency::ToLower(std::filesystem::path(scene.MeshPath).extension().string());
-    const bool surface =
-      extension == ".ply" || extension == ".stl" || extension == ".obj" || extension == ".vtp";
-    if (surface && !scene.UniformSizing &&
-      std::find(order.begin(), order.end(), "quadgraph") != order.end())
-      std::cerr << "translucency: warning: quadgraph on a graded mesh (cells near the surface "
-                   "smaller than inside): its eq. 5 does not conserve light there and its error "
-                   "stalls (25-29 % on a sphere, vs 7-10 % on uniform meshes); add --uniform-size "
-                   "(Documentation/Solvers.md)\n";
-  }
-  std::vector<Stage> stages;
-  double topologyMs = 0.0;
-  vtkSmartPointer<vtkUnstructuredGrid> lit = BuildLitMesh(scene, stages, topologyMs);
+/// Compare: QuadGraph's eq. 5 does not conserve light on graded meshes
+/// (issue 22, Documentation/Solvers.md): say so when this command grades the
+/// mesh.
+void WarnGradedQuadGraph(const SceneOptions& scene, const std::vector<std::string>& order)
+{
+  const std::string extension =
+    translucency::ToLower(std::filesystem::path(scene.MeshPath).extension().string());
+  const bool surface =
+    extension == ".ply" || extension == ".stl" || extension == ".obj" || extension == ".vtp";
+  if (surface && !scene.UniformSizing &&
+    std::find(order.begin(), order.end(), "quadgraph") != order.end())
+    std::cerr << "translucency: warning: quadgraph on a graded mesh (cells near the surface "
+                 "smaller than inside): its eq. 5 does not conserve light there and its error "
+                 "stalls (25-29 % on a sphere, vs 7-10 % on uniform meshes); add --uniform-size "
+                 "(Documentation/Solvers.md)\n";
+}
 
-  std::map<std::string, SolverResult> results;
-  for (size_t k = 0; k < order.size(); ++k)
+/// Compare: every solver on the lit mesh, the reference first.
+void SolveAll(CompareRun& run)
+{
+  const CompareOptions& o = run.Options;
+  for (size_t k = 0; k < run.Order.size(); ++k)
   {
-    const std::string& name = order[k];
+    const std::string& name = run.Order[k];
     Progress("solving with " + name + " (" + std::to_string(k + 1) + " of " +
-      std::to_string(order.size()) + ")...");
-    results[name] =
-      RunSolver(name, lit, relTol, 20000, gridSpacing, photons, seed, paperReadout, o.Optics);
+      std::to_string(run.Order.size()) + ")...");
+    run.Results[name] = RunSolver(name, run.Lit, o.RelTol, 20000, o.GridSpacing, o.Photons,
+      o.Seed, o.Readout.IsPaper(), o.Optics);
   }
-  const SolverResult& ref = results[reference];
-  // The TPSF of every solver at every detector, on the same gates.
-  const bool timeResolved = o.Optics.TimeGates.Count > 0 && !o.Optics.Detectors.empty();
-  TpsfTable tpsf;
-  if (timeResolved)
+}
+
+/// Compare, with time gates and detectors: the TPSF of every solver at every
+/// detector on the same gates, the measured curves and the closed form.
+void CollectCompareTpsf(CompareRun& run, const MeasuredFile& measured)
+{
+  const CompareOptions& o = run.Options;
+  run.TimeResolved = o.Optics.TimeGates.Count > 0 && !o.Optics.Detectors.empty();
+  if (!run.TimeResolved)
+    return;
+  TpsfTable& tpsf = run.Tpsf;
+  std::vector<vtkUnstructuredGrid*> volumes;
+  std::vector<std::string> specs;
+  for (const std::string& name : run.Order)
+    volumes.push_back(run.Results[name].Volume);
+  for (const DetectorSpec& d : o.Optics.Detectors)
+    specs.push_back(d.Spec);
+  tpsf = CollectTpsf(run.Order, volumes, specs);
+  if (!o.MeasuredPath.empty())
+    AddMeasured(tpsf, measured, o.MeasuredNormalise, o.Reference, o.Image.Channel);
+  if (!o.NoClosedForm)
   {
-    std::vector<vtkUnstructuredGrid*> volumes;
-    std::vector<std::string> specs;
-    for (const std::string& name : order)
-      volumes.push_back(results[name].Volume);
-    for (const DetectorSpec& d : o.Optics.Detectors)
-      specs.push_back(d.Spec);
-    tpsf = CollectTpsf(order, volumes, specs);
-    if (!o.MeasuredPath.empty())
-      AddMeasured(tpsf, measured, o.MeasuredNormalise, reference, image.Channel);
-    if (!o.NoClosedForm)
-    {
-      AddClosedForm(tpsf, lit, ref.Volume, o.Optics.Sources, o.Optics.TimeGates);
-      if (!tpsf.ClosedForm.SkipReason.empty())
-        std::cout << "closed form not drawn: " << tpsf.ClosedForm.SkipReason << "\n";
-      else
-        for (size_t d = 0; d < tpsf.ClosedForm.DetectorSkipReasons.size(); ++d)
-          if (!tpsf.ClosedForm.DetectorSkipReasons[d].empty())
-            std::cout << "closed form not drawn for detector " << d + 1 << " (" << specs[d]
-                      << "): " << tpsf.ClosedForm.DetectorSkipReasons[d] << "\n";
-    }
+    AddClosedForm(tpsf, run.Lit, run.Results[o.Reference].Volume, o.Optics.Sources,
+      o.Optics.TimeGates);
+    if (!tpsf.ClosedForm.SkipReason.empty())
+      std::cout << "closed form not drawn: " << tpsf.ClosedForm.SkipReason << "\n";
+    else
+      for (size_t d = 0; d < tpsf.ClosedForm.DetectorSkipReasons.size(); ++d)
+        if (!tpsf.ClosedForm.DetectorSkipReasons[d].empty())
+          std::cout << "closed form not drawn for detector " << d + 1 << " (" << specs[d]
+                    << "): " << tpsf.ClosedForm.DetectorSkipReasons[d] << "\n";
   }
+}
+
+/// Compare, Monte Carlo: the mean relative standard error of its boundary
+/// fluence (`se` its per-point standard error on the volume).
+double MeanRelativeStandardError(const SolverResult& r, vtkDataArray* se)
+{
+  auto* ids =
+    vtkIdTypeArray::SafeDownCast(r.Surface->GetPointData()->GetArray("vtkOriginalPointIds"));
+  vtkDataArray* phi = r.Surface->GetPointData()->GetArray("Fluence");
+  double sum = 0.0;
+  long long count = 0;
+  for (vtkIdType k = 0; k < ids->GetNumberOfTuples(); ++k)
+    for (int c = 0; c < 3; ++c)
+      if (phi->GetComponent(k, c) > 0)
+      {
+        sum += se->GetComponent(ids->GetValue(k), c) / phi->GetComponent(k, c);
+        ++count;
+      }
+  return count ? sum / count : 0.0;
+}
+
+/// Compare: every solver's errors against the reference (boundary points,
+/// all channels) into its statistics, its error arrays and the table; the
+/// error pictures' scale (99th percentile of |error| over the solvers).
+void CompareWithReference(CompareRun& run)
+{
+  const std::string& reference = run.Options.Reference;
+  const SolverResult& ref = run.Results[reference];
   vtkDataArray* refFluence = ref.Surface->GetPointData()->GetArray("Fluence");
   vtkSmartPointer<vtkDataArray> refRadiance = SurfaceRadiance(ref);
-
-  // Errors against the reference (boundary points, all channels).
-  json table = json::array();
-  double errorScale = 0.0;
-  for (const std::string& name : order)
+  for (const std::string& name : run.Order)
   {
-    SolverResult& r = results[name];
+    SolverResult& r = run.Results[name];
     double fMax, fRms, lMax, lRms;
     std::vector<double> perPoint;
     vtkDataArray* fluence = r.Surface->GetPointData()->GetArray("Fluence");
@@ -495,7 +544,7 @@ int Compare(CompareOptions& o)
     std::copy(perPoint.begin(), perPoint.end(), errorArray->GetPointer(0));
     r.Surface->GetPointData()->AddArray(errorArray);
     vtkSmartPointer<vtkDoubleArray> signedError =
-      SignedError(radiance, refRadiance, image.Channel);
+      SignedError(radiance, refRadiance, run.Options.Image.Channel);
     r.Surface->GetPointData()->AddArray(signedError);
     if (name != reference && signedError->GetNumberOfTuples() > 0)
     {
@@ -504,7 +553,7 @@ int Compare(CompareOptions& o)
         sorted[i] = std::abs(signedError->GetValue(static_cast<vtkIdType>(i)));
       const size_t k = 99 * (sorted.size() - 1) / 100;
       std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
-      errorScale = std::max(errorScale, sorted[k]);
+      run.ErrorScale = std::max(run.ErrorScale, sorted[k]);
     }
     r.Stats["fluence_relative_error"] = { { "max", fMax }, { "rms", fRms } };
     r.Stats["radiance_relative_error"] = { { "max", lMax }, { "rms", lRms } };
@@ -513,45 +562,38 @@ int Compare(CompareOptions& o)
     r.Stats["wall_ms"] = r.WallMs;
     r.Stats["reference"] = reference;
     if (vtkDataArray* se = r.Volume->GetPointData()->GetArray("FluenceStandardError"))
-    {
-      // Monte Carlo: the mean relative standard error of its boundary fluence.
-      auto* ids = vtkIdTypeArray::SafeDownCast(
-        r.Surface->GetPointData()->GetArray("vtkOriginalPointIds"));
-      vtkDataArray* phi = r.Surface->GetPointData()->GetArray("Fluence");
-      double sum = 0.0;
-      long long count = 0;
-      for (vtkIdType k = 0; k < ids->GetNumberOfTuples(); ++k)
-        for (int c = 0; c < 3; ++c)
-          if (phi->GetComponent(k, c) > 0)
-          {
-            sum += se->GetComponent(ids->GetValue(k), c) / phi->GetComponent(k, c);
-            ++count;
-          }
-      r.Stats["fluence_mean_relative_standard_error"] = count ? sum / count : 0.0;
-    }
-    table.push_back(r.Stats);
+      r.Stats["fluence_mean_relative_standard_error"] = MeanRelativeStandardError(r, se);
+    run.Table.push_back(r.Stats);
   }
+}
 
-  // Against Monte Carlo, when it ran: z-scores by its standard error.
+/// Compare: against Monte Carlo, when it ran, z-scores by its standard error.
+void CompareWithMonteCarlo(CompareRun& run)
+{
   const SolverResult* monteCarlo = nullptr;
-  for (const std::string& name : order)
-    if (results[name].Volume->GetPointData()->GetArray("FluenceStandardError"))
-      monteCarlo = &results[name];
+  for (const std::string& name : run.Order)
+    if (run.Results[name].Volume->GetPointData()->GetArray("FluenceStandardError"))
+      monteCarlo = &run.Results[name];
   if (monteCarlo)
-    for (json& s : table)
+    for (json& s : run.Table)
       if (s["solver"] != monteCarlo->Name)
         s["fluence_against_montecarlo"] = AgainstMonteCarlo(
-          results[s["solver"].get<std::string>()].Surface->GetPointData()->GetArray("Fluence"),
+          run.Results[s["solver"].get<std::string>()].Surface->GetPointData()->GetArray(
+            "Fluence"),
           *monteCarlo, 0.1);
+  run.MonteCarlo = monteCarlo;
+}
 
-  // Table first, flushed (a pipe buffers it otherwise), then the JSON: both
-  // before the pictures, so a failure there loses neither.
-  std::cout << "mesh: " << lit->GetNumberOfPoints() << " points, " << lit->GetNumberOfCells()
-            << " tets; reference: " << reference << "\n";
-  std::cout << LightsLine(scene) << "\n\n";
+/// Compare, on stdout: the table of errors and costs, then the power balance.
+void PrintErrorTable(const CompareRun& run)
+{
+  std::cout << "mesh: " << run.Lit->GetNumberOfPoints() << " points, "
+            << run.Lit->GetNumberOfCells() << " tets; reference: " << run.Options.Reference
+            << "\n";
+  std::cout << LightsLine(run.Options.Scene) << "\n\n";
   std::cout << "  solver      unknowns      nnz  memory(MB)  setup(ms)  solve(ms)  iters(R)"
                "  fluence err max/rms   radiance err max/rms\n";
-  for (const json& s : table)
+  for (const json& s : run.Table)
   {
     std::cout << "  " << std::left << std::setw(10) << s["solver"].get<std::string>() << std::right
               << std::setw(10) << s["unknowns"].get<long long>() << std::setw(10)
@@ -571,7 +613,7 @@ int Compare(CompareOptions& o)
   }
   std::cout << "\npower balance (W, channel R; JSON power_W has every channel):\n"
                "    solver              injected     absorbed      escaped  imbalance\n";
-  for (const json& s : table)
+  for (const json& s : run.Table)
   {
     if (s["power_W"].is_null())
       continue;
@@ -582,63 +624,67 @@ int Compare(CompareOptions& o)
               << std::setw(13) << p["escaped"].get<double>() << std::setprecision(2)
               << std::setw(11) << p["imbalance"].get<double>() << std::defaultfloat << "\n";
   }
-  if (monteCarlo)
-  {
-    std::cout << "\n  against " << monteCarlo->Name
-              << " (boundary fluence; points with its relative standard error > 10 % masked):\n"
-                 "  solver      z RMS R/G/B          |z| > 3 R/G/B        rel. RMS R/G/B\n";
-    for (const json& s : table)
-    {
-      if (!s.contains("fluence_against_montecarlo"))
-        continue;
-      const json& a = s["fluence_against_montecarlo"];
-      std::cout << "  " << std::left << std::setw(10) << s["solver"].get<std::string>()
-                << std::right << std::fixed << std::setprecision(2);
-      for (const char* key : { "z_rms", "fraction_abs_z_above_3", "relative_rms" })
-      {
-        std::cout << "  ";
-        for (const char* c : { "R", "G", "B" })
-          std::cout << std::setw(6) << a[c][key].get<double>() * (key[0] == 'z' ? 1.0 : 100.0)
-                    << (key[0] == 'z' ? " " : "%");
-      }
-      std::cout << std::defaultfloat << "\n";
-    }
-    if (paperReadout)
-      std::cout << "  note: radiance against " << monteCarlo->Name
-                << " with --radiance-readout paper differs by about eta^2 by the read-out\n"
-                   "  convention (TransCut eq. 3), not by an error (Documentation/Solvers.md)\n";
-  }
-  std::cout.flush();
+}
 
+/// Compare, on stdout, when Monte Carlo ran: the table against it.
+void PrintMonteCarloTable(const CompareRun& run)
+{
+  const SolverResult* monteCarlo = run.MonteCarlo;
+  if (!monteCarlo)
+    return;
+  std::cout << "\n  against " << monteCarlo->Name
+            << " (boundary fluence; points with its relative standard error > 10 % masked):\n"
+               "  solver      z RMS R/G/B          |z| > 3 R/G/B        rel. RMS R/G/B\n";
+  for (const json& s : run.Table)
+  {
+    if (!s.contains("fluence_against_montecarlo"))
+      continue;
+    const json& a = s["fluence_against_montecarlo"];
+    std::cout << "  " << std::left << std::setw(10) << s["solver"].get<std::string>()
+              << std::right << std::fixed << std::setprecision(2);
+    for (const char* key : { "z_rms", "fraction_abs_z_above_3", "relative_rms" })
+    {
+      std::cout << "  ";
+      for (const char* c : { "R", "G", "B" })
+        std::cout << std::setw(6) << a[c][key].get<double>() * (key[0] == 'z' ? 1.0 : 100.0)
+                  << (key[0] == 'z' ? " " : "%");
+    }
+    std::cout << std::defaultfloat << "\n";
+  }
+  if (run.Options.Readout.IsPaper())
+    std::cout << "  note: radiance against " << monteCarlo->Name
+              << " with --radiance-readout paper differs by about eta^2 by the read-out\n"
+                 "  convention (TransCut eq. 3), not by an error (Documentation/Solvers.md)\n";
+}
+
+/// Compare: the JSON report (provenance, mesh, the table, the TPSF).
+json CompareReport(const CompareRun& run)
+{
+  const CompareOptions& o = run.Options;
   json report;
   report["provenance"] = Provenance(o.App);
-  report["provenance"]["scene"] = SceneProvenance(scene);
-  report["provenance"]["seed"] = seed;
-  report["mesh"] = scene.MeshPath;
-  report["points"] = lit->GetNumberOfPoints();
-  report["tets"] = lit->GetNumberOfCells();
-  report["reference"] = reference;
-  report["solvers"] = table;
-  if (timeResolved)
-    report["tpsf"] = TpsfJson(tpsf);
-  if (!jsonPath.empty())
-    WriteJson(jsonPath, report);
+  report["provenance"]["scene"] = SceneProvenance(o.Scene);
+  report["provenance"]["seed"] = o.Seed;
+  report["mesh"] = o.Scene.MeshPath;
+  report["points"] = run.Lit->GetNumberOfPoints();
+  report["tets"] = run.Lit->GetNumberOfCells();
+  report["reference"] = o.Reference;
+  report["solvers"] = run.Table;
+  if (run.TimeResolved)
+    report["tpsf"] = TpsfJson(run.Tpsf);
+  return report;
+}
 
-  // Files.
-  std::string error;
-  if (timeResolved)
-  {
-    EnsureParentDirectory(outputDir + "/tpsf.csv");
-    if (!WriteText(outputDir + "/tpsf.csv", TpsfCsv(tpsf), error))
-      throw translucency::Error(error);
-  }
-  EnsureParentDirectory(outputDir + "/compare.vtm");
-  vtkNew<vtkMultiBlockDataSet> blocks;
+/// Compare: the multiblock of the results, the volume with every solver's
+/// fluence (block 0), then one surface per solver.
+vtkSmartPointer<vtkMultiBlockDataSet> CompareBlocks(CompareRun& run)
+{
+  auto blocks = vtkSmartPointer<vtkMultiBlockDataSet>::New();
   vtkNew<vtkUnstructuredGrid> volume;
-  volume->ShallowCopy(lit);
-  for (const std::string& name : order)
+  volume->ShallowCopy(run.Lit);
+  for (const std::string& name : run.Order)
   {
-    vtkDataArray* phi = results[name].Volume->GetPointData()->GetArray("Fluence");
+    vtkDataArray* phi = run.Results[name].Volume->GetPointData()->GetArray("Fluence");
     vtkSmartPointer<vtkDataArray> copy = vtk::TakeSmartPointer(phi->NewInstance());
     copy->DeepCopy(phi);
     copy->SetName(("Fluence_" + name).c_str());
@@ -647,146 +693,218 @@ int Compare(CompareOptions& o)
   blocks->SetBlock(0, volume);
   blocks->GetMetaData(0u)->Set(vtkMultiBlockDataSet::NAME(), "volume");
   unsigned int block = 1;
-  for (const std::string& name : order)
+  for (const std::string& name : run.Order)
   {
-    blocks->SetBlock(block, results[name].Surface);
+    blocks->SetBlock(block, run.Results[name].Surface);
     blocks->GetMetaData(block)->Set(vtkMultiBlockDataSet::NAME(), name.c_str());
     ++block;
   }
-  // The .vtm refers to a folder of pieces next to it: write both into a
-  // staging folder of a unique name made by this run (mkdtemp), then move
-  // them into place: each piece renamed into DIR/compare/ (over a piece of
-  // the same name only), then compare.vtm. Removed: only what this run
-  // wrote; whatever else DIR/compare/ holds stays.
-  {
-    namespace fs = std::filesystem;
-    const fs::path dir(outputDir);
-    std::string name = (dir / ".compare-XXXXXX").string();
-    if (!mkdtemp(&name[0]))
-      throw translucency::Error("cannot create a staging folder in '" + outputDir + "': " +
-        std::strerror(errno));
-    const fs::path staging(name), stagingPieces = staging / "compare";
-    // What the writer makes (compare/compare_<block>.vtu|vtp), for removal on a signal.
-    std::vector<int> slots = { RegisterCleanup(staging.string(), true),
-      RegisterCleanup(stagingPieces.string(), true),
-      RegisterCleanup((staging / "compare.vtm").string()) };
-    for (unsigned int b = 0; b < block; ++b)
-      for (const char* ext : { ".vtu", ".vtp" })
-        slots.push_back(RegisterCleanup(
-          (stagingPieces / ("compare_" + std::to_string(b) + ext)).string()));
-    std::vector<fs::path> written; // the files this run made in the staging folder
-    const auto removeStaging = [&]() {
-      std::error_code ec;
-      for (const fs::path& f : written)
-        fs::remove(f, ec);
-      fs::remove(staging / "compare.vtm", ec);
-      fs::remove(stagingPieces, ec); // only if empty
-      fs::remove(staging, ec);       // only if empty
-      for (int slot : slots)
-        UnregisterCleanup(slot);
-    };
-    vtkNew<vtkXMLMultiBlockDataWriter> writer;
-    writer->SetInputData(blocks);
-    writer->SetFileName((staging / "compare.vtm").c_str());
-    writer->SetDataModeToAppended();
-    writer->SetCompressorTypeToZLib();
-    const bool wrote = writer->Write() != 0;
-    std::error_code ec;
-    for (fs::directory_iterator it(stagingPieces, ec), end; !ec && it != end; it.increment(ec))
-      written.push_back(it->path());
-    if (!wrote)
-    {
-      removeStaging();
-      throw translucency::Error("cannot write '" + outputDir + "/compare.vtm'");
-    }
-    fs::create_directory(dir / "compare", ec);
-    ec.clear();
-    for (const fs::path& f : written)
-    {
-      fs::rename(f, dir / "compare" / f.filename(), ec);
-      if (ec)
-        break;
-    }
-    if (!ec)
-      fs::rename(staging / "compare.vtm", dir / "compare.vtm", ec);
-    if (ec)
-    {
-      removeStaging();
-      throw translucency::Error("cannot move the results into '" + outputDir + "': " + ec.message());
-    }
-    written.clear();
-    removeStaging();
-  }
+  return blocks;
+}
 
-  if (pictures)
+/// Compare: DIR/compare.vtm and its folder of pieces. The .vtm refers to a
+/// folder of pieces next to it: write both into a staging folder of a unique
+/// name made by this run (mkdtemp), then move them into place: each piece
+/// renamed into DIR/compare/ (over a piece of the same name only), then
+/// compare.vtm. Removed: only what this run wrote; whatever else DIR/compare/
+/// holds stays.
+void WriteStagedMultiblock(vtkMultiBlockDataSet* blocks, const std::string& outputDir)
+{
+  namespace fs = std::filesystem;
+  const unsigned int block = blocks->GetNumberOfBlocks();
+  const fs::path dir(outputDir);
+  std::string name = (dir / ".compare-XXXXXX").string();
+  if (!mkdtemp(&name[0]))
+    throw translucency::Error("cannot create a staging folder in '" + outputDir + "': " +
+      std::strerror(errno));
+  const fs::path staging(name), stagingPieces = staging / "compare";
+  // What the writer makes (compare/compare_<block>.vtu|vtp), for removal on a signal.
+  std::vector<int> slots = { RegisterCleanup(staging.string(), true),
+    RegisterCleanup(stagingPieces.string(), true),
+    RegisterCleanup((staging / "compare.vtm").string()) };
+  for (unsigned int b = 0; b < block; ++b)
+    for (const char* ext : { ".vtu", ".vtp" })
+      slots.push_back(RegisterCleanup(
+        (stagingPieces / ("compare_" + std::to_string(b) + ext)).string()));
+  std::vector<fs::path> written; // the files this run made in the staging folder
+  const auto removeStaging = [&]() {
+    std::error_code ec;
+    for (const fs::path& f : written)
+      fs::remove(f, ec);
+    fs::remove(staging / "compare.vtm", ec);
+    fs::remove(stagingPieces, ec); // only if empty
+    fs::remove(staging, ec);       // only if empty
+    for (int slot : slots)
+      UnregisterCleanup(slot);
+  };
+  vtkNew<vtkXMLMultiBlockDataWriter> writer;
+  writer->SetInputData(blocks);
+  writer->SetFileName((staging / "compare.vtm").c_str());
+  writer->SetDataModeToAppended();
+  writer->SetCompressorTypeToZLib();
+  const bool wrote = writer->Write() != 0;
+  std::error_code ec;
+  for (fs::directory_iterator it(stagingPieces, ec), end; !ec && it != end; it.increment(ec))
+    written.push_back(it->path());
+  if (!wrote)
+  {
+    removeStaging();
+    throw translucency::Error("cannot write '" + outputDir + "/compare.vtm'");
+  }
+  fs::create_directory(dir / "compare", ec);
+  ec.clear();
+  for (const fs::path& f : written)
+  {
+    fs::rename(f, dir / "compare" / f.filename(), ec);
+    if (ec)
+      break;
+  }
+  if (!ec)
+    fs::rename(staging / "compare.vtm", dir / "compare.vtm", ec);
+  if (ec)
+  {
+    removeStaging();
+    throw translucency::Error("cannot move the results into '" + outputDir + "': " + ec.message());
+  }
+  written.clear();
+  removeStaging();
+}
+
+/// Compare: the files of the output folder (tpsf.csv with time gates, the
+/// .vtm multiblock).
+void WriteCompareFiles(CompareRun& run)
+{
+  const std::string& outputDir = run.Options.OutputDir;
+  std::string error;
+  if (run.TimeResolved)
+  {
+    EnsureParentDirectory(outputDir + "/tpsf.csv");
+    if (!WriteText(outputDir + "/tpsf.csv", TpsfCsv(run.Tpsf), error))
+      throw translucency::Error(error);
+  }
+  EnsureParentDirectory(outputDir + "/compare.vtm");
+  vtkSmartPointer<vtkMultiBlockDataSet> blocks = CompareBlocks(run);
+  WriteStagedMultiblock(blocks, outputDir);
+}
+
+/// Compare, pictures: the radiance and error maps of every solver on one
+/// exposure (the reference's) and one error scale, and the TPSF plot.
+void WriteSolverPictures(CompareRun& run)
+{
+  const CompareOptions& o = run.Options;
+  const RadianceImageOptions& image = o.Image;
+  const std::string& reference = o.Reference;
+  const std::string& outputDir = o.OutputDir;
+  std::string error;
+  vtkNew<vtkPolyData> refSurface;
+  refSurface->ShallowCopy(run.Results[reference].Surface);
+  const double exposure = ToneMapRadiance(refSurface, image.Exposure);
+  RadianceImageOptions shared = image;
+  shared.Exposure = exposure;
+  double errorScale = run.ErrorScale;
+  if (errorScale <= 0)
+    errorScale = 1.0; // percent
+  static const char* channelNames[3] = { "R", "G", "B" };
+  const std::string channel = channelNames[image.Channel];
+  for (const std::string& name : run.Order)
+  {
+    SolverResult& r = run.Results[name];
+    vtkNew<vtkPolyData> surface;
+    surface->ShallowCopy(r.Surface);
+    vtkSmartPointer<vtkDataArray> radiance = SurfaceRadiance(r);
+    surface->GetPointData()->AddArray(radiance); // the tallied one for Monte Carlo
+    surface->GetPointData()->RemoveArray("RadianceRGB");
+    if (!WriteRadiancePNG(surface, shared, outputDir + "/" + name + "_radiance.png", error) ||
+      !WriteScalarMapPNG(surface, "SignedRelativeRadianceError", -errorScale, errorScale,
+        "radiance " + channel + " relative error, " + name + " - " + reference, "%",
+        name + " against " + reference + " (shared scale: 99th percentile of |error|)", image,
+        outputDir + "/" + name + "_error.png", error))
+      throw translucency::Error(error);
+  }
+  if (run.TimeResolved)
+  {
+    const TpsfTable& tpsf = run.Tpsf;
+    std::ostringstream caption;
+    caption << "TPSF per detector, " << o.Optics.TimeGates.Count << " gates of "
+            << (o.Optics.TimeGates.End - o.Optics.TimeGates.Start) / o.Optics.TimeGates.Count
+            << " ns; lines: diffusion, markers: Monte Carlo";
+    if (!tpsf.ClosedForm.Name.empty() && tpsf.ClosedForm.SkipReason.empty())
+      caption << ", grey dashed: closed form";
+    if (!tpsf.Measured.Series.empty())
+      caption << ", black: measured";
+    if (!WriteTpsfPNG(tpsf, image.Channel, caption.str(), outputDir + "/tpsf.png", error))
+      throw translucency::Error(error);
+  }
+}
+
+/// Compare, pictures: the error against wall time of the deterministic
+/// solvers (a plot, and the curves added to the JSON report, written again).
+void WriteErrorVersusTime(CompareRun& run, json& report)
+{
+  const CompareOptions& o = run.Options;
+  vtkDataArray* refFluence =
+    run.Results[o.Reference].Surface->GetPointData()->GetArray("Fluence");
+  std::string error;
+  std::vector<PlotSeries> curves;
+  int unconverged = 0;
+  // A stochastic solver has no error-vs-tolerance curve; a time-resolved or
+  // frequency-domain run has none either (the iteration limit of its many
+  // solves is not a measure of its cost).
+  const bool steady = o.Optics.TimeGates.Count == 0 && o.Optics.Frequency == 0.0;
+  for (const std::string& name : run.Order)
+    if (steady && !translucency::GetDiffusionSolverRegistry().Get(name).Properties.IsStochastic)
+    {
+      Progress("error against time: " + name + "...");
+      curves.push_back(
+        ErrorVersusTime(name, run.Lit, refFluence, o.GridSpacing, o.Optics, unconverged));
+    }
+  if (unconverged > 0)
+    Progress("error against time: " + std::to_string(unconverged) +
+      " solves stopped before convergence on purpose (iteration limits 1, 2, 4, ...)");
+  if (!curves.empty() &&
+    !WritePlotPNG(curves, "wall time (ms)", "RMS relative error of boundary fluence",
+      o.OutputDir + "/error_vs_time.png", error))
+    throw translucency::Error(error);
+  json plot;
+  for (const PlotSeries& c : curves)
+    plot[c.Name] = { { "ms", c.X }, { "rms_error", c.Y } };
+  for (json& s : report["solvers"])
+    if (plot.contains(s["solver"].get<std::string>()))
+      s["error_vs_time"] = plot[s["solver"].get<std::string>()];
+  if (!o.JsonPath.empty())
+    WriteJson(o.JsonPath, report);
+}
+
+int Compare(CompareOptions& o)
+{
+  CompareRun run(o);
+  OutputPlan plan; // its locks last until the end of the run
+  MeasuredFile measured;
+  run.Order = CheckAndOrder(o, plan, measured);
+  WarnGradedQuadGraph(o.Scene, run.Order);
+  std::vector<Stage> stages;
+  double topologyMs = 0.0;
+  run.Lit = BuildLitMesh(o.Scene, stages, topologyMs);
+  SolveAll(run);
+  CollectCompareTpsf(run, measured);
+  CompareWithReference(run);
+  CompareWithMonteCarlo(run);
+
+  // Table first, flushed (a pipe buffers it otherwise), then the JSON: both
+  // before the pictures, so a failure there loses neither.
+  PrintErrorTable(run);
+  PrintMonteCarloTable(run);
+  std::cout.flush();
+  json report = CompareReport(run);
+  if (!o.JsonPath.empty())
+    WriteJson(o.JsonPath, report);
+
+  WriteCompareFiles(run);
+  if (!o.NoPictures)
   {
     Progress("writing the pictures...");
-    // One exposure for every radiance picture: the reference's.
-    vtkNew<vtkPolyData> refSurface;
-    refSurface->ShallowCopy(ref.Surface);
-    const double exposure = ToneMapRadiance(refSurface, image.Exposure);
-    RadianceImageOptions shared = image;
-    shared.Exposure = exposure;
-    if (errorScale <= 0)
-      errorScale = 1.0; // percent
-    static const char* channelNames[3] = { "R", "G", "B" };
-    const std::string channel = channelNames[image.Channel];
-    for (const std::string& name : order)
-    {
-      SolverResult& r = results[name];
-      vtkNew<vtkPolyData> surface;
-      surface->ShallowCopy(r.Surface);
-      vtkSmartPointer<vtkDataArray> radiance = SurfaceRadiance(r);
-      surface->GetPointData()->AddArray(radiance); // the tallied one for Monte Carlo
-      surface->GetPointData()->RemoveArray("RadianceRGB");
-      if (!WriteRadiancePNG(surface, shared, outputDir + "/" + name + "_radiance.png", error) ||
-        !WriteScalarMapPNG(surface, "SignedRelativeRadianceError", -errorScale, errorScale,
-          "radiance " + channel + " relative error, " + name + " - " + reference, "%",
-          name + " against " + reference + " (shared scale: 99th percentile of |error|)", image,
-          outputDir + "/" + name + "_error.png", error))
-        throw translucency::Error(error);
-    }
-    if (timeResolved)
-    {
-      std::ostringstream caption;
-      caption << "TPSF per detector, " << o.Optics.TimeGates.Count << " gates of "
-              << (o.Optics.TimeGates.End - o.Optics.TimeGates.Start) / o.Optics.TimeGates.Count
-              << " ns; lines: diffusion, markers: Monte Carlo";
-      if (!tpsf.ClosedForm.Name.empty() && tpsf.ClosedForm.SkipReason.empty())
-        caption << ", grey dashed: closed form";
-      if (!tpsf.Measured.Series.empty())
-        caption << ", black: measured";
-      if (!WriteTpsfPNG(tpsf, image.Channel, caption.str(), outputDir + "/tpsf.png", error))
-        throw translucency::Error(error);
-    }
-    std::vector<PlotSeries> curves;
-    int unconverged = 0;
-    // A stochastic solver has no error-vs-tolerance curve; a time-resolved or
-    // frequency-domain run has none either (the iteration limit of its many
-    // solves is not a measure of its cost).
-    const bool steady = o.Optics.TimeGates.Count == 0 && o.Optics.Frequency == 0.0;
-    for (const std::string& name : order)
-      if (steady && !translucency::GetDiffusionSolverRegistry().Get(name).Properties.IsStochastic)
-      {
-        Progress("error against time: " + name + "...");
-        curves.push_back(
-          ErrorVersusTime(name, lit, refFluence, gridSpacing, o.Optics, unconverged));
-      }
-    if (unconverged > 0)
-      Progress("error against time: " + std::to_string(unconverged) +
-        " solves stopped before convergence on purpose (iteration limits 1, 2, 4, ...)");
-    if (!curves.empty() &&
-      !WritePlotPNG(curves, "wall time (ms)", "RMS relative error of boundary fluence",
-        outputDir + "/error_vs_time.png", error))
-      throw translucency::Error(error);
-    json plot;
-    for (const PlotSeries& c : curves)
-      plot[c.Name] = { { "ms", c.X }, { "rms_error", c.Y } };
-    for (json& s : report["solvers"])
-      if (plot.contains(s["solver"].get<std::string>()))
-        s["error_vs_time"] = plot[s["solver"].get<std::string>()];
-    if (!jsonPath.empty())
-      WriteJson(jsonPath, report);
+    WriteSolverPictures(run);
+    WriteErrorVersusTime(run, report);
   }
   return 0;
 }

@@ -72,6 +72,14 @@ public:
   void Run(const std::string& expectedType);
 
 private:
+  /// Appended arrays to check once the AppendedData element is found.
+  struct Pending
+  {
+    Tag Array;
+    double ExpectedBytes;
+    uint64_t Offset;
+  };
+
   [[noreturn]] void Fail(const std::string& what) const
   {
     throw translucency::Error("'" + this->Path + "': " + what);
@@ -93,6 +101,19 @@ private:
   std::vector<unsigned char> DecodeBase64(
     const std::string& text, size_t begin, size_t end, size_t maxBytes) const;
   uint64_t Word(const unsigned char* p) const;
+  /// Run, 1: the <VTKFile> element (type, byte order, header type, compressor).
+  void CheckRoot(const Tag& tag, const std::string& expectedType);
+  /// Run, 2: the elements below <VTKFile> up to </VTKFile> or <AppendedData>
+  /// (the inline arrays checked on the way, the appended ones queued); false
+  /// if no <Piece> was seen.
+  bool WalkElements(size_t pos, const std::string& expectedType);
+  /// The points and cells of a <Piece> of a file of type `expectedType`.
+  void PieceSizes(const Tag& tag, const std::string& expectedType, double& points, double& cells) const;
+  /// Run, 3: the headers of the appended arrays against the <AppendedData> bytes.
+  void CheckAppended();
+  /// The header words of an appended array starting at byte `begin` of the
+  /// file, and the data bytes available after them.
+  void AppendedHeader(const Pending& p, size_t begin, std::vector<uint64_t>& header, double& available) const;
 
   std::string Path;
   const std::string& Text;
@@ -101,13 +122,6 @@ private:
   std::string Compressor;
   size_t AppendedBegin = std::string::npos; ///< first byte after the '_' marker
   std::string AppendedEncoding;
-  /// Appended arrays to check once the AppendedData element is found.
-  struct Pending
-  {
-    Tag Array;
-    double ExpectedBytes;
-    uint64_t Offset;
-  };
   std::vector<Pending> Appended;
 };
 
@@ -406,14 +420,8 @@ void XmlChecker::CheckDataArray(const Tag& t, const std::string* content, double
     "\" is not ascii, binary or appended");
 }
 
-void XmlChecker::Run(const std::string& expectedType)
+void XmlChecker::CheckRoot(const Tag& tag, const std::string& expectedType)
 {
-  const std::string& s = this->Text;
-  size_t pos = 0;
-  Tag tag;
-  bool closing = false, selfClosing = false;
-  if (!this->NextTag(pos, tag, closing, selfClosing) || tag.Name != "VTKFile" || closing)
-    this->Fail("not a VTK XML file (no <VTKFile> element at its start)");
   const std::string type = tag.Get("type");
   if (type != expectedType)
     this->Fail("<VTKFile> attribute type=\"" + translucency::Abbreviate(type, 40) +
@@ -433,7 +441,51 @@ void XmlChecker::Run(const std::string& expectedType)
     this->Compressor != "vtkLZ4DataCompressor" && this->Compressor != "vtkLZMADataCompressor")
     this->Fail("<VTKFile> attribute compressor=\"" + translucency::Abbreviate(this->Compressor, 40) +
       "\" is not a VTK compressor");
+}
 
+void XmlChecker::PieceSizes(
+  const Tag& tag, const std::string& expectedType, double& points, double& cells) const
+{
+  if (expectedType == "ImageData")
+  {
+    std::istringstream is(tag.Get("Extent"));
+    double e[6];
+    for (double& v : e)
+      if (!(is >> v) || v < -1e9 || v > 1e9 || v != std::floor(v))
+        this->Fail("<Piece> attribute Extent=\"" + translucency::Abbreviate(tag.Get("Extent"), 40) +
+          "\" is not six integers");
+    double n = 1.0;
+    for (int k = 0; k < 3; ++k)
+      n *= std::max(0.0, e[2 * k + 1] - e[2 * k] + 1);
+    if (n > MaxCount)
+      this->Fail("<Piece> attribute Extent=\"" + tag.Get("Extent") + "\" has too many points");
+    points = n;
+    double c = 1.0;
+    for (int k = 0; k < 3; ++k)
+      c *= std::max(1.0, e[2 * k + 1] - e[2 * k]);
+    cells = n == 0.0 ? 0.0 : c;
+  }
+  else
+  {
+    points = this->Integer(tag, "NumberOfPoints", 0, MaxCount, true);
+    if (expectedType == "UnstructuredGrid")
+      cells = this->Integer(tag, "NumberOfCells", 0, MaxCount, true);
+    else
+    {
+      cells = 0;
+      for (const char* key : { "NumberOfVerts", "NumberOfLines", "NumberOfStrips", "NumberOfPolys" })
+        cells += this->Integer(tag, key, 0, MaxCount, false, 0);
+      if (cells > MaxCount)
+        this->Fail("<Piece> holds more than 2^31-1 cells");
+    }
+  }
+}
+
+bool XmlChecker::WalkElements(size_t pos, const std::string& expectedType)
+{
+  const std::string& s = this->Text;
+  Tag tag;
+  bool closing = false, selfClosing = false;
   // Elements below <VTKFile>: the number of tuples an array must hold follows
   // from the enclosing <Piece> and section (<Points>, <PointData>, <CellData>, <Cells>).
   std::vector<std::string> stack{ "VTKFile" };
@@ -492,39 +544,7 @@ void XmlChecker::Run(const std::string& expectedType)
     if (tag.Name == "Piece")
     {
       sawPiece = true;
-      if (expectedType == "ImageData")
-      {
-        std::istringstream is(tag.Get("Extent"));
-        double e[6];
-        for (double& v : e)
-          if (!(is >> v) || v < -1e9 || v > 1e9 || v != std::floor(v))
-            this->Fail("<Piece> attribute Extent=\"" + translucency::Abbreviate(tag.Get("Extent"), 40) +
-              "\" is not six integers");
-        double n = 1.0;
-        for (int k = 0; k < 3; ++k)
-          n *= std::max(0.0, e[2 * k + 1] - e[2 * k] + 1);
-        if (n > MaxCount)
-          this->Fail("<Piece> attribute Extent=\"" + tag.Get("Extent") + "\" has too many points");
-        points = n;
-        double c = 1.0;
-        for (int k = 0; k < 3; ++k)
-          c *= std::max(1.0, e[2 * k + 1] - e[2 * k]);
-        cells = n == 0.0 ? 0.0 : c;
-      }
-      else
-      {
-        points = this->Integer(tag, "NumberOfPoints", 0, MaxCount, true);
-        if (expectedType == "UnstructuredGrid")
-          cells = this->Integer(tag, "NumberOfCells", 0, MaxCount, true);
-        else
-        {
-          cells = 0;
-          for (const char* key : { "NumberOfVerts", "NumberOfLines", "NumberOfStrips", "NumberOfPolys" })
-            cells += this->Integer(tag, key, 0, MaxCount, false, 0);
-          if (cells > MaxCount)
-            this->Fail("<Piece> holds more than 2^31-1 cells");
-        }
-      }
+      this->PieceSizes(tag, expectedType, points, cells);
     }
     if ((tag.Name == "DataArray" || tag.Name == "Array") && arrayDepth == 0 && tag.Has("Name") &&
       !names.back().insert(tag.Get("Name")).second)
@@ -563,12 +583,59 @@ void XmlChecker::Run(const std::string& expectedType)
       names.emplace_back();
     }
   }
-  if (!sawPiece)
-    this->Fail("no <Piece> element");
+  return sawPiece;
+}
+
+void XmlChecker::AppendedHeader(
+  const Pending& p, size_t begin, std::vector<uint64_t>& header, double& available) const
+{
+  const std::string& s = this->Text;
+  const bool compressed = !this->Compressor.empty();
+  const size_t hb = static_cast<size_t>(this->HeaderBytes);
+  if (this->AppendedEncoding == "raw")
+  {
+    available = static_cast<double>(s.size() - begin);
+    if (available < (compressed ? 3 : 1) * hb)
+      this->Fail(this->Element(p.Array) + ": the data header is truncated");
+    const auto* bytes = reinterpret_cast<const unsigned char*>(s.data() + begin);
+    header.push_back(this->Word(bytes));
+    if (compressed)
+    {
+      if (static_cast<double>(header[0]) > available / hb)
+        this->Fail(this->Element(p.Array) + " claims more compressed blocks than the file holds");
+      if (available < (3 + header[0]) * hb)
+        this->Fail(this->Element(p.Array) + ": the block header is truncated");
+      for (size_t k = 1; k < 3 + header[0]; ++k)
+        header.push_back(this->Word(bytes + k * hb));
+    }
+    available -= static_cast<double>(header.size() * hb);
+  }
+  else
+  {
+    available = 0.75 * static_cast<double>(s.size() - begin);
+    std::vector<unsigned char> head = this->DecodeBase64(s, begin, s.size(), 3 * hb);
+    if (head.size() < (compressed ? 3 : 1) * hb)
+      this->Fail(this->Element(p.Array) + ": the data header is truncated");
+    header.push_back(this->Word(head.data()));
+    if (compressed)
+    {
+      if (static_cast<double>(header[0]) > available / hb)
+        this->Fail(this->Element(p.Array) + " claims more compressed blocks than the file holds");
+      head = this->DecodeBase64(s, begin, s.size(), (3 + header[0]) * hb);
+      if (head.size() < (3 + header[0]) * hb)
+        this->Fail(this->Element(p.Array) + ": the block header is truncated");
+      for (size_t k = 1; k < 3 + header[0]; ++k)
+        header.push_back(this->Word(head.data() + k * hb));
+    }
+  }
+}
+
+void XmlChecker::CheckAppended()
+{
+  const std::string& s = this->Text;
   if (!this->Appended.empty() && this->AppendedBegin == std::string::npos)
     this->Fail("a <DataArray format=\"appended\"> but no <AppendedData>");
   const bool compressed = !this->Compressor.empty();
-  const size_t hb = static_cast<size_t>(this->HeaderBytes);
   for (const Pending& p : this->Appended)
   {
     const double at = static_cast<double>(this->AppendedBegin) + static_cast<double>(p.Offset);
@@ -579,47 +646,24 @@ void XmlChecker::Run(const std::string& expectedType)
          << "\" lies beyond the end of the file (truncated?)";
       this->Fail(os.str());
     }
-    const size_t begin = static_cast<size_t>(at);
     std::vector<uint64_t> header;
     double available = 0.0;
-    if (this->AppendedEncoding == "raw")
-    {
-      available = static_cast<double>(s.size() - begin);
-      if (available < (compressed ? 3 : 1) * hb)
-        this->Fail(this->Element(p.Array) + ": the data header is truncated");
-      const auto* bytes = reinterpret_cast<const unsigned char*>(s.data() + begin);
-      header.push_back(this->Word(bytes));
-      if (compressed)
-      {
-        if (static_cast<double>(header[0]) > available / hb)
-          this->Fail(this->Element(p.Array) + " claims more compressed blocks than the file holds");
-        if (available < (3 + header[0]) * hb)
-          this->Fail(this->Element(p.Array) + ": the block header is truncated");
-        for (size_t k = 1; k < 3 + header[0]; ++k)
-          header.push_back(this->Word(bytes + k * hb));
-      }
-      available -= static_cast<double>(header.size() * hb);
-    }
-    else
-    {
-      available = 0.75 * static_cast<double>(s.size() - begin);
-      std::vector<unsigned char> head = this->DecodeBase64(s, begin, s.size(), 3 * hb);
-      if (head.size() < (compressed ? 3 : 1) * hb)
-        this->Fail(this->Element(p.Array) + ": the data header is truncated");
-      header.push_back(this->Word(head.data()));
-      if (compressed)
-      {
-        if (static_cast<double>(header[0]) > available / hb)
-          this->Fail(this->Element(p.Array) + " claims more compressed blocks than the file holds");
-        head = this->DecodeBase64(s, begin, s.size(), (3 + header[0]) * hb);
-        if (head.size() < (3 + header[0]) * hb)
-          this->Fail(this->Element(p.Array) + ": the block header is truncated");
-        for (size_t k = 1; k < 3 + header[0]; ++k)
-          header.push_back(this->Word(head.data() + k * hb));
-      }
-    }
+    this->AppendedHeader(p, static_cast<size_t>(at), header, available);
     this->CheckHeader(p.Array, header, compressed, p.ExpectedBytes, available);
   }
+}
+
+void XmlChecker::Run(const std::string& expectedType)
+{
+  size_t pos = 0;
+  Tag tag;
+  bool closing = false, selfClosing = false;
+  if (!this->NextTag(pos, tag, closing, selfClosing) || tag.Name != "VTKFile" || closing)
+    this->Fail("not a VTK XML file (no <VTKFile> element at its start)");
+  this->CheckRoot(tag, expectedType);
+  if (!this->WalkElements(pos, expectedType))
+    this->Fail("no <Piece> element");
+  this->CheckAppended();
 }
 } // namespace
 

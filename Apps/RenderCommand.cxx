@@ -71,17 +71,12 @@ void ListMaterials()
   }
 }
 
-int Render(RenderOptions& o)
+/// Render: the checks of the options (before any work): the solver-specific
+/// options against the solver, the TPSF plot against the diffuse-optics
+/// options.
+void CheckRenderOptions(const RenderOptions& o)
 {
-  if (o.ListMaterials)
-  {
-    ListMaterials();
-    return 0;
-  }
-  SceneOptions& scene = o.Scene;
-  scene.InteriorSources = !o.Optics.Sources.empty();
-  scene.Finish("render");
-  const std::string &solverName = o.SolverName, &linearSolver = o.LinearSolver;
+  const std::string& solverName = o.SolverName;
   if (o.Anisotropy != 0.0 && translucency::ToLower(solverName) != "montecarlo" &&
     translucency::ToLower(solverName) != "sp3")
   {
@@ -93,39 +88,35 @@ int Render(RenderOptions& o)
   if (o.TwoPointFlux && translucency::ToLower(solverName) != "quadgraph")
     throw UsageError("--two-point-flux applies to --solver quadgraph only (it replaces the "
                      "QuadGraph paper's eq. 5 link weights), not to " + solverName);
-  const std::string &outputPrefix = o.OutputPrefix, &pngPath = o.PngPath,
-                    &slicePath = o.SlicePath, &tpsfPath = o.TpsfPath,
-                    &jsonPath = o.JsonPath;
-  const RadianceImageOptions& image = o.Image;
-  if (!tpsfPath.empty() && (o.Optics.TimeGates.Count == 0 || o.Optics.Detectors.empty()))
+  if (!o.TpsfPath.empty() && (o.Optics.TimeGates.Count == 0 || o.Optics.Detectors.empty()))
     throw UsageError("--tpsf-png needs --time-gates and at least one --detector");
-  // Before any work: no output may be an input or another output, and a
-  // second run into the same prefix is refused (OutputFiles.h).
-  OutputPlan plan;
-  scene.AddInputs(plan);
-  if (!outputPrefix.empty())
+}
+
+/// Render, before any work: no output may be an input or another output,
+/// and a second run into the same prefix is refused (OutputFiles.h). `plan`
+/// holds the locks: the caller keeps it for the whole run.
+void PlanRenderOutputs(RenderOptions& o, OutputPlan& plan)
+{
+  o.Scene.AddInputs(plan);
+  if (!o.OutputPrefix.empty())
   {
-    plan.Output(outputPrefix + ".vtu", "--output");
-    plan.Output(outputPrefix + ".vtp", "--output");
+    plan.Output(o.OutputPrefix + ".vtu", "--output");
+    plan.Output(o.OutputPrefix + ".vtp", "--output");
   }
-  plan.Output(pngPath, "--png");
-  plan.Output(slicePath, "--slice-png");
-  plan.Output(tpsfPath, "--tpsf-png");
-  plan.Output(jsonPath, "--json");
+  plan.Output(o.PngPath, "--png");
+  plan.Output(o.SlicePath, "--slice-png");
+  plan.Output(o.TpsfPath, "--tpsf-png");
+  plan.Output(o.JsonPath, "--json");
   plan.Check();
-  // Before the solve: the pictures need an X server (Pictures.h).
-  if (!pngPath.empty() || !slicePath.empty() || !tpsfPath.empty())
-    RequirePictureDisplay("no --png/--slice-png/--tpsf-png");
+}
 
-  std::vector<Stage> stages;
-  std::string error;
-  MessageCollector messages;
-  double topologyMs = 0.0;
-  EditStats edits;
-  vtkSmartPointer<vtkUnstructuredGrid> lit = BuildLitMesh(scene, stages, topologyMs, &edits);
-
-  // 5. Solve.
-  vtkNew<vtkSolveDiffusion> solve;
+/// Render, 5: the diffusion solve on the lit mesh (its errors, collected by
+/// `messages`, thrown); its stage times added to `stages`.
+vtkSmartPointer<vtkSolveDiffusion> SolveLitMesh(RenderOptions& o, vtkUnstructuredGrid* lit,
+  double topologyMs, MessageCollector& messages, std::vector<Stage>& stages)
+{
+  const std::string& solverName = o.SolverName;
+  auto solve = vtkSmartPointer<vtkSolveDiffusion>::New();
   messages.Watch(solve, "solving with " + solverName);
   Progress("solving with " + solverName + "...");
   if (!solve->SetSolverByName(solverName.c_str()))
@@ -133,7 +124,7 @@ int Render(RenderOptions& o)
   solve->SetInputData(lit);
   solve->SetRelTol(o.RelTol);
   solve->SetMaxIter(o.MaxIter);
-  solve->SetLinearSolver(linearSolver.c_str());
+  solve->SetLinearSolver(o.LinearSolver.c_str());
   solve->SetGridSpacing(o.GridSpacing);
   solve->SetNumberOfPhotons(o.Photons);
   solve->SetAnisotropy(o.Anisotropy);
@@ -146,11 +137,15 @@ int Render(RenderOptions& o)
   stages.push_back({ "topology", topologyMs + solve->GetTopologyTime() });
   stages.push_back({ "assembly", solve->GetAssemblyTime() });
   stages.push_back({ "solve", solve->GetSolveTime() });
-  vtkUnstructuredGrid* solved = solve->GetOutput();
+  return solve;
+}
 
-  // 6. Radiance.
+/// Render, 6: the outgoing radiance of the solved mesh (errors thrown).
+vtkSmartPointer<vtkOutgoingRadiance> ComputeRadiance(const RenderOptions& o,
+  vtkUnstructuredGrid* solved, MessageCollector& messages, std::vector<Stage>& stages)
+{
   auto start = Clock::now();
-  vtkNew<vtkOutgoingRadiance> radiance;
+  auto radiance = vtkSmartPointer<vtkOutgoingRadiance>::New();
   messages.Watch(radiance);
   radiance->SetInputData(solved);
   radiance->SetRadianceReadout(
@@ -158,18 +153,21 @@ int Render(RenderOptions& o)
   radiance->Update();
   if (!messages.Errors.empty())
     throw translucency::Error(messages.Last());
-  vtkPolyData* outSurface = radiance->GetOutput();
   stages.push_back({ "radiance", MillisecondsSince(start) });
-  // No exit 0 with NaN: every array of the results (fluence, radiance,
-  // detector readings and TPSF) must be finite before anything is written.
-  RequireFiniteResult(solved, "the " + solverName + " solution");
-  RequireFiniteResult(outSurface, "the surface radiance");
+  return radiance;
+}
 
-  // 7. Outputs: all new or all old (OutputBatch), committed after the report.
-  OutputBatch outputs;
+/// Render, 7: the .vtu/.vtp results and the radiance and slice pictures,
+/// into the batch `outputs`.
+void WriteRenderFiles(const RenderOptions& o, vtkUnstructuredGrid* solved,
+  vtkPolyData* outSurface, OutputBatch& outputs, std::vector<Stage>& stages)
+{
+  const std::string &outputPrefix = o.OutputPrefix, &pngPath = o.PngPath,
+                    &slicePath = o.SlicePath;
+  std::string error;
   if (!outputPrefix.empty())
   {
-    start = Clock::now();
+    auto start = Clock::now();
     EnsureParentDirectory(outputPrefix + ".vtu");
     vtkNew<vtkXMLUnstructuredGridWriter> gridWriter;
     vtkNew<vtkXMLPolyDataWriter> surfaceWriter;
@@ -180,11 +178,11 @@ int Render(RenderOptions& o)
   }
   if (!pngPath.empty() || !slicePath.empty())
   {
-    start = Clock::now();
+    auto start = Clock::now();
     if (!pngPath.empty())
     {
       EnsureParentDirectory(pngPath);
-      if (!WriteRadiancePNG(outSurface, image, outputs.Add(pngPath), error))
+      if (!WriteRadiancePNG(outSurface, o.Image, outputs.Add(pngPath), error))
         throw translucency::Error(error);
     }
     if (!slicePath.empty())
@@ -193,51 +191,59 @@ int Render(RenderOptions& o)
       // Frequency domain: amplitude and phase side by side.
       if (o.Optics.Frequency > 0.0
             ? !WriteAmplitudePhaseSlicePNG(
-                solved, image, o.Optics.Frequency, outputs.Add(slicePath), error)
-            : !WriteFluenceSlicePNG(solved, image, outputs.Add(slicePath), error))
+                solved, o.Image, o.Optics.Frequency, outputs.Add(slicePath), error)
+            : !WriteFluenceSlicePNG(solved, o.Image, outputs.Add(slicePath), error))
         throw translucency::Error(error);
     }
     stages.push_back({ "render", MillisecondsSince(start) });
   }
-  if (!tpsfPath.empty())
-  {
-    // The temporal point-spread function of every detector, channel
-    // --channel, on a log scale (gates with no positive reading left out).
-    start = Clock::now();
-    static const char* channelName[3] = { "R", "G", "B" };
-    std::vector<PlotSeries> curves;
-    for (int d = 0; d < solve->GetNumberOfDetectors(); ++d)
-    {
-      PlotSeries curve;
-      curve.Name = "detector " + std::to_string(d + 1) + " (" +
-        o.Optics.Detectors[static_cast<size_t>(d)].Spec + ")";
-      for (int g = 0; g < solve->GetNumberOfTimeGates(); ++g)
-      {
-        const double value = solve->GetDetectorFluenceTPSF(d, g, image.Channel);
-        if (value > 0.0)
-        {
-          curve.X.push_back(solve->GetTimeGateCentre(g));
-          curve.Y.push_back(value);
-        }
-      }
-      curves.push_back(curve);
-    }
-    EnsureParentDirectory(tpsfPath);
-    if (!WritePlotPNG(curves, "time (ns, gate centres)",
-          std::string("fluence ") + channelName[image.Channel] +
-            " per J of pulse (J/(mm^2 ns)), gate average, log scale",
-          outputs.Add(tpsfPath), error))
-      throw translucency::Error(error);
-    stages.push_back({ "tpsf plot", MillisecondsSince(start) });
-  }
+}
 
-  // 8. Report.
-  const vtkIdType numPoints = solved->GetNumberOfPoints();
-  const vtkIdType numTets = solved->GetNumberOfCells();
-  const vtkIdType numBoundary = outSurface->GetNumberOfPoints();
-  std::cout << "mesh: " << numPoints << " points, " << numTets << " tets, " << numBoundary
+/// Render, 7: the temporal point-spread function of every detector, channel
+/// --channel, on a log scale (gates with no positive reading left out).
+void WriteTpsfPlot(const RenderOptions& o, vtkSolveDiffusion* solve, OutputBatch& outputs,
+  std::vector<Stage>& stages)
+{
+  const int channel = o.Image.Channel;
+  std::string error;
+  auto start = Clock::now();
+  static const char* channelName[3] = { "R", "G", "B" };
+  std::vector<PlotSeries> curves;
+  for (int d = 0; d < solve->GetNumberOfDetectors(); ++d)
+  {
+    PlotSeries curve;
+    curve.Name = "detector " + std::to_string(d + 1) + " (" +
+      o.Optics.Detectors[static_cast<size_t>(d)].Spec + ")";
+    for (int g = 0; g < solve->GetNumberOfTimeGates(); ++g)
+    {
+      const double value = solve->GetDetectorFluenceTPSF(d, g, channel);
+      if (value > 0.0)
+      {
+        curve.X.push_back(solve->GetTimeGateCentre(g));
+        curve.Y.push_back(value);
+      }
+    }
+    curves.push_back(curve);
+  }
+  EnsureParentDirectory(o.TpsfPath);
+  if (!WritePlotPNG(curves, "time (ns, gate centres)",
+        std::string("fluence ") + channelName[channel] +
+          " per J of pulse (J/(mm^2 ns)), gate average, log scale",
+        outputs.Add(o.TpsfPath), error))
+    throw translucency::Error(error);
+  stages.push_back({ "tpsf plot", MillisecondsSince(start) });
+}
+
+/// Render, 8: the summary on stdout (mesh, lights, solver, channels, the
+/// diffuse-optics read-outs, power balance, notes, stage times); returns the
+/// power balance (PowerBalanceJson) for the report.
+json PrintRenderSummary(const RenderOptions& o, vtkSolveDiffusion* solve,
+  vtkUnstructuredGrid* solved, vtkPolyData* outSurface, const std::vector<Stage>& stages)
+{
+  std::cout << "mesh: " << solved->GetNumberOfPoints() << " points, "
+            << solved->GetNumberOfCells() << " tets, " << outSurface->GetNumberOfPoints()
             << " boundary points\n";
-  std::cout << LightsLine(scene) << "\n";
+  std::cout << LightsLine(o.Scene) << "\n";
   std::cout << "solver: " << solve->GetSolverName() << " (" << solve->GetNumberOfUnknowns()
             << " unknowns per channel, linear solver " << solve->GetLinearSolverUsed() << ")\n";
   static const char* channel[3] = { "R", "G", "B" };
@@ -255,49 +261,103 @@ int Render(RenderOptions& o)
   if (!meshNote.empty())
     std::cout << "note: " << meshNote << "\n";
   PrintStages(stages);
+  return power;
+}
 
-  if (!jsonPath.empty())
+/// Render, 8: the JSON report (provenance, mesh, solver, edits, read-outs,
+/// power balance, channels, stage times).
+json RenderReport(const RenderOptions& o, vtkSolveDiffusion* solve, vtkUnstructuredGrid* solved,
+  vtkPolyData* outSurface, const EditStats& edits, const json& power,
+  const std::vector<Stage>& stages)
+{
+  const SceneOptions& scene = o.Scene;
+  json j;
+  j["provenance"] = Provenance(o.App);
+  j["provenance"]["scene"] = SceneProvenance(scene);
+  j["provenance"]["seed"] = solve->GetSeed();
+  j["mesh"] = scene.MeshPath;
+  j["points"] = solved->GetNumberOfPoints();
+  j["tets"] = solved->GetNumberOfCells();
+  j["boundary_points"] = outSurface->GetNumberOfPoints();
+  j["solver"] = solve->GetSolverName();
+  j["linear_solver"] = solve->GetLinearSolverUsed();
+  j["unknowns"] = solve->GetNumberOfUnknowns();
+  j["nonzeros"] = solve->GetNumberOfNonZeros();
+  if (edits.Cut)
   {
-    json j;
-    j["provenance"] = Provenance(o.App);
-    j["provenance"]["scene"] = SceneProvenance(scene);
-    j["provenance"]["seed"] = solve->GetSeed();
-    j["mesh"] = scene.MeshPath;
-    j["points"] = numPoints;
-    j["tets"] = numTets;
-    j["boundary_points"] = numBoundary;
-    j["solver"] = solve->GetSolverName();
-    j["linear_solver"] = solve->GetLinearSolverUsed();
-    j["unknowns"] = solve->GetNumberOfUnknowns();
-    j["nonzeros"] = solve->GetNumberOfNonZeros();
-    if (edits.Cut)
-    {
-      j["cut"] = { { "tets_kept", edits.KeptTets }, { "vertices_moved", edits.MovedVertices },
-        { "blocked", edits.BlockedVertices }, { "ms", edits.CutMs } };
-    }
-    if (edits.Painted)
-    {
-      j["paint"] = { { "tets_touched", edits.PaintedTets }, { "ms", edits.PaintMs } };
-    }
-    o.Optics.Report(solve, j);
-    j["power_W"] = power;
-    j["model_range"] = { { "warning", solve->GetModelRangeWarning() },
-      { "mesh_resolution_note", meshNote } };
-    for (int c = 0; c < 3; ++c)
-    {
-      j["channels"][channel[c]] = { { "iterations", solve->GetNumberOfIterations(c) },
-        { "relative_residual", solve->GetFinalResidual(c) },
-        { "converged", solve->GetConverged(c) } };
-    }
-    double total = 0.0;
-    for (const Stage& s : stages)
-    {
-      j["times_ms"][s.Name] = s.Milliseconds;
-      total += s.Milliseconds;
-    }
-    j["times_ms"]["total"] = total;
-    EnsureParentDirectory(jsonPath);
-    if (!outputs.WriteText(jsonPath, j.dump(2) + "\n", error))
+    j["cut"] = { { "tets_kept", edits.KeptTets }, { "vertices_moved", edits.MovedVertices },
+      { "blocked", edits.BlockedVertices }, { "ms", edits.CutMs } };
+  }
+  if (edits.Painted)
+  {
+    j["paint"] = { { "tets_touched", edits.PaintedTets }, { "ms", edits.PaintMs } };
+  }
+  o.Optics.Report(solve, j);
+  j["power_W"] = power;
+  j["model_range"] = { { "warning", solve->GetModelRangeWarning() },
+    { "mesh_resolution_note", solve->GetMeshResolutionNote() } };
+  static const char* channel[3] = { "R", "G", "B" };
+  for (int c = 0; c < 3; ++c)
+  {
+    j["channels"][channel[c]] = { { "iterations", solve->GetNumberOfIterations(c) },
+      { "relative_residual", solve->GetFinalResidual(c) },
+      { "converged", solve->GetConverged(c) } };
+  }
+  double total = 0.0;
+  for (const Stage& s : stages)
+  {
+    j["times_ms"][s.Name] = s.Milliseconds;
+    total += s.Milliseconds;
+  }
+  j["times_ms"]["total"] = total;
+  return j;
+}
+
+int Render(RenderOptions& o)
+{
+  if (o.ListMaterials)
+  {
+    ListMaterials();
+    return 0;
+  }
+  SceneOptions& scene = o.Scene;
+  scene.InteriorSources = !o.Optics.Sources.empty();
+  scene.Finish("render");
+  CheckRenderOptions(o);
+  OutputPlan plan; // its locks last until the end of the run
+  PlanRenderOutputs(o, plan);
+  // Before the solve: the pictures need an X server (Pictures.h).
+  if (!o.PngPath.empty() || !o.SlicePath.empty() || !o.TpsfPath.empty())
+    RequirePictureDisplay("no --png/--slice-png/--tpsf-png");
+
+  std::vector<Stage> stages;
+  std::string error;
+  MessageCollector messages;
+  double topologyMs = 0.0;
+  EditStats edits;
+  vtkSmartPointer<vtkUnstructuredGrid> lit = BuildLitMesh(scene, stages, topologyMs, &edits);
+  vtkSmartPointer<vtkSolveDiffusion> solve = SolveLitMesh(o, lit, topologyMs, messages, stages);
+  vtkUnstructuredGrid* solved = solve->GetOutput();
+  vtkSmartPointer<vtkOutgoingRadiance> radiance = ComputeRadiance(o, solved, messages, stages);
+  vtkPolyData* outSurface = radiance->GetOutput();
+  // No exit 0 with NaN: every array of the results (fluence, radiance,
+  // detector readings and TPSF) must be finite before anything is written.
+  RequireFiniteResult(solved, "the " + o.SolverName + " solution");
+  RequireFiniteResult(outSurface, "the surface radiance");
+
+  // 7. Outputs: all new or all old (OutputBatch), committed after the report.
+  OutputBatch outputs;
+  WriteRenderFiles(o, solved, outSurface, outputs, stages);
+  if (!o.TpsfPath.empty())
+    WriteTpsfPlot(o, solve, outputs, stages);
+
+  // 8. Report.
+  const json power = PrintRenderSummary(o, solve, solved, outSurface, stages);
+  if (!o.JsonPath.empty())
+  {
+    const json j = RenderReport(o, solve, solved, outSurface, edits, power, stages);
+    EnsureParentDirectory(o.JsonPath);
+    if (!outputs.WriteText(o.JsonPath, j.dump(2) + "\n", error))
       throw translucency::Error(error);
   }
   if (!outputs.Commit(error))

@@ -77,21 +77,23 @@ int vtkDetectorReadings::FillInputPortInformation(int, vtkInformation* info)
 int vtkDetectorReadings::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
-    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
-    { return this->PlanParallel(i, c); },
-    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-      { return this->RequestSerial(r, i, o); },
-      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
+  return vtkTranslucencyDispatch::RunFilter(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
+    {
+      if (c.GetRank() > 0)
       {
-        if (c.GetRank() > 0)
-        {
-          vtkTranslucencyOutputGuard empty(o); // empty tables on the other ranks
-          return empty.Succeed();
-        }
-        return this->RequestSerial(nullptr, i, o);
-      }  },
-    { this->ParallelPath, this->ParallelPlan });
+        vtkTranslucencyOutputGuard empty(o); // empty tables on the other ranks
+        return empty.Succeed();
+      }
+      return this->RequestSerial(nullptr, i, o);
+    });
+}
+
+//------------------------------------------------------------------------------
+int vtkDetectorReadings::RequestUpdateExtent(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::UpdateExtent(this, request, inputVector, outputVector);
 }
 
 //------------------------------------------------------------------------------

@@ -71,6 +71,10 @@ protected:
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation* request, vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
+  /// Empties the outputs before anything upstream runs, so that a failure
+  /// upstream leaves them empty (vtkTranslucencyDispatch::UpdateExtent).
+  int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  friend struct vtkTranslucencyDispatchAccess; // RunFilter, UpdateExtent
   /// The plan for more than one process (vtkTranslucencyDispatch: called on
   /// every rank; collective over `comm`).
   vtkTranslucencyParallelPlan PlanParallel(

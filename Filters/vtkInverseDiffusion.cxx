@@ -267,12 +267,14 @@ void WriteHistory(const translucency::InverseDiffusionResult& result, vtkTable* 
 int vtkInverseDiffusion::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
-    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
-    { return this->PlanParallel(i, c); },
-    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-      { return this->RequestSerial(r, i, o); } },
-    { this->ParallelPath, this->ParallelPlan });
+  return vtkTranslucencyDispatch::RunFilter(this, request, inputVector, outputVector);
+}
+
+//------------------------------------------------------------------------------
+int vtkInverseDiffusion::RequestUpdateExtent(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::UpdateExtent(this, request, inputVector, outputVector);
 }
 
 //------------------------------------------------------------------------------

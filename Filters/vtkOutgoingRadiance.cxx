@@ -33,6 +33,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,264 @@ translucency::RadianceReadout ToReadout(int readout)
 {
   return readout == vtkOutgoingRadiance::PAPER ? translucency::RadianceReadout::Paper
                                                : translucency::RadianceReadout::EnergyConserving;
+}
+
+/// Fluence and Irradiance of `input` (3 components per point). The extended
+/// collimated model's Fluence includes the unscattered beam, which does not
+/// leave as diffuse radiance: with a CollimatedFluence array, phi_d is read.
+bool ReadFluenceAndIrradiance(vtkUnstructuredGrid* input, std::vector<double>& fluence,
+  std::vector<double>& irradiance, std::string& error)
+{
+  if (!vtkTranslucency::ReadPointArray(input, vtkTranslucency::FluenceName, 3, fluence, error) ||
+    !vtkTranslucency::ReadPointArray(input, vtkTranslucency::IrradianceName, 3, irradiance, error))
+  {
+    error += " (run vtkSurfaceIrradiance and vtkSolveDiffusion first)";
+    return false;
+  }
+  if (input->GetPointData()->GetArray("CollimatedFluence"))
+  {
+    std::vector<double> collimated;
+    if (!vtkTranslucency::ReadPointArray(input, "CollimatedFluence", 3, collimated, error))
+    {
+      return false;
+    }
+    for (std::size_t k = 0; k < fluence.size(); ++k)
+    {
+      fluence[k] -= collimated[k];
+    }
+  }
+  return true;
+}
+
+/// The warning when light enters but no radiance leaves anywhere: eq. 3 went
+/// negative (and was clamped to 0) at every point. Seen when the tets are far
+/// larger than the transport mean free path (a model in the wrong unit or
+/// scaled by 1e6..1e9): the boundary fluence is not resolved. Names the scale.
+std::string NoRadianceLeavesWarning(double maxIrradiance, double diagonal, double tets)
+{
+  const double spacing = diagonal / std::cbrt(std::max(1.0, tets));
+  std::ostringstream msg;
+  msg << "Radiance is 0 at every boundary point although light enters (irradiance "
+      << "up to " << maxIrradiance << " W/mm^2): the model is "
+      << translucency::FormatNumber(diagonal) << " mm across with tets of about "
+      << translucency::FormatNumber(spacing)
+      << " mm, far coarser than the light's mean free path (~1/sigma_s', about "
+         "1 mm for the measured materials), so the fluence at the surface is "
+         "not resolved: is the model in mm? (else use much smaller tets)";
+  return msg.str();
+}
+
+/// The Robin rule the solve used (vtkSolveDiffusion writes
+/// TranslucencyBoundaryRule = 1 for the Fresnel moments of the
+/// "extended-moments" collimated model); absent: eq. 3's fit.
+translucency::Fresnel::BoundaryRule BoundaryRuleOf(vtkUnstructuredGrid* input)
+{
+  vtkDataArray* ruleArray = input->GetFieldData()->GetArray("TranslucencyBoundaryRule");
+  return ruleArray && ruleArray->GetNumberOfTuples() > 0 && ruleArray->GetComponent(0, 0) == 1.0
+    ? translucency::Fresnel::BoundaryRule::Moments
+    : translucency::Fresnel::BoundaryRule::Fit;
+}
+
+/// The surface output of both paths: its points, original point ids and the
+/// Radiance, Fluence, Irradiance and Normals arrays (n points), filled by the
+/// caller, then attached with the triangles by Attach().
+struct SurfaceOutput
+{
+  explicit SurfaceOutput(vtkIdType n)
+  {
+    this->Points->SetDataTypeToDouble();
+    this->Points->SetNumberOfPoints(n);
+    this->OriginalIds->SetName(vtkTranslucency::OriginalPointIdsName);
+    this->OriginalIds->SetNumberOfTuples(n);
+    const char* names[4] = { vtkTranslucency::RadianceName, vtkTranslucency::FluenceName,
+      vtkTranslucency::IrradianceName, "Normals" };
+    vtkDoubleArray* arrays[4] = { this->Radiance, this->Fluence, this->Irradiance,
+      this->Normals };
+    for (int a = 0; a < 4; ++a)
+    {
+      arrays[a]->SetName(names[a]);
+      arrays[a]->SetNumberOfComponents(3);
+      arrays[a]->SetNumberOfTuples(n);
+      if (a < 3)
+      {
+        vtkTranslucency::SetRGBComponentNames(arrays[a]);
+      }
+    }
+  }
+
+  void Attach(vtkPolyData* output, vtkCellArray* polys)
+  {
+    output->SetPoints(this->Points);
+    output->SetPolys(polys);
+    output->GetPointData()->AddArray(this->Radiance);
+    output->GetPointData()->AddArray(this->Fluence);
+    output->GetPointData()->AddArray(this->Irradiance);
+    output->GetPointData()->SetNormals(this->Normals);
+    output->GetPointData()->AddArray(this->OriginalIds);
+  }
+
+  vtkNew<vtkPoints> Points;
+  vtkNew<vtkIdTypeArray> OriginalIds;
+  vtkNew<vtkDoubleArray> Radiance;
+  vtkNew<vtkDoubleArray> Fluence;
+  vtkNew<vtkDoubleArray> Irradiance;
+  vtkNew<vtkDoubleArray> Normals;
+};
+
+/// The serial surface: the mesh's boundary points (compact) and triangles,
+/// with the radiance `values` (3 per boundary point, in boundary order) and
+/// the fluence, irradiance and normals of those points.
+void AttachSerialSurface(const translucency::TetMesh& mesh, const std::vector<double>& values,
+  const std::vector<double>& fluence, const std::vector<double>& irradiance,
+  vtkPolyData* output)
+{
+  const std::vector<int>& boundary = mesh.GetBoundaryPoints();
+  const vtkIdType n = static_cast<vtkIdType>(boundary.size());
+  std::vector<vtkIdType> surfaceId(static_cast<size_t>(mesh.GetNumberOfPoints()), -1);
+  SurfaceOutput out(n);
+  for (vtkIdType k = 0; k < n; ++k)
+  {
+    surfaceId[boundary[k]] = k;
+    out.Points->SetPoint(k, mesh.GetPoint(boundary[k]));
+    out.OriginalIds->SetValue(k, boundary[k]);
+  }
+  const std::vector<int>& tris = mesh.GetBoundaryTriangles();
+  vtkNew<vtkCellArray> polys;
+  polys->AllocateExact(static_cast<vtkIdType>(tris.size() / 3), static_cast<vtkIdType>(tris.size()));
+  for (size_t f = 0; f < tris.size() / 3; ++f)
+  {
+    const vtkIdType ids[3] = { surfaceId[tris[3 * f]], surfaceId[tris[3 * f + 1]],
+      surfaceId[tris[3 * f + 2]] };
+    polys->InsertNextCell(3, ids);
+  }
+  const std::vector<double>& normals = mesh.GetPointNormals();
+  vtkSMPTools::For(0, n, [&](vtkIdType begin, vtkIdType end) {
+    for (vtkIdType k = begin; k < end; ++k)
+    {
+      const size_t i = static_cast<size_t>(boundary[k]);
+      for (int c = 0; c < 3; ++c)
+      {
+        out.Radiance->SetTypedComponent(k, c, values[3 * k + c]);
+        out.Fluence->SetTypedComponent(k, c, fluence[3 * i + c]);
+        out.Irradiance->SetTypedComponent(k, c, irradiance[3 * i + c]);
+        out.Normals->SetTypedComponent(k, c, normals[3 * i + c]);
+      }
+    }
+  });
+  out.Attach(output, polys);
+}
+
+/// This rank's surface (per piece): its faces and their points, in local
+/// point order, with the radiance `values`, fluence and irradiance (3 per
+/// local point). Returns the radiance of the surface's points, in its order.
+std::vector<double> AttachPieceSurface(vtkUnstructuredGrid* input,
+  const vtkTranslucencyDistributedRadiance::Surface& surface, const std::vector<double>& values,
+  const std::vector<double>& fluence, const std::vector<double>& irradiance,
+  vtkPolyData* output)
+{
+  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
+  std::vector<vtkIdType> surfaceId(static_cast<size_t>(numPoints), -1);
+  for (long long v : surface.Triangles)
+  {
+    surfaceId[static_cast<size_t>(v)] = 0;
+  }
+  std::vector<vtkIdType> used;
+  for (vtkIdType i = 0; i < numPoints; ++i)
+  {
+    if (surfaceId[i] == 0)
+    {
+      surfaceId[i] = static_cast<vtkIdType>(used.size());
+      used.push_back(i);
+    }
+  }
+  const vtkIdType n = static_cast<vtkIdType>(used.size());
+  SurfaceOutput out(n);
+  std::vector<double> surfaceValues(3 * static_cast<size_t>(n));
+  for (vtkIdType k = 0; k < n; ++k)
+  {
+    const size_t i = static_cast<size_t>(used[k]);
+    double x[3];
+    input->GetPoint(used[k], x);
+    out.Points->SetPoint(k, x);
+    out.OriginalIds->SetValue(k, used[k]);
+    for (int c = 0; c < 3; ++c)
+    {
+      surfaceValues[3 * k + c] = values[3 * i + c];
+      out.Radiance->SetTypedComponent(k, c, values[3 * i + c]);
+      out.Fluence->SetTypedComponent(k, c, fluence[3 * i + c]);
+      out.Irradiance->SetTypedComponent(k, c, irradiance[3 * i + c]);
+      out.Normals->SetTypedComponent(k, c, surface.Normals[3 * i + c]);
+    }
+  }
+  vtkNew<vtkCellArray> polys;
+  polys->AllocateExact(static_cast<vtkIdType>(surface.Triangles.size() / 3),
+    static_cast<vtkIdType>(surface.Triangles.size()));
+  for (size_t f = 0; f < surface.Triangles.size() / 3; ++f)
+  {
+    const vtkIdType ids[3] = { surfaceId[surface.Triangles[3 * f]],
+      surfaceId[surface.Triangles[3 * f + 1]], surfaceId[surface.Triangles[3 * f + 2]] };
+    polys->InsertNextCell(3, ids);
+  }
+  out.Attach(output, polys);
+  return surfaceValues;
+}
+
+/// Radiance (TransCut eq. 3) at every local point of `input` on the physical
+/// boundary, with the serial normal and eta of `surface` (summed over every
+/// rank's faces); `cosOut` of the view point if `viewPoint` is set, else 1.
+/// `extremes`: max q, max L, then -min x, max x, -min y, ... of the points.
+/// With `phi1`/`phi2` (an sp3 solve's moments, else null): the outgoing P3
+/// radiance of the moments instead.
+std::vector<double> PieceRadiance(vtkUnstructuredGrid* input,
+  const vtkTranslucencyDistributedRadiance::Surface& surface, const std::vector<double>& fluence,
+  const std::vector<double>& irradiance, const double* viewPoint,
+  translucency::RadianceReadout readout, double extremes[8],
+  const std::vector<double>* phi1 = nullptr, const std::vector<double>* phi2 = nullptr)
+{
+  const bool sp3 = phi1 && phi2;
+  translucency::Sp3BoundaryCoefficients sp3Coefficients;
+  double sp3Eta = -1.0;
+  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
+  std::vector<double> values(3 * static_cast<size_t>(numPoints), 0.0);
+  for (vtkIdType i = 0; i < numPoints; ++i)
+  {
+    double x[3];
+    input->GetPoint(i, x);
+    for (int k = 0; k < 3; ++k)
+    {
+      extremes[2 + 2 * k] = std::max(extremes[2 + 2 * k], -x[k]);
+      extremes[3 + 2 * k] = std::max(extremes[3 + 2 * k], x[k]);
+    }
+    if (!surface.OnBoundary[i])
+    {
+      continue;
+    }
+    const double* nrm = &surface.Normals[3 * static_cast<size_t>(i)];
+    double cosOut = 1.0;
+    if (viewPoint)
+    {
+      const double d[3] = { viewPoint[0] - x[0], viewPoint[1] - x[1], viewPoint[2] - x[2] };
+      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
+    }
+    if (sp3 && surface.Eta[i] != sp3Eta)
+    {
+      sp3Eta = surface.Eta[i];
+      sp3Coefficients = translucency::Sp3BoundaryCoefficients::Compute(sp3Eta);
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      const size_t k = 3 * static_cast<size_t>(i) + c;
+      values[k] = sp3
+        ? translucency::Sp3OutgoingRadiance(sp3Coefficients, surface.Eta[i], (*phi1)[k],
+            (*phi2)[k], irradiance[k], cosOut, readout)
+        : translucency::OutgoingRadiance(
+            fluence[k], irradiance[k], surface.Eta[i], cosOut, readout);
+      extremes[0] = std::max(extremes[0], irradiance[k]);
+      extremes[1] = std::max(extremes[1], values[k]);
+    }
+  }
+  return values;
 }
 }
 
@@ -115,14 +374,16 @@ int vtkOutgoingRadiance::FillInputPortInformation(int, vtkInformation* info)
 int vtkOutgoingRadiance::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
-    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
-    { return this->PlanParallel(i, c); },
-    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-      { return this->RequestSerial(r, i, o); },
-      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
-      { return this->RequestPerPiece(i, o, c); }  },
-    { this->ParallelPath, this->ParallelPlan });
+  return vtkTranslucencyDispatch::RunFilter(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
+    { return this->RequestPerPiece(i, o, c); });
+}
+
+//------------------------------------------------------------------------------
+int vtkOutgoingRadiance::RequestUpdateExtent(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::UpdateExtent(this, request, inputVector, outputVector);
 }
 
 //------------------------------------------------------------------------------
@@ -149,6 +410,7 @@ int vtkOutgoingRadiance::RequestSerial(
   vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputVector[0]);
   vtkPolyData* output = vtkPolyData::GetData(outputVector);
+  // 1. The mesh and the arrays read.
   std::string error;
   this->Internal->Mesh = vtkTranslucency::AcquireTetMesh(input, error);
   if (!this->Internal->Mesh)
@@ -157,48 +419,18 @@ int vtkOutgoingRadiance::RequestSerial(
     return 0;
   }
   const translucency::TetMesh& mesh = *this->Internal->Mesh;
-  std::vector<double> fluence, irradiance;
-  if (!vtkTranslucency::ReadPointArray(input, vtkTranslucency::FluenceName, 3, fluence, error) ||
-    !vtkTranslucency::ReadPointArray(
-      input, vtkTranslucency::IrradianceName, 3, irradiance, error))
-  {
-    vtkErrorMacro(<< error << " (run vtkSurfaceIrradiance and vtkSolveDiffusion first)");
-    return 0;
-  }
-  // The extended collimated model's Fluence includes the unscattered beam,
-  // which does not leave as diffuse radiance: read phi_d.
-  if (input->GetPointData()->GetArray("CollimatedFluence"))
-  {
-    std::vector<double> collimated;
-    if (!vtkTranslucency::ReadPointArray(input, "CollimatedFluence", 3, collimated, error))
-    {
-      vtkErrorMacro(<< error);
-      return 0;
-    }
-    for (std::size_t k = 0; k < fluence.size(); ++k)
-    {
-      fluence[k] -= collimated[k];
-    }
-  }
-  std::vector<double> tetEta;
-  if (!vtkTranslucency::ReadRefractiveIndex(input, tetEta, error))
+  std::vector<double> fluence, irradiance, tetEta;
+  if (!ReadFluenceAndIrradiance(input, fluence, irradiance, error) ||
+    !vtkTranslucency::ReadRefractiveIndex(input, tetEta, error))
   {
     vtkErrorMacro(<< error);
     return 0;
   }
   const std::vector<double> pointEta = translucency::PointRefractiveIndex(mesh, tetEta);
-  // Radiance at the boundary points (TransCut eq. 3), OpenMP-parallel in the core.
+  // 2. Radiance at the boundary points (TransCut eq. 3), OpenMP-parallel in the core.
   std::vector<double> values;
   try
   {
-    // The Robin rule the solve used (vtkSolveDiffusion writes
-    // TranslucencyBoundaryRule = 1 for the Fresnel moments of the
-    // "extended-moments" collimated model); absent: eq. 3's fit.
-    vtkDataArray* ruleArray = input->GetFieldData()->GetArray("TranslucencyBoundaryRule");
-    const translucency::Fresnel::BoundaryRule rule =
-      ruleArray && ruleArray->GetNumberOfTuples() > 0 && ruleArray->GetComponent(0, 0) == 1.0
-      ? translucency::Fresnel::BoundaryRule::Moments
-      : translucency::Fresnel::BoundaryRule::Fit;
     std::vector<double> phi1, phi2;
     if (ReadSp3Moments(input, phi1, phi2, error))
     {
@@ -213,7 +445,8 @@ int vtkOutgoingRadiance::RequestSerial(
     else
     {
       values = translucency::BoundaryRadiance(mesh, fluence, irradiance, pointEta,
-        this->UseViewPoint ? this->ViewPoint : nullptr, ToReadout(this->RadianceReadout), rule);
+        this->UseViewPoint ? this->ViewPoint : nullptr, ToReadout(this->RadianceReadout),
+        BoundaryRuleOf(input));
     }
   }
   catch (const translucency::Error& e)
@@ -221,106 +454,24 @@ int vtkOutgoingRadiance::RequestSerial(
     vtkErrorMacro(<< e.what());
     return 0;
   }
+  // 3. Light enters but no radiance leaves anywhere: say why.
+  double maxIrradiance = 0.0, maxRadiance = 0.0;
+  for (int i : mesh.GetBoundaryPoints())
+    for (int c = 0; c < 3; ++c)
+      maxIrradiance = std::max(maxIrradiance, irradiance[3 * static_cast<size_t>(i) + c]);
+  for (double v : values)
+    maxRadiance = std::max(maxRadiance, v);
+  if (maxIrradiance > 0.0 && maxRadiance == 0.0)
   {
-    // Light enters but no radiance leaves anywhere: eq. 3 went negative (and
-    // was clamped to 0) at every point. Seen when the tets are far larger than
-    // the transport mean free path (a model in the wrong unit or scaled by
-    // 1e6..1e9): the boundary fluence is not resolved. Say so, naming the scale.
-    double maxIrradiance = 0.0, maxRadiance = 0.0;
-    for (int i : mesh.GetBoundaryPoints())
-      for (int c = 0; c < 3; ++c)
-        maxIrradiance = std::max(maxIrradiance, irradiance[3 * static_cast<size_t>(i) + c]);
-    for (double v : values)
-      maxRadiance = std::max(maxRadiance, v);
-    if (maxIrradiance > 0.0 && maxRadiance == 0.0)
-    {
-      double bounds[6];
-      input->GetBounds(bounds);
-      const double diagonal = std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
-        (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) +
-        (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
-      const double spacing =
-        diagonal / std::cbrt(std::max<double>(1.0, static_cast<double>(mesh.GetNumberOfTets())));
-      vtkWarningMacro(<< "Radiance is 0 at every boundary point although light enters (irradiance "
-                      << "up to " << maxIrradiance << " W/mm^2): the model is "
-                      << translucency::FormatNumber(diagonal) << " mm across with tets of about "
-                      << translucency::FormatNumber(spacing)
-                      << " mm, far coarser than the light's mean free path (~1/sigma_s', about "
-                         "1 mm for the measured materials), so the fluence at the surface is "
-                         "not resolved: is the model in mm? (else use much smaller tets)");
-    }
+    vtkWarningMacro(<< NoRadianceLeavesWarning(maxIrradiance, input->GetLength(),
+                      static_cast<double>(mesh.GetNumberOfTets())));
   }
-
-  // Compact surface: boundary points only.
-  const std::vector<int>& boundary = mesh.GetBoundaryPoints();
-  const vtkIdType n = static_cast<vtkIdType>(boundary.size());
-  std::vector<vtkIdType> surfaceId(static_cast<size_t>(mesh.GetNumberOfPoints()), -1);
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(n);
-  vtkNew<vtkIdTypeArray> originalIds;
-  originalIds->SetName(vtkTranslucency::OriginalPointIdsName);
-  originalIds->SetNumberOfTuples(n);
-  for (vtkIdType k = 0; k < n; ++k)
-  {
-    surfaceId[boundary[k]] = k;
-    points->SetPoint(k, mesh.GetPoint(boundary[k]));
-    originalIds->SetValue(k, boundary[k]);
-  }
-  const std::vector<int>& tris = mesh.GetBoundaryTriangles();
-  vtkNew<vtkCellArray> polys;
-  polys->AllocateExact(static_cast<vtkIdType>(tris.size() / 3), static_cast<vtkIdType>(tris.size()));
-  for (size_t f = 0; f < tris.size() / 3; ++f)
-  {
-    const vtkIdType ids[3] = { surfaceId[tris[3 * f]], surfaceId[tris[3 * f + 1]],
-      surfaceId[tris[3 * f + 2]] };
-    polys->InsertNextCell(3, ids);
-  }
-
-  auto makeArray = [n](const char* name, bool rgb) {
-    vtkDoubleArray* a = vtkDoubleArray::New();
-    a->SetName(name);
-    a->SetNumberOfComponents(3);
-    a->SetNumberOfTuples(n);
-    if (rgb)
-    {
-      vtkTranslucency::SetRGBComponentNames(a);
-    }
-    return a;
-  };
-  vtkDoubleArray* radiance = makeArray(vtkTranslucency::RadianceName, true);
-  vtkDoubleArray* phiOut = makeArray(vtkTranslucency::FluenceName, true);
-  vtkDoubleArray* qOut = makeArray(vtkTranslucency::IrradianceName, true);
-  vtkDoubleArray* normalsOut = makeArray("Normals", false);
-  const std::vector<double>& normals = mesh.GetPointNormals();
-  vtkSMPTools::For(0, n, [&](vtkIdType begin, vtkIdType end) {
-    for (vtkIdType k = begin; k < end; ++k)
-    {
-      const size_t i = static_cast<size_t>(boundary[k]);
-      for (int c = 0; c < 3; ++c)
-      {
-        radiance->SetTypedComponent(k, c, values[3 * k + c]);
-        phiOut->SetTypedComponent(k, c, fluence[3 * i + c]);
-        qOut->SetTypedComponent(k, c, irradiance[3 * i + c]);
-        normalsOut->SetTypedComponent(k, c, normals[3 * i + c]);
-      }
-    }
-  });
-  output->SetPoints(points);
-  output->SetPolys(polys);
-  output->GetPointData()->AddArray(radiance);
-  output->GetPointData()->AddArray(phiOut);
-  output->GetPointData()->AddArray(qOut);
-  output->GetPointData()->SetNormals(normalsOut);
-  output->GetPointData()->AddArray(originalIds);
-  // The display colours (the CLI's PNG mapping): Map Scalars off in ParaView.
+  // 4. The compact surface (boundary points only) and the display colours
+  // (the CLI's PNG mapping: Map Scalars off in ParaView).
+  AttachSerialSurface(mesh, values, fluence, irradiance, output);
   this->ExposureUsed =
     this->Exposure > 0.0 ? this->Exposure : translucency::AutomaticExposure(values);
   AttachDisplayColours(output, values, this->ExposureUsed);
-  radiance->Delete();
-  phiOut->Delete();
-  qOut->Delete();
-  normalsOut->Delete();
   return outputs.Succeed();
 }
 
@@ -333,6 +484,7 @@ int vtkOutgoingRadiance::RequestPerPiece(vtkInformationVector** inputVector,
   vtkPolyData* output = vtkPolyData::GetData(outputVector);
   this->Internal->Mesh.reset();
   // Every rank takes part in every collective below, an empty piece too.
+  // 1. The piece's physical boundary (collective) and its arrays.
   vtkTranslucencyDistributedRadiance::Surface surface;
   std::string error;
   if (!vtkTranslucencyDistributedRadiance::FindSurface(input, surface, error))
@@ -345,24 +497,7 @@ int vtkOutgoingRadiance::RequestPerPiece(vtkInformationVector** inputVector,
   std::string local;
   if (numPoints > 0)
   {
-    if (!vtkTranslucency::ReadPointArray(input, vtkTranslucency::FluenceName, 3, fluence, local) ||
-      !vtkTranslucency::ReadPointArray(input, vtkTranslucency::IrradianceName, 3, irradiance, local))
-    {
-      local += " (run vtkSurfaceIrradiance and vtkSolveDiffusion first)";
-    }
-    // The extended collimated model's Fluence includes the unscattered beam,
-    // which does not leave as diffuse radiance: read phi_d.
-    else if (input->GetPointData()->GetArray("CollimatedFluence"))
-    {
-      std::vector<double> collimated;
-      if (vtkTranslucency::ReadPointArray(input, "CollimatedFluence", 3, collimated, local))
-      {
-        for (std::size_t k = 0; k < fluence.size(); ++k)
-        {
-          fluence[k] -= collimated[k];
-        }
-      }
-    }
+    ReadFluenceAndIrradiance(input, fluence, irradiance, local);
   }
   // An sp3 solve: the P3 radiance of its moments (SP3Phi1, SP3Phi2).
   std::vector<double> phi1, phi2;
@@ -371,54 +506,15 @@ int vtkOutgoingRadiance::RequestPerPiece(vtkInformationVector** inputVector,
   {
     sp3 = ReadSp3Moments(input, phi1, phi2, local);
   }
-  translucency::Sp3BoundaryCoefficients sp3Coefficients;
-  double sp3Eta = -1.0;
-  // Radiance (TransCut eq. 3) at every local point on the physical boundary,
-  // with the serial normal and eta (summed over every rank's faces).
+  // 2. Radiance (TransCut eq. 3) at every local point on the physical boundary.
   std::vector<double> values(3 * static_cast<size_t>(numPoints), 0.0);
   double extremes[8] = { 0.0, 0.0, -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX,
     -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX }; // max q, max L, -min x, max x, ...
   if (local.empty())
   {
-    for (vtkIdType i = 0; i < numPoints; ++i)
-    {
-      double x[3];
-      input->GetPoint(i, x);
-      for (int k = 0; k < 3; ++k)
-      {
-        extremes[2 + 2 * k] = std::max(extremes[2 + 2 * k], -x[k]);
-        extremes[3 + 2 * k] = std::max(extremes[3 + 2 * k], x[k]);
-      }
-      if (!surface.OnBoundary[i])
-      {
-        continue;
-      }
-      const double* nrm = &surface.Normals[3 * static_cast<size_t>(i)];
-      double cosOut = 1.0;
-      if (this->UseViewPoint)
-      {
-        const double d[3] = { this->ViewPoint[0] - x[0], this->ViewPoint[1] - x[1],
-          this->ViewPoint[2] - x[2] };
-        const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
-      }
-      if (sp3 && surface.Eta[i] != sp3Eta)
-      {
-        sp3Eta = surface.Eta[i];
-        sp3Coefficients = translucency::Sp3BoundaryCoefficients::Compute(sp3Eta);
-      }
-      for (int c = 0; c < 3; ++c)
-      {
-        const size_t k = 3 * static_cast<size_t>(i) + c;
-        values[k] = sp3
-          ? translucency::Sp3OutgoingRadiance(sp3Coefficients, surface.Eta[i], phi1[k], phi2[k],
-              irradiance[k], cosOut, ToReadout(this->RadianceReadout))
-          : translucency::OutgoingRadiance(
-              fluence[k], irradiance[k], surface.Eta[i], cosOut, ToReadout(this->RadianceReadout));
-        extremes[0] = std::max(extremes[0], irradiance[k]);
-        extremes[1] = std::max(extremes[1], values[k]);
-      }
-    }
+    values = PieceRadiance(input, surface, fluence, irradiance,
+      this->UseViewPoint ? this->ViewPoint : nullptr, ToReadout(this->RadianceReadout), extremes,
+      sp3 ? &phi1 : nullptr, sp3 ? &phi2 : nullptr);
     try
     {
       translucency::RequireFinite(values, "Radiance", translucency::OverflowCause());
@@ -434,25 +530,18 @@ int vtkOutgoingRadiance::RequestPerPiece(vtkInformationVector** inputVector,
     vtkErrorMacro(<< error);
     return 0;
   }
+  // 3. As the serial path: light enters but no radiance leaves anywhere.
   std::vector<double> reduced(extremes, extremes + 8);
   vtkTranslucencyDistributedRadiance::AllMax(reduced);
   if (reduced[0] > 0.0 && reduced[1] == 0.0 && comm.GetRank() == 0)
   {
-    // As the serial path: light enters but no radiance leaves anywhere.
     const double diagonal = std::sqrt((reduced[3] + reduced[2]) * (reduced[3] + reduced[2]) +
       (reduced[5] + reduced[4]) * (reduced[5] + reduced[4]) +
       (reduced[7] + reduced[6]) * (reduced[7] + reduced[6]));
-    const double spacing =
-      diagonal / std::cbrt(std::max<double>(1.0, static_cast<double>(surface.TotalTets)));
-    vtkWarningMacro(<< "Radiance is 0 at every boundary point although light enters (irradiance "
-                    << "up to " << reduced[0] << " W/mm^2): the model is "
-                    << translucency::FormatNumber(diagonal) << " mm across with tets of about "
-                    << translucency::FormatNumber(spacing)
-                    << " mm, far coarser than the light's mean free path (~1/sigma_s', about "
-                       "1 mm for the measured materials), so the fluence at the surface is "
-                       "not resolved: is the model in mm? (else use much smaller tets)");
+    vtkWarningMacro(<< NoRadianceLeavesWarning(
+                      reduced[0], diagonal, static_cast<double>(surface.TotalTets)));
   }
-  // The automatic exposure over every boundary point once (by its owner):
+  // 4. The automatic exposure over every boundary point once (by its owner):
   // the serial percentile.
   if (this->Exposure > 0.0)
   {
@@ -471,80 +560,12 @@ int vtkOutgoingRadiance::RequestPerPiece(vtkInformationVector** inputVector,
     this->ExposureUsed =
       translucency::AutomaticExposure(vtkTranslucencyDistributedRadiance::AllGather(owned));
   }
-
-  // This rank's faces and their points, in local point order.
-  std::vector<vtkIdType> surfaceId(static_cast<size_t>(numPoints), -1);
-  for (long long v : surface.Triangles)
-  {
-    surfaceId[static_cast<size_t>(v)] = 0;
-  }
-  std::vector<vtkIdType> used;
-  for (vtkIdType i = 0; i < numPoints; ++i)
-  {
-    if (surfaceId[i] == 0)
-    {
-      surfaceId[i] = static_cast<vtkIdType>(used.size());
-      used.push_back(i);
-    }
-  }
-  const vtkIdType n = static_cast<vtkIdType>(used.size());
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(n);
-  vtkNew<vtkIdTypeArray> originalIds;
-  originalIds->SetName(vtkTranslucency::OriginalPointIdsName);
-  originalIds->SetNumberOfTuples(n);
-  auto makeArray = [n](const char* name, bool rgb) {
-    vtkNew<vtkDoubleArray> a;
-    a->SetName(name);
-    a->SetNumberOfComponents(3);
-    a->SetNumberOfTuples(n);
-    if (rgb)
-    {
-      vtkTranslucency::SetRGBComponentNames(a);
-    }
-    return vtkSmartPointer<vtkDoubleArray>(a.GetPointer());
-  };
-  vtkSmartPointer<vtkDoubleArray> radiance = makeArray(vtkTranslucency::RadianceName, true);
-  vtkSmartPointer<vtkDoubleArray> phiOut = makeArray(vtkTranslucency::FluenceName, true);
-  vtkSmartPointer<vtkDoubleArray> qOut = makeArray(vtkTranslucency::IrradianceName, true);
-  vtkSmartPointer<vtkDoubleArray> normalsOut = makeArray("Normals", false);
-  std::vector<double> surfaceValues(3 * static_cast<size_t>(n));
-  for (vtkIdType k = 0; k < n; ++k)
-  {
-    const size_t i = static_cast<size_t>(used[k]);
-    double x[3];
-    input->GetPoint(used[k], x);
-    points->SetPoint(k, x);
-    originalIds->SetValue(k, used[k]);
-    for (int c = 0; c < 3; ++c)
-    {
-      surfaceValues[3 * k + c] = values[3 * i + c];
-      radiance->SetTypedComponent(k, c, values[3 * i + c]);
-      phiOut->SetTypedComponent(k, c, fluence[3 * i + c]);
-      qOut->SetTypedComponent(k, c, irradiance[3 * i + c]);
-      normalsOut->SetTypedComponent(k, c, surface.Normals[3 * i + c]);
-    }
-  }
-  vtkNew<vtkCellArray> polys;
-  polys->AllocateExact(static_cast<vtkIdType>(surface.Triangles.size() / 3),
-    static_cast<vtkIdType>(surface.Triangles.size()));
-  for (size_t f = 0; f < surface.Triangles.size() / 3; ++f)
-  {
-    const vtkIdType ids[3] = { surfaceId[surface.Triangles[3 * f]],
-      surfaceId[surface.Triangles[3 * f + 1]], surfaceId[surface.Triangles[3 * f + 2]] };
-    polys->InsertNextCell(3, ids);
-  }
-  output->SetPoints(points);
-  output->SetPolys(polys);
-  output->GetPointData()->AddArray(radiance);
-  output->GetPointData()->AddArray(phiOut);
-  output->GetPointData()->AddArray(qOut);
-  output->GetPointData()->SetNormals(normalsOut);
-  output->GetPointData()->AddArray(originalIds);
+  // 5. This rank's faces and their points. A point that other ranks hold
+  // too has the same values on each; every rank's faces together are the
+  // serial surface.
+  const std::vector<double> surfaceValues =
+    AttachPieceSurface(input, surface, values, fluence, irradiance, output);
   AttachDisplayColours(output, surfaceValues, this->ExposureUsed);
-  // A point that other ranks hold too has the same values on each; every
-  // rank's faces together are the serial surface.
   this->NumberOfSurfaceTriangles = surface.TotalTriangles;
   return outputs.Succeed();
 }

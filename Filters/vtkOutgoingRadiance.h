@@ -141,6 +141,10 @@ protected:
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  /// Empties the outputs before anything upstream runs, so that a failure
+  /// upstream leaves them empty (vtkTranslucencyDispatch::UpdateExtent).
+  int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  friend struct vtkTranslucencyDispatchAccess; // RunFilter, UpdateExtent
   /// The plan for more than one process (vtkTranslucencyDispatch: called on
   /// every rank; collective over `comm`).
   vtkTranslucencyParallelPlan PlanParallel(

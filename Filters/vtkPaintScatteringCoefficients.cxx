@@ -143,14 +143,16 @@ std::string CheckCutMapping(
 int vtkPaintScatteringCoefficients::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
-    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
-    { return this->PlanParallel(i, c); },
-    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-      { return this->RequestSerial(r, i, o); },
-      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
-      { return this->RequestPerPiece(i, o, c); } },
-    { this->ParallelPath, this->ParallelPlan });
+  return vtkTranslucencyDispatch::RunFilter(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
+    { return this->RequestPerPiece(i, o, c); });
+}
+
+//------------------------------------------------------------------------------
+int vtkPaintScatteringCoefficients::RequestUpdateExtent(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::UpdateExtent(this, request, inputVector, outputVector);
 }
 
 //------------------------------------------------------------------------------

@@ -546,15 +546,16 @@ void AttachDetectorArrays(vtkUnstructuredGrid* output,
 int vtkSolveDiffusion::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
-    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
-    { return this->PlanParallel(i, c); },
-    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-      { return this->RequestSerial(r, i, o); },
-      nullptr,
-      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator&)
-      { return this->RequestDistributed(i, o); } },
-    { this->ParallelPath, this->ParallelPlan });
+  return vtkTranslucencyDispatch::RunFilter(this, request, inputVector, outputVector, nullptr,
+    [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator&)
+    { return this->RequestDistributed(i, o); });
+}
+
+//------------------------------------------------------------------------------
+int vtkSolveDiffusion::RequestUpdateExtent(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::UpdateExtent(this, request, inputVector, outputVector);
 }
 
 //------------------------------------------------------------------------------

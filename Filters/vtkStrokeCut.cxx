@@ -128,14 +128,19 @@ int vtkStrokeCut::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   this->NumberOfFrontTets = this->NumberOfFrontPoints = this->FrontBytes = 0;
-  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
-    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
-    { return this->PlanParallel(i, c); },
-    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-      { return this->RequestSerial(r, i, o); },
-      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
-      { return this->RequestPerPiece(i, o, this->HasSharedStroke ? &this->SharedStroke : nullptr, c); } },
-    { this->ParallelPath, this->ParallelPlan });
+  return vtkTranslucencyDispatch::RunFilter(this, request, inputVector, outputVector,
+    [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator& c)
+    {
+      return this->RequestPerPiece(
+        i, o, this->HasSharedStroke ? &this->SharedStroke : nullptr, c);
+    });
+}
+
+//------------------------------------------------------------------------------
+int vtkStrokeCut::RequestUpdateExtent(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::UpdateExtent(this, request, inputVector, outputVector);
 }
 
 //------------------------------------------------------------------------------

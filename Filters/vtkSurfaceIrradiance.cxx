@@ -168,15 +168,16 @@ int vtkSurfaceIrradiance::GetNumberOfSpotLights() const
 int vtkSurfaceIrradiance::RequestData(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
-    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
-    { return this->PlanParallel(i, c); },
-    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-      { return this->RequestSerial(r, i, o); },
-      nullptr,
-      [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator&)
-      { return this->RequestLights(i, o, true); } },
-    { this->ParallelPath, this->ParallelPlan });
+  return vtkTranslucencyDispatch::RunFilter(this, request, inputVector, outputVector, nullptr,
+    [this](vtkInformationVector** i, vtkInformationVector* o, const vtkTranslucencyCommunicator&)
+    { return this->RequestLights(i, o, true); });
+}
+
+//------------------------------------------------------------------------------
+int vtkSurfaceIrradiance::RequestUpdateExtent(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::UpdateExtent(this, request, inputVector, outputVector);
 }
 
 //------------------------------------------------------------------------------

@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <sstream>
 #include <vector>
@@ -403,102 +404,83 @@ bool BuildGradedBackground(const Surface& surface, double h, double g, tetgenio&
   std::copy(tets.begin(), tets.end(), background.tetrahedronlist);
   return true;
 }
+
+/// What the meshing phases below read of the filter's settings.
+struct MeshSettings
+{
+  std::string Mesher;         ///< lower case: "tetgen" or "hxt"
+  double Grading = 0.0;       ///< GradingFactor: 0 (off) or in [1, 8]
+  bool UniformSizing = false;
+  vtkIdType TargetNumberOfTets = 0;
+  double MaxTetVolume = 0.0;  ///< mm^3
+  double MemoryLimit = 0.0;   ///< GiB; 0: the default limit
+  double Quality = 1.414;
+  int NumberOfThreads = 0;
+  bool HxtOptimization = false;
+};
+
+std::size_t MemoryLimitBytes(double gib)
+{
+  return gib > 0 ? static_cast<std::size_t>(std::min(gib * 1073741824.0, 1.8e19))
+                 : translucency::GetDefaultMemoryLimit();
 }
 
-//------------------------------------------------------------------------------
-vtkTetrahedralizeSurface::vtkTetrahedralizeSurface() = default;
-
-//------------------------------------------------------------------------------
-int vtkTetrahedralizeSurface::FillInputPortInformation(int, vtkInformation* info)
+/// The error for a mesher this build does not have (`name` as the user wrote it).
+std::string UnknownMesherError(const std::string& mesher, const std::string& name)
 {
-  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPolyData");
-  return 1;
-}
-
-//------------------------------------------------------------------------------
-int vtkTetrahedralizeSurface::RequestData(
-  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
-{
-  return vtkTranslucencyDispatch::Run(this, request, inputVector, outputVector,
-    [this](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
-    { return this->PlanParallel(i, c); },
-    { [this](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
-      { return this->RequestSerial(r, i, o); } },
-    { this->ParallelPath, this->ParallelPlan });
-}
-
-//------------------------------------------------------------------------------
-vtkTranslucencyParallelPlan vtkTetrahedralizeSurface::PlanParallel(
-  vtkInformationVector**, const vtkTranslucencyCommunicator&)
-{
-  return vtkTranslucencyParallelPlan::Gathered(
-    vtkTranslucencyParallelPlan::GatherMode::RankZero, "TetGen is serial: the tets on rank 0 (follow with Redistribute DataSet)");
-}
-
-//------------------------------------------------------------------------------
-int vtkTetrahedralizeSurface::RequestSerial(
-  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
-{
-  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
-  vtkPolyData* input = vtkPolyData::GetData(inputVector[0]);
-  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
-
-  // The mesher's name first: a wrong one fails before the checks' work.
-  const std::string mesher = translucency::ToLower(this->Mesher);
-  if (!vtkTetrahedralizeSurface::HasMesher(mesher.c_str()))
+  if (mesher == "hxt")
   {
-    if (mesher == "hxt")
-    {
-      translucency::HxtMesherOptions none;
-      std::vector<double> p;
-      std::vector<int> t;
-      std::string message;
-      translucency::RunHxtMesher({}, {}, none, p, t, message); // the build's message
-      vtkErrorMacro(<< "mesher 'hxt': " << message);
-    }
-    else
-    {
-      vtkErrorMacro(<< "unknown mesher '" << this->Mesher << "': use tetgen or hxt");
-    }
-    return 0;
+    translucency::HxtMesherOptions none;
+    std::vector<double> p;
+    std::vector<int> t;
+    std::string message;
+    translucency::RunHxtMesher({}, {}, none, p, t, message); // the build's message
+    return "mesher 'hxt': " + message;
   }
+  return "unknown mesher '" + name + "': use tetgen or hxt";
+}
 
-  // The grading factor: off (0) or in [1, 8], tetgen only, not with UniformSizing.
-  const double grading = this->GradingFactor;
-  if (grading != 0.0)
+/// The grading factor: off (0) or in [1, 8], tetgen only, not with
+/// UniformSizing. Returns "" when the settings are fine.
+std::string CheckGrading(const MeshSettings& s)
+{
+  const double grading = s.Grading;
+  std::ostringstream msg;
+  if (grading == 0.0)
   {
-    if (!std::isfinite(grading) || grading < 1.0 || grading > 8.0)
-    {
-      vtkErrorMacro(<< "GradingFactor " << grading
-                    << " is out of range: use 0 (off: the mesher's own grading) or a ratio of "
-                       "interior to surface edge length from 1 (uniform) to 8");
-      return 0;
-    }
-    if (this->UniformSizing)
-    {
-      vtkErrorMacro(<< "GradingFactor " << grading
-                    << " and UniformSizing are both set: uniform sizing is GradingFactor 1; "
-                       "set one of them");
-      return 0;
-    }
-    if (mesher != "tetgen")
-    {
-      vtkErrorMacro(<< "GradingFactor is available with the tetgen mesher only (mesher '"
-                    << mesher << "'): use UniformSizing with hxt, or mesher tetgen");
-      return 0;
-    }
+    return std::string();
   }
-
-  // Coordinates and ids first: vtkStaticCleanPolyData crashes on infinite or
-  // huge coordinates and on point ids out of range.
-  std::string error;
-  if (input && input->GetNumberOfCells() > 0 && !vtkTranslucency::CheckSurfacePointsAndIds(input, MaxCoordinate, error))
+  if (!std::isfinite(grading) || grading < 1.0 || grading > 8.0)
   {
-    vtkErrorMacro(<< error);
-    return 0;
+    msg << "GradingFactor " << grading
+        << " is out of range: use 0 (off: the mesher's own grading) or a ratio of "
+           "interior to surface edge length from 1 (uniform) to 8";
   }
+  else if (s.UniformSizing)
+  {
+    msg << "GradingFactor " << grading
+        << " and UniformSizing are both set: uniform sizing is GradingFactor 1; set one of them";
+  }
+  else if (s.Mesher != "tetgen")
+  {
+    msg << "GradingFactor is available with the tetgen mesher only (mesher '" << s.Mesher
+        << "'): use UniformSizing with hxt, or mesher tetgen";
+  }
+  return msg.str();
+}
 
-  // Merge coincident points (STL/OBJ files often repeat them) before the checks.
+/// The surface the mesher gets: coordinates and ids checked first
+/// (vtkStaticCleanPolyData crashes on infinite or huge coordinates and on
+/// point ids out of range), coincident points merged (STL/OBJ files often
+/// repeat them), then closed, manifold and free of self-intersections.
+bool PrepareSurface(vtkPolyData* input, Surface& surface, double& volume, std::string& error)
+{
+  if (input && input->GetNumberOfCells() > 0 &&
+    !vtkTranslucency::CheckSurfacePointsAndIds(
+      input, vtkTetrahedralizeSurface::MaxCoordinate, error))
+  {
+    return false;
+  }
   vtkNew<vtkStaticCleanPolyData> clean;
   vtkNew<vtkPolyData> copy;
   if (input)
@@ -514,239 +496,246 @@ int vtkTetrahedralizeSurface::RequestSerial(
   {
     clean->Update();
   }
-  Surface surface;
-  double volume = 0.0;
-  if (!CheckSurface(input && input->GetNumberOfPoints() > 0 ? clean->GetOutput() : input, surface,
-        volume, error))
-  {
-    vtkErrorMacro(<< error);
-    return 0;
-  }
-  if (!CheckSelfIntersections(surface, error))
-  {
-    vtkErrorMacro(<< error);
-    return 0;
-  }
-  this->UpdateProgress(0.05);
+  return CheckSurface(input && input->GetNumberOfPoints() > 0 ? clean->GetOutput() : input,
+           surface, volume, error) &&
+    CheckSelfIntersections(surface, error);
+}
 
-  // Size guard: estimate the tet count before TetGen allocates it.
+/// The size guard: estimate the tet count before the mesher allocates it.
+/// Throws translucency::Error when it does not fit.
+void CheckSize(const MeshSettings& s, double volume)
+{
+  const double tets = s.TargetNumberOfTets > 0
+    ? static_cast<double>(s.TargetNumberOfTets)
+    : (s.MaxTetVolume > 0 ? volume / s.MaxTetVolume : 0.0);
+  std::ostringstream what;
+  what << "about " << translucency::FormatNumber(tets) << " tets ("
+       << (s.TargetNumberOfTets > 0
+              ? "TargetNumberOfTets"
+              : "enclosed volume " + translucency::FormatNumber(volume) + " mm^3 / MaxTetVolume " +
+                translucency::FormatNumber(s.MaxTetVolume) + " mm^3")
+       << ")";
+  translucency::CheckMemory(what.str(), tets * 400.0, MemoryLimitBytes(s.MemoryLimit),
+    "ask for fewer tets (a smaller target or a larger maximum volume; filter: MemoryLimit GiB)");
+  if (tets * 4.0 >= static_cast<double>(std::numeric_limits<int>::max()))
   {
-    const double tets = this->TargetNumberOfTets > 0
-      ? static_cast<double>(this->TargetNumberOfTets)
-      : (this->MaxTetVolume > 0 ? volume / this->MaxTetVolume : 0.0);
-    const std::size_t limit = this->MemoryLimit > 0
-      ? static_cast<std::size_t>(std::min(this->MemoryLimit * 1073741824.0, 1.8e19))
-      : translucency::GetDefaultMemoryLimit();
-    std::ostringstream what;
-    what << "about " << translucency::FormatNumber(tets) << " tets ("
-         << (this->TargetNumberOfTets > 0
-                ? "TargetNumberOfTets"
-                : "enclosed volume " + translucency::FormatNumber(volume) +
-                  " mm^3 / MaxTetVolume " + translucency::FormatNumber(this->MaxTetVolume) +
-                  " mm^3")
-         << ")";
-    try
+    throw translucency::Error(what.str() + " are more than the 32-bit indices hold");
+  }
+}
+
+/// The diagonal of the surface's bounding box (mm).
+double BoundingDiagonal(const Surface& surface)
+{
+  double lo[3] = { VTK_DOUBLE_MAX, VTK_DOUBLE_MAX, VTK_DOUBLE_MAX };
+  double hi[3] = { -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX };
+  for (size_t i = 0; i < surface.Points.size(); ++i)
+  {
+    lo[i % 3] = std::min(lo[i % 3], surface.Points[i]);
+    hi[i % 3] = std::max(hi[i % 3], surface.Points[i]);
+  }
+  return std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+    (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
+/// The A k of the graded layer (A the surface area, k = g (g + 1) / 2 - 1;
+/// see FirstParameter); 0 without grading.
+double GradedLayer(const Surface& surface, double grading)
+{
+  if (grading <= 0.0)
+  {
+    return 0.0;
+  }
+  double area = 0.0;
+  for (const auto& t : surface.Triangles)
+  {
+    const double* a = &surface.Points[3 * t[0]];
+    const double* b = &surface.Points[3 * t[1]];
+    const double* c = &surface.Points[3 * t[2]];
+    const double u[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+    const double v[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
+    const double n[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+      u[0] * v[1] - u[1] * v[0] };
+    area += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  }
+  return area * (grading * (grading + 1.0) / 2.0 - 1.0);
+}
+
+/// One run of the mesher for a size `parameter`: TetGen's volume bound -a
+/// (graded: the edge length of its background) or edge length (uniform, -m);
+/// HXT's edge length. 0: none (`diag` the surface's bounding-box diagonal).
+bool RunMesher(const MeshSettings& s, const Surface& surface, double diag, double parameter,
+  std::vector<double>& points, std::vector<int>& tets, std::string& error)
+{
+  if (s.Mesher == "tetgen" && s.Grading > 0.0)
+  {
+    const double h = parameter > 0 ? parameter : diag / 10.0;
+    tetgenio background;
+    if (!BuildGradedBackground(surface, h, s.Grading, background, error))
     {
-      translucency::CheckMemory(what.str(), tets * 400.0, limit,
-        "ask for fewer tets (a smaller target or a larger maximum volume; filter: MemoryLimit GiB)");
-      if (tets * 4.0 >= static_cast<double>(std::numeric_limits<int>::max()))
+      return false;
+    }
+    std::ostringstream os;
+    os.precision(17);
+    os << "pq" << s.Quality << "mzQ";
+    return RunTetGen(surface, os.str(), points, tets, error, h / s.Grading, &background);
+  }
+  if (s.Mesher == "tetgen")
+  {
+    std::ostringstream os;
+    os.precision(17);
+    os << "pq" << s.Quality;
+    double sizing = 0.0;
+    if (s.UniformSizing)
+    {
+      sizing = parameter;
+      if (s.TargetNumberOfTets == 0 && s.MaxTetVolume > 0)
       {
-        throw translucency::Error(what.str() + " are more than the 32-bit indices hold");
+        os << "a" << s.MaxTetVolume;
+      }
+      if (sizing > 0)
+      {
+        os << "m";
       }
     }
-    catch (const translucency::Error& e)
+    else if (parameter > 0)
     {
-      vtkErrorMacro(<< e.what());
-      return 0;
+      os << "a" << parameter;
+    }
+    os << "zQ";
+    return RunTetGen(surface, os.str(), points, tets, error, sizing);
+  }
+  std::vector<int> triangles(3 * surface.Triangles.size());
+  for (size_t t = 0; t < surface.Triangles.size(); ++t)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      triangles[3 * t + k] = static_cast<int>(surface.Triangles[t][k]);
     }
   }
+  translucency::HxtMesherOptions options;
+  options.MeshSize = parameter > 0 ? parameter : diag;
+  options.RemeshSurface = s.UniformSizing;
+  options.Threads = s.NumberOfThreads;
+  options.Optimize = s.HxtOptimization;
+  return translucency::RunHxtMesher(surface.Points, triangles, options, points, tets, error);
+}
 
-  // The mesher: one run for a size parameter, a second one correcting the
-  // parameter when the count misses the target by more than 15 %.
+/// How the tet count depends on the size parameter. Measured counts (bunny,
+/// sphere): TetGen -q1.414 -a: N falls like a^-0.8 and a = 2.5 V/N gives
+/// about N at N = 1e6; TetGen -m h: N ~ 5 V / h^3 (5 mm sphere); HXT with
+/// edge length h: N ~ 5.5 V / h^3 (bunny, sphere).
+struct CountModel
+{
+  explicit CountModel(const MeshSettings& s)
+    : EdgeLength(s.Mesher == "hxt" || s.UniformSizing || s.Grading > 0.0)
+    , CountConstant(s.Mesher == "hxt" ? 5.5 : 5.0)
+    , Exponent(EdgeLength ? 1.0 / 3.0 : 1.0 / 0.8)
+  {
+  }
+  bool EdgeLength;      ///< the parameter is an edge length (else a volume bound)
+  double CountConstant; ///< c of N ~ c V / h^3
+  double Exponent;      ///< parameter ~ N^-Exponent
+};
+
+/// The first run's size parameter from TargetNumberOfTets or MaxTetVolume
+/// (0: the mesher's own size). Throws translucency::Error when a graded
+/// mesh would not fit in memory.
+double FirstParameter(const MeshSettings& s, const CountModel& model, double volume,
+  double gradedLayer)
+{
   // The edge length of the regular tet of volume v.
   auto regularEdge = [](double v) { return std::cbrt(6.0 * std::sqrt(2.0) * v); };
-  double diag = 0.0;
-  {
-    double lo[3] = { VTK_DOUBLE_MAX, VTK_DOUBLE_MAX, VTK_DOUBLE_MAX };
-    double hi[3] = { -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX };
-    for (size_t i = 0; i < surface.Points.size(); ++i)
-    {
-      lo[i % 3] = std::min(lo[i % 3], surface.Points[i]);
-      hi[i % 3] = std::max(hi[i % 3], surface.Points[i]);
-    }
-    diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-      (hi[2] - lo[2]) * (hi[2] - lo[2]));
-  }
-
-  std::vector<double> points;
-  std::vector<int> tets;
-  // parameter: TetGen's volume bound -a (graded) or edge length (uniform, -m);
-  // HXT's edge length. 0: none.
-  auto runMesher = [&](double parameter) -> bool {
-    if (mesher == "tetgen" && grading > 0.0)
-    {
-      const double h = parameter > 0 ? parameter : diag / 10.0;
-      tetgenio background;
-      if (!BuildGradedBackground(surface, h, grading, background, error))
-      {
-        return false;
-      }
-      std::ostringstream os;
-      os.precision(17);
-      os << "pq" << this->Quality << "mzQ";
-      return RunTetGen(surface, os.str(), points, tets, error, h / grading, &background);
-    }
-    if (mesher == "tetgen")
-    {
-      std::ostringstream os;
-      os.precision(17);
-      os << "pq" << this->Quality;
-      double sizing = 0.0;
-      if (this->UniformSizing)
-      {
-        sizing = parameter;
-        if (this->TargetNumberOfTets == 0 && this->MaxTetVolume > 0)
-        {
-          os << "a" << this->MaxTetVolume;
-        }
-        if (sizing > 0)
-        {
-          os << "m";
-        }
-      }
-      else if (parameter > 0)
-      {
-        os << "a" << parameter;
-      }
-      os << "zQ";
-      return RunTetGen(surface, os.str(), points, tets, error, sizing);
-    }
-    std::vector<int> triangles(3 * surface.Triangles.size());
-    for (size_t t = 0; t < surface.Triangles.size(); ++t)
-    {
-      for (int k = 0; k < 3; ++k)
-      {
-        triangles[3 * t + k] = static_cast<int>(surface.Triangles[t][k]);
-      }
-    }
-    translucency::HxtMesherOptions options;
-    options.MeshSize = parameter > 0 ? parameter : diag;
-    options.RemeshSurface = this->UniformSizing;
-    options.Threads = this->NumberOfThreads;
-    options.Optimize = this->HxtOptimization;
-    return translucency::RunHxtMesher(
-      surface.Points, triangles, options, points, tets, error);
-  };
-
-  // A k of the graded layer (see below); 0 without grading.
-  double gradedLayer = 0.0;
-  if (grading > 0.0)
-  {
-    for (const auto& t : surface.Triangles)
-    {
-      const double* a = &surface.Points[3 * t[0]];
-      const double* b = &surface.Points[3 * t[1]];
-      const double* c = &surface.Points[3 * t[2]];
-      const double u[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
-      const double v[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
-      const double n[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0] };
-      gradedLayer += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    }
-    gradedLayer *= grading * (grading + 1.0) / 2.0 - 1.0;
-  }
-
-  // Measured counts (bunny, sphere): TetGen -q1.414 -a: N falls like a^-0.8
-  // and a = 2.5 V/N gives about N at N = 1e6; TetGen -m h: N ~ 5 V / h^3
-  // (5 mm sphere); HXT with edge length h: N ~ 5.5 V / h^3 (bunny, sphere).
-  const bool edgeLength = mesher == "hxt" || this->UniformSizing || grading > 0.0;
-  const double countConstant = mesher == "hxt" ? 5.5 : 5.0;
-  const double exponent = edgeLength ? 1.0 / 3.0 : 1.0 / 0.8;
   double parameter = 0.0;
-  if (this->TargetNumberOfTets > 0)
+  if (s.TargetNumberOfTets > 0)
   {
-    parameter = edgeLength
-      ? std::cbrt(countConstant * volume / static_cast<double>(this->TargetNumberOfTets))
-      : 2.5 * volume / static_cast<double>(this->TargetNumberOfTets);
+    const double target = static_cast<double>(s.TargetNumberOfTets);
+    parameter = model.EdgeLength ? std::cbrt(model.CountConstant * volume / target)
+                                 : 2.5 * volume / target;
     // Graded: the transition layer adds about A (g (g + 1) / 2 - 1) / h^2
     // cells (the integral of 1/h(d)^3 - 1/h^3 over the layer, A the surface
     // area): solve N = c (V / h^3 + A k / h^2) for h by fixed point.
-    for (int it = 0; grading > 0.0 && it < 30; ++it)
+    for (int it = 0; s.Grading > 0.0 && it < 30; ++it)
     {
-      parameter = std::cbrt(countConstant * (volume + gradedLayer * parameter) /
-        static_cast<double>(this->TargetNumberOfTets));
+      parameter = std::cbrt(model.CountConstant * (volume + gradedLayer * parameter) / target);
     }
   }
-  else if (this->MaxTetVolume > 0)
+  else if (s.MaxTetVolume > 0)
   {
-    parameter = edgeLength ? regularEdge(this->MaxTetVolume) : this->MaxTetVolume;
-    if (grading > 0.0)
+    parameter = model.EdgeLength ? regularEdge(s.MaxTetVolume) : s.MaxTetVolume;
+    if (s.Grading > 0.0)
     {
-      // The size guard above counted the volume only: add the graded layer.
-      const double tets = countConstant *
+      // The size guard counted the volume only: add the graded layer.
+      const double tets = model.CountConstant *
         (volume / std::pow(parameter, 3) + gradedLayer / (parameter * parameter));
-      const std::size_t limit = this->MemoryLimit > 0
-        ? static_cast<std::size_t>(std::min(this->MemoryLimit * 1073741824.0, 1.8e19))
-        : translucency::GetDefaultMemoryLimit();
-      try
-      {
-        translucency::CheckMemory("about " + translucency::FormatNumber(tets) +
-            " tets (MaxTetVolume with GradingFactor " + translucency::FormatNumber(grading) + ")",
-          tets * 400.0, limit,
-          "ask for fewer tets (a larger maximum volume or a smaller GradingFactor; filter: "
-          "MemoryLimit GiB)");
-      }
-      catch (const translucency::Error& e)
-      {
-        vtkErrorMacro(<< e.what());
-        return 0;
-      }
+      translucency::CheckMemory("about " + translucency::FormatNumber(tets) +
+          " tets (MaxTetVolume with GradingFactor " + translucency::FormatNumber(s.Grading) + ")",
+        tets * 400.0, MemoryLimitBytes(s.MemoryLimit),
+        "ask for fewer tets (a larger maximum volume or a smaller GradingFactor; filter: "
+        "MemoryLimit GiB)");
     }
   }
-  if (!runMesher(parameter))
-  {
-    vtkErrorMacro(<< error);
-    return 0;
-  }
-  if (this->TargetNumberOfTets > 0)
-  {
-    const double ratio = static_cast<double>(tets.size() / 4) / this->TargetNumberOfTets;
-    if (std::abs(ratio - 1.0) > 0.15)
-    {
-      this->UpdateProgress(0.5);
-      const double firstParameter = parameter;
-      parameter *= std::pow(ratio, exponent);
-      if (!runMesher(parameter))
-      {
-        vtkErrorMacro(<< error);
-        return 0;
-      }
-      // Graded: the count is not a power of h (the layer grows as h^-2, the
-      // surface's own resolution caps it): a third run on the secant of
-      // log N against log h through the two runs.
-      const double ratio2 = static_cast<double>(tets.size() / 4) / this->TargetNumberOfTets;
-      if (grading > 0.0 && std::abs(ratio2 - 1.0) > 0.15 && std::abs(ratio2 - ratio) > 1e-3)
-      {
-        this->UpdateProgress(0.7);
-        const double slope = std::log(ratio2 / ratio) / std::log(parameter / firstParameter);
-        if (std::isfinite(slope) && slope < 0.0)
-        {
-          parameter *= std::exp(-std::log(ratio2) / slope);
-          if (!runMesher(parameter))
-          {
-            vtkErrorMacro(<< error);
-            return 0;
-          }
-        }
-      }
-    }
-  }
-  this->UpdateProgress(0.9);
+  return parameter;
+}
 
+/// The mesher's runs: one for the first size parameter, a second one
+/// correcting the parameter when the count misses TargetNumberOfTets by more
+/// than 15 %, and (graded) a third on the secant through the two.
+/// `progress` reports the filter's progress. Throws translucency::Error as
+/// FirstParameter.
+bool MeshToTarget(const MeshSettings& s, const Surface& surface, double volume,
+  const std::function<void(double)>& progress, std::vector<double>& points,
+  std::vector<int>& tets, std::string& error)
+{
+  const double diag = BoundingDiagonal(surface);
+  const CountModel model(s);
+  double parameter = FirstParameter(s, model, volume, GradedLayer(surface, s.Grading));
+  if (!RunMesher(s, surface, diag, parameter, points, tets, error))
+  {
+    return false;
+  }
+  if (s.TargetNumberOfTets <= 0)
+  {
+    return true;
+  }
+  const double target = static_cast<double>(s.TargetNumberOfTets);
+  const double ratio = static_cast<double>(tets.size() / 4) / target;
+  if (std::abs(ratio - 1.0) <= 0.15)
+  {
+    return true;
+  }
+  progress(0.5);
+  const double firstParameter = parameter;
+  parameter *= std::pow(ratio, model.Exponent);
+  if (!RunMesher(s, surface, diag, parameter, points, tets, error))
+  {
+    return false;
+  }
+  // Graded: the count is not a power of h (the layer grows as h^-2, the
+  // surface's own resolution caps it): a third run on the secant of
+  // log N against log h through the two runs.
+  const double ratio2 = static_cast<double>(tets.size() / 4) / target;
+  if (s.Grading > 0.0 && std::abs(ratio2 - 1.0) > 0.15 && std::abs(ratio2 - ratio) > 1e-3)
+  {
+    progress(0.7);
+    const double slope = std::log(ratio2 / ratio) / std::log(parameter / firstParameter);
+    if (std::isfinite(slope) && slope < 0.0)
+    {
+      parameter *= std::exp(-std::log(ratio2) / slope);
+      return RunMesher(s, surface, diag, parameter, points, tets, error);
+    }
+  }
+  return true;
+}
+
+/// The output grid: the mesher's points and tets in Morton order (or as
+/// they are), every tet positively oriented as VTK wants it.
+void BuildOutput(const std::vector<double>& points, const std::vector<int>& tets,
+  bool spatialReordering, vtkUnstructuredGrid* output)
+{
   const size_t numPoints = points.size() / 3;
   const size_t numTets = tets.size() / 4;
   std::vector<int> pointOrder, tetOrder;
-  if (this->SpatialReordering)
+  if (spatialReordering)
   {
     translucency::TetMesh::ComputeSpatialOrder(points, tets, pointOrder, tetOrder);
   }
@@ -809,6 +798,100 @@ int vtkTetrahedralizeSurface::RequestSerial(
   cells->SetData(offsets, connectivity);
   output->SetPoints(outPoints);
   output->SetCells(VTK_TETRA, cells);
+}
+}
+
+//------------------------------------------------------------------------------
+vtkTetrahedralizeSurface::vtkTetrahedralizeSurface() = default;
+
+//------------------------------------------------------------------------------
+int vtkTetrahedralizeSurface::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPolyData");
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+int vtkTetrahedralizeSurface::RequestData(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::RunFilter(this, request, inputVector, outputVector);
+}
+
+//------------------------------------------------------------------------------
+int vtkTetrahedralizeSurface::RequestUpdateExtent(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatch::UpdateExtent(this, request, inputVector, outputVector);
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyParallelPlan vtkTetrahedralizeSurface::PlanParallel(
+  vtkInformationVector**, const vtkTranslucencyCommunicator&)
+{
+  return vtkTranslucencyParallelPlan::Gathered(
+    vtkTranslucencyParallelPlan::GatherMode::RankZero, "TetGen is serial: the tets on rank 0 (follow with Redistribute DataSet)");
+}
+
+//------------------------------------------------------------------------------
+int vtkTetrahedralizeSurface::RequestSerial(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkTranslucencyOutputGuard outputs(outputVector); // clean empty outputs on any failure
+  vtkPolyData* input = vtkPolyData::GetData(inputVector[0]);
+  vtkUnstructuredGrid* output = vtkUnstructuredGrid::GetData(outputVector);
+  MeshSettings settings;
+  settings.Mesher = translucency::ToLower(this->Mesher);
+  settings.Grading = this->GradingFactor;
+  settings.UniformSizing = this->UniformSizing;
+  settings.TargetNumberOfTets = this->TargetNumberOfTets;
+  settings.MaxTetVolume = this->MaxTetVolume;
+  settings.MemoryLimit = this->MemoryLimit;
+  settings.Quality = this->Quality;
+  settings.NumberOfThreads = this->NumberOfThreads;
+  settings.HxtOptimization = this->HxtOptimization;
+
+  // 1. The settings: the mesher's name first (a wrong one fails before the
+  // checks' work), then the grading factor.
+  std::string error;
+  if (!vtkTetrahedralizeSurface::HasMesher(settings.Mesher.c_str()))
+  {
+    error = UnknownMesherError(settings.Mesher, this->Mesher);
+  }
+  else
+  {
+    error = CheckGrading(settings);
+  }
+  // 2. The surface: checked, cleaned, closed, not self-intersecting.
+  Surface surface;
+  double volume = 0.0;
+  if (!error.empty() || !PrepareSurface(input, surface, volume, error))
+  {
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  this->UpdateProgress(0.05);
+  // 3. The size guard, 4. the mesher's runs towards the target.
+  std::vector<double> points;
+  std::vector<int> tets;
+  try
+  {
+    CheckSize(settings, volume);
+    if (!MeshToTarget(settings, surface, volume, [this](double p) { this->UpdateProgress(p); },
+          points, tets, error))
+    {
+      vtkErrorMacro(<< error);
+      return 0;
+    }
+  }
+  catch (const translucency::Error& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  this->UpdateProgress(0.9);
+  // 5. The output grid.
+  BuildOutput(points, tets, this->SpatialReordering, output);
   this->UpdateProgress(1.0);
   return outputs.Succeed();
 }

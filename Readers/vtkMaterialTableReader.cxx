@@ -71,34 +71,16 @@ double NonNegative(const std::string& fileName, const std::string& where, const 
   }
   return x;
 }
-} // namespace
 
-//------------------------------------------------------------------------------
-vtkMaterialTableReader::vtkMaterialTableReader()
-{
-  this->SetNumberOfInputPorts(0);
-}
-
-//------------------------------------------------------------------------------
-int vtkMaterialTableReader::CanReadFile(const char* fileName)
-{
-  if (!fileName)
-  {
-    return 0;
-  }
-  const std::string f(fileName);
-  return f.size() > 5 && f.compare(f.size() - 5, 5, ".json") == 0 ? 1 : 0;
-}
-
-//------------------------------------------------------------------------------
-std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMaterialTable(
-  const std::string& fileName)
+/// ReadMaterialTable: the file read (a regular file within the size bound,
+/// not a FIFO or /dev/zero), its nesting bounded, parsed as JSON and checked
+/// to be an object with a "materials" array.
+json ParseMaterialFile(const std::string& fileName)
 {
   if (fileName.empty())
   {
     throw std::runtime_error("material table: no file name given");
   }
-  // A regular file within the size bound (not a FIFO or /dev/zero).
   std::string text;
   try
   {
@@ -126,20 +108,176 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
   {
     Fail(fileName, "must hold a JSON object {\"units\": \"1/mm\", \"materials\": [...]}");
   }
-  double unitScale = 1.0;
-  if (root.contains("units"))
+  return root;
+}
+
+/// ReadMaterialTable: the factor from the file's "units" to 1/mm (1 if
+/// none is given).
+double UnitScale(const std::string& fileName, const json& root)
+{
+  if (!root.contains("units"))
   {
-    const json& u = root["units"];
-    const std::string units = u.is_string() ? u.get<std::string>() : u.dump();
-    if (units == "1/mm")
-      unitScale = 1.0;
-    else if (units == "1/cm")
-      unitScale = 0.1;
-    else if (units == "1/m")
-      unitScale = 0.001;
-    else
-      Fail(fileName, "\"units\" must be \"1/mm\", \"1/cm\" or \"1/m\", not " + Short(u));
+    return 1.0;
   }
+  const json& u = root["units"];
+  const std::string units = u.is_string() ? u.get<std::string>() : u.dump();
+  if (units == "1/mm")
+    return 1.0;
+  if (units == "1/cm")
+    return 0.1;
+  if (units == "1/m")
+    return 0.001;
+  Fail(fileName, "\"units\" must be \"1/mm\", \"1/cm\" or \"1/m\", not " + Short(u));
+}
+
+/// ReadMaterialTable, one entry: its fields known, its "name" and "id".
+void ReadEntryKeys(const std::string& fileName, const std::string& where, const json& e,
+  vtkMaterialTableReader::Material& m)
+{
+  if (!e.is_object())
+  {
+    Fail(fileName, where + " must be a JSON object, not " + Short(e));
+  }
+  for (auto it = e.begin(); it != e.end(); ++it)
+  {
+    static const std::set<std::string> known = { "name", "id", "preset", "absorption",
+      "reduced_scattering", "refractive_index" };
+    if (!known.count(it.key()))
+    {
+      Fail(fileName, where + ": unknown field \"" + it.key() + "\"");
+    }
+  }
+  if (e.contains("name"))
+  {
+    if (!e["name"].is_string() || e["name"].get<std::string>().empty())
+    {
+      Fail(fileName, where + ": \"name\" must be a non-empty string, not " + Short(e["name"]));
+    }
+    m.Name = e["name"].get<std::string>();
+  }
+  if (e.contains("id"))
+  {
+    const json& id = e["id"];
+    if (!id.is_number_integer() || id.get<long long>() < 0 ||
+      id.get<long long>() > std::numeric_limits<int>::max())
+    {
+      Fail(fileName, where + ": \"id\" must be an integer >= 0, not " + Short(id));
+    }
+    m.Id = id.get<int>();
+  }
+  if (m.Name.empty() && m.Id < 0 && !e.contains("preset"))
+  {
+    Fail(fileName, where + " needs a \"name\" or an \"id\"");
+  }
+}
+
+/// ReadMaterialTable, one entry: the coefficients of its "preset" (and its
+/// name when the entry has neither name nor id).
+void ReadEntryPreset(const std::string& fileName, const std::string& where, const json& e,
+  vtkMaterialTableReader::Material& m)
+{
+  const bool explicitValues = e.contains("absorption") || e.contains("reduced_scattering") ||
+    e.contains("refractive_index");
+  if (explicitValues)
+  {
+    Fail(fileName,
+      where + " has both \"preset\" and explicit coefficients: give one or the other");
+  }
+  if (!e["preset"].is_string())
+  {
+    Fail(fileName, where + ": \"preset\" must be a preset name (a string), not " +
+        Short(e["preset"]));
+  }
+  try
+  {
+    const translucency::MaterialPreset& p =
+      translucency::FindMaterialPreset(e["preset"].get<std::string>());
+    for (int c = 0; c < 3; ++c)
+    {
+      m.Absorption[c] = p.Absorption[c];
+      m.ReducedScattering[c] = p.ReducedScattering[c];
+    }
+    m.RefractiveIndex = p.RefractiveIndex;
+    if (m.Name.empty() && m.Id < 0)
+    {
+      m.Name = p.Name;
+    }
+  }
+  catch (const std::exception& ex)
+  {
+    Fail(fileName, where + ": \"preset\": " + ex.what());
+  }
+}
+
+/// ReadMaterialTable, one entry: its explicit coefficients (in the file's
+/// units, scaled to 1/mm by `unitScale`) and refractive index.
+void ReadEntryCoefficients(const std::string& fileName, const std::string& where,
+  const json& e, double unitScale, vtkMaterialTableReader::Material& m)
+{
+  if (!e.contains("absorption") || !e.contains("reduced_scattering"))
+  {
+    Fail(fileName, where + " needs either \"preset\" or both \"absorption\": [r, g, b] and "
+                           "\"reduced_scattering\": [r, g, b]");
+  }
+  auto triple = [&](const char* key, double out[3]) {
+    const json& v = e[key];
+    if (!v.is_array() || v.size() != 3)
+    {
+      Fail(fileName, where + ": \"" + key + "\" must be [r, g, b], not " + Short(v));
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      out[c] = unitScale *
+        NonNegative(fileName, where + ": \"" + key + "\"[" + std::to_string(c) + "]", v[c]);
+    }
+  };
+  triple("absorption", m.Absorption);
+  triple("reduced_scattering", m.ReducedScattering);
+  for (int c = 0; c < 3; ++c)
+  {
+    if (!(m.Absorption[c] + m.ReducedScattering[c] > 0.0))
+    {
+      Fail(fileName, where + ": absorption + reduced_scattering must be > 0 in channel " +
+          std::to_string(c));
+    }
+  }
+  if (e.contains("refractive_index"))
+  {
+    m.RefractiveIndex = NonNegative(fileName, where + ": \"refractive_index\"",
+      e["refractive_index"]);
+    // [0.1, 10]: 1e-320 passed "> 0" and gave a NaN fluence.
+    if (!(m.RefractiveIndex >= 0.1 && m.RefractiveIndex <= 10.0))
+    {
+      Fail(fileName, where + ": \"refractive_index\" must be in [0.1, 10], not " +
+          Short(e["refractive_index"]));
+    }
+  }
+}
+} // namespace
+
+//------------------------------------------------------------------------------
+vtkMaterialTableReader::vtkMaterialTableReader()
+{
+  this->SetNumberOfInputPorts(0);
+}
+
+//------------------------------------------------------------------------------
+int vtkMaterialTableReader::CanReadFile(const char* fileName)
+{
+  if (!fileName)
+  {
+    return 0;
+  }
+  const std::string f(fileName);
+  return f.size() > 5 && f.compare(f.size() - 5, 5, ".json") == 0 ? 1 : 0;
+}
+
+//------------------------------------------------------------------------------
+std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMaterialTable(
+  const std::string& fileName)
+{
+  const json root = ParseMaterialFile(fileName);
+  const double unitScale = UnitScale(fileName, root);
   const json& list = root["materials"];
   if (list.empty())
   {
@@ -152,116 +290,15 @@ std::vector<vtkMaterialTableReader::Material> vtkMaterialTableReader::ReadMateri
   {
     const json& e = list[i];
     const std::string where = EntryPrefix(i, e);
-    if (!e.is_object())
-    {
-      Fail(fileName, where + " must be a JSON object, not " + Short(e));
-    }
-    for (auto it = e.begin(); it != e.end(); ++it)
-    {
-      static const std::set<std::string> known = { "name", "id", "preset", "absorption",
-        "reduced_scattering", "refractive_index" };
-      if (!known.count(it.key()))
-      {
-        Fail(fileName, where + ": unknown field \"" + it.key() + "\"");
-      }
-    }
     Material m;
-    if (e.contains("name"))
-    {
-      if (!e["name"].is_string() || e["name"].get<std::string>().empty())
-      {
-        Fail(fileName, where + ": \"name\" must be a non-empty string, not " + Short(e["name"]));
-      }
-      m.Name = e["name"].get<std::string>();
-    }
-    if (e.contains("id"))
-    {
-      const json& id = e["id"];
-      if (!id.is_number_integer() || id.get<long long>() < 0 ||
-        id.get<long long>() > std::numeric_limits<int>::max())
-      {
-        Fail(fileName, where + ": \"id\" must be an integer >= 0, not " + Short(id));
-      }
-      m.Id = id.get<int>();
-    }
-    if (m.Name.empty() && m.Id < 0 && !e.contains("preset"))
-    {
-      Fail(fileName, where + " needs a \"name\" or an \"id\"");
-    }
-    const bool explicitValues = e.contains("absorption") || e.contains("reduced_scattering") ||
-      e.contains("refractive_index");
+    ReadEntryKeys(fileName, where, e, m);
     if (e.contains("preset"))
     {
-      if (explicitValues)
-      {
-        Fail(fileName,
-          where + " has both \"preset\" and explicit coefficients: give one or the other");
-      }
-      if (!e["preset"].is_string())
-      {
-        Fail(fileName, where + ": \"preset\" must be a preset name (a string), not " +
-            Short(e["preset"]));
-      }
-      try
-      {
-        const translucency::MaterialPreset& p =
-          translucency::FindMaterialPreset(e["preset"].get<std::string>());
-        for (int c = 0; c < 3; ++c)
-        {
-          m.Absorption[c] = p.Absorption[c];
-          m.ReducedScattering[c] = p.ReducedScattering[c];
-        }
-        m.RefractiveIndex = p.RefractiveIndex;
-        if (m.Name.empty() && m.Id < 0)
-        {
-          m.Name = p.Name;
-        }
-      }
-      catch (const std::exception& ex)
-      {
-        Fail(fileName, where + ": \"preset\": " + ex.what());
-      }
+      ReadEntryPreset(fileName, where, e, m);
     }
     else
     {
-      if (!e.contains("absorption") || !e.contains("reduced_scattering"))
-      {
-        Fail(fileName, where + " needs either \"preset\" or both \"absorption\": [r, g, b] and "
-                               "\"reduced_scattering\": [r, g, b]");
-      }
-      auto triple = [&](const char* key, double out[3]) {
-        const json& v = e[key];
-        if (!v.is_array() || v.size() != 3)
-        {
-          Fail(fileName, where + ": \"" + key + "\" must be [r, g, b], not " + Short(v));
-        }
-        for (int c = 0; c < 3; ++c)
-        {
-          out[c] = unitScale *
-            NonNegative(fileName, where + ": \"" + key + "\"[" + std::to_string(c) + "]", v[c]);
-        }
-      };
-      triple("absorption", m.Absorption);
-      triple("reduced_scattering", m.ReducedScattering);
-      for (int c = 0; c < 3; ++c)
-      {
-        if (!(m.Absorption[c] + m.ReducedScattering[c] > 0.0))
-        {
-          Fail(fileName, where + ": absorption + reduced_scattering must be > 0 in channel " +
-              std::to_string(c));
-        }
-      }
-      if (e.contains("refractive_index"))
-      {
-        m.RefractiveIndex = NonNegative(fileName, where + ": \"refractive_index\"",
-          e["refractive_index"]);
-        // [0.1, 10]: 1e-320 passed "> 0" and gave a NaN fluence.
-        if (!(m.RefractiveIndex >= 0.1 && m.RefractiveIndex <= 10.0))
-        {
-          Fail(fileName, where + ": \"refractive_index\" must be in [0.1, 10], not " +
-              Short(e["refractive_index"]));
-        }
-      }
+      ReadEntryCoefficients(fileName, where, e, unitScale, m);
     }
     if (m.Id >= 0 && !ids.insert(m.Id).second)
     {

@@ -36,28 +36,6 @@ LIMIT = 150
 # work (issue 30) that will shorten it. Key: the name as printed (a file that
 # moves keeps its entry), or "path::name" for a name used in several files.
 ALLOWED = {
-    # The plumbing of the parallel seam (Filters/Parallel/): to split next.
-    "MergePointSets": "seam plumbing: the merge of the ranks' pieces, to split",
-    "RunGathered": "seam plumbing: the gather and scatter back, to split",
-    "XmlChecker::Run": "the .vtu/.vtp pre-parser (Apps/MeshIO.cxx), to split",
-    # Split into named phases on a branch whose split conflicted with the
-    # same functions' other changes of the same round: redo the split.
-    "MonteCarloSolver::Solve": "split conflicted with LightSources changes: redo at its ---- markers",
-    "Compare": "split conflicted with the output-safety changes: redo",
-    "vtkTetrahedralizeSurface::RequestSerial": "split conflicted with the seam's rename: redo",
-    "Acquire": "split conflicted with the output-safety changes: redo",
-    "Render": "split conflicted with the output-safety changes: redo",
-    "vtkOutgoingRadiance::RequestPerPiece": "split conflicted with the read-out default: redo",
-    "vtkOutgoingRadiance::RequestSerial": "grew with the seam's rename: split",
-    "BenchLinearSolvers": "split conflicted with the output-safety changes: redo",
-    "vtkMaterialTableReader::ReadMaterialTable": "split conflicted with the bounded reads: redo",
-    "VertexDiffusionSolver::Solve": "split conflicted with the relight's right-hand side: redo",
-    "VertexDiffusionSolver::SolveFrequencyDomain": "to split (schedule of the COCG set-up)",
-    # Grew or arrived in the same round: to split.
-    "ComputeCollimatedSource": "to split",
-    "AddBenchCommand": "grew with bench --pipeline: to split",
-    "Trace": "the photon walk's inner loop: to split",
-    "Build": "MonteCarlo.cxx's scene build: to split",
 }
 
 

@@ -2,6 +2,7 @@
 
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkTranslucencyParallel.h"
+#include "vtkTranslucencyThreads.h"
 
 #include <vtkAlgorithm.h>
 #include <vtkDataObject.h>
@@ -21,12 +22,17 @@ int PlanCode(const vtkTranslucencyParallelPlan& plan)
 int Fail(vtkAlgorithm* self, vtkInformationVector* outputVector, const std::string& message)
 {
   vtkErrorWithObjectMacro(self, << message);
+  vtkTranslucencyDispatch::EmptyOutputs(outputVector);
+  return 0;
+}
+}
+
+void vtkTranslucencyDispatch::EmptyOutputs(vtkInformationVector* outputVector)
+{
   for (int port = 0; port < outputVector->GetNumberOfInformationObjects(); ++port)
   {
     vtkTranslucencyOutputGuard::MakeEmpty(vtkDataObject::GetData(outputVector, port));
   }
-  return 0;
-}
 }
 
 int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
@@ -77,6 +83,8 @@ int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
     record.Path = "serial";
     return paths.Serial(request, inputVector, outputVector);
   }
+  // OpenMP threads per rank = cores / ranks on the node (collective).
+  const vtkTranslucency::ThreadsPerRankScope threads(comm);
   switch (plan.Kind)
   {
     case vtkTranslucencyParallelPlan::Kinds::PerPiece:

@@ -34,6 +34,7 @@
 
 #include <functional>
 #include <string>
+#include <utility>
 
 class vtkAlgorithm;
 class vtkInformation;
@@ -70,6 +71,85 @@ struct Record
 /// RequestData of a filter: plan, agree, run the path (see the file comment).
 int Run(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
   vtkInformationVector* outputVector, const Planner& planner, const Paths& paths, Record record);
+
+/// Make every output of `outputVector` a clean empty data set
+/// (vtkTranslucencyOutputGuard::MakeEmpty). Called by RequestUpdateExtent:
+/// see UpdateExtent().
+void EmptyOutputs(vtkInformationVector* outputVector);
+}
+
+/**
+ * What the filter templates below need of a filter's protected members:
+ * PlanParallel, RequestSerial, ParallelPath, ParallelPlan and the
+ * superclass's RequestUpdateExtent. Every public filter names it a friend
+ * (`friend struct vtkTranslucencyDispatchAccess;`).
+ */
+struct vtkTranslucencyDispatchAccess
+{
+  template <class Filter>
+  static int Run(Filter* self, vtkInformation* request, vtkInformationVector** inputVector,
+    vtkInformationVector* outputVector, vtkTranslucencyDispatch::PiecePath perPiece,
+    vtkTranslucencyDispatch::PiecePath distributed)
+  {
+    return vtkTranslucencyDispatch::Run(
+      self, request, inputVector, outputVector,
+      [self](vtkInformationVector** i, const vtkTranslucencyCommunicator& c)
+      { return self->PlanParallel(i, c); },
+      { [self](vtkInformation* r, vtkInformationVector** i, vtkInformationVector* o)
+        { return self->RequestSerial(r, i, o); },
+        std::move(perPiece), std::move(distributed) },
+      { self->ParallelPath, self->ParallelPlan });
+  }
+
+  template <class Filter>
+  static int UpdateExtent(Filter* self, vtkInformation* request,
+    vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+  {
+    vtkTranslucencyDispatch::EmptyOutputs(outputVector);
+    return self->Filter::Superclass::RequestUpdateExtent(request, inputVector, outputVector);
+  }
+};
+
+namespace vtkTranslucencyDispatch
+{
+/**
+ * A filter's whole RequestData: Run() with the filter's PlanParallel as the
+ * planner, its RequestSerial as the serial path, the given per-piece and
+ * distributed paths (null: the filter has none) and its ParallelPath and
+ * ParallelPlan as the record.
+ * @code
+ * int vtkMyFilter::RequestData(vtkInformation* request,
+ *   vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+ * {
+ *   return vtkTranslucencyDispatch::RunFilter(this, request, inputVector, outputVector);
+ * }
+ * @endcode
+ */
+template <class Filter>
+int RunFilter(Filter* self, vtkInformation* request, vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector, PiecePath perPiece = nullptr,
+  PiecePath distributed = nullptr)
+{
+  return vtkTranslucencyDispatchAccess::Run(
+    self, request, inputVector, outputVector, std::move(perPiece), std::move(distributed));
+}
+
+/**
+ * A filter's whole RequestUpdateExtent: empty the outputs, then the
+ * superclass's. The pipeline calls RequestUpdateExtent only on a filter that
+ * is about to execute, before anything upstream of it executes; when an
+ * upstream filter then fails, VTK does not call this filter's RequestData at
+ * all, so without this its output would keep the previous run's fields (a
+ * stale Fluence after a typo in the material name). With it, the output of
+ * every filter downstream of a failure is empty, as the failed filter's own
+ * (vtkTranslucencyOutputGuard), until a run succeeds.
+ */
+template <class Filter>
+int UpdateExtent(Filter* self, vtkInformation* request, vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector)
+{
+  return vtkTranslucencyDispatchAccess::UpdateExtent(self, request, inputVector, outputVector);
+}
 }
 
 #endif

@@ -45,7 +45,7 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
   const long long ownedTets = faces.OwnedTets;
   long long totalTets = 0;
   std::vector<translucency::PointKey> keys;
-  const int allIds = vtkTranslucency::MakePointKeys(comm, input, points, !local.empty(), keys);
+  vtkTranslucency::MakePointKeys(comm, input, points, !local.empty(), keys);
   MPI_Allreduce(&ownedTets, &totalTets, 1, MPI_LONG_LONG, MPI_SUM, comm);
   try
   {
@@ -58,7 +58,7 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
     std::vector<int> surfacePoint;
     std::vector<double> rotations;
     translucency::BoundarySurfaceReport gathered;
-    translucency::GatherBoundarySurface(comm, points, keys, allIds != 0, faces.Used,
+    translucency::GatherBoundarySurface(comm, points, keys, faces.Used,
       faces.Triangles, faces.TriangleEta, faces.TriangleTets, surface, surfacePoint, rotations,
       gathered);
     report.SurfaceTriangles = gathered.Triangles;
@@ -136,15 +136,14 @@ bool vtkTranslucencyDistributedIrradiance::GatherSurface(
     local = e.what();
   }
   std::vector<translucency::PointKey> keys;
-  const int allIds =
-    vtkTranslucency::MakePointKeys(comm, input, faces.Points, !local.empty(), keys);
+  vtkTranslucency::MakePointKeys(comm, input, faces.Points, !local.empty(), keys);
   try
   {
     translucency::AgreeOnError(comm, local);
     std::vector<int> surfacePoint;
     std::vector<double> rotations;
     translucency::BoundarySurfaceReport report;
-    translucency::GatherBoundarySurface(comm, faces.Points, keys, allIds != 0, faces.Used,
+    translucency::GatherBoundarySurface(comm, faces.Points, keys, faces.Used,
       faces.Triangles, faces.TriangleEta, faces.TriangleTets, surface, surfacePoint, rotations,
       report);
   }

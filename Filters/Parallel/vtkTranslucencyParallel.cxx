@@ -119,94 +119,70 @@ PointKey KeyOf(vtkPointSet* piece, vtkDataArray* globalIds, vtkIdType i)
   return key;
 }
 
-/// Merge point-set pieces (vtkUnstructuredGrid or vtkPolyData) into one:
-/// ghost cells dropped, shared points merged (see the header), the arrays
-/// common to every non-empty piece kept (ghost arrays removed).
-vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* maps)
+/// The pieces MergePointSets works on and what they have in common.
+struct MergeInputs
 {
-  std::vector<vtkPointSet*> sets;
-  vtkPointSet* prototype = nullptr;
-  for (const auto& p : pieces)
+  explicit MergeInputs(const Pieces& pieces)
+    : PointFields(static_cast<int>(pieces.size()))
+    , CellFields(static_cast<int>(pieces.size()))
   {
-    sets.push_back(vtkPointSet::SafeDownCast(p));
-    if (!prototype && sets.back() && !IsEmpty(sets.back()))
+    for (const auto& p : pieces)
     {
-      prototype = sets.back();
+      this->Sets.push_back(vtkPointSet::SafeDownCast(p));
+      if (!this->Prototype && this->Sets.back() && !IsEmpty(this->Sets.back()))
+      {
+        this->Prototype = this->Sets.back();
+      }
     }
-  }
-  if (maps)
-  {
-    maps->Points.assign(pieces.size(), {});
-    maps->Cells.assign(pieces.size(), {});
-  }
-  if (!prototype)
-  {
-    vtkSmartPointer<vtkDataObject> empty;
-    empty.TakeReference(pieces.front()->NewInstance());
-    return empty;
-  }
-  vtkSmartPointer<vtkPointSet> merged;
-  merged.TakeReference(prototype->NewInstance());
-  auto* mergedGrid = vtkUnstructuredGrid::SafeDownCast(merged);
-  auto* mergedPoly = vtkPolyData::SafeDownCast(merged);
-
-  // Global ids only if every non-empty piece has them.
-  bool useGlobalIds = true;
-  vtkIdType totalPoints = 0, totalCells = 0;
-  vtkDataSetAttributes::FieldList pointFields(static_cast<int>(sets.size()));
-  vtkDataSetAttributes::FieldList cellFields(static_cast<int>(sets.size()));
-  bool first = true;
-  for (vtkPointSet* s : sets)
-  {
-    if (!s || IsEmpty(s))
+    // Global ids only if every non-empty piece has them; the arrays common
+    // to every non-empty piece; which piece is which input of the field
+    // lists (the non-empty ones, in order).
+    this->InputIndex.assign(this->Sets.size(), -1);
+    int inputs = 0;
+    for (size_t r = 0; r < this->Sets.size(); ++r)
     {
-      continue;
-    }
-    useGlobalIds = useGlobalIds && s->GetPointData()->GetGlobalIds() != nullptr;
-    totalPoints += s->GetNumberOfPoints();
-    totalCells += s->GetNumberOfCells();
-    if (first)
-    {
-      pointFields.InitializeFieldList(s->GetPointData());
-      cellFields.InitializeFieldList(s->GetCellData());
-      first = false;
-    }
-    else
-    {
-      pointFields.IntersectFieldList(s->GetPointData());
-      cellFields.IntersectFieldList(s->GetCellData());
+      vtkPointSet* s = this->Sets[r];
+      if (!s || IsEmpty(s))
+      {
+        continue;
+      }
+      this->InputIndex[r] = inputs++;
+      this->UseGlobalIds = this->UseGlobalIds && s->GetPointData()->GetGlobalIds() != nullptr;
+      this->UseCellGlobalIds =
+        this->UseCellGlobalIds && s->GetCellData()->GetGlobalIds() != nullptr;
+      this->TotalPoints += s->GetNumberOfPoints();
+      this->TotalCells += s->GetNumberOfCells();
+      if (inputs == 1)
+      {
+        this->PointFields.InitializeFieldList(s->GetPointData());
+        this->CellFields.InitializeFieldList(s->GetCellData());
+      }
+      else
+      {
+        this->PointFields.IntersectFieldList(s->GetPointData());
+        this->CellFields.IntersectFieldList(s->GetCellData());
+      }
     }
   }
 
-  vtkNew<vtkPoints> points;
-  points->SetDataType(prototype->GetPoints() ? prototype->GetPoints()->GetDataType() : VTK_DOUBLE);
-  points->Allocate(totalPoints);
-  merged->GetPointData()->CopyAllocate(pointFields, totalPoints);
-  merged->GetCellData()->CopyAllocate(cellFields, totalCells);
-  if (mergedGrid)
-  {
-    mergedGrid->Allocate(totalCells);
-  }
-  else if (mergedPoly)
-  {
-    mergedPoly->AllocateEstimate(totalCells, 4);
-  }
+  std::vector<vtkPointSet*> Sets;   ///< null for a piece that is not a point set
+  vtkPointSet* Prototype = nullptr; ///< the first non-empty piece; null: all empty
+  std::vector<int> InputIndex;      ///< index in the field lists; -1: empty piece
+  bool UseGlobalIds = true;         ///< every non-empty piece has point GlobalIds
+  bool UseCellGlobalIds = true;     ///< every non-empty piece has cell GlobalIds
+  vtkIdType TotalPoints = 0, TotalCells = 0;
+  vtkDataSetAttributes::FieldList PointFields;
+  vtkDataSetAttributes::FieldList CellFields;
+};
 
-  // Which piece is which input of the field lists (the non-empty ones, in order).
-  std::vector<int> inputIndex(sets.size(), -1);
-  int inputs = 0;
-  for (size_t r = 0; r < sets.size(); ++r)
-  {
-    if (sets[r] && !IsEmpty(sets[r]))
-    {
-      inputIndex[r] = inputs++;
-    }
-  }
-
-  // Points: those of owned cells, and points of no cell at all (an orphan
-  // point is one in serial too), each once, in the order of first occurrence
-  // or, with GlobalIds, of the ids; a point of ghost cells only is matched
-  // to its owner's once every piece's points are in.
+/// The points of the merged set: those of owned cells, and points of no cell
+/// at all (an orphan point is one in serial too), each once, in the order of
+/// first occurrence or, with GlobalIds, of the ids; a point of ghost cells
+/// only is matched to its owner's once every piece's points are in. Returns,
+/// per piece, each point's merged id (-1: no counterpart).
+std::vector<std::vector<vtkIdType>> MergePoints(MergeInputs& in, vtkPointSet* merged)
+{
+  const std::vector<vtkPointSet*>& sets = in.Sets;
   struct PointRef
   {
     size_t Piece;
@@ -220,11 +196,11 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
   for (size_t r = 0; r < sets.size(); ++r)
   {
     vtkPointSet* s = sets[r];
-    if (inputIndex[r] < 0)
+    if (in.InputIndex[r] < 0)
     {
       continue;
     }
-    vtkDataArray* globalIds = useGlobalIds ? s->GetPointData()->GetGlobalIds() : nullptr;
+    vtkDataArray* globalIds = in.UseGlobalIds ? s->GetPointData()->GetGlobalIds() : nullptr;
     vtkUnsignedCharArray* ghosts = GhostCells(s);
     const vtkIdType n = s->GetNumberOfPoints();
     std::vector<char> owned(static_cast<size_t>(n), 0), used(static_cast<size_t>(n), 0);
@@ -262,26 +238,26 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
   {
     order[k] = static_cast<vtkIdType>(k);
   }
-  if (useGlobalIds)
+  if (in.UseGlobalIds)
   {
     std::stable_sort(order.begin(), order.end(),
       [&unique](vtkIdType a, vtkIdType b) { return unique[a].GlobalId < unique[b].GlobalId; });
   }
   std::vector<vtkIdType> finalId(unique.size());
+  vtkPoints* points = merged->GetPoints();
   points->SetNumberOfPoints(static_cast<vtkIdType>(unique.size()));
   for (size_t k = 0; k < order.size(); ++k)
   {
     const PointRef& p = unique[static_cast<size_t>(order[k])];
     finalId[static_cast<size_t>(order[k])] = static_cast<vtkIdType>(k);
     points->SetPoint(static_cast<vtkIdType>(k), sets[p.Piece]->GetPoint(p.Id));
-    merged->GetPointData()->CopyData(pointFields, sets[p.Piece]->GetPointData(),
-      inputIndex[p.Piece], p.Id, static_cast<vtkIdType>(k));
+    merged->GetPointData()->CopyData(in.PointFields, sets[p.Piece]->GetPointData(),
+      in.InputIndex[p.Piece], p.Id, static_cast<vtkIdType>(k));
   }
-  merged->SetPoints(points);
   for (size_t r = 0; r < sets.size(); ++r)
   {
     vtkPointSet* s = sets[r];
-    vtkDataArray* globalIds = s && useGlobalIds ? s->GetPointData()->GetGlobalIds() : nullptr;
+    vtkDataArray* globalIds = s && in.UseGlobalIds ? s->GetPointData()->GetGlobalIds() : nullptr;
     for (size_t i = 0; i < local[r].size(); ++i)
     {
       vtkIdType& id = local[r][i];
@@ -294,19 +270,40 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
       id = found == index.end() ? -1 : finalId[static_cast<size_t>(found->second)];
     }
   }
+  return local;
+}
 
-  // Cells: the owned cells of each piece, in piece order or, when every
-  // piece has cell GlobalIds, in id order. A cell that another piece already
-  // brought (the same points: overlapping pieces not marked as ghosts) is
-  // taken once; a ghost cell maps to the owned cell with its points.
-  bool useCellGlobalIds = true;
-  for (size_t r = 0; r < sets.size(); ++r)
+/// A cell's identity: its type and sorted merged point ids.
+std::string CellKey(int type, std::vector<vtkIdType> ids)
+{
+  std::sort(ids.begin(), ids.end());
+  ids.push_back(type);
+  return std::string(reinterpret_cast<const char*>(ids.data()), ids.size() * sizeof(vtkIdType));
+}
+
+/// The merged point ids of cell `c` of piece `r`.
+void MergedCellPoints(const MergeInputs& in, const std::vector<std::vector<vtkIdType>>& local,
+  size_t r, vtkIdType c, vtkIdList* cellPoints, std::vector<vtkIdType>& ids)
+{
+  in.Sets[r]->GetCellPoints(c, cellPoints);
+  ids.resize(static_cast<size_t>(cellPoints->GetNumberOfIds()));
+  for (size_t k = 0; k < ids.size(); ++k)
   {
-    if (inputIndex[r] >= 0)
-    {
-      useCellGlobalIds = useCellGlobalIds && sets[r]->GetCellData()->GetGlobalIds() != nullptr;
-    }
+    ids[k] = local[r][cellPoints->GetId(static_cast<vtkIdType>(k))];
   }
+}
+
+/// The cells of the merged set: the owned cells of each piece, in piece
+/// order or, when every piece has cell GlobalIds, in id order. A cell that
+/// another piece already brought (the same points: overlapping pieces not
+/// marked as ghosts) is taken once; a ghost cell maps to the owned cell with
+/// its points. Returns, per piece, each cell's merged id (-1: none).
+std::vector<std::vector<vtkIdType>> MergeCells(MergeInputs& in,
+  const std::vector<std::vector<vtkIdType>>& local, vtkPointSet* merged)
+{
+  const std::vector<vtkPointSet*>& sets = in.Sets;
+  auto* mergedGrid = vtkUnstructuredGrid::SafeDownCast(merged);
+  auto* mergedPoly = vtkPolyData::SafeDownCast(merged);
   struct CellRef
   {
     size_t Piece;
@@ -324,12 +321,12 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
       continue;
     }
     cellMaps[r].assign(static_cast<size_t>(s->GetNumberOfCells()), -1);
-    if (inputIndex[r] < 0)
+    if (in.InputIndex[r] < 0)
     {
       continue;
     }
     vtkUnsignedCharArray* ghosts = GhostCells(s);
-    vtkDataArray* cellIds = useCellGlobalIds ? s->GetCellData()->GetGlobalIds() : nullptr;
+    vtkDataArray* cellIds = in.UseCellGlobalIds ? s->GetCellData()->GetGlobalIds() : nullptr;
     for (vtkIdType c = 0; c < s->GetNumberOfCells(); ++c)
     {
       if (IsGhostCell(ghosts, c))
@@ -340,32 +337,22 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
       ownedCells.push_back({ r, c, cellIds ? cellIds->GetComponent(c, 0) : 0.0 });
     }
   }
-  if (useCellGlobalIds)
+  if (in.UseCellGlobalIds)
   {
     std::stable_sort(ownedCells.begin(), ownedCells.end(),
       [](const CellRef& a, const CellRef& b) { return a.GlobalId < b.GlobalId; });
   }
-  // A cell's identity: its type and sorted merged point ids.
-  auto cellKey = [](int type, std::vector<vtkIdType> ids) {
-    std::sort(ids.begin(), ids.end());
-    ids.push_back(type);
-    return std::string(reinterpret_cast<const char*>(ids.data()), ids.size() * sizeof(vtkIdType));
-  };
   std::unordered_map<std::string, vtkIdType> cellIndex;
   cellIndex.reserve(ownedCells.size());
   std::vector<size_t> cellPiece;
   std::vector<vtkIdType> ids;
+  vtkNew<vtkIdList> cellPoints;
   for (const CellRef& cell : ownedCells)
   {
     vtkPointSet* s = sets[cell.Piece];
-    s->GetCellPoints(cell.Id, cellPoints);
-    ids.resize(static_cast<size_t>(cellPoints->GetNumberOfIds()));
-    for (size_t k = 0; k < ids.size(); ++k)
-    {
-      ids[k] = local[cell.Piece][cellPoints->GetId(static_cast<vtkIdType>(k))];
-    }
+    MergedCellPoints(in, local, cell.Piece, cell.Id, cellPoints, ids);
     const int type = s->GetCellType(cell.Id);
-    const auto known = cellIndex.emplace(cellKey(type, ids), merged->GetNumberOfCells());
+    const auto known = cellIndex.emplace(CellKey(type, ids), merged->GetNumberOfCells());
     if (!known.second && cellPiece[static_cast<size_t>(known.first->second)] != cell.Piece)
     {
       cellMaps[cell.Piece][cell.Id] = known.first->second; // brought by another piece
@@ -375,38 +362,73 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
       ? mergedGrid->InsertNextCell(type, static_cast<vtkIdType>(ids.size()), ids.data())
       : mergedPoly->InsertNextCell(type, static_cast<vtkIdType>(ids.size()), ids.data());
     merged->GetCellData()->CopyData(
-      cellFields, s->GetCellData(), inputIndex[cell.Piece], cell.Id, id);
+      in.CellFields, s->GetCellData(), in.InputIndex[cell.Piece], cell.Id, id);
     cellMaps[cell.Piece][cell.Id] = id;
     cellPiece.push_back(cell.Piece);
   }
   for (size_t r = 0; anyGhost && r < sets.size(); ++r)
   {
     vtkPointSet* s = sets[r];
-    vtkUnsignedCharArray* ghosts = inputIndex[r] < 0 ? nullptr : GhostCells(s);
+    vtkUnsignedCharArray* ghosts = in.InputIndex[r] < 0 ? nullptr : GhostCells(s);
     for (vtkIdType c = 0; ghosts && c < s->GetNumberOfCells(); ++c)
     {
       if (!IsGhostCell(ghosts, c))
       {
         continue;
       }
-      s->GetCellPoints(c, cellPoints);
-      ids.resize(static_cast<size_t>(cellPoints->GetNumberOfIds()));
-      for (size_t k = 0; k < ids.size(); ++k)
-      {
-        ids[k] = local[r][cellPoints->GetId(static_cast<vtkIdType>(k))];
-      }
-      const auto found = cellIndex.find(cellKey(s->GetCellType(c), ids));
+      MergedCellPoints(in, local, r, c, cellPoints, ids);
+      const auto found = cellIndex.find(CellKey(s->GetCellType(c), ids));
       cellMaps[r][c] = found == cellIndex.end() ? -1 : found->second;
     }
   }
+  return cellMaps;
+}
+
+/// Merge point-set pieces (vtkUnstructuredGrid or vtkPolyData) into one:
+/// ghost cells dropped, shared points merged (see the header), the arrays
+/// common to every non-empty piece kept (ghost arrays removed).
+vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* maps)
+{
+  MergeInputs in(pieces);
   if (maps)
   {
-    for (size_t r = 0; r < sets.size(); ++r)
+    maps->Points.assign(pieces.size(), {});
+    maps->Cells.assign(pieces.size(), {});
+  }
+  if (!in.Prototype)
+  {
+    vtkSmartPointer<vtkDataObject> empty;
+    empty.TakeReference(pieces.front()->NewInstance());
+    return empty;
+  }
+  vtkSmartPointer<vtkPointSet> merged;
+  merged.TakeReference(in.Prototype->NewInstance());
+  vtkNew<vtkPoints> points;
+  points->SetDataType(
+    in.Prototype->GetPoints() ? in.Prototype->GetPoints()->GetDataType() : VTK_DOUBLE);
+  points->Allocate(in.TotalPoints);
+  merged->SetPoints(points);
+  merged->GetPointData()->CopyAllocate(in.PointFields, in.TotalPoints);
+  merged->GetCellData()->CopyAllocate(in.CellFields, in.TotalCells);
+  if (auto* mergedGrid = vtkUnstructuredGrid::SafeDownCast(merged))
+  {
+    mergedGrid->Allocate(in.TotalCells);
+  }
+  else if (auto* mergedPoly = vtkPolyData::SafeDownCast(merged))
+  {
+    mergedPoly->AllocateEstimate(in.TotalCells, 4);
+  }
+
+  std::vector<std::vector<vtkIdType>> local = MergePoints(in, merged);
+  std::vector<std::vector<vtkIdType>> cellMaps = MergeCells(in, local, merged);
+  if (maps)
+  {
+    for (size_t r = 0; r < in.Sets.size(); ++r)
     {
-      maps->Points[r] = sets[r] ? std::move(local[r]) : std::vector<vtkIdType>();
-      if (sets[r] && maps->Points[r].empty())
+      maps->Points[r] = in.Sets[r] ? std::move(local[r]) : std::vector<vtkIdType>();
+      if (in.Sets[r] && maps->Points[r].empty())
       {
-        maps->Points[r].assign(static_cast<size_t>(sets[r]->GetNumberOfPoints()), -1);
+        maps->Points[r].assign(static_cast<size_t>(in.Sets[r]->GetNumberOfPoints()), -1);
       }
       maps->Cells[r] = std::move(cellMaps[r]);
     }
@@ -416,7 +438,7 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
   merged->GetCellData()->RemoveArray(vtkDataSetAttributes::GhostArrayName());
   merged->GetPointData()->Squeeze();
   merged->GetCellData()->Squeeze();
-  merged->GetFieldData()->ShallowCopy(prototype->GetFieldData());
+  merged->GetFieldData()->ShallowCopy(in.Prototype->GetFieldData());
   return merged;
 }
 
@@ -687,22 +709,15 @@ void CaptureError(vtkObject*, unsigned long, void* clientData, void* callData)
     *messages = MessageBody(static_cast<const char*>(callData));
   }
 }
-} // namespace
-
-//------------------------------------------------------------------------------
-int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
-  vtkInformationVector* outputVector, GatherMode mode, const SerialRequest& serial,
-  const vtkTranslucencyCommunicator& comm)
+/// Step 1 of RunGathered: every input port's pieces to rank 0 (an
+/// unconnected port on every rank is skipped). `local`: this rank's piece
+/// per port (an empty grid for a rank without one).
+void GatherInputs(vtkMultiProcessController* controller, int numInputs,
+  vtkInformationVector** inputVector, std::vector<Pieces>& gathered,
+  std::vector<vtkSmartPointer<vtkDataObject>>& local)
 {
-  vtkMultiProcessController* controller = comm.GetController();
-  const int rank = controller->GetLocalProcessId();
-  const int size = controller->GetNumberOfProcesses();
-  const int numInputs = self->GetNumberOfInputPorts();
-  const int numOutputs = self->GetNumberOfOutputPorts();
-
-  // 1. Every input port's pieces to rank 0 (an unconnected port on every rank is skipped).
-  std::vector<Pieces> gathered(static_cast<size_t>(numInputs));
-  std::vector<vtkSmartPointer<vtkDataObject>> local(static_cast<size_t>(numInputs));
+  gathered.assign(static_cast<size_t>(numInputs), {});
+  local.assign(static_cast<size_t>(numInputs), nullptr);
   for (int port = 0; port < numInputs; ++port)
   {
     vtkDataObject* in = inputVector[port]->GetNumberOfInformationObjects() > 0
@@ -721,6 +736,161 @@ int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVecto
     }
     controller->Gather(local[port], gathered[port], 0);
   }
+}
+
+/// On rank 0: the merged inputs as the serial RequestData's input
+/// information vectors (one per port; empty for a skipped port). Returns
+/// false with `error` set when a port's pieces cannot be merged.
+bool MergeInputVectors(vtkInformationVector** inputVector, const std::vector<Pieces>& gathered,
+  PieceMaps& maps, std::vector<vtkSmartPointer<vtkInformationVector>>& inputs,
+  std::string& error)
+{
+  for (size_t port = 0; port < gathered.size(); ++port)
+  {
+    auto vector = vtkSmartPointer<vtkInformationVector>::New();
+    if (!gathered[port].empty())
+    {
+      vtkSmartPointer<vtkDataObject> merged =
+        Merge(gathered[port], port == 0 ? &maps : nullptr, error);
+      if (!merged)
+      {
+        error = "cannot gather the pieces of input " + std::to_string(port) + " to one rank" +
+          (error.empty() ? std::string() : ": " + error);
+        return false;
+      }
+      vtkNew<vtkInformation> info;
+      if (inputVector[port]->GetNumberOfInformationObjects() > 0)
+      {
+        info->Copy(inputVector[port]->GetInformationObject(0));
+      }
+      info->Set(vtkDataObject::DATA_OBJECT(), merged);
+      vector->Append(info);
+    }
+    inputs.push_back(vector);
+  }
+  return true;
+}
+
+/// On rank 0: the filter's serial RequestData on the merged `inputs`, into
+/// new instances of the real outputs (`serialOutputs`), alone (every filter
+/// run here sees a communicator of size one). The filter's errors are
+/// captured into `error` (reported on every rank by the caller). Returns the
+/// serial path's status.
+int RunSerialAlone(vtkAlgorithm* self, vtkInformation* request,
+  std::vector<vtkSmartPointer<vtkInformationVector>>& inputs, vtkInformationVector* outputVector,
+  const SerialRequest& serial, std::vector<vtkSmartPointer<vtkDataObject>>& serialOutputs,
+  std::string& error)
+{
+  std::vector<vtkInformationVector*> inputPointers;
+  for (auto& vector : inputs)
+  {
+    inputPointers.push_back(vector);
+  }
+  vtkNew<vtkInformationVector> outputs;
+  for (int port = 0; port < outputVector->GetNumberOfInformationObjects(); ++port)
+  {
+    vtkInformation* realInfo = outputVector->GetInformationObject(port);
+    vtkNew<vtkInformation> info;
+    info->Copy(realInfo);
+    vtkDataObject* real = realInfo->Get(vtkDataObject::DATA_OBJECT());
+    serialOutputs[port].TakeReference(real->NewInstance());
+    info->Set(vtkDataObject::DATA_OBJECT(), serialOutputs[port]);
+    outputs->Append(info);
+  }
+  vtkNew<vtkCallbackCommand> capture;
+  capture->SetCallback(CaptureError);
+  capture->SetClientData(&error);
+  const unsigned long observer = self->AddObserver(vtkCommand::ErrorEvent, capture);
+  int status = 0;
+  try
+  {
+    const vtkTranslucencyCommunicator::LocalScope alone;
+    status = serial(request, inputPointers.data(), outputs);
+  }
+  catch (const std::exception& e)
+  {
+    status = 0;
+    if (error.empty())
+    {
+      error = e.what();
+    }
+  }
+  self->RemoveObserver(observer);
+  return status;
+}
+
+/// SameMesh's check on rank 0: the first output must be the merged input's
+/// mesh (same numbers of points and cells); else it stays on rank 0.
+GatherMode CheckSameMesh(GatherMode mode, const std::vector<Pieces>& gathered,
+  const std::vector<vtkSmartPointer<vtkInformationVector>>& inputs, vtkDataObject* serialOutput)
+{
+  if (mode != GatherMode::SameMesh)
+  {
+    return mode;
+  }
+  auto* out = vtkDataSet::SafeDownCast(serialOutput);
+  auto* in = gathered[0].empty()
+    ? nullptr
+    : vtkDataSet::SafeDownCast(
+        inputs[0]->GetInformationObject(0)->Get(vtkDataObject::DATA_OBJECT()));
+  if (!out || !in || out->GetNumberOfPoints() != in->GetNumberOfPoints() ||
+    out->GetNumberOfCells() != in->GetNumberOfCells())
+  {
+    return GatherMode::RankZero;
+  }
+  return mode;
+}
+
+/// SameMesh, output port 0: every rank's own piece gets the serial output's
+/// arrays mapped to its points and cells (rank 0 sends, the others receive).
+void ScatterArrays(vtkMultiProcessController* controller, vtkDataObject* piece,
+  vtkDataObject* serialOutput, const PieceMaps& maps, vtkDataObject* out)
+{
+  const int rank = controller->GetLocalProcessId();
+  auto* outSet = vtkDataSet::SafeDownCast(out);
+  if (rank != 0)
+  {
+    vtkNew<vtkTable> pointArrays, cellArrays;
+    controller->Receive(pointArrays, 0, PointArraysTag);
+    controller->Receive(cellArrays, 0, CellArraysTag);
+    outSet->ShallowCopy(piece);
+    ApplyArrays(outSet, pointArrays, cellArrays);
+    return;
+  }
+  auto* serialOut = vtkDataSet::SafeDownCast(serialOutput);
+  for (int r = controller->GetNumberOfProcesses() - 1; r >= 0; --r) // rank 0's last: its own
+  {
+    vtkNew<vtkTable> pointArrays, cellArrays;
+    MapArrays(serialOut->GetPointData(), maps.Points[r], pointArrays->GetRowData());
+    MapArrays(serialOut->GetCellData(), maps.Cells[r], cellArrays->GetRowData());
+    pointArrays->GetFieldData()->ShallowCopy(serialOut->GetFieldData());
+    if (r > 0)
+    {
+      controller->Send(pointArrays, r, PointArraysTag);
+      controller->Send(cellArrays, r, CellArraysTag);
+    }
+    else
+    {
+      outSet->ShallowCopy(vtkDataSet::SafeDownCast(piece));
+      ApplyArrays(outSet, pointArrays, cellArrays);
+    }
+  }
+}
+} // namespace
+
+//------------------------------------------------------------------------------
+int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector, GatherMode mode, const SerialRequest& serial,
+  const vtkTranslucencyCommunicator& comm)
+{
+  vtkMultiProcessController* controller = comm.GetController();
+  const int rank = controller->GetLocalProcessId();
+  const int numOutputs = self->GetNumberOfOutputPorts();
+
+  // 1. Every input port's pieces to rank 0.
+  std::vector<Pieces> gathered;
+  std::vector<vtkSmartPointer<vtkDataObject>> local;
+  GatherInputs(controller, self->GetNumberOfInputPorts(), inputVector, gathered, local);
 
   // 2. Rank 0 merges and runs the filter's serial RequestData.
   int status = 1;
@@ -730,80 +900,11 @@ int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVecto
   if (rank == 0)
   {
     std::vector<vtkSmartPointer<vtkInformationVector>> inputs;
-    std::vector<vtkInformationVector*> inputPointers;
-    for (int port = 0; port < numInputs && status; ++port)
-    {
-      auto vector = vtkSmartPointer<vtkInformationVector>::New();
-      if (!gathered[port].empty())
-      {
-        vtkSmartPointer<vtkDataObject> merged =
-          Merge(gathered[port], port == 0 ? &maps : nullptr, error);
-        if (!merged)
-        {
-          status = 0;
-          error = "cannot gather the pieces of input " + std::to_string(port) + " to one rank" +
-            (error.empty() ? std::string() : ": " + error);
-          break;
-        }
-        vtkNew<vtkInformation> info;
-        if (inputVector[port]->GetNumberOfInformationObjects() > 0)
-        {
-          info->Copy(inputVector[port]->GetInformationObject(0));
-        }
-        info->Set(vtkDataObject::DATA_OBJECT(), merged);
-        vector->Append(info);
-      }
-      inputs.push_back(vector);
-      inputPointers.push_back(vector);
-    }
+    status = MergeInputVectors(inputVector, gathered, maps, inputs, error) &&
+      RunSerialAlone(self, request, inputs, outputVector, serial, serialOutputs, error);
     if (status)
     {
-      vtkNew<vtkInformationVector> outputs;
-      for (int port = 0; port < numOutputs; ++port)
-      {
-        vtkInformation* realInfo = outputVector->GetInformationObject(port);
-        vtkNew<vtkInformation> info;
-        info->Copy(realInfo);
-        vtkDataObject* real = realInfo->Get(vtkDataObject::DATA_OBJECT());
-        serialOutputs[port].TakeReference(real->NewInstance());
-        info->Set(vtkDataObject::DATA_OBJECT(), serialOutputs[port]);
-        outputs->Append(info);
-      }
-      // The filter's errors are captured here and reported below on every rank.
-      vtkNew<vtkCallbackCommand> capture;
-      capture->SetCallback(CaptureError);
-      capture->SetClientData(&error);
-      const unsigned long observer = self->AddObserver(vtkCommand::ErrorEvent, capture);
-      try
-      {
-        // Alone on rank 0: every filter run here (this one's serial path
-        // included) sees a communicator of size one.
-        const vtkTranslucencyCommunicator::LocalScope alone;
-        status = serial(request, inputPointers.data(), outputs);
-      }
-      catch (const std::exception& e)
-      {
-        status = 0;
-        if (error.empty())
-        {
-          error = e.what();
-        }
-      }
-      self->RemoveObserver(observer);
-      if (status && mode == GatherMode::SameMesh)
-      {
-        // The first output must be the merged input's mesh; else keep it on rank 0.
-        auto* out = vtkDataSet::SafeDownCast(serialOutputs[0]);
-        auto* in = gathered[0].empty()
-          ? nullptr
-          : vtkDataSet::SafeDownCast(inputs[0]->GetInformationObject(0)->Get(
-              vtkDataObject::DATA_OBJECT()));
-        if (!out || !in || out->GetNumberOfPoints() != in->GetNumberOfPoints() ||
-          out->GetNumberOfCells() != in->GetNumberOfCells())
-        {
-          mode = GatherMode::RankZero;
-        }
-      }
+      mode = CheckSameMesh(mode, gathered, inputs, serialOutputs[0]);
     }
   }
 
@@ -817,7 +918,6 @@ int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVecto
   int modeValue = 0;
   stream >> status >> modeValue >> error;
   mode = static_cast<GatherMode>(modeValue);
-
   if (!status)
   {
     for (int port = 0; port < numOutputs; ++port)
@@ -834,45 +934,16 @@ int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVecto
     return 0;
   }
 
+  // 4. The outputs: arrays back to every rank's own piece (SameMesh, port
+  // 0), else the serial output on rank 0 and empty outputs on the others.
   for (int port = 0; port < numOutputs; ++port)
   {
     vtkDataObject* out = vtkDataObject::GetData(outputVector, port);
     if (port == 0 && mode == GatherMode::SameMesh)
     {
-      auto* piece = vtkDataSet::SafeDownCast(local[0]);
-      auto* outSet = vtkDataSet::SafeDownCast(out);
-      if (rank == 0)
-      {
-        auto* serialOut = vtkDataSet::SafeDownCast(serialOutputs[0]);
-        for (int r = size - 1; r >= 0; --r) // rank 0's last: its own piece below
-        {
-          vtkNew<vtkTable> pointArrays, cellArrays;
-          MapArrays(serialOut->GetPointData(), maps.Points[r], pointArrays->GetRowData());
-          MapArrays(serialOut->GetCellData(), maps.Cells[r], cellArrays->GetRowData());
-          pointArrays->GetFieldData()->ShallowCopy(serialOut->GetFieldData());
-          if (r > 0)
-          {
-            controller->Send(pointArrays, r, PointArraysTag);
-            controller->Send(cellArrays, r, CellArraysTag);
-          }
-          else
-          {
-            outSet->ShallowCopy(piece);
-            ApplyArrays(outSet, pointArrays, cellArrays);
-          }
-        }
-      }
-      else
-      {
-        vtkNew<vtkTable> pointArrays, cellArrays;
-        controller->Receive(pointArrays, 0, PointArraysTag);
-        controller->Receive(cellArrays, 0, CellArraysTag);
-        outSet->ShallowCopy(piece);
-        ApplyArrays(outSet, pointArrays, cellArrays);
-      }
-      continue;
+      ScatterArrays(controller, local[0], serialOutputs[0], maps, out);
     }
-    if (rank == 0)
+    else if (rank == 0)
     {
       out->ShallowCopy(serialOutputs[port]);
     }

@@ -1,5 +1,6 @@
 #include "MonteCarlo.h"
 
+#include "BoundingBox.h"
 #include "Error.h"
 #include "Fresnel.h"
 #include "InteriorSources.h"
@@ -17,6 +18,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -135,8 +137,15 @@ struct WalkMesh
 
   void Build(const TetMesh& mesh)
   {
+    BuildCells(mesh);
+    BuildAdjacency(mesh);
+  }
+
+  /// Build, 1. Per tet the barycentric gradients G_f and offsets E_f
+  /// (lambda_f(x) = G_f . x + E_f).
+  void BuildCells(const TetMesh& mesh)
+  {
     const int numTets = mesh.GetNumberOfTets();
-    const int numPoints = mesh.GetNumberOfPoints();
     Cells.resize(numTets);
 #pragma omp parallel for schedule(static)
     for (int t = 0; t < numTets; ++t)
@@ -183,9 +192,15 @@ struct WalkMesh
         pl.E[f] = -sum / 3.0;
       }
     }
+  }
 
-    // Face adjacency: faces bucketed by their smallest vertex, matched by
-    // the other two inside each bucket.
+  /// Build, 2. Face adjacency (Next of each cell face: the neighbour's face
+  /// code 4 t + f, or -1 - k for boundary triangle k), faces bucketed by
+  /// their smallest vertex, matched by the other two inside each bucket.
+  void BuildAdjacency(const TetMesh& mesh)
+  {
+    const int numTets = mesh.GetNumberOfTets();
+    const int numPoints = mesh.GetNumberOfPoints();
     struct Face
     {
       int B, C, Code;
@@ -728,6 +743,70 @@ struct Tracer
     }
   }
 
+  /// Trace: the exit face of the ray (x, d) in cell pl, the nearest face
+  /// it moves towards (not `entry`, the one it just came in through, unless
+  /// nothing else is left by rounding), or -1; and its distance (infinite
+  /// for -1). Distances lambda_f / (-G_f . d) compared without dividing:
+  /// a/b < c/e  <=>  a e < c b for positive b, e.
+  int ExitFace(const TetCell& pl, const double x[3], const double d[3], int entry,
+    double& exitDistance) const
+  {
+    double gd[4];
+    gd[1] = Dot(pl.G[1], d);
+    gd[2] = Dot(pl.G[2], d);
+    gd[3] = Dot(pl.G[3], d);
+    gd[0] = -(gd[1] + gd[2] + gd[3]); // the gradients sum to 0
+    double bestLambda = 1.0, bestRate = 0.0; // distance bestLambda / bestRate
+    int exitFace = -1;
+    for (int pass = 0; pass < 2 && exitFace < 0; ++pass)
+    {
+      for (int f = 0; f < 4; ++f)
+      {
+        if ((f == entry) != (pass == 1) || !(gd[f] < 0.0))
+        {
+          continue;
+        }
+        const double lambda = std::max(0.0, Dot(pl.G[f], x) + pl.E[f]);
+        if (exitFace < 0 || lambda * bestRate < bestLambda * -gd[f])
+        {
+          bestLambda = lambda;
+          bestRate = -gd[f];
+          exitFace = f;
+        }
+      }
+    }
+    exitDistance = exitFace < 0 ? std::numeric_limits<double>::infinity() : bestLambda / bestRate;
+    return exitFace;
+  }
+
+  /// Trace, escape through `exitFace` of tet t at x: the weight w shared
+  /// among the triangle's corners by their barycentric coordinates there
+  /// (exitance tally and detectors).
+  void Escape(const TetCell& pl, int t, int exitFace, const double x[3], double w, double time,
+    bool detectors, BatchTally& tally) const
+  {
+    const int* tets = Mesh->GetTets().data();
+    double lambda[4], sum = 0.0;
+    for (int a = 0; a < 4; ++a)
+    {
+      lambda[a] = a == exitFace ? 0.0 : std::max(0.0, Dot(pl.G[a], x) + pl.E[a]);
+      sum += lambda[a];
+    }
+    for (int a = 0; a < 4; ++a)
+    {
+      if (a != exitFace)
+      {
+        const double share = sum > 0.0 ? lambda[a] / sum : 1.0 / 3.0;
+        const int point = tets[4 * static_cast<std::size_t>(t) + a];
+        tally.Exit[point] += w * share;
+        if (detectors)
+        {
+          TallyDetectorExit(point, w * share, time, tally);
+        }
+      }
+    }
+  }
+
   /// Trace photon number `index` of this channel into the batch tally.
   void Trace(long long index, BatchTally& tally) const
   {
@@ -745,7 +824,6 @@ struct Tracer
     double time = 0.0; // ns since the emission (time of flight)
     const bool detectors = Detectors && Detectors->Count > 0;
     int zeroSteps = 0;
-    const int* tets = Mesh->GetTets().data();
     for (long long step = 0;; ++step)
     {
       if (step >= MaxSteps)
@@ -757,34 +835,8 @@ struct Tracer
       const TetCell& pl = Walk->Cells[t];
       // Exit face: the nearest face the ray moves towards (not the one it
       // just came in through, unless nothing else is left by rounding).
-      // Distances lambda_f / (-G_f . d) compared without dividing:
-      // a/b < c/e  <=>  a e < c b for positive b, e.
-      double gd[4];
-      gd[1] = Dot(pl.G[1], d);
-      gd[2] = Dot(pl.G[2], d);
-      gd[3] = Dot(pl.G[3], d);
-      gd[0] = -(gd[1] + gd[2] + gd[3]); // the gradients sum to 0
-      double bestLambda = 1.0, bestRate = 0.0; // distance bestLambda / bestRate
-      int exitFace = -1;
-      for (int pass = 0; pass < 2 && exitFace < 0; ++pass)
-      {
-        for (int f = 0; f < 4; ++f)
-        {
-          if ((f == entry) != (pass == 1) || !(gd[f] < 0.0))
-          {
-            continue;
-          }
-          const double lambda = std::max(0.0, Dot(pl.G[f], x) + pl.E[f]);
-          if (exitFace < 0 || lambda * bestRate < bestLambda * -gd[f])
-          {
-            bestLambda = lambda;
-            bestRate = -gd[f];
-            exitFace = f;
-          }
-        }
-      }
-      const double exitDistance = exitFace < 0 ? std::numeric_limits<double>::infinity()
-                                               : bestLambda / bestRate;
+      double exitDistance;
+      const int exitFace = ExitFace(pl, x, d, entry, exitDistance);
       const double muS = pl.MuS, muA = pl.MuA;
       const double scatterDistance =
         muS > 0.0 ? tau / muS : std::numeric_limits<double>::infinity();
@@ -878,25 +930,7 @@ struct Tracer
       }
       // Escape: share the weight among the triangle's corners by their
       // barycentric coordinates at the exit point.
-      double lambda[4], sum = 0.0;
-      for (int a = 0; a < 4; ++a)
-      {
-        lambda[a] = a == exitFace ? 0.0 : std::max(0.0, Dot(pl.G[a], x) + pl.E[a]);
-        sum += lambda[a];
-      }
-      for (int a = 0; a < 4; ++a)
-      {
-        if (a != exitFace)
-        {
-          const double share = sum > 0.0 ? lambda[a] / sum : 1.0 / 3.0;
-          const int point = tets[4 * static_cast<std::size_t>(t) + a];
-          tally.Exit[point] += w * share;
-          if (detectors)
-          {
-            TallyDetectorExit(point, w * share, time, tally);
-          }
-        }
-      }
+      Escape(pl, t, exitFace, x, w, time, detectors, tally);
       balance.Escaped += w;
       break;
     }
@@ -904,107 +938,30 @@ struct Tracer
   }
 };
 
-} // namespace
+using Progress = std::function<bool(double)>;
 
-bool MonteCarloSolver::Solve(
-  const DiffusionProblem& problem, std::vector<double>& fluence, SolverReport& report)
+/// What the photons start from: the lights with their own q, the interior
+/// launches (point sources, pencil beams) and, per channel, the table of
+/// (light, triangle) pairs with the cumulative power to draw from.
+struct LaunchTables
 {
-  // ---- Input checks (before any work).
-  if (!problem.Mesh || !problem.Material)
-  {
-    throw Error("montecarlo: the problem needs a mesh and a material");
-  }
+  std::vector<LaunchLight> Lights;
+  std::vector<InteriorLaunch> Interior;
+  std::vector<std::array<double, NumberOfChannels>> InteriorPower;
+  std::vector<std::pair<std::size_t, int>> PencilTriangles; // (launch, boundary triangle)
+  std::array<ChannelSource, NumberOfChannels> Sources;
+};
+
+/// Set-up: each light of the problem (checked, with its q alone) and the
+/// uniform light. False if the progress callback asked to abort.
+bool PrepareLights(const DiffusionProblem& problem, int uniformSamples, const Progress& progress,
+  std::vector<LaunchLight>& lights)
+{
   const TetMesh& mesh = *problem.Mesh;
-  const int numTets = mesh.GetNumberOfTets();
-  const int numPoints = mesh.GetNumberOfPoints();
-  if (numTets == 0)
-  {
-    throw Error("montecarlo: the mesh has no tets");
-  }
   const OpticalProperties& material = *problem.Material;
-  material.Validate(numTets);
-  if (NumberOfPhotons_ <= 0)
-  {
-    throw Error("montecarlo: number of photons " + std::to_string(NumberOfPhotons_) +
-      ": must be > 0");
-  }
-  if (NumberOfPhotons_ > MaxPhotons_ && !GetLongRunsAllowed())
-  {
-    throw Error("montecarlo: " + std::to_string(NumberOfPhotons_) +
-      " photons per channel (--photons) are above the budget of " + std::to_string(MaxPhotons_) +
-      " (hours of tracing): use fewer photons (or " + LongRunOverride() +
-      ", or MonteCarlo::SetMaxPhotons)");
-  }
-  if (NumberOfBatches_ < 2)
-  {
-    throw Error("montecarlo: number of batches " + std::to_string(NumberOfBatches_) +
-      ": must be >= 2 (the standard errors come from the batches)");
-  }
-  if (!(Anisotropy_ > -1.0 && Anisotropy_ < 1.0))
-  {
-    std::ostringstream msg;
-    msg << "montecarlo: anisotropy g = " << Anisotropy_ << ": must be in (-1, 1)";
-    throw Error(msg.str());
-  }
-  if (NumberOfThreads_ < 0)
-  {
-    throw Error("montecarlo: number of threads " + std::to_string(NumberOfThreads_) +
-      ": must be >= 0 (0: OpenMP default)");
-  }
-  if (UniformLightSamples_ < 0)
-  {
-    throw Error("montecarlo: uniform light samples " + std::to_string(UniformLightSamples_) +
-      ": must be >= 0");
-  }
-  if (!(problem.UniformIrradiance >= 0.0) || !std::isfinite(problem.UniformIrradiance))
-  {
-    std::ostringstream msg;
-    msg << "montecarlo: uniform irradiance " << problem.UniformIrradiance
-        << " W/mm^2: must be finite and >= 0";
-    throw Error(msg.str());
-  }
-  if (problem.Lights.empty() && problem.UniformIrradiance == 0.0 &&
-    !problem.HasInteriorSources())
-  {
-    throw Error("montecarlo: the problem has no light (no Lights, UniformIrradiance 0 and no "
-                "interior source): the Monte Carlo reference launches its photons from the "
-                "lights and sources, not from the Irradiance array");
-  }
-  const bool timed = Gates_.Count != 0;
-  if (timed)
-  {
-    try
-    {
-      Gates_.Validate();
-    }
-    catch (const Error& e)
-    {
-      throw Error(std::string("montecarlo: ") + e.what());
-    }
-  }
-  for (std::size_t l = 0; l < problem.Lights.size(); ++l)
-  {
-    if (problem.Lights[l].Type == LightSource::Kind::Uniform)
-    {
-      throw Error("montecarlo: light " + std::to_string(l) +
-        " is uniform: pass a uniform light as DiffusionProblem::UniformIrradiance");
-    }
-  }
-
-  // ---- Set-up: walk structure, per-light irradiance, source tables.
-  auto start = Clock::now();
-  if (!ReportProgress(0.0))
-  {
-    return false;
-  }
-  const std::vector<double> pointEta =
-    BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
-
-  std::vector<LaunchLight> lights;
-  std::vector<std::pair<std::size_t, int>> pencilTriangles; // (launch, boundary triangle)
   bool aborted = false;
-  auto abortCheck = [this, &aborted]() {
-    aborted = aborted || !ReportProgress(0.0);
+  auto abortCheck = [&progress, &aborted]() {
+    aborted = aborted || !progress(0.0);
     return aborted;
   };
   for (std::size_t l = 0; l < problem.Lights.size(); ++l)
@@ -1041,123 +998,99 @@ bool MonteCarloSolver::Solve(
     LaunchLight light;
     light.Type = LightSource::Kind::Uniform;
     if (!ComputeTriangleCornerIrradiance(mesh, material.RefractiveIndex, {}, problem.UniformIrradiance,
-          UniformLightSamples_, problem.Shadows, light.Q, abortCheck))
+          uniformSamples, problem.Shadows, light.Q, abortCheck))
     {
       return false;
     }
     lights.push_back(std::move(light));
   }
+  return true;
+}
 
-  // Interior sources: point sources placed in their tets, pencil beams at
-  // their entry points (the errors name the source).
-  std::vector<InteriorLaunch> interior;
-  std::vector<std::array<double, NumberOfChannels>> interiorPower;
-  if (problem.HasInteriorSources())
+/// Set-up: point sources placed in their tets, pencil beams at their entry
+/// points (the errors name the source).
+void PlaceInteriorSources(const DiffusionProblem& problem, LaunchTables& tables)
+{
+  if (!problem.HasInteriorSources())
   {
-    const Sources& all = *problem.InteriorSources;
-    Sources points;
-    for (const PointSource& point : all.GetPointSources())
-    {
-      points.AddPointSource(point);
-    }
-    try
-    {
-      all.Validate();
-      for (const PlacedSource& placed : points.Place(mesh, material))
-      {
-        InteriorLaunch start;
-        std::copy(placed.Source.Position.begin(), placed.Source.Position.end(), start.X);
-        start.Tet = placed.Tet;
-        interior.push_back(start);
-        interiorPower.push_back(placed.Source.Power);
-      }
-      const std::vector<PencilBeam>& pencils = all.GetPencilBeams();
-      const double tolerance = pencils.empty() ? 0.0 : SurfaceTolerance(mesh);
-      for (std::size_t k = 0; k < pencils.size(); ++k)
-      {
-        const PencilBeam& beam = pencils[k];
-        const std::string name =
-          beam.Label.empty() ? "pencil beam " + std::to_string(k + 1) : beam.Label;
-        const PencilEntry entry = LocatePencilEntry(mesh, material, beam, name, tolerance);
-        InteriorLaunch start;
-        std::copy(entry.Surface.Position.begin(), entry.Surface.Position.end(), start.X);
-        std::copy(entry.Refracted.begin(), entry.Refracted.end(), start.D);
-        start.Isotropic = false;
-        interior.push_back(start);
-        std::array<double, NumberOfChannels> power{};
-        for (int c = 0; c < NumberOfChannels; ++c)
-        {
-          power[c] = entry.Transmitted * beam.Power[c];
-        }
-        interiorPower.push_back(power);
-        pencilTriangles.push_back({ interior.size() - 1, entry.Surface.Triangle });
-      }
-    }
-    catch (const Error& e)
-    {
-      throw Error(std::string("montecarlo: ") + e.what());
-    }
+    return;
   }
-  // The detectors' footprints (the errors of ReadDetectors).
-  DetectorMap detectorMap;
-  std::vector<DetectorFootprint> footprints;
+  const TetMesh& mesh = *problem.Mesh;
+  const OpticalProperties& material = *problem.Material;
+  const Sources& all = *problem.InteriorSources;
+  Sources points;
+  for (const PointSource& point : all.GetPointSources())
+  {
+    points.AddPointSource(point);
+  }
   try
   {
-    footprints = LocateDetectors(mesh, Detectors_);
+    all.Validate();
+    for (const PlacedSource& placed : points.Place(mesh, material))
+    {
+      InteriorLaunch start;
+      std::copy(placed.Source.Position.begin(), placed.Source.Position.end(), start.X);
+      start.Tet = placed.Tet;
+      tables.Interior.push_back(start);
+      tables.InteriorPower.push_back(placed.Source.Power);
+    }
+    const std::vector<PencilBeam>& pencils = all.GetPencilBeams();
+    const double tolerance = pencils.empty() ? 0.0 : SurfaceTolerance(mesh);
+    for (std::size_t k = 0; k < pencils.size(); ++k)
+    {
+      const PencilBeam& beam = pencils[k];
+      const std::string name =
+        beam.Label.empty() ? "pencil beam " + std::to_string(k + 1) : beam.Label;
+      const PencilEntry entry = LocatePencilEntry(mesh, material, beam, name, tolerance);
+      InteriorLaunch start;
+      std::copy(entry.Surface.Position.begin(), entry.Surface.Position.end(), start.X);
+      std::copy(entry.Refracted.begin(), entry.Refracted.end(), start.D);
+      start.Isotropic = false;
+      tables.Interior.push_back(start);
+      std::array<double, NumberOfChannels> power{};
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        power[c] = entry.Transmitted * beam.Power[c];
+      }
+      tables.InteriorPower.push_back(power);
+      tables.PencilTriangles.push_back({ tables.Interior.size() - 1, entry.Surface.Triangle });
+    }
   }
   catch (const Error& e)
   {
     throw Error(std::string("montecarlo: ") + e.what());
   }
-  detectorMap.Build(mesh, footprints);
+}
 
-  WalkMesh walk;
-  walk.Build(mesh);
-  for (const auto& [launch, triangle] : pencilTriangles)
+/// Set-up: the detectors' footprints (the errors of ReadDetectors).
+std::vector<DetectorFootprint> LocateFootprints(
+  const TetMesh& mesh, const std::vector<Detector>& detectors)
+{
+  try
   {
-    const int code = walk.TriangleFace[triangle];
-    interior[launch].Tet = code >> 2;
-    interior[launch].Face = code & 3;
+    return LocateDetectors(mesh, detectors);
   }
+  catch (const Error& e)
+  {
+    throw Error(std::string("montecarlo: ") + e.what());
+  }
+}
 
-  // The shadowed uniform light launches along unoccluded directions only.
-  const bool uniformShadowed =
-    problem.UniformIrradiance > 0.0 && problem.Shadows && UniformLightSamples_ > 0;
-  RayCaster caster;
-  double lo[3], hi[3];
-  for (int a = 0; a < 3; ++a)
-  {
-    lo[a] = std::numeric_limits<double>::infinity();
-    hi[a] = -lo[a];
-  }
-  for (int i = 0; i < numPoints; ++i)
-  {
-    for (int a = 0; a < 3; ++a)
-    {
-      lo[a] = std::min(lo[a], mesh.GetPoint(i)[a]);
-      hi[a] = std::max(hi[a], mesh.GetPoint(i)[a]);
-    }
-  }
-  const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
-    (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-  if (uniformShadowed)
-  {
-    caster.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
-  }
-
-  // Power through each boundary triangle: S_f x mean of its corner values
-  // (the vertex rule for the integral of q over f; the diffusion solvers'
-  // loads S_i q_i / 3 of the projected q sum to the same total).
+/// Set-up: per channel, the power through each boundary triangle: S_f x
+/// mean of its corner values (the vertex rule for the integral of q over f;
+/// the diffusion solvers' loads S_i q_i / 3 of the projected q sum to the
+/// same total), then the interior launches.
+void BuildChannelSources(const TetMesh& mesh, LaunchTables& tables)
+{
   const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
   const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
-  std::array<ChannelSource, NumberOfChannels> sources;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    ChannelSource& src = sources[c];
+    ChannelSource& src = tables.Sources[c];
     double total = 0.0;
-    for (std::size_t l = 0; l < lights.size(); ++l)
+    for (std::size_t l = 0; l < tables.Lights.size(); ++l)
     {
-      const std::vector<double>& q = lights[l].Q;
+      const std::vector<double>& q = tables.Lights[l].Q;
       for (int f = 0; f < numTriangles; ++f)
       {
         const double* qf = &q[9 * static_cast<std::size_t>(f) + c];
@@ -1171,9 +1104,9 @@ bool MonteCarloSolver::Solve(
         }
       }
     }
-    for (std::size_t s = 0; s < interior.size(); ++s)
+    for (std::size_t s = 0; s < tables.Interior.size(); ++s)
     {
-      const double power = interiorPower[s][c];
+      const double power = tables.InteriorPower[s][c];
       if (power > 0.0)
       {
         total += power;
@@ -1184,9 +1117,13 @@ bool MonteCarloSolver::Solve(
     }
     src.Power = total;
   }
-  // Max over the outside hemisphere of F_t (the uniform light's rejection
-  // bound), per distinct eta would be exact; F_t is largest at normal
-  // incidence for an unpolarised smooth interface, checked on a grid.
+}
+
+/// Max over the outside hemisphere of F_t (the uniform light's rejection
+/// bound), per distinct eta would be exact; F_t is largest at normal
+/// incidence for an unpolarised smooth interface, checked on a grid.
+double MaxUniformTransmittance(const std::vector<double>& refractiveIndex)
+{
   auto maxTransmittance = [](double eta) {
     double best = Fresnel::Transmittance(1.0, eta);
     for (int k = 0; k <= 1024; ++k)
@@ -1195,278 +1132,261 @@ bool MonteCarloSolver::Solve(
     }
     return best;
   };
+  std::vector<double> etas(refractiveIndex);
+  std::sort(etas.begin(), etas.end());
+  etas.erase(std::unique(etas.begin(), etas.end()), etas.end());
+  if (etas.size() > 64)
+  {
+    return 1.0; // correct for any eta, only slower to accept
+  }
   double maxFt = 0.0;
+  for (double eta : etas)
   {
-    std::vector<double> etas(material.RefractiveIndex);
-    std::sort(etas.begin(), etas.end());
-    etas.erase(std::unique(etas.begin(), etas.end()), etas.end());
-    if (etas.size() <= 64)
+    maxFt = std::max(maxFt, maxTransmittance(eta));
+  }
+  return maxFt;
+}
+
+/// The sizes of the tracing: photons per channel split into batches, run
+/// `Slots` batches at a time (one per thread).
+struct BatchPlan
+{
+  long long Photons = 0;
+  int Batches = 0;
+  int Threads = 0;
+  int Slots = 0;
+  double TotalPhotons = 0.0; ///< over the lit channels (progress)
+  int NumTets = 0, NumPoints = 0;
+  std::size_t DetectorItems = 0, GateItems = 0;
+};
+
+/// Sums over the batches b (photons n_b, tallies T_b): A1 = sum T_b and
+/// A2 = sum T_b^2 / n_b, per tet (A1 only), per point and per detector item.
+struct BatchSums
+{
+  std::vector<double> TetSum, FluenceA1, FluenceA2, ExitA1, ExitA2;
+  std::vector<double> DetectorA1, DetectorA2, GateA1, GateA2;
+
+  explicit BatchSums(const BatchPlan& plan)
+    : TetSum(plan.NumTets)
+    , FluenceA1(plan.NumPoints)
+    , FluenceA2(plan.NumPoints)
+    , ExitA1(plan.NumPoints)
+    , ExitA2(plan.NumPoints)
+    , DetectorA1(plan.DetectorItems)
+    , DetectorA2(plan.DetectorItems)
+    , GateA1(plan.GateItems)
+    , GateA2(plan.GateItems)
+  {
+  }
+  void Clear()
+  {
+    for (std::vector<double>* v : { &TetSum, &FluenceA1, &FluenceA2, &ExitA1, &ExitA2,
+           &DetectorA1, &DetectorA2, &GateA1, &GateA2 })
     {
-      for (double eta : etas)
-      {
-        maxFt = std::max(maxFt, maxTransmittance(eta));
-      }
-    }
-    else
-    {
-      maxFt = 1.0; // correct for any eta, only slower to accept
+      std::fill(v->begin(), v->end(), 0.0);
     }
   }
-  const double setupMs = MillisecondsSince(start);
+};
 
-  // ---- Tracing.
-  start = Clock::now();
-  const long long numPhotons = NumberOfPhotons_;
-  const int threads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
-  int litChannels = 0;
-  for (int c = 0; c < NumberOfChannels; ++c)
-  {
-    litChannels += sources[c].Power > 0.0 ? 1 : 0;
-  }
-  const double totalPhotons = static_cast<double>(numPhotons) * std::max(1, litChannels);
-  std::atomic<long long> done(0);
-  std::atomic<bool> stop(false);
-
+/// Tracing: the batches of one channel, `Slots` at a time, each added to
+/// the sums in batch order (deterministic for any thread count). Sets
+/// `stop` when the progress callback asks to abort.
+void TraceBatches(const Tracer& tracer, const BatchPlan& plan, const TetMesh& mesh,
+  const Progress& progress, std::vector<BatchTally>& tallies, BatchSums& sums,
+  MonteCarloSolver::PowerBalance& balance, std::atomic<long long>& done, std::atomic<bool>& stop)
+{
   const std::vector<int>& pointTetOffsets = mesh.GetPointTetOffsets();
   const std::vector<int>& pointTets = mesh.GetPointTets();
-  const std::vector<double>& tetVolumes = mesh.GetTetVolumes();
-  const std::vector<double>& vertexVolumes = mesh.GetVertexVolumes();
-  const std::vector<double>& boundaryAreas = mesh.GetBoundaryAreas();
-
-  std::vector<double> tetFluence(3 * static_cast<std::size_t>(numTets), 0.0);
-  std::vector<double> pointFluence(3 * static_cast<std::size_t>(numPoints), 0.0);
-  std::vector<double> pointFluenceError(3 * static_cast<std::size_t>(numPoints), 0.0);
-  std::vector<double> exitance(3 * static_cast<std::size_t>(numPoints), 0.0);
-  std::vector<double> exitanceError(3 * static_cast<std::size_t>(numPoints), 0.0);
-  std::array<PowerBalance, NumberOfChannels> balances{};
-  const int numDetectors = detectorMap.Count;
-  const std::size_t detectorItems = 2 * static_cast<std::size_t>(numDetectors);
-  const std::size_t gateItems = timed ? detectorItems * Gates_.Count : 0;
-  std::vector<DetectorReading> readings(numDetectors), readingErrors(numDetectors);
-  std::vector<std::vector<DetectorReading>> gateReadings(
-    timed ? Gates_.Count : 0, std::vector<DetectorReading>(numDetectors));
-  std::vector<std::vector<DetectorReading>> gateErrors = gateReadings;
-  for (int k = 0; k < numDetectors; ++k)
+  const int numTets = plan.NumTets, numPoints = plan.NumPoints;
+  const int numBatches = plan.Batches, slots = plan.Slots, threads = plan.Threads;
+  const long long numPhotons = plan.Photons;
+  for (int first = 0; first < numBatches && !stop; first += slots)
   {
-    readings[k].SurfacePosition = footprints[k].SurfacePosition;
-    readings[k].Area = footprints[k].Area;
-    readingErrors[k] = readings[k];
-    for (std::size_t g = 0; g < gateReadings.size(); ++g)
-    {
-      gateReadings[g][k] = readings[k];
-      gateErrors[g][k] = readings[k];
-    }
-  }
-  std::vector<double> detectorA1(detectorItems), detectorA2(detectorItems), gateA1(gateItems),
-    gateA2(gateItems);
-
-  const int numBatches =
-    static_cast<int>(std::min<long long>(NumberOfBatches_, numPhotons));
-  const int slots = std::min(threads, numBatches);
-  std::vector<BatchTally> tallies(slots);
-  // Sums over the batches b (photons n_b, tallies T_b): A1 = sum T_b and
-  // A2 = sum T_b^2 / n_b, per tet (A1 only) and per point.
-  std::vector<double> tetSum(numTets), fluenceA1(numPoints), fluenceA2(numPoints),
-    exitA1(numPoints), exitA2(numPoints);
-  const std::size_t tallyBytes =
-    static_cast<std::size_t>(slots) *
-      (numTets + static_cast<std::size_t>(numPoints) + detectorItems + gateItems) *
-      sizeof(double) +
-    (tetSum.size() + 4 * static_cast<std::size_t>(numPoints)) * sizeof(double) +
-    (tetFluence.size() + 4 * pointFluence.size()) * sizeof(double);
-
-  for (int c = 0; c < NumberOfChannels && !stop; ++c)
-  {
-    if (!(sources[c].Power > 0.0))
-    {
-      continue; // dark channel: everything stays 0
-    }
-    Tracer tracer;
-    tracer.Mesh = &mesh;
-    tracer.Walk = &walk;
-    tracer.Source = &sources[c];
-    tracer.Lights = &lights;
-    tracer.Interior = &interior;
-    tracer.Detectors = numDetectors > 0 ? &detectorMap : nullptr;
-    if (timed)
-    {
-      tracer.GateStart = Gates_.Start;
-      tracer.GateEnd = Gates_.End;
-      tracer.GateWidth = Gates_.GetWidth();
-      tracer.GateCount = Gates_.Count;
-    }
-    tracer.Caster = uniformShadowed ? &caster : nullptr;
-    tracer.Eta = &material.RefractiveIndex;
-    tracer.Anisotropy = Anisotropy_;
-    tracer.Weight = sources[c].Power / static_cast<double>(numPhotons);
-    tracer.RayOffset = 1e-5 * diag; // as ComputeBoundaryIrradiance
-    tracer.RayReach = 2.0 * diag;
-    tracer.MaxUniformTransmittance = maxFt;
-    tracer.Seed = Seed_;
-    tracer.Channel = c;
-    for (int t = 0; t < numTets; ++t)
-    {
-      TetCell& cell = walk.Cells[t];
-      cell.MuS = material.ReducedScatteringCoefficient[3 * static_cast<std::size_t>(t) + c] /
-        (1.0 - Anisotropy_);
-      cell.MuA = material.AbsorptionCoefficient[3 * static_cast<std::size_t>(t) + c];
-    }
-    std::fill(tetSum.begin(), tetSum.end(), 0.0);
-    std::fill(fluenceA1.begin(), fluenceA1.end(), 0.0);
-    std::fill(fluenceA2.begin(), fluenceA2.end(), 0.0);
-    std::fill(exitA1.begin(), exitA1.end(), 0.0);
-    std::fill(exitA2.begin(), exitA2.end(), 0.0);
-    std::fill(detectorA1.begin(), detectorA1.end(), 0.0);
-    std::fill(detectorA2.begin(), detectorA2.end(), 0.0);
-    std::fill(gateA1.begin(), gateA1.end(), 0.0);
-    std::fill(gateA2.begin(), gateA2.end(), 0.0);
-
-    for (int first = 0; first < numBatches && !stop; first += slots)
-    {
-      const int count = std::min(slots, numBatches - first);
-      // One batch per thread; only thread 0 (the calling thread) reports.
+    const int count = std::min(slots, numBatches - first);
+    // One batch per thread; only thread 0 (the calling thread) reports.
 #pragma omp parallel for num_threads(count) schedule(static, 1)
-      for (int k = 0; k < count; ++k)
+    for (int k = 0; k < count; ++k)
+    {
+      BatchTally& tally = tallies[k];
+      tally.Reset(numTets, numPoints, plan.DetectorItems, plan.GateItems);
+      const long long b = first + k;
+      tally.Begin = b * numPhotons / numBatches;
+      tally.End = (b + 1) * numPhotons / numBatches;
+      for (long long p = tally.Begin; p < tally.End && !stop.load(std::memory_order_relaxed);
+           p += Chunk)
       {
-        BatchTally& tally = tallies[k];
-        tally.Reset(numTets, numPoints, detectorItems, gateItems);
-        const long long b = first + k;
-        tally.Begin = b * numPhotons / numBatches;
-        tally.End = (b + 1) * numPhotons / numBatches;
-        for (long long p = tally.Begin; p < tally.End && !stop.load(std::memory_order_relaxed);
-             p += Chunk)
+        const long long end = std::min(tally.End, p + Chunk);
+        for (long long i = p; i < end; ++i)
         {
-          const long long end = std::min(tally.End, p + Chunk);
-          for (long long i = p; i < end; ++i)
-          {
-            tracer.Trace(i, tally);
-          }
-          const long long total = done.fetch_add(end - p) + (end - p);
-          if (omp_get_thread_num() == 0 && !ReportProgress(total / totalPhotons))
-          {
-            stop = true;
-          }
+          tracer.Trace(i, tally);
         }
-      }
-      if (stop)
-      {
-        break;
-      }
-      // Add the batches in batch order (deterministic for any thread count);
-      // in parallel only when it pays for a thread team.
-      const bool parallelSum = static_cast<long long>(count) * (numTets + numPoints) > 1000000;
-#pragma omp parallel for num_threads(threads) schedule(static) if (parallelSum)
-      for (int t = 0; t < numTets; ++t)
-      {
-        for (int k = 0; k < count; ++k)
+        const long long total = done.fetch_add(end - p) + (end - p);
+        if (omp_get_thread_num() == 0 && !progress(total / plan.TotalPhotons))
         {
-          tetSum[t] += tallies[k].Track[t];
+          stop = true;
         }
-      }
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 1024) if (parallelSum)
-      for (int i = 0; i < numPoints; ++i)
-      {
-        for (int k = 0; k < count; ++k)
-        {
-          const BatchTally& tally = tallies[k];
-          const double n = static_cast<double>(tally.End - tally.Begin);
-          double track = 0.0;
-          for (int j = pointTetOffsets[i]; j < pointTetOffsets[i + 1]; ++j)
-          {
-            track += tally.Track[pointTets[j]];
-          }
-          fluenceA1[i] += track;
-          fluenceA2[i] += track * track / n;
-          const double out = tally.Exit[i];
-          exitA1[i] += out;
-          exitA2[i] += out * out / n;
-        }
-      }
-      for (int k = 0; k < count; ++k)
-      {
-        const BatchTally& tally = tallies[k];
-        const double n = static_cast<double>(tally.End - tally.Begin);
-        for (std::size_t m = 0; m < detectorItems; ++m)
-        {
-          detectorA1[m] += tally.Detector[m];
-          detectorA2[m] += tally.Detector[m] * tally.Detector[m] / n;
-        }
-        for (std::size_t m = 0; m < gateItems; ++m)
-        {
-          gateA1[m] += tally.Gate[m];
-          gateA2[m] += tally.Gate[m] * tally.Gate[m] / n;
-        }
-        AddBalance(balances[c], tally.Balance);
       }
     }
     if (stop)
     {
       break;
     }
-
-    // Batch estimates X_b = T_b N / (n_b D) (D = V_i or S_i / 3): the mean is
-    // A1 / D and the variance of the mean (sum n_b X_b^2 - N X^2) /
-    // ((B - 1) N) = (N A2 - A1^2) / ((B - 1) D^2).
-    const double n = static_cast<double>(numPhotons);
-    const double dof = numBatches - 1;
+    // Add the batches in batch order (deterministic for any thread count);
+    // in parallel only when it pays for a thread team.
+    const bool parallelSum = static_cast<long long>(count) * (numTets + numPoints) > 1000000;
+#pragma omp parallel for num_threads(threads) schedule(static) if (parallelSum)
     for (int t = 0; t < numTets; ++t)
     {
-      tetFluence[3 * static_cast<std::size_t>(t) + c] = tetSum[t] / tetVolumes[t];
-    }
-    auto standardError = [&](double a1, double a2, double measure) {
-      if (numBatches < 2)
+      for (int k = 0; k < count; ++k)
       {
-        return std::numeric_limits<double>::quiet_NaN(); // one photon: undefined
+        sums.TetSum[t] += tallies[k].Track[t];
       }
-      return std::sqrt(std::max(0.0, n * a2 - a1 * a1) / dof) / measure;
-    };
+    }
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1024) if (parallelSum)
     for (int i = 0; i < numPoints; ++i)
     {
-      const std::size_t ic = 3 * static_cast<std::size_t>(i) + c;
-      if (vertexVolumes[i] > 0.0)
+      for (int k = 0; k < count; ++k)
       {
-        pointFluence[ic] = fluenceA1[i] / vertexVolumes[i];
-        pointFluenceError[ic] = standardError(fluenceA1[i], fluenceA2[i], vertexVolumes[i]);
-      }
-      if (boundaryAreas[i] > 0.0)
-      {
-        const double s = boundaryAreas[i] / 3.0;
-        exitance[ic] = exitA1[i] / s;
-        exitanceError[ic] = standardError(exitA1[i], exitA2[i], s);
+        const BatchTally& tally = tallies[k];
+        const double n = static_cast<double>(tally.End - tally.Begin);
+        double track = 0.0;
+        for (int j = pointTetOffsets[i]; j < pointTetOffsets[i + 1]; ++j)
+        {
+          track += tally.Track[pointTets[j]];
+        }
+        sums.FluenceA1[i] += track;
+        sums.FluenceA2[i] += track * track / n;
+        const double out = tally.Exit[i];
+        sums.ExitA1[i] += out;
+        sums.ExitA2[i] += out * out / n;
       }
     }
-    // Detectors: the tallies are the readings (the weights hold the
-    // measures); the gate sums become gate averages (/ width).
-    for (int k = 0; k < numDetectors; ++k)
+    for (int k = 0; k < count; ++k)
     {
-      const std::size_t f = k, e = numDetectors + static_cast<std::size_t>(k);
-      readings[k].Fluence[c] = detectorA1[f];
-      readings[k].Exitance[c] = detectorA1[e];
-      readingErrors[k].Fluence[c] = standardError(detectorA1[f], detectorA2[f], 1.0);
-      readingErrors[k].Exitance[c] = standardError(detectorA1[e], detectorA2[e], 1.0);
-      for (int g = 0; timed && g < Gates_.Count; ++g)
+      const BatchTally& tally = tallies[k];
+      const double n = static_cast<double>(tally.End - tally.Begin);
+      for (std::size_t m = 0; m < plan.DetectorItems; ++m)
       {
-        const double width = Gates_.GetWidth();
-        const std::size_t gf = static_cast<std::size_t>(g) * numDetectors + k;
-        const std::size_t ge = (static_cast<std::size_t>(Gates_.Count) + g) * numDetectors + k;
-        gateReadings[g][k].Fluence[c] = gateA1[gf] / width;
-        gateReadings[g][k].Exitance[c] = gateA1[ge] / width;
-        gateErrors[g][k].Fluence[c] = standardError(gateA1[gf], gateA2[gf], width);
-        gateErrors[g][k].Exitance[c] = standardError(gateA1[ge], gateA2[ge], width);
+        sums.DetectorA1[m] += tally.Detector[m];
+        sums.DetectorA2[m] += tally.Detector[m] * tally.Detector[m] / n;
+      }
+      for (std::size_t m = 0; m < plan.GateItems; ++m)
+      {
+        sums.GateA1[m] += tally.Gate[m];
+        sums.GateA2[m] += tally.Gate[m] * tally.Gate[m] / n;
+      }
+      AddBalance(balance, tally.Balance);
+    }
+  }
+}
+
+/// The results of the tracing, channel by channel.
+struct Estimates
+{
+  std::vector<double> TetFluence, PointFluence, PointFluenceError, Exitance, ExitanceError;
+  std::array<MonteCarloSolver::PowerBalance, NumberOfChannels> Balances{};
+  std::vector<DetectorReading> Readings, ReadingErrors;
+  std::vector<std::vector<DetectorReading>> GateReadings, GateErrors;
+
+  Estimates(const BatchPlan& plan, const std::vector<DetectorFootprint>& footprints,
+    int gateCount)
+    : TetFluence(3 * static_cast<std::size_t>(plan.NumTets), 0.0)
+    , PointFluence(3 * static_cast<std::size_t>(plan.NumPoints), 0.0)
+    , PointFluenceError(3 * static_cast<std::size_t>(plan.NumPoints), 0.0)
+    , Exitance(3 * static_cast<std::size_t>(plan.NumPoints), 0.0)
+    , ExitanceError(3 * static_cast<std::size_t>(plan.NumPoints), 0.0)
+    , Readings(footprints.size())
+    , ReadingErrors(footprints.size())
+    , GateReadings(gateCount, std::vector<DetectorReading>(footprints.size()))
+  {
+    GateErrors = GateReadings;
+    for (std::size_t k = 0; k < footprints.size(); ++k)
+    {
+      Readings[k].SurfacePosition = footprints[k].SurfacePosition;
+      Readings[k].Area = footprints[k].Area;
+      ReadingErrors[k] = Readings[k];
+      for (std::size_t g = 0; g < GateReadings.size(); ++g)
+      {
+        GateReadings[g][k] = Readings[k];
+        GateErrors[g][k] = Readings[k];
       }
     }
   }
-  if (stop)
-  {
-    return false;
-  }
-  const double solveMs = MillisecondsSince(start);
+};
 
-  // ---- Outputs.
-  // Radiance along the normal implied by eq. 3's angular form: L_o(w) =
-  // C F_t(w) (TransCut eq. 3), so M = int L_o cos dw = C pi
-  // UniformTransmittance(eta) and L_n = M F_t(1) / (pi UniformTransmittance).
-  std::vector<double> radiance(exitance.size(), 0.0), radianceError(exitance.size(), 0.0);
+/// Read-out of channel c from the batch sums. Batch estimates
+/// X_b = T_b N / (n_b D) (D = V_i or S_i / 3): the mean is A1 / D and the
+/// variance of the mean (sum n_b X_b^2 - N X^2) / ((B - 1) N) =
+/// (N A2 - A1^2) / ((B - 1) D^2).
+void StoreChannelEstimates(int c, const BatchSums& sums, const BatchPlan& plan,
+  const TetMesh& mesh, const TimeGates& gates, Estimates& out)
+{
+  const std::vector<double>& tetVolumes = mesh.GetTetVolumes();
+  const std::vector<double>& vertexVolumes = mesh.GetVertexVolumes();
+  const std::vector<double>& boundaryAreas = mesh.GetBoundaryAreas();
+  const int numBatches = plan.Batches;
+  const bool timed = gates.Count != 0;
+  const double n = static_cast<double>(plan.Photons);
+  const double dof = numBatches - 1;
+  for (int t = 0; t < plan.NumTets; ++t)
+  {
+    out.TetFluence[3 * static_cast<std::size_t>(t) + c] = sums.TetSum[t] / tetVolumes[t];
+  }
+  auto standardError = [&](double a1, double a2, double measure) {
+    if (numBatches < 2)
+    {
+      return std::numeric_limits<double>::quiet_NaN(); // one photon: undefined
+    }
+    return std::sqrt(std::max(0.0, n * a2 - a1 * a1) / dof) / measure;
+  };
+  for (int i = 0; i < plan.NumPoints; ++i)
+  {
+    const std::size_t ic = 3 * static_cast<std::size_t>(i) + c;
+    if (vertexVolumes[i] > 0.0)
+    {
+      out.PointFluence[ic] = sums.FluenceA1[i] / vertexVolumes[i];
+      out.PointFluenceError[ic] =
+        standardError(sums.FluenceA1[i], sums.FluenceA2[i], vertexVolumes[i]);
+    }
+    if (boundaryAreas[i] > 0.0)
+    {
+      const double s = boundaryAreas[i] / 3.0;
+      out.Exitance[ic] = sums.ExitA1[i] / s;
+      out.ExitanceError[ic] = standardError(sums.ExitA1[i], sums.ExitA2[i], s);
+    }
+  }
+  // Detectors: the tallies are the readings (the weights hold the
+  // measures); the gate sums become gate averages (/ width).
+  const int numDetectors = static_cast<int>(out.Readings.size());
+  for (int k = 0; k < numDetectors; ++k)
+  {
+    const std::size_t f = k, e = numDetectors + static_cast<std::size_t>(k);
+    out.Readings[k].Fluence[c] = sums.DetectorA1[f];
+    out.Readings[k].Exitance[c] = sums.DetectorA1[e];
+    out.ReadingErrors[k].Fluence[c] = standardError(sums.DetectorA1[f], sums.DetectorA2[f], 1.0);
+    out.ReadingErrors[k].Exitance[c] = standardError(sums.DetectorA1[e], sums.DetectorA2[e], 1.0);
+    for (int g = 0; timed && g < gates.Count; ++g)
+    {
+      const double width = gates.GetWidth();
+      const std::size_t gf = static_cast<std::size_t>(g) * numDetectors + k;
+      const std::size_t ge = (static_cast<std::size_t>(gates.Count) + g) * numDetectors + k;
+      out.GateReadings[g][k].Fluence[c] = sums.GateA1[gf] / width;
+      out.GateReadings[g][k].Exitance[c] = sums.GateA1[ge] / width;
+      out.GateErrors[g][k].Fluence[c] = standardError(sums.GateA1[gf], sums.GateA2[gf], width);
+      out.GateErrors[g][k].Exitance[c] = standardError(sums.GateA1[ge], sums.GateA2[ge], width);
+    }
+  }
+}
+
+/// Outputs: radiance along the normal implied by eq. 3's angular form:
+/// L_o(w) = C F_t(w) (TransCut eq. 3), so M = int L_o cos dw = C pi
+/// UniformTransmittance(eta) and L_n = M F_t(1) / (pi UniformTransmittance).
+void ExitanceToRadiance(const TetMesh& mesh, const std::vector<double>& pointEta,
+  const Estimates& estimates, std::vector<double>& radiance, std::vector<double>& radianceError)
+{
+  radiance.assign(estimates.Exitance.size(), 0.0);
+  radianceError.assign(estimates.Exitance.size(), 0.0);
   for (int i : mesh.GetBoundaryPoints())
   {
     const double eta = pointEta[i];
@@ -1475,39 +1395,54 @@ bool MonteCarloSolver::Solve(
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       const std::size_t ic = 3 * static_cast<std::size_t>(i) + c;
-      radiance[ic] = exitance[ic] * toRadiance;
-      radianceError[ic] = exitanceError[ic] * toRadiance;
+      radiance[ic] = estimates.Exitance[ic] * toRadiance;
+      radianceError[ic] = estimates.ExitanceError[ic] * toRadiance;
     }
   }
+}
 
-  long long traced = 0;
-  for (const PowerBalance& b : balances)
+/// Set-up: the pencil beams' entry tets and faces from their triangles.
+void AttachPencilEntries(const WalkMesh& walk, LaunchTables& tables)
+{
+  for (const auto& [launch, triangle] : tables.PencilTriangles)
   {
-    traced += b.Photons;
+    const int code = walk.TriangleFace[triangle];
+    tables.Interior[launch].Tet = code >> 2;
+    tables.Interior[launch].Face = code & 3;
   }
-  Balance_ = balances;
-  TetFluence_ = std::move(tetFluence);
-  Exitance_ = std::move(exitance);
-  ExitanceError_ = std::move(exitanceError);
-  Readings_ = std::move(readings);
-  ReadingErrors_ = std::move(readingErrors);
-  GateReadings_ = std::move(gateReadings);
-  GateReadingErrors_ = std::move(gateErrors);
-  PhotonsTraced_ = traced;
-  ThreadsUsed_ = slots;
-  Rate_ = solveMs > 0.0 ? traced / (solveMs * 1e-3) / slots : 0.0;
+}
 
-  report = SolverReport();
-  report.Solver = GetName();
+/// Tracing: the walk's coefficients of channel c (scattering sigma_s' /
+/// (1 - g), absorption mu_a).
+void SetChannelCoefficients(
+  const OpticalProperties& material, int c, double anisotropy, WalkMesh& walk)
+{
+  const int numTets = static_cast<int>(walk.Cells.size());
+  for (int t = 0; t < numTets; ++t)
+  {
+    TetCell& cell = walk.Cells[t];
+    cell.MuS = material.ReducedScatteringCoefficient[3 * static_cast<std::size_t>(t) + c] /
+      (1.0 - anisotropy);
+    cell.MuA = material.AbsorptionCoefficient[3 * static_cast<std::size_t>(t) + c];
+  }
+}
+
+/// Outputs: the report of a Monte Carlo solve (no linear solve: 0
+/// iterations, converged), memory of the tallies, the walk and the tables.
+SolverReport MakeReport(const std::string& name, int numTets, std::size_t bytes,
+  const LaunchTables& tables, double setupMs, double solveMs)
+{
+  SolverReport report;
+  report.Solver = name;
   report.LinearSolver = "photons";
   report.NumberOfUnknowns = numTets; // tally cells per channel
   report.NumberOfNonZeros = 0;
-  report.MemoryBytes = tallyBytes + walk.Bytes();
-  for (const LaunchLight& light : lights)
+  report.MemoryBytes = bytes;
+  for (const LaunchLight& light : tables.Lights)
   {
     report.MemoryBytes += light.Q.size() * sizeof(double);
   }
-  for (const ChannelSource& src : sources)
+  for (const ChannelSource& src : tables.Sources)
   {
     report.MemoryBytes += src.Cumulative.size() * (sizeof(double) + 2 * sizeof(int));
   }
@@ -1519,10 +1454,245 @@ bool MonteCarloSolver::Solve(
     report.Residual[c] = 0.0;
     report.Converged[c] = true;
   }
-  report.FluenceStandardError = std::move(pointFluenceError);
+  return report;
+}
+
+/// Solve's input checks (before any work): the errors listed at Solve.
+void CheckInputs(const MonteCarloSolver& solver, const DiffusionProblem& problem)
+{
+  const long long numberOfPhotons = solver.GetNumberOfPhotons();
+  const long long maxPhotons = solver.GetMaxPhotons();
+  const int numberOfBatches = solver.GetNumberOfBatches();
+  const double anisotropy = solver.GetAnisotropy();
+  const int numberOfThreads = solver.GetNumberOfThreads();
+  const int uniformLightSamples = solver.GetUniformLightSamples();
+  const TimeGates& gates = solver.GetTimeGates();
+  if (!problem.Mesh || !problem.Material)
+  {
+    throw Error("montecarlo: the problem needs a mesh and a material");
+  }
+  const TetMesh& mesh = *problem.Mesh;
+  const int numTets = mesh.GetNumberOfTets();
+  if (numTets == 0)
+  {
+    throw Error("montecarlo: the mesh has no tets");
+  }
+  const OpticalProperties& material = *problem.Material;
+  material.Validate(numTets);
+  if (numberOfPhotons <= 0)
+  {
+    throw Error("montecarlo: number of photons " + std::to_string(numberOfPhotons) +
+      ": must be > 0");
+  }
+  if (numberOfPhotons > maxPhotons && !GetLongRunsAllowed())
+  {
+    throw Error("montecarlo: " + std::to_string(numberOfPhotons) +
+      " photons per channel (--photons) are above the budget of " + std::to_string(maxPhotons) +
+      " (hours of tracing): use fewer photons (or " + LongRunOverride() +
+      ", or MonteCarlo::SetMaxPhotons)");
+  }
+  if (numberOfBatches < 2)
+  {
+    throw Error("montecarlo: number of batches " + std::to_string(numberOfBatches) +
+      ": must be >= 2 (the standard errors come from the batches)");
+  }
+  if (!(anisotropy > -1.0 && anisotropy < 1.0))
+  {
+    std::ostringstream msg;
+    msg << "montecarlo: anisotropy g = " << anisotropy << ": must be in (-1, 1)";
+    throw Error(msg.str());
+  }
+  if (numberOfThreads < 0)
+  {
+    throw Error("montecarlo: number of threads " + std::to_string(numberOfThreads) +
+      ": must be >= 0 (0: OpenMP default)");
+  }
+  if (uniformLightSamples < 0)
+  {
+    throw Error("montecarlo: uniform light samples " + std::to_string(uniformLightSamples) +
+      ": must be >= 0");
+  }
+  if (!(problem.UniformIrradiance >= 0.0) || !std::isfinite(problem.UniformIrradiance))
+  {
+    std::ostringstream msg;
+    msg << "montecarlo: uniform irradiance " << problem.UniformIrradiance
+        << " W/mm^2: must be finite and >= 0";
+    throw Error(msg.str());
+  }
+  if (problem.Lights.empty() && problem.UniformIrradiance == 0.0 &&
+    !problem.HasInteriorSources())
+  {
+    throw Error("montecarlo: the problem has no light (no Lights, UniformIrradiance 0 and no "
+                "interior source): the Monte Carlo reference launches its photons from the "
+                "lights and sources, not from the Irradiance array");
+  }
+  const bool timed = gates.Count != 0;
+  if (timed)
+  {
+    try
+    {
+      gates.Validate();
+    }
+    catch (const Error& e)
+    {
+      throw Error(std::string("montecarlo: ") + e.what());
+    }
+  }
+  for (std::size_t l = 0; l < problem.Lights.size(); ++l)
+  {
+    if (problem.Lights[l].Type == LightSource::Kind::Uniform)
+    {
+      throw Error("montecarlo: light " + std::to_string(l) +
+        " is uniform: pass a uniform light as DiffusionProblem::UniformIrradiance");
+    }
+  }
+}
+
+} // namespace
+
+bool MonteCarloSolver::Solve(
+  const DiffusionProblem& problem, std::vector<double>& fluence, SolverReport& report)
+{
+  // ---- Input checks (before any work).
+  CheckInputs(*this, problem);
+  const TetMesh& mesh = *problem.Mesh;
+  const OpticalProperties& material = *problem.Material;
+  const int numTets = mesh.GetNumberOfTets();
+  const int numPoints = mesh.GetNumberOfPoints();
+  const bool timed = Gates_.Count != 0;
+
+  // ---- Set-up: walk structure, per-light irradiance, source tables.
+  auto start = Clock::now();
+  if (!ReportProgress(0.0))
+  {
+    return false;
+  }
+  const Progress progress = [this](double fraction) { return ReportProgress(fraction); };
+  const std::vector<double> pointEta =
+    BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
+  LaunchTables tables;
+  if (!PrepareLights(problem, UniformLightSamples_, progress, tables.Lights))
+  {
+    return false;
+  }
+  PlaceInteriorSources(problem, tables);
+  DetectorMap detectorMap;
+  const std::vector<DetectorFootprint> footprints = LocateFootprints(mesh, Detectors_);
+  detectorMap.Build(mesh, footprints);
+  WalkMesh walk;
+  walk.Build(mesh);
+  AttachPencilEntries(walk, tables);
+  // The shadowed uniform light launches along unoccluded directions only.
+  const bool uniformShadowed =
+    problem.UniformIrradiance > 0.0 && problem.Shadows && UniformLightSamples_ > 0;
+  RayCaster caster;
+  const double diag = BoundingBoxDiagonal(mesh);
+  if (uniformShadowed)
+  {
+    caster.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
+  }
+  BuildChannelSources(mesh, tables);
+  const double maxFt = MaxUniformTransmittance(material.RefractiveIndex);
+  const double setupMs = MillisecondsSince(start);
+
+  // ---- Tracing.
+  start = Clock::now();
+  BatchPlan plan;
+  plan.Photons = NumberOfPhotons_;
+  plan.Threads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
+  int litChannels = 0;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    litChannels += tables.Sources[c].Power > 0.0 ? 1 : 0;
+  }
+  plan.TotalPhotons = static_cast<double>(plan.Photons) * std::max(1, litChannels);
+  plan.NumTets = numTets;
+  plan.NumPoints = numPoints;
+  plan.DetectorItems = 2 * static_cast<std::size_t>(detectorMap.Count);
+  plan.GateItems = timed ? plan.DetectorItems * Gates_.Count : 0;
+  plan.Batches = static_cast<int>(std::min<long long>(NumberOfBatches_, plan.Photons));
+  plan.Slots = std::min(plan.Threads, plan.Batches);
+  std::atomic<long long> done(0);
+  std::atomic<bool> stop(false);
+  Estimates estimates(plan, footprints, timed ? Gates_.Count : 0);
+  std::vector<BatchTally> tallies(plan.Slots);
+  BatchSums sums(plan);
+  const std::size_t tallyBytes = static_cast<std::size_t>(plan.Slots) *
+      (numTets + static_cast<std::size_t>(numPoints) + plan.DetectorItems + plan.GateItems) *
+      sizeof(double) +
+    (sums.TetSum.size() + 4 * static_cast<std::size_t>(numPoints)) * sizeof(double) +
+    (estimates.TetFluence.size() + 4 * estimates.PointFluence.size()) * sizeof(double);
+
+  for (int c = 0; c < NumberOfChannels && !stop; ++c)
+  {
+    if (!(tables.Sources[c].Power > 0.0))
+    {
+      continue; // dark channel: everything stays 0
+    }
+    Tracer tracer;
+    tracer.Mesh = &mesh;
+    tracer.Walk = &walk;
+    tracer.Source = &tables.Sources[c];
+    tracer.Lights = &tables.Lights;
+    tracer.Interior = &tables.Interior;
+    tracer.Detectors = detectorMap.Count > 0 ? &detectorMap : nullptr;
+    if (timed)
+    {
+      tracer.GateStart = Gates_.Start;
+      tracer.GateEnd = Gates_.End;
+      tracer.GateWidth = Gates_.GetWidth();
+      tracer.GateCount = Gates_.Count;
+    }
+    tracer.Caster = uniformShadowed ? &caster : nullptr;
+    tracer.Eta = &material.RefractiveIndex;
+    tracer.Anisotropy = Anisotropy_;
+    tracer.Weight = tables.Sources[c].Power / static_cast<double>(plan.Photons);
+    tracer.RayOffset = 1e-5 * diag; // as ComputeBoundaryIrradiance
+    tracer.RayReach = 2.0 * diag;
+    tracer.MaxUniformTransmittance = maxFt;
+    tracer.Seed = Seed_;
+    tracer.Channel = c;
+    SetChannelCoefficients(material, c, Anisotropy_, walk);
+    sums.Clear();
+    TraceBatches(
+      tracer, plan, mesh, progress, tallies, sums, estimates.Balances[c], done, stop);
+    if (stop)
+    {
+      break;
+    }
+    StoreChannelEstimates(c, sums, plan, mesh, Gates_, estimates);
+  }
+  if (stop)
+  {
+    return false;
+  }
+  const double solveMs = MillisecondsSince(start);
+
+  // ---- Outputs.
+  std::vector<double> radiance, radianceError;
+  ExitanceToRadiance(mesh, pointEta, estimates, radiance, radianceError);
+  long long traced = 0;
+  for (const PowerBalance& b : estimates.Balances)
+  {
+    traced += b.Photons;
+  }
+  Balance_ = estimates.Balances;
+  TetFluence_ = std::move(estimates.TetFluence);
+  Exitance_ = std::move(estimates.Exitance);
+  ExitanceError_ = std::move(estimates.ExitanceError);
+  Readings_ = std::move(estimates.Readings);
+  ReadingErrors_ = std::move(estimates.ReadingErrors);
+  GateReadings_ = std::move(estimates.GateReadings);
+  GateReadingErrors_ = std::move(estimates.GateErrors);
+  PhotonsTraced_ = traced;
+  ThreadsUsed_ = plan.Slots;
+  Rate_ = solveMs > 0.0 ? traced / (solveMs * 1e-3) / plan.Slots : 0.0;
+
+  report = MakeReport(GetName(), numTets, tallyBytes + walk.Bytes(), tables, setupMs, solveMs);
+  report.FluenceStandardError = std::move(estimates.PointFluenceError);
   report.Radiance = std::move(radiance);
   report.RadianceStandardError = std::move(radianceError);
-  fluence = std::move(pointFluence);
+  fluence = std::move(estimates.PointFluence);
   ReportProgress(1.0);
   return true;
 }

@@ -351,22 +351,6 @@ void AssembleTimeResolved(const std::string& who, Discretization& discretization
   out.Mass.Set(system, std::move(masses[0]));
 }
 
-/// The registry's entry with the given Krylov method and preconditioner
-/// (traits, not a name).
-const LinearSolverRegistry::Entry& FindLinearSolver(
-  const std::string& krylov, const std::string& preconditioner)
-{
-  for (const auto& entry : GetLinearSolverRegistry().GetEntries())
-  {
-    if (entry.Properties.Built && entry.Properties.Krylov == krylov &&
-      entry.Properties.Preconditioner == preconditioner)
-    {
-      return entry;
-    }
-  }
-  throw Error("no linear solver " + krylov + " x " + preconditioner + " in the registry");
-}
-
 /**
  * Step matrices and their solver: a M / dt + K on K's pattern, solved, the
  * three channels together, by the linear solver a continuous-wave Solve()
@@ -419,7 +403,7 @@ public:
     report.LinearSolver = Linear_->GetName();
     const LinearSolverRegistry::Entry& jacobi = FindLinearSolver("cg", "jacobi");
     const LinearSolverTraits& chosen =
-      GetLinearSolverRegistry().Find(linearName)->Properties;
+      GetLinearSolverRegistry().Get(ResolveLinearSolverName(linearName)).Properties;
     Adaptive_ = defaultChoice &&
       !(chosen.Krylov == jacobi.Properties.Krylov &&
         chosen.Preconditioner == jacobi.Properties.Preconditioner);

@@ -10,6 +10,7 @@
 #include <cctype>
 #include <cmath>
 #include <complex>
+#include <functional>
 #include <iomanip>
 #include <limits>
 #include <sstream>
@@ -35,6 +36,195 @@ void AddSourceLoad(const std::vector<double>& load, DiffusionSystem& system)
       system.RightHandSide[c][i] += 4.0 * load[3 * static_cast<std::size_t>(i) + c];
     }
   }
+}
+
+/// Solve: the load of the interior sources and, with the extended
+/// collimated model, of the beam's volume source (`collimated` gets the
+/// beam); empty without either.
+std::vector<double> SourceLoad(
+  const DiffusionProblem& problem, bool extended, CollimatedSource& collimated)
+{
+  const TetMesh& mesh = *problem.Mesh;
+  std::vector<double> sourceLoad;
+  if (problem.HasInteriorSources())
+  {
+    sourceLoad = problem.InteriorSources->ComputeLoad(mesh, *problem.Material);
+  }
+  if (extended)
+  {
+    collimated =
+      ComputeCollimatedSource(mesh, *problem.Material, problem.Lights, problem.Shadows);
+    if (sourceLoad.empty())
+    {
+      sourceLoad.swap(collimated.Load);
+    }
+    else
+    {
+      for (std::size_t k = 0; k < sourceLoad.size(); ++k)
+      {
+        sourceLoad[k] += collimated.Load[k];
+      }
+    }
+  }
+  return sourceLoad;
+}
+
+/// Solve: the linear solver's set-up for `system`: a rebuild for a new
+/// solver object, mesh or moved points (`rebuild`: the hierarchy's eq. 16
+/// weights depend on edge lengths), else values only when they changed
+/// (only the changed tets' rows after an incremental update), else none
+/// (relight). Returns what was done, for SolverReport::LinearSetup.
+const char* SetUpLinearSolver(LinearSolver& linear, const DiffusionSystem& system,
+  const TetMesh& mesh, bool rebuild, bool incremental, const std::vector<int>& changedTets,
+  const std::array<std::vector<double>, NumberOfChannels>& previousValues)
+{
+  if (rebuild)
+  {
+    // New solver object, new mesh or moved points (the hierarchy's eq. 16
+    // weights depend on edge lengths): rebuild everything.
+    linear.Setup(system, &mesh, true);
+    return "rebuilt";
+  }
+  bool valuesChanged = incremental && !changedTets.empty();
+  for (int c = 0; !incremental && c < NumberOfChannels && !valuesChanged; ++c)
+  {
+    valuesChanged = system.Values[c] != previousValues[c];
+  }
+  if (valuesChanged && incremental)
+  {
+    // Only the rows of the changed tets' vertices changed.
+    const std::vector<int>& tets = mesh.GetTets();
+    std::vector<int> rows;
+    rows.reserve(4 * changedTets.size());
+    for (const int t : changedTets)
+    {
+      for (int v = 0; v < 4; ++v)
+      {
+        rows.push_back(tets[4 * static_cast<std::size_t>(t) + v]);
+      }
+    }
+    linear.SetupChangedRows(system, &mesh, rows);
+    return "rows";
+  }
+  if (valuesChanged)
+  {
+    linear.Setup(system, &mesh, false); // same pattern, new values
+    return "values";
+  }
+  // Otherwise only the right-hand side changed (relight): no Setup.
+  return "kept";
+}
+
+/// SolveFrequencyDomain, the extended collimated model: the beam's volume
+/// source carries its own modulation exp(-i omega eta s / c)
+/// (CollimatedSource.h): a complex right-hand side, 4 x the load as for the
+/// interior sources, its real part added to `system`'s right-hand sides and
+/// its imaginary part in `imaginaryRight`; the beam in `collimated` and its
+/// complex fluence in `collimatedFluence`.
+void AddCollimatedFrequencyLoad(const DiffusionProblem& problem, double omega,
+  DiffusionSystem& system, CollimatedSource& collimated,
+  std::vector<std::complex<double>>& collimatedFluence,
+  std::array<Eigen::VectorXd, NumberOfChannels>& imaginaryRight)
+{
+  const TetMesh& mesh = *problem.Mesh;
+  const OpticalProperties& material = *problem.Material;
+  collimated = ComputeCollimatedSource(mesh, material, problem.Lights, problem.Shadows);
+  std::vector<std::complex<double>> load;
+  ComputeCollimatedFrequencyLoad(
+    mesh, material, collimated, omega / SpeedOfLight, load, collimatedFluence);
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    imaginaryRight[c].setZero(system.NumberOfUnknowns);
+    for (int i = 0; i < system.NumberOfUnknowns; ++i)
+    {
+      const std::complex<double> value = 4.0 * load[3 * static_cast<std::size_t>(i) + c];
+      system.RightHandSide[c][i] += value.real();
+      imaginaryRight[c][i] = value.imag();
+    }
+  }
+}
+
+/// SolveFrequencyDomain: the imaginary part of the matrix, the mass matrix
+/// of the imaginary absorption omega eta_t / c (1/mm) per tet and channel,
+/// on the system's pattern; false if the discretisation has none.
+bool ImaginaryMass(Discretization& discretization, const TetMesh& mesh,
+  const OpticalProperties& material, double omega, const DiffusionSystem& system,
+  std::array<std::vector<double>, NumberOfChannels>& imaginary)
+{
+  const int numTets = mesh.GetNumberOfTets();
+  std::vector<double> coefficient(3 * static_cast<std::size_t>(numTets));
+  for (int t = 0; t < numTets; ++t)
+  {
+    const double value = omega * material.RefractiveIndex[t] / SpeedOfLight;
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      coefficient[3 * static_cast<std::size_t>(t) + c] = value;
+    }
+  }
+  for (auto& values : imaginary)
+  {
+    values.assign(system.ColumnIndices.size(), 0.0);
+  }
+  return discretization.AddMass(mesh, coefficient, imaginary);
+}
+
+/// SolveFrequencyDomain's preconditioner: the cycle of the linear solver
+/// `name` (the one this solve would use in continuous wave: by name, or by
+/// size multigrid-agg from LargeSystemUnknowns on), built on the real part
+/// A, when that solver has one (LinearSolver::HasPreconditioner); else null
+/// (Jacobi). Documentation/DiffuseOptics.md says why.
+std::unique_ptr<LinearSolver> RealPartPreconditioner(
+  const std::string& name, const DiffusionSystem& system, const TetMesh& mesh)
+{
+  std::unique_ptr<LinearSolver> real = CreateLinearSolver(name); // throws, listing the known names
+  // Only solvers with a cycle are set up (a factorisation would be wasted).
+  if (real->GetName() == "multigrid-agg")
+  {
+    real->Setup(system, &mesh, true);
+  }
+  if (!real->HasPreconditioner())
+  {
+    real.reset();
+  }
+  return real;
+}
+
+/// SolveFrequencyDomain without a cycle of the real part: COCG with Jacobi,
+/// channel by channel (the imaginary right-hand sides with `extended`);
+/// false if `progress` (the fraction done) aborted.
+bool SolveChannelsJacobiCOCG(const DiffusionSystem& system,
+  const std::array<std::vector<double>, NumberOfChannels>& imaginary, bool extended,
+  const std::array<Eigen::VectorXd, NumberOfChannels>& imaginaryRight, double relTol,
+  int maxIter, const std::function<bool(double)>& progress,
+  std::array<Eigen::VectorXd, NumberOfChannels>& realPart,
+  std::array<Eigen::VectorXd, NumberOfChannels>& imagPart, SolverReport& report)
+{
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    Eigen::VectorXcd x;
+    LinearSolveStats stats;
+    const auto channelProgress = [&progress, maxIter, c](int iteration) {
+      return progress((c + static_cast<double>(iteration) / std::max(1, maxIter)) /
+        NumberOfChannels);
+    };
+    Eigen::VectorXcd b = system.RightHandSide[c].cast<std::complex<double>>();
+    if (extended)
+    {
+      b.imag() = imaginaryRight[c];
+    }
+    if (!SolveComplexSymmetricCOCG(system.NumberOfUnknowns, system.RowOffsets.data(),
+          system.ColumnIndices.data(), system.Values[c].data(), imaginary[c].data(), b, x,
+          relTol, maxIter, stats, channelProgress))
+    {
+      return false;
+    }
+    realPart[c] = x.real();
+    imagPart[c] = x.imag();
+    report.Iterations[c] = stats.Iterations;
+    report.Residual[c] = stats.RelativeResidual;
+    report.Converged[c] = stats.Converged;
+  }
+  return true;
 }
 
 } // namespace
@@ -115,28 +305,8 @@ bool VertexDiffusionSolver::Solve(
   const bool sameRule = rule == Discretization_->GetBoundaryRule();
   Discretization_->SetBoundaryRule(rule);
   const bool hasSources = problem.HasInteriorSources() || extended;
-  std::vector<double> sourceLoad;
-  if (problem.HasInteriorSources())
-  {
-    sourceLoad = problem.InteriorSources->ComputeLoad(mesh, *problem.Material);
-  }
   CollimatedSource collimated;
-  if (extended)
-  {
-    collimated =
-      ComputeCollimatedSource(mesh, *problem.Material, problem.Lights, problem.Shadows);
-    if (sourceLoad.empty())
-    {
-      sourceLoad.swap(collimated.Load);
-    }
-    else
-    {
-      for (std::size_t k = 0; k < sourceLoad.size(); ++k)
-      {
-        sourceLoad[k] += collimated.Load[k];
-      }
-    }
-  }
+  const std::vector<double> sourceLoad = SourceLoad(problem, extended, collimated);
   // Painting: rebuild only the rows of the changed tets' vertices (TransCut
   // Sec. 5.2) when the system of the last successful solve is of this mesh
   // with its current geometry. The request is one-shot, also when the update
@@ -189,44 +359,8 @@ bool VertexDiffusionSolver::Solve(
   Linear_->SetRelTol(RelTol_);
   Linear_->SetMaxIter(MaxIter_);
   Linear_->SetProgressCallback([this](double f) { return ReportProgress(f); });
-  if (!LinearReady_ || !sameGeometry)
-  {
-    // New solver object, new mesh or moved points (the hierarchy's eq. 16
-    // weights depend on edge lengths): rebuild everything.
-    Linear_->Setup(System_, &mesh, true);
-    report.LinearSetup = "rebuilt";
-  }
-  else
-  {
-    report.LinearSetup = "kept";
-    bool valuesChanged = incremental && !changedTets.empty();
-    for (int c = 0; !incremental && c < NumberOfChannels && !valuesChanged; ++c)
-    {
-      valuesChanged = System_.Values[c] != PreviousValues_[c];
-    }
-    if (valuesChanged && incremental)
-    {
-      // Only the rows of the changed tets' vertices changed.
-      const std::vector<int>& tets = mesh.GetTets();
-      std::vector<int> rows;
-      rows.reserve(4 * changedTets.size());
-      for (const int t : changedTets)
-      {
-        for (int v = 0; v < 4; ++v)
-        {
-          rows.push_back(tets[4 * static_cast<std::size_t>(t) + v]);
-        }
-      }
-      Linear_->SetupChangedRows(System_, &mesh, rows);
-      report.LinearSetup = "rows";
-    }
-    else if (valuesChanged)
-    {
-      Linear_->Setup(System_, &mesh, false); // same pattern, new values
-      report.LinearSetup = "values";
-    }
-    // Otherwise only the right-hand side changed (relight): no Setup.
-  }
+  report.LinearSetup = SetUpLinearSolver(*Linear_, System_, mesh, !LinearReady_ || !sameGeometry,
+    incremental, changedTets, PreviousValues_);
   LinearReady_ = true;
   report.SetupMilliseconds = MillisecondsSince(start);
 
@@ -376,7 +510,6 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   {
     AddSourceLoad(sourceLoad, system);
   }
-  const int numTets = mesh.GetNumberOfTets();
   const double omega = 2.0 * 3.14159265358979323846 * frequency;
   CheckFrequencyResolution(mesh, material, frequency, omega);
   // The extended collimated model: the beam's volume source carries its
@@ -388,63 +521,22 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   std::array<Eigen::VectorXd, NumberOfChannels> imaginaryRight;
   if (extended)
   {
-    collimated =
-      ComputeCollimatedSource(mesh, material, problem.Lights, problem.Shadows);
-    std::vector<std::complex<double>> load;
-    ComputeCollimatedFrequencyLoad(
-      mesh, material, collimated, omega / SpeedOfLight, load, collimatedFluence);
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      imaginaryRight[c].setZero(system.NumberOfUnknowns);
-      for (int i = 0; i < system.NumberOfUnknowns; ++i)
-      {
-        const std::complex<double> value = 4.0 * load[3 * static_cast<std::size_t>(i) + c];
-        system.RightHandSide[c][i] += value.real();
-        imaginaryRight[c][i] = value.imag();
-      }
-    }
+    AddCollimatedFrequencyLoad(
+      problem, omega, system, collimated, collimatedFluence, imaginaryRight);
   }
   // The imaginary absorption omega eta_t / c (1/mm) per tet and channel.
-  std::vector<double> coefficient(3 * static_cast<std::size_t>(numTets));
-  for (int t = 0; t < numTets; ++t)
-  {
-    const double value = omega * material.RefractiveIndex[t] / SpeedOfLight;
-    for (int c = 0; c < NumberOfChannels; ++c)
-    {
-      coefficient[3 * static_cast<std::size_t>(t) + c] = value;
-    }
-  }
   std::array<std::vector<double>, NumberOfChannels> imaginary;
-  for (auto& values : imaginary)
-  {
-    values.assign(system.ColumnIndices.size(), 0.0);
-  }
-  if (!Discretization_->AddMass(mesh, coefficient, imaginary))
+  if (!ImaginaryMass(*Discretization_, mesh, material, omega, system, imaginary))
   {
     throw Error(GetName() + ": this discretisation has no frequency-domain solve");
   }
 
   // The preconditioner: the cycle of the linear solver this solve would use
-  // in continuous wave (by name, or by size: multigrid-agg from
-  // LargeSystemUnknowns on), built on the real part A, when that solver has
-  // one (LinearSolver::HasPreconditioner); else Jacobi.
-  // Documentation/DiffuseOptics.md says why.
-  std::unique_ptr<LinearSolver> real;
-  {
-    const std::string name = ToLower(LinearSolver_.empty()
-        ? GetDefaultLinearSolverName(mesh.GetNumberOfPoints())
-        : LinearSolver_);
-    real = CreateLinearSolver(name); // throws, listing the known names
-    // Only solvers with a cycle are set up (a factorisation would be wasted).
-    if (real->GetName() == "multigrid-agg")
-    {
-      real->Setup(system, &mesh, true);
-    }
-    if (!real->HasPreconditioner())
-    {
-      real.reset();
-    }
-  }
+  // in continuous wave, built on the real part A, or Jacobi (null).
+  const std::string name = ToLower(LinearSolver_.empty()
+      ? GetDefaultLinearSolverName(mesh.GetNumberOfPoints())
+      : LinearSolver_);
+  std::unique_ptr<LinearSolver> real = RealPartPreconditioner(name, system, mesh);
   report.LinearSolver = real ? "cocg-" + real->GetName() : "cocg-jacobi";
   report.SetupMilliseconds = MillisecondsSince(start);
 
@@ -475,30 +567,11 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
       report.Converged[c] = stats[c].Converged;
     }
   }
-  for (int c = 0; c < NumberOfChannels && !real; ++c)
+  if (!real &&
+    !SolveChannelsJacobiCOCG(system, imaginary, extended, imaginaryRight, RelTol_, MaxIter_,
+      [this](double fraction) { return ReportProgress(fraction); }, realPart, imagPart, report))
   {
-    Eigen::VectorXcd x;
-    LinearSolveStats stats;
-    const auto progress = [this, c](int iteration) {
-      return ReportProgress((c + static_cast<double>(iteration) / std::max(1, MaxIter_)) /
-        NumberOfChannels);
-    };
-    Eigen::VectorXcd b = system.RightHandSide[c].cast<std::complex<double>>();
-    if (extended)
-    {
-      b.imag() = imaginaryRight[c];
-    }
-    if (!SolveComplexSymmetricCOCG(system.NumberOfUnknowns, system.RowOffsets.data(),
-          system.ColumnIndices.data(), system.Values[c].data(), imaginary[c].data(), b, x,
-          RelTol_, MaxIter_, stats, progress))
-    {
-      return false;
-    }
-    realPart[c] = x.real();
-    imagPart[c] = x.imag();
-    report.Iterations[c] = stats.Iterations;
-    report.Residual[c] = stats.RelativeResidual;
-    report.Converged[c] = stats.Converged;
+    return false;
   }
   report.SolveMilliseconds = MillisecondsSince(start);
   report.NumberOfUnknowns = system.NumberOfUnknowns;

@@ -13,11 +13,11 @@
  *  2. the fronts of all pieces are added in rank order (Add), a point shared
  *     by pieces is one point, matched by its global id or, without ids, by
  *     its exact coordinates; a tet brought by two pieces is taken once;
- *  3. Relax() runs TetCut on the front in the global point order: the order
- *     of the ids, or without ids the order of first appearance (rank order,
- *     then each piece's point order). With ids made from the serial mesh's
- *     point order the moves are the serial ones, bit for bit (same sweep
- *     order, same one-ring summation order, same guard on the same tets);
+ *  3. Relax() runs TetCut on the front (points in the order of the ids, or
+ *     without ids of first appearance). TetCut visits the vertices and sums
+ *     their one-rings in the order of their coordinates, so the moves are the
+ *     serial ones, bit for bit, with or without ids and for any partition
+ *     (same sweep order, same summation order, same guard on the same tets);
  *  4. each piece looks its points up (Find) and takes the new positions.
  *
  * Serial and deterministic: every rank that adds the same fronts in the same

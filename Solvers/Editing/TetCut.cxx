@@ -187,6 +187,26 @@ void MarkKept(int numPoints, const std::vector<int>& tets, const std::vector<dou
   }
 }
 
+/// Points ordered by their coordinates (x, then y, then z; then index): an
+/// order of the vertices that does not depend on their numbering, so the
+/// relaxation gives the same positions for any point order or partition.
+struct CoordinateLess
+{
+  const std::vector<double>& Points;
+  bool operator()(int a, int b) const
+  {
+    const double* p = &Points[3 * static_cast<std::size_t>(a)];
+    const double* q = &Points[3 * static_cast<std::size_t>(b)];
+    if (p[0] != q[0])
+      return p[0] < q[0];
+    if (p[1] != q[1])
+      return p[1] < q[1];
+    if (p[2] != q[2])
+      return p[2] < q[2];
+    return a < b;
+  }
+};
+
 /// Cut, 3. The neighbourhood of the movable vertices: their tets (CSR,
 /// tets ascending; only kept tets straddling the cut have any) and their
 /// one-rings (unique neighbours through those tets).
@@ -197,7 +217,8 @@ struct MovableRings
 };
 
 MovableRings BuildMovableRings(const std::vector<int>& tets, int m, int n,
-  const std::vector<char>& isMovable, const std::vector<int>& movable)
+  const std::vector<char>& isMovable, const std::vector<int>& movable,
+  const CoordinateLess& less)
 {
   MovableRings rings;
   std::vector<int>& offsets = rings.Offsets;
@@ -270,6 +291,9 @@ MovableRings BuildMovableRings(const std::vector<int>& tets, int m, int n,
     }
     std::sort(ring.begin() + begin, ring.end());
     ring.erase(std::unique(ring.begin() + begin, ring.end()), ring.end());
+    // Summed in the order of the coordinates: the same bits whatever the
+    // point numbering.
+    std::sort(ring.begin() + begin, ring.end(), less);
     ringOffsets[j + 1] = static_cast<int>(ring.size());
   }
   return rings;
@@ -417,13 +441,18 @@ void TetCut::Cut(const std::vector<double>& points, const std::vector<int>& tets
   {
     isMovable[k] = side[KeptPoints_[k]] > 0.0;
   }
-  const std::vector<int> movable = Compact(isMovable);
+  std::vector<int> movable = Compact(isMovable);
   Movable_ = static_cast<int>(movable.size());
   if (m == 0 || Iterations_ <= 0 || movable.empty())
   {
     return;
   }
-  const MovableRings rings = BuildMovableRings(Tets_, m, n, isMovable, movable);
+  // Visited in the order of their coordinates (before any move), not of
+  // their ids: the Gauss-Seidel sweep then gives the same positions for any
+  // point order, e.g. a mesh redistributed over MPI ranks (CutFront).
+  const CoordinateLess less{ Points_ };
+  std::sort(movable.begin(), movable.end(), less);
+  const MovableRings rings = BuildMovableRings(Tets_, m, n, isMovable, movable, less);
   Moved_ = RelaxSweeps(
     Points_, Tets_, movable, rings, F, Rho_, Iterations_, MinDihedral_, Blocked_, Sweeps_);
 }

@@ -15,9 +15,12 @@
  *     surface), if a tet around the vertex would get a non-positive volume, or
  *     if it would get a minimum dihedral angle below the bound while lowering
  *     that tet's minimum dihedral angle (a tet that was already worse than the
- *     bound may only improve). Vertices are visited in id order and each move
- *     is seen by the next one (Gauss-Seidel); the sweep is repeated for the
- *     given number of iterations or until no vertex moves.
+ *     bound may only improve). Vertices are visited in the order of their
+ *     coordinates (x, then y, then z) and each move is seen by the next one
+ *     (Gauss-Seidel), the one-ring summed in that order too; the sweep is
+ *     repeated for the given number of iterations or until no vertex moves.
+ *     The moved positions therefore do not depend on the point numbering
+ *     (a renumbered or partitioned mesh gets the same bits).
  *
  * Serial and deterministic. Throws translucency::Error on inconsistent input.
  */

@@ -226,6 +226,35 @@ using LinearSolverRegistry = Registry<LinearSolver, LinearSolverTraits>;
 /// default "cg-jacobi" first.
 const LinearSolverRegistry& GetLinearSolverRegistry();
 
+/**
+ * A linear solver is a Krylov method composed with a preconditioner
+ * (LinearSolverTraits::Krylov x Preconditioner, as PETSc composes a KSP with
+ * a PC): every entry of the registry is one composition, named
+ * "KRYLOV/PRECONDITIONER" ("cg/jacobi", "cg/ichol", "cg/aggregation",
+ * "cg/multires", "cg/boomeramg", "none/multires", "none/direct",
+ * "bicgstab/jacobi", "none/relaxation"; "none": the preconditioner is the
+ * whole method). The registered names ("cg-jacobi", "multigrid-agg", ...)
+ * are aliases of their compositions: CreateLinearSolver and
+ * CreateNonSymmetricLinearSolver take either spelling (case-insensitive) and
+ * create the same solver.
+ */
+/// The composition "KRYLOV/PRECONDITIONER" of the entry called `name` (a
+/// registered name or a composition); throws translucency::Error for an
+/// unknown name.
+std::string GetLinearSolverComposition(const std::string& name);
+
+/// The registered name of `name`: itself (lower case) for a registered
+/// name, the entry's name for a composition "KRYLOV/PRECONDITIONER" of the
+/// registry (built or not), else `name` unchanged (CreateLinearSolver then
+/// names it unknown).
+std::string ResolveLinearSolverName(const std::string& name);
+
+/// The built entry with the given Krylov method and preconditioner (traits,
+/// not a name, e.g. ("cg", "jacobi")); throws translucency::Error if this
+/// build has none.
+const LinearSolverRegistry::Entry& FindLinearSolver(
+  const std::string& krylov, const std::string& preconditioner);
+
 /// The solver of symmetric positive definite systems called `name`
 /// (case-insensitive). Throws translucency::Error naming the known solvers
 /// if it is unknown, not built (optional libraries) or for non-symmetric

@@ -1,8 +1,9 @@
 /**
  * @file LinearSolverFactory.cxx
  * @brief The linear-solver registry: one entry per name (factory, traits,
- * help); CreateLinearSolver, GetLinearSolverNames and their non-symmetric
- * counterparts are views of it.
+ * help), each a Krylov method x preconditioner composition that can also be
+ * named "KRYLOV/PRECONDITIONER"; CreateLinearSolver, GetLinearSolverNames
+ * and their non-symmetric counterparts are views of it.
  */
 #include "LinearSolver.h"
 
@@ -150,6 +151,51 @@ const LinearSolverRegistry& GetLinearSolverRegistry()
   return registry;
 }
 
+std::string GetLinearSolverComposition(const std::string& name)
+{
+  const LinearSolverTraits& traits =
+    GetLinearSolverRegistry().Get(ResolveLinearSolverName(name)).Properties;
+  return traits.Krylov + "/" + traits.Preconditioner;
+}
+
+std::string ResolveLinearSolverName(const std::string& name)
+{
+  const LinearSolverRegistry& registry = GetLinearSolverRegistry();
+  if (const auto* entry = registry.Find(name))
+  {
+    return entry->Name;
+  }
+  const std::string key = ToLower(name);
+  const std::size_t slash = key.find('/');
+  if (slash == std::string::npos)
+  {
+    return name;
+  }
+  const std::string krylov = key.substr(0, slash), preconditioner = key.substr(slash + 1);
+  for (const auto& entry : registry.GetEntries())
+  {
+    if (entry.Properties.Krylov == krylov && entry.Properties.Preconditioner == preconditioner)
+    {
+      return entry.Name;
+    }
+  }
+  return name;
+}
+
+const LinearSolverRegistry::Entry& FindLinearSolver(
+  const std::string& krylov, const std::string& preconditioner)
+{
+  for (const auto& entry : GetLinearSolverRegistry().GetEntries())
+  {
+    if (entry.Properties.Built && entry.Properties.Krylov == krylov &&
+      entry.Properties.Preconditioner == preconditioner)
+    {
+      return entry;
+    }
+  }
+  throw Error("no linear solver " + krylov + "/" + preconditioner + " in this build");
+}
+
 std::vector<std::string> GetLinearSolverNames()
 {
   return NamesOf(true);
@@ -162,7 +208,7 @@ std::vector<std::string> GetNonSymmetricLinearSolverNames()
 
 std::unique_ptr<LinearSolver> CreateLinearSolver(const std::string& name)
 {
-  const auto* entry = GetLinearSolverRegistry().Find(name);
+  const auto* entry = GetLinearSolverRegistry().Find(ResolveLinearSolverName(name));
   const std::string known = JoinNames(GetLinearSolverNames());
   if (entry && !entry->Properties.Built)
   {
@@ -180,7 +226,7 @@ std::unique_ptr<ChannelLinearSolver> CreateNonSymmetricLinearSolver(
   const std::string& name, const std::string& who)
 {
   const std::string key = name.empty() ? std::string("bicgstab") : name;
-  const auto* entry = GetLinearSolverRegistry().Find(key);
+  const auto* entry = GetLinearSolverRegistry().Find(ResolveLinearSolverName(key));
   const std::string known = JoinNames(GetNonSymmetricLinearSolverNames());
   if (entry && entry->Properties.Built && entry->Properties.NeedsSymmetricPositiveDefinite)
   {

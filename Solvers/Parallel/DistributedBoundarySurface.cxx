@@ -30,7 +30,6 @@ struct PointRecord
   int Row;
   int Padding;
   double X[3];
-  std::uint64_t Key; ///< global id (ids), or the first word of the key
 };
 
 /// Every rank's `mine`, concatenated in rank order, on every rank.
@@ -134,7 +133,7 @@ double GlobalDiagonal(MPI_Comm comm, const std::vector<double>& points, std::siz
 } // namespace
 
 void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
-  const std::vector<PointKey>& keys, bool ids, const std::vector<char>& used,
+  const std::vector<PointKey>& keys, const std::vector<char>& used,
   const std::vector<int>& triangles, const std::vector<double>& triangleEta,
   const std::vector<int>& triangleTets, BoundarySurface& surface,
   std::vector<int>& surfacePoint, std::vector<double>& rotations,
@@ -180,7 +179,6 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
     record.Row = numbering.GetRow(static_cast<int>(i));
     record.Padding = 0;
     std::memcpy(record.X, &points[3 * i], sizeof record.X);
-    record.Key = keys[i][0];
     myPoints.push_back(record);
   }
   std::sort(myPoints.begin(), myPoints.end(),
@@ -204,38 +202,10 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
     surfaceRows[p] = allPoints[p].Row;
     std::memcpy(&surface.Points[3 * p], allPoints[p].X, sizeof allPoints[p].X);
   }
-  // The uniform light's rotation follows the point's index in the gathered
-  // path's merged mesh (points in id order with ids, else in rank order), the
-  // serial index when the ids (or the one rank holding the mesh) follow the
-  // serial order: with ids, the number of distinct ids below the point's,
-  // counted over every rank (each point by its owner; points no tet uses by
-  // every rank holding them); without, the global row.
-  if (ids)
-  {
-    std::vector<std::int64_t> counted;
-    for (std::size_t i = 0; i < numPoints; ++i)
-    {
-      if (numbering.GetRow(static_cast<int>(i)) < 0 || numbering.IsOwned(static_cast<int>(i)))
-        counted.push_back(static_cast<std::int64_t>(keys[i][0]));
-    }
-    std::sort(counted.begin(), counted.end());
-    counted.erase(std::unique(counted.begin(), counted.end()), counted.end());
-    std::vector<long long> below(allPoints.size());
-    for (std::size_t p = 0; p < allPoints.size(); ++p)
-    {
-      below[p] = std::lower_bound(counted.begin(), counted.end(),
-                   static_cast<std::int64_t>(allPoints[p].Key)) - counted.begin();
-    }
-    MPI_Allreduce(MPI_IN_PLACE, below.data(), static_cast<int>(below.size()), MPI_LONG_LONG,
-      MPI_SUM, comm);
-    for (std::size_t p = 0; p < allPoints.size(); ++p)
-      rotations[p] = UniformSampleRotation(static_cast<double>(below[p]));
-  }
-  else
-  {
-    for (std::size_t p = 0; p < allPoints.size(); ++p)
-      rotations[p] = UniformSampleRotation(static_cast<double>(allPoints[p].Row));
-  }
+  // The uniform light's rotation is a hash of the point's coordinates, as
+  // in the serial code: the same on every rank and for any partition.
+  for (std::size_t p = 0; p < allPoints.size(); ++p)
+    rotations[p] = UniformSampleRotation(allPoints[p].X);
   allPoints = {};
   auto indexOf = [&surfaceRows](int row) {
     const auto it = std::lower_bound(surfaceRows.begin(), surfaceRows.end(), row);

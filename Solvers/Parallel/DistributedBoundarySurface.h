@@ -37,12 +37,9 @@ struct BoundarySurfaceReport
  * Collective.
  * @param points this rank's points, 3 each (mm)
  * @param keys one per point (PointKeyFromId / PointKeyFromCoordinates)
- * @param ids true if the keys are global ids. The uniform light's sample
- *   rotation of a point is UniformSampleRotation(k), k its index in the mesh
- *   the gathered path would merge: with ids, the number of distinct ids
- *   below its id over every rank (independent of the partition; the serial
- *   index when the ids grow with the serial order), else its global row
- *   (rank order: the serial index when one rank holds the whole mesh).
+ * The uniform light's sample rotation of a point (`rotations`) is
+ *   UniformSampleRotation() of its coordinates, as in the serial code,
+ *   whatever the keys and the partition.
  * @param used 1 per point of an owned tet of this rank
  * @param triangles this rank's boundary triangles (of its own tets; 3 local
  *   point ids each, outward as TetMesh::GetBoundaryTriangles)
@@ -58,7 +55,7 @@ struct BoundarySurfaceReport
  * marks) or an invalid refractive index under a physical triangle.
  */
 void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
-  const std::vector<PointKey>& keys, bool ids, const std::vector<char>& used,
+  const std::vector<PointKey>& keys, const std::vector<char>& used,
   const std::vector<int>& triangles, const std::vector<double>& triangleEta,
   const std::vector<int>& triangleTets, BoundarySurface& surface,
   std::vector<int>& surfacePoint, std::vector<double>& rotations,

@@ -2,6 +2,7 @@
 
 #include "Error.h"
 #include "Fresnel.h"
+#include "RankThreads.h"
 #include "TetContributions.h"
 #include "VertexAssembly.h"
 
@@ -536,6 +537,12 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
   Timings_ = Timings();
   Readings_.clear();
   report = SolverReport();
+  // NumberOfThreads 0: the node's cores shared by its ranks (collective).
+  std::unique_ptr<ScopedRankThreads> threads;
+  if (NumberOfThreads_ <= 0)
+  {
+    threads = std::make_unique<ScopedRankThreads>(Comm_);
+  }
   report.Solver = Name_;
   report.LinearSolver = "hypre-amg (distributed)";
   report.Assembly = "full";

@@ -77,7 +77,8 @@ public:
    */
   void SetValuesOnlySetup(bool on) { ValuesOnly_ = on; }
   bool GetValuesOnlySetup() const { return ValuesOnly_; }
-  /// OpenMP threads of the local assembly (0 = OpenMP's default).
+  /// OpenMP threads of the local assembly (0, the default: the node's
+  /// cores shared by its ranks, ScopedRankThreads, unless OMP_NUM_THREADS).
   void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
   /**
    * Interior sources (point sources, pencil beams) of the next Solves (null

@@ -1,5 +1,6 @@
 #include "CollimatedSource.h"
 
+#include "BoundingBox.h"
 #include "Error.h"
 #include "Fresnel.h"
 #include "RayCaster.h"
@@ -176,70 +177,19 @@ std::vector<LightSource> NonCollimatedLights(const std::vector<LightSource>& lig
   return rest;
 }
 
-CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<LightSource>& lights, bool shadows)
+namespace
+{
+/// ComputeCollimatedSource: E_c of every beam at the points (zero where the
+/// ray toward the light leaves through no entry face, or is shadowed) and
+/// the optical path to the entry point.
+void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<LightSource>& beams, bool shadows, CollimatedSource& out)
 {
   const int numPoints = mesh.GetNumberOfPoints();
-  const int numTets = mesh.GetNumberOfTets();
-  material.Validate(numTets);
-  std::vector<LightSource> beams;
-  for (size_t l = 0; l < lights.size(); ++l)
-  {
-    ValidateLight(lights[l], l);
-    if (lights[l].Type == LightSource::Kind::Directional)
-    {
-      beams.push_back(lights[l]);
-    }
-  }
-  CollimatedSource out;
-  out.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
-  out.Load.assign(3 * static_cast<size_t>(numPoints), 0.0);
-  out.Beams.resize(beams.size());
-  for (CollimatedSource::Beam& beam : out.Beams)
-  {
-    beam.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
-    beam.OpticalPath.assign(static_cast<size_t>(numPoints), 0.0);
-  }
-  if (beams.empty() || mesh.GetNumberOfBoundaryTriangles() == 0)
-  {
-    return out;
-  }
   const std::vector<double>& tetEta = material.RefractiveIndex;
   const std::vector<double>& muA = material.AbsorptionCoefficient;
   const std::vector<double>& muS = material.ReducedScatteringCoefficient;
-
-  // Entering power: the triangle-integrated irradiance of the beams.
-  {
-    std::vector<double> cornerQ;
-    ComputeTriangleCornerIrradiance(mesh, tetEta, beams, 0.0, 0, shadows, cornerQ);
-    const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
-    for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
-    {
-      for (int c = 0; c < NumberOfChannels; ++c)
-      {
-        const double* q = &cornerQ[9 * static_cast<size_t>(f) + c];
-        out.Entering[c] += areas[f] * (q[0] + q[3] + q[6]) / 3.0;
-      }
-    }
-  }
-
-  double lo[3], hi[3];
-  for (int k = 0; k < 3; ++k)
-  {
-    lo[k] = std::numeric_limits<double>::infinity();
-    hi[k] = -lo[k];
-  }
-  for (int i = 0; i < numPoints; ++i)
-  {
-    const double* x = mesh.GetPoint(i);
-    for (int k = 0; k < 3; ++k)
-    {
-      lo[k] = std::min(lo[k], x[k]);
-      hi[k] = std::max(hi[k], x[k]);
-    }
-  }
-  const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
-    (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const double diag = BoundingBoxDiagonal(mesh);
   const double offset = 1e-5 * diag;
   const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
   const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
@@ -329,9 +279,15 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
       }
     }
   }
+}
 
-  // Loads: integral of mu_s' E_c phi_a per tet and beam, then scattered to
-  // the points.
+/// ComputeCollimatedSource, loads: integral of mu_s' E_c phi_a per tet and
+/// beam, then scattered to the points (and mu_a E_c, the absorbed power).
+void BeamLoads(const TetMesh& mesh, const OpticalProperties& material, CollimatedSource& out)
+{
+  const int numTets = mesh.GetNumberOfTets();
+  const std::vector<double>& muA = material.AbsorptionCoefficient;
+  const std::vector<double>& muS = material.ReducedScatteringCoefficient;
   std::vector<double> tetLoad(12 * static_cast<size_t>(numTets), 0.0);
   std::vector<double> tetAbsorbed(3 * static_cast<size_t>(numTets), 0.0);
 #pragma omp parallel for schedule(static)
@@ -382,6 +338,60 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
       out.Absorbed[c] += tetAbsorbed[3 * static_cast<size_t>(t) + c];
     }
   }
+}
+
+} // namespace
+
+CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<LightSource>& lights, bool shadows)
+{
+  const int numPoints = mesh.GetNumberOfPoints();
+  const int numTets = mesh.GetNumberOfTets();
+  material.Validate(numTets);
+  std::vector<LightSource> beams;
+  for (size_t l = 0; l < lights.size(); ++l)
+  {
+    ValidateLight(lights[l], l);
+    if (lights[l].Type == LightSource::Kind::Directional)
+    {
+      beams.push_back(lights[l]);
+    }
+  }
+  CollimatedSource out;
+  out.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  out.Load.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  out.Beams.resize(beams.size());
+  for (CollimatedSource::Beam& beam : out.Beams)
+  {
+    beam.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+    beam.OpticalPath.assign(static_cast<size_t>(numPoints), 0.0);
+  }
+  if (beams.empty() || mesh.GetNumberOfBoundaryTriangles() == 0)
+  {
+    return out;
+  }
+  const std::vector<double>& tetEta = material.RefractiveIndex;
+
+  // Entering power: the triangle-integrated irradiance of the beams.
+  {
+    std::vector<double> cornerQ;
+    ComputeTriangleCornerIrradiance(mesh, tetEta, beams, 0.0, 0, shadows, cornerQ);
+    const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
+    for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        const double* q = &cornerQ[9 * static_cast<size_t>(f) + c];
+        out.Entering[c] += areas[f] * (q[0] + q[3] + q[6]) / 3.0;
+      }
+    }
+  }
+
+  BeamFieldAtPoints(mesh, material, beams, shadows, out);
+
+  // Loads: integral of mu_s' E_c phi_a per tet and beam, then scattered to
+  // the points.
+  BeamLoads(mesh, material, out);
   return out;
 }
 

@@ -13,6 +13,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <sstream>
 
@@ -80,6 +82,26 @@ bool DirectIrradiance(const LightSource& light, const double x[3], const double 
     q[c] = light.Power[c] * transmitted;
   }
   return true;
+}
+
+double UniformSampleRotation(const double x[3])
+{
+  // SplitMix64 (Steele, Lea & Flood 2014) over the three coordinates' bits.
+  auto mix = [](std::uint64_t z) {
+    z += 0x9e3779b97f4a7c15ULL;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  };
+  std::uint64_t h = 0;
+  for (int k = 0; k < 3; ++k)
+  {
+    const double v = x[k] == 0.0 ? 0.0 : x[k]; // -0 and +0: one point
+    std::uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    h = mix(h ^ bits);
+  }
+  return static_cast<double>(h >> 11) * 0x1.0p-53;
 }
 
 double HemisphereDirection(const double n[3], int k, int count, double rotation, double w[3])
@@ -270,7 +292,7 @@ bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& p
       else
       {
         // Cosine-weighted estimate of (1/pi) int V F_t cos dw.
-        const double rotation = std::fmod(0.6180339887498949 * i, 1.0);
+        const double rotation = UniformSampleRotation(x);
         for (int k = 0; k < uniformSamples; ++k)
         {
           double w[3];

@@ -113,6 +113,15 @@ void ValidateLight(const LightSource& light, size_t index);
 double HemisphereDirection(const double n[3], int k, int count, double rotation, double w[3]);
 
 /**
+ * The uniform light's sample rotation, in [0, 1), of the surface point at x
+ * (mm): a hash (SplitMix64) of the bits of its three coordinates (-0 taken
+ * as +0). It depends on the point alone, not on its index, so the sampled
+ * uniform light is the same whatever the point order or the partition of the
+ * mesh over MPI ranks (Documentation/Parallel.md, "Partitions and identity").
+ */
+double UniformSampleRotation(const double x[3]);
+
+/**
  * Irradiance transmitted into the medium at every boundary point (W/mm^2 per
  * channel): the sum of DirectIrradiance() over `lights` plus the uniform
  * light, with self-shadowing by the mesh's own boundary surface when
@@ -128,7 +137,8 @@ double HemisphereDirection(const double n[3], int k, int count, double rotation,
  * none), gives E * Fresnel::UniformTransmittance(eta) without shadows or with
  * uniformSamples == 0, and otherwise the cosine-weighted estimate
  * E / N * sum_k V(w_k) F_t(w_k) over N = uniformSamples HemisphereDirection()
- * rays (rotation fmod(0.618... * i, 1) for point i), V = 1 if the ray escapes.
+ * rays (rotation UniformSampleRotation(x) for the point at x), V = 1 if the ray
+ * escapes.
  *
  * @param mesh the tet mesh (its boundary triangles, boundary points and
  *   point normals are used)

@@ -166,11 +166,6 @@ std::size_t BoundarySurface::GetMemoryBytes() const
     TriangleEta.capacity() * sizeof(double);
 }
 
-double UniformSampleRotation(double index)
-{
-  return std::fmod(0.6180339887498949 * index, 1.0);
-}
-
 bool ComputeSurfacePointIrradiance(const BoundarySurface& surface,
   const std::vector<int>& points, const std::vector<double>& rotations,
   const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,

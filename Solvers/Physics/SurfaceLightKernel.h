@@ -52,7 +52,7 @@ struct BoundarySurface
  * boundary point of the serial mesh).
  *
  * @param rotations the uniform light's sample rotation, in [0, 1), per entry
- *   of `points` (the serial code uses fmod(0.618... * i, 1) for mesh point i)
+ *   of `points` (the serial code uses UniformSampleRotation() of the point)
  * @param lights, uniformIrradiance, uniformSamples, shadows, abort as in
  *   ComputeBoundaryIrradiance(); the ray budget counts the surface's points.
  * @return false if aborted. Throws translucency::Error on invalid input.
@@ -65,8 +65,5 @@ bool ComputeSurfacePointIrradiance(const BoundarySurface& surface,
   const std::vector<int>& points, const std::vector<double>& rotations,
   const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
   bool shadows, std::vector<double>& q, const std::function<bool()>& abort = {});
-
-/// The serial uniform-light rotation of mesh point (or global id) `index`.
-double UniformSampleRotation(double index);
 
 } // namespace translucency

@@ -15,7 +15,10 @@ marker file and the screenshot:
    Coefficients -> Surface Irradiance -> Solve Diffusion -> Outgoing Radiance,
    each shown, the GUI's events processed after each step.
 2. Paint Scattering Coefficients, from the Translucency menu, with its
-   polyline stroke widget in the panel: two handles, painted along the line.
+   polyline stroke widget in the panel: created without a warning (the first
+   stroke from the input's bounds), the view saved with and without the
+   widget and the whole screen dumped (xwd); then two handles, painted along
+   the line.
    Then Solve Diffusion the active source (the Properties panel builds its
    widgets, the Linear Solver drop-down included).
 3. Plot Over Line downstream of Solve Diffusion, in a line chart view.
@@ -29,9 +32,11 @@ marker file and the screenshot:
    the GUI's Python has no Qt binding, so it is called with ctypes.
 """
 
+import contextlib
 import ctypes
 import json
 import os
+import subprocess
 import time
 import traceback
 
@@ -52,6 +57,35 @@ def process_events():
 def quit_application(code):
     """QCoreApplication::exit(code): the event loop ends after this script."""
     QT._ZN16QCoreApplication4exitEi(code)
+
+
+@contextlib.contextmanager
+def recorded_messages():
+    """The text of every VTK warning and error reported inside the block
+    (vtkOutputWindow: what the GUI shows in its Output Messages pop-up)."""
+    from vtkmodules.util.misc import calldata_type
+    from vtkmodules.util.vtkConstants import VTK_STRING
+    from vtkmodules.vtkCommonCore import vtkCommand, vtkOutputWindow
+
+    messages = []
+
+    @calldata_type(VTK_STRING)
+    def record(caller, event, text):
+        messages.append(text or "")
+
+    window = vtkOutputWindow.GetInstance()
+    tags = [window.AddObserver(event, record)
+            for event in (vtkCommand.WarningEvent, vtkCommand.ErrorEvent)]
+    try:
+        yield messages
+    finally:
+        for tag in tags:
+            window.RemoveObserver(tag)
+
+
+def screen_dump(path):
+    """The whole X screen (the GUI with its panels) as an xwd file."""
+    subprocess.run(["xwd", "-root", "-silent", "-out", path], check=True, timeout=60)
 
 
 def array_names(attributes):
@@ -136,9 +170,37 @@ def run():
     process_events()
 
     # 2a. Paint Scattering Coefficients from the Translucency menu: its panel
-    # has the polyline widget of the stroke (no handle yet), then two handles
-    # across the bunny's back, painted along the line between them.
-    paint = PaintScatteringCoefficients(Input=assign)
+    # has the polyline widget of the stroke with the first stroke from the
+    # input's bounds (two handles across the front), created without a VTK
+    # warning or error (the pop-up "minimum of 1 points required" of a widget
+    # without handles); the render view with and without the widget, and the
+    # whole screen (xwd) for Documentation/. Then two handles across the
+    # bunny's back, painted along the line between them.
+    with recorded_messages() as messages:
+        paint = PaintScatteringCoefficients(Input=assign)
+        SetActiveSource(paint)
+        process_events()
+        Show(assign, view)
+        Render(view)
+        process_events()
+    results["paint_creation_messages"] = messages
+    results["paint_default_stroke"] = list(paint.StrokePoints)
+    view.OrientationAxesVisibility = 0
+    view.CameraPosition = [0.0, 14.5, 80.0]
+    view.CameraFocalPoint = [0.0, 14.5, 0.0]
+    view.CameraViewUp = [0.0, 1.0, 0.0]
+    Render(view)
+    process_events()
+    SaveScreenshot(os.path.join(OUT, "paint_widget_shown.png"), view, ImageResolution=[640, 480],
+                   TransparentBackground=0)
+    screen_dump(os.path.join(OUT, "paint_gui.xwd"))
+    SetActiveSource(assign)  # the widget goes with the panel
+    process_events()
+    Render(view)
+    process_events()
+    SaveScreenshot(os.path.join(OUT, "paint_widget_hidden.png"), view, ImageResolution=[640, 480],
+                   TransparentBackground=0)
+    Hide(assign, view)
     SetActiveSource(paint)
     process_events()
     paint.StrokePoints = [-8.0, 16.0, 3.0, 8.0, 16.0, 3.0]

@@ -18,6 +18,10 @@ PLY file):
    the empty result of ParaView's Threshold.
 4. The property is restored and the output is complete again.
 
+And (issue 33 item 5) after an unknown material, the outputs of Solve
+Diffusion and Outgoing Radiance downstream themselves (not a Fetch) are
+empty, never the previous run's fields, until the name is repaired.
+
 Exits non-zero on failure (unittest).
 """
 
@@ -140,6 +144,30 @@ class FailedFiltersTest(unittest.TestCase):
         self.check_failure(self.assign, None, fail, restore, "vtkUnstructuredGrid")
         # Downstream of the failure: the solver also leaves an empty output.
         self.check_failure(self.solve, "Fluence", fail, restore, "vtkUnstructuredGrid")
+
+    def test_no_stale_output_downstream_of_a_failure(self):
+        """Issue 33 item 5 in ParaView: the filters' own outputs (not a Fetch,
+        which builds a new data object) downstream of a failed filter are
+        empty, never the previous run's Fluence and Radiance."""
+        self.radiance.UpdatePipeline()
+        own = [proxy.GetClientSideObject() for proxy in (self.solve, self.radiance)]
+        self.assertIsNotNone(own[0].GetOutputDataObject(0).GetPointData().GetArray("Fluence"))
+        self.assertIsNotNone(own[1].GetOutputDataObject(0).GetPointData().GetArray("Radiance"))
+        self.assign.MaterialName = "nosuchmaterial"
+        try:
+            self.radiance.UpdatePipeline()
+            for algorithm in own:
+                self.assertEqual(empty_output_problems(algorithm.GetOutputDataObject(0)), [],
+                                 "%s kept the previous run's output" % algorithm.GetClassName())
+            # Again with nothing changed: still empty, never the old data.
+            self.radiance.UpdatePipeline()
+            for algorithm in own:
+                self.assertEqual(empty_output_problems(algorithm.GetOutputDataObject(0)), [])
+        finally:
+            self.assign.MaterialName = "marble"
+        self.radiance.UpdatePipeline()
+        self.assertIsNotNone(own[0].GetOutputDataObject(0).GetPointData().GetArray("Fluence"))
+        self.assertIsNotNone(own[1].GetOutputDataObject(0).GetPointData().GetArray("Radiance"))
 
     def test_bad_light(self):
         def fail():

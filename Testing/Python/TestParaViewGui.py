@@ -18,7 +18,15 @@ How to run (ctest does this; needs an X display, e.g. Xvfb):
    solvers, "default" first; the failed Solve Diffusion output was a clean
    empty vtkUnstructuredGrid (vtkPoints present, no arrays) and Outgoing
    Radiance downstream empty; after the repair, Radiance again.
-4. Compares the render view (640 x 480, Outgoing Radiance magnitude on a fixed
+4. Paint Scattering Coefficients (issue 33): created without a VTK warning
+   or error (the GUI's pop-up "minimum of 1 points required" of a stroke
+   widget without handles), its first stroke from the input's bounds (two
+   handles across the front, mid-height); its stroke widget visible: the
+   view with Paint's panel differs from the view without it in more than 200
+   pixels. The whole screen (xwd, cropped, as PNG) and the view are kept in
+   Testing/Temporary; with --update-baseline they are also written to
+   Documentation/images/gui_paint.png and gui_paint_widget.png (128 colours).
+5. Compares the render view (640 x 480, Outgoing Radiance magnitude on a fixed
    0..1/1.3^2 W/(mm^2 sr) Inferno scale, fixed camera) with the baseline
    Testing/Baselines/paraview_gui_bunny.png (vtkImageDifference, the
    tolerances of TestDemoImage). The baseline was made by this test with
@@ -90,11 +98,54 @@ def foreground_fraction(image):
     return float(np.mean(np.abs(rgb - rgb[0]).sum(axis=1) > 30))
 
 
-def keep_for_inspection(png):
+def xwd_to_png(xwd, png):
+    """An X window dump (xwd -root: ZPixmap, 24 or 32 bits per pixel, true
+    colour) written as a PNG with VTK; returns `png`."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkIOImage import vtkPNGWriter
+    with open(xwd, "rb") as f:
+        data = f.read()
+    header = np.frombuffer(data[:100], dtype=">u4")
+    (header_size, _version, pixmap_format, _depth, width, height, _xoffset, byte_order,
+     _unit, _bit_order, _pad, bits_per_pixel, bytes_per_line, _visual, red_mask, green_mask,
+     blue_mask, _bits_per_rgb, _entries, ncolors) = (int(v) for v in header[:20])
+    if pixmap_format != 2 or bits_per_pixel not in (24, 32):
+        raise AssertionError("%s: not a true-colour ZPixmap dump" % xwd)
+    start = header_size + 12 * ncolors
+    rows = np.frombuffer(data[start:start + bytes_per_line * height], dtype=np.uint8)
+    rows = rows.reshape(height, bytes_per_line)[:, :width * bits_per_pixel // 8]
+    raw = rows.reshape(height, width, bits_per_pixel // 8).astype(np.uint32)
+    if byte_order == 1:  # MSBFirst
+        raw = raw[:, :, ::-1]
+    value = sum(raw[:, :, k] << (8 * k) for k in range(raw.shape[2]))
+
+    def channel(mask):
+        shift = (mask & -mask).bit_length() - 1
+        return ((value & mask) >> shift).astype(np.uint8)
+    rgb = np.dstack([channel(red_mask), channel(green_mask), channel(blue_mask)])
+    # Cropped to the windows (the screen's black background around them left out).
+    rows_used = np.flatnonzero(rgb.any(axis=(1, 2)))
+    columns_used = np.flatnonzero(rgb.any(axis=(0, 2)))
+    if rows_used.size and columns_used.size:
+        rgb = rgb[rows_used[0]:rows_used[-1] + 1, columns_used[0]:columns_used[-1] + 1]
+    height, width = rgb.shape[:2]
+    image = vtkImageData()
+    image.SetDimensions(width, height, 1)
+    flat = np.ascontiguousarray(rgb[::-1].reshape(-1, 3))  # VTK's rows go up
+    image.GetPointData().SetScalars(numpy_to_vtk(flat, deep=1))
+    writer = vtkPNGWriter()
+    writer.SetFileName(png)
+    writer.SetInputData(image)
+    writer.Write()
+    return png
+
+
+def keep_for_inspection(png, name="TestParaViewGui.png"):
     binary_dir = os.environ.get("TRANSLUCENCY_BINARY_DIR")
     if not binary_dir:
         return png
-    kept = os.path.join(binary_dir, "Testing", "Temporary", "TestParaViewGui.png")
+    kept = os.path.join(binary_dir, "Testing", "Temporary", name)
     os.makedirs(os.path.dirname(kept), exist_ok=True)
     shutil.copyfile(png, kept)
     return kept
@@ -176,6 +227,42 @@ class ParaViewGuiTest(unittest.TestCase):
         # Two handles 16 mm apart, Width 1.5 mm: painted along the line (as
         # two points alone, a few tets around each end would be).
         self.assertGreater(self.results()["paint_cells_above_half"], 20)
+
+    def test_paint_created_without_a_pop_up_and_a_stroke_to_show(self):
+        # Issue 33: creating Paint popped up "minimum of 1 points required"
+        # (its polyline widget without handles) and showed no stroke.
+        results = self.results()
+        self.assertEqual(results["paint_creation_messages"], [],
+                         "VTK warnings or errors (the GUI's pop-up) on creating Paint")
+        stroke = results["paint_default_stroke"]
+        self.assertEqual(len(stroke), 6, "the first stroke has two handles")
+        xmin, xmax, ymin, ymax, zmin, zmax = results["bounds"]
+        expected = [xmin, (ymin + ymax) / 2, zmax, xmax, (ymin + ymax) / 2, zmax]
+        for got, want in zip(stroke, expected):
+            self.assertAlmostEqual(got, want, places=3)
+
+    def test_paint_stroke_widget_is_visible(self):
+        # The render view with Paint's panel (its widget shown) and with
+        # another source's panel (no widget), same camera and data: the
+        # stroke (line and handles) must change enough pixels to be seen.
+        shown = pixels(read_png(self.file("paint_widget_shown.png")))[:, :3]
+        hidden = pixels(read_png(self.file("paint_widget_hidden.png")))[:, :3]
+        self.assertEqual(shown.shape, hidden.shape)
+        changed = int(np.sum(np.abs(shown - hidden).sum(axis=1) > 60))
+        print("the stroke widget changes %d pixels of the view" % changed)
+        self.assertGreater(changed, 200, "the stroke widget is not visible in the view")
+        png = xwd_to_png(self.file("paint_gui.xwd"), self.file("paint_gui.png"))
+        keep_for_inspection(png, "TestParaViewGui_paint.png")
+        keep_for_inspection(self.file("paint_widget_shown.png"),
+                            "TestParaViewGui_paint_widget.png")
+        if UPDATE:
+            from PIL import Image  # python3-pil: 128 colours keep the PNGs small
+            for source, name in ((png, "gui_paint.png"),
+                                 (self.file("paint_widget_shown.png"), "gui_paint_widget.png")):
+                Image.open(source).convert("RGB").quantize(colors=128).save(
+                    os.path.join(SOURCE_DIR, "Documentation", "images", name), optimize=True)
+        self.assertGreater(foreground_fraction(read_png(png)), MIN_FOREGROUND,
+                           "the screen dump is blank")
 
     def test_failed_filter_left_a_clean_empty_output(self):
         results = self.results()

@@ -20,8 +20,9 @@ and `cmake --install ... --prefix /usr/local` (writes into the system;
 Python.TestInstall installs into a temporary prefix).
 
 Sizes: the README's sizes (100k to 1M tets) take tens of minutes on two cores,
-so by default --target-tets N and --tets LIST become 3000 and --photons is
-capped at 200000; TRANSLUCENCY_README_FULL=1 runs the blocks exactly as written.
+so by default --target-tets N, --tets LIST and bench --diffuse-optics'
+--gate-tets become 3000, its --gates 10, every bench runs once (--runs 1)
+and --photons is capped at 200000; TRANSLUCENCY_README_FULL=1 runs the blocks exactly as written.
 Exits non-zero on failure (unittest).
 """
 
@@ -78,6 +79,12 @@ def smaller(command):
                      lambda m: "--photons %d" % min(int(m.group(1)), 200000), command)
     if " --photons " not in command and re.search(r"--solvers \S*montecarlo", command):
         command += " --photons 200000"
+    if " --diffuse-optics" in command and " --gate-tets " not in command:
+        command += " --gate-tets 3000"  # the time-gate table's own size (default 200000)
+    if " --diffuse-optics" in command and " --gates " not in command:
+        command += " --gates 10"  # of 100: 170 implicit steps, not 1,700
+    if re.search(r"translucency bench\b", command) and " --runs " not in command:
+        command += " --runs 1"  # one run per figure: this test checks it runs, not its medians
     return command
 
 

@@ -47,8 +47,15 @@ def run(command, work, limit):
     """The finished process, or one with returncode None that says it hung.
     A hung mpiexec gets SIGTERM (it ends its ranks), then its process group
     SIGKILL, so that no rank is left running."""
+    env = None
+    if command[:len(MPIEXEC)] == MPIEXEC:
+        # The ranks choose their OpenMP threads themselves (cores / ranks on
+        # the node, Filters/Parallel/vtkTranslucencyThreads.h): ctest's
+        # OMP_NUM_THREADS, an explicit choice the product would honour, is
+        # not passed on, so that policy is what runs here.
+        env = {k: v for k, v in os.environ.items() if k != "OMP_NUM_THREADS"}
     process = subprocess.Popen(command, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               text=True, start_new_session=True)
+                               text=True, start_new_session=True, env=env)
     try:
         out, err = process.communicate(timeout=limit)
         return subprocess.CompletedProcess(command, process.returncode, out, err)

@@ -114,6 +114,7 @@ struct Entry
 {
   std::string Text;
   std::string Value;
+  std::string Info;
 };
 
 /// The <Entry text=".." value=".."/> of the EnumerationDomain of `property`.
@@ -124,7 +125,7 @@ std::vector<Entry> EnumerationEntries(const std::string& property)
   for (const std::size_t start : StartTags(domain, "Entry"))
   {
     auto attributes = Attributes(domain, start);
-    entries.push_back({ attributes["text"], attributes["value"] });
+    entries.push_back({ attributes["text"], attributes["value"], attributes["info"] });
   }
   return entries;
 }
@@ -152,6 +153,26 @@ TEST(PluginEnumerations, SolveDiffusionSolverListsTheDiffusionSolverNames)
     EXPECT_EQ(entries[k].Value, std::to_string(k))
       << "entry " << k << " (" << entries[k].Text << ") of the Solver EnumerationDomain of "
       << SolveDiffusionXml << ": the values are 0..n-1 in the order of the names";
+  }
+}
+
+TEST(PluginEnumerations, SolveDiffusionSolverEntriesShowTheRegistryHelp)
+{
+  // The drop-down's line under each solver (the Entry's info) is the
+  // registry's one line of help, the same as `translucency help render`
+  // prints: written once, in the registry.
+  const std::string xml = ReadText(SolveDiffusionXml);
+  const std::string property =
+    Element(Element(xml, "SourceProxy", "SolveDiffusion"), "IntVectorProperty", "Solver");
+  ASSERT_FALSE(property.empty()) << "no IntVectorProperty Solver in " << SolveDiffusionXml;
+  const auto& registry = translucency::GetDiffusionSolverRegistry();
+  for (const Entry& entry : EnumerationEntries(property))
+  {
+    const auto* registered = registry.Find(entry.Text);
+    ASSERT_NE(registered, nullptr) << entry.Text;
+    EXPECT_EQ(entry.Info, registered->Help)
+      << "the info of the Solver entry '" << entry.Text << "' in " << SolveDiffusionXml
+      << " must be the registry's help line (DiffusionSolverFactory.cxx)";
   }
 }
 

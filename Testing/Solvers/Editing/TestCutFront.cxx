@@ -3,7 +3,9 @@
 // cut of the whole mesh (same bits), and gives the serial statistics: pieces
 // made by a scattered tet partition with ghost copies and a tet brought twice
 // (matched by global id), and one piece holding the whole mesh matched by
-// coordinates; a stroke-like curved cutter too.
+// coordinates; a stroke-like curved cutter too; pieces matched by
+// coordinates, and the mesh renumbered (the relaxation follows the
+// coordinates, not the point ids).
 
 #include "CutFront.h"
 #include "Error.h"
@@ -264,6 +266,55 @@ TEST(CutFront, OnePieceByCoordinatesGivesTheSerialRelaxation)
   const Outcome serial = Serial(mesh, plane);
   ASSERT_GT(serial.Moved, 20);
   ExpectSame(serial, Distributed(mesh, pieces, plane, false));
+}
+
+TEST(CutFront, ScatteredPiecesByCoordinatesGiveTheSerialRelaxation)
+{
+  // Without ids the front's points come in the order of first appearance
+  // (piece by piece), not the serial one: TetCut visits them in the order of
+  // their coordinates, so the moves are still the serial ones, bit for bit.
+  const MeshData mesh = OrientedBox(9, 8, 7, 0.3, 5);
+  const TetCut::SideFunction plane = [](const double* x)
+  { return 0.8 * x[0] + 0.3 * x[1] + 0.2 * x[2] - 4.1; };
+  const Outcome serial = Serial(mesh, plane);
+  ASSERT_GT(serial.Moved, 20);
+  ExpectSame(serial, Distributed(mesh, Partition(mesh), plane, false));
+}
+
+TEST(CutFront, RenumberedMeshGivesTheSameRelaxation)
+{
+  // The serial cut of the same mesh with its points numbered in reverse
+  // (and its tets in reverse order) moves every point to the same bits.
+  const MeshData mesh = OrientedBox(8, 8, 8, 0.25, 11);
+  const TetCut::SideFunction sphere = [](const double* x)
+  {
+    const double dx = x[0] - 2.0, dy = x[1] - 3.0, dz = x[2] - 4.5;
+    return 4.3 - std::sqrt(dx * dx + dy * dy + dz * dz);
+  };
+  const int n = mesh.NumberOfPoints();
+  MeshData renumbered = mesh;
+  for (int i = 0; i < n; ++i)
+  {
+    std::copy_n(&mesh.Points[3 * i], 3, &renumbered.Points[3 * (n - 1 - i)]);
+  }
+  const int m = mesh.NumberOfTets();
+  for (int t = 0; t < m; ++t)
+  {
+    for (int a = 0; a < 4; ++a)
+    {
+      renumbered.Tets[4 * (m - 1 - t) + a] = n - 1 - mesh.Tets[4 * t + a];
+    }
+  }
+  const Outcome serial = Serial(mesh, sphere);
+  ASSERT_GT(serial.Moved, 20);
+  Outcome other = Serial(renumbered, sphere);
+  std::vector<double> back(other.Points.size());
+  for (int i = 0; i < n; ++i)
+  {
+    std::copy_n(&other.Points[3 * (n - 1 - i)], 3, &back[3 * i]);
+  }
+  other.Points = back;
+  ExpectSame(serial, other);
 }
 
 TEST(CutFront, BadInputIsAnError)

@@ -21,6 +21,8 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <set>
+#include <string>
 
 namespace
 {
@@ -377,6 +379,95 @@ TEST(LinearSolverRegistry, EachFamilyRejectsTheOthersNames)
   message = tt::ErrorMessage([] { CreateLinearSolver("bicgstab"); });
   EXPECT_TRUE(tt::Contains(message, "unknown linear solver 'bicgstab'")) << message;
   EXPECT_TRUE(tt::Contains(message, "cg-jacobi")) << message;
+}
+
+// Every entry is a Krylov method x preconditioner composition (LinearSolver.h):
+// "KRYLOV/PRECONDITIONER" names it, one entry per composition, and its
+// registered name is an alias of it for both factories.
+TEST(LinearSolverRegistry, EveryNameIsAnAliasOfItsComposition)
+{
+  std::set<std::string> compositions;
+  for (const auto& entry : GetLinearSolverRegistry().GetEntries())
+  {
+    const std::string composition = GetLinearSolverComposition(entry.Name);
+    EXPECT_EQ(composition, entry.Properties.Krylov + "/" + entry.Properties.Preconditioner);
+    EXPECT_TRUE(compositions.insert(composition).second) << composition << " twice";
+    EXPECT_EQ(GetLinearSolverComposition(composition), composition);
+    EXPECT_EQ(ResolveLinearSolverName(composition), entry.Name);
+    std::string upper = composition;
+    std::transform(upper.begin(), upper.end(), upper.begin(), ::toupper);
+    EXPECT_EQ(ResolveLinearSolverName(upper), entry.Name);
+    if (!entry.Properties.Built)
+    {
+      const std::string message = tt::ErrorMessage([&] { CreateLinearSolver(composition); });
+      EXPECT_TRUE(tt::Contains(message, "is not in this build")) << message;
+      continue;
+    }
+    EXPECT_EQ(FindLinearSolver(entry.Properties.Krylov, entry.Properties.Preconditioner).Name,
+      entry.Name);
+    if (entry.Properties.NeedsSymmetricPositiveDefinite)
+    {
+      EXPECT_EQ(CreateLinearSolver(composition)->GetName(), entry.Name);
+    }
+    else
+    {
+      EXPECT_EQ(CreateNonSymmetricLinearSolver(composition, "test")->GetName(), entry.Name);
+    }
+  }
+  EXPECT_EQ(GetLinearSolverComposition("cg-jacobi"), "cg/jacobi");
+  EXPECT_EQ(GetLinearSolverComposition("Multigrid-Agg"), "cg/aggregation");
+  EXPECT_EQ(ResolveLinearSolverName("cg/bogus"), "cg/bogus");
+  std::string message = tt::ErrorMessage([] { CreateLinearSolver("cg/bogus"); });
+  EXPECT_TRUE(tt::Contains(message, "unknown linear solver 'cg/bogus'")) << message;
+  message = tt::ErrorMessage([] { CreateLinearSolver("bicgstab/jacobi"); });
+  EXPECT_TRUE(tt::Contains(message, "unknown linear solver 'bicgstab/jacobi'")) << message;
+  message = tt::ErrorMessage([] { FindLinearSolver("cg", "bogus"); });
+  EXPECT_TRUE(tt::Contains(message, "no linear solver cg/bogus")) << message;
+  message = tt::ErrorMessage([] { GetLinearSolverComposition("gmres"); });
+  EXPECT_TRUE(tt::Contains(message, "gmres")) << message;
+}
+
+// An alias and its composition create the same solver: the same iterates,
+// bit for bit, and the same iteration counts on the same system.
+TEST(LinearSolverRegistry, AliasAndCompositionGiveTheSameIterates)
+{
+  Problem p;
+  MakeProblem(p, 3, 3, 3, 41);
+  const auto solve = [&p](std::unique_ptr<LinearSolver> solver,
+                       std::array<Eigen::VectorXd, 3>& x, std::array<LinearSolveStats, 3>& stats) {
+    solver->SetRelTol(1e-8);
+    solver->SetMaxIter(100000);
+    solver->Setup(p.System, &p.Mesh, true);
+    return solver->Solve(p.System, x, false, stats);
+  };
+  for (const auto& entry : GetLinearSolverRegistry().GetEntries())
+  {
+    if (!entry.Properties.Built)
+    {
+      continue;
+    }
+    const std::string composition = GetLinearSolverComposition(entry.Name);
+    const bool symmetric = entry.Properties.NeedsSymmetricPositiveDefinite;
+    const auto create = [symmetric](const std::string& name) -> std::unique_ptr<LinearSolver> {
+      if (symmetric)
+      {
+        return CreateLinearSolver(name);
+      }
+      return CreateNonSymmetricLinearSolver(name, "test");
+    };
+    std::array<Eigen::VectorXd, 3> byName, byComposition;
+    std::array<LinearSolveStats, 3> nameStats, compositionStats;
+    ASSERT_TRUE(solve(create(entry.Name), byName, nameStats)) << entry.Name;
+    ASSERT_TRUE(solve(create(composition), byComposition, compositionStats)) << composition;
+    for (int c = 0; c < 3; ++c)
+    {
+      EXPECT_TRUE(nameStats[c].Converged) << entry.Name << " channel " << c;
+      EXPECT_EQ(nameStats[c].Iterations, compositionStats[c].Iterations) << composition;
+      ASSERT_EQ(byName[c].size(), byComposition[c].size()) << composition;
+      EXPECT_EQ((byName[c] - byComposition[c]).cwiseAbs().maxCoeff(), 0.0)
+        << entry.Name << " and " << composition << " differ in channel " << c;
+    }
+  }
 }
 
 // BiCGSTAB and the relaxation also solve the symmetric systems; the two

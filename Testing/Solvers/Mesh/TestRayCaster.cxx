@@ -678,7 +678,7 @@ TEST(RayCasterIrradiance, UniformLight)
     // estimate is the plain cosine-weighted sum.
     if (std::abs(x[2] - 2.0) < 1e-12 && x[0] > 0.26 && x[0] < 0.74 && x[1] > 0.26 && x[1] < 0.74)
     {
-      const double rotation = std::fmod(0.6180339887498949 * i, 1.0);
+      const double rotation = UniformSampleRotation(x);
       double sum = 0.0;
       for (int k = 0; k < samples; ++k)
       {

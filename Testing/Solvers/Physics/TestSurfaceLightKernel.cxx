@@ -83,7 +83,7 @@ TEST(SurfaceLightKernel, EqualsTheSerialProjectedIrradiance)
   for (int i = 0; i < numPoints; ++i)
   {
     all[i] = i;
-    rotations[i] = UniformSampleRotation(i);
+    rotations[i] = UniformSampleRotation(c.Mesh.GetPoint(i));
   }
   for (const bool shadows : { true, false })
   {
@@ -114,6 +114,49 @@ TEST(SurfaceLightKernel, EqualsTheSerialProjectedIrradiance)
   EXPECT_GT(shadowed, 30);
 }
 
+TEST(SurfaceLightKernel, SampledUniformLightDoesNotDependOnThePointOrder)
+{
+  // The uniform light's sample rotation is keyed on the point's coordinates:
+  // the same mesh with its points and tets numbered in reverse gets the same
+  // irradiance at every point (a partitioned or redistributed mesh too).
+  WellCase c;
+  MakeWell(c);
+  const int n = c.Mesh.GetNumberOfPoints();
+  const int m = c.Mesh.GetNumberOfTets();
+  std::vector<double> points(3 * static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i)
+    std::copy_n(c.Mesh.GetPoint(i), 3, &points[3 * static_cast<size_t>(n - 1 - i)]);
+  std::vector<int> tets(4 * static_cast<size_t>(m));
+  std::vector<double> eta(static_cast<size_t>(m));
+  for (int t = 0; t < m; ++t)
+  {
+    for (int a = 0; a < 4; ++a)
+      tets[4 * static_cast<size_t>(m - 1 - t) + a] = n - 1 - c.Mesh.GetTets()[4 * static_cast<size_t>(t) + a];
+    eta[m - 1 - t] = c.TetEta[t];
+  }
+  TetMesh reversed;
+  reversed.SetGeometry(points, tets);
+  const std::vector<LightSource> none;
+  std::vector<double> q, qReversed, unoccluded;
+  ASSERT_TRUE(ComputeProjectedIrradiance(c.Mesh, c.TetEta, none, 0.2, 16, true, q));
+  ASSERT_TRUE(ComputeProjectedIrradiance(reversed, eta, none, 0.2, 16, true, qReversed));
+  ASSERT_TRUE(ComputeProjectedIrradiance(c.Mesh, c.TetEta, none, 0.2, 16, false, unoccluded));
+  double scale = 0.0;
+  int occluded = 0;
+  for (size_t k = 0; k < q.size(); ++k)
+  {
+    scale = std::max(scale, std::abs(q[k]));
+    occluded += q[k] < unoccluded[k] - 1e-6 ? 1 : 0;
+  }
+  ASSERT_GT(scale, 0.0);
+  EXPECT_GT(occluded, 30) << "the well must occlude samples for the test to mean anything";
+  for (int i = 0; i < n; ++i)
+    for (int ch = 0; ch < 3; ++ch)
+      EXPECT_NEAR(qReversed[3 * static_cast<size_t>(n - 1 - i) + ch],
+        q[3 * static_cast<size_t>(i) + ch], 1e-13 * scale)
+        << "point " << i;
+}
+
 TEST(SurfaceLightKernel, SomePointsOnlyAndErrors)
 {
   WellCase c;
@@ -126,11 +169,11 @@ TEST(SurfaceLightKernel, SomePointsOnlyAndErrors)
   for (int i = 0; i < n; ++i)
   {
     all.push_back(i);
-    rAll.push_back(UniformSampleRotation(i));
+    rAll.push_back(UniformSampleRotation(&surface.Points[3 * i]));
     if (i % 7 == 3)
     {
       some.push_back(i);
-      rSome.push_back(UniformSampleRotation(i));
+      rSome.push_back(UniformSampleRotation(&surface.Points[3 * i]));
     }
   }
   std::vector<double> qAll, qSome;
