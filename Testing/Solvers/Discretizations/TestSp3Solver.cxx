@@ -647,6 +647,49 @@ TEST(Sp3Radiance, ItsHemisphereIntegralIsTheExitance)
   }
 }
 
+TEST(Sp3Radiance, BoundaryRadianceIsTheReadoutAtEachBoundaryPoint)
+{
+  // Sp3BoundaryRadiance (OpenMP over the points) against Sp3OutgoingRadiance
+  // point by point (its serial twin), along the normals and from a view
+  // point; wrong sizes are refused.
+  const TetMesh mesh = Build(BoxMesh(4, 4, 3, 4.0, 4.0, 3.0, 0.2, 3));
+  const std::size_t n = static_cast<std::size_t>(mesh.GetNumberOfPoints());
+  std::vector<double> phi1(3 * n), phi2(3 * n), q(3 * n), eta(n, 1.4);
+  for (std::size_t m = 0; m < 3 * n; ++m)
+  {
+    phi1[m] = 1.0 + 0.01 * static_cast<double>(m % 17);
+    phi2[m] = 0.1 - 0.003 * static_cast<double>(m % 11);
+    q[m] = 0.02 * static_cast<double>(m % 5);
+  }
+  const Sp3BoundaryCoefficients k = Sp3BoundaryCoefficients::Compute(1.4);
+  const double view[3] = { 2.0, 1.0, 9.0 };
+  for (const double* viewPoint : { static_cast<const double*>(nullptr), view })
+  {
+    const std::vector<double> all = Sp3BoundaryRadiance(mesh, phi1, phi2, q, eta, viewPoint);
+    const std::vector<int>& boundary = mesh.GetBoundaryPoints();
+    ASSERT_EQ(all.size(), 3 * boundary.size());
+    for (std::size_t b = 0; b < boundary.size(); ++b)
+    {
+      const std::size_t i = static_cast<std::size_t>(boundary[b]);
+      const double* nrm = &mesh.GetPointNormals()[3 * i];
+      double cosOut = 1.0;
+      if (viewPoint)
+      {
+        const double* x = mesh.GetPoint(static_cast<int>(i));
+        const double d[3] = { view[0] - x[0], view[1] - x[1], view[2] - x[2] };
+        cosOut = (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) /
+          std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      }
+      for (int c = 0; c < 3; ++c)
+      {
+        EXPECT_EQ(all[3 * b + c],
+          Sp3OutgoingRadiance(k, 1.4, phi1[3 * i + c], phi2[3 * i + c], q[3 * i + c], cosOut));
+      }
+    }
+  }
+  EXPECT_THROW(Sp3BoundaryRadiance(mesh, phi1, std::vector<double>(5), q, eta, nullptr), Error);
+}
+
 // ---- Frequency domain (SolveFrequencyDomain).
 
 /// A jittered box (eta 1.4, g 0.5 in G) lit by q on its top face, a point
@@ -789,6 +832,16 @@ TEST(Sp3Frequency, MultigridAndJacobiAgreeAndTheExtendedBeamIsModulated)
     norm += std::norm(jacobi[m]);
   }
   EXPECT_LT(std::sqrt(diff / norm), 1e-8);
+  // The serial twin: one thread gives the same bits (row-wise products,
+  // dot products in serial order).
+  Sp3Solver single;
+  single.SetRelTol(1e-11);
+  single.SetMaxIter(20000);
+  single.SetLinearSolver("jacobi");
+  single.SetNumberOfThreads(1);
+  std::vector<std::complex<double>> serial;
+  ASSERT_TRUE(single.SolveFrequencyDomain(problem, 200e6, serial, report));
+  EXPECT_EQ(serial, jacobi);
   std::vector<double> cw;
   ASSERT_TRUE(a.Solve(problem, cw, report));
   ASSERT_TRUE(a.SolveFrequencyDomain(problem, 1e3, low, report));
