@@ -838,8 +838,10 @@ void vtkSolveDiffusion::Internals::Configure(vtkSolveDiffusion& self, int number
 {
   // Validate: a vertex solver's linear solver must be one of this build's.
   const auto& entry = SolverEntry(self.Solver);
-  const std::string linearSolver =
-    translucency::ToLower(self.LinearSolver) == "default" ? "" : self.LinearSolver;
+  // A composition "KRYLOV/PRECONDITIONER" (e.g. "cg/jacobi") names its entry.
+  const std::string linearSolver = translucency::ToLower(self.LinearSolver) == "default"
+    ? ""
+    : translucency::ResolveLinearSolverName(self.LinearSolver);
   if (entry.Properties.UnknownsAtVertices && !linearSolver.empty())
   {
     const std::vector<std::string> names = translucency::GetLinearSolverNames();
