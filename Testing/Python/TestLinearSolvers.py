@@ -14,6 +14,8 @@ How to run (from a build tree; ctest sets the variables itself):
 3. An unknown name is an error that lists the known names.
 4. A relight (new light, same mesh and material) with multigrid-cg warm-
    starts and needs fewer iterations than the cold solve.
+5. A Krylov x preconditioner composition (cg/jacobi, ...) names the
+   registry entry it composes: the same solver and fluence as its name.
 """
 
 import os
@@ -94,6 +96,20 @@ class LinearSolverTest(unittest.TestCase):
                     # fluence agrees to far better than 1e-6.
                     err = np.max(np.abs(phi - phi_ref)) / np.max(phi_ref)
                     self.assertLess(err, 1e-6, "%s/%s: %g" % (solver, name, err))
+
+    def test_a_composition_names_its_entry(self):
+        # KRYLOV/PRECONDITIONER (the registry's composition) is the same solver
+        # as the entry's name: the same name used and the same fluence, bit for bit.
+        for composition, name in (("cg/jacobi", "cg-jacobi"), ("CG/Aggregation", "multigrid-agg"),
+                                  ("cg/multires", "multigrid-cg")):
+            with self.subTest(composition=composition):
+                by_name, messages = self.solve("divergence", name)
+                self.assertEqual(messages.errors + messages.pipeline_errors, [])
+                solve, messages = self.solve("divergence", composition)
+                self.assertEqual(messages.errors + messages.pipeline_errors, [])
+                self.assertEqual(solve.GetLinearSolverUsed(), name)
+                np.testing.assert_array_equal(array(solve.GetOutput(), "Fluence"),
+                                              array(by_name.GetOutput(), "Fluence"))
 
     def test_unknown_name_is_a_clear_error(self):
         for solver in ("divergence", "fem"):
