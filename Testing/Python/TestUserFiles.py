@@ -303,6 +303,36 @@ class UserFiles(unittest.TestCase):
         self.assertIn("--tets", result.stderr)
 
 
+    def test_every_command_refuses_an_output_over_its_input(self):
+        """compare, acquire and radiosity as render: --json or --output naming
+        an input is a usage error before any work, the input unchanged."""
+        folder = self.folder("collisions_all")
+        mesh_prefix = os.path.join(folder, "mesh")
+        self.assertEqual(self.render(mesh_prefix).returncode, 0)
+        mesh = mesh_prefix + ".vtu"
+        scene = os.path.join(folder, "scene.json")
+        csv = os.path.join(folder, "measured.csv")
+        with open(scene, "w") as f:
+            f.write("{}\n")
+        with open(csv, "w") as f:
+            f.write("t_ns,a\n0,1\n1,2\n")
+        out = os.path.join(folder, "out")
+        for args, needle in [
+            (["compare", "--mesh", mesh, "--json", mesh, "--no-png", "--output", out],
+             "--json '%s' is the input --mesh" % mesh),
+            (["compare", "--mesh", mesh, "--measured", csv, "--json", csv, "--no-png",
+              "--time-gates", "0,0.5,4", "--source", "pencil:5,5,10:0,0,-1", "--detector",
+              "5,0,5", "--output", out], "is the input --measured"),
+            (["acquire", "--sample", mesh, "--patterns", mesh, "--output", mesh_prefix,
+              "--no-png"], "--output '%s' is the input --sample" % mesh),
+            (["acquire", "--sample", mesh, "--patterns", mesh, "--json", mesh, "--output", out,
+              "--no-png"], "is the input --sample"),
+            (["radiosity", "--scene", scene, "--json", scene, "--output", out],
+             "is the input --scene"),
+        ]:
+            with self.subTest(command=args[0], needle=needle):
+                self.expect_refused(args, [needle, "refused"], [mesh, scene, csv])
+
     # 8 ------------------------------------------------------------------------
     def test_concurrent_compares_into_one_folder(self):
         from vtkmodules.vtkIOXML import vtkXMLMultiBlockDataReader
