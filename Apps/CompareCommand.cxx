@@ -929,18 +929,16 @@ void WriteSolverPictures(CompareRun& run)
     const json& map = r.Stats["error_map"];
     const double own = PictureScale(map["scale_percent"].get<double>());
     const long long masked = map["masked_points"].get<long long>();
-    const std::string maskNote =
-      masked > 0 ? "; grey: Monte Carlo standard error > 10 %" : std::string();
-    const std::string quantity =
-      "radiance " + channel + " relative error, " + name + " - " + reference;
+    // Short captions: the pictures may be small (--size 320x240).
+    const std::string maskNote = masked > 0 ? "; grey: noisy MC" : std::string();
+    const std::string quantity = "radiance " + channel + " error, " + name + " - " + reference;
     std::ostringstream caption;
-    caption << name << " against " << reference << " (own scale: 99th percentile of |error| = "
-            << std::setprecision(3) << own << " %" << maskNote << ")";
+    caption << name << " vs " << reference << ", own scale" << maskNote;
     const std::string part = outputDir + "/" + name + "_error_shared.part.png";
     if (!WriteScalarMapPNG(surface, "SignedRelativeRadianceError", -own, own, quantity, "%",
           caption.str(), image, outputDir + "/" + name + "_error.png", error) ||
       !WriteScalarMapPNG(surface, "SignedRelativeRadianceError", -sharedScale, sharedScale,
-        quantity, "%", name + " against " + reference + " (shared scale" + maskNote + ")", image,
+        quantity, "%", name + " vs " + reference + ", shared scale" + maskNote, image,
         part, error))
       throw translucency::Error(error);
     overview.push_back(part);
