@@ -40,6 +40,13 @@ struct DiffusionSolverTraits
   bool Distributed = false;
   /// The options its SetOptions reads (DiffusionOption names).
   std::vector<std::string> Options;
+  /// The linear solvers its SetLinearSolver accepts: registered names of the
+  /// linear-solver registry this build has (GetLinearSolverRegistry), in
+  /// listing order; "" (the solver's own default by size) is accepted too.
+  /// Empty exactly when HasLinearSolverChoice is false. The filter refuses
+  /// any other name before solving, and the plugin's Linear Solver drop-down
+  /// lists only these for the chosen Solver.
+  std::vector<std::string> LinearSolvers;
 };
 
 /// The boolean traits as flags, to register an entry on one line:
@@ -57,9 +64,29 @@ enum : unsigned
 };
 }
 
-/// Traits from DiffusionTrait flags and the option names.
-DiffusionSolverTraits MakeDiffusionSolverTraits(
-  unsigned flags, std::vector<std::string> options = {});
+/// Traits from DiffusionTrait flags, the option names and the accepted
+/// linear solvers (DiffusionSolverTraits::LinearSolvers).
+DiffusionSolverTraits MakeDiffusionSolverTraits(unsigned flags,
+  std::vector<std::string> options = {}, std::vector<std::string> linearSolvers = {});
+
+/**
+ * The linear solvers the solver called `name` accepts (its registry entry's
+ * LinearSolvers; empty for a solver without a choice). Throws as
+ * GetDiffusionSolverRegistry().Get(name) for an unknown solver.
+ */
+const std::vector<std::string>& GetAcceptedLinearSolvers(const std::string& name);
+
+/**
+ * Throws translucency::Error unless the solver called `solver` accepts the
+ * linear solver `linearSolver` (a registered name or a composition
+ * "KRYLOV/PRECONDITIONER"; "" is always accepted). The message names the
+ * solver and lists what it accepts, e.g. "the sp3 solver does not accept
+ * the linear solver 'relaxation' (it accepts: bicgstab, multigrid-agg;
+ * empty = its default)", "unknown linear solver 'x' for the fem solver (it
+ * accepts: ...)", or a linear solver of the registry this build lacks with
+ * its remedy. A solver without a choice (Monte Carlo) accepts only "".
+ */
+void CheckLinearSolverAccepted(const std::string& solver, const std::string& linearSolver);
 
 /// Names of the registered solvers with every trait of `flags` (listing order).
 std::vector<std::string> GetDiffusionSolverNamesWith(unsigned flags);

@@ -2,6 +2,7 @@
 
 #include "Error.h"
 #include "Fresnel.h"
+#include "LinearSolver.h"
 #include "ResourceLimits.h"
 #include "Strings.h"
 #include "TetMesh.h"
@@ -1176,17 +1177,31 @@ std::string Sp3Solver::ChoosePreconditioner(const TetMesh& mesh) const
       ? "jacobi"
       : "multigrid-agg";
   }
-  if (requested == "jacobi" || requested == "cg-jacobi" || requested == "bicgstab")
+  // The names it accepts are its registry entry's (DiffusionSolverTraits::
+  // LinearSolvers: bicgstab, multigrid-agg), each mapped here by its traits
+  // (LinearSolverTraits) to the block preconditioner of SP3's BiCGSTAB:
+  // BiCGSTAB with the diagonal, or one aggregation multigrid cycle per block.
+  // "jacobi" is the core's short name of the first.
+  if (requested == "jacobi")
   {
     return "jacobi";
   }
-  if (requested == "multigrid-agg")
+  if (const auto* entry = GetLinearSolverRegistry().Find(ResolveLinearSolverName(requested)))
   {
-    return "multigrid-agg";
+    const LinearSolverTraits& traits = entry->Properties;
+    if (traits.Krylov == "bicgstab" && traits.Preconditioner == "jacobi")
+    {
+      return "jacobi";
+    }
+    if (traits.Preconditioner == "aggregation")
+    {
+      return "multigrid-agg";
+    }
   }
   throw Error("sp3: linear solver '" + LinearSolver_ +
-    "' is not available for the SP3 block system (known: jacobi, multigrid-agg; \"\" chooses "
-    "by size)");
+    "' is not available for the SP3 block system: its BiCGSTAB takes the diagonal "
+    "(\"bicgstab\") or an aggregation multigrid cycle (\"multigrid-agg\") as preconditioner; "
+    "\"\" chooses by size");
 }
 
 void Sp3Solver::FillReport(const TetMesh& mesh, SolverReport& report) const
