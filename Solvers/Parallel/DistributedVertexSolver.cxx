@@ -1,5 +1,6 @@
 #include "DistributedVertexSolver.h"
 
+#include "DiffusionSolverFactory.h"
 #include "Error.h"
 #include "Fresnel.h"
 #include "RankThreads.h"
@@ -29,7 +30,53 @@ double Milliseconds(double since)
   return 1000.0 * (MPI_Wtime() - since);
 }
 
+/// The registry's distributed variants of divergence and fem, registered
+/// when this layer is loaded (a build without it has none).
+const bool Registered = [] {
+  for (const char* name : { "divergence", "fem" })
+  {
+    const std::string discretization = name;
+    RegisterDistributedDiffusionSolver(discretization, [discretization] {
+      return std::unique_ptr<DiffusionSolver>(
+        std::make_unique<DistributedVertexSolver>(discretization));
+    });
+  }
+  return true;
+}();
+
 } // namespace
+
+const MPI_Comm* GetSelfCommunicator()
+{
+  static const MPI_Comm self = MPI_COMM_SELF;
+  return &self;
+}
+
+const MPI_Comm* GetWorldCommunicator()
+{
+  static const MPI_Comm world = MPI_COMM_WORLD;
+  return &world;
+}
+
+MPI_Comm GetMPIComm(const Communicator& comm)
+{
+  EnsureHypreInitialized();
+  return comm.IsMPI() ? *static_cast<const MPI_Comm*>(comm.GetHandle()) : MPI_COMM_SELF;
+}
+
+Communicator MakeCommunicator(const MPI_Comm* comm)
+{
+  EnsureHypreInitialized();
+  int rank = 0, size = 1;
+  MPI_Comm_rank(*comm, &rank);
+  MPI_Comm_size(*comm, &size);
+  return Communicator(comm, rank, size);
+}
+
+DistributedVertexSolver::DistributedVertexSolver(const std::string& discretization)
+  : DistributedVertexSolver(GetMPIComm(Communicator()), discretization)
+{
+}
 
 DistributedVertexSolver::DistributedVertexSolver(MPI_Comm comm, const std::string& discretization)
   : Comm_(comm)
@@ -42,9 +89,51 @@ DistributedVertexSolver::DistributedVertexSolver(MPI_Comm comm, const std::strin
   }
   Fem_ = discretization == "fem";
   EnsureHypreInitialized();
+  (void)Registered;
 }
 
 DistributedVertexSolver::~DistributedVertexSolver() = default;
+
+void DistributedVertexSolver::SetCommunicator(const Communicator& comm)
+{
+  const MPI_Comm next = GetMPIComm(comm);
+  if (next == Comm_)
+  {
+    return;
+  }
+  Reset();
+  HaveGeometry_ = false;
+  Keys_.clear();
+  Points_.clear();
+  Tets_.clear();
+  OwnMesh_ = TetMesh();
+  Comm_ = next;
+}
+
+void DistributedVertexSolver::Reset()
+{
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    Channels_[c].reset();
+    Solution_[c].clear();
+    Contributions_[c].clear();
+    FullIterations_[c] = 0;
+    ForceFull_[c] = false;
+  }
+}
+
+bool DistributedVertexSolver::GetTalliedReadouts(TalliedReadouts& readouts) const
+{
+  readouts = TalliedReadouts();
+  readouts.Readings = Readings_;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    readouts.Injected[c] = Balance_.BoundaryInjected[c] + SourcePower_[c];
+    readouts.Absorbed[c] = Balance_.Absorbed[c];
+    readouts.Escaped[c] = Balance_.Escaped[c];
+  }
+  return true;
+}
 
 void DistributedVertexSolver::SetAMGOptions(const BoomerAMGOptions& options)
 {
@@ -65,47 +154,33 @@ double DistributedVertexSolver::GetOperatorComplexity(int c) const
 DistributedPiece DistributedVertexSolver::Piece(const OpticalProperties& material) const
 {
   DistributedPiece piece;
-  piece.Mesh = &Mesh_;
-  piece.HasTets = !Tets_.empty();
+  piece.Mesh = Mesh_;
+  piece.HasTets = HasTets();
   piece.NumberOfPoints = static_cast<int>(Keys_.size());
   piece.Physical = &PhysicalFace_;
   piece.Material = &material;
   return piece;
 }
 
-void DistributedVertexSolver::BuildGeometry(
-  const std::vector<double>& points, const std::vector<PointKey>& keys, const std::vector<int>& tets)
+void DistributedVertexSolver::BuildGeometry(const TetMesh* mesh, const std::vector<PointKey>& keys)
 {
+  // The local mesh: the owned tets on the local points (partition faces
+  // are boundary faces of it; the count across ranks sorts them out).
   HaveGeometry_ = false;
   for (auto& channel : Channels_)
     channel.reset();
   for (auto& x : Solution_)
     x.clear();
   const std::size_t numPoints = keys.size();
-
-  // The local mesh: the owned tets on the local points (partition faces
-  // are boundary faces of it; the count across ranks sorts them out).
+  Mesh_ = mesh && mesh->GetNumberOfTets() > 0 ? mesh : &EmptyMesh_;
   std::string error;
-  Mesh_ = TetMesh();
-  if (!tets.empty())
-  {
-    try
-    {
-      Mesh_.SetGeometry(points, tets);
-    }
-    catch (const Error& e)
-    {
-      error = e.what();
-    }
-  }
-  AgreeOnError(Comm_, error);
   Used_.assign(numPoints, 0);
-  for (int id : tets)
+  for (int id : Mesh_->GetTets())
     Used_[static_cast<std::size_t>(id)] = 1;
   Numbering_.Build(Comm_, keys, Used_);
 
   // The physical boundary: local boundary faces no other tet shares.
-  const std::vector<int>& triangles = Mesh_.GetBoundaryTriangles();
+  const std::vector<int>& triangles = Mesh_->GetBoundaryTriangles();
   std::vector<int> triangleRows(triangles.size());
   for (std::size_t k = 0; k < triangles.size(); ++k)
     triangleRows[k] = Numbering_.GetRow(triangles[k]);
@@ -135,9 +210,9 @@ void DistributedVertexSolver::BuildGeometry(
   SendSizes_.clear();
   SendColumns_.clear();
   SendPositions_.clear();
-  const std::vector<int>& offsets = Mesh_.GetRowOffsets();
-  const std::vector<int>& columns = Mesh_.GetColumnIndices();
-  for (std::size_t i = 0; i < numPoints && !tets.empty(); ++i)
+  const std::vector<int>& offsets = Mesh_->GetRowOffsets();
+  const std::vector<int>& columns = Mesh_->GetColumnIndices();
+  for (std::size_t i = 0; i < numPoints && HasTets(); ++i)
   {
     if (!Used_[i])
       continue;
@@ -160,9 +235,8 @@ void DistributedVertexSolver::BuildGeometry(
       SendPositions_.push_back(k);
     }
   }
-  Points_ = points;
   Keys_ = keys;
-  Tets_ = tets;
+  Revision_ = HasTets() ? Mesh_->GetGeometryRevision() : 0;
   HaveGeometry_ = true;
 }
 
@@ -203,19 +277,46 @@ void DistributedVertexSolver::CheckPiece(const std::vector<double>& points,
   AgreeOnError(Comm_, error);
 }
 
+void DistributedVertexSolver::CheckPiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
+  const OpticalProperties& material, const std::vector<double>& irradiance) const
+{
+  // Sizes (the mesh checked its ids; the values are checked by the assembly).
+  const std::size_t numPoints = keys.size();
+  const int numTets = mesh ? mesh->GetNumberOfTets() : 0;
+  std::string error;
+  try
+  {
+    if ((mesh && static_cast<std::size_t>(mesh->GetNumberOfPoints()) != numPoints) ||
+      irradiance.size() != 3 * numPoints)
+    {
+      std::ostringstream os;
+      os << "distributed solve: " << numPoints << " point keys, "
+         << (mesh ? mesh->GetNumberOfPoints() : 0) << " mesh points and " << irradiance.size()
+         << " irradiance values (3 per point) do not match";
+      throw Error(os.str());
+    }
+    material.Validate(numTets);
+  }
+  catch (const Error& e)
+  {
+    error = e.what();
+  }
+  AgreeOnError(Comm_, error);
+}
+
 void DistributedVertexSolver::AssembleLocal(const OpticalProperties& material,
   const std::vector<double>& irradiance, DiffusionSystem& system)
 {
   // The element matrices of the owned tets (TetContributions.h, the serial
   // assemblies' expressions).
   std::string error;
-  const int numTets = static_cast<int>(Tets_.size() / 4);
+  const int numTets = Mesh_->GetNumberOfTets();
   const double* muA = material.AbsorptionCoefficient.data();
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
   if (numTets > 0)
   {
     const int threads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
-    ResizeVertexSystem(Mesh_, system); // sized first: the kernel keeps pointers into it
+    ResizeVertexSystem(*Mesh_, system); // sized first: the kernel keeps pointers into it
     const ChannelPointers channels(system);
     const ChannelPointers* pointers = &channels;
     const bool fem = Fem_;
@@ -230,12 +331,12 @@ void DistributedVertexSolver::AssembleLocal(const OpticalProperties& material,
         ScatterTetMatrix(pointers->Values[c], pos, diag, off);
       }
     };
-    if (!AssembleVertexSystem(Mesh_, material, irradiance, system, threads, GeometryCache_,
+    if (!AssembleVertexSystem(*Mesh_, material, irradiance, system, threads, GeometryCache_,
           [] {}, kernel, [] {}))
     {
       try
       {
-        CheckIrradiance(Mesh_, irradiance); // names the point (the material was checked)
+        CheckIrradiance(*Mesh_, irradiance); // names the point (the material was checked)
         error = "distributed solve: invalid material or irradiance";
       }
       catch (const Error& e)
@@ -250,21 +351,21 @@ void DistributedVertexSolver::AssembleLocal(const OpticalProperties& material,
 void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material,
   const std::vector<double>& irradiance, DiffusionSystem& system, std::vector<double>& localRhs)
 {
-  const std::vector<int>& triangles = Mesh_.GetBoundaryTriangles();
-  const std::vector<int>& triangleTets = Mesh_.GetBoundaryTriangleTets();
-  const std::vector<double>& areas = Mesh_.GetBoundaryTriangleAreas();
+  const std::vector<int>& triangles = Mesh_->GetBoundaryTriangles();
+  const std::vector<int>& triangleTets = Mesh_->GetBoundaryTriangleTets();
+  const std::vector<double>& areas = Mesh_->GetBoundaryTriangleAreas();
   const double* tetEta = material.RefractiveIndex.data();
   const double* q = irradiance.data();
   if (Fem_)
   {
     // Each physical face with its tet, on the tet's rank (TransCut eq. 2).
-    const int* tetPositions = Mesh_.GetTetNonZeroPositions().data();
+    const int* tetPositions = Mesh_->GetTetNonZeroPositions().data();
     for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
     {
       if (!PhysicalFace_[f])
         continue;
       const int t = triangleTets[f];
-      const int* tv = Mesh_.GetTet(t);
+      const int* tv = Mesh_->GetTet(t);
       const int* pos = tetPositions + 16 * static_cast<std::size_t>(t);
       const int* tri = triangles.data() + 3 * f;
       const int l[3] = { LocalIndex(tv, tri[0]), LocalIndex(tv, tri[1]), LocalIndex(tv, tri[2]) };
@@ -306,7 +407,7 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
     }
   }
   const std::vector<double> owned = Numbering_.SumToOwners(Comm_, measures, 2);
-  const int* diagonal = Mesh_.GetDiagonalPositions().data();
+  const int* diagonal = Mesh_->GetDiagonalPositions().data();
   for (std::size_t r = 0; r < FirstLocal_.size(); ++r)
   {
     const double s = owned[2 * r];
@@ -481,10 +582,10 @@ void DistributedVertexSolver::ReadOuts(const OpticalProperties& material,
 
   // The power balance: this rank's tets and physical faces, summed.
   std::array<double, 4 * NumberOfChannels> sums{};
-  if (!Tets_.empty())
+  if (HasTets())
   {
     const PowerBalance local = ComputePowerBalance(
-      Mesh_, material, fluence, &irradiance, Fresnel::BoundaryRule::Fit, &PhysicalFace_);
+      *Mesh_, material, fluence, &irradiance, Fresnel::BoundaryRule::Fit, &PhysicalFace_);
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       sums[c] = local.Absorbed[c];
@@ -534,6 +635,77 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
   const OpticalProperties& material, const std::vector<double>& irradiance,
   std::vector<double>& fluence, SolverReport& report)
 {
+  // The piece's sizes and ids, then its TetMesh (kept while the arrays are
+  // the same: its revision keys the numbering and the geometry cache).
+  CheckPiece(points, keys, tets, material, irradiance);
+  std::string error;
+  if (tets.empty())
+  {
+    OwnMesh_ = TetMesh();
+    Points_.clear();
+    Tets_.clear();
+  }
+  else if (OwnMesh_.GetNumberOfTets() == 0 || points != Points_ || tets != Tets_)
+  {
+    try
+    {
+      Points_.clear();
+      Tets_.clear();
+      OwnMesh_.SetGeometry(points, tets);
+      Points_ = points;
+      Tets_ = tets;
+    }
+    catch (const Error& e)
+    {
+      error = e.what();
+      OwnMesh_ = TetMesh();
+    }
+  }
+  AgreeOnError(Comm_, error);
+  SolvePiece(tets.empty() ? nullptr : &OwnMesh_, keys, material, irradiance, fluence, report);
+}
+
+bool DistributedVertexSolver::Solve(
+  const DiffusionProblem& problem, std::vector<double>& fluence, SolverReport& report)
+{
+  std::string error;
+  if (!problem.PointKeys)
+  {
+    error = "the distributed " + Name_ +
+      " solve needs the points' global keys (DiffusionProblem::PointKeys)";
+  }
+  else if (!problem.Material || !problem.Irradiance)
+  {
+    error = "the distributed " + Name_ + " solve needs a material and an irradiance";
+  }
+  else if (IsExtendedCollimatedModel(problem.Collimated))
+  {
+    error = "the distributed " + Name_ +
+      " solve has the surface collimated model only (the extended models are solved in one "
+      "process)";
+  }
+  AgreeOnError(Comm_, error);
+  Sources_ = problem.InteriorSources;
+  try
+  {
+    SolvePiece(problem.Mesh, *problem.PointKeys, *problem.Material, *problem.Irradiance,
+      fluence, report);
+  }
+  catch (...)
+  {
+    Sources_ = nullptr;
+    Mesh_ = &EmptyMesh_;
+    throw;
+  }
+  Sources_ = nullptr; // borrowed for this call only
+  Mesh_ = &EmptyMesh_;
+  return true;
+}
+
+void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
+  const OpticalProperties& material, const std::vector<double>& irradiance,
+  std::vector<double>& fluence, SolverReport& report)
+{
   Timings_ = Timings();
   Readings_.clear();
   report = SolverReport();
@@ -547,17 +719,23 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
   report.LinearSolver = "hypre-amg (distributed)";
   report.Assembly = "full";
 
-  // 0. The piece's sizes and ids.
-  CheckPiece(points, keys, tets, material, irradiance);
+  // 0. The piece's sizes.
+  CheckPiece(mesh, keys, material, irradiance);
+  if (mesh && mesh->GetNumberOfTets() == 0)
+  {
+    mesh = nullptr;
+  }
 
   // 1. The global identity and boundary, unless the mesh is the last one.
   double start = MPI_Wtime();
-  int same = HaveGeometry_ && points == Points_ && keys == Keys_ && tets == Tets_ ? 1 : 0;
+  const std::uint64_t revision = mesh ? mesh->GetGeometryRevision() : 0;
+  int same = HaveGeometry_ && revision == Revision_ && keys == Keys_ ? 1 : 0;
   int allSame = 0;
   MPI_Allreduce(&same, &allSame, 1, MPI_INT, MPI_MIN, Comm_);
+  Mesh_ = mesh ? mesh : &EmptyMesh_;
   if (!allSame)
   {
-    BuildGeometry(points, keys, tets);
+    BuildGeometry(mesh, keys);
     Timings_.Numbering = Milliseconds(start);
   }
 

@@ -25,6 +25,16 @@
  * Every public call is collective over the communicator (ranks with empty
  * pieces too); an error on any rank is thrown on every rank with the same
  * message (AgreeOnError).
+ *
+ * It is the registry's distributed variant of "divergence" and "fem"
+ * (DiffusionSolverFactory.h, trait Distributed; registered when this layer
+ * is loaded): a DiffusionSolver that takes its communicator as PETSc objects
+ * do (SetCommunicator; none means MPI_COMM_SELF, one rank, so it runs
+ * without mpiexec too), and takes RelTol, MaxIter, the warm start, interior
+ * sources and detectors as the serial solvers do. DiffusionFrontEnd chooses
+ * it by that trait (SetCommunicator); its detector readings and power
+ * balance, summed over the ranks, are its tallied read-outs
+ * (GetTalliedReadouts).
  */
 #pragma once
 
@@ -46,21 +56,48 @@
 namespace translucency
 {
 
-class DistributedVertexSolver
+/// The MPI communicator of `comm` (MPI_COMM_SELF for none, initialising MPI
+/// if nobody has).
+MPI_Comm GetMPIComm(const Communicator& comm);
+/// The Communicator of `*comm` (its rank and size; the MPI_Comm must outlive
+/// every user of the result). Initialises MPI if nobody has.
+Communicator MakeCommunicator(const MPI_Comm* comm);
+/// Process-lifetime MPI_COMM_SELF and MPI_COMM_WORLD, for MakeCommunicator.
+const MPI_Comm* GetSelfCommunicator();
+const MPI_Comm* GetWorldCommunicator();
+
+class DistributedVertexSolver : public DiffusionSolver
 {
 public:
-  /// `discretization`: "divergence" or "fem" (else translucency::Error).
-  /// The communicator must outlive the solver.
+  /// `discretization`: "divergence" or "fem" (else translucency::Error), on
+  /// MPI_COMM_SELF until SetCommunicator.
+  explicit DistributedVertexSolver(const std::string& discretization);
+  /// As above on `comm`, which must outlive the solver.
   DistributedVertexSolver(MPI_Comm comm, const std::string& discretization);
-  ~DistributedVertexSolver();
+  ~DistributedVertexSolver() override;
 
-  ///@{
-  /// PCG stopping rule ||b - A x|| <= RelTol ||b|| (default 1e-6) within
-  /// MaxIter iterations (default 2000) per channel; warm start (default on).
-  void SetRelTol(double tol) { RelTol_ = tol; }
-  void SetMaxIter(int n) { MaxIter_ = n; }
-  void SetWarmStart(bool on) { WarmStart_ = on; }
-  ///@}
+  /// "divergence" or "fem" (the discretisation's registry name).
+  std::string GetName() const override { return Name_; }
+  /// Any communicator (none: MPI_COMM_SELF). A new one forgets the mesh,
+  /// the hierarchies and the warm start.
+  void SetCommunicator(const Communicator& comm) override;
+  /**
+   * Collective: the DiffusionSolver interface. The problem's Mesh is this
+   * rank's piece (owned tets on the local points; null for a rank without
+   * tets), PointKeys the points' identities (required), Irradiance 3 per
+   * point, InteriorSources the sources (null: none). Continuous wave, the
+   * surface collimated model. The PCG stopping rule is ||b - A x|| <=
+   * RelTol ||b|| per channel (global norms). Throws translucency::Error on
+   * every rank on invalid input; returns true.
+   */
+  bool Solve(const DiffusionProblem& problem, std::vector<double>& fluence,
+    SolverReport& report) override;
+  /// Forgets the hierarchies and the warm start (keeps the numbering of an
+  /// unchanged mesh): the next Solve sets up from scratch.
+  void Reset() override;
+  /// The detector readings and power balance of the last Solve (the same on
+  /// every rank): injected = the physical faces' irradiance + the sources.
+  bool GetTalliedReadouts(TalliedReadouts& readouts) const override;
   /**
    * Values-only set-up (default on): when the mesh is the last Solve's and
    * only the matrix values changed (a paint), the new values go into the
@@ -79,7 +116,7 @@ public:
   bool GetValuesOnlySetup() const { return ValuesOnly_; }
   /// OpenMP threads of the local assembly (0, the default: the node's
   /// cores shared by its ranks, ScopedRankThreads, unless OMP_NUM_THREADS).
-  void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+  void SetNumberOfThreads(int n) override { NumberOfThreads_ = n; }
   /**
    * Interior sources (point sources, pencil beams) of the next Solves (null
    * or empty: none; the pointer must stay valid through Solve). Their load
@@ -90,7 +127,7 @@ public:
    */
   void SetInteriorSources(const Sources* sources) { Sources_ = sources; }
   /// Detectors read after each Solve (GetDetectorReadings: the same on every rank).
-  void SetDetectors(const std::vector<Detector>& detectors) { Detectors_ = detectors; }
+  void SetDetectors(const std::vector<Detector>& detectors) override { Detectors_ = detectors; }
   /// The readings of the last Solve (one per detector; empty without detectors).
   const std::vector<DetectorReading>& GetDetectorReadings() const { return Readings_; }
   /**
@@ -122,7 +159,7 @@ public:
    * hierarchies (SetValuesOnlySetup), "unchanged" when every rank's matrix
    * values equal the last Solve's (a relight: the hierarchies are kept,
    * only the right-hand side is new); iterations and residuals are the same
-   * on every rank.
+   * on every rank. (The interface's Solve on a TetMesh this solver builds.)
    */
   void Solve(const std::vector<double>& points, const std::vector<PointKey>& keys,
     const std::vector<int>& tets, const OpticalProperties& material,
@@ -161,9 +198,15 @@ private:
     Fresh       ///< set up from scratch
   };
   // The phases of Solve (each collective).
+  void SolvePiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
+    const OpticalProperties& material, const std::vector<double>& irradiance,
+    std::vector<double>& fluence, SolverReport& report);
   void CheckPiece(const std::vector<double>& points, const std::vector<PointKey>& keys,
     const std::vector<int>& tets, const OpticalProperties& material,
     const std::vector<double>& irradiance) const;
+  void CheckPiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
+    const OpticalProperties& material, const std::vector<double>& irradiance) const;
+  bool HasTets() const { return Mesh_->GetNumberOfTets() > 0; }
   void AssembleLocal(const OpticalProperties& material, const std::vector<double>& irradiance,
     DiffusionSystem& system);
   void AddBoundaryTerms(const OpticalProperties& material, const std::vector<double>& irradiance,
@@ -177,15 +220,11 @@ private:
   void ReadOuts(const OpticalProperties& material, const std::vector<double>& irradiance,
     const std::vector<double>& fluence, const std::array<double, NumberOfChannels>& localSourcePower);
   void FillStatistics(SolverReport& report) const;
-  void BuildGeometry(const std::vector<double>& points, const std::vector<PointKey>& keys,
-    const std::vector<int>& tets);
+  void BuildGeometry(const TetMesh* mesh, const std::vector<PointKey>& keys);
 
   MPI_Comm Comm_;
   std::string Name_;
   bool Fem_ = false;
-  double RelTol_ = 1e-6;
-  int MaxIter_ = 2000;
-  bool WarmStart_ = true;
   int NumberOfThreads_ = 0;
   BoomerAMGOptions Options_ = BoomerAMGOptions::Tuned();
   bool OptionsChanged_ = false;
@@ -197,10 +236,16 @@ private:
 
   // The geometry of the last Solve and what was derived from it.
   bool HaveGeometry_ = false;
-  std::vector<double> Points_;
   std::vector<PointKey> Keys_;
+  std::uint64_t Revision_ = 0;  ///< of the mesh the numbering is of (0: no tets)
+  /// The piece of the Solve in progress (the caller's or OwnMesh_; EmptyMesh_
+  /// without tets): valid during Solve only.
+  const TetMesh* Mesh_ = &EmptyMesh_;
+  TetMesh EmptyMesh_;
+  /// The arrays of the last array Solve and the mesh built from them.
+  std::vector<double> Points_;
   std::vector<int> Tets_;
-  TetMesh Mesh_; ///< the owned tets with the local points (no tets: unused)
+  TetMesh OwnMesh_;
   TetGeometryCache GeometryCache_;
   DistributedNumbering Numbering_;
   std::vector<char> PhysicalFace_; ///< per local boundary triangle of Mesh_
