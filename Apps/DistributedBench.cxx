@@ -26,6 +26,7 @@
 #include "Detectors.h"
 #include "DistributedVertexSolver.h"
 #include "Error.h"
+#include "HypreSolver.h" // BoomerAMGOptions, EnsureHypreInitialized
 
 #include <malloc.h>
 #include <omp.h>
@@ -216,7 +217,7 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
   Result result;
   {
     translucency::DistributedVertexSolver solver(comm, solverName);
-    solver.SetAMGOptions(options);
+    solver.SetLinearSolverOptions(options.ToOptions());
     solver.SetRelTol(tol);
     solver.SetMaxIter(1000);
     solver.SetNumberOfThreads(threads);

@@ -3,7 +3,7 @@
 
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
 #include "DiffusionFrontEnd.h"
-#include "DistributedVertexSolver.h" // MakeCommunicator: the MPI side of translucency::Communicator
+#include "HypreSolver.h" // MakeCommunicator: the MPI side of translucency::Communicator
 #include "Error.h"
 #include "vtkTranslucencyMPI.h"
 #include "vtkTranslucencyMeshConversion.h"

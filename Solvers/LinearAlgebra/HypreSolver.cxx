@@ -7,7 +7,9 @@
 #include <HYPRE_parcsr_ls.h>
 #include <_hypre_parcsr_ls.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <limits>
 #include <mutex>
 #include <numeric>
 #include <sstream>
@@ -77,6 +79,64 @@ void EnsureHypreInitialized()
   });
 }
 
+const MPI_Comm* GetSelfCommunicator()
+{
+  static const MPI_Comm self = MPI_COMM_SELF;
+  return &self;
+}
+
+const MPI_Comm* GetWorldCommunicator()
+{
+  static const MPI_Comm world = MPI_COMM_WORLD;
+  return &world;
+}
+
+MPI_Comm GetMPIComm(const Communicator& comm)
+{
+  EnsureHypreInitialized();
+  return comm.IsMPI() ? *static_cast<const MPI_Comm*>(comm.GetHandle()) : MPI_COMM_SELF;
+}
+
+Communicator MakeCommunicator(const MPI_Comm* comm)
+{
+  EnsureHypreInitialized();
+  int rank = 0, size = 1;
+  MPI_Comm_rank(*comm, &rank);
+  MPI_Comm_size(*comm, &size);
+  return Communicator(comm, rank, size);
+}
+
+SolverOptions BoomerAMGOptions::ToOptions() const
+{
+  return { { "amg-coarsening", static_cast<double>(CoarsenType) },
+    { "amg-interpolation", static_cast<double>(InterpType) },
+    { "amg-pmax", static_cast<double>(PMaxElmts) }, { "amg-strong-threshold", StrongThreshold },
+    { "amg-relaxation", static_cast<double>(RelaxType) },
+    { "amg-sweeps", static_cast<double>(NumSweeps) },
+    { "amg-aggressive-levels", static_cast<double>(AggNumLevels) },
+    { "amg-aggressive-interpolation", static_cast<double>(AggInterpType) } };
+}
+
+void HypreBoomerAMGPCG::SetOptions(const SolverOptions& options)
+{
+  const std::string who = "cg/boomeramg";
+  BoomerAMGOptions o = Options_;
+  options.ReadInteger(who, "amg-coarsening", 0, "a BoomerAMG coarsening code (10 = HMIS)", o.CoarsenType);
+  options.ReadInteger(who, "amg-interpolation", 0, "a BoomerAMG interpolation code (6 = ext+i)", o.InterpType);
+  options.ReadInteger(who, "amg-pmax", 0, "interpolation entries per row, >= 0", o.PMaxElmts);
+  options.ReadNumber(who, "amg-strong-threshold", 0.0, "the strength threshold, in [0, 1)", o.StrongThreshold);
+  options.ReadInteger(who, "amg-relaxation", 0, "a BoomerAMG relaxation code", o.RelaxType);
+  options.ReadInteger(who, "amg-sweeps", 1, "sweeps, >= 1", o.NumSweeps);
+  options.ReadInteger(who, "amg-aggressive-levels", 0, "levels, >= 0", o.AggNumLevels);
+  options.ReadInteger(who, "amg-aggressive-interpolation", 0, "a BoomerAMG interpolation code", o.AggInterpType);
+  if (!(o.StrongThreshold < 1.0))
+  {
+    throw Error(who + ": option amg-strong-threshold = " + std::to_string(o.StrongThreshold) +
+      " is invalid: the strength threshold, in [0, 1)");
+  }
+  Options_ = o;
+}
+
 struct HypreBoomerAMGPCG::Handles
 {
   HYPRE_IJMatrix A = nullptr;
@@ -111,12 +171,16 @@ void HypreBoomerAMGPCG::Free()
   if (H_->X)
     HYPRE_IJVectorDestroy(H_->X);
   *H_ = Handles();
+  Places_.clear();
+  PlaceOffsets_.clear();
+  PlaceColumns_.clear();
 }
 
 void HypreBoomerAMGPCG::Setup(
   int rowBegin, int rowEnd, const int* rowOffsets, const int* columns, const double* values)
 {
   Free();
+  const double start = MPI_Wtime();
   RowBegin_ = rowBegin;
   RowEnd_ = rowEnd;
   const int rows = rowEnd - rowBegin;
@@ -139,11 +203,95 @@ void HypreBoomerAMGPCG::Setup(
   Check(HYPRE_IJMatrixSetDiagOffdSizes(h.A, diag.data(), offd.data()), "matrix sizes");
   Check(HYPRE_IJMatrixInitialize(h.A), "matrix initialisation");
   const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
-  std::vector<HYPRE_BigInt> cols(columns, columns + nnz);
-  Check(HYPRE_IJMatrixSetValues(h.A, rows, sizes.data(), h.Rows.data(), cols.data(), values),
-    "setting the matrix values");
+  if (rows > 0)
+  {
+    std::vector<HYPRE_BigInt> cols(columns, columns + nnz);
+    Check(HYPRE_IJMatrixSetValues(h.A, rows, sizes.data(), h.Rows.data(), cols.data(), values),
+      "setting the matrix values");
+  }
   Check(HYPRE_IJMatrixAssemble(h.A), "matrix assembly");
+  const double assembled = MPI_Wtime();
+  MatrixMilliseconds_ = 1000.0 * (assembled - start);
   BuildSolver();
+  HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
+}
+
+void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, const double* values)
+{
+  Handles& h = *H_;
+  if (!h.A || !h.PCG)
+  {
+    throw Error("hypre-amg: UpdateValues() called before Setup()");
+  }
+  const double start = MPI_Wtime();
+  const int rows = RowEnd_ - RowBegin_;
+  // The new values go straight into the assembled ParCSR matrix (the fine
+  // level of the kept hierarchy): each entry's place in the diagonal or
+  // off-diagonal block is found once per pattern, then every update is a
+  // scatter. (Re-initialising a matrix made with SetDiagOffdSizes and
+  // setting its values through the IJ interface does not give the new
+  // matrix in hypre 2.26: TestDistributedFamily's (2A)^-1 = A^-1 / 2.)
+  hypre_ParCSRMatrix* a = nullptr;
+  HYPRE_IJMatrixGetObject(h.A, reinterpret_cast<void**>(&a));
+  hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(a);
+  hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(a);
+  const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
+  const bool samePattern = Places_.size() == nnz &&
+    std::equal(rowOffsets, rowOffsets + rows + 1, PlaceOffsets_.begin(), PlaceOffsets_.end()) &&
+    std::equal(columns, columns + nnz, PlaceColumns_.begin(), PlaceColumns_.end());
+  if (!samePattern)
+  {
+    Places_.clear();
+    const HYPRE_Int* di = hypre_CSRMatrixI(diag);
+    const HYPRE_Int* dj = hypre_CSRMatrixJ(diag);
+    const HYPRE_Int* oi = hypre_CSRMatrixI(offd);
+    const HYPRE_Int* oj = hypre_CSRMatrixJ(offd);
+    const HYPRE_BigInt* colMap = hypre_ParCSRMatrixColMapOffd(a);
+    const HYPRE_BigInt firstColumn = hypre_ParCSRMatrixFirstColDiag(a);
+    const HYPRE_BigInt lastColumn = firstColumn + hypre_CSRMatrixNumCols(diag) - 1;
+    std::vector<long long> places(nnz);
+    for (int r = 0; r < rows; ++r)
+    {
+      for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
+      {
+        const HYPRE_BigInt column = columns[k];
+        long long place = std::numeric_limits<long long>::min();
+        if (column >= firstColumn && column <= lastColumn)
+        {
+          for (HYPRE_Int q = di[r]; q < di[r + 1]; ++q)
+            if (dj[q] == column - firstColumn)
+              place = q;
+        }
+        else if (oi && colMap)
+        {
+          for (HYPRE_Int q = oi[r]; q < oi[r + 1]; ++q)
+            if (colMap[oj[q]] == column)
+              place = -1 - static_cast<long long>(q);
+        }
+        if (place == std::numeric_limits<long long>::min())
+        {
+          throw Error("hypre-amg: UpdateValues(): entry (" + std::to_string(RowBegin_ + r) + ", " +
+            std::to_string(column) + ") is not in the matrix of the last Setup() (a changed pattern)");
+        }
+        places[k] = place;
+      }
+    }
+    Places_ = std::move(places);
+    PlaceOffsets_.assign(rowOffsets, rowOffsets + rows + 1);
+    PlaceColumns_.assign(columns, columns + nnz);
+  }
+  HYPRE_Complex* diagData = hypre_CSRMatrixData(diag);
+  HYPRE_Complex* offdData = hypre_CSRMatrixData(offd);
+  for (std::size_t k = 0; k < nnz; ++k)
+  {
+    const long long place = Places_[k];
+    if (place >= 0)
+      diagData[place] = values[k];
+    else
+      offdData[-1 - place] = values[k];
+  }
+  MatrixMilliseconds_ = 1000.0 * (MPI_Wtime() - start);
+  HierarchyMilliseconds_ = 0.0;
 }
 
 void HypreBoomerAMGPCG::SetupAddTo(int rowBegin, int rowEnd, const std::vector<int>& rows,

@@ -46,33 +46,6 @@ const bool Registered = [] {
 
 } // namespace
 
-const MPI_Comm* GetSelfCommunicator()
-{
-  static const MPI_Comm self = MPI_COMM_SELF;
-  return &self;
-}
-
-const MPI_Comm* GetWorldCommunicator()
-{
-  static const MPI_Comm world = MPI_COMM_WORLD;
-  return &world;
-}
-
-MPI_Comm GetMPIComm(const Communicator& comm)
-{
-  EnsureHypreInitialized();
-  return comm.IsMPI() ? *static_cast<const MPI_Comm*>(comm.GetHandle()) : MPI_COMM_SELF;
-}
-
-Communicator MakeCommunicator(const MPI_Comm* comm)
-{
-  EnsureHypreInitialized();
-  int rank = 0, size = 1;
-  MPI_Comm_rank(*comm, &rank);
-  MPI_Comm_size(*comm, &size);
-  return Communicator(comm, rank, size);
-}
-
 DistributedVertexSolver::DistributedVertexSolver(const std::string& discretization)
   : DistributedVertexSolver(GetMPIComm(Communicator()), discretization)
 {
@@ -135,9 +108,9 @@ bool DistributedVertexSolver::GetTalliedReadouts(TalliedReadouts& readouts) cons
   return true;
 }
 
-void DistributedVertexSolver::SetAMGOptions(const BoomerAMGOptions& options)
+void DistributedVertexSolver::SetLinearSolverOptions(const SolverOptions& options)
 {
-  Options_ = options;
+  LinearOptions_ = options;
   OptionsChanged_ = true;
 }
 
@@ -202,42 +175,177 @@ void DistributedVertexSolver::BuildGeometry(const TetMesh* mesh, const std::vect
   }
   AgreeOnError(Comm_, error);
 
-  // What goes to hypre: the rows of the vertices of owned tets.
+  BuildOwnedRows();
+  Keys_ = keys;
+  Revision_ = HasTets() ? Mesh_->GetGeometryRevision() : 0;
+  HaveGeometry_ = true;
+}
+
+void DistributedVertexSolver::BuildOwnedRows()
+{
+  // Whole owned rows, handed to hypre once (issue 32): every local CSR
+  // entry of a used point goes to its row's owner, this rank's own into
+  // place directly, the others' (partition rows) sent once per assembly
+  // as values in a fixed order; the pattern and the places are built here,
+  // once per mesh. Every rank calls the exchanges (an empty piece too).
+  const int rank = [this] {
+    int r = 0;
+    MPI_Comm_rank(Comm_, &r);
+    return r;
+  }();
+  int ranks = 1;
+  MPI_Comm_size(Comm_, &ranks);
   const int owned = Numbering_.GetNumberOfOwnedRows();
+  const int rowBegin = Numbering_.GetRowBegin();
+  const std::size_t numPoints = Used_.size();
   FirstLocal_.assign(static_cast<std::size_t>(owned), -1);
-  RowSizeHints_.assign(static_cast<std::size_t>(owned), 1);
-  SendRows_.clear();
-  SendSizes_.clear();
-  SendColumns_.clear();
-  SendPositions_.clear();
   const std::vector<int>& offsets = Mesh_->GetRowOffsets();
   const std::vector<int>& columns = Mesh_->GetColumnIndices();
+
+  // This rank's entries (row, column, local CSR position), and per owner
+  // rank the (row, column) pairs of the entries it sends.
+  std::vector<std::vector<int>> outgoing(static_cast<std::size_t>(ranks));
+  std::vector<std::vector<int>> outgoingPositions(static_cast<std::size_t>(ranks));
+  std::vector<int> localRows, localColumns;
+  LocalPositions_.clear();
   for (std::size_t i = 0; i < numPoints && HasTets(); ++i)
   {
     if (!Used_[i])
       continue;
     const int row = Numbering_.GetRow(static_cast<int>(i));
-    const int length = offsets[i + 1] - offsets[i];
-    if (Numbering_.IsOwned(static_cast<int>(i)))
+    const int owner = Numbering_.GetOwner(static_cast<int>(i));
+    if (owner == rank)
     {
-      int& first = FirstLocal_[static_cast<std::size_t>(row - Numbering_.GetRowBegin())];
+      int& first = FirstLocal_[static_cast<std::size_t>(row - rowBegin)];
       if (first < 0)
         first = static_cast<int>(i);
-      // A shared row gets entries from other ranks too: room for them.
-      int& hint = RowSizeHints_[static_cast<std::size_t>(row - Numbering_.GetRowBegin())];
-      hint = std::max(hint, length + 8);
     }
-    SendRows_.push_back(row);
-    SendSizes_.push_back(length);
     for (int k = offsets[i]; k < offsets[i + 1]; ++k)
     {
-      SendColumns_.push_back(Numbering_.GetRow(columns[static_cast<std::size_t>(k)]));
-      SendPositions_.push_back(k);
+      const int column = Numbering_.GetRow(columns[static_cast<std::size_t>(k)]);
+      if (owner == rank)
+      {
+        localRows.push_back(row - rowBegin);
+        localColumns.push_back(column);
+        LocalPositions_.push_back(k);
+      }
+      else
+      {
+        outgoing[static_cast<std::size_t>(owner)].push_back(row);
+        outgoing[static_cast<std::size_t>(owner)].push_back(column);
+        outgoingPositions[static_cast<std::size_t>(owner)].push_back(k);
+      }
     }
   }
-  Keys_ = keys;
-  Revision_ = HasTets() ? Mesh_->GetGeometryRevision() : 0;
-  HaveGeometry_ = true;
+  SendCounts_.assign(static_cast<std::size_t>(ranks), 0);
+  SendPositionsOff_.clear();
+  for (int r = 0; r < ranks; ++r)
+  {
+    SendCounts_[r] = static_cast<int>(outgoingPositions[r].size());
+    SendPositionsOff_.insert(
+      SendPositionsOff_.end(), outgoingPositions[r].begin(), outgoingPositions[r].end());
+  }
+  RecvCounts_.assign(static_cast<std::size_t>(ranks), 0);
+  MPI_Alltoall(SendCounts_.data(), 1, MPI_INT, RecvCounts_.data(), 1, MPI_INT, Comm_);
+  std::vector<int> pairCounts(static_cast<std::size_t>(ranks)), pairDispls(ranks + 1, 0),
+    recvPairCounts(static_cast<std::size_t>(ranks)), recvPairDispls(ranks + 1, 0);
+  std::vector<int> sendPairs;
+  for (int r = 0; r < ranks; ++r)
+  {
+    pairCounts[r] = 2 * SendCounts_[r];
+    recvPairCounts[r] = 2 * RecvCounts_[r];
+    pairDispls[r + 1] = pairDispls[r] + pairCounts[r];
+    recvPairDispls[r + 1] = recvPairDispls[r] + recvPairCounts[r];
+    sendPairs.insert(sendPairs.end(), outgoing[r].begin(), outgoing[r].end());
+  }
+  outgoing = {};
+  std::vector<int> recvPairs(static_cast<std::size_t>(recvPairDispls[ranks]));
+  MPI_Alltoallv(sendPairs.data(), pairCounts.data(), pairDispls.data(), MPI_INT, recvPairs.data(),
+    recvPairCounts.data(), recvPairDispls.data(), MPI_INT, Comm_);
+  sendPairs = {};
+
+  // The owned rows' pattern: per row the sorted distinct columns of the
+  // local and received entries; every entry's place in it.
+  const std::size_t numLocal = localRows.size(), numReceived = recvPairs.size() / 2;
+  std::vector<int> entryRow(numLocal + numReceived), entryColumn(numLocal + numReceived);
+  for (std::size_t e = 0; e < numLocal; ++e)
+  {
+    entryRow[e] = localRows[e];
+    entryColumn[e] = localColumns[e];
+  }
+  for (std::size_t e = 0; e < numReceived; ++e)
+  {
+    entryRow[numLocal + e] = recvPairs[2 * e] - rowBegin;
+    entryColumn[numLocal + e] = recvPairs[2 * e + 1];
+  }
+  localRows = {};
+  localColumns = {};
+  recvPairs = {};
+  std::vector<int> rowStart(static_cast<std::size_t>(owned) + 1, 0);
+  for (int r : entryRow)
+    ++rowStart[static_cast<std::size_t>(r) + 1];
+  for (int r = 0; r < owned; ++r)
+    rowStart[r + 1] += rowStart[r];
+  std::vector<int> byRow(entryRow.size());
+  {
+    std::vector<int> fill(rowStart.begin(), rowStart.end() - 1);
+    for (std::size_t e = 0; e < entryRow.size(); ++e)
+      byRow[static_cast<std::size_t>(fill[static_cast<std::size_t>(entryRow[e])]++)] =
+        static_cast<int>(e);
+  }
+  Targets_.assign(entryRow.size(), -1);
+  OwnedOffsets_.assign(static_cast<std::size_t>(owned) + 1, 0);
+  OwnedColumns_.clear();
+  OwnedColumns_.reserve(entryRow.size() / 2 + 1);
+  std::vector<int> row;
+  for (int r = 0; r < owned; ++r)
+  {
+    row.clear();
+    for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
+      row.push_back(entryColumn[static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)])]);
+    std::sort(row.begin(), row.end());
+    row.erase(std::unique(row.begin(), row.end()), row.end());
+    const int base = static_cast<int>(OwnedColumns_.size());
+    OwnedColumns_.insert(OwnedColumns_.end(), row.begin(), row.end());
+    OwnedOffsets_[r + 1] = static_cast<int>(OwnedColumns_.size());
+    for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
+    {
+      const std::size_t e = static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)]);
+      Targets_[e] = base +
+        static_cast<int>(std::lower_bound(row.begin(), row.end(), entryColumn[e]) - row.begin());
+    }
+  }
+}
+
+void DistributedVertexSolver::GatherOwnedRows(
+  const std::vector<double>& local, std::vector<double>& ownedValues) const
+{
+  // This rank's entries into place, the partition rows' partial values sent
+  // to their owners in the order BuildOwnedRows fixed (one exchange).
+  int ranks = 1;
+  MPI_Comm_size(Comm_, &ranks);
+  ownedValues.assign(OwnedColumns_.size(), 0.0);
+  const std::size_t numLocal = LocalPositions_.size();
+  for (std::size_t e = 0; e < numLocal; ++e)
+    ownedValues[static_cast<std::size_t>(Targets_[e])] +=
+      local[static_cast<std::size_t>(LocalPositions_[e])];
+  std::vector<double> send(SendPositionsOff_.size());
+  for (std::size_t e = 0; e < send.size(); ++e)
+    send[e] = local[static_cast<std::size_t>(SendPositionsOff_[e])];
+  std::vector<int> sendDispls(ranks + 1, 0), recvDispls(ranks + 1, 0);
+  for (int r = 0; r < ranks; ++r)
+  {
+    sendDispls[r + 1] = sendDispls[r] + SendCounts_[r];
+    recvDispls[r + 1] = recvDispls[r] + RecvCounts_[r];
+  }
+  std::vector<double> received(static_cast<std::size_t>(recvDispls[ranks]));
+  if (ranks > 1)
+  {
+    MPI_Alltoallv(send.data(), SendCounts_.data(), sendDispls.data(), MPI_DOUBLE, received.data(),
+      RecvCounts_.data(), recvDispls.data(), MPI_DOUBLE, Comm_);
+  }
+  for (std::size_t e = 0; e < received.size(); ++e)
+    ownedValues[static_cast<std::size_t>(Targets_[numLocal + e])] += received[e];
 }
 
 void DistributedVertexSolver::CheckPiece(const std::vector<double>& points,
@@ -431,10 +539,17 @@ void DistributedVertexSolver::SetUpChannel(int c)
   FullIterations_[c] = -1; // set by this Solve's PCG
   try
   {
-    if (!Channels_[c] || OptionsChanged_)
-      Channels_[c] = std::make_unique<HypreBoomerAMGPCG>(Comm_, Options_);
-    Channels_[c]->SetupAddTo(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), SendRows_,
-      SendSizes_, SendColumns_, Contributions_[c], RowSizeHints_.data());
+    // From the linear-solver registry (its distributed variant), not hypre itself.
+    const std::string name = LinearSolverName();
+    if (!Channels_[c] || OptionsChanged_ || name != ChannelLinear_[c])
+    {
+      ChannelLinear_[c].clear();
+      Channels_[c] = CreateDistributedLinearSolver(name, MakeCommunicator(&Comm_));
+      Channels_[c]->SetOptions(LinearOptions_);
+      ChannelLinear_[c] = name;
+    }
+    Channels_[c]->Setup(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), OwnedOffsets_.data(),
+      OwnedColumns_.data(), Contributions_[c].data());
   }
   catch (const Error& e)
   {
@@ -454,15 +569,17 @@ DistributedVertexSolver::SetUpMatrices(
   std::string error;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    std::vector<double> values(SendPositions_.size());
-    for (std::size_t k = 0; k < SendPositions_.size(); ++k)
-      values[k] = system.Values[c][static_cast<std::size_t>(SendPositions_[k])];
-    int changed = (!Channels_[c] || OptionsChanged_ || values != Contributions_[c]) ? 1 : 0;
+    // Another linear solver (SetLinearSolver) rebuilds the channel.
+    const bool renamed = LinearSolverName() != ChannelLinear_[c];
+    std::vector<double> values;
+    GatherOwnedRows(system.Values[c], values);
+    int changed =
+      (!Channels_[c] || OptionsChanged_ || renamed || values != Contributions_[c]) ? 1 : 0;
     int anyChanged = 0;
     MPI_Allreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, Comm_);
     system.Values[c] = {};
     // Values only when every rank can (the same branch on every rank).
-    int canUpdate = sameMesh && Channels_[c] && !OptionsChanged_ && !ForceFull_[c] &&
+    int canUpdate = sameMesh && Channels_[c] && !OptionsChanged_ && !renamed && !ForceFull_[c] &&
         values.size() == Contributions_[c].size()
       ? 1
       : 0;
@@ -472,7 +589,7 @@ DistributedVertexSolver::SetUpMatrices(
     {
       try
       {
-        Channels_[c]->UpdateValuesAddTo(SendRows_, SendSizes_, SendColumns_, values);
+        Channels_[c]->UpdateValues(OwnedOffsets_.data(), OwnedColumns_.data(), values.data());
       }
       catch (const Error& e)
       {
@@ -614,8 +731,8 @@ void DistributedVertexSolver::FillStatistics(SolverReport& report) const
   report.NumberOfUnknowns = Numbering_.GetNumberOfRows();
   report.NumberOfNonZeros = Channels_[0] ? Channels_[0]->GetNumberOfNonZeros() : 0;
   std::size_t bytes = Numbering_.GetMemoryBytes() +
-    (SendRows_.capacity() + SendSizes_.capacity() + SendColumns_.capacity() +
-      SendPositions_.capacity()) * sizeof(int);
+    (OwnedOffsets_.capacity() + OwnedColumns_.capacity() + LocalPositions_.capacity() +
+      Targets_.capacity() + SendPositionsOff_.capacity()) * sizeof(int);
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     bytes += Contributions_[c].capacity() * sizeof(double) + Solution_[c].capacity() * sizeof(double);
@@ -624,7 +741,7 @@ void DistributedVertexSolver::FillStatistics(SolverReport& report) const
       // The hierarchy below the fine level with its interpolation, the two IJ
       // vectors, and the fine matrix (~ the entries sent, 12 bytes each).
       bytes += Channels_[c]->GetMemoryBytes() + static_cast<std::size_t>(owned) * 2 * sizeof(double) +
-        SendColumns_.size() * (sizeof(int) + sizeof(double));
+        OwnedColumns_.size() * (sizeof(int) + sizeof(double));
     }
   }
   report.MemoryBytes = bytes;
@@ -716,7 +833,7 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
     threads = std::make_unique<ScopedRankThreads>(Comm_);
   }
   report.Solver = Name_;
-  report.LinearSolver = "hypre-amg (distributed)";
+  report.LinearSolver = LinearSolverName() + " (distributed)";
   report.Assembly = "full";
 
   // 0. The piece's sizes.

@@ -41,7 +41,8 @@
 #include "DiffusionSolver.h"
 #include "DistributedNumbering.h"
 #include "DistributedSources.h"
-#include "HypreSolver.h"
+#include "DistributedLinearSolver.h"
+#include "HypreSolver.h" // GetMPIComm, MakeCommunicator: the MPI side of Communicator
 #include "OpticalProperties.h"
 #include "TetGeometry.h"
 #include "TetMesh.h"
@@ -55,16 +56,6 @@
 
 namespace translucency
 {
-
-/// The MPI communicator of `comm` (MPI_COMM_SELF for none, initialising MPI
-/// if nobody has).
-MPI_Comm GetMPIComm(const Communicator& comm);
-/// The Communicator of `*comm` (its rank and size; the MPI_Comm must outlive
-/// every user of the result). Initialises MPI if nobody has.
-Communicator MakeCommunicator(const MPI_Comm* comm);
-/// Process-lifetime MPI_COMM_SELF and MPI_COMM_WORLD, for MakeCommunicator.
-const MPI_Comm* GetSelfCommunicator();
-const MPI_Comm* GetWorldCommunicator();
 
 class DistributedVertexSolver : public DiffusionSolver
 {
@@ -102,7 +93,7 @@ public:
    * Values-only set-up (default on): when the mesh is the last Solve's and
    * only the matrix values changed (a paint), the new values go into the
    * same hypre matrices and the BoomerAMG hierarchies are kept
-   * (HypreBoomerAMGPCG::UpdateValuesAddTo): no set-up, PCG still converges
+   * (DistributedLinearSolver::UpdateValues): no set-up, PCG still converges
    * to RelTol on the new matrix. A channel whose PCG then needs more than
    * twice the iterations of its last solve after a full set-up (at least
    * 10) gets a full set-up at the next change. A channel whose PCG does not
@@ -145,9 +136,14 @@ public:
   {
     return SourcePower_;
   }
-  /// BoomerAMG settings (default BoomerAMGOptions::Tuned()); a change
-  /// rebuilds the hierarchy at the next Solve.
-  void SetAMGOptions(const BoomerAMGOptions& options);
+  /**
+   * The linear solver: DiffusionSolver::SetLinearSolver's name or
+   * composition of the registry ("" = "cg/boomeramg", BoomerAMG-PCG with
+   * BoomerAMGOptions::Tuned()), created through CreateDistributedLinearSolver
+   * with these options (e.g. BoomerAMGOptions::ToOptions(); default none); a
+   * change rebuilds the hierarchy at the next Solve.
+   */
+  void SetLinearSolverOptions(const SolverOptions& options);
 
   /**
    * Collective. points: 3 per local point (mm); keys: one per local point;
@@ -221,13 +217,23 @@ private:
     const std::vector<double>& fluence, const std::array<double, NumberOfChannels>& localSourcePower);
   void FillStatistics(SolverReport& report) const;
   void BuildGeometry(const TetMesh* mesh, const std::vector<PointKey>& keys);
+  void BuildOwnedRows();
+  /// The owned rows' values (OwnedColumns_ order) of the local CSR values
+  /// `local`, with the other ranks' partial rows (collective).
+  void GatherOwnedRows(const std::vector<double>& local, std::vector<double>& ownedValues) const;
 
   MPI_Comm Comm_;
   std::string Name_;
   bool Fem_ = false;
   int NumberOfThreads_ = 0;
-  BoomerAMGOptions Options_ = BoomerAMGOptions::Tuned();
+  SolverOptions LinearOptions_;
   bool OptionsChanged_ = false;
+  /// The linear solver each channel was made with ("" = none yet).
+  std::array<std::string, NumberOfChannels> ChannelLinear_;
+  std::string LinearSolverName() const
+  {
+    return LinearSolver_.empty() ? std::string("cg/boomeramg") : LinearSolver_;
+  }
   bool ValuesOnly_ = true;
   /// Per channel: iterations of the last solve after a full set-up, and
   /// whether the next change of values must rebuild the hierarchy.
@@ -249,17 +255,20 @@ private:
   TetGeometryCache GeometryCache_;
   DistributedNumbering Numbering_;
   std::vector<char> PhysicalFace_; ///< per local boundary triangle of Mesh_
-  std::vector<int> RowSizeHints_;  ///< per owned row
   std::vector<char> Used_;         ///< per local point: a vertex of an owned tet
   std::vector<int> FirstLocal_;    ///< per owned row: its first local point
-  /// The local matrix entries sent to hypre: rows (global), entries per
-  /// row, columns (global) and their positions in the local CSR values.
-  std::vector<int> SendRows_, SendSizes_, SendColumns_, SendPositions_;
+  /// The owned rows handed to hypre whole (CSR, global sorted columns), and
+  /// where each local CSR entry goes: this rank's entries (LocalPositions_
+  /// in the local CSR, Targets_[e] in the owned rows), the partition rows'
+  /// entries sent to their owners (SendPositionsOff_, SendCounts_ per rank),
+  /// and the received ones (RecvCounts_ per rank, Targets_[local + e]).
+  std::vector<int> OwnedOffsets_, OwnedColumns_;
+  std::vector<int> LocalPositions_, Targets_, SendPositionsOff_, SendCounts_, RecvCounts_;
 
   // The matrices' local contributions of the last Solve, their hierarchies
   // and solutions (owned rows).
   std::array<std::vector<double>, NumberOfChannels> Contributions_;
-  std::array<std::unique_ptr<HypreBoomerAMGPCG>, NumberOfChannels> Channels_;
+  std::array<std::unique_ptr<DistributedLinearSolver>, NumberOfChannels> Channels_;
   std::array<std::vector<double>, NumberOfChannels> Solution_;
   Timings Timings_;
 

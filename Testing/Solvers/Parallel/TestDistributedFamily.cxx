@@ -6,6 +6,7 @@
 // tolerance (the independent reason: the serial solver on the same tets).
 #include "DiffusionFrontEnd.h"
 #include "DiffusionSolverFactory.h"
+#include "DistributedLinearSolver.h"
 #include "DistributedVertexSolver.h"
 #include "TestMeshes.h"
 #include "TestProblems.h"
@@ -232,4 +233,83 @@ TEST(DistributedFamily, NeverANonConvergedResult)
     front.Solve(s.Mesh, s.Material, s.Irradiance, DiffusionProblem(), SolveRequest(), result);
   }),
     "needs the points' global keys"));
+}
+
+// hypre comes from the linear-solver registry: "cg/boomeramg" (alias
+// "hypre-amg") has a distributed variant, the other compositions not.
+TEST(DistributedFamily, BoomerAMGCGIsARegistryComposition)
+{
+  auto solver = CreateDistributedLinearSolver("cg/boomeramg", Self());
+  EXPECT_EQ(solver->GetName(), "cg/boomeramg");
+  EXPECT_EQ(CreateDistributedLinearSolver("HYPRE-AMG", Self())->GetName(), "cg/boomeramg");
+  EXPECT_EQ(ErrorMessage([] { CreateDistributedLinearSolver("cg/jacobi", Self()); }),
+    "linear solver 'cg/jacobi' has no distributed variant (those with one: cg/boomeramg)");
+  EXPECT_TRUE(Contains(ErrorMessage([] { CreateDistributedLinearSolver("gmres", Self()); }),
+    "linear solver 'gmres' has no distributed variant"));
+  // An option it reads is checked.
+  SolverOptions bad;
+  bad.Set("amg-strong-threshold", 1.5);
+  EXPECT_TRUE(Contains(ErrorMessage([&] { solver->SetOptions(bad); }), "amg-strong-threshold"));
+
+  // A 1-D Laplacian (+ identity) of 60 rows on one rank: the solve meets its
+  // tolerance on the residual computed here; after a values-only update
+  // (the diagonal 3 -> 3.3, the hierarchy kept: a paint-sized change) the
+  // solve meets it on the new matrix, computed here too.
+  const int n = 60;
+  std::vector<int> offsets(1, 0), columns;
+  std::vector<double> values, b(n);
+  for (int i = 0; i < n; ++i)
+  {
+    for (int j = std::max(0, i - 1); j <= std::min(n - 1, i + 1); ++j)
+    {
+      columns.push_back(j);
+      values.push_back(i == j ? 3.0 : -1.0);
+    }
+    offsets.push_back(static_cast<int>(columns.size()));
+    b[i] = std::sin(0.3 * i) + 1.0;
+  }
+  auto relativeResidual = [&](const std::vector<double>& a, const std::vector<double>& x) {
+    double r2 = 0.0, b2 = 0.0;
+    for (int i = 0; i < n; ++i)
+    {
+      double ax = 0.0;
+      for (int k = offsets[i]; k < offsets[i + 1]; ++k)
+        ax += a[k] * x[columns[k]];
+      r2 += (b[i] - ax) * (b[i] - ax);
+      b2 += b[i] * b[i];
+    }
+    return std::sqrt(r2 / b2);
+  };
+  solver->Setup(0, n, offsets.data(), columns.data(), values.data());
+  std::vector<double> x(n, 0.0), y(n, 0.0);
+  double residual = 1.0;
+  EXPECT_GT(solver->Solve(b.data(), x.data(), false, 1e-12, 100, residual), 0);
+  EXPECT_LE(residual, 1e-12);
+  EXPECT_LE(relativeResidual(values, x), 1e-11);
+  std::vector<double> shifted(values);
+  for (int i = 0; i < n; ++i)
+    for (int k = offsets[i]; k < offsets[i + 1]; ++k)
+      if (columns[k] == i)
+        shifted[k] = 3.3;
+  solver->UpdateValues(offsets.data(), columns.data(), shifted.data());
+  EXPECT_EQ(solver->GetHierarchyMilliseconds(), 0.0); // kept
+  solver->Solve(b.data(), y.data(), false, 1e-12, 100, residual);
+  EXPECT_LE(residual, 1e-12);
+  EXPECT_LE(relativeResidual(shifted, y), 1e-11);
+  EXPECT_GT(relativeResidual(values, y), 1e-2); // the new matrix, not the old one
+  // A pattern change is refused.
+  std::vector<int> moved(columns);
+  moved[1] = 5;
+  EXPECT_TRUE(Contains(
+    ErrorMessage([&] { solver->UpdateValues(offsets.data(), moved.data(), shifted.data()); }),
+    "not in the matrix of the last Setup"));
+
+  // The distributed diffusion solver names the composition it used.
+  const Scene s = MakeScene();
+  DiffusionFrontEnd front;
+  front.SetCommunicator(Self());
+  EXPECT_EQ(SolveScene(front, s, s.Irradiance).Report.LinearSolver, "cg/boomeramg (distributed)");
+  front.GetSolver().SetLinearSolver("cg/jacobi");
+  EXPECT_TRUE(Contains(ErrorMessage([&] { SolveScene(front, s, s.Irradiance); }),
+    "linear solver 'cg/jacobi' has no distributed variant"));
 }
