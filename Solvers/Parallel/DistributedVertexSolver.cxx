@@ -13,6 +13,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <time.h>
+
 namespace translucency
 {
 
@@ -28,6 +30,14 @@ inline int LocalIndex(const int* tv, int id)
 double Milliseconds(double since)
 {
   return 1000.0 * (MPI_Wtime() - since);
+}
+
+/// This process's CPU time (ms).
+double CpuMilliseconds()
+{
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return 1000.0 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
 }
 
 /// The registry's distributed variants of divergence and fem, registered
@@ -534,6 +544,7 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
 
 void DistributedVertexSolver::SetUpChannel(int c)
 {
+  const double cpu = CpuMilliseconds();
   std::string error;
   ForceFull_[c] = false;
   FullIterations_[c] = -1; // set by this Solve's PCG
@@ -554,6 +565,14 @@ void DistributedVertexSolver::SetUpChannel(int c)
   catch (const Error& e)
   {
     error = e.what();
+  }
+  // The hierarchy's share of this channel's set-up, in CPU time (the
+  // matrix's share measured in wall time, scaled alike).
+  if (Channels_[c])
+  {
+    const double wall = Channels_[c]->GetMatrixMilliseconds() + Channels_[c]->GetHierarchyMilliseconds();
+    const double share = wall > 0.0 ? Channels_[c]->GetHierarchyMilliseconds() / wall : 1.0;
+    HierarchyCpu_ += share * (CpuMilliseconds() - cpu);
   }
   AgreeOnError(Comm_, error);
 }
@@ -824,6 +843,7 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   std::vector<double>& fluence, SolverReport& report)
 {
   Timings_ = Timings();
+  HierarchyCpu_ = 0.0;
   Readings_.clear();
   report = SolverReport();
   // NumberOfThreads 0: the node's cores shared by its ranks (collective).
@@ -845,6 +865,7 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
 
   // 1. The global identity and boundary, unless the mesh is the last one.
   double start = MPI_Wtime();
+  double cpu = CpuMilliseconds();
   const std::uint64_t revision = mesh ? mesh->GetGeometryRevision() : 0;
   int same = HaveGeometry_ && revision == Revision_ && keys == Keys_ ? 1 : 0;
   int allSame = 0;
@@ -854,12 +875,14 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   {
     BuildGeometry(mesh, keys);
     Timings_.Numbering = Milliseconds(start);
+    Timings_.NumberingCpu = CpuMilliseconds() - cpu;
   }
 
   // 2. The local system: element matrices of the owned tets, boundary terms
   // of the physical faces, interior sources (their load on the rank owning
   // each source's tet, times 4 as every right-hand side: FiniteElement.h).
   start = MPI_Wtime();
+  cpu = CpuMilliseconds();
   DiffusionSystem system;
   AssembleLocal(material, irradiance, system);
   std::vector<double> localRhs(3 * keys.size(), 0.0);
@@ -884,15 +907,21 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
     SetUpMatrices(allSame != 0, system, report.Assembly, hierarchyMs);
   system = DiffusionSystem();
   Timings_.Assembly = Milliseconds(start) - hierarchyMs;
+  Timings_.AssemblyCpu = CpuMilliseconds() - cpu - HierarchyCpu_;
+  Timings_.AMGSetupCpu = HierarchyCpu_;
 
   // 4. PCG per channel (again after a full set-up if a kept hierarchy fails).
   start = MPI_Wtime();
+  cpu = CpuMilliseconds();
+  HierarchyCpu_ = 0.0;
   double retryMs = 0.0;
   std::vector<double> solution;
   SolveChannels(rhs, setup, solution, report, retryMs);
   fluence = Numbering_.FetchFromOwners(Comm_, solution, 3);
   Timings_.Solve = Milliseconds(start) - retryMs;
   Timings_.AMGSetup = hierarchyMs + retryMs;
+  Timings_.SolveCpu = CpuMilliseconds() - cpu - HierarchyCpu_;
+  Timings_.AMGSetupCpu += HierarchyCpu_;
 
   // 5. Detectors and the power balance, summed over the ranks.
   ReadOuts(material, irradiance, fluence, localSourcePower);

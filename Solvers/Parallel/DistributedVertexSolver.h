@@ -176,6 +176,12 @@ public:
     double Assembly = 0.0;
     double AMGSetup = 0.0;
     double Solve = 0.0;
+    /// The same phases in this process's CPU time (ms): the work, whatever
+    /// the machine's load (a rank waiting in MPI may spin, though).
+    double NumberingCpu = 0.0;
+    double AssemblyCpu = 0.0;
+    double AMGSetupCpu = 0.0;
+    double SolveCpu = 0.0;
   };
   const Timings& GetTimings() const { return Timings_; }
   /// Owned rows on this rank and the global number of unknowns.
@@ -271,6 +277,7 @@ private:
   std::array<std::unique_ptr<DistributedLinearSolver>, NumberOfChannels> Channels_;
   std::array<std::vector<double>, NumberOfChannels> Solution_;
   Timings Timings_;
+  double HierarchyCpu_ = 0.0; ///< CPU ms of the hierarchies set up in this Solve
 
   const Sources* Sources_ = nullptr;
   std::vector<Detector> Detectors_;
