@@ -8,6 +8,7 @@
 #include <_hypre_parcsr_ls.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 #include <limits>
 #include <mutex>
@@ -172,8 +173,7 @@ void HypreBoomerAMGPCG::Free()
     HYPRE_IJVectorDestroy(H_->X);
   *H_ = Handles();
   Places_.clear();
-  PlaceOffsets_.clear();
-  PlaceColumns_.clear();
+  PlacePattern_ = 0;
 }
 
 void HypreBoomerAMGPCG::Setup(
@@ -236,10 +236,17 @@ void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, 
   hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(a);
   hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(a);
   const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
-  const bool samePattern = Places_.size() == nnz &&
-    std::equal(rowOffsets, rowOffsets + rows + 1, PlaceOffsets_.begin(), PlaceOffsets_.end()) &&
-    std::equal(columns, columns + nnz, PlaceColumns_.begin(), PlaceColumns_.end());
-  if (!samePattern)
+  // The pattern's fingerprint (FNV-1a of the offsets and columns): a
+  // changed pattern finds its places again (or is refused), without a copy.
+  std::uint64_t fingerprint = 1469598103934665603ull;
+  auto mix = [&fingerprint](int v) {
+    fingerprint = (fingerprint ^ static_cast<std::uint32_t>(v)) * 1099511628211ull;
+  };
+  for (int r = 0; r <= rows; ++r)
+    mix(rowOffsets[r]);
+  for (std::size_t k = 0; k < nnz; ++k)
+    mix(columns[k]);
+  if (Places_.size() != nnz || fingerprint != PlacePattern_)
   {
     Places_.clear();
     const HYPRE_Int* di = hypre_CSRMatrixI(diag);
@@ -249,13 +256,13 @@ void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, 
     const HYPRE_BigInt* colMap = hypre_ParCSRMatrixColMapOffd(a);
     const HYPRE_BigInt firstColumn = hypre_ParCSRMatrixFirstColDiag(a);
     const HYPRE_BigInt lastColumn = firstColumn + hypre_CSRMatrixNumCols(diag) - 1;
-    std::vector<long long> places(nnz);
+    std::vector<int> places(nnz);
     for (int r = 0; r < rows; ++r)
     {
       for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
       {
         const HYPRE_BigInt column = columns[k];
-        long long place = std::numeric_limits<long long>::min();
+        int place = std::numeric_limits<int>::min();
         if (column >= firstColumn && column <= lastColumn)
         {
           for (HYPRE_Int q = di[r]; q < di[r + 1]; ++q)
@@ -266,9 +273,9 @@ void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, 
         {
           for (HYPRE_Int q = oi[r]; q < oi[r + 1]; ++q)
             if (colMap[oj[q]] == column)
-              place = -1 - static_cast<long long>(q);
+              place = -1 - static_cast<int>(q);
         }
-        if (place == std::numeric_limits<long long>::min())
+        if (place == std::numeric_limits<int>::min())
         {
           throw Error("hypre-amg: UpdateValues(): entry (" + std::to_string(RowBegin_ + r) + ", " +
             std::to_string(column) + ") is not in the matrix of the last Setup() (a changed pattern)");
@@ -277,14 +284,13 @@ void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, 
       }
     }
     Places_ = std::move(places);
-    PlaceOffsets_.assign(rowOffsets, rowOffsets + rows + 1);
-    PlaceColumns_.assign(columns, columns + nnz);
+    PlacePattern_ = fingerprint;
   }
   HYPRE_Complex* diagData = hypre_CSRMatrixData(diag);
   HYPRE_Complex* offdData = hypre_CSRMatrixData(offd);
   for (std::size_t k = 0; k < nnz; ++k)
   {
-    const long long place = Places_[k];
+    const int place = Places_[k];
     if (place >= 0)
       diagData[place] = values[k];
     else

@@ -14,6 +14,7 @@
 
 #include <mpi.h>
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -179,8 +180,8 @@ private:
   std::size_t MemoryBytes_ = 0;
   /// UpdateValues: each entry's place in the ParCSR blocks (>= 0 diagonal
   /// block, -1 - k off-diagonal block), found once per Setup.
-  std::vector<long long> Places_;
-  std::vector<int> PlaceOffsets_, PlaceColumns_; ///< the pattern Places_ is of
+  std::vector<int> Places_;
+  std::uint64_t PlacePattern_ = 0; ///< fingerprint of the pattern Places_ is of
 };
 
 /**
