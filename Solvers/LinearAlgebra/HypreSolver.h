@@ -102,39 +102,16 @@ public:
 
   /**
    * Values-only update (collective) after Setup: the same rows and columns,
-   * new values set into the same hypre matrix (HYPRE_IJMatrixSetValues of
-   * whole rows); the hierarchy is kept as in UpdateValuesAddTo. Throws
-   * translucency::Error if there is no Setup to update or hypre refuses an
-   * entry (a changed pattern).
+   * new values written straight into the assembled ParCSR matrix (each
+   * entry's place found once per pattern); the hierarchy is kept: its fine
+   * level is this matrix, so
+   * smoothing and residuals see the new values, the coarse levels and the
+   * smoother's l1 norms are the old matrix's (good while the change is
+   * small, a paint stroke). Throws
+   * translucency::Error if there is no Setup to update or an entry is not in
+   * the matrix (a changed pattern).
    */
   void UpdateValues(const int* rowOffsets, const int* columns, const double* values) override;
-
-  /**
-   * Collective over the communicator: this rank owns rows [rowBegin,
-   * rowEnd) and adds entries to any rows, its own or other ranks'
-   * (HYPRE_IJMatrixAddToValues; hypre sends the off-rank rows to their
-   * owners when the matrix is assembled). Row k of the `rows` list has
-   * sizes[k] entries, (columns, values) from offset sum_{j<k} sizes[j];
-   * rowSizeHints (rowEnd - rowBegin values, may be null) estimates the
-   * entries of each owned row. Then builds the AMG hierarchy as Setup().
-   */
-  void SetupAddTo(int rowBegin, int rowEnd, const std::vector<int>& rows,
-    const std::vector<int>& sizes, const std::vector<int>& columns,
-    const std::vector<double>& values, const int* rowSizeHints);
-
-  /**
-   * Values-only update (collective): the same rows, sizes and columns as
-   * the last SetupAddTo, new values, written into the same hypre matrix
-   * (re-initialised, zeroed, added to, re-assembled); the BoomerAMG
-   * hierarchy is kept. Its fine level is this matrix, so smoothing and
-   * residuals see the new values; the coarse levels and the smoother's
-   * l1 norms are the old matrix's, a preconditioner that stays good while
-   * the change is small (a paint stroke). PCG then converges to RelTol on
-   * the new matrix. Throws translucency::Error if there is no SetupAddTo
-   * to update or hypre refuses an entry (a changed pattern).
-   */
-  void UpdateValuesAddTo(const std::vector<int>& rows, const std::vector<int>& sizes,
-    const std::vector<int>& columns, const std::vector<double>& values);
 
   /**
    * Solve for the local part b (rowEnd - rowBegin values) into x; x is the
@@ -154,7 +131,7 @@ public:
   int GetNumberOfLevels() const override { return Levels_; }
   /// Non-zeros of the fine matrix, summed over the ranks.
   long long GetNumberOfNonZeros() const override { return NonZeros_; }
-  /// Wall times of the last SetupAddTo on this rank (ms): the IJ matrix
+  /// Wall times of the last Setup or UpdateValues on this rank (ms): the IJ matrix
   /// (values added, off-rank rows exchanged, assembled), then the vectors
   /// and the BoomerAMG hierarchy.
   double GetMatrixMilliseconds() const override { return MatrixMilliseconds_; }
