@@ -20,6 +20,7 @@
  */
 #pragma once
 
+#include "Communicator.h"
 #include "DiffusionSystem.h"
 #include "Registry.h"
 
@@ -31,6 +32,8 @@
 
 namespace translucency
 {
+class DistributedLinearSolver;
+
 
 class TetMesh;
 
@@ -218,6 +221,9 @@ struct LinearSolverTraits
   bool Built = true;
   /// How to get the library when it is not built (for the error message).
   std::string Remedy;
+  /// The composition's distributed variant (one matrix over the ranks of an
+  /// MPI communicator: DistributedLinearSolver.h), or empty: "cg/boomeramg".
+  std::function<std::unique_ptr<DistributedLinearSolver>(const Communicator&)> CreateDistributed;
 };
 
 using LinearSolverRegistry = Registry<LinearSolver, LinearSolverTraits>;
