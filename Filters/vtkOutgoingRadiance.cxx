@@ -355,13 +355,7 @@ std::vector<double> PieceRadiance(vtkUnstructuredGrid* input,
       continue;
     }
     const double* nrm = &surface.Normals[3 * static_cast<size_t>(i)];
-    double cosOut = 1.0;
-    if (viewPoint)
-    {
-      const double d[3] = { viewPoint[0] - x[0], viewPoint[1] - x[1], viewPoint[2] - x[2] };
-      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
-    }
+    const double cosOut = translucency::ViewCosine(viewPoint, x, nrm);
     if (sp3 && surface.Eta[i] != sp3Eta)
     {
       sp3Eta = surface.Eta[i];

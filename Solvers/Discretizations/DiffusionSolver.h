@@ -127,6 +127,19 @@ struct SolverReport
   std::vector<double> RadianceStandardError;
 };
 
+/// The extended collimated model's read-out, shared by the vertex solvers
+/// and SP3: adds the unscattered beam's fluence to the diffuse one (the
+/// total fluence rate phi_d + E_c) and records the beam in the report
+/// (SolverReport::CollimatedFluence and the beams' power balance).
+void AddCollimatedFluence(CollimatedSource& collimated, std::vector<double>& fluence,
+  SolverReport& report);
+/// The frequency domain's: adds the modulated beam (complex, 3 per mesh
+/// point) and records its amplitude and phase; the powers are those of
+/// continuous wave, taken from `collimated`.
+void AddCollimatedFluence(const CollimatedSource& collimated,
+  const std::vector<std::complex<double>>& modulated,
+  std::vector<std::complex<double>>& fluence, SolverReport& report);
+
 /// The names of the solver-specific options (DiffusionSolver::SetOptions).
 namespace DiffusionOption
 {

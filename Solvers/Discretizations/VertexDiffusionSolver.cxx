@@ -401,15 +401,7 @@ bool VertexDiffusionSolver::Solve(
   Discretization_->ToPointFluence(mesh, System_, Solution_, fluence);
   if (extended)
   {
-    // The total fluence rate: diffuse plus the unscattered beam.
-    for (std::size_t k = 0; k < fluence.size(); ++k)
-    {
-      fluence[k] += collimated.Fluence[k];
-    }
-    report.CollimatedFluence = std::move(collimated.Fluence);
-    report.CollimatedEntering = collimated.Entering;
-    report.CollimatedScattered = collimated.Scattered;
-    report.CollimatedAbsorbed = collimated.Absorbed;
+    AddCollimatedFluence(collimated, fluence, report);
   }
   return true;
 }
@@ -599,20 +591,7 @@ bool VertexDiffusionSolver::SolveFrequencyDomain(const DiffusionProblem& problem
   }
   if (extended)
   {
-    // The total: diffuse plus the modulated unscattered beam; the report
-    // keeps the beam's amplitude and phase (the detectors read the diffuse
-    // part) and its continuous-wave powers.
-    report.CollimatedFluence.resize(fluence.size());
-    report.CollimatedFluencePhase.resize(fluence.size());
-    for (std::size_t k = 0; k < fluence.size(); ++k)
-    {
-      fluence[k] += collimatedFluence[k];
-      report.CollimatedFluence[k] = std::abs(collimatedFluence[k]);
-      report.CollimatedFluencePhase[k] = std::arg(collimatedFluence[k]);
-    }
-    report.CollimatedEntering = collimated.Entering;
-    report.CollimatedScattered = collimated.Scattered;
-    report.CollimatedAbsorbed = collimated.Absorbed;
+    AddCollimatedFluence(collimated, collimatedFluence, fluence, report);
   }
   return true;
 }
