@@ -44,6 +44,7 @@ public:
   {
     CG_.SetRelTol(RelTol_);
     CG_.SetMaxIter(MaxIter_);
+    CG_.SetMinIter(MinIter_);
     CG_.SetProgressCallback(Progress_);
     const bool done = CG_.Solve(system, x, warmStart);
     for (int c = 0; c < NumberOfChannels; ++c)
