@@ -22,40 +22,21 @@ The bench runs on a sphere of radius 10 mm (written here) tetrahedralised to
 Exits non-zero on failure (unittest).
 """
 
-import json
 import os
 import subprocess
 import sys
-import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_under_test import find_cli, write_sphere  # noqa: E402
+from cli_under_test import BenchJsonTest, find_cli  # noqa: E402
 
 CLI = find_cli("TestBenchDiffuseOptics")
 
 
-class BenchDiffuseOptics(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls):
-        cls.tmp = tempfile.TemporaryDirectory()
-        cls.json_path = os.path.join(cls.tmp.name, "bench.json")
-        mesh = cls.mesh = os.path.join(cls.tmp.name, "sphere.stl")
-        write_sphere(mesh, 10.0, 16)
-        cmd = [CLI, "bench", "--diffuse-optics", "--mesh", mesh, "--tets", "3000",
-               "--gate-tets", "3000", "--gates", "10", "--runs", "1", "--json", cls.json_path]
-        cls.run_result = subprocess.run(cmd, capture_output=True, text=True, timeout=240)
-        print(cls.run_result.stdout)
-        print(cls.run_result.stderr, file=sys.stderr)
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.tmp.cleanup()
-
-    def setUp(self):
-        self.assertEqual(self.run_result.returncode, 0, self.run_result.stderr)
-        with open(self.json_path) as f:
-            self.results = json.load(f)
+class BenchDiffuseOptics(BenchJsonTest):
+    CLI = CLI
+    BENCH_ARGS = ["--diffuse-optics", "--tets", "3000", "--gate-tets", "3000", "--gates", "10",
+                  "--runs", "1"]
 
     def test_frequency_domain(self):
         tables = self.results["frequency_domain"]

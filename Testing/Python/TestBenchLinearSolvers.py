@@ -32,38 +32,22 @@ import os
 import shutil
 import subprocess
 import sys
-import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_under_test import find_cli, write_sphere  # noqa: E402
+from cli_under_test import BenchJsonTest, find_cli  # noqa: E402
 
 CLI = find_cli("TestBenchLinearSolvers")
 
 
-class BenchLinearSolvers(unittest.TestCase):
+class BenchLinearSolvers(BenchJsonTest):
+    CLI = CLI
+    BENCH_ARGS = ["--linear-solvers", "--tets", "3000", "--runs", "1"]
+
     @classmethod
-    def setUpClass(cls):
-        cls.tmp = tempfile.TemporaryDirectory()
-        cls.json_path = os.path.join(cls.tmp.name, "bench.json")
+    def extra_args(cls):
         cls.png_path = os.path.join(cls.tmp.name, "curve.png")
-        mesh = cls.mesh = os.path.join(cls.tmp.name, "sphere.stl")
-        write_sphere(mesh, 10.0, 16)
-        cmd = [CLI, "bench", "--linear-solvers", "--mesh", mesh, "--tets", "3000", "--runs", "1", "--json", cls.json_path, "--plot", cls.png_path]
-        cls.run_result = subprocess.run(cmd, capture_output=True, text=True, timeout=240)
-        print(cls.run_result.stdout)
-        print(cls.run_result.stderr, file=sys.stderr)
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.tmp.cleanup()
-
-    def setUp(self):
-        self.assertEqual(self.run_result.returncode, 0, self.run_result.stderr)
-        with open(self.json_path) as f:
-            self.results = json.load(f)
-        self.assertEqual(len(self.results), 1)
-        self.size = self.results[0]
+        return ["--plot", cls.png_path]
 
     def test_reference_and_bandwidth(self):
         s = self.size

@@ -20,18 +20,15 @@ sphere of radius 10 mm tetrahedralised to ~6000 tets, one run. Checked:
 Exits non-zero on failure (unittest).
 """
 
-import json
 import os
 import subprocess
 import sys
-import tempfile
 import unittest
 
-from vtkmodules.vtkFiltersCore import vtkTriangleFilter
-from vtkmodules.vtkFiltersSources import vtkSphereSource
-from vtkmodules.vtkIOGeometry import vtkSTLWriter
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cli_under_test import BenchJsonTest, find_cli  # noqa: E402
 
-CLI = os.environ["TRANSLUCENCY_CLI"]
+CLI = find_cli("TestBenchPipeline")
 
 # The filters each step executes (the bench's columns).
 STEP_FILTERS = {
@@ -42,38 +39,10 @@ STEP_FILTERS = {
 }
 
 
-class BenchPipeline(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls):
-        cls.tmp = tempfile.TemporaryDirectory()
-        cls.json_path = os.path.join(cls.tmp.name, "bench.json")
-        mesh = cls.mesh = os.path.join(cls.tmp.name, "sphere.stl")
-        sphere = vtkSphereSource()
-        sphere.SetRadius(10.0)
-        sphere.SetThetaResolution(16)
-        sphere.SetPhiResolution(16)
-        triangles = vtkTriangleFilter()
-        triangles.SetInputConnection(sphere.GetOutputPort())
-        writer = vtkSTLWriter()
-        writer.SetFileName(mesh)
-        writer.SetInputConnection(triangles.GetOutputPort())
-        writer.Write()
-        cmd = [CLI, "bench", "--pipeline", "--mesh", mesh, "--tets", "6000", "--runs", "1",
-               "--json", cls.json_path]
-        cls.run_result = subprocess.run(cmd, capture_output=True, text=True, timeout=400)
-        print(cls.run_result.stdout)
-        print(cls.run_result.stderr, file=sys.stderr)
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.tmp.cleanup()
-
-    def setUp(self):
-        self.assertEqual(self.run_result.returncode, 0, self.run_result.stderr)
-        with open(self.json_path) as f:
-            self.results = json.load(f)
-        self.assertEqual(len(self.results), 1)
-        self.size = self.results[0]
+class BenchPipeline(BenchJsonTest):
+    CLI = CLI
+    BENCH_ARGS = ["--pipeline", "--tets", "6000", "--runs", "1"]
+    TIMEOUT = 400
 
     def test_table(self):
         s = self.size

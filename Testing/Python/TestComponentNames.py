@@ -18,11 +18,15 @@ How to run (from a build tree):
 Exits non-zero on failure (unittest).
 """
 
+import os
+import sys
 import unittest
 
 import translucency
 from vtkmodules.vtkCommonDataModel import vtkPlane
-from vtkmodules.vtkFiltersSources import vtkSphereSource
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from vtk_chain import sphere_chain  # noqa: E402
 
 VECTORS = {"Normals"}
 
@@ -49,20 +53,8 @@ class ComponentNamesTest(unittest.TestCase):
 
     @classmethod
     def setUpClass(cls):
-        sphere = vtkSphereSource()
-        sphere.SetRadius(4.0)
-        sphere.SetThetaResolution(12)
-        sphere.SetPhiResolution(12)
-        tetra = translucency.vtkTetrahedralizeSurface()
-        tetra.SetInputConnection(sphere.GetOutputPort())
-        tetra.SetTargetNumberOfTets(1000)
-        assign = translucency.vtkAssignScatteringCoefficients()
-        assign.SetInputConnection(tetra.GetOutputPort())
-        light = translucency.vtkSurfaceIrradiance()
-        light.SetInputConnection(assign.GetOutputPort())
-        light.AddDirectionalLight(0.0, -1.0, -1.0, 1.0)
-        solve = translucency.vtkSolveDiffusion()
-        solve.SetInputConnection(light.GetOutputPort())
+        chain = sphere_chain(material=None)
+        tetra, assign, light, solve = chain.tetra, chain.material, chain.light, chain.solve
         monte_carlo = translucency.vtkSolveDiffusion()
         monte_carlo.SetInputConnection(light.GetOutputPort())
         monte_carlo.SetSolverByName("montecarlo")

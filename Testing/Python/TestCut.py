@@ -30,6 +30,9 @@ the filter:
 Exits non-zero on failure (unittest). Runs in a few seconds on 2 cores.
 """
 
+import functools
+import sys
+import os
 import math
 import random
 import unittest
@@ -37,9 +40,7 @@ import unittest
 import numpy as np
 
 import translucency
-from vtkmodules.util.misc import calldata_type
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.util.vtkConstants import VTK_STRING
 from vtkmodules.vtkCommonCore import vtkPoints
 from vtkmodules.vtkCommonDataModel import (
     VTK_HEXAHEDRON,
@@ -53,36 +54,13 @@ from vtkmodules.vtkCommonDataModel import (
 from vtkmodules.vtkFiltersCore import vtkCleanPolyData, vtkTriangleFilter
 from vtkmodules.vtkFiltersSources import vtkCubeSource, vtkSphereSource
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import vtk_chain  # noqa: E402
+
+# The executive's "returned failure" error counts among the errors.
+Messages = functools.partial(vtk_chain.Messages, executive="errors")
+
 BOUND = 0.5  # default MinimumDihedralAngle (degrees)
-
-
-class Messages:
-    """ErrorEvent / WarningEvent observers on an algorithm and its executive."""
-
-    def __init__(self, *algorithms):
-        self.errors = []
-        self.warnings = []
-
-        @calldata_type(VTK_STRING)
-        def on_error(caller, event, message):
-            self.errors.append(message)
-
-        @calldata_type(VTK_STRING)
-        def on_warning(caller, event, message):
-            self.warnings.append(message)
-
-        self._callbacks = (on_error, on_warning)
-        self._tags = []
-        for algorithm in algorithms:
-            self._tags.append((algorithm, algorithm.AddObserver("ErrorEvent", on_error)))
-            self._tags.append((algorithm, algorithm.AddObserver("WarningEvent", on_warning)))
-            executive = algorithm.GetExecutive()
-            self._tags.append((executive, executive.AddObserver("ErrorEvent", on_error)))
-
-    def remove(self):
-        for obj, tag in self._tags:
-            obj.RemoveObserver(tag)
-        self._tags = []
 
 
 def update(test, *algorithms):

@@ -26,28 +26,21 @@ Exits non-zero on failure (unittest).
 
 import unittest
 
+import os
+import sys
+
 import translucency
-from vtkmodules.vtkFiltersSources import vtkSphereSource
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from vtk_chain import sphere_chain  # noqa: E402
 
 
 class FailFastTest(unittest.TestCase):
 
     def setUp(self):
-        self.sphere = vtkSphereSource()
-        self.sphere.SetRadius(4.0)
-        self.sphere.SetThetaResolution(12)
-        self.sphere.SetPhiResolution(12)
-        self.tetra = translucency.vtkTetrahedralizeSurface()
-        self.tetra.SetInputConnection(self.sphere.GetOutputPort())
-        self.tetra.SetTargetNumberOfTets(1000)
-        self.material = translucency.vtkAssignScatteringCoefficients()
-        self.material.SetInputConnection(self.tetra.GetOutputPort())
-        self.material.SetMaterialName("marble")
-        self.light = translucency.vtkSurfaceIrradiance()
-        self.light.SetInputConnection(self.material.GetOutputPort())
-        self.light.AddDirectionalLight(0.0, -1.0, -1.0, 1.0)
-        self.solve = translucency.vtkSolveDiffusion()
-        self.solve.SetInputConnection(self.light.GetOutputPort())
+        chain = sphere_chain()
+        self.sphere, self.tetra, self.material = chain.sphere, chain.tetra, chain.material
+        self.light, self.solve = chain.light, chain.solve
 
     def test_valid_chain(self):
         output = translucency.update(self.solve)

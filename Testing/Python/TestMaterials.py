@@ -32,6 +32,8 @@ How to run (from a build tree):
 Exits non-zero on failure (unittest).
 """
 
+import functools
+import sys
 import itertools
 import json
 import math
@@ -41,10 +43,14 @@ import tempfile
 import unittest
 
 import translucency
-from vtkmodules.util.misc import calldata_type
-from vtkmodules.util.vtkConstants import VTK_STRING
 from vtkmodules.vtkCommonCore import vtkDoubleArray, vtkPoints
 from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import vtk_chain  # noqa: E402
+
+# The executive's "returned failure" error is swallowed.
+Messages = functools.partial(vtk_chain.Messages, executive="ignore")
 
 VTK_TETRA = 10
 SOURCE_DIR = os.environ.get(
@@ -130,21 +136,6 @@ def centroids(grid):
 def depth(x):
     """Distance from a point inside the box to the nearest box face."""
     return min(min(x[a], BOX[a] - x[a]) for a in range(3))
-
-
-class Messages:
-    """Collects the error messages of an algorithm (and of its executive)."""
-
-    def __init__(self, algorithm):
-        self.errors = []
-
-        @calldata_type(VTK_STRING)
-        def on_error(caller, event, message):
-            self.errors.append(message)
-
-        self._callback = on_error
-        algorithm.AddObserver("ErrorEvent", on_error)
-        algorithm.GetExecutive().AddObserver("ErrorEvent", lambda *args: None)
 
 
 def coefficients(grid, c):

@@ -32,13 +32,17 @@ How to run (from a build tree):
 Exits non-zero on failure (unittest).
 """
 
+import os
+import sys
 import unittest
 
 import numpy as np
 import translucency
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkCommand, vtkOutputWindow
-from vtkmodules.vtkFiltersSources import vtkSphereSource
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from vtk_chain import sphere_chain  # noqa: E402
 
 
 class ErrorRecorder:
@@ -83,21 +87,9 @@ def problems_of_empty(data):
 class NoStaleResultsTest(unittest.TestCase):
 
     def setUp(self):
-        self.sphere = vtkSphereSource()
-        self.sphere.SetRadius(4.0)
-        self.sphere.SetThetaResolution(12)
-        self.sphere.SetPhiResolution(12)
-        self.tetra = translucency.vtkTetrahedralizeSurface()
-        self.tetra.SetInputConnection(self.sphere.GetOutputPort())
-        self.tetra.SetTargetNumberOfTets(1000)
-        self.material = translucency.vtkAssignScatteringCoefficients()
-        self.material.SetInputConnection(self.tetra.GetOutputPort())
-        self.material.SetMaterialName("marble")
-        self.light = translucency.vtkSurfaceIrradiance()
-        self.light.SetInputConnection(self.material.GetOutputPort())
-        self.light.AddDirectionalLight(0.0, -1.0, -1.0, 1.0)
-        self.solve = translucency.vtkSolveDiffusion()
-        self.solve.SetInputConnection(self.light.GetOutputPort())
+        chain = sphere_chain()
+        self.sphere, self.tetra, self.material = chain.sphere, chain.tetra, chain.material
+        self.light, self.solve = chain.light, chain.solve
         self.solve.SetRelTol(1e-10)
         self.radiance = translucency.vtkOutgoingRadiance()
         self.radiance.SetInputConnection(self.solve.GetOutputPort())

@@ -32,15 +32,15 @@ How to run (from a build tree; ctest sets the variables itself):
 Exits non-zero on failure (unittest). Runs in a few seconds on 2 cores.
 """
 
+import sys
+import os
 import math
 import unittest
 
 import numpy as np
 
 import translucency
-from vtkmodules.util.misc import calldata_type
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
-from vtkmodules.util.vtkConstants import VTK_STRING
 from vtkmodules.vtkCommonCore import vtkPoints
 from vtkmodules.vtkCommonDataModel import (
     VTK_TETRA,
@@ -58,6 +58,9 @@ from vtkmodules.vtkFiltersCore import (
 from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter
 from vtkmodules.vtkFiltersModeling import vtkLinearSubdivisionFilter
 from vtkmodules.vtkFiltersSources import vtkCubeSource, vtkSphereSource
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from vtk_chain import Messages  # noqa: E402
 
 # Measured presets (Jensen et al. 2001, 1/mm; Documentation/Materials.md).
 MARBLE_SIGMA_S = (2.19, 2.62, 3.00)
@@ -212,40 +215,6 @@ def boundary_point_ids(grid):
 
 # --------------------------------------------------------------------------
 # Running filters with their messages caught.
-
-class Messages:
-    """ErrorEvent / WarningEvent observers on algorithms and their executives."""
-
-    def __init__(self, *algorithms):
-        self.errors = []
-        self.warnings = []
-        self.pipeline_errors = []
-
-        @calldata_type(VTK_STRING)
-        def on_error(caller, event, message):
-            self.errors.append(message)
-
-        @calldata_type(VTK_STRING)
-        def on_warning(caller, event, message):
-            self.warnings.append(message)
-
-        @calldata_type(VTK_STRING)
-        def on_pipeline_error(caller, event, message):
-            self.pipeline_errors.append(message)
-
-        self._callbacks = (on_error, on_warning, on_pipeline_error)
-        self._tags = []
-        for algorithm in algorithms:
-            self._tags.append((algorithm, algorithm.AddObserver("ErrorEvent", on_error)))
-            self._tags.append((algorithm, algorithm.AddObserver("WarningEvent", on_warning)))
-            executive = algorithm.GetExecutive()
-            self._tags.append((executive, executive.AddObserver("ErrorEvent", on_pipeline_error)))
-
-    def remove(self):
-        for obj, tag in self._tags:
-            obj.RemoveObserver(tag)
-        self._tags = []
-
 
 class Pipeline:
     """surface -> tetrahedralize -> coefficients -> irradiance -> solve -> radiance."""

@@ -22,6 +22,8 @@ How to run (from a build tree; ctest sets the variables itself):
    1 and names the file; a tiny scene runs and writes its .vtp files and JSON.
 """
 
+import functools
+import sys
 import json
 import os
 import subprocess
@@ -31,13 +33,17 @@ import unittest
 import numpy as np
 
 import translucency
-from vtkmodules.util.misc import calldata_type
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
-from vtkmodules.vtkCommonCore import VTK_STRING
 from vtkmodules.vtkCommonDataModel import (vtkCompositeDataSet, vtkMultiBlockDataSet,
                                            vtkPartitionedDataSetCollection, vtkPolyData)
 from vtkmodules.vtkFiltersCore import vtkCleanPolyData, vtkReverseSense, vtkTriangleFilter
 from vtkmodules.vtkFiltersSources import vtkCubeSource, vtkTessellatedBoxSource
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import vtk_chain  # noqa: E402
+
+# The executive's "returned failure" error counts among the errors.
+Messages = functools.partial(vtk_chain.Messages, executive="errors")
 
 L = 20.0
 
@@ -98,19 +104,6 @@ def marble_cube(with_coefficients=True):
     assign.SetScaleFactor(0.2)  # more translucent than marble at this size
     assign.Update()
     return assign.GetOutput()
-
-
-class Messages:
-    def __init__(self, algorithm):
-        self.errors = []
-
-        @calldata_type(VTK_STRING)
-        def on_error(caller, event, message):
-            self.errors.append(message)
-
-        self._callback = on_error
-        algorithm.AddObserver("ErrorEvent", on_error)
-        algorithm.GetExecutive().AddObserver("ErrorEvent", on_error)
 
 
 def make_collection(room, cube):

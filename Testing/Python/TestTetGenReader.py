@@ -26,9 +26,10 @@ import tempfile
 import unittest
 
 import translucency
-from vtkmodules.util.misc import calldata_type
-from vtkmodules.util.vtkConstants import VTK_STRING
 from vtkmodules.vtkCommonCore import vtkObject
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from vtk_chain import Messages  # noqa: E402
 
 VTK_TETRA = 10
 
@@ -152,39 +153,6 @@ def five_node_lines():
 
 def five_ele_lines():
     return ["5 4 0"] + ["%d %s" % (i, " ".join(map(str, tet))) for i, tet in enumerate(FIVE_TETS)]
-
-
-class Messages:
-    """Collects the reader's errors and warnings instead of printing them."""
-
-    def __init__(self, reader):
-        self.errors = []
-        self.warnings = []
-        self.pipeline_errors = []
-
-        @calldata_type(VTK_STRING)
-        def on_error(caller, event, message):
-            self.errors.append(message)
-
-        @calldata_type(VTK_STRING)
-        def on_warning(caller, event, message):
-            self.warnings.append(message)
-
-        @calldata_type(VTK_STRING)
-        def on_pipeline_error(caller, event, message):
-            self.pipeline_errors.append(message)
-
-        # Keep the callbacks alive as long as the observers.
-        self._callbacks = (on_error, on_warning, on_pipeline_error)
-        reader.AddObserver("ErrorEvent", on_error)
-        reader.AddObserver("WarningEvent", on_warning)
-        # The executive's "returned failure" error, expected after every reader error.
-        reader.GetExecutive().AddObserver("ErrorEvent", on_pipeline_error)
-
-    def clear(self):
-        self.errors.clear()
-        self.warnings.clear()
-        self.pipeline_errors.clear()
 
 
 class TetGenReaderTest(unittest.TestCase):

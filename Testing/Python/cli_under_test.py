@@ -50,6 +50,50 @@ def write_sphere(name, radius, resolution, clean=False):
     writer.Write()
 
 
+class BenchJsonTest(unittest.TestCase):
+    """Tests of one `translucency bench` run on a small sphere (radius 10 mm,
+    resolution 16, written as STL): setUpClass runs `bench BENCH_ARGS --mesh
+    SPHERE --json FILE` once and keeps the result; setUp asserts the run
+    exited 0 and loads the JSON into `self.results` (and, when it holds one
+    mesh size, `self.size`). Subclasses set CLI (find_cli), BENCH_ARGS and
+    TIMEOUT (seconds)."""
+
+    CLI = None
+    BENCH_ARGS = []
+    TIMEOUT = 240
+
+    @classmethod
+    def extra_args(cls):
+        """Arguments that need the class's temporary folder (cls.tmp.name)."""
+        return []
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory()
+        cls.json_path = os.path.join(cls.tmp.name, "bench.json")
+        cls.mesh = os.path.join(cls.tmp.name, "sphere.stl")
+        write_sphere(cls.mesh, 10.0, 16)
+        cmd = [cls.CLI, "bench"] + list(cls.BENCH_ARGS) + cls.extra_args() + [
+            "--mesh", cls.mesh, "--json", cls.json_path]
+        cls.run_result = subprocess.run(cmd, capture_output=True, text=True,
+                                        timeout=cls.TIMEOUT)
+        print(cls.run_result.stdout)
+        print(cls.run_result.stderr, file=sys.stderr)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmp.cleanup()
+
+    def setUp(self):
+        import json
+        self.assertEqual(self.run_result.returncode, 0, self.run_result.stderr)
+        with open(self.json_path) as f:
+            self.results = json.load(f)
+        if isinstance(self.results, list):
+            self.assertEqual(len(self.results), 1)
+            self.size = self.results[0]
+
+
 class BoxRenderTest(unittest.TestCase):
     """Tests of `translucency render` on one 20 x 20 x 10 mm box: setUpClass
     writes it as STL and meshes it once with BOX_TETS tets (no light), so that
