@@ -216,6 +216,13 @@ def boundary_point_ids(grid):
 # --------------------------------------------------------------------------
 # Running filters with their messages caught.
 
+def chain_warnings(messages):
+    """The warnings but the mesher's note that a small target (these tests ask
+    2,000-4,000 tets, for speed) is more than 25 % off: its documented
+    behaviour (issue 33; Python.TestMeshers checks it), not the chain's."""
+    return [w for w in messages.warnings if "TargetNumberOfTets" not in w]
+
+
 class Pipeline:
     """surface -> tetrahedralize -> coefficients -> irradiance -> solve -> radiance."""
 
@@ -250,7 +257,7 @@ class Pipeline:
         finally:
             messages.remove()
         test.assertEqual(messages.errors + messages.pipeline_errors, [], "unexpected errors")
-        test.assertEqual(messages.warnings, [], "unexpected warnings")
+        test.assertEqual(chain_warnings(messages), [], "unexpected warnings")
         return last.GetOutput()
 
 
@@ -679,7 +686,7 @@ class PipelineTest(unittest.TestCase):
             pipe.solve.Update()
         finally:
             messages.remove()
-        self.assertEqual(messages.warnings, [])
+        self.assertEqual(chain_warnings(messages), [])
         self.assertEqual(len(messages.errors), 1, messages.errors)
         error = messages.errors[0]
         self.assertIn("did not converge, also after a full set-up", error)
