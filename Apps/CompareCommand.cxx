@@ -1,7 +1,9 @@
 // `translucency compare`: every selected solver on one problem (mesh,
 // material, lights), side by side: a table (stdout and JSON), a radiance
-// picture and a relative-error map per solver on one colour scale, a plot of
-// error against wall time for the iterative solvers, and a .vtm multiblock.
+// picture per solver, a relative-error map per solver but the reference on
+// its own symmetric scale plus one overview of them all on a shared scale,
+// a plot of error against wall time for the iterative solvers (not the
+// reference), and a .vtm multiblock.
 // With the diffuse-optics options (sources, detectors, time gates): every
 // solver's detector readings, and with --time-gates one TPSF plot overlaying
 // the solvers (CompareTpsf.h), a measured curve (--measured, CompareMeasured.h)
@@ -30,9 +32,13 @@
 #include <vtkExecutive.h>
 #include <vtkDoubleArray.h>
 #include <vtkIdTypeArray.h>
+#include <vtkImageAppend.h>
+#include <vtkImageData.h>
 #include <vtkInformation.h>
 #include <vtkMultiBlockDataSet.h>
 #include <vtkNew.h>
+#include <vtkPNGReader.h>
+#include <vtkPNGWriter.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
@@ -312,6 +318,61 @@ vtkSmartPointer<vtkDoubleArray> SignedError(vtkDataArray* x, vtkDataArray* r, in
   return error;
 }
 
+/// The relative standard error above which a Monte Carlo point is masked:
+/// in the z-scores (AgainstMonteCarlo) and in the error maps (grey).
+constexpr double MaxMonteCarloRelativeSE = 0.1;
+
+/**
+ * Masks (sets to NaN, drawn grey) the points of `error` where a Monte Carlo
+ * result among `results` (the solver's own or the reference's) has a
+ * relative standard error of its fluence above MaxMonteCarloRelativeSE in
+ * channel `c`: too few photons there to judge any difference. Returns the
+ * number of points masked.
+ */
+long long MaskNoisyMonteCarloPoints(
+  vtkDoubleArray* error, std::initializer_list<const SolverResult*> results, int c)
+{
+  std::vector<bool> masked(static_cast<size_t>(error->GetNumberOfTuples()), false);
+  for (const SolverResult* r : results)
+  {
+    vtkDataArray* se = r->Volume->GetPointData()->GetArray("FluenceStandardError");
+    auto* ids =
+      vtkIdTypeArray::SafeDownCast(r->Surface->GetPointData()->GetArray("vtkOriginalPointIds"));
+    vtkDataArray* phi = r->Surface->GetPointData()->GetArray("Fluence");
+    if (!se || !ids || !phi || ids->GetNumberOfTuples() != error->GetNumberOfTuples())
+      continue;
+    for (vtkIdType k = 0; k < ids->GetNumberOfTuples(); ++k)
+    {
+      const double m = phi->GetComponent(k, c);
+      const double e = se->GetComponent(ids->GetValue(k), c);
+      if (!(m > 0) || !(e >= 0) || e > MaxMonteCarloRelativeSE * m)
+        masked[static_cast<size_t>(k)] = true;
+    }
+  }
+  long long count = 0;
+  for (size_t k = 0; k < masked.size(); ++k)
+    if (masked[k])
+    {
+      error->SetValue(static_cast<vtkIdType>(k), std::nan(""));
+      ++count;
+    }
+  return count;
+}
+
+/// The 99th percentile of |value| over the finite values of `error` (0 if none).
+double AbsolutePercentile99(vtkDoubleArray* error)
+{
+  std::vector<double> values;
+  for (vtkIdType i = 0; i < error->GetNumberOfTuples(); ++i)
+    if (std::isfinite(error->GetValue(i)))
+      values.push_back(std::abs(error->GetValue(i)));
+  if (values.empty())
+    return 0.0;
+  const size_t k = 99 * (values.size() - 1) / 100;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
+
 /// Error against the reference after k iterations, k = 1, 2, 4, ... until
 /// converged: relative error of boundary fluence against wall time. The
 /// solves stopped early do not converge by design: their warnings are
@@ -543,17 +604,22 @@ void CompareWithReference(CompareRun& run)
     errorArray->SetNumberOfTuples(static_cast<vtkIdType>(perPoint.size()));
     std::copy(perPoint.begin(), perPoint.end(), errorArray->GetPointer(0));
     r.Surface->GetPointData()->AddArray(errorArray);
-    vtkSmartPointer<vtkDoubleArray> signedError =
-      SignedError(radiance, refRadiance, run.Options.Image.Channel);
-    r.Surface->GetPointData()->AddArray(signedError);
-    if (name != reference && signedError->GetNumberOfTuples() > 0)
+    if (name != reference)
     {
-      std::vector<double> sorted(static_cast<size_t>(signedError->GetNumberOfTuples()));
-      for (size_t i = 0; i < sorted.size(); ++i)
-        sorted[i] = std::abs(signedError->GetValue(static_cast<vtkIdType>(i)));
-      const size_t k = 99 * (sorted.size() - 1) / 100;
-      std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
-      run.ErrorScale = std::max(run.ErrorScale, sorted[k]);
+      // The error map: signed, Monte Carlo's noisy points masked, on the
+      // solver's own symmetric scale (99th percentile of |error|); the
+      // overview puts every map on the largest of these scales.
+      vtkSmartPointer<vtkDoubleArray> signedError =
+        SignedError(radiance, refRadiance, run.Options.Image.Channel);
+      const long long masked =
+        MaskNoisyMonteCarloPoints(signedError, { &r, &ref }, run.Options.Image.Channel);
+      r.Surface->GetPointData()->AddArray(signedError);
+      const double scale = AbsolutePercentile99(signedError);
+      run.ErrorScale = std::max(run.ErrorScale, scale);
+      r.Stats["error_map"] = { { "picture", name + "_error.png" },
+        { "channel", std::string(1, "RGB"[run.Options.Image.Channel]) },
+        { "scale_percent", scale }, { "masked_points", masked },
+        { "points", static_cast<long long>(signedError->GetNumberOfTuples()) } };
     }
     r.Stats["fluence_relative_error"] = { { "max", fMax }, { "rms", fRms } };
     r.Stats["radiance_relative_error"] = { { "max", lMax }, { "rms", lRms } };
@@ -565,6 +631,9 @@ void CompareWithReference(CompareRun& run)
       r.Stats["fluence_mean_relative_standard_error"] = MeanRelativeStandardError(r, se);
     run.Table.push_back(r.Stats);
   }
+  for (json& row : run.Table)
+    if (row.contains("error_map"))
+      row["error_map"]["shared_scale_percent"] = run.ErrorScale;
 }
 
 /// Compare: against Monte Carlo, when it ran, z-scores by its standard error.
@@ -580,7 +649,7 @@ void CompareWithMonteCarlo(CompareRun& run)
         s["fluence_against_montecarlo"] = AgainstMonteCarlo(
           run.Results[s["solver"].get<std::string>()].Surface->GetPointData()->GetArray(
             "Fluence"),
-          *monteCarlo, 0.1);
+          *monteCarlo, MaxMonteCarloRelativeSE);
   run.MonteCarlo = monteCarlo;
 }
 
@@ -787,8 +856,48 @@ void WriteCompareFiles(CompareRun& run)
   WriteStagedMultiblock(blocks, outputDir);
 }
 
-/// Compare, pictures: the radiance and error maps of every solver on one
-/// exposure (the reference's) and one error scale, and the TPSF plot.
+/// A symmetric error scale (percent) for the pictures: `scale`, or 1 % when
+/// the errors are all zero (a picture needs a range).
+double PictureScale(double scale)
+{
+  return scale > 0 ? scale : 1.0;
+}
+
+/// Compare, pictures: side by side in one PNG (the overview), `pngs` read
+/// back and appended left to right; the parts are removed.
+void AppendPictures(const std::vector<std::string>& pngs, const std::string& fileName)
+{
+  vtkNew<vtkImageAppend> append;
+  append->SetAppendAxis(0);
+  for (const std::string& png : pngs)
+  {
+    vtkNew<vtkPNGReader> reader;
+    reader->SetFileName(png.c_str());
+    reader->Update();
+    vtkNew<vtkImageData> image;
+    image->DeepCopy(reader->GetOutput());
+    append->AddInputData(image);
+  }
+  append->Update();
+  const std::string temporary = fileName + ".part.png";
+  vtkNew<vtkPNGWriter> writer;
+  writer->SetFileName(temporary.c_str());
+  writer->SetInputConnection(append->GetOutputPort());
+  writer->Write();
+  std::error_code ec;
+  for (const std::string& png : pngs)
+    std::filesystem::remove(png, ec);
+  std::filesystem::rename(temporary, fileName, ec);
+  if (ec || writer->GetErrorCode() != 0)
+    throw translucency::Error("cannot write " + fileName);
+}
+
+/// Compare, pictures: the radiance of every solver on one exposure (the
+/// reference's); the error map of every other solver against the reference
+/// on its own symmetric scale (the 99th percentile of its |error|: a small
+/// error is not flat grey beside a large one), Monte Carlo's noisy points
+/// grey; and errors_overview.png, every error map side by side on the
+/// shared scale (the largest of them). The reference gets no error map.
 void WriteSolverPictures(CompareRun& run)
 {
   const CompareOptions& o = run.Options;
@@ -801,11 +910,10 @@ void WriteSolverPictures(CompareRun& run)
   const double exposure = ToneMapRadiance(refSurface, image.Exposure);
   RadianceImageOptions shared = image;
   shared.Exposure = exposure;
-  double errorScale = run.ErrorScale;
-  if (errorScale <= 0)
-    errorScale = 1.0; // percent
+  const double sharedScale = PictureScale(run.ErrorScale);
   static const char* channelNames[3] = { "R", "G", "B" };
   const std::string channel = channelNames[image.Channel];
+  std::vector<std::string> overview;
   for (const std::string& name : run.Order)
   {
     SolverResult& r = run.Results[name];
@@ -814,13 +922,29 @@ void WriteSolverPictures(CompareRun& run)
     vtkSmartPointer<vtkDataArray> radiance = SurfaceRadiance(r);
     surface->GetPointData()->AddArray(radiance); // the tallied one for Monte Carlo
     surface->GetPointData()->RemoveArray("RadianceRGB");
-    if (!WriteRadiancePNG(surface, shared, outputDir + "/" + name + "_radiance.png", error) ||
-      !WriteScalarMapPNG(surface, "SignedRelativeRadianceError", -errorScale, errorScale,
-        "radiance " + channel + " relative error, " + name + " - " + reference, "%",
-        name + " against " + reference + " (shared scale: 99th percentile of |error|)", image,
-        outputDir + "/" + name + "_error.png", error))
+    if (!WriteRadiancePNG(surface, shared, outputDir + "/" + name + "_radiance.png", error))
       throw translucency::Error(error);
+    if (name == reference)
+      continue;
+    const json& map = r.Stats["error_map"];
+    const double own = PictureScale(map["scale_percent"].get<double>());
+    const long long masked = map["masked_points"].get<long long>();
+    // Short captions: the pictures may be small (--size 320x240).
+    const std::string maskNote = masked > 0 ? "; grey: noisy MC" : std::string();
+    const std::string quantity = "radiance " + channel + " error, " + name + " - " + reference;
+    std::ostringstream caption;
+    caption << name << " vs " << reference << ", own scale" << maskNote;
+    const std::string part = outputDir + "/" + name + "_error_shared.part.png";
+    if (!WriteScalarMapPNG(surface, "SignedRelativeRadianceError", -own, own, quantity, "%",
+          caption.str(), image, outputDir + "/" + name + "_error.png", error) ||
+      !WriteScalarMapPNG(surface, "SignedRelativeRadianceError", -sharedScale, sharedScale,
+        quantity, "%", name + " vs " + reference + ", shared scale" + maskNote, image,
+        part, error))
+      throw translucency::Error(error);
+    overview.push_back(part);
   }
+  if (!overview.empty())
+    AppendPictures(overview, outputDir + "/errors_overview.png");
   if (run.TimeResolved)
   {
     const TpsfTable& tpsf = run.Tpsf;
@@ -851,8 +975,11 @@ void WriteErrorVersusTime(CompareRun& run, json& report)
   // frequency-domain run has none either (the iteration limit of its many
   // solves is not a measure of its cost).
   const bool steady = o.Optics.TimeGates.Count == 0 && o.Optics.Frequency == 0.0;
+  // The reference is left out: its error against itself is 0 by definition
+  // (drawn at the plot's floor, it squashed the other curves).
   for (const std::string& name : run.Order)
-    if (steady && !translucency::GetDiffusionSolverRegistry().Get(name).Properties.IsStochastic)
+    if (steady && name != o.Reference &&
+      !translucency::GetDiffusionSolverRegistry().Get(name).Properties.IsStochastic)
     {
       Progress("error against time: " + name + "...");
       curves.push_back(
@@ -934,7 +1061,9 @@ Command AddCompareCommand(CLI::App& app)
   AddNumber(c, "--rel-tol", o->RelTol, "relative residual of the iterative solvers", "T",
     [](double t) { return t > 0 && t < 1; }, "--rel-tol must be in (0, 1)");
   c->add_option("--output", o->OutputDir,
-     "<solver>_radiance.png, <solver>_error.png, error_vs_time.png,\n"
+     "<solver>_radiance.png, <solver>_error.png (every solver but\n"
+     "the reference, on its own scale), errors_overview.png (all\n"
+     "error maps on one scale), error_vs_time.png,\n"
      "compare.vtm (needs X for the PNGs: xvfb-run -a); with\n"
      "--time-gates and --detector: tpsf.png (every solver's TPSF\n"
      "per detector, channel --channel) and tpsf.csv (its data)")

@@ -5,9 +5,12 @@
 #include <vtkColorTransferFunction.h>
 #include <vtkImageData.h>
 #include <vtkLookupTable.h>
+#include <vtkCoordinate.h>
 #include <vtkNew.h>
+#include <vtkPropAssembly.h>
 #include <vtkRenderWindow.h>
 #include <vtkScalarBarActor.h>
+#include <vtkTextActor.h>
 #include <vtkTextProperty.h>
 #include <vtkStdString.h>
 #include <vtkTextRenderer.h>
@@ -170,7 +173,7 @@ vtkSmartPointer<vtkLookupTable> MakeLookupTable(
   return table;
 }
 
-vtkSmartPointer<vtkScalarBarActor> MakeColourBar(
+vtkSmartPointer<vtkProp> MakeColourBar(
   vtkLookupTable* table, const std::string& quantity, const std::string& unit)
 {
   std::string title = quantity;
@@ -178,17 +181,27 @@ vtkSmartPointer<vtkScalarBarActor> MakeColourBar(
     title += " (" + unit + ")";
   if (table->GetScale() == VTK_SCALE_LOG10)
     title += ", log scale";
+  // The bar and its tick labels below it (vtkScalarBarActor), the title a
+  // text actor of its own above the bar: the scalar bar actor puts its title
+  // on the row of the tick labels when the fonts keep their size, where the
+  // two overlapped.
   auto bar = vtkSmartPointer<vtkScalarBarActor>::New();
   bar->SetLookupTable(table);
   bar->SetOrientationToHorizontal();
-  bar->SetTitle(title.c_str());
+  bar->SetTitle(" ");
   bar->SetNumberOfLabels(5);
   bar->SetLabelFormat(table->GetScale() == VTK_SCALE_LOG10 ? "%.2g" : "%.3g");
-  bar->SetPosition(0.1, 0.02);
-  bar->SetPosition2(0.8, 0.16);
-  bar->SetBarRatio(0.25);
-  bar->UnconstrainedFontSizeOn(); // the title keeps its size: never squeezed
-  for (vtkTextProperty* text : { bar->GetTitleTextProperty(), bar->GetLabelTextProperty() })
+  bar->SetPosition(0.1, 0.01);
+  bar->SetPosition2(0.8, 0.10);
+  bar->SetBarRatio(0.4);
+  bar->SetTextPositionToPrecedeScalarBar(); // horizontal: the labels below the bar
+  bar->UnconstrainedFontSizeOn();           // the labels keep their size
+  auto caption = vtkSmartPointer<vtkTextActor>::New();
+  caption->SetInput(title.c_str());
+  caption->GetPositionCoordinate()->SetCoordinateSystemToNormalizedViewport();
+  caption->GetPositionCoordinate()->SetValue(0.5, 0.115);
+  for (vtkTextProperty* text :
+    { bar->GetTitleTextProperty(), bar->GetLabelTextProperty(), caption->GetTextProperty() })
   {
     text->SetColor(1.0, 1.0, 1.0);
     text->SetFontFamilyToArial();
@@ -196,9 +209,15 @@ vtkSmartPointer<vtkScalarBarActor> MakeColourBar(
     text->ItalicOff();
     text->ShadowOff();
   }
-  bar->GetTitleTextProperty()->SetFontSize(16);
+  bar->GetTitleTextProperty()->SetFontSize(1);
   bar->GetLabelTextProperty()->SetFontSize(13);
-  return bar;
+  caption->GetTextProperty()->SetFontSize(16);
+  caption->GetTextProperty()->SetJustificationToCentered();
+  caption->GetTextProperty()->SetVerticalJustificationToBottom();
+  auto assembly = vtkSmartPointer<vtkPropAssembly>::New();
+  assembly->AddPart(bar);
+  assembly->AddPart(caption);
+  return assembly;
 }
 
 void DrawText(RasterImage image, int x, int y, const std::string& text, int fontSize,

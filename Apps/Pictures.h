@@ -25,7 +25,7 @@
 
 class vtkLookupTable;
 class vtkRenderWindow;
-class vtkScalarBarActor;
+class vtkProp;
 
 namespace translucency_app
 {
@@ -67,11 +67,13 @@ vtkSmartPointer<vtkLookupTable> MakeLookupTable(
   ColourMap map, double lo, double hi, bool logScale);
 
 /**
- * A horizontal colour bar along the bottom of the picture, titled
+ * A horizontal colour bar along the bottom of the picture (a prop assembly:
+ * the bar with its tick labels below it, and the title above it), titled
  * `quantity` + " (" + `unit` + ")" and ", log scale" when the table is
- * logarithmic; font sizes fixed so the title is never shrunk or cut.
+ * logarithmic; font sizes fixed so that the title is never shrunk or cut,
+ * and on its own row so that it never runs into the tick labels.
  */
-vtkSmartPointer<vtkScalarBarActor> MakeColourBar(
+vtkSmartPointer<vtkProp> MakeColourBar(
   vtkLookupTable* table, const std::string& quantity, const std::string& unit);
 
 /**

@@ -79,6 +79,8 @@ struct vtkSolveDiffusion::Internals
   translucency::SolveDomain SolvedDomain = translucency::SolveDomain::ContinuousWave;
   /// GetAvailableLinearSolvers()'s array.
   vtkNew<vtkStringArray> LinearSolverNames;
+  /// GetLinearSolverTable()'s array.
+  vtkNew<vtkStringArray> LinearSolverTable;
   translucency::Sources Sources;
   /// The sources of the last execution: Sources plus the interactive ones.
   translucency::Sources SolvedSources;
@@ -138,6 +140,21 @@ bool vtkSolveDiffusion::SetSolverByName(const char* name)
     vtkErrorMacro(<< e.what());
     return false;
   }
+}
+
+vtkStringArray* vtkSolveDiffusion::GetLinearSolverTable()
+{
+  vtkStringArray* table = this->Internal->LinearSolverTable;
+  table->Initialize();
+  for (const auto& entry : translucency::GetDiffusionSolverRegistry().GetEntries())
+  {
+    for (const std::string& name : entry.Properties.LinearSolvers)
+    {
+      table->InsertNextValue(entry.Name);
+      table->InsertNextValue(name);
+    }
+  }
+  return table;
 }
 
 vtkStringArray* vtkSolveDiffusion::GetAvailableLinearSolvers()
@@ -566,8 +583,9 @@ vtkTranslucencyParallelPlan vtkSolveDiffusion::PlanParallel(
   const Plan::GatherMode mode = Plan::GatherMode::SameMesh;
   // Collective first: every rank takes part whatever the settings.
   const bool extended = ExtendedCollimatedModel(inputVector[0], comm);
-  const bool vertexSolver = this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
-  if (!vertexSolver)
+  // By the registry's trait: the solvers with a distributed variant (a build
+  // without the Parallel layer has none).
+  if (!SolverEntry(this->Solver).Properties.Distributed)
   {
     return Plan::Gathered(mode, "the solver is serial (only divergence and fem run distributed)");
   }
@@ -836,22 +854,28 @@ void vtkSolveDiffusion::Internals::AddInteractiveDetector(
 
 void vtkSolveDiffusion::Internals::Configure(vtkSolveDiffusion& self, int numberOfPoints)
 {
-  // Validate: a vertex solver's linear solver must be one of this build's.
+  // Validate: the linear solver must be one the chosen solver accepts (its
+  // registry entry's list, what the plugin's drop-down offers); a solver
+  // without a choice (Monte Carlo) ignores it.
   const auto& entry = SolverEntry(self.Solver);
   // A composition "KRYLOV/PRECONDITIONER" (e.g. "cg/jacobi") names its entry.
   const std::string linearSolver = translucency::ToLower(self.LinearSolver) == "default"
     ? ""
     : translucency::ResolveLinearSolverName(self.LinearSolver);
-  if (entry.Properties.UnknownsAtVertices && !linearSolver.empty())
+  if (entry.Properties.HasLinearSolverChoice && !linearSolver.empty())
   {
-    const std::vector<std::string> names = translucency::GetLinearSolverNames();
-    if (std::find(names.begin(), names.end(), translucency::ToLower(linearSolver)) == names.end())
+    try
     {
-      throw translucency::Error("unknown LinearSolver '" + self.LinearSolver + "' for the " +
-        entry.Name + " solver (this build has: " + translucency::JoinNames(names) +
-        "; empty or \"default\" = " +
-        translucency::VertexDiffusionSolver::GetDefaultLinearSolverName(numberOfPoints) +
-        " for this mesh)");
+      translucency::CheckLinearSolverAccepted(entry.Name, self.LinearSolver);
+    }
+    catch (const translucency::Error& e)
+    {
+      const std::string byDefault = entry.Properties.UnknownsAtVertices
+        ? " for this mesh: " +
+          translucency::VertexDiffusionSolver::GetDefaultLinearSolverName(numberOfPoints)
+        : "";
+      throw translucency::Error(std::string("LinearSolver: ") + e.what() +
+        (byDefault.empty() ? "" : " (\"default\"" + byDefault + ")"));
     }
   }
   // The front end keeps the solver, detects the changed tets and
@@ -1252,7 +1276,7 @@ int vtkSolveDiffusion::RequestDistributed(
   std::vector<double> fluence;
   translucency::SolverReport& report = in.Result.Report;
   if (!in.Distributed.Solve(input, SolverEntry(this->Solver).Name, this->RelTol, this->MaxIter,
-        this->WarmStart, this->NumberOfThreads, &in.SolvedSources, in.Detectors, fluence,
+        this->WarmStart, this->NumberOfThreads, this->AcceptUnconverged != 0, &in.SolvedSources, in.Detectors, fluence,
         in.Result.Readings, report, error))
   {
     in.Result = translucency::SolveResult();

@@ -152,7 +152,7 @@ public:
   ///@{
   /**
    * Iterative solvers: relative residual ||b - M phi|| / ||b|| to reach per
-   * channel. Default 1e-3, the interactive stopping rule: the boundary
+   * channel. Default 1e-2, the interactive stopping rule: the boundary
    * fluence within 1 % of the converged solution, cold and warm-started
    * (translucency::InteractiveRelTol, Documentation/Solvers.md). Set it
    * (e.g. 1e-10) for a tighter solve.
@@ -225,13 +225,15 @@ public:
 
   ///@{
   /// Linear solver by name; "" or "default" (default "") = the chosen
-  /// solver's default. Discrete divergence and FEM: a name of
-  /// translucency::GetLinearSolverNames() (by default "cg-jacobi" below
-  /// 20,000 unknowns, "multigrid-agg" above: VertexDiffusionSolver::
-  /// GetDefaultLinearSolverName(int)),
-  /// "transcut-multires", "multigrid-cg", ...). QuadGraph and grid:
-  /// "bicgstab" (default) or "relaxation". An unknown name makes RequestData
-  /// fail with an error listing the known names.
+  /// solver's default. The names each solver accepts are its registry
+  /// entry's (translucency::GetAcceptedLinearSolvers, GetLinearSolverTable):
+  /// discrete divergence and FEM every solver of symmetric positive definite
+  /// systems this build has (translucency::GetLinearSolverNames(); by
+  /// default "cg-jacobi" below 20,000 unknowns, "multigrid-agg" above:
+  /// VertexDiffusionSolver::GetDefaultLinearSolverName(int)); QuadGraph and
+  /// grid "bicgstab" (default) or "relaxation"; SP3 "bicgstab" or
+  /// "multigrid-agg"; Monte Carlo ignores it. Any other name makes
+  /// RequestData fail with an error naming the solver and what it accepts.
   vtkSetStdStringFromCharMacro(LinearSolver);
   vtkGetCharFromStdStringMacro(LinearSolver);
   ///@}
@@ -242,6 +244,12 @@ public:
   /// translucency::GetNonSymmetricLinearSolverNames() (quadgraph, grid).
   /// The array is owned by the filter.
   vtkStringArray* GetAvailableLinearSolvers();
+
+  /// The linear solvers each solver accepts, as pairs (solver name, linear
+  /// solver name) in registry order: the plugin's Linear Solver drop-down
+  /// lists "default" and the chosen Solver's names (its decorator
+  /// pqTranslucencyLinearSolverDecorator). The array is owned by the filter.
+  vtkStringArray* GetLinearSolverTable();
 
   ///@{
   /// QuadGraph and grid: coarse-to-fine initialisation (default off).
@@ -566,7 +574,7 @@ protected:
   int RequestDistributed(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
 
   int Solver = SOLVER_DIVERGENCE;
-  double RelTol = 1e-3; // translucency::InteractiveRelTol (checked by a test)
+  double RelTol = 1e-2; // translucency::InteractiveRelTol (checked by a test)
   int MaxIter = 2000;
   bool WarmStart = true;
   bool AcceptUnconverged = false;

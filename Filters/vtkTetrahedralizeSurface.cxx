@@ -858,11 +858,17 @@ double FirstParameter(const MeshSettings& s, const CountModel& model, double vol
   return parameter;
 }
 
+/// How far a count may miss TargetNumberOfTets before the filter says why
+/// (vtkTetrahedralizeSurface.h: "within 25 %").
+constexpr double TargetTolerance = 0.25;
+
 /// The mesher's runs: one for the first size parameter, a second one
 /// correcting the parameter when the count misses TargetNumberOfTets by more
-/// than 15 %, and (graded) a third on the secant through the two.
-/// `progress` reports the filter's progress. Throws translucency::Error as
-/// FirstParameter.
+/// than 15 %, and a third on the secant of log N against log h through the
+/// two when the second still misses (the count is not a power of the size:
+/// graded layers grow as h^-2, TetGen's quality bound refines near the
+/// surface). `progress` reports the filter's progress. Throws
+/// translucency::Error as FirstParameter.
 bool MeshToTarget(const MeshSettings& s, const Surface& surface, double volume,
   const std::function<void(double)>& progress, std::vector<double>& points,
   std::vector<int>& tets, std::string& error)
@@ -887,25 +893,93 @@ bool MeshToTarget(const MeshSettings& s, const Surface& surface, double volume,
   progress(0.5);
   const double firstParameter = parameter;
   parameter *= std::pow(ratio, model.Exponent);
+  std::vector<double> firstPoints;
+  std::vector<int> firstTets;
+  firstPoints.swap(points);
+  firstTets.swap(tets);
   if (!RunMesher(s, surface, diag, parameter, points, tets, error))
   {
     return false;
   }
-  // Graded: the count is not a power of h (the layer grows as h^-2, the
-  // surface's own resolution caps it): a third run on the secant of
-  // log N against log h through the two runs.
   const double ratio2 = static_cast<double>(tets.size() / 4) / target;
-  if (s.Grading > 0.0 && std::abs(ratio2 - 1.0) > 0.15 && std::abs(ratio2 - ratio) > 1e-3)
+  // The first run was closer (the second overshot): keep it.
+  if (std::abs(std::log(ratio)) < std::abs(std::log(ratio2)))
+  {
+    points.swap(firstPoints);
+    tets.swap(firstTets);
+  }
+  if (std::abs(ratio2 - 1.0) > 0.15 && std::abs(ratio2 - ratio) > 1e-3)
   {
     progress(0.7);
     const double slope = std::log(ratio2 / ratio) / std::log(parameter / firstParameter);
     if (std::isfinite(slope) && slope < 0.0)
     {
-      parameter *= std::exp(-std::log(ratio2) / slope);
-      return RunMesher(s, surface, diag, parameter, points, tets, error);
+      const double best = std::min(std::abs(std::log(ratio)), std::abs(std::log(ratio2)));
+      std::vector<double> thirdPoints;
+      std::vector<int> thirdTets;
+      if (!RunMesher(s, surface, diag, parameter * std::exp(-std::log(ratio2) / slope),
+            thirdPoints, thirdTets, error))
+      {
+        return false;
+      }
+      const double ratio3 = static_cast<double>(thirdTets.size() / 4) / target;
+      if (std::abs(std::log(ratio3)) < best)
+      {
+        points.swap(thirdPoints);
+        tets.swap(thirdTets);
+      }
     }
   }
   return true;
+}
+
+/**
+ * Why a count missed TargetNumberOfTets by more than TargetTolerance, and
+ * what to do, or "" when it did not. Too many tets: the mesher's coarsest
+ * mesh of this surface (its own size, no bound) is run; when it is itself
+ * above the tolerance, the surface's resolution is the floor (TetGen keeps
+ * every input triangle and refines near them for its quality bound).
+ */
+std::string ExplainMissedTarget(const MeshSettings& s, const Surface& surface, size_t made)
+{
+  const double target = static_cast<double>(s.TargetNumberOfTets);
+  if (s.TargetNumberOfTets <= 0 || std::abs(static_cast<double>(made) / target - 1.0) <= TargetTolerance)
+  {
+    return std::string();
+  }
+  std::ostringstream why;
+  why << "TargetNumberOfTets " << s.TargetNumberOfTets << ": the mesh has " << made
+      << " tets (" << std::showpos
+      << std::lround(100.0 * (static_cast<double>(made) - target) / target) << std::noshowpos
+      << " %, more than " << std::lround(100 * TargetTolerance) << " % off). ";
+  std::vector<double> points;
+  std::vector<int> tets;
+  std::string error;
+  const bool remeshes = s.Mesher == "hxt" && s.UniformSizing;
+  if (static_cast<double>(made) > target && !remeshes &&
+    RunMesher(s, surface, BoundingDiagonal(surface), 0.0, points, tets, error))
+  {
+    const size_t floor = tets.size() / 4;
+    if (static_cast<double>(floor) > (1.0 + TargetTolerance) * target)
+    {
+      why << "The input surface's resolution sets the floor: its " << surface.Triangles.size()
+          << " triangles are kept by the " << s.Mesher
+          << " mesher, and the coarsest mesh it makes of this surface has " << floor
+          << " tets. For fewer tets, decimate the surface first (ParaView: Decimate; VTK: "
+             "vtkQuadricDecimation)";
+      if (vtkTetrahedralizeSurface::HasMesher("hxt"))
+      {
+        why << ", or let the hxt mesher re-mesh it (Mesher hxt with UniformSizing; CLI: "
+               "--mesher hxt --uniform-size)";
+      }
+      why << ".";
+      return why.str();
+    }
+  }
+  why << "The " << s.Mesher
+      << " mesher's count does not follow its size bound closely on this surface; set the "
+         "size directly with MaxTetVolume (CLI: --max-tet-volume) to choose it.";
+  return why.str();
 }
 
 /// The output grid: the mesher's points and tets in Morton order (or as
@@ -1069,6 +1143,12 @@ int vtkTetrahedralizeSurface::RequestSerial(
   {
     vtkErrorMacro(<< e.what());
     return 0;
+  }
+  // A count far from the target: a warning saying why and what to do.
+  const std::string missed = ExplainMissedTarget(settings, surface, tets.size() / 4);
+  if (!missed.empty())
+  {
+    vtkWarningMacro(<< missed);
   }
   this->UpdateProgress(0.9);
   // 5. The output grid.

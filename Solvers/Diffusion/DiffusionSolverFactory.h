@@ -14,6 +14,7 @@
 #include "DiffusionSolver.h"
 #include "Registry.h"
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,11 +36,26 @@ struct DiffusionSolverTraits
   bool SupportsFrequency = false;
   /// SolveTimeResolved is implemented (else the interface refuses it).
   bool SupportsTime = false;
-  /// One system distributed over the ranks of a communicator (MPI): every
-  /// rank solves with its own piece of the mesh (Solvers/Parallel/).
+  /**
+   * The solver has a distributed variant: one system over the ranks of an
+   * MPI communicator, every rank solving with its own piece of the mesh
+   * (DiffusionSolver::SetCommunicator, DiffusionProblem::PointKeys). The
+   * optional Parallel layer registers it when it is built
+   * (RegisterDistributedDiffusionSolver: divergence and fem);
+   * DiffusionFrontEnd::SetCommunicator chooses it by this trait.
+   */
   bool Distributed = false;
+  /// The distributed variant's factory (set with Distributed).
+  std::function<std::unique_ptr<DiffusionSolver>()> CreateDistributed;
   /// The options its SetOptions reads (DiffusionOption names).
   std::vector<std::string> Options;
+  /// The linear solvers its SetLinearSolver accepts: registered names of the
+  /// linear-solver registry this build has (GetLinearSolverRegistry), in
+  /// listing order; "" (the solver's own default by size) is accepted too.
+  /// Empty exactly when HasLinearSolverChoice is false. The filter refuses
+  /// any other name before solving, and the plugin's Linear Solver drop-down
+  /// lists only these for the chosen Solver.
+  std::vector<std::string> LinearSolvers;
 };
 
 /// The boolean traits as flags, to register an entry on one line:
@@ -57,9 +73,29 @@ enum : unsigned
 };
 }
 
-/// Traits from DiffusionTrait flags and the option names.
-DiffusionSolverTraits MakeDiffusionSolverTraits(
-  unsigned flags, std::vector<std::string> options = {});
+/// Traits from DiffusionTrait flags, the option names and the accepted
+/// linear solvers (DiffusionSolverTraits::LinearSolvers).
+DiffusionSolverTraits MakeDiffusionSolverTraits(unsigned flags,
+  std::vector<std::string> options = {}, std::vector<std::string> linearSolvers = {});
+
+/**
+ * The linear solvers the solver called `name` accepts (its registry entry's
+ * LinearSolvers; empty for a solver without a choice). Throws as
+ * GetDiffusionSolverRegistry().Get(name) for an unknown solver.
+ */
+const std::vector<std::string>& GetAcceptedLinearSolvers(const std::string& name);
+
+/**
+ * Throws translucency::Error unless the solver called `solver` accepts the
+ * linear solver `linearSolver` (a registered name or a composition
+ * "KRYLOV/PRECONDITIONER"; "" is always accepted). The message names the
+ * solver and lists what it accepts, e.g. "the sp3 solver does not accept
+ * the linear solver 'relaxation' (it accepts: bicgstab, multigrid-agg;
+ * empty = its default)", "unknown linear solver 'x' for the fem solver (it
+ * accepts: ...)", or a linear solver of the registry this build lacks with
+ * its remedy. A solver without a choice (Monte Carlo) accepts only "".
+ */
+void CheckLinearSolverAccepted(const std::string& solver, const std::string& linearSolver);
 
 /// Names of the registered solvers with every trait of `flags` (listing order).
 std::vector<std::string> GetDiffusionSolverNamesWith(unsigned flags);
@@ -81,6 +117,25 @@ std::vector<std::string> GetDiffusionSolverNames();
  * naming the unknown name and listing the known ones.
  */
 std::unique_ptr<DiffusionSolver> CreateDiffusionSolver(const std::string& name);
+
+/**
+ * Registers `create` as the distributed variant of the registered solver
+ * `name` (its traits then say Distributed). Called by the Parallel layer
+ * when the library is loaded (Solvers/Parallel/DistributedVertexSolver.cxx),
+ * so a build without it has no distributed variant. Throws
+ * translucency::Error for an unknown name.
+ */
+void RegisterDistributedDiffusionSolver(
+  const std::string& name, std::function<std::unique_ptr<DiffusionSolver>()> create);
+
+/**
+ * A new distributed variant of the solver `name` (trait Distributed), to be
+ * given its communicator (DiffusionSolver::SetCommunicator). Throws
+ * translucency::Error for an unknown name or a solver without one, naming
+ * those with one ("the quadgraph solver has no distributed variant
+ * (solvers with one: divergence, fem)").
+ */
+std::unique_ptr<DiffusionSolver> CreateDistributedDiffusionSolver(const std::string& name);
 
 /// "  name    one line of help" per solver, for --help texts.
 std::string GetDiffusionSolverHelp(const std::string& indent = "  ");

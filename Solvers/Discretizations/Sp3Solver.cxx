@@ -2,6 +2,7 @@
 
 #include "Error.h"
 #include "Fresnel.h"
+#include "LinearSolver.h"
 #include "ResourceLimits.h"
 #include "Strings.h"
 #include "TetMesh.h"
@@ -131,14 +132,7 @@ std::vector<double> Sp3BoundaryRadiance(const TetMesh& mesh, const std::vector<d
   {
     const std::size_t i = static_cast<std::size_t>(boundary[static_cast<std::size_t>(k)]);
     const double* nrm = &normals[3 * i];
-    double cosOut = 1.0;
-    if (viewPoint)
-    {
-      const double* x = mesh.GetPoint(static_cast<int>(i));
-      const double d[3] = { viewPoint[0] - x[0], viewPoint[1] - x[1], viewPoint[2] - x[2] };
-      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
-    }
+    const double cosOut = ViewCosine(viewPoint, mesh.GetPoint(static_cast<int>(i)), nrm);
     const Sp3BoundaryCoefficients& coefficient = coefficients.find(pointEta[i])->second;
     for (int c = 0; c < 3; ++c)
     {
@@ -1183,17 +1177,31 @@ std::string Sp3Solver::ChoosePreconditioner(const TetMesh& mesh) const
       ? "jacobi"
       : "multigrid-agg";
   }
-  if (requested == "jacobi" || requested == "cg-jacobi" || requested == "bicgstab")
+  // The names it accepts are its registry entry's (DiffusionSolverTraits::
+  // LinearSolvers: bicgstab, multigrid-agg), each mapped here by its traits
+  // (LinearSolverTraits) to the block preconditioner of SP3's BiCGSTAB:
+  // BiCGSTAB with the diagonal, or one aggregation multigrid cycle per block.
+  // "jacobi" is the core's short name of the first.
+  if (requested == "jacobi")
   {
     return "jacobi";
   }
-  if (requested == "multigrid-agg")
+  if (const auto* entry = GetLinearSolverRegistry().Find(ResolveLinearSolverName(requested)))
   {
-    return "multigrid-agg";
+    const LinearSolverTraits& traits = entry->Properties;
+    if (traits.Krylov == "bicgstab" && traits.Preconditioner == "jacobi")
+    {
+      return "jacobi";
+    }
+    if (traits.Preconditioner == "aggregation")
+    {
+      return "multigrid-agg";
+    }
   }
   throw Error("sp3: linear solver '" + LinearSolver_ +
-    "' is not available for the SP3 block system (known: jacobi, multigrid-agg; \"\" chooses "
-    "by size)");
+    "' is not available for the SP3 block system: its BiCGSTAB takes the diagonal "
+    "(\"bicgstab\") or an aggregation multigrid cycle (\"multigrid-agg\") as preconditioner; "
+    "\"\" chooses by size");
 }
 
 void Sp3Solver::FillReport(const TetMesh& mesh, SolverReport& report) const
@@ -1279,15 +1287,7 @@ bool Sp3Solver::Solve(
   ComputeExitance(problem, {}, {});
   if (extended)
   {
-    // The total fluence rate: diffuse plus the unscattered beam.
-    for (std::size_t k = 0; k < fluence.size(); ++k)
-    {
-      fluence[k] += collimated.Fluence[k];
-    }
-    report.CollimatedFluence = std::move(collimated.Fluence);
-    report.CollimatedEntering = collimated.Entering;
-    report.CollimatedScattered = collimated.Scattered;
-    report.CollimatedAbsorbed = collimated.Absorbed;
+    AddCollimatedFluence(collimated, fluence, report);
   }
   return true;
 }
@@ -1385,17 +1385,7 @@ bool Sp3Solver::SolveFrequencyDomain(const DiffusionProblem& given, double frequ
   // from it (X_ untouched), and Phi1_/Phi2_ hold the real parts.
   if (extended)
   {
-    report.CollimatedFluence.resize(half);
-    report.CollimatedFluencePhase.resize(half);
-    for (std::size_t k = 0; k < half; ++k)
-    {
-      fluence[k] += collimatedFluence[k];
-      report.CollimatedFluence[k] = std::abs(collimatedFluence[k]);
-      report.CollimatedFluencePhase[k] = std::arg(collimatedFluence[k]);
-    }
-    report.CollimatedEntering = collimated.Entering;
-    report.CollimatedScattered = collimated.Scattered;
-    report.CollimatedAbsorbed = collimated.Absorbed;
+    AddCollimatedFluence(collimated, collimatedFluence, fluence, report);
   }
   return true;
 }

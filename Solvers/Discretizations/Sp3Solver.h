@@ -156,8 +156,11 @@ std::vector<double> ComputeSp3SourceLoad(const TetMesh& mesh, const OpticalPrope
  * default below VertexDiffusionSolver::LargeSystemUnknowns vertices) or one
  * multigrid-agg cycle on each diagonal block ("multigrid-agg", the default
  * from there on), the three channels together; warm start from the last
- * solution on the same mesh. SetLinearSolver: "" (by size), "jacobi" (or
- * "cg-jacobi"), "multigrid-agg"; others are an error.
+ * solution on the same mesh. SetLinearSolver: "" (by size), or the names
+ * of its registry entry (DiffusionSolverTraits::LinearSolvers, what the
+ * filter and the plugin offer): "bicgstab" (the diagonal; the short
+ * "jacobi" too) or "multigrid-agg", mapped by their LinearSolverTraits;
+ * others are an error.
  *
  * Sources: the boundary irradiance q (diffusive, in the boundary
  * conditions); point sources as isotropic delta sources Q; pencil beams by

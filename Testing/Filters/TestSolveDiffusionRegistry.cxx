@@ -11,6 +11,9 @@
 #include <vtkStringArray.h>
 
 #include <algorithm>
+#include <map>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -82,4 +85,40 @@ TEST(SolveDiffusionRegistry, AvailableLinearSolversAreTheBuiltRegistryEntries)
   // Asked again (ParaView asks on every information update): the same list.
   EXPECT_EQ(solve->GetAvailableLinearSolvers()->GetNumberOfValues(),
     static_cast<vtkIdType>(expected.size()));
+}
+
+// The plugin's Linear Solver drop-down follows the chosen Solver through
+// GetLinearSolverTable(): pairs (solver, linear solver), exactly each registry
+// entry's accepted list in order, every name one of GetAvailableLinearSolvers().
+TEST(SolveDiffusionRegistry, LinearSolverTableIsEachSolversAcceptedList)
+{
+  vtkNew<vtkSolveDiffusion> solve;
+  vtkStringArray* table = solve->GetLinearSolverTable();
+  ASSERT_NE(table, nullptr);
+  ASSERT_EQ(table->GetNumberOfValues() % 2, 0);
+  std::map<std::string, std::vector<std::string>> listed;
+  for (vtkIdType i = 0; i < table->GetNumberOfValues(); i += 2)
+  {
+    listed[table->GetValue(i)].push_back(table->GetValue(i + 1));
+  }
+  vtkStringArray* available = solve->GetAvailableLinearSolvers();
+  std::vector<std::string> names;
+  for (vtkIdType i = 0; i < available->GetNumberOfValues(); ++i)
+  {
+    names.push_back(available->GetValue(i));
+  }
+  for (const auto& entry : translucency::GetDiffusionSolverRegistry().GetEntries())
+  {
+    SCOPED_TRACE(entry.Name);
+    EXPECT_EQ(listed[entry.Name], entry.Properties.LinearSolvers);
+    for (const std::string& name : entry.Properties.LinearSolvers)
+    {
+      EXPECT_NE(std::find(names.begin(), names.end(), name), names.end());
+    }
+  }
+  EXPECT_TRUE(listed["montecarlo"].empty());
+  EXPECT_EQ(listed["sp3"], (std::vector<std::string>{ "bicgstab", "multigrid-agg" }));
+  EXPECT_EQ(listed["grid"], (std::vector<std::string>{ "bicgstab", "relaxation" }));
+  // Asked again (ParaView asks on every information update): the same table.
+  EXPECT_EQ(solve->GetLinearSolverTable()->GetNumberOfValues(), table->GetNumberOfValues());
 }

@@ -20,7 +20,8 @@ marker file and the screenshot:
    widget and the whole screen dumped (xwd); then two handles, painted along
    the line.
    Then Solve Diffusion the active source (the Properties panel builds its
-   widgets, the Linear Solver drop-down included).
+   widgets, the Linear Solver drop-down included), each Solver chosen in
+   the panel and the Linear Solver drop-down's names read back.
 3. Plot Over Line downstream of Solve Diffusion, in a line chart view.
 4. The crash of issue 20: Linear Solver set to an unknown name, applied, all
    views rendered; the failed output must be empty and the GUI alive.
@@ -92,6 +93,73 @@ def array_names(attributes):
     return [attributes.GetArrayName(i) for i in range(attributes.GetNumberOfArrays())]
 
 
+def colouring(display, view, name):
+    """What ParaView chose for `display`: array, LUT mode and component,
+    and the colour bar's title and component title."""
+    lut = GetColorTransferFunction(name)
+    bar = GetScalarBar(lut, view)
+    return {"array": [str(v) for v in display.ColorArrayName],
+            "vector_mode": str(lut.VectorMode).strip("'\""), "vector_component": int(lut.VectorComponent),
+            "title": str(bar.Title), "component_title": str(bar.ComponentTitle)}
+
+
+def default_colouring(solve, radiance, view):
+    found = {}
+    shown = GetDisplayProperties(radiance, view)
+    shown.SetScalarBarVisibility(view, True)  # the colour bar as the toolbar button shows it
+    found["radiance"] = colouring(shown, view, "Radiance")
+    shown.SetScalarBarVisibility(view, False)
+    solved = Show(solve, view)
+    ColorBy(solved, ("POINTS", "Fluence"))  # the combo box: the array, its default mode
+    solved.SetScalarBarVisibility(view, True)
+    Hide(radiance, view)
+    view.OrientationAxesVisibility = 0
+    view.CameraPosition = [0.0, 14.5, 80.0]
+    view.CameraFocalPoint = [0.0, 14.5, 0.0]
+    view.CameraViewUp = [0.0, 1.0, 0.0]
+    Render(view)
+    process_events()
+    found["fluence"] = colouring(solved, view, "Fluence")
+    SaveScreenshot(os.path.join(OUT, "fluence_colour_bar.png"), view,
+                   ImageResolution=[640, 480], TransparentBackground=0)
+    solved.SetScalarBarVisibility(view, False)
+    Hide(solve, view)
+    Show(radiance, view)
+    Render(view)
+    process_events()
+    return found
+
+
+def linear_solver_choices(solve):
+    """The Linear Solver drop-down's names for each Solver chosen in the
+    panel (unchecked values: the GUI's decorator must follow them), and the
+    value left after choosing quadgraph's "relaxation" then divergence."""
+    solver = solve.GetProperty("Solver").SMProperty
+    linear = solve.GetProperty("LinearSolver").SMProperty
+    domain = solve.GetProperty("LinearSolver").GetDomain("list")
+    solvers = solver.FindDomain("vtkSMEnumerationDomain")
+    checked = solver.GetElement(0)
+    choices = {}
+    for i in range(solvers.GetNumberOfEntries()):
+        solver.SetUncheckedElement(0, solvers.GetEntryValue(i))
+        process_events()
+        choices[solvers.GetEntryText(i)] = [
+            domain.GetString(k) for k in range(domain.GetNumberOfStrings())]
+    solver.SetUncheckedElement(0, solvers.GetEntryValueForText("quadgraph"))
+    process_events()
+    linear.SetUncheckedElement(0, "relaxation")
+    solver.SetUncheckedElement(0, solvers.GetEntryValueForText("divergence"))
+    process_events()
+    choices["value_after_switch"] = str(linear.GetUncheckedElement(0))
+    solve.UpdatePropertyInformation()
+    table = [str(v) for v in solve.GetProperty("LinearSolverTable")]
+    choices["table"] = [list(pair) for pair in zip(table[0::2], table[1::2])]
+    solver.SetUncheckedElement(0, checked)  # back to the applied state
+    linear.ClearUncheckedElements()
+    process_events()
+    return choices
+
+
 def run():
     results = {"seconds": {}}
     start = time.perf_counter()
@@ -126,6 +194,13 @@ def run():
         Hide(proxy, view)
 
     stage("chain")
+
+    # 1a. The default colouring (issue 33): Outgoing Radiance, shown as the
+    # GUI shows it, is coloured by its active scalars Radiance, component G
+    # (not the magnitude of R, G, B), with the unit in the colour bar's
+    # title; Fluence, chosen in the colour combo box, likewise. The view with
+    # the colour bar is saved for Documentation/images.
+    results["default_colouring"] = default_colouring(solve, radiance, view)
 
     # 1b. Surface Irradiance as the menu creates it: the default light must be
     # there (it was dropped: the XML gave default values without a size), the
@@ -219,6 +294,11 @@ def run():
     domain = solve.GetProperty("LinearSolver").GetDomain("list")
     results["linear_solver_choices"] = [
         domain.GetString(i) for i in range(domain.GetNumberOfStrings())]
+    # 2b. The Linear Solver drop-down follows the Solver drop-down before
+    # Apply (issue 33): each Solver chosen in the panel (its unchecked value,
+    # what the combo box sets), the drop-down's domain read back; then a
+    # choice the next Solver does not accept goes back to "default".
+    results["linear_solver_choices_by_solver"] = linear_solver_choices(solve)
 
     stage("panel")
 

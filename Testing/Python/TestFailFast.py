@@ -78,7 +78,7 @@ class FailFastTest(unittest.TestCase):
             translucency.update(self.solve)
         message = str(raised.exception)
         self.assertIn("vtkSolveDiffusion", message)
-        self.assertIn("unknown LinearSolver 'nosuchsolver'", message)
+        self.assertIn("unknown linear solver 'nosuchsolver'", message)
         self.assertIn("cg-jacobi", message)
         self.assertEqual(self.solve.GetOutput().GetNumberOfPoints(), 0)
 

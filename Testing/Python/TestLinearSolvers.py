@@ -61,7 +61,7 @@ class LinearSolverTest(unittest.TestCase):
         self.assertEqual(len(messages.errors), 1, messages.errors)
         message = messages.errors[0]
         self.assertIn("no-such-solver", message)
-        match = re.search(r"this build has: ([^;)]*)", message)
+        match = re.search(r"it accepts: ([^;)]*)", message)
         self.assertIsNotNone(match, message)
         names = [n.strip() for n in match.group(1).split(",")]
         for name in BASE_NAMES:

@@ -15,7 +15,8 @@ How to run (ctest does this; needs an X display, e.g. Xvfb):
 2. Checks that the GUI survived: exit code 0 (a crash gives a signal), the
    marker written at the end of the script, no error.txt.
 3. Checks what the script saw: the Linear Solver drop-down lists this build's
-   solvers, "default" first; the failed Solve Diffusion output was a clean
+   solvers, "default" first, and follows the Solver chosen in the panel (only
+   what it accepts; an unaccepted choice goes back to "default"); the failed Solve Diffusion output was a clean
    empty vtkUnstructuredGrid (vtkPoints present, no arrays) and Outgoing
    Radiance downstream empty; after the repair, Radiance again.
 4. Paint Scattering Coefficients (issue 33): created without a VTK warning
@@ -152,6 +153,7 @@ def keep_for_inspection(png, name="TestParaViewGui.png"):
 
 
 class ParaViewGuiTest(unittest.TestCase):
+    maxDiff = None  # the GUI script's whole traceback
 
     @classmethod
     def setUpClass(cls):
@@ -197,10 +199,54 @@ class ParaViewGuiTest(unittest.TestCase):
             return json.load(f)
 
     def test_linear_solver_drop_down(self):
+        # The panel of the divergence solver (the applied Solver): its names.
         choices = self.results()["linear_solver_choices"]
         self.assertEqual(choices[0], "default")
-        for name in ("cg-jacobi", "multigrid-agg", "bicgstab", "relaxation"):
+        for name in ("cg-jacobi", "multigrid-agg"):
             self.assertIn(name, choices)
+        self.assertEqual(
+            choices, self.results()["linear_solver_choices_by_solver"]["divergence"])
+
+    def test_linear_solver_drop_down_follows_the_solver(self):
+        # Issue 33: the Linear Solver list offered solvers the chosen Solver
+        # cannot use. The panel's decorator sets the drop-down to "default"
+        # and the chosen Solver's row of LinearSolverTable (the registry's
+        # lists, TestSolveDiffusionRegistry) as the Solver changes, before Apply.
+        choices = self.results()["linear_solver_choices_by_solver"]
+        table = {}
+        for solver, name in choices["table"]:
+            table.setdefault(solver, []).append(name)
+        for solver in ("divergence", "fem", "quadgraph", "grid", "montecarlo", "sp3"):
+            with self.subTest(solver=solver):
+                self.assertEqual(choices[solver], ["default"] + table.get(solver, []))
+        self.assertEqual(choices["sp3"], ["default", "bicgstab", "multigrid-agg"])
+        self.assertEqual(choices["grid"], ["default", "bicgstab", "relaxation"])
+        self.assertEqual(choices["montecarlo"], ["default"])
+        self.assertIn("multigrid-agg", choices["divergence"])
+        self.assertNotIn("relaxation", choices["divergence"])
+        # quadgraph's "relaxation", then divergence: back to "default".
+        self.assertEqual(choices["value_after_switch"], "default")
+
+    def test_colouring_by_a_named_component_with_units(self):
+        # Issue 33: ParaView coloured Fluence by the magnitude of (R, G, B), an
+        # unphysical quantity, with no unit. The plugin's settings make it the
+        # component G with the unit in the colour bar's title.
+        colouring = self.results()["default_colouring"]
+        for name, title in (("radiance", "Radiance (W/(mm^2 sr))"),
+                            ("fluence", "Fluence (W/mm^2)")):
+            with self.subTest(array=name):
+                found = colouring[name]
+                self.assertEqual(found["array"][1], name.capitalize())
+                self.assertEqual(found["vector_mode"], "Component")
+                self.assertEqual(found["vector_component"], 1)
+                self.assertEqual(found["title"], title)
+                self.assertEqual(found["component_title"], "G")
+        png = self.file("fluence_colour_bar.png")
+        self.assertGreater(foreground_fraction(read_png(png)), MIN_FOREGROUND)
+        keep_for_inspection(png, "TestParaViewGui_fluence_colour_bar.png")
+        if UPDATE:
+            shutil.copyfile(png, os.path.join(SOURCE_DIR, "Documentation", "images",
+                                              "gui_fluence_colour_bar.png"))
 
     def test_default_light_and_interactive_light(self):
         results = self.results()

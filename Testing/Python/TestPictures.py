@@ -17,10 +17,17 @@ deliberate change of the picture, look at the new image, then run it with
    complete (provenance, per-channel errors, z-scores against Monte Carlo,
    error-vs-time curves); the
    error-vs-time sweep's non-convergence is one summary line, not a flood.
+   Issue 33: no error map of the reference (fem) against itself and no
+   reference curve in error-vs-time; each error map on its own symmetric
+   scale (JSON error_map), errors_overview.png all of them on the shared
+   (largest) scale; Monte Carlo's points with a relative standard error
+   over 10 % masked in its map.
 2. Without DISPLAY: `compare` and `render --png` stop before solving with one
    line telling the user to run under `xvfb-run -a` (exit 1, no abort).
 3. `render --slice-png` against a committed baseline; its colour bar is
-   inferno (the pixels at its two ends), the error maps' bars are cool-warm.
+   inferno (the pixels at its two ends), the error maps' bars are cool-warm;
+   the bar's title has rows of its own above the bar and the tick labels
+   are below it (issue 33: the two overlapped).
 4. `--version` prints the CMake project version and a revision; the JSON of
    render and compare carries the same, every option with its value, the
    lights (the default ones flagged) and the seed; `--quiet` drops progress.
@@ -75,6 +82,24 @@ def read_png(path):
     return image, pixels.astype(int)  # row 0 at the top
 
 
+def text_rows_around_bar(pixels):
+    """(rows with white text just above the colour bar, rows with white text
+    below it): the bar is the run of rows in the bottom 16 % whose pixels are
+    mostly coloured; text is near-white (the colour bar's font colour)."""
+    h, w, _ = pixels.shape
+    coloured = [(np.ptp(pixels[y], axis=1) > 40).sum() > 0.5 * w for y in range(h)]
+    bar = [y for y in range(int(0.84 * h), h) if coloured[y]]
+    if not bar:
+        return 0, 0
+    top, bottom = min(bar), max(bar)  # image rows go down
+
+    def white(y):
+        return int((pixels[y].min(axis=1) > 200).sum()) > 2
+    above = sum(1 for y in range(max(0, top - 30), top) if white(y))
+    below = sum(1 for y in range(bottom + 1, h) if white(y))
+    return above, below
+
+
 def bar_row(pixels):
     """The middle row of the horizontal colour bar (in the bottom 16 % of the
     picture): the row with the most coloured (not grey) pixels."""
@@ -117,10 +142,18 @@ class PicturesTest(unittest.TestCase):
                 self.assertNotIn("Abort", result.stderr)
                 self.assertEqual(result.returncode, 0, result.stderr)
                 for name in names:
-                    for kind in ("radiance", "error"):
+                    # fem is the reference: no map of it against itself (issue 33).
+                    kinds = ("radiance",) if name == "fem" else ("radiance", "error")
+                    for kind in kinds:
                         png = os.path.join(out, "%s_%s.png" % (name, kind))
                         image, _ = read_png(png)
                         self.assertEqual(image.GetDimensions()[:2], (320, 240), png)
+                    if name == "fem":
+                        self.assertFalse(os.path.exists(os.path.join(out, "fem_error.png")))
+                # The overview: every error map side by side on the shared scale.
+                image, _ = read_png(os.path.join(out, "errors_overview.png"))
+                self.assertEqual(image.GetDimensions()[:2], (320 * (len(names) - 1), 240))
+                self.assertEqual([f for f in os.listdir(out) if f.endswith(".part.png")], [])
                 self.assertTrue(os.path.exists(os.path.join(out, "error_vs_time.png")))
                 table, _, against = result.stdout.partition("\n  against montecarlo")
                 self.assertEqual(sorted(re.findall(r"^  (\w+) ", table, re.M)),
@@ -136,10 +169,27 @@ class PicturesTest(unittest.TestCase):
         self.assertEqual(stats["provenance"]["options"]["--solvers"], SOLVERS)
         by_name = {s["solver"]: s for s in stats["solvers"]}
         self.assertEqual(set(by_name), set(names))
+        # Each error map on its own symmetric scale (the 99th percentile of its
+        # |error|); the overview's shared scale is the largest; Monte Carlo's
+        # noisy points (3000 photons) are masked in its map.
+        maps = {name: s["error_map"] for name, s in by_name.items() if name != "fem"}
+        self.assertNotIn("error_map", by_name["fem"])
+        self.assertNotIn("error_vs_time", by_name["fem"])  # the reference: 0 by definition
+        shared = max(m["scale_percent"] for m in maps.values())
+        for name, m in maps.items():
+            self.assertEqual(m["picture"], name + "_error.png")
+            self.assertGreater(m["scale_percent"], 0.0, name)
+            self.assertAlmostEqual(m["shared_scale_percent"], shared, places=9)
+        self.assertGreater(maps["montecarlo"]["masked_points"], 0)
+        self.assertLess(maps["montecarlo"]["masked_points"], maps["montecarlo"]["points"])
+        self.assertEqual(maps["divergence"]["masked_points"], 0)  # fem is no Monte Carlo
+        # divergence is close to fem: its own scale is far below the shared one.
+        self.assertLess(maps["divergence"]["scale_percent"], 0.5 * shared)
         for name, s in by_name.items():
             self.assertEqual(set(s["radiance_relative_error_per_channel"]), {"R", "G", "B"})
             if name != "montecarlo":
-                self.assertIn("error_vs_time", s, name)
+                if name != "fem":
+                    self.assertIn("error_vs_time", s, name)
                 # z-scores against Monte Carlo over the points its standard error allows.
                 a = s["fluence_against_montecarlo"]
                 total = a["R"]["points"] + a["R"]["masked"]  # the boundary points
@@ -186,6 +236,11 @@ class PicturesTest(unittest.TestCase):
         row = bar_row(pixels)
         for colour in INFERNO_ENDS:
             self.assertTrue(near(colour, row), "inferno end %s not in the colour bar" % (colour,))
+        # Readable (issue 33): the title on its own rows above the bar, the
+        # tick labels below it (they shared a row and ran into each other).
+        title_rows, label_rows = text_rows_around_bar(pixels)
+        self.assertGreater(title_rows, 5, "no title above the colour bar")
+        self.assertGreater(label_rows, 5, "no tick labels below the colour bar")
         self.assertTrue(os.path.exists(BASELINE), "missing baseline %s" % BASELINE)
         old, old_pixels = read_png(BASELINE)
         self.assertEqual(new.GetDimensions(), old.GetDimensions())

@@ -11,10 +11,14 @@ TestFilters compares with the core's registry).
 
 1. The drop-down lists exactly the filter's names, "default" first, and the
    property's default value is "default".
-2. Every entry runs: a symmetric solver's name with the divergence and fem
-   solvers, a non-symmetric one's with quadgraph, "default" with all four;
-   no error (translucency.raise_on_error), a Fluence array, and the filter
-   reports the linear solver it used (the entry, or the solver's default).
+2. The information property LinearSolverTable (pairs solver, linear
+   solver: what the GUI's decorator lists for the chosen Solver) is the
+   filter's table and covers the drop-down; sp3 takes bicgstab and
+   multigrid-agg, quadgraph and grid bicgstab and relaxation.
+3. Every solver with every name of the drop-down: the names of its row run
+   (no error, a Fluence array, the filter reports the linear solver it
+   used), every other name fails with an error naming what it accepts
+   (issue 33: the list offered solvers the chosen Solver could not use).
 
 Exits non-zero on failure (unittest). No rendering.
 """
@@ -62,28 +66,68 @@ class PluginLinearSolversTest(unittest.TestCase):
         self.assertIn("bicgstab", expected)
         self.assertEqual(self.solve.LinearSolver, "default")
 
-    def test_every_entry_runs(self):
+    def table(self):
+        """The proxy's LinearSolverTable (pairs solver, linear solver) as a
+        dict solver -> names: what the GUI's drop-down lists per Solver."""
+        self.solve.UpdatePropertyInformation()
+        values = list(self.solve.GetProperty("LinearSolverTable"))
+        self.assertEqual(len(values) % 2, 0)
+        table = {}
+        for solver, name in zip(values[0::2], values[1::2]):
+            table.setdefault(solver, []).append(name)
+        return table
+
+    def test_table_is_the_filters_and_covers_the_drop_down(self):
+        table = self.table()
+        array = translucency.vtkSolveDiffusion().GetLinearSolverTable()
+        expected = {}
+        for i in range(0, array.GetNumberOfValues(), 2):
+            expected.setdefault(array.GetValue(i), []).append(array.GetValue(i + 1))
+        self.assertEqual(table, expected)
+        self.assertEqual(sorted(table), sorted(VERTEX_SOLVERS + ["quadgraph", "grid", "sp3"]))
+        self.assertNotIn("montecarlo", table)  # no choice: the widget is hidden
+        listed = set(name for names in table.values() for name in names)
+        self.assertEqual(listed, set(self.drop_down()) - {"default"})
+        self.assertEqual(table["sp3"], ["bicgstab", "multigrid-agg"])
+        for solver in ("quadgraph", "grid"):
+            self.assertEqual(table[solver], ["bicgstab", "relaxation"])
+
+    def test_every_entry_runs_and_the_others_are_refused(self):
+        # Each solver with each name of the drop-down: the ones its row of the
+        # table lists run (no error, a Fluence array, the entry reported as
+        # used), every other fails with an error naming what it accepts.
         filter_object = self.solve.GetClientSideObject()
-        runs = 0
-        for name in self.drop_down():
-            if name == "default":
-                solvers = VERTEX_SOLVERS + ["quadgraph", "grid"]
-            elif name in NON_SYMMETRIC:
-                solvers = ["quadgraph"]
-            else:
-                solvers = VERTEX_SOLVERS
-            for solver in solvers:
+        table = self.table()
+        runs = refusals = 0
+        for solver in sorted(table):
+            for name in self.drop_down():
                 with self.subTest(linear_solver=name, solver=solver):
                     self.solve.Solver = solver
                     self.solve.LinearSolver = name
+                    if name != "default" and name not in table[solver]:
+                        with self.assertRaises(translucency.PipelineError) as raised:
+                            with translucency.raise_on_error():
+                                self.solve.UpdatePipeline()
+                        message = str(raised.exception)
+                        self.assertIn("the %s solver does not accept the linear solver '%s'"
+                                      % (solver, name), message)
+                        self.assertIn("it accepts: " + ", ".join(table[solver]), message)
+                        refusals += 1
+                        continue
                     with translucency.raise_on_error():
                         self.solve.UpdatePipeline()
                     data = servermanager.Fetch(self.solve)
                     self.assertIsNotNone(data.GetPointData().GetArray("Fluence"))
                     used = filter_object.GetLinearSolverUsed()
-                    self.assertEqual(used, DEFAULTS[solver] if name == "default" else name)
+                    if solver == "sp3":
+                        block = {"default": "jacobi", "bicgstab": "jacobi",
+                                 "multigrid-agg": "multigrid-agg"}[name]
+                        self.assertEqual(used, "bicgstab-block-" + block)
+                    else:
+                        self.assertEqual(used, DEFAULTS[solver] if name == "default" else name)
                     runs += 1
-        self.assertGreaterEqual(runs, 12)
+        self.assertGreaterEqual(runs, 15)
+        self.assertGreaterEqual(refusals, 10)
         self.solve.Solver = "divergence"
         self.solve.LinearSolver = "default"
 

@@ -88,6 +88,8 @@ def visible(decorator, values):
         expressions = decorator.findall("Expression")
         assert len(expressions) == 1, "a CompositeDecorator holds one Expression"
         return evaluate(expressions[0], values)
+    if kind == "TranslucencyLinearSolverDecorator":
+        return True  # the plugin's own: it filters the drop-down, never hides it
     raise AssertionError("unexpected decorator type %s" % kind)
 
 
@@ -110,8 +112,10 @@ def shown(prop, values):
 def referenced_properties(element):
     """Property names an element's decorators and required properties refer to."""
     for node in element.iter():
-        if node.tag == "PropertyWidgetDecorator" and node.get("property"):
-            yield node.get("property")
+        if node.tag == "PropertyWidgetDecorator":
+            for attribute in ("property", "solver_property", "table_property"):
+                if node.get(attribute):
+                    yield node.get(attribute)
         if node.tag == "RequiredProperties":
             for required in node.findall("Property"):
                 yield required.get("name")
@@ -183,6 +187,22 @@ class PluginXmlTest(unittest.TestCase):
                 self.assertEqual(info.get("information_only"), "1")
                 self.assertEqual(info.get("command"), "GetAvailableLinearSolvers")
                 self.assertIsNotNone(info.find("StringArrayHelper"))
+
+    def test_linear_solver_follows_the_solver(self):
+        # Issue 33: Solve Diffusion's Linear Solver has the plugin's decorator,
+        # fed by the filter's table of accepted linear solvers per solver.
+        proxy = next(p for _, p in proxies() if p.get("name") == "SolveDiffusion")
+        by_name = {p.get("name"): p for p in properties(proxy)}
+        kinds = [d.get("type") for d in decorators(by_name["LinearSolver"])]
+        self.assertIn("TranslucencyLinearSolverDecorator", kinds)
+        decorator = next(d for d in decorators(by_name["LinearSolver"])
+                         if d.get("type") == "TranslucencyLinearSolverDecorator")
+        self.assertEqual(by_name[decorator.get("solver_property")].find("EnumerationDomain")
+                         is not None, True)
+        table = by_name[decorator.get("table_property")]
+        self.assertEqual(table.get("information_only"), "1")
+        self.assertEqual(table.get("command"), "GetLinearSolverTable")
+        self.assertIsNotNone(table.find("StringArrayHelper"))
 
     def test_tables_have_a_label_and_column_headers(self):
         # Every repeatable property with several numbers per row (a table in the

@@ -3,9 +3,12 @@
 #include "DiffusionSolverFactory.h"
 #include "Error.h"
 #include "GridSolver.h"
+#include "LinearSolver.h"
 #include "MonteCarlo.h"
 #include "QuadGraph.h"
+#include "TestMeshes.h"
 #include "TestProblems.h"
+#include "TetMesh.h"
 #include "VertexDiffusionSolver.h"
 
 #include <gtest/gtest.h>
@@ -131,4 +134,91 @@ TEST(DiffusionSolverOptions, BadValueIsRefusedNamingIt)
     "unknown solver option 'gridspacing' (known options: anisotropy, grid-spacing, multilevel, "
     "photons, seed, time-step-recycled, two-point-flux)");
   EXPECT_NO_THROW(CheckDiffusionSolverOptions(SolverOptions{ { "Seed", 3 }, { "photons", 9 } }));
+}
+
+// Each entry lists the linear solvers its solver accepts (what the filter
+// checks and the plugin's Linear Solver drop-down offers): the solver object
+// itself decides, independently of the list, by solving with every linear
+// solver this build has. A listed name must solve; any other must be refused.
+TEST(DiffusionRegistry, LinearSolverListsAreWhatEachSolverAccepts)
+{
+  const translucency::testing::MeshData data = translucency::testing::CubeMesh(3, 6.0, 0.2, 3);
+  TetMesh mesh;
+  mesh.SetGeometry(data.Points, data.Tets);
+  const double muA[3] = { 0.02, 0.03, 0.04 }, muS[3] = { 1.0, 1.2, 1.4 };
+  const OpticalProperties material =
+    OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, muS, 1.3);
+  std::vector<double> irradiance(3 * static_cast<std::size_t>(mesh.GetNumberOfPoints()), 0.0);
+  for (int i : mesh.GetBoundaryPoints())
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      irradiance[3 * static_cast<std::size_t>(i) + c] = mesh.GetPoint(i)[2] > 5.999 ? 0.1 : 0.0;
+    }
+  }
+  const DiffusionProblem problem =
+    translucency::testing::MakeProblem(mesh, material, irradiance);
+  std::vector<std::string> built;
+  for (const auto& entry : GetLinearSolverRegistry().GetEntries())
+  {
+    if (entry.Properties.Built)
+    {
+      built.push_back(entry.Name);
+    }
+  }
+  for (const auto& entry : GetDiffusionSolverRegistry().GetEntries())
+  {
+    SCOPED_TRACE(entry.Name);
+    const std::vector<std::string>& listed = entry.Properties.LinearSolvers;
+    EXPECT_EQ(listed, GetAcceptedLinearSolvers(entry.Name));
+    EXPECT_EQ(entry.Properties.HasLinearSolverChoice, !listed.empty());
+    EXPECT_NO_THROW(CheckLinearSolverAccepted(entry.Name, ""));
+    if (listed.empty())
+    {
+      EXPECT_TRUE(Contains(ErrorMessage([&] { CheckLinearSolverAccepted(entry.Name, "bicgstab"); }),
+        "has no linear solver to choose"));
+      continue;
+    }
+    for (const std::string& name : built)
+    {
+      SCOPED_TRACE(name);
+      const bool accepted = std::find(listed.begin(), listed.end(), name) != listed.end();
+      std::unique_ptr<DiffusionSolver> solver = entry.Create();
+      solver->SetLinearSolver(name);
+      solver->SetRelTol(1e-6);
+      solver->SetMaxIter(20000);
+      std::vector<double> fluence;
+      SolverReport report;
+      bool solved = false;
+      std::string refused;
+      try
+      {
+        solved = solver->Solve(problem, fluence, report);
+      }
+      catch (const Error& e)
+      {
+        refused = e.what();
+      }
+      EXPECT_EQ(accepted, solved) << refused;
+      EXPECT_EQ(accepted, refused.empty()) << refused;
+      if (accepted)
+      {
+        EXPECT_NO_THROW(CheckLinearSolverAccepted(entry.Name, name));
+        // A composition names the same entry.
+        EXPECT_NO_THROW(CheckLinearSolverAccepted(entry.Name, GetLinearSolverComposition(name)));
+      }
+      else
+      {
+        EXPECT_EQ(ErrorMessage([&] { CheckLinearSolverAccepted(entry.Name, name); }),
+          "the " + entry.Name + " solver does not accept the linear solver '" + name +
+            "' (it accepts: " + JoinNames(listed) + "; empty = its default)");
+      }
+    }
+  }
+  EXPECT_EQ(GetAcceptedLinearSolvers("sp3"), (std::vector<std::string>{ "bicgstab", "multigrid-agg" }));
+  EXPECT_EQ(GetAcceptedLinearSolvers("quadgraph"), GetNonSymmetricLinearSolverNames());
+  EXPECT_EQ(GetAcceptedLinearSolvers("fem"), GetLinearSolverNames());
+  EXPECT_EQ(ErrorMessage([] { CheckLinearSolverAccepted("sp3", "nosuchsolver"); }),
+    "unknown linear solver 'nosuchsolver' for the sp3 solver (it accepts: bicgstab, "
+    "multigrid-agg; empty = its default)");
 }
