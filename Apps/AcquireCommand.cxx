@@ -1173,9 +1173,22 @@ int Acquire(const AcquireOptions& o)
   }
 
   // What the fit will cost if every iteration runs, measured here (stderr).
-  const FitEstimate estimate = EstimateInputFit(o, input, synthetic);
+  // An estimate that cannot be made does not stop the run: it says why.
+  FitEstimate estimate;
+  std::string estimateError;
+  try
+  {
+    estimate = EstimateInputFit(o, input, synthetic);
+  }
+  catch (const std::exception& e)
+  {
+    estimateError = e.what();
+  }
   if (!IsQuiet())
-    std::cerr << "acquire: estimate: " << DescribeEstimate(estimate) << "\n";
+    std::cerr << "acquire: estimate: "
+              << (estimateError.empty() ? DescribeEstimate(estimate)
+                                        : "not made (" + EscapeControl(estimateError) + ")")
+              << "\n";
 
   double fitMs = 0.0, fitCpu = 0.0;
   MessageCollector messages;
@@ -1211,7 +1224,10 @@ int Acquire(const AcquireOptions& o)
   report["tets"] = result->GetNumberOfCells();
   report["fit_relative_rms"] = misfit;
   ReportInverseCosts(inverse, fitMs, report);
-  ReportEstimate(estimate, fitCpu, report);
+  if (estimateError.empty())
+    ReportEstimate(estimate, fitCpu, report);
+  else
+    report["cpu_seconds_fit"] = fitCpu;
   report["homogeneous_fit"] = o.HomogeneousFit == "cg" ? "cg" : "gauss-newton";
   report["line_search_start"] =
     o.LineSearchStart == "gauss-newton" ? "gauss-newton" : "previous";

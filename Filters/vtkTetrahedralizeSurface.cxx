@@ -28,11 +28,19 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <sstream>
 #include <vector>
+
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 vtkStandardNewMacro(vtkTetrahedralizeSurface);
 
@@ -202,6 +210,189 @@ std::string TetGenErrorText(int code)
   }
 }
 
+/// Writes all of `size` bytes to `fd` (the child's side of the pipe).
+bool WriteAll(int fd, const void* data, size_t size)
+{
+  const char* p = static_cast<const char*>(data);
+  while (size > 0)
+  {
+    const ssize_t n = ::write(fd, p, size);
+    if (n < 0 && errno == EINTR)
+    {
+      continue;
+    }
+    if (n <= 0)
+    {
+      return false;
+    }
+    p += n;
+    size -= static_cast<size_t>(n);
+  }
+  return true;
+}
+
+/// Reads all of `size` bytes from `fd`; false at an early end.
+bool ReadAll(int fd, void* data, size_t size)
+{
+  char* p = static_cast<char*>(data);
+  while (size > 0)
+  {
+    const ssize_t n = ::read(fd, p, size);
+    if (n < 0 && errno == EINTR)
+    {
+      continue;
+    }
+    if (n <= 0)
+    {
+      return false;
+    }
+    p += n;
+    size -= static_cast<size_t>(n);
+  }
+  return true;
+}
+
+/// What the callers read of TetGen's output, sent from the child: the
+/// points, the tets and the intersecting faces of a -d pass.
+struct TetGenOutputHeader
+{
+  int Status = 0; ///< 0: done; else TetGen's error code (its `throw int`)
+  int FirstNumber = 0;
+  int NumberOfPoints = 0;
+  int NumberOfCorners = 0;
+  int NumberOfTetrahedra = 0;
+  int NumberOfTriFaces = 0;
+};
+
+/**
+ * tetrahedralize() in a child process (fork), its output sent back through
+ * a pipe. TetGen 1.5.0 (the Debian/Ubuntu libtet) stops with a failed
+ * assertion (SIGABRT) or a segmentation fault on some surfaces that pass
+ * every check before it: `make fuzz-long` found a bunny with one vertex moved
+ * 10 m away (a needle) that aborted the whole program in
+ * tetgenmesh::fillcavity (issue 34). In a child, such a crash is a clean
+ * error naming the signal; TetGen's own errors (`throw int`) come back as
+ * their codes. Returns false with `error` set on either.
+ */
+bool IsolatedTetrahedralize(char* switches, tetgenio* in, tetgenio* out, tetgenio* background,
+  std::string& error)
+{
+  int fds[2];
+  if (::pipe(fds) != 0)
+  {
+    error = std::string("TetGen could not be started (pipe: ") + std::strerror(errno) + ")";
+    return false;
+  }
+  std::fflush(nullptr); // nothing buffered is written twice
+  const pid_t child = ::fork();
+  if (child < 0)
+  {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    error = std::string("TetGen could not be started (fork: ") + std::strerror(errno) + ")";
+    return false;
+  }
+  if (child == 0)
+  {
+    // The child: TetGen, then its output down the pipe, then _exit (no
+    // atexit handlers, no destructors of the parent's objects).
+    ::close(fds[0]);
+    const int devnull = ::open("/dev/null", O_WRONLY);
+    if (devnull >= 0)
+    {
+      ::dup2(devnull, STDERR_FILENO); // a failed assertion's raw line
+      ::dup2(devnull, STDOUT_FILENO);
+    }
+    TetGenOutputHeader header;
+    try
+    {
+      tetrahedralize(switches, in, out, nullptr, background);
+    }
+    catch (int code)
+    {
+      header.Status = code == 0 ? -1 : code;
+    }
+    catch (...)
+    {
+      header.Status = 1; // std::bad_alloc from TetGen's new
+    }
+    if (header.Status == 0)
+    {
+      header.FirstNumber = out->firstnumber;
+      header.NumberOfPoints = out->pointlist ? out->numberofpoints : 0;
+      header.NumberOfCorners = out->numberofcorners;
+      header.NumberOfTetrahedra = out->tetrahedronlist ? out->numberoftetrahedra : 0;
+      header.NumberOfTriFaces = out->trifacelist ? out->numberoftrifaces : 0;
+    }
+    bool ok = WriteAll(fds[1], &header, sizeof(header));
+    ok = ok && WriteAll(fds[1], out->pointlist, sizeof(REAL) * 3 * size_t(header.NumberOfPoints));
+    ok = ok &&
+      WriteAll(fds[1], out->tetrahedronlist,
+        sizeof(int) * size_t(header.NumberOfCorners) * size_t(header.NumberOfTetrahedra));
+    ok = ok && WriteAll(fds[1], out->trifacelist, sizeof(int) * 3 * size_t(header.NumberOfTriFaces));
+    ::_exit(ok ? 0 : 3);
+  }
+  ::close(fds[1]);
+  TetGenOutputHeader header;
+  bool received = ReadAll(fds[0], &header, sizeof(header));
+  if (received && header.Status == 0)
+  {
+    const bool sane = header.NumberOfPoints >= 0 && header.NumberOfTetrahedra >= 0 &&
+      header.NumberOfTriFaces >= 0 && header.NumberOfCorners >= 0 && header.NumberOfCorners <= 10;
+    received = sane;
+    out->firstnumber = header.FirstNumber;
+    out->numberofpoints = header.NumberOfPoints;
+    out->numberofcorners = header.NumberOfCorners;
+    out->numberoftetrahedra = header.NumberOfTetrahedra;
+    out->numberoftrifaces = header.NumberOfTriFaces;
+    if (received && header.NumberOfPoints > 0)
+    {
+      out->pointlist = new REAL[3 * size_t(header.NumberOfPoints)];
+      received = ReadAll(fds[0], out->pointlist, sizeof(REAL) * 3 * size_t(header.NumberOfPoints));
+    }
+    const size_t corners = size_t(header.NumberOfCorners) * size_t(header.NumberOfTetrahedra);
+    if (received && corners > 0)
+    {
+      out->tetrahedronlist = new int[corners];
+      received = ReadAll(fds[0], out->tetrahedronlist, sizeof(int) * corners);
+    }
+    if (received && header.NumberOfTriFaces > 0)
+    {
+      out->trifacelist = new int[3 * size_t(header.NumberOfTriFaces)];
+      received =
+        ReadAll(fds[0], out->trifacelist, sizeof(int) * 3 * size_t(header.NumberOfTriFaces));
+    }
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(child, &status, 0) < 0 && errno == EINTR)
+  {
+  }
+  if (WIFSIGNALED(status))
+  {
+    const int signal = WTERMSIG(status);
+    error = "TetGen crashed on this surface (signal " + std::to_string(signal) + ", " +
+      (signal == SIGABRT ? std::string("SIGABRT: one of TetGen 1.5.0's internal checks failed")
+                         : signal == SIGSEGV ? std::string("SIGSEGV")
+                                             : std::string(strsignal(signal))) +
+      "): the surface may have a spike or nearly degenerate triangles; check it, or try "
+      "another mesher (hxt)";
+    return false;
+  }
+  if (received && header.Status != 0)
+  {
+    error = "TetGen failed: " + TetGenErrorText(header.Status == -1 ? 0 : header.Status);
+    return false;
+  }
+  if (!received || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+  {
+    error = "TetGen stopped without handing back its result (exit status " +
+      std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + ")";
+    return false;
+  }
+  return true;
+}
+
 /// The surface as TetGen's input: one triangle facet per triangle.
 void FillTetGenInput(const Surface& surface, tetgenio& in)
 {
@@ -270,13 +461,8 @@ bool CheckSelfIntersections(const Surface& surface, std::string& error)
   tetgenio in, out;
   FillTetGenInput(surface, in);
   char switches[] = "dQ";
-  try
+  if (!IsolatedTetrahedralize(switches, &in, &out, nullptr, error))
   {
-    tetrahedralize(switches, &in, &out);
-  }
-  catch (int code)
-  {
-    error = "TetGen failed: " + TetGenErrorText(code);
     return false;
   }
   if (out.numberoftrifaces > 0)
@@ -315,13 +501,8 @@ bool RunTetGen(const Surface& surface, const std::string& switches, std::vector<
   }
   std::vector<char> sw(switches.begin(), switches.end());
   sw.push_back('\0');
-  try
+  if (!IsolatedTetrahedralize(sw.data(), &in, &out, background, error))
   {
-    tetrahedralize(sw.data(), &in, &out, nullptr, background);
-  }
-  catch (int code)
-  {
-    error = "TetGen failed: " + TetGenErrorText(code);
     return false;
   }
   if (out.numberoftetrahedra <= 0)

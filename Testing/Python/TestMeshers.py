@@ -31,6 +31,11 @@ Asserts:
     3.08 / 1.17 on a finer sphere), the count near the target, the quality
     bound kept; out-of-range g, g with UniformSizing and g with hxt are
     errors naming GradingFactor;
+  - a surface on which TetGen 1.5.0 itself crashes (the bunny with one
+    vertex moved 143 m away, found by `make fuzz-long`: a failed assertion in
+    tetgenmesh::fillcavity aborted the program) is a clean error naming the
+    signal, with an empty output; the process lives on and meshes the intact
+    bunny afterwards (TetGen runs in a child process);
   - QuadGraph on a uniform mesh of a 5 mm sphere under uniform light: RMS
     relative error against the exact solution phi = C sinh(k r) / r below 12 %
     in every channel (printed), and below the graded mesh's error.
@@ -114,6 +119,18 @@ def enclosed_volume(surface):
 
 
 class MesherTest(unittest.TestCase):
+
+    def test_tetgen_crash_is_a_clean_error(self):
+        needle = read_bunny()
+        x, _, z = needle.GetPoint(422)
+        needle.GetPoints().SetPoint(422, x, 143535.0, z)  # was y = 14.16 mm
+        grid, errors = tetrahedralize(needle, "tetgen", quality=4, max_volume=1000)
+        self.assertEqual(grid.GetNumberOfCells(), 0)
+        self.assertEqual(len(errors), 1, errors)
+        self.assertIn("TetGen crashed on this surface (signal 6, SIGABRT", errors[0])
+        grid, errors = tetrahedralize(read_bunny(), "tetgen", quality=4, max_volume=1000)
+        self.assertEqual(errors, [])
+        self.assertGreater(grid.GetNumberOfCells(), 1000)
 
     def test_same_errors_for_bad_surfaces(self):
         tet_coords = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
