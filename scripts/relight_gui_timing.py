@@ -25,8 +25,9 @@ mesh, same steps.
 3. Relights TRANSLUCENCY_RELIGHT_STEPS times (default 5): Point 1 moved so
    that the light turns 15 degrees about x, alternately there and back (the
    property the line widget drives); each timed as the user meets it: in the
-   GUI from the property change to the rendered view (Render, then the
-   GUI's pending events), in pvbatch to Outgoing Radiance's UpdatePipeline.
+   GUI from the property change to the rendered view (Outgoing Radiance's
+   UpdatePipeline, Render, then the GUI's pending events; each phase's
+   median is reported too), in pvbatch to Outgoing Radiance's UpdatePipeline.
 4. Writes TRANSLUCENCY_RELIGHT_OUT (JSON): mode, tets, seconds (cold,
    relights, median) and, with
    TRANSLUCENCY_RELIGHT_FIELDS=1, the Fluence of the cold chain and of each
@@ -115,10 +116,22 @@ def run(results):
 
     view = GetActiveViewOrCreate("RenderView") if GUI else None
 
+    phases = {"pipeline": [], "render": [], "events": []}
+
     def update():
         if GUI:
+            # The parts of what the user waits for: the pipeline (as pvbatch's
+            # UpdatePipeline), the render, the GUI's pending events (panels,
+            # pipeline browser, data information).
+            t0 = time.perf_counter()
+            radiance.UpdatePipeline()
+            t1 = time.perf_counter()
             Render(view)
+            t2 = time.perf_counter()
             process_events()
+            t3 = time.perf_counter()
+            for name, seconds in zip(phases, (t1 - t0, t2 - t1, t3 - t2)):
+                phases[name].append(seconds)
         else:
             radiance.UpdatePipeline()
 
@@ -144,6 +157,10 @@ def run(results):
             results["fluence"].append(fluence(solve))
         print("relight %d: %.3f s" % (k + 1, relights[-1]), flush=True)
     results["relight_seconds"] = relights
+    if GUI:
+        # Medians of the relights' phases (the first entry is the cold chain's).
+        results["relight_phase_median_seconds"] = {
+            name: statistics.median(v[1:]) for name, v in phases.items() if len(v) > 1}
     results["relight_median_seconds"] = statistics.median(relights)
 
 
