@@ -45,6 +45,8 @@
 #include <memory>
 #include <random>
 #include <sstream>
+#include <thread>
+#include <ctime>
 
 namespace translucency_app
 {
@@ -633,6 +635,202 @@ void PlanAcquireOutputs(const AcquireOptions& o, OutputPlan& plan)
   plan.Check();
 }
 
+/// Acquire: what the fit will cost, estimated before it runs. The old figure
+/// (4e-6 s per point x pattern x iteration, measured on two small grids) said
+/// 5.1 s for a fit of 39 s of CPU: a factorisation grows faster than the
+/// points, and each iteration is several forward passes. Now: the passes the
+/// fit makes (counted by the same rules as InverseDiffusion's optimiser) times
+/// the cost of one factorisation and one blocked solve, measured here on the
+/// same grid (or a smaller one of the same shape, scaled up).
+struct FitEstimate
+{
+  double Points = 0.0;         ///< of the problem
+  int Patterns = 0;
+  int Iterations = 0;          ///< heterogeneous iterations per channel (--max-iter: all run)
+  double ForwardPasses = 0.0;  ///< all channels: factorisation + M-column solve
+  double AdjointPasses = 0.0;  ///< all channels: M-column solve
+  double TangentPasses = 0.0;  ///< all channels: M-column solve (2M in the homogeneous fit)
+  double SolveColumns = 0.0;   ///< all channels: blocked solves in units of M columns
+  double CalibrationPoints = 0.0;
+  double FactorSeconds = 0.0;  ///< CPU seconds of one numeric factorisation at Points
+  double SolveSeconds = 0.0;   ///< CPU seconds of one M-column solve at Points
+  double CpuSeconds = 0.0;     ///< the fit, summed over the 3 channels
+  bool Scaled = false;         ///< calibrated on fewer points and scaled up
+};
+
+// Per channel, counted on 10x10x3, 16x16x4 and 32x32x8 grids with 2x2
+// patterns and --threshold 0 (every iteration runs): the Levenberg-Marquardt
+// homogeneous fit stops after 4-6 iterations (one trial forward pass and one
+// tangent solve each); each heterogeneous iteration makes one adjoint pass,
+// one tangent pass (the Gauss-Newton start of the line search) and 6 forward
+// passes (the golden-section search from that start; 6-9, mostly 7, from
+// the previous step). The paper's CG for the homogeneous pair stops after
+// 5-9 iterations of 6-11 forward passes (mostly 7-8) and one adjoint pass.
+constexpr int EstimatedHomogeneousIterations = 6;
+constexpr int EstimatedCgHomogeneousIterations = 7;
+constexpr int EstimatedCgHomogeneousPasses = 8;
+constexpr int EstimatedGaussNewtonStartPasses = 6;
+constexpr int EstimatedPreviousStartPasses = 7;
+// Calibration above this many points is done on a smaller grid of the same
+// shape; the factorisation's time then scales as points^1.5 and a solve's as
+// points^(4/3) (nested dissection on a 3D grid: fill ~ n^(4/3), work grows
+// faster than n^1.5: so a scaled estimate is a lower bound).
+constexpr double CalibrationPointLimit = 4000.0;
+
+double ProcessCpuSeconds()
+{
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+/// The passes of the fit (all three channels) if every iteration runs.
+void CountEstimatedPasses(const AcquireOptions& o, FitEstimate& e)
+{
+  const double k = std::max(o.MaxIter, 0);
+  const bool gaussNewtonStart = o.LineSearchStart == "gauss-newton", cg = o.HomogeneousFit == "cg";
+  const double h = cg ? EstimatedCgHomogeneousIterations : EstimatedHomogeneousIterations;
+  double forward = 1.0 +
+    k * (gaussNewtonStart ? EstimatedGaussNewtonStartPasses : EstimatedPreviousStartPasses);
+  double adjoint = k + 1.0, tangent = 0.0;
+  if (cg)
+  {
+    forward += h * EstimatedCgHomogeneousPasses;
+    adjoint += h + 1.0;
+  }
+  else
+  {
+    forward += h;
+    tangent += h + 1.0;
+  }
+  if (gaussNewtonStart)
+    tangent += k;
+  e.Iterations = o.MaxIter;
+  e.ForwardPasses = 3.0 * forward;
+  e.AdjointPasses = 3.0 * adjoint;
+  e.TangentPasses = 3.0 * tangent;
+  // The homogeneous fit's tangent passes solve for two directions (2M columns).
+  const double wideTangents = cg ? 0.0 : h + 1.0;
+  e.SolveColumns = e.ForwardPasses + e.AdjointPasses + e.TangentPasses + 3.0 * wideTangents;
+}
+
+/// The estimate for a block of dims[0] x dims[1] x dims[2] voxels (the
+/// synthetic grid, or a cube of the sample's number of points) and
+/// `patterns` patterns: the passes, and the CPU time of a factorisation and
+/// a blocked solve measured on that grid (at most CalibrationPointLimit
+/// points: larger grids are calibrated on a smaller one of the same shape).
+FitEstimate EstimateFit(const AcquireOptions& o, const double dims[3], int patterns)
+{
+  FitEstimate e;
+  e.Points = (dims[0] + 1.0) * (dims[1] + 1.0) * (dims[2] + 1.0);
+  e.Patterns = patterns;
+  CountEstimatedPasses(o, e);
+  const double shrink = std::min(1.0, std::cbrt(CalibrationPointLimit / e.Points));
+  int n[3];
+  for (int d = 0; d < 3; ++d)
+    n[d] = std::max(1, static_cast<int>(std::lround(dims[d] * shrink)));
+  std::vector<double> points;
+  std::vector<int> tets, element;
+  const double origin[3] = { 0.0, 0.0, 0.0 }, size[3] = { 1.0, 1.0, 1.0 };
+  translucency::BuildGridBlock(n[0], n[1], n[2], origin, size, points, tets, element);
+  translucency::TetMesh mesh;
+  mesh.SetGeometry(points, tets);
+  const int elements = n[0] * n[1] * n[2];
+  translucency::DiffusionForwardModel model(
+    mesh, element, elements, std::vector<double>(element.size(), 1.3));
+  e.CalibrationPoints = static_cast<double>(model.GetNumberOfPoints());
+  e.Scaled = e.CalibrationPoints < e.Points;
+  // The fit's start: kappa = 1 / (3 (mu_a + sigma_s')) everywhere.
+  const std::vector<double> mu(elements, 0.01), kappa(elements, 1.0 / (3.0 * 1.01));
+  const Eigen::MatrixXd rhs = Eigen::MatrixXd::Ones(model.GetNumberOfPoints(), std::max(patterns, 1));
+  Eigen::MatrixXd phi;
+  // As in the fit: one BLAS thread per channel thread.
+  const int blasThreads = translucency::DiffusionForwardModel::SetBlasThreads(1);
+  translucency::DiffusionForwardModel::Factor factor;
+  model.Factorize(kappa.data(), mu.data(), factor); // the symbolic analysis, kept by the fit
+  const int repeats = 3;
+  double start = ProcessCpuSeconds();
+  for (int r = 0; r < repeats; ++r)
+    model.Factorize(kappa.data(), mu.data(), factor);
+  const double factorSeconds = (ProcessCpuSeconds() - start) / repeats;
+  start = ProcessCpuSeconds();
+  for (int r = 0; r < repeats; ++r)
+    factor.Solve(rhs, phi);
+  const double solveSeconds = (ProcessCpuSeconds() - start) / repeats;
+  if (blasThreads > 0)
+    translucency::DiffusionForwardModel::SetBlasThreads(blasThreads);
+  const double ratio = e.Points / e.CalibrationPoints;
+  e.FactorSeconds = factorSeconds * std::pow(ratio, 1.5);
+  e.SolveSeconds = solveSeconds * std::pow(ratio, 4.0 / 3.0);
+  e.CpuSeconds = e.ForwardPasses * e.FactorSeconds + e.SolveColumns * e.SolveSeconds;
+  return e;
+}
+
+/// "6.75 ms", "40 s", "12 min", "3.2 h".
+std::string FormatDuration(double seconds)
+{
+  if (seconds < 1.0)
+    return translucency::FormatNumber(std::round(seconds * 1e5) / 100.0) + " ms";
+  if (seconds < 120.0)
+    return translucency::FormatNumber(std::round(seconds * 10.0) / 10.0) + " s";
+  if (seconds < 7200.0)
+    return translucency::FormatNumber(std::round(seconds / 60.0)) + " min";
+  return translucency::FormatNumber(std::round(seconds / 360.0) / 10.0) + " h";
+}
+
+/// One line: the estimate and what it rests on.
+std::string DescribeEstimate(const FitEstimate& e)
+{
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const double wall = e.CpuSeconds / std::min(3u, cores);
+  std::ostringstream os;
+  os << "about " << FormatDuration(e.CpuSeconds)
+     << " of CPU (" << FormatDuration(wall) << " on " << std::min(3u, cores)
+     << " idle cores) if all " << e.Iterations << " iterations run: "
+     << translucency::FormatNumber(std::round(e.ForwardPasses)) << " forward passes ("
+     << "factorisation " << FormatDuration(e.FactorSeconds) << " + " << e.Patterns
+     << " solves " << FormatDuration(e.SolveSeconds) << " on " << translucency::FormatNumber(e.Points) << " points, measured"
+     << (e.Scaled ? " on " + translucency::FormatNumber(e.CalibrationPoints) + " points and scaled"
+                  : std::string(" here"))
+     << "), " << translucency::FormatNumber(std::round(e.AdjointPasses + e.TangentPasses))
+     << " adjoint and tangent solves";
+  return os.str();
+}
+
+/// The estimate for the fit of `input` (after its patterns are attached):
+/// the synthetic grid itself, or for a sample a cube of as many points.
+FitEstimate EstimateInputFit(const AcquireOptions& o, vtkUnstructuredGrid* input, bool synthetic)
+{
+  int patterns = 0;
+  while (input->GetPointData()->GetArray(Indexed("Irradiance", patterns).c_str()))
+    ++patterns;
+  double dims[3];
+  if (synthetic)
+  {
+    const std::vector<int> grid = ParseDims(o.GridArg, "--grid", 3);
+    for (int d = 0; d < 3; ++d)
+      dims[d] = grid[d];
+  }
+  else
+  {
+    const double side = std::max(1.0, std::cbrt(static_cast<double>(input->GetNumberOfPoints())) - 1.0);
+    dims[0] = dims[1] = dims[2] = side;
+  }
+  return EstimateFit(o, dims, patterns);
+}
+
+/// Acquire, report: the estimate next to what the fit did (passes counted by
+/// the filter, CPU time of the process during the fit).
+void ReportEstimate(const FitEstimate& e, double fitCpu, json& report)
+{
+  report["estimate"] = { { "iterations", e.Iterations }, { "forward_passes", e.ForwardPasses },
+    { "adjoint_passes", e.AdjointPasses }, { "tangent_passes", e.TangentPasses },
+    { "seconds_per_factorization", e.FactorSeconds }, { "seconds_per_solve", e.SolveSeconds },
+    { "calibration_points", e.CalibrationPoints }, { "scaled", e.Scaled },
+    { "cpu_seconds", e.CpuSeconds } };
+  report["cpu_seconds_fit"] = fitCpu;
+}
+
 /// Acquire, synthetic mode: every pattern keeps its measured, forward and
 /// adjoint fields (3 channels) at every point of the block: refuse a --grid
 /// and --patterns that cannot fit, or whose fit would run for hours, before
@@ -665,23 +863,22 @@ void CheckSyntheticBudget(const AcquireOptions& o, const std::vector<int>& grid,
     throw UsageError(e.what());
   }
   // Work: every inverse iteration solves forward and adjoint problems for
-  // every pattern on every point. Measured (session 17, 2 cores, under
-  // load): 16x16x4 and 32x32x8 with 2x2 patterns and --max-iter 100 took
-  // 6.6 s and 13.6 s, about 4e-6 s per point x pattern x iteration; the
-  // budget (1.5e8 units, about 10 minutes) refuses what would run for
-  // hours (100x100x100 with 2x2 patterns: about 27 minutes at least).
+  // every pattern on every point; the budget (1.5e8 point x pattern x
+  // iteration units) refuses what would run for hours. The message gives
+  // the estimate measured here (EstimateFit).
   const double work = points * patterns * std::max(maxIter, 1);
-  const double workBudget = 1.5e8, secondsPerUnit = 4e-6;
+  const double workBudget = 1.5e8;
   if (work > workBudget && !translucency::GetLongRunsAllowed())
   {
+    const double dims[3] = { static_cast<double>(grid[0]), static_cast<double>(grid[1]),
+      static_cast<double>(grid[2]) };
+    const FitEstimate estimate = EstimateFit(o, dims, static_cast<int>(patterns));
     throw UsageError("acquire: --grid " + gridArg + " (" + translucency::FormatNumber(points) +
       " points) with --patterns " + patternsArg + " (" + translucency::FormatNumber(patterns) +
-      " patterns) and --max-iter " +
-      std::to_string(maxIter) + " would take at least about " +
-      translucency::FormatNumber(std::round(work * secondsPerUnit / 60.0)) +
-      " minutes (budget: about " +
-      translucency::FormatNumber(std::round(workBudget * secondsPerUnit / 60.0)) +
-      "): use a coarser --grid, fewer --patterns or a lower --max-iter (or " +
+      " patterns) and --max-iter " + std::to_string(maxIter) + " is " +
+      translucency::FormatNumber(work) + " point x pattern x iteration units, above the budget of " +
+      translucency::FormatNumber(workBudget) + " (the fit would take " +
+      DescribeEstimate(estimate) + "): use a coarser --grid, fewer --patterns or a lower --max-iter (or " +
       translucency::LongRunOverride() + ")");
   }
 }
@@ -717,11 +914,11 @@ vtkSmartPointer<vtkUnstructuredGrid> MakeSyntheticInput(const AcquireOptions& o,
 /// Acquire: the inverse diffusion filter on the measurements, with a
 /// progress bar on stderr (not with --quiet); its errors, collected by
 /// `messages` (which the caller keeps as long as the filter), thrown. The
-/// fit's time in `fitMs`.
+/// fit's time in `fitMs`, the CPU time of the process during it in `fitCpu`.
 vtkSmartPointer<vtkInverseDiffusion> RunInverse(const AcquireOptions& o,
   vtkUnstructuredGrid* input, const std::string& elementArray,
   const std::vector<double>& initialMu, const std::vector<double>& initialSigma,
-  MessageCollector& messages, double& fitMs)
+  MessageCollector& messages, double& fitMs, double& fitCpu)
 {
   const int homogeneousMethod = o.HomogeneousFit == "cg" ? vtkInverseDiffusion::CONJUGATE_GRADIENT
                                                          : vtkInverseDiffusion::GAUSS_NEWTON;
@@ -753,7 +950,9 @@ vtkSmartPointer<vtkInverseDiffusion> RunInverse(const AcquireOptions& o,
   if (!IsQuiet()) // --quiet: no progress bar
     inverse->AddObserver(vtkCommand::ProgressEvent, progress);
   const auto fitStart = Clock::now();
+  const double cpuStart = ProcessCpuSeconds();
   inverse->Update();
+  fitCpu = ProcessCpuSeconds() - cpuStart;
   inverse->RemoveObserver(progress); // it points at this function's lastPercent
   if (!IsQuiet())
     std::cerr << "\n";
@@ -973,10 +1172,15 @@ int Acquire(const AcquireOptions& o)
     stages.push_back({ "read", MillisecondsSince(start) });
   }
 
-  double fitMs = 0.0;
+  // What the fit will cost if every iteration runs, measured here (stderr).
+  const FitEstimate estimate = EstimateInputFit(o, input, synthetic);
+  if (!IsQuiet())
+    std::cerr << "acquire: estimate: " << DescribeEstimate(estimate) << "\n";
+
+  double fitMs = 0.0, fitCpu = 0.0;
   MessageCollector messages;
   vtkSmartPointer<vtkInverseDiffusion> inverse =
-    RunInverse(o, input, elementArray, initialMu, initialSigma, messages, fitMs);
+    RunInverse(o, input, elementArray, initialMu, initialSigma, messages, fitMs, fitCpu);
   stages.push_back({ "inverse diffusion", fitMs });
   vtkUnstructuredGrid* result = inverse->GetOutput();
   vtkTable* history = vtkTable::SafeDownCast(inverse->GetHistoryOutput());
@@ -1007,6 +1211,7 @@ int Acquire(const AcquireOptions& o)
   report["tets"] = result->GetNumberOfCells();
   report["fit_relative_rms"] = misfit;
   ReportInverseCosts(inverse, fitMs, report);
+  ReportEstimate(estimate, fitCpu, report);
   report["homogeneous_fit"] = o.HomogeneousFit == "cg" ? "cg" : "gauss-newton";
   report["line_search_start"] =
     o.LineSearchStart == "gauss-newton" ? "gauss-newton" : "previous";

@@ -4,7 +4,7 @@
 //
 //   mpiexec -n 2 translucency-distributed-bench [--tets N] [--solver divergence|fem]
 //       [--coordinates] [--no-single] [--serial] [--strong T] [--agg L] [--pmax P]
-//       [--interp I] [--tol TOL] [--threads T] [--rounds R]
+//       [--interp I] [--coarsen C] [--tol TOL] [--threads T] [--rounds R]
 //
 // In one run, --rounds times (default 2): first every rank of MPI_COMM_WORLD
 // solves its slab (cold solve: numbering, assembly, AMG set-up, PCG; then a
@@ -26,6 +26,7 @@
 #include "Detectors.h"
 #include "DistributedVertexSolver.h"
 #include "Error.h"
+#include "HypreSolver.h" // BoomerAMGOptions, EnsureHypreInitialized
 
 #include <malloc.h>
 #include <omp.h>
@@ -192,8 +193,11 @@ struct Result
   translucency::PowerBalance Balance; ///< of the last solve, over every rank
 };
 
-/// Times (ms) of every round, per "<label> <phase>" and metric, on rank 0.
-std::map<std::string, std::vector<std::array<double, 5>>> Rounds;
+/// Times (ms) of every round, per "<label> <phase>" and metric, on rank 0:
+/// wall (slowest rank) and CPU (the busiest rank's; the work, whatever the
+/// machine's load). The serial path's CPU and wall times per round.
+std::map<std::string, std::vector<std::array<double, 5>>> Rounds, RoundsCpu;
+std::vector<double> SerialCpu, SerialWall;
 
 double Median(std::vector<double> v)
 {
@@ -216,7 +220,7 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
   Result result;
   {
     translucency::DistributedVertexSolver solver(comm, solverName);
-    solver.SetAMGOptions(options);
+    solver.SetLinearSolverOptions(options.ToOptions());
     solver.SetRelTol(tol);
     solver.SetMaxIter(1000);
     solver.SetNumberOfThreads(threads);
@@ -246,6 +250,8 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
       const auto& t = solver.GetTimings();
       const double numbering = Max(t.Numbering, comm), assembly = Max(t.Assembly, comm),
                    amg = Max(t.AMGSetup, comm), solve = Max(t.Solve, comm);
+      const double numberingCpu = Max(t.NumberingCpu, comm), assemblyCpu = Max(t.AssemblyCpu, comm),
+                   amgCpu = Max(t.AMGSetupCpu, comm), solveCpu = Max(t.SolveCpu, comm);
       malloc_trim(0); // free heap pages back to the system: count what is live
       const double memory = ResidentBytes() - baseline;
       std::vector<double> memories(static_cast<size_t>(ranks)), peaks(memories);
@@ -258,6 +264,9 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
       {
         Rounds[std::string(label) + " " + phases[phase]].push_back(
           { numbering, assembly, amg, solve, total });
+        const double cpuMax = *std::max_element(cpus.begin(), cpus.end());
+        RoundsCpu[std::string(label) + " " + phases[phase]].push_back(
+          { numberingCpu, assemblyCpu, amgCpu, solveCpu, cpuMax });
         std::printf("%s ranks %d %s tets %lld unknowns %lld: numbering %.0f ms, assembly %.0f ms, "
                     "AMG set-up %.0f ms, solve %.0f ms (total %.0f ms); iterations %d %d %d, "
                     "residual %.1e; levels %d, operator complexity %.2f; assembly '%s'; memory MB "
@@ -333,7 +342,10 @@ void CompareWithSerial(const std::vector<long long>& ids, const std::vector<doub
   std::vector<double> expected;
   translucency::SolverReport report;
   const double start = MPI_Wtime();
+  const double cpuStart = CpuMilliseconds();
   reference->Solve(problem, expected, report);
+  SerialCpu.push_back(CpuMilliseconds() - cpuStart);
+  SerialWall.push_back(1000.0 * (MPI_Wtime() - start));
   std::vector<size_t> where(whole.Ids.size());
   for (size_t k = 0; k < whole.Ids.size(); ++k)
     where[static_cast<size_t>(whole.Ids[k])] = k;
@@ -417,6 +429,8 @@ int main(int argc, char* argv[])
       options.PMaxElmts = std::atoi(next());
     else if (arg == "--interp")
       options.InterpType = std::atoi(next());
+    else if (arg == "--coarsen")
+      options.CoarsenType = std::atoi(next());
     else if (arg == "--tol")
       tol = std::atof(next());
     else if (arg == "--rounds")
@@ -428,7 +442,7 @@ int main(int argc, char* argv[])
       if (rank == 0)
         std::cerr << "usage: mpiexec -n RANKS translucency-distributed-bench [--tets N] [--solver "
                      "divergence|fem] [--coordinates] [--no-single] [--serial] [--strong T] [--agg L] "
-                     "[--pmax P] [--interp I] [--tol TOL] [--threads T] [--rounds R]\n";
+                     "[--pmax P] [--interp I] [--coarsen C] [--tol TOL] [--threads T] [--rounds R]\n";
       MPI_Finalize();
       return 2;
     }
@@ -491,6 +505,25 @@ int main(int argc, char* argv[])
     if (rank == 0)
     {
       static const char* names[5] = { "numbering", "assembly", "AMG set-up", "solve", "total" };
+      for (const auto& entry : RoundsCpu)
+      {
+        std::printf("summary CPU %s over %zu rounds (min / median ms):", entry.first.c_str(),
+          entry.second.size());
+        for (int m = 0; m < 5; ++m)
+        {
+          std::vector<double> v;
+          for (const auto& r : entry.second)
+            v.push_back(r[m]);
+          std::printf(" %s %.0f / %.0f%s", names[m], *std::min_element(v.begin(), v.end()),
+            Median(v), m < 4 ? "," : "\n");
+        }
+      }
+      if (!SerialCpu.empty())
+        std::printf("summary serial path (cold: assembly, set-up, solve) over %zu rounds (min / "
+                    "median ms): CPU %.0f / %.0f, wall %.0f / %.0f\n",
+          SerialCpu.size(), *std::min_element(SerialCpu.begin(), SerialCpu.end()),
+          Median(SerialCpu), *std::min_element(SerialWall.begin(), SerialWall.end()),
+          Median(SerialWall));
       for (const auto& entry : Rounds)
       {
         std::printf("summary %s over %zu rounds (min / median ms):", entry.first.c_str(),

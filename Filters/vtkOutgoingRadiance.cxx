@@ -30,9 +30,12 @@
 #include <vtkSmartPointer.h>
 #include <vtkSMPTools.h>
 #include <vtkUnstructuredGrid.h>
+#include <vtkWeakPointer.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -170,47 +173,100 @@ struct SurfaceOutput
   vtkNew<vtkDoubleArray> Normals;
 };
 
-/// The serial surface: the mesh's boundary points (compact) and triangles,
-/// with the radiance `values` (3 per boundary point, in boundary order) and
-/// the fluence, irradiance and normals of those points.
-void AttachSerialSurface(const translucency::TetMesh& mesh, const std::vector<double>& values,
-  const std::vector<double>& fluence, const std::vector<double>& irradiance,
-  vtkPolyData* output)
+/// The geometry of the serial surface, which depends on the mesh only: the
+/// boundary points (compact), their original ids and normals, the boundary
+/// triangles. Built once per geometry and shared by the outputs of the
+/// following executions (never modified after it is built), so that a
+/// relight or a paint stroke rebuilds the three value arrays only.
+struct SerialSurfaceGeometry
+{
+  vtkSmartPointer<vtkPoints> Points;
+  vtkSmartPointer<vtkCellArray> Polys;
+  vtkSmartPointer<vtkIdTypeArray> OriginalIds;
+  vtkSmartPointer<vtkDoubleArray> Normals;
+
+  void Build(const translucency::TetMesh& mesh)
+  {
+    const std::vector<int>& boundary = mesh.GetBoundaryPoints();
+    const vtkIdType n = static_cast<vtkIdType>(boundary.size());
+    std::vector<vtkIdType> surfaceId(static_cast<size_t>(mesh.GetNumberOfPoints()), -1);
+    this->Points = vtkSmartPointer<vtkPoints>::New();
+    this->Points->SetDataTypeToDouble();
+    this->Points->SetNumberOfPoints(n);
+    this->OriginalIds = vtkSmartPointer<vtkIdTypeArray>::New();
+    this->OriginalIds->SetName(vtkTranslucency::OriginalPointIdsName);
+    this->OriginalIds->SetNumberOfTuples(n);
+    this->Normals = vtkSmartPointer<vtkDoubleArray>::New();
+    this->Normals->SetName("Normals");
+    this->Normals->SetNumberOfComponents(3);
+    this->Normals->SetNumberOfTuples(n);
+    const std::vector<double>& normals = mesh.GetPointNormals();
+    for (vtkIdType k = 0; k < n; ++k)
+    {
+      const size_t i = static_cast<size_t>(boundary[k]);
+      surfaceId[i] = k;
+      this->Points->SetPoint(k, mesh.GetPoint(boundary[k]));
+      this->OriginalIds->SetValue(k, boundary[k]);
+      for (int c = 0; c < 3; ++c)
+      {
+        this->Normals->SetTypedComponent(k, c, normals[3 * i + c]);
+      }
+    }
+    const std::vector<int>& tris = mesh.GetBoundaryTriangles();
+    this->Polys = vtkSmartPointer<vtkCellArray>::New();
+    this->Polys->AllocateExact(
+      static_cast<vtkIdType>(tris.size() / 3), static_cast<vtkIdType>(tris.size()));
+    for (size_t f = 0; f < tris.size() / 3; ++f)
+    {
+      const vtkIdType ids[3] = { surfaceId[tris[3 * f]], surfaceId[tris[3 * f + 1]],
+        surfaceId[tris[3 * f + 2]] };
+      this->Polys->InsertNextCell(3, ids);
+    }
+  }
+};
+
+/// A new point array of 3 components named `name` (R, G, B).
+vtkSmartPointer<vtkDoubleArray> NewRGBArray(const char* name, vtkIdType n)
+{
+  auto array = vtkSmartPointer<vtkDoubleArray>::New();
+  array->SetName(name);
+  array->SetNumberOfComponents(3);
+  array->SetNumberOfTuples(n);
+  vtkTranslucency::SetRGBComponentNames(array);
+  return array;
+}
+
+/// The serial surface: the geometry (built for this mesh) with the radiance
+/// `values` (3 per boundary point, in boundary order) and the fluence and
+/// irradiance of those points.
+void AttachSerialSurface(const translucency::TetMesh& mesh, const SerialSurfaceGeometry& geometry,
+  const std::vector<double>& values, const std::vector<double>& fluence,
+  const std::vector<double>& irradiance, vtkPolyData* output)
 {
   const std::vector<int>& boundary = mesh.GetBoundaryPoints();
   const vtkIdType n = static_cast<vtkIdType>(boundary.size());
-  std::vector<vtkIdType> surfaceId(static_cast<size_t>(mesh.GetNumberOfPoints()), -1);
-  SurfaceOutput out(n);
-  for (vtkIdType k = 0; k < n; ++k)
-  {
-    surfaceId[boundary[k]] = k;
-    out.Points->SetPoint(k, mesh.GetPoint(boundary[k]));
-    out.OriginalIds->SetValue(k, boundary[k]);
-  }
-  const std::vector<int>& tris = mesh.GetBoundaryTriangles();
-  vtkNew<vtkCellArray> polys;
-  polys->AllocateExact(static_cast<vtkIdType>(tris.size() / 3), static_cast<vtkIdType>(tris.size()));
-  for (size_t f = 0; f < tris.size() / 3; ++f)
-  {
-    const vtkIdType ids[3] = { surfaceId[tris[3 * f]], surfaceId[tris[3 * f + 1]],
-      surfaceId[tris[3 * f + 2]] };
-    polys->InsertNextCell(3, ids);
-  }
-  const std::vector<double>& normals = mesh.GetPointNormals();
+  auto radiance = NewRGBArray(vtkTranslucency::RadianceName, n);
+  auto surfaceFluence = NewRGBArray(vtkTranslucency::FluenceName, n);
+  auto surfaceIrradiance = NewRGBArray(vtkTranslucency::IrradianceName, n);
   vtkSMPTools::For(0, n, [&](vtkIdType begin, vtkIdType end) {
     for (vtkIdType k = begin; k < end; ++k)
     {
       const size_t i = static_cast<size_t>(boundary[k]);
       for (int c = 0; c < 3; ++c)
       {
-        out.Radiance->SetTypedComponent(k, c, values[3 * k + c]);
-        out.Fluence->SetTypedComponent(k, c, fluence[3 * i + c]);
-        out.Irradiance->SetTypedComponent(k, c, irradiance[3 * i + c]);
-        out.Normals->SetTypedComponent(k, c, normals[3 * i + c]);
+        radiance->SetTypedComponent(k, c, values[3 * k + c]);
+        surfaceFluence->SetTypedComponent(k, c, fluence[3 * i + c]);
+        surfaceIrradiance->SetTypedComponent(k, c, irradiance[3 * i + c]);
       }
     }
   });
-  out.Attach(output, polys);
+  output->SetPoints(geometry.Points);
+  output->SetPolys(geometry.Polys);
+  output->GetPointData()->AddArray(radiance);
+  output->GetPointData()->AddArray(surfaceFluence);
+  output->GetPointData()->AddArray(surfaceIrradiance);
+  output->GetPointData()->SetNormals(geometry.Normals);
+  output->GetPointData()->AddArray(geometry.OriginalIds);
 }
 
 /// This rank's surface (per piece): its faces and their points, in local
@@ -299,13 +355,7 @@ std::vector<double> PieceRadiance(vtkUnstructuredGrid* input,
       continue;
     }
     const double* nrm = &surface.Normals[3 * static_cast<size_t>(i)];
-    double cosOut = 1.0;
-    if (viewPoint)
-    {
-      const double d[3] = { viewPoint[0] - x[0], viewPoint[1] - x[1], viewPoint[2] - x[2] };
-      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
-    }
+    const double cosOut = translucency::ViewCosine(viewPoint, x, nrm);
     if (sp3 && surface.Eta[i] != sp3Eta)
     {
       sp3Eta = surface.Eta[i];
@@ -353,6 +403,53 @@ static bool ReadSp3Moments(vtkUnstructuredGrid* input, std::vector<double>& phi1
 struct vtkOutgoingRadiance::Internals
 {
   std::shared_ptr<const translucency::TetMesh> Mesh;
+  /// The serial surface's geometry and the per-point refractive index, kept
+  /// for the mesh (object and geometry revision) they were built for; the
+  /// index also for the RefractiveIndex array (object and MTime) read.
+  std::weak_ptr<const translucency::TetMesh> SurfaceMesh, EtaMesh;
+  std::uint64_t SurfaceRevision = 0, EtaRevision = 0;
+  SerialSurfaceGeometry Surface;
+  vtkWeakPointer<vtkDataArray> EtaArray;
+  vtkMTimeType EtaTime = 0;
+  std::vector<double> PointEta;
+
+  const SerialSurfaceGeometry& SurfaceOf(const std::shared_ptr<const translucency::TetMesh>& mesh)
+  {
+    if (this->SurfaceMesh.lock() != mesh || this->SurfaceRevision != mesh->GetGeometryRevision() ||
+      !this->Surface.Points)
+    {
+      this->Surface.Build(*mesh);
+      this->SurfaceMesh = mesh;
+      this->SurfaceRevision = mesh->GetGeometryRevision();
+    }
+    return this->Surface;
+  }
+
+  /// PointRefractiveIndex of the input's RefractiveIndex, recomputed when
+  /// the mesh or the array changed; false (and `error`) if it cannot be read.
+  bool PointEtaOf(const std::shared_ptr<const translucency::TetMesh>& mesh,
+    vtkUnstructuredGrid* input, std::string& error)
+  {
+    vtkDataArray* eta = input->GetCellData()->GetArray(vtkTranslucency::RefractiveIndexName);
+    if (eta && this->EtaMesh.lock() == mesh && this->EtaRevision == mesh->GetGeometryRevision() &&
+      this->EtaArray == eta && this->EtaTime == eta->GetMTime() && !this->PointEta.empty())
+    {
+      return true;
+    }
+    this->PointEta.clear();
+    this->EtaArray = nullptr;
+    std::vector<double> tetEta;
+    if (!vtkTranslucency::ReadRefractiveIndex(input, tetEta, error))
+    {
+      return false;
+    }
+    this->PointEta = translucency::PointRefractiveIndex(*mesh, tetEta);
+    this->EtaMesh = mesh;
+    this->EtaRevision = mesh->GetGeometryRevision();
+    this->EtaArray = eta;
+    this->EtaTime = eta ? eta->GetMTime() : 0;
+    return true;
+  }
 };
 
 //------------------------------------------------------------------------------
@@ -419,14 +516,14 @@ int vtkOutgoingRadiance::RequestSerial(
     return 0;
   }
   const translucency::TetMesh& mesh = *this->Internal->Mesh;
-  std::vector<double> fluence, irradiance, tetEta;
+  std::vector<double> fluence, irradiance;
   if (!ReadFluenceAndIrradiance(input, fluence, irradiance, error) ||
-    !vtkTranslucency::ReadRefractiveIndex(input, tetEta, error))
+    !this->Internal->PointEtaOf(this->Internal->Mesh, input, error))
   {
     vtkErrorMacro(<< error);
     return 0;
   }
-  const std::vector<double> pointEta = translucency::PointRefractiveIndex(mesh, tetEta);
+  const std::vector<double>& pointEta = this->Internal->PointEta;
   // 2. Radiance at the boundary points (TransCut eq. 3), OpenMP-parallel in the core.
   std::vector<double> values;
   try
@@ -468,7 +565,8 @@ int vtkOutgoingRadiance::RequestSerial(
   }
   // 4. The compact surface (boundary points only) and the display colours
   // (the CLI's PNG mapping: Map Scalars off in ParaView).
-  AttachSerialSurface(mesh, values, fluence, irradiance, output);
+  AttachSerialSurface(
+    mesh, this->Internal->SurfaceOf(this->Internal->Mesh), values, fluence, irradiance, output);
   this->ExposureUsed =
     this->Exposure > 0.0 ? this->Exposure : translucency::AutomaticExposure(values);
   AttachDisplayColours(output, values, this->ExposureUsed);

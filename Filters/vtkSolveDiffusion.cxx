@@ -583,8 +583,9 @@ vtkTranslucencyParallelPlan vtkSolveDiffusion::PlanParallel(
   const Plan::GatherMode mode = Plan::GatherMode::SameMesh;
   // Collective first: every rank takes part whatever the settings.
   const bool extended = ExtendedCollimatedModel(inputVector[0], comm);
-  const bool vertexSolver = this->Solver == SOLVER_DIVERGENCE || this->Solver == SOLVER_FEM;
-  if (!vertexSolver)
+  // By the registry's trait: the solvers with a distributed variant (a build
+  // without the Parallel layer has none).
+  if (!SolverEntry(this->Solver).Properties.Distributed)
   {
     return Plan::Gathered(mode, "the solver is serial (only divergence and fem run distributed)");
   }
@@ -1275,7 +1276,7 @@ int vtkSolveDiffusion::RequestDistributed(
   std::vector<double> fluence;
   translucency::SolverReport& report = in.Result.Report;
   if (!in.Distributed.Solve(input, SolverEntry(this->Solver).Name, this->RelTol, this->MaxIter,
-        this->WarmStart, this->NumberOfThreads, &in.SolvedSources, in.Detectors, fluence,
+        this->WarmStart, this->NumberOfThreads, this->AcceptUnconverged != 0, &in.SolvedSources, in.Detectors, fluence,
         in.Result.Readings, report, error))
   {
     in.Result = translucency::SolveResult();

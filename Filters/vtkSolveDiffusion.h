@@ -152,7 +152,7 @@ public:
   ///@{
   /**
    * Iterative solvers: relative residual ||b - M phi|| / ||b|| to reach per
-   * channel. Default 1e-3, the interactive stopping rule: the boundary
+   * channel. Default 1e-2, the interactive stopping rule: the boundary
    * fluence within 1 % of the converged solution, cold and warm-started
    * (translucency::InteractiveRelTol, Documentation/Solvers.md). Set it
    * (e.g. 1e-10) for a tighter solve.
@@ -574,7 +574,7 @@ protected:
   int RequestDistributed(vtkInformationVector** inputVector, vtkInformationVector* outputVector);
 
   int Solver = SOLVER_DIVERGENCE;
-  double RelTol = 1e-3; // translucency::InteractiveRelTol (checked by a test)
+  double RelTol = 1e-2; // translucency::InteractiveRelTol (checked by a test)
   int MaxIter = 2000;
   bool WarmStart = true;
   bool AcceptUnconverged = false;

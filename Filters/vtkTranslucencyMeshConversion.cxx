@@ -336,6 +336,17 @@ bool ReadArray(vtkDataSetAttributes* attributes, const char* kind, const char* n
   }
   const vtkIdType n = array->GetNumberOfTuples();
   values.resize(static_cast<size_t>(n) * components);
+  if (vtkDoubleArray* doubles = vtkDoubleArray::FastDownCast(array))
+  {
+    // The arrays the filters write (contiguous doubles): one copy, no
+    // virtual call per value (7M of them for a 1M-tet material).
+    const double* source = doubles->GetPointer(0);
+    vtkSMPTools::For(0, n, [&](vtkIdType begin, vtkIdType end) {
+      std::copy(source + components * begin, source + components * end,
+        values.data() + components * begin);
+    });
+    return true;
+  }
   vtkSMPTools::For(0, n, [&](vtkIdType begin, vtkIdType end) {
     for (vtkIdType i = begin; i < end; ++i)
     {

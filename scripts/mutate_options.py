@@ -51,10 +51,13 @@ OPTIONS = {
                # Diffuse optics and meshers (session 17): compound values are
                # built in run_case with one hostile part.
                "--frequency": 1, "--uniform-size": 1, "--source-point": 1,
-               "--source-pencil": 1, "--detector": 1, "--hxt-target-tets": 1},
+               "--source-pencil": 1, "--detector": 1, "--hxt-target-tets": 1,
+               # Time gates T0,dt,T1 with one hostile part, on a pencil beam
+               # (issue 34: 0,1e-320,10 and 0,1e308,10 gave exit 0 with NaN).
+               "--time-gates": 1},
     "compare": {"--target-tets": 1, "--max-tet-volume": 1, "--uniform-samples": 1,
                 "--rel-tol": 1, "--seed": 1, "--photons": 1, "--grid-spacing": 1,
-                "--memory-limit": 1, "--light-power": 1},
+                "--memory-limit": 1, "--light-power": 1, "--time-gates": 1},
     "radiosity": {"--rel-tol": 1, "--rays": 1, "--cell-size": 1, "--bench": 1,
                   "--memory-limit": 1, "cell_size": 1, "rays_per_patch": 1, "max_iter": 1,
                   "power": 1, "max_tet_volume": 1, "target_tets": 1},
@@ -195,6 +198,14 @@ def run_case(args):
                                               f"pencil:5,5,10:0,0,{value}"])
         elif option == "--detector":
             options["--detector"] = rng.choice([f"5,5,10:{value}", f"5,{value},10"])
+        elif option == "--time-gates":
+            options["--time-gates"] = rng.choice([f"0,{value},10", f"{value},1,10",
+                                                  f"0,1,{value}", f"0,{value},{value}"])
+            options["--source"] = "pencil:5,5,10:0,0,-1"
+            options["--detector"] = "8,5,10"
+            if command == "compare":
+                options["--solvers"] = "divergence"
+                options.pop("--photons", None)
         elif option == "--hxt-target-tets":
             options["--mesher"] = "hxt"
             options["--target-tets"] = value

@@ -3,8 +3,11 @@
 
 Seeded: the same --seed gives the same cases. Base inputs are generated here
 (a 48-tet .vtu in four data modes, a sphere .vtp in two, a material table, a
-material, a paint stroke, a cut stroke and a small radiosity scene); each case
-mutates one of them and runs the CLI in a subprocess with a timeout:
+material, a paint stroke, a cut stroke, a small radiosity scene, the cube as
+TetGen .node/.ele, acquire's measurements .vtu (made by the CLI) and truth
+.vti, and compare's --measured CSV); each case mutates one of them (a TetGen
+file next to its intact partner) and runs the CLI in a subprocess with a
+timeout:
 
     /usr/bin/python3 scripts/mutate_xml_inputs.py --cli build/bin/translucency \\
         --cases 3000 --seed 1 --jobs 2 --keep /tmp/mutants
@@ -69,7 +72,56 @@ def cube_grid():
     return grid
 
 
-def write_bases(directory):
+# Files copied next to a mutated base (the other TetGen file): base -> [paths].
+COMPANIONS = {}
+
+
+def write_tetgen(grid, directory):
+    """The grid as TetGen cube.node and cube.ele (1-based)."""
+    node = os.path.join(directory, "cube.node")
+    ele = os.path.join(directory, "cube.ele")
+    with open(node, "w") as f:
+        f.write("%d 3 0 0\n" % grid.GetNumberOfPoints())
+        for i in range(grid.GetNumberOfPoints()):
+            f.write("%d %g %g %g\n" % ((i + 1,) + grid.GetPoint(i)))
+    with open(ele, "w") as f:
+        f.write("%d 4 0\n" % grid.GetNumberOfCells())
+        for c in range(grid.GetNumberOfCells()):
+            ids = grid.GetCell(c).GetPointIds()
+            f.write("%d %s\n" % (c + 1, " ".join(str(ids.GetId(k) + 1) for k in range(4))))
+    return node, ele
+
+
+def write_truth(directory):
+    """acquire's --synthetic-truth: a 3 x 3 x 2 image with two materials."""
+    from vtkmodules.vtkCommonCore import vtkDoubleArray
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkIOXML import vtkXMLImageDataWriter
+    image = vtkImageData()
+    image.SetDimensions(4, 4, 3)
+    image.SetSpacing(1.0, 1.0, 0.5)
+    for name, values in (("AbsorptionCoefficient", (0.01, 0.05)),
+                         ("ReducedScatteringCoefficient", (1.0, 0.7))):
+        array = vtkDoubleArray()
+        array.SetName(name)
+        array.SetNumberOfComponents(3)
+        for c in range(image.GetNumberOfCells()):
+            v = values[c % 2]
+            array.InsertNextTuple3(v, 1.5 * v, 2.0 * v)
+        image.GetCellData().AddArray(array)
+    path = os.path.join(directory, "truth.vti")
+    w = vtkXMLImageDataWriter()
+    w.SetInputData(image)
+    w.SetFileName(path)
+    w.SetDataModeToAscii()
+    w.Write()
+    return path
+
+
+ACQUIRE_SYNTHETIC = ["--grid", "3x3x2", "--patterns", "1x2", "--max-iter", "2", "--no-png"]
+
+
+def write_bases(directory, cli):
     """The base inputs: {kind: [(file name, args builder)]}."""
     from vtkmodules.vtkFiltersSources import vtkSphereSource
     from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter, vtkXMLUnstructuredGridWriter
@@ -149,6 +201,31 @@ def write_bases(directory):
     bases["paint"] = [(paint, lambda f: render + ["--mesh", mesh, "--paint", f])]
     bases["stroke"] = [(stroke, lambda f: render + ["--mesh", mesh, "--cut-stroke", f])]
     bases["scene"] = [(scene, lambda f: ["radiosity", "--scene", f, "--rays", "8"])]
+
+    node, ele = write_tetgen(grid, directory)
+    COMPANIONS[node], COMPANIONS[ele] = [ele], [node]
+    bases["tetgen"] = [(node, lambda f: render + ["--mesh", f]),
+                       (ele, lambda f: render + ["--mesh", f[:-len(".ele")] + ".node"])]
+
+    truth = write_truth(directory)
+    bases["acquire-truth"] = [(truth, lambda f: ["acquire", "--synthetic-truth", f] +
+                               ACQUIRE_SYNTHETIC)]
+    made = subprocess.run([cli, "acquire", "--synthetic-truth", truth] + ACQUIRE_SYNTHETIC +
+                          ["--output", os.path.join(directory, "syn"), "--quiet"],
+                          capture_output=True, text=True, timeout=300)
+    if made.returncode != 0:
+        raise RuntimeError("acquire's base measurements: " + made.stderr)
+    measurements = os.path.join(directory, "syn_measurements.vtu")
+    bases["acquire-sample"] = [(measurements, lambda f: ["acquire", "--sample", f, "--patterns",
+                                                         f, "--max-iter", "2", "--no-png"])]
+
+    measured = os.path.join(directory, "measured.csv")
+    with open(measured, "w") as f:
+        f.write("# one fibre, counts\nt_ns, fibre\n0, 1\n0.5, 30\n1.0, 25\n1.5, 8\n2.0, 2.5\n")
+    bases["measured-csv"] = [(measured, lambda f: [
+        "compare", "--mesh", mesh, "--solvers", "divergence", "--reference", "divergence",
+        "--no-png", "--time-gates", "0,0.5,4", "--source", "pencil:5,5,10:0,0,-1",
+        "--detector", "5,0,5", "--measured", f])]
     return bases
 
 
@@ -299,8 +376,10 @@ TEXT_MUTATIONS = [replace_numbers, line_edit, truncate, bit_flips, non_utf8]
 
 
 def mutate(kind, data, rng):
-    if kind in ("vtu", "vtp"):
+    if kind in ("vtu", "vtp", "acquire-truth", "acquire-sample"):
         ops = TEXT_MUTATIONS + [change_attribute, change_attribute, replace_numbers]
+    elif kind in ("tetgen", "measured-csv"):
+        ops = TEXT_MUTATIONS + [replace_numbers, line_edit]
     else:
         ops = TEXT_MUTATIONS + [json_mutation] * 5
     out = data
@@ -323,7 +402,11 @@ def non_finite_output(prefix, kind):
             files.append("%s_%d.vtp" % (prefix, k))
             k += 1
     else:
-        files = [prefix + ".vtu", prefix + ".vtp"]
+        files = [prefix + ".vtu", prefix + ".vtp", prefix + "_measurements.vtu"]
+    if kind == "measured-csv":
+        table = os.path.join(prefix, "tpsf.csv")  # compare --output DIR
+        if os.path.exists(table) and re.search(r"\b(nan|inf)\b", open(table).read(), re.I):
+            return table
     for path in files:
         if not os.path.exists(path):
             continue
@@ -353,6 +436,8 @@ def run_case(cli, workdir, index, kind, base, args_of, content, case_seed):
     path = os.path.join(case_dir, os.path.basename(base))
     with open(path, "wb") as f:
         f.write(data)
+    for companion in COMPANIONS.get(base, []):
+        shutil.copy(companion, case_dir)
     prefix = os.path.join(case_dir, "out")
     args = [cli] + args_of(path) + ["--output", prefix, "--json", prefix + ".json"]
     try:
@@ -389,7 +474,7 @@ def main():
     rng = random.Random(options.seed)
     workdir = tempfile.mkdtemp(prefix="mutate_xml_")
     try:
-        bases = write_bases(workdir)
+        bases = write_bases(workdir, options.cli)
         kinds = sorted(bases)
         contents = {p: open(p, "rb").read() for entries in bases.values() for p, _ in entries}
         # Each case mutates with a generator of its own (seeded from --seed), in

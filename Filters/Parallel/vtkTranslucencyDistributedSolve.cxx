@@ -2,7 +2,8 @@
 
 
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
-#include "DistributedVertexSolver.h"
+#include "DiffusionFrontEnd.h"
+#include "HypreSolver.h" // MakeCommunicator: the MPI side of translucency::Communicator
 #include "Error.h"
 #include "vtkTranslucencyMPI.h"
 #include "vtkTranslucencyMeshConversion.h"
@@ -20,120 +21,188 @@
 
 struct vtkTranslucencyDistributedSolve::Impl
 {
-  std::unique_ptr<translucency::DistributedVertexSolver> Solver;
-  std::string Discretization;
+  /// The core's one front end, on the controller's communicator: it takes
+  /// the registry's distributed variant of the solver (trait Distributed).
+  translucency::DiffusionFrontEnd FrontEnd;
+  /// The piece's mesh (owned tets), kept while its points and tets are the
+  /// same: the front end keeps the hierarchy for the same mesh object.
+  std::shared_ptr<translucency::TetMesh> Mesh;
+  std::vector<double> Points;
+  std::vector<int> Tets;
+  translucency::SolveResult Result;
+  bool Solved = false;
 };
+
+namespace
+{
+/// This rank's piece in the core's types: its points, owned tets (ghost
+/// copies left out), their material and the irradiance. Throws
+/// translucency::Error (on this rank only).
+void ConvertPiece(vtkUnstructuredGrid* input, std::vector<double>& points, std::vector<int>& tets,
+  translucency::OpticalProperties& material, std::vector<double>& irradiance)
+{
+  std::string local;
+  std::vector<int> cells;
+  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
+  if (numPoints > 0 && !vtkTranslucency::ToTetArrays(input, points, cells, local))
+  {
+    throw translucency::Error(local);
+  }
+  // Owned cells only: a ghost copy is another rank's tet.
+  const std::vector<vtkIdType> kept = vtkTranslucency::OwnedTets(input, cells, tets);
+  cells = {};
+  if (!kept.empty())
+  {
+    translucency::OpticalProperties all;
+    if (!vtkTranslucency::ToOpticalProperties(input, all, local))
+    {
+      throw translucency::Error(local);
+    }
+    for (vtkIdType c : kept)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        material.AbsorptionCoefficient.push_back(all.AbsorptionCoefficient[3 * c + k]);
+        material.ReducedScatteringCoefficient.push_back(
+          all.ReducedScatteringCoefficient[3 * c + k]);
+      }
+      material.RefractiveIndex.push_back(all.RefractiveIndex[c]);
+    }
+  }
+  if (!kept.empty() &&
+    !vtkTranslucency::ReadPointArray(input, vtkTranslucency::IrradianceName, 3, irradiance, local))
+  {
+    if (local.find("no point array") != std::string::npos)
+    {
+      local += ": compute it with vtkSurfaceIrradiance or supply your own";
+    }
+    throw translucency::Error(local);
+  }
+  if (kept.empty())
+  {
+    irradiance.assign(3 * static_cast<size_t>(numPoints), 0.0); // no tet reads it
+  }
+}
+}
 
 bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   const std::string& discretization, double relTol, int maxIter, bool warmStart, int threads,
-  const translucency::Sources* sources, const std::vector<translucency::Detector>& detectors,
-  std::vector<double>& fluence, std::vector<translucency::DetectorReading>& readings,
-  translucency::SolverReport& report, std::string& error)
+  bool acceptUnconverged, const translucency::Sources* sources,
+  const std::vector<translucency::Detector>& detectors, std::vector<double>& fluence,
+  std::vector<translucency::DetectorReading>& readings, translucency::SolverReport& report,
+  std::string& error)
 {
   readings.clear();
-  MPI_Comm comm = *vtkTranslucency::MPIHandle(vtkTranslucencyCommunicator::World());
+  Impl& in = *this->Internal;
+  in.Solved = false;
+  const MPI_Comm* handle = vtkTranslucency::MPIHandle(vtkTranslucencyCommunicator::World());
+  if (!handle)
+  {
+    handle = translucency::GetSelfCommunicator(); // one process: a communicator of size one
+  }
+  const MPI_Comm comm = *handle;
   std::string local;
   std::vector<double> points;
-  std::vector<int> cells;
   std::vector<int> tets;
   translucency::OpticalProperties material;
   std::vector<double> irradiance;
   std::vector<translucency::PointKey> keys;
-  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
   try
   {
-    if (numPoints > 0 && !vtkTranslucency::ToTetArrays(input, points, cells, local))
+    ConvertPiece(input, points, tets, material, irradiance);
+    // The piece's TetMesh, kept while the piece is the same (a relight, a paint).
+    if (tets.empty())
     {
-      throw translucency::Error(local);
+      in.Mesh.reset();
     }
-    // Owned cells only: a ghost copy is another rank's tet.
-    const std::vector<vtkIdType> kept = vtkTranslucency::OwnedTets(input, cells, tets);
-    cells = {};
-    if (!kept.empty())
+    else if (!in.Mesh || points != in.Points || tets != in.Tets)
     {
-      translucency::OpticalProperties all;
-      if (!vtkTranslucency::ToOpticalProperties(input, all, local))
-      {
-        throw translucency::Error(local);
-      }
-      for (vtkIdType c : kept)
-      {
-        for (int k = 0; k < 3; ++k)
-        {
-          material.AbsorptionCoefficient.push_back(all.AbsorptionCoefficient[3 * c + k]);
-          material.ReducedScatteringCoefficient.push_back(
-            all.ReducedScatteringCoefficient[3 * c + k]);
-        }
-        material.RefractiveIndex.push_back(all.RefractiveIndex[c]);
-      }
+      in.Mesh.reset();
+      auto mesh = std::make_shared<translucency::TetMesh>();
+      mesh->SetGeometry(points, tets);
+      in.Mesh = std::move(mesh);
+      in.Points = points;
+      in.Tets = tets;
     }
-    if (!kept.empty() &&
-      !vtkTranslucency::ReadPointArray(input, vtkTranslucency::IrradianceName, 3, irradiance, local))
-    {
-      if (local.find("no point array") != std::string::npos)
-      {
-        local += ": compute it with vtkSurfaceIrradiance or supply your own";
-      }
-      throw translucency::Error(local);
-    }
-    if (kept.empty())
-    {
-      irradiance.assign(3 * static_cast<size_t>(numPoints), 0.0); // no tet reads it
-    }
-  }
-  catch (const translucency::Error& e)
-  {
-    local = e.what();
   }
   catch (const std::exception& e)
   {
     local = e.what();
+    in.Mesh.reset();
   }
   // Global ids when every rank with points has them, else coordinates.
   vtkTranslucency::MakePointKeys(comm, input, points, !local.empty(), keys);
   try
   {
     translucency::AgreeOnError(comm, local);
-    if (!this->Internal->Solver || this->Internal->Discretization != discretization)
-    {
-      this->Internal->Solver =
-        std::make_unique<translucency::DistributedVertexSolver>(comm, discretization);
-      this->Internal->Discretization = discretization;
-    }
-    translucency::DistributedVertexSolver& solver = *this->Internal->Solver;
+    // The solver by name, its distributed variant by the registry's trait.
+    in.FrontEnd.SetSolver(discretization);
+    in.FrontEnd.SetCommunicator(translucency::MakeCommunicator(handle));
+    translucency::DiffusionSolver& solver = in.FrontEnd.GetSolver();
     solver.SetRelTol(relTol);
     solver.SetMaxIter(maxIter);
     solver.SetWarmStart(warmStart);
     solver.SetNumberOfThreads(threads);
-    solver.SetInteriorSources(sources);
-    solver.SetDetectors(detectors);
-    solver.Solve(points, keys, tets, material, irradiance, fluence, report);
-    solver.SetInteriorSources(nullptr); // not kept past this call
-    readings = solver.GetDetectorReadings();
+    translucency::DiffusionProblem light;
+    light.InteriorSources = sources;
+    light.PointKeys = &keys;
+    translucency::SolveRequest request;
+    request.Detectors = detectors;
+    request.AcceptUnconverged = acceptUnconverged;
+    in.Result = translucency::SolveResult();
+    in.FrontEnd.Solve(in.Mesh, std::move(material), std::move(irradiance), light, request,
+      in.Result);
   }
   catch (const translucency::Error& e)
   {
-    error = e.what(); // the same on every rank (AgreeOnError)
-    this->Internal->Solver.reset();
+    local = e.what();
+  }
+  // A failure inside the collective solve is already the same on every
+  // rank; one after it (a check of this rank's field) is agreed here.
+  int failed = local.empty() ? 0 : 1, allFailed = 0, anyFailed = 0;
+  MPI_Allreduce(&failed, &allFailed, 1, MPI_INT, MPI_MIN, comm);
+  MPI_Allreduce(&failed, &anyFailed, 1, MPI_INT, MPI_MAX, comm);
+  if (anyFailed && !allFailed)
+  {
+    try
+    {
+      translucency::AgreeOnError(comm, local);
+    }
+    catch (const translucency::Error& e)
+    {
+      local = e.what();
+    }
+  }
+  if (anyFailed)
+  {
+    error = local;
+    in.Result = translucency::SolveResult();
+    in.FrontEnd.Reset();
+    in.Mesh.reset();
     return false;
   }
+  fluence = std::move(in.Result.Fluence);
+  in.Result.Fluence.clear();
+  readings = in.Result.Readings;
+  report = in.Result.Report;
+  in.Solved = true;
   return true;
 }
 
 bool vtkTranslucencyDistributedSolve::GetPowerBalance(
   double injected[3], double absorbed[3], double escaped[3]) const
 {
-  if (!this->Internal->Solver)
+  const Impl& in = *this->Internal;
+  if (!in.Solved || !in.Result.HasTalliedBalance)
   {
     return false;
   }
-  const translucency::PowerBalance& balance = this->Internal->Solver->GetPowerBalance();
-  const auto& sources = this->Internal->Solver->GetInjectedSourcePower();
+  // The distributed solver's balance, summed over the ranks (its tallies).
   for (int c = 0; c < 3; ++c)
   {
-    injected[c] = balance.BoundaryInjected[c] + sources[c];
-    absorbed[c] = balance.Absorbed[c];
-    escaped[c] = balance.Escaped[c];
+    injected[c] = in.Result.TalliedInjected[c];
+    absorbed[c] = in.Result.TalliedAbsorbed[c];
+    escaped[c] = in.Result.TalliedEscaped[c];
   }
   return true;
 }
@@ -145,7 +214,7 @@ struct vtkTranslucencyDistributedSolve::Impl
 };
 
 bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid*, const std::string&, double,
-  int, bool, int, const translucency::Sources*, const std::vector<translucency::Detector>&,
+  int, bool, int, bool, const translucency::Sources*, const std::vector<translucency::Detector>&,
   std::vector<double>&, std::vector<translucency::DetectorReading>&, translucency::SolverReport&,
   std::string& error)
 {

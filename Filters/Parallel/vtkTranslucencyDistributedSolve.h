@@ -1,8 +1,10 @@
 /**
  * @file   vtkTranslucencyDistributedSolve.h
  * @brief  vtkSolveDiffusion's distributed path under MPI: each rank's piece
- *         is solved in place by translucency::DistributedVertexSolver (hypre
- *         BoomerAMG-PCG on the global controller's communicator), instead of
+ *         is solved in place by the core's front end (DiffusionFrontEnd) with
+ *         the registry's distributed variant of the solver (trait Distributed:
+ *         translucency::DistributedVertexSolver, hypre BoomerAMG-PCG on the
+ *         global controller's communicator), instead of
  *         being gathered to rank 0 (vtkTranslucencyParallel::RunGathered).
  *
  * Used for the divergence and fem solvers in continuous wave (point
@@ -37,13 +39,18 @@ public:
   ~vtkTranslucencyDistributedSolve();
 
   /**
-   * Collective. Solve on this rank's piece `input` ("divergence" or "fem");
-   * fluence gets 3 values per input point. `sources` (may be null) are the
-   * interior sources, `detectors` read into `readings` (the same on every
-   * rank). Returns false with `error` (the same on every rank) on failure.
+   * Collective. Solve on this rank's piece `input` with the registry's
+   * distributed variant of `solver` (trait Distributed: "divergence" or
+   * "fem"), through translucency::DiffusionFrontEnd on the controller's
+   * communicator; fluence gets 3 values per input point. `sources` (may be
+   * null) are the interior sources, `detectors` read into `readings` (the
+   * same on every rank). A solve that does not converge, also after a full
+   * set-up, fails unless `acceptUnconverged`. Returns false with `error`
+   * (the same on every rank) on failure.
    */
-  bool Solve(vtkUnstructuredGrid* input, const std::string& discretization, double relTol,
-    int maxIter, bool warmStart, int threads, const translucency::Sources* sources,
+  bool Solve(vtkUnstructuredGrid* input, const std::string& solver, double relTol,
+    int maxIter, bool warmStart, int threads, bool acceptUnconverged,
+    const translucency::Sources* sources,
     const std::vector<translucency::Detector>& detectors, std::vector<double>& fluence,
     std::vector<translucency::DetectorReading>& readings, translucency::SolverReport& report,
     std::string& error);

@@ -26,8 +26,35 @@ void DiffusionFrontEnd::SetSolver(const std::string& name)
   {
     return;
   }
-  Solver_ = entry.Create();
+  Solver_ = MakeSolver(entry.Name, Comm_);
   SolverName_ = entry.Name;
+  ForgetLast();
+}
+
+std::unique_ptr<DiffusionSolver> DiffusionFrontEnd::MakeSolver(
+  const std::string& name, const Communicator& comm)
+{
+  if (!comm.IsMPI())
+  {
+    return CreateDiffusionSolver(name);
+  }
+  // Chosen by the registry trait Distributed (the Parallel layer registers
+  // the variants it has), never by name or type.
+  std::unique_ptr<DiffusionSolver> solver = CreateDistributedDiffusionSolver(name);
+  solver->SetCommunicator(comm);
+  return solver;
+}
+
+void DiffusionFrontEnd::SetCommunicator(const Communicator& comm)
+{
+  if (Solver_ && comm.GetHandle() == Comm_.GetHandle() && comm.GetSize() == Comm_.GetSize())
+  {
+    return;
+  }
+  Solver_ = MakeSolver(SolverName_, comm); // throws before anything changes
+  Comm_ = comm;
+  Mesh_.reset();
+  ChangedTets_ = -1;
   ForgetLast();
 }
 
@@ -94,6 +121,12 @@ void DiffusionFrontEnd::CheckDomain(const SolveRequest& request) const
       JoinNames(GetDiffusionSolverNamesWith(DiffusionTrait::Time)) +
       ", the frequency domain by " +
       JoinNames(GetDiffusionSolverNamesWith(DiffusionTrait::Frequency)));
+  }
+  if (Comm_.IsMPI() && request.Domain != SolveDomain::ContinuousWave)
+  {
+    throw Error("the distributed " + SolverName_ +
+      " solve is continuous wave only: the frequency domain and time gates are solved in one "
+      "process");
   }
   if (request.Domain != SolveDomain::Time && !request.Snapshots.empty())
   {
@@ -175,9 +208,12 @@ bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProper
     Mesh_ = mesh;
     ForgetLast();
   }
+  // The incremental assembly of a paint is the in-process vertex solvers'
+  // (the distributed variant keeps its hierarchy across paints itself).
   const bool continuous = request.Domain == SolveDomain::ContinuousWave;
+  const bool incremental = traits.UnknownsAtVertices && continuous && !Comm_.IsMPI();
   ChangedTets_ = -1;
-  if (traits.UnknownsAtVertices && continuous)
+  if (incremental)
   {
     DetectChangedTets(material, irradiance);
   }
@@ -213,7 +249,8 @@ bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProper
       {
         // A NaN/inf field says more than "did not converge" (an overflow).
         RequireFinite(result.Fluence, "Fluence (" + SolverName_ + " solver)", OverflowCause());
-        throw Error("the " + SolverName_ + " solve did not converge, also after a full set-up (" +
+        throw Error("the " + std::string(Comm_.IsMPI() ? "distributed " : "") + SolverName_ +
+          " solve did not converge, also after a full set-up (" +
           unconverged + "; RelTol " + FormatNumber(Solver_->GetRelTol()) + ", MaxIter " +
           std::to_string(Solver_->GetMaxIter()) + ", linear solver " +
           result.Report.LinearSolver +
@@ -232,7 +269,7 @@ bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProper
     ForgetLast();
     throw;
   }
-  if (traits.UnknownsAtVertices && IncrementalAssembly_ && continuous)
+  if (incremental && IncrementalAssembly_)
   {
     LastMaterial_ = std::move(material);
     LastIrradiance_ = std::move(irradiance);

@@ -124,6 +124,21 @@ public:
    * is then unchanged).
    */
   void SetSolver(const std::string& name);
+  /**
+   * The communicator of the next solves (model: PETSc, where every object
+   * has one and serial is a communicator of size one). None (the default):
+   * the in-process solvers. An MPI communicator, of any size (one
+   * included): the registry's distributed variant of the named solver
+   * (trait Distributed; SetSolver keeps choosing variants while it is set),
+   * in continuous wave; every rank of the communicator then calls Solve
+   * together with its own piece: the mesh of its owned tets (null for a rank
+   * without tets) and DiffusionProblem::PointKeys. A new communicator
+   * creates a new solver (default settings) and forgets the warm start.
+   * Throws translucency::Error for a solver without a distributed variant,
+   * naming those with one (the front end is then unchanged).
+   */
+  void SetCommunicator(const Communicator& comm);
+  const Communicator& GetCommunicator() const { return Comm_; }
   /// The registry name of the current solver.
   const std::string& GetSolverName() const { return SolverName_; }
   /// The current solver, to set its parameters (RelTol, options, ...).
@@ -218,7 +233,12 @@ private:
     SolveResult& result);
   void ReadOut(const DiffusionProblem& problem, const SolveRequest& request, SolveResult& result);
 
+  /// A new solver of the registry entry `name` for communicator `comm`.
+  static std::unique_ptr<DiffusionSolver> MakeSolver(
+    const std::string& name, const Communicator& comm);
+
   std::string SolverName_;
+  Communicator Comm_;
   std::unique_ptr<DiffusionSolver> Solver_;
   std::shared_ptr<const TetMesh> Mesh_;
   bool IncrementalAssembly_ = true;

@@ -98,10 +98,53 @@ std::vector<std::string> GetDiffusionSolverNamesWith(unsigned flags)
   return names;
 }
 
+namespace
+{
+/// The table; changed only by RegisterDistributedDiffusionSolver (when the
+/// library is loaded), read-only after.
+DiffusionSolverRegistry& MutableRegistry()
+{
+  static DiffusionSolverRegistry registry = MakeRegistry();
+  return registry;
+}
+} // namespace
+
 const DiffusionSolverRegistry& GetDiffusionSolverRegistry()
 {
-  static const DiffusionSolverRegistry registry = MakeRegistry();
-  return registry;
+  return MutableRegistry();
+}
+
+void RegisterDistributedDiffusionSolver(
+  const std::string& name, std::function<std::unique_ptr<DiffusionSolver>()> create)
+{
+  DiffusionSolverRegistry& registry = MutableRegistry();
+  const std::string key = registry.Get(name).Name; // throws for an unknown name
+  // Registry entries are read-only: rebuild the table with the new traits.
+  DiffusionSolverRegistry updated("solver");
+  for (DiffusionSolverRegistry::Entry entry : registry.GetEntries())
+  {
+    if (entry.Name == key)
+    {
+      entry.Properties.Distributed = true;
+      entry.Properties.CreateDistributed = create;
+    }
+    updated.Add(std::move(entry));
+  }
+  registry = std::move(updated);
+}
+
+std::unique_ptr<DiffusionSolver> CreateDistributedDiffusionSolver(const std::string& name)
+{
+  const DiffusionSolverRegistry::Entry& entry = GetDiffusionSolverRegistry().Get(name);
+  if (!entry.Properties.Distributed || !entry.Properties.CreateDistributed)
+  {
+    const std::vector<std::string> with = GetDiffusionSolverNamesWith(DiffusionTrait::Distributed);
+    throw Error("the " + entry.Name + " solver has no distributed variant (" +
+      (with.empty() ? std::string("this build has none: it needs hypre and MPI")
+                    : "solvers with one: " + JoinNames(with)) +
+      ")");
+  }
+  return entry.Properties.CreateDistributed();
 }
 
 std::vector<std::string> GetDiffusionSolverNames()

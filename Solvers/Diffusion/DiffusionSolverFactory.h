@@ -14,6 +14,7 @@
 #include "DiffusionSolver.h"
 #include "Registry.h"
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,9 +36,17 @@ struct DiffusionSolverTraits
   bool SupportsFrequency = false;
   /// SolveTimeResolved is implemented (else the interface refuses it).
   bool SupportsTime = false;
-  /// One system distributed over the ranks of a communicator (MPI): every
-  /// rank solves with its own piece of the mesh (Solvers/Parallel/).
+  /**
+   * The solver has a distributed variant: one system over the ranks of an
+   * MPI communicator, every rank solving with its own piece of the mesh
+   * (DiffusionSolver::SetCommunicator, DiffusionProblem::PointKeys). The
+   * optional Parallel layer registers it when it is built
+   * (RegisterDistributedDiffusionSolver: divergence and fem);
+   * DiffusionFrontEnd::SetCommunicator chooses it by this trait.
+   */
   bool Distributed = false;
+  /// The distributed variant's factory (set with Distributed).
+  std::function<std::unique_ptr<DiffusionSolver>()> CreateDistributed;
   /// The options its SetOptions reads (DiffusionOption names).
   std::vector<std::string> Options;
   /// The linear solvers its SetLinearSolver accepts: registered names of the
@@ -108,6 +117,25 @@ std::vector<std::string> GetDiffusionSolverNames();
  * naming the unknown name and listing the known ones.
  */
 std::unique_ptr<DiffusionSolver> CreateDiffusionSolver(const std::string& name);
+
+/**
+ * Registers `create` as the distributed variant of the registered solver
+ * `name` (its traits then say Distributed). Called by the Parallel layer
+ * when the library is loaded (Solvers/Parallel/DistributedVertexSolver.cxx),
+ * so a build without it has no distributed variant. Throws
+ * translucency::Error for an unknown name.
+ */
+void RegisterDistributedDiffusionSolver(
+  const std::string& name, std::function<std::unique_ptr<DiffusionSolver>()> create);
+
+/**
+ * A new distributed variant of the solver `name` (trait Distributed), to be
+ * given its communicator (DiffusionSolver::SetCommunicator). Throws
+ * translucency::Error for an unknown name or a solver without one, naming
+ * those with one ("the quadgraph solver has no distributed variant
+ * (solvers with one: divergence, fem)").
+ */
+std::unique_ptr<DiffusionSolver> CreateDistributedDiffusionSolver(const std::string& name);
 
 /// "  name    one line of help" per solver, for --help texts.
 std::string GetDiffusionSolverHelp(const std::string& indent = "  ");

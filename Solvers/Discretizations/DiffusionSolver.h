@@ -9,6 +9,7 @@
 #pragma once
 
 #include "CollimatedSource.h"
+#include "Communicator.h"
 #include "InteriorSources.h"
 #include "LightSources.h"
 #include "OpticalProperties.h"
@@ -60,6 +61,12 @@ struct DiffusionProblem
   /// Robin condition to Fresnel::BoundaryRule::Moments); quadgraph and grid
   /// throw, Monte Carlo (transport, not diffusion) ignores it.
   CollimatedModel Collimated = CollimatedModel::Surface;
+  /// A distributed solve (DiffusionSolver::SetCommunicator with an MPI
+  /// communicator): the identity of each of Mesh's points across the ranks,
+  /// one per point (borrowed). Mesh is then this rank's piece: its owned
+  /// tets (no ghost copies) on its local points; null when the rank has no
+  /// tets (its points are the keys). The in-process solvers ignore it.
+  const std::vector<PointKey>* PointKeys = nullptr;
 
   bool HasInteriorSources() const { return InteriorSources && !InteriorSources->Empty(); }
 };
@@ -126,6 +133,19 @@ struct SolverReport
   std::vector<double> Radiance;
   std::vector<double> RadianceStandardError;
 };
+
+/// The extended collimated model's read-out, shared by the vertex solvers
+/// and SP3: adds the unscattered beam's fluence to the diffuse one (the
+/// total fluence rate phi_d + E_c) and records the beam in the report
+/// (SolverReport::CollimatedFluence and the beams' power balance).
+void AddCollimatedFluence(CollimatedSource& collimated, std::vector<double>& fluence,
+  SolverReport& report);
+/// The frequency domain's: adds the modulated beam (complex, 3 per mesh
+/// point) and records its amplitude and phase; the powers are those of
+/// continuous wave, taken from `collimated`.
+void AddCollimatedFluence(const CollimatedSource& collimated,
+  const std::vector<std::complex<double>>& modulated,
+  std::vector<std::complex<double>>& fluence, SolverReport& report);
 
 /// The names of the solver-specific options (DiffusionSolver::SetOptions).
 namespace DiffusionOption
@@ -212,6 +232,25 @@ public:
     (void)irradianceChanged;
   }
 
+  /**
+   * The communicator of the solve (model: PETSc, every object has one). The
+   * in-process solvers take none (the default Communicator); the base
+   * refuses an MPI communicator with translucency::Error naming the solver.
+   * A solver with the registry trait Distributed (the variant the registry
+   * gives for it, DiffusionFrontEnd::SetCommunicator) solves one system over
+   * the communicator's ranks, each rank calling Solve with its own piece
+   * (DiffusionProblem::PointKeys); a communicator of size one is the same
+   * code on one rank.
+   */
+  virtual void SetCommunicator(const Communicator& comm)
+  {
+    if (comm.IsMPI())
+    {
+      throw Error("the " + GetName() +
+        " solver runs in one process: it takes no MPI communicator (its registry entry has "
+        "no distributed variant)");
+    }
+  }
   /// OpenMP threads of the solver's parallel loops (0, the default: OpenMP's
   /// default). Does not change the results. The base (no threads) ignores it.
   virtual void SetNumberOfThreads(int n) { (void)n; }

@@ -132,14 +132,7 @@ std::vector<double> Sp3BoundaryRadiance(const TetMesh& mesh, const std::vector<d
   {
     const std::size_t i = static_cast<std::size_t>(boundary[static_cast<std::size_t>(k)]);
     const double* nrm = &normals[3 * i];
-    double cosOut = 1.0;
-    if (viewPoint)
-    {
-      const double* x = mesh.GetPoint(static_cast<int>(i));
-      const double d[3] = { viewPoint[0] - x[0], viewPoint[1] - x[1], viewPoint[2] - x[2] };
-      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
-    }
+    const double cosOut = ViewCosine(viewPoint, mesh.GetPoint(static_cast<int>(i)), nrm);
     const Sp3BoundaryCoefficients& coefficient = coefficients.find(pointEta[i])->second;
     for (int c = 0; c < 3; ++c)
     {
@@ -1294,15 +1287,7 @@ bool Sp3Solver::Solve(
   ComputeExitance(problem, {}, {});
   if (extended)
   {
-    // The total fluence rate: diffuse plus the unscattered beam.
-    for (std::size_t k = 0; k < fluence.size(); ++k)
-    {
-      fluence[k] += collimated.Fluence[k];
-    }
-    report.CollimatedFluence = std::move(collimated.Fluence);
-    report.CollimatedEntering = collimated.Entering;
-    report.CollimatedScattered = collimated.Scattered;
-    report.CollimatedAbsorbed = collimated.Absorbed;
+    AddCollimatedFluence(collimated, fluence, report);
   }
   return true;
 }
@@ -1400,17 +1385,7 @@ bool Sp3Solver::SolveFrequencyDomain(const DiffusionProblem& given, double frequ
   // from it (X_ untouched), and Phi1_/Phi2_ hold the real parts.
   if (extended)
   {
-    report.CollimatedFluence.resize(half);
-    report.CollimatedFluencePhase.resize(half);
-    for (std::size_t k = 0; k < half; ++k)
-    {
-      fluence[k] += collimatedFluence[k];
-      report.CollimatedFluence[k] = std::abs(collimatedFluence[k]);
-      report.CollimatedFluencePhase[k] = std::arg(collimatedFluence[k]);
-    }
-    report.CollimatedEntering = collimated.Entering;
-    report.CollimatedScattered = collimated.Scattered;
-    report.CollimatedAbsorbed = collimated.Absorbed;
+    AddCollimatedFluence(collimated, collimatedFluence, fluence, report);
   }
   return true;
 }

@@ -1001,7 +1001,7 @@ bool AggregationMultigridSolver::Solve(const DiffusionSystem& system,
     : nullptr;
   return FusedBlockedPCG(
     system, single, [this](const double* r, double* z) { return Precondition(r, z); }, x,
-    warmStart, RelTol_, MaxIter_, stats, flops, Progress_, Internal_->Work, recycler);
+    warmStart, RelTol_, MaxIter_, stats, flops, Progress_, Internal_->Work, recycler, MinIter_);
 }
 
 void AggregationMultigridSolver::SetRecycledSolutions(int k)

@@ -314,11 +314,13 @@ inline void Deinterleave(const Eigen::VectorXd& in, std::array<Eigen::VectorXd, 
 
 /// Per-channel start of the blocked CG loops from b.b and r.r of the
 /// initial residual: the norms of b, the stats (initialSpMV SpMV-equivalents
-/// so far) and which channels still iterate. Returns the channels with b = 0,
-/// whose solution is exactly 0 (SPD) and which the caller zeroes.
+/// so far) and which channels still iterate (a channel within tol iterates
+/// anyway when minIter > 0 and its residual is not zero: LinearSolver::
+/// SetMinIter). Returns the channels with b = 0, whose solution is exactly 0
+/// (SPD) and which the caller zeroes.
 inline std::array<bool, NC> StartChannels(const std::array<double, NC>& bb,
   const std::array<double, NC>& rr, double tol, double initialSpMV, std::array<double, NC>& normB,
-  std::array<bool, NC>& active, std::array<LinearSolveStats, NC>& stats)
+  std::array<bool, NC>& active, std::array<LinearSolveStats, NC>& stats, int minIter = 0)
 {
   std::array<bool, NC> zero{};
   for (int c = 0; c < NC; ++c)
@@ -334,18 +336,19 @@ inline std::array<bool, NC> StartChannels(const std::array<double, NC>& bb,
       continue;
     }
     stats[c].RelativeResidual = std::sqrt(rr[c]) / normB[c];
-    active[c] = !(stats[c].RelativeResidual <= tol);
+    active[c] = !(stats[c].RelativeResidual <= tol) || (minIter > 0 && rr[c] > 0.0);
     stats[c].Converged = !active[c];
   }
   return zero;
 }
 
 /// Per-channel end of a CG iteration: counts it for the active channels,
-/// freezes those that reached tol (converged) or broke down (p.A p <= 0 or
-/// a non-finite residual: not SPD, not converged).
+/// freezes those that reached tol after at least minIter iterations
+/// (converged) or broke down (p.A p <= 0 or a non-finite residual: not SPD,
+/// not converged).
 inline void UpdateChannels(const std::array<double, NC>& pq, const std::array<double, NC>& rr,
   const std::array<double, NC>& normB, double tol, double spmvPerIteration,
-  std::array<bool, NC>& active, std::array<LinearSolveStats, NC>& stats)
+  std::array<bool, NC>& active, std::array<LinearSolveStats, NC>& stats, int minIter = 0)
 {
   for (int c = 0; c < NC; ++c)
   {
@@ -356,7 +359,7 @@ inline void UpdateChannels(const std::array<double, NC>& pq, const std::array<do
     ++stats[c].Iterations;
     stats[c].SpMVEquivalents += spmvPerIteration;
     stats[c].RelativeResidual = std::sqrt(rr[c]) / normB[c];
-    if (stats[c].RelativeResidual <= tol)
+    if ((stats[c].RelativeResidual <= tol && stats[c].Iterations >= minIter) || rr[c] == 0.0)
     {
       active[c] = false;
       stats[c].Converged = true;
@@ -424,7 +427,7 @@ inline void UpdateDirections(double* p, const double* z, const std::array<double
 template <typename Precondition>
 inline bool BlockedPCG(const DiffusionSystem& system, Precondition precondition, Eigen::VectorXd& x,
   double tol, int maxIter, std::array<LinearSolveStats, NC>& stats, double flopsPerIteration,
-  const std::function<bool(double)>& progress)
+  const std::function<bool(double)>& progress, int minIter = 0)
 {
   const int n = system.NumberOfUnknowns;
   const double nnz = std::max<double>(1.0, static_cast<double>(system.ColumnIndices.size()));
@@ -437,7 +440,7 @@ inline bool BlockedPCG(const DiffusionSystem& system, Precondition precondition,
   std::array<bool, NC> active;
   std::array<double, NC> normB, rz{};
   auto rr = Dot3(r, r);
-  const auto zero = StartChannels(bb, rr, tol, 1.0 + 4.0 * n / nnz, normB, active, stats);
+  const auto zero = StartChannels(bb, rr, tol, 1.0 + 4.0 * n / nnz, normB, active, stats, minIter);
   for (int c = 0; c < NC; ++c)
   {
     for (int i = 0; zero[c] && i < n; ++i)
@@ -471,7 +474,7 @@ inline bool BlockedPCG(const DiffusionSystem& system, Precondition precondition,
       }
     }
     rr = Dot3(r, r);
-    UpdateChannels(pq, rr, normB, tol, flopsPerIteration / nnz, active, stats);
+    UpdateChannels(pq, rr, normB, tol, flopsPerIteration / nnz, active, stats, minIter);
     if (!anyActive())
     {
       break;
@@ -615,15 +618,15 @@ inline auto FusedUpdate(int n, const std::array<double, NC>& alpha, const double
  * (the caller's rule). warm: start from x (else from 0; x is resized).
  * Work vectors in `w`. recycler (optional): a warm start is first replaced
  * by its projection onto span{x, kept solutions} (SolutionRecycler), and
- * the solution is kept there after a solve that was not aborted. Returns
- * false if aborted.
+ * the solution is kept there after a solve that was not aborted. minIter:
+ * LinearSolver::SetMinIter. Returns false if aborted.
  */
 template <typename Precondition>
 inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
   Precondition precondition, std::array<Eigen::VectorXd, NC>& x, bool warm, double tol,
   int maxIter, std::array<LinearSolveStats, NC>& stats, double flopsPerIteration,
   const std::function<bool(double)>& progress, FusedPCGWorkspace& w,
-  SolutionRecycler* recycler = nullptr)
+  SolutionRecycler* recycler = nullptr, int minIter = 0)
 {
   const int n = system.NumberOfUnknowns;
   const long long n3 = 3 * static_cast<long long>(n);
@@ -673,7 +676,7 @@ inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
   std::array<double, NC> normB, rz{};
   const auto zero = StartChannels({ start[0], start[1], start[2] },
     { start[3], start[4], start[5] }, tol, (warm ? 1.0 : 0.0) + 4.0 * n / nnz + recycleSpMV,
-    normB, active, stats);
+    normB, active, stats, minIter);
   for (int c = 0; c < NC; ++c)
   {
     if (zero[c])
@@ -701,7 +704,7 @@ inline bool FusedBlockedPCG(const DiffusionSystem& system, const float* single,
                            : FusedProduct<false>(system, single, w.P.data(), q);
     const std::array<double, NC> alpha = StepLengths(active, rz, pq);
     const auto rr = FusedUpdate(n, alpha, w.P.data(), q, x[0].data(), x[1].data(), x[2].data(), r);
-    UpdateChannels(pq, rr, normB, tol, flopsPerIteration / nnz, active, stats);
+    UpdateChannels(pq, rr, normB, tol, flopsPerIteration / nnz, active, stats, minIter);
     if (!anyActive())
     {
       break;

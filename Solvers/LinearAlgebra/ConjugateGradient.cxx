@@ -155,7 +155,20 @@ bool ConjugateGradient::Solve(const DiffusionSystem& system,
     }
     Iterations_[c] = static_cast<int>(solver.iterations());
     FinalNorm_[c] = solver.error();
-    Converged_[c] = solver.info() == Eigen::Success && std::isfinite(FinalNorm_[c]) &&
+    bool success = solver.info() == Eigen::Success;
+    if (Iterations_[c] < MinIter_ && FinalNorm_[c] > 0.0 && solver.info() == Eigen::Success)
+    {
+      // Within RelTol before MinIter iterations (a warm start): the
+      // remaining iterations with no tolerance, from where it stopped.
+      solver.setTolerance(0.0);
+      solver.setMaxIterations(MinIter_ - Iterations_[c]);
+      const Eigen::VectorXd x0 = x[c];
+      x[c] = solver.solveWithGuess(b, x0);
+      Iterations_[c] += static_cast<int>(solver.iterations());
+      FinalNorm_[c] = solver.error();
+      success = FinalNorm_[c] <= RelTol_; // no tolerance: judged against RelTol
+    }
+    Converged_[c] = success && std::isfinite(FinalNorm_[c]) &&
       x[c].allFinite(); // never converged on a NaN/inf residual
   }
   if (Progress_)

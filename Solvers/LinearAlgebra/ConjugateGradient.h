@@ -29,6 +29,10 @@ public:
   /// Iteration limit per channel. Default 2000.
   void SetMaxIter(int n) { MaxIter_ = n; }
   int GetMaxIter() const { return MaxIter_; }
+  /// Fewest iterations of a channel whose initial residual is not zero
+  /// (LinearSolver::SetMinIter). Default 0.
+  void SetMinIter(int n) { MinIter_ = n < 0 ? 0 : n; }
+  int GetMinIter() const { return MinIter_; }
 
   /**
    * Called between channels with the fraction done in [0, 1]; returning
@@ -71,6 +75,7 @@ private:
   std::unique_ptr<Prepared> Prepared_;
   double RelTol_ = 1e-6;
   int MaxIter_ = 2000;
+  int MinIter_ = 0;
   std::function<bool(double)> Progress_;
   std::array<int, NumberOfChannels> Iterations_{};
   std::array<double, NumberOfChannels> FinalNorm_{};

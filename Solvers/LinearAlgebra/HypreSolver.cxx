@@ -7,7 +7,10 @@
 #include <HYPRE_parcsr_ls.h>
 #include <_hypre_parcsr_ls.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdlib>
+#include <limits>
 #include <mutex>
 #include <numeric>
 #include <sstream>
@@ -77,6 +80,64 @@ void EnsureHypreInitialized()
   });
 }
 
+const MPI_Comm* GetSelfCommunicator()
+{
+  static const MPI_Comm self = MPI_COMM_SELF;
+  return &self;
+}
+
+const MPI_Comm* GetWorldCommunicator()
+{
+  static const MPI_Comm world = MPI_COMM_WORLD;
+  return &world;
+}
+
+MPI_Comm GetMPIComm(const Communicator& comm)
+{
+  EnsureHypreInitialized();
+  return comm.IsMPI() ? *static_cast<const MPI_Comm*>(comm.GetHandle()) : MPI_COMM_SELF;
+}
+
+Communicator MakeCommunicator(const MPI_Comm* comm)
+{
+  EnsureHypreInitialized();
+  int rank = 0, size = 1;
+  MPI_Comm_rank(*comm, &rank);
+  MPI_Comm_size(*comm, &size);
+  return Communicator(comm, rank, size);
+}
+
+SolverOptions BoomerAMGOptions::ToOptions() const
+{
+  return { { "amg-coarsening", static_cast<double>(CoarsenType) },
+    { "amg-interpolation", static_cast<double>(InterpType) },
+    { "amg-pmax", static_cast<double>(PMaxElmts) }, { "amg-strong-threshold", StrongThreshold },
+    { "amg-relaxation", static_cast<double>(RelaxType) },
+    { "amg-sweeps", static_cast<double>(NumSweeps) },
+    { "amg-aggressive-levels", static_cast<double>(AggNumLevels) },
+    { "amg-aggressive-interpolation", static_cast<double>(AggInterpType) } };
+}
+
+void HypreBoomerAMGPCG::SetOptions(const SolverOptions& options)
+{
+  const std::string who = "cg/boomeramg";
+  BoomerAMGOptions o = Options_;
+  options.ReadInteger(who, "amg-coarsening", 0, "a BoomerAMG coarsening code (10 = HMIS)", o.CoarsenType);
+  options.ReadInteger(who, "amg-interpolation", 0, "a BoomerAMG interpolation code (6 = ext+i)", o.InterpType);
+  options.ReadInteger(who, "amg-pmax", 0, "interpolation entries per row, >= 0", o.PMaxElmts);
+  options.ReadNumber(who, "amg-strong-threshold", 0.0, "the strength threshold, in [0, 1)", o.StrongThreshold);
+  options.ReadInteger(who, "amg-relaxation", 0, "a BoomerAMG relaxation code", o.RelaxType);
+  options.ReadInteger(who, "amg-sweeps", 1, "sweeps, >= 1", o.NumSweeps);
+  options.ReadInteger(who, "amg-aggressive-levels", 0, "levels, >= 0", o.AggNumLevels);
+  options.ReadInteger(who, "amg-aggressive-interpolation", 0, "a BoomerAMG interpolation code", o.AggInterpType);
+  if (!(o.StrongThreshold < 1.0))
+  {
+    throw Error(who + ": option amg-strong-threshold = " + std::to_string(o.StrongThreshold) +
+      " is invalid: the strength threshold, in [0, 1)");
+  }
+  Options_ = o;
+}
+
 struct HypreBoomerAMGPCG::Handles
 {
   HYPRE_IJMatrix A = nullptr;
@@ -111,12 +172,15 @@ void HypreBoomerAMGPCG::Free()
   if (H_->X)
     HYPRE_IJVectorDestroy(H_->X);
   *H_ = Handles();
+  Places_.clear();
+  PlacePattern_ = 0;
 }
 
 void HypreBoomerAMGPCG::Setup(
   int rowBegin, int rowEnd, const int* rowOffsets, const int* columns, const double* values)
 {
   Free();
+  const double start = MPI_Wtime();
   RowBegin_ = rowBegin;
   RowEnd_ = rowEnd;
   const int rows = rowEnd - rowBegin;
@@ -139,62 +203,11 @@ void HypreBoomerAMGPCG::Setup(
   Check(HYPRE_IJMatrixSetDiagOffdSizes(h.A, diag.data(), offd.data()), "matrix sizes");
   Check(HYPRE_IJMatrixInitialize(h.A), "matrix initialisation");
   const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
-  std::vector<HYPRE_BigInt> cols(columns, columns + nnz);
-  Check(HYPRE_IJMatrixSetValues(h.A, rows, sizes.data(), h.Rows.data(), cols.data(), values),
-    "setting the matrix values");
-  Check(HYPRE_IJMatrixAssemble(h.A), "matrix assembly");
-  BuildSolver();
-}
-
-void HypreBoomerAMGPCG::SetupAddTo(int rowBegin, int rowEnd, const std::vector<int>& rows,
-  const std::vector<int>& sizes, const std::vector<int>& columns,
-  const std::vector<double>& values, const int* rowSizeHints)
-{
-  Free();
-  const double start = MPI_Wtime();
-  RowBegin_ = rowBegin;
-  RowEnd_ = rowEnd;
-  const int owned = rowEnd - rowBegin;
-  Handles& h = *H_;
-  Check(HYPRE_IJMatrixCreate(Comm_, rowBegin, rowEnd - 1, rowBegin, rowEnd - 1, &h.A),
-    "matrix creation");
-  Check(HYPRE_IJMatrixSetObjectType(h.A, HYPRE_PARCSR), "matrix type");
-  if (rowSizeHints)
+  if (rows > 0)
   {
-    std::vector<HYPRE_Int> hints(rowSizeHints, rowSizeHints + owned);
-    Check(HYPRE_IJMatrixSetRowSizes(h.A, hints.data()), "matrix row sizes");
-  }
-  // Off-rank entries: room for what this rank sends (hypre grows it if needed).
-  std::size_t offRank = 0;
-  for (std::size_t k = 0; k < rows.size(); ++k)
-  {
-    if (rows[k] < rowBegin || rows[k] >= rowEnd)
-      offRank += static_cast<std::size_t>(sizes[k]);
-  }
-  Check(HYPRE_IJMatrixSetMaxOffProcElmts(h.A, static_cast<HYPRE_Int>(offRank)),
-    "matrix off-rank room");
-  Check(HYPRE_IJMatrixInitialize(h.A), "matrix initialisation");
-  h.Rows.resize(static_cast<std::size_t>(owned));
-  for (int i = 0; i < owned; ++i)
-    h.Rows[i] = rowBegin + i;
-  if (!rows.empty())
-  {
-    // hypre's integer types are int in Debian's build: no copies then.
-    if constexpr (std::is_same<HYPRE_Int, int>::value && std::is_same<HYPRE_BigInt, int>::value)
-    {
-      std::vector<int> n(sizes); // hypre takes the sizes as non-const
-      Check(HYPRE_IJMatrixAddToValues(h.A, static_cast<HYPRE_Int>(rows.size()), n.data(),
-              rows.data(), columns.data(), values.data()),
-        "adding the matrix values");
-    }
-    else
-    {
-      std::vector<HYPRE_Int> n(sizes.begin(), sizes.end());
-      std::vector<HYPRE_BigInt> r(rows.begin(), rows.end()), c(columns.begin(), columns.end());
-      Check(HYPRE_IJMatrixAddToValues(h.A, static_cast<HYPRE_Int>(r.size()), n.data(), r.data(),
-              c.data(), values.data()),
-        "adding the matrix values");
-    }
+    std::vector<HYPRE_BigInt> cols(columns, columns + nnz);
+    Check(HYPRE_IJMatrixSetValues(h.A, rows, sizes.data(), h.Rows.data(), cols.data(), values),
+      "setting the matrix values");
   }
   Check(HYPRE_IJMatrixAssemble(h.A), "matrix assembly");
   const double assembled = MPI_Wtime();
@@ -203,30 +216,86 @@ void HypreBoomerAMGPCG::SetupAddTo(int rowBegin, int rowEnd, const std::vector<i
   HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
 }
 
-void HypreBoomerAMGPCG::UpdateValuesAddTo(const std::vector<int>& rows,
-  const std::vector<int>& sizes, const std::vector<int>& columns,
-  const std::vector<double>& values)
+void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, const double* values)
 {
   Handles& h = *H_;
   if (!h.A || !h.PCG)
   {
-    throw Error("hypre-amg: UpdateValuesAddTo() called before SetupAddTo()");
+    throw Error("hypre-amg: UpdateValues() called before Setup()");
   }
   const double start = MPI_Wtime();
-  // hypre (2.26): SetConstantValues on the assembled matrix, then
-  // Initialize re-opens it for values on its existing pattern (the
-  // ParCSR object, and so the hierarchy's fine level, stays the same).
-  Check(HYPRE_IJMatrixSetConstantValues(h.A, 0.0), "zeroing the matrix values");
-  Check(HYPRE_IJMatrixInitialize(h.A), "matrix re-initialisation");
-  if (!rows.empty())
+  const int rows = RowEnd_ - RowBegin_;
+  // The new values go straight into the assembled ParCSR matrix (the fine
+  // level of the kept hierarchy): each entry's place in the diagonal or
+  // off-diagonal block is found once per pattern, then every update is a
+  // scatter. (Re-initialising a matrix made with SetDiagOffdSizes and
+  // setting its values through the IJ interface does not give the new
+  // matrix in hypre 2.26: TestDistributedFamily's (2A)^-1 = A^-1 / 2.)
+  hypre_ParCSRMatrix* a = nullptr;
+  HYPRE_IJMatrixGetObject(h.A, reinterpret_cast<void**>(&a));
+  hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(a);
+  hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(a);
+  const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
+  // The pattern's fingerprint (FNV-1a of the offsets and columns): a
+  // changed pattern finds its places again (or is refused), without a copy.
+  std::uint64_t fingerprint = 1469598103934665603ull;
+  auto mix = [&fingerprint](int v) {
+    fingerprint = (fingerprint ^ static_cast<std::uint32_t>(v)) * 1099511628211ull;
+  };
+  for (int r = 0; r <= rows; ++r)
+    mix(rowOffsets[r]);
+  for (std::size_t k = 0; k < nnz; ++k)
+    mix(columns[k]);
+  if (Places_.size() != nnz || fingerprint != PlacePattern_)
   {
-    std::vector<HYPRE_Int> n(sizes.begin(), sizes.end());
-    std::vector<HYPRE_BigInt> r(rows.begin(), rows.end()), c(columns.begin(), columns.end());
-    Check(HYPRE_IJMatrixAddToValues(h.A, static_cast<HYPRE_Int>(r.size()), n.data(), r.data(),
-            c.data(), values.data()),
-      "adding the new matrix values");
+    Places_.clear();
+    const HYPRE_Int* di = hypre_CSRMatrixI(diag);
+    const HYPRE_Int* dj = hypre_CSRMatrixJ(diag);
+    const HYPRE_Int* oi = hypre_CSRMatrixI(offd);
+    const HYPRE_Int* oj = hypre_CSRMatrixJ(offd);
+    const HYPRE_BigInt* colMap = hypre_ParCSRMatrixColMapOffd(a);
+    const HYPRE_BigInt firstColumn = hypre_ParCSRMatrixFirstColDiag(a);
+    const HYPRE_BigInt lastColumn = firstColumn + hypre_CSRMatrixNumCols(diag) - 1;
+    std::vector<int> places(nnz);
+    for (int r = 0; r < rows; ++r)
+    {
+      for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
+      {
+        const HYPRE_BigInt column = columns[k];
+        int place = std::numeric_limits<int>::min();
+        if (column >= firstColumn && column <= lastColumn)
+        {
+          for (HYPRE_Int q = di[r]; q < di[r + 1]; ++q)
+            if (dj[q] == column - firstColumn)
+              place = q;
+        }
+        else if (oi && colMap)
+        {
+          for (HYPRE_Int q = oi[r]; q < oi[r + 1]; ++q)
+            if (colMap[oj[q]] == column)
+              place = -1 - static_cast<int>(q);
+        }
+        if (place == std::numeric_limits<int>::min())
+        {
+          throw Error("hypre-amg: UpdateValues(): entry (" + std::to_string(RowBegin_ + r) + ", " +
+            std::to_string(column) + ") is not in the matrix of the last Setup() (a changed pattern)");
+        }
+        places[k] = place;
+      }
+    }
+    Places_ = std::move(places);
+    PlacePattern_ = fingerprint;
   }
-  Check(HYPRE_IJMatrixAssemble(h.A), "matrix re-assembly");
+  HYPRE_Complex* diagData = hypre_CSRMatrixData(diag);
+  HYPRE_Complex* offdData = hypre_CSRMatrixData(offd);
+  for (std::size_t k = 0; k < nnz; ++k)
+  {
+    const int place = Places_[k];
+    if (place >= 0)
+      diagData[place] = values[k];
+    else
+      offdData[-1 - place] = values[k];
+  }
   MatrixMilliseconds_ = 1000.0 * (MPI_Wtime() - start);
   HierarchyMilliseconds_ = 0.0;
 }

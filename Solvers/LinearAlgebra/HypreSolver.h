@@ -9,10 +9,12 @@
  */
 #pragma once
 
+#include "DistributedLinearSolver.h"
 #include "LinearSolver.h"
 
 #include <mpi.h>
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -23,6 +25,16 @@ namespace translucency
 /// MPI_COMM_SELF; ParaView's VTK may already have initialised it), and
 /// HYPRE_Init; both are finalised at exit if this call initialised them.
 void EnsureHypreInitialized();
+
+/// The MPI communicator of `comm` (MPI_COMM_SELF for none; initialises MPI
+/// and hypre if nobody has).
+MPI_Comm GetMPIComm(const Communicator& comm);
+/// The Communicator of `*comm` (its rank and size; the MPI_Comm must outlive
+/// every user of the result). Initialises MPI and hypre if nobody has.
+Communicator MakeCommunicator(const MPI_Comm* comm);
+/// Process-lifetime MPI_COMM_SELF and MPI_COMM_WORLD, for MakeCommunicator.
+const MPI_Comm* GetSelfCommunicator();
+const MPI_Comm* GetWorldCommunicator();
 
 /**
  * BoomerAMG settings (hypre's codes). The defaults are the in-process
@@ -50,6 +62,12 @@ struct BoomerAMGOptions
     o.AggNumLevels = 1;
     return o;
   }
+
+  /// As options of HypreBoomerAMGPCG::SetOptions ("amg-coarsening",
+  /// "amg-interpolation", "amg-pmax", "amg-strong-threshold",
+  /// "amg-relaxation", "amg-sweeps", "amg-aggressive-levels",
+  /// "amg-aggressive-interpolation").
+  SolverOptions ToOptions() const;
 };
 
 /**
@@ -61,11 +79,16 @@ struct BoomerAMGOptions
  * symmetric cycle, as PCG needs), one V-cycle per preconditioner
  * application. PCG stops on the 2-norm: ||b - Ax|| <= tol ||b||.
  */
-class HypreBoomerAMGPCG
+class HypreBoomerAMGPCG : public DistributedLinearSolver
 {
 public:
   explicit HypreBoomerAMGPCG(MPI_Comm comm, const BoomerAMGOptions& options = BoomerAMGOptions());
-  ~HypreBoomerAMGPCG();
+  ~HypreBoomerAMGPCG() override;
+
+  std::string GetName() const override { return "cg/boomeramg"; }
+  /// The BoomerAMG settings by name (BoomerAMGOptions::ToOptions), applied
+  /// at the next Setup.
+  void SetOptions(const SolverOptions& options) override;
   HypreBoomerAMGPCG(const HypreBoomerAMGPCG&) = delete;
   HypreBoomerAMGPCG& operator=(const HypreBoomerAMGPCG&) = delete;
 
@@ -75,34 +98,20 @@ public:
    * hierarchy (from scratch: BoomerAMG has no values-only set-up).
    */
   void Setup(int rowBegin, int rowEnd, const int* rowOffsets, const int* columns,
-    const double* values);
+    const double* values) override;
 
   /**
-   * Collective over the communicator: this rank owns rows [rowBegin,
-   * rowEnd) and adds entries to any rows, its own or other ranks'
-   * (HYPRE_IJMatrixAddToValues; hypre sends the off-rank rows to their
-   * owners when the matrix is assembled). Row k of the `rows` list has
-   * sizes[k] entries, (columns, values) from offset sum_{j<k} sizes[j];
-   * rowSizeHints (rowEnd - rowBegin values, may be null) estimates the
-   * entries of each owned row. Then builds the AMG hierarchy as Setup().
+   * Values-only update (collective) after Setup: the same rows and columns,
+   * new values written straight into the assembled ParCSR matrix (each
+   * entry's place found once per pattern); the hierarchy is kept: its fine
+   * level is this matrix, so
+   * smoothing and residuals see the new values, the coarse levels and the
+   * smoother's l1 norms are the old matrix's (good while the change is
+   * small, a paint stroke). Throws
+   * translucency::Error if there is no Setup to update or an entry is not in
+   * the matrix (a changed pattern).
    */
-  void SetupAddTo(int rowBegin, int rowEnd, const std::vector<int>& rows,
-    const std::vector<int>& sizes, const std::vector<int>& columns,
-    const std::vector<double>& values, const int* rowSizeHints);
-
-  /**
-   * Values-only update (collective): the same rows, sizes and columns as
-   * the last SetupAddTo, new values, written into the same hypre matrix
-   * (re-initialised, zeroed, added to, re-assembled); the BoomerAMG
-   * hierarchy is kept. Its fine level is this matrix, so smoothing and
-   * residuals see the new values; the coarse levels and the smoother's
-   * l1 norms are the old matrix's, a preconditioner that stays good while
-   * the change is small (a paint stroke). PCG then converges to RelTol on
-   * the new matrix. Throws translucency::Error if there is no SetupAddTo
-   * to update or hypre refuses an entry (a changed pattern).
-   */
-  void UpdateValuesAddTo(const std::vector<int>& rows, const std::vector<int>& sizes,
-    const std::vector<int>& columns, const std::vector<double>& values);
+  void UpdateValues(const int* rowOffsets, const int* columns, const double* values) override;
 
   /**
    * Solve for the local part b (rowEnd - rowBegin values) into x; x is the
@@ -110,7 +119,7 @@ public:
    * relativeResidual gets ||b - Ax|| / ||b||.
    */
   int Solve(const double* b, double* x, bool guess, double relTol, int maxIter,
-    double& relativeResidual);
+    double& relativeResidual) override;
 
   /// Work of one PCG iteration in SpMVs with the fine matrix: 1 + the
   /// V-cycle's (3 sum_l nnz(A_l) + 2 sum_l nnz(P_l)) / nnz(A_0) (two
@@ -118,16 +127,16 @@ public:
   /// interpolation), summed over all ranks.
   double GetSpMVEquivalentsPerIteration() const { return IterationWork_; }
   /// sum_l nnz(A_l) / nnz(A_0) of the hierarchy.
-  double GetOperatorComplexity() const { return OperatorComplexity_; }
-  int GetNumberOfLevels() const { return Levels_; }
+  double GetOperatorComplexity() const override { return OperatorComplexity_; }
+  int GetNumberOfLevels() const override { return Levels_; }
   /// Non-zeros of the fine matrix, summed over the ranks.
-  long long GetNumberOfNonZeros() const { return NonZeros_; }
-  /// Wall times of the last SetupAddTo on this rank (ms): the IJ matrix
+  long long GetNumberOfNonZeros() const override { return NonZeros_; }
+  /// Wall times of the last Setup or UpdateValues on this rank (ms): the IJ matrix
   /// (values added, off-rank rows exchanged, assembled), then the vectors
   /// and the BoomerAMG hierarchy.
-  double GetMatrixMilliseconds() const { return MatrixMilliseconds_; }
-  double GetHierarchyMilliseconds() const { return HierarchyMilliseconds_; }
-  std::size_t GetMemoryBytes() const { return MemoryBytes_; }
+  double GetMatrixMilliseconds() const override { return MatrixMilliseconds_; }
+  double GetHierarchyMilliseconds() const override { return HierarchyMilliseconds_; }
+  std::size_t GetMemoryBytes() const override { return MemoryBytes_; }
 
 private:
   void Free();
@@ -146,6 +155,10 @@ private:
   double MatrixMilliseconds_ = 0.0;
   double HierarchyMilliseconds_ = 0.0;
   std::size_t MemoryBytes_ = 0;
+  /// UpdateValues: each entry's place in the ParCSR blocks (>= 0 diagonal
+  /// block, -1 - k off-diagonal block), found once per Setup.
+  std::vector<int> Places_;
+  std::uint64_t PlacePattern_ = 0; ///< fingerprint of the pattern Places_ is of
 };
 
 /**

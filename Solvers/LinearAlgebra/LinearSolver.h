@@ -20,6 +20,7 @@
  */
 #pragma once
 
+#include "Communicator.h"
 #include "DiffusionSystem.h"
 #include "Registry.h"
 
@@ -31,6 +32,8 @@
 
 namespace translucency
 {
+class DistributedLinearSolver;
+
 
 class TetMesh;
 
@@ -98,6 +101,21 @@ public:
   int GetMaxIter() const { return MaxIter_; }
   ///@}
 
+  ///@{
+  /**
+   * Fewest iterations of a channel whose initial residual is not zero
+   * (default 0: a warm start already within RelTol runs none). The vertex
+   * solvers set 1 for the warm start after a paint stroke, so that the
+   * stroke's own change of the solution is resolved even when the stroke
+   * moves the global relative residual by less than a loose RelTol
+   * (Documentation/Solvers.md, "The interactive stopping rule"). Honoured by
+   * the CG solvers (cg-jacobi, multigrid-agg, multigrid-cg); the others
+   * ignore it.
+   */
+  void SetMinIter(int n) { MinIter_ = n < 0 ? 0 : n; }
+  int GetMinIter() const { return MinIter_; }
+  ///@}
+
   /// Fraction done in [0, 1]; returning false aborts the solve.
   void SetProgressCallback(std::function<bool(double)> callback) { Progress_ = std::move(callback); }
 
@@ -154,6 +172,7 @@ protected:
 
   double RelTol_ = 1e-6;
   int MaxIter_ = 2000;
+  int MinIter_ = 0;
   int NumberOfThreads_ = 0;
   std::function<bool(double)> Progress_;
   ///@{
@@ -218,6 +237,9 @@ struct LinearSolverTraits
   bool Built = true;
   /// How to get the library when it is not built (for the error message).
   std::string Remedy;
+  /// The composition's distributed variant (one matrix over the ranks of an
+  /// MPI communicator: DistributedLinearSolver.h), or empty: "cg/boomeramg".
+  std::function<std::unique_ptr<DistributedLinearSolver>(const Communicator&)> CreateDistributed;
 };
 
 using LinearSolverRegistry = Registry<LinearSolver, LinearSolverTraits>;

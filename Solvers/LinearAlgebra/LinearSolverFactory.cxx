@@ -7,6 +7,8 @@
  */
 #include "LinearSolver.h"
 
+#include "DistributedLinearSolver.h"
+
 #include "AggregationMultigrid.h"
 #include "BiCGSTAB.h"
 #include "ConjugateGradient.h"
@@ -42,6 +44,7 @@ public:
   {
     CG_.SetRelTol(RelTol_);
     CG_.SetMaxIter(MaxIter_);
+    CG_.SetMinIter(MinIter_);
     CG_.SetProgressCallback(Progress_);
     const bool done = CG_.Solve(system, x, warmStart);
     for (int c = 0; c < NumberOfChannels; ++c)
@@ -117,7 +120,14 @@ LinearSolverRegistry MakeRegistry()
     "TRANSLUCENCY_USE_HYPRE was off or CMake did not find hypre: install libhypre-dev" };
   const std::string hypreHelp = "CG preconditioned by hypre's BoomerAMG";
 #ifdef TRANSLUCENCY_HAVE_HYPRE
-  r.Add(Make<HypreSolver>("hypre-amg", hypre, hypreHelp));
+  // The distributed variant: BoomerAMG with the settings measured best for
+  // the distributed diffusion solve (BoomerAMGOptions::Tuned()).
+  LinearSolverTraits distributedHypre = hypre;
+  distributedHypre.CreateDistributed = [](const Communicator& comm) {
+    return std::unique_ptr<DistributedLinearSolver>(
+      std::make_unique<HypreBoomerAMGPCG>(GetMPIComm(comm), BoomerAMGOptions::Tuned()));
+  };
+  r.Add(Make<HypreSolver>("hypre-amg", distributedHypre, hypreHelp));
 #else
   r.Add(Missing("hypre-amg", hypre, hypreHelp));
 #endif
@@ -194,6 +204,32 @@ const LinearSolverRegistry::Entry& FindLinearSolver(
     }
   }
   throw Error("no linear solver " + krylov + "/" + preconditioner + " in this build");
+}
+
+std::unique_ptr<DistributedLinearSolver> CreateDistributedLinearSolver(
+  const std::string& name, const Communicator& comm)
+{
+  const auto* entry = GetLinearSolverRegistry().Find(ResolveLinearSolverName(name));
+  std::vector<std::string> with;
+  for (const auto& e : GetLinearSolverRegistry().GetEntries())
+  {
+    if (e.Properties.Built && e.Properties.CreateDistributed)
+    {
+      with.push_back(e.Properties.Krylov + "/" + e.Properties.Preconditioner);
+    }
+  }
+  const std::string known = with.empty() ? std::string("this build has none: it needs hypre")
+                                         : "those with one: " + JoinNames(with);
+  if (entry && !entry->Properties.Built)
+  {
+    throw Error("linear solver '" + name + "' is not in this build (" + entry->Properties.Remedy +
+      " and reconfigure)");
+  }
+  if (!entry || !entry->Properties.CreateDistributed)
+  {
+    throw Error("linear solver '" + name + "' has no distributed variant (" + known + ")");
+  }
+  return entry->Properties.CreateDistributed(comm);
 }
 
 std::vector<std::string> GetLinearSolverNames()

@@ -457,7 +457,7 @@ bool MultigridConjugateGradient::Solve(const DiffusionSystem& system,
     Internal_->VCycleFlops;
   const bool done = BlockedPCG(
     system, [this](const Eigen::VectorXd& r, Eigen::VectorXd& z) { ApplyPreconditioner(r, z); },
-    xi, RelTol_, MaxIter_, stats, flops, Progress_);
+    xi, RelTol_, MaxIter_, stats, flops, Progress_, MinIter_);
   Deinterleave(xi, x);
   return done;
 }
@@ -666,7 +666,8 @@ bool TransCutMultiresSolver::Solve(const DiffusionSystem& system,
   JacobiApply jacobi{ &Internal_->InverseDiagonal0 };
   const bool done = BlockedPCG(system, jacobi, xi, RelTol_, MaxIter_, stats, flops,
     Progress_ ? std::function<bool(double)>([this](double f) { return Progress_(0.1 + 0.9 * f); })
-              : std::function<bool(double)>());
+              : std::function<bool(double)>(),
+    MinIter_);
   for (int c = 0; c < NC; ++c)
   {
     stats[c].SpMVEquivalents += coarseWork[c] / nnz0;

@@ -16,6 +16,8 @@
  */
 #pragma once
 
+#include "Communicator.h"
+
 #include <mpi.h>
 
 #include <array>
@@ -25,10 +27,6 @@
 
 namespace translucency
 {
-
-/// A vertex's identity across ranks: a global id in [0] (zeros after it),
-/// or the bits of its three exact coordinates (-0 taken as +0).
-using PointKey = std::array<std::uint64_t, 3>;
 
 /// The key of a global point id.
 PointKey PointKeyFromId(std::int64_t id);

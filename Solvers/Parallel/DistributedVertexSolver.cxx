@@ -1,5 +1,6 @@
 #include "DistributedVertexSolver.h"
 
+#include "DiffusionSolverFactory.h"
 #include "Error.h"
 #include "Fresnel.h"
 #include "RankThreads.h"
@@ -11,6 +12,8 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+
+#include <time.h>
 
 namespace translucency
 {
@@ -29,7 +32,34 @@ double Milliseconds(double since)
   return 1000.0 * (MPI_Wtime() - since);
 }
 
+/// This process's CPU time (ms).
+double CpuMilliseconds()
+{
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return 1000.0 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+}
+
+/// The registry's distributed variants of divergence and fem, registered
+/// when this layer is loaded (a build without it has none).
+const bool Registered = [] {
+  for (const char* name : { "divergence", "fem" })
+  {
+    const std::string discretization = name;
+    RegisterDistributedDiffusionSolver(discretization, [discretization] {
+      return std::unique_ptr<DiffusionSolver>(
+        std::make_unique<DistributedVertexSolver>(discretization));
+    });
+  }
+  return true;
+}();
+
 } // namespace
+
+DistributedVertexSolver::DistributedVertexSolver(const std::string& discretization)
+  : DistributedVertexSolver(GetMPIComm(Communicator()), discretization)
+{
+}
 
 DistributedVertexSolver::DistributedVertexSolver(MPI_Comm comm, const std::string& discretization)
   : Comm_(comm)
@@ -42,13 +72,55 @@ DistributedVertexSolver::DistributedVertexSolver(MPI_Comm comm, const std::strin
   }
   Fem_ = discretization == "fem";
   EnsureHypreInitialized();
+  (void)Registered;
 }
 
 DistributedVertexSolver::~DistributedVertexSolver() = default;
 
-void DistributedVertexSolver::SetAMGOptions(const BoomerAMGOptions& options)
+void DistributedVertexSolver::SetCommunicator(const Communicator& comm)
 {
-  Options_ = options;
+  const MPI_Comm next = GetMPIComm(comm);
+  if (next == Comm_)
+  {
+    return;
+  }
+  Reset();
+  HaveGeometry_ = false;
+  Keys_.clear();
+  Points_.clear();
+  Tets_.clear();
+  OwnMesh_ = TetMesh();
+  Comm_ = next;
+}
+
+void DistributedVertexSolver::Reset()
+{
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    Channels_[c].reset();
+    Solution_[c].clear();
+    Contributions_[c].clear();
+    FullIterations_[c] = 0;
+    ForceFull_[c] = false;
+  }
+}
+
+bool DistributedVertexSolver::GetTalliedReadouts(TalliedReadouts& readouts) const
+{
+  readouts = TalliedReadouts();
+  readouts.Readings = Readings_;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    readouts.Injected[c] = Balance_.BoundaryInjected[c] + SourcePower_[c];
+    readouts.Absorbed[c] = Balance_.Absorbed[c];
+    readouts.Escaped[c] = Balance_.Escaped[c];
+  }
+  return true;
+}
+
+void DistributedVertexSolver::SetLinearSolverOptions(const SolverOptions& options)
+{
+  LinearOptions_ = options;
   OptionsChanged_ = true;
 }
 
@@ -65,47 +137,33 @@ double DistributedVertexSolver::GetOperatorComplexity(int c) const
 DistributedPiece DistributedVertexSolver::Piece(const OpticalProperties& material) const
 {
   DistributedPiece piece;
-  piece.Mesh = &Mesh_;
-  piece.HasTets = !Tets_.empty();
+  piece.Mesh = Mesh_;
+  piece.HasTets = HasTets();
   piece.NumberOfPoints = static_cast<int>(Keys_.size());
   piece.Physical = &PhysicalFace_;
   piece.Material = &material;
   return piece;
 }
 
-void DistributedVertexSolver::BuildGeometry(
-  const std::vector<double>& points, const std::vector<PointKey>& keys, const std::vector<int>& tets)
+void DistributedVertexSolver::BuildGeometry(const TetMesh* mesh, const std::vector<PointKey>& keys)
 {
+  // The local mesh: the owned tets on the local points (partition faces
+  // are boundary faces of it; the count across ranks sorts them out).
   HaveGeometry_ = false;
   for (auto& channel : Channels_)
     channel.reset();
   for (auto& x : Solution_)
     x.clear();
   const std::size_t numPoints = keys.size();
-
-  // The local mesh: the owned tets on the local points (partition faces
-  // are boundary faces of it; the count across ranks sorts them out).
+  Mesh_ = mesh && mesh->GetNumberOfTets() > 0 ? mesh : &EmptyMesh_;
   std::string error;
-  Mesh_ = TetMesh();
-  if (!tets.empty())
-  {
-    try
-    {
-      Mesh_.SetGeometry(points, tets);
-    }
-    catch (const Error& e)
-    {
-      error = e.what();
-    }
-  }
-  AgreeOnError(Comm_, error);
   Used_.assign(numPoints, 0);
-  for (int id : tets)
+  for (int id : Mesh_->GetTets())
     Used_[static_cast<std::size_t>(id)] = 1;
   Numbering_.Build(Comm_, keys, Used_);
 
   // The physical boundary: local boundary faces no other tet shares.
-  const std::vector<int>& triangles = Mesh_.GetBoundaryTriangles();
+  const std::vector<int>& triangles = Mesh_->GetBoundaryTriangles();
   std::vector<int> triangleRows(triangles.size());
   for (std::size_t k = 0; k < triangles.size(); ++k)
     triangleRows[k] = Numbering_.GetRow(triangles[k]);
@@ -127,43 +185,177 @@ void DistributedVertexSolver::BuildGeometry(
   }
   AgreeOnError(Comm_, error);
 
-  // What goes to hypre: the rows of the vertices of owned tets.
+  BuildOwnedRows();
+  Keys_ = keys;
+  Revision_ = HasTets() ? Mesh_->GetGeometryRevision() : 0;
+  HaveGeometry_ = true;
+}
+
+void DistributedVertexSolver::BuildOwnedRows()
+{
+  // Whole owned rows, handed to hypre once (issue 32): every local CSR
+  // entry of a used point goes to its row's owner, this rank's own into
+  // place directly, the others' (partition rows) sent once per assembly
+  // as values in a fixed order; the pattern and the places are built here,
+  // once per mesh. Every rank calls the exchanges (an empty piece too).
+  const int rank = [this] {
+    int r = 0;
+    MPI_Comm_rank(Comm_, &r);
+    return r;
+  }();
+  int ranks = 1;
+  MPI_Comm_size(Comm_, &ranks);
   const int owned = Numbering_.GetNumberOfOwnedRows();
+  const int rowBegin = Numbering_.GetRowBegin();
+  const std::size_t numPoints = Used_.size();
   FirstLocal_.assign(static_cast<std::size_t>(owned), -1);
-  RowSizeHints_.assign(static_cast<std::size_t>(owned), 1);
-  SendRows_.clear();
-  SendSizes_.clear();
-  SendColumns_.clear();
-  SendPositions_.clear();
-  const std::vector<int>& offsets = Mesh_.GetRowOffsets();
-  const std::vector<int>& columns = Mesh_.GetColumnIndices();
-  for (std::size_t i = 0; i < numPoints && !tets.empty(); ++i)
+  const std::vector<int>& offsets = Mesh_->GetRowOffsets();
+  const std::vector<int>& columns = Mesh_->GetColumnIndices();
+
+  // This rank's entries (row, column, local CSR position), and per owner
+  // rank the (row, column) pairs of the entries it sends.
+  std::vector<std::vector<int>> outgoing(static_cast<std::size_t>(ranks));
+  std::vector<std::vector<int>> outgoingPositions(static_cast<std::size_t>(ranks));
+  std::vector<int> localRows, localColumns;
+  LocalPositions_.clear();
+  for (std::size_t i = 0; i < numPoints && HasTets(); ++i)
   {
     if (!Used_[i])
       continue;
     const int row = Numbering_.GetRow(static_cast<int>(i));
-    const int length = offsets[i + 1] - offsets[i];
-    if (Numbering_.IsOwned(static_cast<int>(i)))
+    const int owner = Numbering_.GetOwner(static_cast<int>(i));
+    if (owner == rank)
     {
-      int& first = FirstLocal_[static_cast<std::size_t>(row - Numbering_.GetRowBegin())];
+      int& first = FirstLocal_[static_cast<std::size_t>(row - rowBegin)];
       if (first < 0)
         first = static_cast<int>(i);
-      // A shared row gets entries from other ranks too: room for them.
-      int& hint = RowSizeHints_[static_cast<std::size_t>(row - Numbering_.GetRowBegin())];
-      hint = std::max(hint, length + 8);
     }
-    SendRows_.push_back(row);
-    SendSizes_.push_back(length);
     for (int k = offsets[i]; k < offsets[i + 1]; ++k)
     {
-      SendColumns_.push_back(Numbering_.GetRow(columns[static_cast<std::size_t>(k)]));
-      SendPositions_.push_back(k);
+      const int column = Numbering_.GetRow(columns[static_cast<std::size_t>(k)]);
+      if (owner == rank)
+      {
+        localRows.push_back(row - rowBegin);
+        localColumns.push_back(column);
+        LocalPositions_.push_back(k);
+      }
+      else
+      {
+        outgoing[static_cast<std::size_t>(owner)].push_back(row);
+        outgoing[static_cast<std::size_t>(owner)].push_back(column);
+        outgoingPositions[static_cast<std::size_t>(owner)].push_back(k);
+      }
     }
   }
-  Points_ = points;
-  Keys_ = keys;
-  Tets_ = tets;
-  HaveGeometry_ = true;
+  SendCounts_.assign(static_cast<std::size_t>(ranks), 0);
+  SendPositionsOff_.clear();
+  for (int r = 0; r < ranks; ++r)
+  {
+    SendCounts_[r] = static_cast<int>(outgoingPositions[r].size());
+    SendPositionsOff_.insert(
+      SendPositionsOff_.end(), outgoingPositions[r].begin(), outgoingPositions[r].end());
+  }
+  RecvCounts_.assign(static_cast<std::size_t>(ranks), 0);
+  MPI_Alltoall(SendCounts_.data(), 1, MPI_INT, RecvCounts_.data(), 1, MPI_INT, Comm_);
+  std::vector<int> pairCounts(static_cast<std::size_t>(ranks)), pairDispls(ranks + 1, 0),
+    recvPairCounts(static_cast<std::size_t>(ranks)), recvPairDispls(ranks + 1, 0);
+  std::vector<int> sendPairs;
+  for (int r = 0; r < ranks; ++r)
+  {
+    pairCounts[r] = 2 * SendCounts_[r];
+    recvPairCounts[r] = 2 * RecvCounts_[r];
+    pairDispls[r + 1] = pairDispls[r] + pairCounts[r];
+    recvPairDispls[r + 1] = recvPairDispls[r] + recvPairCounts[r];
+    sendPairs.insert(sendPairs.end(), outgoing[r].begin(), outgoing[r].end());
+  }
+  outgoing = {};
+  std::vector<int> recvPairs(static_cast<std::size_t>(recvPairDispls[ranks]));
+  MPI_Alltoallv(sendPairs.data(), pairCounts.data(), pairDispls.data(), MPI_INT, recvPairs.data(),
+    recvPairCounts.data(), recvPairDispls.data(), MPI_INT, Comm_);
+  sendPairs = {};
+
+  // The owned rows' pattern: per row the sorted distinct columns of the
+  // local and received entries; every entry's place in it.
+  const std::size_t numLocal = localRows.size(), numReceived = recvPairs.size() / 2;
+  std::vector<int> entryRow(numLocal + numReceived), entryColumn(numLocal + numReceived);
+  for (std::size_t e = 0; e < numLocal; ++e)
+  {
+    entryRow[e] = localRows[e];
+    entryColumn[e] = localColumns[e];
+  }
+  for (std::size_t e = 0; e < numReceived; ++e)
+  {
+    entryRow[numLocal + e] = recvPairs[2 * e] - rowBegin;
+    entryColumn[numLocal + e] = recvPairs[2 * e + 1];
+  }
+  localRows = {};
+  localColumns = {};
+  recvPairs = {};
+  std::vector<int> rowStart(static_cast<std::size_t>(owned) + 1, 0);
+  for (int r : entryRow)
+    ++rowStart[static_cast<std::size_t>(r) + 1];
+  for (int r = 0; r < owned; ++r)
+    rowStart[r + 1] += rowStart[r];
+  std::vector<int> byRow(entryRow.size());
+  {
+    std::vector<int> fill(rowStart.begin(), rowStart.end() - 1);
+    for (std::size_t e = 0; e < entryRow.size(); ++e)
+      byRow[static_cast<std::size_t>(fill[static_cast<std::size_t>(entryRow[e])]++)] =
+        static_cast<int>(e);
+  }
+  Targets_.assign(entryRow.size(), -1);
+  OwnedOffsets_.assign(static_cast<std::size_t>(owned) + 1, 0);
+  OwnedColumns_.clear();
+  OwnedColumns_.reserve(entryRow.size() / 2 + 1);
+  std::vector<int> row;
+  for (int r = 0; r < owned; ++r)
+  {
+    row.clear();
+    for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
+      row.push_back(entryColumn[static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)])]);
+    std::sort(row.begin(), row.end());
+    row.erase(std::unique(row.begin(), row.end()), row.end());
+    const int base = static_cast<int>(OwnedColumns_.size());
+    OwnedColumns_.insert(OwnedColumns_.end(), row.begin(), row.end());
+    OwnedOffsets_[r + 1] = static_cast<int>(OwnedColumns_.size());
+    for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
+    {
+      const std::size_t e = static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)]);
+      Targets_[e] = base +
+        static_cast<int>(std::lower_bound(row.begin(), row.end(), entryColumn[e]) - row.begin());
+    }
+  }
+}
+
+void DistributedVertexSolver::GatherOwnedRows(
+  const std::vector<double>& local, std::vector<double>& ownedValues) const
+{
+  // This rank's entries into place, the partition rows' partial values sent
+  // to their owners in the order BuildOwnedRows fixed (one exchange).
+  int ranks = 1;
+  MPI_Comm_size(Comm_, &ranks);
+  ownedValues.assign(OwnedColumns_.size(), 0.0);
+  const std::size_t numLocal = LocalPositions_.size();
+  for (std::size_t e = 0; e < numLocal; ++e)
+    ownedValues[static_cast<std::size_t>(Targets_[e])] +=
+      local[static_cast<std::size_t>(LocalPositions_[e])];
+  std::vector<double> send(SendPositionsOff_.size());
+  for (std::size_t e = 0; e < send.size(); ++e)
+    send[e] = local[static_cast<std::size_t>(SendPositionsOff_[e])];
+  std::vector<int> sendDispls(ranks + 1, 0), recvDispls(ranks + 1, 0);
+  for (int r = 0; r < ranks; ++r)
+  {
+    sendDispls[r + 1] = sendDispls[r] + SendCounts_[r];
+    recvDispls[r + 1] = recvDispls[r] + RecvCounts_[r];
+  }
+  std::vector<double> received(static_cast<std::size_t>(recvDispls[ranks]));
+  if (ranks > 1)
+  {
+    MPI_Alltoallv(send.data(), SendCounts_.data(), sendDispls.data(), MPI_DOUBLE, received.data(),
+      RecvCounts_.data(), recvDispls.data(), MPI_DOUBLE, Comm_);
+  }
+  for (std::size_t e = 0; e < received.size(); ++e)
+    ownedValues[static_cast<std::size_t>(Targets_[numLocal + e])] += received[e];
 }
 
 void DistributedVertexSolver::CheckPiece(const std::vector<double>& points,
@@ -203,19 +395,46 @@ void DistributedVertexSolver::CheckPiece(const std::vector<double>& points,
   AgreeOnError(Comm_, error);
 }
 
+void DistributedVertexSolver::CheckPiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
+  const OpticalProperties& material, const std::vector<double>& irradiance) const
+{
+  // Sizes (the mesh checked its ids; the values are checked by the assembly).
+  const std::size_t numPoints = keys.size();
+  const int numTets = mesh ? mesh->GetNumberOfTets() : 0;
+  std::string error;
+  try
+  {
+    if ((mesh && static_cast<std::size_t>(mesh->GetNumberOfPoints()) != numPoints) ||
+      irradiance.size() != 3 * numPoints)
+    {
+      std::ostringstream os;
+      os << "distributed solve: " << numPoints << " point keys, "
+         << (mesh ? mesh->GetNumberOfPoints() : 0) << " mesh points and " << irradiance.size()
+         << " irradiance values (3 per point) do not match";
+      throw Error(os.str());
+    }
+    material.Validate(numTets);
+  }
+  catch (const Error& e)
+  {
+    error = e.what();
+  }
+  AgreeOnError(Comm_, error);
+}
+
 void DistributedVertexSolver::AssembleLocal(const OpticalProperties& material,
   const std::vector<double>& irradiance, DiffusionSystem& system)
 {
   // The element matrices of the owned tets (TetContributions.h, the serial
   // assemblies' expressions).
   std::string error;
-  const int numTets = static_cast<int>(Tets_.size() / 4);
+  const int numTets = Mesh_->GetNumberOfTets();
   const double* muA = material.AbsorptionCoefficient.data();
   const double* sigmaS = material.ReducedScatteringCoefficient.data();
   if (numTets > 0)
   {
     const int threads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
-    ResizeVertexSystem(Mesh_, system); // sized first: the kernel keeps pointers into it
+    ResizeVertexSystem(*Mesh_, system); // sized first: the kernel keeps pointers into it
     const ChannelPointers channels(system);
     const ChannelPointers* pointers = &channels;
     const bool fem = Fem_;
@@ -230,12 +449,12 @@ void DistributedVertexSolver::AssembleLocal(const OpticalProperties& material,
         ScatterTetMatrix(pointers->Values[c], pos, diag, off);
       }
     };
-    if (!AssembleVertexSystem(Mesh_, material, irradiance, system, threads, GeometryCache_,
+    if (!AssembleVertexSystem(*Mesh_, material, irradiance, system, threads, GeometryCache_,
           [] {}, kernel, [] {}))
     {
       try
       {
-        CheckIrradiance(Mesh_, irradiance); // names the point (the material was checked)
+        CheckIrradiance(*Mesh_, irradiance); // names the point (the material was checked)
         error = "distributed solve: invalid material or irradiance";
       }
       catch (const Error& e)
@@ -250,21 +469,21 @@ void DistributedVertexSolver::AssembleLocal(const OpticalProperties& material,
 void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material,
   const std::vector<double>& irradiance, DiffusionSystem& system, std::vector<double>& localRhs)
 {
-  const std::vector<int>& triangles = Mesh_.GetBoundaryTriangles();
-  const std::vector<int>& triangleTets = Mesh_.GetBoundaryTriangleTets();
-  const std::vector<double>& areas = Mesh_.GetBoundaryTriangleAreas();
+  const std::vector<int>& triangles = Mesh_->GetBoundaryTriangles();
+  const std::vector<int>& triangleTets = Mesh_->GetBoundaryTriangleTets();
+  const std::vector<double>& areas = Mesh_->GetBoundaryTriangleAreas();
   const double* tetEta = material.RefractiveIndex.data();
   const double* q = irradiance.data();
   if (Fem_)
   {
     // Each physical face with its tet, on the tet's rank (TransCut eq. 2).
-    const int* tetPositions = Mesh_.GetTetNonZeroPositions().data();
+    const int* tetPositions = Mesh_->GetTetNonZeroPositions().data();
     for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
     {
       if (!PhysicalFace_[f])
         continue;
       const int t = triangleTets[f];
-      const int* tv = Mesh_.GetTet(t);
+      const int* tv = Mesh_->GetTet(t);
       const int* pos = tetPositions + 16 * static_cast<std::size_t>(t);
       const int* tri = triangles.data() + 3 * f;
       const int l[3] = { LocalIndex(tv, tri[0]), LocalIndex(tv, tri[1]), LocalIndex(tv, tri[2]) };
@@ -306,7 +525,7 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
     }
   }
   const std::vector<double> owned = Numbering_.SumToOwners(Comm_, measures, 2);
-  const int* diagonal = Mesh_.GetDiagonalPositions().data();
+  const int* diagonal = Mesh_->GetDiagonalPositions().data();
   for (std::size_t r = 0; r < FirstLocal_.size(); ++r)
   {
     const double s = owned[2 * r];
@@ -325,19 +544,35 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
 
 void DistributedVertexSolver::SetUpChannel(int c)
 {
+  const double cpu = CpuMilliseconds();
   std::string error;
   ForceFull_[c] = false;
   FullIterations_[c] = -1; // set by this Solve's PCG
   try
   {
-    if (!Channels_[c] || OptionsChanged_)
-      Channels_[c] = std::make_unique<HypreBoomerAMGPCG>(Comm_, Options_);
-    Channels_[c]->SetupAddTo(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), SendRows_,
-      SendSizes_, SendColumns_, Contributions_[c], RowSizeHints_.data());
+    // From the linear-solver registry (its distributed variant), not hypre itself.
+    const std::string name = LinearSolverName();
+    if (!Channels_[c] || OptionsChanged_ || name != ChannelLinear_[c])
+    {
+      ChannelLinear_[c].clear();
+      Channels_[c] = CreateDistributedLinearSolver(name, MakeCommunicator(&Comm_));
+      Channels_[c]->SetOptions(LinearOptions_);
+      ChannelLinear_[c] = name;
+    }
+    Channels_[c]->Setup(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), OwnedOffsets_.data(),
+      OwnedColumns_.data(), Contributions_[c].data());
   }
   catch (const Error& e)
   {
     error = e.what();
+  }
+  // The hierarchy's share of this channel's set-up, in CPU time (the
+  // matrix's share measured in wall time, scaled alike).
+  if (Channels_[c])
+  {
+    const double wall = Channels_[c]->GetMatrixMilliseconds() + Channels_[c]->GetHierarchyMilliseconds();
+    const double share = wall > 0.0 ? Channels_[c]->GetHierarchyMilliseconds() / wall : 1.0;
+    HierarchyCpu_ += share * (CpuMilliseconds() - cpu);
   }
   AgreeOnError(Comm_, error);
 }
@@ -353,15 +588,17 @@ DistributedVertexSolver::SetUpMatrices(
   std::string error;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    std::vector<double> values(SendPositions_.size());
-    for (std::size_t k = 0; k < SendPositions_.size(); ++k)
-      values[k] = system.Values[c][static_cast<std::size_t>(SendPositions_[k])];
-    int changed = (!Channels_[c] || OptionsChanged_ || values != Contributions_[c]) ? 1 : 0;
+    // Another linear solver (SetLinearSolver) rebuilds the channel.
+    const bool renamed = LinearSolverName() != ChannelLinear_[c];
+    std::vector<double> values;
+    GatherOwnedRows(system.Values[c], values);
+    int changed =
+      (!Channels_[c] || OptionsChanged_ || renamed || values != Contributions_[c]) ? 1 : 0;
     int anyChanged = 0;
     MPI_Allreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, Comm_);
     system.Values[c] = {};
     // Values only when every rank can (the same branch on every rank).
-    int canUpdate = sameMesh && Channels_[c] && !OptionsChanged_ && !ForceFull_[c] &&
+    int canUpdate = sameMesh && Channels_[c] && !OptionsChanged_ && !renamed && !ForceFull_[c] &&
         values.size() == Contributions_[c].size()
       ? 1
       : 0;
@@ -371,7 +608,7 @@ DistributedVertexSolver::SetUpMatrices(
     {
       try
       {
-        Channels_[c]->UpdateValuesAddTo(SendRows_, SendSizes_, SendColumns_, values);
+        Channels_[c]->UpdateValues(OwnedOffsets_.data(), OwnedColumns_.data(), values.data());
       }
       catch (const Error& e)
       {
@@ -481,10 +718,10 @@ void DistributedVertexSolver::ReadOuts(const OpticalProperties& material,
 
   // The power balance: this rank's tets and physical faces, summed.
   std::array<double, 4 * NumberOfChannels> sums{};
-  if (!Tets_.empty())
+  if (HasTets())
   {
     const PowerBalance local = ComputePowerBalance(
-      Mesh_, material, fluence, &irradiance, Fresnel::BoundaryRule::Fit, &PhysicalFace_);
+      *Mesh_, material, fluence, &irradiance, Fresnel::BoundaryRule::Fit, &PhysicalFace_);
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       sums[c] = local.Absorbed[c];
@@ -513,8 +750,8 @@ void DistributedVertexSolver::FillStatistics(SolverReport& report) const
   report.NumberOfUnknowns = Numbering_.GetNumberOfRows();
   report.NumberOfNonZeros = Channels_[0] ? Channels_[0]->GetNumberOfNonZeros() : 0;
   std::size_t bytes = Numbering_.GetMemoryBytes() +
-    (SendRows_.capacity() + SendSizes_.capacity() + SendColumns_.capacity() +
-      SendPositions_.capacity()) * sizeof(int);
+    (OwnedOffsets_.capacity() + OwnedColumns_.capacity() + LocalPositions_.capacity() +
+      Targets_.capacity() + SendPositionsOff_.capacity()) * sizeof(int);
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     bytes += Contributions_[c].capacity() * sizeof(double) + Solution_[c].capacity() * sizeof(double);
@@ -523,7 +760,7 @@ void DistributedVertexSolver::FillStatistics(SolverReport& report) const
       // The hierarchy below the fine level with its interpolation, the two IJ
       // vectors, and the fine matrix (~ the entries sent, 12 bytes each).
       bytes += Channels_[c]->GetMemoryBytes() + static_cast<std::size_t>(owned) * 2 * sizeof(double) +
-        SendColumns_.size() * (sizeof(int) + sizeof(double));
+        OwnedColumns_.size() * (sizeof(int) + sizeof(double));
     }
   }
   report.MemoryBytes = bytes;
@@ -534,7 +771,79 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
   const OpticalProperties& material, const std::vector<double>& irradiance,
   std::vector<double>& fluence, SolverReport& report)
 {
+  // The piece's sizes and ids, then its TetMesh (kept while the arrays are
+  // the same: its revision keys the numbering and the geometry cache).
+  CheckPiece(points, keys, tets, material, irradiance);
+  std::string error;
+  if (tets.empty())
+  {
+    OwnMesh_ = TetMesh();
+    Points_.clear();
+    Tets_.clear();
+  }
+  else if (OwnMesh_.GetNumberOfTets() == 0 || points != Points_ || tets != Tets_)
+  {
+    try
+    {
+      Points_.clear();
+      Tets_.clear();
+      OwnMesh_.SetGeometry(points, tets);
+      Points_ = points;
+      Tets_ = tets;
+    }
+    catch (const Error& e)
+    {
+      error = e.what();
+      OwnMesh_ = TetMesh();
+    }
+  }
+  AgreeOnError(Comm_, error);
+  SolvePiece(tets.empty() ? nullptr : &OwnMesh_, keys, material, irradiance, fluence, report);
+}
+
+bool DistributedVertexSolver::Solve(
+  const DiffusionProblem& problem, std::vector<double>& fluence, SolverReport& report)
+{
+  std::string error;
+  if (!problem.PointKeys)
+  {
+    error = "the distributed " + Name_ +
+      " solve needs the points' global keys (DiffusionProblem::PointKeys)";
+  }
+  else if (!problem.Material || !problem.Irradiance)
+  {
+    error = "the distributed " + Name_ + " solve needs a material and an irradiance";
+  }
+  else if (IsExtendedCollimatedModel(problem.Collimated))
+  {
+    error = "the distributed " + Name_ +
+      " solve has the surface collimated model only (the extended models are solved in one "
+      "process)";
+  }
+  AgreeOnError(Comm_, error);
+  Sources_ = problem.InteriorSources;
+  try
+  {
+    SolvePiece(problem.Mesh, *problem.PointKeys, *problem.Material, *problem.Irradiance,
+      fluence, report);
+  }
+  catch (...)
+  {
+    Sources_ = nullptr;
+    Mesh_ = &EmptyMesh_;
+    throw;
+  }
+  Sources_ = nullptr; // borrowed for this call only
+  Mesh_ = &EmptyMesh_;
+  return true;
+}
+
+void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
+  const OpticalProperties& material, const std::vector<double>& irradiance,
+  std::vector<double>& fluence, SolverReport& report)
+{
   Timings_ = Timings();
+  HierarchyCpu_ = 0.0;
   Readings_.clear();
   report = SolverReport();
   // NumberOfThreads 0: the node's cores shared by its ranks (collective).
@@ -544,27 +853,36 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
     threads = std::make_unique<ScopedRankThreads>(Comm_);
   }
   report.Solver = Name_;
-  report.LinearSolver = "hypre-amg (distributed)";
+  report.LinearSolver = LinearSolverName() + " (distributed)";
   report.Assembly = "full";
 
-  // 0. The piece's sizes and ids.
-  CheckPiece(points, keys, tets, material, irradiance);
+  // 0. The piece's sizes.
+  CheckPiece(mesh, keys, material, irradiance);
+  if (mesh && mesh->GetNumberOfTets() == 0)
+  {
+    mesh = nullptr;
+  }
 
   // 1. The global identity and boundary, unless the mesh is the last one.
   double start = MPI_Wtime();
-  int same = HaveGeometry_ && points == Points_ && keys == Keys_ && tets == Tets_ ? 1 : 0;
+  double cpu = CpuMilliseconds();
+  const std::uint64_t revision = mesh ? mesh->GetGeometryRevision() : 0;
+  int same = HaveGeometry_ && revision == Revision_ && keys == Keys_ ? 1 : 0;
   int allSame = 0;
   MPI_Allreduce(&same, &allSame, 1, MPI_INT, MPI_MIN, Comm_);
+  Mesh_ = mesh ? mesh : &EmptyMesh_;
   if (!allSame)
   {
-    BuildGeometry(points, keys, tets);
+    BuildGeometry(mesh, keys);
     Timings_.Numbering = Milliseconds(start);
+    Timings_.NumberingCpu = CpuMilliseconds() - cpu;
   }
 
   // 2. The local system: element matrices of the owned tets, boundary terms
   // of the physical faces, interior sources (their load on the rank owning
   // each source's tet, times 4 as every right-hand side: FiniteElement.h).
   start = MPI_Wtime();
+  cpu = CpuMilliseconds();
   DiffusionSystem system;
   AssembleLocal(material, irradiance, system);
   std::vector<double> localRhs(3 * keys.size(), 0.0);
@@ -589,15 +907,21 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
     SetUpMatrices(allSame != 0, system, report.Assembly, hierarchyMs);
   system = DiffusionSystem();
   Timings_.Assembly = Milliseconds(start) - hierarchyMs;
+  Timings_.AssemblyCpu = CpuMilliseconds() - cpu - HierarchyCpu_;
+  Timings_.AMGSetupCpu = HierarchyCpu_;
 
   // 4. PCG per channel (again after a full set-up if a kept hierarchy fails).
   start = MPI_Wtime();
+  cpu = CpuMilliseconds();
+  HierarchyCpu_ = 0.0;
   double retryMs = 0.0;
   std::vector<double> solution;
   SolveChannels(rhs, setup, solution, report, retryMs);
   fluence = Numbering_.FetchFromOwners(Comm_, solution, 3);
   Timings_.Solve = Milliseconds(start) - retryMs;
   Timings_.AMGSetup = hierarchyMs + retryMs;
+  Timings_.SolveCpu = CpuMilliseconds() - cpu - HierarchyCpu_;
+  Timings_.AMGSetupCpu += HierarchyCpu_;
 
   // 5. Detectors and the power balance, summed over the ranks.
   ReadOuts(material, irradiance, fluence, localSourcePower);

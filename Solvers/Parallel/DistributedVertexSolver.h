@@ -25,13 +25,24 @@
  * Every public call is collective over the communicator (ranks with empty
  * pieces too); an error on any rank is thrown on every rank with the same
  * message (AgreeOnError).
+ *
+ * It is the registry's distributed variant of "divergence" and "fem"
+ * (DiffusionSolverFactory.h, trait Distributed; registered when this layer
+ * is loaded): a DiffusionSolver that takes its communicator as PETSc objects
+ * do (SetCommunicator; none means MPI_COMM_SELF, one rank, so it runs
+ * without mpiexec too), and takes RelTol, MaxIter, the warm start, interior
+ * sources and detectors as the serial solvers do. DiffusionFrontEnd chooses
+ * it by that trait (SetCommunicator); its detector readings and power
+ * balance, summed over the ranks, are its tallied read-outs
+ * (GetTalliedReadouts).
  */
 #pragma once
 
 #include "DiffusionSolver.h"
 #include "DistributedNumbering.h"
 #include "DistributedSources.h"
-#include "HypreSolver.h"
+#include "DistributedLinearSolver.h"
+#include "HypreSolver.h" // GetMPIComm, MakeCommunicator: the MPI side of Communicator
 #include "OpticalProperties.h"
 #include "TetGeometry.h"
 #include "TetMesh.h"
@@ -46,26 +57,43 @@
 namespace translucency
 {
 
-class DistributedVertexSolver
+class DistributedVertexSolver : public DiffusionSolver
 {
 public:
-  /// `discretization`: "divergence" or "fem" (else translucency::Error).
-  /// The communicator must outlive the solver.
+  /// `discretization`: "divergence" or "fem" (else translucency::Error), on
+  /// MPI_COMM_SELF until SetCommunicator.
+  explicit DistributedVertexSolver(const std::string& discretization);
+  /// As above on `comm`, which must outlive the solver.
   DistributedVertexSolver(MPI_Comm comm, const std::string& discretization);
-  ~DistributedVertexSolver();
+  ~DistributedVertexSolver() override;
 
-  ///@{
-  /// PCG stopping rule ||b - A x|| <= RelTol ||b|| (default 1e-6) within
-  /// MaxIter iterations (default 2000) per channel; warm start (default on).
-  void SetRelTol(double tol) { RelTol_ = tol; }
-  void SetMaxIter(int n) { MaxIter_ = n; }
-  void SetWarmStart(bool on) { WarmStart_ = on; }
-  ///@}
+  /// "divergence" or "fem" (the discretisation's registry name).
+  std::string GetName() const override { return Name_; }
+  /// Any communicator (none: MPI_COMM_SELF). A new one forgets the mesh,
+  /// the hierarchies and the warm start.
+  void SetCommunicator(const Communicator& comm) override;
+  /**
+   * Collective: the DiffusionSolver interface. The problem's Mesh is this
+   * rank's piece (owned tets on the local points; null for a rank without
+   * tets), PointKeys the points' identities (required), Irradiance 3 per
+   * point, InteriorSources the sources (null: none). Continuous wave, the
+   * surface collimated model. The PCG stopping rule is ||b - A x|| <=
+   * RelTol ||b|| per channel (global norms). Throws translucency::Error on
+   * every rank on invalid input; returns true.
+   */
+  bool Solve(const DiffusionProblem& problem, std::vector<double>& fluence,
+    SolverReport& report) override;
+  /// Forgets the hierarchies and the warm start (keeps the numbering of an
+  /// unchanged mesh): the next Solve sets up from scratch.
+  void Reset() override;
+  /// The detector readings and power balance of the last Solve (the same on
+  /// every rank): injected = the physical faces' irradiance + the sources.
+  bool GetTalliedReadouts(TalliedReadouts& readouts) const override;
   /**
    * Values-only set-up (default on): when the mesh is the last Solve's and
    * only the matrix values changed (a paint), the new values go into the
    * same hypre matrices and the BoomerAMG hierarchies are kept
-   * (HypreBoomerAMGPCG::UpdateValuesAddTo): no set-up, PCG still converges
+   * (DistributedLinearSolver::UpdateValues): no set-up, PCG still converges
    * to RelTol on the new matrix. A channel whose PCG then needs more than
    * twice the iterations of its last solve after a full set-up (at least
    * 10) gets a full set-up at the next change. A channel whose PCG does not
@@ -79,7 +107,7 @@ public:
   bool GetValuesOnlySetup() const { return ValuesOnly_; }
   /// OpenMP threads of the local assembly (0, the default: the node's
   /// cores shared by its ranks, ScopedRankThreads, unless OMP_NUM_THREADS).
-  void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
+  void SetNumberOfThreads(int n) override { NumberOfThreads_ = n; }
   /**
    * Interior sources (point sources, pencil beams) of the next Solves (null
    * or empty: none; the pointer must stay valid through Solve). Their load
@@ -90,7 +118,7 @@ public:
    */
   void SetInteriorSources(const Sources* sources) { Sources_ = sources; }
   /// Detectors read after each Solve (GetDetectorReadings: the same on every rank).
-  void SetDetectors(const std::vector<Detector>& detectors) { Detectors_ = detectors; }
+  void SetDetectors(const std::vector<Detector>& detectors) override { Detectors_ = detectors; }
   /// The readings of the last Solve (one per detector; empty without detectors).
   const std::vector<DetectorReading>& GetDetectorReadings() const { return Readings_; }
   /**
@@ -108,9 +136,14 @@ public:
   {
     return SourcePower_;
   }
-  /// BoomerAMG settings (default BoomerAMGOptions::Tuned()); a change
-  /// rebuilds the hierarchy at the next Solve.
-  void SetAMGOptions(const BoomerAMGOptions& options);
+  /**
+   * The linear solver: DiffusionSolver::SetLinearSolver's name or
+   * composition of the registry ("" = "cg/boomeramg", BoomerAMG-PCG with
+   * BoomerAMGOptions::Tuned()), created through CreateDistributedLinearSolver
+   * with these options (e.g. BoomerAMGOptions::ToOptions(); default none); a
+   * change rebuilds the hierarchy at the next Solve.
+   */
+  void SetLinearSolverOptions(const SolverOptions& options);
 
   /**
    * Collective. points: 3 per local point (mm); keys: one per local point;
@@ -122,7 +155,7 @@ public:
    * hierarchies (SetValuesOnlySetup), "unchanged" when every rank's matrix
    * values equal the last Solve's (a relight: the hierarchies are kept,
    * only the right-hand side is new); iterations and residuals are the same
-   * on every rank.
+   * on every rank. (The interface's Solve on a TetMesh this solver builds.)
    */
   void Solve(const std::vector<double>& points, const std::vector<PointKey>& keys,
     const std::vector<int>& tets, const OpticalProperties& material,
@@ -143,6 +176,12 @@ public:
     double Assembly = 0.0;
     double AMGSetup = 0.0;
     double Solve = 0.0;
+    /// The same phases in this process's CPU time (ms): the work, whatever
+    /// the machine's load (a rank waiting in MPI may spin, though).
+    double NumberingCpu = 0.0;
+    double AssemblyCpu = 0.0;
+    double AMGSetupCpu = 0.0;
+    double SolveCpu = 0.0;
   };
   const Timings& GetTimings() const { return Timings_; }
   /// Owned rows on this rank and the global number of unknowns.
@@ -161,9 +200,15 @@ private:
     Fresh       ///< set up from scratch
   };
   // The phases of Solve (each collective).
+  void SolvePiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
+    const OpticalProperties& material, const std::vector<double>& irradiance,
+    std::vector<double>& fluence, SolverReport& report);
   void CheckPiece(const std::vector<double>& points, const std::vector<PointKey>& keys,
     const std::vector<int>& tets, const OpticalProperties& material,
     const std::vector<double>& irradiance) const;
+  void CheckPiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
+    const OpticalProperties& material, const std::vector<double>& irradiance) const;
+  bool HasTets() const { return Mesh_->GetNumberOfTets() > 0; }
   void AssembleLocal(const OpticalProperties& material, const std::vector<double>& irradiance,
     DiffusionSystem& system);
   void AddBoundaryTerms(const OpticalProperties& material, const std::vector<double>& irradiance,
@@ -177,18 +222,24 @@ private:
   void ReadOuts(const OpticalProperties& material, const std::vector<double>& irradiance,
     const std::vector<double>& fluence, const std::array<double, NumberOfChannels>& localSourcePower);
   void FillStatistics(SolverReport& report) const;
-  void BuildGeometry(const std::vector<double>& points, const std::vector<PointKey>& keys,
-    const std::vector<int>& tets);
+  void BuildGeometry(const TetMesh* mesh, const std::vector<PointKey>& keys);
+  void BuildOwnedRows();
+  /// The owned rows' values (OwnedColumns_ order) of the local CSR values
+  /// `local`, with the other ranks' partial rows (collective).
+  void GatherOwnedRows(const std::vector<double>& local, std::vector<double>& ownedValues) const;
 
   MPI_Comm Comm_;
   std::string Name_;
   bool Fem_ = false;
-  double RelTol_ = 1e-6;
-  int MaxIter_ = 2000;
-  bool WarmStart_ = true;
   int NumberOfThreads_ = 0;
-  BoomerAMGOptions Options_ = BoomerAMGOptions::Tuned();
+  SolverOptions LinearOptions_;
   bool OptionsChanged_ = false;
+  /// The linear solver each channel was made with ("" = none yet).
+  std::array<std::string, NumberOfChannels> ChannelLinear_;
+  std::string LinearSolverName() const
+  {
+    return LinearSolver_.empty() ? std::string("cg/boomeramg") : LinearSolver_;
+  }
   bool ValuesOnly_ = true;
   /// Per channel: iterations of the last solve after a full set-up, and
   /// whether the next change of values must rebuild the hierarchy.
@@ -197,26 +248,36 @@ private:
 
   // The geometry of the last Solve and what was derived from it.
   bool HaveGeometry_ = false;
-  std::vector<double> Points_;
   std::vector<PointKey> Keys_;
+  std::uint64_t Revision_ = 0;  ///< of the mesh the numbering is of (0: no tets)
+  /// The piece of the Solve in progress (the caller's or OwnMesh_; EmptyMesh_
+  /// without tets): valid during Solve only.
+  const TetMesh* Mesh_ = &EmptyMesh_;
+  TetMesh EmptyMesh_;
+  /// The arrays of the last array Solve and the mesh built from them.
+  std::vector<double> Points_;
   std::vector<int> Tets_;
-  TetMesh Mesh_; ///< the owned tets with the local points (no tets: unused)
+  TetMesh OwnMesh_;
   TetGeometryCache GeometryCache_;
   DistributedNumbering Numbering_;
   std::vector<char> PhysicalFace_; ///< per local boundary triangle of Mesh_
-  std::vector<int> RowSizeHints_;  ///< per owned row
   std::vector<char> Used_;         ///< per local point: a vertex of an owned tet
   std::vector<int> FirstLocal_;    ///< per owned row: its first local point
-  /// The local matrix entries sent to hypre: rows (global), entries per
-  /// row, columns (global) and their positions in the local CSR values.
-  std::vector<int> SendRows_, SendSizes_, SendColumns_, SendPositions_;
+  /// The owned rows handed to hypre whole (CSR, global sorted columns), and
+  /// where each local CSR entry goes: this rank's entries (LocalPositions_
+  /// in the local CSR, Targets_[e] in the owned rows), the partition rows'
+  /// entries sent to their owners (SendPositionsOff_, SendCounts_ per rank),
+  /// and the received ones (RecvCounts_ per rank, Targets_[local + e]).
+  std::vector<int> OwnedOffsets_, OwnedColumns_;
+  std::vector<int> LocalPositions_, Targets_, SendPositionsOff_, SendCounts_, RecvCounts_;
 
   // The matrices' local contributions of the last Solve, their hierarchies
   // and solutions (owned rows).
   std::array<std::vector<double>, NumberOfChannels> Contributions_;
-  std::array<std::unique_ptr<HypreBoomerAMGPCG>, NumberOfChannels> Channels_;
+  std::array<std::unique_ptr<DistributedLinearSolver>, NumberOfChannels> Channels_;
   std::array<std::vector<double>, NumberOfChannels> Solution_;
   Timings Timings_;
+  double HierarchyCpu_ = 0.0; ///< CPU ms of the hierarchies set up in this Solve
 
   const Sources* Sources_ = nullptr;
   std::vector<Detector> Detectors_;

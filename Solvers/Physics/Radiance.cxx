@@ -123,14 +123,7 @@ std::vector<double> BoundaryRadiance(const TetMesh& mesh, const std::vector<doub
   {
     const size_t i = static_cast<size_t>(boundary[k]);
     const double* nrm = &normals[3 * i];
-    double cosOut = 1.0;
-    if (viewPoint)
-    {
-      const double* x = mesh.GetPoint(static_cast<int>(i));
-      const double d[3] = { viewPoint[0] - x[0], viewPoint[1] - x[1], viewPoint[2] - x[2] };
-      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      cosOut = len > 0 ? (d[0] * nrm[0] + d[1] * nrm[1] + d[2] * nrm[2]) / len : 0.0;
-    }
+    const double cosOut = ViewCosine(viewPoint, mesh.GetPoint(static_cast<int>(i)), nrm);
     for (int c = 0; c < 3; ++c)
     {
       radiance[3 * k + c] = OutgoingRadiance(

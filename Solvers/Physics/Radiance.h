@@ -7,6 +7,7 @@
 #include "Fresnel.h"
 #include "TetMesh.h"
 
+#include <cmath>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -60,6 +61,24 @@ RadianceReadout RadianceReadoutFromName(const std::string& name);
 double OutgoingRadiance(double phi, double q, double eta, double cosOut,
   RadianceReadout readout = RadianceReadout::EnergyConserving,
   Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit);
+
+/**
+ * The cosOut of OutgoingRadiance() for a boundary point x with unit outward
+ * normal `normal` seen from `viewPoint`: the cosine between the normal and
+ * the direction from x to the view point (0 at the view point itself); 1
+ * (seen along the normal) when viewPoint is null. The one definition the
+ * diffusion, SP3 and per-piece read-outs share.
+ */
+inline double ViewCosine(const double* viewPoint, const double* x, const double* normal)
+{
+  if (!viewPoint)
+  {
+    return 1.0;
+  }
+  const double d[3] = { viewPoint[0] - x[0], viewPoint[1] - x[1], viewPoint[2] - x[2] };
+  const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  return len > 0 ? (d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]) / len : 0.0;
+}
 
 /**
  * OutgoingRadiance() at every boundary point of the mesh, in the order of

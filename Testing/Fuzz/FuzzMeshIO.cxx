@@ -20,11 +20,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
   const size_t eol = input.find('\n');
   if (eol == std::string_view::npos)
   {
+    Tally("skipped");
     return 0;
   }
   const std::string ext(input.substr(0, eol));
   if (ext != "ply" && ext != "stl" && ext != "obj" && ext != "vtp" && ext != "vtu")
   {
+    Tally("skipped");
     return -1; // not added to the corpus
   }
   const std::string path = WriteInput("mesh." + ext, data + eol + 1, size - eol - 1);
@@ -34,7 +36,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
   if (!translucency_app::ReadMesh(path, surface, grid, error))
   {
     Check(!error.empty(), "a failed read says why");
-    Tally("clean error");
+    Tally("clean error", ext);
     return 0;
   }
   Check(surface || grid, "a successful read gives a surface or a grid");
@@ -55,10 +57,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     }
     catch (const translucency::Error&)
     {
-      Tally("clean error");
+      Tally("clean error", ext);
       return 0;
     }
   }
-  Tally("success");
+  Tally("success", ext);
   return 0;
 }

@@ -18,6 +18,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <unistd.h>
 
@@ -55,30 +56,40 @@ inline std::string WriteInput(const std::string& name, const uint8_t* data, size
   return path.string();
 }
 
-/// Count one input's outcome ("clean error" or "success") for a long run
-/// (scripts/fuzz_long.py, `make fuzz-long`): with TRANSLUCENCY_FUZZ_TALLY=FILE
-/// the counts are added to FILE at exit ("<outcome>: <count>" lines).
-inline void Tally(const char* outcome)
+/// Count one input's outcome ("clean error", "success" or "skipped": an
+/// input the target does not run, e.g. fuzzMeshIO's without an extension
+/// line) for a long run (scripts/fuzz_long.py, `make fuzz-long`): with
+/// TRANSLUCENCY_FUZZ_TALLY=FILE the counts are added to FILE at exit
+/// ("<outcome>: <count>" lines, and "<group> <outcome>: <count>" when a
+/// group is given, e.g. the mesh format).
+inline void Tally(const std::string& outcome, const std::string& group = std::string())
 {
   static const char* file = std::getenv("TRANSLUCENCY_FUZZ_TALLY");
   if (!file)
   {
     return;
   }
-  static long counts[2] = { 0, 0 };
+  static std::map<std::string, long> counts;
   static const bool registered = []
   {
     std::atexit([] {
       if (FILE* out = std::fopen(std::getenv("TRANSLUCENCY_FUZZ_TALLY"), "a"))
       {
-        std::fprintf(out, "clean error: %ld\nsuccess: %ld\n", counts[0], counts[1]);
+        for (const auto& [key, count] : counts)
+        {
+          std::fprintf(out, "%s: %ld\n", key.c_str(), count);
+        }
         std::fclose(out);
       }
     });
     return true;
   }();
   (void)registered;
-  ++counts[std::string(outcome) == "success" ? 1 : 0];
+  ++counts[outcome];
+  if (!group.empty())
+  {
+    ++counts[group + " " + outcome];
+  }
 }
 
 /// Abort (a libFuzzer finding) when `condition` is false.

@@ -7,11 +7,15 @@ How to run (from a build tree; ctest sets the variable itself):
     TRANSLUCENCY_CLI=<build>/bin/translucency /usr/bin/python3 TestBoundedReads.py
 
 1. /dev/zero through a symlink, and a FIFO (no writer: opening it would block
-   for ever), named as every file input that is read into memory: the mesh
-   (.vtu, .vtp), a --material JSON (single and table), --paint, --cut-stroke,
-   a radiosity --scene, compare's --measured CSV, acquire's --sample and
-   --synthetic-truth. Each run must end within seconds with exit 1 and a
-   message that names the file and says it is not a regular file.
+   for ever), named as every file input that is read: the mesh in every
+   format (.vtu, .vtp, .ply, .stl, .obj, TetGen .node and .ele, and the .ele
+   next to a good .node; an optional .face that is not a regular file is not
+   read, and the run goes on), through render, compare and acquire; a
+   --material JSON (single and table), --paint, --cut-stroke, a radiosity
+   --scene, compare's --measured CSV, acquire's --sample, --patterns (a file,
+   and a file inside a --patterns folder) and --synthetic-truth. Each run
+   must end within seconds with exit 1 and a message that names the file and
+   says it is not a regular file.
 2. A sparse .vtu larger than a quarter of --memory-limit is refused by its
    size before it is read (in well under the time reading it would take).
 3. The project's own binary .vtu output with one line of its <CellData>
@@ -110,12 +114,60 @@ class BoundedReads(unittest.TestCase):
                                       "--output", out, "--no-png"]),
             ("truth.vti", lambda p: ["acquire", "--synthetic-truth", p, "--grid", "2x2x2",
                                      "--patterns", "1x1", "--output", out, "--no-png"]),
-        ]
+            ("patterns.vtu", lambda p: ["acquire", "--sample", self.mesh, "--patterns", p,
+                                        "--output", out, "--no-png"]),
+            ("compare.vtu", lambda p: ["compare", "--mesh", p, "--no-png", "--solvers", "fem",
+                                       "--output", out]),
+            ("acquire_mesh.vtu", lambda p: ["acquire", "--sample", p, "--patterns", p,
+                                            "--output", out, "--no-png"]),
+        ] + [("mesh." + ext, lambda p: ["render", "--mesh", p, "--output", out])
+             for ext in ("ply", "stl", "obj", "node", "ele")]
         for kind in ("symlink", "fifo"):
             for name, args in cases:
                 with self.subTest(kind=kind, name=name):
                     path = self.endless(name, kind)
                     self.expect_refused(args(path), path, "%s %s" % (kind, name))
+
+    def test_endless_companions(self):
+        """A FIFO or /dev/zero where a reader finds a second file by itself:
+        the .ele or .face next to a good TetGen .node, a pattern file inside
+        a --patterns folder."""
+        out = os.path.join(self.dir, "out")
+        for kind in ("symlink", "fifo"):
+            for companion in ("ele", "face"):
+                with self.subTest(kind=kind, companion=companion):
+                    folder = os.path.join(self.dir, "tetgen_%s_%s" % (kind, companion))
+                    os.makedirs(folder, exist_ok=True)
+                    node = os.path.join(folder, "tet.node")
+                    with open(node, "w") as f:
+                        f.write("4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n")
+                    if companion == "face":
+                        with open(os.path.join(folder, "tet.ele"), "w") as f:
+                            f.write("1 4 0\n1 1 2 3 4\n")
+                    path = os.path.join(folder, "tet." + companion)
+                    if kind == "symlink":
+                        os.symlink("/dev/zero", path)
+                    else:
+                        os.mkfifo(path)
+                    result, _ = self.run_cli(["render", "--mesh", node, "--output", out])
+                    if companion == "face":
+                        # Optional (boundary markers): a .face that is not a
+                        # regular file is not read; the run goes on.
+                        self.assertEqual(result.returncode, 0, result.stderr)
+                        continue
+                    self.assertEqual(result.returncode, 1, result.stderr)
+                    self.assertIn("tet." + companion, result.stderr)
+                    self.assertIn("not a regular file", result.stderr)
+            with self.subTest(kind=kind, companion="pattern in a folder"):
+                folder = os.path.join(self.dir, "patterns_" + kind)
+                os.makedirs(folder, exist_ok=True)
+                path = os.path.join(folder, "p0.vtu")
+                if kind == "symlink":
+                    os.symlink("/dev/zero", path)
+                else:
+                    os.mkfifo(path)
+                self.expect_refused(["acquire", "--sample", self.mesh, "--patterns", folder,
+                                     "--output", out, "--no-png"], path, "pattern folder " + kind)
 
     def test_size_bound_before_reading(self):
         sparse = os.path.join(self.dir, "huge.vtu")

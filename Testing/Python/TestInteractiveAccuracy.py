@@ -14,7 +14,9 @@ RelTol is compared with a solve of the same input to RelTol 1e-10 (boundary
 RMS relative error, the worst channel), for a cold solve, a relight (the key
 light turned 15 degrees, warm start through the filter) and a paint stroke
 (warm start, incremental assembly). Checked: every error is <= 1 % (the
-rule's stated bound), and the default RelTol is the core's
+rule's stated bound), a paint stroke's solve iterates at least once in each
+channel (the rule's guard: a stroke can move the global residual by less
+than RelTol), and the default RelTol is the core's
 translucency::InteractiveRelTol (the documented rule). The table is printed.
 
 Exits non-zero on failure (unittest).
@@ -89,6 +91,7 @@ class InteractiveAccuracyTest(unittest.TestCase):
 
     def test_boundary_fluence_within_the_bound(self):
         rows = []
+        paint_iterations = {}
         for case in ("sphere", "inclusion", "bunny"):
             assign = mesh(case)
             boundary = boundary_point_ids(assign.GetOutput())
@@ -117,6 +120,10 @@ class InteractiveAccuracyTest(unittest.TestCase):
                     solve.Update()
                     self.assertTrue(all(solve.GetConverged(c) for c in range(3)))
                     iterations.append(sum(solve.GetNumberOfIterations(c) for c in range(3)))
+                    painted = paint.GetOutput().GetFieldData().GetArray("PaintedCellIds")
+                    if step == "paint" and painted and painted.GetNumberOfTuples() > 0:
+                        paint_iterations[(case, linear)] = [
+                            min(1, solve.GetNumberOfIterations(c)) for c in range(3)]
                     errors.append(boundary_error(solve.GetOutput(),
                                                  tight(paint.GetOutput(), linear), boundary))
                 rows.append((case, assign.GetOutput().GetNumberOfCells(), linear, errors,
@@ -129,6 +136,9 @@ class InteractiveAccuracyTest(unittest.TestCase):
         for case, tets, linear, errors, iterations in rows:
             for step, e in zip(("cold", "relight", "paint"), errors):
                 self.assertLessEqual(e, BOUND, (case, linear, step))
+        self.assertTrue(paint_iterations, "no stroke painted any tet")
+        for key, painted_iterations in paint_iterations.items():
+            self.assertEqual(painted_iterations, [1, 1, 1], key)
 
 
 if __name__ == "__main__":

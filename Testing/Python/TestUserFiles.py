@@ -25,6 +25,14 @@ How to run (from a build tree; ctest sets the variable itself):
 6. A failed write (the file-size limit of the process, as a full disk)
    keeps every old output and removes the temporaries.
 7. bench --tets "" is a usage error (it silently ran the default sizes).
+8. Three compares started together into one --output DIR (one broke in 1 of
+   3 trials): each succeeds or is refused by the lock; compare.vtm and its
+   pieces are one run's (the irradiance of the volume and of both solvers'
+   surfaces agree, a different light power per run) and nothing is left
+   over.
+9. Messages carry no raw bytes of a file: control bytes in a PLY header, a
+   TetGen number, a --measured CSV, a JSON key and a file name give one
+   line per message on stderr, with no control byte in it.
 
 Exits non-zero on failure (unittest).
 """
@@ -293,6 +301,109 @@ class UserFiles(unittest.TestCase):
         result = self.run_cli(["bench", "--mesh", self.cube, "--tets", ""])
         self.assertEqual(result.returncode, 2, result.stderr)
         self.assertIn("--tets", result.stderr)
+
+
+    def test_every_command_refuses_an_output_over_its_input(self):
+        """compare, acquire and radiosity as render: --json or --output naming
+        an input is a usage error before any work, the input unchanged."""
+        folder = self.folder("collisions_all")
+        mesh_prefix = os.path.join(folder, "mesh")
+        self.assertEqual(self.render(mesh_prefix).returncode, 0)
+        mesh = mesh_prefix + ".vtu"
+        scene = os.path.join(folder, "scene.json")
+        csv = os.path.join(folder, "measured.csv")
+        with open(scene, "w") as f:
+            f.write("{}\n")
+        with open(csv, "w") as f:
+            f.write("t_ns,a\n0,1\n1,2\n")
+        out = os.path.join(folder, "out")
+        for args, needle in [
+            (["compare", "--mesh", mesh, "--json", mesh, "--no-png", "--output", out],
+             "--json '%s' is the input --mesh" % mesh),
+            (["compare", "--mesh", mesh, "--measured", csv, "--json", csv, "--no-png",
+              "--time-gates", "0,0.5,4", "--source", "pencil:5,5,10:0,0,-1", "--detector",
+              "5,0,5", "--output", out], "is the input --measured"),
+            (["acquire", "--sample", mesh, "--patterns", mesh, "--output", mesh_prefix,
+              "--no-png"], "--output '%s' is the input --sample" % mesh),
+            (["acquire", "--sample", mesh, "--patterns", mesh, "--json", mesh, "--output", out,
+              "--no-png"], "is the input --sample"),
+            (["radiosity", "--scene", scene, "--json", scene, "--output", out],
+             "is the input --scene"),
+        ]:
+            with self.subTest(command=args[0], needle=needle):
+                self.expect_refused(args, [needle, "refused"], [mesh, scene, csv])
+
+    # 8 ------------------------------------------------------------------------
+    def test_concurrent_compares_into_one_folder(self):
+        from vtkmodules.vtkIOXML import vtkXMLMultiBlockDataReader
+        out = self.folder("concurrent_compare")
+        powers = [1.0, 2.0, 4.0]
+        for trial in range(2):
+            runs = [subprocess.Popen([CLI, "compare", "--mesh", self.cube] + SMALL +
+                                     ["--solvers", "fem,divergence", "--no-png", "--light",
+                                      "directional:0,0,-1:%g" % p, "--output", out],
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                    for p in powers]
+            outcomes = [(r.wait(timeout=TIME_LIMIT), r.communicate()[1]) for r in runs]
+            succeeded = 0
+            for code, stderr in outcomes:
+                if code == 0:
+                    succeeded += 1
+                else:
+                    self.assertEqual(code, 1, stderr)
+                    self.assertIn("another translucency run is writing the outputs", stderr)
+            self.assertGreaterEqual(succeeded, 1, outcomes)
+            self.assertEqual(self.leftovers(out), [], trial)
+            reader = vtkXMLMultiBlockDataReader()
+            reader.SetFileName(os.path.join(out, "compare.vtm"))
+            reader.Update()
+            blocks = reader.GetOutput()
+            self.assertEqual(blocks.GetNumberOfBlocks(), 3, trial)
+            peaks = [blocks.GetBlock(i).GetPointData().GetArray("Irradiance").GetRange(0)[1]
+                     for i in range(3)]
+            for peak in peaks[1:]:
+                self.assertAlmostEqual(peak / peaks[0], 1.0, places=9,
+                                       msg="pieces of different runs in trial %d" % trial)
+
+    # 9 ------------------------------------------------------------------------
+    def test_messages_carry_no_raw_bytes(self):
+        folder = self.folder("raw_bytes")
+
+        def write(name, data):
+            path = os.path.join(folder, name)
+            with open(path, "wb") as f:
+                f.write(data)
+            return path
+
+        ply = write("esc.ply", b"ply\nformat ascii 1.0\nelement vertex 3\x1b[2J\r\n"
+                               b"property float x\nend_header\n")
+        node = write("bell.node", b"4 3 0 0\n1 0 0 0\n2 1\x07 0 0\n3 0 1 0\n4 0 0 1\n")
+        write("bell.ele", b"1 4 0\n1 1 2 3 4\n")
+        key = write("key.json", b'{"absorption\\n\\u001b[31m": [0.1, 0.1, 0.1]}')
+        csv = write("measured.csv", b"t_ns,a\n0,1\n0.5,3\x1b[0m\r\n1,2\n")
+        mesh_prefix = os.path.join(folder, "mesh")
+        self.assertEqual(self.render(mesh_prefix).returncode, 0)
+        out = os.path.join(folder, "out")
+        cases = [
+            ["render", "--mesh", ply, "--output", out],
+            ["render", "--mesh", node, "--output", out],
+            ["render", "--mesh", mesh_prefix + ".vtu", "--material", key, "--output", out],
+            ["compare", "--mesh", mesh_prefix + ".vtu", "--solvers", "divergence", "--no-png",
+             "--time-gates", "0,0.5,4", "--source", "pencil:5,5,10:0,0,-1", "--detector",
+             "5,0,5", "--measured", csv, "--output", out],
+            ["render", "--mesh", os.path.join(folder, "new\nline\x1b.obj"), "--output", out],
+        ]
+        for args in cases:
+            with self.subTest(args=args[:3]):
+                result = subprocess.run([CLI] + args, capture_output=True, timeout=TIME_LIMIT)
+                self.assertEqual(result.returncode, 1, result.stderr)
+                lines = result.stderr.split(b"\n")
+                self.assertEqual(lines[-1], b"")
+                errors = [line for line in lines if line.startswith(b"translucency: error")]
+                self.assertEqual(len(errors), 1, result.stderr)
+                for line in lines:
+                    self.assertFalse(any(byte < 0x20 or byte == 0x7f for byte in line),
+                                     line)
 
 
 if __name__ == "__main__":

@@ -264,7 +264,8 @@ TEST(DiffusionFrontEnd, DomainsAreRefusedByTraitsNamingTheSolversWithThem)
       EXPECT_TRUE(Contains(t, "the " + entry.Name + " solver has no frequency domain or time gates"));
       EXPECT_TRUE(Contains(t, "time gates are implemented by divergence, fem, montecarlo"));
     }
-    EXPECT_FALSE(entry.Properties.Distributed);
+    // Distributed: a variant registered by the Parallel layer (TestParallel).
+    EXPECT_EQ(entry.Properties.Distributed, static_cast<bool>(entry.Properties.CreateDistributed));
   }
 }
 

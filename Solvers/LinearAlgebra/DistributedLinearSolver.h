@@ -1,0 +1,90 @@
+/**
+ * @file DistributedLinearSolver.h
+ * @brief The distributed member of the linear-solver family: one SPD matrix
+ * distributed by rows over the ranks of a communicator, set up once per
+ * pattern and solved for many right-hand sides. The registry
+ * (LinearSolver.h) composes it as it composes the in-process solvers
+ * (Krylov method x preconditioner, model: PETSc's KSP x PC): an entry whose
+ * traits have CreateDistributed has a distributed variant, created by
+ * CreateDistributedLinearSolver("cg/boomeramg" or its alias "hypre-amg").
+ * The distributed diffusion solver (Solvers/Parallel) takes its linear
+ * solver from there, so no diffusion solver calls hypre itself.
+ */
+#pragma once
+
+#include "Communicator.h"
+#include "SolverOptions.h"
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+namespace translucency
+{
+
+class DistributedLinearSolver
+{
+public:
+  virtual ~DistributedLinearSolver() = default;
+
+  /// The registry's composition, e.g. "cg/boomeramg".
+  virtual std::string GetName() const = 0;
+
+  /**
+   * Solver-specific settings by name (before Setup; a later change applies
+   * at the next Setup). Each solver reads those it knows, checks them
+   * (translucency::Error naming the option and the value) and leaves the
+   * others unused (SolverOptions::GetUnused). Default: reads none.
+   */
+  virtual void SetOptions(const SolverOptions& options) { (void)options; }
+
+  /**
+   * Collective: this rank's rows [rowBegin, rowEnd) as CSR (rowOffsets has
+   * rowEnd - rowBegin + 1 entries from 0; global column indices, sorted in
+   * each row), every row whole (the partial rows of other ranks already
+   * summed). Builds the matrix and the preconditioner from scratch.
+   */
+  virtual void Setup(int rowBegin, int rowEnd, const int* rowOffsets, const int* columns,
+    const double* values) = 0;
+
+  /**
+   * Collective: the same rows and columns as the last Setup with new values;
+   * the preconditioner is kept (built for the old values: good while the
+   * change is small, a paint stroke). Throws translucency::Error if there is
+   * no Setup or the pattern differs.
+   */
+  virtual void UpdateValues(const int* rowOffsets, const int* columns, const double* values) = 0;
+
+  /**
+   * Collective: solves for the local part b (rowEnd - rowBegin values) into
+   * x, from x if `guess` (else from zero), until ||b - A x|| <= relTol ||b||
+   * (global 2-norms) or maxIter iterations. Returns the iterations;
+   * relativeResidual gets ||b - A x|| / ||b|| (the same on every rank). Not
+   * converging is not an error (the caller reads the residual).
+   */
+  virtual int Solve(const double* b, double* x, bool guess, double relTol, int maxIter,
+    double& relativeResidual) = 0;
+
+  /// Levels and operator complexity of the preconditioner (1 and 1 without
+  /// a hierarchy); non-zeros of the matrix summed over the ranks.
+  virtual int GetNumberOfLevels() const { return 1; }
+  virtual double GetOperatorComplexity() const { return 1.0; }
+  virtual long long GetNumberOfNonZeros() const = 0;
+  /// Wall times of the last Setup or UpdateValues on this rank (ms): the
+  /// matrix, then the preconditioner (0 for UpdateValues).
+  virtual double GetMatrixMilliseconds() const = 0;
+  virtual double GetHierarchyMilliseconds() const = 0;
+  /// Bytes of the preconditioner on this rank (the matrix not included).
+  virtual std::size_t GetMemoryBytes() const { return 0; }
+};
+
+/**
+ * A new distributed linear solver on `comm` by registry name or
+ * composition ("cg/boomeramg", or its alias "hypre-amg"; case-insensitive).
+ * Throws translucency::Error for an unknown name, a solver this build lacks
+ * (its remedy) or one without a distributed variant, naming those with one.
+ */
+std::unique_ptr<DistributedLinearSolver> CreateDistributedLinearSolver(
+  const std::string& name, const Communicator& comm);
+
+} // namespace translucency

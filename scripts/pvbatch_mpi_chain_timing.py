@@ -1,0 +1,125 @@
+"""The issue-31 chain under `mpiexec -n N pvbatch` against serial pvbatch on
+the same tets (issues 31 and 32; Documentation/Performance.md and Scaling.md).
+
+    OMP_NUM_THREADS=2 pvbatch scripts/pvbatch_mpi_chain_timing.py PLUGIN bunny1m.vtu out.json
+    mpiexec --allow-run-as-root -n 2 pvbatch scripts/pvbatch_mpi_chain_timing.py \\
+        PLUGIN bunny1m.vtu out2.json
+    /usr/bin/python3 scripts/pvbatch_mpi_chain_timing.py --table out.json out2.json
+
+1. The mesh: serial pvbatch reads the .vtu itself. Under N ranks the N-piece
+   bunny1m-N.pvtu next to it is read (XML partitioned reader: one piece per
+   rank); if it does not exist it is made first, once: the .vtu read on rank
+   0, Redistribute DataSet (N pieces, each cell on one rank) and written as
+   .pvtu (never overwritten). Both runs hold the same tets.
+2. The chain, each filter's UpdatePipeline timed (on rank 0, a collective
+   update): Assign (marble) -> Surface Irradiance (directional (0,-1,-1) +
+   the uniform light 0.1) -> Paint Scattering Coefficients (a stroke outside
+   the object) -> Solve Diffusion (defaults) -> Outgoing Radiance, as
+   *cold*; then *relight* (the directional light turned 15 degrees about x)
+   and *paint* (the stroke moved onto the top of the object, width 2.4 % of
+   the diagonal), each timed the same way. Repeated RUNS times (default 3,
+   env TRANSLUCENCY_MPI_RUNS) on a new chain; medians.
+3. Writes the medians (seconds, per step and filter), the ranks and the tets
+   to the JSON file. --table prints the Markdown
+   table of two or more such files (the first is the baseline).
+"""
+
+import json
+import math
+import os
+import statistics
+import sys
+import time
+
+STEPS = ("cold", "relight", "paint")
+FILTERS = ("assign", "irradiance", "paint", "solve", "radiance")
+
+
+def table(paths):
+    runs = [json.load(open(p)) for p in paths]
+    base = runs[0]
+    print("| step | filter | " + " | ".join("%d rank%s (s)" % (r["ranks"], "s" if r["ranks"] > 1 else "")
+                                        for r in runs) + " | ratio |")
+    print("|---|---|" + "---|" * len(runs) + "---|")
+    for step in STEPS:
+        for f in FILTERS + ("total",):
+            values = [r["medians"][step].get(f) for r in runs]
+            if values[0] is None:
+                continue
+            ratio = values[-1] / values[0] if values[0] > 0 else float("nan")
+            print("| %s | %s | %s | %.2f |" % (step, f, " | ".join("%.3f" % v for v in values),
+                                               ratio))
+
+
+def main():
+    from paraview.simple import (LoadPlugin, XMLUnstructuredGridReader, RedistributeDataSet,
+                                 SaveData, XMLPartitionedUnstructuredGridReader, Delete)
+    from paraview import servermanager
+    plugin, vtu, out = sys.argv[1:4]
+    runs = int(os.environ.get("TRANSLUCENCY_MPI_RUNS", "3"))
+    LoadPlugin(plugin, ns=globals())
+    pm = servermanager.vtkProcessModule.GetProcessModule()
+    ranks = pm.GetNumberOfLocalPartitions()
+    if ranks > 1:
+        pvtu = os.path.splitext(vtu)[0] + "-%d.pvtu" % ranks
+        if not os.path.exists(pvtu):
+            whole = XMLUnstructuredGridReader(FileName=[vtu])
+            parts = RedistributeDataSet(Input=whole)
+            SaveData(pvtu, proxy=parts)
+            Delete(parts)
+            Delete(whole)
+        reader = XMLPartitionedUnstructuredGridReader(FileName=[pvtu])
+    else:
+        reader = XMLUnstructuredGridReader(FileName=[vtu])
+    reader.UpdatePipeline()
+    info = reader.GetDataInformation()
+    bounds = info.GetBounds()
+    centre = [0.5 * (bounds[2 * k] + bounds[2 * k + 1]) for k in range(3)]
+    diag = math.sqrt(sum((bounds[2 * k + 1] - bounds[2 * k]) ** 2 for k in range(3)))
+
+    def key_light(degrees):
+        t = math.radians(degrees)
+        return [0.0, -math.cos(t) + math.sin(t), -math.sin(t) - math.cos(t), 1.0]
+
+    times = {s: {f: [] for f in FILTERS + ("total",)} for s in STEPS}
+    for run in range(runs):
+        assign = AssignScatteringCoefficients(Input=reader, MaterialName="marble")  # noqa: F821
+        light = SurfaceIrradiance(Input=assign, DirectionalLights=key_light(0.0),  # noqa: F821
+                                  UniformLightIrradiance=0.1)
+        paint = PaintScatteringCoefficients(Input=light)  # noqa: F821
+        paint.StrokePoints = [bounds[1] + diag, centre[1], centre[2]]
+        paint.Width = 0.01 * diag
+        solve = SolveDiffusion(Input=paint)  # noqa: F821
+        radiance = OutgoingRadiance(Input=solve)  # noqa: F821
+        proxies = dict(zip(FILTERS, (assign, light, paint, solve, radiance)))
+        for step in STEPS:
+            if step == "relight":
+                light.DirectionalLights = key_light(15.0)
+            if step == "paint":
+                paint.StrokePoints = [centre[0], bounds[3], centre[2]]
+                paint.Width = 0.024 * diag
+            total = 0.0
+            for f in FILTERS:
+                start = time.perf_counter()
+                proxies[f].UpdatePipeline()
+                seconds = time.perf_counter() - start
+                times[step][f].append(seconds)
+                total += seconds
+            times[step]["total"].append(total)
+            print("run %d %-8s %s total %.3f" % (run + 1, step, " ".join(
+                "%s %.3f" % (f, times[step][f][-1]) for f in FILTERS), total), flush=True)
+        for proxy in (radiance, solve, paint, light, assign):
+            Delete(proxy)
+    result = {"ranks": ranks, "tets": info.GetNumberOfCells(), "runs": runs,
+              "threads": os.environ.get("OMP_NUM_THREADS", ""),
+              "medians": {s: {f: statistics.median(v) for f, v in times[s].items()}
+                          for s in STEPS}}
+    with open(out, "w") as f:
+        json.dump(result, f, indent=1)
+    print(json.dumps(result["medians"]))
+
+
+if len(sys.argv) > 1 and sys.argv[1] == "--table":
+    table(sys.argv[2:])
+else:
+    main()
