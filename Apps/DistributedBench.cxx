@@ -392,6 +392,40 @@ void CompareWithSerial(const std::vector<long long>& ids, const std::vector<doub
   std::fflush(stdout);
 }
 
+/// One line per configuration of `rounds` (CPU or wall time): the minimum
+/// and median of each phase over the rounds.
+void PrintRounds(const char* what,
+  const std::map<std::string, std::vector<std::array<double, 5>>>& rounds)
+{
+  static const char* names[5] = { "numbering", "assembly", "AMG set-up", "solve", "total" };
+  for (const auto& entry : rounds)
+  {
+    std::printf("summary %s%s over %zu rounds (min / median ms):", what, entry.first.c_str(),
+      entry.second.size());
+    for (int m = 0; m < 5; ++m)
+    {
+      std::vector<double> v;
+      for (const auto& r : entry.second)
+        v.push_back(r[m]);
+      std::printf(" %s %.0f / %.0f%s", names[m], *std::min_element(v.begin(), v.end()),
+        Median(v), m < 4 ? "," : "\n");
+    }
+  }
+}
+
+/// Rank 0's summary after the rounds: CPU per phase, the serial path, wall per phase.
+void PrintSummary()
+{
+  PrintRounds("CPU ", RoundsCpu);
+  if (!SerialCpu.empty())
+    std::printf("summary serial path (cold: assembly, set-up, solve) over %zu rounds (min / "
+                "median ms): CPU %.0f / %.0f, wall %.0f / %.0f\n",
+      SerialCpu.size(), *std::min_element(SerialCpu.begin(), SerialCpu.end()),
+      Median(SerialCpu), *std::min_element(SerialWall.begin(), SerialWall.end()),
+      Median(SerialWall));
+  PrintRounds("", Rounds);
+}
+
 } // namespace
 
 int main(int argc, char* argv[])
@@ -504,39 +538,7 @@ int main(int argc, char* argv[])
     }
     if (rank == 0)
     {
-      static const char* names[5] = { "numbering", "assembly", "AMG set-up", "solve", "total" };
-      for (const auto& entry : RoundsCpu)
-      {
-        std::printf("summary CPU %s over %zu rounds (min / median ms):", entry.first.c_str(),
-          entry.second.size());
-        for (int m = 0; m < 5; ++m)
-        {
-          std::vector<double> v;
-          for (const auto& r : entry.second)
-            v.push_back(r[m]);
-          std::printf(" %s %.0f / %.0f%s", names[m], *std::min_element(v.begin(), v.end()),
-            Median(v), m < 4 ? "," : "\n");
-        }
-      }
-      if (!SerialCpu.empty())
-        std::printf("summary serial path (cold: assembly, set-up, solve) over %zu rounds (min / "
-                    "median ms): CPU %.0f / %.0f, wall %.0f / %.0f\n",
-          SerialCpu.size(), *std::min_element(SerialCpu.begin(), SerialCpu.end()),
-          Median(SerialCpu), *std::min_element(SerialWall.begin(), SerialWall.end()),
-          Median(SerialWall));
-      for (const auto& entry : Rounds)
-      {
-        std::printf("summary %s over %zu rounds (min / median ms):", entry.first.c_str(),
-          entry.second.size());
-        for (int m = 0; m < 5; ++m)
-        {
-          std::vector<double> v;
-          for (const auto& r : entry.second)
-            v.push_back(r[m]);
-          std::printf(" %s %.0f / %.0f%s", names[m], *std::min_element(v.begin(), v.end()),
-            Median(v), m < 4 ? "," : "\n");
-        }
-      }
+      PrintSummary();
     }
   }
   catch (const std::exception& e)

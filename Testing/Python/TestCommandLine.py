@@ -501,7 +501,13 @@ class CommandLineTest(unittest.TestCase):
     def test_paint(self):
         self.assertSucceeded(self.first)
         source = read(self.prefix + ".vtu")
-        centre, width, target = np.array([3.0, 0.0, 0.0]), 0.5, np.array([1.0, 2.0, 3.0])
+        p = vtk_to_numpy(source.GetPoints().GetData()).astype(float)
+        t = vtk_to_numpy(source.GetCells().GetConnectivityArray()).reshape(-1, 4)
+        centroids = p[t].mean(axis=1)
+        # The stroke's centre: the tet centroid nearest (3, 0, 0), so that
+        # some tets lie within the width whatever the mesher's tet size.
+        centre = centroids[np.argmin(np.linalg.norm(centroids - [3.0, 0.0, 0.0], axis=1))]
+        width, target = 0.5, np.array([1.0, 2.0, 3.0])
         paint = self.write_json("paint.json", {"points": [centre.tolist()], "width": width,
                                                "mode": "set", "absorption": target.tolist(),
                                                "channels": [1, 1, 0]})
@@ -509,9 +515,7 @@ class CommandLineTest(unittest.TestCase):
         self.assertSucceeded(self.run_cli("render", "--mesh", self.prefix + ".vtu", "--paint",
                                           paint, "--output", prefix, "--json", prefix + ".json"))
         painted = read(prefix + ".vtu")
-        p = vtk_to_numpy(source.GetPoints().GetData()).astype(float)
-        t = vtk_to_numpy(source.GetCells().GetConnectivityArray()).reshape(-1, 4)
-        d = np.linalg.norm(p[t].mean(axis=1) - centre, axis=1)
+        d = np.linalg.norm(centroids - centre, axis=1)
         w = np.exp(-d ** 2 / (2 * width ** 2))
         # The documented cut-off (default weight 1e-6): w(R) = 1e-6.
         w[d ** 2 > 2 * width ** 2 * np.log(1e6)] = 0.0
