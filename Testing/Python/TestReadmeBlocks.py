@@ -32,6 +32,7 @@ import shlex
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 
 SOURCE_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
@@ -133,9 +134,12 @@ class ReadmeBlocksTest(unittest.TestCase):
             if len(script) == 1:
                 continue
             with self.subTest(block=number, commands=script[1:]):
+                start = time.perf_counter()
                 result = subprocess.run(["bash", "-c", "\n".join(script)], cwd=scratch, env=env,
                                         stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                         universal_newlines=True)
+                print("block %d: %.1f s (%s)" % (number, time.perf_counter() - start,
+                                                 "; ".join(script[1:])[:160]), flush=True)
                 self.assertEqual(result.returncode, 0, "block %d failed:\n%s\n%s\n%s" % (
                     number, "\n".join(script[1:]), result.stdout[-3000:], result.stderr[-3000:]))
                 for path in outputs:
