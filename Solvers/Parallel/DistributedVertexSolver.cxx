@@ -571,6 +571,7 @@ void DistributedVertexSolver::SetUpChannel(int c)
     Channels_[c]->Setup(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), OwnedOffsets_.data(),
       OwnedColumns_.data(), Contributions_[c].data());
     Donor_[c] = c;
+    HierarchyDiagonal_[c] = OwnedDiagonal(Contributions_[c]);
     ++HierarchySetups_;
   }
   catch (const Error& e)
@@ -608,7 +609,10 @@ void DistributedVertexSolver::ShareChannel(int c, int donor, double& hierarchyMs
     shared = Channels_[c]->SetupShared(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(),
       OwnedOffsets_.data(), OwnedColumns_.data(), Contributions_[c].data(), *Channels_[donor]);
     if (shared)
+    {
       Donor_[c] = donor;
+      HierarchyDiagonal_[c] = HierarchyDiagonal_[donor];
+    }
   }
   catch (const Error& e)
   {
@@ -654,35 +658,49 @@ int DistributedVertexSolver::MedianChannel() const
   return order[1];
 }
 
-bool DistributedVertexSolver::CanShare(int c, int donor) const
+std::vector<double> DistributedVertexSolver::OwnedDiagonal(const std::vector<double>& values) const
 {
-  // The shared hierarchy smooths channel c's fine level with the donor's l1
-  // norms (its diagonal on one rank): a symmetric Gauss-Seidel sweep with
-  // row weights d_c / d_donor, which converges only below 2. Shared when
-  // every row's ratio lies in [1/3, 1.8] over all ranks (e.g. channels of
-  // one measured material), else each channel its own hierarchy.
   const int rowBegin = Numbering_.GetRowBegin();
   const int owned = Numbering_.GetNumberOfOwnedRows();
-  double extremes[2] = { 0.0, 0.0 }; // max ratio, max inverse ratio
-  for (int r = 0; r < owned; ++r)
+  std::vector<double> diagonal(static_cast<std::size_t>(owned), 0.0);
+  for (int r = 0; r < owned && !values.empty(); ++r)
   {
     for (int k = OwnedOffsets_[r]; k < OwnedOffsets_[r + 1]; ++k)
     {
-      if (OwnedColumns_[static_cast<std::size_t>(k)] != rowBegin + r)
-        continue;
-      const double a = Contributions_[c][static_cast<std::size_t>(k)];
-      const double b = Contributions_[donor][static_cast<std::size_t>(k)];
-      if (!(a > 0.0) || !(b > 0.0))
-      {
-        extremes[0] = extremes[1] = HUGE_VAL;
-        continue;
-      }
-      extremes[0] = std::max(extremes[0], a / b);
-      extremes[1] = std::max(extremes[1], b / a);
+      if (OwnedColumns_[static_cast<std::size_t>(k)] == rowBegin + r)
+        diagonal[static_cast<std::size_t>(r)] = values[static_cast<std::size_t>(k)];
     }
   }
-  MPI_Allreduce(MPI_IN_PLACE, extremes, 2, MPI_DOUBLE, MPI_MAX, Comm_);
-  return extremes[0] <= 1.8 && extremes[1] <= 3.0;
+  return diagonal;
+}
+
+bool DistributedVertexSolver::WithinSmootherRange(
+  const std::vector<double>& values, const std::vector<double>& diagonal) const
+{
+  // A hierarchy smooths the fine level with the l1 norms of the matrix it
+  // was set up on (its diagonal on one rank): on matrix `values` a
+  // symmetric Gauss-Seidel sweep with row weights d / d_setup, which
+  // converges only below 2. Within range: every owned row's ratio in
+  // [1/3, 1.8]. This rank's rows only (no communication). (The values-only
+  // set-up does not ask: a paint changes a few rows, and a channel whose
+  // kept hierarchy then fails is set up again and re-solved.)
+  const std::vector<double> d = OwnedDiagonal(values);
+  if (d.size() != diagonal.size())
+    return false;
+  for (std::size_t r = 0; r < d.size(); ++r)
+  {
+    if (!(d[r] > 0.0) || !(diagonal[r] > 0.0) || d[r] > 1.8 * diagonal[r] ||
+      diagonal[r] > 3.0 * d[r])
+      return false;
+  }
+  return true;
+}
+
+bool DistributedVertexSolver::CanShare(int c, int donor) const
+{
+  int mine = WithinSmootherRange(Contributions_[c], HierarchyDiagonal_[donor]) ? 1 : 0, all = 0;
+  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, Comm_);
+  return all != 0;
 }
 
 bool DistributedVertexSolver::SameMaterialEverywhere(const OpticalProperties& material) const

@@ -106,7 +106,7 @@ public:
   void SetValuesOnlySetup(bool on) { ValuesOnly_ = on; }
   bool GetValuesOnlySetup() const { return ValuesOnly_; }
   /**
-   * One hierarchy for the three channels (default on; issue 32): when every
+   * One hierarchy for the three channels (default off; issue 32): when every
    * channel needs a new hierarchy (a new mesh, a full set-up), BoomerAMG is
    * set up once, on the channel whose matrix has the median trace (summed
    * over the ranks), and preconditions the channels whose diagonal is
@@ -115,7 +115,13 @@ public:
    * (DistributedLinearSolver::SetupShared: each channel's PCG iterates on
    * its own matrix). The convergence check still guards each channel: one
    * that does not converge under the shared hierarchy gets its own and is
-   * solved again (report.Resolved). Off: one hierarchy per channel.
+   * solved again (report.Resolved). Off (the default): one hierarchy per
+   * channel. The trade (Documentation/Scaling.md): a cold solve or full
+   * set-up saves up to two BoomerAMG set-ups, every later solve pays the
+   * shared channels' extra PCG iterations (a relight too); and after an
+   * extreme paint the fields differ from the own-hierarchy path at
+   * round-off level, points 1e-16 of the maximum, which
+   * ParaView.TestDistributedSolve's 1e-6-relative comparison there sees.
    */
   void SetSharedHierarchy(bool on) { SharedHierarchy_ = on; }
   bool GetSharedHierarchy() const { return SharedHierarchy_; }
@@ -255,6 +261,11 @@ private:
   /// Collective: whether channel c may use `donor`'s hierarchy (every
   /// row's diagonal ratio within the range its smoother converges in).
   bool CanShare(int c, int donor) const;
+  /// The owned rows' diagonal entries of owned-row values (OwnedColumns_ order).
+  std::vector<double> OwnedDiagonal(const std::vector<double>& values) const;
+  /// This rank: every owned row's diagonal of `values` within [1/3, 1.8]
+  /// of `diagonal` (the matrix a hierarchy was set up on).
+  bool WithinSmootherRange(const std::vector<double>& values, const std::vector<double>& diagonal) const;
   void SolveChannels(const std::vector<double>& rhs,
     const std::array<ChannelSetup, NumberOfChannels>& setup, std::vector<double>& solution,
     SolverReport& report, double& hierarchyMs);
@@ -280,10 +291,12 @@ private:
     return LinearSolver_.empty() ? std::string("cg/boomeramg") : LinearSolver_;
   }
   bool ValuesOnly_ = true;
-  bool SharedHierarchy_ = true;
+  bool SharedHierarchy_ = false;
   /// Per channel: the channel whose hierarchy preconditions it (itself if
   /// its own; -1 none).
   std::array<int, NumberOfChannels> Donor_{ -1, -1, -1 };
+  /// Per channel: the owned diagonal of the matrix its hierarchy was set up on.
+  std::array<std::vector<double>, NumberOfChannels> HierarchyDiagonal_;
   long long Numberings_ = 0, HierarchySetups_ = 0;
   /// The material of the last matrices (a relight compares it, bit for bit).
   OpticalProperties Material_;

@@ -16,8 +16,8 @@ How to run (ctest does this, with 2 and with 3 ranks):
    reference point is covered; the distributed cases took the distributed
    path and the gathered case the gathered one; iterations and residuals
    are the same on every rank; the relight kept the hierarchies (assembly
-   "unchanged"; by counters on every rank: no numbering, no hierarchy set
-   up, and the cold solve set up one hierarchy for the three channels) and
+   "unchanged"; by counters on every rank: no numbering and no hierarchy
+   set up since the cold solve's one numbering and three hierarchies) and
    the warm start of the same system needed at most 2
    iterations; the pieces stay distributed; with 3 ranks on 2 pieces one
    rank has an empty piece; an invalid mu_a on rank 1 only gives rank 1's
@@ -226,14 +226,14 @@ class DistributedSolveTest(MpiSuite):
 
     def test_set_ups_counted(self):
         # Issue 32, by counters on every rank: the cold solve numbers the mesh
-        # once and sets up one BoomerAMG hierarchy for the three channels; the
-        # relight and the warm start (same mesh and material) set up nothing.
+        # once and sets up a BoomerAMG hierarchy per channel; the relight and
+        # the warm start (same mesh and material) number and set up nothing.
         setups = {case: {rank: m.group(3) for rank, m in per_rank.items()}
                   for case, per_rank in self.rank_reports(
                       "solves", r"^setup (\S+) rank (\d+) (.*)$").items()}
-        for case, expected in (("pvtu3", "rebuilt (numberings 1, hierarchies 1)"),
-                               ("relight", "kept (numberings 1, hierarchies 1)"),
-                               ("warm", "kept (numberings 1, hierarchies 1)")):
+        for case, expected in (("pvtu3", "rebuilt (numberings 1, hierarchies 3)"),
+                               ("relight", "kept (numberings 1, hierarchies 3)"),
+                               ("warm", "kept (numberings 1, hierarchies 3)")):
             per_rank = setups.get(case, {})
             self.assertEqual(sorted(per_rank), list(range(RANKS)), case)
             for rank in range(RANKS):

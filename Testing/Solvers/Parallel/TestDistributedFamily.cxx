@@ -156,9 +156,8 @@ TEST(DistributedFamily, TheFrontEndPicksTheDistributedVariantByTrait)
 
 TEST(DistributedFamily, OneRankEqualsTheSerialSolve)
 {
-  // With one hierarchy for the three channels (the default) and with one
-  // each: both equal the serial solve (the loop below runs the default;
-  // SharedAndOwnHierarchiesAgree compares the two).
+  // One hierarchy per channel (the default; SharedAndOwnHierarchiesAgree
+  // compares it with one shared by the three).
   const Scene s = MakeScene();
   // The relight's irradiance: another field on the same boundary points.
   std::vector<double> relit = s.Irradiance;
@@ -217,8 +216,8 @@ TEST(DistributedFamily, OneRankEqualsTheSerialSolve)
   }
 }
 
-// Issue 32: one BoomerAMG hierarchy for the three channels (the default)
-// gives the fluence of one hierarchy per channel (both to RelTol 1e-12 of
+// Issue 32: one BoomerAMG hierarchy for the three channels (SetSharedHierarchy)
+// gives the fluence of one hierarchy per channel (the default) (both to RelTol 1e-12 of
 // the same systems); counted set-ups: a cold solve numbers once and sets up
 // one hierarchy (three without sharing), a relight (same mesh and
 // material) sets up nothing and assembles the right-hand side only, a paint
@@ -297,6 +296,7 @@ TEST(DistributedFamily, SharedAndOwnHierarchiesAgree)
     // that the smoother would diverge on.
     const Scene random = MakeScene();
     DistributedVertexSolver solver(name);
+    solver.SetSharedHierarchy(true);
     solver.SetRelTol(1e-12);
     DiffusionProblem problem;
     problem.Mesh = random.Mesh.get();
