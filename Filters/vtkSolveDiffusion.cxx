@@ -1,6 +1,9 @@
 #include "vtkSolveDiffusion.h"
 
 #include "AimedPencilBeam.h"
+#include "CollimatedModels.h"
+#include "CollimatedSource.h"
+#include "LightSources.h"
 #include "Detectors.h"
 #include "ModelRange.h"
 #include "DiffusionFrontEnd.h"
@@ -52,16 +55,51 @@ const translucency::DiffusionSolverRegistry::Entry& SolverEntry(int solver)
 
 namespace
 {
-/// Whether the input asks for the extended collimated-source model
-/// (vtkSurfaceIrradiance's CollimatedModel, in the field data): the
-/// distributed path does not implement it, so such inputs are gathered.
-bool ExtendedCollimatedModel(vtkInformationVector* inputs, const vtkTranslucencyCommunicator& comm)
+void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& problem);
+
+/// Whether vtkSurfaceIrradiance left the collimated model to this filter
+/// (its COLLIMATED_DEFAULT: `TranslucencyCollimatedModelByDefault` = 1).
+bool ChosenByDefault(vtkFieldData* fd)
+{
+  vtkDataArray* flag = fd ? fd->GetArray("TranslucencyCollimatedModelByDefault") : nullptr;
+  return flag && flag->GetNumberOfTuples() > 0 && flag->GetComponent(0, 0) != 0.0;
+}
+
+/// The model of a default choice: the core's default table for the
+/// scene's lights and pencil beams for the vertex solvers (divergence, fem:
+/// the table was measured with them), and Monte Carlo (which ignores it);
+/// the surface model for the others (quadgraph and grid have no extended
+/// model; sp3 keeps its own validated default).
+translucency::CollimatedModel DefaultModelFor(
+  const translucency::DiffusionProblem& problem, bool pencilBeams, const std::string& solver)
+{
+  const auto& traits = translucency::GetDiffusionSolverRegistry().Get(solver).Properties;
+  return traits.UnknownsAtVertices || traits.IsStochastic
+    ? translucency::DefaultCollimatedModel(
+        problem.Lights, problem.UniformIrradiance > 0.0, pencilBeams)
+    : translucency::CollimatedModel::Surface;
+}
+
+/// Whether the input asks for an extended collimated-source model
+/// (vtkSurfaceIrradiance's CollimatedModel, in the field data, or its
+/// default decided here): the distributed path does not implement them, so
+/// such inputs are gathered. `pencilBeams`: the filter has pencil beams;
+/// `solver`: its solver's name (a default choice depends on both:
+/// DefaultModelFor).
+bool ExtendedCollimatedModel(vtkInformationVector* inputs,
+  const vtkTranslucencyCommunicator& comm, bool pencilBeams, const std::string& solver)
 {
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputs);
-  vtkDataArray* model =
-    input ? input->GetFieldData()->GetArray("TranslucencyCollimatedModel") : nullptr;
-  const bool extended =
-    model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) != 0.0;
+  vtkFieldData* fd = input ? input->GetFieldData() : nullptr;
+  vtkDataArray* model = fd ? fd->GetArray("TranslucencyCollimatedModel") : nullptr;
+  bool extended = model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) != 0.0;
+  if (input && ChosenByDefault(fd))
+  {
+    translucency::DiffusionProblem problem;
+    ReadLights(input, problem);
+    extended =
+      translucency::IsExtendedCollimatedModel(DefaultModelFor(problem, pencilBeams, solver));
+  }
   // A collective decision: an empty piece may carry no field data, and every
   // rank must take the same path (or the others hang in its collectives).
   return comm.Any(extended);
@@ -112,6 +150,8 @@ struct vtkSolveDiffusion::Internals
   vtkTranslucencyDistributedSolve Distributed;
   /// Time gates: the snapshots asked for.
   std::vector<int> TimeSnapshots;
+  /// Time Snapshots from the panel that are not whole numbers (an error).
+  std::vector<double> BadTimeSnapshots;
 
   // The phases of RequestData (below it): validate, convert, configure,
   // attach. Each throws translucency::Error with a message for the user.
@@ -410,11 +450,25 @@ void vtkSolveDiffusion::AddTimeSnapshot(int gate)
   this->Modified();
 }
 
+void vtkSolveDiffusion::AddTimeSnapshotFromPanel(double gate)
+{
+  if (std::isfinite(gate) && gate == std::floor(gate) && std::abs(gate) < 1e9)
+  {
+    this->AddTimeSnapshot(static_cast<int>(gate));
+  }
+  else
+  {
+    this->Internal->BadTimeSnapshots.push_back(gate);
+    this->Modified();
+  }
+}
+
 void vtkSolveDiffusion::RemoveAllTimeSnapshots()
 {
-  if (!this->Internal->TimeSnapshots.empty())
+  if (!this->Internal->TimeSnapshots.empty() || !this->Internal->BadTimeSnapshots.empty())
   {
     this->Internal->TimeSnapshots.clear();
+    this->Internal->BadTimeSnapshots.clear();
     this->Modified();
   }
 }
@@ -514,6 +568,57 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
                                       : translucency::CollimatedModel::Surface;
   }
 }
+
+/**
+ * vtkSurfaceIrradiance's default model (`TranslucencyCollimatedModelByDefault`),
+ * decided here where the pencil beams and the solver are known
+ * (DefaultModelFor: the core's default table, measured against Monte Carlo;
+ * the surface model for quadgraph, grid and sp3). The irradiance upstream holds
+ * every light; for an extended model the directional lights' part (their q,
+ * computed as vtkSurfaceIrradiance computes it, term for term) is taken out
+ * of it, as an explicit extended model leaves it out upstream. Returns true
+ * when `irradiance` changed. An explicit model is left as it is.
+ */
+bool DecideDefaultCollimatedModel(vtkUnstructuredGrid* input, const std::string& solver,
+  const translucency::TetMesh& mesh, const std::vector<double>& tetEta,
+  std::vector<double>& irradiance, translucency::DiffusionProblem& problem)
+{
+  if (!ChosenByDefault(input->GetFieldData()))
+  {
+    return false;
+  }
+  const bool pencils =
+    problem.InteriorSources && !problem.InteriorSources->GetPencilBeams().empty();
+  problem.Collimated = DefaultModelFor(problem, pencils, solver);
+  std::vector<translucency::LightSource> beams;
+  for (const translucency::LightSource& light : problem.Lights)
+  {
+    if (light.Type == translucency::LightSource::Kind::Directional)
+    {
+      beams.push_back(light);
+    }
+  }
+  if (!translucency::IsExtendedCollimatedModel(problem.Collimated) || beams.empty())
+  {
+    return false;
+  }
+  std::vector<double> q;
+  translucency::ComputeProjectedIrradiance(mesh, tetEta, beams, 0.0, 0, problem.Shadows, q);
+  if (q.size() != irradiance.size())
+  {
+    throw translucency::Error("the directional lights' irradiance has " +
+      std::to_string(q.size()) + " values, the input's Irradiance " +
+      std::to_string(irradiance.size()));
+  }
+  for (std::size_t i = 0; i < irradiance.size(); ++i)
+  {
+    // What is left is the other lights' q; a point only the beams reach
+    // keeps a rounding residue of their sum, set to 0.
+    const double rest = irradiance[i] - q[i];
+    irradiance[i] = rest > 1e-12 * irradiance[i] ? rest : 0.0;
+  }
+  return true;
+}
 }
 
 //------------------------------------------------------------------------------
@@ -607,7 +712,9 @@ vtkTranslucencyParallelPlan vtkSolveDiffusion::PlanParallel(
   using Plan = vtkTranslucencyParallelPlan;
   const Plan::GatherMode mode = Plan::GatherMode::SameMesh;
   // Collective first: every rank takes part whatever the settings.
-  const bool extended = ExtendedCollimatedModel(inputVector[0], comm);
+  const bool extended = ExtendedCollimatedModel(inputVector[0], comm,
+    !this->Internal->Sources.GetPencilBeams().empty() || this->InteractivePencilBeam,
+    this->GetSolverName());
   // By the registry's trait: the solvers with a distributed variant (a build
   // without the Parallel layer has none).
   if (!SolverEntry(this->Solver).Properties.Distributed)
@@ -699,6 +806,11 @@ int vtkSolveDiffusion::RequestSerial(
     ReadLights(input, light);
     in.AddInteractiveSources(*this, mesh.get(), nullptr);
     light.InteriorSources = &in.SolvedSources;
+    const bool beamsTakenOut = DecideDefaultCollimatedModel(
+      input, this->GetSolverName(), *mesh, material.RefractiveIndex, irradiance, light);
+    const std::vector<double> solvedIrradiance =
+      beamsTakenOut ? irradiance : std::vector<double>();
+    const translucency::CollimatedModel solvedModel = light.Collimated;
     in.AddInteractiveDetector(*this, *mesh);
     solveRequest.Detectors = in.SolvedDetectors;
 
@@ -744,8 +856,21 @@ int vtkSolveDiffusion::RequestSerial(
     this->SolveTime = in.Result.Report.SolveMilliseconds;
     in.WarnUnconverged(*this); // only with AcceptUnconverged (else the solve threw)
 
-    // Attach.
+    // Attach, with the model this solve used (and, for a default extended
+    // model, the irradiance it used: vtkOutgoingRadiance's q of eq. 3).
     in.Attach(*this, input, output);
+    if (beamsTakenOut)
+    {
+      vtkDataArray* array =
+        vtkTranslucency::NewTripleArray(vtkTranslucency::IrradianceName, solvedIrradiance);
+      output->GetPointData()->AddArray(array);
+      array->Delete();
+    }
+    vtkNew<vtkIntArray> modelArray;
+    modelArray->SetName("TranslucencyCollimatedModel");
+    modelArray->InsertNextValue(static_cast<int>(solvedModel));
+    output->GetFieldData()->AddArray(modelArray);
+    this->SolvedCollimatedModel = static_cast<int>(solvedModel);
   }
   catch (const translucency::Error& e)
   {
@@ -777,6 +902,12 @@ translucency::SolveRequest vtkSolveDiffusion::Internals::MakeRequest(
   {
     os << "TimeGates: the number of gates must be a whole number, got "
        << self.TimeGatesCountText;
+    throw translucency::Error(os.str());
+  }
+  if (!this->BadTimeSnapshots.empty())
+  {
+    os << "TimeSnapshots: " << this->BadTimeSnapshots.front()
+       << " is not a gate (a whole number from 0 to the number of Time Gates - 1)";
     throw translucency::Error(os.str());
   }
   request.Gates.Start = self.TimeGatesStart;

@@ -149,6 +149,22 @@ public:
   /// Name of the selected solver.
   const char* GetSolverName() const;
 
+  /**
+   * The collimated model the last serial or gathered solve used (0 surface,
+   * 1 extended, 2 extended-moments; -1 before the first), also written to
+   * the output's field data (`TranslucencyCollimatedModel`).
+   * vtkSurfaceIrradiance's default model (COLLIMATED_DEFAULT) is decided
+   * here, where the pencil beams and the solver are known: divergence and
+   * fem solve the core's default table's model for the scene's light kinds
+   * (translucency::DefaultCollimatedModel, measured against Monte Carlo;
+   * Documentation/DiffuseOptics.md), the other solvers the surface model.
+   * For an extended model the directional lights' q is taken out of the
+   * irradiance of the solve, and the output's `Irradiance` is that of the
+   * solve (what vtkOutgoingRadiance reads). Under MPI an extended model is
+   * solved gathered (Documentation/Parallel.md).
+   */
+  int GetSolvedCollimatedModel() const { return this->SolvedCollimatedModel; }
+
   ///@{
   /**
    * Iterative solvers: relative residual ||b - M phi|| / ||b|| to reach per
@@ -494,6 +510,11 @@ public:
   /// `FluenceGate<g>`. None by default; a gate >= N is an error.
   void AddTimeSnapshot(int gate);
   void RemoveAllTimeSnapshots();
+  /// The plugin's Time Snapshots table (a one-column DoubleVectorProperty:
+  /// ParaView 5.11 shows the label of such a table, not of an integer one):
+  /// a whole number adds that gate; any other value makes RequestData fail
+  /// with an error naming it.
+  void AddTimeSnapshotFromPanel(double gate);
   ///@}
 
   ///@{
@@ -612,6 +633,7 @@ protected:
   double InteractivePointSourcePosition[3] = { 0.0, 0.0, 0.0 };
   double InteractivePointSourcePower[3] = { 1.0, 1.0, 1.0 };
   bool InteractivePencilBeam = false;
+  int SolvedCollimatedModel = -1;
   double InteractivePencilBeamPoint1[3] = { 0.0, 0.0, 1.0 };
   double InteractivePencilBeamPoint2[3] = { 0.0, 0.0, 0.0 };
   double InteractivePencilBeamPower[3] = { 1.0, 1.0, 1.0 };
