@@ -806,8 +806,9 @@ int vtkSolveDiffusion::RequestSerial(
     ReadLights(input, light);
     in.AddInteractiveSources(*this, mesh.get(), nullptr);
     light.InteriorSources = &in.SolvedSources;
-    const bool beamsTakenOut = DecideDefaultCollimatedModel(
-      input, this->GetSolverName(), *mesh, material.RefractiveIndex, irradiance, light);
+    const bool beamsTakenOut = DecideDefaultCollimatedModel(input, this->GetSolverName(), *mesh,
+      keptMaterial ? in.FrontEnd.GetKeptMaterial()->RefractiveIndex : material.RefractiveIndex,
+      irradiance, light);
     const std::vector<double> solvedIrradiance =
       beamsTakenOut ? irradiance : std::vector<double>();
     const translucency::CollimatedModel solvedModel = light.Collimated;
