@@ -388,6 +388,7 @@ struct BenchCommandState
   int Runs = 0;             ///< --runs (0: each bench's default)
   std::vector<std::string> Solvers; ///< --linear-solvers' values (comma lists)
   bool Meshers = false, DiffuseOptics = false, Pipeline = false;
+  bool GradedOnly = false; ///< --graded-only (with --meshers)
   CLI::Option* LinearSolvers = nullptr; ///< set when --linear-solvers is given
 };
 
@@ -558,6 +559,7 @@ int RunBench(BenchCommandState& s)
       m.Tets = s.Tets;
     if (s.Runs > 0)
       m.Runs = s.Runs;
+    m.GradedOnly = s.GradedOnly;
     return BenchMeshers(m);
   }
   s.Plain.MeshPath = linear.MeshPath;
@@ -584,6 +586,9 @@ Command AddBenchCommand(CLI::App& app)
     "built), graded and --uniform-size, at --tets (default\n"
     "1000000), --runs (default 3): time, tets/s, min dihedral\n"
     "histogram, radius-edge ratios, edge-length spread");
+  c->add_flag("--graded-only", s->GradedOnly,
+     "with --meshers: the graded rows only (no --uniform-size rows)")
+    ->needs(meshers);
   meshers->excludes(linearSolvers);
   edit->excludes(meshers);
   edit->excludes(linearSolvers);

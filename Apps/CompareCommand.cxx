@@ -511,6 +511,24 @@ std::vector<std::string> CheckAndOrder(
   for (const std::string& name : solvers)
     if (name != o.Reference)
       order.push_back(name);
+  // One problem for every solver: the default collimated model is the core
+  // table's for divergence and fem only (vtkSolveDiffusion), so with any
+  // other diffusion solver every solver solves the surface model.
+  if (scene.Collimated == "default")
+  {
+    for (const std::string& name : order)
+    {
+      const auto& traits = translucency::GetDiffusionSolverRegistry().Get(name).Properties;
+      if (!traits.UnknownsAtVertices && !traits.IsStochastic)
+      {
+        scene.Collimated = "surface";
+        std::cerr << "translucency: note: the collimated model is surface for every solver "
+                     "(the default by light kind is for divergence and fem; " +
+            name + " solves the surface model)\n";
+        break;
+      }
+    }
+  }
   return order;
 }
 

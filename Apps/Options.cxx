@@ -3,6 +3,7 @@
 #include "PipelineRender.h"
 #include "Scene.h"
 
+#include "CollimatedModels.h"
 #include "DiffusionSolverFactory.h"
 #include "Radiance.h"
 #include "Strings.h"
@@ -103,6 +104,17 @@ CLI::Validator OneOf(const std::string& option, const std::vector<std::string>& 
       return std::string();
     },
     "");
+}
+
+/// "default" and the names of the core's collimated-model table.
+static std::vector<std::string> CollimatedModelChoices()
+{
+  std::vector<std::string> names = { "default" };
+  for (const translucency::CollimatedModelEntry& entry : translucency::GetCollimatedModelTable())
+  {
+    names.push_back(entry.Name);
+  }
+  return names;
 }
 
 CLI::Validator DiffusionSolverCheck(const std::string& option)
@@ -276,15 +288,14 @@ void AddSceneOptions(CLI::App* command, SceneOptions& scene)
     ->group(group);
   command
     ->add_option("--collimated", scene.Collimated,
-      "how directional lights enter the diffusion model:\n"
-      "surface   boundary irradiance (default)\n"
-      "extended  unscattered beam exp(-mu_t' s) + volume source\n"
-      "          mu_s' E_c (divergence and fem; also with --frequency\n"
-      "          and --time-gates: the beam's delay; DiffuseOptics.md)\n"
-      "extended-moments  extended, with the boundary condition's A\n"
-      "          from the Fresnel moments (closer to Monte Carlo)")
+      "how directional lights enter the diffusion model (pencil\n"
+      "beams and spot lights: the Robin rule; DiffuseOptics.md):\n" +
+        translucency::FormatCollimatedModelHelp("") +
+        "default: measured against Monte Carlo per light kind, for\n"
+        "divergence and fem (the other solvers: surface); explicit\n"
+        "extended models: divergence, fem, sp3")
     ->type_name("MODEL")
-    ->check(OneOf("--collimated", { "surface", "extended", "extended-moments" }))
+    ->check(OneOf("--collimated", CollimatedModelChoices()))
     ->group(group);
   command
     ->add_option("--paint", scene.Paint,

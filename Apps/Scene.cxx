@@ -373,10 +373,7 @@ vtkSmartPointer<vtkUnstructuredGrid> BuildLitMesh(const SceneOptions& options,
   irradiance->SetShadows(options.Shadows);
   irradiance->SetDefaultLights(false); // Finish() resolved the defaults: the lights are explicit
   irradiance->SetUniformLightSamples(options.UniformSamples);
-  irradiance->SetCollimatedModel(options.Collimated == "extended"
-      ? vtkSurfaceIrradiance::COLLIMATED_EXTENDED
-      : options.Collimated == "extended-moments" ? vtkSurfaceIrradiance::COLLIMATED_EXTENDED_MOMENTS
-                                                 : vtkSurfaceIrradiance::COLLIMATED_SURFACE);
+  irradiance->SetCollimatedModelByName(options.Collimated.c_str()); // checked by --collimated
   double uniformE = 0.0;
   for (const Light& l : options.Lights)
   {

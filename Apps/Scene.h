@@ -50,9 +50,11 @@ struct SceneOptions
   bool DefaultLights = false; ///< no --light given: Finish() added the default lights
   bool Shadows = true;
   int UniformSamples = 32;
-  /// --collimated: how directional lights enter the diffusion model,
-  /// "surface" (boundary irradiance) or "extended" (volume source).
-  std::string Collimated = "surface";
+  /// --collimated: how directional lights enter the diffusion model:
+  /// "default" (the core table's model per light kind,
+  /// translucency::DefaultCollimatedModel) or a name of
+  /// translucency::GetCollimatedModelTable().
+  std::string Collimated = "default";
   std::vector<double> CutPlane; ///< --cut-plane: origin (mm) and normal; empty: no plane cut
   std::string CutStroke;        ///< --cut-stroke: JSON stroke file; empty: no stroke cut
   std::string Paint;            ///< --paint: JSON paint file; empty: no painting

@@ -1,6 +1,9 @@
 #include "vtkSolveDiffusion.h"
 
 #include "AimedPencilBeam.h"
+#include "CollimatedModels.h"
+#include "CollimatedSource.h"
+#include "LightSources.h"
 #include "Detectors.h"
 #include "ModelRange.h"
 #include "DiffusionFrontEnd.h"
@@ -52,16 +55,51 @@ const translucency::DiffusionSolverRegistry::Entry& SolverEntry(int solver)
 
 namespace
 {
-/// Whether the input asks for the extended collimated-source model
-/// (vtkSurfaceIrradiance's CollimatedModel, in the field data): the
-/// distributed path does not implement it, so such inputs are gathered.
-bool ExtendedCollimatedModel(vtkInformationVector* inputs, const vtkTranslucencyCommunicator& comm)
+void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& problem);
+
+/// Whether vtkSurfaceIrradiance left the collimated model to this filter
+/// (its COLLIMATED_DEFAULT: `TranslucencyCollimatedModelByDefault` = 1).
+bool ChosenByDefault(vtkFieldData* fd)
+{
+  vtkDataArray* flag = fd ? fd->GetArray("TranslucencyCollimatedModelByDefault") : nullptr;
+  return flag && flag->GetNumberOfTuples() > 0 && flag->GetComponent(0, 0) != 0.0;
+}
+
+/// The model of a default choice: the core's default table for the
+/// scene's lights and pencil beams for the vertex solvers (divergence, fem:
+/// the table was measured with them), and Monte Carlo (which ignores it);
+/// the surface model for the others (quadgraph and grid have no extended
+/// model; sp3 keeps its own validated default).
+translucency::CollimatedModel DefaultModelFor(
+  const translucency::DiffusionProblem& problem, bool pencilBeams, const std::string& solver)
+{
+  const auto& traits = translucency::GetDiffusionSolverRegistry().Get(solver).Properties;
+  return traits.UnknownsAtVertices || traits.IsStochastic
+    ? translucency::DefaultCollimatedModel(
+        problem.Lights, problem.UniformIrradiance > 0.0, pencilBeams)
+    : translucency::CollimatedModel::Surface;
+}
+
+/// Whether the input asks for an extended collimated-source model
+/// (vtkSurfaceIrradiance's CollimatedModel, in the field data, or its
+/// default decided here): the distributed path does not implement them, so
+/// such inputs are gathered. `pencilBeams`: the filter has pencil beams;
+/// `solver`: its solver's name (a default choice depends on both:
+/// DefaultModelFor).
+bool ExtendedCollimatedModel(vtkInformationVector* inputs,
+  const vtkTranslucencyCommunicator& comm, bool pencilBeams, const std::string& solver)
 {
   vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputs);
-  vtkDataArray* model =
-    input ? input->GetFieldData()->GetArray("TranslucencyCollimatedModel") : nullptr;
-  const bool extended =
-    model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) != 0.0;
+  vtkFieldData* fd = input ? input->GetFieldData() : nullptr;
+  vtkDataArray* model = fd ? fd->GetArray("TranslucencyCollimatedModel") : nullptr;
+  bool extended = model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) != 0.0;
+  if (input && ChosenByDefault(fd))
+  {
+    translucency::DiffusionProblem problem;
+    ReadLights(input, problem);
+    extended =
+      translucency::IsExtendedCollimatedModel(DefaultModelFor(problem, pencilBeams, solver));
+  }
   // A collective decision: an empty piece may carry no field data, and every
   // rank must take the same path (or the others hang in its collectives).
   return comm.Any(extended);
@@ -93,10 +131,27 @@ struct vtkSolveDiffusion::Internals
   std::weak_ptr<const translucency::TetMesh> RangeMesh;
   std::vector<double> Sizes;
   vtkMTimeType RangeAbsorptionTime = 0, RangeScatteringTime = 0;
+  /// The coefficient arrays (absorption, scattering, refractive index) of
+  /// the last successful serial solve: their addresses and modification
+  /// times, compared, never dereferenced. The same arrays, not modified
+  /// since (VTK's modification times only grow, so a new array never has an
+  /// old array's time), on the mesh the front end kept its material for, are
+  /// the same material: a relight neither copies, validates nor compares it.
+  const void* KeptArrays[3] = { nullptr, nullptr, nullptr };
+  vtkMTimeType KeptTimes[3] = { 0, 0, 0 };
+  /// Executions that copied and validated the coefficient arrays.
+  long long MaterialConversions = 0;
+  /// True if `input` carries the kept coefficient arrays, unmodified.
+  bool SameMaterialArrays(vtkUnstructuredGrid* input) const;
+  /// Remember `input`'s coefficient arrays (after a successful solve) or
+  /// forget them (null).
+  void KeepMaterialArrays(vtkUnstructuredGrid* input);
   /// The distributed path's solver (kept: hierarchy and warm start).
   vtkTranslucencyDistributedSolve Distributed;
   /// Time gates: the snapshots asked for.
   std::vector<int> TimeSnapshots;
+  /// Time Snapshots from the panel that are not whole numbers (an error).
+  std::vector<double> BadTimeSnapshots;
 
   // The phases of RequestData (below it): validate, convert, configure,
   // attach. Each throws translucency::Error with a message for the user.
@@ -217,6 +272,16 @@ const char* vtkSolveDiffusion::GetLastAssembly() const
 vtkIdType vtkSolveDiffusion::GetNumberOfChangedTets() const
 {
   return static_cast<vtkIdType>(this->Internal->FrontEnd.GetNumberOfChangedTets());
+}
+
+vtkTypeInt64 vtkSolveDiffusion::GetNumberOfMaterialConversions() const
+{
+  return this->Internal->MaterialConversions;
+}
+
+vtkTypeInt64 vtkSolveDiffusion::GetNumberOfMaterialComparisons() const
+{
+  return this->Internal->FrontEnd.GetNumberOfMaterialComparisons();
 }
 
 vtkTypeInt64 vtkSolveDiffusion::GetNumberOfUnknowns() const
@@ -385,11 +450,25 @@ void vtkSolveDiffusion::AddTimeSnapshot(int gate)
   this->Modified();
 }
 
+void vtkSolveDiffusion::AddTimeSnapshotFromPanel(double gate)
+{
+  if (std::isfinite(gate) && gate == std::floor(gate) && std::abs(gate) < 1e9)
+  {
+    this->AddTimeSnapshot(static_cast<int>(gate));
+  }
+  else
+  {
+    this->Internal->BadTimeSnapshots.push_back(gate);
+    this->Modified();
+  }
+}
+
 void vtkSolveDiffusion::RemoveAllTimeSnapshots()
 {
-  if (!this->Internal->TimeSnapshots.empty())
+  if (!this->Internal->TimeSnapshots.empty() || !this->Internal->BadTimeSnapshots.empty())
   {
     this->Internal->TimeSnapshots.clear();
+    this->Internal->BadTimeSnapshots.clear();
     this->Modified();
   }
 }
@@ -489,6 +568,57 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
                                       : translucency::CollimatedModel::Surface;
   }
 }
+
+/**
+ * vtkSurfaceIrradiance's default model (`TranslucencyCollimatedModelByDefault`),
+ * decided here where the pencil beams and the solver are known
+ * (DefaultModelFor: the core's default table, measured against Monte Carlo;
+ * the surface model for quadgraph, grid and sp3). The irradiance upstream holds
+ * every light; for an extended model the directional lights' part (their q,
+ * computed as vtkSurfaceIrradiance computes it, term for term) is taken out
+ * of it, as an explicit extended model leaves it out upstream. Returns true
+ * when `irradiance` changed. An explicit model is left as it is.
+ */
+bool DecideDefaultCollimatedModel(vtkUnstructuredGrid* input, const std::string& solver,
+  const translucency::TetMesh& mesh, const std::vector<double>& tetEta,
+  std::vector<double>& irradiance, translucency::DiffusionProblem& problem)
+{
+  if (!ChosenByDefault(input->GetFieldData()))
+  {
+    return false;
+  }
+  const bool pencils =
+    problem.InteriorSources && !problem.InteriorSources->GetPencilBeams().empty();
+  problem.Collimated = DefaultModelFor(problem, pencils, solver);
+  std::vector<translucency::LightSource> beams;
+  for (const translucency::LightSource& light : problem.Lights)
+  {
+    if (light.Type == translucency::LightSource::Kind::Directional)
+    {
+      beams.push_back(light);
+    }
+  }
+  if (!translucency::IsExtendedCollimatedModel(problem.Collimated) || beams.empty())
+  {
+    return false;
+  }
+  std::vector<double> q;
+  translucency::ComputeProjectedIrradiance(mesh, tetEta, beams, 0.0, 0, problem.Shadows, q);
+  if (q.size() != irradiance.size())
+  {
+    throw translucency::Error("the directional lights' irradiance has " +
+      std::to_string(q.size()) + " values, the input's Irradiance " +
+      std::to_string(irradiance.size()));
+  }
+  for (std::size_t i = 0; i < irradiance.size(); ++i)
+  {
+    // What is left is the other lights' q; a point only the beams reach
+    // keeps a rounding residue of their sum, set to 0.
+    const double rest = irradiance[i] - q[i];
+    irradiance[i] = rest > 1e-12 * irradiance[i] ? rest : 0.0;
+  }
+  return true;
+}
 }
 
 //------------------------------------------------------------------------------
@@ -582,7 +712,9 @@ vtkTranslucencyParallelPlan vtkSolveDiffusion::PlanParallel(
   using Plan = vtkTranslucencyParallelPlan;
   const Plan::GatherMode mode = Plan::GatherMode::SameMesh;
   // Collective first: every rank takes part whatever the settings.
-  const bool extended = ExtendedCollimatedModel(inputVector[0], comm);
+  const bool extended = ExtendedCollimatedModel(inputVector[0], comm,
+    !this->Internal->Sources.GetPencilBeams().empty() || this->InteractivePencilBeam,
+    this->GetSolverName());
   // By the registry's trait: the solvers with a distributed variant (a build
   // without the Parallel layer has none).
   if (!SolverEntry(this->Solver).Properties.Distributed)
@@ -651,9 +783,14 @@ int vtkSolveDiffusion::RequestSerial(
     }
     this->TopologyTime = built ? translucency::MillisecondsSince(start) : 0.0;
     this->UpdateProgress(0.05);
+    // The material: the front end's kept copy when the input carries the
+    // same coefficient arrays, unmodified, as the last solve (a relight);
+    // else copied and validated.
+    const bool keptMaterial = in.SameMaterialArrays(input) && in.FrontEnd.HasKeptMaterial(mesh);
+    in.KeepMaterialArrays(nullptr); // until this solve succeeds
     translucency::OpticalProperties material;
     std::vector<double> irradiance;
-    if (!vtkTranslucency::ToOpticalProperties(input, material, error) ||
+    if ((!keptMaterial && !vtkTranslucency::ToOpticalProperties(input, material, error)) ||
       !vtkTranslucency::ReadPointArray(
         input, vtkTranslucency::IrradianceName, 3, irradiance, error))
     {
@@ -664,18 +801,35 @@ int vtkSolveDiffusion::RequestSerial(
       in.FrontEnd.Reset(); // as a failed solve: no warm start from before it
       throw translucency::Error(error);
     }
+    in.MaterialConversions += keptMaterial ? 0 : 1;
     translucency::DiffusionProblem light;
     ReadLights(input, light);
     in.AddInteractiveSources(*this, mesh.get(), nullptr);
     light.InteriorSources = &in.SolvedSources;
+    const bool beamsTakenOut = DecideDefaultCollimatedModel(
+      input, this->GetSolverName(), *mesh, material.RefractiveIndex, irradiance, light);
+    const std::vector<double> solvedIrradiance =
+      beamsTakenOut ? irradiance : std::vector<double>();
+    const translucency::CollimatedModel solvedModel = light.Collimated;
     in.AddInteractiveDetector(*this, *mesh);
     solveRequest.Detectors = in.SolvedDetectors;
 
     // The core: the solver by name with its settings, then the one solve.
     in.Configure(*this, mesh->GetNumberOfPoints());
     in.FrontEnd.CheckDomain(solveRequest);
-    in.CheckModelRange(*this, input, mesh, material);
     auto* sp3 = dynamic_cast<translucency::Sp3Solver*>(&in.FrontEnd.GetSolver());
+    if (keptMaterial && (sp3 || !in.FrontEnd.HasKeptMaterial(mesh)))
+    {
+      // Configure chose another solver (which forgets the kept material), or
+      // sp3 (which adds the anisotropy to its own copy): read the arrays.
+      if (!vtkTranslucency::ToOpticalProperties(input, material, error))
+      {
+        throw translucency::Error(error);
+      }
+      ++in.MaterialConversions;
+    }
+    const bool useKept = keptMaterial && !sp3 && in.FrontEnd.HasKeptMaterial(mesh);
+    in.CheckModelRange(*this, input, mesh, useKept ? *in.FrontEnd.GetKeptMaterial() : material);
     if (sp3 && this->Anisotropy != 0.0)
     {
       // SP3 resolves the phase function's moments: g per tet and channel
@@ -685,11 +839,15 @@ int vtkSolveDiffusion::RequestSerial(
     const translucency::OpticalProperties sp3Material =
       sp3 ? material : translucency::OpticalProperties();
     const std::vector<double> sp3Irradiance = sp3 ? irradiance : std::vector<double>();
-    if (!in.FrontEnd.Solve(mesh, std::move(material), std::move(irradiance), light, solveRequest,
-          in.Result))
+    const bool solved = useKept
+      ? in.FrontEnd.SolveKeptMaterial(mesh, std::move(irradiance), light, solveRequest, in.Result)
+      : in.FrontEnd.Solve(
+          mesh, std::move(material), std::move(irradiance), light, solveRequest, in.Result);
+    if (!solved)
     {
       return 0; // aborted by the user
     }
+    in.KeepMaterialArrays(input);
     if (sp3)
     {
       in.Sp3Readouts(*sp3, *mesh, sp3Material, sp3Irradiance);
@@ -698,8 +856,21 @@ int vtkSolveDiffusion::RequestSerial(
     this->SolveTime = in.Result.Report.SolveMilliseconds;
     in.WarnUnconverged(*this); // only with AcceptUnconverged (else the solve threw)
 
-    // Attach.
+    // Attach, with the model this solve used (and, for a default extended
+    // model, the irradiance it used: vtkOutgoingRadiance's q of eq. 3).
     in.Attach(*this, input, output);
+    if (beamsTakenOut)
+    {
+      vtkDataArray* array =
+        vtkTranslucency::NewTripleArray(vtkTranslucency::IrradianceName, solvedIrradiance);
+      output->GetPointData()->AddArray(array);
+      array->Delete();
+    }
+    vtkNew<vtkIntArray> modelArray;
+    modelArray->SetName("TranslucencyCollimatedModel");
+    modelArray->InsertNextValue(static_cast<int>(solvedModel));
+    output->GetFieldData()->AddArray(modelArray);
+    this->SolvedCollimatedModel = static_cast<int>(solvedModel);
   }
   catch (const translucency::Error& e)
   {
@@ -731,6 +902,12 @@ translucency::SolveRequest vtkSolveDiffusion::Internals::MakeRequest(
   {
     os << "TimeGates: the number of gates must be a whole number, got "
        << self.TimeGatesCountText;
+    throw translucency::Error(os.str());
+  }
+  if (!this->BadTimeSnapshots.empty())
+  {
+    os << "TimeSnapshots: " << this->BadTimeSnapshots.front()
+       << " is not a gate (a whole number from 0 to the number of Time Gates - 1)";
     throw translucency::Error(os.str());
   }
   request.Gates.Start = self.TimeGatesStart;
@@ -922,6 +1099,33 @@ void vtkSolveDiffusion::Internals::Configure(vtkSolveDiffusion& self, int number
     self.UpdateProgress(0.05 + 0.9 * fraction);
     return !self.CheckAbort();
   });
+}
+
+bool vtkSolveDiffusion::Internals::SameMaterialArrays(vtkUnstructuredGrid* input) const
+{
+  const char* names[3] = { vtkTranslucency::AbsorptionName, vtkTranslucency::ScatteringName,
+    vtkTranslucency::RefractiveIndexName };
+  for (int k = 0; k < 3; ++k)
+  {
+    vtkDataArray* array = input ? input->GetCellData()->GetArray(names[k]) : nullptr;
+    if (!array || array != this->KeptArrays[k] || array->GetMTime() != this->KeptTimes[k])
+    {
+      return false;
+    }
+  }
+  return true;
+}
+
+void vtkSolveDiffusion::Internals::KeepMaterialArrays(vtkUnstructuredGrid* input)
+{
+  const char* names[3] = { vtkTranslucency::AbsorptionName, vtkTranslucency::ScatteringName,
+    vtkTranslucency::RefractiveIndexName };
+  for (int k = 0; k < 3; ++k)
+  {
+    vtkDataArray* array = input ? input->GetCellData()->GetArray(names[k]) : nullptr;
+    this->KeptArrays[k] = array;
+    this->KeptTimes[k] = array ? array->GetMTime() : 0;
+  }
 }
 
 void vtkSolveDiffusion::Internals::CheckModelRange(vtkSolveDiffusion& self,

@@ -149,6 +149,22 @@ public:
   /// Name of the selected solver.
   const char* GetSolverName() const;
 
+  /**
+   * The collimated model the last serial or gathered solve used (0 surface,
+   * 1 extended, 2 extended-moments; -1 before the first), also written to
+   * the output's field data (`TranslucencyCollimatedModel`).
+   * vtkSurfaceIrradiance's default model (COLLIMATED_DEFAULT) is decided
+   * here, where the pencil beams and the solver are known: divergence and
+   * fem solve the core's default table's model for the scene's light kinds
+   * (translucency::DefaultCollimatedModel, measured against Monte Carlo;
+   * Documentation/DiffuseOptics.md), the other solvers the surface model.
+   * For an extended model the directional lights' q is taken out of the
+   * irradiance of the solve, and the output's `Irradiance` is that of the
+   * solve (what vtkOutgoingRadiance reads). Under MPI an extended model is
+   * solved gathered (Documentation/Parallel.md).
+   */
+  int GetSolvedCollimatedModel() const { return this->SolvedCollimatedModel; }
+
   ///@{
   /**
    * Iterative solvers: relative residual ||b - M phi|| / ||b|| to reach per
@@ -494,6 +510,11 @@ public:
   /// `FluenceGate<g>`. None by default; a gate >= N is an error.
   void AddTimeSnapshot(int gate);
   void RemoveAllTimeSnapshots();
+  /// The plugin's Time Snapshots table (a one-column DoubleVectorProperty:
+  /// ParaView 5.11 shows the label of such a table, not of an integer one):
+  /// a whole number adds that gate; any other value makes RequestData fail
+  /// with an error naming it.
+  void AddTimeSnapshotFromPanel(double gate);
   ///@}
 
   ///@{
@@ -525,6 +546,16 @@ public:
   /// did not look: no cached coefficients, new mesh, too many changes, or
   /// IncrementalAssembly off).
   vtkIdType GetNumberOfChangedTets() const;
+
+  /// Serial executions that copied and validated the coefficient arrays
+  /// (AbsorptionCoefficient, ReducedScatteringCoefficient, RefractiveIndex)
+  /// since construction. An execution whose input carries the same arrays,
+  /// unmodified (VTK modification time), as the last successful solve on the
+  /// same mesh (a relight) reuses the material kept from it instead.
+  vtkTypeInt64 GetNumberOfMaterialConversions() const;
+  /// Serial solves that compared the material tet by tet with the last one
+  /// (to find the tets a paint changed) since construction.
+  vtkTypeInt64 GetNumberOfMaterialComparisons() const;
 
   ///@{
   /// Statistics of the last solve, per channel c in 0..2 (R, G, B).
@@ -602,6 +633,7 @@ protected:
   double InteractivePointSourcePosition[3] = { 0.0, 0.0, 0.0 };
   double InteractivePointSourcePower[3] = { 1.0, 1.0, 1.0 };
   bool InteractivePencilBeam = false;
+  int SolvedCollimatedModel = -1;
   double InteractivePencilBeamPoint1[3] = { 0.0, 0.0, 1.0 };
   double InteractivePencilBeamPoint2[3] = { 0.0, 0.0, 0.0 };
   double InteractivePencilBeamPower[3] = { 1.0, 1.0, 1.0 };

@@ -2,10 +2,12 @@
 
 #include "DefaultLights.h"
 #include "Error.h"
+#include "CollimatedModels.h"
 #include "CollimatedSource.h"
 #include "IrradianceCache.h"
 #include "LightSources.h"
 #include "Radiance.h"
+#include "Strings.h"
 #include "TetMesh.h"
 #include "Timer.h"
 #include "vtkTranslucencyDistributedIrradiance.h"
@@ -21,6 +23,7 @@
 #include <vtkNew.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
+#include <vtkIntArray.h>
 #include <vtkObjectFactory.h>
 #include <vtkPointData.h>
 #include <vtkStringArray.h>
@@ -45,6 +48,9 @@ struct vtkSurfaceIrradiance::Internals
   /// Each light's term and the uniform light's, kept across executions
   /// (a relight recomputes the changed light only).
   translucency::IrradianceCache Cache;
+  /// The distributed path's: the gathered boundary surface and each
+  /// light's terms, kept while every rank's piece is the same.
+  vtkTranslucencyDistributedIrradiance::State Distributed;
 };
 
 //------------------------------------------------------------------------------
@@ -256,11 +262,16 @@ int vtkSurfaceIrradiance::RequestLights(
     this->LightsDescription += " (the default: add a light to choose)";
   }
 
+  // An explicit extended model leaves the directional lights to the solver;
+  // the default keeps them in `Irradiance` (what the surface receives) and
+  // vtkSolveDiffusion decides (translucency::DefaultCollimatedModel).
+  const bool extended = this->CollimatedModel == COLLIMATED_EXTENDED ||
+    this->CollimatedModel == COLLIMATED_EXTENDED_MOMENTS;
+
   std::string error;
   std::vector<double> q;
   const std::vector<translucency::LightSource>& computed =
-    this->CollimatedModel != COLLIMATED_SURFACE ? translucency::NonCollimatedLights(lights)
-                                                 : lights;
+    extended ? translucency::NonCollimatedLights(lights) : lights;
   this->LightsComputed = static_cast<int>(computed.size());
   this->UniformComputed = true;
   if (distributed)
@@ -269,7 +280,8 @@ int vtkSurfaceIrradiance::RequestLights(
     vtkTranslucencyDistributedIrradiance::Report report;
     if (!vtkTranslucencyDistributedIrradiance::Compute(input, computed, uniformIrradiance,
           this->UniformLightSamples, this->Shadows,
-          [this]() { return this->GetAbortExecute() != 0; }, q, report, error))
+          [this]() { return this->GetAbortExecute() != 0; }, q, report, error,
+          &this->Internal->Distributed))
     {
       if (!error.empty())
       {
@@ -277,6 +289,8 @@ int vtkSurfaceIrradiance::RequestLights(
       }
       return 0;
     }
+    this->LightsComputed = this->Internal->Distributed.GetNumberOfLightsComputed();
+    this->UniformComputed = this->Internal->Distributed.GetUniformComputed();
     this->BoundarySurfaceTriangles = report.SurfaceTriangles;
     this->BoundarySurfaceBytes = report.GatheredBytes;
     this->BoundarySurfaceTime = report.GatherMilliseconds;
@@ -369,8 +383,15 @@ bool vtkSurfaceIrradiance::AttachOutputs(vtkUnstructuredGrid* input, vtkUnstruct
   fieldData->AddArray(shadowArray);
   vtkNew<vtkDoubleArray> collimatedArray;
   collimatedArray->SetName("TranslucencyCollimatedModel");
-  collimatedArray->InsertNextValue(this->CollimatedModel);
+  collimatedArray->InsertNextValue(
+    this->CollimatedModel == COLLIMATED_DEFAULT ? COLLIMATED_SURFACE : this->CollimatedModel);
   fieldData->AddArray(collimatedArray);
+  // The default model is decided by vtkSolveDiffusion, which knows the
+  // pencil beams and the solver (the irradiance holds every light).
+  vtkNew<vtkIntArray> byDefaultArray;
+  byDefaultArray->SetName("TranslucencyCollimatedModelByDefault");
+  byDefaultArray->InsertNextValue(this->CollimatedModel == COLLIMATED_DEFAULT ? 1 : 0);
+  fieldData->AddArray(byDefaultArray);
   output->SetFieldData(fieldData);
   vtkDataArray* array = vtkTranslucency::NewTripleArray(vtkTranslucency::IrradianceName, q);
   output->GetPointData()->AddArray(array);
@@ -430,10 +451,71 @@ void vtkSurfaceIrradiance::PrintSelf(ostream& os, vtkIndent indent)
      << this->InteractiveLightType << ", power " << this->InteractiveLightPower << ")\n";
   os << indent << "Shadows: " << this->Shadows << "\n";
   os << indent << "CollimatedModel: "
-     << (this->CollimatedModel == COLLIMATED_EXTENDED_MOMENTS ? "extended-moments"
-          : this->CollimatedModel == COLLIMATED_EXTENDED   ? "extended"
-                                                           : "surface")
+     << (this->CollimatedModel == COLLIMATED_DEFAULT
+            ? std::string("default")
+            : GetCollimatedModelName(this->CollimatedModel))
      << "\n";
   os << indent << "ParallelPath: " << this->ParallelPath << "\n";
   os << indent << "ParallelPlan: " << this->ParallelPlan << "\n";
+}
+
+//------------------------------------------------------------------------------
+bool vtkSurfaceIrradiance::SetCollimatedModelByName(const char* name)
+{
+  const std::string text = name ? name : "";
+  if (translucency::ToLower(text) == "default")
+  {
+    this->SetCollimatedModel(COLLIMATED_DEFAULT);
+    return true;
+  }
+  try
+  {
+    this->SetCollimatedModel(static_cast<int>(translucency::GetCollimatedModel(text).Model));
+    return true;
+  }
+  catch (const translucency::Error&)
+  {
+    std::string names = "default";
+    for (const translucency::CollimatedModelEntry& entry : translucency::GetCollimatedModelTable())
+    {
+      names += ", " + entry.Name;
+    }
+    vtkErrorMacro(<< "unknown collimated model '" << text << "' (known: " << names << ")");
+    return false;
+  }
+}
+
+int vtkSurfaceIrradiance::GetNumberOfCollimatedModels()
+{
+  return static_cast<int>(translucency::GetCollimatedModelTable().size());
+}
+
+std::string vtkSurfaceIrradiance::GetCollimatedModelName(int i)
+{
+  const auto& table = translucency::GetCollimatedModelTable();
+  return i >= 0 && i < static_cast<int>(table.size()) ? table[i].Name : std::string();
+}
+
+std::string vtkSurfaceIrradiance::GetCollimatedModelLabel(int i)
+{
+  const auto& table = translucency::GetCollimatedModelTable();
+  return i >= 0 && i < static_cast<int>(table.size()) ? table[i].Label : std::string();
+}
+
+std::string vtkSurfaceIrradiance::GetDefaultCollimatedModelName(const char* kind)
+{
+  const std::string key = translucency::ToLower(kind ? kind : "");
+  for (const translucency::CollimatedDefault& row : translucency::GetCollimatedDefaultTable())
+  {
+    if (row.KindName == key)
+    {
+      return translucency::GetCollimatedModel(row.Model).Name;
+    }
+  }
+  return std::string();
+}
+
+std::string vtkSurfaceIrradiance::DescribeCollimatedDefaults()
+{
+  return translucency::DescribeCollimatedDefaults();
 }

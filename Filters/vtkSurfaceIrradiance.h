@@ -150,29 +150,61 @@ public:
   ///@}
 
   /// How the directional (collimated) lights enter the diffusion model.
+  /// The values 0-2 are translucency::CollimatedModel's (the core table
+  /// translucency::GetCollimatedModelTable(), which the plugin's list is
+  /// tested against).
   enum CollimatedModels
   {
-    COLLIMATED_SURFACE = 0,  ///< as boundary irradiance q (the default)
+    COLLIMATED_SURFACE = 0,  ///< as boundary irradiance q
     COLLIMATED_EXTENDED = 1, ///< as a volume source (translucency::ComputeCollimatedSource)
     /// as COLLIMATED_EXTENDED, with the Robin condition from the Fresnel
     /// moments (translucency::CollimatedModel::ExtendedMoments)
-    COLLIMATED_EXTENDED_MOMENTS = 2
+    COLLIMATED_EXTENDED_MOMENTS = 2,
+    /// the default: the model of the scene's light kinds
+    /// (translucency::DefaultCollimatedModel, measured against Monte Carlo)
+    COLLIMATED_DEFAULT = 3
   };
 
   ///@{
   /**
-   * COLLIMATED_SURFACE (default): the directional lights are part of
-   * `Irradiance`. COLLIMATED_EXTENDED: they are left out of `Irradiance`
-   * (the point and uniform lights stay) and the field data records the
-   * model (`TranslucencyCollimatedModel` = 1), so that vtkSolveDiffusion
-   * (divergence, fem) adds the unscattered beam and its volume source
-   * (Documentation/DiffuseOptics.md, "Collimated beams: the extended
-   * source"). COLLIMATED_EXTENDED_MOMENTS (= 2 in the field data): the
-   * same, and the solve's Robin condition takes A and Fdr from the Fresnel
-   * moments (closer to Monte Carlo; DiffuseOptics.md).
+   * COLLIMATED_DEFAULT (the default): `Irradiance` holds every light, as
+   * under COLLIMATED_SURFACE, and the field data marks the choice as the
+   * default (`TranslucencyCollimatedModel` = 0,
+   * `TranslucencyCollimatedModelByDefault` = 1): vtkSolveDiffusion then
+   * solves the model of the core's default table for the scene's light
+   * kinds (translucency::DefaultCollimatedModel, measured against Monte
+   * Carlo; Documentation/DiffuseOptics.md, "Which collimated model by
+   * default"), taking the directional lights out of its irradiance when
+   * that model is an extended one (divergence and fem, where the table
+   * was measured; quadgraph, grid and sp3 solve the surface model).
+   * COLLIMATED_SURFACE: the directional lights are part of `Irradiance`.
+   * COLLIMATED_EXTENDED: they are left out of `Irradiance` (the point and
+   * uniform lights stay) and the field data records the model
+   * (`TranslucencyCollimatedModel` = 1), so that vtkSolveDiffusion adds the
+   * unscattered beam and its volume source (Documentation/DiffuseOptics.md,
+   * "Collimated beams: the extended source"); quadgraph and grid refuse it.
+   * COLLIMATED_EXTENDED_MOMENTS (= 2 in the field data): the same, and the
+   * solve's Robin condition takes A and Fdr from the Fresnel moments.
    */
-  vtkSetClampMacro(CollimatedModel, int, COLLIMATED_SURFACE, COLLIMATED_EXTENDED_MOMENTS);
+  vtkSetClampMacro(CollimatedModel, int, COLLIMATED_SURFACE, COLLIMATED_DEFAULT);
   vtkGetMacro(CollimatedModel, int);
+  /// Set the model by its name: "default" or a name of the core table
+  /// ("surface", "extended", "extended-moments"); false (and an error) for
+  /// an unknown name.
+  bool SetCollimatedModelByName(const char* name);
+  ///@}
+
+  ///@{
+  /// The core tables, for scripts and the test that compares them with the
+  /// plugin XML: the number of models, the name and label of model `i` (in
+  /// the enum's order), and the default model's name for a light kind
+  /// ("directional", "coloured", "spot", "pencil"; "" for an unknown kind).
+  static int GetNumberOfCollimatedModels();
+  static std::string GetCollimatedModelName(int i);
+  static std::string GetCollimatedModelLabel(int i);
+  static std::string GetDefaultCollimatedModelName(const char* kind);
+  /// "directional: extended-moments, coloured: ..." (the plugin's help).
+  static std::string DescribeCollimatedDefaults();
   ///@}
 
   ///@{
@@ -227,7 +259,9 @@ public:
    * each light's term and the uniform light's across executions
    * (translucency::IrradianceCache, keyed on the mesh geometry, the
    * refractive index and the light's parameters), so turning one light
-   * recomputes that light only; the distributed path computes everything.
+   * recomputes that light only; so does the distributed path
+   * (vtkTranslucencyDistributedIrradiance::State: the gathered surface and
+   * the terms kept while every rank's piece and refractive index are the same).
    */
   int GetNumberOfLightsComputed() const { return this->LightsComputed; }
   bool GetUniformComputed() const { return this->UniformComputed; }
@@ -284,7 +318,7 @@ protected:
   double InteractiveLightPoint1[3] = { 0.0, 1.0, 1.0 };
   double InteractiveLightPoint2[3] = { 0.0, 0.0, 0.0 };
   double InteractiveLightPower = 1.0;
-  int CollimatedModel = COLLIMATED_SURFACE;
+  int CollimatedModel = COLLIMATED_DEFAULT;
   double TopologyTime = 0.0;
   std::string LightsDescription;
   long long BoundarySurfaceTriangles = 0;

@@ -73,10 +73,14 @@ double OutgoingRadiance(double phi, double q, double eta, double cosOut, Radianc
   }
   else
   {
-    // The same read-out with the rule's A and Fdr (Radiance.h): eq. 3's
-    // 4/(1 + Fdr) q is (4 q/(1 - Fdr)) / A for the fit's A.
+    // Eq. 3 written with the exitance of the Robin condition (Radiance.h):
+    // L_o = F_t J / (pi (1 - Fdr)), J = q + (phi - 4 q/(1 - Fdr))/(2 A),
+    // which is eq. 3 for the fit's A and Fdr, and emits exactly J (after
+    // the 1/eta^2 below) when Fdr is the hemispherical internal reflectance
+    // R_phi, as with the Fresnel moments.
     const Fresnel::RobinCoefficients robin = Fresnel::BoundaryCoefficients(eta, rule);
-    radiance = ft / (4.0 * Pi) * (phi + (phi - 4.0 * q / (1.0 - robin.Fdr)) / robin.A);
+    const double exitance = q + (phi - 4.0 * q / (1.0 - robin.Fdr)) / (2.0 * robin.A);
+    radiance = ft * exitance / (Pi * (1.0 - robin.Fdr));
   }
   if (readout == RadianceReadout::EnergyConserving)
   {

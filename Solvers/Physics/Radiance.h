@@ -46,9 +46,14 @@ RadianceReadout RadianceReadoutFromName(const std::string& name);
  * divided by eta^2 unless `readout` is RadianceReadout::Paper,
  * with the fit's A = (1 + Fdr)/(1 - Fdr) (Fresnel::BoundaryRule::Fit). With
  * another rule (`rule`, the Robin coefficients the solve used: Moments for
- * the "extended-moments" collimated model) the same read-out is written
- * L_o = F_t/(4 pi) [ phi + (phi - 4 q/(1 - Fdr)) / A ], which is eq. 3 for
- * the fit and the matching flux of the Robin condition otherwise.
+ * the "extended-moments" collimated model) the same read-out is written with
+ * the exitance of that Robin condition, J = q + (phi - 4 q/(1 - Fdr))/(2 A):
+ * L_o = F_t J / (pi (1 - Fdr)), which is eq. 3 for the fit (J = (phi -
+ * 2 q)/(2 A) there) and, divided by eta^2, emits exactly J over the
+ * hemisphere when Fdr is the internal hemispherical reflectance R_phi (the
+ * moments: pi eta^2 (1 - R_phi) is the integral of F_t cos, by
+ * reciprocity). The earlier form F_t/(4 pi) [phi + (phi - 4 q/(1 - Fdr))/A]
+ * emitted (A + 1)(1 - R_phi)/2 = 0.93 J with the moments at eta 1.3.
  * @param phi fluence at the point (W/mm^2)
  * @param q boundary irradiance at the point (W/mm^2)
  * @param eta refractive index at the point

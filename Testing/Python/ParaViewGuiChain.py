@@ -21,7 +21,10 @@ marker file and the screenshot:
    the line.
    Then Solve Diffusion the active source (the Properties panel builds its
    widgets, the Linear Solver drop-down included), each Solver chosen in
-   the panel and the Linear Solver drop-down's names read back.
+   the panel and the Linear Solver drop-down's names read back; its tables
+   (Point Sources, Pencil Beams, Detectors, Time Snapshots) shown with the
+   advanced properties, their labels and column headers read from the Qt
+   widgets and that part of the panel saved (solve_tables.png).
 3. Plot Over Line downstream of Solve Diffusion, in a line chart view.
 4. The crash of issue 20: Linear Solver set to an unknown name, applied, all
    views rendered; the failed output must be empty and the GUI alive.
@@ -158,6 +161,20 @@ def linear_solver_choices(solve):
     linear.ClearUncheckedElements()
     process_events()
     return choices
+
+
+def panel_tables(png):
+    """What the Properties panel shows of Solve Diffusion's four tables
+    (Plugin/TranslucencyPanelInspector.cxx), with their picture in `png`."""
+    plugin = ctypes.CDLL(os.environ["TRANSLUCENCY_PLUGIN"])
+    inspect = plugin.TranslucencyInspectPanelTables
+    inspect.restype = ctypes.c_char_p
+    inspect.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p]
+    process_events()
+    text = inspect(b"SolveDiffusion", b"PointSources,PencilBeams,Detectors,TimeSnapshots",
+                   png.encode())
+    process_events()
+    return json.loads(text.decode())
 
 
 def run():
@@ -299,6 +316,12 @@ def run():
     # what the combo box sets), the drop-down's domain read back; then a
     # choice the next Solver does not accept goes back to "default".
     results["linear_solver_choices_by_solver"] = linear_solver_choices(solve)
+    # 2c. The tables of the panel (issue 33): shown with the advanced
+    # properties (the gear button: `--dr` ignores the settings that would
+    # turn it on), each with its label and column headers, read from the Qt
+    # widgets by the plugin's TranslucencyInspectPanelTables (the GUI's Python
+    # has no Qt binding), and a picture of that part of the panel.
+    results["panel_tables"] = panel_tables(os.path.join(OUT, "solve_tables.png"))
 
     stage("panel")
 

@@ -25,8 +25,10 @@ How to run (from a build tree; ctest sets the environment):
    leaving unscattered) to the diffuse field's balance, read with the Robin
    rule the solve used; the three models inject the same power (incident
    times F_t, computed two ways). Outgoing Radiance after an
-   extended-moments solve equals eq. 3 rewritten with the Fresnel-moment
-   A and Fdr, computed here by quadrature (an independent implementation).
+   extended-moments solve equals eq. 3 rewritten with the exitance of the
+   Fresnel-moment Robin condition, F_t J / (pi eta^2 (1 - R_phi)), which
+   emits exactly J (the moments and the hemispherical integral computed here
+   by quadrature: an independent implementation).
 4. Frequency domain: ComputePowerBalance refuses (complex fluence).
 6. Coloured and spot lights: an R,G,B directional light scales each channel
    of a white one exactly (powers of two); a spot light equals the point
@@ -251,9 +253,20 @@ class LightsAndPowerTest(unittest.TestCase):
         r_phi, r_j = self.fresnel_moments(eta)
         a = (1.0 + r_j) / (1.0 - r_phi)
         f_t = 1.0 - ((eta - 1.0) / (eta + 1.0)) ** 2  # seen along the normal
-        # The default read-out: the Robin flux divided by eta^2 (the n^2 law).
-        expected = np.maximum(0.0, f_t / (4 * np.pi * eta ** 2) *
-                              (phi + (phi - 4 * q / (1 - r_phi)) / a))
+        # The default read-out: the radiance of shape F_t that emits the exitance
+        # J of the Robin condition the solve used, J = q + (phi - 4 q/(1 - R_phi))
+        # / (2 A), over the hemisphere outside: L = F_t J / (pi eta^2 (1 - R_phi)),
+        # since the integral of F_t cos over the outside hemisphere is
+        # pi eta^2 (1 - R_phi) by reciprocity (checked below by quadrature).
+        # With the fit's A and Fdr this is eq. 3 / eta^2 (issue 33: the form
+        # F_t/(4 pi eta^2) [phi + (phi - 4 q/(1 - R_phi))/A] used before
+        # emitted 0.93 J at eta 1.3).
+        exitance = q + (phi - 4 * q / (1 - r_phi)) / (2 * a)
+        expected = np.maximum(0.0, f_t * exitance / (np.pi * eta ** 2 * (1 - r_phi)))
+        xs, ws = np.polynomial.legendre.leggauss(400)
+        cos_o = 0.5 * (xs + 1.0)
+        hemisphere = np.sum(0.5 * ws * 2 * np.pi * tp.fresnel_transmittance(cos_o, eta) * cos_o)
+        self.assertLess(abs(hemisphere / (np.pi * eta ** 2 * (1 - r_phi)) - 1.0), 1e-6)
         fit = np.maximum(0.0, f_t / (4 * np.pi * eta ** 2) *
                          ((1 + 1 / tp.mismatch_a(eta)) * phi - 4 / (1 + tp.fdr(eta)) * q))
         got = vtk_to_numpy(out.GetPointData().GetArray("Radiance"))

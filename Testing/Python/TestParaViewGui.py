@@ -27,6 +27,13 @@ How to run (ctest does this; needs an X display, e.g. Xvfb):
    pixels. The whole screen (xwd, cropped, as PNG) and the view are kept in
    Testing/Temporary; with --update-baseline they are also written to
    Documentation/images/gui_paint.png and gui_paint_widget.png (128 colours).
+4a. Solve Diffusion's tables (issue 33): Point Sources, Pencil Beams,
+   Detectors and Time Snapshots are visible with the advanced properties
+   on, each with its label and the column headers of the XML's
+   ShowComponentLabels, as read from the Qt widgets
+   (Plugin/TranslucencyPanelInspector.cxx); the picture of that part of the
+   panel is kept and, with --update-baseline, written to
+   Documentation/images/gui_solve_tables.png.
 5. Compares the render view (640 x 480, Outgoing Radiance magnitude on a fixed
    0..1/1.3^2 W/(mm^2 sr) Inferno scale, fixed camera) with the baseline
    Testing/Baselines/paraview_gui_bunny.png (vtkImageDifference, the
@@ -309,6 +316,46 @@ class ParaViewGuiTest(unittest.TestCase):
                     os.path.join(SOURCE_DIR, "Documentation", "images", name), optimize=True)
         self.assertGreater(foreground_fraction(read_png(png)), MIN_FOREGROUND,
                            "the screen dump is blank")
+
+    def test_solve_diffusion_tables_show_labels_and_column_headers(self):
+        # Read from the Qt widgets of the Properties panel (not only a
+        # picture): each of the four tables is visible once the advanced
+        # properties are on, next to its label, with one column header per
+        # number of a row, the texts of the XML's ShowComponentLabels.
+        import xml.etree.ElementTree as ET
+        root = ET.parse(os.path.join(SOURCE_DIR, "Plugin", "SolveDiffusion.xml")).getroot()
+        proxy = next(p for p in root.iter("SourceProxy") if p.get("name") == "SolveDiffusion")
+        expected = {}
+        for prop in proxy:
+            labels = prop.find("Hints/ShowComponentLabels") if prop.find("Hints") is not None \
+                else None
+            if prop.get("name") in ("PointSources", "PencilBeams", "Detectors", "TimeSnapshots"):
+                self.assertIsNotNone(labels, prop.get("name"))
+                expected[prop.get("name")] = (prop.get("label"), [
+                    c.get("label") for c in sorted(labels, key=lambda c: int(c.get("component")))])
+        self.assertEqual(len(expected), 4)
+        found = self.results()["panel_tables"]
+        self.assertGreaterEqual(found["advanced_boxes"], 1, "no advanced (gear) button found")
+        tables = {t["property"]: t for t in found["tables"]}
+        for name, (label, headers) in expected.items():
+            table = tables[name]
+            self.assertTrue(table["found"], name + ": no widget in the panel")
+            self.assertTrue(table["visible"], name + ": hidden (advanced properties off?)")
+            self.assertEqual(table["label"], label, name + ": its label")
+            self.assertTrue(table["header_visible"], name + ": the column headers are hidden")
+            self.assertEqual(table["headers"], headers, name + ": the column headers")
+        png = found["picture"]
+        self.assertTrue(png and os.path.exists(png), "no picture of the tables")
+        image = read_png(png)
+        width, height = image.GetDimensions()[:2]
+        self.assertGreater(width, 200)
+        self.assertGreater(height, 200)
+        keep_for_inspection(png, "TestParaViewGui_solve_tables.png")
+        if UPDATE:
+            from PIL import Image
+            Image.open(png).convert("RGB").quantize(colors=128).save(
+                os.path.join(SOURCE_DIR, "Documentation", "images", "gui_solve_tables.png"),
+                optimize=True)
 
     def test_failed_filter_left_a_clean_empty_output(self):
         results = self.results()

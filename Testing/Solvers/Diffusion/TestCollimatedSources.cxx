@@ -4,6 +4,7 @@
 // (B) the extended-source model: the unscattered beam E_c, its volume source
 //     mu_s' E_c, the power balance, and the gain in accuracy against Monte
 //     Carlo on the 20 x 20 x 10 mm box of the issue.
+#include "CollimatedModels.h"
 #include "Detectors.h"
 #include "DiffusionSolverFactory.h"
 #include "Error.h"
@@ -528,6 +529,13 @@ TEST(CollimatedSource, GapToMonteCarloOnTheIssuesBox)
     EXPECT_LT(std::abs(gap[2]), 0.036) << name << ": extended-moments";
     EXPECT_LT(std::abs(gap[2]), 0.5 * std::abs(gap[0])) << name << ": half the surface gap";
     EXPECT_LT(std::abs(gap[2]), 0.5 * std::abs(gap[1])) << name << ": half the extended gap";
+    // The default model of a directional light (the core's default table,
+    // which the filter, the plugin and the CLI read; issue 33) is nearer
+    // Monte Carlo than the surface model (the independent reference:
+    // transport, not diffusion).
+    const int byDefault = static_cast<int>(DefaultCollimatedModel(LightKind::Directional));
+    EXPECT_LT(std::abs(gap[byDefault]), std::abs(gap[0]))
+      << name << ": the default model " << modelNames[byDefault];
   }
 }
 

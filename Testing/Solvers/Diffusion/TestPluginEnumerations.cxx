@@ -6,7 +6,9 @@
 // The XML is read as text (the core is VTK-free): a few start tags, their
 // attributes and the five predefined entities are all this needs.
 
+#include "CollimatedModels.h"
 #include "DiffusionSolverFactory.h"
+#include "Error.h"
 #include "LinearSolver.h"
 
 #include <gtest/gtest.h>
@@ -25,6 +27,8 @@ namespace
 {
 
 const std::string SolveDiffusionXml = std::string(TRANSLUCENCY_PLUGIN_DIR) + "/SolveDiffusion.xml";
+const std::string SurfaceIrradianceXml =
+  std::string(TRANSLUCENCY_PLUGIN_DIR) + "/SurfaceIrradiance.xml";
 
 std::string ReadText(const std::string& fileName)
 {
@@ -255,6 +259,99 @@ TEST(PluginEnumerations, SolveDiffusionLinearSolverDocumentationNamesEveryLinear
       << "the LinearSolver documentation of " << SolveDiffusionXml
       << " does not name the linear solver '" << name << "' of GetLinearSolverNames()";
   }
+}
+
+TEST(PluginEnumerations, CollimatedModelListIsTheCoreTableWithItsDefault)
+{
+  // Surface Irradiance's Collimated Model: the core table's models in order
+  // (values 0..n-1, vtkSurfaceIrradiance passes them through as
+  // translucency::CollimatedModel), their labels and help lines, then
+  // "Default (by light kind)" (vtkSurfaceIrradiance::COLLIMATED_DEFAULT = n),
+  // which is the property's default; its documentation states the default
+  // per light kind as the core's table gives it (issue 33).
+  const std::string xml = ReadText(SurfaceIrradianceXml);
+  ASSERT_FALSE(xml.empty()) << "cannot read " << SurfaceIrradianceXml;
+  const std::string proxy = Element(xml, "SourceProxy", "SurfaceIrradiance");
+  ASSERT_FALSE(proxy.empty()) << "no SourceProxy SurfaceIrradiance in " << SurfaceIrradianceXml;
+  const std::string property = Element(proxy, "IntVectorProperty", "CollimatedModel");
+  ASSERT_FALSE(property.empty()) << "no IntVectorProperty CollimatedModel";
+  const std::vector<Entry> entries = EnumerationEntries(property);
+  const auto& table = translucency::GetCollimatedModelTable();
+  ASSERT_EQ(entries.size(), table.size() + 1)
+    << "the models of translucency::GetCollimatedModelTable() and the default";
+  for (std::size_t k = 0; k < table.size(); ++k)
+  {
+    EXPECT_EQ(static_cast<std::size_t>(table[k].Model), k) << "the table is in the enum's order";
+    EXPECT_EQ(entries[k].Value, std::to_string(k)) << table[k].Name;
+    EXPECT_EQ(entries[k].Text, table[k].Label) << "entry " << k;
+    EXPECT_EQ(entries[k].Info, table[k].Help) << "entry " << k;
+  }
+  const std::string defaultValue = std::to_string(table.size());
+  EXPECT_EQ(entries.back().Value, defaultValue);
+  EXPECT_EQ(entries.back().Text, "Default (by light kind)");
+  EXPECT_EQ(Attributes(property, 0)["default_values"], defaultValue)
+    << "the plugin's default is the default by light kind";
+  std::string documentation = Content(property, "Documentation");
+  for (char& c : documentation)
+  {
+    c = c == '\n' ? ' ' : c;
+  }
+  EXPECT_NE(documentation.find(translucency::DescribeCollimatedDefaults()), std::string::npos)
+    << "the documentation of CollimatedModel in " << SurfaceIrradianceXml
+    << " must state the defaults as the core table gives them: \""
+    << translucency::DescribeCollimatedDefaults() << "\"";
+}
+
+TEST(PluginEnumerations, CollimatedDefaultTableDecidesInItsOrder)
+{
+  // One solve has one Robin rule: the first kind of the table that a scene
+  // has decides. The pencil beams (known only to Solve Diffusion) must come
+  // after the directional kinds, whose choice vtkSurfaceIrradiance makes
+  // upstream (it leaves their beams out of the irradiance).
+  using translucency::LightKind;
+  const auto& rows = translucency::GetCollimatedDefaultTable();
+  auto position = [&rows](LightKind kind) {
+    for (std::size_t k = 0; k < rows.size(); ++k)
+    {
+      if (rows[k].Kind == kind)
+      {
+        return k;
+      }
+    }
+    return rows.size();
+  };
+  ASSERT_LT(position(LightKind::Pencil), rows.size());
+  for (const LightKind kind : { LightKind::Directional, LightKind::Coloured, LightKind::Spot,
+         LightKind::Point, LightKind::Uniform })
+  {
+    EXPECT_LT(position(kind), position(LightKind::Pencil)) << "a light decides before a beam";
+  }
+  EXPECT_EQ(position(LightKind::None), rows.size() - 1);
+  const translucency::LightSource white =
+    translucency::DirectionalLight({ 0.0, 0.0, -1.0 }, { 1.0, 1.0, 1.0 });
+  const translucency::LightSource coloured =
+    translucency::DirectionalLight({ 0.0, 0.0, -1.0 }, { 1.0, 0.5, 0.25 });
+  const translucency::LightSource spot = translucency::SpotLight(
+    { 0.0, 0.0, 10.0 }, { 0.0, 0.0, -1.0 }, 20.0, 0.0, { 1.0, 1.0, 1.0 });
+  const translucency::LightSource point =
+    translucency::PointLight({ 0.0, 0.0, 10.0 }, { 1.0, 1.0, 1.0 });
+  EXPECT_EQ(translucency::KindOfLight(white), LightKind::Directional);
+  EXPECT_EQ(translucency::KindOfLight(coloured), LightKind::Coloured);
+  EXPECT_EQ(translucency::KindOfLight(spot), LightKind::Spot);
+  EXPECT_EQ(translucency::KindOfLight(point), LightKind::Point);
+  using translucency::DefaultCollimatedModel;
+  EXPECT_EQ(DefaultCollimatedModel({ white }, true, true),
+    DefaultCollimatedModel(LightKind::Directional));
+  EXPECT_EQ(DefaultCollimatedModel({ coloured }, false, false),
+    DefaultCollimatedModel(LightKind::Coloured));
+  EXPECT_EQ(DefaultCollimatedModel({ spot }, false, false), DefaultCollimatedModel(LightKind::Spot));
+  EXPECT_EQ(DefaultCollimatedModel({ point }, false, true), DefaultCollimatedModel(LightKind::Point));
+  EXPECT_EQ(DefaultCollimatedModel({}, true, true), DefaultCollimatedModel(LightKind::Uniform));
+  EXPECT_EQ(DefaultCollimatedModel({}, false, true), DefaultCollimatedModel(LightKind::Pencil));
+  EXPECT_EQ(DefaultCollimatedModel({}, false, false), DefaultCollimatedModel(LightKind::None));
+  EXPECT_THROW(translucency::GetCollimatedModel("extnded"), translucency::Error);
+  EXPECT_EQ(translucency::GetCollimatedModel("Extended-Moments").Model,
+    translucency::CollimatedModel::ExtendedMoments);
 }
 
 } // namespace
