@@ -555,7 +555,7 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
  * when `irradiance` changed. An explicit model is left as it is.
  */
 bool DecideDefaultCollimatedModel(vtkUnstructuredGrid* input, const std::string& solver,
-  const translucency::TetMesh& mesh, const std::vector<double>& tetEta,
+  const translucency::TetMesh& mesh, const translucency::OpticalProperties& material,
   std::vector<double>& irradiance, translucency::DiffusionProblem& problem)
 {
   if (!ChosenByDefault(input->GetFieldData()))
@@ -578,7 +578,8 @@ bool DecideDefaultCollimatedModel(vtkUnstructuredGrid* input, const std::string&
     return false;
   }
   std::vector<double> q;
-  translucency::ComputeProjectedIrradiance(mesh, tetEta, beams, 0.0, 0, problem.Shadows, q);
+  translucency::ComputeProjectedIrradiance(
+    mesh, material.RefractiveIndex, beams, 0.0, 0, problem.Shadows, q);
   if (q.size() != irradiance.size())
   {
     throw translucency::Error("the directional lights' irradiance has " +
@@ -776,7 +777,7 @@ int vtkSolveDiffusion::RequestSerial(
     in.AddInteractiveSources(*this, mesh.get(), nullptr);
     light.InteriorSources = &in.SolvedSources;
     const bool beamsTakenOut = DecideDefaultCollimatedModel(
-      input, this->GetSolverName(), *mesh, material.RefractiveIndex, irradiance, light);
+      input, this->GetSolverName(), *mesh, material, irradiance, light);
     const std::vector<double> solvedIrradiance =
       beamsTakenOut ? irradiance : std::vector<double>();
     const translucency::CollimatedModel solvedModel = light.Collimated;
