@@ -17,6 +17,7 @@
 #include "Error.h"
 #include "LinearSolver.h"
 #include "OpticalProperties.h"
+#include "Sp3Solver.h"
 #include "Strings.h"
 #include "TetMesh.h"
 #include "TimeResolved.h"
@@ -189,24 +190,29 @@ json BenchEdit(vtkUnstructuredGrid* g, int runs)
 /// linear solver (by size: multigrid-agg from 20k vertices) at rel-tol 1e-6:
 /// cold = a new solver object (assembly, set-up, solve from zero), warm = the
 /// same object after the light moved (`q2`: a second directional light;
-/// warm start from the previous solution). Medians of `runs`, the two
-/// solvers alternating within each run.
+/// warm start from the previous solution). Medians of `runs`, the
+/// solvers alternating within each run. "sp3-gmres" is sp3 with restarted
+/// GMRES on its block system in place of its default BiCGSTAB
+/// (Sp3Solver::SetKrylovMethod), the measurement behind that choice.
 json BenchSp3(const translucency::TetMesh& mesh, const translucency::OpticalProperties& material,
   const std::vector<double>& q, const std::vector<double>& q2, int runs)
 {
   json out;
-  const char* names[2] = { "divergence", "sp3" };
-  // The two solvers alternate within each run (divergence, sp3, divergence,
-  // ...), so that a change of the machine's load hits both alike.
-  std::array<std::vector<double>, 2> cold, warm;
-  std::array<int, 2> coldIterations{}, warmIterations{};
+  constexpr int count = 3;
+  const char* names[count] = { "divergence", "sp3", "sp3-gmres" };
+  // The solvers alternate within each run (divergence, sp3, sp3-gmres,
+  // divergence, ...), so that a change of the machine's load hits all alike.
+  std::array<std::vector<double>, count> cold, warm;
+  std::array<int, count> coldIterations{}, warmIterations{};
   for (int r = 0; r < runs; ++r)
   {
-    for (int s = 0; s < 2; ++s)
+    for (int s = 0; s < count; ++s)
     {
       const char* name = names[s];
       std::unique_ptr<translucency::DiffusionSolver> solver =
-        translucency::CreateDiffusionSolver(name);
+        translucency::CreateDiffusionSolver(s == 0 ? "divergence" : "sp3");
+      if (s == 2)
+        dynamic_cast<translucency::Sp3Solver&>(*solver).SetKrylovMethod("gmres");
       solver->SetRelTol(1e-6);
       translucency::DiffusionProblem problem;
       problem.Mesh = &mesh;
@@ -227,8 +233,8 @@ json BenchSp3(const translucency::TetMesh& mesh, const translucency::OpticalProp
       warmIterations[s] = report.Iterations[0];
     }
   }
-  std::array<std::array<double, 2>, 2> times{};
-  for (int s = 0; s < 2; ++s)
+  std::array<std::array<double, 2>, count> times{};
+  for (int s = 0; s < count; ++s)
   {
     times[s] = { Median(cold[s]), Median(warm[s]) };
     std::cout << std::fixed << std::setprecision(1) << "    " << names[s] << ": cold " << times[s][0]
@@ -242,6 +248,11 @@ json BenchSp3(const translucency::TetMesh& mesh, const translucency::OpticalProp
             << "x, warm " << ratio[1] << "x\n" << std::defaultfloat;
   out["sp3_over_divergence_cold"] = ratio[0];
   out["sp3_over_divergence_warm"] = ratio[1];
+  const double reference[2] = { times[2][0] / times[0][0], times[2][1] / times[0][1] };
+  std::cout << std::fixed << std::setprecision(2) << "    sp3-gmres / divergence: cold "
+            << reference[0] << "x, warm " << reference[1] << "x\n" << std::defaultfloat;
+  out["sp3_gmres_over_divergence_cold"] = reference[0];
+  out["sp3_gmres_over_divergence_warm"] = reference[1];
   return out;
 }
 
@@ -377,6 +388,7 @@ struct BenchCommandState
   int Runs = 0;             ///< --runs (0: each bench's default)
   std::vector<std::string> Solvers; ///< --linear-solvers' values (comma lists)
   bool Meshers = false, DiffuseOptics = false, Pipeline = false;
+  bool GradedOnly = false; ///< --graded-only (with --meshers)
   CLI::Option* LinearSolvers = nullptr; ///< set when --linear-solvers is given
 };
 
@@ -411,8 +423,9 @@ void AddSharedBenchOptions(
     "stroke on ~1 % of the tets (+ incremental row update)");
   sp3 = c->add_flag("--sp3", s.Plain.Sp3,
     "also time the sp3 solver against divergence (default linear\n"
-    "solvers, rel-tol 1e-6): cold (new solver) and warm (the\n"
-    "light turned 45 degrees, warm start), medians of --runs");
+    "solvers, rel-tol 1e-6; sp3 also with GMRES in place of its\n"
+    "BiCGSTAB): cold (new solver) and warm (the light turned 45\n"
+    "degrees, warm start), medians of --runs");
 }
 
 /// bench: --linear-solvers and the options only it takes (--plot,
@@ -546,6 +559,7 @@ int RunBench(BenchCommandState& s)
       m.Tets = s.Tets;
     if (s.Runs > 0)
       m.Runs = s.Runs;
+    m.GradedOnly = s.GradedOnly;
     return BenchMeshers(m);
   }
   s.Plain.MeshPath = linear.MeshPath;
@@ -572,6 +586,9 @@ Command AddBenchCommand(CLI::App& app)
     "built), graded and --uniform-size, at --tets (default\n"
     "1000000), --runs (default 3): time, tets/s, min dihedral\n"
     "histogram, radius-edge ratios, edge-length spread");
+  c->add_flag("--graded-only", s->GradedOnly,
+     "with --meshers: the graded rows only (no --uniform-size rows)")
+    ->needs(meshers);
   meshers->excludes(linearSolvers);
   edit->excludes(meshers);
   edit->excludes(linearSolvers);

@@ -18,7 +18,8 @@ class vtkUnstructuredGrid;
 namespace translucency_app
 {
 
-/// Tetrahedralize `surface` to about `targetTets` tets (vtkTetrahedralizeSurface,
+/// Tetrahedralize `surface` to about `targetTets` tets (vtkTetrahedralizeSurface
+/// with the tetgen mesher, so that the benches' figures compare across sessions;
 /// spatially ordered) and copy the result to the core's arrays (3 coordinates
 /// per point, 4 point ids per tet). Returns the TetGen time (ms). Throws
 /// translucency::Error with the filter's message on failure.

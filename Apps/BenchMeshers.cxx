@@ -6,6 +6,7 @@
 #include "Utilities.h"
 
 #include "Error.h"
+#include "TetMesh.h"
 #include "TetQuality.h"
 
 #include "vtkTetrahedralizeSurface.h"
@@ -38,24 +39,43 @@ int BenchMeshers(const MesherBenchOptions& o)
   if (!surface)
     throw translucency::Error("bench --meshers needs a surface mesh (.ply, .stl, .obj, .vtp)");
 
-  std::vector<std::string> meshers = { "tetgen" };
-  if (vtkTetrahedralizeSurface::HasMesher("hxt"))
-    meshers.push_back("hxt");
+  // The rows of each size: {mesher, uniform sizing, hxt's optimisation pass}.
+  struct Row
+  {
+    std::string Mesher;
+    bool Uniform;
+    bool Optimize;
+  };
+  std::vector<Row> rows = { { "tetgen", false, true } };
+  const bool hxt = vtkTetrahedralizeSurface::HasMesher("hxt");
+  if (hxt)
+  {
+    rows.push_back({ "hxt", false, true });
+    rows.push_back({ "hxt", false, false });
+  }
   else
     std::cout << "hxt: not in this build (no gmsh)\n";
+  if (!o.GradedOnly)
+  {
+    rows.push_back({ "tetgen", true, true });
+    if (hxt)
+      rows.push_back({ "hxt", true, true });
+  }
   std::cout << "threads: " << omp_get_max_threads() << ", runs per figure: " << o.Runs
             << " (median time; the mesh of the last run is measured)\n"
             << "min dihedral histogram: tets per 10-degree bin of their smallest dihedral "
                "angle, 0-10 ... 70-80 (%)\n\n";
-  std::cout << "  target mesher  sizing        tets   time(ms)   Mtets/s  min-dih  max-r/e  "
-               "mean-r/e >1.414(%)  edge-cv  histogram(%)\n";
+  std::cout << "  target    mesher  sizing        tets   time(ms)   Mtets/s  min-dih  <5deg(%)  max-r/e  "
+               "mean-r/e >1.414(%)  edge-cv  boundary-pts  histogram(%)\n";
   json results = json::array();
   for (double target : o.Tets)
   {
-    for (const bool uniform : { false, true })
+    for (const Row& row : rows)
     {
-      for (const std::string& mesher : meshers)
       {
+        const std::string& mesher = row.Mesher;
+        const bool uniform = row.Uniform;
+        const std::string label = mesher == "hxt" && !row.Optimize ? "hxt-noopt" : mesher;
         std::vector<double> times;
         vtkSmartPointer<vtkUnstructuredGrid> last;
         for (int r = 0; r < o.Runs; ++r)
@@ -66,6 +86,7 @@ int BenchMeshers(const MesherBenchOptions& o)
           tetra->SetInputData(surface);
           tetra->SetMesher(mesher.c_str());
           tetra->SetUniformSizing(uniform);
+          tetra->SetHxtOptimization(row.Optimize);
           tetra->SetTargetNumberOfTets(static_cast<vtkIdType>(target));
           const auto start = Clock::now();
           tetra->Update();
@@ -78,6 +99,10 @@ int BenchMeshers(const MesherBenchOptions& o)
         std::vector<int> tets;
         GridToCoreArrays(last, points, tets);
         const translucency::TetQualityStats q = translucency::ComputeTetQuality(points, tets, 1.414);
+        const double below5 = 100.0 * static_cast<double>(q.TetsBelow5Degrees) / q.NumberOfTets;
+        translucency::TetMesh topology;
+        topology.SetGeometry(points, tets);
+        const std::size_t boundaryPoints = topology.GetBoundaryPoints().size();
         const double ms = Median(times);
         std::ostringstream hist;
         json histogram = json::array();
@@ -88,21 +113,24 @@ int BenchMeshers(const MesherBenchOptions& o)
           histogram.push_back(percent);
         }
         std::cout << std::fixed << std::setprecision(2) << "  " << std::setw(6)
-                  << static_cast<long>(target) << " " << std::setw(6) << mesher << "  "
+                  << static_cast<long>(target) << " " << std::setw(9) << label << "  "
                   << std::setw(7) << (uniform ? "uniform" : "graded") << " " << std::setw(10)
                   << q.NumberOfTets << " " << std::setw(10) << std::setprecision(0) << ms << " "
                   << std::setw(9) << std::setprecision(3) << q.NumberOfTets / ms / 1000.0 << " "
-                  << std::setw(8) << std::setprecision(2) << q.MinDihedral << " " << std::setw(8)
+                  << std::setw(8) << std::setprecision(2) << q.MinDihedral << " " << std::setw(9)
+                  << std::setprecision(3) << below5 << " " << std::setw(8) << std::setprecision(2)
                   << q.MaxRadiusEdge << " " << std::setw(9) << std::setprecision(3)
                   << q.MeanRadiusEdge << " " << std::setw(9) << std::setprecision(3)
                   << 100.0 * q.FractionAboveRadiusEdgeBound << " " << std::setw(8)
-                  << q.EdgeLengthCV << "  " << hist.str() << "\n"
+                  << q.EdgeLengthCV << " " << std::setw(13) << boundaryPoints << "  " << hist.str()
+                  << "\n"
                   << std::defaultfloat;
-        results.push_back({ { "target_tets", target }, { "mesher", mesher },
+        results.push_back({ { "target_tets", target }, { "mesher", label },
           { "uniform_sizing", uniform }, { "tets", q.NumberOfTets }, { "time_ms_median", ms },
           { "tets_per_second", q.NumberOfTets / ms * 1000.0 },
           { "speedup_vs_tetgen_graded_per_tet", 1.0 },
           { "min_dihedral_deg", q.MinDihedral }, { "max_dihedral_deg", q.MaxDihedral },
+          { "percent_min_dihedral_below_5", below5 }, { "boundary_points", boundaryPoints },
           { "min_dihedral_histogram_percent", histogram },
           { "max_radius_edge", q.MaxRadiusEdge }, { "mean_radius_edge", q.MeanRadiusEdge },
           { "percent_radius_edge_above_1.414", 100.0 * q.FractionAboveRadiusEdgeBound },

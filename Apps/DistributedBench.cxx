@@ -5,13 +5,17 @@
 //   mpiexec -n 2 translucency-distributed-bench [--tets N] [--solver divergence|fem]
 //       [--coordinates] [--no-single] [--serial] [--strong T] [--agg L] [--pmax P]
 //       [--interp I] [--coarsen C] [--tol TOL] [--threads T] [--rounds R]
+//       [--own-hierarchies] [--relax R] [--keep-transpose]
 //
 // In one run, --rounds times (default 2): first every rank of MPI_COMM_WORLD
 // solves its slab (cold solve: numbering, assembly, AMG set-up, PCG; then a
 // relight: new right-hand side, hierarchy kept, warm start; then two paint
 // strokes, each changing mu_a x5 and mu_s' x2 in a half ball under the top
 // face (~1 % of the tets): the first with a full hierarchy set-up, the
-// second with the values-only set-up, warm started), then rank 0
+// second with the values-only set-up, warm started; a new hierarchy is one
+// BoomerAMG set-up shared by the three channels unless --own-hierarchies;
+// the relight must set up nothing: its numbering and hierarchy counts are
+// checked), then rank 0
 // alone (MPI_COMM_SELF; the others sleep) solves the whole box the same way,
 // and the two fluences are compared at every point. --serial also compares
 // with the serial core path (the solver's default linear solver, cg-jacobi)
@@ -207,7 +211,8 @@ double Median(std::vector<double> v)
 
 /// Cold solve + relight on `comm`; prints one line per phase (rank 0 of comm).
 Result Run(const char* label, MPI_Comm comm, int n, double size, const std::string& solverName,
-  bool coordinates, const translucency::BoomerAMGOptions& options, double tol, int threads)
+  bool coordinates, const translucency::BoomerAMGOptions& options, double tol, int threads,
+  bool shared)
 {
   int rank = 0, ranks = 1;
   MPI_Comm_rank(comm, &rank);
@@ -224,6 +229,7 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
     solver.SetRelTol(tol);
     solver.SetMaxIter(1000);
     solver.SetNumberOfThreads(threads);
+    solver.SetSharedHierarchy(shared);
     static const char* phases[4] = { "cold", "relight", "paint (full set-up)",
       "paint (values-only set-up)" };
     for (int phase = 0; phase < 4; ++phase)
@@ -235,6 +241,8 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
         solver.SetValuesOnlySetup(phase == 3);
       }
       translucency::SolverReport report;
+      const long long numberings = solver.GetNumberOfNumberings(),
+                      hierarchies = solver.GetNumberOfHierarchySetups();
       MPI_Barrier(comm);
       const double start = MPI_Wtime();
       const double cpuStart = CpuMilliseconds();
@@ -243,6 +251,19 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
       if (report.Assembly != expected[phase])
         throw translucency::Error(std::string("the ") + phases[phase] + " solve took the '" +
           report.Assembly + "' path, not '" + expected[phase] + "'");
+      // Set-ups by counters: a relight and a values-only paint renumber and
+      // set up nothing; a cold solve numbers once and sets up one shared
+      // hierarchy (three without sharing), unless a channel was re-solved.
+      const long long newNumberings = solver.GetNumberOfNumberings() - numberings,
+                      newHierarchies = solver.GetNumberOfHierarchySetups() - hierarchies;
+      const long long wantNumberings = phase == 0 ? 1 : 0;
+      const long long wantHierarchies = phase == 1 || phase == 3 ? 0 : (shared ? 1 : 3);
+      if (newNumberings != wantNumberings ||
+        (!report.Resolved && newHierarchies != wantHierarchies))
+        throw translucency::Error(std::string("the ") + phases[phase] + " solve built " +
+          std::to_string(newNumberings) + " numberings and " + std::to_string(newHierarchies) +
+          " hierarchies, not " + std::to_string(wantNumberings) + " and " +
+          std::to_string(wantHierarchies));
       const double cpu = CpuMilliseconds() - cpuStart;
       std::vector<double> cpus(static_cast<size_t>(ranks));
       MPI_Gather(&cpu, 1, MPI_DOUBLE, cpus.data(), 1, MPI_DOUBLE, 0, comm);
@@ -269,12 +290,13 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
           { numberingCpu, assemblyCpu, amgCpu, solveCpu, cpuMax });
         std::printf("%s ranks %d %s tets %lld unknowns %lld: numbering %.0f ms, assembly %.0f ms, "
                     "AMG set-up %.0f ms, solve %.0f ms (total %.0f ms); iterations %d %d %d, "
-                    "residual %.1e; levels %d, operator complexity %.2f; assembly '%s'; memory MB "
-                    "per rank",
+                    "residual %.1e; levels %d, operator complexity %.2f; assembly '%s', set-up "
+                    "'%s'%s; memory MB per rank",
           label, ranks, phases[phase], allTets, solver.GetNumberOfRows(),
           numbering, assembly, amg, solve, total, report.Iterations[0], report.Iterations[1],
           report.Iterations[2], std::max({ report.Residual[0], report.Residual[1], report.Residual[2] }),
-          solver.GetNumberOfLevels(0), solver.GetOperatorComplexity(0), report.Assembly.c_str());
+          solver.GetNumberOfLevels(0), solver.GetOperatorComplexity(0), report.Assembly.c_str(),
+          report.LinearSetup.c_str(), report.Resolved ? " (re-solved)" : "");
         for (double mb : memories)
           std::printf(" %.0f", mb / 1e6);
         std::printf(" (%.0f MB per million tets per rank at %d ranks); process peak MB",
@@ -298,10 +320,10 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
 /// one rank's run of the same box on rank 0.
 void CompareWithSingleRank(const std::vector<long long>& ids, const std::vector<double>& fluence,
   int size, int n, double sizeMm, const std::string& solver, bool coordinates,
-  const translucency::BoomerAMGOptions& options, double tol, int threads)
+  const translucency::BoomerAMGOptions& options, double tol, int threads, bool shared)
 {
   const Result one =
-    Run("single", MPI_COMM_SELF, n, sizeMm, solver, coordinates, options, tol, threads);
+    Run("single", MPI_COMM_SELF, n, sizeMm, solver, coordinates, options, tol, threads, shared);
   std::vector<size_t> where(one.Ids.size());
   for (size_t k = 0; k < one.Ids.size(); ++k)
     where[static_cast<size_t>(one.Ids[k])] = k;
@@ -436,7 +458,7 @@ int main(int argc, char* argv[])
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   long long targetTets = 1000000;
   std::string solver = "divergence";
-  bool coordinates = false, single = true, serial = false;
+  bool coordinates = false, single = true, serial = false, shared = true;
   double tol = 1e-8;
   int threads = 1;
   int rounds = 2;
@@ -471,12 +493,19 @@ int main(int argc, char* argv[])
       rounds = std::max(1, std::atoi(next()));
     else if (arg == "--threads")
       threads = std::atoi(next());
+    else if (arg == "--own-hierarchies")
+      shared = false;
+    else if (arg == "--relax")
+      options.RelaxType = std::atoi(next());
+    else if (arg == "--keep-transpose")
+      options.KeepTranspose = 1;
     else
     {
       if (rank == 0)
         std::cerr << "usage: mpiexec -n RANKS translucency-distributed-bench [--tets N] [--solver "
                      "divergence|fem] [--coordinates] [--no-single] [--serial] [--strong T] [--agg L] "
-                     "[--pmax P] [--interp I] [--coarsen C] [--tol TOL] [--threads T] [--rounds R]\n";
+                     "[--pmax P] [--interp I] [--coarsen C] [--tol TOL] [--threads T] [--rounds R] "
+                     "[--own-hierarchies] [--relax R] [--keep-transpose]\n";
       MPI_Finalize();
       return 2;
     }
@@ -497,7 +526,8 @@ int main(int argc, char* argv[])
       if (rank == 0)
         std::printf("round %d\n", round + 1);
       const Result all =
-        Run("distributed", MPI_COMM_WORLD, n, sizeMm, solver, coordinates, options, tol, threads);
+        Run("distributed", MPI_COMM_WORLD, n, sizeMm, solver, coordinates, options, tol, threads,
+          shared);
       // Rank 0 gathers the distributed fluence by global id.
       const int count = static_cast<int>(all.Ids.size());
       std::vector<int> counts(static_cast<size_t>(size)), offsets(static_cast<size_t>(size) + 1, 0);
@@ -518,7 +548,7 @@ int main(int argc, char* argv[])
       if (rank == 0 && single && size > 1)
       {
         CompareWithSingleRank(
-          ids, fluence, size, n, sizeMm, solver, coordinates, options, tol, threads);
+          ids, fluence, size, n, sizeMm, solver, coordinates, options, tol, threads, shared);
       }
       if (rank == 0 && serial)
       {

@@ -1,5 +1,13 @@
 #include "TranslucencyHxtMesher.h"
 
+#include <array>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <queue>
+#include <tuple>
+#include <unordered_map>
+
 #ifdef TRANSLUCENCY_HAVE_GMSH
 #include <dlfcn.h>
 #include <gmshc.h>
@@ -14,6 +22,189 @@
 
 namespace translucency
 {
+
+namespace
+{
+/// The key of the undirected edge {a, b}.
+std::uint64_t EdgeKey(int a, int b)
+{
+  const auto lo = static_cast<std::uint32_t>(a < b ? a : b);
+  const auto hi = static_cast<std::uint32_t>(a < b ? b : a);
+  return (static_cast<std::uint64_t>(lo) << 32) | hi;
+}
+} // namespace
+
+int CountSurfaceParts(std::size_t numPoints, const std::vector<int>& triangles)
+{
+  // Union-find over the points of each triangle: the parts are the
+  // connected components of the points used by triangles.
+  std::vector<int> parent(numPoints);
+  for (std::size_t i = 0; i < numPoints; ++i)
+  {
+    parent[i] = static_cast<int>(i);
+  }
+  auto find = [&parent](int i) {
+    while (parent[static_cast<std::size_t>(i)] != i)
+    {
+      parent[static_cast<std::size_t>(i)] =
+        parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+      i = parent[static_cast<std::size_t>(i)];
+    }
+    return i;
+  };
+  std::vector<char> used(numPoints, 0);
+  for (std::size_t k = 0; k < triangles.size(); ++k)
+  {
+    used[static_cast<std::size_t>(triangles[k])] = 1;
+    if (k % 3 != 0)
+    {
+      const int a = find(triangles[k - k % 3]), b = find(triangles[k]);
+      parent[static_cast<std::size_t>(a)] = b;
+    }
+  }
+  int parts = 0;
+  for (std::size_t i = 0; i < numPoints; ++i)
+  {
+    parts += used[i] && find(static_cast<int>(i)) == static_cast<int>(i) ? 1 : 0;
+  }
+  return parts;
+}
+
+bool RefineSurfaceLongestEdge(
+  std::vector<double>& points, std::vector<int>& triangles, double maxEdge, std::string& error)
+{
+  if (!(maxEdge > 0.0) || !std::isfinite(maxEdge))
+  {
+    error = "surface refinement needs a finite edge length > 0 mm";
+    return false;
+  }
+  const long long numPoints = static_cast<long long>(points.size() / 3);
+  for (const int id : triangles)
+  {
+    if (id < 0 || id >= numPoints)
+    {
+      error = "surface refinement: point id " + std::to_string(id) + " out of range";
+      return false;
+    }
+  }
+  // Edge -> the two triangles sharing it.
+  std::unordered_map<std::uint64_t, std::array<int, 2>> edges;
+  edges.reserve(triangles.size());
+  auto attach = [&edges](int a, int b, int triangle) {
+    std::array<int, 2>& slot =
+      edges.emplace(EdgeKey(a, b), std::array<int, 2>{ -1, -1 }).first->second;
+    int& free = slot[0] < 0 ? slot[0] : slot[1];
+    if (free >= 0)
+    {
+      return false; // a third triangle on this edge
+    }
+    free = triangle;
+    return true;
+  };
+  auto length2 = [&points](int a, int b) {
+    double sum = 0.0;
+    for (int d = 0; d < 3; ++d)
+    {
+      const double e = points[3 * static_cast<std::size_t>(a) + d] -
+        points[3 * static_cast<std::size_t>(b) + d];
+      sum += e * e;
+    }
+    return sum;
+  };
+  const double limit2 = maxEdge * maxEdge;
+  // The longest edge first; ties by ids, so the result does not depend on
+  // the hash map's order.
+  using Entry = std::tuple<double, int, int>;
+  std::priority_queue<Entry> queue;
+  auto consider = [&](int a, int b) {
+    const double l2 = length2(a, b);
+    if (l2 > limit2)
+    {
+      queue.emplace(l2, a < b ? a : b, a < b ? b : a);
+    }
+  };
+  const int numTriangles = static_cast<int>(triangles.size() / 3);
+  for (int t = 0; t < numTriangles; ++t)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      if (!attach(triangles[3 * t + k], triangles[3 * t + (k + 1) % 3], t))
+      {
+        error = "surface refinement: an edge is shared by more than two triangles";
+        return false;
+      }
+    }
+  }
+  for (const auto& edge : edges)
+  {
+    if (edge.second[1] < 0)
+    {
+      error = "surface refinement: the surface is not closed";
+      return false;
+    }
+    consider(static_cast<int>(edge.first >> 32), static_cast<int>(edge.first & 0xffffffffu));
+  }
+  while (!queue.empty())
+  {
+    const int a = std::get<1>(queue.top());
+    const int b = std::get<2>(queue.top());
+    queue.pop();
+    const std::uint64_t key = EdgeKey(a, b);
+    const auto found = edges.find(key);
+    if (found == edges.end())
+    {
+      continue; // split already (an entry pushed twice)
+    }
+    const std::array<int, 2> sharing = found->second;
+    edges.erase(found);
+    if (points.size() / 3 >= static_cast<std::size_t>(INT_MAX / 2) ||
+      triangles.size() / 3 >= static_cast<std::size_t>(INT_MAX / 2))
+    {
+      error = "surface refinement: more points than 32-bit ids hold (edge length too small)";
+      return false;
+    }
+    const int m = static_cast<int>(points.size() / 3);
+    for (int d = 0; d < 3; ++d)
+    {
+      points.push_back(0.5 * (points[3 * static_cast<std::size_t>(a) + d] +
+        points[3 * static_cast<std::size_t>(b) + d]));
+    }
+    for (const int t : sharing)
+    {
+      int k = 0;
+      while (k < 3 && EdgeKey(triangles[3 * t + k], triangles[3 * t + (k + 1) % 3]) != key)
+      {
+        ++k;
+      }
+      if (k == 3)
+      {
+        error = "surface refinement: inconsistent edge map"; // cannot happen
+        return false;
+      }
+      // t = (x, y, c) with the split edge x -> y in t's own order: t becomes
+      // (x, m, c) and the new triangle (m, y, c), both oriented as t.
+      const int x = triangles[3 * t + k], y = triangles[3 * t + (k + 1) % 3],
+                c = triangles[3 * t + (k + 2) % 3];
+      const int added = static_cast<int>(triangles.size() / 3);
+      triangles[3 * t] = x;
+      triangles[3 * t + 1] = m;
+      triangles[3 * t + 2] = c;
+      triangles.push_back(m);
+      triangles.push_back(y);
+      triangles.push_back(c);
+      std::array<int, 2>& yc = edges[EdgeKey(y, c)];
+      (yc[0] == t ? yc[0] : yc[1]) = added;
+      attach(x, m, t);
+      attach(m, y, added);
+      attach(m, c, t);
+      attach(m, c, added);
+      consider(m, c);
+    }
+    consider(a, m);
+    consider(m, b);
+  }
+  return true;
+}
 
 #ifndef TRANSLUCENCY_HAVE_GMSH
 
@@ -94,15 +285,35 @@ struct GmshFailure
 };
 
 /// Loads gmsh once (under GmshMutex). On failure LoadError says why.
+/// Set after a failed mesh: gmsh 4.8.4's GenerateMesh sets CTX::lock and an
+/// exception (AbortOnError) skips its release, so every later mesh in that
+/// instance returns nothing ("I'm busy!"). The next call loads a fresh copy.
+bool& NeedsFreshGmsh()
+{
+  static bool fresh = false;
+  return fresh;
+}
+
 GmshApi& Api()
 {
-  static GmshApi api;
-  static bool tried = false;
-  if (tried)
+  static GmshApi* current = nullptr;
+  static int loads = 0;
+  if (current && !NeedsFreshGmsh())
   {
+    return *current;
+  }
+  // A fresh copy in a new link-map namespace; the old one is left loaded
+  // (unloading gmsh with its OpenMP runtime is not safe). glibc allows 16
+  // namespaces: past that dlmopen fails and LoadError says so.
+  NeedsFreshGmsh() = false;
+  current = new GmshApi;
+  GmshApi& api = *current;
+  if (++loads > 8)
+  {
+    api.LoadError = "gmsh failed too often in this process (after each failed mesh gmsh 4.8.4 "
+                    "has to be loaded anew, at most 8 times): restart, or use the tetgen mesher";
     return api;
   }
-  tried = true;
   api.Handle = dlmopen(LM_ID_NEWLM, TRANSLUCENCY_GMSH_LIBRARY, RTLD_NOW | RTLD_LOCAL);
   if (!api.Handle)
   {
@@ -178,6 +389,74 @@ GmshApi& Ready()
   return api;
 }
 
+/**
+ * HXT's optimisation pass (gmsh 4.8.4) can return two nodes at the same
+ * coordinates, each carrying tets (measured: 3 such pairs in a 3,626-tet mesh
+ * of a sphere, none without the pass): a crack through the mesh. The points
+ * of equal coordinates are merged (the first kept, ids renumbered); a tet
+ * left with a repeated corner (zero volume) is dropped.
+ */
+void MergeCoincidentPoints(std::vector<double>& points, std::vector<int>& tets)
+{
+  const std::size_t n = points.size() / 3;
+  std::vector<int> order(n);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    order[i] = static_cast<int>(i);
+  }
+  const double* p = points.data();
+  std::sort(order.begin(), order.end(), [p](int a, int b) {
+    return std::lexicographical_compare(p + 3 * static_cast<std::size_t>(a),
+      p + 3 * static_cast<std::size_t>(a) + 3, p + 3 * static_cast<std::size_t>(b),
+      p + 3 * static_cast<std::size_t>(b) + 3);
+  });
+  std::vector<int> first(order.size());
+  bool merged = false;
+  for (std::size_t k = 0; k < order.size(); ++k)
+  {
+    const std::size_t i = static_cast<std::size_t>(order[k]);
+    first[i] = order[k];
+    if (k > 0 && std::equal(p + 3 * i, p + 3 * i + 3, p + 3 * static_cast<std::size_t>(order[k - 1])))
+    {
+      first[i] = first[static_cast<std::size_t>(order[k - 1])];
+      merged = true;
+    }
+  }
+  if (!merged)
+  {
+    return;
+  }
+  std::vector<int> newId(n, -1);
+  std::vector<double> kept;
+  kept.reserve(points.size());
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    if (first[i] == static_cast<int>(i))
+    {
+      newId[i] = static_cast<int>(kept.size() / 3);
+      kept.insert(kept.end(), p + 3 * i, p + 3 * i + 3);
+    }
+  }
+  std::vector<int> keptTets;
+  keptTets.reserve(tets.size());
+  for (std::size_t t = 0; 4 * t < tets.size(); ++t)
+  {
+    int ids[4];
+    for (int k = 0; k < 4; ++k)
+    {
+      ids[k] = newId[static_cast<std::size_t>(first[static_cast<std::size_t>(tets[4 * t + k])])];
+    }
+    if (ids[0] == ids[1] || ids[0] == ids[2] || ids[0] == ids[3] || ids[1] == ids[2] ||
+      ids[1] == ids[3] || ids[2] == ids[3])
+    {
+      continue;
+    }
+    keptTets.insert(keptTets.end(), ids, ids + 4);
+  }
+  points.swap(kept);
+  tets.swap(keptTets);
+}
+
 /// Frees arrays gmsh allocated.
 template <typename T>
 struct GmshArray
@@ -238,7 +517,33 @@ bool RunHxtMesher(const std::vector<double>& points, const std::vector<int>& tri
     error = "the hxt mesher needs a mesh size > 0 mm";
     return false;
   }
-  const std::size_t numPoints = points.size() / 3;
+  // One closed surface: HXT fails on several (measured: two disjoint
+  // spheres, "HXT 3D mesh failed").
+  const int parts = CountSurfaceParts(points.size() / 3, triangles);
+  if (parts > 1)
+  {
+    error = "the hxt mesher fills one closed surface; this one has " + std::to_string(parts) +
+      " separate parts: use the tetgen mesher, or mesh the parts one by one";
+    return false;
+  }
+  // The surface HXT gets: the input, or the input refined (not with
+  // RemeshSurface: gmsh re-meshes it to MeshSize itself).
+  std::vector<double> refinedPoints;
+  std::vector<int> refinedTriangles;
+  const bool refine = !options.RemeshSurface && options.SurfaceEdgeLength > 0.0;
+  if (refine)
+  {
+    refinedPoints = points;
+    refinedTriangles = triangles;
+    if (!RefineSurfaceLongestEdge(
+          refinedPoints, refinedTriangles, options.SurfaceEdgeLength, error))
+    {
+      return false;
+    }
+  }
+  const std::vector<double>& surfacePoints = refine ? refinedPoints : points;
+  const std::vector<int>& surfaceTriangles = refine ? refinedTriangles : triangles;
+  const std::size_t numPoints = surfacePoints.size() / 3;
   std::lock_guard<std::mutex> lock(GmshMutex());
   OmpThreadsGuard threadsGuard;
   GmshApi* apiPointer = nullptr;
@@ -263,7 +568,9 @@ bool RunHxtMesher(const std::vector<double>& points, const std::vector<int>& tri
     set("Mesh.MeshSizeMax", options.MeshSize);
     set("Mesh.MeshSizeMin", options.RemeshSurface ? options.MeshSize : 0.0);
     set("Mesh.MeshSizeFromPoints", options.RemeshSurface ? 0 : 1);
-    set("Mesh.MeshSizeExtendFromBoundary", options.RemeshSurface ? 0 : 1);
+    // On a refined surface the interior takes MeshSize, not the sizes
+    // interpolated from the surface: the count then follows MeshSize smoothly.
+    set("Mesh.MeshSizeExtendFromBoundary", options.RemeshSurface || refine ? 0 : 1);
     set("Mesh.MeshSizeFromCurvature", 0);
 
     api.ModelAdd("translucency", &ierr);
@@ -275,14 +582,14 @@ bool RunHxtMesher(const std::vector<double>& points, const std::vector<int>& tri
     {
       nodeTags[i] = i + 1;
     }
-    std::vector<double> coordinates(points);
+    std::vector<double> coordinates(surfacePoints);
     api.ModelMeshAddNodes(2, surface, nodeTags.data(), nodeTags.size(), coordinates.data(),
       coordinates.size(), nullptr, 0, &ierr);
     Check(api, ierr, "mesh/addNodes");
-    std::vector<std::size_t> triangleNodes(triangles.size());
-    for (std::size_t i = 0; i < triangles.size(); ++i)
+    std::vector<std::size_t> triangleNodes(surfaceTriangles.size());
+    for (std::size_t i = 0; i < surfaceTriangles.size(); ++i)
     {
-      triangleNodes[i] = static_cast<std::size_t>(triangles[i]) + 1;
+      triangleNodes[i] = static_cast<std::size_t>(surfaceTriangles[i]) + 1;
     }
     api.ModelMeshAddElementsByType(
       surface, 2, nullptr, 0, triangleNodes.data(), triangleNodes.size(), &ierr);
@@ -296,11 +603,8 @@ bool RunHxtMesher(const std::vector<double>& points, const std::vector<int>& tri
       api.ModelMeshCreateGeometry(nullptr, 0, &ierr);
       Check(api, ierr, "mesh/createGeometry");
     }
-    else
-    {
-      api.ModelMeshClassifySurfaces(M_PI, 0, 0, M_PI, 1, &ierr);
-      Check(api, ierr, "mesh/classifySurfaces");
-    }
+    // Kept as it is, the one discrete surface bounds the volume directly: no
+    // classification (which took 1.2 of 10.3 s at 200k tets, for one patch).
     std::vector<int> surfaceTags;
     {
       GmshArray<int> dimTags(api);
@@ -423,6 +727,7 @@ bool RunHxtMesher(const std::vector<double>& points, const std::vector<int>& tri
       }
     }
     api.Clear(&ierr);
+    MergeCoincidentPoints(outPoints, outTets);
     return true;
   }
   catch (const GmshFailure& failure)
@@ -437,6 +742,7 @@ bool RunHxtMesher(const std::vector<double>& points, const std::vector<int>& tri
   {
     int ierr = 0;
     apiPointer->Clear(&ierr);
+    NeedsFreshGmsh() = true; // this instance may be locked (see NeedsFreshGmsh)
   }
   return false;
 }

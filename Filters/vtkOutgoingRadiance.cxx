@@ -412,6 +412,9 @@ struct vtkOutgoingRadiance::Internals
   vtkWeakPointer<vtkDataArray> EtaArray;
   vtkMTimeType EtaTime = 0;
   std::vector<double> PointEta;
+  /// The per-piece path's physical boundary, kept while every rank's piece
+  /// is the same (issue 32).
+  vtkTranslucencyDistributedRadiance::SurfaceCache PieceSurface;
 
   const SerialSurfaceGeometry& SurfaceOf(const std::shared_ptr<const translucency::TetMesh>& mesh)
   {
@@ -583,13 +586,14 @@ int vtkOutgoingRadiance::RequestPerPiece(vtkInformationVector** inputVector,
   this->Internal->Mesh.reset();
   // Every rank takes part in every collective below, an empty piece too.
   // 1. The piece's physical boundary (collective) and its arrays.
-  vtkTranslucencyDistributedRadiance::Surface surface;
+  const vtkTranslucencyDistributedRadiance::Surface* found = nullptr;
   std::string error;
-  if (!vtkTranslucencyDistributedRadiance::FindSurface(input, surface, error))
+  if (!this->Internal->PieceSurface.Find(input, found, error))
   {
     vtkErrorMacro(<< error);
     return 0;
   }
+  const vtkTranslucencyDistributedRadiance::Surface& surface = *found;
   const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
   std::vector<double> fluence, irradiance;
   std::string local;

@@ -131,6 +131,21 @@ struct vtkSolveDiffusion::Internals
   std::weak_ptr<const translucency::TetMesh> RangeMesh;
   std::vector<double> Sizes;
   vtkMTimeType RangeAbsorptionTime = 0, RangeScatteringTime = 0;
+  /// The coefficient arrays (absorption, scattering, refractive index) of
+  /// the last successful serial solve: their addresses and modification
+  /// times, compared, never dereferenced. The same arrays, not modified
+  /// since (VTK's modification times only grow, so a new array never has an
+  /// old array's time), on the mesh the front end kept its material for, are
+  /// the same material: a relight neither copies, validates nor compares it.
+  const void* KeptArrays[3] = { nullptr, nullptr, nullptr };
+  vtkMTimeType KeptTimes[3] = { 0, 0, 0 };
+  /// Executions that copied and validated the coefficient arrays.
+  long long MaterialConversions = 0;
+  /// True if `input` carries the kept coefficient arrays, unmodified.
+  bool SameMaterialArrays(vtkUnstructuredGrid* input) const;
+  /// Remember `input`'s coefficient arrays (after a successful solve) or
+  /// forget them (null).
+  void KeepMaterialArrays(vtkUnstructuredGrid* input);
   /// The distributed path's solver (kept: hierarchy and warm start).
   vtkTranslucencyDistributedSolve Distributed;
   /// Time gates: the snapshots asked for.
@@ -257,6 +272,16 @@ const char* vtkSolveDiffusion::GetLastAssembly() const
 vtkIdType vtkSolveDiffusion::GetNumberOfChangedTets() const
 {
   return static_cast<vtkIdType>(this->Internal->FrontEnd.GetNumberOfChangedTets());
+}
+
+vtkTypeInt64 vtkSolveDiffusion::GetNumberOfMaterialConversions() const
+{
+  return this->Internal->MaterialConversions;
+}
+
+vtkTypeInt64 vtkSolveDiffusion::GetNumberOfMaterialComparisons() const
+{
+  return this->Internal->FrontEnd.GetNumberOfMaterialComparisons();
 }
 
 vtkTypeInt64 vtkSolveDiffusion::GetNumberOfUnknowns() const
@@ -759,9 +784,14 @@ int vtkSolveDiffusion::RequestSerial(
     }
     this->TopologyTime = built ? translucency::MillisecondsSince(start) : 0.0;
     this->UpdateProgress(0.05);
+    // The material: the front end's kept copy when the input carries the
+    // same coefficient arrays, unmodified, as the last solve (a relight);
+    // else copied and validated.
+    const bool keptMaterial = in.SameMaterialArrays(input) && in.FrontEnd.HasKeptMaterial(mesh);
+    in.KeepMaterialArrays(nullptr); // until this solve succeeds
     translucency::OpticalProperties material;
     std::vector<double> irradiance;
-    if (!vtkTranslucency::ToOpticalProperties(input, material, error) ||
+    if ((!keptMaterial && !vtkTranslucency::ToOpticalProperties(input, material, error)) ||
       !vtkTranslucency::ReadPointArray(
         input, vtkTranslucency::IrradianceName, 3, irradiance, error))
     {
@@ -772,6 +802,7 @@ int vtkSolveDiffusion::RequestSerial(
       in.FrontEnd.Reset(); // as a failed solve: no warm start from before it
       throw translucency::Error(error);
     }
+    in.MaterialConversions += keptMaterial ? 0 : 1;
     translucency::DiffusionProblem light;
     ReadLights(input, light);
     in.AddInteractiveSources(*this, mesh.get(), nullptr);
@@ -787,8 +818,19 @@ int vtkSolveDiffusion::RequestSerial(
     // The core: the solver by name with its settings, then the one solve.
     in.Configure(*this, mesh->GetNumberOfPoints());
     in.FrontEnd.CheckDomain(solveRequest);
-    in.CheckModelRange(*this, input, mesh, material);
     auto* sp3 = dynamic_cast<translucency::Sp3Solver*>(&in.FrontEnd.GetSolver());
+    if (keptMaterial && (sp3 || !in.FrontEnd.HasKeptMaterial(mesh)))
+    {
+      // Configure chose another solver (which forgets the kept material), or
+      // sp3 (which adds the anisotropy to its own copy): read the arrays.
+      if (!vtkTranslucency::ToOpticalProperties(input, material, error))
+      {
+        throw translucency::Error(error);
+      }
+      ++in.MaterialConversions;
+    }
+    const bool useKept = keptMaterial && !sp3 && in.FrontEnd.HasKeptMaterial(mesh);
+    in.CheckModelRange(*this, input, mesh, useKept ? *in.FrontEnd.GetKeptMaterial() : material);
     if (sp3 && this->Anisotropy != 0.0)
     {
       // SP3 resolves the phase function's moments: g per tet and channel
@@ -798,11 +840,15 @@ int vtkSolveDiffusion::RequestSerial(
     const translucency::OpticalProperties sp3Material =
       sp3 ? material : translucency::OpticalProperties();
     const std::vector<double> sp3Irradiance = sp3 ? irradiance : std::vector<double>();
-    if (!in.FrontEnd.Solve(mesh, std::move(material), std::move(irradiance), light, solveRequest,
-          in.Result))
+    const bool solved = useKept
+      ? in.FrontEnd.SolveKeptMaterial(mesh, std::move(irradiance), light, solveRequest, in.Result)
+      : in.FrontEnd.Solve(
+          mesh, std::move(material), std::move(irradiance), light, solveRequest, in.Result);
+    if (!solved)
     {
       return 0; // aborted by the user
     }
+    in.KeepMaterialArrays(input);
     if (sp3)
     {
       in.Sp3Readouts(*sp3, *mesh, sp3Material, sp3Irradiance);
@@ -1054,6 +1100,33 @@ void vtkSolveDiffusion::Internals::Configure(vtkSolveDiffusion& self, int number
     self.UpdateProgress(0.05 + 0.9 * fraction);
     return !self.CheckAbort();
   });
+}
+
+bool vtkSolveDiffusion::Internals::SameMaterialArrays(vtkUnstructuredGrid* input) const
+{
+  const char* names[3] = { vtkTranslucency::AbsorptionName, vtkTranslucency::ScatteringName,
+    vtkTranslucency::RefractiveIndexName };
+  for (int k = 0; k < 3; ++k)
+  {
+    vtkDataArray* array = input ? input->GetCellData()->GetArray(names[k]) : nullptr;
+    if (!array || array != this->KeptArrays[k] || array->GetMTime() != this->KeptTimes[k])
+    {
+      return false;
+    }
+  }
+  return true;
+}
+
+void vtkSolveDiffusion::Internals::KeepMaterialArrays(vtkUnstructuredGrid* input)
+{
+  const char* names[3] = { vtkTranslucency::AbsorptionName, vtkTranslucency::ScatteringName,
+    vtkTranslucency::RefractiveIndexName };
+  for (int k = 0; k < 3; ++k)
+  {
+    vtkDataArray* array = input ? input->GetCellData()->GetArray(names[k]) : nullptr;
+    this->KeptArrays[k] = array;
+    this->KeptTimes[k] = array ? array->GetMTime() : 0;
+  }
 }
 
 void vtkSolveDiffusion::Internals::CheckModelRange(vtkSolveDiffusion& self,

@@ -547,6 +547,16 @@ public:
   /// IncrementalAssembly off).
   vtkIdType GetNumberOfChangedTets() const;
 
+  /// Serial executions that copied and validated the coefficient arrays
+  /// (AbsorptionCoefficient, ReducedScatteringCoefficient, RefractiveIndex)
+  /// since construction. An execution whose input carries the same arrays,
+  /// unmodified (VTK modification time), as the last successful solve on the
+  /// same mesh (a relight) reuses the material kept from it instead.
+  vtkTypeInt64 GetNumberOfMaterialConversions() const;
+  /// Serial solves that compared the material tet by tet with the last one
+  /// (to find the tets a paint changed) since construction.
+  vtkTypeInt64 GetNumberOfMaterialComparisons() const;
+
   ///@{
   /// Statistics of the last solve, per channel c in 0..2 (R, G, B).
   int GetNumberOfIterations(int channel) const;

@@ -48,6 +48,9 @@ struct vtkSurfaceIrradiance::Internals
   /// Each light's term and the uniform light's, kept across executions
   /// (a relight recomputes the changed light only).
   translucency::IrradianceCache Cache;
+  /// The distributed path's: the gathered boundary surface and each
+  /// light's terms, kept while every rank's piece is the same.
+  vtkTranslucencyDistributedIrradiance::State Distributed;
 };
 
 //------------------------------------------------------------------------------
@@ -277,7 +280,8 @@ int vtkSurfaceIrradiance::RequestLights(
     vtkTranslucencyDistributedIrradiance::Report report;
     if (!vtkTranslucencyDistributedIrradiance::Compute(input, computed, uniformIrradiance,
           this->UniformLightSamples, this->Shadows,
-          [this]() { return this->GetAbortExecute() != 0; }, q, report, error))
+          [this]() { return this->GetAbortExecute() != 0; }, q, report, error,
+          &this->Internal->Distributed))
     {
       if (!error.empty())
       {
@@ -285,6 +289,8 @@ int vtkSurfaceIrradiance::RequestLights(
       }
       return 0;
     }
+    this->LightsComputed = this->Internal->Distributed.GetNumberOfLightsComputed();
+    this->UniformComputed = this->Internal->Distributed.GetUniformComputed();
     this->BoundarySurfaceTriangles = report.SurfaceTriangles;
     this->BoundarySurfaceBytes = report.GatheredBytes;
     this->BoundarySurfaceTime = report.GatherMilliseconds;

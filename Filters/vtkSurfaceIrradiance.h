@@ -259,7 +259,9 @@ public:
    * each light's term and the uniform light's across executions
    * (translucency::IrradianceCache, keyed on the mesh geometry, the
    * refractive index and the light's parameters), so turning one light
-   * recomputes that light only; the distributed path computes everything.
+   * recomputes that light only; so does the distributed path
+   * (vtkTranslucencyDistributedIrradiance::State: the gathered surface and
+   * the terms kept while every rank's piece and refractive index are the same).
    */
   int GetNumberOfLightsComputed() const { return this->LightsComputed; }
   bool GetUniformComputed() const { return this->UniformComputed; }

@@ -741,11 +741,17 @@ double GradedLayer(const Surface& surface, double grading)
   return area * (grading * (grading + 1.0) / 2.0 - 1.0);
 }
 
+/// The hxt mesher's surface refinement: longest-edge bisection leaves edges
+/// between half and all of the bound, so a bound of this factor times the
+/// interior edge length h gives surface edges of about h on average.
+constexpr double HxtSurfaceEdgeFactor = 1.35;
+
 /// One run of the mesher for a size `parameter`: TetGen's volume bound -a
 /// (graded: the edge length of its background) or edge length (uniform, -m);
 /// HXT's edge length. 0: none (`diag` the surface's bounding-box diagonal).
 bool RunMesher(const MeshSettings& s, const Surface& surface, double diag, double parameter,
-  std::vector<double>& points, std::vector<int>& tets, std::string& error)
+  std::vector<double>& points, std::vector<int>& tets, std::string& error,
+  double hxtSurfaceEdge = 0.0)
 {
   if (s.Mesher == "tetgen" && s.Grading > 0.0)
   {
@@ -796,6 +802,10 @@ bool RunMesher(const MeshSettings& s, const Surface& surface, double diag, doubl
   translucency::HxtMesherOptions options;
   options.MeshSize = parameter > 0 ? parameter : diag;
   options.RemeshSurface = s.UniformSizing;
+  // HXT keeps the surface it gets: the input surface is refined to about
+  // the interior edge length first, or a coarse surface grades into slivers
+  // (Documentation/Performance.md, "Tetrahedralisers").
+  options.SurfaceEdgeLength = hxtSurfaceEdge;
   options.Threads = s.NumberOfThreads;
   options.Optimize = s.HxtOptimization;
   return translucency::RunHxtMesher(surface.Points, triangles, options, points, tets, error);
@@ -876,7 +886,11 @@ bool MeshToTarget(const MeshSettings& s, const Surface& surface, double volume,
   const double diag = BoundingDiagonal(surface);
   const CountModel model(s);
   double parameter = FirstParameter(s, model, volume, GradedLayer(surface, s.Grading));
-  if (!RunMesher(s, surface, diag, parameter, points, tets, error))
+  // hxt: the surface refinement is that of the first size for every run,
+  // so that the count follows the interior size smoothly (bisection
+  // refines a surface of similar edges in steps of 2x, all at once).
+  const double hxtSurfaceEdge = parameter > 0 ? HxtSurfaceEdgeFactor * parameter : 0.0;
+  if (!RunMesher(s, surface, diag, parameter, points, tets, error, hxtSurfaceEdge))
   {
     return false;
   }
@@ -897,7 +911,7 @@ bool MeshToTarget(const MeshSettings& s, const Surface& surface, double volume,
   std::vector<int> firstTets;
   firstPoints.swap(points);
   firstTets.swap(tets);
-  if (!RunMesher(s, surface, diag, parameter, points, tets, error))
+  if (!RunMesher(s, surface, diag, parameter, points, tets, error, hxtSurfaceEdge))
   {
     return false;
   }
@@ -918,7 +932,7 @@ bool MeshToTarget(const MeshSettings& s, const Surface& surface, double volume,
       std::vector<double> thirdPoints;
       std::vector<int> thirdTets;
       if (!RunMesher(s, surface, diag, parameter * std::exp(-std::log(ratio2) / slope),
-            thirdPoints, thirdTets, error))
+            thirdPoints, thirdTets, error, hxtSurfaceEdge))
       {
         return false;
       }

@@ -1,4 +1,5 @@
 #include "vtkSurfaceReader.h"
+#include "vtkTranslucencyNumbers.h"
 
 #include "vtkCellArray.h"
 #include "vtkDoubleArray.h"
@@ -157,38 +158,21 @@ void Tokenize(std::string_view line, std::vector<std::string_view>& tokens)
 /// The whole token as a decimal integer (an optional leading '+').
 bool ParseInteger(std::string_view token, long long& value)
 {
-  const char* first = token.data();
-  const char* last = first + token.size();
-  if (first != last && *first == '+' && last - first > 1 && first[1] != '-')
-  {
-    ++first;
-  }
-  const auto r = std::from_chars(first, last, value);
-  return r.ec == std::errc() && r.ptr == last && first != last;
+  return vtkTranslucencyNumbers::ParseWhole(token, value);
 }
 
 /// The whole token as a decimal unsigned integer.
 bool ParseUnsigned(std::string_view token, unsigned long long& value)
 {
-  const char* first = token.data();
-  const char* last = first + token.size();
-  if (first != last && *first == '+' && last - first > 1)
-  {
-    ++first;
-  }
-  const auto r = std::from_chars(first, last, value);
-  return r.ec == std::errc() && r.ptr == last && first != last;
+  return vtkTranslucencyNumbers::ParseWhole(token, value);
 }
 
 /// The whole token as a finite real number; `error` says why not.
 bool ParseFinite(std::string_view token, double& value, std::string& error)
 {
-  const char* first = token.data();
-  const char* last = first + token.size();
-  if (first != last && *first == '+' && last - first > 1 && first[1] != '-')
-  {
-    ++first;
-  }
+  const std::string_view digits = vtkTranslucencyNumbers::StripPlus(token);
+  const char* first = digits.data();
+  const char* last = first + digits.size();
   const auto r = std::from_chars(first, last, value);
   if (r.ec == std::errc::result_out_of_range)
   {

@@ -1,4 +1,5 @@
 #include "vtkTetGenReader.h"
+#include "vtkTranslucencyNumbers.h"
 
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
@@ -132,44 +133,13 @@ std::string Quote(std::string_view token)
 /// Parses the whole token as a decimal integer (an optional leading '+' is allowed).
 bool ParseInteger(std::string_view token, long long& value)
 {
-  const char* first = token.data();
-  const char* last = first + token.size();
-  if (first != last && *first == '+')
-  {
-    ++first;
-    if (first != last && *first == '-')
-    {
-      return false;
-    }
-  }
-  if (first == last)
-  {
-    return false;
-  }
-  const std::from_chars_result result = std::from_chars(first, last, value);
-  return result.ec == std::errc() && result.ptr == last;
+  return vtkTranslucencyNumbers::ParseWhole(token, value);
 }
 
 /// Parses the whole token as a real number, independently of the C locale.
 bool ParseReal(std::string_view token, double& value)
 {
-  const char* first = token.data();
-  const char* last = first + token.size();
-  if (first != last && *first == '+')
-  {
-    ++first;
-    if (first != last && *first == '-')
-    {
-      return false;
-    }
-  }
-  if (first == last)
-  {
-    return false;
-  }
-  const std::from_chars_result result =
-    std::from_chars(first, last, value, std::chars_format::general);
-  return result.ec == std::errc() && result.ptr == last;
+  return vtkTranslucencyNumbers::ParseWhole(token, value);
 }
 
 //------------------------------------------------------------------------------

@@ -23,15 +23,54 @@
 #include <algorithm>
 #include <memory>
 
-bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
-  const std::vector<translucency::LightSource>& lights, double uniformIrradiance,
-  int uniformSamples, bool shadows, const std::function<bool()>& abort, std::vector<double>& q,
-  Report& report, std::string& error)
+struct vtkTranslucencyDistributedIrradiance::State::Impl
 {
-  MPI_Comm comm = *vtkTranslucency::MPIHandle(vtkTranslucencyCommunicator::World());
-  report = Report();
+  bool Valid = false;
+  vtkTranslucency::PieceIdentity Identity; ///< of the piece the surface is of
+  vtkIdType NumberOfPoints = 0;
+  std::vector<int> SurfacePoint; ///< per piece point: its surface point, -1 if none
+  std::vector<int> Wanted;       ///< this rank's distinct surface points (sorted)
+  translucency::SurfacePointIrradianceCache Kernel;
+  Report Gathered;               ///< the gather's figures
+  bool SurfaceGathered = false;  ///< by the last Compute
+};
+
+vtkTranslucencyDistributedIrradiance::State::State()
+  : In(new Impl)
+{
+}
+
+vtkTranslucencyDistributedIrradiance::State::~State() = default;
+
+int vtkTranslucencyDistributedIrradiance::State::GetNumberOfLightsComputed() const
+{
+  return this->In->Kernel.GetNumberOfLightsComputed();
+}
+
+bool vtkTranslucencyDistributedIrradiance::State::GetUniformComputed() const
+{
+  return this->In->Kernel.GetUniformComputed();
+}
+
+bool vtkTranslucencyDistributedIrradiance::State::GetSurfaceGathered() const
+{
+  return this->In->SurfaceGathered;
+}
+
+void vtkTranslucencyDistributedIrradiance::State::Clear()
+{
+  this->In.reset(new Impl);
+}
+
+namespace
+{
+/// Collective. Gathers the physical boundary surface into `state` (this
+/// rank's points on it, their sample rotations). Throws translucency::Error
+/// (the same on every rank).
+void GatherInto(MPI_Comm comm, vtkUnstructuredGrid* input,
+  vtkTranslucencyDistributedIrradiance::State::Impl& state)
+{
   std::string local;
-  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
   vtkTranslucency::PieceFaces faces;
   try
   {
@@ -47,45 +86,90 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
   std::vector<translucency::PointKey> keys;
   vtkTranslucency::MakePointKeys(comm, input, points, !local.empty(), keys);
   MPI_Allreduce(&ownedTets, &totalTets, 1, MPI_LONG_LONG, MPI_SUM, comm);
+  translucency::AgreeOnError(comm, local);
+  if (totalTets == 0)
+  {
+    throw translucency::Error("the input mesh is empty (no points or no cells)");
+  }
+  translucency::BoundarySurface surface;
+  std::vector<double> rotations;
+  translucency::BoundarySurfaceReport gathered;
+  translucency::GatherBoundarySurface(comm, points, keys, faces.Used, faces.Triangles,
+    faces.TriangleEta, faces.TriangleTets, surface, state.SurfacePoint, rotations, gathered);
+  state.Gathered = vtkTranslucencyDistributedIrradiance::Report();
+  state.Gathered.SurfaceTriangles = gathered.Triangles;
+  state.Gathered.SurfacePoints = gathered.Points;
+  state.Gathered.GatheredBytes = gathered.GatheredBytes;
+  state.Gathered.GatherMilliseconds = gathered.Milliseconds;
+
+  // This rank's distinct surface points, computed once each.
+  state.Wanted.clear();
+  for (int s : state.SurfacePoint)
+  {
+    if (s >= 0)
+      state.Wanted.push_back(s);
+  }
+  std::sort(state.Wanted.begin(), state.Wanted.end());
+  state.Wanted.erase(std::unique(state.Wanted.begin(), state.Wanted.end()), state.Wanted.end());
+  std::vector<double> wantedRotations(state.Wanted.size());
+  for (size_t k = 0; k < state.Wanted.size(); ++k)
+    wantedRotations[k] = rotations[static_cast<size_t>(state.Wanted[k])];
+  local.clear();
   try
   {
-    translucency::AgreeOnError(comm, local);
-    if (totalTets == 0)
-    {
-      throw translucency::Error("the input mesh is empty (no points or no cells)");
-    }
-    translucency::BoundarySurface surface;
-    std::vector<int> surfacePoint;
-    std::vector<double> rotations;
-    translucency::BoundarySurfaceReport gathered;
-    translucency::GatherBoundarySurface(comm, points, keys, faces.Used,
-      faces.Triangles, faces.TriangleEta, faces.TriangleTets, surface, surfacePoint, rotations,
-      gathered);
-    report.SurfaceTriangles = gathered.Triangles;
-    report.SurfacePoints = gathered.Points;
-    report.GatheredBytes = gathered.GatheredBytes;
-    report.GatherMilliseconds = gathered.Milliseconds;
+    state.Kernel.SetSurface(std::move(surface), state.Wanted, std::move(wantedRotations));
+  }
+  catch (const translucency::Error& e)
+  {
+    local = e.what();
+  }
+  translucency::AgreeOnError(comm, local);
+}
+}
 
-    // This rank's distinct surface points, computed once each.
-    const translucency::Timer timer;
-    std::vector<int> wanted;
-    for (int s : surfacePoint)
+bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
+  const std::vector<translucency::LightSource>& lights, double uniformIrradiance,
+  int uniformSamples, bool shadows, const std::function<bool()>& abort, std::vector<double>& q,
+  Report& report, std::string& error, State* kept)
+{
+  MPI_Comm comm = *vtkTranslucency::MPIHandle(vtkTranslucencyCommunicator::World());
+  report = Report();
+  State temporary;
+  State::Impl& state = *(kept ? kept : &temporary)->In;
+  state.SurfaceGathered = false;
+  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
+
+  // The kept surface while every rank's piece and its refractive index are
+  // the same (a relight); else gathered again.
+  const vtkTranslucency::PieceIdentity identity = vtkTranslucency::PieceIdentity::Of(input);
+  const bool same = vtkTranslucency::SameOnEveryRank(comm,
+    state.Valid && state.Kernel.HasSurface() && identity == state.Identity &&
+      numPoints == state.NumberOfPoints);
+  try
+  {
+    if (!same)
     {
-      if (s >= 0)
-        wanted.push_back(s);
+      state.Valid = false;
+      GatherInto(comm, input, state);
+      state.SurfaceGathered = true;
+      state.Identity = identity;
+      state.NumberOfPoints = numPoints;
+      state.Valid = true;
+      report.GatherMilliseconds = state.Gathered.GatherMilliseconds;
     }
-    std::sort(wanted.begin(), wanted.end());
-    wanted.erase(std::unique(wanted.begin(), wanted.end()), wanted.end());
-    std::vector<double> wantedRotations(wanted.size());
-    for (size_t k = 0; k < wanted.size(); ++k)
-      wantedRotations[k] = rotations[static_cast<size_t>(wanted[k])];
+    report.SurfaceTriangles = state.Gathered.SurfaceTriangles;
+    report.SurfacePoints = state.Gathered.SurfacePoints;
+    report.GatheredBytes = state.Gathered.GatheredBytes;
+
+    // This rank's surface points: the kept terms of unchanged lights.
+    const translucency::Timer timer;
     std::vector<double> values;
     int aborted = 0;
-    local.clear();
+    std::string local;
     try
     {
-      aborted = translucency::ComputeSurfacePointIrradiance(surface, wanted, wantedRotations,
-                  lights, uniformIrradiance, uniformSamples, shadows, values, abort)
+      aborted = state.Kernel.Compute(lights, uniformIrradiance, uniformSamples, shadows, values,
+                  abort)
         ? 0
         : 1;
     }
@@ -100,10 +184,11 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
       error.clear();
       return false;
     }
+    const std::vector<int>& wanted = state.Wanted;
     q.assign(3 * static_cast<size_t>(numPoints), 0.0);
     for (vtkIdType i = 0; i < numPoints; ++i)
     {
-      const int s = surfacePoint[static_cast<size_t>(i)];
+      const int s = state.SurfacePoint[static_cast<size_t>(i)];
       if (s < 0)
         continue;
       const size_t k = static_cast<size_t>(
@@ -115,6 +200,8 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
   catch (const translucency::Error& e)
   {
     error = e.what(); // the same on every rank (AgreeOnError)
+    if (!state.Valid)
+      state.Kernel.Clear(); // a failed gather; a light's error keeps the surface
     return false;
   }
   return true;
@@ -157,9 +244,37 @@ bool vtkTranslucencyDistributedIrradiance::GatherSurface(
 
 #else // no distributed path in this build
 
+struct vtkTranslucencyDistributedIrradiance::State::Impl
+{
+};
+
+vtkTranslucencyDistributedIrradiance::State::State()
+  : In(new Impl)
+{
+}
+
+vtkTranslucencyDistributedIrradiance::State::~State() = default;
+
+int vtkTranslucencyDistributedIrradiance::State::GetNumberOfLightsComputed() const
+{
+  return 0;
+}
+
+bool vtkTranslucencyDistributedIrradiance::State::GetUniformComputed() const
+{
+  return false;
+}
+
+bool vtkTranslucencyDistributedIrradiance::State::GetSurfaceGathered() const
+{
+  return false;
+}
+
+void vtkTranslucencyDistributedIrradiance::State::Clear() {}
+
 bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid*,
   const std::vector<translucency::LightSource>&, double, int, bool,
-  const std::function<bool()>&, std::vector<double>&, Report&, std::string& error)
+  const std::function<bool()>&, std::vector<double>&, Report&, std::string& error, State*)
 {
   error = "this build has no distributed surface irradiance (hypre or VTK's ParallelMPI missing)";
   return false;

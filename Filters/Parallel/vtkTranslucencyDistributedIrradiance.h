@@ -29,6 +29,7 @@
 #include "SurfaceLightKernel.h" // for translucency::BoundarySurface
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -47,16 +48,46 @@ struct Report
 };
 
 /**
+ * What Compute() keeps across the executions of one filter (issue 32), as
+ * the serial path's IrradianceCache: the gathered physical boundary
+ * surface, this rank's points on it, and the uniform light's and each
+ * light's terms (translucency::SurfacePointIrradianceCache). Kept while the
+ * geometry of every rank's piece (vtkTranslucency::PieceGeometryKey) and its
+ * RefractiveIndex (bit for bit) are the same on every rank; so a relight
+ * gathers nothing and computes the changed light only.
+ */
+class State
+{
+public:
+  State();
+  ~State();
+  State(const State&) = delete;
+  State& operator=(const State&) = delete;
+  /// What the last Compute() computed (the rest came from the kept terms):
+  /// the number of lights, whether the uniform light's term, whether the
+  /// surface was gathered.
+  int GetNumberOfLightsComputed() const;
+  bool GetUniformComputed() const;
+  bool GetSurfaceGathered() const;
+  /// Forget everything: the next Compute() gathers again.
+  void Clear();
+
+  struct Impl;
+  std::unique_ptr<Impl> In;
+};
+
+/**
  * Collective. The projected irradiance (3 per input point: R, G, B,
  * W/mm^2, 0 inside) of this rank's piece `input` for `lights` (directional,
  * point and spot), the uniform light and shadows as vtkSurfaceIrradiance.
- * Returns false with `error` (the same on every rank, "" if aborted on some
- * rank) on failure.
+ * `state` (may be null: nothing kept) keeps the gathered surface and the
+ * lights' terms across calls. Returns false with `error` (the same on every
+ * rank, "" if aborted on some rank) on failure.
  */
 bool Compute(vtkUnstructuredGrid* input, const std::vector<translucency::LightSource>& lights,
   double uniformIrradiance, int uniformSamples, bool shadows,
   const std::function<bool()>& abort, std::vector<double>& q, Report& report,
-  std::string& error);
+  std::string& error, State* state = nullptr);
 
 /**
  * Collective. The physical boundary surface of the distributed mesh (every

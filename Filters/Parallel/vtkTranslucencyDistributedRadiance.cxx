@@ -68,6 +68,48 @@ bool vtkTranslucencyDistributedRadiance::FindSurface(
   return true;
 }
 
+struct vtkTranslucencyDistributedRadiance::SurfaceCache::Impl
+{
+  bool Valid = false;
+  vtkTranslucency::PieceIdentity Identity;
+  Surface Kept;
+};
+
+vtkTranslucencyDistributedRadiance::SurfaceCache::SurfaceCache()
+  : In(new Impl)
+{
+}
+
+vtkTranslucencyDistributedRadiance::SurfaceCache::~SurfaceCache() = default;
+
+void vtkTranslucencyDistributedRadiance::SurfaceCache::Clear()
+{
+  this->In.reset(new Impl);
+}
+
+bool vtkTranslucencyDistributedRadiance::SurfaceCache::Find(
+  vtkUnstructuredGrid* input, const Surface*& surface, std::string& error)
+{
+  Impl& in = *this->In;
+  vtkTranslucency::PieceIdentity identity = vtkTranslucency::PieceIdentity::Of(input);
+  this->Searched = !vtkTranslucency::SameOnEveryRank(
+    *GlobalCommunicator(), in.Valid && identity == in.Identity);
+  surface = &in.Kept;
+  if (!this->Searched)
+  {
+    return true;
+  }
+  in.Valid = false;
+  if (!FindSurface(input, in.Kept, error))
+  {
+    in.Kept = Surface();
+    return false;
+  }
+  in.Identity = std::move(identity);
+  in.Valid = true;
+  return true;
+}
+
 std::vector<double> vtkTranslucencyDistributedRadiance::AllGather(const std::vector<double>& local)
 {
   MPI_Comm comm = *GlobalCommunicator();
@@ -91,6 +133,27 @@ void vtkTranslucencyDistributedRadiance::AllMax(std::vector<double>& values)
 }
 
 #else // no per-piece path in this build
+
+struct vtkTranslucencyDistributedRadiance::SurfaceCache::Impl
+{
+};
+
+vtkTranslucencyDistributedRadiance::SurfaceCache::SurfaceCache()
+  : In(new Impl)
+{
+}
+
+vtkTranslucencyDistributedRadiance::SurfaceCache::~SurfaceCache() = default;
+
+void vtkTranslucencyDistributedRadiance::SurfaceCache::Clear() {}
+
+bool vtkTranslucencyDistributedRadiance::SurfaceCache::Find(
+  vtkUnstructuredGrid*, const Surface*& surface, std::string& error)
+{
+  surface = nullptr;
+  error = "this build has no distributed outgoing radiance (hypre or VTK's ParallelMPI missing)";
+  return false;
+}
 
 bool vtkTranslucencyDistributedRadiance::FindSurface(vtkUnstructuredGrid*, Surface&, std::string& error)
 {

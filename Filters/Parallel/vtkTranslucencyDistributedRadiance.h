@@ -19,6 +19,7 @@
 #ifndef vtkTranslucencyDistributedRadiance_h
 #define vtkTranslucencyDistributedRadiance_h
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,34 @@ struct Surface
  * every rank, overlapping pieces without ghost marks.
  */
 bool FindSurface(vtkUnstructuredGrid* input, Surface& surface, std::string& error);
+
+/**
+ * FindSurface kept across the executions of one filter (issue 32), as the
+ * serial path keeps its surface per mesh: the last surface while the
+ * geometry and RefractiveIndex of every rank's piece are the same
+ * (vtkTranslucency::PieceIdentity, agreed over the ranks); else found again.
+ * A relight or a new solve then finds no faces and numbers no points.
+ */
+class SurfaceCache
+{
+public:
+  SurfaceCache();
+  ~SurfaceCache();
+  SurfaceCache(const SurfaceCache&) = delete;
+  SurfaceCache& operator=(const SurfaceCache&) = delete;
+  /// Collective. FindSurface's result for `input`, kept or found now
+  /// (`surface` points into this object, valid until the next call);
+  /// false with `error` (the same on every rank) as FindSurface.
+  bool Find(vtkUnstructuredGrid* input, const Surface*& surface, std::string& error);
+  /// Whether the last Find() searched (false: the kept surface).
+  bool GetSearched() const { return this->Searched; }
+  void Clear();
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> In;
+  bool Searched = false;
+};
 
 /// Collective: on every rank, `local` concatenated over the ranks (rank order).
 std::vector<double> AllGather(const std::vector<double>& local);

@@ -29,17 +29,22 @@ struct vtkTranslucencyDistributedSolve::Impl
   std::shared_ptr<translucency::TetMesh> Mesh;
   std::vector<double> Points;
   std::vector<int> Tets;
+  /// The piece's geometry key (vtkTranslucency::PieceGeometryKey) and owned
+  /// cells of Mesh: an unchanged piece (a relight, a paint) is not
+  /// converted again.
+  std::string Geometry;
+  std::vector<vtkIdType> Kept;
   translucency::SolveResult Result;
   bool Solved = false;
 };
 
 namespace
 {
-/// This rank's piece in the core's types: its points, owned tets (ghost
-/// copies left out), their material and the irradiance. Throws
+/// This rank's piece's geometry in the core's types: its points and owned
+/// tets (ghost copies left out), and the owned cells' ids. Throws
 /// translucency::Error (on this rank only).
-void ConvertPiece(vtkUnstructuredGrid* input, std::vector<double>& points, std::vector<int>& tets,
-  translucency::OpticalProperties& material, std::vector<double>& irradiance)
+void ConvertGeometry(vtkUnstructuredGrid* input, std::vector<double>& points,
+  std::vector<int>& tets, std::vector<vtkIdType>& kept)
 {
   std::string local;
   std::vector<int> cells;
@@ -49,8 +54,16 @@ void ConvertPiece(vtkUnstructuredGrid* input, std::vector<double>& points, std::
     throw translucency::Error(local);
   }
   // Owned cells only: a ghost copy is another rank's tet.
-  const std::vector<vtkIdType> kept = vtkTranslucency::OwnedTets(input, cells, tets);
-  cells = {};
+  kept = vtkTranslucency::OwnedTets(input, cells, tets);
+}
+
+/// The owned cells' material and the points' irradiance. Throws
+/// translucency::Error (on this rank only).
+void ConvertValues(vtkUnstructuredGrid* input, const std::vector<vtkIdType>& kept,
+  translucency::OpticalProperties& material, std::vector<double>& irradiance)
+{
+  std::string local;
+  const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
   if (!kept.empty())
   {
     translucency::OpticalProperties all;
@@ -58,6 +71,9 @@ void ConvertPiece(vtkUnstructuredGrid* input, std::vector<double>& points, std::
     {
       throw translucency::Error(local);
     }
+    material.AbsorptionCoefficient.reserve(3 * kept.size());
+    material.ReducedScatteringCoefficient.reserve(3 * kept.size());
+    material.RefractiveIndex.reserve(kept.size());
     for (vtkIdType c : kept)
     {
       for (int k = 0; k < 3; ++k)
@@ -107,31 +123,45 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   translucency::OpticalProperties material;
   std::vector<double> irradiance;
   std::vector<translucency::PointKey> keys;
+  // The piece's geometry is converted again only when it changed
+  // (vtkTranslucency::PieceGeometryKey: its VTK objects and their times).
+  const std::string geometry = vtkTranslucency::PieceGeometryKey(input);
+  const bool reuse = in.Mesh && !in.Geometry.empty() && geometry == in.Geometry;
   try
   {
-    ConvertPiece(input, points, tets, material, irradiance);
-    // The piece's TetMesh, kept while the piece is the same (a relight, a paint).
-    if (tets.empty())
+    if (!reuse)
     {
-      in.Mesh.reset();
+      in.Geometry.clear();
+      std::vector<vtkIdType> kept;
+      ConvertGeometry(input, points, tets, kept);
+      // The piece's TetMesh, kept while the piece is the same (a relight, a paint).
+      if (tets.empty())
+      {
+        in.Mesh.reset();
+      }
+      else if (!in.Mesh || points != in.Points || tets != in.Tets)
+      {
+        in.Mesh.reset();
+        auto mesh = std::make_shared<translucency::TetMesh>();
+        mesh->SetGeometry(points, tets);
+        in.Mesh = std::move(mesh);
+        in.Points = points;
+        in.Tets = tets;
+      }
+      in.Kept = std::move(kept);
+      if (in.Mesh)
+        in.Geometry = geometry;
     }
-    else if (!in.Mesh || points != in.Points || tets != in.Tets)
-    {
-      in.Mesh.reset();
-      auto mesh = std::make_shared<translucency::TetMesh>();
-      mesh->SetGeometry(points, tets);
-      in.Mesh = std::move(mesh);
-      in.Points = points;
-      in.Tets = tets;
-    }
+    ConvertValues(input, in.Kept, material, irradiance);
   }
   catch (const std::exception& e)
   {
     local = e.what();
     in.Mesh.reset();
+    in.Geometry.clear();
   }
   // Global ids when every rank with points has them, else coordinates.
-  vtkTranslucency::MakePointKeys(comm, input, points, !local.empty(), keys);
+  vtkTranslucency::MakePointKeys(comm, input, reuse ? in.Points : points, !local.empty(), keys);
   try
   {
     translucency::AgreeOnError(comm, local);
@@ -179,6 +209,7 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
     in.Result = translucency::SolveResult();
     in.FrontEnd.Reset();
     in.Mesh.reset();
+    in.Geometry.clear();
     return false;
   }
   fluence = std::move(in.Result.Fluence);

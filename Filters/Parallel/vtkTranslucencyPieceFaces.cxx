@@ -5,11 +5,17 @@
 #include "TetMesh.h"
 #include "vtkTranslucencyMeshConversion.h"
 
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
 #include <vtkDataArray.h>
+#include <vtkDataSetAttributes.h>
 #include <vtkPointData.h>
+#include <vtkPoints.h>
 #include <vtkUnstructuredGrid.h>
 
+#include <cstring>
 #include <memory>
+#include <sstream>
 #include <string>
 
 void vtkTranslucency::ExtractPieceFaces(
@@ -85,5 +91,55 @@ bool vtkTranslucency::MakePointKeys(MPI_Comm comm, vtkUnstructuredGrid* input,
       : translucency::PointKeyFromCoordinates(points.data() + 3 * i);
   }
   return allIds != 0;
+}
+
+std::string vtkTranslucency::PieceGeometryKey(vtkUnstructuredGrid* input)
+{
+  if (!input)
+  {
+    return "";
+  }
+  std::ostringstream os;
+  auto object = [&os](vtkObject* o) {
+    os << static_cast<const void*>(o) << ':' << (o ? o->GetMTime() : 0) << ';';
+  };
+  vtkPoints* points = input->GetPoints();
+  object(points);
+  object(points ? points->GetData() : nullptr);
+  object(input->GetCells());
+  object(input->GetCellTypesArray());
+  object(input->GetCellData()->GetArray(vtkDataSetAttributes::GhostArrayName()));
+  object(input->GetPointData()->GetGlobalIds());
+  os << input->GetNumberOfPoints() << ':' << input->GetNumberOfCells();
+  return os.str();
+}
+
+vtkTranslucency::PieceIdentity vtkTranslucency::PieceIdentity::Of(vtkUnstructuredGrid* input)
+{
+  PieceIdentity identity;
+  identity.Geometry = PieceGeometryKey(input);
+  std::string ignored; // an unreadable index is the caller's error to report
+  if (input && input->GetNumberOfCells() > 0)
+  {
+    identity.HasEta = vtkTranslucency::ReadRefractiveIndex(input, identity.Eta, ignored);
+    if (!identity.HasEta)
+      identity.Eta.clear();
+  }
+  return identity;
+}
+
+bool vtkTranslucency::PieceIdentity::operator==(const PieceIdentity& other) const
+{
+  return this->Geometry == other.Geometry && this->HasEta == other.HasEta &&
+    this->Eta.size() == other.Eta.size() &&
+    (this->Eta.empty() ||
+      std::memcmp(this->Eta.data(), other.Eta.data(), this->Eta.size() * sizeof(double)) == 0);
+}
+
+bool vtkTranslucency::SameOnEveryRank(MPI_Comm comm, bool same)
+{
+  int mine = same ? 1 : 0, all = 0;
+  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, comm);
+  return all != 0;
 }
 #endif

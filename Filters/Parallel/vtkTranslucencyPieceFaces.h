@@ -12,6 +12,7 @@
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
 #include "DistributedNumbering.h" // for translucency::PointKey
 
+#include <string>
 #include <vector>
 
 class vtkUnstructuredGrid;
@@ -49,6 +50,35 @@ void ExtractPieceFaces(vtkUnstructuredGrid* input, PieceFaces& faces, bool readE
  */
 bool MakePointKeys(MPI_Comm comm, vtkUnstructuredGrid* input, const std::vector<double>& points,
   bool skip, std::vector<translucency::PointKey>& keys);
+
+/**
+ * Not collective. The identity of the geometry of a piece across
+ * executions, for the per-mesh caches of the distributed paths (issue 32):
+ * the objects and modification times of its points, their data, its cells,
+ * its ghost array and its point GlobalIds, and its sizes (as
+ * AcquireTetMesh's key; a new VTK object has a newer modification time, so
+ * a re-used address does not match). "" for no input.
+ */
+std::string PieceGeometryKey(vtkUnstructuredGrid* input);
+
+/// Collective: `same` on every rank (an MPI_MIN of the flags).
+bool SameOnEveryRank(MPI_Comm comm, bool same);
+
+/**
+ * What the per-mesh caches of the distributed paths are keyed on: the
+ * piece's geometry (PieceGeometryKey) and its RefractiveIndex per cell, bit
+ * for bit (empty when the piece has no cells or no readable index: such a
+ * piece matches only while it stays so).
+ */
+struct PieceIdentity
+{
+  std::string Geometry;
+  std::vector<double> Eta;
+  bool HasEta = false;
+  /// Not collective: the identity of `input` now.
+  static PieceIdentity Of(vtkUnstructuredGrid* input);
+  bool operator==(const PieceIdentity& other) const;
+};
 }
 #endif
 

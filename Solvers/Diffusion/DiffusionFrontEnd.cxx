@@ -2,6 +2,7 @@
 #include "ResourceLimits.h"
 
 #include "DiffusionSolverFactory.h"
+#include "TetMesh.h"
 #include "Strings.h"
 
 #include <complex>
@@ -135,15 +136,24 @@ void DiffusionFrontEnd::CheckDomain(const SolveRequest& request) const
 }
 
 void DiffusionFrontEnd::DetectChangedTets(
-  const OpticalProperties& material, const std::vector<double>& irradiance)
+  const OpticalProperties& material, const std::vector<double>& irradiance, bool kept)
 {
   // Same mesh (topology and points), only some tets' coefficients changed
   // since the last successful solve: found by comparing with the
-  // coefficients cached from that solve. Another irradiance (a relight)
-  // rebuilds the right-hand side too.
+  // coefficients cached from that solve (none when the caller passed the
+  // kept material back: `kept`). Another irradiance (a relight) rebuilds the
+  // right-hand side too.
   const std::size_t numTets = material.RefractiveIndex.size();
   const auto limit = static_cast<std::size_t>(MaximumChangedFraction_ * numTets);
-  if (IncrementalAssembly_ && HaveLast_ && LastMaterial_.RefractiveIndex.size() == numTets &&
+  if (kept && IncrementalAssembly_ && LastIrradiance_.size() == irradiance.size())
+  {
+    const bool relit = std::memcmp(LastIrradiance_.data(), irradiance.data(),
+                         irradiance.size() * sizeof(double)) != 0;
+    ChangedTets_ = 0;
+    Solver_->SetChangedTets(std::vector<int>(), relit);
+    return;
+  }
+  if (!kept && IncrementalAssembly_ && HaveLast_ && LastMaterial_.RefractiveIndex.size() == numTets &&
     LastMaterial_.AbsorptionCoefficient.size() == material.AbsorptionCoefficient.size() &&
     LastMaterial_.ReducedScatteringCoefficient.size() ==
       material.ReducedScatteringCoefficient.size() &&
@@ -151,6 +161,7 @@ void DiffusionFrontEnd::DetectChangedTets(
   {
     const bool relit = std::memcmp(LastIrradiance_.data(), irradiance.data(),
                          irradiance.size() * sizeof(double)) != 0;
+    ++MaterialComparisons_;
     std::vector<int> changed = FindChangedTets(LastMaterial_, material, limit);
     if (changed.size() <= limit)
     {
@@ -196,9 +207,38 @@ std::string UnconvergedChannels(const SolverReport& report)
 }
 }
 
+bool DiffusionFrontEnd::HasKeptMaterial(const std::shared_ptr<const TetMesh>& mesh) const
+{
+  return HaveLast_ && mesh && mesh == Mesh_ &&
+    LastMaterial_.RefractiveIndex.size() == static_cast<std::size_t>(mesh->GetNumberOfTets());
+}
+
+bool DiffusionFrontEnd::SolveKeptMaterial(std::shared_ptr<const TetMesh> mesh,
+  std::vector<double> irradiance, const DiffusionProblem& light, const SolveRequest& request,
+  SolveResult& result)
+{
+  if (!HasKeptMaterial(mesh))
+  {
+    throw Error("DiffusionFrontEnd::SolveKeptMaterial: no material kept from a solve on this mesh");
+  }
+  CheckDomain(request); // before the kept material is taken
+  OpticalProperties material = std::move(LastMaterial_);
+  LastMaterial_ = OpticalProperties();
+  return SolveMaterial(
+    std::move(mesh), std::move(material), std::move(irradiance), light, request, result, true);
+}
+
 bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProperties material,
   std::vector<double> irradiance, const DiffusionProblem& light, const SolveRequest& request,
   SolveResult& result)
+{
+  return SolveMaterial(
+    std::move(mesh), std::move(material), std::move(irradiance), light, request, result, false);
+}
+
+bool DiffusionFrontEnd::SolveMaterial(std::shared_ptr<const TetMesh> mesh,
+  OpticalProperties material, std::vector<double> irradiance, const DiffusionProblem& light,
+  const SolveRequest& request, SolveResult& result, bool kept)
 {
   CheckDomain(request);
   const DiffusionSolverTraits& traits = GetDiffusionSolverRegistry().Get(SolverName_).Properties;
@@ -215,7 +255,7 @@ bool DiffusionFrontEnd::Solve(std::shared_ptr<const TetMesh> mesh, OpticalProper
   ChangedTets_ = -1;
   if (incremental)
   {
-    DetectChangedTets(material, irradiance);
+    DetectChangedTets(material, irradiance, kept);
   }
   ForgetLast(); // until this solve succeeds
 

@@ -187,6 +187,30 @@ public:
     SolveResult& result);
 
   /**
+   * True when the front end keeps the material of its last successful solve
+   * on `mesh` (an in-process vertex solve in continuous wave with
+   * IncrementalAssembly on, for the changed-tet detection):
+   * SolveKeptMaterial may then be called. GetKeptMaterial() is that material
+   * (null when there is none).
+   */
+  bool HasKeptMaterial(const std::shared_ptr<const TetMesh>& mesh) const;
+  const OpticalProperties* GetKeptMaterial() const { return HaveLast_ ? &LastMaterial_ : nullptr; }
+
+  /**
+   * Solve as above with the material of the last successful solve, which the
+   * caller knows did not change (e.g. the filter's input carries the same
+   * coefficient arrays, not modified since): it is not copied, compared tet
+   * by tet or validated again (a relight). Throws translucency::Error unless
+   * HasKeptMaterial(mesh).
+   */
+  bool SolveKeptMaterial(std::shared_ptr<const TetMesh> mesh, std::vector<double> irradiance,
+    const DiffusionProblem& light, const SolveRequest& request, SolveResult& result);
+
+  /// How many times a solve compared its material tet by tet with the kept
+  /// one (FindChangedTets) since construction: SolveKeptMaterial does not.
+  long long GetNumberOfMaterialComparisons() const { return MaterialComparisons_; }
+
+  /**
    * Throws translucency::Error unless the current solver has the domain of
    * `request` (its registry traits), naming the solvers that have it. Solve
    * calls it first; callers may call it before converting their input.
@@ -227,7 +251,11 @@ public:
 
 private:
   void ForgetLast();
-  void DetectChangedTets(const OpticalProperties& material, const std::vector<double>& irradiance);
+  void DetectChangedTets(
+    const OpticalProperties& material, const std::vector<double>& irradiance, bool kept);
+  bool SolveMaterial(std::shared_ptr<const TetMesh> mesh, OpticalProperties material,
+    std::vector<double> irradiance, const DiffusionProblem& light, const SolveRequest& request,
+    SolveResult& result, bool kept);
   bool SolveOnce(const DiffusionProblem& problem, const SolveRequest& request, SolveResult& result);
   bool SolveFrequency(const DiffusionProblem& problem, const SolveRequest& request,
     SolveResult& result);
@@ -249,6 +277,7 @@ private:
   OpticalProperties LastMaterial_;
   std::vector<double> LastIrradiance_;
   long long ChangedTets_ = -1;
+  long long MaterialComparisons_ = 0;
 };
 
 } // namespace translucency

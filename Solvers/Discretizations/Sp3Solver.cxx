@@ -156,6 +156,7 @@ struct Sp3Solver::Blocks
   std::array<std::vector<double>, NumberOfChannels> ImaginaryRhs1, ImaginaryRhs2;
   std::unique_ptr<LinearSolver> Cycle1, Cycle2; ///< multigrid-agg on A11, A22
   std::vector<double> InverseDiagonal;          ///< Jacobi: 2 N x 3 interleaved
+  std::vector<unsigned char> OwnA21; ///< per row: A21 differs from A12 (BlockProduct)
   bool Multigrid = false;
   bool CyclesReady = false;
 };
@@ -533,22 +534,41 @@ struct BlockValues
 };
 
 /// y = A x for the block matrix A, 2 N x 3 interleaved ((b N + i) 3 + c).
-void BlockProduct(int n, const int* rows, const int* cols, const BlockValues& a, const double* x,
-  double* y)
+/// The rows i with `ownA21[i]` == 0 read A12 in place of A21 (equal there:
+/// the two coupling blocks differ only in the Fresnel boundary rows), so
+/// an interior row reads three value arrays per channel, not four.
+void BlockProduct(int n, const int* rows, const int* cols, const BlockValues& a,
+  const unsigned char* ownA21, const double* x, double* y)
 {
   const std::size_t shift = 3 * static_cast<std::size_t>(n);
 #pragma omp for schedule(static)
   for (int i = 0; i < n; ++i)
   {
     double y1[3] = { 0, 0, 0 }, y2[3] = { 0, 0, 0 };
-    for (int k = rows[i]; k < rows[i + 1]; ++k)
+    if (ownA21[i])
     {
-      const std::size_t j = 3 * static_cast<std::size_t>(cols[k]);
-      for (int c = 0; c < 3; ++c)
+      for (int k = rows[i]; k < rows[i + 1]; ++k)
       {
-        const double x1 = x[j + c], x2 = x[shift + j + c];
-        y1[c] += a.V11[c][k] * x1 + a.V12[c][k] * x2;
-        y2[c] += a.V21[c][k] * x1 + a.V22[c][k] * x2;
+        const std::size_t j = 3 * static_cast<std::size_t>(cols[k]);
+        for (int c = 0; c < 3; ++c)
+        {
+          const double x1 = x[j + c], x2 = x[shift + j + c];
+          y1[c] += a.V11[c][k] * x1 + a.V12[c][k] * x2;
+          y2[c] += a.V21[c][k] * x1 + a.V22[c][k] * x2;
+        }
+      }
+    }
+    else
+    {
+      for (int k = rows[i]; k < rows[i + 1]; ++k)
+      {
+        const std::size_t j = 3 * static_cast<std::size_t>(cols[k]);
+        for (int c = 0; c < 3; ++c)
+        {
+          const double x1 = x[j + c], x2 = x[shift + j + c], a12 = a.V12[c][k];
+          y1[c] += a.V11[c][k] * x1 + a12 * x2;
+          y2[c] += a12 * x1 + a.V22[c][k] * x2;
+        }
       }
     }
     for (int c = 0; c < 3; ++c)
@@ -610,6 +630,51 @@ std::array<double, 3> Dots(const std::vector<double>& a, const std::vector<doubl
     }
   }
   return d;
+}
+
+/// Dots on `threads` OpenMP threads: partial sums over fixed chunks of
+/// 4096 points added in chunk order, so the result does not depend on the
+/// thread count.
+std::array<double, 3> ChunkedDots(const double* a, const double* b, std::size_t size, int threads)
+{
+  constexpr std::size_t chunk = 3 * 4096;
+  const std::size_t chunks = (size + chunk - 1) / chunk;
+  std::vector<std::array<double, 3>> partial(chunks);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::ptrdiff_t q = 0; q < static_cast<std::ptrdiff_t>(chunks); ++q)
+  {
+    double d0 = 0.0, d1 = 0.0, d2 = 0.0;
+    const std::size_t end = std::min(size, (static_cast<std::size_t>(q) + 1) * chunk);
+    for (std::size_t k = static_cast<std::size_t>(q) * chunk; k < end; k += 3)
+    {
+      d0 += a[k] * b[k];
+      d1 += a[k + 1] * b[k + 1];
+      d2 += a[k + 2] * b[k + 2];
+    }
+    partial[static_cast<std::size_t>(q)] = { d0, d1, d2 };
+  }
+  std::array<double, 3> d{ 0, 0, 0 };
+  for (const std::array<double, 3>& p : partial)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      d[c] += p[c];
+    }
+  }
+  return d;
+}
+
+/// y += s_c x per channel (interleaved by 3), on `threads` threads.
+void ChannelAxpy(const std::array<double, 3>& s, const double* x, double* y, std::size_t size,
+  int threads)
+{
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::ptrdiff_t k = 0; k < static_cast<std::ptrdiff_t>(size); k += 3)
+  {
+    y[k] += s[0] * x[k];
+    y[k + 1] += s[1] * x[k + 1];
+    y[k + 2] += s[2] * x[k + 2];
+  }
 }
 
 /**
@@ -816,6 +881,380 @@ private:
   std::array<int, 3> Iterations_{};
 };
 
+/**
+ * Restarted GMRES(m), right-preconditioned and flexible (the preconditioned
+ * vectors z_j = M^-1 v_j are kept, so x = x_0 + Z y is exact for any
+ * preconditioner, e.g. a single-precision cycle; Saad, "A flexible
+ * inner-outer preconditioned GMRES algorithm", SIAM J. Sci. Comput. 14(2),
+ * 1993, Algorithm 2.2), for the three channels in lockstep on vectors
+ * interleaved by 3: one product and one preconditioner application per
+ * iteration (BiCGSTAB: two each), Gram-Schmidt (Orthogonalise below) and
+ * Givens rotations per channel, each channel with its own Hessenberg matrix.
+ * Not the default: its orthogonalisation reads the whole basis every
+ * iteration, about one block product's memory traffic at 8 vectors, and
+ * it needs as many products as BiCGSTAB here (Solvers.md, SP3 "Cost").
+ * A channel stops when its least-squares residual |g_{j+1}| reaches RelTol
+ * (or on a happy breakdown); every restart starts from the true residual
+ * b - A x, which decides convergence. A cycle that does not reduce a
+ * channel's true residual marks it failed (reported as not converged).
+ */
+class LockstepGmres
+{
+public:
+  using Operator = std::function<void(const std::vector<double>&, std::vector<double>&)>;
+
+  LockstepGmres(Operator product, Operator precondition, double relTol, int maxIter, int restart,
+    int threads, std::function<bool(int)> progress)
+    : Product_(std::move(product))
+    , Precondition_(std::move(precondition))
+    , RelTol_(relTol)
+    , MaxIter_(maxIter)
+    , Restart_(std::max(1, restart))
+    , Threads_(std::max(1, threads))
+    , Progress_(std::move(progress))
+  {
+  }
+
+  /// Solves A x = rhs from x (sized as rhs); false if `progress` aborted.
+  bool Solve(const std::vector<double>& rhs, std::vector<double>& x, SolverReport& report)
+  {
+    const std::size_t size = rhs.size();
+    R_.assign(size, 0.0);
+    W_.assign(size, 0.0);
+    Bb_ = Dots(rhs, rhs);
+    for (int c = 0; c < 3; ++c)
+    {
+      if (Bb_[c] == 0.0)
+      {
+        // No source in this channel: the solution is 0.
+        for (std::size_t k = static_cast<std::size_t>(c); k < size; k += 3)
+        {
+          x[k] = 0.0;
+        }
+      }
+    }
+    TrueResidual(rhs, x);
+    while (It_ < MaxIter_)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        Done_[c] = Failed_[c] || Converged(c);
+      }
+      if (Done_[0] && Done_[1] && Done_[2])
+      {
+        break;
+      }
+      const std::array<double, 3> before = Rr_;
+      if (!Cycle(x))
+      {
+        return false;
+      }
+      TrueResidual(rhs, x);
+      for (int c = 0; c < 3; ++c)
+      {
+        // No progress over a whole cycle: stagnation (or a non-finite value).
+        if (!Done_[c] && !Converged(c) && !(Rr_[c] < before[c]))
+        {
+          Failed_[c] = true;
+        }
+      }
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      report.Iterations[c] = Iterations_[c];
+      report.Residual[c] = Bb_[c] > 0.0 ? std::sqrt(Rr_[c] / Bb_[c]) : std::sqrt(Rr_[c]);
+      report.Converged[c] = !Failed_[c] && Converged(c);
+    }
+    return true;
+  }
+
+private:
+  bool Converged(int c) const
+  {
+    return Bb_[c] == 0.0 ? Rr_[c] == 0.0 : std::sqrt(Rr_[c] / Bb_[c]) <= RelTol_;
+  }
+
+  void TrueResidual(const std::vector<double>& rhs, const std::vector<double>& x)
+  {
+    Product_(x, R_);
+    for (std::size_t k = 0; k < R_.size(); ++k)
+    {
+      R_[k] = rhs[k] - R_[k];
+    }
+    Rr_ = Dots(R_, R_);
+  }
+
+  /// The basis vector v_j (allocated on first use: memory grows with the
+  /// iterations a cycle needs, at most Restart_ + 1 vectors of V and
+  /// Restart_ of Z).
+  static std::vector<double>& Vector(std::vector<std::vector<double>>& set, int j, std::size_t size)
+  {
+    if (static_cast<int>(set.size()) <= j)
+    {
+      set.resize(static_cast<std::size_t>(j) + 1);
+    }
+    set[static_cast<std::size_t>(j)].resize(size);
+    return set[static_cast<std::size_t>(j)];
+  }
+
+  /// The per-channel dots (v_i, w) for i < count, in one pass over the
+  /// basis (fixed chunks summed in order: independent of the thread count).
+  std::vector<std::array<double, 3>> Project(int count) const
+  {
+    const std::size_t size = W_.size();
+    constexpr std::size_t chunk = 3 * 2048;
+    const std::size_t chunks = (size + chunk - 1) / chunk;
+    const std::size_t width = 3 * static_cast<std::size_t>(count);
+    std::vector<double> partial(chunks * width, 0.0);
+    const double* w = W_.data();
+#pragma omp parallel for schedule(static) num_threads(Threads_)
+    for (std::ptrdiff_t q = 0; q < static_cast<std::ptrdiff_t>(chunks); ++q)
+    {
+      const std::size_t begin = static_cast<std::size_t>(q) * chunk;
+      const std::size_t end = std::min(size, begin + chunk);
+      double* out = partial.data() + static_cast<std::size_t>(q) * width;
+      for (int i = 0; i < count; ++i)
+      {
+        const double* v = V_[static_cast<std::size_t>(i)].data();
+        double d0 = 0.0, d1 = 0.0, d2 = 0.0;
+        for (std::size_t k = begin; k < end; k += 3)
+        {
+          d0 += v[k] * w[k];
+          d1 += v[k + 1] * w[k + 1];
+          d2 += v[k + 2] * w[k + 2];
+        }
+        out[3 * i] = d0;
+        out[3 * i + 1] = d1;
+        out[3 * i + 2] = d2;
+      }
+    }
+    std::vector<std::array<double, 3>> d(static_cast<std::size_t>(count), { 0.0, 0.0, 0.0 });
+    for (std::size_t q = 0; q < chunks; ++q)
+    {
+      for (int i = 0; i < count; ++i)
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          d[static_cast<std::size_t>(i)][c] += partial[q * width + 3 * static_cast<std::size_t>(i) + c];
+        }
+      }
+    }
+    return d;
+  }
+
+  /// w -= sum_i d_i v_i per channel, in one pass; returns |w|^2 per channel
+  /// (chunked as Project).
+  std::array<double, 3> Subtract(const std::vector<std::array<double, 3>>& d)
+  {
+    const std::size_t size = W_.size();
+    constexpr std::size_t chunk = 3 * 2048;
+    const std::size_t chunks = (size + chunk - 1) / chunk;
+    const int count = static_cast<int>(d.size());
+    std::vector<std::array<double, 3>> partial(chunks);
+    double* w = W_.data();
+#pragma omp parallel for schedule(static) num_threads(Threads_)
+    for (std::ptrdiff_t q = 0; q < static_cast<std::ptrdiff_t>(chunks); ++q)
+    {
+      const std::size_t begin = static_cast<std::size_t>(q) * chunk;
+      const std::size_t end = std::min(size, begin + chunk);
+      for (int i = 0; i < count; ++i)
+      {
+        const double* v = V_[static_cast<std::size_t>(i)].data();
+        const std::array<double, 3>& s = d[static_cast<std::size_t>(i)];
+        for (std::size_t k = begin; k < end; k += 3)
+        {
+          w[k] -= s[0] * v[k];
+          w[k + 1] -= s[1] * v[k + 1];
+          w[k + 2] -= s[2] * v[k + 2];
+        }
+      }
+      double n0 = 0.0, n1 = 0.0, n2 = 0.0;
+      for (std::size_t k = begin; k < end; k += 3)
+      {
+        n0 += w[k] * w[k];
+        n1 += w[k + 1] * w[k + 1];
+        n2 += w[k + 2] * w[k + 2];
+      }
+      partial[static_cast<std::size_t>(q)] = { n0, n1, n2 };
+    }
+    std::array<double, 3> ww{ 0.0, 0.0, 0.0 };
+    for (const std::array<double, 3>& p : partial)
+    {
+      for (int c = 0; c < 3; ++c)
+      {
+        ww[c] += p[c];
+      }
+    }
+    return ww;
+  }
+
+  /// One GMRES(m) cycle from the current residual R_; x gets the
+  /// correction Z y of every channel that took part. False if aborted.
+  bool Cycle(std::vector<double>& x)
+  {
+    const std::size_t size = x.size();
+    const int m = Restart_;
+    std::array<bool, 3> active{};
+    std::array<int, 3> steps{};
+    for (int c = 0; c < 3; ++c)
+    {
+      active[c] = !Done_[c];
+      H_[c].assign(static_cast<std::size_t>((m + 1) * m), 0.0);
+      G_[c].assign(static_cast<std::size_t>(m + 1), 0.0);
+      Cs_[c].assign(static_cast<std::size_t>(m), 0.0);
+      Sn_[c].assign(static_cast<std::size_t>(m), 0.0);
+      G_[c][0] = std::sqrt(Rr_[c]);
+    }
+    {
+      std::vector<double>& v0 = Vector(V_, 0, size);
+      for (std::size_t k = 0; k < size; ++k)
+      {
+        const int c = static_cast<int>(k % 3);
+        v0[k] = active[c] ? R_[k] / G_[c][0] : 0.0;
+      }
+    }
+    auto h = [m](std::vector<double>& hc, int i, int j) -> double& {
+      return hc[static_cast<std::size_t>(i * m + j)];
+    };
+    for (int j = 0; j < m && It_ < MaxIter_ && (active[0] || active[1] || active[2]); ++j, ++It_)
+    {
+      if (Progress_ && !Progress_(It_))
+      {
+        return false;
+      }
+      std::vector<double>& z = Vector(Z_, j, size);
+      Precondition_(V_[static_cast<std::size_t>(j)], z);
+      Product_(z, W_);
+      // Classical Gram-Schmidt against v_0..v_j, per channel, repeated
+      // once when it cancelled more than 1 - 1/sqrt(2) of w's norm (the
+      // DGKS criterion: Daniel, Gragg, Kaufman and Stewart, Math. Comp.
+      // 30(136), 1976): two passes over the basis per round, so two
+      // parallel regions where modified Gram-Schmidt needs 2 (j + 1)
+      // (each costs a wait for both threads on a loaded machine).
+      std::array<double, 3> ww = ChunkedDots(W_.data(), W_.data(), size, Threads_);
+      for (int round = 0; round < 2; ++round)
+      {
+        const std::array<double, 3> before = ww;
+        std::vector<std::array<double, 3>> d = Project(j + 1);
+        ww = Subtract(d);
+        bool again = false;
+        for (int c = 0; c < 3; ++c)
+        {
+          for (int i = 0; i <= j; ++i)
+          {
+            h(H_[c], i, j) = (round == 0 ? 0.0 : h(H_[c], i, j)) + (active[c] ? d[i][c] : 0.0);
+          }
+          again = again || (active[c] && ww[c] < 0.5 * before[c]);
+        }
+        if (!again)
+        {
+          break;
+        }
+      }
+      std::array<double, 3> norm{};
+      for (int c = 0; c < 3; ++c)
+      {
+        if (!active[c])
+        {
+          continue;
+        }
+        norm[c] = std::sqrt(ww[c]);
+        std::vector<double>& hc = H_[c];
+        // The earlier rotations on the new column, then the one that zeroes
+        // its subdiagonal entry.
+        for (int i = 0; i < j; ++i)
+        {
+          const double a = h(hc, i, j), b = h(hc, i + 1, j);
+          h(hc, i, j) = Cs_[c][i] * a + Sn_[c][i] * b;
+          h(hc, i + 1, j) = -Sn_[c][i] * a + Cs_[c][i] * b;
+        }
+        const double a = h(hc, j, j), b = norm[c];
+        const double r = std::hypot(a, b);
+        steps[c] = j + 1;
+        ++Iterations_[c];
+        if (!std::isfinite(r) || !(r > 0.0))
+        {
+          // A singular or non-finite step: this channel fails.
+          Failed_[c] = true;
+          active[c] = false;
+          steps[c] = j; // column j is not usable
+          continue;
+        }
+        Cs_[c][j] = a / r;
+        Sn_[c][j] = b / r;
+        h(hc, j, j) = r;
+        h(hc, j + 1, j) = 0.0;
+        G_[c][j + 1] = -Sn_[c][j] * G_[c][j];
+        G_[c][j] = Cs_[c][j] * G_[c][j];
+        const double estimate = std::abs(G_[c][j + 1]);
+        if (!(norm[c] > 0.0) || estimate <= RelTol_ * std::sqrt(Bb_[c]))
+        {
+          active[c] = false; // converged in the least-squares sense, or a happy breakdown
+        }
+      }
+      if (j + 1 < m)
+      {
+        std::vector<double>& next = Vector(V_, j + 1, size);
+        std::array<double, 3> scale{};
+        for (int c = 0; c < 3; ++c)
+        {
+          scale[c] = active[c] ? 1.0 / norm[c] : 0.0;
+        }
+        const double* w = W_.data();
+        double* out = next.data();
+#pragma omp parallel for schedule(static) num_threads(Threads_)
+        for (std::ptrdiff_t k = 0; k < static_cast<std::ptrdiff_t>(size); k += 3)
+        {
+          out[k] = scale[0] * w[k];
+          out[k + 1] = scale[1] * w[k + 1];
+          out[k + 2] = scale[2] * w[k + 2];
+        }
+      }
+    }
+    // x += Z y, y from the triangular system H y = g of each channel.
+    std::array<std::vector<double>, 3> y;
+    for (int c = 0; c < 3; ++c)
+    {
+      const int k = steps[c];
+      y[c].assign(static_cast<std::size_t>(m), 0.0);
+      for (int i = k - 1; i >= 0; --i)
+      {
+        double s = G_[c][i];
+        for (int l = i + 1; l < k; ++l)
+        {
+          s -= h(H_[c], i, l) * y[c][l];
+        }
+        y[c][i] = s / h(H_[c], i, i);
+      }
+    }
+    const int used = std::max({ steps[0], steps[1], steps[2] });
+    for (int i = 0; i < used; ++i)
+    {
+      std::array<double, 3> s{};
+      for (int c = 0; c < 3; ++c)
+      {
+        s[c] = i < steps[c] ? y[c][static_cast<std::size_t>(i)] : 0.0;
+      }
+      ChannelAxpy(s, Z_[static_cast<std::size_t>(i)].data(), x.data(), size, Threads_);
+    }
+    return true;
+  }
+
+  Operator Product_, Precondition_;
+  double RelTol_;
+  int MaxIter_;
+  int Restart_;
+  int Threads_;
+  std::function<bool(int)> Progress_;
+  int It_ = 0;
+  std::vector<double> R_, W_;
+  std::vector<std::vector<double>> V_, Z_;
+  std::array<std::vector<double>, 3> H_, G_, Cs_, Sn_;
+  std::array<double, 3> Bb_{}, Rr_{};
+  std::array<bool, 3> Done_{}, Failed_{};
+  std::array<int, 3> Iterations_{};
+};
+
 } // namespace
 
 void Sp3Solver::SetUpPreconditioner(const TetMesh& mesh, const std::string& preconditioner)
@@ -882,6 +1321,22 @@ bool Sp3Solver::SolveBlocks(
   }
   const int* rows = b.A11.RowOffsets.data();
   const int* cols = b.A11.ColumnIndices.data();
+  // The rows where A21 differs from A12: only boundary rows can (the
+  // Fresnel coupling F21 != F12 of the boundary mass); the others share A12.
+  b.OwnA21.assign(static_cast<std::size_t>(n), 0);
+  for (const int i : mesh.GetBoundaryPoints())
+  {
+    for (int k = rows[i]; k < rows[i + 1] && !b.OwnA21[static_cast<std::size_t>(i)]; ++k)
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        if (b.A21[c][k] != b.A12[c][k])
+        {
+          b.OwnA21[static_cast<std::size_t>(i)] = 1;
+        }
+      }
+    }
+  }
   auto product = [&](const std::vector<double>& in, std::vector<double>& out) {
 #pragma omp parallel num_threads(numThreads)
     {
@@ -891,7 +1346,7 @@ bool Sp3Solver::SolveBlocks(
       }
       else
       {
-        BlockProduct(n, rows, cols, real, in.data(), out.data());
+        BlockProduct(n, rows, cols, real, b.OwnA21.data(), in.data(), out.data());
       }
     }
   };
@@ -933,8 +1388,16 @@ bool Sp3Solver::SolveBlocks(
   {
     x.assign(size, 0.0);
   }
-  LockstepBiCgStab solver(product, precondition, RelTol_, MaxIter_,
-    [this](int it) { return ReportProgress(static_cast<double>(it) / std::max(1, MaxIter_)); });
+  auto progress = [this](int it) {
+    return ReportProgress(static_cast<double>(it) / std::max(1, MaxIter_));
+  };
+  if (ChooseKrylov(preconditioner) == "gmres")
+  {
+    LockstepGmres solver(
+      product, precondition, RelTol_, MaxIter_, GmresRestart_, numThreads, progress);
+    return solver.Solve(rhs, x, report);
+  }
+  LockstepBiCgStab solver(product, precondition, RelTol_, MaxIter_, progress);
   return solver.Solve(rhs, x, report);
 }
 
@@ -1204,6 +1667,36 @@ std::string Sp3Solver::ChoosePreconditioner(const TetMesh& mesh) const
     "\"\" chooses by size");
 }
 
+void Sp3Solver::SetKrylovMethod(const std::string& name)
+{
+  const std::string lower = ToLower(name);
+  if (!lower.empty() && lower != "gmres" && lower != "bicgstab")
+  {
+    throw Error("sp3: Krylov method '" + name +
+      "' is not available for the SP3 block system: \"gmres\", \"bicgstab\", or \"\" "
+      "(by preconditioner)");
+  }
+  Krylov_ = lower;
+}
+
+void Sp3Solver::SetGmresRestart(int m)
+{
+  if (m < 1 || m > 1000)
+  {
+    throw Error("sp3: GMRES restart length " + std::to_string(m) + " (expected 1 to 1000)");
+  }
+  GmresRestart_ = m;
+}
+
+std::string Sp3Solver::ChooseKrylov(const std::string& preconditioner) const
+{
+  if (!Krylov_.empty())
+  {
+    return Krylov_;
+  }
+  return "bicgstab";
+}
+
 void Sp3Solver::FillReport(const TetMesh& mesh, SolverReport& report) const
 {
   const std::size_t half = 3 * static_cast<std::size_t>(mesh.GetNumberOfPoints());
@@ -1226,7 +1719,7 @@ bool Sp3Solver::Solve(
   report.Solver = GetName();
   report.Assembly = "full";
   const std::string preconditioner = ChoosePreconditioner(mesh);
-  report.LinearSolver = "bicgstab-block-" + preconditioner;
+  report.LinearSolver = ChooseKrylov(preconditioner) + "-block-" + preconditioner;
 
   auto start = Clock::now();
   std::vector<double> sourceLoad;
@@ -1311,7 +1804,7 @@ bool Sp3Solver::SolveFrequencyDomain(const DiffusionProblem& given, double frequ
   report.Solver = GetName();
   report.Assembly = "full";
   const std::string preconditioner = ChoosePreconditioner(mesh);
-  report.LinearSolver = "bicgstab-block-" + preconditioner;
+  report.LinearSolver = ChooseKrylov(preconditioner) + "-block-" + preconditioner;
 
   auto start = Clock::now();
   const double wavenumber = omega / SpeedOfLight; // rad per mm of optical path

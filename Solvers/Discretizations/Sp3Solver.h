@@ -152,7 +152,8 @@ std::vector<double> ComputeSp3SourceLoad(const TetMesh& mesh, const OpticalPrope
  * Linear solve: the 2 x 2 block system is symmetric in its interior part
  * (and positive definite: the mass block's determinant is (5/9) mu_a mu_a2)
  * but its Fresnel boundary coupling is not (F12 != F21), so it is solved by
- * BiCGSTAB, preconditioned by the block diagonal: Jacobi ("jacobi", the
+ * BiCGSTAB (or restarted GMRES: SetKrylovMethod), preconditioned by the
+ * block diagonal: Jacobi ("jacobi", the
  * default below VertexDiffusionSolver::LargeSystemUnknowns vertices) or one
  * multigrid-agg cycle on each diagonal block ("multigrid-agg", the default
  * from there on), the three channels together; warm start from the last
@@ -253,6 +254,23 @@ public:
   /// OpenMP threads for assembly and solve (0 = OpenMP default). Default 0.
   void SetNumberOfThreads(int n) { NumberOfThreads_ = n; }
 
+  /**
+   * The Krylov method of the block system: "bicgstab" (two block products
+   * and two preconditioner applications per iteration), "gmres" (restarted
+   * flexible GMRES, one of each per iteration but an orthogonalisation
+   * against the whole basis), or "" (the default: bicgstab, the faster in
+   * the bench; Solvers.md, SP3 "Cost", has the measurements).
+   * Case-insensitive; anything else is a translucency::Error. The report's
+   * LinearSolver names the method used ("bicgstab-block-multigrid-agg",
+   * "gmres-block-jacobi", ...).
+   */
+  void SetKrylovMethod(const std::string& name);
+  const std::string& GetKrylovMethod() const { return Krylov_; }
+  /// GMRES's restart length m (1 to 1000, default 30; vectors are allocated
+  /// as a cycle needs them: at most 2 m + 1 of 2 N x 3 values).
+  void SetGmresRestart(int m);
+  int GetGmresRestart() const { return GmresRestart_; }
+
 private:
   double Anisotropy_ = 0.0; ///< SetOptions' g (used when the material has none)
   struct Blocks;
@@ -260,6 +278,7 @@ private:
   /// mesh resets the warm start.
   DiffusionProblem PrepareProblem(const DiffusionProblem& given, OpticalProperties& withAnisotropy);
   std::string ChoosePreconditioner(const TetMesh& mesh) const;
+  std::string ChooseKrylov(const std::string& preconditioner) const;
   void SizeBlocks(const TetMesh& mesh, bool complex);
   /// The blocks for angular frequency omega (rad/s; 0: continuous wave,
   /// real) with the interior sources' load (real and imaginary parts).
@@ -278,6 +297,8 @@ private:
 
   std::unique_ptr<Blocks> Blocks_;
   int NumberOfThreads_ = 0;
+  std::string Krylov_;
+  int GmresRestart_ = 30;
   std::vector<double> Phi1_, Phi2_, Exitance_;
   std::vector<std::complex<double>> ComplexExitance_;
   std::vector<double> AdditionalLoad1_, AdditionalLoad2_;

@@ -56,6 +56,24 @@ public:
   virtual void UpdateValues(const int* rowOffsets, const int* columns, const double* values) = 0;
 
   /**
+   * Collective: as Setup (the same rows, the matrix built from scratch), but
+   * preconditioned by `donor`'s preconditioner instead of one of its own
+   * (issue 32: one BoomerAMG hierarchy for the three colour channels, whose
+   * matrices differ only by mu_a and sigma_s'). Solve still iterates on this
+   * matrix to relTol, so only the convergence rate depends on how close the
+   * two matrices are. `donor` must be set up on the same rows and stay so
+   * while this solver is used: a new Setup of the donor needs a new
+   * SetupShared here. Returns false, with nothing built, when this solver
+   * cannot share with `donor` (the default: then call Setup).
+   */
+  virtual bool SetupShared(int rowBegin, int rowEnd, const int* rowOffsets, const int* columns,
+    const double* values, const DistributedLinearSolver& donor)
+  {
+    (void)rowBegin, (void)rowEnd, (void)rowOffsets, (void)columns, (void)values, (void)donor;
+    return false;
+  }
+
+  /**
    * Collective: solves for the local part b (rowEnd - rowBegin values) into
    * x, from x if `guess` (else from zero), until ||b - A x|| <= relTol ||b||
    * (global 2-norms) or maxIter iterations. Returns the iterations;

@@ -115,7 +115,8 @@ SolverOptions BoomerAMGOptions::ToOptions() const
     { "amg-relaxation", static_cast<double>(RelaxType) },
     { "amg-sweeps", static_cast<double>(NumSweeps) },
     { "amg-aggressive-levels", static_cast<double>(AggNumLevels) },
-    { "amg-aggressive-interpolation", static_cast<double>(AggInterpType) } };
+    { "amg-aggressive-interpolation", static_cast<double>(AggInterpType) },
+    { "amg-keep-transpose", static_cast<double>(KeepTranspose) } };
 }
 
 void HypreBoomerAMGPCG::SetOptions(const SolverOptions& options)
@@ -130,6 +131,7 @@ void HypreBoomerAMGPCG::SetOptions(const SolverOptions& options)
   options.ReadInteger(who, "amg-sweeps", 1, "sweeps, >= 1", o.NumSweeps);
   options.ReadInteger(who, "amg-aggressive-levels", 0, "levels, >= 0", o.AggNumLevels);
   options.ReadInteger(who, "amg-aggressive-interpolation", 0, "a BoomerAMG interpolation code", o.AggInterpType);
+  options.ReadInteger(who, "amg-keep-transpose", 0, "0 or 1", o.KeepTranspose);
   if (!(o.StrongThreshold < 1.0))
   {
     throw Error(who + ": option amg-strong-threshold = " + std::to_string(o.StrongThreshold) +
@@ -143,8 +145,20 @@ struct HypreBoomerAMGPCG::Handles
   HYPRE_IJMatrix A = nullptr;
   HYPRE_IJVector B = nullptr, X = nullptr;
   HYPRE_Solver PCG = nullptr, AMG = nullptr;
+  /// Another solver's BoomerAMG used as this one's preconditioner (not owned).
+  HYPRE_Solver SharedAMG = nullptr;
   std::vector<HYPRE_BigInt> Rows;
 };
+
+namespace
+{
+/// The preconditioner set-up of a channel that shares another's hierarchy:
+/// nothing (the hierarchy is the donor's, already set up).
+HYPRE_Int NoSetup(HYPRE_Solver, HYPRE_Matrix, HYPRE_Vector, HYPRE_Vector)
+{
+  return 0;
+}
+}
 
 HypreBoomerAMGPCG::HypreBoomerAMGPCG(MPI_Comm comm, const BoomerAMGOptions& options)
   : Comm_(comm)
@@ -176,11 +190,9 @@ void HypreBoomerAMGPCG::Free()
   PlacePattern_ = 0;
 }
 
-void HypreBoomerAMGPCG::Setup(
+void HypreBoomerAMGPCG::BuildMatrix(
   int rowBegin, int rowEnd, const int* rowOffsets, const int* columns, const double* values)
 {
-  Free();
-  const double start = MPI_Wtime();
   RowBegin_ = rowBegin;
   RowEnd_ = rowEnd;
   const int rows = rowEnd - rowBegin;
@@ -210,10 +222,36 @@ void HypreBoomerAMGPCG::Setup(
       "setting the matrix values");
   }
   Check(HYPRE_IJMatrixAssemble(h.A), "matrix assembly");
+}
+
+void HypreBoomerAMGPCG::Setup(
+  int rowBegin, int rowEnd, const int* rowOffsets, const int* columns, const double* values)
+{
+  Free();
+  const double start = MPI_Wtime();
+  BuildMatrix(rowBegin, rowEnd, rowOffsets, columns, values);
   const double assembled = MPI_Wtime();
   MatrixMilliseconds_ = 1000.0 * (assembled - start);
   BuildSolver();
   HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
+}
+
+bool HypreBoomerAMGPCG::SetupShared(int rowBegin, int rowEnd, const int* rowOffsets,
+  const int* columns, const double* values, const DistributedLinearSolver& donor)
+{
+  const auto* other = dynamic_cast<const HypreBoomerAMGPCG*>(&donor);
+  if (!other || other == this || !other->H_->AMG || !other->H_->PCG ||
+    other->RowBegin_ != rowBegin || other->RowEnd_ != rowEnd)
+  {
+    return false;
+  }
+  Free();
+  const double start = MPI_Wtime();
+  BuildMatrix(rowBegin, rowEnd, rowOffsets, columns, values);
+  BuildSolver(other);
+  MatrixMilliseconds_ = 1000.0 * (MPI_Wtime() - start);
+  HierarchyMilliseconds_ = 0.0;
+  return true;
 }
 
 void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, const double* values)
@@ -300,7 +338,7 @@ void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, 
   HierarchyMilliseconds_ = 0.0;
 }
 
-void HypreBoomerAMGPCG::BuildSolver()
+void HypreBoomerAMGPCG::BuildSolver(const HypreBoomerAMGPCG* shared)
 {
   Handles& h = *H_;
   const int rowBegin = RowBegin_, rowEnd = RowEnd_;
@@ -317,6 +355,30 @@ void HypreBoomerAMGPCG::BuildSolver()
   HYPRE_IJVectorGetObject(h.B, reinterpret_cast<void**>(&b));
   HYPRE_IJVectorGetObject(h.X, reinterpret_cast<void**>(&x));
 
+  if (shared)
+  {
+    // The donor's hierarchy, its set-up already done (NoSetup); PCG's own
+    // vectors are set up on this matrix.
+    h.SharedAMG = shared->H_->AMG;
+    Check(HYPRE_ParCSRPCGCreate(Comm_, &h.PCG), "PCG creation");
+    HYPRE_PCGSetTwoNorm(h.PCG, 1);
+    HYPRE_PCGSetPrintLevel(h.PCG, 0);
+    HYPRE_PCGSetLogging(h.PCG, 1);
+    HYPRE_PCGSetPrecond(h.PCG, reinterpret_cast<HYPRE_PtrToSolverFcn>(HYPRE_BoomerAMGSolve),
+      reinterpret_cast<HYPRE_PtrToSolverFcn>(NoSetup), h.SharedAMG);
+    Check(HYPRE_ParCSRPCGSetup(h.PCG, a, b, x), "PCG set-up");
+    auto* m = reinterpret_cast<hypre_ParCSRMatrix*>(a);
+    const double local = static_cast<double>(hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixDiag(m)) +
+      hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixOffd(m)));
+    double total = 0.0;
+    MPI_Allreduce(&local, &total, 1, MPI_DOUBLE, MPI_SUM, Comm_);
+    NonZeros_ = static_cast<long long>(total);
+    Levels_ = shared->Levels_;
+    OperatorComplexity_ = shared->OperatorComplexity_;
+    IterationWork_ = shared->IterationWork_;
+    MemoryBytes_ = 0; // the hierarchy is the donor's
+    return;
+  }
   Check(HYPRE_BoomerAMGCreate(&h.AMG), "BoomerAMG creation");
   HYPRE_BoomerAMGSetPrintLevel(h.AMG, 0);
   const BoomerAMGOptions& o = Options_; // defaults: hypre's 3-D diffusion recommendations
@@ -330,6 +392,10 @@ void HypreBoomerAMGPCG::BuildSolver()
   {
     HYPRE_BoomerAMGSetAggNumLevels(h.AMG, o.AggNumLevels);
     HYPRE_BoomerAMGSetAggInterpType(h.AMG, o.AggInterpType);
+  }
+  if (o.KeepTranspose)
+  {
+    HYPRE_BoomerAMGSetKeepTranspose(h.AMG, 1);
   }
   HYPRE_BoomerAMGSetTol(h.AMG, 0.0);
   HYPRE_BoomerAMGSetMaxIter(h.AMG, 1); // one V-cycle per application

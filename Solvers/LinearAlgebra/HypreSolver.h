@@ -50,6 +50,7 @@ struct BoomerAMGOptions
   int NumSweeps = 1;             ///< sweeps down and up
   int AggNumLevels = 0;          ///< levels of aggressive coarsening
   int AggInterpType = 4;         ///< interpolation on those levels (4 = multipass)
+  int KeepTranspose = 0;         ///< 1: keep P^T (restriction without a transposed product)
 
   /// The settings measured best on the bunny diffusion system
   /// (Documentation/Scaling.md): HMIS, strong threshold 0.25, one level of
@@ -66,7 +67,7 @@ struct BoomerAMGOptions
   /// As options of HypreBoomerAMGPCG::SetOptions ("amg-coarsening",
   /// "amg-interpolation", "amg-pmax", "amg-strong-threshold",
   /// "amg-relaxation", "amg-sweeps", "amg-aggressive-levels",
-  /// "amg-aggressive-interpolation").
+  /// "amg-aggressive-interpolation", "amg-keep-transpose").
   SolverOptions ToOptions() const;
 };
 
@@ -114,6 +115,17 @@ public:
   void UpdateValues(const int* rowOffsets, const int* columns, const double* values) override;
 
   /**
+   * The matrix of these rows with `donor`'s BoomerAMG hierarchy as the
+   * preconditioner (no set-up of its own): BoomerAMG's V-cycle smooths on
+   * this matrix at the fine level (hypre_BoomerAMGSolve takes the fine
+   * matrix from its caller) and on the donor's coarse levels, with the
+   * donor's l1 norms. False if `donor` is not a set-up HypreBoomerAMGPCG on
+   * the same rows.
+   */
+  bool SetupShared(int rowBegin, int rowEnd, const int* rowOffsets, const int* columns,
+    const double* values, const DistributedLinearSolver& donor) override;
+
+  /**
    * Solve for the local part b (rowEnd - rowBegin values) into x; x is the
    * initial guess if `guess`, else zero. Returns the PCG iterations;
    * relativeResidual gets ||b - Ax|| / ||b||.
@@ -140,8 +152,12 @@ public:
 
 private:
   void Free();
-  /// Vectors, BoomerAMG and PCG on the assembled matrix; work and memory.
-  void BuildSolver();
+  /// The IJ matrix of these rows, assembled.
+  void BuildMatrix(int rowBegin, int rowEnd, const int* rowOffsets, const int* columns,
+    const double* values);
+  /// Vectors, BoomerAMG (or `shared`'s, not owned) and PCG on the assembled
+  /// matrix; work and memory.
+  void BuildSolver(const HypreBoomerAMGPCG* shared = nullptr);
 
   MPI_Comm Comm_;
   BoomerAMGOptions Options_;

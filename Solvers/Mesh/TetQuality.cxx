@@ -122,14 +122,14 @@ TetQualityStats ComputeTetQuality(
   }
   double minAngle = 180.0, maxAngle = 0.0, maxRe = 0.0, sumRe = 0.0, edgeSum = 0.0,
          edgeSquares = 0.0, minVol = std::numeric_limits<double>::infinity(), maxVol = 0.0;
-  long long above = 0;
+  long long above = 0, below5 = 0;
   std::array<long long, 8> hist{};
   const double bound = radiusEdgeBound > 0 ? radiusEdgeBound * (1 + 1e-9) : 0.0;
 #pragma omp parallel
   {
     std::array<long long, 8> localHist{};
 #pragma omp for reduction(min : minAngle, minVol) reduction(max : maxAngle, maxRe, maxVol) \
-  reduction(+ : sumRe, edgeSum, edgeSquares, above)
+  reduction(+ : sumRe, edgeSum, edgeSquares, above, below5)
     for (long long t = 0; t < numTets; ++t)
     {
       const double* p[4];
@@ -151,6 +151,7 @@ TetQualityStats ComputeTetQuality(
         ++above;
       }
       localHist[std::min(7, static_cast<int>(m.MinAngle / 10.0))]++;
+      below5 += m.MinAngle < 5.0 ? 1 : 0;
     }
 #pragma omp critical
     for (int k = 0; k < 8; ++k)
@@ -164,6 +165,7 @@ TetQualityStats ComputeTetQuality(
   {
     s.MinDihedralHistogram[k] = static_cast<std::size_t>(hist[k]);
   }
+  s.TetsBelow5Degrees = static_cast<std::size_t>(below5);
   s.MaxRadiusEdge = maxRe;
   s.MeanRadiusEdge = sumRe / static_cast<double>(numTets);
   s.FractionAboveRadiusEdgeBound = static_cast<double>(above) / static_cast<double>(numTets);

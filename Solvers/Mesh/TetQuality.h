@@ -25,6 +25,9 @@ struct TetQualityStats
   /// Number of tets whose smallest dihedral angle lies in [10 k, 10 k + 10)
   /// degrees, k = 0..7 (the last bin also holds 70.53, the regular tet's).
   std::array<std::size_t, 8> MinDihedralHistogram{};
+  /// Number of tets whose smallest dihedral angle is below 5 degrees (the
+  /// slivers of the mesher criterion in Documentation/Performance.md, "Tetrahedralisers").
+  std::size_t TetsBelow5Degrees = 0;
   /// Largest radius-edge ratio (circumradius / shortest edge; 0.612 for the
   /// regular tet; TetGen's -q bound applies to it).
   double MaxRadiusEdge = 0.0;

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 #include <time.h>
@@ -102,7 +103,10 @@ void DistributedVertexSolver::Reset()
     Contributions_[c].clear();
     FullIterations_[c] = 0;
     ForceFull_[c] = false;
+    Donor_[c] = -1;
   }
+  Material_ = OpticalProperties();
+  HaveMaterial_ = false;
 }
 
 bool DistributedVertexSolver::GetTalliedReadouts(TalliedReadouts& readouts) const
@@ -150,10 +154,13 @@ void DistributedVertexSolver::BuildGeometry(const TetMesh* mesh, const std::vect
   // The local mesh: the owned tets on the local points (partition faces
   // are boundary faces of it; the count across ranks sorts them out).
   HaveGeometry_ = false;
+  ++Numberings_;
   for (auto& channel : Channels_)
     channel.reset();
   for (auto& x : Solution_)
     x.clear();
+  Donor_ = { -1, -1, -1 };
+  HaveMaterial_ = false;
   const std::size_t numPoints = keys.size();
   Mesh_ = mesh && mesh->GetNumberOfTets() > 0 ? mesh : &EmptyMesh_;
   std::string error;
@@ -467,7 +474,7 @@ void DistributedVertexSolver::AssembleLocal(const OpticalProperties& material,
 }
 
 void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material,
-  const std::vector<double>& irradiance, DiffusionSystem& system, std::vector<double>& localRhs)
+  const std::vector<double>& irradiance, DiffusionSystem* system, std::vector<double>& localRhs)
 {
   const std::vector<int>& triangles = Mesh_->GetBoundaryTriangles();
   const std::vector<int>& triangleTets = Mesh_->GetBoundaryTriangleTets();
@@ -493,13 +500,13 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
         robin, load);
       for (int c = 0; c < NumberOfChannels; ++c)
       {
-        double* v = system.Values[c].data();
+        double* v = system ? system->Values[c].data() : nullptr;
         double sum = 0.0;
         for (int a = 0; a < 3; ++a)
           sum += q[3 * static_cast<std::size_t>(tri[a]) + c];
         for (int a = 0; a < 3; ++a)
         {
-          for (int b = 0; b < 3; ++b)
+          for (int b = 0; v && b < 3; ++b)
             v[pos[4 * l[a] + l[b]]] += a == b ? robin + robin : robin;
           localRhs[3 * static_cast<std::size_t>(tri[a]) + c] +=
             load * (sum + q[3 * static_cast<std::size_t>(tri[a]) + c]);
@@ -536,7 +543,8 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
     const double a = Fresnel::MismatchA(eta), fdr = Fresnel::DiffuseReflectance(eta);
     for (int c = 0; c < NumberOfChannels; ++c)
     {
-      system.Values[c][static_cast<std::size_t>(diagonal[i])] += DivergenceRobinDiagonal(s, a);
+      if (system)
+        system->Values[c][static_cast<std::size_t>(diagonal[i])] += DivergenceRobinDiagonal(s, a);
       localRhs[3 * i + c] = DivergenceRobinLoad(s, q[3 * i + c], a, fdr);
     }
   }
@@ -559,8 +567,12 @@ void DistributedVertexSolver::SetUpChannel(int c)
       Channels_[c]->SetOptions(LinearOptions_);
       ChannelLinear_[c] = name;
     }
+    Donor_[c] = -1;
     Channels_[c]->Setup(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), OwnedOffsets_.data(),
       OwnedColumns_.data(), Contributions_[c].data());
+    Donor_[c] = c;
+    HierarchyDiagonal_[c] = OwnedDiagonal(Contributions_[c]);
+    ++HierarchySetups_;
   }
   catch (const Error& e)
   {
@@ -577,6 +589,136 @@ void DistributedVertexSolver::SetUpChannel(int c)
   AgreeOnError(Comm_, error);
 }
 
+void DistributedVertexSolver::ShareChannel(int c, int donor, double& hierarchyMs)
+{
+  std::string error;
+  bool shared = false;
+  ForceFull_[c] = false;
+  FullIterations_[c] = -1; // set by this Solve's PCG
+  try
+  {
+    const std::string name = LinearSolverName();
+    if (!Channels_[c] || OptionsChanged_ || name != ChannelLinear_[c])
+    {
+      ChannelLinear_[c].clear();
+      Channels_[c] = CreateDistributedLinearSolver(name, MakeCommunicator(&Comm_));
+      Channels_[c]->SetOptions(LinearOptions_);
+      ChannelLinear_[c] = name;
+    }
+    Donor_[c] = -1;
+    shared = Channels_[c]->SetupShared(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(),
+      OwnedOffsets_.data(), OwnedColumns_.data(), Contributions_[c].data(), *Channels_[donor]);
+    if (shared)
+    {
+      Donor_[c] = donor;
+      HierarchyDiagonal_[c] = HierarchyDiagonal_[donor];
+    }
+  }
+  catch (const Error& e)
+  {
+    error = e.what();
+  }
+  AgreeOnError(Comm_, error);
+  if (!shared) // the same answer on every rank (the same solver kind and rows)
+  {
+    SetUpChannel(c);
+    hierarchyMs += Channels_[c]->GetHierarchyMilliseconds();
+  }
+}
+
+void DistributedVertexSolver::ReshareDependents(int donor, double& hierarchyMs)
+{
+  for (int o = 0; o < NumberOfChannels; ++o)
+  {
+    if (o != donor && Donor_[o] == donor)
+      ShareChannel(o, donor, hierarchyMs);
+  }
+}
+
+int DistributedVertexSolver::MedianChannel() const
+{
+  // The trace of each channel's owned rows, summed over the ranks.
+  std::array<double, NumberOfChannels> trace{};
+  const int rowBegin = Numbering_.GetRowBegin();
+  const int owned = Numbering_.GetNumberOfOwnedRows();
+  for (int r = 0; r < owned; ++r)
+  {
+    for (int k = OwnedOffsets_[r]; k < OwnedOffsets_[r + 1]; ++k)
+    {
+      if (OwnedColumns_[static_cast<std::size_t>(k)] == rowBegin + r)
+      {
+        for (int c = 0; c < NumberOfChannels; ++c)
+          trace[c] += Contributions_[c][static_cast<std::size_t>(k)];
+      }
+    }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, trace.data(), NumberOfChannels, MPI_DOUBLE, MPI_SUM, Comm_);
+  std::array<int, NumberOfChannels> order{ 0, 1, 2 };
+  std::sort(order.begin(), order.end(), [&trace](int a, int b) { return trace[a] < trace[b]; });
+  return order[1];
+}
+
+std::vector<double> DistributedVertexSolver::OwnedDiagonal(const std::vector<double>& values) const
+{
+  const int rowBegin = Numbering_.GetRowBegin();
+  const int owned = Numbering_.GetNumberOfOwnedRows();
+  std::vector<double> diagonal(static_cast<std::size_t>(owned), 0.0);
+  for (int r = 0; r < owned && !values.empty(); ++r)
+  {
+    for (int k = OwnedOffsets_[r]; k < OwnedOffsets_[r + 1]; ++k)
+    {
+      if (OwnedColumns_[static_cast<std::size_t>(k)] == rowBegin + r)
+        diagonal[static_cast<std::size_t>(r)] = values[static_cast<std::size_t>(k)];
+    }
+  }
+  return diagonal;
+}
+
+bool DistributedVertexSolver::WithinSmootherRange(
+  const std::vector<double>& values, const std::vector<double>& diagonal) const
+{
+  // A hierarchy smooths the fine level with the l1 norms of the matrix it
+  // was set up on (its diagonal on one rank): on matrix `values` a
+  // symmetric Gauss-Seidel sweep with row weights d / d_setup, which
+  // converges only below 2. Within range: every owned row's ratio in
+  // [1/3, 1.8]. This rank's rows only (no communication). (The values-only
+  // set-up does not ask: a paint changes a few rows, and a channel whose
+  // kept hierarchy then fails is set up again and re-solved.)
+  const std::vector<double> d = OwnedDiagonal(values);
+  if (d.size() != diagonal.size())
+    return false;
+  for (std::size_t r = 0; r < d.size(); ++r)
+  {
+    if (!(d[r] > 0.0) || !(diagonal[r] > 0.0) || d[r] > 1.8 * diagonal[r] ||
+      diagonal[r] > 3.0 * d[r])
+      return false;
+  }
+  return true;
+}
+
+bool DistributedVertexSolver::CanShare(int c, int donor) const
+{
+  int mine = WithinSmootherRange(Contributions_[c], HierarchyDiagonal_[donor]) ? 1 : 0, all = 0;
+  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, Comm_);
+  return all != 0;
+}
+
+bool DistributedVertexSolver::SameMaterialEverywhere(const OpticalProperties& material) const
+{
+  auto same = [](const std::vector<double>& a, const std::vector<double>& b) {
+    return a.size() == b.size() &&
+      (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
+  };
+  int mine = HaveMaterial_ && same(material.AbsorptionCoefficient, Material_.AbsorptionCoefficient) &&
+      same(material.ReducedScatteringCoefficient, Material_.ReducedScatteringCoefficient) &&
+      same(material.RefractiveIndex, Material_.RefractiveIndex)
+    ? 1
+    : 0;
+  int all = 0;
+  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, Comm_);
+  return all != 0;
+}
+
 std::array<DistributedVertexSolver::ChannelSetup, NumberOfChannels>
 DistributedVertexSolver::SetUpMatrices(
   bool sameMesh, DiffusionSystem& system, std::string& assembly, double& hierarchyMs)
@@ -584,7 +726,8 @@ DistributedVertexSolver::SetUpMatrices(
   // Rebuilt (values added, hierarchy set up) when changed, or, on the same
   // mesh, new values under the kept hierarchy. Returns what each channel got.
   std::array<ChannelSetup, NumberOfChannels> setup{};
-  bool rebuilt = false, updated = false;
+  std::array<bool, NumberOfChannels> fresh{};
+  bool updated = false;
   std::string error;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
@@ -593,13 +736,15 @@ DistributedVertexSolver::SetUpMatrices(
     std::vector<double> values;
     GatherOwnedRows(system.Values[c], values);
     int changed =
-      (!Channels_[c] || OptionsChanged_ || renamed || values != Contributions_[c]) ? 1 : 0;
+      (!Channels_[c] || Donor_[c] < 0 || OptionsChanged_ || renamed || values != Contributions_[c])
+      ? 1
+      : 0;
     int anyChanged = 0;
     MPI_Allreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, Comm_);
     system.Values[c] = {};
     // Values only when every rank can (the same branch on every rank).
-    int canUpdate = sameMesh && Channels_[c] && !OptionsChanged_ && !renamed && !ForceFull_[c] &&
-        values.size() == Contributions_[c].size()
+    int canUpdate = sameMesh && Channels_[c] && Donor_[c] >= 0 && !OptionsChanged_ && !renamed &&
+        !ForceFull_[c] && values.size() == Contributions_[c].size()
       ? 1
       : 0;
     int allCanUpdate = 0;
@@ -618,8 +763,19 @@ DistributedVertexSolver::SetUpMatrices(
       MPI_Allreduce(&failed, &anyFailed, 1, MPI_INT, MPI_MAX, Comm_);
       if (anyFailed)
       {
-        // The matrix is half-updated: the next Solve sets up from scratch.
+        // The matrix is half-updated: the next Solve sets up from scratch,
+        // and the channels that used its hierarchy too.
+        for (int o = 0; o < NumberOfChannels; ++o)
+        {
+          if (o != c && Donor_[o] == c)
+          {
+            Channels_[o].reset();
+            Donor_[o] = -1;
+            Contributions_[o].clear();
+          }
+        }
         Channels_[c].reset();
+        Donor_[c] = -1;
         Contributions_[c].clear();
       }
       AgreeOnError(Comm_, error);
@@ -630,13 +786,54 @@ DistributedVertexSolver::SetUpMatrices(
     else if (anyChanged)
     {
       Contributions_[c].swap(values);
+      fresh[c] = true;
+    }
+  }
+  // New hierarchies: one for the three channels when all three need one
+  // (the median channel's, shared), else each its own.
+  const bool all = fresh[0] && fresh[1] && fresh[2];
+  const int donor = all && SharedHierarchy_ ? MedianChannel() : -1;
+  if (donor >= 0)
+  {
+    SetUpChannel(donor);
+    hierarchyMs += Channels_[donor]->GetHierarchyMilliseconds();
+    setup[donor] = ChannelSetup::Fresh;
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      if (c == donor)
+        continue;
+      if (CanShare(c, donor))
+      {
+        ShareChannel(c, donor, hierarchyMs);
+        setup[c] = Donor_[c] == c ? ChannelSetup::Fresh : ChannelSetup::Shared;
+      }
+      else
+      {
+        SetUpChannel(c);
+        hierarchyMs += Channels_[c]->GetHierarchyMilliseconds();
+        setup[c] = ChannelSetup::Fresh;
+      }
+    }
+  }
+  else
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      if (!fresh[c])
+        continue;
       SetUpChannel(c);
-      rebuilt = true;
-      setup[c] = ChannelSetup::Fresh;
       hierarchyMs += Channels_[c]->GetHierarchyMilliseconds();
+      setup[c] = ChannelSetup::Fresh;
+    }
+    // A channel that shared a hierarchy rebuilt now takes the new one.
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      if (fresh[c])
+        ReshareDependents(c, hierarchyMs);
     }
   }
   OptionsChanged_ = false;
+  const bool rebuilt = fresh[0] || fresh[1] || fresh[2];
   assembly = rebuilt ? "full" : updated ? "values-only" : "unchanged";
   return setup;
 }
@@ -646,10 +843,11 @@ void DistributedVertexSolver::SolveChannels(const std::vector<double>& rhs,
   SolverReport& report, double& hierarchyMs)
 {
   // PCG per channel, from the previous solution on the same unknowns.
-  // Never a non-converged result from a kept hierarchy: a channel that does
-  // not converge under a hierarchy set up before this Solve (values-only
-  // update after a paint, a relight) is set up from scratch and solved
-  // again, cold (issue 32: a kept hierarchy broke down after 1 iteration).
+  // Never a non-converged result from a kept or shared hierarchy: a channel
+  // that does not converge under a hierarchy set up before this Solve
+  // (values-only update after a paint, a relight) or on another channel's
+  // matrix gets its own, set up from scratch, and is solved again, cold
+  // (issue 32: a kept hierarchy broke down after 1 iteration).
   const int owned = Numbering_.GetNumberOfOwnedRows();
   solution.assign(3 * static_cast<std::size_t>(owned), 0.0);
   std::string error;
@@ -697,8 +895,9 @@ void DistributedVertexSolver::SolveChannels(const std::vector<double>& rhs,
           ForceFull_[c] = true; // the kept hierarchy has aged: rebuild at the next change
         break;
       }
-      SetUpChannel(c); // the kept hierarchy failed: set up from scratch, solve again cold
+      SetUpChannel(c); // the kept or shared hierarchy failed: its own, solve again cold
       hierarchyMs += Channels_[c]->GetHierarchyMilliseconds();
+      ReshareDependents(c, hierarchyMs); // the others that used c's old hierarchy
       report.Resolved = true;
       guess = false;
       std::fill(x.begin(), x.end(), 0.0);
@@ -881,12 +1080,23 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   // 2. The local system: element matrices of the owned tets, boundary terms
   // of the physical faces, interior sources (their load on the rank owning
   // each source's tet, times 4 as every right-hand side: FiniteElement.h).
+  // A relight (every rank's mesh and material the last set-up's, bit for
+  // bit, the hierarchies kept) assembles the right-hand side only.
   start = MPI_Wtime();
   cpu = CpuMilliseconds();
+  bool ready = allSame != 0 && !OptionsChanged_;
+  for (int c = 0; c < NumberOfChannels; ++c)
+    ready = ready && Channels_[c] && Donor_[c] >= 0 && LinearSolverName() == ChannelLinear_[c];
+  int allReady = ready ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &allReady, 1, MPI_INT, MPI_MIN, Comm_);
+  const bool relight = allReady && SameMaterialEverywhere(material);
   DiffusionSystem system;
-  AssembleLocal(material, irradiance, system);
+  if (!relight)
+  {
+    AssembleLocal(material, irradiance, system);
+  }
   std::vector<double> localRhs(3 * keys.size(), 0.0);
-  AddBoundaryTerms(material, irradiance, system, localRhs);
+  AddBoundaryTerms(material, irradiance, relight ? nullptr : &system, localRhs);
   std::array<double, NumberOfChannels> localSourcePower{};
   if (Sources_ && !Sources_->Empty())
   {
@@ -903,8 +1113,33 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
 
   // 3. The hypre matrices and their hierarchies.
   double hierarchyMs = 0.0;
-  const std::array<ChannelSetup, NumberOfChannels> setup =
-    SetUpMatrices(allSame != 0, system, report.Assembly, hierarchyMs);
+  const long long hierarchiesBefore = HierarchySetups_;
+  std::array<ChannelSetup, NumberOfChannels> setup{};
+  if (relight)
+  {
+    // The irradiance is checked here (AssembleLocal checks it otherwise).
+    std::string error;
+    try
+    {
+      if (HasTets())
+        CheckIrradiance(*Mesh_, irradiance);
+    }
+    catch (const Error& e)
+    {
+      error = e.what();
+    }
+    AgreeOnError(Comm_, error);
+    report.Assembly = "unchanged";
+  }
+  else
+  {
+    HaveMaterial_ = false;
+    setup = SetUpMatrices(allSame != 0, system, report.Assembly, hierarchyMs);
+    Material_.AbsorptionCoefficient = material.AbsorptionCoefficient;
+    Material_.ReducedScatteringCoefficient = material.ReducedScatteringCoefficient;
+    Material_.RefractiveIndex = material.RefractiveIndex;
+    HaveMaterial_ = true;
+  }
   system = DiffusionSystem();
   Timings_.Assembly = Milliseconds(start) - hierarchyMs;
   Timings_.AssemblyCpu = CpuMilliseconds() - cpu - HierarchyCpu_;
@@ -926,6 +1161,12 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   // 5. Detectors and the power balance, summed over the ranks.
   ReadOuts(material, irradiance, fluence, localSourcePower);
   FillStatistics(report);
+  std::ostringstream linear;
+  linear << (HierarchySetups_ > hierarchiesBefore ? "rebuilt"
+                                                 : report.Assembly == "values-only" ? "values"
+                                                                                    : "kept")
+         << " (numberings " << Numberings_ << ", hierarchies " << HierarchySetups_ << ")";
+  report.LinearSetup = linear.str();
 }
 
 } // namespace translucency

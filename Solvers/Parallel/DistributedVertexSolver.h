@@ -105,6 +105,31 @@ public:
    */
   void SetValuesOnlySetup(bool on) { ValuesOnly_ = on; }
   bool GetValuesOnlySetup() const { return ValuesOnly_; }
+  /**
+   * One hierarchy for the three channels (default off; issue 32): when every
+   * channel needs a new hierarchy (a new mesh, a full set-up), BoomerAMG is
+   * set up once, on the channel whose matrix has the median trace (summed
+   * over the ranks), and preconditions the channels whose diagonal is
+   * within [1/3, 1.8] of its at every row (CanShare: the fine-level smoother
+   * uses the donor's l1 norms; the others get their own)
+   * (DistributedLinearSolver::SetupShared: each channel's PCG iterates on
+   * its own matrix). The convergence check still guards each channel: one
+   * that does not converge under the shared hierarchy gets its own and is
+   * solved again (report.Resolved). Off (the default): one hierarchy per
+   * channel. The trade (Documentation/Scaling.md): a cold solve or full
+   * set-up saves up to two BoomerAMG set-ups, every later solve pays the
+   * shared channels' extra PCG iterations (a relight too); and after an
+   * extreme paint the fields differ from the own-hierarchy path at
+   * round-off level, points 1e-16 of the maximum, which
+   * ParaView.TestDistributedSolve's 1e-6-relative comparison there sees.
+   */
+  void SetSharedHierarchy(bool on) { SharedHierarchy_ = on; }
+  bool GetSharedHierarchy() const { return SharedHierarchy_; }
+  /// Since construction: how many times the global numbering and boundary
+  /// were built, and how many BoomerAMG hierarchies were set up (a relight
+  /// adds to neither; a cold solve with a shared hierarchy adds 1 to each).
+  long long GetNumberOfNumberings() const { return Numberings_; }
+  long long GetNumberOfHierarchySetups() const { return HierarchySetups_; }
   /// OpenMP threads of the local assembly (0, the default: the node's
   /// cores shared by its ranks, ScopedRankThreads, unless OMP_NUM_THREADS).
   void SetNumberOfThreads(int n) override { NumberOfThreads_ = n; }
@@ -154,8 +179,12 @@ public:
    * rebuilt, "values-only" when new values went into the kept matrices and
    * hierarchies (SetValuesOnlySetup), "unchanged" when every rank's matrix
    * values equal the last Solve's (a relight: the hierarchies are kept,
-   * only the right-hand side is new); iterations and residuals are the same
-   * on every rank. (The interface's Solve on a TetMesh this solver builds.)
+   * only the right-hand side is new; when every rank's mesh and material are
+   * the last Solve's, bit for bit, nothing but the right-hand side is
+   * assembled); report.LinearSetup says "kept", "values" or "rebuilt" and
+   * the counts so far, "(numberings N, hierarchies H)"; iterations and
+   * residuals are the same on every rank. (The interface's Solve on a
+   * TetMesh this solver builds.)
    */
   void Solve(const std::vector<double>& points, const std::vector<PointKey>& keys,
     const std::vector<int>& tets, const OpticalProperties& material,
@@ -197,6 +226,7 @@ private:
   {
     Kept,       ///< the matrix is unchanged (a relight)
     ValuesOnly, ///< new values under the kept hierarchy (a paint)
+    Shared,     ///< a new matrix under another channel's new hierarchy
     Fresh       ///< set up from scratch
   };
   // The phases of Solve (each collective).
@@ -211,11 +241,31 @@ private:
   bool HasTets() const { return Mesh_->GetNumberOfTets() > 0; }
   void AssembleLocal(const OpticalProperties& material, const std::vector<double>& irradiance,
     DiffusionSystem& system);
+  /// The boundary terms: the Robin matrix terms into `system` (null: a
+  /// relight, the right-hand side only) and the load into localRhs.
   void AddBoundaryTerms(const OpticalProperties& material, const std::vector<double>& irradiance,
-    DiffusionSystem& system, std::vector<double>& localRhs);
+    DiffusionSystem* system, std::vector<double>& localRhs);
+  /// Collective: every rank's material is the last set-up's, bit for bit.
+  bool SameMaterialEverywhere(const OpticalProperties& material) const;
   std::array<ChannelSetup, NumberOfChannels> SetUpMatrices(
     bool sameMesh, DiffusionSystem& system, std::string& assembly, double& hierarchyMs);
   void SetUpChannel(int c);
+  /// Channel c's matrix under channel `donor`'s hierarchy (own set-up if the
+  /// linear solver cannot share).
+  void ShareChannel(int c, int donor, double& hierarchyMs);
+  /// After channel `donor` got a new hierarchy: the channels that used its
+  /// old one (not in `except`) point to the new one.
+  void ReshareDependents(int donor, double& hierarchyMs);
+  /// The channel whose matrix has the median global trace.
+  int MedianChannel() const;
+  /// Collective: whether channel c may use `donor`'s hierarchy (every
+  /// row's diagonal ratio within the range its smoother converges in).
+  bool CanShare(int c, int donor) const;
+  /// The owned rows' diagonal entries of owned-row values (OwnedColumns_ order).
+  std::vector<double> OwnedDiagonal(const std::vector<double>& values) const;
+  /// This rank: every owned row's diagonal of `values` within [1/3, 1.8]
+  /// of `diagonal` (the matrix a hierarchy was set up on).
+  bool WithinSmootherRange(const std::vector<double>& values, const std::vector<double>& diagonal) const;
   void SolveChannels(const std::vector<double>& rhs,
     const std::array<ChannelSetup, NumberOfChannels>& setup, std::vector<double>& solution,
     SolverReport& report, double& hierarchyMs);
@@ -241,6 +291,16 @@ private:
     return LinearSolver_.empty() ? std::string("cg/boomeramg") : LinearSolver_;
   }
   bool ValuesOnly_ = true;
+  bool SharedHierarchy_ = false;
+  /// Per channel: the channel whose hierarchy preconditions it (itself if
+  /// its own; -1 none).
+  std::array<int, NumberOfChannels> Donor_{ -1, -1, -1 };
+  /// Per channel: the owned diagonal of the matrix its hierarchy was set up on.
+  std::array<std::vector<double>, NumberOfChannels> HierarchyDiagonal_;
+  long long Numberings_ = 0, HierarchySetups_ = 0;
+  /// The material of the last matrices (a relight compares it, bit for bit).
+  OpticalProperties Material_;
+  bool HaveMaterial_ = false;
   /// Per channel: iterations of the last solve after a full set-up, and
   /// whether the next change of values must rebuild the hierarchy.
   std::array<int, NumberOfChannels> FullIterations_{};

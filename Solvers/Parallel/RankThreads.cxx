@@ -1,21 +1,38 @@
 #include "RankThreads.h"
 
+#include "Threads.h"
+
 #include <omp.h>
 
-#include <algorithm>
 #include <cstdlib>
+#include <thread>
 
 namespace translucency
 {
 
-int ThreadsPerRank(MPI_Comm comm)
+int RanksOnThisNode(MPI_Comm comm)
 {
-  MPI_Comm node;
-  MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
-  int ranksOnNode = 1;
-  MPI_Comm_size(node, &ranksOnNode);
-  MPI_Comm_free(&node);
-  return std::max(1, omp_get_num_procs() / std::max(1, ranksOnNode));
+  static int cached = 0;
+  static MPI_Comm cachedComm = MPI_COMM_NULL;
+  if (cached == 0 || cachedComm != comm)
+  {
+    MPI_Comm node = MPI_COMM_NULL;
+    int ranksOnNode = 1;
+    if (MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node) ==
+        MPI_SUCCESS &&
+      node != MPI_COMM_NULL)
+    {
+      MPI_Comm_size(node, &ranksOnNode);
+      MPI_Comm_free(&node);
+    }
+    else
+    {
+      MPI_Comm_size(comm, &ranksOnNode);
+    }
+    cached = ranksOnNode;
+    cachedComm = comm;
+  }
+  return cached;
 }
 
 ScopedRankThreads::ScopedRankThreads(MPI_Comm comm)
@@ -35,16 +52,14 @@ ScopedRankThreads::ScopedRankThreads(MPI_Comm comm)
   {
     return;
   }
-  static int cached = 0;
-  static MPI_Comm cachedComm = MPI_COMM_NULL;
-  if (cached == 0 || cachedComm != comm)
+  const int cores = static_cast<int>(std::thread::hardware_concurrency());
+  Threads_ = ThreadsPerRank(cores > 0 ? cores : omp_get_num_procs(), omp_get_num_procs(),
+    RanksOnThisNode(comm), false);
+  if (Threads_ > 0)
   {
-    cached = ThreadsPerRank(comm);
-    cachedComm = comm;
+    Previous_ = omp_get_max_threads();
+    omp_set_num_threads(Threads_);
   }
-  Previous_ = omp_get_max_threads();
-  Threads_ = cached;
-  omp_set_num_threads(Threads_);
 }
 
 ScopedRankThreads::~ScopedRankThreads()

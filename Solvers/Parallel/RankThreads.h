@@ -2,7 +2,10 @@
  * @file RankThreads.h
  * @brief OpenMP threads per MPI rank: the cores of a node shared by the
  * ranks on it (issue 32), so that N ranks on one machine do not each start
- * one thread per core (N times oversubscribed).
+ * one thread per core (N times oversubscribed). The rule itself is
+ * translucency::ThreadsPerRank (Solvers/Common/Threads.h); this is its MPI
+ * side, used by the distributed solver and by the filters' dispatcher
+ * (Filters/Parallel/vtkTranslucencyThreads.h).
  */
 #pragma once
 
@@ -12,20 +15,19 @@ namespace translucency
 {
 
 /**
- * Collective over `comm`. The threads each rank of `comm` should use: the
- * processors OpenMP sees on this rank's node (omp_get_num_procs) divided by
- * the ranks of `comm` on that node (MPI_Comm_split_type, shared memory),
- * rounded down, at least 1.
+ * Collective over `comm`: the ranks of `comm` sharing this rank's node
+ * (MPI_Comm_split_type, shared memory). Counted once per communicator and
+ * kept: a run's node layout does not change.
  */
-int ThreadsPerRank(MPI_Comm comm);
+int RanksOnThisNode(MPI_Comm comm);
 
 /**
  * While alive, OpenMP's default team size on the calling thread is
- * ThreadsPerRank(comm) when `comm` has more than one rank and no rank's user
+ * ThreadsPerRank(hardware threads, processors OpenMP may use, ranks of
+ * `comm` on this node) when `comm` has more than one rank and no rank's user
  * chose (OMP_NUM_THREADS unset or empty on every rank); otherwise it changes
  * nothing. The previous default is restored on destruction. Collective (one
- * MPI_Allreduce; the first time on a communicator also the node split, whose
- * result is kept per process).
+ * MPI_Allreduce; the first time on a communicator also the node split).
  */
 class ScopedRankThreads
 {

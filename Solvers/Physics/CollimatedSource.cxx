@@ -1,6 +1,7 @@
 #include "CollimatedSource.h"
 
 #include "Error.h"
+#include "ExponentialMoments.h"
 #include "Fresnel.h"
 #include "RayCaster.h"
 #include "TetMesh.h"
@@ -8,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <sstream>
 
@@ -96,47 +98,89 @@ const TetRules& Rules()
   return rules;
 }
 
-/**
- * The quadrature of one beam and channel over one tet: E_c interpolated
- * log-linearly between the vertex values e[4] (linearly if one is 0), the
- * optical path linearly between path[4]; the level the smallest (<= 4) at
- * which the exponent ln E_c - i k path varies by at most 0.5 across a
- * sub-tet (k = 0: the real range alone, as the continuous-wave load).
- * Calls visit(g, l, pathAtPoint, weight) per point (g the interpolated E_c,
- * l the barycentric coordinates, weight = volume / points) and returns the
- * weight, or 0 if E_c is 0 at all four vertices (no call).
- */
-template <class Visit>
-double VisitTet(const double e[4], const double path[4], double wavenumber, double volume,
-  Visit&& visit)
+/// ln E_c + i phase as the exponent type: double drops the phase (k = 0).
+template <class T>
+T ExponentOf(double logE, double phase);
+template <>
+double ExponentOf<double>(double logE, double)
 {
-  double logE[4];
-  bool positive = true, any = false;
+  return logE;
+}
+template <>
+std::complex<double> ExponentOf<std::complex<double>>(double logE, double phase)
+{
+  return { logE, phase };
+}
+
+/// g exp(i phase) as T: double drops the phase (k = 0).
+template <class T>
+T Modulated(double g, double phase);
+template <>
+double Modulated<double>(double g, double)
+{
+  return g;
+}
+template <>
+std::complex<double> Modulated<std::complex<double>>(double g, double phase)
+{
+  return g * std::polar(1.0, phase);
+}
+
+/// The quadrature level of one beam and channel on one tet (VisitTet): the
+/// smallest (<= TetRules::MaxLevel) at which the exponent ln E_c - i k path
+/// varies by at most 0.5 across a sub-tet (k = 0: the real range alone, as
+/// the continuous-wave load); 1 where E_c is 0 at some vertex (E_c then
+/// interpolated linearly). `positive`: E_c > 0 at every vertex, with its
+/// logarithms in logE; `any`: at some vertex.
+int QuadratureLevel(const double e[4], const double path[4], double wavenumber, double logE[4],
+  bool& positive, bool& any)
+{
+  positive = true;
+  any = false;
   for (int k = 0; k < 4; ++k)
   {
     positive = positive && e[k] > 0.0;
     any = any || e[k] > 0.0;
     logE[k] = e[k] > 0.0 ? std::log(e[k]) : 0.0;
   }
+  if (!positive)
+  {
+    return 1;
+  }
+  const double real = std::max(std::max(logE[0], logE[1]), std::max(logE[2], logE[3])) -
+    std::min(std::min(logE[0], logE[1]), std::min(logE[2], logE[3]));
+  const double imaginary = wavenumber *
+    (std::max(std::max(path[0], path[1]), std::max(path[2], path[3])) -
+      std::min(std::min(path[0], path[1]), std::min(path[2], path[3])));
+  const double range = imaginary > 0.0 ? std::hypot(real, imaginary) : real;
+  int level = 0;
+  while (level < TetRules::MaxLevel && range > 0.5 * (1 << level))
+  {
+    ++level;
+  }
+  return level;
+}
+
+/**
+ * The quadrature of one beam and channel over one tet: E_c interpolated
+ * log-linearly between the vertex values e[4] (linearly if one is 0), the
+ * optical path linearly between path[4], at QuadratureLevel() capped at
+ * `maxLevel`. Calls visit(g, l, pathAtPoint, weight) per point (g the
+ * interpolated E_c, l the barycentric coordinates, weight = volume /
+ * points) and returns the weight, or 0 if E_c is 0 at all four vertices (no
+ * call).
+ */
+template <class Visit>
+double VisitTet(const double e[4], const double path[4], double wavenumber, double volume,
+  Visit&& visit, int maxLevel = TetRules::MaxLevel)
+{
+  double logE[4];
+  bool positive = true, any = false;
+  const int level =
+    std::min(maxLevel, QuadratureLevel(e, path, wavenumber, logE, positive, any));
   if (!any)
   {
     return 0.0;
-  }
-  // Finer rules where E_c (or its phase) varies more across the tet.
-  int level = 1;
-  if (positive)
-  {
-    const double real = std::max(std::max(logE[0], logE[1]), std::max(logE[2], logE[3])) -
-      std::min(std::min(logE[0], logE[1]), std::min(logE[2], logE[3]));
-    const double imaginary = wavenumber *
-      (std::max(std::max(path[0], path[1]), std::max(path[2], path[3])) -
-        std::min(std::min(path[0], path[1]), std::min(path[2], path[3])));
-    const double range = imaginary > 0.0 ? std::hypot(real, imaginary) : real;
-    level = 0;
-    while (level < TetRules::MaxLevel && range > 0.5 * (1 << level))
-    {
-      ++level;
-    }
   }
   const std::vector<std::array<double, 4>>& points = Rules().Points[level];
   const double weight = volume / static_cast<double>(points.size());
@@ -150,6 +194,62 @@ double VisitTet(const double e[4], const double path[4], double wavenumber, doub
   return weight;
 }
 
+/// From this quadrature level on (128 points and more), the loads take the
+/// exact integrals of the log-linear E_c instead (ExponentialMoments.h):
+/// the quadrature's cost grows 8x a level, the exact form's does not.
+constexpr int ExactFromLevel = 2;
+
+/**
+ * The integrals over one tet of E_c exp(-i k path) (`total`) and of
+ * lambda_j times it (moment[j]), E_c and the path interpolated as in
+ * VisitTet: exactly (ExponentialMoments, z_j = ln E_c,j - i k path_j) where
+ * the quadrature would need level ExactFromLevel or more, else by the
+ * quadrature. T is double for k = 0 (the imaginary part is dropped).
+ * Returns false (and zeros) if E_c is 0 at all four vertices.
+ */
+template <class T>
+bool TetIntegrals(const double e[4], const double path[4], double wavenumber, double volume,
+  T& total, T moment[4])
+{
+  double logE[4];
+  bool positive = true, any = false;
+  const int level = QuadratureLevel(e, path, wavenumber, logE, positive, any);
+  total = T(0.0);
+  for (int j = 0; j < 4; ++j)
+  {
+    moment[j] = T(0.0);
+  }
+  if (!any)
+  {
+    return false;
+  }
+  if (positive && level >= ExactFromLevel)
+  {
+    T z[4];
+    for (int j = 0; j < 4; ++j)
+    {
+      z[j] = ExponentOf<T>(logE[j], -wavenumber * path[j]);
+    }
+    ExponentialMoments(z, volume, total, moment);
+    return true;
+  }
+  const double weight = VisitTet(e, path, wavenumber, volume,
+    [&](double g, const std::array<double, 4>& l, double p, double) {
+      const T value = Modulated<T>(g, -wavenumber * p);
+      total += value;
+      for (int j = 0; j < 4; ++j)
+      {
+        moment[j] += value * l[j];
+      }
+    });
+  total *= weight;
+  for (int j = 0; j < 4; ++j)
+  {
+    moment[j] *= weight;
+  }
+  return true;
+}
+
 /// The vertex values of beam `beam`, channel c, on tet v: E_c and the path.
 void TetValues(const CollimatedSource::Beam& beam, const int* v, int c, double e[4],
   double path[4])
@@ -158,6 +258,78 @@ void TetValues(const CollimatedSource::Beam& beam, const int* v, int c, double e
   {
     e[k] = beam.Fluence[3 * static_cast<size_t>(v[k]) + c];
     path[k] = beam.OpticalPath[v[k]];
+  }
+}
+
+/**
+ * The time load of one beam and channel on one tet (ComputeCollimatedTimeLoad):
+ * the continuous-wave load sigma int_T lambda_k E_c dV of TetIntegrals, split
+ * over the step times [first, end) by the arrival time path / c at the
+ * quadrature's points (a hat function in time between the two step times
+ * around each arrival), added to w[12 (j - first) + 3 k] (w offset by the
+ * channel). Where the load is the exact integral (level ExactFromLevel or
+ * more) the split is the quadrature's at level ExactFromLevel, scaled so that
+ * the times sum to the exact load: the time integral is the continuous-wave
+ * load in either case. `share` is scratch space.
+ */
+void DepositInTime(const double e[4], const double path[4], double volume, double sigma,
+  const std::vector<double>& times, int first, int end, double* w, std::vector<double>& share)
+{
+  double logE[4];
+  bool positive = true, any = false;
+  const bool exact =
+    QuadratureLevel(e, path, 0.0, logE, positive, any) >= ExactFromLevel && positive;
+  const int last = static_cast<int>(times.size()) - 1;
+  share.assign(4 * static_cast<size_t>(end - first), 0.0);
+  double quadrature[4] = { 0.0, 0.0, 0.0, 0.0 };
+  VisitTet(e, path, 0.0, volume,
+    [&](double g, const std::array<double, 4>& l, double p, double weight) {
+      const double scaled = sigma * weight * g;
+      for (int k = 0; k < 4; ++k)
+      {
+        quadrature[k] += scaled * l[k];
+      }
+      const double tau = p / SpeedOfLightMillimetresPerNanosecond;
+      const int j =
+        static_cast<int>(std::upper_bound(times.begin(), times.end(), tau) - times.begin());
+      int j0 = 0, j1 = 0;
+      double share1 = 0.0;
+      if (j > last)
+      {
+        return; // arrives after the last time: not in this run
+      }
+      if (j > 0)
+      {
+        j0 = j - 1;
+        j1 = j;
+        share1 = (tau - times[j0]) / (times[j1] - times[j0]);
+      }
+      // (Inside [first, end) up to rounding of the interpolation.)
+      j0 = std::max(first, std::min(j0, end - 1));
+      j1 = std::max(first, std::min(j1, end - 1));
+      for (int k = 0; k < 4; ++k)
+      {
+        share[4 * static_cast<size_t>(j0 - first) + k] += (1.0 - share1) * scaled * l[k];
+        share[4 * static_cast<size_t>(j1 - first) + k] += share1 * scaled * l[k];
+      }
+    },
+    exact ? ExactFromLevel : TetRules::MaxLevel);
+  double factor[4] = { 1.0, 1.0, 1.0, 1.0 };
+  if (exact)
+  {
+    double total = 0.0, moment[4];
+    TetIntegrals(e, path, 0.0, volume, total, moment);
+    for (int k = 0; k < 4; ++k)
+    {
+      factor[k] = quadrature[k] > 0.0 ? sigma * moment[k] / quadrature[k] : 0.0;
+    }
+  }
+  for (int j = 0; j < end - first; ++j)
+  {
+    for (int k = 0; k < 4; ++k)
+    {
+      w[12 * static_cast<size_t>(j) + 3 * k] += factor[k] * share[4 * static_cast<size_t>(j) + k];
+    }
   }
 }
 
@@ -300,26 +472,17 @@ void BeamLoads(const TetMesh& mesh, const OpticalProperties& material, Collimate
       {
         double e[4], path[4];
         TetValues(beam, v, c, e, path);
-        double moment[4] = { 0.0, 0.0, 0.0, 0.0 }, total = 0.0;
-        const double scale = VisitTet(e, path, 0.0, volume,
-          [&](double g, const std::array<double, 4>& l, double, double) {
-            total += g;
-            for (int k = 0; k < 4; ++k)
-            {
-              moment[k] += g * l[k];
-            }
-          });
-        if (scale == 0.0)
+        double moment[4], total = 0.0;
+        if (!TetIntegrals(e, path, 0.0, volume, total, moment))
         {
           continue;
         }
         const double sigma = muS[3 * static_cast<size_t>(t) + c];
         for (int k = 0; k < 4; ++k)
         {
-          tetLoad[12 * static_cast<size_t>(t) + 3 * k + c] += sigma * scale * moment[k];
+          tetLoad[12 * static_cast<size_t>(t) + 3 * k + c] += sigma * moment[k];
         }
-        tetAbsorbed[3 * static_cast<size_t>(t) + c] +=
-          muA[3 * static_cast<size_t>(t) + c] * scale * total;
+        tetAbsorbed[3 * static_cast<size_t>(t) + c] += muA[3 * static_cast<size_t>(t) + c] * total;
       }
     }
   }
@@ -439,20 +602,16 @@ void ComputeCollimatedFrequencyLoad(const TetMesh& mesh, const OpticalProperties
       {
         double e[4], path[4];
         TetValues(beam, v, c, e, path);
-        std::complex<double> moment[4] = { 0.0, 0.0, 0.0, 0.0 };
-        const double scale = VisitTet(e, path, wavenumber, volume,
-          [&](double g, const std::array<double, 4>& l, double p, double) {
-            // The beam's own modulation: exp(-i omega eta s / c).
-            const std::complex<double> value = g * std::polar(1.0, -wavenumber * p);
-            for (int k = 0; k < 4; ++k)
-            {
-              moment[k] += value * l[k];
-            }
-          });
-        const double sigma = muS[3 * static_cast<size_t>(t) + c];
-        for (int k = 0; k < 4 && scale > 0.0; ++k)
+        // The beam's own modulation exp(-i omega eta s / c) with E_c.
+        std::complex<double> moment[4], total;
+        if (!TetIntegrals(e, path, wavenumber, volume, total, moment))
         {
-          tetLoad[12 * static_cast<size_t>(t) + 3 * k + c] += sigma * scale * moment[k];
+          continue;
+        }
+        const double sigma = muS[3 * static_cast<size_t>(t) + c];
+        for (int k = 0; k < 4; ++k)
+        {
+          tetLoad[12 * static_cast<size_t>(t) + 3 * k + c] += sigma * moment[k];
         }
       }
     }
@@ -497,7 +656,7 @@ std::vector<CollimatedDeposit> ComputeCollimatedTimeLoad(const TetMesh& mesh,
   {
     // The tet's deposits, dense over the times its arrivals span: weights
     // [(j - first) * 12 + 3 k + c] for time j, vertex k, channel c.
-    std::vector<double> dense;
+    std::vector<double> dense, share;
 #pragma omp for schedule(static)
     for (int t = 0; t < numTets; ++t)
     {
@@ -535,38 +694,8 @@ std::vector<CollimatedDeposit> ComputeCollimatedTimeLoad(const TetMesh& mesh,
         {
           double e[4], path[4];
           TetValues(beam, v, c, e, path);
-          // Exactly the continuous-wave quadrature (wavenumber 0), each
-          // point's weight split between the two step times around its
-          // arrival (a hat function in time).
-          const double sigma = muS[3 * static_cast<size_t>(t) + c];
-          double* w = dense.data() + c;
-          VisitTet(e, path, 0.0, volume,
-            [&](double g, const std::array<double, 4>& l, double p, double weight) {
-              const double tau = p / SpeedOfLightMillimetresPerNanosecond;
-              const int j = static_cast<int>(
-                std::upper_bound(times.begin(), times.end(), tau) - times.begin());
-              int j0 = 0, j1 = 0;
-              double share1 = 0.0;
-              if (j > last)
-              {
-                return; // arrives after the last time: not in this run
-              }
-              if (j > 0)
-              {
-                j0 = j - 1;
-                j1 = j;
-                share1 = (tau - times[j0]) / (times[j1] - times[j0]);
-              }
-              // (Inside [first, end) up to rounding of the interpolation.)
-              j0 = std::max(first, std::min(j0, end - 1));
-              j1 = std::max(first, std::min(j1, end - 1));
-              const double scaled = sigma * weight * g;
-              for (int k = 0; k < 4; ++k)
-              {
-                w[12 * static_cast<size_t>(j0 - first) + 3 * k] += (1.0 - share1) * scaled * l[k];
-                w[12 * static_cast<size_t>(j1 - first) + 3 * k] += share1 * scaled * l[k];
-              }
-            });
+          DepositInTime(e, path, volume, muS[3 * static_cast<size_t>(t) + c], times, first, end,
+            dense.data() + c, share);
         }
       }
       std::vector<CollimatedDeposit>& out = perTet[static_cast<size_t>(t)];

@@ -20,6 +20,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <vector>
 
 namespace translucency
@@ -65,5 +66,68 @@ bool ComputeSurfacePointIrradiance(const BoundarySurface& surface,
   const std::vector<int>& points, const std::vector<double>& rotations,
   const std::vector<LightSource>& lights, double uniformIrradiance, int uniformSamples,
   bool shadows, std::vector<double>& q, const std::function<bool()>& abort = {});
+
+/**
+ * ComputeSurfacePointIrradiance kept across the calls of an interactive
+ * session on one surface and one set of points (the distributed Surface
+ * Irradiance's per-light cache; IrradianceCache is the serial filter's):
+ *  - the uniform light's term per point (its occlusion sampling), kept while
+ *    its irradiance, samples and the shadow flag stay the same;
+ *  - each directional, point or spot light's corner terms (3 values per
+ *    triangle around each point: DirectIrradiance() times the visibility of
+ *    the point's shadow ray), kept while every field of the light and the
+ *    shadow flag stay the same;
+ *  - the surface's measures and ray caster.
+ * So a change of one light recomputes that light only. SetSurface() forgets
+ * everything. The result equals ComputeSurfacePointIrradiance() of the same
+ * arguments bit for bit: each corner sums the uniform term, then each
+ * light's in the order of `lights`, as the full computation does (a light
+ * that does not reach a corner adds 0.0).
+ *
+ * Memory: 24 bytes per triangle corner of the points and light, 8 per point
+ * for the uniform light, the surface and its ray caster (GetMemoryBytes()).
+ */
+class SurfacePointIrradianceCache
+{
+public:
+  SurfacePointIrradianceCache();
+  ~SurfacePointIrradianceCache();
+  SurfacePointIrradianceCache(const SurfacePointIrradianceCache&) = delete;
+  SurfacePointIrradianceCache& operator=(const SurfacePointIrradianceCache&) = delete;
+
+  /// The surface and the points to compute (indices into surface.Points,
+  /// with their uniform-light sample rotations, as ComputeSurfacePointIrradiance).
+  /// Forgets every kept term. Throws translucency::Error if a point is not
+  /// one of the surface's or the sizes differ.
+  void SetSurface(BoundarySurface surface, std::vector<int> points, std::vector<double> rotations);
+  /// Whether SetSurface was called since construction or Clear().
+  bool HasSurface() const;
+  const BoundarySurface& GetSurface() const;
+
+  /**
+   * ComputeSurfacePointIrradiance(surface, points, rotations, lights, ...)
+   * of the SetSurface arguments, re-using the kept terms. Same errors and
+   * abort contract; an aborted call keeps the terms that were complete.
+   */
+  bool Compute(const std::vector<LightSource>& lights, double uniformIrradiance,
+    int uniformSamples, bool shadows, std::vector<double>& q,
+    const std::function<bool()>& abort = {});
+
+  ///@{
+  /// What the last Compute() computed (the rest came from the cache): the
+  /// number of lights, and whether the uniform light's term.
+  int GetNumberOfLightsComputed() const;
+  bool GetUniformComputed() const;
+  ///@}
+
+  /// Forget the surface and every kept term.
+  void Clear();
+  /// Bytes held (surface, measures, kept terms; about those of the ray caster).
+  std::size_t GetMemoryBytes() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> Impl_;
+};
 
 } // namespace translucency

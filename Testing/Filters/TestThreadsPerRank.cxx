@@ -1,11 +1,12 @@
-// OpenMP threads per rank (Filters/Parallel/vtkTranslucencyThreads.h): the
+// OpenMP threads per rank (Solvers/Common/Threads.h, the rule of the filters'
+// dispatcher and the distributed solver): the
 // team each rank runs is cores / ranks on the node, never more than the rank
 // may use, never zero, and an explicit OMP_NUM_THREADS is left alone.
-#include "vtkTranslucencyThreads.h"
+#include "Threads.h"
 
 #include <gtest/gtest.h>
 
-using vtkTranslucency::ThreadsPerRank;
+using translucency::ThreadsPerRank;
 
 TEST(ThreadsPerRank, SplitsTheCoresOverTheRanksOnTheNode)
 {

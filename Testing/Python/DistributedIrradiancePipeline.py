@@ -36,7 +36,13 @@ Coefficients per piece (paint_<case>.pvtu; the serial ref_paint.vtu, painted
 then lit with B and solved), with a line "paint <case> rank <r> path <path>";
 Outgoing Radiance of pvtu3_B, pvtu2_B, redist_B and pvtu1_B per piece and of
 pvtu3_B gathered (radiance_<case>.pvtp; the serial ref_radiance.vtp), with a
-line "radiance <case> rank <r> path <path> triangles <n> exposure <e>".
+line "radiance <case> rank <r> path <path> triangles <n> exposure <e>";
+a relight of one kept Surface Irradiance (a light moved, then the uniform
+light changed: relight_<step>_kept.pvtu, and a fresh filter's full
+computation relight_<step>_fresh.pvtu), with a line "relight <step> rank <r>
+lights <computed> uniform <0|1> ms <gather ms>"; Outgoing Radiance
+re-executed after a relight (radiance_again_kept.pvtp) and a fresh one on the
+same solve (radiance_again_fresh.pvtp).
 """
 
 import os
@@ -364,6 +370,35 @@ elif MODE == "run":
                 o.GetOutputDataObject(0).GetNumberOfCells()))
             f.write("cutstats %s rank %d %s\n" % (name, RANK, cut_statistics(cutter)))
         SaveData(path(name + ".pvtu"), proxy=solved)
+    # A relight of one distributed Surface Irradiance (issue 32): the kept
+    # surface and terms; one light moved recomputes that light only (no
+    # gather: ms 0), then a new uniform light its term only; each result
+    # saved with a fresh filter's full computation of the same lights.
+    kept = SurfaceIrradiance(Input=pvtu3, Shadows=1, **LIGHTS["A"])
+    kept.UpdatePipeline()
+    for step, change in (("light", dict(PointLights=[-3.0, 12.0, 21.0, 350.0])),
+                         ("uniform", dict(UniformLightIrradiance=0.25))):
+        for name, value in change.items():
+            setattr(kept, name, value)
+        kept.UpdatePipeline()
+        o = kept.GetClientSideObject()
+        with open(path("irr_%d.txt" % RANK), "a") as f:
+            f.write("relight %s rank %d lights %d uniform %d ms %.3f\n" % (
+                step, RANK, o.GetNumberOfLightsComputed(), int(o.GetUniformComputed()),
+                o.GetBoundarySurfaceTime()))
+        SaveData(path("relight_%s_kept.pvtu" % step), proxy=kept)
+        settings = dict(LIGHTS["A"], PointLights=list(kept.PointLights),
+                        UniformLightIrradiance=kept.UniformLightIrradiance)
+        fresh = SurfaceIrradiance(Input=pvtu3, Shadows=1, **settings)
+        SaveData(path("relight_%s_fresh.pvtu" % step), proxy=fresh)
+    # Outgoing Radiance re-executed after a relight keeps its boundary
+    # (issue 32): saved with a fresh filter's output on the same solve.
+    relit, relit_solved = chain(pvtu3, "B")
+    again = OutgoingRadiance(Input=relit_solved)
+    again.UpdatePipeline()
+    relit.PointLights = [-3.0, 12.0, 21.0, 350.0]
+    SaveData(path("radiance_again_kept.pvtp"), proxy=again)
+    SaveData(path("radiance_again_fresh.pvtp"), proxy=OutgoingRadiance(Input=relit_solved))
     # An invalid RefractiveIndex on rank 1 only: every rank reports rank 1's
     # error and nobody hangs; the next run works.
     bad = ProgrammableFilter(Input=pvtu3)

@@ -172,6 +172,8 @@ elif MODE == "run":
                 case, RANK, o.GetParallelPath(), o.GetLastAssembly() or "-",
                 ",".join(str(o.GetNumberOfIterations(c)) for c in range(3)),
                 ",".join("%.6e" % o.GetFinalResidual(c) for c in range(3))))
+            # What the solver set up, with its counts so far (issue 32).
+            f.write("setup %s rank %d %s\n" % (case, RANK, o.GetLastLinearSetup() or "-"))
             if o.GetParallelPath() == "distributed":
                 # The whole object's balance, summed over the ranks in the solve.
                 f.write("balance %s rank %d %s\n" % (case, RANK, " ".join(

@@ -127,6 +127,51 @@ class DistributedIrradianceTest(MpiSuite):
             else:
                 self.assertGreater(nonempty, 1, "the pieces stay distributed, " + case)
 
+    def test_relight_keeps_surface_and_terms(self):
+        # A relight of one filter (issue 32): the moved light only, then the
+        # uniform light only, nothing gathered (time 0) on every rank; the
+        # Irradiance equal to a fresh filter's full computation to 1e-12
+        # (the same sums in the same order: bit for bit) at every point.
+        reports = {case: {rank: m.groups()[2:] for rank, m in per_rank.items()}
+                   for case, per_rank in self.rank_reports(
+                       "irr", r"^relight (\S+) rank (\d+) lights (\d+) uniform (\d) "
+                              r"ms (\S+)$").items()}
+        for step, lights, uniform in (("light", "1", "0"), ("uniform", "0", "1")):
+            per_rank = reports.get(step, {})
+            self.assertEqual(sorted(per_rank), list(range(RANKS)), step)
+            for rank in range(RANKS):
+                self.assertEqual(per_rank[rank], (lights, uniform, "0.000"),
+                                 "rank %d, %s" % (rank, step))
+            kept = pieces_of(os.path.join(self.work, "relight_%s_kept.pvtu" % step))
+            fresh = pieces_of(os.path.join(self.work, "relight_%s_fresh.pvtu" % step))
+            self.assertEqual(len(kept), len(fresh))
+            worst, count = 0.0, 0
+            for a, b in zip(kept, fresh):
+                if a.GetNumberOfPoints() == 0:
+                    continue
+                qa = vtk_to_numpy(a.GetPointData().GetArray("Irradiance"))
+                qb = vtk_to_numpy(b.GetPointData().GetArray("Irradiance"))
+                self.assertEqual(qa.shape, qb.shape, step)
+                worst = max(worst, float(np.abs(qa - qb).max() / np.abs(qb).max()))
+                count += int((qb > 0).any(axis=1).sum())
+            self.assertGreater(count, 100, "lit points, " + step)
+            self.assertLessEqual(worst, 1e-12, "kept against fresh Irradiance, " + step)
+
+    def test_radiance_reexecuted_keeps_its_boundary(self):
+        # The per-piece Outgoing Radiance keeps its boundary across a relight
+        # (issue 32): the same faces and Radiance as a fresh filter, bit for bit.
+        kept = pieces_of(os.path.join(self.work, "radiance_again_kept.pvtp"))
+        fresh = pieces_of(os.path.join(self.work, "radiance_again_fresh.pvtp"))
+        self.assertEqual([p.GetNumberOfCells() for p in kept], [p.GetNumberOfCells() for p in fresh])
+        self.assertEqual(sum(p.GetNumberOfCells() for p in kept), self.boundary)
+        for a, b in zip(kept, fresh):
+            if a.GetNumberOfPoints() == 0:
+                continue
+            ra = vtk_to_numpy(a.GetPointData().GetArray("Radiance"))
+            rb = vtk_to_numpy(b.GetPointData().GetArray("Radiance"))
+            self.assertTrue(np.array_equal(ra, rb))
+            self.assertGreater(float(rb.max()), 0.0)
+
     def test_paths_and_gathered_surface(self):
         for case in CASES:
             per_rank = self.reports.get(case, {})

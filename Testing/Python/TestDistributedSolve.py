@@ -16,7 +16,9 @@ How to run (ctest does this, with 2 and with 3 ranks):
    reference point is covered; the distributed cases took the distributed
    path and the gathered case the gathered one; iterations and residuals
    are the same on every rank; the relight kept the hierarchies (assembly
-   "unchanged") and the warm start of the same system needed at most 2
+   "unchanged"; by counters on every rank: no numbering and no hierarchy
+   set up since the cold solve's one numbering and three hierarchies) and
+   the warm start of the same system needed at most 2
    iterations; the pieces stay distributed; with 3 ranks on 2 pieces one
    rank has an empty piece; an invalid mu_a on rank 1 only gives rank 1's
    error on every rank, and the next solve works; no other error is logged
@@ -221,6 +223,21 @@ class DistributedSolveTest(MpiSuite):
         # issue 32's bug) and still gave the serial field (test above).
         self.assertEqual(self.solves["unpainted"][0][1], "full")
         self.assertEqual(self.solves["paint"][0][1], "values-only")
+
+    def test_set_ups_counted(self):
+        # Issue 32, by counters on every rank: the cold solve numbers the mesh
+        # once and sets up a BoomerAMG hierarchy per channel; the relight and
+        # the warm start (same mesh and material) number and set up nothing.
+        setups = {case: {rank: m.group(3) for rank, m in per_rank.items()}
+                  for case, per_rank in self.rank_reports(
+                      "solves", r"^setup (\S+) rank (\d+) (.*)$").items()}
+        for case, expected in (("pvtu3", "rebuilt (numberings 1, hierarchies 3)"),
+                               ("relight", "kept (numberings 1, hierarchies 3)"),
+                               ("warm", "kept (numberings 1, hierarchies 3)")):
+            per_rank = setups.get(case, {})
+            self.assertEqual(sorted(per_rank), list(range(RANKS)), case)
+            for rank in range(RANKS):
+                self.assertEqual(per_rank[rank], expected, "rank %d, %s" % (rank, case))
 
     def test_hierarchy_kept_and_warm_start(self):
         self.assertEqual(self.solves["pvtu3"][0][1], "full")

@@ -15,6 +15,11 @@ How to run (from a build tree; ctest sets the variables itself):
    solve, and the paint filter did not paint again (its arrays re-used).
 4. Falls back to a full assembly: a cut (topology change), too many changed
    tets (beyond MaximumChangedFraction), IncrementalAssembly off.
+5. A relight (the input carries the same coefficient arrays, unmodified)
+   neither copies, validates nor compares the material (the filter's
+   counters stay; issue 31), and its fluence equals a from-scratch solve; a
+   paint stroke (new arrays) and an array modified in place are read,
+   validated and compared again.
 
 Exits non-zero on failure (unittest).
 """
@@ -124,6 +129,37 @@ class IncrementalSolveTest(unittest.TestCase):
         self.assertEqual(self.solve.GetNumberOfChangedTets(), 3)
         np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
                                    self.reference(edited), rtol=1e-7)
+
+    def test_relight_reuses_the_material(self):
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetNumberOfMaterialConversions(), 1)
+        self.assertEqual(self.solve.GetNumberOfMaterialComparisons(), 0)
+        # Relight: the arrays are the same objects, not modified.
+        self.lights.AddDirectionalLight(1.0, 0.0, 0.0, 0.5)
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetLastAssembly(), "right-hand side")
+        self.assertEqual(self.solve.GetNumberOfMaterialConversions(), 1)
+        self.assertEqual(self.solve.GetNumberOfMaterialComparisons(), 0)
+        np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
+                                   self.reference(self.paint.GetOutput()), rtol=1e-7)
+        # A paint stroke: new arrays, read and compared with the kept ones.
+        self.paint.SetStrength(1.0)
+        self.paint.SetTargetAbsorptionCoefficient(0.5, 0.5, 0.5)
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetLastAssembly(), "incremental")
+        self.assertEqual(self.solve.GetNumberOfMaterialConversions(), 2)
+        self.assertEqual(self.solve.GetNumberOfMaterialComparisons(), 1)
+        # An array changed in place (and marked modified): read again.
+        absorption = self.paint.GetOutput().GetCellData().GetArray(ABSORPTION)
+        absorption.SetComponent(7, 0, 2.0 * absorption.GetComponent(7, 0))
+        absorption.Modified()
+        self.solve.Modified()
+        run(self.solve)
+        self.assertEqual(self.solve.GetNumberOfMaterialConversions(), 3)
+        self.assertEqual(self.solve.GetNumberOfMaterialComparisons(), 2)
+        self.assertEqual(self.solve.GetNumberOfChangedTets(), 1)
+        np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
+                                   self.reference(self.paint.GetOutput()), rtol=1e-7)
 
     def test_falls_back_to_full_assembly(self):
         run(self.lights, self.paint, self.solve)

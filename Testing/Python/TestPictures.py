@@ -190,6 +190,13 @@ class PicturesTest(unittest.TestCase):
             if name != "montecarlo":
                 if name != "fem":
                     self.assertIn("error_vs_time", s, name)
+                    # The sweep stops at the error floor: two doublings in a
+                    # row moving the error by < 1 % end it (none before its end).
+                    errors = s["error_vs_time"]["rms_error"]
+                    flat = [abs(b - a) < 0.01 * max(abs(a), abs(b))
+                            for a, b in zip(errors, errors[1:])]
+                    self.assertFalse(any(p and q for p, q in zip(flat[:-2], flat[1:-1])),
+                                     (name, errors))
                 # z-scores against Monte Carlo over the points its standard error allows.
                 a = s["fluence_against_montecarlo"]
                 total = a["R"]["points"] + a["R"]["masked"]  # the boundary points

@@ -185,6 +185,46 @@ TEST(DiffusionFrontEnd, PaintIsIncrementalAndEqualsAFullAssembly)
   EXPECT_EQ(report.Assembly, "full");
 }
 
+// Issue 31: a relight with the material kept from the last solve (no copy,
+// comparison or validation of it) gives the fluence of a solve from scratch;
+// without a kept material on this mesh it is refused.
+TEST(DiffusionFrontEnd, KeptMaterialRelightEqualsASolveFromScratch)
+{
+  Scene s = MakeScene(6);
+  const double tol = 1e-11;
+  DiffusionFrontEnd front;
+  front.GetSolver().SetRelTol(tol);
+  SolveResult result;
+  EXPECT_FALSE(front.HasKeptMaterial(s.Mesh));
+  EXPECT_TRUE(Contains(
+    ErrorMessage([&] { front.SolveKeptMaterial(s.Mesh, s.Irradiance, {}, SolveRequest(), result); }),
+    "no material kept"));
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, s.Irradiance, {}, SolveRequest(), result));
+  ASSERT_TRUE(front.HasKeptMaterial(s.Mesh));
+  EXPECT_EQ(front.GetNumberOfMaterialComparisons(), 0);
+  std::vector<double> relit = s.Irradiance;
+  for (int i : s.Mesh->GetBoundaryPoints())
+    relit[3 * static_cast<size_t>(i) + 2] *= 0.6;
+  ASSERT_TRUE(front.SolveKeptMaterial(s.Mesh, relit, {}, SolveRequest(), result));
+  EXPECT_EQ(result.Report.Assembly, "right-hand side");
+  EXPECT_EQ(front.GetNumberOfChangedTets(), 0);
+  EXPECT_EQ(front.GetNumberOfMaterialComparisons(), 0);
+  ASSERT_TRUE(front.HasKeptMaterial(s.Mesh)); // kept again for the next relight
+  const std::unique_ptr<DiffusionSolver> fresh = CreateDiffusionSolver("divergence");
+  fresh->SetRelTol(tol);
+  const DiffusionProblem problem = MakeProblem(*s.Mesh, s.Material, relit);
+  std::vector<double> reference;
+  SolverReport freshReport;
+  ASSERT_TRUE(fresh->Solve(problem, reference, freshReport));
+  EXPECT_LT(MaxRelativeDifference(result.Fluence, reference), 1e-7);
+  // A material passed in is compared with the kept one.
+  ASSERT_TRUE(front.Solve(s.Mesh, s.Material, relit, {}, SolveRequest(), result));
+  EXPECT_EQ(front.GetNumberOfMaterialComparisons(), 1);
+  // Another mesh object: nothing kept for it.
+  Scene other = MakeScene(6);
+  EXPECT_FALSE(front.HasKeptMaterial(other.Mesh));
+}
+
 TEST(DiffusionFrontEnd, SolverByNameAndNoIncrementalForOtherSolvers)
 {
   Scene s = MakeScene(3);

@@ -4,7 +4,10 @@
 // convergence to a manufactured solution of the SP3 system (both eigenmodes,
 // anisotropic scattering, a Fresnel boundary), the power balance, the
 // diffusive limit against the project's FEM diffusion solver, the
-// preconditioners and thread counts agreeing, and the errors for bad input.
+// preconditioners and thread counts agreeing, the Krylov methods of the block
+// system (GMRES to RelTol in an independently assembled system, equal to
+// BiCGSTAB's solution; an unconverged solve reported as such), and the errors
+// for bad input.
 
 #include "DiffusionSolverFactory.h"
 #include "ConjugateGradient.h"
@@ -561,6 +564,221 @@ TEST(Sp3Solver, PreconditionersAndThreadCountsAgree)
   ASSERT_TRUE(solver.Solve(problem, fluence, first));
   ASSERT_TRUE(solver.Solve(problem, fluence, second));
   EXPECT_LE(second.Iterations[0], 1);
+}
+
+// ---- the Krylov methods of the block system ----
+
+/// The lit box of PreconditionersAndThreadCountsAgree: eta 1.3 (F12 != F21,
+/// a non-symmetric system), half the top face lit, three channels.
+struct LitBox
+{
+  TetMesh Mesh = Build(BoxMesh(8, 8, 6, 8.0, 8.0, 6.0, 0.25, 3));
+  OpticalProperties Material;
+  std::vector<double> Q;
+  double MuA[3] = { 0.02, 0.1, 0.4 }, Sigma[3] = { 1.2, 0.9, 0.6 };
+  double Eta = 1.3;
+  LitBox()
+  {
+    Material = OpticalProperties::Uniform(Mesh.GetNumberOfTets(), MuA, Sigma, Eta);
+    const int n = Mesh.GetNumberOfPoints();
+    Q.assign(3 * static_cast<std::size_t>(n), 0.0);
+    for (int i = 0; i < n; ++i)
+    {
+      if (Mesh.GetPoint(i)[2] > 6.0 - 1e-9 && Mesh.GetPoint(i)[0] < 4.0)
+      {
+        Q[3 * static_cast<std::size_t>(i)] = 1.0;
+        Q[3 * static_cast<std::size_t>(i) + 1] = 0.5;
+        Q[3 * static_cast<std::size_t>(i) + 2] = 0.25;
+      }
+    }
+  }
+  DiffusionProblem Problem() const
+  {
+    DiffusionProblem problem;
+    problem.Mesh = &Mesh;
+    problem.Material = &Material;
+    problem.Irradiance = &Q;
+    return problem;
+  }
+};
+
+/// The relative residual |b - A x| / |b| of channel c of an SP3 solution
+/// (phi_1, phi_2) of the lit box (g = 0, no interior sources), with A and b
+/// assembled here independently of the solver: element stiffness from the
+/// barycentric gradients, consistent mass (V / 20)(1 + delta), boundary mass
+/// (S / 12)(1 + delta) with the currents' coefficients F, the load -S_k int q v
+/// (Sp3Solver.h).
+double IndependentResidual(const LitBox& box, const std::vector<double>& phi1,
+  const std::vector<double>& phi2, int c)
+{
+  const TetMesh& mesh = box.Mesh;
+  const int n = mesh.GetNumberOfPoints();
+  const double muA = box.MuA[c], muA1 = box.MuA[c] + box.Sigma[c];
+  const double d1 = 1.0 / (3.0 * muA1), d2 = 1.0 / (7.0 * muA1);
+  const double m11 = muA, m12 = -2.0 / 3.0 * muA, m22 = 4.0 / 9.0 * muA + 5.0 / 9.0 * muA1;
+  Eigen::VectorXd x1(n), x2(n), r1 = Eigen::VectorXd::Zero(n), r2 = Eigen::VectorXd::Zero(n);
+  for (int i = 0; i < n; ++i)
+  {
+    x1[i] = phi1[3 * static_cast<std::size_t>(i) + c];
+    x2[i] = phi2[3 * static_cast<std::size_t>(i) + c];
+  }
+  // r = A x first, then r = b - r.
+  for (int t = 0; t < mesh.GetNumberOfTets(); ++t)
+  {
+    const int* tv = mesh.GetTet(t);
+    Eigen::Matrix4d corners;
+    for (int a = 0; a < 4; ++a)
+    {
+      corners.row(a) << 1.0, mesh.GetPoint(tv[a])[0], mesh.GetPoint(tv[a])[1],
+        mesh.GetPoint(tv[a])[2];
+    }
+    const Eigen::Matrix4d inverse = corners.inverse(); // column a: barycentric coordinate a
+    const double volume = std::abs(corners.determinant()) / 6.0;
+    for (int a = 0; a < 4; ++a)
+    {
+      for (int b = 0; b < 4; ++b)
+      {
+        const double stiffness = volume * inverse.col(a).tail<3>().dot(inverse.col(b).tail<3>());
+        const double mass = volume / 20.0 * (a == b ? 2.0 : 1.0);
+        r1[tv[a]] += (d1 * stiffness + m11 * mass) * x1[tv[b]] + m12 * mass * x2[tv[b]];
+        r2[tv[a]] += m12 * mass * x1[tv[b]] + (d2 * stiffness + m22 * mass) * x2[tv[b]];
+      }
+    }
+  }
+  const Sp3BoundaryCoefficients k = Sp3BoundaryCoefficients::Compute(box.Eta);
+  Eigen::VectorXd b1 = Eigen::VectorXd::Zero(n), b2 = Eigen::VectorXd::Zero(n);
+  for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+  {
+    const int* tri = &mesh.GetBoundaryTriangles()[3 * static_cast<std::size_t>(f)];
+    const Eigen::Vector3d p0(mesh.GetPoint(tri[0])), p1(mesh.GetPoint(tri[1])),
+      p2(mesh.GetPoint(tri[2]));
+    const double area = 0.5 * (p1 - p0).cross(p2 - p0).norm();
+    for (int a = 0; a < 3; ++a)
+    {
+      for (int b = 0; b < 3; ++b)
+      {
+        const double mass = area / 12.0 * (a == b ? 2.0 : 1.0);
+        r1[tri[a]] += mass * (k.F11 * x1[tri[b]] + k.F12 * x2[tri[b]]);
+        r2[tri[a]] += mass * (k.F21 * x1[tri[b]] + k.F22 * x2[tri[b]]);
+        const double qv = mass * box.Q[3 * static_cast<std::size_t>(tri[b]) + c];
+        b1[tri[a]] -= k.S1 * qv;
+        b2[tri[a]] -= k.S2 * qv;
+      }
+    }
+  }
+  const double bb = b1.squaredNorm() + b2.squaredNorm();
+  return std::sqrt(((b1 - r1).squaredNorm() + (b2 - r2).squaredNorm()) / bb);
+}
+
+double MaxRelativeDifference(const std::vector<double>& a, const std::vector<double>& b)
+{
+  double maxValue = 0.0, maxDifference = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k)
+  {
+    maxValue = std::max(maxValue, std::abs(a[k]));
+    maxDifference = std::max(maxDifference, std::abs(a[k] - b[k]));
+  }
+  return maxDifference / maxValue;
+}
+
+TEST(Sp3Solver, GmresSolvesTheBlockSystemToRelTolAndMatchesBiCgStab)
+{
+  const LitBox box;
+  const DiffusionProblem problem = box.Problem();
+  auto run = [&](const std::string& krylov, const std::string& linear, int restart, double tol,
+               SolverReport& report, std::vector<double>* phi1 = nullptr,
+               std::vector<double>* phi2 = nullptr) {
+    Sp3Solver solver;
+    solver.SetRelTol(tol);
+    solver.SetMaxIter(20000);
+    solver.SetLinearSolver(linear);
+    solver.SetKrylovMethod(krylov);
+    solver.SetGmresRestart(restart);
+    std::vector<double> fluence;
+    EXPECT_TRUE(solver.Solve(problem, fluence, report));
+    if (phi1)
+    {
+      *phi1 = solver.GetPhi1();
+      *phi2 = solver.GetPhi2();
+    }
+    return fluence;
+  };
+  // GMRES's solution has the requested relative residual in the
+  // independently assembled system.
+  for (const double tol : { 1e-6, 1e-10 })
+  {
+    SolverReport report;
+    std::vector<double> phi1, phi2;
+    run("GMRES", "multigrid-agg", 30, tol, report, &phi1, &phi2);
+    EXPECT_EQ(report.LinearSolver, "gmres-block-multigrid-agg");
+    for (int c = 0; c < 3; ++c)
+    {
+      EXPECT_TRUE(report.Converged[c]);
+      EXPECT_LE(report.Residual[c], tol);
+      const double residual = IndependentResidual(box, phi1, phi2, c);
+      EXPECT_LE(residual, tol) << "channel " << c;
+      // The reported residual is the true one (not GMRES's estimate).
+      EXPECT_NEAR(residual, report.Residual[c], 1e-3 * tol) << "channel " << c;
+    }
+  }
+  // At a tight tolerance GMRES (restarted every 30, and every 3
+  // iterations) and BiCGSTAB give the same solution, with either block
+  // preconditioner (PreconditionersAndThreadCountsAgree's bound).
+  SolverReport gmres, restarted, bicgstab, gmresJacobi;
+  const std::vector<double> a = run("gmres", "multigrid-agg", 30, 1e-11, gmres);
+  const std::vector<double> b = run("gmres", "multigrid-agg", 3, 1e-11, restarted);
+  const std::vector<double> c = run("", "multigrid-agg", 30, 1e-11, bicgstab); // the default
+  const std::vector<double> d = run("gmres", "jacobi", 30, 1e-11, gmresJacobi);
+  EXPECT_EQ(bicgstab.LinearSolver, "bicgstab-block-multigrid-agg");
+  EXPECT_EQ(gmresJacobi.LinearSolver, "gmres-block-jacobi");
+  EXPECT_LT(MaxRelativeDifference(a, c), 1e-8);
+  EXPECT_LT(MaxRelativeDifference(b, c), 1e-8);
+  EXPECT_LT(MaxRelativeDifference(d, c), 1e-8);
+  for (int ch = 0; ch < 3; ++ch)
+  {
+    EXPECT_TRUE(gmres.Converged[ch] && restarted.Converged[ch] && bicgstab.Converged[ch] &&
+      gmresJacobi.Converged[ch]);
+    // One preconditioner application per GMRES iteration, two per BiCGSTAB
+    // iteration: GMRES minimises the residual over its Krylov space, so it
+    // needs no more applications than BiCGSTAB here.
+    EXPECT_LE(gmres.Iterations[ch], 2 * bicgstab.Iterations[ch]);
+    // Restarting every 3 iterations loses the older directions.
+    EXPECT_GT(restarted.Iterations[ch], gmres.Iterations[ch]);
+  }
+}
+
+TEST(Sp3Solver, AnUnconvergedSolveIsReportedAsSuch)
+{
+  const LitBox box;
+  const DiffusionProblem problem = box.Problem();
+  for (const std::string krylov : { "gmres", "bicgstab" })
+  {
+    Sp3Solver solver;
+    solver.SetKrylovMethod(krylov);
+    solver.SetLinearSolver("jacobi");
+    solver.SetRelTol(1e-12);
+    solver.SetMaxIter(4);
+    std::vector<double> fluence;
+    SolverReport report;
+    ASSERT_TRUE(solver.Solve(problem, fluence, report));
+    for (int c = 0; c < 3; ++c)
+    {
+      EXPECT_FALSE(report.Converged[c]) << krylov;
+      EXPECT_GT(report.Residual[c], 1e-12) << krylov;
+      EXPECT_LE(report.Iterations[c], 4) << krylov;
+    }
+  }
+  Sp3Solver solver;
+  try
+  {
+    solver.SetKrylovMethod("cg");
+    ADD_FAILURE() << "no error";
+  }
+  catch (const Error& e)
+  {
+    EXPECT_TRUE(Contains(e.what(), "Krylov method 'cg' is not available")) << e.what();
+  }
+  EXPECT_THROW(solver.SetGmresRestart(0), Error);
 }
 
 TEST(Sp3Solver, IsRegisteredAndRefusesWhatItDoesNotDo)

@@ -4,6 +4,8 @@
 // a box with a well (shadows matter), a heterogeneous refractive index,
 // directional, point and uniform (sampled) lights; also with the surface's
 // triangles in another order (the gather's order is not the mesh's).
+// SurfacePointIrradianceCache (the distributed path's per-light cache) equals
+// the full computation bit for bit and recomputes only what changed.
 
 #include "Error.h"
 #include "LightSources.h"
@@ -189,6 +191,60 @@ TEST(SurfaceLightKernel, SomePointsOnlyAndErrors)
     Error);
   EXPECT_THROW(ComputeSurfacePointIrradiance(surface, some, rSome, lights, -1.0, 8, true, qSome),
     Error);
+}
+
+TEST(SurfaceLightKernel, CacheRecomputesTheChangedLightOnlyBitForBit)
+{
+  WellCase c;
+  MakeWell(c);
+  BoundarySurface surface = SurfaceOf(c.Mesh, c.TetEta, true);
+  std::vector<int> some;
+  std::vector<double> rotations;
+  for (int i = 0; i < c.Mesh.GetNumberOfPoints(); i += 2)
+  {
+    some.push_back(i);
+    rotations.push_back(UniformSampleRotation(&surface.Points[3 * static_cast<size_t>(i)]));
+  }
+  SurfacePointIrradianceCache cache;
+  std::vector<double> q;
+  EXPECT_THROW(cache.Compute({}, 0.1, 8, true, q), Error); // no surface yet
+  cache.SetSurface(surface, some, rotations);
+  std::vector<LightSource> lights = { DirectionalLight({ 0.3, -0.5, -1.0 }, { 1.0, 0.5, 0.2 }),
+    PointLight({ 9.0, 4.0, 12.0 }, { 50.0, 60.0, 70.0 }),
+    SpotLight({ 4.0, 4.0, 14.0 }, { 0.0, 0.0, -1.0 }, 40.0, 2.0, { 30.0, 30.0, 30.0 }) };
+  // Each step: what changes, then the lights and uniform terms computed.
+  auto check = [&](double uniform, int samples, bool shadows, int lightsComputed,
+                 bool uniformComputed, const char* step) {
+    std::vector<double> full;
+    ASSERT_TRUE(cache.Compute(lights, uniform, samples, shadows, q)) << step;
+    EXPECT_EQ(cache.GetNumberOfLightsComputed(), lightsComputed) << step;
+    EXPECT_EQ(cache.GetUniformComputed(), uniformComputed) << step;
+    ASSERT_TRUE(
+      ComputeSurfacePointIrradiance(surface, some, rotations, lights, uniform, samples, shadows, full));
+    ASSERT_EQ(q.size(), full.size());
+    double largest = 0.0;
+    for (size_t k = 0; k < q.size(); ++k)
+    {
+      EXPECT_EQ(q[k], full[k]) << step << ", value " << k; // the same sums in the same order
+      largest = std::max(largest, q[k]);
+    }
+    EXPECT_GT(largest, 0.0) << step;
+  };
+  check(0.2, 16, true, 3, true, "first");
+  check(0.2, 16, true, 0, false, "again");
+  lights[1] = PointLight({ 2.0, 9.0, 11.0 }, { 50.0, 60.0, 70.0 });
+  check(0.2, 16, true, 1, false, "a light moved");
+  std::swap(lights[0], lights[2]);
+  check(0.2, 16, true, 0, false, "the same lights in another order");
+  check(0.3, 16, true, 0, true, "another uniform irradiance");
+  check(0.3, 16, false, 3, true, "shadows off");
+  lights.pop_back();
+  check(0.3, 16, false, 0, false, "a light removed");
+  // A new surface forgets everything; an aborted light is not kept.
+  cache.SetSurface(surface, some, rotations);
+  EXPECT_FALSE(cache.Compute(lights, 0.3, 16, false, q, [] { return true; }));
+  check(0.3, 16, false, 2, true, "after an abort");
+  EXPECT_THROW(cache.SetSurface(surface, { -1 }, { 0.0 }), Error);
 }
 
 } // namespace
