@@ -69,12 +69,16 @@ bool ChosenByDefault(vtkFieldData* fd)
 /// scene's lights and pencil beams for the vertex solvers (divergence, fem:
 /// the table was measured with them), and Monte Carlo (which ignores it);
 /// the surface model for the others (quadgraph and grid have no extended
-/// model; sp3 keeps its own validated default).
+/// model; sp3 keeps its own validated default) and under MPI.
 translucency::CollimatedModel DefaultModelFor(
   const translucency::DiffusionProblem& problem, bool pencilBeams, const std::string& solver)
 {
   const auto& traits = translucency::GetDiffusionSolverRegistry().Get(solver).Properties;
-  return traits.UnknownsAtVertices || traits.IsStochastic
+  // Under MPI (more than one process) the surface model, distributed: the
+  // extended models are solved gathered, and that path's default choice did
+  // not reproduce the serial run in TestPartitionIndependence (Parallel.md).
+  const bool mpi = vtkTranslucencyCommunicator::World().GetSize() > 1;
+  return !mpi && (traits.UnknownsAtVertices || traits.IsStochastic)
     ? translucency::DefaultCollimatedModel(
         problem.Lights, problem.UniformIrradiance > 0.0, pencilBeams)
     : translucency::CollimatedModel::Surface;
@@ -93,13 +97,9 @@ bool ExtendedCollimatedModel(vtkInformationVector* inputs,
   vtkFieldData* fd = input ? input->GetFieldData() : nullptr;
   vtkDataArray* model = fd ? fd->GetArray("TranslucencyCollimatedModel") : nullptr;
   bool extended = model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) != 0.0;
-  if (input && ChosenByDefault(fd))
-  {
-    translucency::DiffusionProblem problem;
-    ReadLights(input, problem);
-    extended =
-      translucency::IsExtendedCollimatedModel(DefaultModelFor(problem, pencilBeams, solver));
-  }
+  // A default choice is the surface model under MPI (DefaultModelFor).
+  (void)pencilBeams;
+  (void)solver;
   // A collective decision: an empty piece may carry no field data, and every
   // rank must take the same path (or the others hang in its collectives).
   return comm.Any(extended);
@@ -580,7 +580,7 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
  * when `irradiance` changed. An explicit model is left as it is.
  */
 bool DecideDefaultCollimatedModel(vtkUnstructuredGrid* input, const std::string& solver,
-  const translucency::TetMesh& mesh, const std::vector<double>& tetEta,
+  const translucency::TetMesh& mesh, const translucency::OpticalProperties& material,
   std::vector<double>& irradiance, translucency::DiffusionProblem& problem)
 {
   if (!ChosenByDefault(input->GetFieldData()))
@@ -603,7 +603,8 @@ bool DecideDefaultCollimatedModel(vtkUnstructuredGrid* input, const std::string&
     return false;
   }
   std::vector<double> q;
-  translucency::ComputeProjectedIrradiance(mesh, tetEta, beams, 0.0, 0, problem.Shadows, q);
+  translucency::ComputeProjectedIrradiance(
+    mesh, material.RefractiveIndex, beams, 0.0, 0, problem.Shadows, q);
   if (q.size() != irradiance.size())
   {
     throw translucency::Error("the directional lights' irradiance has " +
@@ -806,9 +807,9 @@ int vtkSolveDiffusion::RequestSerial(
     ReadLights(input, light);
     in.AddInteractiveSources(*this, mesh.get(), nullptr);
     light.InteriorSources = &in.SolvedSources;
+    // On a relight with the kept material, `material` was not converted.
     const bool beamsTakenOut = DecideDefaultCollimatedModel(input, this->GetSolverName(), *mesh,
-      keptMaterial ? in.FrontEnd.GetKeptMaterial()->RefractiveIndex : material.RefractiveIndex,
-      irradiance, light);
+      keptMaterial ? *in.FrontEnd.GetKeptMaterial() : material, irradiance, light);
     const std::vector<double> solvedIrradiance =
       beamsTakenOut ? irradiance : std::vector<double>();
     const translucency::CollimatedModel solvedModel = light.Collimated;

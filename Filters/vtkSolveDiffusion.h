@@ -160,8 +160,8 @@ public:
    * Documentation/DiffuseOptics.md), the other solvers the surface model.
    * For an extended model the directional lights' q is taken out of the
    * irradiance of the solve, and the output's `Irradiance` is that of the
-   * solve (what vtkOutgoingRadiance reads). Under MPI an extended model is
-   * solved gathered (Documentation/Parallel.md).
+   * solve (what vtkOutgoingRadiance reads). Under MPI (more than one
+   * process) a default choice is the surface model (distributed).
    */
   int GetSolvedCollimatedModel() const { return this->SolvedCollimatedModel; }
 

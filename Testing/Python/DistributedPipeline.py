@@ -65,7 +65,7 @@ PAINTS = {"paint": None, "paint_extreme": [61.0, 970.0, 1450.0]}
 
 def painted(source, target):
     """reader -> Surface Irradiance -> Paint (stroke STROKE) -> Solve Diffusion."""
-    lit = SurfaceIrradiance(Input=source, DirectionalLights=LIGHTS["a"])
+    lit = SurfaceIrradiance(Input=source, DirectionalLights=LIGHTS["a"], CollimatedModel=0)
     paint = PaintScatteringCoefficients(Input=lit, StrokePoints=STROKE, Width=1.0)
     if target:
         paint.TargetAbsorptionCoefficient = target
@@ -85,8 +85,11 @@ def balance(algorithm):
     return injected + absorbed + escaped
 
 
+# CollimatedModel=0 (Surface) throughout: the distributed solve has the
+# surface model only; the default by light kind (extended-moments for a
+# directional light, DiffuseOptics.md) is solved gathered.
 def solve(source, light, solver="divergence", distributed=1):
-    lit = SurfaceIrradiance(Input=source, DirectionalLights=LIGHTS[light])
+    lit = SurfaceIrradiance(Input=source, DirectionalLights=LIGHTS[light], CollimatedModel=0)
     return lit, SolveDiffusion(Input=lit, Solver=solver, RelTol=TOL, MaxIter=20000,
                                DistributedSolve=distributed)
 
@@ -199,7 +202,7 @@ elif MODE == "run":
     case("gathered", pvtu3, distributed=0)
     # An invalid value on rank 1 only: every rank reports rank 1's error and
     # nobody hangs; the next solve works.
-    bad = ProgrammableFilter(Input=SurfaceIrradiance(Input=pvtu3, DirectionalLights=LIGHTS["a"]))
+    bad = ProgrammableFilter(Input=SurfaceIrradiance(Input=pvtu3, DirectionalLights=LIGHTS["a"], CollimatedModel=0))
     bad.Script = """
 from vtkmodules.vtkParallelCore import vtkMultiProcessController
 out = self.GetOutput()

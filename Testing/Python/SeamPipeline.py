@@ -94,7 +94,9 @@ def difference(a, b):
 if MODE == "run":
     reader, tets, spread = mesh_chain()
     assigned = AssignScatteringCoefficients(Input=spread)
-    lit = SurfaceIrradiance(Input=assigned, DirectionalLights=LIGHT)
+    # The surface model (CollimatedModel=0): the distributed solve's; the
+    # default by light kind for a directional light is solved gathered.
+    lit = SurfaceIrradiance(Input=assigned, DirectionalLights=LIGHT, CollimatedModel=0)
     solved = SolveDiffusion(Input=lit, RelTol=1e-10, MaxIter=20000)
     radiance = OutgoingRadiance(Input=solved)
     detected = SolveDiffusion(Input=lit, RelTol=1e-10, MaxIter=20000,

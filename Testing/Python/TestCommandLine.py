@@ -298,6 +298,8 @@ class CommandLineTest(unittest.TestCase):
         prefix = os.path.join(self.dir, "clear")
         result = self.run_cli("render", "--mesh", self.sphere_vtp, "--target-tets", "1500",
                               "--material", material, "--light", "uniform:0.25",
+                              # the fit's Robin condition, whose closed form this is
+                              "--collimated", "surface",
                               "--uniform-samples", "0", "--rel-tol", "1e-12", "--output", prefix)
         self.assertSucceeded(result)
         grid = read(prefix + ".vtu")

@@ -63,6 +63,9 @@ class IncrementalSolveTest(unittest.TestCase):
         self.lights.SetUniformLightIrradiance(0.0)
         self.lights.SetUniformLightSamples(0)
         self.lights.AddDirectionalLight(0.3, -1.0, -0.5, 1.0)
+        # The surface model: the extended models' volume source changes with
+        # every painted coefficient, so they always assemble in full.
+        self.lights.SetCollimatedModel(self.lights.COLLIMATED_SURFACE)
         self.paint = translucency.vtkPaintScatteringCoefficients()
         self.paint.SetInputConnection(self.lights.GetOutputPort())
         self.paint.AddStrokePoint(3.0, 2.0, 0.0)

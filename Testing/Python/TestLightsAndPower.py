@@ -441,6 +441,9 @@ class LightsAndPowerTest(unittest.TestCase):
         result = subprocess.run(
             [CLI, "render", "--mesh", self.prefix + ".vtu", "--solver", "fem",
              "--light", "directional:0,-1,-1:1,0.5,0.25", "--light", "spot:0,0,20:0,0,-1:10,2:500",
+             # the surface model: the solve's Irradiance is then every light's
+             # (an extended model's leaves the directional one to the solver)
+             "--collimated", "surface",
              "--output", prefix, "--json", prefix + ".json", "--quiet"],
             capture_output=True, text=True, timeout=300)
         self.assertEqual(result.returncode, 0, result.stderr)

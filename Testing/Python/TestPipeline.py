@@ -242,6 +242,10 @@ class Pipeline:
             self.assign.SetRefractiveIndex(eta)
         self.irradiance = translucency.vtkSurfaceIrradiance()
         self.irradiance.SetInputConnection(self.assign.GetOutputPort())
+        # The surface model (TransCut's eq. 2 with the fit's Fdr): the closed
+        # forms below are those of its Robin condition (the default model by
+        # light kind: TestCollimatedDefaults.py).
+        self.irradiance.SetCollimatedModel(self.irradiance.COLLIMATED_SURFACE)
         self.solve = translucency.vtkSolveDiffusion()
         self.solve.SetInputConnection(self.irradiance.GetOutputPort())
         self.radiance = translucency.vtkOutgoingRadiance()

@@ -94,6 +94,9 @@ class PipelineReuseTest(unittest.TestCase):
         self.light_set = Lights()
         self.lights = translucency.vtkSurfaceIrradiance()
         self.lights.SetInputData(self.grid)
+        # The surface model: its relight and paint reuse the assembly (the
+        # default by light kind, extended-moments, assembles in full).
+        self.lights.SetCollimatedModel(self.lights.COLLIMATED_SURFACE)
         self.lights.SetUniformLightSamples(8)
         self.light_set.apply(self.lights)
         self.paint = translucency.vtkPaintScatteringCoefficients()
@@ -113,6 +116,7 @@ class PipelineReuseTest(unittest.TestCase):
     def fresh_irradiance(self):
         f = translucency.vtkSurfaceIrradiance()
         f.SetInputData(self.grid)
+        f.SetCollimatedModel(f.COLLIMATED_SURFACE)
         f.SetUniformLightSamples(self.lights.GetUniformLightSamples())
         self.light_set.apply(f)
         run(f)

@@ -71,7 +71,9 @@ class PluginTest(unittest.TestCase):
         cls.triangles = Triangulate(Input=cls.sphere)
         cls.tetra = Tetrahedralize(Input=cls.triangles, TargetNumberOfTets=1500)
         cls.assign = AssignScatteringCoefficients(Input=cls.tetra)
-        cls.irradiance = SurfaceIrradiance(Input=cls.assign)
+        # The surface model: the incremental paint path below is its (the
+        # default by light kind assembles the extended model in full).
+        cls.irradiance = SurfaceIrradiance(Input=cls.assign, CollimatedModel=0)
         cls.solve = SolveDiffusion(Input=cls.irradiance)
         cls.radiance = OutgoingRadiance(Input=cls.solve)
 
