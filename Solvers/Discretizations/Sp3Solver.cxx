@@ -632,6 +632,21 @@ std::array<double, 3> Dots(const std::vector<double>& a, const std::vector<doubl
   return d;
 }
 
+/// The per-channel sums of per-chunk partial sums, in chunk order (the same
+/// bits for any thread count).
+std::array<double, 3> SumPartials(const std::vector<std::array<double, 3>>& partial)
+{
+  std::array<double, 3> sum{ 0.0, 0.0, 0.0 };
+  for (const std::array<double, 3>& p : partial)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      sum[c] += p[c];
+    }
+  }
+  return sum;
+}
+
 /// Dots on `threads` OpenMP threads: partial sums over fixed chunks of
 /// 4096 points added in chunk order, so the result does not depend on the
 /// thread count.
@@ -653,15 +668,7 @@ std::array<double, 3> ChunkedDots(const double* a, const double* b, std::size_t 
     }
     partial[static_cast<std::size_t>(q)] = { d0, d1, d2 };
   }
-  std::array<double, 3> d{ 0, 0, 0 };
-  for (const std::array<double, 3>& p : partial)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      d[c] += p[c];
-    }
-  }
-  return d;
+  return SumPartials(partial);
 }
 
 /// y += s_c x per channel (interleaved by 3), on `threads` threads.
@@ -1077,15 +1084,7 @@ private:
       }
       partial[static_cast<std::size_t>(q)] = { n0, n1, n2 };
     }
-    std::array<double, 3> ww{ 0.0, 0.0, 0.0 };
-    for (const std::array<double, 3>& p : partial)
-    {
-      for (int c = 0; c < 3; ++c)
-      {
-        ww[c] += p[c];
-      }
-    }
-    return ww;
+    return SumPartials(partial);
   }
 
   /// One GMRES(m) cycle from the current residual R_; x gets the
