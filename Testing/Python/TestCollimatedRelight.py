@@ -6,7 +6,8 @@ How to run (from a build tree; ctest sets the environment):
 
     PYTHONPATH=<build>/lib/python3.11/site-packages /usr/bin/python3 TestCollimatedRelight.py
 
-For the extended-moments and extended models chosen by name, through
+For the extended-moments and extended models chosen by name, and for the
+default choice (the core table's model for a directional light), through
 Surface Irradiance -> Solve Diffusion (divergence, multigrid-agg, so there is
 a hierarchy to keep):
 
@@ -116,6 +117,13 @@ class CollimatedRelightTest(unittest.TestCase):
 
     def test_extended(self):
         self.check(S.COLLIMATED_EXTENDED, S.COLLIMATED_EXTENDED)
+
+    def test_default_choice(self):
+        # A directional light's default (the core table) is an extended model.
+        expected = ["surface", "extended", "extended-moments"].index(
+            S.GetDefaultCollimatedModelName("directional"))
+        self.assertNotEqual(expected, S.COLLIMATED_SURFACE)
+        self.check(S.COLLIMATED_DEFAULT, expected)
 
 
 if __name__ == "__main__":

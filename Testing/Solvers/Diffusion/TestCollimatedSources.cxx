@@ -642,8 +642,13 @@ TEST(CollimatedSource, GapToMonteCarloOnTheIssuesBox)
     EXPECT_LT(std::abs(gap[2]), 0.036) << name << ": extended-moments";
     EXPECT_LT(std::abs(gap[2]), 0.5 * std::abs(gap[0])) << name << ": half the surface gap";
     EXPECT_LT(std::abs(gap[2]), 0.5 * std::abs(gap[1])) << name << ": half the extended gap";
-    // (The default stays the surface model until the extended models give
-    // the same field under MPI: CollimatedModels.cxx.)
+    // The default model of a directional light (the core's default table,
+    // which the filter, the plugin and the CLI read; issue 33) is nearer
+    // Monte Carlo than the surface model (the independent reference:
+    // transport, not diffusion).
+    const int byDefault = static_cast<int>(DefaultCollimatedModel(LightKind::Directional));
+    EXPECT_LT(std::abs(gap[byDefault]), std::abs(gap[0]))
+      << name << ": the default model " << modelNames[byDefault];
   }
 }
 
