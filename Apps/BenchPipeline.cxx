@@ -220,6 +220,10 @@ void RunOnce(const std::string& path, const double bounds[6], const std::vector<
   relight.Filters["irradiance"].push_back(TimedUpdate(chain.Light, "Surface Irradiance"));
   relight.Filters["paint"].push_back(TimedUpdate(chain.Paint, "Paint"));
   relight.Filters["solve"].push_back(TimedUpdate(chain.Solve, "Solve Diffusion"));
+  // The solve's own phases: set-up (assembly of the right-hand side) and the
+  // linear solve; the rest of the filter's time is conversion and output.
+  relight.Filters["solve.setup"].push_back(chain.Solve->GetAssemblyTime());
+  relight.Filters["solve.linear"].push_back(chain.Solve->GetSolveTime());
   relight.Filters["radiance"].push_back(TimedUpdate(chain.Radiance, "Outgoing Radiance"));
   relight.Iterations.push_back(TotalIterations(chain.Solve));
   if (check)
@@ -292,18 +296,31 @@ int BenchPipeline(const PipelineBenchOptions& o)
   vtkSmartPointer<vtkUnstructuredGrid> grid;
   if (!ReadMesh(o.MeshPath, surface, grid, error))
     throw translucency::Error(error);
-  if (!surface)
-    throw translucency::Error("bench --pipeline needs a surface mesh (.ply, .stl, .obj, .vtp)");
+  if (!surface && !grid)
+    throw translucency::Error(
+      "bench --pipeline needs a surface mesh (.ply, .stl, .obj, .vtp) or a tetrahedral .vtu");
+  // A tetrahedral mesh is used as it is (one size: --tets is ignored), so
+  // that runs compare on the same tets without meshing again.
+  const std::vector<double> targets =
+    surface ? o.Tets : std::vector<double>{ static_cast<double>(grid->GetNumberOfCells()) };
 
   json results = json::array();
   std::cout << "pipeline bench: threads " << omp_get_max_threads() << ", runs per figure " << o.Runs
             << " (medians); each cell: ms (SpMV units)\n";
-  for (double target : o.Tets)
+  for (double target : targets)
   {
     vtkSmartPointer<vtkUnstructuredGrid> tetrahedralized;
     std::vector<double> points;
     std::vector<int> tets;
-    TetrahedralizeForBench(surface, target, tetrahedralized, points, tets);
+    if (surface)
+    {
+      TetrahedralizeForBench(surface, target, tetrahedralized, points, tets);
+    }
+    else
+    {
+      tetrahedralized = grid;
+      GridToCoreArrays(grid, points, tets);
+    }
     // The mesh a user would load: a .vtu written once.
     const std::filesystem::path path = std::filesystem::temp_directory_path() /
       ("translucency-bench-pipeline-" + std::to_string(getpid()) + "-" +
@@ -389,6 +406,21 @@ int BenchPipeline(const PipelineBenchOptions& o)
               << 100.0 * accuracy.value("paint_fluence_boundary_error", -1.0) << " % ("
               << accuracy.value("tets_painted", 0) << " tets painted)\n"
               << std::right << std::defaultfloat;
+    {
+      // The relight's solve split: set-up, linear solve, the filter's rest.
+      const StepTimes& r = steps["relight"];
+      const double total = Median(r.Filters.at("solve"));
+      const double setup = Median(r.Filters.at("solve.setup"));
+      const double linear = Median(r.Filters.at("solve.linear"));
+      std::cout << std::fixed << std::setprecision(1) << "  relight solve " << total
+                << " ms: set-up " << setup << ", linear solve " << linear
+                << ", the filter's conversions and output " << total - setup - linear << " ("
+                << std::setprecision(0) << setup / spmv << " + " << linear / spmv << " + "
+                << (total - setup - linear) / spmv << " SpMV units)\n"
+                << std::defaultfloat;
+      row["relight"]["solve_setup_median_ms"] = setup;
+      row["relight"]["solve_linear_median_ms"] = linear;
+    }
     row["accuracy"] = accuracy;
     results.push_back(row);
   }

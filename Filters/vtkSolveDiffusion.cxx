@@ -1065,6 +1065,11 @@ void vtkSolveDiffusion::Internals::Configure(vtkSolveDiffusion& self, int number
   translucency::DiffusionSolver& solver = this->FrontEnd.GetSolver();
   solver.SetNumberOfThreads(self.NumberOfThreads);
   solver.SetRelTol(self.RelTol);
+  // At the interactive RelTol (the default) or looser, the interactive rule
+  // also stops when the boundary fluence stops changing; a tighter RelTol
+  // asks for a residual-only solve.
+  solver.SetChangeTol(
+    self.RelTol >= translucency::InteractiveRelTol ? translucency::InteractiveChangeTol : 0.0);
   solver.SetMaxIter(self.MaxIter);
   solver.SetWarmStart(self.WarmStart);
   solver.SetLinearSolver(linearSolver);

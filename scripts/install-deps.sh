@@ -12,7 +12,7 @@ packages=(
   googletest libgtest-dev libbenchmark-dev
   xvfb xauth x11-apps libx11-dev libcli11-dev libqt5svg5 strace
   libsuitesparse-dev libhypre-dev libopenblas0-pthread python3-matplotlib
-  libgmsh-dev
+  libgmsh-dev libembree-dev
   qtxmlpatterns5-dev-tools qhelpgenerator-qt5 qttools5-dev
 )
 

@@ -36,4 +36,11 @@ constexpr double InteractiveBoundaryAccuracy = 0.01;
 /// after a paint stroke iterates at least once (LinearSolver::SetMinIter).
 constexpr double InteractiveRelTol = 1e-2;
 
+/// The change rule of the interactive solve (DiffusionSolver::SetChangeTol,
+/// LinearSolver::SetChangeRule): a channel also stops once the estimated
+/// error of its boundary fluence (the geometric tail of the per-iteration
+/// changes) is within this, relative RMS. Applied by vtkSolveDiffusion while
+/// its RelTol is at least InteractiveRelTol.
+constexpr double InteractiveChangeTol = 3e-3;
+
 } // namespace translucency

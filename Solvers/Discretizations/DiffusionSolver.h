@@ -279,6 +279,19 @@ public:
   int GetMaxIter() const { return MaxIter_; }
   ///@}
 
+  ///@{
+  /**
+   * The interactive accuracy rule (Documentation/Solvers.md, "The
+   * interactive stopping rule"): > 0 also stops a channel once the
+   * estimated error of its boundary fluence (relative RMS over the boundary
+   * points) is at most this (LinearSolver::SetChangeRule). Default 0: off,
+   * RelTol alone. Honoured by the vertex solvers with multigrid-agg; the
+   * others ignore it.
+   */
+  void SetChangeTol(double tol) { ChangeTol_ = tol > 0.0 ? tol : 0.0; }
+  double GetChangeTol() const { return ChangeTol_; }
+  ///@}
+
   /// Start from the previous solution when the unknowns are unchanged (default on).
   void SetWarmStart(bool on) { WarmStart_ = on; }
   bool GetWarmStart() const { return WarmStart_; }
@@ -332,6 +345,7 @@ protected:
 
   double RelTol_ = 1e-6;
   int MaxIter_ = 2000;
+  double ChangeTol_ = 0.0;
   bool WarmStart_ = true;
   std::string LinearSolver_;
   std::function<bool(double)> Progress_;

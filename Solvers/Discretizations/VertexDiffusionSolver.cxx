@@ -369,6 +369,9 @@ bool VertexDiffusionSolver::Solve(
   }
   Linear_->SetRelTol(RelTol_);
   Linear_->SetMaxIter(MaxIter_);
+  // The interactive rule watches the boundary fluence (what a picture shows).
+  Linear_->SetChangeRule(
+    ChangeTol_, ChangeTol_ > 0.0 ? mesh.GetBoundaryPoints() : std::vector<int>());
   Linear_->SetProgressCallback([this](double f) { return ReportProgress(f); });
   report.LinearSetup = SetUpLinearSolver(*Linear_, System_, mesh, !LinearReady_ || !sameGeometry,
     incremental, changedTets, PreviousValues_);

@@ -999,9 +999,17 @@ bool AggregationMultigridSolver::Solve(const DiffusionSystem& system,
       Internal_->Recycler.GetCapacity() > 0
     ? &Internal_->Recycler
     : nullptr;
+  blocked::ChangeRule change;
+  change.Rows = &ChangeRows_;
+  change.Tol = ChangeTol_;
+  if (change.IsOn())
+  {
+    change.Check(n, GetName());
+  }
   return FusedBlockedPCG(
     system, single, [this](const double* r, double* z) { return Precondition(r, z); }, x,
-    warmStart, RelTol_, MaxIter_, stats, flops, Progress_, Internal_->Work, recycler, MinIter_);
+    warmStart, RelTol_, MaxIter_, stats, flops, Progress_, Internal_->Work, recycler, MinIter_,
+    &change);
 }
 
 void AggregationMultigridSolver::SetRecycledSolutions(int k)

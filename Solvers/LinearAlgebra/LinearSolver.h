@@ -46,6 +46,9 @@ struct LinearSolveStats
   /// Work in units of one SpMV with this channel's matrix (multiply-adds of
   /// the solve divided by the matrix's nonzeros), for the bench's table.
   double SpMVEquivalents = 0.0;
+  /// True when the channel stopped by the change rule (SetChangeRule), not
+  /// by RelTol; Converged is then true too.
+  bool StoppedByChange = false;
 };
 
 class LinearSolver
@@ -116,6 +119,29 @@ public:
   int GetMinIter() const { return MinIter_; }
   ///@}
 
+  ///@{
+  /**
+   * The interactive accuracy rule (Documentation/Solvers.md, "The
+   * interactive stopping rule"): with tol > 0 and observed rows (e.g. the
+   * boundary points, what the picture shows), a channel also stops, as
+   * converged, once the estimated error of its solution over those rows is
+   * at most tol relative to the solution there (RMS). After iteration k >=
+   * max(3, MinIter), with Delta_k = ||x_k - x_{k-1}||_R / ||x_k||_R and
+   * rho the larger of Delta_k / Delta_{k-1} and Delta_{k-1} / Delta_{k-2},
+   * the estimate is the geometric tail of the changes still to come,
+   * Delta_k rho / (1 - rho); rho >= 1 never stops. tol = 0 (the default) or no rows: off, the residual rule alone.
+   * Rows are checked (in [0, unknowns)) by the solve. Honoured by
+   * multigrid-agg; the other solvers ignore it.
+   */
+  void SetChangeRule(double tol, std::vector<int> rows)
+  {
+    ChangeTol_ = tol > 0.0 ? tol : 0.0;
+    ChangeRows_ = std::move(rows);
+  }
+  double GetChangeTol() const { return ChangeTol_; }
+  const std::vector<int>& GetChangeRows() const { return ChangeRows_; }
+  ///@}
+
   /// Fraction done in [0, 1]; returning false aborts the solve.
   void SetProgressCallback(std::function<bool(double)> callback) { Progress_ = std::move(callback); }
 
@@ -173,6 +199,8 @@ protected:
   double RelTol_ = 1e-6;
   int MaxIter_ = 2000;
   int MinIter_ = 0;
+  double ChangeTol_ = 0.0;
+  std::vector<int> ChangeRows_;
   int NumberOfThreads_ = 0;
   std::function<bool(double)> Progress_;
   ///@{

@@ -1,7 +1,7 @@
 #include "IrradianceCache.h"
 
 #include "Radiance.h"
-#include "RayCaster.h"
+#include "ShadowCaster.h"
 #include "TetMesh.h"
 
 #include <cstring>
@@ -53,7 +53,7 @@ std::size_t IrradianceCache::GetMemoryBytes() const
     bytes += e.Corners.size() * sizeof(double);
   }
   // The ray caster: about one node (52 bytes) and one id per triangle.
-  return bytes + (Caster_ ? 56 * static_cast<std::size_t>(Caster_->GetNumberOfTriangles()) : 0);
+  return bytes + (Caster_ ? Caster_->GetMemoryBytes() : 0);
 }
 
 bool IrradianceCache::Compute(const TetMesh& mesh, const std::vector<double>& tetEta,
@@ -115,7 +115,7 @@ bool IrradianceCache::Compute(const TetMesh& mesh, const std::vector<double>& te
     entry.Corners.assign(9 * static_cast<size_t>(numTriangles), 0.0);
     if (shadows && !Caster_)
     {
-      Caster_ = std::make_unique<RayCaster>();
+      Caster_ = std::make_unique<ShadowCaster>();
       Caster_->Build(mesh.GetPoints(), triangles);
     }
     if (!AddLightCornerIrradiance(mesh, tetEta, Normals_, light, shadows, Caster_.get(),

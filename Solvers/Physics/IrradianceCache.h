@@ -13,7 +13,7 @@
  *    the shadow flag;
  *  - the uniform light's per-point irradiance (its occlusion sampling, the
  *    costliest part), keyed on its irradiance, samples and the shadow flag;
- *  - the RayCaster over the boundary triangles and the triangle normals;
+ *  - the ShadowCaster over the boundary triangles and the triangle normals;
  * all keyed on the TetMesh's geometry revision (process-wide unique) and the
  * refractive index of every tet (compared bit for bit): another geometry or
  * index forgets everything.
@@ -39,7 +39,7 @@
 namespace translucency
 {
 
-class RayCaster;
+class ShadowCaster;
 
 class IrradianceCache
 {
@@ -86,7 +86,7 @@ private:
   std::vector<double> TetEta_;
   std::vector<double> Normals_;
   double Diagonal_ = 0.0;
-  std::unique_ptr<RayCaster> Caster_; ///< built at the first shadowed light
+  std::unique_ptr<ShadowCaster> Caster_; ///< built at the first shadowed light
   bool HaveUniform_ = false;
   double UniformIrradiance_ = 0.0;
   int UniformSamples_ = 0;

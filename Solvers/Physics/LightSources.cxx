@@ -4,7 +4,7 @@
 #include "Error.h"
 #include "Fresnel.h"
 #include "Radiance.h"
-#include "RayCaster.h"
+#include "ShadowCaster.h"
 #include "TetMesh.h"
 #include "TriangleGeometry.h"
 
@@ -229,7 +229,7 @@ bool ComputeBoundaryIrradiance(const TetMesh& mesh, const std::vector<double>& p
 
   const bool needRays =
     shadows && (!lights.empty() || (uniformIrradiance > 0.0 && uniformSamples > 0));
-  RayCaster caster;
+  ShadowCaster caster;
   if (needRays)
   {
     caster.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
@@ -390,7 +390,7 @@ std::vector<double> BoundaryTriangleNormals(const TetMesh& mesh)
 
 bool AddLightCornerIrradiance(const TetMesh& mesh, const std::vector<double>& tetEta,
   const std::vector<double>& triangleNormals, const LightSource& light, bool shadows,
-  const RayCaster* caster, double diagonal, std::vector<double>& cornerQ,
+  const ShadowCaster* caster, double diagonal, std::vector<double>& cornerQ,
   const std::function<bool()>& abort)
 {
   const std::vector<int>& boundary = mesh.GetBoundaryPoints();
@@ -500,7 +500,7 @@ bool ComputeTriangleCornerIrradiance(const TetMesh& mesh, const std::vector<doub
   }
   const std::vector<double> normals = BoundaryTriangleNormals(mesh);
   const double diag = BoundingBoxDiagonal(mesh);
-  RayCaster caster;
+  ShadowCaster caster;
   if (shadows && !lights.empty())
   {
     caster.Build(mesh.GetPoints(), triangles);

@@ -5,7 +5,7 @@
  *
  * DirectIrradiance() and HemisphereDirection() give the unoccluded
  * contribution and the direction to test; ComputeBoundaryIrradiance() adds
- * the visibility (self-shadowing) with a RayCaster over the whole boundary.
+ * the visibility (self-shadowing) with a ShadowCaster over the whole boundary.
  */
 #pragma once
 
@@ -17,7 +17,7 @@
 namespace translucency
 {
 
-class RayCaster;
+class ShadowCaster;
 class TetMesh;
 
 /// A white or coloured light. Units per type:
@@ -130,8 +130,8 @@ double UniformSampleRotation(const double x[3]);
  * Shadow rays start at x + offset (n + w), offset = 1e-5 times the diagonal
  * of the mesh's bounding box (x the point, n its normal, w the unit direction
  * of the ray), and reach min(distance to the light, 2 * diagonal); they are
- * cast with a RayCaster built over mesh.GetBoundaryTriangles() (only when a
- * ray is needed).
+ * cast with a ShadowCaster (Embree when the build has it, else RayCaster)
+ * built over mesh.GetBoundaryTriangles() (only when a ray is needed).
  *
  * The uniform light, of irradiance uniformIrradiance (W/mm^2, >= 0; 0 means
  * none), gives E * Fresnel::UniformTransmittance(eta) without shadows or with
@@ -220,7 +220,7 @@ std::vector<double> BoundaryTriangleNormals(const TetMesh& mesh);
  */
 bool AddLightCornerIrradiance(const TetMesh& mesh, const std::vector<double>& tetEta,
   const std::vector<double>& triangleNormals, const LightSource& light, bool shadows,
-  const RayCaster* caster, double diagonal, std::vector<double>& cornerQ,
+  const ShadowCaster* caster, double diagonal, std::vector<double>& cornerQ,
   const std::function<bool()>& abort = {});
 
 /**

@@ -57,6 +57,13 @@ class BenchPipeline(BenchJsonTest):
             self.assertGreater(row["total_ms"], 0.0, step)
             self.assertAlmostEqual(row["total_spmv"], total / s["spmv_1ch_ms_median"], places=6)
             self.assertGreater(row["iterations_3ch_median"], 0, step)
+        # The relight's solve split into its set-up and linear solve (the
+        # rest is the filter's own work): parts of the filter's time.
+        relight = s["relight"]
+        self.assertGreaterEqual(relight["solve_setup_median_ms"], 0.0)
+        self.assertGreater(relight["solve_linear_median_ms"], 0.0)
+        self.assertLessEqual(relight["solve_setup_median_ms"] + relight["solve_linear_median_ms"],
+                             relight["solve_ms_median"])
         # The printed table: a header and one line per step.
         lines = self.run_result.stdout.splitlines()
         for step in STEP_FILTERS:

@@ -575,4 +575,71 @@ TEST(LinearSolverSetup, RebuildsOnlyWhenThePatternOrTheSizeChanged)
     tt::ErrorMessage([&] { solver.Solve(a.System, x, false, stats); }), "Setup"));
 }
 
+// The change rule (LinearSolver::SetChangeRule: the interactive accuracy
+// rule of Documentation/Solvers.md). A relight (new right-hand side, warm
+// start from the converged solution of the old light) with RelTol out of
+// reach stops by the rule alone, after at least 3 iterations, with its
+// estimated boundary error within tol; checked: the actual boundary error
+// against a direct solve of the new system (the independent reference) is
+// within tol too; off (tol 0) it never stops by change and iterates on to
+// RelTol; a row out of range is refused.
+TEST(LinearSolverChangeRule, StopsARelightWhenTheBoundaryStopsChanging)
+{
+  Problem p;
+  MakeProblem(p, 24, 20, 18, 5, 0.0);
+  auto solver = CreateLinearSolver("multigrid-agg");
+  solver->SetRelTol(1e-14);
+  solver->SetMaxIter(500);
+  solver->Setup(p.System, &p.Mesh, true);
+  std::array<Eigen::VectorXd, 3> previous;
+  std::array<LinearSolveStats, 3> stats;
+  ASSERT_TRUE(solver->Solve(p.System, previous, false, stats));
+  DiffusionSystem rotated;
+  DiscreteDivergence().Assemble(p.Mesh, p.Material, LightAt(p, 15.0), rotated);
+  for (int c = 0; c < 3; ++c)
+  {
+    p.System.RightHandSide[c] = rotated.RightHandSide[c];
+  }
+  const auto reference = ReferenceSolution(p.System, "multigrid-agg");
+  const std::vector<int>& rows = p.Mesh.GetBoundaryPoints();
+  auto boundaryError = [&](const Eigen::VectorXd& x, int c) {
+    double num = 0.0, den = 0.0;
+    for (int i : rows)
+    {
+      num += (x[i] - reference[c][i]) * (x[i] - reference[c][i]);
+      den += reference[c][i] * reference[c][i];
+    }
+    return std::sqrt(num / den);
+  };
+
+  const double tol = 3e-3;
+  solver->SetChangeRule(tol, rows);
+  EXPECT_EQ(solver->GetChangeTol(), tol);
+  std::array<Eigen::VectorXd, 3> x = previous;
+  ASSERT_TRUE(solver->Solve(p.System, x, true, stats));
+  std::array<int, 3> byChange{};
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_TRUE(stats[c].Converged && stats[c].StoppedByChange) << "channel " << c;
+    EXPECT_GE(stats[c].Iterations, 3) << "channel " << c;
+    EXPECT_LE(boundaryError(x[c], c), tol) << "channel " << c << ", " << stats[c].Iterations << " iterations";
+    byChange[c] = stats[c].Iterations;
+  }
+
+  // Off: the residual rule alone, to RelTol 1e-14, iterates longer.
+  solver->SetChangeRule(0.0, rows);
+  x = previous;
+  ASSERT_TRUE(solver->Solve(p.System, x, true, stats));
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_FALSE(stats[c].StoppedByChange) << "channel " << c;
+    EXPECT_GT(stats[c].Iterations, byChange[c]) << "channel " << c;
+  }
+
+  solver->SetChangeRule(tol, { 0, p.System.NumberOfUnknowns });
+  x = previous;
+  EXPECT_TRUE(tt::Contains(
+    tt::ErrorMessage([&] { solver->Solve(p.System, x, true, stats); }), "change rule row"));
+}
+
 } // namespace
