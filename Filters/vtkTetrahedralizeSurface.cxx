@@ -877,7 +877,7 @@ constexpr double TargetTolerance = 0.25;
 /// triangles, a floor of 45,113 tets) TetGen ran 3 times for a target of
 /// 3,000 or 5,000 and 4 times for 30,000 (first run, corrections, the floor
 /// for the warning), now twice; a target the floor does not bind pays the
-/// floor run (50,000: 4 runs instead of 3).
+/// floor run (bunny at 50,000: 4 runs instead of 3).
 constexpr double FloorFirstRatio = 2.0;
 
 /// hxt with uniform sizing re-meshes the surface: no floor from its triangles.
@@ -945,26 +945,12 @@ bool MeshToTarget(const MeshSettings& s, const Surface& surface, double volume,
       }
       return true;
     }
-    if (std::abs(static_cast<double>(floor) / target - 1.0) <= 0.15)
-    {
-      points.swap(floorPoints);
-      tets.swap(floorTets);
-      return true;
-    }
+    // Otherwise the size bound decides, as without the floor run: a mesh
+    // of the target's size, not the floor's coarse interior, even when the
+    // floor's count is near the target (TestPaint's 2,000-tet sphere).
   }
   const double firstParameter = parameter;
-  const double first = static_cast<double>(tets.size() / 4);
-  if (floor > 0 && static_cast<double>(floor) < target)
-  {
-    // The floor known and below the target: the count above the floor
-    // follows the size (N - floor ~ parameter^(-1/Exponent)); on the bunny
-    // at 50,000 tets the plain power law took two corrections.
-    parameter *= std::pow((first - floor) / (target - floor), model.Exponent);
-  }
-  else
-  {
-    parameter *= std::pow(ratio, model.Exponent);
-  }
+  parameter *= std::pow(ratio, model.Exponent);
   std::vector<double> firstPoints;
   std::vector<int> firstTets;
   firstPoints.swap(points);
