@@ -5,6 +5,7 @@
 #include "Strings.h"
 
 #include <fcntl.h>
+#include <pthread.h>
 #include <signal.h>
 #include <sys/file.h>
 #include <sys/stat.h>
@@ -31,9 +32,18 @@ char CleanupPaths[CleanupSlots][CleanupPathBytes];
 volatile sig_atomic_t CleanupUsed[CleanupSlots];
 volatile sig_atomic_t CleanupIsDirectory[CleanupSlots];
 std::mutex CleanupMutex;
+pthread_t MainThread; ///< the thread that installed the handler (main's)
 
 extern "C" void RemoveRegisteredOnSignal(int sig)
 {
+  // A library's worker thread (OpenBLAS starts its pool when loaded) may be
+  // the one a signal is delivered to: hand it to the main thread, which
+  // holds it back while it creates and registers a lock (HoldCleanupSignals).
+  if (!pthread_equal(pthread_self(), MainThread))
+  {
+    pthread_kill(MainThread, sig);
+    return;
+  }
   // Files first, then the folders that held them (compare's staging folder).
   for (int pass = 0; pass < 2; ++pass)
     for (int k = 0; k < CleanupSlots; ++k)
@@ -47,6 +57,29 @@ extern "C" void RemoveRegisteredOnSignal(int sig)
   signal(sig, SIG_DFL);
   raise(sig); // delivered when the handler returns: the exit status says which signal
 }
+
+/// SIGINT, SIGTERM and SIGHUP held back on this thread while it lives: a
+/// lock file is created and registered for removal as one step, so a signal
+/// between the two (the handler would not know the file yet) cannot leave
+/// it behind; a held-back signal is delivered when the scope ends.
+class HoldCleanupSignals
+{
+public:
+  HoldCleanupSignals()
+  {
+    sigset_t held;
+    sigemptyset(&held);
+    for (int sig : { SIGINT, SIGTERM, SIGHUP })
+      sigaddset(&held, sig);
+    pthread_sigmask(SIG_BLOCK, &held, &this->Previous);
+  }
+  ~HoldCleanupSignals() { pthread_sigmask(SIG_SETMASK, &this->Previous, nullptr); }
+  HoldCleanupSignals(const HoldCleanupSignals&) = delete;
+  HoldCleanupSignals& operator=(const HoldCleanupSignals&) = delete;
+
+private:
+  sigset_t Previous;
+};
 
 std::string Quote(const std::string& path)
 {
@@ -92,6 +125,7 @@ std::string RandomName()
 
 void InstallOutputCleanup()
 {
+  MainThread = pthread_self();
   struct sigaction action;
   std::memset(&action, 0, sizeof(action));
   action.sa_handler = RemoveRegisteredOnSignal;
@@ -289,6 +323,10 @@ void OutputPlan::Check()
     EnsureParentDirectory(path);
     while (true)
     {
+      // The lock's creation and its registration for removal are one step
+      // for the signal handler (which runs on the main thread: the locks
+      // are taken there, before any work).
+      HoldCleanupSignals hold;
       const int fd = open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0666);
       if (fd < 0)
       {

@@ -333,8 +333,9 @@ std::vector<double> AttachPieceSurface(vtkUnstructuredGrid* input,
 std::vector<double> PieceRadiance(vtkUnstructuredGrid* input,
   const vtkTranslucencyDistributedRadiance::Surface& surface, const std::vector<double>& fluence,
   const std::vector<double>& irradiance, const double* viewPoint,
-  translucency::RadianceReadout readout, double extremes[8],
-  const std::vector<double>* phi1 = nullptr, const std::vector<double>* phi2 = nullptr)
+  translucency::RadianceReadout readout, translucency::Fresnel::BoundaryRule rule,
+  double extremes[8], const std::vector<double>* phi1 = nullptr,
+  const std::vector<double>* phi2 = nullptr)
 {
   const bool sp3 = phi1 && phi2;
   translucency::Sp3BoundaryCoefficients sp3Coefficients;
@@ -368,7 +369,7 @@ std::vector<double> PieceRadiance(vtkUnstructuredGrid* input,
         ? translucency::Sp3OutgoingRadiance(sp3Coefficients, surface.Eta[i], (*phi1)[k],
             (*phi2)[k], irradiance[k], cosOut, readout)
         : translucency::OutgoingRadiance(
-            fluence[k], irradiance[k], surface.Eta[i], cosOut, readout);
+            fluence[k], irradiance[k], surface.Eta[i], cosOut, readout, rule);
       extremes[0] = std::max(extremes[0], irradiance[k]);
       extremes[1] = std::max(extremes[1], values[k]);
     }
@@ -614,9 +615,11 @@ int vtkOutgoingRadiance::RequestPerPiece(vtkInformationVector** inputVector,
     -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX, -VTK_DOUBLE_MAX }; // max q, max L, -min x, max x, ...
   if (local.empty())
   {
+    // The solve's Robin rule, as the serial path (the Fresnel moments after
+    // an extended-moments solve: the same field data on every rank).
     values = PieceRadiance(input, surface, fluence, irradiance,
-      this->UseViewPoint ? this->ViewPoint : nullptr, ToReadout(this->RadianceReadout), extremes,
-      sp3 ? &phi1 : nullptr, sp3 ? &phi2 : nullptr);
+      this->UseViewPoint ? this->ViewPoint : nullptr, ToReadout(this->RadianceReadout),
+      BoundaryRuleOf(input), extremes, sp3 ? &phi1 : nullptr, sp3 ? &phi2 : nullptr);
     try
     {
       translucency::RequireFinite(values, "Radiance", translucency::OverflowCause());

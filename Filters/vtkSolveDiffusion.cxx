@@ -69,16 +69,12 @@ bool ChosenByDefault(vtkFieldData* fd)
 /// scene's lights and pencil beams for the vertex solvers (divergence, fem:
 /// the table was measured with them), and Monte Carlo (which ignores it);
 /// the surface model for the others (quadgraph and grid have no extended
-/// model; sp3 keeps its own validated default) and under MPI.
+/// model; sp3 keeps its own validated default).
 translucency::CollimatedModel DefaultModelFor(
   const translucency::DiffusionProblem& problem, bool pencilBeams, const std::string& solver)
 {
   const auto& traits = translucency::GetDiffusionSolverRegistry().Get(solver).Properties;
-  // Under MPI (more than one process) the surface model, distributed: the
-  // extended models are solved gathered, and that path's default choice did
-  // not reproduce the serial run in TestPartitionIndependence (Parallel.md).
-  const bool mpi = vtkTranslucencyCommunicator::World().GetSize() > 1;
-  return !mpi && (traits.UnknownsAtVertices || traits.IsStochastic)
+  return traits.UnknownsAtVertices || traits.IsStochastic
     ? translucency::DefaultCollimatedModel(
         problem.Lights, problem.UniformIrradiance > 0.0, pencilBeams)
     : translucency::CollimatedModel::Surface;
@@ -97,9 +93,13 @@ bool ExtendedCollimatedModel(vtkInformationVector* inputs,
   vtkFieldData* fd = input ? input->GetFieldData() : nullptr;
   vtkDataArray* model = fd ? fd->GetArray("TranslucencyCollimatedModel") : nullptr;
   bool extended = model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) != 0.0;
-  // A default choice is the surface model under MPI (DefaultModelFor).
-  (void)pencilBeams;
-  (void)solver;
+  if (input && ChosenByDefault(fd))
+  {
+    translucency::DiffusionProblem problem;
+    ReadLights(input, problem);
+    extended =
+      translucency::IsExtendedCollimatedModel(DefaultModelFor(problem, pencilBeams, solver));
+  }
   // A collective decision: an empty piece may carry no field data, and every
   // rank must take the same path (or the others hang in its collectives).
   return comm.Any(extended);

@@ -160,8 +160,9 @@ public:
    * Documentation/DiffuseOptics.md), the other solvers the surface model.
    * For an extended model the directional lights' q is taken out of the
    * irradiance of the solve, and the output's `Irradiance` is that of the
-   * solve (what vtkOutgoingRadiance reads). Under MPI (more than one
-   * process) a default choice is the surface model (distributed).
+   * solve (what vtkOutgoingRadiance reads). Under MPI a default choice is
+   * decided as in one process and an extended model is solved gathered
+   * (Documentation/Parallel.md): the same model and field as one process.
    */
   int GetSolvedCollimatedModel() const { return this->SolvedCollimatedModel; }
 

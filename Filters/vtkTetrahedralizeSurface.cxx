@@ -872,17 +872,35 @@ double FirstParameter(const MeshSettings& s, const CountModel& model, double vol
 /// (vtkTetrahedralizeSurface.h: "within 25 %").
 constexpr double TargetTolerance = 0.25;
 
+/// A first run this many times above the target meshes the surface's floor
+/// (its coarsest mesh, the cheapest run) next. On the bundled bunny (3,674
+/// triangles, a floor of 45,113 tets) TetGen ran 3 times for a target of
+/// 3,000 or 5,000 and 4 times for 30,000 (first run, corrections, the floor
+/// for the warning), now twice; a target the floor does not bind pays the
+/// floor run (50,000: 4 runs instead of 3).
+constexpr double FloorFirstRatio = 2.0;
+
+/// hxt with uniform sizing re-meshes the surface: no floor from its triangles.
+bool RemeshesSurface(const MeshSettings& s)
+{
+  return s.Mesher == "hxt" && s.UniformSizing;
+}
+
 /// The mesher's runs: one for the first size parameter, a second one
 /// correcting the parameter when the count misses TargetNumberOfTets by more
 /// than 15 %, and a third on the secant of log N against log h through the
 /// two when the second still misses (the count is not a power of the size:
 /// graded layers grow as h^-2, TetGen's quality bound refines near the
-/// surface). `progress` reports the filter's progress. Throws
-/// translucency::Error as FirstParameter.
+/// surface). A first run more than FloorFirstRatio times the target is
+/// followed by the surface's coarsest mesh instead (`floor`: its count, 0
+/// when not run), which ends the search when it is itself too many.
+/// `progress` reports the filter's progress. Throws translucency::Error as
+/// FirstParameter.
 bool MeshToTarget(const MeshSettings& s, const Surface& surface, double volume,
   const std::function<void(double)>& progress, std::vector<double>& points,
-  std::vector<int>& tets, std::string& error)
+  std::vector<int>& tets, std::string& error, size_t& floor)
 {
+  floor = 0;
   const double diag = BoundingDiagonal(surface);
   const CountModel model(s);
   double parameter = FirstParameter(s, model, volume, GradedLayer(surface, s.Grading));
@@ -905,8 +923,48 @@ bool MeshToTarget(const MeshSettings& s, const Surface& surface, double volume,
     return true;
   }
   progress(0.5);
+  if (ratio > FloorFirstRatio && !RemeshesSurface(s))
+  {
+    // Far too many tets: the surface's resolution is the likely floor. Its
+    // coarsest mesh (no size bound) is what ExplainMissedTarget would run:
+    // run it now, and when it is itself above the tolerance, stop there
+    // (a correction run could not come nearer).
+    std::vector<double> floorPoints;
+    std::vector<int> floorTets;
+    if (!RunMesher(s, surface, diag, 0.0, floorPoints, floorTets, error))
+    {
+      return false;
+    }
+    floor = floorTets.size() / 4;
+    if (static_cast<double>(floor) > (1.0 + TargetTolerance) * target)
+    {
+      if (floor < tets.size() / 4) // nearer the target (equal counts: the first run's mesh)
+      {
+        points.swap(floorPoints);
+        tets.swap(floorTets);
+      }
+      return true;
+    }
+    if (std::abs(static_cast<double>(floor) / target - 1.0) <= 0.15)
+    {
+      points.swap(floorPoints);
+      tets.swap(floorTets);
+      return true;
+    }
+  }
   const double firstParameter = parameter;
-  parameter *= std::pow(ratio, model.Exponent);
+  const double first = static_cast<double>(tets.size() / 4);
+  if (floor > 0 && static_cast<double>(floor) < target)
+  {
+    // The floor known and below the target: the count above the floor
+    // follows the size (N - floor ~ parameter^(-1/Exponent)); on the bunny
+    // at 50,000 tets the plain power law took two corrections.
+    parameter *= std::pow((first - floor) / (target - floor), model.Exponent);
+  }
+  else
+  {
+    parameter *= std::pow(ratio, model.Exponent);
+  }
   std::vector<double> firstPoints;
   std::vector<int> firstTets;
   firstPoints.swap(points);
@@ -954,7 +1012,8 @@ bool MeshToTarget(const MeshSettings& s, const Surface& surface, double volume,
  * above the tolerance, the surface's resolution is the floor (TetGen keeps
  * every input triangle and refines near them for its quality bound).
  */
-std::string ExplainMissedTarget(const MeshSettings& s, const Surface& surface, size_t made)
+std::string ExplainMissedTarget(
+  const MeshSettings& s, const Surface& surface, size_t made, size_t knownFloor)
 {
   const double target = static_cast<double>(s.TargetNumberOfTets);
   if (s.TargetNumberOfTets <= 0 || std::abs(static_cast<double>(made) / target - 1.0) <= TargetTolerance)
@@ -969,11 +1028,11 @@ std::string ExplainMissedTarget(const MeshSettings& s, const Surface& surface, s
   std::vector<double> points;
   std::vector<int> tets;
   std::string error;
-  const bool remeshes = s.Mesher == "hxt" && s.UniformSizing;
-  if (static_cast<double>(made) > target && !remeshes &&
-    RunMesher(s, surface, BoundingDiagonal(surface), 0.0, points, tets, error))
+  if (static_cast<double>(made) > target && !RemeshesSurface(s) &&
+    (knownFloor > 0 ||
+      RunMesher(s, surface, BoundingDiagonal(surface), 0.0, points, tets, error)))
   {
-    const size_t floor = tets.size() / 4;
+    const size_t floor = knownFloor > 0 ? knownFloor : tets.size() / 4;
     if (static_cast<double>(floor) > (1.0 + TargetTolerance) * target)
     {
       why << "The input surface's resolution sets the floor: its " << surface.Triangles.size()
@@ -1143,11 +1202,12 @@ int vtkTetrahedralizeSurface::RequestSerial(
   // 3. The size guard, 4. the mesher's runs towards the target.
   std::vector<double> points;
   std::vector<int> tets;
+  size_t floor = 0; // the coarsest mesh's count when MeshToTarget ran it
   try
   {
     CheckSize(settings, volume);
     if (!MeshToTarget(settings, surface, volume, [this](double p) { this->UpdateProgress(p); },
-          points, tets, error))
+          points, tets, error, floor))
     {
       vtkErrorMacro(<< error);
       return 0;
@@ -1159,7 +1219,7 @@ int vtkTetrahedralizeSurface::RequestSerial(
     return 0;
   }
   // A count far from the target: a warning saying why and what to do.
-  const std::string missed = ExplainMissedTarget(settings, surface, tets.size() / 4);
+  const std::string missed = ExplainMissedTarget(settings, surface, tets.size() / 4, floor);
   if (!missed.empty())
   {
     vtkWarningMacro(<< missed);

@@ -10,7 +10,7 @@ packages=(
   mpi-default-dev libdouble-conversion-dev
   libtet1.5-dev libeigen3-dev libglew-dev
   googletest libgtest-dev libbenchmark-dev
-  xvfb xauth x11-apps libx11-dev libcli11-dev libqt5svg5
+  xvfb xauth x11-apps libx11-dev libcli11-dev libqt5svg5 strace
   libsuitesparse-dev libhypre-dev libopenblas0-pthread python3-matplotlib
   libgmsh-dev libembree-dev
   qtxmlpatterns5-dev-tools qhelpgenerator-qt5 qttools5-dev

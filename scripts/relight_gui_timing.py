@@ -46,6 +46,7 @@ import traceback
 
 from paraview.simple import *  # noqa: F401,F403
 from paraview import servermanager
+from vtkmodules.util.numpy_support import vtk_to_numpy
 
 OUT = os.environ["TRANSLUCENCY_RELIGHT_OUT"]
 MESH = os.environ["TRANSLUCENCY_RELIGHT_MESH"]
@@ -85,7 +86,7 @@ def light_point1(centre, distance, degrees):
 
 def fluence(proxy):
     array = servermanager.Fetch(proxy).GetPointData().GetArray("Fluence")
-    return [array.GetComponent(i, c) for i in range(array.GetNumberOfTuples()) for c in range(3)]
+    return vtk_to_numpy(array).ravel().tolist()  # one call, not one per value
 
 
 def run(results):

@@ -29,6 +29,7 @@
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
+#include <vtkStringArray.h>
 #include <vtkTable.h>
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
@@ -666,8 +667,37 @@ void MapArrays(vtkDataSetAttributes* from, const std::vector<vtkIdType>& map, vt
   }
 }
 
-/// Replace the output piece's arrays by the scattered ones.
-void ApplyArrays(vtkDataSet* output, vtkTable* pointArrays, vtkTable* cellArrays)
+/// The field array (a vtkStringArray in the scattered field data) that lists
+/// the serial run's pass-through field arrays (PassThroughFieldArrays).
+constexpr const char* PassThroughName = "vtkTranslucencyPassThroughFieldArrays";
+
+/// On rank 0: the names of the field arrays that the serial run passed from
+/// its (merged) input to its output unchanged (the same array object). The
+/// merged input's field data is one piece's: such an array may mean
+/// something per piece (Paint's PaintedCellIds number the piece's cells), so
+/// every rank keeps its own input piece's (ApplyArrays).
+std::vector<std::string> PassThroughFieldArrays(vtkDataObject* mergedInput, vtkDataObject* serialOutput)
+{
+  std::vector<std::string> names;
+  vtkFieldData* in = mergedInput ? mergedInput->GetFieldData() : nullptr;
+  vtkFieldData* out = serialOutput ? serialOutput->GetFieldData() : nullptr;
+  for (int a = 0; in && out && a < out->GetNumberOfArrays(); ++a)
+  {
+    vtkAbstractArray* array = out->GetAbstractArray(a);
+    const char* name = array ? array->GetName() : nullptr;
+    if (name && in->GetAbstractArray(name) == array)
+    {
+      names.emplace_back(name);
+    }
+  }
+  return names;
+}
+
+/// Replace the output piece's arrays by the scattered ones. Field data: the
+/// serial result's, but a pass-through array (PassThroughName's list) is the
+/// piece's own when the piece has one.
+void ApplyArrays(
+  vtkDataSet* output, vtkTable* pointArrays, vtkTable* cellArrays, vtkDataObject* piece)
 {
   vtkFieldData* pointData = pointArrays->GetRowData();
   for (int a = 0; a < pointData->GetNumberOfArrays(); ++a)
@@ -682,6 +712,16 @@ void ApplyArrays(vtkDataSet* output, vtkTable* pointArrays, vtkTable* cellArrays
   // A field data object of its own (the shallow copy shares the input's).
   vtkNew<vtkFieldData> fieldData;
   fieldData->ShallowCopy(pointArrays->GetFieldData());
+  auto* passThrough = vtkStringArray::SafeDownCast(fieldData->GetAbstractArray(PassThroughName));
+  vtkFieldData* own = piece ? piece->GetFieldData() : nullptr;
+  for (vtkIdType k = 0; passThrough && own && k < passThrough->GetNumberOfValues(); ++k)
+  {
+    if (vtkAbstractArray* mine = own->GetAbstractArray(passThrough->GetValue(k).c_str()))
+    {
+      fieldData->AddArray(mine);
+    }
+  }
+  fieldData->RemoveArray(PassThroughName);
   output->SetFieldData(fieldData);
 }
 
@@ -844,7 +884,8 @@ GatherMode CheckSameMesh(GatherMode mode, const std::vector<Pieces>& gathered,
 /// SameMesh, output port 0: every rank's own piece gets the serial output's
 /// arrays mapped to its points and cells (rank 0 sends, the others receive).
 void ScatterArrays(vtkMultiProcessController* controller, vtkDataObject* piece,
-  vtkDataObject* serialOutput, const PieceMaps& maps, vtkDataObject* out)
+  vtkDataObject* serialOutput, const PieceMaps& maps, const std::vector<std::string>& passThrough,
+  vtkDataObject* out)
 {
   const int rank = controller->GetLocalProcessId();
   auto* outSet = vtkDataSet::SafeDownCast(out);
@@ -854,8 +895,14 @@ void ScatterArrays(vtkMultiProcessController* controller, vtkDataObject* piece,
     controller->Receive(pointArrays, 0, PointArraysTag);
     controller->Receive(cellArrays, 0, CellArraysTag);
     outSet->ShallowCopy(piece);
-    ApplyArrays(outSet, pointArrays, cellArrays);
+    ApplyArrays(outSet, pointArrays, cellArrays, piece);
     return;
+  }
+  vtkNew<vtkStringArray> passThroughNames;
+  passThroughNames->SetName(PassThroughName);
+  for (const std::string& name : passThrough)
+  {
+    passThroughNames->InsertNextValue(name);
   }
   auto* serialOut = vtkDataSet::SafeDownCast(serialOutput);
   for (int r = controller->GetNumberOfProcesses() - 1; r >= 0; --r) // rank 0's last: its own
@@ -864,6 +911,7 @@ void ScatterArrays(vtkMultiProcessController* controller, vtkDataObject* piece,
     MapArrays(serialOut->GetPointData(), maps.Points[r], pointArrays->GetRowData());
     MapArrays(serialOut->GetCellData(), maps.Cells[r], cellArrays->GetRowData());
     pointArrays->GetFieldData()->ShallowCopy(serialOut->GetFieldData());
+    pointArrays->GetFieldData()->AddArray(passThroughNames);
     if (r > 0)
     {
       controller->Send(pointArrays, r, PointArraysTag);
@@ -872,7 +920,7 @@ void ScatterArrays(vtkMultiProcessController* controller, vtkDataObject* piece,
     else
     {
       outSet->ShallowCopy(vtkDataSet::SafeDownCast(piece));
-      ApplyArrays(outSet, pointArrays, cellArrays);
+      ApplyArrays(outSet, pointArrays, cellArrays, piece);
     }
   }
 }
@@ -896,6 +944,7 @@ int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVecto
   int status = 1;
   std::string error;
   PieceMaps maps;
+  std::vector<std::string> passThrough; // rank 0: PassThroughFieldArrays
   std::vector<vtkSmartPointer<vtkDataObject>> serialOutputs(static_cast<size_t>(numOutputs));
   if (rank == 0)
   {
@@ -905,6 +954,12 @@ int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVecto
     if (status)
     {
       mode = CheckSameMesh(mode, gathered, inputs, serialOutputs[0]);
+      if (!gathered[0].empty())
+      {
+        passThrough = PassThroughFieldArrays(
+          inputs[0]->GetInformationObject(0)->Get(vtkDataObject::DATA_OBJECT()),
+          serialOutputs[0]);
+      }
     }
   }
 
@@ -941,7 +996,7 @@ int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVecto
     vtkDataObject* out = vtkDataObject::GetData(outputVector, port);
     if (port == 0 && mode == GatherMode::SameMesh)
     {
-      ScatterArrays(controller, local[0], serialOutputs[0], maps, out);
+      ScatterArrays(controller, local[0], serialOutputs[0], maps, passThrough, out);
     }
     else if (rank == 0)
     {

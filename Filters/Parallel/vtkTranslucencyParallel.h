@@ -23,7 +23,9 @@
  *       changed arrays): each rank's output is its own input piece, partition
  *       and ghost cells kept, with the arrays of the serial result, point by
  *       point and cell by cell, so shared points get the same value on every
- *       rank;
+ *       rank; the field arrays of the serial result, except those it passed
+ *       through from its input unchanged, which stay each piece's own (they
+ *       may number the piece's cells, as Paint's PaintedCellIds);
  *     - GatherMode::RankZero (a new mesh, e.g. TetGen's tets or a cut): rank 0
  *       holds the whole result, the other ranks an empty output of the same
  *       type (Redistribute DataSet spreads it again).

@@ -319,14 +319,25 @@ bool VertexDiffusionSolver::Solve(
   IrradianceChanged_ = false;
   const bool sameGeometry = LastMesh_ == &mesh && LastPoints_ == mesh.GetNumberOfPoints() &&
     LastTets_ == mesh.GetNumberOfTets() && LastRevision_ == mesh.GetGeometryRevision();
-  // The incremental update rebuilds right-hand-side rows from q only: not
-  // with interior sources in this or the last system.
-  // A relight also rebuilds the right-hand side (before UpdateTets, which
-  // leaves System_ alone when it returns false: nothing is half updated).
-  const bool canUpdate = requested && sameGeometry && sameRule && LinearReady_ && !hasSources &&
-    !SystemHasSources_;
+  // The incremental update rebuilds right-hand-side rows from q only. A
+  // relight rebuilds the right-hand side (before UpdateTets, which leaves
+  // System_ alone when it returns false: nothing is half updated). With a
+  // volume load in this or the last system (interior sources, the extended
+  // collimated beam) the kept right-hand side holds the last load: it is
+  // rebuilt from q (interior rows 0, as Assemble leaves them) and the new
+  // load is added below, so the system equals a full assembly's bit for bit
+  // while the matrices and the linear solver's set-up are kept.
+  const bool canUpdate = requested && sameGeometry && sameRule && LinearReady_;
+  const bool rebuildRight = newIrradiance || hasSources || SystemHasSources_;
+  if (canUpdate && rebuildRight && (hasSources || SystemHasSources_))
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      std::fill(System_.RightHandSide[c].begin(), System_.RightHandSide[c].end(), 0.0);
+    }
+  }
   const bool incremental = canUpdate &&
-    (!newIrradiance ||
+    (!rebuildRight ||
       Discretization_->UpdateRightHandSide(mesh, *problem.Material, *problem.Irradiance, System_)) &&
     (changedTets.empty() ||
       Discretization_->UpdateTets(mesh, *problem.Material, *problem.Irradiance, changedTets, System_));
@@ -340,8 +351,8 @@ bool VertexDiffusionSolver::Solve(
     Discretization_->Assemble(mesh, *problem.Material, *problem.Irradiance, System_);
   }
   report.Assembly = !incremental ? "full"
-    : newIrradiance && changedTets.empty() ? "right-hand side"
-                                           : "incremental";
+    : rebuildRight && changedTets.empty() ? "right-hand side"
+                                          : "incremental";
   SystemHasSources_ = hasSources;
   if (hasSources)
   {

@@ -200,7 +200,8 @@ private:
   std::uint64_t LastRevision_ = 0; ///< TetMesh::GetGeometryRevision of the last solve
   bool HasChangedTets_ = false;
   bool IrradianceChanged_ = false; ///< SetChangedTets' second argument
-  /// System_'s right-hand side holds interior sources (no incremental update).
+  /// System_'s right-hand side holds a volume load (interior sources, the
+  /// extended collimated beam): an incremental update rebuilds it.
   bool SystemHasSources_ = false;
   std::vector<int> ChangedTets_;
 };

@@ -59,23 +59,17 @@ const std::vector<CollimatedDefault>& GetCollimatedDefaultTable()
   // collimated model by default"; scripts/collimated_model_table.py): the
   // model nearest Monte Carlo on most read-outs, the deep fluence and the
   // transmittance first. The order decides a scene with several kinds.
-  // The defaults are the surface model for every kind (session 25): the
-  // extended models, nearer Monte Carlo in serial, are solved gathered under
-  // MPI, where they did not reproduce the one-process run
-  // (TestPartitionIndependence: up to 70 % off with an empty rank), and a
-  // relight or paint under them re-assembles; a default must give the same
-  // field on one process and on N. The measured gaps stay in the notes.
   static const std::vector<CollimatedDefault> table = {
-    { LightKind::Directional, "directional", CollimatedModel::Surface,
-      "deep fluence -7.8 %, transmittance -15.1 % on the box (extended-moments: +1.0 %, -0.2 %)" },
-    { LightKind::Coloured, "coloured", CollimatedModel::Surface,
+    { LightKind::Directional, "directional", CollimatedModel::ExtendedMoments,
+      "deep fluence +1.0 % (surface -7.8 %), transmittance -0.2 % (-15.1 %) on the box" },
+    { LightKind::Coloured, "coloured", CollimatedModel::ExtendedMoments,
       "as directional, channel by channel (both sides are linear in the light)" },
-    { LightKind::Spot, "spot", CollimatedModel::Surface,
-      "deep fluence -7.8 %, transmittance -12.8 % on the box (extended-moments: -4.9 %, -8.5 %)" },
-    { LightKind::Point, "point", CollimatedModel::Surface,
+    { LightKind::Spot, "spot", CollimatedModel::ExtendedMoments,
+      "deep fluence -4.9 % (surface -7.8 %), transmittance -8.5 % (-12.8 %) on the box" },
+    { LightKind::Point, "point", CollimatedModel::ExtendedMoments,
       "as spot: the same boundary irradiance of a point, without the cone" },
-    { LightKind::Uniform, "uniform", CollimatedModel::Surface,
-      "deep fluence -2.3 %, transmittance +0.3 % on the box (extended-moments: -1.1 %, +0.1 %)" },
+    { LightKind::Uniform, "uniform", CollimatedModel::ExtendedMoments,
+      "deep fluence -1.1 % (surface -2.3 %), transmittance +0.1 % (+0.3 %) on the box" },
     { LightKind::Pencil, "pencil", CollimatedModel::Surface,
       "deep fluence -2.2 % (extended-moments -4.8 %), transmittance -1.1 % (-2.6 %)" },
     { LightKind::None, "interior sources", CollimatedModel::Surface,

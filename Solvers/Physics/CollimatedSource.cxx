@@ -362,6 +362,22 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
   const std::vector<double>& muS = material.ReducedScatteringCoefficient;
   const double diag = BoundingBoxDiagonal(mesh);
   const double offset = 1e-5 * diag;
+  // Every ray's origin is moved by one fixed, generic vector of 1e-9 of the
+  // diagonal ((1, sqrt 2, sqrt 3) / sqrt 6: no small-integer relation between
+  // its components, so it lies in no plane of a structured mesh's lattice).
+  // A ray from a grid point of a structured mesh lit along a lattice
+  // direction (the default key light (0, -1, -1) on a box of Kuhn cells)
+  // otherwise runs exactly through mesh edges or along face planes, where
+  // the entry triangle is a tie that rounding in the triangle's vertex order
+  // and the ray caster's triangle order decide: the numbering, so another
+  // partition or a renumbered mesh took another face (a collimated fluence
+  // of 0 instead of the serial value where the beam grazes an edge: Fluence
+  // up to 70 % off; Documentation/Parallel.md). 1e-9 is far above the
+  // rounding of the origin (~1e-16 of the diagonal) and far below any mesh
+  // feature; the depth below the entry plane is measured from the point
+  // itself, so E_c changes only where the entry face was such a tie.
+  const double generic = 1e-9 * diag / std::sqrt(6.0);
+  const double shift[3] = { generic, generic * std::sqrt(2.0), generic * std::sqrt(3.0) };
   const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
   const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
   RayCaster caster;
@@ -373,7 +389,7 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
   for (int i = 0; i < numPoints; ++i)
   {
     const double* x = mesh.GetPoint(i);
-    double origin[3] = { x[0], x[1], x[2] };
+    double origin[3] = { x[0] + shift[0], x[1] + shift[1], x[2] + shift[2] };
     if (mesh.IsBoundaryPoint(i))
     {
       const double* n = &pointNormals[3 * static_cast<size_t>(i)];

@@ -46,6 +46,7 @@ import traceback
 
 from paraview.simple import *  # noqa: F401,F403
 from paraview import servermanager
+from vtkmodules.util.numpy_support import vtk_to_numpy
 
 OUT = os.environ["TRANSLUCENCY_GUI_OUT"]
 QT = ctypes.CDLL("libQt5Core.so.5")
@@ -236,8 +237,7 @@ def run():
 
     def irradiance_values(proxy):
         array = servermanager.Fetch(proxy).GetPointData().GetArray("Irradiance")
-        return [array.GetComponent(i, c) for i in range(array.GetNumberOfTuples())
-                for c in range(3)]
+        return vtk_to_numpy(array).ravel().tolist()  # one call, not one per value
 
     explicit_q = irradiance_values(irradiance)
     default_q = irradiance_values(default_light)

@@ -28,6 +28,14 @@ par_<source>_<chain>.pvtu (one piece per rank):
            extended  a directional light as the extended collimated model (its
                      direction off the grid's diagonals)
            gated     time gates (4 gates in [0, 0.2] ns)
+           moments   Assign (a spherical inclusion) -> Surface Irradiance with
+                     the default lights (the key light along the grid's
+                     diagonal (0, -1, -1)) as the extended-moments model ->
+                     Solve Diffusion -> Outgoing Radiance (moments_radiance)
+           default   the same chain with the default collimated model (the
+                     table's model for the default lights: extended-moments)
+           defrelit  the default chain's Solve Diffusion after another
+                     directional light
            interactive  lit, solved with the default RelTol (the interactive
                      stopping rule; every other chain solves to RelTol 1e-12)
 Every rank prints "case <source> done" after each source.
@@ -40,7 +48,8 @@ from paraview.simple import *  # noqa: F401,F403
 
 PLUGIN, WORK, MODE = sys.argv[1], sys.argv[2], sys.argv[3]
 LoadPlugin(PLUGIN, ns=globals())
-CHAINS = ("lit", "relit", "paint", "extreme", "cut", "extended", "gated")
+CHAINS = ("lit", "relit", "paint", "extreme", "cut", "extended", "gated", "moments", "default",
+          "defrelit")
 
 
 def path(name):
@@ -51,8 +60,8 @@ def solve(source, **extra):
     return SolveDiffusion(Input=source, RelTol=1e-12, MaxIter=20000, **extra)
 
 
-def save(name, proxy):
-    SaveData(path(name + ".pvtu"), proxy=proxy)
+def save(name, proxy, extension=".pvtu"):
+    SaveData(path(name + extension), proxy=proxy)
 
 
 def chains(prefix, source):
@@ -90,6 +99,20 @@ def chains(prefix, source):
                                  CollimatedModel=1)
     save(prefix + "_extended", solve(extended))
     save(prefix + "_gated", solve(SurfaceIrradiance(Input=source, CollimatedModel=0), TimeGates=[0.0, 0.2, 4]))
+    # The extended-moments model, named and by default, with the default
+    # lights: their key light (0, -1, -1) runs along the grid's diagonals, so
+    # rays from grid points run through mesh edges (CollimatedSource.cxx).
+    assigned = AssignScatteringCoefficients(Input=source, MaterialMode=2,
+                                            InclusionCenter=[4.0, 4.0, 3.0], InclusionRadius=3.0)
+    moments = solve(SurfaceIrradiance(Input=assigned, CollimatedModel=2))
+    save(prefix + "_moments", moments)
+    save(prefix + "_moments_radiance", OutgoingRadiance(Input=moments), ".pvtp")
+    lit_default = SurfaceIrradiance(Input=assigned)
+    by_default = solve(lit_default)
+    save(prefix + "_default", by_default)
+    save(prefix + "_default_radiance", OutgoingRadiance(Input=by_default), ".pvtp")
+    lit_default.DirectionalLights = [0.3, -1.0, 0.5, 1.0]
+    save(prefix + "_defrelit", by_default)
     # The interactive stopping rule: Solve Diffusion's default RelTol.
     save(prefix + "_interactive", SolveDiffusion(Input=SurfaceIrradiance(Input=source, CollimatedModel=0)))
     print("case %s done" % prefix.split("_")[-1], flush=True)

@@ -297,19 +297,21 @@ class MesherTest(unittest.TestCase):
     def test_uniform_sizing_is_uniform(self):
         sphere = tp.sphere_surface(radius=5.0, resolution=24)
         results = {}
-        for mesher in MESHERS:
-            for uniform in (False, True):
-                grid, errors = tetrahedralize(sphere, mesher, target=30000, uniform=uniform)
-                self.assertEqual(errors, [])
-                p = tp.points_of(grid)[tp.tets_of(grid)]
-                near = (np.linalg.norm(p.mean(axis=1), axis=1) > 4.5).mean()
-                _, _, edges = quality(grid)
-                cv = edges.std() / edges.mean()
-                results[(mesher, uniform)] = (grid.GetNumberOfCells(), near, cv)
-                print("%-6s %-7s %6d tets: %.3f of the tets within 0.5 mm of the surface "
-                      "(volume fraction %.3f), edge CV %.3f"
-                      % (mesher, "uniform" if uniform else "graded", grid.GetNumberOfCells(),
-                         near, SHELL_FRACTION, cv))
+        # hxt graded is not asserted on (uniform sizing is what this checks;
+        # TetGen's graded mesh is the contrast): not meshed.
+        for mesher, uniform in [(m, u) for m in MESHERS for u in (False, True)
+                                if m == "tetgen" or u]:
+            grid, errors = tetrahedralize(sphere, mesher, target=30000, uniform=uniform)
+            self.assertEqual(errors, [])
+            p = tp.points_of(grid)[tp.tets_of(grid)]
+            near = (np.linalg.norm(p.mean(axis=1), axis=1) > 4.5).mean()
+            _, _, edges = quality(grid)
+            cv = edges.std() / edges.mean()
+            results[(mesher, uniform)] = (grid.GetNumberOfCells(), near, cv)
+            print("%-6s %-7s %6d tets: %.3f of the tets within 0.5 mm of the surface "
+                  "(volume fraction %.3f), edge CV %.3f"
+                  % (mesher, "uniform" if uniform else "graded", grid.GetNumberOfCells(),
+                     near, SHELL_FRACTION, cv))
         for mesher in MESHERS:
             n, near, cv = results[(mesher, True)]
             self.assertLess(abs(near - SHELL_FRACTION), 0.08, mesher)

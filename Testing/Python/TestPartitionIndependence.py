@@ -16,11 +16,16 @@ How to run (ctest does this, with 2 and with 3 ranks):
 3. Here: for every chain (default lights with the uniform light's occlusion
    sampling, a relight, a paint with the default targets and with mu_a x 1000
    after an unpainted solve, a relaxed plane cut, the extended collimated
-   model, time gates) and every source, at every point of every rank's piece
+   model, time gates, the extended-moments model named and by default with
+   the default lights, whose key light runs along the grid's diagonals, and
+   a relight of the default one) and every source, at every point of every rank's piece
    (each rank's copy of a shared point), matched to the serial mesh by its
    coordinates, Fluence equals the serial Fluence to a relative 1e-6; every
    serial point is covered (the cut's relaxed points at the serial
-   coordinates); the serial run on the renumbered mesh does too; with the
+   coordinates); the Outgoing Radiance of the extended-moments chains equals
+   the serial Radiance to 1e-6 of its maximum at every surface point, and
+   the default model solved is extended-moments on every rank, as in one
+   process; the serial run on the renumbered mesh does too; with the
    default RelTol (the interactive stopping rule) the boundary fluence is
    within 1 % RMS of the converged one, serial and on every source; the split
    sources stay split and the empty-rank sources have an empty rank; nothing
@@ -36,7 +41,10 @@ from vtkmodules.util.numpy_support import vtk_to_numpy
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from mpi_harness import RANKS, MpiSuite, main, pieces_of  # noqa: E402
 
-CHAINS = ("lit", "relit", "paint", "extreme", "cut", "extended", "gated")
+CHAINS = ("lit", "relit", "paint", "extreme", "cut", "extended", "gated", "moments", "default",
+          "defrelit")
+# The chains with an Outgoing Radiance surface (<chain>_radiance.pvtp).
+RADIANCE = ("moments", "default")
 SOURCES = ("pvtu3", "redist", "pvtu2", "shuffled")
 
 
@@ -79,6 +87,44 @@ class PartitionIndependenceTest(MpiSuite):
         self.assertLessEqual(worst, 1e-6, "max relative Fluence difference, " + name)
         return got_pieces
 
+    def surfaces(self, name):
+        from vtkmodules.vtkCommonDataModel import vtkPolyData
+        from vtkmodules.vtkIOXML import vtkXMLPPolyDataReader
+        reader = vtkXMLPPolyDataReader()
+        reader.SetFileName(os.path.join(self.work, name + ".pvtp"))
+        reader.Update()
+        pieces = []
+        for k in range(reader.GetNumberOfPieces()):
+            reader.UpdatePiece(k, reader.GetNumberOfPieces(), 0)
+            piece = vtkPolyData()
+            piece.DeepCopy(reader.GetOutput())
+            pieces.append(piece)
+        return pieces
+
+    def check_radiance(self, name, reference):
+        """Worst Radiance difference of the surface <name> against <reference>,
+        relative to the reference's largest value, at every surface point
+        (matched by coordinates; each piece's copy of a shared point)."""
+        ref = by_point(self.surfaces(reference), "Radiance")
+        got = by_point(self.surfaces(name), "Radiance")
+        self.assertEqual(set(got), set(ref), name + ": the points of the serial surface")
+        scale = max(float(np.abs(v).max()) for values in ref.values() for v in values)
+        self.assertGreater(scale, 0.0, reference)
+        worst = 0.0
+        for x, values in got.items():
+            for v in values:
+                worst = max(worst, min(float(np.abs(v - r).max()) for r in ref[x]) / scale)
+        self.assertLessEqual(worst, 1e-6, "max Radiance difference / max Radiance, " + name)
+
+    def check_model(self, name):
+        """Every piece with cells solved the extended-moments model (2)."""
+        for piece in self.pieces(name):
+            if piece.GetNumberOfCells() == 0:
+                continue
+            model = piece.GetFieldData().GetArray("TranslucencyCollimatedModel")
+            self.assertIsNotNone(model, name)
+            self.assertEqual(int(model.GetTuple1(0)), 2, name + ": extended-moments solved")
+
     def test_0_runs(self):
         self.assertIsNotNone(self.result.returncode, self.result.stderr)
         self.assertEqual(self.result.returncode, 0, self.result.stdout + self.result.stderr)
@@ -92,6 +138,11 @@ class PartitionIndependenceTest(MpiSuite):
         for chain in CHAINS:
             with self.subTest(chain=chain):
                 self.check("ser_shuffled_" + chain, "ref_" + chain)
+        for chain in RADIANCE:
+            with self.subTest(chain=chain + "_radiance"):
+                self.check_radiance("ser_shuffled_%s_radiance" % chain, "ref_%s_radiance" % chain)
+        self.check_model("ref_default")
+        self.check_model("ser_shuffled_default")
 
     def check_source(self, source, split, empty):
         for chain in CHAINS:
@@ -104,6 +155,11 @@ class PartitionIndependenceTest(MpiSuite):
                     self.assertGreater(nonempty, 1, "the pieces stay on their ranks")
                 if empty:
                     self.assertLess(nonempty, RANKS, "a rank has an empty piece")
+        for chain in RADIANCE:
+            with self.subTest(chain=chain + "_radiance"):
+                self.check_radiance("par_%s_%s_radiance" % (source, chain),
+                                    "ref_%s_radiance" % chain)
+        self.check_model("par_%s_default" % source)
 
     def test_interactive_stopping_rule(self):
         # Solve Diffusion's default RelTol promises the boundary fluence

@@ -408,6 +408,119 @@ TEST(CollimatedSource, BoundaryRuleFollowsTheModel)
   }
 }
 
+// A relight and a paint under the extended models (issues 32 and 33): the
+// matrices and the linear solver's set-up are kept, only the right-hand side
+// (boundary q and the beam's volume load) is rebuilt, and the system equals
+// a full assembly's bit for bit (the independent reference: a new solver
+// that assembles everything), so the fluence equals the fresh solve within
+// the solve's tolerance.
+TEST(CollimatedSource, RelightAndPaintUnderTheExtendedModelsKeepTheMatrices)
+{
+  const TetMesh mesh = Box(6, 3, 0.3);
+  const double muA[3] = { 0.01, 0.1, 0.3 }, muS[3] = { 1.0, 0.5, 2.0 };
+  OpticalProperties material =
+    OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, muS, BoxEta);
+  LightSource point;
+  point.Type = LightSource::Kind::Point;
+  point.Position = { 10.0, 10.0, 30.0 };
+  point.Power = { 100.0, 100.0, 100.0 };
+  const std::vector<LightSource> first = { Directional(0, 0, -1, 1.0, 2.0, 0.5), point };
+  const std::vector<LightSource> second = { Directional(0.3, -0.2, -1, 0.7, 1.0, 1.5), point };
+  std::vector<double> q;
+  ASSERT_TRUE(ComputeProjectedIrradiance(
+    mesh, material.RefractiveIndex, NonCollimatedLights(first), 0.0, 0, true, q));
+  std::vector<double> secondQ;
+  LightSource dimmer = point;
+  dimmer.Power = { 40.0, 50.0, 60.0 };
+  ASSERT_TRUE(ComputeProjectedIrradiance(
+    mesh, material.RefractiveIndex, { dimmer }, 0.0, 0, true, secondQ));
+  for (CollimatedModel model : { CollimatedModel::Extended, CollimatedModel::ExtendedMoments })
+  {
+    SCOPED_TRACE(static_cast<int>(model));
+    auto solver = CreateDiffusionSolver("divergence");
+    auto* vertex = dynamic_cast<VertexDiffusionSolver*>(solver.get());
+    ASSERT_NE(vertex, nullptr);
+    const auto configure = [](DiffusionSolver& s) {
+      s.SetRelTol(1e-12);
+      s.SetMaxIter(20000);
+      s.SetLinearSolver("multigrid-agg");
+    };
+    configure(*solver);
+    // A fresh solver's solve: its system and fluence.
+    const auto fresh = [&](const DiffusionProblem& p, DiffusionSystem& system) {
+      auto other = CreateDiffusionSolver("divergence");
+      configure(*other);
+      std::vector<double> fluence;
+      SolverReport report;
+      EXPECT_TRUE(other->Solve(p, fluence, report));
+      EXPECT_EQ(report.Assembly, "full");
+      system = dynamic_cast<VertexDiffusionSolver&>(*other).GetSystem();
+      return fluence;
+    };
+    const auto check = [&](const DiffusionProblem& p, const std::vector<double>& fluence,
+                         const char* step) {
+      DiffusionSystem system;
+      const std::vector<double> expected = fresh(p, system);
+      const DiffusionSystem& kept = vertex->GetSystem();
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        EXPECT_EQ(kept.Values[c], system.Values[c]) << step << ", matrix channel " << c;
+        EXPECT_EQ(kept.RightHandSide[c], system.RightHandSide[c])
+          << step << ", right-hand side channel " << c;
+      }
+      ASSERT_EQ(fluence.size(), expected.size());
+      const double largest = *std::max_element(expected.begin(), expected.end());
+      for (size_t i = 0; i < fluence.size(); ++i)
+      {
+        ASSERT_NEAR(fluence[i], expected[i], 1e-8 * largest) << step << ", value " << i;
+      }
+    };
+    DiffusionProblem problem = MakeProblem(mesh, material, q);
+    problem.Lights = first;
+    problem.Collimated = model;
+    std::vector<double> fluence;
+    SolverReport report;
+    ASSERT_TRUE(solver->Solve(problem, fluence, report));
+    EXPECT_EQ(report.Assembly, "full");
+    EXPECT_EQ(report.LinearSetup, "rebuilt");
+
+    // Relight: another directional light, another point light (its q).
+    DiffusionProblem relit = MakeProblem(mesh, material, secondQ);
+    relit.Lights = second;
+    relit.Collimated = model;
+    vertex->SetChangedTets({}, true);
+    ASSERT_TRUE(solver->Solve(relit, fluence, report));
+    EXPECT_EQ(report.Assembly, "right-hand side");
+    EXPECT_EQ(report.LinearSetup, "kept");
+    check(relit, fluence, "relight");
+
+    // Only the beam changed (q the same: the directional light is not in it).
+    relit.Lights = first;
+    vertex->SetChangedTets({}, false);
+    ASSERT_TRUE(solver->Solve(relit, fluence, report));
+    EXPECT_EQ(report.Assembly, "right-hand side");
+    EXPECT_EQ(report.LinearSetup, "kept");
+    check(relit, fluence, "beam only");
+
+    // Paint: three tets' coefficients (the beam's load changes with mu_s').
+    OpticalProperties painted = material;
+    std::vector<int> changed = { 3, 40, 41 };
+    for (int t : changed)
+    {
+      painted.AbsorptionCoefficient[3 * static_cast<size_t>(t)] *= 5.0;
+      painted.ReducedScatteringCoefficient[3 * static_cast<size_t>(t) + 1] *= 2.0;
+    }
+    DiffusionProblem paint = MakeProblem(mesh, painted, secondQ);
+    paint.Lights = first;
+    paint.Collimated = model;
+    vertex->SetChangedTets(changed, false);
+    ASSERT_TRUE(solver->Solve(paint, fluence, report));
+    EXPECT_EQ(report.Assembly, "incremental");
+    EXPECT_EQ(report.LinearSetup, "rows");
+    check(paint, fluence, "paint");
+  }
+}
+
 } // namespace translucency
 
 namespace translucency
@@ -529,8 +642,13 @@ TEST(CollimatedSource, GapToMonteCarloOnTheIssuesBox)
     EXPECT_LT(std::abs(gap[2]), 0.036) << name << ": extended-moments";
     EXPECT_LT(std::abs(gap[2]), 0.5 * std::abs(gap[0])) << name << ": half the surface gap";
     EXPECT_LT(std::abs(gap[2]), 0.5 * std::abs(gap[1])) << name << ": half the extended gap";
-    // (The default stays the surface model until the extended models give
-    // the same field under MPI: CollimatedModels.cxx.)
+    // The default model of a directional light (the core's default table,
+    // which the filter, the plugin and the CLI read; issue 33) is nearer
+    // Monte Carlo than the surface model (the independent reference:
+    // transport, not diffusion).
+    const int byDefault = static_cast<int>(DefaultCollimatedModel(LightKind::Directional));
+    EXPECT_LT(std::abs(gap[byDefault]), std::abs(gap[0]))
+      << name << ": the default model " << modelNames[byDefault];
   }
 }
 
