@@ -171,8 +171,11 @@ public:
    * Iterative solvers: relative residual ||b - M phi|| / ||b|| to reach per
    * channel. Default 1e-2, the interactive stopping rule: the boundary
    * fluence within 1 % of the converged solution, cold and warm-started
-   * (translucency::InteractiveRelTol, Documentation/Solvers.md). Set it
-   * (e.g. 1e-10) for a tighter solve.
+   * (translucency::InteractiveRelTol, Documentation/Solvers.md). While
+   * RelTol is at least this default, the multigrid-agg solve also stops a
+   * channel once its boundary fluence stops changing (estimated error <=
+   * translucency::InteractiveChangeTol, 0.3 %). Set it (e.g. 1e-10) for a
+   * tighter, residual-only solve.
    */
   vtkSetClampMacro(RelTol, double, 1e-16, 1.0);
   vtkGetMacro(RelTol, double);

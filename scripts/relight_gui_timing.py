@@ -148,12 +148,21 @@ def run(results):
     if FIELDS:
         results["fluence"] = [fluence(solve)]
     relights = []
+    diagnose = os.environ.get("TRANSLUCENCY_RELIGHT_DIAG") == "1"
     for k in range(STEPS):
         degrees = 15.0 if k % 2 == 0 else 0.0
         start = time.perf_counter()
         light.InteractiveLightPoint1 = light_point1(centre, distance, degrees)  # the widget's drag
         update()
         relights.append(time.perf_counter() - start)
+        if diagnose:
+            # What ParaView's data information of each proxy costs after a
+            # relight (the GUI's panels and pipeline browser gather it).
+            for name, proxy in (("light", light), ("solve", solve), ("radiance", radiance)):
+                t0 = time.perf_counter()
+                proxy.GetDataInformation().GetNumberOfCells()
+                print("  data information of %s: %.3f s" % (name, time.perf_counter() - t0),
+                      flush=True)
         if FIELDS:
             results["fluence"].append(fluence(solve))
         print("relight %d: %.3f s" % (k + 1, relights[-1]), flush=True)

@@ -16,6 +16,10 @@
  * Testing/Python/TestInteractiveAccuracy.py checks it and
  * `translucency bench --pipeline` reports it at 200k and 1M tets.
  *
+ * Since session 26 a second test stops a channel first when the picture
+ * stopped changing: the change rule (InteractiveChangeTol below), an
+ * estimate of the boundary error left from the per-iteration changes.
+ *
  * vtkSolveDiffusion's RelTol defaults to InteractiveRelTol; a user who
  * wants a tighter solve sets RelTol (e.g. 1e-10) and gets it. The core's
  * DiffusionSolver keeps its own default (1e-6) for the tests and benches

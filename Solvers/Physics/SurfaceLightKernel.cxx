@@ -2,7 +2,7 @@
 
 #include "Error.h"
 #include "Fresnel.h"
-#include "RayCaster.h"
+#include "ShadowCaster.h"
 
 #include <omp.h>
 
@@ -186,7 +186,7 @@ public:
   {
     if (!Caster_ && Surface_.GetNumberOfTriangles() > 0)
     {
-      Caster_ = std::make_unique<RayCaster>();
+      Caster_ = std::make_unique<ShadowCaster>();
       Caster_->Build(Surface_.Points, Surface_.Triangles);
     }
   }
@@ -199,13 +199,13 @@ public:
   std::size_t GetMemoryBytes() const
   {
     // About one node (52 bytes) and one id per triangle.
-    return Caster_ ? 56 * static_cast<std::size_t>(Caster_->GetNumberOfTriangles()) : 0;
+    return Caster_ ? Caster_->GetMemoryBytes() : 0;
   }
 
 private:
   const BoundarySurface& Surface_;
   double Offset_;
-  std::unique_ptr<RayCaster> Caster_;
+  std::unique_ptr<ShadowCaster> Caster_;
 };
 
 /// An OpenMP loop over the points asked for, body(k) for each, checking

@@ -58,7 +58,7 @@ struct BoundarySurface
  *   ComputeBoundaryIrradiance(); the ray budget counts the surface's points.
  * @return false if aborted. Throws translucency::Error on invalid input.
  *
- * Shadow rays are cast against the whole surface (a RayCaster built only
+ * Shadow rays are cast against the whole surface (a ShadowCaster built only
  * when a ray is needed). OpenMP-parallel over `points`; the result does not
  * depend on the number of threads nor on which other points are asked for.
  */
