@@ -149,9 +149,87 @@ T ExponentialDividedDifference(const T* z, int n)
   return std::exp(shift) * table.Of((1u << n) - 1u);
 }
 
+/// 1 / k! for k < 25 (the series' denominators (n + m)!, n <= 4, m < 20).
+const std::array<double, 25>& InverseFactorials()
+{
+  static const std::array<double, 25> table = [] {
+    std::array<double, 25> t{};
+    double f = 1.0;
+    for (int k = 0; k < 25; ++k)
+    {
+      f *= k > 0 ? static_cast<double>(k) : 1.0;
+      t[k] = 1.0 / f;
+    }
+    return t;
+  }();
+  return table;
+}
+
+/// The five divided differences of ExponentialMoments at once when the four
+/// nodes lie within 1 of each other (a tet at most one optical depth across:
+/// the usual case): one series about their mean c for all five, exp[z] =
+/// e^c sum_m h_m(z - c) / (n + m)!, the complete symmetric polynomials h_m of
+/// the four nodes extended by the fifth node z_k (h_m^+ = h_m + y_k h_{m-1}^+).
+/// |z_k - c| <= 1 too, so the series' bound (SeriesTerms) holds. One exp per
+/// tet instead of 30 (the table of each call, eagerly): the relight of an
+/// extended-moments beam spent 63 % of its time here. False: spread > 1.
+template <class T>
+bool SharedCentreMoments(const T z[4], double volume, T& total, T moment[4])
+{
+  double spread = 0.0;
+  for (int p = 0; p < 4; ++p)
+  {
+    for (int q = p + 1; q < 4; ++q)
+    {
+      spread = std::max(spread, static_cast<double>(std::abs(z[q] - z[p])));
+    }
+  }
+  if (!(spread <= 1.0))
+  {
+    return false;
+  }
+  const T centre = 0.25 * (z[0] + z[1] + z[2] + z[3]);
+  T y[4];
+  std::array<T, SeriesTerms> h;
+  h.fill(T(0.0));
+  h[0] = 1.0;
+  for (int p = 0; p < 4; ++p)
+  {
+    y[p] = z[p] - centre;
+    for (int m = 1; m < SeriesTerms; ++m)
+    {
+      h[m] += y[p] * h[m - 1];
+    }
+  }
+  const std::array<double, 25>& inverse = InverseFactorials();
+  const T scale = 6.0 * volume * std::exp(centre);
+  T sum = 0.0;
+  for (int m = 0; m < SeriesTerms; ++m)
+  {
+    sum += h[m] * inverse[3 + m];
+  }
+  total = scale * sum;
+  for (int k = 0; k < 4; ++k)
+  {
+    T previous = h[0];
+    T extended = previous * inverse[4];
+    for (int m = 1; m < SeriesTerms; ++m)
+    {
+      previous = h[m] + y[k] * previous;
+      extended += previous * inverse[4 + m];
+    }
+    moment[k] = scale * extended;
+  }
+  return true;
+}
+
 template <class T>
 void ExponentialMoments(const T z[4], double volume, T& total, T moment[4])
 {
+  if (SharedCentreMoments(z, volume, total, moment))
+  {
+    return;
+  }
   // Hermite-Genocchi: int_T exp(z . lambda) dV = 6 V exp[z_0..z_3] and
   // int_T lambda_k exp(z . lambda) dV = 6 V exp[z_0..z_3, z_k].
   T nodes[5] = { z[0], z[1], z[2], z[3], T(0.0) };
