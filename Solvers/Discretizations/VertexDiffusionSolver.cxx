@@ -268,6 +268,28 @@ void VertexDiffusionSolver::SetChangedTets(std::vector<int> changedTets, bool ir
   IrradianceChanged_ = irradianceChanged;
 }
 
+namespace
+{
+/// The size, memory and per-channel convergence of a solve, for its report.
+void ReportSolve(const DiffusionSystem& system, const LinearSolver& linear,
+  const std::array<LinearSolveStats, NumberOfChannels>& stats, SolverReport& report)
+{
+  report.NumberOfUnknowns = system.NumberOfUnknowns;
+  report.NumberOfNonZeros = static_cast<long long>(system.ColumnIndices.size());
+  report.MemoryBytes = system.RowOffsets.size() * sizeof(int) +
+    system.ColumnIndices.size() * sizeof(int) +
+    NumberOfChannels * system.ColumnIndices.size() * sizeof(double) +
+    2 * NumberOfChannels * static_cast<std::size_t>(system.NumberOfUnknowns) * sizeof(double) +
+    linear.GetMemoryBytes();
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    report.Iterations[c] = stats[c].Iterations;
+    report.Residual[c] = stats[c].RelativeResidual;
+    report.Converged[c] = stats[c].Converged;
+  }
+}
+} // namespace
+
 bool VertexDiffusionSolver::Solve(
   const DiffusionProblem& problem, std::vector<double>& fluence, SolverReport& report)
 {
@@ -399,19 +421,7 @@ bool VertexDiffusionSolver::Solve(
   LastRevision_ = mesh.GetGeometryRevision();
   report.SolveMilliseconds = MillisecondsSince(start);
 
-  report.NumberOfUnknowns = System_.NumberOfUnknowns;
-  report.NumberOfNonZeros = static_cast<long long>(System_.ColumnIndices.size());
-  report.MemoryBytes = System_.RowOffsets.size() * sizeof(int) +
-    System_.ColumnIndices.size() * sizeof(int) +
-    NumberOfChannels * System_.ColumnIndices.size() * sizeof(double) +
-    2 * NumberOfChannels * static_cast<std::size_t>(System_.NumberOfUnknowns) * sizeof(double) +
-    Linear_->GetMemoryBytes();
-  for (int c = 0; c < NumberOfChannels; ++c)
-  {
-    report.Iterations[c] = stats[c].Iterations;
-    report.Residual[c] = stats[c].RelativeResidual;
-    report.Converged[c] = stats[c].Converged;
-  }
+  ReportSolve(System_, *Linear_, stats, report);
   Discretization_->ToPointFluence(mesh, System_, Solution_, fluence);
   if (extended)
   {
