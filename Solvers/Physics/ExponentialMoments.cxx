@@ -17,6 +17,46 @@ constexpr int MaxNodes = 5;
 /// is at most 1 / (n! m!) of e^c: m = 19 is below 1e-17.
 constexpr int SeriesTerms = 20;
 
+/// 1 / k! for k < 25 (the series' denominators (n + m)!, n <= 4, m < 20).
+const std::array<double, 25>& InverseFactorials()
+{
+  static const std::array<double, 25> table = [] {
+    std::array<double, 25> t{};
+    double f = 1.0;
+    for (int k = 0; k < 25; ++k)
+    {
+      f *= k > 0 ? static_cast<double>(k) : 1.0;
+      t[k] = 1.0 / f;
+    }
+    return t;
+  }();
+  return table;
+}
+
+/// The complete symmetric polynomials h_m of the nodes so far, extended by
+/// the node y (h_m^+ = h_m + y h_{m-1}^+); h = {1, 0, ...} for no node.
+template <class T>
+void AddNode(std::array<T, SeriesTerms>& h, T y)
+{
+  for (int m = 1; m < SeriesTerms; ++m)
+  {
+    h[m] += y * h[m - 1];
+  }
+}
+
+/// sum_m h_m / (n + m)!: exp[x_0..x_n] / e^c for nodes x = c + y.
+template <class T>
+T SeriesSum(const std::array<T, SeriesTerms>& h, int n)
+{
+  const std::array<double, 25>& inverse = InverseFactorials();
+  T sum = 0.0;
+  for (int m = 0; m < SeriesTerms; ++m)
+  {
+    sum += h[m] * inverse[n + m];
+  }
+  return sum;
+}
+
 /// The divided differences of exp on the subsets of one set of nodes,
 /// memoised by bit mask.
 template <class T>
@@ -89,32 +129,14 @@ private:
       centre += this->Z[nodes[p]];
     }
     centre /= static_cast<double>(count);
-    // h[m] = h_m(y_0, ..., y_j) for the nodes so far (h_m^(j) = h_m^(j-1) +
-    // y_j h_{m-1}^(j)).
     std::array<T, SeriesTerms> h;
     h.fill(T(0.0));
     h[0] = 1.0;
     for (int p = 0; p < count; ++p)
     {
-      const T y = this->Z[nodes[p]] - centre;
-      for (int m = 1; m < SeriesTerms; ++m)
-      {
-        h[m] += y * h[m - 1];
-      }
+      AddNode(h, this->Z[nodes[p]] - centre);
     }
-    // sum_m h_m / (n + m)!, n = count - 1.
-    double factorial = 1.0;
-    for (int k = 2; k < count; ++k)
-    {
-      factorial *= k;
-    }
-    T sum = 0.0;
-    for (int m = 0; m < SeriesTerms; ++m)
-    {
-      sum += h[m] / factorial;
-      factorial *= static_cast<double>(count + m);
-    }
-    return std::exp(centre) * sum;
+    return std::exp(centre) * SeriesSum(h, count - 1);
   }
 
   const T* Z;
@@ -149,22 +171,6 @@ T ExponentialDividedDifference(const T* z, int n)
   return std::exp(shift) * table.Of((1u << n) - 1u);
 }
 
-/// 1 / k! for k < 25 (the series' denominators (n + m)!, n <= 4, m < 20).
-const std::array<double, 25>& InverseFactorials()
-{
-  static const std::array<double, 25> table = [] {
-    std::array<double, 25> t{};
-    double f = 1.0;
-    for (int k = 0; k < 25; ++k)
-    {
-      f *= k > 0 ? static_cast<double>(k) : 1.0;
-      t[k] = 1.0 / f;
-    }
-    return t;
-  }();
-  return table;
-}
-
 /// The five divided differences of ExponentialMoments at once when the four
 /// nodes lie within 1 of each other (a tet at most one optical depth across:
 /// the usual case): one series about their mean c for all five, exp[z] =
@@ -189,36 +195,20 @@ bool SharedCentreMoments(const T z[4], double volume, T& total, T moment[4])
     return false;
   }
   const T centre = 0.25 * (z[0] + z[1] + z[2] + z[3]);
-  T y[4];
   std::array<T, SeriesTerms> h;
   h.fill(T(0.0));
   h[0] = 1.0;
   for (int p = 0; p < 4; ++p)
   {
-    y[p] = z[p] - centre;
-    for (int m = 1; m < SeriesTerms; ++m)
-    {
-      h[m] += y[p] * h[m - 1];
-    }
+    AddNode(h, z[p] - centre);
   }
-  const std::array<double, 25>& inverse = InverseFactorials();
   const T scale = 6.0 * volume * std::exp(centre);
-  T sum = 0.0;
-  for (int m = 0; m < SeriesTerms; ++m)
-  {
-    sum += h[m] * inverse[3 + m];
-  }
-  total = scale * sum;
+  total = scale * SeriesSum(h, 3);
   for (int k = 0; k < 4; ++k)
   {
-    T previous = h[0];
-    T extended = previous * inverse[4];
-    for (int m = 1; m < SeriesTerms; ++m)
-    {
-      previous = h[m] + y[k] * previous;
-      extended += previous * inverse[4 + m];
-    }
-    moment[k] = scale * extended;
+    std::array<T, SeriesTerms> extended = h;
+    AddNode(extended, z[k] - centre);
+    moment[k] = scale * SeriesSum(extended, 4);
   }
   return true;
 }
