@@ -545,14 +545,8 @@ bool RayCaster::IntersectTriangle(const double origin[3], const double direction
 }
 
 //------------------------------------------------------------------------------
-template <bool AnyHit>
-bool RayCaster::Traverse(const double origin[3], const double direction[3], double tMax,
-  double& tOut, int& triangleOut) const
+bool RayCaster::UnitDirection(const double origin[3], const double direction[3], double unit[3])
 {
-  if (Root_.Count < 0 || !(tMax > Epsilon_))
-  {
-    return false;
-  }
   const double len2 = direction[0] * direction[0] + direction[1] * direction[1] +
     direction[2] * direction[2];
   if (!(len2 > 0.0) || !std::isfinite(len2) || !std::isfinite(origin[0]) ||
@@ -561,7 +555,27 @@ bool RayCaster::Traverse(const double origin[3], const double direction[3], doub
     return false;
   }
   const double len = std::sqrt(len2);
-  const double d[3] = { direction[0] / len, direction[1] / len, direction[2] / len };
+  for (int k = 0; k < 3; ++k)
+  {
+    unit[k] = direction[k] / len;
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
+template <bool AnyHit>
+bool RayCaster::Traverse(const double origin[3], const double direction[3], double tMax,
+  double& tOut, int& triangleOut) const
+{
+  if (Root_.Count < 0 || !(tMax > Epsilon_))
+  {
+    return false;
+  }
+  double d[3];
+  if (!UnitDirection(origin, direction, d))
+  {
+    return false;
+  }
   // Inverse direction; a (near) zero component becomes a tiny one of the same
   // sign, which gives the limit of the slab test without 0 * inf = NaN.
   double inv[3];

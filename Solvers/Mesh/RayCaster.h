@@ -78,6 +78,13 @@ public:
   bool Occluded(const double origin[3], const double direction[3], double tMax) const;
 
   /**
+   * The unit direction of a ray that can be cast: false (no hit, for every
+   * caster: this one and ShadowCaster's Embree path) when the origin is not
+   * finite or the direction is zero or not finite.
+   */
+  static bool UnitDirection(const double origin[3], const double direction[3], double unit[3]);
+
+  /**
    * Closest hit with t in (epsilon, tMax) (mm). On a hit returns true and
    * sets t (mm along the normalised direction) and triangle (its index in
    * the list given to Build()); otherwise returns false and leaves them

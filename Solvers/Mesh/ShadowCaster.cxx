@@ -183,14 +183,11 @@ bool ShadowCaster::Occluded(const double origin[3], const double direction[3], d
   {
     return false;
   }
-  const double len2 = direction[0] * direction[0] + direction[1] * direction[1] +
-    direction[2] * direction[2];
-  if (!(len2 > 0.0) || !std::isfinite(len2) || !std::isfinite(origin[0]) ||
-    !std::isfinite(origin[1]) || !std::isfinite(origin[2]))
+  double unit[3];
+  if (!RayCaster::UnitDirection(origin, direction, unit))
   {
     return false;
   }
-  const double len = std::sqrt(len2);
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay ray;
@@ -198,9 +195,9 @@ bool ShadowCaster::Occluded(const double origin[3], const double direction[3], d
   ray.org_y = static_cast<float>(origin[1] - Embree_->Centre[1]);
   ray.org_z = static_cast<float>(origin[2] - Embree_->Centre[2]);
   ray.tnear = 0.0f;
-  ray.dir_x = static_cast<float>(direction[0] / len);
-  ray.dir_y = static_cast<float>(direction[1] / len);
-  ray.dir_z = static_cast<float>(direction[2] / len);
+  ray.dir_x = static_cast<float>(unit[0]);
+  ray.dir_y = static_cast<float>(unit[1]);
+  ray.dir_z = static_cast<float>(unit[2]);
   ray.time = 0.0f;
   ray.tfar = static_cast<float>(std::min(tMax, static_cast<double>(std::numeric_limits<float>::max())));
   ray.mask = 0xFFFFFFFFu;
