@@ -198,6 +198,8 @@ class ParaViewGuiTest(unittest.TestCase):
                          % (self.result.returncode, self.result.stderr[-4000:]))
         self.assertTrue(os.path.exists(self.file("marker")),
                         "the GUI did not reach the end of the script")
+        # Where the GUI's time went (seconds since the script started, per stage).
+        print("stages (s): %s" % self.results()["seconds"], file=sys.stderr)
 
     def results(self):
         path = self.file("results.json")
