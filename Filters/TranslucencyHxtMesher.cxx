@@ -9,15 +9,12 @@
 #include <unordered_map>
 
 #ifdef TRANSLUCENCY_HAVE_GMSH
+#include "TranslucencyChildProcess.h"
+
 #include <dlfcn.h>
-#include <fcntl.h>
 #include <gmshc.h>
 #include <omp.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <cerrno>
-#include <csignal>
 #include <cstring>
 
 #include <algorithm>
@@ -757,48 +754,6 @@ bool RunHxtMesherHere(const std::vector<double>& points, const std::vector<int>&
   return false;
 }
 
-/// Writes all of `size` bytes to `fd`; false on an error.
-bool WriteAll(int fd, const void* data, std::size_t size)
-{
-  const char* p = static_cast<const char*>(data);
-  while (size > 0)
-  {
-    const ssize_t n = ::write(fd, p, size);
-    if (n < 0 && errno == EINTR)
-    {
-      continue;
-    }
-    if (n <= 0)
-    {
-      return false;
-    }
-    p += n;
-    size -= static_cast<std::size_t>(n);
-  }
-  return true;
-}
-
-/// Reads all of `size` bytes from `fd`; false at an early end.
-bool ReadAll(int fd, void* data, std::size_t size)
-{
-  char* p = static_cast<char*>(data);
-  while (size > 0)
-  {
-    const ssize_t n = ::read(fd, p, size);
-    if (n < 0 && errno == EINTR)
-    {
-      continue;
-    }
-    if (n <= 0)
-    {
-      return false;
-    }
-    p += n;
-    size -= static_cast<std::size_t>(n);
-  }
-  return true;
-}
-
 /// What the child sends back before its arrays.
 struct HxtResultHeader
 {
@@ -808,18 +763,10 @@ struct HxtResultHeader
   std::uint64_t TetValues = 0;   ///< 4 per tet
 };
 
-/// The child's side: mesh, send the result down `fd`, _exit (no atexit
-/// handlers, no static destructors: gmsh's runtime never ends in a process
-/// that goes on).
-[[noreturn]] void MeshInChild(int fd, const std::vector<double>& points,
-  const std::vector<int>& triangles, const HxtMesherOptions& options)
+/// The child's side: mesh and send the result down `fd`.
+bool MeshInChild(int fd, const std::vector<double>& points, const std::vector<int>& triangles,
+  const HxtMesherOptions& options)
 {
-  const int devnull = ::open("/dev/null", O_WRONLY);
-  if (devnull >= 0)
-  {
-    ::dup2(devnull, STDOUT_FILENO); // gmsh's and OpenMP's stray lines
-    ::dup2(devnull, STDERR_FILENO);
-  }
   std::vector<double> outPoints;
   std::vector<int> outTets;
   std::string message;
@@ -840,8 +787,7 @@ struct HxtResultHeader
   bool ok = WriteAll(fd, &header, sizeof(header));
   ok = ok && WriteAll(fd, message.data(), message.size());
   ok = ok && WriteAll(fd, outPoints.data(), sizeof(double) * header.PointValues);
-  ok = ok && WriteAll(fd, outTets.data(), sizeof(int) * header.TetValues);
-  ::_exit(ok ? 0 : 3);
+  return ok && WriteAll(fd, outTets.data(), sizeof(int) * header.TetValues);
 }
 } // namespace
 
@@ -849,63 +795,46 @@ bool RunHxtMesher(const std::vector<double>& points, const std::vector<int>& tri
   const HxtMesherOptions& options, std::vector<double>& outPoints, std::vector<int>& outTets,
   std::string& error)
 {
-  // In a child process (fork), as TetGen (vtkTetrahedralizeSurface.cxx):
-  // gmsh is loaded there only. Loaded into the caller, the TBB runtime of
-  // gmsh's link-map namespace crashed the process at its exit (SIGSEGV in
-  // libtbb's static destructors under __cxa_finalize: every pvbatch,
-  // pvpython and ParaView GUI run that had used hxt, session 27), and a
-  // crash inside gmsh is now a clean error instead of the caller's end.
-  int fds[2];
-  if (::pipe(fds) != 0)
-  {
-    error = std::string("hxt could not be started (pipe: ") + std::strerror(errno) + ")";
-    return false;
-  }
-  std::fflush(nullptr); // nothing buffered is written twice
-  const pid_t child = ::fork();
-  if (child < 0)
-  {
-    ::close(fds[0]);
-    ::close(fds[1]);
-    error = std::string("hxt could not be started (fork: ") + std::strerror(errno) + ")";
-    return false;
-  }
-  if (child == 0)
-  {
-    ::close(fds[0]);
-    MeshInChild(fds[1], points, triangles, options);
-  }
-  ::close(fds[1]);
+  // In a child process, as TetGen (vtkTetrahedralizeSurface.cxx): gmsh is
+  // loaded there only. Loaded into the caller, the TBB runtime of gmsh's
+  // link-map namespace crashed the process at its exit (SIGSEGV in libtbb's
+  // static destructors under __cxa_finalize: every pvbatch, pvpython and
+  // ParaView GUI run that had used hxt, session 27); and a crash inside gmsh
+  // is now a clean error instead of the caller's end.
   HxtResultHeader header;
-  bool received = ReadAll(fds[0], &header, sizeof(header));
-  // Sizes the child could not have made are a broken stream, not a mesh.
-  received = received && header.MessageSize < (std::uint64_t(1) << 20) &&
-    header.PointValues % 3 == 0 && header.TetValues % 4 == 0 &&
-    header.PointValues < (std::uint64_t(1) << 40) && header.TetValues < (std::uint64_t(1) << 40);
-  std::string message(received ? header.MessageSize : 0, '\0');
-  received = received && ReadAll(fds[0], &message[0], message.size());
-  if (received && header.Done == 1)
+  std::string message;
+  auto read = [&](int fd) {
+    // Sizes the child could not have made are a broken stream, not a mesh.
+    bool received = ReadAll(fd, &header, sizeof(header)) &&
+      header.MessageSize < (std::uint64_t(1) << 20) && header.PointValues % 3 == 0 &&
+      header.TetValues % 4 == 0 && header.PointValues < (std::uint64_t(1) << 40) &&
+      header.TetValues < (std::uint64_t(1) << 40);
+    message.assign(received ? header.MessageSize : 0, '\0');
+    received = received && ReadAll(fd, &message[0], message.size());
+    if (received && header.Done == 1)
+    {
+      outPoints.resize(header.PointValues);
+      outTets.resize(header.TetValues);
+      received = ReadAll(fd, outPoints.data(), sizeof(double) * outPoints.size()) &&
+        ReadAll(fd, outTets.data(), sizeof(int) * outTets.size());
+    }
+    return received;
+  };
+  const ChildOutcome outcome = RunInChildProcess(
+    [&](int fd) { return MeshInChild(fd, points, triangles, options); }, read);
+  if (!outcome.Started)
   {
-    outPoints.resize(header.PointValues);
-    outTets.resize(header.TetValues);
-    received = ReadAll(fds[0], outPoints.data(), sizeof(double) * outPoints.size()) &&
-      ReadAll(fds[0], outTets.data(), sizeof(int) * outTets.size());
+    error = "hxt could not be started (" + outcome.StartError + ")";
   }
-  ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(child, &status, 0) < 0 && errno == EINTR)
+  else if (outcome.Signal != 0)
   {
+    error = "hxt crashed on this surface (signal " + std::to_string(outcome.Signal) + ", " +
+      strsignal(outcome.Signal) + "): check the surface, or try the tetgen mesher";
   }
-  if (WIFSIGNALED(status))
-  {
-    const int signal = WTERMSIG(status);
-    error = "hxt crashed on this surface (signal " + std::to_string(signal) + ", " +
-      strsignal(signal) + "): check the surface, or try the tetgen mesher";
-  }
-  else if (!received || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+  else if (!outcome.Received || outcome.ExitStatus != 0)
   {
     error = "hxt stopped without handing back its result (exit status " +
-      std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + ")";
+      std::to_string(outcome.ExitStatus) + ")";
   }
   else if (header.Done != 1)
   {
