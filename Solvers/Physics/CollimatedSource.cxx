@@ -4,13 +4,17 @@
 #include "ExponentialMoments.h"
 #include "Fresnel.h"
 #include "RayCaster.h"
+#include "ShadowCaster.h"
 #include "TetMesh.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <sstream>
 
 namespace translucency
@@ -28,6 +32,16 @@ struct TetRules
 {
   static constexpr int MaxLevel = 4;
   std::vector<std::array<double, 4>> Points[MaxLevel + 1];
+  /// The sub-tets of level 1 by their nodes: 0-3 the tet's vertices, 4-9 the
+  /// midpoints of the edges 01, 02, 03, 12, 13, 23. Point 4 s + k of level 1
+  /// is a Sub[s][k] + b (the other three nodes of sub-tet s), in barycentric
+  /// coordinates (LevelOneIntegrals factorises its exponentials by them).
+  static constexpr int Sub[8][4] = { { 0, 4, 5, 6 }, { 1, 4, 7, 8 }, { 2, 5, 7, 9 },
+    { 3, 6, 8, 9 }, { 5, 8, 4, 7 }, { 5, 8, 7, 9 }, { 5, 8, 9, 6 }, { 5, 8, 6, 4 } };
+  /// The vertices of the edge of each midpoint node 4-9.
+  static constexpr int Edge[6][2] = { { 0, 1 }, { 0, 2 }, { 0, 3 }, { 1, 2 }, { 1, 3 }, { 2, 3 } };
+  /// The symmetric 4-point rule of degree 2: a at its own vertex, b at the others.
+  static constexpr double A = 0.5854101966249685, B = 0.1381966011250105;
 
   TetRules()
   {
@@ -40,7 +54,7 @@ struct TetRules
         tets[0][k][j] = k == j ? 1.0 : 0.0;
       }
     }
-    const double a = 0.5854101966249685, b = 0.1381966011250105;
+    const double a = A, b = B;
     for (int level = 0; level <= MaxLevel; ++level)
     {
       for (const Tet& t : tets)
@@ -71,18 +85,15 @@ struct TetRules
         {
           v[k] = t[k];
         }
-        const int pairs[6][2] = { { 0, 1 }, { 0, 2 }, { 0, 3 }, { 1, 2 }, { 1, 3 }, { 2, 3 } };
         for (int m = 0; m < 6; ++m)
         {
           for (int j = 0; j < 4; ++j)
           {
-            v[4 + m][j] = 0.5 * (t[pairs[m][0]][j] + t[pairs[m][1]][j]);
+            v[4 + m][j] = 0.5 * (t[Edge[m][0]][j] + t[Edge[m][1]][j]);
           }
         }
         // Midpoints 4..9: 01, 02, 03, 12, 13, 23.
-        const int sub[8][4] = { { 0, 4, 5, 6 }, { 1, 4, 7, 8 }, { 2, 5, 7, 9 }, { 3, 6, 8, 9 },
-          { 5, 8, 4, 7 }, { 5, 8, 7, 9 }, { 5, 8, 9, 6 }, { 5, 8, 6, 4 } };
-        for (const auto& s : sub)
+        for (const auto& s : Sub)
         {
           finer.push_back(Tet{ v[s[0]], v[s[1]], v[s[2]], v[s[3]] });
         }
@@ -250,6 +261,160 @@ bool TetIntegrals(const double e[4], const double path[4], double wavenumber, do
   return true;
 }
 
+/**
+ * The level-1 quadrature of VisitTet (32 points) for a positive E_c (e[4],
+ * with logarithms logE[4]): the same sums, with 4 exponentials and 12
+ * square roots instead of 32 exponentials. Point (s, k) of the rule is
+ * a n_k + b (n_0 + n_1 + n_2 + n_3 - n_k) over the nodes n of sub-tet s
+ * (TetRules::Sub), so with zeta_n the exponent at node n,
+ *   exp(z . l) = prod_m exp(b zeta_{n_m}) x exp((a - b) zeta_{n_k});
+ * at a vertex exp((a - b) zeta) = E_c / exp(b zeta)^4 (a + 3 b = 1), and at
+ * a midpoint, where zeta is the mean of its edge's vertices' values, each
+ * exponential is the geometric mean of its vertices'. Rounding differs from
+ * the direct exponentials by a few ulps (test:
+ * `CollimatedBeam.FastEqualsTheReferenceOnTheBunny`).
+ */
+void LevelOneIntegrals(const double e[4], const double logE[4], double volume, double& total,
+  double moment[4])
+{
+  double own[10], other[10];
+  for (int n = 0; n < 4; ++n)
+  {
+    other[n] = std::exp(TetRules::B * logE[n]);
+    const double square = other[n] * other[n];
+    own[n] = e[n] / (square * square);
+  }
+  for (int m = 0; m < 6; ++m)
+  {
+    const int i = TetRules::Edge[m][0], j = TetRules::Edge[m][1];
+    own[4 + m] = std::sqrt(own[i] * own[j]);
+    other[4 + m] = std::sqrt(other[i] * other[j]);
+  }
+  const std::vector<std::array<double, 4>>& points = Rules().Points[1];
+  total = 0.0;
+  for (int j = 0; j < 4; ++j)
+  {
+    moment[j] = 0.0;
+  }
+  for (int s = 0; s < 8; ++s)
+  {
+    const int* n = TetRules::Sub[s];
+    const double base = other[n[0]] * other[n[1]] * other[n[2]] * other[n[3]];
+    for (int k = 0; k < 4; ++k)
+    {
+      const double g = base * own[n[k]];
+      const std::array<double, 4>& l = points[4 * static_cast<size_t>(s) + k];
+      total += g;
+      for (int j = 0; j < 4; ++j)
+      {
+        moment[j] += g * l[j];
+      }
+    }
+  }
+  const double weight = volume / static_cast<double>(points.size());
+  total *= weight;
+  for (int j = 0; j < 4; ++j)
+  {
+    moment[j] *= weight;
+  }
+}
+
+/**
+ * TetIntegrals<double> (continuous wave) with the logarithms of E_c given
+ * (logE[k] = ln e[k] where e[k] > 0, taken once per point by BeamLoads
+ * instead of four times per tet): the same rule (VisitTet's levels 0 and 1,
+ * the exact integrals from ExactFromLevel on), the level-1 quadrature by
+ * LevelOneIntegrals.
+ */
+bool ContinuousWaveTetIntegrals(const double e[4], const double logE[4], double volume,
+  double& total, double moment[4])
+{
+  bool positive = true, any = false;
+  for (int k = 0; k < 4; ++k)
+  {
+    positive = positive && e[k] > 0.0;
+    any = any || e[k] > 0.0;
+  }
+  if (!any)
+  {
+    total = 0.0;
+    for (int j = 0; j < 4; ++j)
+    {
+      moment[j] = 0.0;
+    }
+    return false;
+  }
+  const double range = std::max(std::max(logE[0], logE[1]), std::max(logE[2], logE[3])) -
+    std::min(std::min(logE[0], logE[1]), std::min(logE[2], logE[3]));
+  // QuadratureLevel's levels: 0 up to a range of 0.5, 1 up to 1, then exact.
+  static_assert(ExactFromLevel == 2, "the levels below follow QuadratureLevel");
+  if (!positive)
+  {
+    const double path[4] = { 0.0, 0.0, 0.0, 0.0 };
+    return TetIntegrals(e, path, 0.0, volume, total, moment);
+  }
+  if (!(range > 0.5))
+  {
+    // Level 0: VisitTet's 4 points, as TetIntegrals sums them.
+    const std::vector<std::array<double, 4>>& points = Rules().Points[0];
+    total = 0.0;
+    for (int j = 0; j < 4; ++j)
+    {
+      moment[j] = 0.0;
+    }
+    for (const std::array<double, 4>& l : points)
+    {
+      const double g =
+        std::exp(l[0] * logE[0] + l[1] * logE[1] + l[2] * logE[2] + l[3] * logE[3]);
+      total += g;
+      for (int j = 0; j < 4; ++j)
+      {
+        moment[j] += g * l[j];
+      }
+    }
+    const double weight = volume / static_cast<double>(points.size());
+    total *= weight;
+    for (int j = 0; j < 4; ++j)
+    {
+      moment[j] *= weight;
+    }
+    return true;
+  }
+  if (range > 1.0)
+  {
+    ExponentialMoments(logE, volume, total, moment);
+  }
+  else
+  {
+    LevelOneIntegrals(e, logE, volume, total, moment);
+  }
+  return true;
+}
+
+/// CollimatedEvaluation::Reference's TetIntegrals<double>: the logarithms
+/// per tet, VisitTet's direct exponentials below ExactFromLevel and the
+/// memoised recursion of ExponentialDividedDifference from it on.
+bool ReferenceTetIntegrals(const double e[4], double volume, double& total, double moment[4])
+{
+  double logE[4];
+  bool positive = true, any = false;
+  const double path[4] = { 0.0, 0.0, 0.0, 0.0 };
+  if (QuadratureLevel(e, path, 0.0, logE, positive, any) < ExactFromLevel || !positive)
+  {
+    return TetIntegrals(e, path, 0.0, volume, total, moment);
+  }
+  // Hermite-Genocchi: int_T exp(z . lambda) dV = 6 V exp[z_0..z_3] and
+  // int_T lambda_k exp(z . lambda) dV = 6 V exp[z_0..z_3, z_k].
+  double nodes[5] = { logE[0], logE[1], logE[2], logE[3], 0.0 };
+  total = 6.0 * volume * ExponentialDividedDifference(nodes, 4);
+  for (int k = 0; k < 4; ++k)
+  {
+    nodes[4] = logE[k];
+    moment[k] = 6.0 * volume * ExponentialDividedDifference(nodes, 5);
+  }
+  return true;
+}
+
 /// The vertex values of beam `beam`, channel c, on tet v: E_c and the path.
 void TetValues(const CollimatedSource::Beam& beam, const int* v, int c, double e[4],
   double path[4])
@@ -350,17 +515,96 @@ std::vector<LightSource> NonCollimatedLights(const std::vector<LightSource>& lig
 
 namespace
 {
+/**
+ * What ComputeCollimatedSource casts its rays against, built from the mesh's
+ * geometry alone: the closest-hit caster of the entry rays (RayCaster), the
+ * shadow caster of the entering power (ShadowCaster, as
+ * ComputeTriangleCornerIrradiance builds it), the boundary triangles' normals
+ * and the box's diagonal. A relight or a paint casts new rays on the same
+ * surface, so the last mesh's is kept (BoundaryCastersOf).
+ */
+struct BoundaryCasters
+{
+  std::uint64_t Revision = 0;
+  RayCaster Rays;
+  ShadowCaster Shadows;
+  bool HasShadows = false;
+  std::vector<double> TriangleNormals;
+  double Diagonal = 0.0;
+};
+
+/**
+ * The BoundaryCasters of `mesh`: the kept ones when they were built for its
+ * geometry (TetMesh::GetGeometryRevision(): unique per SetGeometry() and
+ * UpdatePoints() in the process, shared by copies), else new ones, which
+ * replace them (one mesh kept: the memory of one boundary's trees; the
+ * shadow tree is built when first asked for). Thread-safe; the casters
+ * themselves are read-only once returned.
+ */
+std::shared_ptr<const BoundaryCasters> BoundaryCastersOf(const TetMesh& mesh, bool shadows)
+{
+  static std::mutex mutex;
+  // Never destroyed (as ShadowCaster's Embree device): an Embree scene
+  // released during the static destruction at exit could outlive Embree.
+  static auto* const kept = new std::shared_ptr<const BoundaryCasters>();
+  std::lock_guard<std::mutex> lock(mutex);
+  const std::uint64_t revision = mesh.GetGeometryRevision();
+  if (*kept && revision != 0 && (*kept)->Revision == revision && ((*kept)->HasShadows || !shadows))
+  {
+    return *kept;
+  }
+  auto made = std::make_shared<BoundaryCasters>();
+  made->Revision = revision;
+  made->Rays.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
+  made->HasShadows = shadows;
+  if (shadows)
+  {
+    made->Shadows.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
+  }
+  made->TriangleNormals = BoundaryTriangleNormals(mesh);
+  made->Diagonal = BoundingBoxDiagonal(mesh);
+  *kept = made;
+  return made;
+}
+
+/// ComputeCollimatedSource: the power of the beams transmitted into the
+/// object: ComputeTriangleCornerIrradiance's corner values of the beams
+/// alone (AddLightCornerIrradiance, light by light, on the kept shadow
+/// caster), integrated over the boundary triangles.
+void EnteringPower(const TetMesh& mesh, const std::vector<double>& tetEta,
+  const std::vector<LightSource>& beams, bool shadows, const BoundaryCasters& casters,
+  CollimatedSource& out)
+{
+  CheckBoundaryTriangleEta(mesh, tetEta);
+  std::vector<double> cornerQ(9 * static_cast<size_t>(mesh.GetNumberOfBoundaryTriangles()), 0.0);
+  for (const LightSource& beam : beams)
+  {
+    AddLightCornerIrradiance(mesh, tetEta, casters.TriangleNormals, beam, shadows,
+      shadows ? &casters.Shadows : nullptr, casters.Diagonal, cornerQ);
+  }
+  const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
+  for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      const double* q = &cornerQ[9 * static_cast<size_t>(f) + c];
+      out.Entering[c] += areas[f] * (q[0] + q[3] + q[6]) / 3.0;
+    }
+  }
+}
+
 /// ComputeCollimatedSource: E_c of every beam at the points (zero where the
 /// ray toward the light leaves through no entry face, or is shadowed) and
 /// the optical path to the entry point.
 void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<LightSource>& beams, bool shadows, CollimatedSource& out)
+  const std::vector<LightSource>& beams, bool shadows, const BoundaryCasters& casters,
+  CollimatedSource& out)
 {
   const int numPoints = mesh.GetNumberOfPoints();
   const std::vector<double>& tetEta = material.RefractiveIndex;
   const std::vector<double>& muA = material.AbsorptionCoefficient;
   const std::vector<double>& muS = material.ReducedScatteringCoefficient;
-  const double diag = BoundingBoxDiagonal(mesh);
+  const double diag = casters.Diagonal;
   const double offset = 1e-5 * diag;
   // Every ray's origin is moved by one fixed, generic vector of 1e-9 of the
   // diagonal ((1, sqrt 2, sqrt 3) / sqrt 6: no small-integer relation between
@@ -380,8 +624,7 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
   const double shift[3] = { generic, generic * std::sqrt(2.0), generic * std::sqrt(3.0) };
   const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
   const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
-  RayCaster caster;
-  caster.Build(mesh.GetPoints(), triangles);
+  const RayCaster& caster = casters.Rays;
   const std::vector<double>& pointNormals = mesh.GetPointNormals();
 
   // E_c at the points.
@@ -470,26 +713,51 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
 
 /// ComputeCollimatedSource, loads: integral of mu_s' E_c phi_a per tet and
 /// beam, then scattered to the points (and mu_a E_c, the absorbed power).
-void BeamLoads(const TetMesh& mesh, const OpticalProperties& material, CollimatedSource& out)
+void BeamLoads(const TetMesh& mesh, const OpticalProperties& material,
+  CollimatedEvaluation evaluation, CollimatedSource& out)
 {
   const int numTets = mesh.GetNumberOfTets();
   const std::vector<double>& muA = material.AbsorptionCoefficient;
   const std::vector<double>& muS = material.ReducedScatteringCoefficient;
   std::vector<double> tetLoad(12 * static_cast<size_t>(numTets), 0.0);
   std::vector<double> tetAbsorbed(3 * static_cast<size_t>(numTets), 0.0);
+  // ln E_c per point, beam and channel (0 where E_c = 0, as QuadratureLevel).
+  const int numPoints = mesh.GetNumberOfPoints();
+  const bool fast = evaluation == CollimatedEvaluation::Fast;
+  std::vector<std::vector<double>> logs(out.Beams.size());
+  for (size_t b = 0; fast && b < out.Beams.size(); ++b)
+  {
+    const std::vector<double>& fluence = out.Beams[b].Fluence;
+    std::vector<double>& log = logs[b];
+    log.resize(fluence.size());
 #pragma omp parallel for schedule(static)
+    for (int i = 0; i < 3 * numPoints; ++i)
+    {
+      log[i] = fluence[i] > 0.0 ? std::log(fluence[i]) : 0.0;
+    }
+  }
+  // (Dynamic: the tets' costs differ by their rule, and the lit tets cluster.)
+#pragma omp parallel for schedule(dynamic, 256)
   for (int t = 0; t < numTets; ++t)
   {
     const int* v = mesh.GetTet(t);
     const double volume = mesh.GetTetVolume(t);
-    for (const CollimatedSource::Beam& beam : out.Beams)
+    for (size_t b = 0; b < out.Beams.size(); ++b)
     {
+      const std::vector<double>& fluence = out.Beams[b].Fluence;
+      const std::vector<double>& log = logs[b];
       for (int c = 0; c < NumberOfChannels; ++c)
       {
-        double e[4], path[4];
-        TetValues(beam, v, c, e, path);
+        double e[4], logE[4];
+        for (int k = 0; k < 4; ++k)
+        {
+          e[k] = fluence[3 * static_cast<size_t>(v[k]) + c];
+          logE[k] = fast ? log[3 * static_cast<size_t>(v[k]) + c] : 0.0;
+        }
         double moment[4], total = 0.0;
-        if (!TetIntegrals(e, path, 0.0, volume, total, moment))
+        const bool lit = fast ? ContinuousWaveTetIntegrals(e, logE, volume, total, moment)
+                              : ReferenceTetIntegrals(e, volume, total, moment);
+        if (!lit)
         {
           continue;
         }
@@ -521,7 +789,7 @@ void BeamLoads(const TetMesh& mesh, const OpticalProperties& material, Collimate
 } // namespace
 
 CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<LightSource>& lights, bool shadows)
+  const std::vector<LightSource>& lights, bool shadows, CollimatedEvaluation evaluation)
 {
   const int numPoints = mesh.GetNumberOfPoints();
   const int numTets = mesh.GetNumberOfTets();
@@ -551,6 +819,7 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
   const std::vector<double>& tetEta = material.RefractiveIndex;
 
   // Entering power: the triangle-integrated irradiance of the beams.
+  if (evaluation == CollimatedEvaluation::Reference)
   {
     std::vector<double> cornerQ;
     ComputeTriangleCornerIrradiance(mesh, tetEta, beams, 0.0, 0, shadows, cornerQ);
@@ -563,13 +832,22 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
         out.Entering[c] += areas[f] * (q[0] + q[3] + q[6]) / 3.0;
       }
     }
+    // The casters built anew (not the kept ones).
+    BoundaryCasters casters;
+    casters.Rays.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
+    casters.Diagonal = BoundingBoxDiagonal(mesh);
+    BeamFieldAtPoints(mesh, material, beams, shadows, casters, out);
   }
-
-  BeamFieldAtPoints(mesh, material, beams, shadows, out);
+  else
+  {
+    const std::shared_ptr<const BoundaryCasters> casters = BoundaryCastersOf(mesh, shadows);
+    EnteringPower(mesh, tetEta, beams, shadows, *casters, out);
+    BeamFieldAtPoints(mesh, material, beams, shadows, *casters, out);
+  }
 
   // Loads: integral of mu_s' E_c phi_a per tet and beam, then scattered to
   // the points.
-  BeamLoads(mesh, material, out);
+  BeamLoads(mesh, material, evaluation, out);
   return out;
 }
 
