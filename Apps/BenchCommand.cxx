@@ -611,8 +611,7 @@ Command AddBenchCommand(CLI::App& app)
   for (CLI::Option* other : { linearSolvers, meshers, edit, diffuseOptics })
     pipeline->excludes(other);
   c->add_option("--collimated", s->Collimated,
-     "with --pipeline: Surface Irradiance's collimated model
-"
+     "with --pipeline: Surface Irradiance's collimated model\n"
      "(default: by light kind, extended-moments here)")
     ->type_name("MODEL")
     ->check(OneOf("--collimated", CollimatedModelChoices()))

@@ -42,9 +42,26 @@ struct TetRules
   static constexpr int Edge[6][2] = { { 0, 1 }, { 0, 2 }, { 0, 3 }, { 1, 2 }, { 1, 3 }, { 2, 3 } };
   /// The symmetric 4-point rule of degree 2: a at its own vertex, b at the others.
   static constexpr double A = 0.5854101966249685, B = 0.1381966011250105;
+  /// Per sub-tet of level 1, the sum of its nodes' barycentric coordinates.
+  double NodeSums[8][4] = {};
 
   TetRules()
   {
+    for (int s = 0; s < 8; ++s)
+    {
+      for (const int n : Sub[s])
+      {
+        if (n < 4)
+        {
+          NodeSums[s][n] += 1.0;
+        }
+        else
+        {
+          NodeSums[s][Edge[n - 4][0]] += 0.5;
+          NodeSums[s][Edge[n - 4][1]] += 0.5;
+        }
+      }
+    }
     using Tet = std::array<std::array<double, 4>, 4>;
     std::vector<Tet> tets(1);
     for (int k = 0; k < 4; ++k)
@@ -290,32 +307,48 @@ void LevelOneIntegrals(const double e[4], const double logE[4], double volume, d
     own[4 + m] = std::sqrt(own[i] * own[j]);
     other[4 + m] = std::sqrt(other[i] * other[j]);
   }
-  const std::vector<std::array<double, 4>>& points = Rules().Points[1];
+  // The sums by sub-tet and node: with g_{s,k} = base_s own_{n_k} and
+  // l = b N_s + (a - b) node n_k (N_s the sum of sub-tet s's nodes),
+  //   sum_p g_p l_p = b sum_s G_s N_s + (a - b) sum_n own_n B_n node_n,
+  // G_s = base_s sum_k own_{n_k}, B_n = the sum of base_s over the sub-tets
+  // that have node n (a node's barycentric coordinates: a vertex's unit
+  // vector, a midpoint's half its edge's two).
+  const TetRules& rules = Rules();
+  double base[8], nodeBase[10] = {};
   total = 0.0;
-  for (int j = 0; j < 4; ++j)
-  {
-    moment[j] = 0.0;
-  }
+  double moments[4] = { 0.0, 0.0, 0.0, 0.0 };
   for (int s = 0; s < 8; ++s)
   {
     const int* n = TetRules::Sub[s];
-    const double base = other[n[0]] * other[n[1]] * other[n[2]] * other[n[3]];
+    base[s] = other[n[0]] * other[n[1]] * other[n[2]] * other[n[3]];
+    const double g = base[s] * (own[n[0]] + own[n[1]] + own[n[2]] + own[n[3]]);
+    total += g;
     for (int k = 0; k < 4; ++k)
     {
-      const double g = base * own[n[k]];
-      const std::array<double, 4>& l = points[4 * static_cast<size_t>(s) + k];
-      total += g;
-      for (int j = 0; j < 4; ++j)
-      {
-        moment[j] += g * l[j];
-      }
+      nodeBase[n[k]] += base[s];
+    }
+    for (int j = 0; j < 4; ++j)
+    {
+      moments[j] += g * rules.NodeSums[s][j];
     }
   }
-  const double weight = volume / static_cast<double>(points.size());
+  const double ab = TetRules::A - TetRules::B;
+  double node[4];
+  for (int j = 0; j < 4; ++j)
+  {
+    node[j] = own[j] * nodeBase[j];
+  }
+  for (int m = 0; m < 6; ++m)
+  {
+    const double half = 0.5 * own[4 + m] * nodeBase[4 + m];
+    node[TetRules::Edge[m][0]] += half;
+    node[TetRules::Edge[m][1]] += half;
+  }
+  const double weight = volume / 32.0;
   total *= weight;
   for (int j = 0; j < 4; ++j)
   {
-    moment[j] *= weight;
+    moment[j] = weight * (TetRules::B * moments[j] + ab * node[j]);
   }
 }
 
@@ -567,6 +600,317 @@ std::shared_ptr<const BoundaryCasters> BoundaryCastersOf(const TetMesh& mesh, bo
   return made;
 }
 
+/**
+ * The rays of one beam all run along one direction d: the triangles that a
+ * ray o + t d can hit are those whose projection along d holds o's. This
+ * grid bins the boundary triangles by their projections on the plane
+ * normal to d (cells of about one triangle's size) and answers FirstHit()
+ * and Occluded() as RayCaster does for rays along d: RayCaster's queries
+ * give exactly the answer of a loop over all triangles with
+ * RayCaster::IntersectTriangle() (its contract), and these loop over the
+ * triangles of the origin's cell with that same function (the same t to the
+ * bit, the closest kept). Conservative: each projected box is padded by
+ * 1e-9 of the diagonal, far more than IntersectTriangle's rounding can put
+ * a hit outside a triangle (about 6 ulps of the diagonal over |cos| of the
+ * angle between d and the triangle's normal), and a triangle within 1e-5 of
+ * parallel to d is tried for every ray. Only exact ties in t between two
+ * triangles (a ray through a shared edge) may resolve differently, which
+ * RayCaster leaves unspecified too (and the origins' generic shift avoids).
+ * Built per beam in O(triangles); a query tests the few triangles over one
+ * cell instead of descending a tree.
+ */
+class DirectionGrid
+{
+public:
+  DirectionGrid(const TetMesh& mesh, const double direction[3], double diagonal)
+  {
+    const double origin[3] = { 0.0, 0.0, 0.0 };
+    this->Valid = RayCaster::UnitDirection(origin, direction, this->D);
+    const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
+    const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+    if (!this->Valid || numTriangles == 0)
+    {
+      this->Valid = false;
+      return;
+    }
+    // An orthonormal basis (U, V) of the plane normal to D.
+    const double* d = this->D;
+    const double helper[3] = { std::abs(d[0]) < 0.6 ? 1.0 : 0.0, std::abs(d[0]) < 0.6 ? 0.0 : 1.0,
+      0.0 };
+    Cross(d, helper, this->U);
+    Normalize(this->U);
+    Cross(d, this->U, this->V);
+    Normalize(this->V);
+    this->Points = &mesh.GetPoints();
+    this->Triangles = &triangles;
+    const double pad = 1e-9 * diagonal;
+    std::vector<double> boxes(4 * static_cast<size_t>(numTriangles));
+    this->Near.resize(static_cast<size_t>(numTriangles));
+    this->Far.resize(static_cast<size_t>(numTriangles));
+    double low[2] = { std::numeric_limits<double>::infinity(),
+      std::numeric_limits<double>::infinity() };
+    double high[2] = { -low[0], -low[1] };
+    double area = 0.0;
+    for (int f = 0; f < numTriangles; ++f)
+    {
+      double* box = &boxes[4 * static_cast<size_t>(f)];
+      box[0] = box[1] = std::numeric_limits<double>::infinity();
+      box[2] = box[3] = -std::numeric_limits<double>::infinity();
+      double x[3][3];
+      this->Near[f] = std::numeric_limits<double>::infinity();
+      this->Far[f] = -std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 3; ++k)
+      {
+        const double* p = mesh.GetPoint(triangles[3 * static_cast<size_t>(f) + k]);
+        const double pu = Dot(p, this->U), pv = Dot(p, this->V), pd = Dot(p, d);
+        this->Near[f] = std::min(this->Near[f], pd - pad);
+        this->Far[f] = std::max(this->Far[f], pd + pad);
+        box[0] = std::min(box[0], pu - pad);
+        box[1] = std::min(box[1], pv - pad);
+        box[2] = std::max(box[2], pu + pad);
+        box[3] = std::max(box[3], pv + pad);
+        for (int j = 0; j < 3; ++j)
+        {
+          x[k][j] = p[j];
+        }
+      }
+      double e1[3], e2[3], n[3];
+      for (int j = 0; j < 3; ++j)
+      {
+        e1[j] = x[1][j] - x[0][j];
+        e2[j] = x[2][j] - x[0][j];
+      }
+      Cross(e1, e2, n);
+      const double length = std::sqrt(Dot(n, n));
+      if (!(length > 0.0))
+      {
+        box[0] = box[1] = 1.0; // never hit (IntersectTriangle: det = 0): binned nowhere
+        box[2] = box[3] = -1.0;
+        continue;
+      }
+      if (std::abs(Dot(n, d)) < 1e-5 * length)
+      {
+        this->Everywhere.push_back(f);
+        box[0] = box[1] = 1.0;
+        box[2] = box[3] = -1.0;
+        continue;
+      }
+      area += (box[2] - box[0]) * (box[3] - box[1]);
+      low[0] = std::min(low[0], box[0]);
+      low[1] = std::min(low[1], box[1]);
+      high[0] = std::max(high[0], box[2]);
+      high[1] = std::max(high[1], box[3]);
+    }
+    if (!(high[0] >= low[0] && high[1] >= low[1]))
+    {
+      this->Cells[0] = this->Cells[1] = 0;
+      return;
+    }
+    // Cells of about half a projected triangle's box, at most 16 per triangle.
+    double cell = std::max(0.5 * std::sqrt(area / numTriangles), 1e-12 * diagonal);
+    const double maxCells = 16.0 * numTriangles + 1024.0;
+    while (((high[0] - low[0]) / cell + 1.0) * ((high[1] - low[1]) / cell + 1.0) > maxCells)
+    {
+      cell *= 1.25;
+    }
+    for (int a = 0; a < 2; ++a)
+    {
+      this->Low[a] = low[a];
+      this->Cells[a] = static_cast<int>((high[a] - low[a]) / cell) + 1;
+      this->Scale[a] = this->Cells[a] / std::max(high[a] - low[a], 1e-300);
+    }
+    // Bin (CSR): counts, offsets, then the triangles in order.
+    const size_t numCells = static_cast<size_t>(this->Cells[0]) * this->Cells[1];
+    this->Offsets.assign(numCells + 1, 0);
+    auto span = [&](const double* box, int range[4]) {
+      for (int a = 0; a < 2; ++a)
+      {
+        range[a] = this->CellOf(box[a], a);
+        range[2 + a] = this->CellOf(box[2 + a], a);
+      }
+      return box[2] >= box[0];
+    };
+    for (int pass = 0; pass < 2; ++pass)
+    {
+      if (pass == 1)
+      {
+        for (size_t c = 0; c < numCells; ++c)
+        {
+          this->Offsets[c + 1] += this->Offsets[c];
+        }
+        this->Entries.resize(this->Offsets[numCells]);
+      }
+      std::vector<int> fill(pass == 1 ? this->Offsets.begin() : this->Offsets.end(),
+        pass == 1 ? this->Offsets.end() - 1 : this->Offsets.end());
+      for (int f = 0; f < numTriangles; ++f)
+      {
+        int range[4];
+        if (!span(&boxes[4 * static_cast<size_t>(f)], range))
+        {
+          continue;
+        }
+        for (int j = range[1]; j <= range[3]; ++j)
+        {
+          for (int i = range[0]; i <= range[2]; ++i)
+          {
+            const size_t c = static_cast<size_t>(j) * this->Cells[0] + i;
+            if (pass == 0)
+            {
+              ++this->Offsets[c + 1];
+            }
+            else
+            {
+              this->Entries[fill[c]++] = { this->Near[f], this->Far[f], f };
+            }
+          }
+        }
+      }
+    }
+    // Each cell's triangles by their nearest depth along d, so that a query
+    // stops at the first one beyond what it looks for.
+    for (size_t c = 0; c < numCells; ++c)
+    {
+      std::sort(this->Entries.begin() + this->Offsets[c], this->Entries.begin() + this->Offsets[c + 1],
+        [](const Entry& x, const Entry& y) { return x.Near < y.Near; });
+    }
+  }
+
+  /// RayCaster::FirstHit(origin, direction, infinity, t, triangle) for the
+  /// grid's direction (epsilon 0).
+  bool FirstHit(const double origin[3], double& t, int& triangle) const
+  {
+    bool hit = false;
+    double best = std::numeric_limits<double>::infinity();
+    this->Visit(origin, best, [&](int f) {
+      double tt;
+      if (this->Intersect(origin, f, 0.0, best, tt))
+      {
+        best = tt;
+        triangle = f;
+        hit = true;
+      }
+      return false;
+    });
+    if (hit)
+    {
+      t = best;
+    }
+    return hit;
+  }
+
+  /// RayCaster::Occluded(origin, direction, tMax) for the grid's direction.
+  bool Occluded(const double origin[3], double tMax) const
+  {
+    bool hit = false;
+    this->Visit(origin, tMax, [&](int f) {
+      double tt;
+      hit = this->Intersect(origin, f, 0.0, tMax, tt);
+      return hit;
+    });
+    return hit;
+  }
+
+private:
+  static double Dot(const double* a, const double* b)
+  {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  }
+  static void Cross(const double* a, const double* b, double* c)
+  {
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+  }
+  static void Normalize(double* a)
+  {
+    const double length = std::sqrt(Dot(a, a));
+    for (int k = 0; k < 3; ++k)
+    {
+      a[k] /= length;
+    }
+  }
+  int CellOf(double x, int axis) const
+  {
+    const double c = std::floor((x - this->Low[axis]) * this->Scale[axis]);
+    return static_cast<int>(std::max(0.0, std::min(c, static_cast<double>(this->Cells[axis] - 1))));
+  }
+  bool Intersect(const double origin[3], int f, double tMin, double tMax, double& t) const
+  {
+    const int* tri = &(*this->Triangles)[3 * static_cast<size_t>(f)];
+    const std::vector<double>& p = *this->Points;
+    return RayCaster::IntersectTriangle(origin, this->D, &p[3 * static_cast<size_t>(tri[0])],
+      &p[3 * static_cast<size_t>(tri[1])], &p[3 * static_cast<size_t>(tri[2])], tMin, tMax, t);
+  }
+  /// Calls visit(f) for the triangles that a ray from `origin` can hit at
+  /// 0 < t < reach (its cell's, nearest first, then those tried
+  /// everywhere) until visit returns true. `reach` is read at each step
+  /// (FirstHit lowers it to the closest hit so far). A triangle's depth
+  /// range along d, padded as its box, bounds the t of any hit on it
+  /// (IntersectTriangle's rounding of t is below the pad as that of its
+  /// position), so the skipped triangles are exactly those that could not
+  /// be hit within (0, reach).
+  template <class Function>
+  void Visit(const double origin[3], const double& reach, Function&& visit) const
+  {
+    if (!this->Valid || !std::isfinite(origin[0]) || !std::isfinite(origin[1]) ||
+      !std::isfinite(origin[2]))
+    {
+      return;
+    }
+    const double depth = Dot(origin, this->D);
+    if (this->Cells[0] > 0)
+    {
+      const double pu = Dot(origin, this->U), pv = Dot(origin, this->V);
+      const double i = std::floor((pu - this->Low[0]) * this->Scale[0]);
+      const double j = std::floor((pv - this->Low[1]) * this->Scale[1]);
+      if (i >= 0.0 && j >= 0.0 && i < this->Cells[0] && j < this->Cells[1])
+      {
+        const size_t c = static_cast<size_t>(j) * this->Cells[0] + static_cast<size_t>(i);
+        for (int e = this->Offsets[c]; e < this->Offsets[c + 1]; ++e)
+        {
+          const Entry& entry = this->Entries[e];
+          if (entry.Near - depth >= reach)
+          {
+            break; // this one and the rest lie beyond reach
+          }
+          if (entry.Far - depth <= 0.0)
+          {
+            continue; // behind the origin
+          }
+          if (visit(entry.Triangle))
+          {
+            return;
+          }
+        }
+      }
+    }
+    for (const int f : this->Everywhere)
+    {
+      if (visit(f))
+      {
+        return;
+      }
+    }
+  }
+
+  bool Valid = false;
+  double D[3] = { 0.0, 0.0, 0.0 }, U[3] = { 0.0, 0.0, 0.0 }, V[3] = { 0.0, 0.0, 0.0 };
+  const std::vector<double>* Points = nullptr;
+  const std::vector<int>* Triangles = nullptr;
+  double Low[2] = { 0.0, 0.0 }, Scale[2] = { 0.0, 0.0 };
+  int Cells[2] = { 0, 0 };
+  /// A triangle in a cell, with its depth range along d (padded).
+  struct Entry
+  {
+    double Near, Far;
+    int Triangle;
+  };
+  std::vector<int> Offsets, Everywhere;
+  std::vector<Entry> Entries;
+  /// Each triangle's depth range along d (padded), while binning.
+  std::vector<double> Near, Far;
+};
+
 /// ComputeCollimatedSource: the power of the beams transmitted into the
 /// object: ComputeTriangleCornerIrradiance's corner values of the beams
 /// alone (AddLightCornerIrradiance, light by light, on the kept shadow
@@ -598,7 +942,7 @@ void EnteringPower(const TetMesh& mesh, const std::vector<double>& tetEta,
 /// the optical path to the entry point.
 void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
   const std::vector<LightSource>& beams, bool shadows, const BoundaryCasters& casters,
-  CollimatedSource& out)
+  bool directionGrids, CollimatedSource& out)
 {
   const int numPoints = mesh.GetNumberOfPoints();
   const std::vector<double>& tetEta = material.RefractiveIndex;
@@ -625,6 +969,18 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
   const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
   const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
   const RayCaster& caster = casters.Rays;
+  // Fast: the rays of each beam through a grid along its direction (the
+  // same hits as the caster's, DirectionGrid).
+  std::vector<std::unique_ptr<DirectionGrid>> grids(beams.size());
+  for (size_t index = 0; directionGrids && index < beams.size(); ++index)
+  {
+    const LightSource& beam = beams[index];
+    const double len = std::sqrt(beam.Direction[0] * beam.Direction[0] +
+      beam.Direction[1] * beam.Direction[1] + beam.Direction[2] * beam.Direction[2]);
+    const double w[3] = { -beam.Direction[0] / len, -beam.Direction[1] / len,
+      -beam.Direction[2] / len };
+    grids[index] = std::make_unique<DirectionGrid>(mesh, w, diag);
+  }
   const std::vector<double>& pointNormals = mesh.GetPointNormals();
 
   // E_c at the points.
@@ -651,7 +1007,9 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
         -beam.Direction[2] / len };
       double t = 0.0;
       int f = -1;
-      if (!caster.FirstHit(origin, w, std::numeric_limits<double>::infinity(), t, f))
+      const DirectionGrid* grid = grids[index].get();
+      if (!(grid ? grid->FirstHit(origin, t, f)
+                 : caster.FirstHit(origin, w, std::numeric_limits<double>::infinity(), t, f)))
       {
         continue;
       }
@@ -679,7 +1037,7 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
         const double p[3] = { origin[0] + t * w[0] + offset * (n[0] / nl + w[0]),
           origin[1] + t * w[1] + offset * (n[1] / nl + w[1]),
           origin[2] + t * w[2] + offset * (n[2] / nl + w[2]) };
-        if (caster.Occluded(p, w, 2.0 * diag))
+        if (grid ? grid->Occluded(p, 2.0 * diag) : caster.Occluded(p, w, 2.0 * diag))
         {
           continue;
         }
@@ -719,8 +1077,10 @@ void BeamLoads(const TetMesh& mesh, const OpticalProperties& material,
   const int numTets = mesh.GetNumberOfTets();
   const std::vector<double>& muA = material.AbsorptionCoefficient;
   const std::vector<double>& muS = material.ReducedScatteringCoefficient;
-  std::vector<double> tetLoad(12 * static_cast<size_t>(numTets), 0.0);
-  std::vector<double> tetAbsorbed(3 * static_cast<size_t>(numTets), 0.0);
+  // Per tet, zeroed by the thread that fills it (no pass over the whole
+  // buffer first: at 1M tets it is 120 MB, new pages on every call).
+  const std::unique_ptr<double[]> tetLoad(new double[12 * static_cast<size_t>(numTets)]);
+  const std::unique_ptr<double[]> tetAbsorbed(new double[3 * static_cast<size_t>(numTets)]);
   // ln E_c per point, beam and channel (0 where E_c = 0, as QuadratureLevel).
   const int numPoints = mesh.GetNumberOfPoints();
   const bool fast = evaluation == CollimatedEvaluation::Fast;
@@ -742,6 +1102,8 @@ void BeamLoads(const TetMesh& mesh, const OpticalProperties& material,
   {
     const int* v = mesh.GetTet(t);
     const double volume = mesh.GetTetVolume(t);
+    std::fill_n(&tetLoad[12 * static_cast<size_t>(t)], 12, 0.0);
+    std::fill_n(&tetAbsorbed[3 * static_cast<size_t>(t)], 3, 0.0);
     for (size_t b = 0; b < out.Beams.size(); ++b)
     {
       const std::vector<double>& fluence = out.Beams[b].Fluence;
@@ -836,13 +1198,13 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
     BoundaryCasters casters;
     casters.Rays.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
     casters.Diagonal = BoundingBoxDiagonal(mesh);
-    BeamFieldAtPoints(mesh, material, beams, shadows, casters, out);
+    BeamFieldAtPoints(mesh, material, beams, shadows, casters, false, out);
   }
   else
   {
     const std::shared_ptr<const BoundaryCasters> casters = BoundaryCastersOf(mesh, shadows);
     EnteringPower(mesh, tetEta, beams, shadows, *casters, out);
-    BeamFieldAtPoints(mesh, material, beams, shadows, *casters, out);
+    BeamFieldAtPoints(mesh, material, beams, shadows, *casters, true, out);
   }
 
   // Loads: integral of mu_s' E_c phi_a per tet and beam, then scattered to
