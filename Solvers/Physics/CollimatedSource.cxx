@@ -549,17 +549,15 @@ std::vector<LightSource> NonCollimatedLights(const std::vector<LightSource>& lig
 namespace
 {
 /**
- * What ComputeCollimatedSource casts its rays against, built from the mesh's
- * geometry alone: the closest-hit caster of the entry rays (RayCaster), the
- * shadow caster of the entering power (ShadowCaster, as
- * ComputeTriangleCornerIrradiance builds it), the boundary triangles' normals
- * and the box's diagonal. A relight or a paint casts new rays on the same
- * surface, so the last mesh's is kept (BoundaryCastersOf).
+ * What the entering power casts its shadow rays against, built from the
+ * mesh's geometry alone: the shadow caster (ShadowCaster, as
+ * ComputeTriangleCornerIrradiance builds it), the boundary triangles'
+ * normals and the box's diagonal. A relight or a paint casts new rays on the
+ * same surface, so the last mesh's is kept (BoundaryCastersOf).
  */
 struct BoundaryCasters
 {
   std::uint64_t Revision = 0;
-  RayCaster Rays;
   ShadowCaster Shadows;
   bool HasShadows = false;
   std::vector<double> TriangleNormals;
@@ -588,7 +586,6 @@ std::shared_ptr<const BoundaryCasters> BoundaryCastersOf(const TetMesh& mesh, bo
   }
   auto made = std::make_shared<BoundaryCasters>();
   made->Revision = revision;
-  made->Rays.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
   made->HasShadows = shadows;
   if (shadows)
   {
@@ -941,14 +938,14 @@ void EnteringPower(const TetMesh& mesh, const std::vector<double>& tetEta,
 /// ray toward the light leaves through no entry face, or is shadowed) and
 /// the optical path to the entry point.
 void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<LightSource>& beams, bool shadows, const BoundaryCasters& casters,
-  bool directionGrids, CollimatedSource& out)
+  const std::vector<LightSource>& beams, bool shadows, double diagonal, const RayCaster* caster,
+  CollimatedSource& out)
 {
   const int numPoints = mesh.GetNumberOfPoints();
   const std::vector<double>& tetEta = material.RefractiveIndex;
   const std::vector<double>& muA = material.AbsorptionCoefficient;
   const std::vector<double>& muS = material.ReducedScatteringCoefficient;
-  const double diag = casters.Diagonal;
+  const double diag = diagonal;
   const double offset = 1e-5 * diag;
   // Every ray's origin is moved by one fixed, generic vector of 1e-9 of the
   // diagonal ((1, sqrt 2, sqrt 3) / sqrt 6: no small-integer relation between
@@ -968,11 +965,10 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
   const double shift[3] = { generic, generic * std::sqrt(2.0), generic * std::sqrt(3.0) };
   const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
   const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
-  const RayCaster& caster = casters.Rays;
-  // Fast: the rays of each beam through a grid along its direction (the
-  // same hits as the caster's, DirectionGrid).
+  // Without a caster (Fast): the rays of each beam through a grid along its
+  // direction (the same hits as RayCaster's, DirectionGrid).
   std::vector<std::unique_ptr<DirectionGrid>> grids(beams.size());
-  for (size_t index = 0; directionGrids && index < beams.size(); ++index)
+  for (size_t index = 0; !caster && index < beams.size(); ++index)
   {
     const LightSource& beam = beams[index];
     const double len = std::sqrt(beam.Direction[0] * beam.Direction[0] +
@@ -1009,7 +1005,7 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
       int f = -1;
       const DirectionGrid* grid = grids[index].get();
       if (!(grid ? grid->FirstHit(origin, t, f)
-                 : caster.FirstHit(origin, w, std::numeric_limits<double>::infinity(), t, f)))
+                 : caster->FirstHit(origin, w, std::numeric_limits<double>::infinity(), t, f)))
       {
         continue;
       }
@@ -1037,7 +1033,7 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
         const double p[3] = { origin[0] + t * w[0] + offset * (n[0] / nl + w[0]),
           origin[1] + t * w[1] + offset * (n[1] / nl + w[1]),
           origin[2] + t * w[2] + offset * (n[2] / nl + w[2]) };
-        if (grid ? grid->Occluded(p, 2.0 * diag) : caster.Occluded(p, w, 2.0 * diag))
+        if (grid ? grid->Occluded(p, 2.0 * diag) : caster->Occluded(p, w, 2.0 * diag))
         {
           continue;
         }
@@ -1194,17 +1190,16 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
         out.Entering[c] += areas[f] * (q[0] + q[3] + q[6]) / 3.0;
       }
     }
-    // The casters built anew (not the kept ones).
-    BoundaryCasters casters;
-    casters.Rays.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
-    casters.Diagonal = BoundingBoxDiagonal(mesh);
-    BeamFieldAtPoints(mesh, material, beams, shadows, casters, false, out);
+    // A caster built for the call.
+    RayCaster caster;
+    caster.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
+    BeamFieldAtPoints(mesh, material, beams, shadows, BoundingBoxDiagonal(mesh), &caster, out);
   }
   else
   {
     const std::shared_ptr<const BoundaryCasters> casters = BoundaryCastersOf(mesh, shadows);
     EnteringPower(mesh, tetEta, beams, shadows, *casters, out);
-    BeamFieldAtPoints(mesh, material, beams, shadows, *casters, true, out);
+    BeamFieldAtPoints(mesh, material, beams, shadows, casters->Diagonal, nullptr, out);
   }
 
   // Loads: integral of mu_s' E_c phi_a per tet and beam, then scattered to
