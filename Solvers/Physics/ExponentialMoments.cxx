@@ -48,8 +48,8 @@ constexpr double RealSeriesSpread = 4.0;
 /**
  * The number of terms M of a series about a centre c for real nodes within
  * r of c (RealSeriesTerms reads it from a table): the smallest M with
- * e^{r/5} r^M / M! / (1 - r / (M + 1)) <= 1e-17; SeriesTerms (20) for r <= 1
- * (the rule of the complex and the narrow real sets). Why this bounds the
+ * e^{r/5} r^M / M! / (1 - r / (M + 1)) <= 1e-17 (16 at r = 0.5, 20 at 1,
+ * 30 at 3; complex nodes keep SeriesTerms, 20, within 1). Why this bounds the
  * relative truncation error (n + 1 nodes, n <= 4): |h_m(y)| <= C(n + m, m)
  * r^m, so the terms m >= M sum to at most (1 / n!) sum_{m >= M} r^m / m! <=
  * (1 / n!) r^M / M! / (1 - r / (M + 1)); and for real nodes the divided
@@ -82,22 +82,18 @@ constexpr int RadiusSteps = 8;
 
 int RealSeriesTerms(double r)
 {
-  if (r <= 1.0)
-  {
-    return SeriesTerms;
-  }
   // The bound is increasing in r: a table of its terms at the upper ends of
-  // steps of 1/8 up to r = 3.25 (the widest the series take: 3.2).
-  static const std::array<int, 9 * RadiusSteps / 4 + 2> table = [] {
-    std::array<int, 9 * RadiusSteps / 4 + 2> t{};
+  // steps of 1/8 up to r = 3.375 (the widest the series take: 3.2).
+  static const std::array<int, 27 + 1> table = [] {
+    std::array<int, 27 + 1> t{};
     for (int i = 0; i < static_cast<int>(t.size()); ++i)
     {
-      t[i] = TermsForRadius(1.0 + static_cast<double>(i) / RadiusSteps);
+      t[i] = TermsForRadius(static_cast<double>(i) / RadiusSteps);
     }
     return t;
   }();
-  // Step i covers (1 + (i - 1) / 8, 1 + i / 8]; rounding only moves r up a step.
-  const int step = static_cast<int>((r - 1.0) * RadiusSteps) + 1;
+  // Step i covers [(i - 1) / 8, i / 8); rounding only moves r up a step.
+  const int step = static_cast<int>(r * RadiusSteps) + 1;
   return step < static_cast<int>(table.size()) ? table[step] : TermsForRadius(r);
 }
 
@@ -220,6 +216,9 @@ T ExponentialDividedDifference(const T* z, int n)
   DividedDifferences<T> table(shifted, n);
   return std::exp(shift) * table.Of((1u << n) - 1u);
 }
+
+namespace
+{
 
 /// The five divided differences of ExponentialMoments at once when the four
 /// nodes lie close together: one series about their mean c for all five,
@@ -457,6 +456,8 @@ void WideMoments<double>(const double z[4], double volume, double& total, double
     moment[k] = scale * runs.Moment(k);
   }
 }
+
+} // namespace
 
 template <class T>
 void ExponentialMoments(const T z[4], double volume, T& total, T moment[4])
