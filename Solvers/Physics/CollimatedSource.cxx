@@ -716,60 +716,7 @@ public:
       this->Cells[a] = static_cast<int>((high[a] - low[a]) / cell) + 1;
       this->Scale[a] = this->Cells[a] / std::max(high[a] - low[a], 1e-300);
     }
-    // Bin (CSR): counts, offsets, then the triangles in order.
-    const size_t numCells = static_cast<size_t>(this->Cells[0]) * this->Cells[1];
-    this->Offsets.assign(numCells + 1, 0);
-    auto span = [&](const double* box, int range[4]) {
-      for (int a = 0; a < 2; ++a)
-      {
-        range[a] = this->CellOf(box[a], a);
-        range[2 + a] = this->CellOf(box[2 + a], a);
-      }
-      return box[2] >= box[0];
-    };
-    for (int pass = 0; pass < 2; ++pass)
-    {
-      if (pass == 1)
-      {
-        for (size_t c = 0; c < numCells; ++c)
-        {
-          this->Offsets[c + 1] += this->Offsets[c];
-        }
-        this->Entries.resize(this->Offsets[numCells]);
-      }
-      std::vector<int> fill(pass == 1 ? this->Offsets.begin() : this->Offsets.end(),
-        pass == 1 ? this->Offsets.end() - 1 : this->Offsets.end());
-      for (int f = 0; f < numTriangles; ++f)
-      {
-        int range[4];
-        if (!span(&boxes[4 * static_cast<size_t>(f)], range))
-        {
-          continue;
-        }
-        for (int j = range[1]; j <= range[3]; ++j)
-        {
-          for (int i = range[0]; i <= range[2]; ++i)
-          {
-            const size_t c = static_cast<size_t>(j) * this->Cells[0] + i;
-            if (pass == 0)
-            {
-              ++this->Offsets[c + 1];
-            }
-            else
-            {
-              this->Entries[fill[c]++] = { this->Near[f], this->Far[f], f };
-            }
-          }
-        }
-      }
-    }
-    // Each cell's triangles by their nearest depth along d, so that a query
-    // stops at the first one beyond what it looks for.
-    for (size_t c = 0; c < numCells; ++c)
-    {
-      std::sort(this->Entries.begin() + this->Offsets[c], this->Entries.begin() + this->Offsets[c + 1],
-        [](const Entry& x, const Entry& y) { return x.Near < y.Near; });
-    }
+    this->Bin(boxes, numTriangles);
   }
 
   /// RayCaster::FirstHit(origin, direction, infinity, t, triangle) for the
@@ -826,6 +773,64 @@ private:
       a[k] /= length;
     }
   }
+  /// The constructor's binning (CSR): counts, offsets, then the triangles
+  /// in order; each cell's triangles by their nearest depth along d, so that
+  /// a query stops at the first one beyond what it looks for.
+  void Bin(const std::vector<double>& boxes, int numTriangles)
+  {
+    const size_t numCells = static_cast<size_t>(this->Cells[0]) * this->Cells[1];
+    this->Offsets.assign(numCells + 1, 0);
+    auto span = [&](const double* box, int range[4]) {
+      for (int a = 0; a < 2; ++a)
+      {
+        range[a] = this->CellOf(box[a], a);
+        range[2 + a] = this->CellOf(box[2 + a], a);
+      }
+      return box[2] >= box[0];
+    };
+    for (int pass = 0; pass < 2; ++pass)
+    {
+      if (pass == 1)
+      {
+        for (size_t c = 0; c < numCells; ++c)
+        {
+          this->Offsets[c + 1] += this->Offsets[c];
+        }
+        this->Entries.resize(this->Offsets[numCells]);
+      }
+      std::vector<int> fill(pass == 1 ? this->Offsets.begin() : this->Offsets.end(),
+        pass == 1 ? this->Offsets.end() - 1 : this->Offsets.end());
+      for (int f = 0; f < numTriangles; ++f)
+      {
+        int range[4];
+        if (!span(&boxes[4 * static_cast<size_t>(f)], range))
+        {
+          continue;
+        }
+        for (int j = range[1]; j <= range[3]; ++j)
+        {
+          for (int i = range[0]; i <= range[2]; ++i)
+          {
+            const size_t c = static_cast<size_t>(j) * this->Cells[0] + i;
+            if (pass == 0)
+            {
+              ++this->Offsets[c + 1];
+            }
+            else
+            {
+              this->Entries[fill[c]++] = { this->Near[f], this->Far[f], f };
+            }
+          }
+        }
+      }
+    }
+    for (size_t c = 0; c < numCells; ++c)
+    {
+      std::sort(this->Entries.begin() + this->Offsets[c], this->Entries.begin() + this->Offsets[c + 1],
+        [](const Entry& x, const Entry& y) { return x.Near < y.Near; });
+    }
+  }
+
   int CellOf(double x, int axis) const
   {
     const double c = std::floor((x - this->Low[axis]) * this->Scale[axis]);
