@@ -348,19 +348,25 @@ std::vector<LightSource> NonCollimatedLights(const std::vector<LightSource>& lig
   return rest;
 }
 
-namespace
+void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
+  const std::vector<LightSource>& beams, bool shadows, const std::vector<double>& points,
+  const std::vector<char>& onBoundary, const std::vector<double>& normals, CollimatedSource& out)
 {
-/// ComputeCollimatedSource: E_c of every beam at the points (zero where the
-/// ray toward the light leaves through no entry face, or is shadowed) and
-/// the optical path to the entry point.
-void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<LightSource>& beams, bool shadows, CollimatedSource& out)
-{
-  const int numPoints = mesh.GetNumberOfPoints();
-  const std::vector<double>& tetEta = material.RefractiveIndex;
-  const std::vector<double>& muA = material.AbsorptionCoefficient;
-  const std::vector<double>& muS = material.ReducedScatteringCoefficient;
-  const double diag = BoundingBoxDiagonal(mesh);
+  const int numPoints = static_cast<int>(points.size() / 3);
+  const std::vector<double>& surfacePoints = *surface.Points;
+  const std::vector<int>& triangles = *surface.Triangles;
+  out.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  out.Beams.resize(beams.size());
+  for (CollimatedSource::Beam& beam : out.Beams)
+  {
+    beam.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+    beam.OpticalPath.assign(static_cast<size_t>(numPoints), 0.0);
+  }
+  if (beams.empty() || triangles.empty())
+  {
+    return;
+  }
+  const double diag = surface.Diagonal;
   const double offset = 1e-5 * diag;
   // Every ray's origin is moved by one fixed, generic vector of 1e-9 of the
   // diagonal ((1, sqrt 2, sqrt 3) / sqrt 6: no small-integer relation between
@@ -378,21 +384,19 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
   // itself, so E_c changes only where the entry face was such a tie.
   const double generic = 1e-9 * diag / std::sqrt(6.0);
   const double shift[3] = { generic, generic * std::sqrt(2.0), generic * std::sqrt(3.0) };
-  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
-  const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
   RayCaster caster;
-  caster.Build(mesh.GetPoints(), triangles);
-  const std::vector<double>& pointNormals = mesh.GetPointNormals();
+  caster.Build(surfacePoints, triangles);
+  auto vertex = [&surfacePoints](int p) { return &surfacePoints[3 * static_cast<size_t>(p)]; };
 
   // E_c at the points.
 #pragma omp parallel for schedule(dynamic, 256)
   for (int i = 0; i < numPoints; ++i)
   {
-    const double* x = mesh.GetPoint(i);
+    const double* x = &points[3 * static_cast<size_t>(i)];
     double origin[3] = { x[0] + shift[0], x[1] + shift[1], x[2] + shift[2] };
-    if (mesh.IsBoundaryPoint(i))
+    if (onBoundary[static_cast<size_t>(i)])
     {
-      const double* n = &pointNormals[3 * static_cast<size_t>(i)];
+      const double* n = &normals[3 * static_cast<size_t>(i)];
       for (int k = 0; k < 3; ++k)
       {
         origin[k] -= offset * n[k]; // just inside
@@ -414,9 +418,9 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
       }
       // The entry triangle's outward normal.
       const int* tri = &triangles[3 * static_cast<size_t>(f)];
-      const double* a = mesh.GetPoint(tri[0]);
-      const double* b = mesh.GetPoint(tri[1]);
-      const double* c3 = mesh.GetPoint(tri[2]);
+      const double* a = vertex(tri[0]);
+      const double* b = vertex(tri[1]);
+      const double* c3 = vertex(tri[2]);
       const double e1[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
       const double e2[3] = { c3[0] - a[0], c3[1] - a[1], c3[2] - a[2] };
       double n[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
@@ -441,8 +445,7 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
           continue;
         }
       }
-      const int tet = triangleTets[f];
-      const double eta = tetEta[tet];
+      const double eta = surface.Eta[static_cast<size_t>(f)];
       const double sin2 = (1.0 - cosIn * cosIn) / (eta * eta);
       const double cosT = std::sqrt(std::max(0.0, 1.0 - sin2));
       if (!(cosT > 0.0))
@@ -458,8 +461,7 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
       field.OpticalPath[i] = eta * s;
       for (int c = 0; c < NumberOfChannels; ++c)
       {
-        const double muT = muA[3 * static_cast<size_t>(tet) + c] +
-          muS[3 * static_cast<size_t>(tet) + c];
+        const double muT = surface.Extinction[3 * static_cast<size_t>(f) + c];
         const double value = beam.Power[c] * entering * std::exp(-muT * s);
         field.Fluence[3 * static_cast<size_t>(i) + c] = value;
         out.Fluence[3 * static_cast<size_t>(i) + c] += value;
@@ -468,11 +470,49 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
   }
 }
 
-/// ComputeCollimatedSource, loads: integral of mu_s' E_c phi_a per tet and
-/// beam, then scattered to the points (and mu_a E_c, the absorbed power).
-void BeamLoads(const TetMesh& mesh, const OpticalProperties& material, CollimatedSource& out)
+namespace
+{
+/// ComputeCollimatedSource: E_c of every beam at the mesh's points, cast
+/// against its own boundary (ComputeCollimatedBeamAtPoints).
+void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<LightSource>& beams, bool shadows, CollimatedSource& out)
+{
+  const int numPoints = mesh.GetNumberOfPoints();
+  const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
+  CollimatedEntrySurface surface;
+  surface.Points = &mesh.GetPoints();
+  surface.Triangles = &mesh.GetBoundaryTriangles();
+  surface.Diagonal = BoundingBoxDiagonal(mesh);
+  surface.Eta.resize(triangleTets.size());
+  surface.Extinction.resize(3 * triangleTets.size());
+  for (std::size_t f = 0; f < triangleTets.size(); ++f)
+  {
+    const std::size_t tet = static_cast<std::size_t>(triangleTets[f]);
+    surface.Eta[f] = material.RefractiveIndex[tet];
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      surface.Extinction[3 * f + c] =
+        material.AbsorptionCoefficient[3 * tet + c] + material.ReducedScatteringCoefficient[3 * tet + c];
+    }
+  }
+  std::vector<char> onBoundary(static_cast<std::size_t>(numPoints));
+  for (int i = 0; i < numPoints; ++i)
+  {
+    onBoundary[static_cast<std::size_t>(i)] = mesh.IsBoundaryPoint(i) ? 1 : 0;
+  }
+  ComputeCollimatedBeamAtPoints(
+    surface, beams, shadows, mesh.GetPoints(), onBoundary, mesh.GetPointNormals(), out);
+}
+
+} // namespace
+
+void AddCollimatedLoads(const TetMesh& mesh, const OpticalProperties& material, CollimatedSource& out)
 {
   const int numTets = mesh.GetNumberOfTets();
+  if (out.Load.size() != 3 * static_cast<size_t>(mesh.GetNumberOfPoints()))
+  {
+    out.Load.assign(3 * static_cast<size_t>(mesh.GetNumberOfPoints()), 0.0);
+  }
   const std::vector<double>& muA = material.AbsorptionCoefficient;
   const std::vector<double>& muS = material.ReducedScatteringCoefficient;
   std::vector<double> tetLoad(12 * static_cast<size_t>(numTets), 0.0);
@@ -517,8 +557,6 @@ void BeamLoads(const TetMesh& mesh, const OpticalProperties& material, Collimate
     }
   }
 }
-
-} // namespace
 
 CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalProperties& material,
   const std::vector<LightSource>& lights, bool shadows)
@@ -569,7 +607,7 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
 
   // Loads: integral of mu_s' E_c phi_a per tet and beam, then scattered to
   // the points.
-  BeamLoads(mesh, material, out);
+  AddCollimatedLoads(mesh, material, out);
   return out;
 }
 
