@@ -1,7 +1,7 @@
 # Translucency: the two commands a new user needs.
-#   make demo   install missing Debian packages, configure, build what the demo needs (the
-#               core, the VTK modules, the CLI, the plugin: CMake target TranslucencyDemo,
-#               no test programs), render the bunny into out/
+#   make demo   install missing Debian packages, configure, build the command line (the
+#               core, the VTK modules, the CLI), render the bunny into out/, then build the
+#               plugin (CMake target TranslucencyDemo; no test programs)
 #   make test   install missing Debian packages, configure, build everything, run every test but
 #               the slow tier with ctest (ctest -LE slow; tiers: Testing/TestTiers.cmake)
 #   make test-all   the same with every test, the slow tier included (what CI runs)
@@ -43,9 +43,12 @@ configure: deps
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
+# The pictures first (the command line: TranslucencyDemoCommandLine), then the
+# plugin and the rest of TranslucencyDemo (Documentation/Building.md).
 demo: configure
-	cmake --build $(BUILD_DIR) -j $(JOBS) --target TranslucencyDemo
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target TranslucencyDemoCommandLine
 	bash scripts/demo.sh $(BUILD_DIR)
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target TranslucencyDemo
 
 # Test tiers (ctest LABELS unit, integration, mpi, gui, slow): e.g.
 # `cd build && ctest -L unit` for the core alone, `ctest -L slow` for the rest.

@@ -389,6 +389,7 @@ struct BenchCommandState
   std::vector<std::string> Solvers; ///< --linear-solvers' values (comma lists)
   bool Meshers = false, DiffuseOptics = false, Pipeline = false;
   bool GradedOnly = false; ///< --graded-only (with --meshers)
+  std::string Collimated = "default"; ///< --collimated (with --pipeline)
   CLI::Option* LinearSolvers = nullptr; ///< set when --linear-solvers is given
 };
 
@@ -548,6 +549,7 @@ int RunBench(BenchCommandState& s)
       p.Tets = s.Tets;
     if (s.Runs > 0)
       p.Runs = s.Runs;
+    p.Collimated = s.Collimated;
     return BenchPipeline(p);
   }
   if (s.Meshers)
@@ -608,6 +610,12 @@ Command AddBenchCommand(CLI::App& app)
     "a solve to RelTol 1e-10");
   for (CLI::Option* other : { linearSolvers, meshers, edit, diffuseOptics })
     pipeline->excludes(other);
+  c->add_option("--collimated", s->Collimated,
+     "with --pipeline: Surface Irradiance's collimated model\n"
+     "(default: by light kind, extended-moments here)")
+    ->type_name("MODEL")
+    ->check(OneOf("--collimated", CollimatedModelChoices()))
+    ->needs(pipeline);
   return { c, [s]() { return RunBench(*s); } };
 }
 

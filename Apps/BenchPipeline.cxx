@@ -136,7 +136,7 @@ struct Chain
   vtkNew<vtkSolveDiffusion> Solve;
   vtkNew<vtkOutgoingRadiance> Radiance;
 
-  explicit Chain(const std::string& path)
+  Chain(const std::string& path, const std::string& collimated)
   {
     Reader->SetFileName(path.c_str());
     Assign->SetInputConnection(Reader->GetOutputPort());
@@ -144,6 +144,7 @@ struct Chain
     Light->SetInputConnection(Assign->GetOutputPort());
     SetKeyLight(Light, 0.0);
     Light->SetUniformLightIrradiance(0.1);
+    Light->SetCollimatedModelByName(collimated.c_str()); // checked by --collimated
     Paint->SetInputConnection(Light->GetOutputPort());
     Solve->SetInputConnection(Paint->GetOutputPort());
     Radiance->SetInputConnection(Solve->GetOutputPort());
@@ -192,10 +193,11 @@ double MeasureSpMV(const std::vector<double>& points, const std::vector<int>& te
 
 /// One run of the four steps on a new chain; adds its times to `steps` and,
 /// when `check` is set, the accuracy figures to `accuracy`.
-void RunOnce(const std::string& path, const double bounds[6], const std::vector<int>& boundary,
-  int run, bool check, std::map<std::string, StepTimes>& steps, json& accuracy)
+void RunOnce(const std::string& path, const std::string& collimated, const double bounds[6],
+  const std::vector<int>& boundary, int run, bool check, std::map<std::string, StepTimes>& steps,
+  json& accuracy)
 {
-  Chain chain(path);
+  Chain chain(path, collimated);
   const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
     0.5 * (bounds[4] + bounds[5]) };
   const double diag = std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
@@ -234,6 +236,7 @@ void RunOnce(const std::string& path, const double bounds[6], const std::vector<
     fresh->SetInputData(chain.Assign->GetOutput());
     SetKeyLight(fresh, 15.0);
     fresh->SetUniformLightIrradiance(0.1);
+    fresh->SetCollimatedModelByName(collimated.c_str());
     TimedUpdate(fresh, "Surface Irradiance (reference)");
     accuracy["relight_irradiance_max_relative_difference"] =
       MaximumRelativeDifference(chain.Light->GetOutput(), fresh->GetOutput(), "Irradiance");
@@ -306,7 +309,7 @@ int BenchPipeline(const PipelineBenchOptions& o)
 
   json results = json::array();
   std::cout << "pipeline bench: threads " << omp_get_max_threads() << ", runs per figure " << o.Runs
-            << " (medians); each cell: ms (SpMV units)\n";
+            << " (medians), collimated model " << o.Collimated << "; each cell: ms (SpMV units)\n";
   for (double target : targets)
   {
     vtkSmartPointer<vtkUnstructuredGrid> tetrahedralized;
@@ -343,7 +346,7 @@ int BenchPipeline(const PipelineBenchOptions& o)
     try
     {
       for (int r = 0; r < o.Runs; ++r)
-        RunOnce(path.string(), bounds, boundary, r, r == o.Runs - 1, steps, accuracy);
+        RunOnce(path.string(), o.Collimated, bounds, boundary, r, r == o.Runs - 1, steps, accuracy);
     }
     catch (...)
     {
@@ -363,7 +366,7 @@ int BenchPipeline(const PipelineBenchOptions& o)
     std::cout << std::setw(18) << "total" << std::setw(8) << "iters" << "\n";
     json row = { { "target_tets", target }, { "tets", tetrahedralized->GetNumberOfCells() },
       { "points", tetrahedralized->GetNumberOfPoints() }, { "spmv_1ch_ms_median", spmv },
-      { "threads", omp_get_max_threads() }, { "runs", o.Runs },
+      { "threads", omp_get_max_threads() }, { "runs", o.Runs }, { "collimated", o.Collimated },
       { "load_average_before", loadBefore }, { "load_average_after", loadAfter } };
     for (const char* step : StepNames)
     {

@@ -18,7 +18,10 @@
  * discrete divergence matrix, timed in the same run). The relit and
  * painted fluence are compared with a solve to RelTol 1e-10 of the same
  * input (boundary RMS error), and the relit irradiance with a new Surface
- * Irradiance of the relit lights (no cache).
+ * Irradiance of the relit lights (no cache). `--collimated` sets Surface
+ * Irradiance's collimated model (default: by light kind, extended-moments:
+ * the relight then recomputes the beam's volume source), so the default
+ * and the surface model's relight compare on the same tets.
  */
 #pragma once
 
@@ -35,6 +38,9 @@ struct PipelineBenchOptions
   std::vector<double> Tets = { 200000, 1000000 };
   int Runs = 3;
   std::string JsonPath;
+  /// Surface Irradiance's collimated model by name (--collimated; "default":
+  /// by light kind, extended-moments for the chain's directional light).
+  std::string Collimated = "default";
 };
 
 /// `translucency bench --pipeline ...`.

@@ -106,8 +106,7 @@ CLI::Validator OneOf(const std::string& option, const std::vector<std::string>& 
     "");
 }
 
-/// "default" and the names of the core's collimated-model table.
-static std::vector<std::string> CollimatedModelChoices()
+std::vector<std::string> CollimatedModelChoices()
 {
   std::vector<std::string> names = { "default" };
   for (const translucency::CollimatedModelEntry& entry : translucency::GetCollimatedModelTable())

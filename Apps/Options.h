@@ -78,6 +78,10 @@ CLI::Validator OneOf(const std::string& option, const std::vector<std::string>& 
 /// "a, b or c".
 std::string JoinOr(const std::vector<std::string>& names);
 
+/// "default" and the names of the core's collimated-model table (the
+/// choices of render's and bench --pipeline's --collimated).
+std::vector<std::string> CollimatedModelChoices();
+
 /// `names` joined by ", " in lines of at most `width` characters (for help text).
 std::string WrapNames(const std::vector<std::string>& names, size_t width = 60);
 

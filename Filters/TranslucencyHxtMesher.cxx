@@ -9,9 +9,13 @@
 #include <unordered_map>
 
 #ifdef TRANSLUCENCY_HAVE_GMSH
+#include "TranslucencyChildProcess.h"
+
 #include <dlfcn.h>
 #include <gmshc.h>
 #include <omp.h>
+
+#include <cstring>
 
 #include <algorithm>
 #include <cmath>
@@ -508,7 +512,10 @@ std::string GetHxtMesherVersion()
   }
 }
 
-bool RunHxtMesher(const std::vector<double>& points, const std::vector<int>& triangles,
+namespace
+{
+/// RunHxtMesher in the calling process (the child RunHxtMesher forks).
+bool RunHxtMesherHere(const std::vector<double>& points, const std::vector<int>& triangles,
   const HxtMesherOptions& options, std::vector<double>& outPoints, std::vector<int>& outTets,
   std::string& error)
 {
@@ -744,6 +751,101 @@ bool RunHxtMesher(const std::vector<double>& points, const std::vector<int>& tri
     apiPointer->Clear(&ierr);
     NeedsFreshGmsh() = true; // this instance may be locked (see NeedsFreshGmsh)
   }
+  return false;
+}
+
+/// What the child sends back before its arrays.
+struct HxtResultHeader
+{
+  std::uint64_t Done = 0; ///< 1: meshed; 0: Message is the error
+  std::uint64_t MessageSize = 0;
+  std::uint64_t PointValues = 0; ///< 3 per point
+  std::uint64_t TetValues = 0;   ///< 4 per tet
+};
+
+/// The child's side: mesh and send the result down `fd`.
+bool MeshInChild(int fd, const std::vector<double>& points, const std::vector<int>& triangles,
+  const HxtMesherOptions& options)
+{
+  std::vector<double> outPoints;
+  std::vector<int> outTets;
+  std::string message;
+  bool done = false;
+  try
+  {
+    done = RunHxtMesherHere(points, triangles, options, outPoints, outTets, message);
+  }
+  catch (const std::exception& e)
+  {
+    message = std::string("hxt failed: ") + e.what();
+  }
+  HxtResultHeader header;
+  header.Done = done ? 1 : 0;
+  header.MessageSize = message.size();
+  header.PointValues = done ? outPoints.size() : 0;
+  header.TetValues = done ? outTets.size() : 0;
+  bool ok = WriteAll(fd, &header, sizeof(header));
+  ok = ok && WriteAll(fd, message.data(), message.size());
+  ok = ok && WriteAll(fd, outPoints.data(), sizeof(double) * header.PointValues);
+  return ok && WriteAll(fd, outTets.data(), sizeof(int) * header.TetValues);
+}
+} // namespace
+
+bool RunHxtMesher(const std::vector<double>& points, const std::vector<int>& triangles,
+  const HxtMesherOptions& options, std::vector<double>& outPoints, std::vector<int>& outTets,
+  std::string& error)
+{
+  // In a child process, as TetGen (vtkTetrahedralizeSurface.cxx): gmsh is
+  // loaded there only. Loaded into the caller, the TBB runtime of gmsh's
+  // link-map namespace crashed the process at its exit (SIGSEGV in libtbb's
+  // static destructors under __cxa_finalize: every pvbatch, pvpython and
+  // ParaView GUI run that had used hxt, session 27); and a crash inside gmsh
+  // is now a clean error instead of the caller's end.
+  HxtResultHeader header;
+  std::string message;
+  auto read = [&](int fd) {
+    // Sizes the child could not have made are a broken stream, not a mesh.
+    bool received = ReadAll(fd, &header, sizeof(header)) &&
+      header.MessageSize < (std::uint64_t(1) << 20) && header.PointValues % 3 == 0 &&
+      header.TetValues % 4 == 0 && header.PointValues < (std::uint64_t(1) << 40) &&
+      header.TetValues < (std::uint64_t(1) << 40);
+    message.assign(received ? header.MessageSize : 0, '\0');
+    received = received && ReadAll(fd, &message[0], message.size());
+    if (received && header.Done == 1)
+    {
+      outPoints.resize(header.PointValues);
+      outTets.resize(header.TetValues);
+      received = ReadAll(fd, outPoints.data(), sizeof(double) * outPoints.size()) &&
+        ReadAll(fd, outTets.data(), sizeof(int) * outTets.size());
+    }
+    return received;
+  };
+  const ChildOutcome outcome = RunInChildProcess(
+    [&](int fd) { return MeshInChild(fd, points, triangles, options); }, read);
+  if (!outcome.Started)
+  {
+    error = "hxt could not be started (" + outcome.StartError + ")";
+  }
+  else if (outcome.Signal != 0)
+  {
+    error = "hxt crashed on this surface (signal " + std::to_string(outcome.Signal) + ", " +
+      strsignal(outcome.Signal) + "): check the surface, or try the tetgen mesher";
+  }
+  else if (!outcome.Received || outcome.ExitStatus != 0)
+  {
+    error = "hxt stopped without handing back its result (exit status " +
+      std::to_string(outcome.ExitStatus) + ")";
+  }
+  else if (header.Done != 1)
+  {
+    error = message;
+  }
+  else
+  {
+    return true;
+  }
+  outPoints.clear();
+  outTets.clear();
   return false;
 }
 

@@ -27,6 +27,12 @@
  * std::regex (std::bad_cast from its locale facets in gmsh::initialize, in the
  * CLI). In its own namespace gmsh has its own C++ and OpenMP runtimes; every
  * array it returns is freed with its gmshFree.
+ *
+ * RunHxtMesher runs all of this in a child process (fork; the result comes
+ * back through a pipe, as TetGen's in vtkTetrahedralizeSurface.cxx): loaded
+ * into the caller, the TBB runtime of gmsh's namespace crashed every pvbatch,
+ * pvpython and ParaView GUI process that had used hxt at its exit (SIGSEGV in
+ * libtbb's static destructors); and a crash inside gmsh is a clean error.
  */
 #pragma once
 

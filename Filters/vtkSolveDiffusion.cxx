@@ -4,6 +4,7 @@
 #include "CollimatedModels.h"
 #include "CollimatedSource.h"
 #include "LightSources.h"
+#include "IrradianceCache.h"
 #include "Detectors.h"
 #include "ModelRange.h"
 #include "DiffusionFrontEnd.h"
@@ -124,6 +125,9 @@ struct vtkSolveDiffusion::Internals
   void KeepMaterialArrays(vtkUnstructuredGrid* input);
   /// The distributed path's solver (kept: hierarchy and warm start).
   vtkTranslucencyDistributedSolve Distributed;
+  /// The directional lights' irradiance that a default extended model takes
+  /// out of the input's (DecideDefaultCollimatedModel), kept per light.
+  translucency::IrradianceCache BeamIrradiance;
   /// Time gates: the snapshots asked for.
   std::vector<int> TimeSnapshots;
   /// Time Snapshots from the panel that are not whole numbers (an error).
@@ -552,12 +556,15 @@ void ReadLights(vtkUnstructuredGrid* input, translucency::DiffusionProblem& prob
  * the surface model for quadgraph, grid and sp3). The irradiance upstream holds
  * every light; for an extended model the directional lights' part (their q,
  * computed as vtkSurfaceIrradiance computes it, term for term) is taken out
- * of it, as an explicit extended model leaves it out upstream. Returns true
- * when `irradiance` changed. An explicit model is left as it is.
+ * of it, as an explicit extended model leaves it out upstream (through
+ * `beamCache`, which keeps the shadow caster and the unchanged lights' terms
+ * across relights and paints, equal bit for bit). Returns true when
+ * `irradiance` changed. An explicit model is left as it is.
  */
 bool DecideDefaultCollimatedModel(vtkUnstructuredGrid* input, const std::string& solver,
   const translucency::TetMesh& mesh, const translucency::OpticalProperties& material,
-  std::vector<double>& irradiance, translucency::DiffusionProblem& problem)
+  translucency::IrradianceCache& beamCache, std::vector<double>& irradiance,
+  translucency::DiffusionProblem& problem)
 {
   if (!ChosenByDefault(input->GetFieldData()))
   {
@@ -579,8 +586,7 @@ bool DecideDefaultCollimatedModel(vtkUnstructuredGrid* input, const std::string&
     return false;
   }
   std::vector<double> q;
-  translucency::ComputeProjectedIrradiance(
-    mesh, material.RefractiveIndex, beams, 0.0, 0, problem.Shadows, q);
+  beamCache.Compute(mesh, material.RefractiveIndex, beams, 0.0, 0, problem.Shadows, q);
   if (q.size() != irradiance.size())
   {
     throw translucency::Error("the directional lights' irradiance has " +
@@ -779,7 +785,8 @@ int vtkSolveDiffusion::RequestSerial(
     light.InteriorSources = &in.SolvedSources;
     // On a relight with the kept material, `material` was not converted.
     const bool beamsTakenOut = DecideDefaultCollimatedModel(input, this->GetSolverName(), *mesh,
-      keptMaterial ? *in.FrontEnd.GetKeptMaterial() : material, irradiance, light);
+      keptMaterial ? *in.FrontEnd.GetKeptMaterial() : material, in.BeamIrradiance, irradiance,
+      light);
     const std::vector<double> solvedIrradiance =
       beamsTakenOut ? irradiance : std::vector<double>();
     const translucency::CollimatedModel solvedModel = light.Collimated;

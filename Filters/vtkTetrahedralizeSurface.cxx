@@ -6,6 +6,7 @@
 #include "Strings.h"
 #include "SurfaceIntersections.h"
 #include "TetMesh.h"
+#include "TranslucencyChildProcess.h"
 #include "TranslucencyHxtMesher.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyOutputGuard.h"
@@ -28,7 +29,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -38,9 +38,6 @@
 #include <sstream>
 #include <vector>
 
-#include <fcntl.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 vtkStandardNewMacro(vtkTetrahedralizeSurface);
 
@@ -210,48 +207,6 @@ std::string TetGenErrorText(int code)
   }
 }
 
-/// Writes all of `size` bytes to `fd` (the child's side of the pipe).
-bool WriteAll(int fd, const void* data, size_t size)
-{
-  const char* p = static_cast<const char*>(data);
-  while (size > 0)
-  {
-    const ssize_t n = ::write(fd, p, size);
-    if (n < 0 && errno == EINTR)
-    {
-      continue;
-    }
-    if (n <= 0)
-    {
-      return false;
-    }
-    p += n;
-    size -= static_cast<size_t>(n);
-  }
-  return true;
-}
-
-/// Reads all of `size` bytes from `fd`; false at an early end.
-bool ReadAll(int fd, void* data, size_t size)
-{
-  char* p = static_cast<char*>(data);
-  while (size > 0)
-  {
-    const ssize_t n = ::read(fd, p, size);
-    if (n < 0 && errno == EINTR)
-    {
-      continue;
-    }
-    if (n <= 0)
-    {
-      return false;
-    }
-    p += n;
-    size -= static_cast<size_t>(n);
-  }
-  return true;
-}
-
 /// What the callers read of TetGen's output, sent from the child: the
 /// points, the tets and the intersecting faces of a -d pass.
 struct TetGenOutputHeader
@@ -277,32 +232,10 @@ struct TetGenOutputHeader
 bool IsolatedTetrahedralize(char* switches, tetgenio* in, tetgenio* out, tetgenio* background,
   std::string& error)
 {
-  int fds[2];
-  if (::pipe(fds) != 0)
-  {
-    error = std::string("TetGen could not be started (pipe: ") + std::strerror(errno) + ")";
-    return false;
-  }
-  std::fflush(nullptr); // nothing buffered is written twice
-  const pid_t child = ::fork();
-  if (child < 0)
-  {
-    ::close(fds[0]);
-    ::close(fds[1]);
-    error = std::string("TetGen could not be started (fork: ") + std::strerror(errno) + ")";
-    return false;
-  }
-  if (child == 0)
-  {
-    // The child: TetGen, then its output down the pipe, then _exit (no
-    // atexit handlers, no destructors of the parent's objects).
-    ::close(fds[0]);
-    const int devnull = ::open("/dev/null", O_WRONLY);
-    if (devnull >= 0)
-    {
-      ::dup2(devnull, STDERR_FILENO); // a failed assertion's raw line
-      ::dup2(devnull, STDOUT_FILENO);
-    }
+  using translucency::ReadAll;
+  using translucency::WriteAll;
+  // The child: TetGen, then its output down the pipe.
+  auto work = [&](int fd) {
     TetGenOutputHeader header;
     try
     {
@@ -324,19 +257,20 @@ bool IsolatedTetrahedralize(char* switches, tetgenio* in, tetgenio* out, tetgeni
       header.NumberOfTetrahedra = out->tetrahedronlist ? out->numberoftetrahedra : 0;
       header.NumberOfTriFaces = out->trifacelist ? out->numberoftrifaces : 0;
     }
-    bool ok = WriteAll(fds[1], &header, sizeof(header));
-    ok = ok && WriteAll(fds[1], out->pointlist, sizeof(REAL) * 3 * size_t(header.NumberOfPoints));
+    bool ok = WriteAll(fd, &header, sizeof(header));
+    ok = ok && WriteAll(fd, out->pointlist, sizeof(REAL) * 3 * size_t(header.NumberOfPoints));
     ok = ok &&
-      WriteAll(fds[1], out->tetrahedronlist,
+      WriteAll(fd, out->tetrahedronlist,
         sizeof(int) * size_t(header.NumberOfCorners) * size_t(header.NumberOfTetrahedra));
-    ok = ok && WriteAll(fds[1], out->trifacelist, sizeof(int) * 3 * size_t(header.NumberOfTriFaces));
-    ::_exit(ok ? 0 : 3);
-  }
-  ::close(fds[1]);
+    return ok && WriteAll(fd, out->trifacelist, sizeof(int) * 3 * size_t(header.NumberOfTriFaces));
+  };
   TetGenOutputHeader header;
-  bool received = ReadAll(fds[0], &header, sizeof(header));
-  if (received && header.Status == 0)
-  {
+  auto read = [&](int fd) {
+    bool received = ReadAll(fd, &header, sizeof(header));
+    if (!received || header.Status != 0)
+    {
+      return received;
+    }
     const bool sane = header.NumberOfPoints >= 0 && header.NumberOfTetrahedra >= 0 &&
       header.NumberOfTriFaces >= 0 && header.NumberOfCorners >= 0 && header.NumberOfCorners <= 10;
     received = sane;
@@ -348,29 +282,30 @@ bool IsolatedTetrahedralize(char* switches, tetgenio* in, tetgenio* out, tetgeni
     if (received && header.NumberOfPoints > 0)
     {
       out->pointlist = new REAL[3 * size_t(header.NumberOfPoints)];
-      received = ReadAll(fds[0], out->pointlist, sizeof(REAL) * 3 * size_t(header.NumberOfPoints));
+      received = ReadAll(fd, out->pointlist, sizeof(REAL) * 3 * size_t(header.NumberOfPoints));
     }
     const size_t corners = size_t(header.NumberOfCorners) * size_t(header.NumberOfTetrahedra);
     if (received && corners > 0)
     {
       out->tetrahedronlist = new int[corners];
-      received = ReadAll(fds[0], out->tetrahedronlist, sizeof(int) * corners);
+      received = ReadAll(fd, out->tetrahedronlist, sizeof(int) * corners);
     }
     if (received && header.NumberOfTriFaces > 0)
     {
       out->trifacelist = new int[3 * size_t(header.NumberOfTriFaces)];
-      received =
-        ReadAll(fds[0], out->trifacelist, sizeof(int) * 3 * size_t(header.NumberOfTriFaces));
+      received = ReadAll(fd, out->trifacelist, sizeof(int) * 3 * size_t(header.NumberOfTriFaces));
     }
-  }
-  ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(child, &status, 0) < 0 && errno == EINTR)
+    return received;
+  };
+  const translucency::ChildOutcome outcome = translucency::RunInChildProcess(work, read);
+  if (!outcome.Started)
   {
+    error = "TetGen could not be started (" + outcome.StartError + ")";
+    return false;
   }
-  if (WIFSIGNALED(status))
+  if (outcome.Signal != 0)
   {
-    const int signal = WTERMSIG(status);
+    const int signal = outcome.Signal;
     error = "TetGen crashed on this surface (signal " + std::to_string(signal) + ", " +
       (signal == SIGABRT ? std::string("SIGABRT: one of TetGen 1.5.0's internal checks failed")
                          : signal == SIGSEGV ? std::string("SIGSEGV")
@@ -379,15 +314,15 @@ bool IsolatedTetrahedralize(char* switches, tetgenio* in, tetgenio* out, tetgeni
       "another mesher (hxt)";
     return false;
   }
-  if (received && header.Status != 0)
+  if (outcome.Received && header.Status != 0)
   {
     error = "TetGen failed: " + TetGenErrorText(header.Status == -1 ? 0 : header.Status);
     return false;
   }
-  if (!received || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+  if (!outcome.Received || outcome.ExitStatus != 0)
   {
     error = "TetGen stopped without handing back its result (exit status " +
-      std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + ")";
+      std::to_string(outcome.ExitStatus) + ")";
     return false;
   }
   return true;

@@ -7,7 +7,9 @@ found with translucency.find_data; the picture's directory is created):
     xvfb-run -a /usr/bin/python3 render_bunny.py [out.png]
 
 (`pvpython` works too.) Without an X display, drop xvfb-run only if you skip
-step 7 (pass --no-render).
+step 7 (pass --no-render). `--target-tets=N` asks for another mesh size than
+100,000 (a quick try: --target-tets=5000 gives TetGen's coarsest mesh of
+this bunny, about 45,000 tets, and a warning saying why).
 
 The pipeline is made of ordinary VTK classes plus the five Translucency filters:
 surface -> tetrahedra -> coefficients -> boundary irradiance -> fluence ->
@@ -25,6 +27,8 @@ import translucency
 bunny = translucency.find_data("bunny.ply")
 out_png = next((a for a in sys.argv[1:] if not a.startswith("--")), "bunny.png")
 render = "--no-render" not in sys.argv
+target_tets = next((int(a.split("=", 1)[1]) for a in sys.argv[1:]
+                    if a.startswith("--target-tets=")), 100000)
 
 # 1. Read the closed triangle surface (lengths in mm).
 reader = vtk.vtkPLYReader()
@@ -33,7 +37,7 @@ reader.SetFileName(bunny)
 # 2. Fill it with about 100k quality tetrahedra (TetGen).
 tetra = translucency.vtkTetrahedralizeSurface()
 tetra.SetInputConnection(reader.GetOutputPort())
-tetra.SetTargetNumberOfTets(100000)
+tetra.SetTargetNumberOfTets(target_tets)
 
 # 3. Marble everywhere (a measured preset; or set explicit coefficients in 1/mm).
 material = translucency.vtkAssignScatteringCoefficients()

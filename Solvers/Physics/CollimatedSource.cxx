@@ -4,13 +4,17 @@
 #include "ExponentialMoments.h"
 #include "Fresnel.h"
 #include "RayCaster.h"
+#include "ShadowCaster.h"
 #include "TetMesh.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <sstream>
 
 namespace translucency
@@ -28,9 +32,36 @@ struct TetRules
 {
   static constexpr int MaxLevel = 4;
   std::vector<std::array<double, 4>> Points[MaxLevel + 1];
+  /// The sub-tets of level 1 by their nodes: 0-3 the tet's vertices, 4-9 the
+  /// midpoints of the edges 01, 02, 03, 12, 13, 23. Point 4 s + k of level 1
+  /// is a Sub[s][k] + b (the other three nodes of sub-tet s), in barycentric
+  /// coordinates (LevelOneIntegrals factorises its exponentials by them).
+  static constexpr int Sub[8][4] = { { 0, 4, 5, 6 }, { 1, 4, 7, 8 }, { 2, 5, 7, 9 },
+    { 3, 6, 8, 9 }, { 5, 8, 4, 7 }, { 5, 8, 7, 9 }, { 5, 8, 9, 6 }, { 5, 8, 6, 4 } };
+  /// The vertices of the edge of each midpoint node 4-9.
+  static constexpr int Edge[6][2] = { { 0, 1 }, { 0, 2 }, { 0, 3 }, { 1, 2 }, { 1, 3 }, { 2, 3 } };
+  /// The symmetric 4-point rule of degree 2: a at its own vertex, b at the others.
+  static constexpr double A = 0.5854101966249685, B = 0.1381966011250105;
+  /// Per sub-tet of level 1, the sum of its nodes' barycentric coordinates.
+  double NodeSums[8][4] = {};
 
   TetRules()
   {
+    for (int s = 0; s < 8; ++s)
+    {
+      for (const int n : Sub[s])
+      {
+        if (n < 4)
+        {
+          NodeSums[s][n] += 1.0;
+        }
+        else
+        {
+          NodeSums[s][Edge[n - 4][0]] += 0.5;
+          NodeSums[s][Edge[n - 4][1]] += 0.5;
+        }
+      }
+    }
     using Tet = std::array<std::array<double, 4>, 4>;
     std::vector<Tet> tets(1);
     for (int k = 0; k < 4; ++k)
@@ -40,7 +71,7 @@ struct TetRules
         tets[0][k][j] = k == j ? 1.0 : 0.0;
       }
     }
-    const double a = 0.5854101966249685, b = 0.1381966011250105;
+    const double a = A, b = B;
     for (int level = 0; level <= MaxLevel; ++level)
     {
       for (const Tet& t : tets)
@@ -71,18 +102,15 @@ struct TetRules
         {
           v[k] = t[k];
         }
-        const int pairs[6][2] = { { 0, 1 }, { 0, 2 }, { 0, 3 }, { 1, 2 }, { 1, 3 }, { 2, 3 } };
         for (int m = 0; m < 6; ++m)
         {
           for (int j = 0; j < 4; ++j)
           {
-            v[4 + m][j] = 0.5 * (t[pairs[m][0]][j] + t[pairs[m][1]][j]);
+            v[4 + m][j] = 0.5 * (t[Edge[m][0]][j] + t[Edge[m][1]][j]);
           }
         }
         // Midpoints 4..9: 01, 02, 03, 12, 13, 23.
-        const int sub[8][4] = { { 0, 4, 5, 6 }, { 1, 4, 7, 8 }, { 2, 5, 7, 9 }, { 3, 6, 8, 9 },
-          { 5, 8, 4, 7 }, { 5, 8, 7, 9 }, { 5, 8, 9, 6 }, { 5, 8, 6, 4 } };
-        for (const auto& s : sub)
+        for (const auto& s : Sub)
         {
           finer.push_back(Tet{ v[s[0]], v[s[1]], v[s[2]], v[s[3]] });
         }
@@ -250,6 +278,176 @@ bool TetIntegrals(const double e[4], const double path[4], double wavenumber, do
   return true;
 }
 
+/**
+ * The level-1 quadrature of VisitTet (32 points) for a positive E_c (e[4],
+ * with logarithms logE[4]): the same sums, with 4 exponentials and 12
+ * square roots instead of 32 exponentials. Point (s, k) of the rule is
+ * a n_k + b (n_0 + n_1 + n_2 + n_3 - n_k) over the nodes n of sub-tet s
+ * (TetRules::Sub), so with zeta_n the exponent at node n,
+ *   exp(z . l) = prod_m exp(b zeta_{n_m}) x exp((a - b) zeta_{n_k});
+ * at a vertex exp((a - b) zeta) = E_c / exp(b zeta)^4 (a + 3 b = 1), and at
+ * a midpoint, where zeta is the mean of its edge's vertices' values, each
+ * exponential is the geometric mean of its vertices'. Rounding differs from
+ * the direct exponentials by a few ulps (test:
+ * `CollimatedBeam.FastEqualsTheReferenceOnTheBunny`).
+ */
+void LevelOneIntegrals(const double e[4], const double logE[4], double volume, double& total,
+  double moment[4])
+{
+  double own[10], other[10];
+  for (int n = 0; n < 4; ++n)
+  {
+    other[n] = std::exp(TetRules::B * logE[n]);
+    const double square = other[n] * other[n];
+    own[n] = e[n] / (square * square);
+  }
+  for (int m = 0; m < 6; ++m)
+  {
+    const int i = TetRules::Edge[m][0], j = TetRules::Edge[m][1];
+    own[4 + m] = std::sqrt(own[i] * own[j]);
+    other[4 + m] = std::sqrt(other[i] * other[j]);
+  }
+  // The sums by sub-tet and node: with g_{s,k} = base_s own_{n_k} and
+  // l = b N_s + (a - b) node n_k (N_s the sum of sub-tet s's nodes),
+  //   sum_p g_p l_p = b sum_s G_s N_s + (a - b) sum_n own_n B_n node_n,
+  // G_s = base_s sum_k own_{n_k}, B_n = the sum of base_s over the sub-tets
+  // that have node n (a node's barycentric coordinates: a vertex's unit
+  // vector, a midpoint's half its edge's two).
+  const TetRules& rules = Rules();
+  double base[8], nodeBase[10] = {};
+  total = 0.0;
+  double moments[4] = { 0.0, 0.0, 0.0, 0.0 };
+  for (int s = 0; s < 8; ++s)
+  {
+    const int* n = TetRules::Sub[s];
+    base[s] = other[n[0]] * other[n[1]] * other[n[2]] * other[n[3]];
+    const double g = base[s] * (own[n[0]] + own[n[1]] + own[n[2]] + own[n[3]]);
+    total += g;
+    for (int k = 0; k < 4; ++k)
+    {
+      nodeBase[n[k]] += base[s];
+    }
+    for (int j = 0; j < 4; ++j)
+    {
+      moments[j] += g * rules.NodeSums[s][j];
+    }
+  }
+  const double ab = TetRules::A - TetRules::B;
+  double node[4];
+  for (int j = 0; j < 4; ++j)
+  {
+    node[j] = own[j] * nodeBase[j];
+  }
+  for (int m = 0; m < 6; ++m)
+  {
+    const double half = 0.5 * own[4 + m] * nodeBase[4 + m];
+    node[TetRules::Edge[m][0]] += half;
+    node[TetRules::Edge[m][1]] += half;
+  }
+  const double weight = volume / 32.0;
+  total *= weight;
+  for (int j = 0; j < 4; ++j)
+  {
+    moment[j] = weight * (TetRules::B * moments[j] + ab * node[j]);
+  }
+}
+
+/**
+ * TetIntegrals<double> (continuous wave) with the logarithms of E_c given
+ * (logE[k] = ln e[k] where e[k] > 0, taken once per point by BeamLoads
+ * instead of four times per tet): the same rule (VisitTet's levels 0 and 1,
+ * the exact integrals from ExactFromLevel on), the level-1 quadrature by
+ * LevelOneIntegrals.
+ */
+bool ContinuousWaveTetIntegrals(const double e[4], const double logE[4], double volume,
+  double& total, double moment[4])
+{
+  bool positive = true, any = false;
+  for (int k = 0; k < 4; ++k)
+  {
+    positive = positive && e[k] > 0.0;
+    any = any || e[k] > 0.0;
+  }
+  if (!any)
+  {
+    total = 0.0;
+    for (int j = 0; j < 4; ++j)
+    {
+      moment[j] = 0.0;
+    }
+    return false;
+  }
+  const double range = std::max(std::max(logE[0], logE[1]), std::max(logE[2], logE[3])) -
+    std::min(std::min(logE[0], logE[1]), std::min(logE[2], logE[3]));
+  // QuadratureLevel's levels: 0 up to a range of 0.5, 1 up to 1, then exact.
+  static_assert(ExactFromLevel == 2, "the levels below follow QuadratureLevel");
+  if (!positive)
+  {
+    const double path[4] = { 0.0, 0.0, 0.0, 0.0 };
+    return TetIntegrals(e, path, 0.0, volume, total, moment);
+  }
+  if (!(range > 0.5))
+  {
+    // Level 0: VisitTet's 4 points, as TetIntegrals sums them.
+    const std::vector<std::array<double, 4>>& points = Rules().Points[0];
+    total = 0.0;
+    for (int j = 0; j < 4; ++j)
+    {
+      moment[j] = 0.0;
+    }
+    for (const std::array<double, 4>& l : points)
+    {
+      const double g =
+        std::exp(l[0] * logE[0] + l[1] * logE[1] + l[2] * logE[2] + l[3] * logE[3]);
+      total += g;
+      for (int j = 0; j < 4; ++j)
+      {
+        moment[j] += g * l[j];
+      }
+    }
+    const double weight = volume / static_cast<double>(points.size());
+    total *= weight;
+    for (int j = 0; j < 4; ++j)
+    {
+      moment[j] *= weight;
+    }
+    return true;
+  }
+  if (range > 1.0)
+  {
+    ExponentialMoments(logE, volume, total, moment);
+  }
+  else
+  {
+    LevelOneIntegrals(e, logE, volume, total, moment);
+  }
+  return true;
+}
+
+/// CollimatedEvaluation::Reference's TetIntegrals<double>: the logarithms
+/// per tet, VisitTet's direct exponentials below ExactFromLevel and the
+/// memoised recursion of ExponentialDividedDifference from it on.
+bool ReferenceTetIntegrals(const double e[4], double volume, double& total, double moment[4])
+{
+  double logE[4];
+  bool positive = true, any = false;
+  const double path[4] = { 0.0, 0.0, 0.0, 0.0 };
+  if (QuadratureLevel(e, path, 0.0, logE, positive, any) < ExactFromLevel || !positive)
+  {
+    return TetIntegrals(e, path, 0.0, volume, total, moment);
+  }
+  // Hermite-Genocchi: int_T exp(z . lambda) dV = 6 V exp[z_0..z_3] and
+  // int_T lambda_k exp(z . lambda) dV = 6 V exp[z_0..z_3, z_k].
+  double nodes[5] = { logE[0], logE[1], logE[2], logE[3], 0.0 };
+  total = 6.0 * volume * ExponentialDividedDifference(nodes, 4);
+  for (int k = 0; k < 4; ++k)
+  {
+    nodes[4] = logE[k];
+    moment[k] = 6.0 * volume * ExponentialDividedDifference(nodes, 5);
+  }
+  return true;
+}
+
 /// The vertex values of beam `beam`, channel c, on tet v: E_c and the path.
 void TetValues(const CollimatedSource::Beam& beam, const int* v, int c, double e[4],
   double path[4])
@@ -348,24 +546,406 @@ std::vector<LightSource> NonCollimatedLights(const std::vector<LightSource>& lig
   return rest;
 }
 
-void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
+namespace
+{
+/**
+ * What the entering power casts its shadow rays against, built from the
+ * mesh's geometry alone: the shadow caster (ShadowCaster, as
+ * ComputeTriangleCornerIrradiance builds it), the boundary triangles'
+ * normals and the box's diagonal. A relight or a paint casts new rays on the
+ * same surface, so the last mesh's is kept (BoundaryCastersOf).
+ */
+struct BoundaryCasters
+{
+  std::uint64_t Revision = 0;
+  ShadowCaster Shadows;
+  bool HasShadows = false;
+  std::vector<double> TriangleNormals;
+  double Diagonal = 0.0;
+};
+
+/**
+ * The BoundaryCasters of `mesh`: the kept ones when they were built for its
+ * geometry (TetMesh::GetGeometryRevision(): unique per SetGeometry() and
+ * UpdatePoints() in the process, shared by copies), else new ones, which
+ * replace them (one mesh kept: the memory of one boundary's trees; the
+ * shadow tree is built when first asked for). Thread-safe; the casters
+ * themselves are read-only once returned.
+ */
+std::shared_ptr<const BoundaryCasters> BoundaryCastersOf(const TetMesh& mesh, bool shadows)
+{
+  static std::mutex mutex;
+  // Never destroyed (as ShadowCaster's Embree device): an Embree scene
+  // released during the static destruction at exit could outlive Embree.
+  static auto* const kept = new std::shared_ptr<const BoundaryCasters>();
+  std::lock_guard<std::mutex> lock(mutex);
+  const std::uint64_t revision = mesh.GetGeometryRevision();
+  if (*kept && revision != 0 && (*kept)->Revision == revision && ((*kept)->HasShadows || !shadows))
+  {
+    return *kept;
+  }
+  auto made = std::make_shared<BoundaryCasters>();
+  made->Revision = revision;
+  made->HasShadows = shadows;
+  if (shadows)
+  {
+    made->Shadows.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
+  }
+  made->TriangleNormals = BoundaryTriangleNormals(mesh);
+  made->Diagonal = BoundingBoxDiagonal(mesh);
+  *kept = made;
+  return made;
+}
+
+/**
+ * The rays of one beam all run along one direction d: the triangles that a
+ * ray o + t d can hit are those whose projection along d holds o's. This
+ * grid bins the boundary triangles by their projections on the plane
+ * normal to d (cells of about one triangle's size) and answers FirstHit()
+ * and Occluded() as RayCaster does for rays along d: RayCaster's queries
+ * give exactly the answer of a loop over all triangles with
+ * RayCaster::IntersectTriangle() (its contract), and these loop over the
+ * triangles of the origin's cell with that same function (the same t to the
+ * bit, the closest kept). Conservative: each projected box is padded by
+ * 1e-9 of the diagonal, far more than IntersectTriangle's rounding can put
+ * a hit outside a triangle (about 6 ulps of the diagonal over |cos| of the
+ * angle between d and the triangle's normal), and a triangle within 1e-5 of
+ * parallel to d is tried for every ray. Only exact ties in t between two
+ * triangles (a ray through a shared edge) may resolve differently, which
+ * RayCaster leaves unspecified too (and the origins' generic shift avoids).
+ * Built per beam in O(triangles); a query tests the few triangles over one
+ * cell instead of descending a tree.
+ */
+class DirectionGrid
+{
+public:
+  DirectionGrid(const std::vector<double>& points, const std::vector<int>& triangles,
+    const double direction[3], double diagonal)
+  {
+    const double origin[3] = { 0.0, 0.0, 0.0 };
+    this->Valid = RayCaster::UnitDirection(origin, direction, this->D);
+    const int numTriangles = static_cast<int>(triangles.size() / 3);
+    if (!this->Valid || numTriangles == 0)
+    {
+      this->Valid = false;
+      return;
+    }
+    // An orthonormal basis (U, V) of the plane normal to D.
+    const double* d = this->D;
+    const double helper[3] = { std::abs(d[0]) < 0.6 ? 1.0 : 0.0, std::abs(d[0]) < 0.6 ? 0.0 : 1.0,
+      0.0 };
+    Cross(d, helper, this->U);
+    Normalize(this->U);
+    Cross(d, this->U, this->V);
+    Normalize(this->V);
+    this->Points = &points;
+    this->Triangles = &triangles;
+    const double pad = 1e-9 * diagonal;
+    std::vector<double> boxes(4 * static_cast<size_t>(numTriangles));
+    this->Near.resize(static_cast<size_t>(numTriangles));
+    this->Far.resize(static_cast<size_t>(numTriangles));
+    double low[2] = { std::numeric_limits<double>::infinity(),
+      std::numeric_limits<double>::infinity() };
+    double high[2] = { -low[0], -low[1] };
+    double area = 0.0;
+    for (int f = 0; f < numTriangles; ++f)
+    {
+      double* box = &boxes[4 * static_cast<size_t>(f)];
+      box[0] = box[1] = std::numeric_limits<double>::infinity();
+      box[2] = box[3] = -std::numeric_limits<double>::infinity();
+      double x[3][3];
+      this->Near[f] = std::numeric_limits<double>::infinity();
+      this->Far[f] = -std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 3; ++k)
+      {
+        const double* p = &points[3 * static_cast<size_t>(triangles[3 * static_cast<size_t>(f) + k])];
+        const double pu = Dot(p, this->U), pv = Dot(p, this->V), pd = Dot(p, d);
+        this->Near[f] = std::min(this->Near[f], pd - pad);
+        this->Far[f] = std::max(this->Far[f], pd + pad);
+        box[0] = std::min(box[0], pu - pad);
+        box[1] = std::min(box[1], pv - pad);
+        box[2] = std::max(box[2], pu + pad);
+        box[3] = std::max(box[3], pv + pad);
+        for (int j = 0; j < 3; ++j)
+        {
+          x[k][j] = p[j];
+        }
+      }
+      double e1[3], e2[3], n[3];
+      for (int j = 0; j < 3; ++j)
+      {
+        e1[j] = x[1][j] - x[0][j];
+        e2[j] = x[2][j] - x[0][j];
+      }
+      Cross(e1, e2, n);
+      const double length = std::sqrt(Dot(n, n));
+      if (!(length > 0.0))
+      {
+        box[0] = box[1] = 1.0; // never hit (IntersectTriangle: det = 0): binned nowhere
+        box[2] = box[3] = -1.0;
+        continue;
+      }
+      if (std::abs(Dot(n, d)) < 1e-5 * length)
+      {
+        this->Everywhere.push_back(f);
+        box[0] = box[1] = 1.0;
+        box[2] = box[3] = -1.0;
+        continue;
+      }
+      area += (box[2] - box[0]) * (box[3] - box[1]);
+      low[0] = std::min(low[0], box[0]);
+      low[1] = std::min(low[1], box[1]);
+      high[0] = std::max(high[0], box[2]);
+      high[1] = std::max(high[1], box[3]);
+    }
+    if (!(high[0] >= low[0] && high[1] >= low[1]))
+    {
+      this->Cells[0] = this->Cells[1] = 0;
+      return;
+    }
+    // Cells of about half a projected triangle's box, at most 16 per triangle.
+    double cell = std::max(0.5 * std::sqrt(area / numTriangles), 1e-12 * diagonal);
+    const double maxCells = 16.0 * numTriangles + 1024.0;
+    while (((high[0] - low[0]) / cell + 1.0) * ((high[1] - low[1]) / cell + 1.0) > maxCells)
+    {
+      cell *= 1.25;
+    }
+    for (int a = 0; a < 2; ++a)
+    {
+      this->Low[a] = low[a];
+      this->Cells[a] = static_cast<int>((high[a] - low[a]) / cell) + 1;
+      this->Scale[a] = this->Cells[a] / std::max(high[a] - low[a], 1e-300);
+    }
+    // Bin (CSR): counts, offsets, then the triangles in order.
+    const size_t numCells = static_cast<size_t>(this->Cells[0]) * this->Cells[1];
+    this->Offsets.assign(numCells + 1, 0);
+    auto span = [&](const double* box, int range[4]) {
+      for (int a = 0; a < 2; ++a)
+      {
+        range[a] = this->CellOf(box[a], a);
+        range[2 + a] = this->CellOf(box[2 + a], a);
+      }
+      return box[2] >= box[0];
+    };
+    for (int pass = 0; pass < 2; ++pass)
+    {
+      if (pass == 1)
+      {
+        for (size_t c = 0; c < numCells; ++c)
+        {
+          this->Offsets[c + 1] += this->Offsets[c];
+        }
+        this->Entries.resize(this->Offsets[numCells]);
+      }
+      std::vector<int> fill(pass == 1 ? this->Offsets.begin() : this->Offsets.end(),
+        pass == 1 ? this->Offsets.end() - 1 : this->Offsets.end());
+      for (int f = 0; f < numTriangles; ++f)
+      {
+        int range[4];
+        if (!span(&boxes[4 * static_cast<size_t>(f)], range))
+        {
+          continue;
+        }
+        for (int j = range[1]; j <= range[3]; ++j)
+        {
+          for (int i = range[0]; i <= range[2]; ++i)
+          {
+            const size_t c = static_cast<size_t>(j) * this->Cells[0] + i;
+            if (pass == 0)
+            {
+              ++this->Offsets[c + 1];
+            }
+            else
+            {
+              this->Entries[fill[c]++] = { this->Near[f], this->Far[f], f };
+            }
+          }
+        }
+      }
+    }
+    // Each cell's triangles by their nearest depth along d, so that a query
+    // stops at the first one beyond what it looks for.
+    for (size_t c = 0; c < numCells; ++c)
+    {
+      std::sort(this->Entries.begin() + this->Offsets[c], this->Entries.begin() + this->Offsets[c + 1],
+        [](const Entry& x, const Entry& y) { return x.Near < y.Near; });
+    }
+  }
+
+  /// RayCaster::FirstHit(origin, direction, infinity, t, triangle) for the
+  /// grid's direction (epsilon 0).
+  bool FirstHit(const double origin[3], double& t, int& triangle) const
+  {
+    bool hit = false;
+    double best = std::numeric_limits<double>::infinity();
+    this->Visit(origin, best, [&](int f) {
+      double tt;
+      if (this->Intersect(origin, f, 0.0, best, tt))
+      {
+        best = tt;
+        triangle = f;
+        hit = true;
+      }
+      return false;
+    });
+    if (hit)
+    {
+      t = best;
+    }
+    return hit;
+  }
+
+  /// RayCaster::Occluded(origin, direction, tMax) for the grid's direction.
+  bool Occluded(const double origin[3], double tMax) const
+  {
+    bool hit = false;
+    this->Visit(origin, tMax, [&](int f) {
+      double tt;
+      hit = this->Intersect(origin, f, 0.0, tMax, tt);
+      return hit;
+    });
+    return hit;
+  }
+
+private:
+  static double Dot(const double* a, const double* b)
+  {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  }
+  static void Cross(const double* a, const double* b, double* c)
+  {
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+  }
+  static void Normalize(double* a)
+  {
+    const double length = std::sqrt(Dot(a, a));
+    for (int k = 0; k < 3; ++k)
+    {
+      a[k] /= length;
+    }
+  }
+  int CellOf(double x, int axis) const
+  {
+    const double c = std::floor((x - this->Low[axis]) * this->Scale[axis]);
+    return static_cast<int>(std::max(0.0, std::min(c, static_cast<double>(this->Cells[axis] - 1))));
+  }
+  bool Intersect(const double origin[3], int f, double tMin, double tMax, double& t) const
+  {
+    const int* tri = &(*this->Triangles)[3 * static_cast<size_t>(f)];
+    const std::vector<double>& p = *this->Points;
+    return RayCaster::IntersectTriangle(origin, this->D, &p[3 * static_cast<size_t>(tri[0])],
+      &p[3 * static_cast<size_t>(tri[1])], &p[3 * static_cast<size_t>(tri[2])], tMin, tMax, t);
+  }
+  /// Calls visit(f) for the triangles that a ray from `origin` can hit at
+  /// 0 < t < reach (its cell's, nearest first, then those tried
+  /// everywhere) until visit returns true. `reach` is read at each step
+  /// (FirstHit lowers it to the closest hit so far). A triangle's depth
+  /// range along d, padded as its box, bounds the t of any hit on it
+  /// (IntersectTriangle's rounding of t is below the pad as that of its
+  /// position), so the skipped triangles are exactly those that could not
+  /// be hit within (0, reach).
+  template <class Function>
+  void Visit(const double origin[3], const double& reach, Function&& visit) const
+  {
+    if (!this->Valid || !std::isfinite(origin[0]) || !std::isfinite(origin[1]) ||
+      !std::isfinite(origin[2]))
+    {
+      return;
+    }
+    const double depth = Dot(origin, this->D);
+    if (this->Cells[0] > 0)
+    {
+      const double pu = Dot(origin, this->U), pv = Dot(origin, this->V);
+      const double i = std::floor((pu - this->Low[0]) * this->Scale[0]);
+      const double j = std::floor((pv - this->Low[1]) * this->Scale[1]);
+      if (i >= 0.0 && j >= 0.0 && i < this->Cells[0] && j < this->Cells[1])
+      {
+        const size_t c = static_cast<size_t>(j) * this->Cells[0] + static_cast<size_t>(i);
+        for (int e = this->Offsets[c]; e < this->Offsets[c + 1]; ++e)
+        {
+          const Entry& entry = this->Entries[e];
+          if (entry.Near - depth >= reach)
+          {
+            break; // this one and the rest lie beyond reach
+          }
+          if (entry.Far - depth <= 0.0)
+          {
+            continue; // behind the origin
+          }
+          if (visit(entry.Triangle))
+          {
+            return;
+          }
+        }
+      }
+    }
+    for (const int f : this->Everywhere)
+    {
+      if (visit(f))
+      {
+        return;
+      }
+    }
+  }
+
+  bool Valid = false;
+  double D[3] = { 0.0, 0.0, 0.0 }, U[3] = { 0.0, 0.0, 0.0 }, V[3] = { 0.0, 0.0, 0.0 };
+  const std::vector<double>* Points = nullptr;
+  const std::vector<int>* Triangles = nullptr;
+  double Low[2] = { 0.0, 0.0 }, Scale[2] = { 0.0, 0.0 };
+  int Cells[2] = { 0, 0 };
+  /// A triangle in a cell, with its depth range along d (padded).
+  struct Entry
+  {
+    double Near, Far;
+    int Triangle;
+  };
+  std::vector<int> Offsets, Everywhere;
+  std::vector<Entry> Entries;
+  /// Each triangle's depth range along d (padded), while binning.
+  std::vector<double> Near, Far;
+};
+
+/// ComputeCollimatedSource: the power of the beams transmitted into the
+/// object: ComputeTriangleCornerIrradiance's corner values of the beams
+/// alone (AddLightCornerIrradiance, light by light, on the kept shadow
+/// caster), integrated over the boundary triangles.
+void EnteringPower(const TetMesh& mesh, const std::vector<double>& tetEta,
+  const std::vector<LightSource>& beams, bool shadows, const BoundaryCasters& casters,
+  CollimatedSource& out)
+{
+  CheckBoundaryTriangleEta(mesh, tetEta);
+  std::vector<double> cornerQ(9 * static_cast<size_t>(mesh.GetNumberOfBoundaryTriangles()), 0.0);
+  for (const LightSource& beam : beams)
+  {
+    AddLightCornerIrradiance(mesh, tetEta, casters.TriangleNormals, beam, shadows,
+      shadows ? &casters.Shadows : nullptr, casters.Diagonal, cornerQ);
+  }
+  const std::vector<double>& areas = mesh.GetBoundaryTriangleAreas();
+  for (int f = 0; f < mesh.GetNumberOfBoundaryTriangles(); ++f)
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      const double* q = &cornerQ[9 * static_cast<size_t>(f) + c];
+      out.Entering[c] += areas[f] * (q[0] + q[3] + q[6]) / 3.0;
+    }
+  }
+}
+
+/// ComputeCollimatedBeamAtPoints: E_c of every beam at the query points
+/// (zero where the ray toward the light leaves through no entry face, or is
+/// shadowed) and the optical path to the entry point, each ray cast against
+/// `surface` with `caster` (built over it) or, without one, through a grid
+/// along each beam (the same hits, DirectionGrid).
+void BeamFieldOnSurface(const CollimatedEntrySurface& surface, const RayCaster* caster,
   const std::vector<LightSource>& beams, bool shadows, const std::vector<double>& points,
-  const std::vector<char>& onBoundary, const std::vector<double>& normals, CollimatedSource& out)
+  const std::vector<char>& onBoundary, const std::vector<double>& pointNormals,
+  CollimatedSource& out)
 {
   const int numPoints = static_cast<int>(points.size() / 3);
   const std::vector<double>& surfacePoints = *surface.Points;
-  const std::vector<int>& triangles = *surface.Triangles;
-  out.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
-  out.Beams.resize(beams.size());
-  for (CollimatedSource::Beam& beam : out.Beams)
-  {
-    beam.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
-    beam.OpticalPath.assign(static_cast<size_t>(numPoints), 0.0);
-  }
-  if (beams.empty() || triangles.empty())
-  {
-    return;
-  }
   const double diag = surface.Diagonal;
   const double offset = 1e-5 * diag;
   // Every ray's origin is moved by one fixed, generic vector of 1e-9 of the
@@ -384,9 +964,19 @@ void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
   // itself, so E_c changes only where the entry face was such a tie.
   const double generic = 1e-9 * diag / std::sqrt(6.0);
   const double shift[3] = { generic, generic * std::sqrt(2.0), generic * std::sqrt(3.0) };
-  RayCaster caster;
-  caster.Build(surfacePoints, triangles);
-  auto vertex = [&surfacePoints](int p) { return &surfacePoints[3 * static_cast<size_t>(p)]; };
+  const std::vector<int>& triangles = *surface.Triangles;
+  // Without a caster (Fast): the rays of each beam through a grid along its
+  // direction (the same hits as RayCaster's, DirectionGrid).
+  std::vector<std::unique_ptr<DirectionGrid>> grids(beams.size());
+  for (size_t index = 0; !caster && index < beams.size(); ++index)
+  {
+    const LightSource& beam = beams[index];
+    const double len = std::sqrt(beam.Direction[0] * beam.Direction[0] +
+      beam.Direction[1] * beam.Direction[1] + beam.Direction[2] * beam.Direction[2]);
+    const double w[3] = { -beam.Direction[0] / len, -beam.Direction[1] / len,
+      -beam.Direction[2] / len };
+    grids[index] = std::make_unique<DirectionGrid>(surfacePoints, triangles, w, diag);
+  }
 
   // E_c at the points.
 #pragma omp parallel for schedule(dynamic, 256)
@@ -396,7 +986,7 @@ void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
     double origin[3] = { x[0] + shift[0], x[1] + shift[1], x[2] + shift[2] };
     if (onBoundary[static_cast<size_t>(i)])
     {
-      const double* n = &normals[3 * static_cast<size_t>(i)];
+      const double* n = &pointNormals[3 * static_cast<size_t>(i)];
       for (int k = 0; k < 3; ++k)
       {
         origin[k] -= offset * n[k]; // just inside
@@ -412,15 +1002,17 @@ void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
         -beam.Direction[2] / len };
       double t = 0.0;
       int f = -1;
-      if (!caster.FirstHit(origin, w, std::numeric_limits<double>::infinity(), t, f))
+      const DirectionGrid* grid = grids[index].get();
+      if (!(grid ? grid->FirstHit(origin, t, f)
+                 : caster->FirstHit(origin, w, std::numeric_limits<double>::infinity(), t, f)))
       {
         continue;
       }
       // The entry triangle's outward normal.
       const int* tri = &triangles[3 * static_cast<size_t>(f)];
-      const double* a = vertex(tri[0]);
-      const double* b = vertex(tri[1]);
-      const double* c3 = vertex(tri[2]);
+      const double* a = &surfacePoints[3 * static_cast<size_t>(tri[0])];
+      const double* b = &surfacePoints[3 * static_cast<size_t>(tri[1])];
+      const double* c3 = &surfacePoints[3 * static_cast<size_t>(tri[2])];
       const double e1[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
       const double e2[3] = { c3[0] - a[0], c3[1] - a[1], c3[2] - a[2] };
       double n[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
@@ -440,7 +1032,7 @@ void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
         const double p[3] = { origin[0] + t * w[0] + offset * (n[0] / nl + w[0]),
           origin[1] + t * w[1] + offset * (n[1] / nl + w[1]),
           origin[2] + t * w[2] + offset * (n[2] / nl + w[2]) };
-        if (caster.Occluded(p, w, 2.0 * diag))
+        if (grid ? grid->Occluded(p, 2.0 * diag) : caster->Occluded(p, w, 2.0 * diag))
         {
           continue;
         }
@@ -470,66 +1062,90 @@ void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
   }
 }
 
-namespace
-{
 /// ComputeCollimatedSource: E_c of every beam at the mesh's points, cast
-/// against its own boundary (ComputeCollimatedBeamAtPoints).
+/// against its own boundary (BeamFieldOnSurface).
 void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<LightSource>& beams, bool shadows, CollimatedSource& out)
+  const std::vector<LightSource>& beams, bool shadows, double diagonal, const RayCaster* caster,
+  CollimatedSource& out)
 {
   const int numPoints = mesh.GetNumberOfPoints();
   const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
   CollimatedEntrySurface surface;
   surface.Points = &mesh.GetPoints();
   surface.Triangles = &mesh.GetBoundaryTriangles();
-  surface.Diagonal = BoundingBoxDiagonal(mesh);
+  surface.Diagonal = diagonal;
   surface.Eta.resize(triangleTets.size());
   surface.Extinction.resize(3 * triangleTets.size());
-  for (std::size_t f = 0; f < triangleTets.size(); ++f)
+  for (size_t f = 0; f < triangleTets.size(); ++f)
   {
-    const std::size_t tet = static_cast<std::size_t>(triangleTets[f]);
+    const size_t tet = static_cast<size_t>(triangleTets[f]);
     surface.Eta[f] = material.RefractiveIndex[tet];
     for (int c = 0; c < NumberOfChannels; ++c)
     {
-      surface.Extinction[3 * f + c] =
-        material.AbsorptionCoefficient[3 * tet + c] + material.ReducedScatteringCoefficient[3 * tet + c];
+      surface.Extinction[3 * f + c] = material.AbsorptionCoefficient[3 * tet + c] +
+        material.ReducedScatteringCoefficient[3 * tet + c];
     }
   }
-  std::vector<char> onBoundary(static_cast<std::size_t>(numPoints));
+  std::vector<char> onBoundary(static_cast<size_t>(numPoints));
   for (int i = 0; i < numPoints; ++i)
   {
-    onBoundary[static_cast<std::size_t>(i)] = mesh.IsBoundaryPoint(i) ? 1 : 0;
+    onBoundary[static_cast<size_t>(i)] = mesh.IsBoundaryPoint(i) ? 1 : 0;
   }
-  ComputeCollimatedBeamAtPoints(
-    surface, beams, shadows, mesh.GetPoints(), onBoundary, mesh.GetPointNormals(), out);
+  BeamFieldOnSurface(
+    surface, caster, beams, shadows, mesh.GetPoints(), onBoundary, mesh.GetPointNormals(), out);
 }
 
-} // namespace
-
-void AddCollimatedLoads(const TetMesh& mesh, const OpticalProperties& material, CollimatedSource& out)
+/// ComputeCollimatedSource, loads: integral of mu_s' E_c phi_a per tet and
+/// beam, then scattered to the points (and mu_a E_c, the absorbed power).
+void BeamLoads(const TetMesh& mesh, const OpticalProperties& material,
+  CollimatedEvaluation evaluation, CollimatedSource& out)
 {
   const int numTets = mesh.GetNumberOfTets();
-  if (out.Load.size() != 3 * static_cast<size_t>(mesh.GetNumberOfPoints()))
-  {
-    out.Load.assign(3 * static_cast<size_t>(mesh.GetNumberOfPoints()), 0.0);
-  }
   const std::vector<double>& muA = material.AbsorptionCoefficient;
   const std::vector<double>& muS = material.ReducedScatteringCoefficient;
-  std::vector<double> tetLoad(12 * static_cast<size_t>(numTets), 0.0);
-  std::vector<double> tetAbsorbed(3 * static_cast<size_t>(numTets), 0.0);
+  // Per tet, zeroed by the thread that fills it (no pass over the whole
+  // buffer first: at 1M tets it is 120 MB, new pages on every call).
+  const std::unique_ptr<double[]> tetLoad(new double[12 * static_cast<size_t>(numTets)]);
+  const std::unique_ptr<double[]> tetAbsorbed(new double[3 * static_cast<size_t>(numTets)]);
+  // ln E_c per point, beam and channel (0 where E_c = 0, as QuadratureLevel).
+  const int numPoints = mesh.GetNumberOfPoints();
+  const bool fast = evaluation == CollimatedEvaluation::Fast;
+  std::vector<std::vector<double>> logs(out.Beams.size());
+  for (size_t b = 0; fast && b < out.Beams.size(); ++b)
+  {
+    const std::vector<double>& fluence = out.Beams[b].Fluence;
+    std::vector<double>& log = logs[b];
+    log.resize(fluence.size());
 #pragma omp parallel for schedule(static)
+    for (int i = 0; i < 3 * numPoints; ++i)
+    {
+      log[i] = fluence[i] > 0.0 ? std::log(fluence[i]) : 0.0;
+    }
+  }
+  // (Dynamic: the tets' costs differ by their rule, and the lit tets cluster.)
+#pragma omp parallel for schedule(dynamic, 256)
   for (int t = 0; t < numTets; ++t)
   {
     const int* v = mesh.GetTet(t);
     const double volume = mesh.GetTetVolume(t);
-    for (const CollimatedSource::Beam& beam : out.Beams)
+    std::fill_n(&tetLoad[12 * static_cast<size_t>(t)], 12, 0.0);
+    std::fill_n(&tetAbsorbed[3 * static_cast<size_t>(t)], 3, 0.0);
+    for (size_t b = 0; b < out.Beams.size(); ++b)
     {
+      const std::vector<double>& fluence = out.Beams[b].Fluence;
+      const std::vector<double>& log = logs[b];
       for (int c = 0; c < NumberOfChannels; ++c)
       {
-        double e[4], path[4];
-        TetValues(beam, v, c, e, path);
+        double e[4], logE[4];
+        for (int k = 0; k < 4; ++k)
+        {
+          e[k] = fluence[3 * static_cast<size_t>(v[k]) + c];
+          logE[k] = fast ? log[3 * static_cast<size_t>(v[k]) + c] : 0.0;
+        }
         double moment[4], total = 0.0;
-        if (!TetIntegrals(e, path, 0.0, volume, total, moment))
+        const bool lit = fast ? ContinuousWaveTetIntegrals(e, logE, volume, total, moment)
+                              : ReferenceTetIntegrals(e, volume, total, moment);
+        if (!lit)
         {
           continue;
         }
@@ -558,8 +1174,39 @@ void AddCollimatedLoads(const TetMesh& mesh, const OpticalProperties& material, 
   }
 }
 
+} // namespace
+
+void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
+  const std::vector<LightSource>& beams, bool shadows, const std::vector<double>& points,
+  const std::vector<char>& onBoundary, const std::vector<double>& normals, CollimatedSource& out)
+{
+  const size_t numPoints = points.size() / 3;
+  out.Fluence.assign(3 * numPoints, 0.0);
+  out.Beams.resize(beams.size());
+  for (CollimatedSource::Beam& beam : out.Beams)
+  {
+    beam.Fluence.assign(3 * numPoints, 0.0);
+    beam.OpticalPath.assign(numPoints, 0.0);
+  }
+  if (beams.empty() || surface.Triangles->empty())
+  {
+    return;
+  }
+  // The rays through a grid along each beam (Fast's path).
+  BeamFieldOnSurface(surface, nullptr, beams, shadows, points, onBoundary, normals, out);
+}
+
+void AddCollimatedLoads(const TetMesh& mesh, const OpticalProperties& material, CollimatedSource& out)
+{
+  if (out.Load.size() != 3 * static_cast<size_t>(mesh.GetNumberOfPoints()))
+  {
+    out.Load.assign(3 * static_cast<size_t>(mesh.GetNumberOfPoints()), 0.0);
+  }
+  BeamLoads(mesh, material, CollimatedEvaluation::Fast, out);
+}
+
 CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<LightSource>& lights, bool shadows)
+  const std::vector<LightSource>& lights, bool shadows, CollimatedEvaluation evaluation)
 {
   const int numPoints = mesh.GetNumberOfPoints();
   const int numTets = mesh.GetNumberOfTets();
@@ -589,6 +1236,7 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
   const std::vector<double>& tetEta = material.RefractiveIndex;
 
   // Entering power: the triangle-integrated irradiance of the beams.
+  if (evaluation == CollimatedEvaluation::Reference)
   {
     std::vector<double> cornerQ;
     ComputeTriangleCornerIrradiance(mesh, tetEta, beams, 0.0, 0, shadows, cornerQ);
@@ -601,13 +1249,21 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
         out.Entering[c] += areas[f] * (q[0] + q[3] + q[6]) / 3.0;
       }
     }
+    // A caster built for the call.
+    RayCaster caster;
+    caster.Build(mesh.GetPoints(), mesh.GetBoundaryTriangles());
+    BeamFieldAtPoints(mesh, material, beams, shadows, BoundingBoxDiagonal(mesh), &caster, out);
   }
-
-  BeamFieldAtPoints(mesh, material, beams, shadows, out);
+  else
+  {
+    const std::shared_ptr<const BoundaryCasters> casters = BoundaryCastersOf(mesh, shadows);
+    EnteringPower(mesh, tetEta, beams, shadows, *casters, out);
+    BeamFieldAtPoints(mesh, material, beams, shadows, casters->Diagonal, nullptr, out);
+  }
 
   // Loads: integral of mu_s' E_c phi_a per tet and beam, then scattered to
   // the points.
-  AddCollimatedLoads(mesh, material, out);
+  BeamLoads(mesh, material, evaluation, out);
   return out;
 }
 

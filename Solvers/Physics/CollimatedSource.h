@@ -128,9 +128,32 @@ struct CollimatedSource
  *
  * Throws translucency::Error on invalid lights or material (sizes,
  * values). OpenMP-parallel over the points.
+ *
+ * `evaluation`: Fast (the default) evaluates the same rule faster than
+ * Reference, the straightforward evaluation kept for the tests (the loads
+ * equal to 1e-12; Documentation/DiffuseOptics.md, "What the default costs
+ * in a relight").
  */
+enum class CollimatedEvaluation
+{
+  /// The level-1 rule's exponentials factorised (4 exp and 12 sqrt instead
+  /// of 32 exp), the logarithms of E_c taken once per point, the exact
+  /// integrals of a real tet up to 4 e-folds across from one series
+  /// (ExponentialMoments), each beam's rays through a grid of the boundary
+  /// triangles binned along its direction (the same hits as RayCaster's),
+  /// and the shadow caster of the boundary (and its normals and diagonal)
+  /// kept from the last call on the same geometry
+  /// (TetMesh::GetGeometryRevision(); one mesh's kept in the process).
+  Fast,
+  /// Per tet and channel: the logarithms, VisitTet's 4 or 32 direct
+  /// exponentials, the exact integrals by the memoised recursion of
+  /// ExponentialDividedDifference, and the rays through a RayCaster built
+  /// for the call (the evaluation before issue 31's beam work).
+  Reference
+};
 CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<LightSource>& lights, bool shadows);
+  const std::vector<LightSource>& lights, bool shadows,
+  CollimatedEvaluation evaluation = CollimatedEvaluation::Fast);
 
 /// The boundary surface a beam enters through (ComputeCollimatedBeamAtPoints):
 /// outward triangles on their points and the optical properties of the tet

@@ -21,8 +21,13 @@
  * 1/(n! 19!) < 1e-17 relative), a wider set by the recursion
  * f[S] = (f[S \ a] - f[S \ b]) / (z_b - z_a) on its two most distant nodes
  * a, b (|z_b - z_a| > 1, so the difference loses little), the subsets
- * memoised. Documentation/DiffuseOptics.md, "The extended source's
- * integrals".
+ * memoised. ExponentialMoments takes its five at once: from one series
+ * about the four nodes' mean when they lie within 1 of each other (real
+ * nodes: 4, the series' terms then chosen by a bound of its truncation
+ * error, at most 32), else for real nodes by the same recursion on the
+ * sorted nodes with series leaves up to 4 apart and one table for all five
+ * (ExponentialMoments.cxx: RealSeriesTerms, RealRuns).
+ * Documentation/DiffuseOptics.md, "The extended source's integrals".
  */
 #pragma once
 

@@ -39,7 +39,8 @@ How to run (ctest does this; needs an X display, e.g. Xvfb):
    Testing/Baselines/paraview_gui_bunny.png (vtkImageDifference, the
    tolerances of TestDemoImage). The baseline was made by this test with
    --update-baseline and looked at: the marble bunny lit from above-front,
-   brighter on the top of the back and the ears, darker underneath.
+   brighter on the top of the back and the ears, darker underneath (remade
+   in session 27 for the 3,000-tet hxt mesh: a coarser silhouette).
 
 Exits non-zero on failure (unittest).
 """
@@ -198,6 +199,8 @@ class ParaViewGuiTest(unittest.TestCase):
                          % (self.result.returncode, self.result.stderr[-4000:]))
         self.assertTrue(os.path.exists(self.file("marker")),
                         "the GUI did not reach the end of the script")
+        # Where the GUI's time went (seconds since the script started, per stage).
+        print("stages (s): %s" % self.results()["seconds"], file=sys.stderr)
 
     def results(self):
         path = self.file("results.json")
@@ -365,7 +368,10 @@ class ParaViewGuiTest(unittest.TestCase):
         self.assertEqual(results["radiance_points_failed"], 0)
         self.assertGreater(results["probed_points_before"], 0)
         self.assertGreater(results["probed_points_after"], 0)
-        self.assertGreater(results["radiance_points"], 1000)
+        # The repaired chain's surface is the one before the failure (the
+        # bunny's boundary points, several hundred at 3,000 tets).
+        self.assertGreater(results["radiance_points_before"], 300)
+        self.assertEqual(results["radiance_points"], results["radiance_points_before"])
         low, high = results["radiance_range"]
         self.assertGreater(low, 0.0)
         self.assertLess(high, 1.0 / 1.3 ** 2)  # inside the fixed colour range of the picture

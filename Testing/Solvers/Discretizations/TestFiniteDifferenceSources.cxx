@@ -62,52 +62,6 @@ TetMesh Build(const MeshData& data)
   return mesh;
 }
 
-/// Icosahedron subdivided `levels` times and projected on the sphere of
-/// radius r about the origin (outward-facing triangles).
-void IcoSphere(int levels, double r, std::vector<double>& points, std::vector<int>& triangles)
-{
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Eigen::Vector3d> p = { { -1, t, 0 }, { 1, t, 0 }, { -1, -t, 0 }, { 1, -t, 0 },
-    { 0, -1, t }, { 0, 1, t }, { 0, -1, -t }, { 0, 1, -t }, { t, 0, -1 }, { t, 0, 1 },
-    { -t, 0, -1 }, { -t, 0, 1 } };
-  std::vector<int> tri = { 0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4,
-    11, 10, 2, 10, 7, 6, 7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11,
-    6, 2, 10, 8, 6, 7, 9, 8, 1 };
-  for (auto& q : p)
-  {
-    q.normalize();
-  }
-  for (int level = 0; level < levels; ++level)
-  {
-    std::map<std::pair<int, int>, int> middle;
-    auto mid = [&](int a, int b)
-    {
-      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      auto it = middle.find(key);
-      if (it != middle.end())
-      {
-        return it->second;
-      }
-      p.push_back((p[a] + p[b]).normalized());
-      return middle[key] = static_cast<int>(p.size()) - 1;
-    };
-    std::vector<int> next;
-    for (std::size_t f = 0; f < tri.size(); f += 3)
-    {
-      const int a = tri[f], b = tri[f + 1], c = tri[f + 2];
-      const int ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
-      next.insert(next.end(), { a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca });
-    }
-    tri.swap(next);
-  }
-  points.clear();
-  for (const auto& q : p)
-  {
-    points.insert(points.end(), { r * q[0], r * q[1], r * q[2] });
-  }
-  triangles = tri;
-}
-
 /**
  * A TetGen mesh of the ball of radius `radius` (quality bound 1.3) with
  * edges of about `fine` mm within `inner` mm of the centre (sizes given at

@@ -845,58 +845,6 @@ TEST(FiniteElement, PointsUsedByNoTetGetIdentityRows)
 
 // ---- divergence vs FEM on the bunny (TransCut Sec. 6.2) ----
 
-/// Reads the ASCII PLY of Data/bunny.ply: header, "x y z" lines, "3 a b c" lines.
-void ReadPly(const std::string& path, std::vector<double>& points, std::vector<int>& triangles)
-{
-  std::ifstream in(path);
-  if (!in)
-  {
-    throw std::runtime_error("cannot open " + path);
-  }
-  std::string line;
-  int numVertices = -1, numFaces = -1;
-  while (std::getline(in, line) && line != "end_header")
-  {
-    std::istringstream words(line);
-    std::string keyword, element;
-    int count = 0;
-    if (words >> keyword >> element >> count && keyword == "element")
-    {
-      if (element == "vertex")
-      {
-        numVertices = count;
-      }
-      else if (element == "face")
-      {
-        numFaces = count;
-      }
-    }
-  }
-  if (numVertices <= 0 || numFaces <= 0)
-  {
-    throw std::runtime_error("bad PLY header in " + path);
-  }
-  points.resize(3 * static_cast<size_t>(numVertices));
-  for (double& x : points)
-  {
-    in >> x;
-  }
-  triangles.resize(3 * static_cast<size_t>(numFaces));
-  for (int f = 0; f < numFaces; ++f)
-  {
-    int n = 0;
-    in >> n >> triangles[3 * f] >> triangles[3 * f + 1] >> triangles[3 * f + 2];
-    if (n != 3)
-    {
-      throw std::runtime_error("PLY face is not a triangle");
-    }
-  }
-  if (!in)
-  {
-    throw std::runtime_error("truncated PLY file " + path);
-  }
-}
-
 /// Minimum dihedral angle of tet t (degrees).
 double MinDihedralAngle(const TetMesh& mesh, int t)
 {

@@ -10,8 +10,10 @@
 #include <unsupported/Eigen/MatrixFunctions>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
+#include <iostream>
 #include <random>
 #include <vector>
 
@@ -227,6 +229,65 @@ TEST(ExponentialMoments, MatchAGaussQuadratureOverATet)
   {
     EXPECT_LT(std::abs(moment[k] - gMoment[k]), 1e-12 * std::abs(gMoment[k])) << k;
   }
+}
+
+TEST(ExponentialMoments, WideRealTetsTakeTheSeriesAndMatchTheRecursion)
+{
+  // Real tets 1 to 4 e-folds across (the wide series with up to 32 terms,
+  // ExponentialMoments.cxx) and just beyond (the recursion), with two and
+  // three equal nodes (a flat-lit face), against the recursion's five divided
+  // differences (ExponentialDividedDifference, Hermite-Genocchi) and the
+  // Opitz matrix exponential.
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  double worstRecursion = 0.0, worstOpitz = 0.0;
+  for (int trial = 0; trial < 2000; ++trial)
+  {
+    const double spread = 1.0 + 3.2 * (trial % 200) / 199.0; // 1 .. 4.2
+    double z[4] = { 0.0, -spread, -spread * unit(random), -spread * unit(random) };
+    if (trial % 5 == 0)
+    {
+      z[3] = z[2]; // two equal nodes
+    }
+    if (trial % 7 == 0)
+    {
+      z[2] = z[3] = z[1]; // three
+    }
+    const double base = -40.0 + 80.0 * unit(random);
+    for (double& x : z)
+    {
+      x += base;
+    }
+    const double volume = 0.25 + unit(random);
+    double total = 0.0, moment[4];
+    ExponentialMoments(z, volume, total, moment);
+    double nodes[5] = { z[0], z[1], z[2], z[3], 0.0 };
+    const double expectedTotal = 6.0 * volume * ExponentialDividedDifference(nodes, 4);
+    worstRecursion = std::max(worstRecursion, std::abs(total / expectedTotal - 1.0));
+    const std::vector<double> four(z, z + 4);
+    worstOpitz = std::max(worstOpitz,
+      std::abs(total / (6.0 * volume * std::exp(base) * OpitzDividedDifference(
+                         std::vector<double>{ z[0] - base, z[1] - base, z[2] - base, z[3] - base })) -
+        1.0));
+    for (int k = 0; k < 4; ++k)
+    {
+      nodes[4] = z[k];
+      const double expected = 6.0 * volume * ExponentialDividedDifference(nodes, 5);
+      worstRecursion = std::max(worstRecursion, std::abs(moment[k] / expected - 1.0));
+      std::vector<double> five(four);
+      five.push_back(z[k]);
+      for (double& x : five)
+      {
+        x -= base;
+      }
+      worstOpitz = std::max(worstOpitz,
+        std::abs(moment[k] / (6.0 * volume * std::exp(base) * OpitzDividedDifference(five)) - 1.0));
+    }
+  }
+  std::cout << "wide real tets: worst relative difference to the recursion " << worstRecursion
+            << ", to the Opitz matrix exponential " << worstOpitz << "\n";
+  EXPECT_LT(worstRecursion, 1e-12);
+  EXPECT_LT(worstOpitz, 1e-11); // Opitz's own accuracy (the random-node test above)
 }
 
 TEST(ExponentialMoments, ABrightVertexDoesNotOverflow)
