@@ -81,30 +81,6 @@ translucency::CollimatedModel DefaultModelFor(
     : translucency::CollimatedModel::Surface;
 }
 
-/// Whether the input asks for an extended collimated-source model
-/// (vtkSurfaceIrradiance's CollimatedModel, in the field data, or its
-/// default decided here): the distributed path does not implement them, so
-/// such inputs are gathered. `pencilBeams`: the filter has pencil beams;
-/// `solver`: its solver's name (a default choice depends on both:
-/// DefaultModelFor).
-bool ExtendedCollimatedModel(vtkInformationVector* inputs,
-  const vtkTranslucencyCommunicator& comm, bool pencilBeams, const std::string& solver)
-{
-  vtkUnstructuredGrid* input = vtkUnstructuredGrid::GetData(inputs);
-  vtkFieldData* fd = input ? input->GetFieldData() : nullptr;
-  vtkDataArray* model = fd ? fd->GetArray("TranslucencyCollimatedModel") : nullptr;
-  bool extended = model && model->GetNumberOfTuples() > 0 && model->GetComponent(0, 0) != 0.0;
-  if (input && ChosenByDefault(fd))
-  {
-    translucency::DiffusionProblem problem;
-    ReadLights(input, problem);
-    extended =
-      translucency::IsExtendedCollimatedModel(DefaultModelFor(problem, pencilBeams, solver));
-  }
-  // A collective decision: an empty piece may carry no field data, and every
-  // rank must take the same path (or the others hang in its collectives).
-  return comm.Any(extended);
-}
 }
 
 struct vtkSolveDiffusion::Internals
@@ -717,11 +693,8 @@ vtkTranslucencyParallelPlan vtkSolveDiffusion::PlanParallel(
   vtkInformationVector** inputVector, const vtkTranslucencyCommunicator& comm)
 {
   using Plan = vtkTranslucencyParallelPlan;
+  (void)inputVector;
   const Plan::GatherMode mode = Plan::GatherMode::SameMesh;
-  // Collective first: every rank takes part whatever the settings.
-  const bool extended = ExtendedCollimatedModel(inputVector[0], comm,
-    !this->Internal->Sources.GetPencilBeams().empty() || this->InteractivePencilBeam,
-    this->GetSolverName());
   // By the registry's trait: the solvers with a distributed variant (a build
   // without the Parallel layer has none).
   if (!SolverEntry(this->Solver).Properties.Distributed)
@@ -744,16 +717,13 @@ vtkTranslucencyParallelPlan vtkSolveDiffusion::PlanParallel(
   {
     return Plan::Gathered(mode, "the interactive detector");
   }
-  if (extended)
-  {
-    return Plan::Gathered(mode, "the extended collimated model");
-  }
   if (!vtkTranslucency::CanDistribute(comm))
   {
     return Plan::Gathered(mode, "this build has no distributed solve (hypre and VTK's ParallelMPI)");
   }
-  Plan plan = Plan::Distributed(
-    mode, "one hypre system over the ranks' pieces (divergence or fem, continuous wave)");
+  Plan plan = Plan::Distributed(mode,
+    "one hypre system over the ranks' pieces (divergence or fem, continuous wave; the extended "
+    "collimated models' beam cast against the all-gathered boundary)");
   plan.DeprecatedVariable = "TRANSLUCENCY_GATHERED_SOLVE";
   return plan;
 }
@@ -1491,11 +1461,35 @@ int vtkSolveDiffusion::RequestDistributed(
     return 0;
   }
   in.SolvedDetectors = in.Detectors;
-  std::vector<double> fluence;
+  // The lights and the collimated model, the same on every rank (an empty
+  // piece may carry no field data), and a default choice decided as in one
+  // process (DecideDefaultCollimatedModel): its directional lights' part is
+  // taken out of the irradiance by the distributed solve.
+  translucency::DiffusionProblem light;
+  if (input)
+  {
+    ReadLights(input, light);
+  }
+  int byDefault = input && ChosenByDefault(input->GetFieldData()) ? 1 : 0;
+  vtkTranslucencyDistributedSolve::AgreeOnLights(input, light, byDefault);
+  bool takeOutBeams = false;
+  if (byDefault)
+  {
+    light.Collimated = DefaultModelFor(light, !in.SolvedSources.GetPencilBeams().empty(),
+      this->GetSolverName());
+    for (const translucency::LightSource& source : light.Lights)
+    {
+      takeOutBeams = takeOutBeams ||
+        (translucency::IsExtendedCollimatedModel(light.Collimated) &&
+          source.Type == translucency::LightSource::Kind::Directional);
+    }
+  }
+  std::vector<double> fluence, solvedIrradiance;
   translucency::SolverReport& report = in.Result.Report;
   if (!in.Distributed.Solve(input, SolverEntry(this->Solver).Name, this->RelTol, this->MaxIter,
-        this->WarmStart, this->NumberOfThreads, this->AcceptUnconverged != 0, &in.SolvedSources, in.Detectors, fluence,
-        in.Result.Readings, report, error))
+        this->WarmStart, this->NumberOfThreads, this->AcceptUnconverged != 0, &in.SolvedSources,
+        in.Detectors, light, takeOutBeams, fluence, solvedIrradiance, in.Result.Readings, report,
+        error))
   {
     in.Result = translucency::SolveResult();
     vtkErrorMacro(<< error);
@@ -1527,10 +1521,29 @@ int vtkSolveDiffusion::RequestDistributed(
   this->AssemblyTime = report.SetupMilliseconds;
   this->SolveTime = report.SolveMilliseconds;
   in.WarnUnconverged(*this);
+  // The Robin rule of the model (DiffusionFrontEnd::SolveOnce: Moments for
+  // extended-moments), read by Attach for vtkOutgoingRadiance.
+  in.Result.Rule = light.Collimated == translucency::CollimatedModel::ExtendedMoments
+    ? translucency::Fresnel::BoundaryRule::Moments
+    : translucency::Fresnel::BoundaryRule::Fit;
+  this->SolvedCollimatedModel = static_cast<int>(light.Collimated);
   if (input)
   {
     in.Result.Fluence = std::move(fluence);
     in.Attach(*this, input, output);
+    // The model this solve used and, for a default extended model, the
+    // irradiance it used (vtkOutgoingRadiance's q of eq. 3), as in one process.
+    if (takeOutBeams && solvedIrradiance.size() == 3 * static_cast<size_t>(input->GetNumberOfPoints()))
+    {
+      vtkDataArray* array =
+        vtkTranslucency::NewTripleArray(vtkTranslucency::IrradianceName, solvedIrradiance);
+      output->GetPointData()->AddArray(array);
+      array->Delete();
+    }
+    vtkNew<vtkIntArray> modelArray;
+    modelArray->SetName("TranslucencyCollimatedModel");
+    modelArray->InsertNextValue(static_cast<int>(light.Collimated));
+    output->GetFieldData()->AddArray(modelArray);
   }
   else
   {

@@ -150,7 +150,7 @@ public:
   const char* GetSolverName() const;
 
   /**
-   * The collimated model the last serial or gathered solve used (0 surface,
+   * The collimated model the last solve used (0 surface,
    * 1 extended, 2 extended-moments; -1 before the first), also written to
    * the output's field data (`TranslucencyCollimatedModel`).
    * vtkSurfaceIrradiance's default model (COLLIMATED_DEFAULT) is decided
@@ -161,8 +161,9 @@ public:
    * For an extended model the directional lights' q is taken out of the
    * irradiance of the solve, and the output's `Irradiance` is that of the
    * solve (what vtkOutgoingRadiance reads). Under MPI a default choice is
-   * decided as in one process and an extended model is solved gathered
-   * (Documentation/Parallel.md): the same model and field as one process.
+   * decided as in one process and an extended model is solved on the
+   * distributed path (the beam cast against the all-gathered boundary;
+   * Documentation/Parallel.md): the same model and field as one process.
    */
   int GetSolvedCollimatedModel() const { return this->SolvedCollimatedModel; }
 
@@ -466,9 +467,9 @@ public:
   /// BoomerAMG-PCG system (Documentation/Parallel.md), instead of gathering
   /// the mesh to rank 0. Default on. Off (or the environment variable
   /// TRANSLUCENCY_GATHERED_SOLVE=1) gathers, as do a modulation frequency,
-  /// time gates, the extended collimated models, the other solvers and
-  /// builds without hypre (point sources, listed and interactive pencil
-  /// beams and detectors are distributed). The distributed path always uses hypre's BoomerAMG-PCG
+  /// time gates, the other solvers and builds without hypre (point sources,
+  /// listed and interactive pencil beams, detectors and the extended
+  /// collimated models are distributed). The distributed path always uses hypre's BoomerAMG-PCG
   /// (LinearSolver, IncrementalAssembly and NumberOfThreads' effect on the
   /// solve do not apply).
   vtkSetMacro(DistributedSolve, bool);

@@ -22,6 +22,11 @@ the same tets (issues 31 and 32; Documentation/Performance.md and Scaling.md).
 3. Writes the medians (seconds, per step and filter), the ranks and the tets
    to the JSON file. --table prints the Markdown
    table of two or more such files (the first is the baseline).
+
+TRANSLUCENCY_MPI_DISTRIBUTED_SOLVE=0 (env) sets Solve Diffusion's
+DistributedSolve off: under MPI its gathered path (the extended collimated
+models' path before issue 32's distributed beam), for a before/after in one
+build.
 """
 
 import json
@@ -57,6 +62,7 @@ def main():
     from paraview import servermanager
     plugin, vtu, out = sys.argv[1:4]
     runs = int(os.environ.get("TRANSLUCENCY_MPI_RUNS", "3"))
+    distributed = int(os.environ.get("TRANSLUCENCY_MPI_DISTRIBUTED_SOLVE", "1"))
     LoadPlugin(plugin, ns=globals())
     pm = servermanager.vtkProcessModule.GetProcessModule()
     ranks = pm.GetNumberOfLocalPartitions()
@@ -89,7 +95,7 @@ def main():
         paint = PaintScatteringCoefficients(Input=light)  # noqa: F821
         paint.StrokePoints = [bounds[1] + diag, centre[1], centre[2]]
         paint.Width = 0.01 * diag
-        solve = SolveDiffusion(Input=paint)  # noqa: F821
+        solve = SolveDiffusion(Input=paint, DistributedSolve=distributed)  # noqa: F821
         radiance = OutgoingRadiance(Input=solve)  # noqa: F821
         proxies = dict(zip(FILTERS, (assign, light, paint, solve, radiance)))
         for step in STEPS:
@@ -111,6 +117,7 @@ def main():
         for proxy in (radiance, solve, paint, light, assign):
             Delete(proxy)
     result = {"ranks": ranks, "tets": info.GetNumberOfCells(), "runs": runs,
+              "distributed_solve": distributed,
               "threads": os.environ.get("OMP_NUM_THREADS", ""),
               "medians": {s: {f: statistics.median(v) for f, v in times[s].items()}
                           for s in STEPS}}

@@ -3,8 +3,10 @@
 
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
 #include "DiffusionFrontEnd.h"
+#include "DistributedCollimatedSource.h"
 #include "HypreSolver.h" // MakeCommunicator: the MPI side of translucency::Communicator
 #include "Error.h"
+#include "vtkTranslucencyDistributedIrradiance.h"
 #include "vtkTranslucencyMPI.h"
 #include "vtkTranslucencyMeshConversion.h"
 #include "vtkTranslucencyPieceFaces.h"
@@ -36,6 +38,10 @@ struct vtkTranslucencyDistributedSolve::Impl
   std::vector<vtkIdType> Kept;
   translucency::SolveResult Result;
   bool Solved = false;
+  /// The directional lights' irradiance taken out of a default model's
+  /// Irradiance: the gathered surface and each light's terms kept across
+  /// executions (a relight computes the changed light only).
+  vtkTranslucencyDistributedIrradiance::State BeamIrradiance;
 };
 
 namespace
@@ -101,14 +107,70 @@ void ConvertValues(vtkUnstructuredGrid* input, const std::vector<vtkIdType>& kep
 }
 }
 
+namespace
+{
+/**
+ * Collective. The default model's irradiance: `irradiance` (every light)
+ * without the directional lights' projected irradiance at this rank's
+ * points, as vtkSolveDiffusion's serial DecideDefaultCollimatedModel takes
+ * it out (term for term the serial ComputeProjectedIrradiance: the
+ * distributed Surface Irradiance's kernel). Throws translucency::Error (the
+ * same on every rank).
+ */
+void TakeOutBeams(vtkUnstructuredGrid* input, const translucency::DiffusionProblem& lights,
+  vtkTranslucencyDistributedIrradiance::State& state, std::vector<double>& irradiance)
+{
+  std::vector<translucency::LightSource> beams;
+  for (const translucency::LightSource& light : lights.Lights)
+  {
+    if (light.Type == translucency::LightSource::Kind::Directional)
+      beams.push_back(light);
+  }
+  std::vector<double> q;
+  vtkTranslucencyDistributedIrradiance::Report report;
+  std::string error;
+  if (!vtkTranslucencyDistributedIrradiance::Compute(
+        input, beams, 0.0, 0, lights.Shadows, {}, q, report, error, &state))
+  {
+    throw translucency::Error(error.empty() ? std::string("aborted") : error);
+  }
+  if (q.size() != irradiance.size())
+  {
+    // (An empty piece: no tet reads its irradiance.)
+    return;
+  }
+  for (std::size_t i = 0; i < irradiance.size(); ++i)
+  {
+    // What is left is the other lights' q; a point only the beams reach
+    // keeps a rounding residue of their sum, set to 0 (the serial rule).
+    const double rest = irradiance[i] - q[i];
+    irradiance[i] = rest > 1e-12 * irradiance[i] ? rest : 0.0;
+  }
+}
+}
+
+void vtkTranslucencyDistributedSolve::AgreeOnLights(
+  vtkUnstructuredGrid* input, translucency::DiffusionProblem& problem, int& flag)
+{
+  const MPI_Comm* handle = vtkTranslucency::MPIHandle(vtkTranslucencyCommunicator::World());
+  if (!handle)
+  {
+    return; // one process
+  }
+  translucency::AgreeOnLights(*handle, input && input->GetNumberOfCells() > 0, problem.Lights,
+    problem.UniformIrradiance, problem.Shadows, problem.Collimated, flag);
+}
+
 bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   const std::string& discretization, double relTol, int maxIter, bool warmStart, int threads,
   bool acceptUnconverged, const translucency::Sources* sources,
-  const std::vector<translucency::Detector>& detectors, std::vector<double>& fluence,
-  std::vector<translucency::DetectorReading>& readings, translucency::SolverReport& report,
-  std::string& error)
+  const std::vector<translucency::Detector>& detectors,
+  const translucency::DiffusionProblem& lights, bool takeOutBeams, std::vector<double>& fluence,
+  std::vector<double>& solvedIrradiance, std::vector<translucency::DetectorReading>& readings,
+  translucency::SolverReport& report, std::string& error)
 {
   readings.clear();
+  solvedIrradiance.clear();
   Impl& in = *this->Internal;
   in.Solved = false;
   const MPI_Comm* handle = vtkTranslucency::MPIHandle(vtkTranslucencyCommunicator::World());
@@ -165,6 +227,11 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   try
   {
     translucency::AgreeOnError(comm, local);
+    if (takeOutBeams)
+    {
+      TakeOutBeams(input, lights, in.BeamIrradiance, irradiance);
+      solvedIrradiance = irradiance;
+    }
     // The solver by name, its distributed variant by the registry's trait.
     in.FrontEnd.SetSolver(discretization);
     in.FrontEnd.SetCommunicator(translucency::MakeCommunicator(handle));
@@ -174,6 +241,10 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
     solver.SetWarmStart(warmStart);
     solver.SetNumberOfThreads(threads);
     translucency::DiffusionProblem light;
+    light.Lights = lights.Lights;
+    light.UniformIrradiance = lights.UniformIrradiance;
+    light.Shadows = lights.Shadows;
+    light.Collimated = lights.Collimated;
     light.InteriorSources = sources;
     light.PointKeys = &keys;
     translucency::SolveRequest request;
@@ -244,10 +315,15 @@ struct vtkTranslucencyDistributedSolve::Impl
 {
 };
 
+void vtkTranslucencyDistributedSolve::AgreeOnLights(
+  vtkUnstructuredGrid*, translucency::DiffusionProblem&, int&)
+{
+}
+
 bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid*, const std::string&, double,
   int, bool, int, bool, const translucency::Sources*, const std::vector<translucency::Detector>&,
-  std::vector<double>&, std::vector<translucency::DetectorReading>&, translucency::SolverReport&,
-  std::string& error)
+  const translucency::DiffusionProblem&, bool, std::vector<double>&, std::vector<double>&,
+  std::vector<translucency::DetectorReading>&, translucency::SolverReport&, std::string& error)
 {
   error = "this build has no distributed solve (hypre or VTK's ParallelMPI missing)";
   return false;

@@ -8,8 +8,10 @@
  *         being gathered to rank 0 (vtkTranslucencyParallel::RunGathered).
  *
  * Used for the divergence and fem solvers in continuous wave (point
- * sources, listed pencil beams and detectors included; no modulation, time
- * gates or extended collimated model; the interactive pencil beam is aimed by
+ * sources, listed pencil beams, detectors and the extended collimated models
+ * included: the beam's rays cast against the all-gathered physical boundary,
+ * translucency::DistributedCollimatedSource; no modulation or time gates;
+ * the interactive pencil beam is aimed by
  * vtkSolveDiffusion on the all-gathered surface and arrives as a listed beam), when vtkSolveDiffusion's plan says
  * "distributed" (vtkTranslucencyDispatch: every rank takes part, a rank with
  * an empty piece too). A build without hypre or without VTK's ParallelMPI
@@ -24,7 +26,7 @@
 #define vtkTranslucencyDistributedSolve_h
 
 #include "Detectors.h"       // for translucency::Detector, DetectorReading, Sources
-#include "DiffusionSolver.h" // for translucency::SolverReport
+#include "DiffusionSolver.h" // for translucency::SolverReport, DiffusionProblem
 
 #include <memory>
 #include <string>
@@ -39,21 +41,39 @@ public:
   ~vtkTranslucencyDistributedSolve();
 
   /**
+   * Collective: the lights, uniform irradiance, shadow flag and collimated
+   * model of `problem` and `flag` as the lowest rank with cells has them
+   * (translucency::AgreeOnLights: an empty piece may carry no field data), on
+   * every rank. Nothing to agree with one process.
+   */
+  static void AgreeOnLights(
+    vtkUnstructuredGrid* input, translucency::DiffusionProblem& problem, int& flag);
+
+  /**
    * Collective. Solve on this rank's piece `input` with the registry's
    * distributed variant of `solver` (trait Distributed: "divergence" or
    * "fem"), through translucency::DiffusionFrontEnd on the controller's
    * communicator; fluence gets 3 values per input point. `sources` (may be
    * null) are the interior sources, `detectors` read into `readings` (the
    * same on every rank). A solve that does not converge, also after a full
-   * set-up, fails unless `acceptUnconverged`. Returns false with `error`
-   * (the same on every rank) on failure.
+   * set-up, fails unless `acceptUnconverged`. `lights` (AgreeOnLights:
+   * the same on every rank): Lights, Shadows and Collimated of the solve; with
+   * an extended model the directional lights enter as the beam's volume
+   * source. `takeOutBeams` (the default model's choice, vtkSolveDiffusion):
+   * the input's Irradiance holds every light, and the directional lights'
+   * projected irradiance (vtkTranslucencyDistributedIrradiance, the serial
+   * ComputeProjectedIrradiance at this rank's points) is taken out of it
+   * before the solve, as the serial filter does; `solvedIrradiance` then gets
+   * the irradiance solved with (3 per input point; else left empty). Returns
+   * false with `error` (the same on every rank) on failure.
    */
   bool Solve(vtkUnstructuredGrid* input, const std::string& solver, double relTol,
     int maxIter, bool warmStart, int threads, bool acceptUnconverged,
     const translucency::Sources* sources,
-    const std::vector<translucency::Detector>& detectors, std::vector<double>& fluence,
-    std::vector<translucency::DetectorReading>& readings, translucency::SolverReport& report,
-    std::string& error);
+    const std::vector<translucency::Detector>& detectors,
+    const translucency::DiffusionProblem& lights, bool takeOutBeams, std::vector<double>& fluence,
+    std::vector<double>& solvedIrradiance, std::vector<translucency::DetectorReading>& readings,
+    translucency::SolverReport& report, std::string& error);
 
   /**
    * The power balance of the last successful Solve over the whole

@@ -137,7 +137,8 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   const std::vector<int>& triangles, const std::vector<double>& triangleEta,
   const std::vector<int>& triangleTets, BoundarySurface& surface,
   std::vector<int>& surfacePoint, std::vector<double>& rotations,
-  BoundarySurfaceReport& report)
+  BoundarySurfaceReport& report, const std::vector<double>* triangleData,
+  int valuesPerTriangle, std::vector<double>* gatheredData)
 {
   const Timer timer;
   report = BoundarySurfaceReport();
@@ -154,11 +155,16 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   const std::vector<int> seen = ClassifyTriangles(comm, numbering, triangles, triangleEta,
     triangleTets, "TRANSLUCENCY_GATHERED_IRRADIANCE=1", rows);
   std::vector<TriangleRecord> myTriangles;
+  std::vector<double> myData;
+  const std::size_t perTriangle =
+    triangleData && gatheredData ? static_cast<std::size_t>(std::max(0, valuesPerTriangle)) : 0;
   std::vector<char> onSurface(numPoints, 0);
   for (std::size_t f = 0; f < numTriangles; ++f)
   {
     if (seen[f] != 1)
       continue;
+    for (std::size_t k = 0; k < perTriangle; ++k)
+      myData.push_back((*triangleData)[perTriangle * f + k]);
     TriangleRecord record;
     record.Padding = 0;
     record.Eta = triangleEta[f];
@@ -215,6 +221,8 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
 
   const std::vector<TriangleRecord> allTriangles =
     AllGather(comm, myTriangles, report.GatheredBytes);
+  if (perTriangle > 0)
+    *gatheredData = AllGather(comm, myData, report.GatheredBytes); // the same rank order
   surface.Triangles.resize(3 * allTriangles.size());
   surface.TriangleEta.resize(allTriangles.size());
   for (std::size_t f = 0; f < allTriangles.size(); ++f)

@@ -50,6 +50,10 @@ struct BoundarySurfaceReport
  * @param surfacePoint output: per local point, its index in surface.Points
  *   (-1: not on the physical boundary)
  * @param rotations output: per surface point, its uniform-light rotation
+ * @param triangleData, valuesPerTriangle, gatheredData optional: more values
+ *   of each local triangle (valuesPerTriangle each, e.g. the extinction of
+ *   its tet for the collimated beam), gathered with the physical triangles
+ *   into gatheredData, in surface.Triangles' order
  * Throws translucency::Error, with the same message on every rank, for a
  * triangle held by more than two ranks (overlapping pieces without ghost
  * marks) or an invalid refractive index under a physical triangle.
@@ -59,7 +63,8 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   const std::vector<int>& triangles, const std::vector<double>& triangleEta,
   const std::vector<int>& triangleTets, BoundarySurface& surface,
   std::vector<int>& surfacePoint, std::vector<double>& rotations,
-  BoundarySurfaceReport& report);
+  BoundarySurfaceReport& report, const std::vector<double>* triangleData = nullptr,
+  int valuesPerTriangle = 0, std::vector<double>* gatheredData = nullptr);
 
 /// A rank's part of the physical boundary (FindPieceBoundary()).
 struct PieceBoundary

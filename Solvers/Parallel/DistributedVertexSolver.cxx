@@ -91,6 +91,7 @@ void DistributedVertexSolver::SetCommunicator(const Communicator& comm)
   Points_.clear();
   Tets_.clear();
   OwnMesh_ = TetMesh();
+  Beam_.Clear();
   Comm_ = next;
 }
 
@@ -118,6 +119,12 @@ bool DistributedVertexSolver::GetTalliedReadouts(TalliedReadouts& readouts) cons
     readouts.Injected[c] = Balance_.BoundaryInjected[c] + SourcePower_[c];
     readouts.Absorbed[c] = Balance_.Absorbed[c];
     readouts.Escaped[c] = Balance_.Escaped[c];
+    // The extended model's beam (DiffusionFrontEnd::ComputePowerBalance):
+    // what entered, what it deposited directly, what leaves unscattered.
+    const CollimatedSource& b = BeamResult_;
+    readouts.Injected[c] += b.Entering[c];
+    readouts.Absorbed[c] += b.Absorbed[c];
+    readouts.Escaped[c] += b.Entering[c] - b.Scattered[c] - b.Absorbed[c];
   }
   return true;
 }
@@ -496,8 +503,8 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
       const int l[3] = { LocalIndex(tv, tri[0]), LocalIndex(tv, tri[1]), LocalIndex(tv, tri[2]) };
       const double eta = tetEta[t];
       double robin, load;
-      FiniteElementRobin(areas[f], Fresnel::MismatchA(eta), Fresnel::DiffuseReflectance(eta),
-        robin, load);
+      const Fresnel::RobinCoefficients robinCoefficients = Fresnel::BoundaryCoefficients(eta, Rule_);
+      FiniteElementRobin(areas[f], robinCoefficients.A, robinCoefficients.Fdr, robin, load);
       for (int c = 0; c < NumberOfChannels; ++c)
       {
         double* v = system ? system->Values[c].data() : nullptr;
@@ -540,7 +547,8 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
       continue;
     const std::size_t i = static_cast<std::size_t>(FirstLocal_[r]);
     const double eta = owned[2 * r + 1] / s;
-    const double a = Fresnel::MismatchA(eta), fdr = Fresnel::DiffuseReflectance(eta);
+    const Fresnel::RobinCoefficients robinCoefficients = Fresnel::BoundaryCoefficients(eta, Rule_);
+    const double a = robinCoefficients.A, fdr = robinCoefficients.Fdr;
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       if (system)
@@ -913,14 +921,14 @@ void DistributedVertexSolver::ReadOuts(const OpticalProperties& material,
 {
   Readings_.clear();
   if (!Detectors_.empty())
-    Readings_ = ReadDistributedDetectors(Comm_, Piece(material), Detectors_, fluence, &irradiance);
+    Readings_ = ReadDistributedDetectors(Comm_, Piece(material), Detectors_, fluence, &irradiance, Rule_);
 
   // The power balance: this rank's tets and physical faces, summed.
   std::array<double, 4 * NumberOfChannels> sums{};
   if (HasTets())
   {
     const PowerBalance local = ComputePowerBalance(
-      *Mesh_, material, fluence, &irradiance, Fresnel::BoundaryRule::Fit, &PhysicalFace_);
+      *Mesh_, material, fluence, &irradiance, Rule_, &PhysicalFace_);
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       sums[c] = local.Absorbed[c];
@@ -1013,13 +1021,18 @@ bool DistributedVertexSolver::Solve(
   {
     error = "the distributed " + Name_ + " solve needs a material and an irradiance";
   }
-  else if (IsExtendedCollimatedModel(problem.Collimated))
-  {
-    error = "the distributed " + Name_ +
-      " solve has the surface collimated model only (the extended models are solved in one "
-      "process)";
-  }
   AgreeOnError(Comm_, error);
+  // The lights and the collimated model: the lowest rank with tets' (an
+  // empty piece may carry no field data), the same on every rank.
+  Lights_ = problem.Lights;
+  Shadows_ = problem.Shadows;
+  Collimated_ = problem.Collimated;
+  double uniform = problem.UniformIrradiance;
+  int unused = 0;
+  AgreeOnLights(Comm_, problem.Mesh && problem.Mesh->GetNumberOfTets() > 0, Lights_, uniform,
+    Shadows_, Collimated_, unused);
+  Rule_ = Collimated_ == CollimatedModel::ExtendedMoments ? Fresnel::BoundaryRule::Moments
+                                                          : Fresnel::BoundaryRule::Fit;
   Sources_ = problem.InteriorSources;
   try
   {
@@ -1030,10 +1043,15 @@ bool DistributedVertexSolver::Solve(
   {
     Sources_ = nullptr;
     Mesh_ = &EmptyMesh_;
+    Collimated_ = CollimatedModel::Surface;
+    Rule_ = Fresnel::BoundaryRule::Fit;
     throw;
   }
   Sources_ = nullptr; // borrowed for this call only
   Mesh_ = &EmptyMesh_;
+  // The array Solve (the bench) has the surface model.
+  Collimated_ = CollimatedModel::Surface;
+  Rule_ = Fresnel::BoundaryRule::Fit;
   return true;
 }
 
@@ -1089,7 +1107,8 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
     ready = ready && Channels_[c] && Donor_[c] >= 0 && LinearSolverName() == ChannelLinear_[c];
   int allReady = ready ? 1 : 0;
   MPI_Allreduce(MPI_IN_PLACE, &allReady, 1, MPI_INT, MPI_MIN, Comm_);
-  const bool relight = allReady && SameMaterialEverywhere(material);
+  // (A change of the Robin rule, the collimated model's, changes the matrix.)
+  const bool relight = allReady && Rule_ == MatrixRule_ && SameMaterialEverywhere(material);
   DiffusionSystem system;
   if (!relight)
   {
@@ -1098,6 +1117,16 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   std::vector<double> localRhs(3 * keys.size(), 0.0);
   AddBoundaryTerms(material, irradiance, relight ? nullptr : &system, localRhs);
   std::array<double, NumberOfChannels> localSourcePower{};
+  // The extended collimated models: the beam's volume source, 4 x its load
+  // as every right-hand side (its rank's tets' share, summed at the owners).
+  BeamResult_ = CollimatedSource();
+  if (IsExtendedCollimatedModel(Collimated_))
+  {
+    Beam_.Compute(Comm_, HasTets() ? Mesh_ : nullptr, keys, Used_, material, Lights_, Shadows_,
+      BeamResult_);
+    for (std::size_t k = 0; k < BeamResult_.Load.size(); ++k)
+      localRhs[k] += 4.0 * BeamResult_.Load[k];
+  }
   if (Sources_ && !Sources_->Empty())
   {
     const std::vector<double> load =
@@ -1135,6 +1164,7 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   {
     HaveMaterial_ = false;
     setup = SetUpMatrices(allSame != 0, system, report.Assembly, hierarchyMs);
+    MatrixRule_ = Rule_;
     Material_.AbsorptionCoefficient = material.AbsorptionCoefficient;
     Material_.ReducedScatteringCoefficient = material.ReducedScatteringCoefficient;
     Material_.RefractiveIndex = material.RefractiveIndex;
@@ -1154,13 +1184,36 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   SolveChannels(rhs, setup, solution, report, retryMs);
   fluence = Numbering_.FetchFromOwners(Comm_, solution, 3);
   Timings_.Solve = Milliseconds(start) - retryMs;
+  // The diffuse fluence read out below; Fluence = phi_d + E_c (the serial
+  // VertexDiffusionSolver's AddCollimatedFluence).
+  std::vector<double> diffuse;
+  const bool beam = BeamResult_.Fluence.size() == fluence.size() && !BeamResult_.Beams.empty();
+  if (beam)
+  {
+    diffuse = fluence;
+    for (std::size_t k = 0; k < fluence.size(); ++k)
+      fluence[k] += BeamResult_.Fluence[k];
+  }
   Timings_.AMGSetup = hierarchyMs + retryMs;
   Timings_.SolveCpu = CpuMilliseconds() - cpu - HierarchyCpu_;
   Timings_.AMGSetupCpu += HierarchyCpu_;
 
   // 5. Detectors and the power balance, summed over the ranks.
-  ReadOuts(material, irradiance, fluence, localSourcePower);
+  ReadOuts(material, irradiance, beam ? diffuse : fluence, localSourcePower);
   FillStatistics(report);
+  if (IsExtendedCollimatedModel(Collimated_))
+  {
+    report.CollimatedFluence = BeamResult_.Fluence;
+    report.CollimatedEntering = BeamResult_.Entering;
+    report.CollimatedScattered = BeamResult_.Scattered;
+    report.CollimatedAbsorbed = BeamResult_.Absorbed;
+    if (report.CollimatedFluence.size() != fluence.size())
+      report.CollimatedFluence.assign(fluence.size(), 0.0);
+  }
+  // Only the power sums are read later (GetTalliedReadouts).
+  BeamResult_.Fluence = {};
+  BeamResult_.Load = {};
+  BeamResult_.Beams = {};
   std::ostringstream linear;
   linear << (HierarchySetups_ > hierarchiesBefore ? "rebuilt"
                                                  : report.Assembly == "values-only" ? "values"

@@ -39,6 +39,7 @@
 #pragma once
 
 #include "DiffusionSolver.h"
+#include "DistributedCollimatedSource.h"
 #include "DistributedNumbering.h"
 #include "DistributedSources.h"
 #include "DistributedLinearSolver.h"
@@ -76,8 +77,14 @@ public:
    * Collective: the DiffusionSolver interface. The problem's Mesh is this
    * rank's piece (owned tets on the local points; null for a rank without
    * tets), PointKeys the points' identities (required), Irradiance 3 per
-   * point, InteriorSources the sources (null: none). Continuous wave, the
-   * surface collimated model. The PCG stopping rule is ||b - A x|| <=
+   * point, InteriorSources the sources (null: none). Continuous wave. The
+   * extended collimated models (Extended, ExtendedMoments; Irradiance then
+   * without the directional lights) add the beam's volume source of
+   * problem.Lights (DistributedCollimatedSource: the physical boundary
+   * all-gathered, no mesh) and its E_c to the fluence, with the Robin rule
+   * of the model (ExtendedMoments: Fresnel::BoundaryRule::Moments); the
+   * lights, shadows and model are the lowest rank with tets' (AgreeOnLights:
+   * an empty piece may carry none). The PCG stopping rule is ||b - A x|| <=
    * RelTol ||b|| per channel (global norms). Throws translucency::Error on
    * every rank on invalid input; returns true.
    */
@@ -213,6 +220,9 @@ public:
     double SolveCpu = 0.0;
   };
   const Timings& GetTimings() const { return Timings_; }
+  /// The extended collimated source of the last Solve (its figures: surface
+  /// gathered or kept, wall times; empty under the surface model).
+  const DistributedCollimatedSource& GetCollimatedSource() const { return Beam_; }
   /// Owned rows on this rank and the global number of unknowns.
   int GetNumberOfOwnedRows() const { return Numbering_.GetNumberOfOwnedRows(); }
   long long GetNumberOfRows() const { return Numbering_.GetNumberOfRows(); }
@@ -340,6 +350,17 @@ private:
   double HierarchyCpu_ = 0.0; ///< CPU ms of the hierarchies set up in this Solve
 
   const Sources* Sources_ = nullptr;
+  /// The extended collimated model of the Solve in progress (Solve(problem)):
+  /// the lights, shadows and model, agreed over the ranks; the Robin rule of
+  /// the model and of the last assembled matrices.
+  std::vector<LightSource> Lights_;
+  bool Shadows_ = false;
+  CollimatedModel Collimated_ = CollimatedModel::Surface;
+  Fresnel::BoundaryRule Rule_ = Fresnel::BoundaryRule::Fit;
+  Fresnel::BoundaryRule MatrixRule_ = Fresnel::BoundaryRule::Fit;
+  DistributedCollimatedSource Beam_;
+  /// The beam of the last Solve: its E_c at the local points and power.
+  CollimatedSource BeamResult_;
   std::vector<Detector> Detectors_;
   std::vector<DetectorReading> Readings_;
   PowerBalance Balance_;

@@ -619,12 +619,12 @@ std::shared_ptr<const BoundaryCasters> BoundaryCastersOf(const TetMesh& mesh, bo
 class DirectionGrid
 {
 public:
-  DirectionGrid(const TetMesh& mesh, const double direction[3], double diagonal)
+  DirectionGrid(const std::vector<double>& points, const std::vector<int>& triangles,
+    const double direction[3], double diagonal)
   {
     const double origin[3] = { 0.0, 0.0, 0.0 };
     this->Valid = RayCaster::UnitDirection(origin, direction, this->D);
-    const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
-    const int numTriangles = mesh.GetNumberOfBoundaryTriangles();
+    const int numTriangles = static_cast<int>(triangles.size() / 3);
     if (!this->Valid || numTriangles == 0)
     {
       this->Valid = false;
@@ -638,7 +638,7 @@ public:
     Normalize(this->U);
     Cross(d, this->U, this->V);
     Normalize(this->V);
-    this->Points = &mesh.GetPoints();
+    this->Points = &points;
     this->Triangles = &triangles;
     const double pad = 1e-9 * diagonal;
     std::vector<double> boxes(4 * static_cast<size_t>(numTriangles));
@@ -658,7 +658,7 @@ public:
       this->Far[f] = -std::numeric_limits<double>::infinity();
       for (int k = 0; k < 3; ++k)
       {
-        const double* p = mesh.GetPoint(triangles[3 * static_cast<size_t>(f) + k]);
+        const double* p = &points[3 * static_cast<size_t>(triangles[3 * static_cast<size_t>(f) + k])];
         const double pu = Dot(p, this->U), pv = Dot(p, this->V), pd = Dot(p, d);
         this->Near[f] = std::min(this->Near[f], pd - pad);
         this->Far[f] = std::max(this->Far[f], pd + pad);
@@ -939,18 +939,19 @@ void EnteringPower(const TetMesh& mesh, const std::vector<double>& tetEta,
   }
 }
 
-/// ComputeCollimatedSource: E_c of every beam at the points (zero where the
-/// ray toward the light leaves through no entry face, or is shadowed) and
-/// the optical path to the entry point.
-void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<LightSource>& beams, bool shadows, double diagonal, const RayCaster* caster,
+/// ComputeCollimatedBeamAtPoints: E_c of every beam at the query points
+/// (zero where the ray toward the light leaves through no entry face, or is
+/// shadowed) and the optical path to the entry point, each ray cast against
+/// `surface` with `caster` (built over it) or, without one, through a grid
+/// along each beam (the same hits, DirectionGrid).
+void BeamFieldOnSurface(const CollimatedEntrySurface& surface, const RayCaster* caster,
+  const std::vector<LightSource>& beams, bool shadows, const std::vector<double>& points,
+  const std::vector<char>& onBoundary, const std::vector<double>& pointNormals,
   CollimatedSource& out)
 {
-  const int numPoints = mesh.GetNumberOfPoints();
-  const std::vector<double>& tetEta = material.RefractiveIndex;
-  const std::vector<double>& muA = material.AbsorptionCoefficient;
-  const std::vector<double>& muS = material.ReducedScatteringCoefficient;
-  const double diag = diagonal;
+  const int numPoints = static_cast<int>(points.size() / 3);
+  const std::vector<double>& surfacePoints = *surface.Points;
+  const double diag = surface.Diagonal;
   const double offset = 1e-5 * diag;
   // Every ray's origin is moved by one fixed, generic vector of 1e-9 of the
   // diagonal ((1, sqrt 2, sqrt 3) / sqrt 6: no small-integer relation between
@@ -968,8 +969,7 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
   // itself, so E_c changes only where the entry face was such a tie.
   const double generic = 1e-9 * diag / std::sqrt(6.0);
   const double shift[3] = { generic, generic * std::sqrt(2.0), generic * std::sqrt(3.0) };
-  const std::vector<int>& triangles = mesh.GetBoundaryTriangles();
-  const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
+  const std::vector<int>& triangles = *surface.Triangles;
   // Without a caster (Fast): the rays of each beam through a grid along its
   // direction (the same hits as RayCaster's, DirectionGrid).
   std::vector<std::unique_ptr<DirectionGrid>> grids(beams.size());
@@ -980,17 +980,16 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
       beam.Direction[1] * beam.Direction[1] + beam.Direction[2] * beam.Direction[2]);
     const double w[3] = { -beam.Direction[0] / len, -beam.Direction[1] / len,
       -beam.Direction[2] / len };
-    grids[index] = std::make_unique<DirectionGrid>(mesh, w, diag);
+    grids[index] = std::make_unique<DirectionGrid>(surfacePoints, triangles, w, diag);
   }
-  const std::vector<double>& pointNormals = mesh.GetPointNormals();
 
   // E_c at the points.
 #pragma omp parallel for schedule(dynamic, 256)
   for (int i = 0; i < numPoints; ++i)
   {
-    const double* x = mesh.GetPoint(i);
+    const double* x = &points[3 * static_cast<size_t>(i)];
     double origin[3] = { x[0] + shift[0], x[1] + shift[1], x[2] + shift[2] };
-    if (mesh.IsBoundaryPoint(i))
+    if (onBoundary[static_cast<size_t>(i)])
     {
       const double* n = &pointNormals[3 * static_cast<size_t>(i)];
       for (int k = 0; k < 3; ++k)
@@ -1016,9 +1015,9 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
       }
       // The entry triangle's outward normal.
       const int* tri = &triangles[3 * static_cast<size_t>(f)];
-      const double* a = mesh.GetPoint(tri[0]);
-      const double* b = mesh.GetPoint(tri[1]);
-      const double* c3 = mesh.GetPoint(tri[2]);
+      const double* a = &surfacePoints[3 * static_cast<size_t>(tri[0])];
+      const double* b = &surfacePoints[3 * static_cast<size_t>(tri[1])];
+      const double* c3 = &surfacePoints[3 * static_cast<size_t>(tri[2])];
       const double e1[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
       const double e2[3] = { c3[0] - a[0], c3[1] - a[1], c3[2] - a[2] };
       double n[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
@@ -1043,8 +1042,7 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
           continue;
         }
       }
-      const int tet = triangleTets[f];
-      const double eta = tetEta[tet];
+      const double eta = surface.Eta[static_cast<size_t>(f)];
       const double sin2 = (1.0 - cosIn * cosIn) / (eta * eta);
       const double cosT = std::sqrt(std::max(0.0, 1.0 - sin2));
       if (!(cosT > 0.0))
@@ -1060,14 +1058,46 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
       field.OpticalPath[i] = eta * s;
       for (int c = 0; c < NumberOfChannels; ++c)
       {
-        const double muT = muA[3 * static_cast<size_t>(tet) + c] +
-          muS[3 * static_cast<size_t>(tet) + c];
+        const double muT = surface.Extinction[3 * static_cast<size_t>(f) + c];
         const double value = beam.Power[c] * entering * std::exp(-muT * s);
         field.Fluence[3 * static_cast<size_t>(i) + c] = value;
         out.Fluence[3 * static_cast<size_t>(i) + c] += value;
       }
     }
   }
+}
+
+/// ComputeCollimatedSource: E_c of every beam at the mesh's points, cast
+/// against its own boundary (BeamFieldOnSurface).
+void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<LightSource>& beams, bool shadows, double diagonal, const RayCaster* caster,
+  CollimatedSource& out)
+{
+  const int numPoints = mesh.GetNumberOfPoints();
+  const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
+  CollimatedEntrySurface surface;
+  surface.Points = &mesh.GetPoints();
+  surface.Triangles = &mesh.GetBoundaryTriangles();
+  surface.Diagonal = diagonal;
+  surface.Eta.resize(triangleTets.size());
+  surface.Extinction.resize(3 * triangleTets.size());
+  for (size_t f = 0; f < triangleTets.size(); ++f)
+  {
+    const size_t tet = static_cast<size_t>(triangleTets[f]);
+    surface.Eta[f] = material.RefractiveIndex[tet];
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      surface.Extinction[3 * f + c] = material.AbsorptionCoefficient[3 * tet + c] +
+        material.ReducedScatteringCoefficient[3 * tet + c];
+    }
+  }
+  std::vector<char> onBoundary(static_cast<size_t>(numPoints));
+  for (int i = 0; i < numPoints; ++i)
+  {
+    onBoundary[static_cast<size_t>(i)] = mesh.IsBoundaryPoint(i) ? 1 : 0;
+  }
+  BeamFieldOnSurface(
+    surface, caster, beams, shadows, mesh.GetPoints(), onBoundary, mesh.GetPointNormals(), out);
 }
 
 /// ComputeCollimatedSource, loads: integral of mu_s' E_c phi_a per tet and
@@ -1150,6 +1180,35 @@ void BeamLoads(const TetMesh& mesh, const OpticalProperties& material,
 }
 
 } // namespace
+
+void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
+  const std::vector<LightSource>& beams, bool shadows, const std::vector<double>& points,
+  const std::vector<char>& onBoundary, const std::vector<double>& normals, CollimatedSource& out)
+{
+  const size_t numPoints = points.size() / 3;
+  out.Fluence.assign(3 * numPoints, 0.0);
+  out.Beams.resize(beams.size());
+  for (CollimatedSource::Beam& beam : out.Beams)
+  {
+    beam.Fluence.assign(3 * numPoints, 0.0);
+    beam.OpticalPath.assign(numPoints, 0.0);
+  }
+  if (beams.empty() || surface.Triangles->empty())
+  {
+    return;
+  }
+  // The rays through a grid along each beam (Fast's path).
+  BeamFieldOnSurface(surface, nullptr, beams, shadows, points, onBoundary, normals, out);
+}
+
+void AddCollimatedLoads(const TetMesh& mesh, const OpticalProperties& material, CollimatedSource& out)
+{
+  if (out.Load.size() != 3 * static_cast<size_t>(mesh.GetNumberOfPoints()))
+  {
+    out.Load.assign(3 * static_cast<size_t>(mesh.GetNumberOfPoints()), 0.0);
+  }
+  BeamLoads(mesh, material, CollimatedEvaluation::Fast, out);
+}
 
 CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalProperties& material,
   const std::vector<LightSource>& lights, bool shadows, CollimatedEvaluation evaluation)

@@ -155,6 +155,47 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
   const std::vector<LightSource>& lights, bool shadows,
   CollimatedEvaluation evaluation = CollimatedEvaluation::Fast);
 
+/// The boundary surface a beam enters through (ComputeCollimatedBeamAtPoints):
+/// outward triangles on their points and the optical properties of the tet
+/// under each triangle (the homogeneous approximation along the path).
+struct CollimatedEntrySurface
+{
+  const std::vector<double>* Points = nullptr; ///< 3 coordinates per point (mm)
+  const std::vector<int>* Triangles = nullptr; ///< 3 point indices each, (p1 - p0) x (p2 - p0) outward
+  std::vector<double> Eta;        ///< refractive index of the tet under each triangle
+  std::vector<double> Extinction; ///< mu_a + mu_s' of that tet, 3 per triangle (1/mm)
+  double Diagonal = 0.0;          ///< bounding-box diagonal of every mesh point (mm)
+};
+
+/**
+ * ComputeCollimatedSource()'s beam field (Fluence and Beams, E_c and the
+ * optical path of each directional light in `beams`) at chosen points,
+ * each ray cast against `surface`: the mesh's own boundary in one process,
+ * the all-gathered physical boundary of a distributed mesh
+ * (Solvers/Parallel/DistributedCollimatedSource.h) on each MPI rank. The
+ * same arithmetic per point whichever points are asked for.
+ * @param points 3 coordinates per query point (mm)
+ * @param onBoundary per query point: on the boundary surface (its ray then
+ *   starts just inside, along -normal)
+ * @param normals 3 per query point: the outward unit point normal (read on
+ *   the boundary only)
+ * @param out Fluence and Beams are sized to the query points and filled;
+ *   Load and the power sums are left alone (AddCollimatedLoads()).
+ * `beams` must be directional and valid (ValidateLight()).
+ */
+void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
+  const std::vector<LightSource>& beams, bool shadows, const std::vector<double>& points,
+  const std::vector<char>& onBoundary, const std::vector<double>& normals, CollimatedSource& out);
+
+/**
+ * ComputeCollimatedSource()'s load: the integral of mu_s' E_c phi_i over each
+ * tet of `mesh` per beam of out.Beams (3 per mesh point), added to out.Load
+ * (sized to the mesh's points if it is not), out.Scattered and out.Absorbed.
+ * On a rank's piece of a distributed mesh (its own tets), the sums over the
+ * ranks are the whole mesh's.
+ */
+void AddCollimatedLoads(const TetMesh& mesh, const OpticalProperties& material, CollimatedSource& out);
+
 /**
  * Frequency domain: the beams of `source` modulated at omega with phase 0 at
  * their entry points (Documentation/DiffuseOptics.md, "Collimated beams in

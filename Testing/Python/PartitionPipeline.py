@@ -38,7 +38,10 @@ par_<source>_<chain>.pvtu (one piece per rank):
                      directional light
            interactive  lit, solved with the default RelTol (the interactive
                      stopping rule; every other chain solves to RelTol 1e-12)
-Every rank prints "case <source> done" after each source.
+Every rank writes "<source> <chain> <path>" lines (Solve Diffusion's
+GetParallelPath) for the collimated-model chains (extended, moments, default,
+defrelit) to paths_<rank>.txt, and prints "case <source> done" after each
+source.
 """
 
 import os
@@ -48,6 +51,7 @@ from paraview.simple import *  # noqa: F401,F403
 
 PLUGIN, WORK, MODE = sys.argv[1], sys.argv[2], sys.argv[3]
 LoadPlugin(PLUGIN, ns=globals())
+import translucency  # noqa: E402,F401  (the filters' getters: GetParallelPath)
 CHAINS = ("lit", "relit", "paint", "extreme", "cut", "extended", "gated", "moments", "default",
           "defrelit")
 
@@ -62,6 +66,18 @@ def solve(source, **extra):
 
 def save(name, proxy, extension=".pvtu"):
     SaveData(path(name + extension), proxy=proxy)
+
+
+def report_path(prefix, chain, solved):
+    """Writes Solve Diffusion's path of the last execution on this rank to
+    paths_<rank>.txt (a file per rank: the ranks' stdout lines interleave)."""
+    if MODE != "run":
+        return
+    from vtkmodules.vtkParallelCore import vtkMultiProcessController
+    rank = vtkMultiProcessController.GetGlobalController().GetLocalProcessId()
+    with open(path("paths_%d.txt" % rank), "a") as log:
+        log.write("%s %s %s\n" % (prefix.split("_")[-1], chain,
+                                  solved.GetClientSideObject().GetParallelPath()))
 
 
 def chains(prefix, source):
@@ -97,7 +113,9 @@ def chains(prefix, source):
     # triangle is a tie that the triangle order decides (Parallel.md).
     extended = SurfaceIrradiance(Input=source, DirectionalLights=[0.13, -1.0, -0.77, 1.0],
                                  CollimatedModel=1)
-    save(prefix + "_extended", solve(extended))
+    extended_solve = solve(extended)
+    save(prefix + "_extended", extended_solve)
+    report_path(prefix, "extended", extended_solve)
     save(prefix + "_gated", solve(SurfaceIrradiance(Input=source, CollimatedModel=0), TimeGates=[0.0, 0.2, 4]))
     # The extended-moments model, named and by default, with the default
     # lights: their key light (0, -1, -1) runs along the grid's diagonals, so
@@ -106,13 +124,16 @@ def chains(prefix, source):
                                             InclusionCenter=[4.0, 4.0, 3.0], InclusionRadius=3.0)
     moments = solve(SurfaceIrradiance(Input=assigned, CollimatedModel=2))
     save(prefix + "_moments", moments)
+    report_path(prefix, "moments", moments)
     save(prefix + "_moments_radiance", OutgoingRadiance(Input=moments), ".pvtp")
     lit_default = SurfaceIrradiance(Input=assigned)
     by_default = solve(lit_default)
     save(prefix + "_default", by_default)
+    report_path(prefix, "default", by_default)
     save(prefix + "_default_radiance", OutgoingRadiance(Input=by_default), ".pvtp")
     lit_default.DirectionalLights = [0.3, -1.0, 0.5, 1.0]
     save(prefix + "_defrelit", by_default)
+    report_path(prefix, "defrelit", by_default)
     # The interactive stopping rule: Solve Diffusion's default RelTol.
     save(prefix + "_interactive", SolveDiffusion(Input=SurfaceIrradiance(Input=source, CollimatedModel=0)))
     print("case %s done" % prefix.split("_")[-1], flush=True)

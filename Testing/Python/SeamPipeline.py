@@ -17,8 +17,9 @@ run:
     solve <case> path=<path>|plan=<plan>|diff=<max relative Fluence difference
         from the distributed solve on this rank's piece>|points=<n>
         for TRANSLUCENCY_PARALLEL=gathered, the deprecated
-        TRANSLUCENCY_GATHERED_SOLVE=1, and the extended collimated model with
-        DistributedSolve on (both gathered, against DistributedSolve off);
+        TRANSLUCENCY_GATHERED_SOLVE=1 (gathered, against the distributed
+        solve), and the extended collimated model with DistributedSolve on
+        (distributed, against DistributedSolve off: gathered);
 failures:
     fail <case> <the filter's last error on this rank, or NONE>
         each filter's failure mode, a missing file for the Surface Reader and
@@ -96,8 +97,7 @@ def difference(a, b):
 if MODE == "run":
     reader, tets, spread = mesh_chain()
     assigned = AssignScatteringCoefficients(Input=spread)
-    # The surface model (CollimatedModel=0): the distributed solve's; the
-    # default by light kind for a directional light is solved gathered.
+    # The surface model (CollimatedModel=0); the extended model below.
     lit = SurfaceIrradiance(Input=assigned, DirectionalLights=LIGHT, CollimatedModel=0)
     solved = SolveDiffusion(Input=lit, RelTol=1e-10, MaxIter=20000)
     radiance = OutgoingRadiance(Input=solved)
@@ -142,9 +142,9 @@ if MODE == "run":
 
     gathered_case("override", "TRANSLUCENCY_PARALLEL", "gathered")
     gathered_case("deprecated", "TRANSLUCENCY_GATHERED_SOLVE", "1")
-    # The extended collimated model: Parallel.md lists it as gathered; with
-    # DistributedSolve on the plan gathers it (before: a collective on rank 0
-    # alone inside the gathered run).
+    # The extended collimated model: distributed with DistributedSolve on
+    # (the beam cast against the all-gathered boundary), gathered with it off
+    # (which once hung: a collective on rank 0 alone inside the gathered run).
     extended = SurfaceIrradiance(Input=assigned, DirectionalLights=LIGHT, CollimatedModel=1)
     on = SolveDiffusion(Input=extended, RelTol=1e-10, MaxIter=20000, DistributedSolve=1)
     off = SolveDiffusion(Input=extended, RelTol=1e-10, MaxIter=20000, DistributedSolve=0)

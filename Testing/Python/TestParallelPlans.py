@@ -169,12 +169,12 @@ def configurations():
         "Assign Scattering Coefficients, Volume": [assign("Volume")],
         "Paint Scattering Coefficients": [single("vtkPaintScatteringCoefficients")],
         "Surface Irradiance": [single("vtkSurfaceIrradiance")],
-        "Solve Diffusion, divergence and fem, continuous wave":
-            [solve(), solve(Solver=1)],
+        "Solve Diffusion, divergence and fem, continuous wave, any collimated model":
+            [solve(), solve(Solver=1), solve(collimated=True)],
         "Solve Diffusion, other cases": [
             solve(Solver=2), solve(Solver=3), solve(Solver=4), solve(DistributedSolve=False),
             solve(ModulationFrequency=1e8), solve(TimeGates=(0.0, 1e-9, 4)),
-            solve(InteractiveDetector=True), solve(collimated=True)],
+            solve(InteractiveDetector=True)],
         "Outgoing Radiance": [single("vtkOutgoingRadiance")],
         "Stroke Cut (implicit cutter or stroke, relaxation on or off)":
             [cut(), cut(NumberOfRelaxationIterations=0)],

@@ -19,8 +19,9 @@ How to run (ctest does this, with 2 and with 3 ranks):
    the deprecated TRANSLUCENCY_GATHERED_SOLVE=1 takes the gathered path and
    gives the distributed Fluence to 1e-6 at every point of every rank's
    piece; with the extended collimated model and DistributedSolve on it plans
-   "gathered" (naming the model) and equals DistributedSolve off (both
-   gathered) exactly. Before the seam both gathered cases hung.
+   and takes the distributed path (naming the beam) and equals
+   DistributedSolve off (gathered) to 1e-6. Before the seam both gathered
+   cases hung.
 3. `... failures`: a missing file for the Surface Reader (rank 0 reads), a
    wrong mesher, an unknown material, a paint and a Surface Irradiance
    without materials, a solve without Irradiance, a radiance without
@@ -142,9 +143,10 @@ class ParallelSeamTest(unittest.TestCase):
                     self.assertNotEqual(s["diff"], "missing")
                     self.assertLess(float(s["diff"]), 1e-6)
             c = solves["collimated"]
-            self.assertEqual(c["path"], "gathered")
-            self.assertIn("extended collimated model", c["plan"])
-            self.assertEqual(c["diff"], "0")
+            self.assertEqual(c["path"], "distributed")
+            self.assertIn("extended collimated models", c["plan"])
+            self.assertNotEqual(c["diff"], "missing")
+            self.assertLess(float(c["diff"]), 1e-6)
         total = sum(int(fields(l.split(" ", 2)[2])["points"])
                     for lines in ranks for l in lines if l.startswith("solve override"))
         self.assertGreater(total, 0)

@@ -25,7 +25,9 @@ How to run (ctest does this, with 2 and with 3 ranks):
    coordinates); the Outgoing Radiance of the extended-moments chains equals
    the serial Radiance to 1e-6 of its maximum at every surface point, and
    the default model solved is extended-moments on every rank, as in one
-   process; the serial run on the renumbered mesh does too; with the
+   process; the collimated-model chains (the extended and extended-moments
+   models named, the default's and its relight) take Solve Diffusion's
+   distributed path on every rank (no gather of the mesh); the serial run on the renumbered mesh does too; with the
    default RelTol (the interactive stopping rule) the boundary fluence is
    within 1 % RMS of the converged one, serial and on every source; the split
    sources stay split and the empty-rank sources have an empty rank; nothing
@@ -143,6 +145,21 @@ class PartitionIndependenceTest(MpiSuite):
                 self.check_radiance("ser_shuffled_%s_radiance" % chain, "ref_%s_radiance" % chain)
         self.check_model("ref_default")
         self.check_model("ser_shuffled_default")
+
+    def test_collimated_models_distributed(self):
+        # The extended models are solved on the distributed path (issue 32:
+        # the default chain without a gather), on every rank and source.
+        paths = {}
+        for rank in range(RANKS):
+            with open(os.path.join(self.work, "paths_%d.txt" % rank)) as log:
+                for l in log:
+                    words = l.split()
+                    if len(words) == 3 and words[0] in SOURCES:
+                        paths.setdefault((words[0], words[1]), []).append(words[2])
+        for source in SOURCES:
+            for chain in ("extended", "moments", "default", "defrelit"):
+                with self.subTest(source=source, chain=chain):
+                    self.assertEqual(paths.get((source, chain)), ["distributed"] * RANKS)
 
     def check_source(self, source, split, empty):
         for chain in CHAINS:

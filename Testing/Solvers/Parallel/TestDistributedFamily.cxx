@@ -216,6 +216,76 @@ TEST(DistributedFamily, OneRankEqualsTheSerialSolve)
   }
 }
 
+// Issue 32: the extended collimated models on the distributed path (the
+// beam cast against the gathered boundary, DistributedCollimatedSource; the
+// moments' Robin rule in the hypre system) give the serial solve's fluence,
+// collimated fluence, detector readings and power balance, cold and relit
+// (another light direction: the matrices kept), shadows on and off.
+TEST(DistributedFamily, TheExtendedModelsEqualTheSerialSolve)
+{
+  const Scene s = MakeScene();
+  const double tol = 1e-12;
+  for (const CollimatedModel model : { CollimatedModel::Extended, CollimatedModel::ExtendedMoments })
+  {
+    for (const std::string name : { "divergence", "fem" })
+    {
+      SCOPED_TRACE(name + (model == CollimatedModel::Extended ? " extended" : " extended-moments"));
+      DiffusionFrontEnd serial, distributed;
+      serial.SetSolver(name);
+      distributed.SetSolver(name);
+      distributed.SetCommunicator(Self());
+      serial.GetSolver().SetRelTol(tol);
+      distributed.GetSolver().SetRelTol(tol);
+      int step = 0;
+      for (const std::array<double, 3>& direction :
+        { std::array<double, 3>{ 0.13, -1.0, -0.77 }, std::array<double, 3>{ -0.4, 0.3, -1.0 } })
+      {
+        SCOPED_TRACE(step++);
+        DiffusionProblem light;
+        light.InteriorSources = &s.InteriorSources;
+        light.PointKeys = &s.Keys;
+        light.Lights = { DirectionalLight(direction, { 1.0, 0.7, 0.4 }) };
+        light.Shadows = step == 2;
+        light.Collimated = model;
+        SolveRequest request;
+        request.Detectors = s.Detectors;
+        SolveResult a, b;
+        ASSERT_TRUE(serial.Solve(s.Mesh, s.Material, s.Irradiance, light, request, a));
+        ASSERT_TRUE(distributed.Solve(s.Mesh, s.Material, s.Irradiance, light, request, b));
+        if (step == 2)
+        {
+          EXPECT_EQ(b.Report.Assembly, "unchanged"); // a relight: the matrices kept
+        }
+        EXPECT_EQ(b.Rule, a.Rule);
+        // The beam: the same rays on the same surface (another triangle order).
+        EXPECT_LT(RelativeDifference(b.Report.CollimatedFluence, a.Report.CollimatedFluence), 1e-12);
+        double beamMax = 0.0;
+        for (double e : a.Report.CollimatedFluence)
+          beamMax = std::max(beamMax, e);
+        EXPECT_GT(beamMax, 0.1);
+        EXPECT_LT(RelativeDifference(b.Fluence, a.Fluence), 1e-8);
+        ASSERT_EQ(b.Readings.size(), 1u);
+        ASSERT_EQ(a.Readings.size(), 1u);
+        std::array<double, NumberOfChannels> in1{}, abs1{}, esc1{}, in2{}, abs2{}, esc2{};
+        DiffusionFrontEnd::ComputePowerBalance(*s.Mesh, s.Material, a.Fluence, s.Irradiance,
+          &s.InteriorSources, a, SolveDomain::ContinuousWave, in1, abs1, esc1);
+        EXPECT_TRUE(b.HasTalliedBalance);
+        DiffusionFrontEnd::ComputePowerBalance(*s.Mesh, s.Material, b.Fluence, s.Irradiance,
+          &s.InteriorSources, b, SolveDomain::ContinuousWave, in2, abs2, esc2);
+        for (int c = 0; c < NumberOfChannels; ++c)
+        {
+          EXPECT_LT(Relative(b.Readings[0].Fluence[c], a.Readings[0].Fluence[c]), 1e-8);
+          EXPECT_LT(Relative(b.Readings[0].Exitance[c], a.Readings[0].Exitance[c]), 1e-8);
+          // Entering: per surface point instead of per triangle corner (1e-13).
+          EXPECT_LT(Relative(in2[c], in1[c]), 1e-10);
+          EXPECT_LT(Relative(abs2[c], abs1[c]), 1e-8);
+          EXPECT_LT(Relative(esc2[c], esc1[c]), 1e-8);
+        }
+      }
+    }
+  }
+}
+
 // Issue 32: one BoomerAMG hierarchy for the three channels (SetSharedHierarchy)
 // gives the fluence of one hierarchy per channel (the default) (both to RelTol 1e-12 of
 // the same systems); counted set-ups: a cold solve numbers once and sets up
