@@ -1055,6 +1055,32 @@ bool DistributedVertexSolver::Solve(
   return true;
 }
 
+void DistributedVertexSolver::AddVolumeSources(const std::vector<PointKey>& keys,
+  const OpticalProperties& material, std::vector<double>& localRhs,
+  std::array<double, NumberOfChannels>& localSourcePower)
+{
+  // The extended collimated models: the beam's volume source (its rank's
+  // tets' share, summed at the owners by the caller).
+  BeamResult_ = CollimatedSource();
+  if (IsExtendedCollimatedModel(Collimated_))
+  {
+    Beam_.Compute(Comm_, HasTets() ? Mesh_ : nullptr, keys, Used_, material, Lights_, Shadows_,
+      BeamResult_);
+    for (std::size_t k = 0; k < BeamResult_.Load.size(); ++k)
+      localRhs[k] += 4.0 * BeamResult_.Load[k];
+  }
+  if (Sources_ && !Sources_->Empty())
+  {
+    const std::vector<double> load =
+      ComputeDistributedSourceLoad(Comm_, Piece(material), *Sources_);
+    for (std::size_t k = 0; k < load.size(); ++k)
+    {
+      localRhs[k] += 4.0 * load[k];
+      localSourcePower[k % 3] += load[k];
+    }
+  }
+}
+
 void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
   const OpticalProperties& material, const std::vector<double>& irradiance,
   std::vector<double>& fluence, SolverReport& report)
@@ -1117,26 +1143,7 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   std::vector<double> localRhs(3 * keys.size(), 0.0);
   AddBoundaryTerms(material, irradiance, relight ? nullptr : &system, localRhs);
   std::array<double, NumberOfChannels> localSourcePower{};
-  // The extended collimated models: the beam's volume source, 4 x its load
-  // as every right-hand side (its rank's tets' share, summed at the owners).
-  BeamResult_ = CollimatedSource();
-  if (IsExtendedCollimatedModel(Collimated_))
-  {
-    Beam_.Compute(Comm_, HasTets() ? Mesh_ : nullptr, keys, Used_, material, Lights_, Shadows_,
-      BeamResult_);
-    for (std::size_t k = 0; k < BeamResult_.Load.size(); ++k)
-      localRhs[k] += 4.0 * BeamResult_.Load[k];
-  }
-  if (Sources_ && !Sources_->Empty())
-  {
-    const std::vector<double> load =
-      ComputeDistributedSourceLoad(Comm_, Piece(material), *Sources_);
-    for (std::size_t k = 0; k < load.size(); ++k)
-    {
-      localRhs[k] += 4.0 * load[k];
-      localSourcePower[k % 3] += load[k];
-    }
-  }
+  AddVolumeSources(keys, material, localRhs, localSourcePower);
   const std::vector<double> rhs = Numbering_.SumToOwners(Comm_, localRhs, 3);
   localRhs = {};
 

@@ -279,6 +279,11 @@ private:
   void SolveChannels(const std::vector<double>& rhs,
     const std::array<ChannelSetup, NumberOfChannels>& setup, std::vector<double>& solution,
     SolverReport& report, double& hierarchyMs);
+  /// SolvePiece's volume sources on this rank's points: the extended
+  /// collimated models' beam (BeamResult_) and the interior sources, 4 x
+  /// their loads as every right-hand side (collective).
+  void AddVolumeSources(const std::vector<PointKey>& keys, const OpticalProperties& material,
+    std::vector<double>& localRhs, std::array<double, NumberOfChannels>& localSourcePower);
   void ReadOuts(const OpticalProperties& material, const std::vector<double>& irradiance,
     const std::vector<double>& fluence, const std::array<double, NumberOfChannels>& localSourcePower);
   void FillStatistics(SolverReport& report) const;
