@@ -46,6 +46,29 @@ vtkStandardNewMacro(vtkSolveDiffusion);
 
 namespace
 {
+/// The output's record of the collimated model a solve used (field array
+/// TranslucencyCollimatedModel) and, when not null, the irradiance it used
+/// (a default extended model's q without the beams: vtkOutgoingRadiance's
+/// q of eq. 3). The one-process and the distributed paths attach the same.
+void AttachSolvedModel(vtkUnstructuredGrid* output, translucency::CollimatedModel model,
+  const std::vector<double>* irradiance)
+{
+  if (irradiance)
+  {
+    vtkDataArray* array =
+      vtkTranslucency::NewTripleArray(vtkTranslucency::IrradianceName, *irradiance);
+    output->GetPointData()->AddArray(array);
+    array->Delete();
+  }
+  vtkNew<vtkIntArray> modelArray;
+  modelArray->SetName("TranslucencyCollimatedModel");
+  modelArray->InsertNextValue(static_cast<int>(model));
+  output->GetFieldData()->AddArray(modelArray);
+}
+} // namespace
+
+namespace
+{
 /// The registry entry of a SOLVER_* constant (the constants are indices
 /// into the registry; TestSolveDiffusionRegistry checks the order).
 const translucency::DiffusionSolverRegistry::Entry& SolverEntry(int solver)
@@ -838,17 +861,7 @@ int vtkSolveDiffusion::RequestSerial(
     // Attach, with the model this solve used (and, for a default extended
     // model, the irradiance it used: vtkOutgoingRadiance's q of eq. 3).
     in.Attach(*this, input, output);
-    if (beamsTakenOut)
-    {
-      vtkDataArray* array =
-        vtkTranslucency::NewTripleArray(vtkTranslucency::IrradianceName, solvedIrradiance);
-      output->GetPointData()->AddArray(array);
-      array->Delete();
-    }
-    vtkNew<vtkIntArray> modelArray;
-    modelArray->SetName("TranslucencyCollimatedModel");
-    modelArray->InsertNextValue(static_cast<int>(solvedModel));
-    output->GetFieldData()->AddArray(modelArray);
+    AttachSolvedModel(output, solvedModel, beamsTakenOut ? &solvedIrradiance : nullptr);
     this->SolvedCollimatedModel = static_cast<int>(solvedModel);
   }
   catch (const translucency::Error& e)
@@ -1533,17 +1546,9 @@ int vtkSolveDiffusion::RequestDistributed(
     in.Attach(*this, input, output);
     // The model this solve used and, for a default extended model, the
     // irradiance it used (vtkOutgoingRadiance's q of eq. 3), as in one process.
-    if (takeOutBeams && solvedIrradiance.size() == 3 * static_cast<size_t>(input->GetNumberOfPoints()))
-    {
-      vtkDataArray* array =
-        vtkTranslucency::NewTripleArray(vtkTranslucency::IrradianceName, solvedIrradiance);
-      output->GetPointData()->AddArray(array);
-      array->Delete();
-    }
-    vtkNew<vtkIntArray> modelArray;
-    modelArray->SetName("TranslucencyCollimatedModel");
-    modelArray->InsertNextValue(static_cast<int>(light.Collimated));
-    output->GetFieldData()->AddArray(modelArray);
+    const bool attachIrradiance = takeOutBeams &&
+      solvedIrradiance.size() == 3 * static_cast<size_t>(input->GetNumberOfPoints());
+    AttachSolvedModel(output, light.Collimated, attachIrradiance ? &solvedIrradiance : nullptr);
   }
   else
   {
