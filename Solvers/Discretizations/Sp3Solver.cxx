@@ -146,9 +146,11 @@ std::vector<double> Sp3BoundaryRadiance(const TetMesh& mesh, const std::vector<d
 }
 
 /// The assembled blocks: A11 and A22 as systems (the multigrid cycles are
-/// set up on them), A12 and A21 on the same pattern; in the frequency domain
-/// the imaginary parts B of the four blocks and of the right-hand sides
-/// (empty in continuous wave).
+/// set up on them), A12 and A21 on the same pattern (in continuous wave A21
+/// is assembled only in the rows of boundary-triangle vertices, RowsA21, and
+/// is 0 elsewhere: there it equals A12, which BlockProduct reads in its
+/// place); in the frequency domain the imaginary parts B of the four blocks
+/// and of the right-hand sides (empty in continuous wave).
 struct Sp3Solver::Blocks
 {
   DiffusionSystem A11, A22;
@@ -160,6 +162,8 @@ struct Sp3Solver::Blocks
   std::unique_ptr<AggregationMultigridSolver> Cycle1, Cycle2;
   std::vector<double> InverseDiagonal;          ///< Jacobi: 2 N x 3 interleaved
   std::vector<unsigned char> OwnA21; ///< per row: A21 differs from A12 (BlockProduct)
+  /// Per point: A21's row is assembled (RowsA21 of the assembly kernels).
+  std::vector<unsigned char> RowsA21;
   /// The material of the blocks of the last continuous-wave assembly
   /// (AssembledValid: they hold it): the blocks are a function of the mesh
   /// geometry, the material and omega only, so a continuous-wave solve on
@@ -278,12 +282,15 @@ struct BlockPointers
   double* W22[NumberOfChannels]{};
   double* Rhs1[NumberOfChannels]{};
   double* Rhs2[NumberOfChannels]{};
+  /// Continuous wave: per point, 1 if A21's row is assembled (a vertex of
+  /// a boundary triangle; Sp3Solver::Blocks::A21).
+  const unsigned char* RowsA21 = nullptr;
   bool Complex = false;
 };
 
 /// A tet's stiffness and consistent mass (V_t / 20)(1 + delta_ab) into the
 /// four blocks, every channel.
-void AddTetBlocks(const BlockPointers& b, std::size_t t, const int* pos,
+void AddTetBlocks(const BlockPointers& b, std::size_t t, const int* tv, const int* pos,
   const TetGeometry& geometry, const OpticalProperties& material, double alpha)
 {
   const double(&g)[4][4] = geometry.Stiffness;
@@ -298,6 +305,9 @@ void AddTetBlocks(const BlockPointers& b, std::size_t t, const int* pos,
       const TetCoefficients<double> k = ComputeTetCoefficients(sigmaS, anisotropy, muA);
       for (int i = 0; i < 4; ++i)
       {
+        // A21's row only where it can differ from A12's (the tets' part
+        // is the same: the Fresnel boundary rows make the difference).
+        const bool rowA21 = b.RowsA21[tv[i]] != 0;
         for (int j = 0; j < 4; ++j)
         {
           const int p = pos[4 * i + j];
@@ -305,7 +315,10 @@ void AddTetBlocks(const BlockPointers& b, std::size_t t, const int* pos,
           b.V11[c][p] += k.D1 * g[i][j] + k.M1 * mij;
           b.V22[c][p] += k.D2 * g[i][j] + k.M2 * mij;
           b.V12[c][p] += k.M12 * mij;
-          b.V21[c][p] += k.M12 * mij;
+          if (rowA21)
+          {
+            b.V21[c][p] += k.M12 * mij;
+          }
         }
       }
       continue;
@@ -448,6 +461,14 @@ bool Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
 
   BlockPointers p;
   p.Complex = omega > 0.0;
+  // The rows of A21 that can differ from A12's: those of boundary-triangle
+  // vertices (continuous wave; the frequency domain's product reads all).
+  b.RowsA21.assign(static_cast<std::size_t>(mesh.GetNumberOfPoints()), p.Complex ? 1 : 0);
+  for (const int v : mesh.GetBoundaryTriangles())
+  {
+    b.RowsA21[static_cast<std::size_t>(v)] = 1;
+  }
+  p.RowsA21 = b.RowsA21.data();
   ChannelPointers channels1(b.A11);
   for (int c = 0; c < NumberOfChannels; ++c)
   {
@@ -522,7 +543,7 @@ bool Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
   auto tetKernel = [&](std::size_t t, const int* tv, const int* pos, const TetGeometry& geometry) {
     // alpha = omega eta_t / c (1/mm): the frequency domain's i omega / v.
     const double alpha = omega > 0.0 ? omega * material.RefractiveIndex[t] / SpeedOfLight : 0.0;
-    AddTetBlocks(p, t, pos, geometry, material, alpha);
+    AddTetBlocks(p, t, tv, pos, geometry, material, alpha);
     for (int f = head[t]; f >= 0; f = next[f])
     {
       AddBoundaryTriangle(p, coefficients[static_cast<std::size_t>(etaIndex[t])], tv, pos,
