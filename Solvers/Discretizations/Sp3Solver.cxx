@@ -1,5 +1,6 @@
 #include "Sp3Solver.h"
 
+#include "AggregationMultigrid.h"
 #include "Error.h"
 #include "Fresnel.h"
 #include "LinearSolver.h"
@@ -145,20 +146,34 @@ std::vector<double> Sp3BoundaryRadiance(const TetMesh& mesh, const std::vector<d
 }
 
 /// The assembled blocks: A11 and A22 as systems (the multigrid cycles are
-/// set up on them), A12 and A21 on the same pattern; in the frequency domain
-/// the imaginary parts B of the four blocks and of the right-hand sides
-/// (empty in continuous wave).
+/// set up on them), A12 and A21 on the same pattern (in continuous wave A21
+/// is assembled only in the rows of boundary-triangle vertices, RowsA21, and
+/// is 0 elsewhere: there it equals A12, which BlockProduct reads in its
+/// place); in the frequency domain the imaginary parts B of the four blocks
+/// and of the right-hand sides (empty in continuous wave).
 struct Sp3Solver::Blocks
 {
   DiffusionSystem A11, A22;
   std::array<std::vector<double>, NumberOfChannels> A12, A21;
   std::array<std::vector<double>, NumberOfChannels> B11, B12, B21, B22;
   std::array<std::vector<double>, NumberOfChannels> ImaginaryRhs1, ImaginaryRhs2;
-  std::unique_ptr<LinearSolver> Cycle1, Cycle2; ///< multigrid-agg on A11, A22
+  /// multigrid-agg on A11 and A22, one aggregation hierarchy (Cycle2's is
+  /// Cycle1's: SetUpPreconditioner).
+  std::unique_ptr<AggregationMultigridSolver> Cycle1, Cycle2;
   std::vector<double> InverseDiagonal;          ///< Jacobi: 2 N x 3 interleaved
   std::vector<unsigned char> OwnA21; ///< per row: A21 differs from A12 (BlockProduct)
+  /// Per point: A21's row is assembled (RowsA21 of the assembly kernels).
+  std::vector<unsigned char> RowsA21;
+  /// The material of the blocks of the last continuous-wave assembly
+  /// (AssembledValid: they hold it): the blocks are a function of the mesh
+  /// geometry, the material and omega only, so a continuous-wave solve on
+  /// the same mesh with an equal material (a relight, new sources) rebuilds
+  /// only the right-hand sides and keeps the cycles' set-up.
+  OpticalProperties AssembledMaterial;
+  bool AssembledValid = false;
   bool Multigrid = false;
-  bool CyclesReady = false;
+  bool CyclesReady = false; ///< the hierarchy is this mesh's
+  bool CyclesSetUp = false; ///< the cycles are set up on the blocks' values
 };
 
 Sp3Solver::Sp3Solver()
@@ -176,6 +191,8 @@ void Sp3Solver::Reset()
   LastTets_ = -1;
   LastRevision_ = 0;
   Blocks_->CyclesReady = false;
+  Blocks_->CyclesSetUp = false;
+  Blocks_->AssembledValid = false;
 }
 
 namespace
@@ -211,16 +228,24 @@ std::vector<Sp3BoundaryCoefficients> CoefficientsPerTet(
   return out;
 }
 
-/// The coefficients of the SP3 equations of one tet and channel (complex
-/// in the frequency domain, real parts only in continuous wave).
+/// The coefficients of the SP3 equations of one tet and channel: T =
+/// std::complex<double> in the frequency domain, double in continuous wave
+/// (the same expressions; with a zero imaginary part every operation's
+/// real part is the real operation's, libgcc's complex division by (c, 0)
+/// included: (a + 0 (0 / c)) / c, so continuous wave gets the same bits
+/// without the complex divisions: with A21's rows below, a full assembly
+/// on cached geometry at 1M tets took about a third less, Solvers.md SP3
+/// "Cost").
+template <typename T>
 struct TetCoefficients
 {
-  std::complex<double> D1, D2, M1, M2, M12;
+  T D1, D2, M1, M2, M12;
 };
 
-/// mu_a (1/mm), sigma_s' (1/mm), g, and alpha = omega eta / c (1/mm; 0 in
-/// continuous wave).
-TetCoefficients ComputeTetCoefficients(double muA, double sigmaS, double g, double alpha)
+/// mu_a (1/mm), sigma_s' (1/mm), g, and a = mu_a + i alpha, alpha = omega
+/// eta / c (1/mm; a = mu_a, real, in continuous wave).
+template <typename T>
+TetCoefficients<T> ComputeTetCoefficients(double sigmaS, double g, T a)
 {
   // mu_an = mu_a + mu_s (1 - g^n) with mu_s = sigma_s' / (1 - g) (Klose &
   // Larsen 2006, the SP_N absorption moments; section and equation numbers
@@ -228,15 +253,14 @@ TetCoefficients ComputeTetCoefficients(double muA, double sigmaS, double g, doub
   // what is used here).
   // The frequency domain: the time derivative (eta / c) d/dt of the
   // transport equation adds i omega eta / c to mu_t, hence to every mu_an.
-  const std::complex<double> a(muA, alpha);
-  const std::complex<double> muA1 = a + sigmaS;
-  const std::complex<double> muA2 = a + sigmaS * (1.0 + g);
-  const std::complex<double> muA3 = a + sigmaS * (1.0 + g + g * g);
+  const T muA1 = a + sigmaS;
+  const T muA2 = a + sigmaS * (1.0 + g);
+  const T muA3 = a + sigmaS * (1.0 + g + g * g);
   // The SP3 equations in their composite moments (Klose & Larsen 2006;
   // derived from the planar P3 equations in Solvers.md "SP3"): diffusion
   // coefficients 1/(3 mu_a1), 1/(7 mu_a3); mass coefficients mu_a,
   // (4/9) mu_a + (5/9) mu_a2 and the coupling -(2/3) mu_a.
-  TetCoefficients k;
+  TetCoefficients<T> k;
   k.D1 = 1.0 / (3.0 * muA1);
   k.D2 = 1.0 / (7.0 * muA3);
   k.M1 = a;
@@ -260,21 +284,49 @@ struct BlockPointers
   double* W22[NumberOfChannels]{};
   double* Rhs1[NumberOfChannels]{};
   double* Rhs2[NumberOfChannels]{};
+  /// Continuous wave: per point, 1 if A21's row is assembled (a vertex of
+  /// a boundary triangle; Sp3Solver::Blocks::A21).
+  const unsigned char* RowsA21 = nullptr;
   bool Complex = false;
 };
 
 /// A tet's stiffness and consistent mass (V_t / 20)(1 + delta_ab) into the
 /// four blocks, every channel.
-void AddTetBlocks(const BlockPointers& b, std::size_t t, const int* pos,
+void AddTetBlocks(const BlockPointers& b, std::size_t t, const int* tv, const int* pos,
   const TetGeometry& geometry, const OpticalProperties& material, double alpha)
 {
   const double(&g)[4][4] = geometry.Stiffness;
   const double mass = geometry.Volume / 20.0;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    const TetCoefficients k = ComputeTetCoefficients(material.AbsorptionCoefficient[3 * t + c],
-      material.ReducedScatteringCoefficient[3 * t + c],
-      material.GetAnisotropy(static_cast<int>(t), c), alpha);
+    const double muA = material.AbsorptionCoefficient[3 * t + c];
+    const double sigmaS = material.ReducedScatteringCoefficient[3 * t + c];
+    const double anisotropy = material.GetAnisotropy(static_cast<int>(t), c);
+    if (!b.Complex)
+    {
+      const TetCoefficients<double> k = ComputeTetCoefficients(sigmaS, anisotropy, muA);
+      for (int i = 0; i < 4; ++i)
+      {
+        // A21's row only where it can differ from A12's (the tets' part
+        // is the same: the Fresnel boundary rows make the difference).
+        const bool rowA21 = b.RowsA21[tv[i]] != 0;
+        for (int j = 0; j < 4; ++j)
+        {
+          const int p = pos[4 * i + j];
+          const double mij = i == j ? 2.0 * mass : mass;
+          b.V11[c][p] += k.D1 * g[i][j] + k.M1 * mij;
+          b.V22[c][p] += k.D2 * g[i][j] + k.M2 * mij;
+          b.V12[c][p] += k.M12 * mij;
+          if (rowA21)
+          {
+            b.V21[c][p] += k.M12 * mij;
+          }
+        }
+      }
+      continue;
+    }
+    const TetCoefficients<std::complex<double>> k =
+      ComputeTetCoefficients(sigmaS, anisotropy, std::complex<double>(muA, alpha));
     for (int i = 0; i < 4; ++i)
     {
       for (int j = 0; j < 4; ++j)
@@ -297,6 +349,31 @@ void AddTetBlocks(const BlockPointers& b, std::size_t t, const int* pos,
   }
 }
 
+/// The boundary load of a boundary triangle (the S q part of the currents
+/// J_1, J_2, moved to the right-hand side; consistent: int q v = (S_f /
+/// 12)(q_i + sum_j q_j)), every channel. Shared by the full assembly and
+/// the right-hand sides' (Sp3Solver::AssembleRightHandSides): the same
+/// operations in the same order, so the same bits.
+inline void AddBoundaryLoad(double* const* rhs1, double* const* rhs2,
+  const Sp3BoundaryCoefficients& k, const int* tri, double area, const double* q)
+{
+  const double m = area / 12.0;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    double qSum = 0.0;
+    for (int i = 0; i < 3; ++i)
+    {
+      qSum += q[3 * static_cast<std::size_t>(tri[i]) + c];
+    }
+    for (int i = 0; i < 3; ++i)
+    {
+      const double load = m * (qSum + q[3 * static_cast<std::size_t>(tri[i]) + c]);
+      rhs1[c][tri[i]] -= k.S1 * load;
+      rhs2[c][tri[i]] -= k.S2 * load;
+    }
+  }
+}
+
 /// A boundary triangle of tet vertices `tv`: the currents J_1, J_2 of the
 /// boundary conditions (Sp3BoundaryCoefficients) as consistent boundary
 /// mass (S_f / 12)(1 + delta_ab) and load (real: the boundary data q is
@@ -308,11 +385,6 @@ void AddBoundaryTriangle(const BlockPointers& b, const Sp3BoundaryCoefficients& 
   const double m = area / 12.0;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    double qSum = 0.0;
-    for (int i = 0; i < 3; ++i)
-    {
-      qSum += q[3 * static_cast<std::size_t>(tri[i]) + c];
-    }
     for (int i = 0; i < 3; ++i)
     {
       for (int j = 0; j < 3; ++j)
@@ -324,13 +396,9 @@ void AddBoundaryTriangle(const BlockPointers& b, const Sp3BoundaryCoefficients& 
         b.V21[c][p] += k.F21 * mij;
         b.V22[c][p] += k.F22 * mij;
       }
-      // int q v = m (q_i + sum_j q_j); the S q part of J moves to the
-      // right-hand side.
-      const double load = m * (qSum + q[3 * static_cast<std::size_t>(tri[i]) + c]);
-      b.Rhs1[c][tri[i]] -= k.S1 * load;
-      b.Rhs2[c][tri[i]] -= k.S2 * load;
     }
   }
+  AddBoundaryLoad(b.Rhs1, b.Rhs2, k, tri, area, q);
 }
 
 } // namespace
@@ -363,7 +431,7 @@ void Sp3Solver::SizeBlocks(const TetMesh& mesh, bool complex)
   }
 }
 
-void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<double>& sourceLoad,
+bool Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<double>& sourceLoad,
   const std::vector<double>& imaginaryLoad, double omega)
 {
   const TetMesh& mesh = *problem.Mesh;
@@ -375,10 +443,34 @@ void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
   std::vector<int> etaIndex;
   const std::vector<Sp3BoundaryCoefficients> coefficients =
     CoefficientsPerTet(mesh, material, etaIndex);
+  if (omega == 0.0 && b.AssembledValid && b.A11.NumberOfUnknowns == numPoints &&
+    material.AbsorptionCoefficient == b.AssembledMaterial.AbsorptionCoefficient &&
+    material.ReducedScatteringCoefficient == b.AssembledMaterial.ReducedScatteringCoefficient &&
+    material.RefractiveIndex == b.AssembledMaterial.RefractiveIndex &&
+    material.Anisotropy == b.AssembledMaterial.Anisotropy)
+  {
+    // The same mesh (PrepareProblem resets on another) and material: the
+    // blocks are those assembled; only the right-hand sides change.
+    AssembleRightHandSides(problem, coefficients, etaIndex);
+    AddLoads(numPoints, sourceLoad, imaginaryLoad);
+    return false;
+  }
+  // A full assembly: the cycles' set-up and the kept material no longer
+  // describe the blocks until it and the set-up succeed.
+  b.AssembledValid = false;
+  b.CyclesSetUp = false;
   SizeBlocks(mesh, omega > 0.0);
 
   BlockPointers p;
   p.Complex = omega > 0.0;
+  // The rows of A21 that can differ from A12's: those of boundary-triangle
+  // vertices (continuous wave; the frequency domain's product reads all).
+  b.RowsA21.assign(static_cast<std::size_t>(mesh.GetNumberOfPoints()), p.Complex ? 1 : 0);
+  for (const int v : mesh.GetBoundaryTriangles())
+  {
+    b.RowsA21[static_cast<std::size_t>(v)] = 1;
+  }
+  p.RowsA21 = b.RowsA21.data();
   ChannelPointers channels1(b.A11);
   for (int c = 0; c < NumberOfChannels; ++c)
   {
@@ -453,7 +545,7 @@ void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
   auto tetKernel = [&](std::size_t t, const int* tv, const int* pos, const TetGeometry& geometry) {
     // alpha = omega eta_t / c (1/mm): the frequency domain's i omega / v.
     const double alpha = omega > 0.0 ? omega * material.RefractiveIndex[t] / SpeedOfLight : 0.0;
-    AddTetBlocks(p, t, pos, geometry, material, alpha);
+    AddTetBlocks(p, t, tv, pos, geometry, material, alpha);
     for (int f = head[t]; f >= 0; f = next[f])
     {
       AddBoundaryTriangle(p, coefficients[static_cast<std::size_t>(etaIndex[t])], tv, pos,
@@ -469,6 +561,49 @@ void Sp3Solver::Assemble(const DiffusionProblem& problem, const std::vector<doub
     throw Error("sp3: invalid material or irradiance");
   }
   AddLoads(numPoints, sourceLoad, imaginaryLoad);
+  if (omega == 0.0)
+  {
+    b.AssembledMaterial.AbsorptionCoefficient = material.AbsorptionCoefficient;
+    b.AssembledMaterial.ReducedScatteringCoefficient = material.ReducedScatteringCoefficient;
+    b.AssembledMaterial.RefractiveIndex = material.RefractiveIndex;
+    b.AssembledMaterial.Anisotropy = material.Anisotropy;
+    b.AssembledValid = true;
+  }
+  return true;
+}
+
+void Sp3Solver::AssembleRightHandSides(const DiffusionProblem& problem,
+  const std::vector<Sp3BoundaryCoefficients>& coefficients, const std::vector<int>& etaIndex)
+{
+  const TetMesh& mesh = *problem.Mesh;
+  const std::vector<double>& irradiance = *problem.Irradiance;
+  CheckIrradiance(mesh, irradiance); // what the full assembly checks of it
+  Blocks& b = *Blocks_;
+  double* rhs1[NumberOfChannels];
+  double* rhs2[NumberOfChannels];
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    std::fill(b.A11.RightHandSide[c].begin(), b.A11.RightHandSide[c].end(), 0.0);
+    std::fill(b.A22.RightHandSide[c].begin(), b.A22.RightHandSide[c].end(), 0.0);
+    rhs1[c] = b.A11.RightHandSide[c].data();
+    rhs2[c] = b.A22.RightHandSide[c].data();
+  }
+  // The boundary triangles in the order of the full assembly (the scatter
+  // schedule's tets in turn, each tet's triangles by the lists it built:
+  // TriangleHead_, TriangleNext_), so every row sums its loads in the same
+  // order: the same bits.
+  const int* triangles = mesh.GetBoundaryTriangles().data();
+  const double* triangleAreas = mesh.GetBoundaryTriangleAreas().data();
+  const double* q = irradiance.data();
+  for (const int t : mesh.GetScatterSchedule().Tets)
+  {
+    for (int f = TriangleHead_[static_cast<std::size_t>(t)]; f >= 0;
+         f = TriangleNext_[static_cast<std::size_t>(f)])
+    {
+      AddBoundaryLoad(rhs1, rhs2, coefficients[static_cast<std::size_t>(etaIndex[t])],
+        triangles + 3 * static_cast<std::size_t>(f), triangleAreas[f], q);
+    }
+  }
 }
 
 void Sp3Solver::AddLoads(int numPoints, const std::vector<double>& sourceLoad,
@@ -696,11 +831,12 @@ public:
   using Operator = std::function<void(const std::vector<double>&, std::vector<double>&)>;
 
   LockstepBiCgStab(Operator product, Operator precondition, double relTol, int maxIter,
-    std::function<bool(int)> progress)
+    int threads, std::function<bool(int)> progress)
     : Product_(std::move(product))
     , Precondition_(std::move(precondition))
     , RelTol_(relTol)
     , MaxIter_(maxIter)
+    , Threads_(threads)
     , Progress_(std::move(progress))
   {
   }
@@ -765,11 +901,21 @@ private:
   void TrueResidual(const std::vector<double>& rhs, const std::vector<double>& x)
   {
     Product_(x, R_);
-    for (std::size_t k = 0; k < R_.size(); ++k)
+    const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(R_.size());
+    double* r = R_.data();
+#pragma omp parallel for schedule(static) num_threads(Threads_)
+    for (std::ptrdiff_t k = 0; k < size; ++k)
     {
-      R_[k] = rhs[k] - R_[k];
+      r[k] = rhs[static_cast<std::size_t>(k)] - r[k];
     }
     Rr_ = Dots(R_, R_);
+  }
+
+  /// Per-channel dot products on the solver's threads (ChunkedDots: the
+  /// same bits for any thread count).
+  std::array<double, 3> Dots(const std::vector<double>& a, const std::vector<double>& b) const
+  {
+    return ChunkedDots(a.data(), b.data(), a.size(), Threads_);
   }
 
   /// One BiCGSTAB cycle from the current residual until every channel is
@@ -818,10 +964,22 @@ private:
         Rho_[c] = rhoNew[c];
       }
     }
-    for (std::size_t k = 0; k < size; ++k)
+    const std::ptrdiff_t points = static_cast<std::ptrdiff_t>(size / 3);
     {
-      const int c = static_cast<int>(k % 3);
-      P_[k] = Done_[c] ? 0.0 : R_[k] + beta[c] * (P_[k] - Omega_[c] * V_[k]);
+      const double* r = R_.data();
+      const double* v = V_.data();
+      double* p = P_.data();
+      const std::array<bool, 3> done = Done_;
+      const std::array<double, 3> omega = Omega_;
+#pragma omp parallel for schedule(static) num_threads(Threads_)
+      for (std::ptrdiff_t i = 0; i < points; ++i)
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          const std::size_t k = 3 * static_cast<std::size_t>(i) + c;
+          p[k] = done[c] ? 0.0 : r[k] + beta[c] * (p[k] - omega[c] * v[k]);
+        }
+      }
     }
     Precondition_(P_, PHat_);
     Product_(PHat_, V_);
@@ -833,10 +991,21 @@ private:
         Alpha_[c] = Rho_[c] / rv[c];
       }
     }
-    for (std::size_t k = 0; k < size; ++k)
     {
-      const int c = static_cast<int>(k % 3);
-      S_[k] = Done_[c] ? 0.0 : R_[k] - Alpha_[c] * V_[k];
+      const double* r = R_.data();
+      const double* v = V_.data();
+      double* sv = S_.data();
+      const std::array<bool, 3> done = Done_;
+      const std::array<double, 3> alpha = Alpha_;
+#pragma omp parallel for schedule(static) num_threads(Threads_)
+      for (std::ptrdiff_t i = 0; i < points; ++i)
+      {
+        for (int c = 0; c < 3; ++c)
+        {
+          const std::size_t k = 3 * static_cast<std::size_t>(i) + c;
+          sv[k] = done[c] ? 0.0 : r[k] - alpha[c] * v[k];
+        }
+      }
     }
     Precondition_(S_, SHat_);
     Product_(SHat_, T_);
@@ -848,13 +1017,27 @@ private:
         Omega_[c] = tt[c] > 0.0 ? ts[c] / tt[c] : 0.0;
       }
     }
-    for (std::size_t k = 0; k < size; ++k)
     {
-      const int c = static_cast<int>(k % 3);
-      if (!Done_[c])
+      const double* pHat = PHat_.data();
+      const double* sHat = SHat_.data();
+      const double* sv = S_.data();
+      const double* tv = T_.data();
+      double* xv = x.data();
+      double* r = R_.data();
+      const std::array<bool, 3> done = Done_;
+      const std::array<double, 3> alpha = Alpha_, omega = Omega_;
+#pragma omp parallel for schedule(static) num_threads(Threads_)
+      for (std::ptrdiff_t i = 0; i < points; ++i)
       {
-        x[k] += Alpha_[c] * PHat_[k] + Omega_[c] * SHat_[k];
-        R_[k] = S_[k] - Omega_[c] * T_[k];
+        for (int c = 0; c < 3; ++c)
+        {
+          const std::size_t k = 3 * static_cast<std::size_t>(i) + c;
+          if (!done[c])
+          {
+            xv[k] += alpha[c] * pHat[k] + omega[c] * sHat[k];
+            r[k] = sv[k] - omega[c] * tv[k];
+          }
+        }
       }
     }
     const std::array<double, 3> rrNew = Dots(R_, R_);
@@ -880,6 +1063,7 @@ private:
   Operator Product_, Precondition_;
   double RelTol_;
   int MaxIter_;
+  int Threads_;
   std::function<bool(int)> Progress_;
   int It_ = 0;
   std::vector<double> R_, RHat_, P_, V_, PHat_, S_, SHat_, T_;
@@ -1256,7 +1440,7 @@ private:
 
 } // namespace
 
-void Sp3Solver::SetUpPreconditioner(const TetMesh& mesh, const std::string& preconditioner)
+const char* Sp3Solver::SetUpPreconditioner(const TetMesh& mesh, const std::string& preconditioner)
 {
   Blocks& b = *Blocks_;
   b.Multigrid = preconditioner == "multigrid-agg";
@@ -1264,16 +1448,34 @@ void Sp3Solver::SetUpPreconditioner(const TetMesh& mesh, const std::string& prec
   {
     if (!b.Cycle1 || !b.Cycle2)
     {
-      b.Cycle1 = CreateLinearSolver("multigrid-agg");
-      b.Cycle2 = CreateLinearSolver("multigrid-agg");
+      b.Cycle1 = std::make_unique<AggregationMultigridSolver>();
+      b.Cycle2 = std::make_unique<AggregationMultigridSolver>();
       b.CyclesReady = false;
     }
-    // A full set-up the first time on this mesh, values-only after.
-    const bool rebuild = !b.CyclesReady;
-    b.Cycle1->Setup(b.A11, &mesh, rebuild);
-    b.Cycle2->Setup(b.A22, &mesh, rebuild);
+    const bool setUp = b.CyclesSetUp;
+    b.CyclesSetUp = false; // until the set-up below succeeds
+    const char* done = "kept";
+    if (!b.CyclesReady)
+    {
+      done = "rebuilt";
+      // The first time on this mesh: one aggregation hierarchy for both
+      // blocks (it reads only the pattern, which A11 and A22 share, and the
+      // points), the values of each.
+      b.Cycle1->Setup(b.A11, &mesh, true);
+      b.Cycle2->SetupSharedHierarchy(*b.Cycle1, b.A22, &mesh);
+    }
+    else if (!setUp)
+    {
+      // New values (a full assembly), the same pattern: values only.
+      b.Cycle1->Setup(b.A11, &mesh, false);
+      b.Cycle2->Setup(b.A22, &mesh, false);
+      done = "values";
+    }
+    // Otherwise the blocks did not change (only the right-hand sides:
+    // Assemble): the set-up is kept.
     b.CyclesReady = true;
-    return;
+    b.CyclesSetUp = true;
+    return done;
   }
   const int n = mesh.GetNumberOfPoints();
   const std::size_t half = 3 * static_cast<std::size_t>(n);
@@ -1288,6 +1490,7 @@ void Sp3Solver::SetUpPreconditioner(const TetMesh& mesh, const std::string& prec
         1.0 / b.A22.Values[c][diagonal[i]];
     }
   }
+  return "values";
 }
 
 bool Sp3Solver::SolveBlocks(
@@ -1301,7 +1504,7 @@ bool Sp3Solver::SolveBlocks(
   // (Re phi_1, Re phi_2, Im phi_1, Im phi_2).
   const std::size_t size = complex ? 2 * block : block;
   const int numThreads = NumberOfThreads_ > 0 ? NumberOfThreads_ : omp_get_max_threads();
-  SetUpPreconditioner(mesh, preconditioner);
+  report.LinearSetup = SetUpPreconditioner(mesh, preconditioner);
 
   BlockValues real{}, imaginary{};
   for (int c = 0; c < NumberOfChannels; ++c)
@@ -1396,7 +1599,7 @@ bool Sp3Solver::SolveBlocks(
       product, precondition, RelTol_, MaxIter_, GmresRestart_, numThreads, progress);
     return solver.Solve(rhs, x, report);
   }
-  LockstepBiCgStab solver(product, precondition, RelTol_, MaxIter_, progress);
+  LockstepBiCgStab solver(product, precondition, RelTol_, MaxIter_, numThreads, progress);
   return solver.Solve(rhs, x, report);
 }
 
@@ -1704,6 +1907,12 @@ void Sp3Solver::FillReport(const TetMesh& mesh, SolverReport& report) const
   report.MemoryBytes = Blocks_->A11.GetMemoryBytes() + Blocks_->A22.GetMemoryBytes() +
     2 * NumberOfChannels * Blocks_->A11.ColumnIndices.size() * sizeof(double) +
     9 * 2 * half * sizeof(double) +
+    // the kept material (Blocks::AssembledMaterial)
+    (Blocks_->AssembledMaterial.AbsorptionCoefficient.capacity() +
+      Blocks_->AssembledMaterial.ReducedScatteringCoefficient.capacity() +
+      Blocks_->AssembledMaterial.RefractiveIndex.capacity() +
+      Blocks_->AssembledMaterial.Anisotropy.capacity()) *
+      sizeof(double) +
     (Blocks_->Cycle1 ? Blocks_->Cycle1->GetMemoryBytes() + Blocks_->Cycle2->GetMemoryBytes() : 0);
 }
 
@@ -1746,7 +1955,7 @@ bool Sp3Solver::Solve(
       sourceLoad[k] += collimated.Load[k];
     }
   }
-  Assemble(problem, sourceLoad, {}, 0.0);
+  report.Assembly = Assemble(problem, sourceLoad, {}, 0.0) ? "full" : "right-hand side";
   report.SetupMilliseconds = MillisecondsSince(start);
 
   start = Clock::now();

@@ -156,8 +156,14 @@ std::vector<double> ComputeSp3SourceLoad(const TetMesh& mesh, const OpticalPrope
  * block diagonal: Jacobi ("jacobi", the
  * default below VertexDiffusionSolver::LargeSystemUnknowns vertices) or one
  * multigrid-agg cycle on each diagonal block ("multigrid-agg", the default
- * from there on), the three channels together; warm start from the last
- * solution on the same mesh. SetLinearSolver: "" (by size), or the names
+ * from there on; the two cycles share one aggregation hierarchy:
+ * AggregationMultigridSolver::SetupSharedHierarchy), the three channels
+ * together; warm start from the last solution on the same mesh. A
+ * continuous-wave solve on the same mesh with an equal material (a
+ * relight, other sources) rebuilds only the right-hand sides and keeps the
+ * blocks and the cycles' set-up (SolverReport::Assembly "right-hand side",
+ * LinearSetup "kept"; the blocks depend on the mesh, the material and
+ * omega only, and the kept material is compared entry by entry). SetLinearSolver: "" (by size), or the names
  * of its registry entry (DiffusionSolverTraits::LinearSolvers, what the
  * filter and the plugin offer): "bicgstab" (the diagonal; the short
  * "jacobi" too) or "multigrid-agg", mapped by their LinearSolverTraits;
@@ -282,11 +288,23 @@ private:
   void SizeBlocks(const TetMesh& mesh, bool complex);
   /// The blocks for angular frequency omega (rad/s; 0: continuous wave,
   /// real) with the interior sources' load (real and imaginary parts).
-  void Assemble(const DiffusionProblem& problem, const std::vector<double>& sourceLoad,
+  /// Returns true for a full assembly, false when only the right-hand sides
+  /// were rebuilt (continuous wave, the same mesh and an equal material as
+  /// the last continuous-wave assembly: the blocks are the same bits).
+  bool Assemble(const DiffusionProblem& problem, const std::vector<double>& sourceLoad,
     const std::vector<double>& imaginaryLoad, double omega);
+  /// The right-hand sides' boundary loads alone, in the full assembly's
+  /// order (the same bits), on the kept blocks.
+  void AssembleRightHandSides(const DiffusionProblem& problem,
+    const std::vector<Sp3BoundaryCoefficients>& coefficients, const std::vector<int>& etaIndex);
   void AddLoads(int numPoints, const std::vector<double>& sourceLoad,
     const std::vector<double>& imaginaryLoad);
-  void SetUpPreconditioner(const TetMesh& mesh, const std::string& preconditioner);
+  /// The block preconditioner's set-up; returns what was done
+  /// (SolverReport::LinearSetup): "rebuilt" (the aggregation hierarchy,
+  /// shared by the two cycles, and the values), "values" (of a block whose
+  /// values changed, or Jacobi's diagonal) or "kept" (a relight: the blocks
+  /// did not change).
+  const char* SetUpPreconditioner(const TetMesh& mesh, const std::string& preconditioner);
   /// BiCGSTAB on the assembled blocks from `x` (resized and zeroed when its
   /// size does not fit: 2 N x 3, or 4 N x 3 in the frequency domain).
   bool SolveBlocks(const TetMesh& mesh, const std::string& preconditioner, std::vector<double>& x,

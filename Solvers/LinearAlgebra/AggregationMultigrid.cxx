@@ -249,6 +249,58 @@ void AggregationMultigridSolver::SetupRows(
   ++RowSetups_;
 }
 
+void AggregationMultigridSolver::SetupSharedHierarchy(
+  const AggregationMultigridSolver& donor, const DiffusionSystem& system, const TetMesh* mesh)
+{
+  CheckSetup(system, mesh);
+  Ready_ = false; // a set-up that throws leaves the solver not ready
+  const auto& from = donor.Internal_->Levels;
+  if (&donor == this)
+  {
+    throw Error(GetName() + ": SetupSharedHierarchy needs another solver as the donor");
+  }
+  if (!donor.Ready_ || from.empty())
+  {
+    throw Error(GetName() + ": SetupSharedHierarchy: the donor has no successful Setup");
+  }
+  const CsrPattern& p = from[0].Pattern;
+  if (p.Size != system.NumberOfUnknowns || p.Offsets != system.RowOffsets ||
+    p.Columns != system.ColumnIndices)
+  {
+    throw Error(GetName() +
+      ": SetupSharedHierarchy: the system's pattern is not the donor's (a shared hierarchy "
+      "needs the same unknowns and non-zeros)");
+  }
+  Internal_->Recycler.Clear();
+  const auto start = Clock::now();
+  // The structure of every level (what BuildHierarchy makes); the values,
+  // smoother data and work vectors are this solver's (SetupValues).
+  auto& levels = Internal_->Levels;
+  levels.assign(from.size(), Internals::Level());
+  for (std::size_t l = 0; l < from.size(); ++l)
+  {
+    levels[l].Pattern = from[l].Pattern;
+    levels[l].MeshIds = from[l].MeshIds;
+    levels[l].Aggregate = from[l].Aggregate;
+    levels[l].MemberOffsets = from[l].MemberOffsets;
+    levels[l].Members = from[l].Members;
+    levels[l].CoarseSlot = from[l].CoarseSlot;
+  }
+  // The coarsest level's symbolic LDL^T analysis (Eigen's solvers are not
+  // copyable; the level is small).
+  Internal_->CoarsestTemplate = donor.Internal_->CoarsestTemplate;
+  for (int c = 0; c < NC; ++c)
+  {
+    Internal_->Coarsest[c].analyzePattern(Internal_->CoarsestTemplate);
+  }
+  HierarchyMs_ = MillisecondsSince(start);
+  ++SharedSetups_;
+  SetupValues(system, mesh);
+  Unknowns_ = system.NumberOfUnknowns;
+  NonZeros_ = system.ColumnIndices.size();
+  Ready_ = true;
+}
+
 int AggregationMultigridSolver::GetNumberOfStaleRows() const
 {
   return Internal_->StaleCount;

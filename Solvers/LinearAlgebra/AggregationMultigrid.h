@@ -118,6 +118,25 @@ public:
   Eigen::SparseMatrix<double, Eigen::RowMajor, int> GetCoarseMatrix(int l, int c) const;
   ///@}
 
+  /**
+   * Setup(system, mesh, true) with the hierarchy of `donor` in place of a
+   * new build: for a system with the donor's pattern on the donor's mesh
+   * (e.g. the other diagonal block of a block system, SP3's A22 beside
+   * A11). The aggregation reads only the pattern and the points (TransCut
+   * Sec. 4.1.1 on the graph, the nearest retained neighbour), so the
+   * hierarchy it would build is the donor's: its levels' patterns,
+   * aggregates and Galerkin slots are copied (HierarchyMilliseconds: the
+   * copy; not a hierarchy build), then this system's values set up. The
+   * hierarchy options are then the donor's (SetMaxLevels, SetCoarsestSize);
+   * the cycle's options stay this solver's. Throws translucency::Error (and
+   * leaves this solver not set up) when the donor has no successful Setup,
+   * is this solver, or its level-0 pattern is not the system's.
+   */
+  void SetupSharedHierarchy(
+    const AggregationMultigridSolver& donor, const DiffusionSystem& system, const TetMesh* mesh);
+  /// Setups that copied a donor's hierarchy (SetupSharedHierarchy).
+  int GetNumberOfSharedHierarchySetups() const { return SharedSetups_; }
+
   /// Milliseconds of the last hierarchy build and of the last value set-up.
   double GetHierarchyMilliseconds() const { return HierarchyMs_; }
   double GetValuesMilliseconds() const { return ValuesMs_; }
@@ -196,7 +215,7 @@ private:
   int Threads_ = 0;
   double HierarchyMs_ = 0.0, ValuesMs_ = 0.0;
   double CoarseRefreshFraction_ = 0.1;
-  int Builds_ = 0, Setups_ = 0, RowSetups_ = 0;
+  int Builds_ = 0, Setups_ = 0, RowSetups_ = 0, SharedSetups_ = 0;
 };
 
 } // namespace translucency

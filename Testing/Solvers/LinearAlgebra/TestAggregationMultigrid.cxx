@@ -352,6 +352,111 @@ TEST(AggregationMultigrid, WarmStartAndValuesOnlySetup)
   }
 }
 
+// SetupSharedHierarchy: a second system on the donor's mesh and pattern
+// with other values (another random material, as SP3's A22 beside A11)
+// set up on the donor's hierarchy equals a fresh Setup of that system: the
+// same hierarchy level by level (the aggregation reads only the pattern and
+// the points), the same CG iterations and bits, its residual recomputed
+// here from the matrix entries within RelTol, its solution the Cholesky
+// one's. The donor's own solve is unchanged, no hierarchy is built, and a
+// values-only Setup of the shared solver keeps the copy.
+TEST(AggregationMultigrid, SharedHierarchyEqualsAFreshSetup)
+{
+  Problem p(CubeMesh(12, 5.0, 0.3, 71), 72);
+  auto donor = MakeSolver();
+  donor->SetRelTol(1e-8);
+  donor->Setup(p.System, &p.Mesh, true);
+  std::array<Eigen::VectorXd, 3> xDonor, xDonorAfter;
+  std::array<LinearSolveStats, 3> sDonor, sDonorAfter;
+  ASSERT_TRUE(donor->Solve(p.System, xDonor, false, sDonor));
+
+  DiffusionSystem second;
+  DiscreteDivergence().Assemble(p.Mesh, RandomMaterial(p.Mesh.GetNumberOfTets(), 73),
+    RandomIrradiance(p.Mesh, 74), second);
+  ASSERT_EQ(second.ColumnIndices, p.System.ColumnIndices);
+  ASSERT_NE(second.Values[0], p.System.Values[0]);
+  auto shared = MakeSolver();
+  shared->SetRelTol(1e-8);
+  shared->SetupSharedHierarchy(*donor, second, &p.Mesh);
+  EXPECT_TRUE(shared->HasPreconditioner());
+  EXPECT_EQ(shared->GetNumberOfHierarchyBuilds(), 0);
+  EXPECT_EQ(shared->GetNumberOfSharedHierarchySetups(), 1);
+  EXPECT_EQ(shared->GetNumberOfSetups(), 1);
+  auto fresh = MakeSolver();
+  fresh->SetRelTol(1e-8);
+  fresh->Setup(second, &p.Mesh, true);
+  ASSERT_GE(fresh->GetNumberOfLevels(), 3);
+  ASSERT_EQ(shared->GetNumberOfLevels(), fresh->GetNumberOfLevels());
+  for (int l = 0; l < fresh->GetNumberOfLevels(); ++l)
+  {
+    EXPECT_EQ(shared->GetAggregates(l), fresh->GetAggregates(l)) << "level " << l;
+    EXPECT_EQ(shared->GetMeshIds(l), fresh->GetMeshIds(l)) << "level " << l;
+    EXPECT_EQ(shared->GetPattern(l).Offsets, fresh->GetPattern(l).Offsets) << "level " << l;
+    EXPECT_EQ(shared->GetPattern(l).Columns, fresh->GetPattern(l).Columns) << "level " << l;
+  }
+
+  std::array<Eigen::VectorXd, 3> xShared, xFresh;
+  std::array<LinearSolveStats, 3> sShared, sFresh;
+  ASSERT_TRUE(shared->Solve(second, xShared, false, sShared));
+  ASSERT_TRUE(fresh->Solve(second, xFresh, false, sFresh));
+  const auto reference = Cholesky(second);
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_TRUE(sShared[c].Converged) << "channel " << c;
+    EXPECT_GT(sShared[c].Iterations, 2) << "channel " << c;
+    EXPECT_EQ(sShared[c].Iterations, sFresh[c].Iterations) << "channel " << c;
+    EXPECT_EQ((xShared[c] - xFresh[c]).norm(), 0.0) << "channel " << c;
+    // b - A x from the CSR entries (not the solver's product).
+    double rr = 0.0, bb = 0.0;
+    for (int i = 0; i < second.NumberOfUnknowns; ++i)
+    {
+      double r = second.RightHandSide[c][i];
+      for (int k = second.RowOffsets[i]; k < second.RowOffsets[i + 1]; ++k)
+      {
+        r -= second.Values[c][k] * xShared[c][second.ColumnIndices[k]];
+      }
+      rr += r * r;
+      bb += second.RightHandSide[c][i] * second.RightHandSide[c][i];
+    }
+    EXPECT_LE(std::sqrt(rr / bb), 1e-8) << "channel " << c;
+    EXPECT_LT(RelativeError(xShared[c], reference[c]), 1e-6) << "channel " << c;
+  }
+  ASSERT_TRUE(donor->Solve(p.System, xDonorAfter, false, sDonorAfter));
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_EQ((xDonorAfter[c] - xDonor[c]).norm(), 0.0) << "channel " << c;
+  }
+
+  // New values on the shared solver: values only, still no build.
+  DiscreteDivergence().Assemble(p.Mesh, RandomMaterial(p.Mesh.GetNumberOfTets(), 75),
+    RandomIrradiance(p.Mesh, 76), second);
+  shared->Setup(second, &p.Mesh, false);
+  fresh->Setup(second, &p.Mesh, true);
+  EXPECT_EQ(shared->GetNumberOfHierarchyBuilds(), 0);
+  EXPECT_EQ(shared->GetNumberOfSetups(), 2);
+  ASSERT_TRUE(shared->Solve(second, xShared, false, sShared));
+  ASSERT_TRUE(fresh->Solve(second, xFresh, false, sFresh));
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_EQ((xShared[c] - xFresh[c]).norm(), 0.0) << "channel " << c;
+  }
+
+  // Refused: a donor without a Setup, the solver itself, another pattern.
+  auto unset = MakeSolver();
+  auto other = MakeSolver();
+  std::string message =
+    tt::ErrorMessage([&] { other->SetupSharedHierarchy(*unset, second, &p.Mesh); });
+  EXPECT_TRUE(tt::Contains(message, "no successful Setup")) << message;
+  EXPECT_FALSE(other->HasPreconditioner());
+  message = tt::ErrorMessage([&] { shared->SetupSharedHierarchy(*shared, second, &p.Mesh); });
+  EXPECT_TRUE(tt::Contains(message, "another solver")) << message;
+  EXPECT_FALSE(shared->HasPreconditioner());
+  Problem small(CubeMesh(4, 1.0), 77);
+  message = tt::ErrorMessage([&] { other->SetupSharedHierarchy(*donor, small.System, &small.Mesh); });
+  EXPECT_TRUE(tt::Contains(message, "not the donor's")) << message;
+  EXPECT_FALSE(other->HasPreconditioner());
+}
+
 // A paint stroke: SetupChangedRows refreshes the level-0 single-precision
 // values and l1 diagonal of the painted rows and keeps the coarse levels (the
 // unpainted Galerkin values); the preconditioner stays symmetric positive,
