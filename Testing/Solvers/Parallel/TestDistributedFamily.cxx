@@ -448,7 +448,8 @@ TEST(DistributedFamily, BoomerAMGCGIsARegistryComposition)
   EXPECT_EQ(solver->GetName(), "cg/boomeramg");
   EXPECT_EQ(CreateDistributedLinearSolver("HYPRE-AMG", Self())->GetName(), "cg/boomeramg");
   EXPECT_EQ(ErrorMessage([] { CreateDistributedLinearSolver("cg/jacobi", Self()); }),
-    "linear solver 'cg/jacobi' has no distributed variant (those with one: cg/boomeramg)");
+    "linear solver 'cg/jacobi' has no distributed variant (those with one: cg/aggregation, "
+    "cg/boomeramg)");
   EXPECT_TRUE(Contains(ErrorMessage([] { CreateDistributedLinearSolver("gmres", Self()); }),
     "linear solver 'gmres' has no distributed variant"));
   // An option it reads is checked.
