@@ -15,7 +15,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -64,7 +63,6 @@ struct SchwarzAggregationPCG::Handles
 {
   HYPRE_IJMatrix A = nullptr;
   HYPRE_IJVector B = nullptr, X = nullptr;
-  HYPRE_IJVector T1 = nullptr, T2 = nullptr; ///< agg-global-fine's x and A x
   HYPRE_Solver PCG = nullptr;
   std::vector<HYPRE_BigInt> Rows;
   std::uint64_t Pattern = 0; ///< fingerprint of the rows given to Setup
@@ -91,10 +89,6 @@ struct SchwarzAggregationPCG::Block
   Eigen::SimplicialLDLT<ColMatrix> Coarsest;
   std::size_t CoarsestNonZeros = 0;
   int Threads = 1;
-  /// agg-global-fine: level 0's products with the whole distributed
-  /// matrix (ax = A x, collective), else with the block.
-  std::function<void(const float* x, double* ax)> GlobalProduct;
-  mutable std::vector<double> T; ///< level 0's A x (GlobalProduct)
   double Theta = 0.6; ///< centre of the Chebyshev interval [0.2, 1] (serial default)
   double Scale = 1.4;
   int CycleIndex = 2;
@@ -141,16 +135,7 @@ struct SchwarzAggregationPCG::Block
 #pragma omp parallel for num_threads(Threads) schedule(static) if(n > SchwarzThreshold)
     for (int i = 0; i < n; ++i)
       X[i] = static_cast<float>(w * inv[i] * static_cast<double>(b[i]));
-    const bool global = l == 0 && GlobalProduct;
-    if (global)
-    {
-      GlobalProduct(X, T.data());
-      float* R = lev.R.data();
-      for (int i = 0; i < n; ++i)
-        R[i] = static_cast<float>(static_cast<double>(b[i]) - T[i]);
-    }
-    else
-      Residual(lev, b, static_cast<const float*>(X), lev.R.data());
+    Residual(lev, b, static_cast<const float*>(X), lev.R.data());
     // Restriction b_c = P^T r (sums over the aggregates).
     const Level& coarse = Levels[l + 1];
     {
@@ -200,14 +185,6 @@ struct SchwarzAggregationPCG::Block
       for (int i = 0; i < n; ++i)
         X[i] = static_cast<float>(X[i] + Scale * xc[agg[i]]);
     }
-    if (global)
-    {
-      GlobalProduct(X, T.data());
-      for (int i = 0; i < n; ++i)
-        out[i] = static_cast<TO>(
-          static_cast<double>(X[i]) + w * inv[i] * (static_cast<double>(b[i]) - T[i]));
-      return;
-    }
     const int* ro = lev.Pattern->Offsets.data();
     const int* ci = lev.Pattern->Columns.data();
     const float* v = lev.Single.data();
@@ -221,20 +198,6 @@ struct SchwarzAggregationPCG::Block
         static_cast<TO>(static_cast<double>(X[i]) + w * inv[i] * (static_cast<double>(b[i]) - ax));
     }
   }
-};
-
-/// The additive coarse correction over the ranks: z += P A_0^-1 P^T r.
-struct SchwarzAggregationPCG::Coarse
-{
-  bool On = false;
-  std::vector<int> Of;         ///< local row -> this rank's coarse vertex (local id)
-  std::vector<int> OffdGlobal; ///< hypre's off-rank column q -> global coarse vertex
-  int Local = 0, Begin = 0, Total = 0;
-  std::vector<int> Counts, Displs; ///< coarse vertices per rank, first of each
-  Eigen::SimplicialLDLT<ColMatrix> Solver;
-  std::size_t FactorNonZeros = 0;
-  mutable std::vector<double> Rc; ///< this rank's restricted residual
-  mutable Eigen::VectorXd Rg, Xg; ///< the whole coarse residual and correction
 };
 
 namespace
@@ -269,7 +232,6 @@ SchwarzAggregationPCG::SchwarzAggregationPCG(MPI_Comm comm)
   : Comm_(comm)
   , H_(std::make_unique<Handles>())
   , B_(std::make_unique<Block>())
-  , C_(std::make_unique<Coarse>())
 {
   EnsureHypreInitialized();
 }
@@ -289,13 +251,8 @@ void SchwarzAggregationPCG::Free()
     HYPRE_IJVectorDestroy(H_->B);
   if (H_->X)
     HYPRE_IJVectorDestroy(H_->X);
-  if (H_->T1)
-    HYPRE_IJVectorDestroy(H_->T1);
-  if (H_->T2)
-    HYPRE_IJVectorDestroy(H_->T2);
   *H_ = Handles();
   B_ = std::make_unique<Block>();
-  C_ = std::make_unique<Coarse>();
   Structure_.reset();
   OwnsStructure_ = false;
   Places_.clear();
@@ -310,11 +267,6 @@ void SchwarzAggregationPCG::SetOptions(const SolverOptions& options)
   options.ReadInteger(Who, "agg-cycle-index", 1, "1 (V-cycle) or 2 (W-cycle)", gamma);
   options.ReadInteger(Who, "agg-coarsest-size", 1, "vertices of the coarsest level, >= 1", coarsest);
   options.ReadInteger(Who, "agg-threads", 0, "OpenMP threads, >= 0 (0: OpenMP's default)", threads);
-  bool coarseSpace = CoarseSpace_;
-  options.ReadFlag(Who, "agg-coarse-space", coarseSpace);
-  bool globalFine = GlobalFine_;
-  options.ReadFlag(Who, "agg-global-fine", globalFine);
-  GlobalFine_ = globalFine;
   if (!(scale > 0.0 && scale < 2.0))
   {
     throw Error(std::string(Who) + ": option agg-coarse-scale = " + std::to_string(scale) +
@@ -329,7 +281,6 @@ void SchwarzAggregationPCG::SetOptions(const SolverOptions& options)
   CycleIndex_ = gamma;
   CoarsestSize_ = coarsest;
   Threads_ = threads;
-  CoarseSpace_ = coarseSpace;
 }
 
 void SchwarzAggregationPCG::SetCoordinates(const double* xyz, int rows)
@@ -385,9 +336,6 @@ void SchwarzAggregationPCG::ExtractBlock(const int* rowOffsets, const int* colum
   BlockOffsets_.assign(static_cast<std::size_t>(rows) + 1, 0);
   BlockColumns_.clear();
   BlockEntries_.clear();
-  BlockDiagonal_.assign(static_cast<std::size_t>(rows), -1);
-  OffBlockRows_.clear();
-  OffBlockEntries_.clear();
   BlockColumns_.reserve(static_cast<std::size_t>(rowOffsets[rows]));
   BlockEntries_.reserve(static_cast<std::size_t>(rowOffsets[rows]));
   for (int i = 0; i < rows; ++i)
@@ -396,15 +344,8 @@ void SchwarzAggregationPCG::ExtractBlock(const int* rowOffsets, const int* colum
     {
       if (columns[k] >= RowBegin_ && columns[k] < RowEnd_)
       {
-        if (columns[k] == RowBegin_ + i)
-          BlockDiagonal_[i] = static_cast<int>(BlockColumns_.size());
         BlockColumns_.push_back(columns[k] - RowBegin_);
         BlockEntries_.push_back(k);
-      }
-      else
-      {
-        OffBlockRows_.push_back(i);
-        OffBlockEntries_.push_back(k);
       }
     }
     BlockOffsets_[i + 1] = static_cast<int>(BlockColumns_.size());
@@ -498,16 +439,6 @@ void SchwarzAggregationPCG::SetBlockValues(const double* values)
     lev.Single.resize(nnz);
     lev.InverseL1.resize(static_cast<std::size_t>(n));
     const CsrPattern& p = *lev.Pattern;
-    // agg-global-fine: level 0 smooths with the whole matrix, so its l1
-    // norms include the couplings to other ranks' columns.
-    std::vector<double> offAbs;
-    if (l == 0 && GlobalFine_)
-    {
-      offAbs.assign(static_cast<std::size_t>(n), 0.0);
-      for (std::size_t e = 0; e < OffBlockRows_.size(); ++e)
-        offAbs[OffBlockRows_[e]] += std::abs(values[OffBlockEntries_[e]]);
-    }
-    const double* extra = offAbs.empty() ? nullptr : offAbs.data();
     long long bad = -1;
 #pragma omp parallel for num_threads(blk.Threads) schedule(static) reduction(max : bad) if(n > SchwarzThreshold)
     for (int i = 0; i < n; ++i)
@@ -522,8 +453,6 @@ void SchwarzAggregationPCG::SetBlockValues(const double* values)
         if (p.Columns[k] == i)
           ok = a > 0.0;
       }
-      if (extra)
-        sum += extra[i];
       ok = ok && std::isfinite(sum);
       lev.InverseL1[i] = sum > 0.0 ? static_cast<float>(1.0 / sum) : 0.0f;
       if (!ok)
@@ -543,7 +472,7 @@ void SchwarzAggregationPCG::SetBlockValues(const double* values)
 void SchwarzAggregationPCG::BuildSolver()
 {
   Handles& h = *H_;
-  for (HYPRE_IJVector* v : { &h.B, &h.X, &h.T1, &h.T2 })
+  for (HYPRE_IJVector* v : { &h.B, &h.X })
   {
     SchwarzCheck(HYPRE_IJVectorCreate(Comm_, RowBegin_, RowEnd_ - 1, v), "vector creation");
     SchwarzCheck(HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR), "vector type");
@@ -555,28 +484,6 @@ void SchwarzAggregationPCG::BuildSolver()
   HYPRE_IJMatrixGetObject(h.A, reinterpret_cast<void**>(&a));
   HYPRE_IJVectorGetObject(h.B, reinterpret_cast<void**>(&b));
   HYPRE_IJVectorGetObject(h.X, reinterpret_cast<void**>(&x));
-  int size = 1;
-  MPI_Comm_size(Comm_, &size);
-  B_->GlobalProduct = nullptr;
-  if (GlobalFine_ && size > 1 && RowEnd_ > RowBegin_ && !B_->Levels.empty())
-  {
-    HYPRE_ParVector t1, t2;
-    HYPRE_IJVectorGetObject(h.T1, reinterpret_cast<void**>(&t1));
-    HYPRE_IJVectorGetObject(h.T2, reinterpret_cast<void**>(&t2));
-    auto* matrix = reinterpret_cast<hypre_ParCSRMatrix*>(a);
-    auto* x1 = reinterpret_cast<hypre_ParVector*>(t1);
-    auto* y1 = reinterpret_cast<hypre_ParVector*>(t2);
-    const int rows = RowEnd_ - RowBegin_;
-    B_->T.assign(static_cast<std::size_t>(rows), 0.0);
-    B_->GlobalProduct = [matrix, x1, y1, rows](const float* x, double* ax) {
-      double* xd = hypre_VectorData(hypre_ParVectorLocalVector(x1));
-      for (int i = 0; i < rows; ++i)
-        xd[i] = x[i];
-      hypre_ParCSRMatrixMatvec(1.0, matrix, x1, 0.0, y1);
-      const double* yd = hypre_VectorData(hypre_ParVectorLocalVector(y1));
-      std::copy(yd, yd + rows, ax);
-    };
-  }
   SchwarzCheck(HYPRE_ParCSRPCGCreate(Comm_, &h.PCG), "PCG creation");
   HYPRE_PCGSetTwoNorm(h.PCG, 1);
   HYPRE_PCGSetPrintLevel(h.PCG, 0);
@@ -617,7 +524,7 @@ void SchwarzAggregationPCG::Setup(
     Structure_ = std::move(structure);
     OwnsStructure_ = true;
   }
-  SetUpValues(values, true);
+  SetBlockValues(values);
   BuildSolver();
   MatrixMilliseconds_ = 1000.0 * (assembled - start);
   HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
@@ -651,7 +558,7 @@ bool SchwarzAggregationPCG::SetupShared(int rowBegin, int rowEnd, const int* row
   BuildMatrix(rowBegin, rowEnd, rowOffsets, columns, values);
   const double assembled = MPI_Wtime();
   Structure_ = std::move(structure);
-  SetUpValues(values, true);
+  SetBlockValues(values);
   BuildSolver();
   MatrixMilliseconds_ = 1000.0 * (assembled - start);
   HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
@@ -728,7 +635,7 @@ void SchwarzAggregationPCG::UpdateValues(
       offdData[-1 - place] = values[k];
   }
   const double assembled = MPI_Wtime();
-  SetUpValues(values, false); // the kept aggregation, the new matrix's values
+  SetBlockValues(values); // the kept aggregation, the new matrix's values
   MatrixMilliseconds_ = 1000.0 * (assembled - start);
   HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
 }
@@ -739,185 +646,9 @@ void SchwarzAggregationPCG::ApplyPreconditioner(const double* r, double* z) cons
   {
     throw Error(std::string(Who) + ": ApplyPreconditioner() before Setup()");
   }
-  if (!B_->Levels.empty()) // else no rows on this rank
-    B_->Visit(0, r, z);
-  const Coarse& c = *C_;
-  if (!c.On)
-    return;
-  // z += P A_0^-1 P^T r: restriction here, the coarse residual gathered on
-  // every rank, solved there, this rank's part prolonged.
-  const int rows = RowEnd_ - RowBegin_;
-  std::fill(c.Rc.begin(), c.Rc.end(), 0.0);
-  for (int i = 0; i < rows; ++i)
-    c.Rc[c.Of[i]] += r[i];
-  MPI_Allgatherv(c.Rc.data(), c.Local, MPI_DOUBLE, c.Rg.data(), c.Counts.data(), c.Displs.data(),
-    MPI_DOUBLE, Comm_);
-  c.Xg = c.Solver.solve(c.Rg);
-  const double* x = c.Xg.data() + c.Begin;
-  for (int i = 0; i < rows; ++i)
-    z[i] += x[c.Of[i]];
-}
-
-void SchwarzAggregationPCG::AgreeOrThrow(const std::string& error) const
-{
-  int mine = error.empty() ? 0 : 1, any = 0;
-  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, Comm_);
-  if (any)
-  {
-    throw Error(mine ? error
-                     : std::string(Who) + ": the set-up failed on another rank (its block is "
-                                          "not SPD or not finite)");
-  }
-}
-
-void SchwarzAggregationPCG::SetUpValues(const double* values, bool structure)
-{
-  std::string error;
-  try
-  {
-    SetBlockValues(values);
-  }
-  catch (const Error& e)
-  {
-    error = e.what();
-  }
-  int size = 1;
-  MPI_Comm_size(Comm_, &size);
-  if (!CoarseSpace_ || size < 2)
-  {
-    C_->On = false;
-    if (!error.empty())
-      throw Error(error);
-    return;
-  }
-  AgreeOrThrow(error);
-  if (structure || !C_->On)
-    BuildCoarseMap();
-  SetCoarseValues();
-}
-
-void SchwarzAggregationPCG::BuildCoarseMap()
-{
-  C_ = std::make_unique<Coarse>();
-  Coarse& c = *C_;
-  c.On = true;
-  const int rows = RowEnd_ - RowBegin_;
-  const int L = static_cast<int>(B_->Levels.size());
-  c.Local = rows > 0 && L > 0 ? B_->Levels.back().Pattern->Size : 0;
-  // Each row's coarsest aggregate: the aggregates of every level composed.
-  c.Of.resize(static_cast<std::size_t>(rows));
-  for (int i = 0; i < rows; ++i)
-  {
-    int v = i;
-    for (int l = 0; l + 1 < L; ++l)
-      v = B_->Levels[l].Aggregate[v];
-    c.Of[i] = v;
-  }
-  int size = 1;
-  MPI_Comm_size(Comm_, &size);
-  c.Counts.assign(static_cast<std::size_t>(size), 0);
-  c.Displs.assign(static_cast<std::size_t>(size), 0);
-  MPI_Allgather(&c.Local, 1, MPI_INT, c.Counts.data(), 1, MPI_INT, Comm_);
-  int rank = 0;
-  MPI_Comm_rank(Comm_, &rank);
-  for (int q = 1; q < size; ++q)
-    c.Displs[q] = c.Displs[q - 1] + c.Counts[q - 1];
-  c.Begin = c.Displs[rank];
-  c.Total = c.Displs[size - 1] + c.Counts[size - 1];
-  c.Rc.assign(static_cast<std::size_t>(c.Local), 0.0);
-  c.Rg.setZero(c.Total);
-  // The off-rank columns' coarse vertices, through hypre's halo exchange
-  // (the product's communication package: the rows each neighbour needs).
-  hypre_ParCSRMatrix* a = nullptr;
-  HYPRE_IJMatrixGetObject(H_->A, reinterpret_cast<void**>(&a));
-  if (!hypre_ParCSRMatrixCommPkg(a))
-    hypre_MatvecCommPkgCreate(a);
-  hypre_ParCSRCommPkg* pkg = hypre_ParCSRMatrixCommPkg(a);
-  const HYPRE_Int sends = hypre_ParCSRCommPkgNumSends(pkg);
-  const HYPRE_Int sendCount = hypre_ParCSRCommPkgSendMapStart(pkg, sends);
-  std::vector<HYPRE_Int> send(static_cast<std::size_t>(sendCount));
-  for (HYPRE_Int k = 0; k < sendCount; ++k)
-    send[k] = c.Begin + c.Of[hypre_ParCSRCommPkgSendMapElmt(pkg, k)];
-  const HYPRE_Int offdColumns = hypre_CSRMatrixNumCols(hypre_ParCSRMatrixOffd(a));
-  std::vector<HYPRE_Int> received(static_cast<std::size_t>(offdColumns));
-  // Job 11: HYPRE_Int data, forward (owned rows -> the ranks that have
-  // them as columns).
-  hypre_ParCSRCommHandle* handle = hypre_ParCSRCommHandleCreate(11, pkg, send.data(), received.data());
-  hypre_ParCSRCommHandleDestroy(handle);
-  c.OffdGlobal.assign(received.begin(), received.end());
-}
-
-void SchwarzAggregationPCG::SetCoarseValues()
-{
-  Coarse& c = *C_;
-  // This rank's rows of A_0: its block's coarsest-level matrix (the
-  // Galerkin sums of the owned block) plus every coupling to another rank's
-  // column, summed into (own coarse vertex, the column's coarse vertex).
-  std::vector<int> ri, ci;
-  std::vector<double> vi;
-  if (!B_->Levels.empty())
-  {
-    const Block::Level& last = B_->Levels.back();
-    const CsrPattern& p = *last.Pattern;
-    for (int a = 0; a < p.Size; ++a)
-    {
-      for (int k = p.Offsets[a]; k < p.Offsets[a + 1]; ++k)
-      {
-        ri.push_back(c.Begin + a);
-        ci.push_back(c.Begin + p.Columns[k]);
-        vi.push_back(last.Values[k]);
-      }
-    }
-  }
-  hypre_ParCSRMatrix* am = nullptr;
-  HYPRE_IJMatrixGetObject(H_->A, reinterpret_cast<void**>(&am));
-  const hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(am);
-  const HYPRE_Int* oi = hypre_CSRMatrixI(offd);
-  const HYPRE_Int* oj = hypre_CSRMatrixJ(offd);
-  const HYPRE_Complex* od = hypre_CSRMatrixData(offd);
-  const int rows = RowEnd_ - RowBegin_;
-  if (oi && hypre_CSRMatrixNumNonzeros(offd) > 0)
-  {
-    for (int i = 0; i < rows; ++i)
-    {
-      for (HYPRE_Int q = oi[i]; q < oi[i + 1]; ++q)
-      {
-        ri.push_back(c.Begin + c.Of[i]);
-        ci.push_back(c.OffdGlobal[oj[q]]);
-        vi.push_back(od[q]);
-      }
-    }
-  }
-  int size = 1;
-  MPI_Comm_size(Comm_, &size);
-  const int mine = static_cast<int>(vi.size());
-  std::vector<int> counts(static_cast<std::size_t>(size)), displs(static_cast<std::size_t>(size), 0);
-  MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, Comm_);
-  for (int q = 1; q < size; ++q)
-    displs[q] = displs[q - 1] + counts[q - 1];
-  const int all = displs[size - 1] + counts[size - 1];
-  std::vector<int> rAll(static_cast<std::size_t>(all)), cAll(rAll.size());
-  std::vector<double> vAll(rAll.size());
-  MPI_Allgatherv(ri.data(), mine, MPI_INT, rAll.data(), counts.data(), displs.data(), MPI_INT, Comm_);
-  MPI_Allgatherv(ci.data(), mine, MPI_INT, cAll.data(), counts.data(), displs.data(), MPI_INT, Comm_);
-  MPI_Allgatherv(vi.data(), mine, MPI_DOUBLE, vAll.data(), counts.data(), displs.data(), MPI_DOUBLE,
-    Comm_);
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(rAll.size());
-  for (std::size_t k = 0; k < rAll.size(); ++k)
-    triplets.emplace_back(rAll[k], cAll[k], vAll[k]);
-  ColMatrix a0(c.Total, c.Total);
-  a0.setFromTriplets(triplets.begin(), triplets.end()); // sums the duplicates
-  c.Solver.compute(a0);
-  // The same matrix on every rank, so the same verdict.
-  if (c.Total > 0 && (c.Solver.info() != Eigen::Success || !(c.Solver.vectorD().minCoeff() > 0.0)))
-  {
-    throw Error(std::string(Who) + ": the coarse matrix over the ranks (" +
-      std::to_string(c.Total) + " vertices) is not positive definite: the matrix is not SPD");
-  }
-  c.FactorNonZeros = c.Total > 0
-    ? static_cast<std::size_t>(c.Solver.matrixL().nestedExpression().nonZeros())
-    : 0;
+  if (B_->Levels.empty())
+    return; // no rows on this rank
+  B_->Visit(0, r, z);
 }
 
 int SchwarzAggregationPCG::Solve(
@@ -981,10 +712,6 @@ std::size_t SchwarzAggregationPCG::GetMemoryBytes() const
   bytes += (BlockOffsets_.size() + BlockColumns_.size() + BlockEntries_.size() + Places_.size()) *
       sizeof(int) +
     Coordinates_.size() * sizeof(double);
-  const Coarse& c = *C_;
-  bytes += (c.Of.size() + c.OffdGlobal.size()) * sizeof(int) +
-    (c.Rc.size() + c.Rg.size() + c.Xg.size()) * sizeof(double) +
-    c.FactorNonZeros * (sizeof(double) + sizeof(int));
   // The aggregation counted once, by the solver that built it.
   if (Structure_ && OwnsStructure_)
     bytes += Structure_->GetMemoryBytes();

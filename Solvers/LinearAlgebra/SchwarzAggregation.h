@@ -14,15 +14,9 @@
  * SPD cycle), so CG stays valid.
  *
  * On one rank this is the serial multigrid-agg CG, one channel at a time.
- * On N > 1 ranks, block Jacobi alone has no coupling across the ranks, so
- * its iterations grow with the number of ranks (at 1M tets: 18 on one rank,
- * 31 on two; Documentation/Scaling.md); an additive two-level coarse
- * correction P A_0^-1 P^T (P: piecewise constant on each rank's coarsest
- * aggregates, A_0 = P^T A P with the couplings between the ranks, gathered
- * and factorised on every rank, one MPI_Allgatherv of the coarse residual
- * per application) is added unless "agg-coarse-space" is 0. Its size is
- * the sum of the ranks' coarsest levels (<= ~300 each): for many ranks
- * "cg/boomeramg" stays available by name.
+ * On N ranks there is no coarse space across the ranks, so the iterations
+ * grow with the number of ranks (Documentation/Scaling.md: measured at 2
+ * and 3 ranks); for many ranks "cg/boomeramg" stays available by name.
  */
 #pragma once
 
@@ -55,10 +49,7 @@ public:
    * default), "agg-coarsest-size" (coarsen until a level has at most this
    * many vertices, >= 1, default 300), "agg-threads" (OpenMP threads of the
    * block's cycle and set-up, 0 = OpenMP's default team, which the
-   * distributed solver sets to the rank's share of the cores),
-   * "agg-coarse-space" (flag, default 1: on more than one rank, add the
-   * coarse correction P A_0^-1 P^T over all ranks, P the blocks' coarsest
-   * aggregates; 0: plain block Jacobi). Others are
+   * distributed solver sets to the rank's share of the cores). Others are
    * left unused (SolverOptions::GetUnused). Applied at the next Setup.
    */
   void SetOptions(const SolverOptions& options) override;
@@ -112,7 +103,6 @@ public:
 
   struct Block;   ///< the owned block's hierarchy values and cycle
   struct Handles; ///< hypre's objects
-  struct Coarse;  ///< the coarse space over the ranks
 
 private:
   void Free();
@@ -125,26 +115,10 @@ private:
   /// the current structure.
   void SetBlockValues(const double* values);
   void BuildSolver();
-  /// Collective: throws on every rank if `error` is not empty on any
-  /// (before a collective that a rank which failed would not reach).
-  void AgreeOrThrow(const std::string& error) const;
-  /// The block values (SetBlockValues), then, with the coarse space, its
-  /// map (if `structure`: after a new Setup) and values; errors agreed.
-  void SetUpValues(const double* values, bool structure);
-  /// Collective: each row's global coarse vertex (this rank's coarsest
-  /// aggregation level, numbered after the lower ranks'), and that of each
-  /// off-rank column (hypre's halo exchange).
-  void BuildCoarseMap();
-  /// Collective: the global coarse matrix P^T A P (the blocks' coarsest
-  /// levels plus the couplings between ranks), gathered and factorised on
-  /// every rank.
-  void SetCoarseValues();
 
   MPI_Comm Comm_;
   std::unique_ptr<Handles> H_;
   std::unique_ptr<Block> B_;
-  std::unique_ptr<Coarse> C_;
-  bool CoarseSpace_ = true;
   /// The aggregation (structure only), shared with SetupShared's sharers.
   std::shared_ptr<const AggregationMultigridSolver> Structure_;
   bool OwnsStructure_ = false; ///< built here (not a donor's)
@@ -160,10 +134,6 @@ private:
   /// The block's pattern: offsets, local columns, and each block entry's
   /// index among the rows' entries (k of Setup's arrays).
   std::vector<int> BlockOffsets_, BlockColumns_, BlockEntries_;
-  /// Each row's diagonal among the block entries; the entries outside the
-  /// block (row, index k of Setup's arrays).
-  std::vector<int> BlockDiagonal_, OffBlockRows_, OffBlockEntries_;
-  bool GlobalFine_ = false; ///< agg-global-fine
   std::uint64_t BlockPattern_ = 0; ///< fingerprint of the block pattern
   /// UpdateValues: each entry's place in the ParCSR blocks (>= 0 diagonal
   /// block, -1 - k off-diagonal block), found once per pattern.
