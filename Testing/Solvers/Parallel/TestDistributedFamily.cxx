@@ -166,13 +166,18 @@ TEST(DistributedFamily, OneRankEqualsTheSerialSolve)
     relit[k] *= 0.5 + 0.1 * static_cast<double>(k % 7);
   }
   const double tol = 1e-12;
+  // The default distributed linear solver (cg/boomeramg) and the
+  // distributed multigrid-agg (cg/aggregation, SchwarzAggregation.h).
+  for (const std::string linear : { "", "cg/aggregation" })
   for (const std::string name : { "divergence", "fem" })
   {
-    SCOPED_TRACE(name);
+    SCOPED_TRACE(name + " " + linear);
     DiffusionFrontEnd serial, distributed;
     serial.SetSolver(name);
     distributed.SetSolver(name);
     distributed.SetCommunicator(Self());
+    if (!linear.empty())
+      distributed.GetSolver().SetLinearSolver(linear);
     serial.GetSolver().SetRelTol(tol);
     distributed.GetSolver().SetRelTol(tol);
 
@@ -181,6 +186,8 @@ TEST(DistributedFamily, OneRankEqualsTheSerialSolve)
       const SolveResult a = SolveScene(serial, s, *q);
       const SolveResult b = SolveScene(distributed, s, *q);
       EXPECT_EQ(b.Report.Solver, name);
+      EXPECT_EQ(b.Report.LinearSolver,
+        (linear.empty() ? std::string("cg/boomeramg") : linear) + " (distributed)");
       EXPECT_EQ(b.Report.NumberOfUnknowns, s.Mesh->GetNumberOfPoints());
       for (int c = 0; c < NumberOfChannels; ++c)
       {

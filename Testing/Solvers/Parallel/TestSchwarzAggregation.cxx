@@ -140,6 +140,7 @@ double MaxRelativeDifference(const std::vector<double>& a, const std::vector<dou
 
 int Rank()
 {
+  EnsureHypreInitialized(); // MPI too, when a test runs alone
   int r = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &r);
   return r;
@@ -147,6 +148,7 @@ int Rank()
 
 int Size()
 {
+  EnsureHypreInitialized();
   int s = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &s);
   return s;
