@@ -267,14 +267,6 @@ void SchwarzAggregationPCG::SetOptions(const SolverOptions& options)
   options.ReadInteger(Who, "agg-cycle-index", 1, "1 (V-cycle) or 2 (W-cycle)", gamma);
   options.ReadInteger(Who, "agg-coarsest-size", 1, "vertices of the coarsest level, >= 1", coarsest);
   options.ReadInteger(Who, "agg-threads", 0, "OpenMP threads, >= 0 (0: OpenMP's default)", threads);
-  int overlap = Overlap_;
-  options.ReadInteger(Who, "agg-overlap", 0, "0 (block Jacobi) or 1 (one layer of overlap)", overlap);
-  if (overlap > 1)
-  {
-    throw Error(std::string(Who) + ": option agg-overlap = " + std::to_string(overlap) +
-      " is invalid: 0 (block Jacobi) or 1 (one layer of overlap)");
-  }
-  Overlap_ = overlap;
   if (!(scale > 0.0 && scale < 2.0))
   {
     throw Error(std::string(Who) + ": option agg-coarse-scale = " + std::to_string(scale) +
@@ -341,144 +333,24 @@ void SchwarzAggregationPCG::BuildMatrix(
 void SchwarzAggregationPCG::ExtractBlock(const int* rowOffsets, const int* columns)
 {
   const int rows = RowEnd_ - RowBegin_;
-  int size = 1;
-  MPI_Comm_size(Comm_, &size);
-  Ghosts_ = 0;
-  GhostValues_.clear();
-  GhostColumns_.clear();
-  hypre_ParCSRMatrix* a = nullptr;
-  if (H_->A)
-    HYPRE_IJMatrixGetObject(H_->A, reinterpret_cast<void**>(&a));
-  const bool overlap = Overlap_ > 0 && size > 1 && a;
-  const HYPRE_BigInt* colMap = overlap ? hypre_ParCSRMatrixColMapOffd(a) : nullptr;
-  const int offdColumns = overlap ? hypre_CSRMatrixNumCols(hypre_ParCSRMatrixOffd(a)) : 0;
-  // A global column's index in the extended block: owned rows first, then
-  // the off-rank columns of the owned rows (hypre's sorted column map), or
-  // -1 outside.
-  auto local = [&](HYPRE_BigInt c) -> int {
-    if (c >= RowBegin_ && c < RowEnd_)
-      return static_cast<int>(c - RowBegin_);
-    if (!overlap)
-      return -1;
-    const HYPRE_BigInt* at = std::lower_bound(colMap, colMap + offdColumns, c);
-    return at != colMap + offdColumns && *at == c ? rows + static_cast<int>(at - colMap) : -1;
-  };
-  hypre_CSRMatrix* ext = nullptr;
-  if (overlap)
-  {
-    // agg-overlap 1: the rows of those off-rank columns (their owners'),
-    // restricted to the extended block.
-    if (!hypre_ParCSRMatrixCommPkg(a))
-      hypre_MatvecCommPkgCreate(a);
-    ext = hypre_ParCSRMatrixExtractBExt(a, a, 1);
-    Ghosts_ = offdColumns;
-  }
-  const int total = rows + Ghosts_;
-  BlockOffsets_.assign(static_cast<std::size_t>(total) + 1, 0);
+  BlockOffsets_.assign(static_cast<std::size_t>(rows) + 1, 0);
   BlockColumns_.clear();
   BlockEntries_.clear();
   BlockColumns_.reserve(static_cast<std::size_t>(rowOffsets[rows]));
   BlockEntries_.reserve(static_cast<std::size_t>(rowOffsets[rows]));
-  std::vector<std::pair<int, int>> row;
-  auto flush = [&](int r) {
-    std::sort(row.begin(), row.end());
-    for (const auto& e : row)
-    {
-      BlockColumns_.push_back(e.first);
-      BlockEntries_.push_back(e.second);
-    }
-    BlockOffsets_[r + 1] = static_cast<int>(BlockColumns_.size());
-    row.clear();
-  };
   for (int i = 0; i < rows; ++i)
   {
     for (int k = rowOffsets[i]; k < rowOffsets[i + 1]; ++k)
     {
-      const int c = local(columns[k]);
-      if (c >= 0)
-        row.emplace_back(c, k);
-    }
-    flush(i);
-  }
-  if (ext)
-  {
-    const HYPRE_Int* ei = hypre_CSRMatrixI(ext);
-    const HYPRE_BigInt* ebj = hypre_CSRMatrixBigJ(ext);
-    const HYPRE_Int* ej = hypre_CSRMatrixJ(ext);
-    const HYPRE_Complex* ed = hypre_CSRMatrixData(ext);
-    const HYPRE_Int nnz = ei[Ghosts_];
-    GhostValues_.assign(ed, ed + nnz);
-    for (int q = 0; q < Ghosts_; ++q)
-    {
-      for (HYPRE_Int p = ei[q]; p < ei[q + 1]; ++p)
+      if (columns[k] >= RowBegin_ && columns[k] < RowEnd_)
       {
-        const HYPRE_BigInt c = ebj ? ebj[p] : static_cast<HYPRE_BigInt>(ej[p]);
-        GhostColumns_.push_back(static_cast<int>(c));
-        const int l = local(c);
-        if (l >= 0)
-          row.emplace_back(l, -1 - static_cast<int>(p));
+        BlockColumns_.push_back(columns[k] - RowBegin_);
+        BlockEntries_.push_back(k);
       }
-      flush(rows + q);
     }
-    hypre_CSRMatrixDestroy(ext);
+    BlockOffsets_[i + 1] = static_cast<int>(BlockColumns_.size());
   }
-  BlockPattern_ = PatternFingerprint(total, BlockOffsets_.data(), BlockColumns_.data());
-}
-
-void SchwarzAggregationPCG::RefreshGhostValues()
-{
-  if (Ghosts_ == 0)
-    return;
-  hypre_ParCSRMatrix* a = nullptr;
-  HYPRE_IJMatrixGetObject(H_->A, reinterpret_cast<void**>(&a));
-  hypre_CSRMatrix* ext = hypre_ParCSRMatrixExtractBExt(a, a, 1);
-  const HYPRE_Int* ei = hypre_CSRMatrixI(ext);
-  const HYPRE_BigInt* ebj = hypre_CSRMatrixBigJ(ext);
-  const HYPRE_Int* ej = hypre_CSRMatrixJ(ext);
-  const HYPRE_Int nnz = ei[Ghosts_];
-  bool same = static_cast<std::size_t>(nnz) == GhostColumns_.size();
-  for (HYPRE_Int p = 0; same && p < nnz; ++p)
-    same = (ebj ? ebj[p] : static_cast<HYPRE_BigInt>(ej[p])) == GhostColumns_[p];
-  if (same)
-    GhostValues_.assign(hypre_CSRMatrixData(ext), hypre_CSRMatrixData(ext) + nnz);
-  hypre_CSRMatrixDestroy(ext);
-  if (!same)
-  {
-    throw Error(std::string(Who) +
-      ": UpdateValues(): the overlap rows' pattern is not the last Setup()'s (a changed pattern)");
-  }
-}
-
-void SchwarzAggregationPCG::ExchangeGhosts(const double* owned, double* ghosts) const
-{
-  hypre_ParCSRMatrix* a = nullptr;
-  HYPRE_IJMatrixGetObject(H_->A, reinterpret_cast<void**>(&a));
-  hypre_ParCSRCommPkg* pkg = hypre_ParCSRMatrixCommPkg(a);
-  const HYPRE_Int sends = hypre_ParCSRCommPkgNumSends(pkg);
-  const HYPRE_Int count = hypre_ParCSRCommPkgSendMapStart(pkg, sends);
-  SendBuffer_.resize(static_cast<std::size_t>(count));
-  for (HYPRE_Int k = 0; k < count; ++k)
-    SendBuffer_[k] = owned[hypre_ParCSRCommPkgSendMapElmt(pkg, k)];
-  // Job 1: doubles, forward (each owned row to the ranks that have it as a column).
-  hypre_ParCSRCommHandle* handle = hypre_ParCSRCommHandleCreate(1, pkg, SendBuffer_.data(), ghosts);
-  hypre_ParCSRCommHandleDestroy(handle);
-}
-
-void SchwarzAggregationPCG::AddGhostsToOwners(const double* ghosts, double* owned) const
-{
-  hypre_ParCSRMatrix* a = nullptr;
-  HYPRE_IJMatrixGetObject(H_->A, reinterpret_cast<void**>(&a));
-  hypre_ParCSRCommPkg* pkg = hypre_ParCSRMatrixCommPkg(a);
-  const HYPRE_Int sends = hypre_ParCSRCommPkgNumSends(pkg);
-  const HYPRE_Int count = hypre_ParCSRCommPkgSendMapStart(pkg, sends);
-  SendBuffer_.resize(static_cast<std::size_t>(count));
-  // Job 2: doubles, backward (as hypre's transposed product): each rank's
-  // ghost values to their owners, added there.
-  hypre_ParCSRCommHandle* handle =
-    hypre_ParCSRCommHandleCreate(2, pkg, const_cast<double*>(ghosts), SendBuffer_.data());
-  hypre_ParCSRCommHandleDestroy(handle);
-  for (HYPRE_Int k = 0; k < count; ++k)
-    owned[hypre_ParCSRCommPkgSendMapElmt(pkg, k)] += SendBuffer_[k];
+  BlockPattern_ = PatternFingerprint(rows, BlockOffsets_.data(), BlockColumns_.data());
 }
 
 void SchwarzAggregationPCG::SetBlockValues(const double* values)
@@ -511,10 +383,7 @@ void SchwarzAggregationPCG::SetBlockValues(const double* values)
     if (l == 0)
     {
       for (std::size_t k = 0; k < nnz; ++k)
-      {
-        const int e = BlockEntries_[k];
-        lev.Values[k] = e >= 0 ? values[e] : GhostValues_[static_cast<std::size_t>(-1 - e)];
-      }
+        lev.Values[k] = values[BlockEntries_[k]];
     }
     else
     {
@@ -637,27 +506,6 @@ void SchwarzAggregationPCG::Setup(
   const double assembled = MPI_Wtime();
   ExtractBlock(rowOffsets, columns);
   const int rows = rowEnd - rowBegin;
-  std::vector<double> ghostXyz;
-  if (Ghosts_ > 0 || (Overlap_ > 0 && H_->A))
-  {
-    // The overlap rows' positions from their owners (x, y, z in turn).
-    int size = 1;
-    MPI_Comm_size(Comm_, &size);
-    if (size > 1 && Overlap_ > 0)
-    {
-      const bool have = Coordinates_.size() == 3 * static_cast<std::size_t>(rows);
-      std::vector<double> component(static_cast<std::size_t>(rows)), ghost(Ghosts_);
-      ghostXyz.assign(3 * static_cast<std::size_t>(Ghosts_), 0.0);
-      for (int d = 0; d < 3; ++d)
-      {
-        for (int i = 0; i < rows; ++i)
-          component[i] = have ? Coordinates_[3 * static_cast<std::size_t>(i) + d] : 0.0;
-        ExchangeGhosts(component.data(), ghost.data());
-        for (int q = 0; q < Ghosts_; ++q)
-          ghostXyz[3 * static_cast<std::size_t>(q) + d] = ghost[q];
-      }
-    }
-  }
   if (rows > 0)
   {
     // The aggregation of the block at the rows' positions (zeros without
@@ -665,10 +513,8 @@ void SchwarzAggregationPCG::Setup(
     std::vector<double> points = Coordinates_;
     if (points.size() != 3 * static_cast<std::size_t>(rows))
       points.assign(3 * static_cast<std::size_t>(rows), 0.0);
-    points.resize(3 * static_cast<std::size_t>(rows + Ghosts_), 0.0);
-    std::copy(ghostXyz.begin(), ghostXyz.end(), points.begin() + 3 * static_cast<std::ptrdiff_t>(rows));
     DiffusionSystem pattern;
-    pattern.NumberOfUnknowns = rows + Ghosts_;
+    pattern.NumberOfUnknowns = rows;
     pattern.RowOffsets = BlockOffsets_;
     pattern.ColumnIndices = BlockColumns_;
     auto structure = std::make_shared<AggregationMultigridSolver>();
@@ -693,20 +539,24 @@ bool SchwarzAggregationPCG::SetupShared(int rowBegin, int rowEnd, const int* row
   {
     return false;
   }
-  // The same block pattern as the donor's (its structure is of that
-  // pattern); else nothing is left built (the caller sets up on its own).
-  Free();
-  const double start = MPI_Wtime();
-  BuildMatrix(rowBegin, rowEnd, rowOffsets, columns, values);
-  const double assembled = MPI_Wtime();
+  // The same block pattern as the donor's (its structure is of that pattern).
+  RowBegin_ = rowBegin;
+  RowEnd_ = rowEnd;
   ExtractBlock(rowOffsets, columns);
   if (BlockPattern_ != other->BlockPattern_ || BlockColumns_ != other->BlockColumns_ ||
     BlockOffsets_ != other->BlockOffsets_)
   {
-    Free();
     return false;
   }
   std::shared_ptr<const AggregationMultigridSolver> structure = other->Structure_;
+  std::vector<int> offsets = BlockOffsets_, blockColumns = BlockColumns_, entries = BlockEntries_;
+  Free();
+  BlockOffsets_.swap(offsets);
+  BlockColumns_.swap(blockColumns);
+  BlockEntries_.swap(entries);
+  const double start = MPI_Wtime();
+  BuildMatrix(rowBegin, rowEnd, rowOffsets, columns, values);
+  const double assembled = MPI_Wtime();
   Structure_ = std::move(structure);
   SetBlockValues(values);
   BuildSolver();
@@ -785,7 +635,6 @@ void SchwarzAggregationPCG::UpdateValues(
       offdData[-1 - place] = values[k];
   }
   const double assembled = MPI_Wtime();
-  RefreshGhostValues(); // the overlap rows' new values (collective)
   SetBlockValues(values); // the kept aggregation, the new matrix's values
   MatrixMilliseconds_ = 1000.0 * (assembled - start);
   HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
@@ -797,24 +646,9 @@ void SchwarzAggregationPCG::ApplyPreconditioner(const double* r, double* z) cons
   {
     throw Error(std::string(Who) + ": ApplyPreconditioner() before Setup()");
   }
-  if (Ghosts_ == 0)
-  {
-    if (!B_->Levels.empty()) // else no rows on this rank
-      B_->Visit(0, r, z);
-    return;
-  }
-  // agg-overlap: the cycle on the extended block (owned rows, then the
-  // overlap rows' residual from their owners); its overlap part added to
-  // the owners' z (symmetric additive Schwarz: sum_i R_i^T B_i R_i r).
-  const int rows = RowEnd_ - RowBegin_;
-  RExt_.resize(static_cast<std::size_t>(rows + Ghosts_));
-  ZExt_.resize(RExt_.size());
-  std::copy(r, r + rows, RExt_.begin());
-  ExchangeGhosts(r, RExt_.data() + rows);
-  if (!B_->Levels.empty())
-    B_->Visit(0, static_cast<const double*>(RExt_.data()), ZExt_.data());
-  std::copy(ZExt_.begin(), ZExt_.begin() + rows, z);
-  AddGhostsToOwners(ZExt_.data() + rows, z);
+  if (B_->Levels.empty())
+    return; // no rows on this rank
+  B_->Visit(0, r, z);
 }
 
 int SchwarzAggregationPCG::Solve(

@@ -115,12 +115,6 @@ private:
   /// the current structure.
   void SetBlockValues(const double* values);
   void BuildSolver();
-  /// agg-overlap: the overlap rows' values again (UpdateValues; collective).
-  void RefreshGhostValues();
-  /// Collective: `ghosts` (one per off-rank column) = their owners' `owned`.
-  void ExchangeGhosts(const double* owned, double* ghosts) const;
-  /// Collective: adds each rank's `ghosts` to their owners' `owned`.
-  void AddGhostsToOwners(const double* ghosts, double* owned) const;
 
   MPI_Comm Comm_;
   std::unique_ptr<Handles> H_;
@@ -141,14 +135,6 @@ private:
   /// index among the rows' entries (k of Setup's arrays).
   std::vector<int> BlockOffsets_, BlockColumns_, BlockEntries_;
   std::uint64_t BlockPattern_ = 0; ///< fingerprint of the block pattern
-  /// agg-overlap: layers of overlap (0 or 1); the overlap rows (hypre's
-  /// off-rank columns of the owned rows), their entries' global columns and
-  /// values (block entries < 0 index these: -1 - p).
-  int Overlap_ = 0;
-  int Ghosts_ = 0;
-  std::vector<int> GhostColumns_;
-  std::vector<double> GhostValues_;
-  mutable std::vector<double> RExt_, ZExt_, SendBuffer_;
   /// UpdateValues: each entry's place in the ParCSR blocks (>= 0 diagonal
   /// block, -1 - k off-diagonal block), found once per pattern.
   std::vector<int> Places_;
