@@ -320,13 +320,18 @@ TEST(DistributedFamily, SharedAndOwnHierarchiesAgree)
   OpticalProperties painted = s.Material;
   for (std::size_t k = 0; k < painted.AbsorptionCoefficient.size(); k += 11)
     painted.AbsorptionCoefficient[k] *= 3.0;
+  // BoomerAMG (the default) and cg/aggregation (whose sharers share the
+  // block aggregation, each with its own values).
+  for (const std::string linear : { "", "cg/aggregation" })
   for (const std::string name : { "divergence", "fem" })
   {
-    SCOPED_TRACE(name);
+    SCOPED_TRACE(name + " " + linear);
     std::vector<double> fluence[2][3];
     for (const bool shared : { true, false })
     {
       DistributedVertexSolver solver(name);
+      if (!linear.empty())
+        solver.SetLinearSolver(linear);
       solver.SetSharedHierarchy(shared);
       solver.SetRelTol(1e-12);
       SolverReport report;
@@ -373,6 +378,8 @@ TEST(DistributedFamily, SharedAndOwnHierarchiesAgree)
     // that the smoother would diverge on.
     const Scene random = MakeScene();
     DistributedVertexSolver solver(name);
+    if (!linear.empty())
+      solver.SetLinearSolver(linear);
     solver.SetSharedHierarchy(true);
     solver.SetRelTol(1e-12);
     DiffusionProblem problem;
@@ -429,15 +436,24 @@ TEST(DistributedFamily, APaintIteratesTheWarmStartAtLeastOnce)
 TEST(DistributedFamily, NeverANonConvergedResult)
 {
   const Scene s = MakeScene();
+  for (const std::string linear : { "", "cg/aggregation" })
+  {
+    SCOPED_TRACE(linear);
+    DiffusionFrontEnd front;
+    front.SetCommunicator(Self());
+    if (!linear.empty())
+      front.GetSolver().SetLinearSolver(linear);
+    front.GetSolver().SetRelTol(1e-12);
+    front.GetSolver().SetMaxIter(1);
+    const std::string message = ErrorMessage([&] { SolveScene(front, s, s.Irradiance); });
+    EXPECT_TRUE(Contains(message,
+      "the distributed divergence solve did not converge, also after a full set-up"))
+      << message;
+    EXPECT_TRUE(Contains(message, "MaxIter 1")) << message;
+  }
   DiffusionFrontEnd front;
   front.SetCommunicator(Self());
   front.GetSolver().SetRelTol(1e-12);
-  front.GetSolver().SetMaxIter(1);
-  const std::string message = ErrorMessage([&] { SolveScene(front, s, s.Irradiance); });
-  EXPECT_TRUE(Contains(message,
-    "the distributed divergence solve did not converge, also after a full set-up"))
-    << message;
-  EXPECT_TRUE(Contains(message, "MaxIter 1")) << message;
   // The problem's point keys are required.
   front.GetSolver().SetMaxIter(2000);
   SolveResult result;
