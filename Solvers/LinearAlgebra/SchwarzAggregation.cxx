@@ -3,6 +3,7 @@
 #include "AggregationMultigrid.h"
 #include "DiffusionSystem.h"
 #include "Error.h"
+#include "HypreParCSR.h"
 #include "HypreSolver.h"
 
 #include <HYPRE.h>
@@ -34,27 +35,7 @@ const char* const Who = "cg/aggregation";
 
 void SchwarzCheck(HYPRE_Int code, const char* what)
 {
-  if (code != 0)
-  {
-    char message[256] = { 0 };
-    HYPRE_DescribeError(code, message);
-    HYPRE_ClearAllErrors();
-    std::ostringstream os;
-    os << Who << ": " << what << " failed (hypre error " << code << ": " << message << ")";
-    throw Error(os.str());
-  }
-}
-
-/// FNV-1a of a CSR pattern (offsets and columns).
-std::uint64_t PatternFingerprint(int rows, const int* offsets, const int* columns)
-{
-  std::uint64_t h = 1469598103934665603ull;
-  auto mix = [&h](int v) { h = (h ^ static_cast<std::uint32_t>(v)) * 1099511628211ull; };
-  for (int r = 0; r <= rows; ++r)
-    mix(offsets[r]);
-  for (int k = 0; k < offsets[rows]; ++k)
-    mix(columns[k]);
-  return h;
+  hypre::Check(code, Who, what);
 }
 
 } // namespace
@@ -299,28 +280,8 @@ void SchwarzAggregationPCG::BuildMatrix(
   RowEnd_ = rowEnd;
   const int rows = rowEnd - rowBegin;
   Handles& h = *H_;
-  SchwarzCheck(HYPRE_IJMatrixCreate(Comm_, rowBegin, rowEnd - 1, rowBegin, rowEnd - 1, &h.A),
-    "matrix creation");
-  SchwarzCheck(HYPRE_IJMatrixSetObjectType(h.A, HYPRE_PARCSR), "matrix type");
-  std::vector<HYPRE_Int> diag(rows, 0), offd(rows, 0), sizes(rows);
-  h.Rows.resize(rows);
-  for (int i = 0; i < rows; ++i)
-  {
-    h.Rows[i] = rowBegin + i;
-    sizes[i] = rowOffsets[i + 1] - rowOffsets[i];
-    for (int k = rowOffsets[i]; k < rowOffsets[i + 1]; ++k)
-      (columns[k] >= rowBegin && columns[k] < rowEnd ? diag[i] : offd[i])++;
-  }
-  SchwarzCheck(HYPRE_IJMatrixSetDiagOffdSizes(h.A, diag.data(), offd.data()), "matrix sizes");
-  SchwarzCheck(HYPRE_IJMatrixInitialize(h.A), "matrix initialisation");
-  if (rows > 0)
-  {
-    std::vector<HYPRE_BigInt> cols(columns, columns + rowOffsets[rows]);
-    SchwarzCheck(HYPRE_IJMatrixSetValues(h.A, rows, sizes.data(), h.Rows.data(), cols.data(), values),
-      "setting the matrix values");
-  }
-  SchwarzCheck(HYPRE_IJMatrixAssemble(h.A), "matrix assembly");
-  h.Pattern = PatternFingerprint(rows, rowOffsets, columns);
+  h.A = hypre::BuildMatrix(Comm_, rowBegin, rowEnd, rowOffsets, columns, values, h.Rows, Who);
+  h.Pattern = hypre::PatternFingerprint(rows, rowOffsets, columns);
   hypre_ParCSRMatrix* a = nullptr;
   HYPRE_IJMatrixGetObject(h.A, reinterpret_cast<void**>(&a));
   const double local = static_cast<double>(hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixDiag(a)) +
@@ -350,7 +311,7 @@ void SchwarzAggregationPCG::ExtractBlock(const int* rowOffsets, const int* colum
     }
     BlockOffsets_[i + 1] = static_cast<int>(BlockColumns_.size());
   }
-  BlockPattern_ = PatternFingerprint(rows, BlockOffsets_.data(), BlockColumns_.data());
+  BlockPattern_ = hypre::PatternFingerprint(rows, BlockOffsets_.data(), BlockColumns_.data());
 }
 
 void SchwarzAggregationPCG::SetBlockValues(const double* values)
@@ -575,65 +536,14 @@ void SchwarzAggregationPCG::UpdateValues(
   }
   const double start = MPI_Wtime();
   const int rows = RowEnd_ - RowBegin_;
-  if (PatternFingerprint(rows, rowOffsets, columns) != h.Pattern)
+  if (hypre::PatternFingerprint(rows, rowOffsets, columns) != h.Pattern)
   {
     throw Error(std::string(Who) +
       ": UpdateValues(): the rows' pattern is not the last Setup()'s (a changed pattern)");
   }
-  hypre_ParCSRMatrix* a = nullptr;
-  HYPRE_IJMatrixGetObject(h.A, reinterpret_cast<void**>(&a));
-  hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(a);
-  hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(a);
-  const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
-  if (Places_.size() != nnz)
-  {
-    // Each entry's place in the assembled ParCSR blocks, once per pattern
-    // (as HypreBoomerAMGPCG::UpdateValues).
-    const HYPRE_Int* di = hypre_CSRMatrixI(diag);
-    const HYPRE_Int* dj = hypre_CSRMatrixJ(diag);
-    const HYPRE_Int* oi = hypre_CSRMatrixI(offd);
-    const HYPRE_Int* oj = hypre_CSRMatrixJ(offd);
-    const HYPRE_BigInt* colMap = hypre_ParCSRMatrixColMapOffd(a);
-    std::vector<int> places(nnz);
-    for (int r = 0; r < rows; ++r)
-    {
-      for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
-      {
-        const HYPRE_BigInt column = columns[k];
-        int place = std::numeric_limits<int>::min();
-        if (column >= RowBegin_ && column < RowEnd_)
-        {
-          for (HYPRE_Int q = di[r]; q < di[r + 1]; ++q)
-            if (dj[q] == column - RowBegin_)
-              place = q;
-        }
-        else if (oi && colMap)
-        {
-          for (HYPRE_Int q = oi[r]; q < oi[r + 1]; ++q)
-            if (colMap[oj[q]] == column)
-              place = -1 - static_cast<int>(q);
-        }
-        if (place == std::numeric_limits<int>::min())
-        {
-          throw Error(std::string(Who) + ": UpdateValues(): entry (" +
-            std::to_string(RowBegin_ + r) + ", " + std::to_string(column) +
-            ") is not in the matrix of the last Setup()");
-        }
-        places[k] = place;
-      }
-    }
-    Places_ = std::move(places);
-  }
-  HYPRE_Complex* diagData = hypre_CSRMatrixData(diag);
-  HYPRE_Complex* offdData = hypre_CSRMatrixData(offd);
-  for (std::size_t k = 0; k < nnz; ++k)
-  {
-    const int place = Places_[k];
-    if (place >= 0)
-      diagData[place] = values[k];
-    else
-      offdData[-1 - place] = values[k];
-  }
+  // Into the assembled ParCSR matrix, each entry's place found once.
+  hypre::ScatterValues(h.A, RowBegin_, RowEnd_, rowOffsets, columns, values, Places_,
+    PlacePattern_, Who);
   const double assembled = MPI_Wtime();
   SetBlockValues(values); // the kept aggregation, the new matrix's values
   MatrixMilliseconds_ = 1000.0 * (assembled - start);
@@ -659,33 +569,8 @@ int SchwarzAggregationPCG::Solve(
   {
     throw Error(std::string(Who) + ": Solve() called before Setup()");
   }
-  const int rows = RowEnd_ - RowBegin_;
-  std::vector<double> zero;
-  if (!guess)
-    zero.assign(rows, 0.0);
-  SchwarzCheck(HYPRE_IJVectorSetValues(h.B, rows, h.Rows.data(), bLocal), "setting the right-hand side");
-  SchwarzCheck(HYPRE_IJVectorSetValues(h.X, rows, h.Rows.data(), guess ? xLocal : zero.data()),
-    "setting the initial guess");
-  HYPRE_ParCSRMatrix a;
-  HYPRE_ParVector b, x;
-  HYPRE_IJMatrixGetObject(h.A, reinterpret_cast<void**>(&a));
-  HYPRE_IJVectorGetObject(h.B, reinterpret_cast<void**>(&b));
-  HYPRE_IJVectorGetObject(h.X, reinterpret_cast<void**>(&x));
-  HYPRE_PCGSetTol(h.PCG, relTol);
-  HYPRE_PCGSetMaxIter(h.PCG, maxIter);
-  const HYPRE_Int code = HYPRE_ParCSRPCGSolve(h.PCG, a, b, x);
-  // Not converging within maxIter is not an error here (the caller reads
-  // the residual); anything else is.
-  if (code != 0 && !HYPRE_CheckError(code, HYPRE_ERROR_CONV))
-    SchwarzCheck(code, "PCG solve");
-  HYPRE_ClearAllErrors();
-  HYPRE_Int iterations = 0;
-  HYPRE_Real residual = 0.0;
-  HYPRE_ParCSRPCGGetNumIterations(h.PCG, &iterations);
-  HYPRE_ParCSRPCGGetFinalRelativeResidualNorm(h.PCG, &residual);
-  SchwarzCheck(HYPRE_IJVectorGetValues(h.X, rows, h.Rows.data(), xLocal), "reading the solution");
-  relRes = residual;
-  return iterations;
+  return hypre::SolvePCG(
+    h.PCG, h.A, h.B, h.X, h.Rows, bLocal, xLocal, guess, relTol, maxIter, relRes, Who);
 }
 
 int SchwarzAggregationPCG::GetNumberOfLevels() const
