@@ -21,6 +21,11 @@ samples) -> Paint (a stroke outside the object) -> Solve Diffusion
    not re-run the solve's assembly ("incremental", 0 changed tets, set-up
    "kept"); a real stroke updates the touched rows ("incremental", "rows").
 4. Another uniform-light sample count recomputes the uniform term only.
+6. Every double point and cell array of each filter's output (Surface
+   Irradiance, Paint, Solve Diffusion, Outgoing Radiance) carries VTK's
+   range cache when the filter returns (vtkTranslucencyRanges.h: ParaView
+   reads it after every execution), and its cached ranges, finite ranges and
+   magnitude ranges equal VTK's own computation on a fresh copy bit for bit.
 5. Under the default collimated model (extended-moments for the directional
    lights: the beam's volume source), a paint casts no ray: the solve's
    source re-integrates the painted tets only ("loads"; a no-op paint:
@@ -38,6 +43,8 @@ import numpy as np
 import translucency
 from TestPaint import marble_mesh
 from TestPipeline import Messages, array
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.vtkCommonCore import vtkAbstractArray, vtkDoubleArray
 from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
 
 
@@ -259,6 +266,49 @@ class DefaultModelPaintTest(unittest.TestCase):
         run(self.lights, self.paint, self.solve)
         self.assertEqual(self.solve.GetLastCollimatedUpdate(), "full")
         self.assert_fluence_is_fresh()
+
+
+class ArrayRangesTest(unittest.TestCase):
+    """Item 6: the range cache of the filters' outputs."""
+
+    def test_cached_ranges_equal_vtk(self):
+        grid = marble_mesh(3000)
+        lights = translucency.vtkSurfaceIrradiance()
+        lights.SetInputData(grid)
+        lights.AddDirectionalLight(0.3, -1.0, -0.5, 1.0)
+        lights.SetUniformLightSamples(8)
+        paint = translucency.vtkPaintScatteringCoefficients()
+        paint.SetInputConnection(lights.GetOutputPort())
+        paint.AddStrokePoint(0.0, 5.0, 0.0)
+        paint.SetWidth(1.0)
+        paint.SetTargetAbsorptionCoefficient(0.02, 0.05, 0.1)
+        paint.SetTargetReducedScatteringCoefficient(1.5, 1.8, 2.0)
+        solve = new_solver()
+        solve.SetInputConnection(paint.GetOutputPort())
+        radiance = translucency.vtkOutgoingRadiance()
+        radiance.SetInputConnection(solve.GetOutputPort())
+        run(lights, paint, solve, radiance)
+        checked = 0
+        for name, f in (("irradiance", lights), ("paint", paint), ("solve", solve),
+                        ("radiance", radiance)):
+            data = f.GetOutput()
+            for attributes in (data.GetPointData(), data.GetCellData()):
+                for a in range(attributes.GetNumberOfArrays()):
+                    array = attributes.GetArray(a)
+                    if not isinstance(array, vtkDoubleArray) or array.GetNumberOfTuples() == 0:
+                        continue
+                    label = "%s: %s" % (name, array.GetName())
+                    with self.subTest(array=label):
+                        self.assertTrue(array.GetInformation().Has(vtkAbstractArray.PER_COMPONENT()),
+                                        label + " has no cached range")
+                        fresh = numpy_to_vtk(vtk_to_numpy(array).copy(), deep=1)
+                        components = array.GetNumberOfComponents()
+                        for k in list(range(components)) + ([-1] if components > 1 else []):
+                            self.assertEqual(array.GetRange(k), fresh.GetRange(k), (label, k))
+                            self.assertEqual(array.GetFiniteRange(k), fresh.GetFiniteRange(k),
+                                             (label, k))
+                        checked += 1
+        self.assertGreater(checked, 10)
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)
