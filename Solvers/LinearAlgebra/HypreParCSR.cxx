@@ -103,21 +103,48 @@ void ScatterValues(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* r
     std::vector<int> found(nnz);
     for (int r = 0; r < rows; ++r)
     {
+      // hypre keeps a row's entries in the order they were set, the
+      // diagonal moved first: with sorted columns each entry is where the
+      // previous one's successor is (the diagonal at the row's start), so
+      // a hint is tried before the row's search (issue 32: the search of
+      // every entry was quadratic in the row length).
+      HYPRE_Int diagHint = di[r] + 1, offdHint = oi ? oi[r] : 0;
       for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
       {
         const HYPRE_BigInt column = columns[k];
         int place = std::numeric_limits<int>::min();
         if (column >= firstColumn && column <= lastColumn)
         {
-          for (HYPRE_Int q = di[r]; q < di[r + 1]; ++q)
-            if (dj[q] == column - firstColumn)
-              place = q;
+          const HYPRE_Int local = static_cast<HYPRE_Int>(column - firstColumn);
+          if (di[r] < di[r + 1] && dj[di[r]] == local)
+            place = di[r];
+          else if (diagHint < di[r + 1] && dj[diagHint] == local)
+            place = diagHint++;
+          else
+          {
+            for (HYPRE_Int q = di[r]; q < di[r + 1]; ++q)
+              if (dj[q] == local)
+              {
+                place = q;
+                diagHint = q + 1;
+                break;
+              }
+          }
         }
         else if (oi && colMap)
         {
-          for (HYPRE_Int q = oi[r]; q < oi[r + 1]; ++q)
-            if (colMap[oj[q]] == column)
-              place = -1 - static_cast<int>(q);
+          if (offdHint < oi[r + 1] && colMap[oj[offdHint]] == column)
+            place = -1 - static_cast<int>(offdHint++);
+          else
+          {
+            for (HYPRE_Int q = oi[r]; q < oi[r + 1]; ++q)
+              if (colMap[oj[q]] == column)
+              {
+                place = -1 - static_cast<int>(q);
+                offdHint = q + 1;
+                break;
+              }
+          }
         }
         if (place == std::numeric_limits<int>::min())
         {

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <climits>
 #include <cstring>
-#include <unordered_map>
 
 namespace translucency
 {
@@ -29,6 +28,60 @@ struct KeyHash
     return static_cast<std::size_t>(Mix(k[0] ^ Mix(k[1] ^ Mix(k[2]))));
   }
 };
+
+/**
+ * An open-addressing (linear probing) index of distinct keys: each slot
+ * holds the id of a stored key, `keyOf(id)` returns it. Replaces
+ * std::unordered_map in the numbering (one allocation, no node per key:
+ * issue 32, the 1-rank numbering's cost was mostly its hash maps).
+ */
+template <typename KeyOf>
+class FlatKeyIndex
+{
+public:
+  FlatKeyIndex(std::size_t expected, KeyOf keyOf)
+    : KeyOf_(keyOf)
+  {
+    std::size_t capacity = 16;
+    while (capacity < 2 * expected)
+      capacity *= 2;
+    Slots_.assign(capacity, -1);
+    Mask_ = capacity - 1;
+  }
+
+  /// The id stored for `key`, or `id` (stored now, `inserted` set).
+  int FindOrInsert(const PointKey& key, int id, bool& inserted)
+  {
+    std::size_t slot = KeyHash()(key) & Mask_;
+    while (true)
+    {
+      const int stored = Slots_[slot];
+      if (stored < 0)
+      {
+        Slots_[slot] = id;
+        inserted = true;
+        return id;
+      }
+      if (KeyOf_(stored) == key)
+      {
+        inserted = false;
+        return stored;
+      }
+      slot = (slot + 1) & Mask_;
+    }
+  }
+
+private:
+  KeyOf KeyOf_;
+  std::vector<int> Slots_;
+  std::size_t Mask_ = 0;
+};
+
+template <typename KeyOf>
+FlatKeyIndex<KeyOf> MakeKeyIndex(std::size_t expected, KeyOf keyOf)
+{
+  return FlatKeyIndex<KeyOf>(expected, keyOf);
+}
 
 int HomeOf(const PointKey& key, int size)
 {
@@ -126,58 +179,86 @@ void DistributedNumbering::Build(
   const std::size_t n = keys.size();
 
   // This rank's distinct keys (a piece may repeat a point).
-  std::unordered_map<PointKey, int, KeyHash> local;
-  local.reserve(n);
   std::vector<int> uniqueOf(n);
   std::vector<PointKey> uniqueKeys;
   std::vector<char> uniqueUsed;
-  for (std::size_t i = 0; i < n; ++i)
+  uniqueKeys.reserve(n);
+  uniqueUsed.reserve(n);
   {
-    const auto found = local.emplace(keys[i], static_cast<int>(uniqueKeys.size()));
-    if (found.second)
+    auto local = MakeKeyIndex(
+      n, [&uniqueKeys](int u) -> const PointKey& { return uniqueKeys[static_cast<std::size_t>(u)]; });
+    for (std::size_t i = 0; i < n; ++i)
     {
-      uniqueKeys.push_back(keys[i]);
-      uniqueUsed.push_back(0);
+      bool inserted = false;
+      const int u = local.FindOrInsert(keys[i], static_cast<int>(uniqueKeys.size()), inserted);
+      if (inserted)
+      {
+        uniqueKeys.push_back(keys[i]);
+        uniqueUsed.push_back(0);
+      }
+      uniqueOf[i] = u;
+      uniqueUsed[static_cast<std::size_t>(u)] |= used[i];
     }
-    uniqueOf[i] = found.first->second;
-    uniqueUsed[static_cast<std::size_t>(found.first->second)] |= used[i];
   }
-  local = {};
 
   // Round 1: keys to their homes, which choose the owners (lowest rank using it).
   std::vector<std::vector<KeyRecord>> out(static_cast<std::size_t>(Size_));
   std::vector<std::vector<int>> sent(static_cast<std::size_t>(Size_));
+  std::vector<int> homeOf(uniqueKeys.size());
+  {
+    std::vector<std::size_t> perHome(static_cast<std::size_t>(Size_), 0);
+    for (std::size_t u = 0; u < uniqueKeys.size(); ++u)
+    {
+      homeOf[u] = HomeOf(uniqueKeys[u], Size_);
+      ++perHome[static_cast<std::size_t>(homeOf[u])];
+    }
+    for (int r = 0; r < Size_; ++r)
+    {
+      out[r].reserve(perHome[r]);
+      sent[r].reserve(perHome[r]);
+    }
+  }
   for (std::size_t u = 0; u < uniqueKeys.size(); ++u)
   {
-    const int home = HomeOf(uniqueKeys[u], Size_);
+    const int home = homeOf[u];
     out[home].push_back({ uniqueKeys[u], static_cast<std::uint64_t>(uniqueUsed[u]) });
     sent[home].push_back(static_cast<int>(u));
   }
   std::vector<int> counts;
   std::vector<KeyRecord> in = AllToAll(comm, out, counts);
   out = {};
-  std::unordered_map<PointKey, int, KeyHash> groups;
-  groups.reserve(in.size());
-  std::vector<int> groupOf(in.size()), groupOwner, groupRow;
+  std::vector<int> groupOf(in.size()), groupOwner, groupRow, groupFirst;
   {
+    // A group's key is that of its first record.
+    groupOwner.reserve(in.size());
+    groupFirst.reserve(in.size());
+    auto groups = MakeKeyIndex(in.size(), [&in, &groupFirst](int g) -> const PointKey& {
+      return in[static_cast<std::size_t>(groupFirst[static_cast<std::size_t>(g)])].Key;
+    });
     std::size_t e = 0;
     for (int source = 0; source < Size_; ++source)
     {
       for (int k = 0; k < counts[source]; ++k, ++e)
       {
-        const auto found = groups.emplace(in[e].Key, static_cast<int>(groupOwner.size()));
-        if (found.second)
+        bool inserted = false;
+        const int g =
+          groups.FindOrInsert(in[e].Key, static_cast<int>(groupOwner.size()), inserted);
+        if (inserted)
+        {
           groupOwner.push_back(INT_MAX);
-        const int g = found.first->second;
+          groupFirst.push_back(static_cast<int>(e));
+        }
         groupOf[e] = g;
         if (in[e].Used)
           groupOwner[g] = std::min(groupOwner[g], source);
       }
     }
   }
-  groups = {};
+  groupFirst = {};
   in = {};
   std::vector<std::vector<int>> reply(static_cast<std::size_t>(Size_));
+  for (int source = 0; source < Size_; ++source)
+    reply[source].reserve(static_cast<std::size_t>(counts[source]));
   {
     std::size_t e = 0;
     for (int source = 0; source < Size_; ++source)
@@ -357,16 +438,34 @@ std::vector<int> CountSharedTriangles(MPI_Comm comm, const std::vector<int>& tri
   std::vector<int> counts;
   const std::vector<PointKey> in = AllToAll(comm, out, counts);
   out = {};
-  std::unordered_map<PointKey, int, KeyHash> seen;
-  seen.reserve(in.size());
-  for (const PointKey& key : in)
-    ++seen[key];
+  // Per distinct key (its first record's index) how many records have it.
+  std::vector<int> groupOf(in.size()), groupCount, groupFirst;
+  {
+    auto seen = MakeKeyIndex(in.size(), [&in, &groupFirst](int g) -> const PointKey& {
+      return in[static_cast<std::size_t>(groupFirst[static_cast<std::size_t>(g)])];
+    });
+    for (std::size_t e = 0; e < in.size(); ++e)
+    {
+      bool inserted = false;
+      const int g = seen.FindOrInsert(in[e], static_cast<int>(groupCount.size()), inserted);
+      if (inserted)
+      {
+        groupCount.push_back(0);
+        groupFirst.push_back(static_cast<int>(e));
+      }
+      groupOf[e] = g;
+      ++groupCount[static_cast<std::size_t>(g)];
+    }
+  }
   std::vector<std::vector<int>> reply(static_cast<std::size_t>(size));
   {
     std::size_t e = 0;
     for (int source = 0; source < size; ++source)
+    {
+      reply[source].reserve(static_cast<std::size_t>(counts[source]));
       for (int j = 0; j < counts[source]; ++j, ++e)
-        reply[source].push_back(seen[in[e]]);
+        reply[source].push_back(groupCount[static_cast<std::size_t>(groupOf[e])]);
+    }
   }
   const std::vector<int> answers = AllToAll(comm, reply, counts);
   std::vector<int> result(n, 0);

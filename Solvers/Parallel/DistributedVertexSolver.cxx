@@ -248,6 +248,13 @@ void DistributedVertexSolver::BuildOwnedRows()
   std::vector<std::vector<int>> outgoingPositions(static_cast<std::size_t>(ranks));
   std::vector<int> localRows, localColumns;
   LocalPositions_.clear();
+  if (HasTets())
+  {
+    const std::size_t entries = static_cast<std::size_t>(offsets[numPoints]);
+    localRows.reserve(entries);
+    localColumns.reserve(entries);
+    LocalPositions_.reserve(entries);
+  }
   for (std::size_t i = 0; i < numPoints && HasTets(); ++i)
   {
     if (!Used_[i])
@@ -307,19 +314,14 @@ void DistributedVertexSolver::BuildOwnedRows()
   // The owned rows' pattern: per row the sorted distinct columns of the
   // local and received entries; every entry's place in it.
   const std::size_t numLocal = localRows.size(), numReceived = recvPairs.size() / 2;
-  std::vector<int> entryRow(numLocal + numReceived), entryColumn(numLocal + numReceived);
-  for (std::size_t e = 0; e < numLocal; ++e)
-  {
-    entryRow[e] = localRows[e];
-    entryColumn[e] = localColumns[e];
-  }
+  std::vector<int> entryRow = std::move(localRows), entryColumn = std::move(localColumns);
+  entryRow.resize(numLocal + numReceived);
+  entryColumn.resize(numLocal + numReceived);
   for (std::size_t e = 0; e < numReceived; ++e)
   {
     entryRow[numLocal + e] = recvPairs[2 * e] - rowBegin;
     entryColumn[numLocal + e] = recvPairs[2 * e + 1];
   }
-  localRows = {};
-  localColumns = {};
   recvPairs = {};
   std::vector<int> rowStart(static_cast<std::size_t>(owned) + 1, 0);
   for (int r : entryRow)
@@ -336,13 +338,30 @@ void DistributedVertexSolver::BuildOwnedRows()
   Targets_.assign(entryRow.size(), -1);
   OwnedOffsets_.assign(static_cast<std::size_t>(owned) + 1, 0);
   OwnedColumns_.clear();
-  OwnedColumns_.reserve(entryRow.size() / 2 + 1);
+  OwnedColumns_.reserve(entryRow.size());
   std::vector<int> row;
   for (int r = 0; r < owned; ++r)
   {
     row.clear();
+    bool increasing = true;
     for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
-      row.push_back(entryColumn[static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)])]);
+    {
+      const int column = entryColumn[static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)])];
+      increasing = increasing && (row.empty() || column > row.back());
+      row.push_back(column);
+    }
+    if (increasing)
+    {
+      // Already sorted and distinct (a row of one local point whose
+      // neighbours' rows ascend with their local ids: one rank, most rows
+      // of a slab): each entry is its own place, no sort or search.
+      const int base = static_cast<int>(OwnedColumns_.size());
+      OwnedColumns_.insert(OwnedColumns_.end(), row.begin(), row.end());
+      OwnedOffsets_[r + 1] = static_cast<int>(OwnedColumns_.size());
+      for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
+        Targets_[static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)])] = base + k - rowStart[r];
+      continue;
+    }
     std::sort(row.begin(), row.end());
     row.erase(std::unique(row.begin(), row.end()), row.end());
     const int base = static_cast<int>(OwnedColumns_.size());
