@@ -374,6 +374,11 @@ void DistributedVertexSolver::BuildOwnedRows()
         static_cast<int>(std::lower_bound(row.begin(), row.end(), entryColumn[e]) - row.begin());
     }
   }
+  IdentityGather_ = numReceived == 0 && SendPositionsOff_.empty() &&
+    LocalPositions_.size() == OwnedColumns_.size() && Targets_.size() == OwnedColumns_.size() &&
+    HasTets() && LocalPositions_.size() == static_cast<std::size_t>(offsets[numPoints]);
+  for (std::size_t e = 0; IdentityGather_ && e < Targets_.size(); ++e)
+    IdentityGather_ = Targets_[e] == static_cast<int>(e) && LocalPositions_[e] == static_cast<int>(e);
 }
 
 void DistributedVertexSolver::GatherOwnedRows(
@@ -383,11 +388,18 @@ void DistributedVertexSolver::GatherOwnedRows(
   // to their owners in the order BuildOwnedRows fixed (one exchange).
   int ranks = 1;
   MPI_Comm_size(Comm_, &ranks);
-  ownedValues.assign(OwnedColumns_.size(), 0.0);
   const std::size_t numLocal = LocalPositions_.size();
-  for (std::size_t e = 0; e < numLocal; ++e)
-    ownedValues[static_cast<std::size_t>(Targets_[e])] +=
-      local[static_cast<std::size_t>(LocalPositions_[e])];
+  if (IdentityGather_ && local.size() == numLocal)
+  {
+    ownedValues.assign(local.begin(), local.end());
+  }
+  else
+  {
+    ownedValues.assign(OwnedColumns_.size(), 0.0);
+    for (std::size_t e = 0; e < numLocal; ++e)
+      ownedValues[static_cast<std::size_t>(Targets_[e])] +=
+        local[static_cast<std::size_t>(LocalPositions_[e])];
+  }
   std::vector<double> send(SendPositionsOff_.size());
   for (std::size_t e = 0; e < send.size(); ++e)
     send[e] = local[static_cast<std::size_t>(SendPositionsOff_[e])];

@@ -345,6 +345,9 @@ private:
   /// and the received ones (RecvCounts_ per rank, Targets_[local + e]).
   std::vector<int> OwnedOffsets_, OwnedColumns_;
   std::vector<int> LocalPositions_, Targets_, SendPositionsOff_, SendCounts_, RecvCounts_;
+  /// Every local CSR entry is its own owned entry, in place (one rank):
+  /// the owned rows' values are a copy of the local ones.
+  bool IdentityGather_ = false;
 
   // The matrices' local contributions of the last Solve, their hierarchies
   // and solutions (owned rows).
