@@ -843,7 +843,10 @@ public:
   }
 
   /// Solves A x = rhs from x (sized as rhs); false if `progress` aborted.
-  bool Solve(const std::vector<double>& rhs, std::vector<double>& x, SolverReport& report)
+  /// `zeroStart`: x is 0 (a cold start), so the first residual is rhs
+  /// without a product.
+  bool Solve(const std::vector<double>& rhs, std::vector<double>& x, SolverReport& report,
+    bool zeroStart = false)
   {
     const std::size_t size = rhs.size();
     for (std::vector<double>* v : { &R_, &P_, &V_, &PHat_, &S_, &SHat_, &T_ })
@@ -862,7 +865,15 @@ public:
         }
       }
     }
-    TrueResidual(rhs, x);
+    if (zeroStart)
+    {
+      R_ = rhs;
+      Rr_ = Bb_;
+    }
+    else
+    {
+      TrueResidual(rhs, x);
+    }
     for (int restart = 0; restart < 5; ++restart)
     {
       for (int c = 0; c < 3; ++c)
@@ -1617,7 +1628,8 @@ bool Sp3Solver::SolveBlocks(
       }
     }
   }
-  if (x.size() != size)
+  const bool zeroStart = x.size() != size;
+  if (zeroStart)
   {
     x.assign(size, 0.0);
   }
@@ -1631,7 +1643,7 @@ bool Sp3Solver::SolveBlocks(
     return solver.Solve(rhs, x, report);
   }
   LockstepBiCgStab solver(product, precondition, RelTol_, MaxIter_, numThreads, progress);
-  return solver.Solve(rhs, x, report);
+  return solver.Solve(rhs, x, report, zeroStart);
 }
 
 void Sp3Solver::ComputeExitance(const DiffusionProblem& problem,
