@@ -255,6 +255,8 @@ void RunOnce(const std::string& path, const std::string& collimated, const doubl
   chain.Paint->SetWidth(0.024 * diag * (1.0 + 0.01 * run));
   paint.Filters["paint"].push_back(TimedUpdate(chain.Paint, "Paint"));
   paint.Filters["solve"].push_back(TimedUpdate(chain.Solve, "Solve Diffusion"));
+  paint.Filters["solve.setup"].push_back(chain.Solve->GetAssemblyTime());
+  paint.Filters["solve.linear"].push_back(chain.Solve->GetSolveTime());
   paint.Filters["radiance"].push_back(TimedUpdate(chain.Radiance, "Outgoing Radiance"));
   paint.Iterations.push_back(TotalIterations(chain.Solve));
   if (check)
@@ -409,20 +411,21 @@ int BenchPipeline(const PipelineBenchOptions& o)
               << 100.0 * accuracy.value("paint_fluence_boundary_error", -1.0) << " % ("
               << accuracy.value("tets_painted", 0) << " tets painted)\n"
               << std::right << std::defaultfloat;
+    for (const char* step : { "relight", "paint" })
     {
-      // The relight's solve split: set-up, linear solve, the filter's rest.
-      const StepTimes& r = steps["relight"];
+      // The solve split: set-up, linear solve, the filter's rest.
+      const StepTimes& r = steps[step];
       const double total = Median(r.Filters.at("solve"));
       const double setup = Median(r.Filters.at("solve.setup"));
       const double linear = Median(r.Filters.at("solve.linear"));
-      std::cout << std::fixed << std::setprecision(1) << "  relight solve " << total
+      std::cout << std::fixed << std::setprecision(1) << "  " << step << " solve " << total
                 << " ms: set-up " << setup << ", linear solve " << linear
                 << ", the filter's conversions and output " << total - setup - linear << " ("
                 << std::setprecision(0) << setup / spmv << " + " << linear / spmv << " + "
                 << (total - setup - linear) / spmv << " SpMV units)\n"
                 << std::defaultfloat;
-      row["relight"]["solve_setup_median_ms"] = setup;
-      row["relight"]["solve_linear_median_ms"] = linear;
+      row[step]["solve_setup_median_ms"] = setup;
+      row[step]["solve_linear_median_ms"] = linear;
     }
     row["accuracy"] = accuracy;
     results.push_back(row);

@@ -5,7 +5,13 @@
 //   mpiexec -n 2 translucency-distributed-bench [--tets N] [--solver divergence|fem]
 //       [--coordinates] [--no-single] [--serial] [--strong T] [--agg L] [--pmax P]
 //       [--interp I] [--coarsen C] [--tol TOL] [--threads T] [--rounds R]
-//       [--own-hierarchies] [--relax R] [--keep-transpose]
+//       [--own-hierarchies] [--relax R] [--keep-transpose] [--linear NAME]
+//
+// --linear: the distributed linear solver by registry name or composition
+// (default: the distributed solver's, "cg/boomeramg"; "cg/aggregation" is
+// additive Schwarz with one aggregation cycle per rank's block);
+// --linear-option NAME=VALUE (repeatable): one of its options, e.g.
+// agg-cycle-index=1 (SchwarzAggregation.h), besides the BoomerAMG ones.
 //
 // In one run, --rounds times (default 2): first every rank of MPI_COMM_WORLD
 // solves its slab (cold solve: numbering, assembly, AMG set-up, PCG; then a
@@ -202,6 +208,10 @@ struct Result
 /// machine's load). The serial path's CPU and wall times per round.
 std::map<std::string, std::vector<std::array<double, 5>>> Rounds, RoundsCpu;
 std::vector<double> SerialCpu, SerialWall;
+/// --linear: the distributed linear solver ("" = the distributed solver's default).
+std::string LinearSolverName;
+/// --linear-option NAME=VALUE: added to the linear solver's options.
+std::vector<std::pair<std::string, double>> LinearOptions;
 
 double Median(std::vector<double> v)
 {
@@ -225,7 +235,12 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
   Result result;
   {
     translucency::DistributedVertexSolver solver(comm, solverName);
-    solver.SetLinearSolverOptions(options.ToOptions());
+    translucency::SolverOptions linearOptions = options.ToOptions();
+    for (const auto& option : LinearOptions)
+      linearOptions.Set(option.first, option.second);
+    solver.SetLinearSolverOptions(linearOptions);
+    if (!LinearSolverName.empty())
+      solver.SetLinearSolver(LinearSolverName);
     solver.SetRelTol(tol);
     solver.SetMaxIter(1000);
     solver.SetNumberOfThreads(threads);
@@ -499,13 +514,23 @@ int main(int argc, char* argv[])
       options.RelaxType = std::atoi(next());
     else if (arg == "--keep-transpose")
       options.KeepTranspose = 1;
+    else if (arg == "--linear")
+      LinearSolverName = next();
+    else if (arg == "--linear-option" && a + 1 < argc &&
+      std::strchr(argv[a + 1], '=') != nullptr)
+    {
+      const std::string option = next();
+      const std::size_t eq = option.find('=');
+      LinearOptions.emplace_back(option.substr(0, eq), std::atof(option.c_str() + eq + 1));
+    }
     else
     {
       if (rank == 0)
         std::cerr << "usage: mpiexec -n RANKS translucency-distributed-bench [--tets N] [--solver "
                      "divergence|fem] [--coordinates] [--no-single] [--serial] [--strong T] [--agg L] "
                      "[--pmax P] [--interp I] [--coarsen C] [--tol TOL] [--threads T] [--rounds R] "
-                     "[--own-hierarchies] [--relax R] [--keep-transpose]\n";
+                     "[--own-hierarchies] [--relax R] [--keep-transpose] [--linear NAME] "
+                     "[--linear-option NAME=VALUE]\n";
       MPI_Finalize();
       return 2;
     }

@@ -267,6 +267,11 @@ const char* vtkSolveDiffusion::GetLastLinearSetup() const
   return this->Internal->Result.Report.LinearSetup.c_str();
 }
 
+const char* vtkSolveDiffusion::GetLastCollimatedUpdate() const
+{
+  return this->Internal->Result.Report.Collimated.c_str();
+}
+
 const char* vtkSolveDiffusion::GetLastAssembly() const
 {
   return this->Internal->Result.Report.Assembly.c_str();

@@ -547,6 +547,13 @@ public:
   /// multigrid hierarchy kept); translucency::SolverReport::LinearSetup.
   const char* GetLastLinearSetup() const;
 
+  /// What the last serial vertex solve's extended collimated source did
+  /// (translucency::SolverReport::Collimated): "full" (new rays and every
+  /// tet integrated: a new light direction or mesh), "loads" (the kept rays,
+  /// the changed tets integrated again: a paint) or "kept"; empty without an
+  /// extended model.
+  const char* GetLastCollimatedUpdate() const;
+
   /// Tets found changed for the last incremental update (-1 if the filter
   /// did not look: no cached coefficients, new mesh, too many changes, or
   /// IncrementalAssembly off).

@@ -2,6 +2,7 @@
 
 #include "vtkTranslucencyOutputGuard.h"
 #include "vtkTranslucencyParallel.h"
+#include "vtkTranslucencyRanges.h"
 #include "vtkTranslucencyThreads.h"
 
 #include <vtkAlgorithm.h>
@@ -35,9 +36,12 @@ void vtkTranslucencyDispatch::EmptyOutputs(vtkInformationVector* outputVector)
   }
 }
 
-int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
-  vtkInformationVector** inputVector, vtkInformationVector* outputVector, const Planner& planner,
-  const Paths& paths, Record record)
+namespace
+{
+/// Run(): plan, agree, run the path.
+int RunPath(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector, const vtkTranslucencyDispatch::Planner& planner,
+  const vtkTranslucencyDispatch::Paths& paths, vtkTranslucencyDispatch::Record record)
 {
   const vtkTranslucencyCommunicator comm = vtkTranslucencyCommunicator::World();
   // 1. The override (local: the environment may differ per rank) and the plan (collective).
@@ -91,7 +95,7 @@ int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
     case vtkTranslucencyParallelPlan::Kinds::Distributed:
     {
       const bool perPiece = plan.Kind == vtkTranslucencyParallelPlan::Kinds::PerPiece;
-      const PiecePath& path = perPiece ? paths.PerPiece : paths.Distributed;
+      const vtkTranslucencyDispatch::PiecePath& path = perPiece ? paths.PerPiece : paths.Distributed;
       record.Path = plan.GetKindName();
       if (!path)
       {
@@ -107,4 +111,19 @@ int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
       return vtkTranslucencyParallel::RunGathered(
         self, request, inputVector, outputVector, plan.Mode, paths.Serial, comm);
   }
+}
+}
+
+int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
+  vtkInformationVector** inputVector, vtkInformationVector* outputVector, const Planner& planner,
+  const Paths& paths, Record record)
+{
+  // The new output arrays' ranges, once, in parallel (vtkTranslucencyRanges.h:
+  // what ParaView asks for after every execution).
+  const int result = RunPath(self, request, inputVector, outputVector, planner, paths, record);
+  if (result == 1)
+  {
+    vtkTranslucency::CacheOutputRanges(outputVector);
+  }
+  return result;
 }

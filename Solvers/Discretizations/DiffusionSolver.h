@@ -98,6 +98,11 @@ struct SolverReport
   /// "rows" (the rows of changed tets, LinearSolver::SetupChangedRows) or
   /// "kept" (the matrices did not change: a relight); empty for the others.
   std::string LinearSetup;
+  /// Vertex discretisations with an extended collimated model: what the
+  /// beam's volume source did (CollimatedSourceCache::GetLastUpdate()):
+  /// "full" (rays and every tet), "loads" (the kept rays, the changed tets
+  /// integrated again: a paint) or "kept"; empty otherwise.
+  std::string Collimated;
   long long NumberOfUnknowns = 0; ///< per channel
   long long NumberOfNonZeros = 0; ///< per channel matrix (0 for Monte Carlo)
   std::size_t MemoryBytes = 0;    ///< system (matrix, vectors) or tallies

@@ -40,9 +40,10 @@ void AddSourceLoad(const std::vector<double>& load, DiffusionSystem& system)
 
 /// Solve: the load of the interior sources and, with the extended
 /// collimated model, of the beam's volume source (`collimated` gets the
-/// beam); empty without either.
-std::vector<double> SourceLoad(
-  const DiffusionProblem& problem, bool extended, CollimatedSource& collimated)
+/// beam, from `cache`: a paint re-integrates the changed tets only); empty
+/// without either.
+std::vector<double> SourceLoad(const DiffusionProblem& problem, bool extended,
+  CollimatedSourceCache& cache, CollimatedSource& collimated)
 {
   const TetMesh& mesh = *problem.Mesh;
   std::vector<double> sourceLoad;
@@ -52,8 +53,7 @@ std::vector<double> SourceLoad(
   }
   if (extended)
   {
-    collimated =
-      ComputeCollimatedSource(mesh, *problem.Material, problem.Lights, problem.Shadows);
+    collimated = cache.Compute(mesh, *problem.Material, problem.Lights, problem.Shadows);
     if (sourceLoad.empty())
     {
       sourceLoad.swap(collimated.Load);
@@ -328,7 +328,9 @@ bool VertexDiffusionSolver::Solve(
   Discretization_->SetBoundaryRule(rule);
   const bool hasSources = problem.HasInteriorSources() || extended;
   CollimatedSource collimated;
-  const std::vector<double> sourceLoad = SourceLoad(problem, extended, collimated);
+  const std::vector<double> sourceLoad =
+    SourceLoad(problem, extended, CollimatedCache_, collimated);
+  report.Collimated = extended ? CollimatedCache_.GetLastUpdate() : "";
   // Painting: rebuild only the rows of the changed tets' vertices (TransCut
   // Sec. 5.2) when the system of the last successful solve is of this mesh
   // with its current geometry. The request is one-shot, also when the update

@@ -14,6 +14,7 @@
  */
 #pragma once
 
+#include "CollimatedSource.h"
 #include "DiffusionSolver.h"
 #include "Discretization.h"
 #include "LinearSolver.h"
@@ -204,6 +205,9 @@ private:
   /// extended collimated beam): an incremental update rebuilds it.
   bool SystemHasSources_ = false;
   std::vector<int> ChangedTets_;
+  /// The extended collimated source of the last solves (a paint
+  /// re-integrates the changed tets only; SolverReport::Collimated).
+  CollimatedSourceCache CollimatedCache_;
 };
 
 } // namespace translucency

@@ -1120,6 +1120,45 @@ const CsrPattern& AggregationMultigridSolver::GetPattern(int l) const
   return Internal_->Levels.at(l).Pattern;
 }
 
+const std::vector<int>& AggregationMultigridSolver::GetMemberOffsets(int l) const
+{
+  return Internal_->Levels.at(l).MemberOffsets;
+}
+
+const std::vector<int>& AggregationMultigridSolver::GetMembers(int l) const
+{
+  return Internal_->Levels.at(l).Members;
+}
+
+const std::vector<int>& AggregationMultigridSolver::GetCoarseSlots(int l) const
+{
+  return Internal_->Levels.at(l).CoarseSlot;
+}
+
+void AggregationMultigridSolver::BuildStructure(
+  const DiffusionSystem& system, const std::vector<double>& points)
+{
+  const int n = system.NumberOfUnknowns;
+  if (n < 0 || system.RowOffsets.size() != static_cast<std::size_t>(n) + 1 ||
+    system.RowOffsets.front() != 0 ||
+    system.ColumnIndices.size() != static_cast<std::size_t>(system.RowOffsets.back()))
+  {
+    throw Error(GetName() + ": BuildStructure() needs NumberOfUnknowns + 1 row offsets from 0 "
+      "and as many column indices as the last offset");
+  }
+  if (points.size() != 3 * static_cast<std::size_t>(n))
+  {
+    throw Error(GetName() + ": BuildStructure() needs 3 coordinates per unknown (" +
+      std::to_string(3 * static_cast<long long>(n)) + "), got " + std::to_string(points.size()));
+  }
+  Ready_ = false;
+  Internal_->Recycler.Clear();
+  const auto start = Clock::now();
+  BuildHierarchy(system, points);
+  HierarchyMs_ = MillisecondsSince(start);
+  ++Builds_;
+}
+
 double AggregationMultigridSolver::GetOperatorComplexity() const
 {
   if (Internal_->Levels.empty())

@@ -112,6 +112,12 @@ public:
   const std::vector<int>& GetMeshIds(int l) const;
   /// Pattern of level l (level 0: the system's).
   const CsrPattern& GetPattern(int l) const;
+  /// Members of each aggregate of level l (offsets into GetMembers(l);
+  /// ascending fine ids) and, per non-zero k of level l's pattern, its slot in
+  /// level l + 1's pattern (the Galerkin sum); empty on the coarsest level.
+  const std::vector<int>& GetMemberOffsets(int l) const;
+  const std::vector<int>& GetMembers(int l) const;
+  const std::vector<int>& GetCoarseSlots(int l) const;
   /// Non-zeros of all levels divided by those of level 0.
   double GetOperatorComplexity() const;
   /// The Galerkin operator P^T A P of level l >= 1, channel c (double values).
@@ -136,6 +142,17 @@ public:
     const AggregationMultigridSolver& donor, const DiffusionSystem& system, const TetMesh* mesh);
   /// Setups that copied a donor's hierarchy (SetupSharedHierarchy).
   int GetNumberOfSharedHierarchySetups() const { return SharedSetups_; }
+
+  /**
+   * The aggregation hierarchy (patterns of every level, no values) of
+   * `system`'s pattern (NumberOfUnknowns, RowOffsets, ColumnIndices; the
+   * values are not read) with vertex i at points[3 i .. 3 i + 2], without a
+   * mesh and without making this solver ready to Solve: the structure the
+   * distributed additive Schwarz preconditioner ("cg/aggregation" on an MPI
+   * communicator, SchwarzAggregationPCG) builds on one rank's block. Throws
+   * translucency::Error for a bad pattern or a non-finite point.
+   */
+  void BuildStructure(const DiffusionSystem& system, const std::vector<double>& points);
 
   /// Milliseconds of the last hierarchy build and of the last value set-up.
   double GetHierarchyMilliseconds() const { return HierarchyMs_; }

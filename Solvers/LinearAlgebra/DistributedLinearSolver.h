@@ -6,7 +6,9 @@
  * (LinearSolver.h) composes it as it composes the in-process solvers
  * (Krylov method x preconditioner, model: PETSc's KSP x PC): an entry whose
  * traits have CreateDistributed has a distributed variant, created by
- * CreateDistributedLinearSolver("cg/boomeramg" or its alias "hypre-amg").
+ * CreateDistributedLinearSolver("cg/boomeramg" or its alias "hypre-amg";
+ * "cg/aggregation" or "multigrid-agg": CG with additive Schwarz, one
+ * aggregation cycle on each rank's owned block, SchwarzAggregation.h).
  * The distributed diffusion solver (Solvers/Parallel) takes its linear
  * solver from there, so no diffusion solver calls hypre itself.
  */
@@ -37,6 +39,16 @@ public:
    * others unused (SolverOptions::GetUnused). Default: reads none.
    */
   virtual void SetOptions(const SolverOptions& options) { (void)options; }
+
+  /**
+   * The positions of this rank's rows (3 per row, the rows of the next
+   * Setup, in order), for a preconditioner that aggregates by distance
+   * ("cg/aggregation": each vertex joins its nearest retained neighbour).
+   * Before Setup or SetupShared; kept until the next call. Default: unused.
+   * Without positions such a preconditioner still works, aggregating by
+   * neighbour order instead (more iterations).
+   */
+  virtual void SetCoordinates(const double* xyz, int rows) { (void)xyz, (void)rows; }
 
   /**
    * Collective: this rank's rows [rowBegin, rowEnd) as CSR (rowOffsets has
@@ -98,7 +110,8 @@ public:
 
 /**
  * A new distributed linear solver on `comm` by registry name or
- * composition ("cg/boomeramg", or its alias "hypre-amg"; case-insensitive).
+ * composition ("cg/boomeramg", or its alias "hypre-amg"; "cg/aggregation", or
+ * its alias "multigrid-agg"; case-insensitive).
  * Throws translucency::Error for an unknown name, a solver this build lacks
  * (its remedy) or one without a distributed variant, naming those with one.
  */

@@ -1,6 +1,7 @@
 #include "HypreSolver.h"
 
 #include "Error.h"
+#include "HypreParCSR.h"
 #include "LinearSolverCommon.h"
 
 #include <HYPRE.h>
@@ -42,15 +43,7 @@ void FinaliseAtExit()
 
 void Check(HYPRE_Int code, const char* what)
 {
-  if (code != 0)
-  {
-    char message[256] = { 0 };
-    HYPRE_DescribeError(code, message);
-    HYPRE_ClearAllErrors();
-    std::ostringstream os;
-    os << "hypre-amg: " << what << " failed (hypre error " << code << ": " << message << ")";
-    throw Error(os.str());
-  }
+  hypre::Check(code, "hypre-amg", what);
 }
 
 } // namespace
@@ -195,33 +188,7 @@ void HypreBoomerAMGPCG::BuildMatrix(
 {
   RowBegin_ = rowBegin;
   RowEnd_ = rowEnd;
-  const int rows = rowEnd - rowBegin;
-  Handles& h = *H_;
-  // hypre's ranges are inclusive; an empty local block is [begin, begin - 1].
-  Check(HYPRE_IJMatrixCreate(Comm_, rowBegin, rowEnd - 1, rowBegin, rowEnd - 1, &h.A),
-    "matrix creation");
-  Check(HYPRE_IJMatrixSetObjectType(h.A, HYPRE_PARCSR), "matrix type");
-  std::vector<HYPRE_Int> diag(rows, 0), offd(rows, 0), sizes(rows);
-  h.Rows.resize(rows);
-  for (int i = 0; i < rows; ++i)
-  {
-    h.Rows[i] = rowBegin + i;
-    sizes[i] = rowOffsets[i + 1] - rowOffsets[i];
-    for (int k = rowOffsets[i]; k < rowOffsets[i + 1]; ++k)
-    {
-      (columns[k] >= rowBegin && columns[k] < rowEnd ? diag[i] : offd[i])++;
-    }
-  }
-  Check(HYPRE_IJMatrixSetDiagOffdSizes(h.A, diag.data(), offd.data()), "matrix sizes");
-  Check(HYPRE_IJMatrixInitialize(h.A), "matrix initialisation");
-  const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
-  if (rows > 0)
-  {
-    std::vector<HYPRE_BigInt> cols(columns, columns + nnz);
-    Check(HYPRE_IJMatrixSetValues(h.A, rows, sizes.data(), h.Rows.data(), cols.data(), values),
-      "setting the matrix values");
-  }
-  Check(HYPRE_IJMatrixAssemble(h.A), "matrix assembly");
+  H_->A = hypre::BuildMatrix(Comm_, rowBegin, rowEnd, rowOffsets, columns, values, H_->Rows, "hypre-amg");
 }
 
 void HypreBoomerAMGPCG::Setup(
@@ -262,78 +229,14 @@ void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, 
     throw Error("hypre-amg: UpdateValues() called before Setup()");
   }
   const double start = MPI_Wtime();
-  const int rows = RowEnd_ - RowBegin_;
   // The new values go straight into the assembled ParCSR matrix (the fine
   // level of the kept hierarchy): each entry's place in the diagonal or
   // off-diagonal block is found once per pattern, then every update is a
   // scatter. (Re-initialising a matrix made with SetDiagOffdSizes and
   // setting its values through the IJ interface does not give the new
   // matrix in hypre 2.26: TestDistributedFamily's (2A)^-1 = A^-1 / 2.)
-  hypre_ParCSRMatrix* a = nullptr;
-  HYPRE_IJMatrixGetObject(h.A, reinterpret_cast<void**>(&a));
-  hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(a);
-  hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(a);
-  const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
-  // The pattern's fingerprint (FNV-1a of the offsets and columns): a
-  // changed pattern finds its places again (or is refused), without a copy.
-  std::uint64_t fingerprint = 1469598103934665603ull;
-  auto mix = [&fingerprint](int v) {
-    fingerprint = (fingerprint ^ static_cast<std::uint32_t>(v)) * 1099511628211ull;
-  };
-  for (int r = 0; r <= rows; ++r)
-    mix(rowOffsets[r]);
-  for (std::size_t k = 0; k < nnz; ++k)
-    mix(columns[k]);
-  if (Places_.size() != nnz || fingerprint != PlacePattern_)
-  {
-    Places_.clear();
-    const HYPRE_Int* di = hypre_CSRMatrixI(diag);
-    const HYPRE_Int* dj = hypre_CSRMatrixJ(diag);
-    const HYPRE_Int* oi = hypre_CSRMatrixI(offd);
-    const HYPRE_Int* oj = hypre_CSRMatrixJ(offd);
-    const HYPRE_BigInt* colMap = hypre_ParCSRMatrixColMapOffd(a);
-    const HYPRE_BigInt firstColumn = hypre_ParCSRMatrixFirstColDiag(a);
-    const HYPRE_BigInt lastColumn = firstColumn + hypre_CSRMatrixNumCols(diag) - 1;
-    std::vector<int> places(nnz);
-    for (int r = 0; r < rows; ++r)
-    {
-      for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
-      {
-        const HYPRE_BigInt column = columns[k];
-        int place = std::numeric_limits<int>::min();
-        if (column >= firstColumn && column <= lastColumn)
-        {
-          for (HYPRE_Int q = di[r]; q < di[r + 1]; ++q)
-            if (dj[q] == column - firstColumn)
-              place = q;
-        }
-        else if (oi && colMap)
-        {
-          for (HYPRE_Int q = oi[r]; q < oi[r + 1]; ++q)
-            if (colMap[oj[q]] == column)
-              place = -1 - static_cast<int>(q);
-        }
-        if (place == std::numeric_limits<int>::min())
-        {
-          throw Error("hypre-amg: UpdateValues(): entry (" + std::to_string(RowBegin_ + r) + ", " +
-            std::to_string(column) + ") is not in the matrix of the last Setup() (a changed pattern)");
-        }
-        places[k] = place;
-      }
-    }
-    Places_ = std::move(places);
-    PlacePattern_ = fingerprint;
-  }
-  HYPRE_Complex* diagData = hypre_CSRMatrixData(diag);
-  HYPRE_Complex* offdData = hypre_CSRMatrixData(offd);
-  for (std::size_t k = 0; k < nnz; ++k)
-  {
-    const int place = Places_[k];
-    if (place >= 0)
-      diagData[place] = values[k];
-    else
-      offdData[-1 - place] = values[k];
-  }
+  hypre::ScatterValues(h.A, RowBegin_, RowEnd_, rowOffsets, columns, values, Places_,
+    PlacePattern_, "hypre-amg");
   MatrixMilliseconds_ = 1000.0 * (MPI_Wtime() - start);
   HierarchyMilliseconds_ = 0.0;
 }
@@ -440,35 +343,8 @@ int HypreBoomerAMGPCG::Solve(
   {
     throw Error("hypre-amg: Solve() called before Setup()");
   }
-  const int rows = RowEnd_ - RowBegin_;
-  std::vector<double> zero;
-  if (!guess)
-    zero.assign(rows, 0.0);
-  Check(HYPRE_IJVectorSetValues(h.B, rows, h.Rows.data(), bLocal), "setting the right-hand side");
-  Check(HYPRE_IJVectorSetValues(h.X, rows, h.Rows.data(), guess ? xLocal : zero.data()),
-    "setting the initial guess");
-  HYPRE_ParCSRMatrix a;
-  HYPRE_ParVector b, x;
-  HYPRE_IJMatrixGetObject(h.A, reinterpret_cast<void**>(&a));
-  HYPRE_IJVectorGetObject(h.B, reinterpret_cast<void**>(&b));
-  HYPRE_IJVectorGetObject(h.X, reinterpret_cast<void**>(&x));
-  HYPRE_PCGSetTol(h.PCG, relTol);
-  HYPRE_PCGSetMaxIter(h.PCG, maxIter);
-  const HYPRE_Int code = HYPRE_ParCSRPCGSolve(h.PCG, a, b, x);
-  // Not converging within maxIter is reported as an error code by hypre: it
-  // is not an error here (the caller reads the residual).
-  if (code != 0 && !HYPRE_CheckError(code, HYPRE_ERROR_CONV))
-  {
-    Check(code, "PCG solve");
-  }
-  HYPRE_ClearAllErrors();
-  HYPRE_Int iterations = 0;
-  HYPRE_Real residual = 0.0;
-  HYPRE_ParCSRPCGGetNumIterations(h.PCG, &iterations);
-  HYPRE_ParCSRPCGGetFinalRelativeResidualNorm(h.PCG, &residual);
-  Check(HYPRE_IJVectorGetValues(h.X, rows, h.Rows.data(), xLocal), "reading the solution");
-  relRes = residual;
-  return iterations;
+  return hypre::SolvePCG(h.PCG, h.A, h.B, h.X, h.Rows, bLocal, xLocal, guess, relTol, maxIter,
+    relRes, "hypre-amg");
 }
 
 HypreSolver::HypreSolver() = default;

@@ -22,6 +22,7 @@
 #endif
 #ifdef TRANSLUCENCY_HAVE_HYPRE
 #include "HypreSolver.h"
+#include "SchwarzAggregation.h"
 #endif
 
 #include <algorithm>
@@ -104,7 +105,17 @@ LinearSolverRegistry MakeRegistry()
     "the TransCut multiresolution hierarchy as a solver (TransCut, Sec. 4)"));
   r.Add(Make<MultigridConjugateGradient>("multigrid-cg", { "cg", "multires", true, true },
     "CG preconditioned by a V-cycle on the TransCut hierarchy"));
-  r.Add(Make<AggregationMultigridSolver>("multigrid-agg", { "cg", "aggregation", true, true },
+  LinearSolverTraits aggregation{ "cg", "aggregation", true, true };
+#ifdef TRANSLUCENCY_HAVE_HYPRE
+  // The distributed variant: hypre's PCG on the whole matrix, additive
+  // Schwarz (block Jacobi over the ranks) with one aggregation cycle on
+  // each rank's owned block (SchwarzAggregation.h).
+  aggregation.CreateDistributed = [](const Communicator& comm) {
+    return std::unique_ptr<DistributedLinearSolver>(
+      std::make_unique<SchwarzAggregationPCG>(GetMPIComm(comm)));
+  };
+#endif
+  r.Add(Make<AggregationMultigridSolver>("multigrid-agg", aggregation,
     "CG preconditioned by an aggregation multigrid W-cycle"));
   r.Add(Make<IncompleteCholeskySolver>("cg-ichol", { "cg", "ichol" },
     "CG with Eigen's incomplete Cholesky (AMD ordering)"));

@@ -45,7 +45,11 @@ if (TRANSLUCENCY_USE_HYPRE)
   find_package(MPI QUIET COMPONENTS C)
   if (HYPRE_INCLUDE_DIR AND HYPRE_LIBRARY AND MPI_C_FOUND)
     message(STATUS "Linear solver 'hypre-amg': ${HYPRE_LIBRARY} (MPI ${MPI_C_VERSION})")
-    target_sources(TranslucencyLinearAlgebra PRIVATE HypreSolver.cxx)
+    # SchwarzAggregation.cxx: the distributed variant of multigrid-agg
+    # (hypre's ParCSR PCG with an additive Schwarz aggregation cycle);
+    # HypreParCSR.cxx: what it shares with HypreSolver.cxx.
+    target_sources(TranslucencyLinearAlgebra PRIVATE HypreSolver.cxx HypreParCSR.cxx
+      SchwarzAggregation.cxx)
     target_include_directories(TranslucencyLinearAlgebra PUBLIC
       $<BUILD_INTERFACE:${HYPRE_INCLUDE_DIR}>)
     target_link_libraries(TranslucencyLinearAlgebra PUBLIC "${HYPRE_LIBRARY}" MPI::MPI_C)

@@ -110,7 +110,7 @@ public:
   const std::vector<int>& GetDiagonalPositions() const { return DiagonalPositions_; }
   /// Tets around each point (CSR: offsets then tet ids).
   const std::vector<int>& GetPointTetOffsets() const { return PointTetOffsets_; }
-  const std::vector<int>& GetPointTets() const { return PointTets_; }
+  const std::vector<int>& GetPointTets() const { return PointTets_; } ///< ascending per point
 
   /**
    * Schedule for a deterministic parallel scatter over tets (used by the

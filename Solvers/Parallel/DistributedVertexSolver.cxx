@@ -55,6 +55,22 @@ const bool Registered = [] {
   return true;
 }();
 
+/// The positions of the owned rows (3 per row; zeros for a row without a
+/// local point), for a linear solver that aggregates by distance
+/// (DistributedLinearSolver::SetCoordinates).
+std::vector<double> RowPositions(const TetMesh& mesh, const std::vector<int>& firstLocal)
+{
+  std::vector<double> xyz(3 * firstLocal.size(), 0.0);
+  const std::vector<double>& points = mesh.GetPoints();
+  for (std::size_t r = 0; r < firstLocal.size(); ++r)
+  {
+    const std::size_t i = static_cast<std::size_t>(firstLocal[r]);
+    if (firstLocal[r] >= 0 && 3 * i + 2 < points.size())
+      std::copy(points.begin() + 3 * i, points.begin() + 3 * i + 3, xyz.begin() + 3 * r);
+  }
+  return xyz;
+}
+
 } // namespace
 
 DistributedVertexSolver::DistributedVertexSolver(const std::string& discretization)
@@ -576,6 +592,8 @@ void DistributedVertexSolver::SetUpChannel(int c)
       ChannelLinear_[c] = name;
     }
     Donor_[c] = -1;
+    const std::vector<double> xyz = RowPositions(*Mesh_, FirstLocal_);
+    Channels_[c]->SetCoordinates(xyz.data(), static_cast<int>(FirstLocal_.size()));
     Channels_[c]->Setup(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), OwnedOffsets_.data(),
       OwnedColumns_.data(), Contributions_[c].data());
     Donor_[c] = c;

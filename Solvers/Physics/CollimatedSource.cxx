@@ -939,15 +939,48 @@ void EnteringPower(const TetMesh& mesh, const std::vector<double>& tetEta,
   }
 }
 
-/// ComputeCollimatedBeamAtPoints: E_c of every beam at the query points
-/// (zero where the ray toward the light leaves through no entry face, or is
-/// shadowed) and the optical path to the entry point, each ray cast against
-/// `surface` with `caster` (built over it) or, without one, through a grid
-/// along each beam (the same hits, DirectionGrid).
-void BeamFieldOnSurface(const CollimatedEntrySurface& surface, const RayCaster* caster,
-  const std::vector<LightSource>& beams, bool shadows, const std::vector<double>& points,
-  const std::vector<char>& onBoundary, const std::vector<double>& pointNormals,
-  CollimatedSource& out)
+/// The unit direction towards a beam's light, -d / |d|.
+void TowardsLight(const LightSource& beam, double w[3])
+{
+  const double len = std::sqrt(beam.Direction[0] * beam.Direction[0] +
+    beam.Direction[1] * beam.Direction[1] + beam.Direction[2] * beam.Direction[2]);
+  w[0] = -beam.Direction[0] / len;
+  w[1] = -beam.Direction[1] / len;
+  w[2] = -beam.Direction[2] / len;
+}
+
+/// The unnormalised outward normal of `surface`'s triangle f; its length in nl.
+const double* EntryNormal(const CollimatedEntrySurface& surface, int f, double n[3], double& nl)
+{
+  const std::vector<double>& surfacePoints = *surface.Points;
+  const int* tri = &(*surface.Triangles)[3 * static_cast<size_t>(f)];
+  const double* a = &surfacePoints[3 * static_cast<size_t>(tri[0])];
+  const double* b = &surfacePoints[3 * static_cast<size_t>(tri[1])];
+  const double* c3 = &surfacePoints[3 * static_cast<size_t>(tri[2])];
+  const double e1[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
+  const double e2[3] = { c3[0] - a[0], c3[1] - a[1], c3[2] - a[2] };
+  n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+  n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+  n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+  nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  return a;
+}
+
+/**
+ * The geometric half of the beam field (BeamFieldOnSurface): per beam and
+ * query point, the boundary triangle through which the beam reaches the
+ * point, or -1 (the ray towards the light leaves through no triangle, leaves
+ * through one that does not face the light, or the entry point is shadowed).
+ * Depends on the surface's geometry, the beams' directions, the shadow flag
+ * and the points only, not on the material (CollimatedSourceCache keeps it
+ * across paints). Each ray is cast against `surface` with `caster` (built
+ * over it) or, without one, through a grid along each beam (the same hits,
+ * DirectionGrid).
+ */
+std::vector<std::vector<int>> CastBeamEntries(const CollimatedEntrySurface& surface,
+  const RayCaster* caster, const std::vector<LightSource>& beams, bool shadows,
+  const std::vector<double>& points, const std::vector<char>& onBoundary,
+  const std::vector<double>& pointNormals)
 {
   const int numPoints = static_cast<int>(points.size() / 3);
   const std::vector<double>& surfacePoints = *surface.Points;
@@ -966,24 +999,22 @@ void BeamFieldOnSurface(const CollimatedEntrySurface& surface, const RayCaster* 
   // up to 70 % off; Documentation/Parallel.md). 1e-9 is far above the
   // rounding of the origin (~1e-16 of the diagonal) and far below any mesh
   // feature; the depth below the entry plane is measured from the point
-  // itself, so E_c changes only where the entry face was such a tie.
+  // itself (EvaluateBeamField), so E_c changes only where the entry face
+  // was such a tie.
   const double generic = 1e-9 * diag / std::sqrt(6.0);
   const double shift[3] = { generic, generic * std::sqrt(2.0), generic * std::sqrt(3.0) };
-  const std::vector<int>& triangles = *surface.Triangles;
   // Without a caster (Fast): the rays of each beam through a grid along its
   // direction (the same hits as RayCaster's, DirectionGrid).
   std::vector<std::unique_ptr<DirectionGrid>> grids(beams.size());
   for (size_t index = 0; !caster && index < beams.size(); ++index)
   {
-    const LightSource& beam = beams[index];
-    const double len = std::sqrt(beam.Direction[0] * beam.Direction[0] +
-      beam.Direction[1] * beam.Direction[1] + beam.Direction[2] * beam.Direction[2]);
-    const double w[3] = { -beam.Direction[0] / len, -beam.Direction[1] / len,
-      -beam.Direction[2] / len };
-    grids[index] = std::make_unique<DirectionGrid>(surfacePoints, triangles, w, diag);
+    double w[3];
+    TowardsLight(beams[index], w);
+    grids[index] =
+      std::make_unique<DirectionGrid>(surfacePoints, *surface.Triangles, w, diag);
   }
-
-  // E_c at the points.
+  std::vector<std::vector<int>> entries(
+    beams.size(), std::vector<int>(static_cast<size_t>(numPoints), -1));
 #pragma omp parallel for schedule(dynamic, 256)
   for (int i = 0; i < numPoints; ++i)
   {
@@ -999,12 +1030,8 @@ void BeamFieldOnSurface(const CollimatedEntrySurface& surface, const RayCaster* 
     }
     for (size_t index = 0; index < beams.size(); ++index)
     {
-      const LightSource& beam = beams[index];
-      CollimatedSource::Beam& field = out.Beams[index];
-      const double len = std::sqrt(beam.Direction[0] * beam.Direction[0] +
-        beam.Direction[1] * beam.Direction[1] + beam.Direction[2] * beam.Direction[2]);
-      const double w[3] = { -beam.Direction[0] / len, -beam.Direction[1] / len,
-        -beam.Direction[2] / len };
+      double w[3];
+      TowardsLight(beams[index], w);
       double t = 0.0;
       int f = -1;
       const DirectionGrid* grid = grids[index].get();
@@ -1014,15 +1041,8 @@ void BeamFieldOnSurface(const CollimatedEntrySurface& surface, const RayCaster* 
         continue;
       }
       // The entry triangle's outward normal.
-      const int* tri = &triangles[3 * static_cast<size_t>(f)];
-      const double* a = &surfacePoints[3 * static_cast<size_t>(tri[0])];
-      const double* b = &surfacePoints[3 * static_cast<size_t>(tri[1])];
-      const double* c3 = &surfacePoints[3 * static_cast<size_t>(tri[2])];
-      const double e1[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] };
-      const double e2[3] = { c3[0] - a[0], c3[1] - a[1], c3[2] - a[2] };
-      double n[3] = { e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-        e1[0] * e2[1] - e1[1] * e2[0] };
-      const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      double n[3], nl = 0.0;
+      EntryNormal(surface, f, n, nl);
       if (!(nl > 0.0))
       {
         continue;
@@ -1042,6 +1062,42 @@ void BeamFieldOnSurface(const CollimatedEntrySurface& surface, const RayCaster* 
           continue;
         }
       }
+      entries[index][static_cast<size_t>(i)] = f;
+    }
+  }
+  return entries;
+}
+
+/**
+ * The optical half of the beam field (BeamFieldOnSurface): E_c of every
+ * beam at the query points and the optical path to the entry point, from the
+ * entry triangles of CastBeamEntries and the material under them (the
+ * surface's Eta and Extinction). Fills out.Fluence (the sum over the beams,
+ * in their order) and out.Beams, which must be sized and zeroed.
+ */
+void EvaluateBeamField(const CollimatedEntrySurface& surface,
+  const std::vector<LightSource>& beams, const std::vector<double>& points,
+  const std::vector<std::vector<int>>& entries, CollimatedSource& out)
+{
+  const int numPoints = static_cast<int>(points.size() / 3);
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < numPoints; ++i)
+  {
+    const double* x = &points[3 * static_cast<size_t>(i)];
+    for (size_t index = 0; index < beams.size(); ++index)
+    {
+      const int f = entries[index][static_cast<size_t>(i)];
+      if (f < 0)
+      {
+        continue;
+      }
+      const LightSource& beam = beams[index];
+      CollimatedSource::Beam& field = out.Beams[index];
+      double w[3];
+      TowardsLight(beam, w);
+      double n[3], nl = 0.0;
+      const double* a = EntryNormal(surface, f, n, nl);
+      const double cosIn = (n[0] * w[0] + n[1] * w[1] + n[2] * w[2]) / nl;
       const double eta = surface.Eta[static_cast<size_t>(f)];
       const double sin2 = (1.0 - cosIn * cosIn) / (eta * eta);
       const double cosT = std::sqrt(std::max(0.0, 1.0 - sin2));
@@ -1067,13 +1123,24 @@ void BeamFieldOnSurface(const CollimatedEntrySurface& surface, const RayCaster* 
   }
 }
 
-/// ComputeCollimatedSource: E_c of every beam at the mesh's points, cast
-/// against its own boundary (BeamFieldOnSurface).
-void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
-  const std::vector<LightSource>& beams, bool shadows, double diagonal, const RayCaster* caster,
+/// ComputeCollimatedBeamAtPoints: E_c of every beam at the query points
+/// (zero where the ray toward the light leaves through no entry face, or is
+/// shadowed) and the optical path to the entry point: CastBeamEntries, then
+/// EvaluateBeamField.
+void BeamFieldOnSurface(const CollimatedEntrySurface& surface, const RayCaster* caster,
+  const std::vector<LightSource>& beams, bool shadows, const std::vector<double>& points,
+  const std::vector<char>& onBoundary, const std::vector<double>& pointNormals,
   CollimatedSource& out)
 {
-  const int numPoints = mesh.GetNumberOfPoints();
+  EvaluateBeamField(surface, beams, points,
+    CastBeamEntries(surface, caster, beams, shadows, points, onBoundary, pointNormals), out);
+}
+
+/// The mesh's own boundary as the entry surface of its beams, with the
+/// material under each triangle.
+CollimatedEntrySurface MeshEntrySurface(
+  const TetMesh& mesh, const OpticalProperties& material, double diagonal)
+{
   const std::vector<int>& triangleTets = mesh.GetBoundaryTriangleTets();
   CollimatedEntrySurface surface;
   surface.Points = &mesh.GetPoints();
@@ -1091,17 +1158,75 @@ void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
         material.ReducedScatteringCoefficient[3 * tet + c];
     }
   }
+  return surface;
+}
+
+/// Per mesh point: 1 on the boundary.
+std::vector<char> BoundaryFlags(const TetMesh& mesh)
+{
+  const int numPoints = mesh.GetNumberOfPoints();
   std::vector<char> onBoundary(static_cast<size_t>(numPoints));
   for (int i = 0; i < numPoints; ++i)
   {
     onBoundary[static_cast<size_t>(i)] = mesh.IsBoundaryPoint(i) ? 1 : 0;
   }
-  BeamFieldOnSurface(
-    surface, caster, beams, shadows, mesh.GetPoints(), onBoundary, mesh.GetPointNormals(), out);
+  return onBoundary;
+}
+
+/// ComputeCollimatedSource: E_c of every beam at the mesh's points, cast
+/// against its own boundary (BeamFieldOnSurface).
+void BeamFieldAtPoints(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<LightSource>& beams, bool shadows, double diagonal, const RayCaster* caster,
+  CollimatedSource& out)
+{
+  BeamFieldOnSurface(MeshEntrySurface(mesh, material, diagonal), caster, beams, shadows,
+    mesh.GetPoints(), BoundaryFlags(mesh), mesh.GetPointNormals(), out);
+}
+
+/**
+ * One tet's share of the beams' loads (BeamLoads): load[3 k + c] the
+ * integral of mu_s' E_c phi_k over the tet (vertex k, channel c) and
+ * absorbed[c] that of mu_a E_c, summed over `beams` in their order. `logs`:
+ * per beam, ln E_c per point and channel (0 where E_c is 0; Fast), or null
+ * (Fast takes the same logarithms here; Reference takes none).
+ */
+void TetBeamLoads(const int* v, double volume, const std::vector<CollimatedSource::Beam>& beams,
+  const std::vector<std::vector<double>>* logs, bool fast, const double* muA, const double* muS,
+  double load[12], double absorbed[3])
+{
+  std::fill_n(load, 12, 0.0);
+  std::fill_n(absorbed, 3, 0.0);
+  for (size_t b = 0; b < beams.size(); ++b)
+  {
+    const std::vector<double>& fluence = beams[b].Fluence;
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      double e[4], logE[4];
+      for (int k = 0; k < 4; ++k)
+      {
+        const size_t at = 3 * static_cast<size_t>(v[k]) + c;
+        e[k] = fluence[at];
+        logE[k] = !fast ? 0.0 : logs ? (*logs)[b][at] : e[k] > 0.0 ? std::log(e[k]) : 0.0;
+      }
+      double moment[4], total = 0.0;
+      const bool lit = fast ? ContinuousWaveTetIntegrals(e, logE, volume, total, moment)
+                            : ReferenceTetIntegrals(e, volume, total, moment);
+      if (!lit)
+      {
+        continue;
+      }
+      for (int k = 0; k < 4; ++k)
+      {
+        load[3 * k + c] += muS[c] * moment[k];
+      }
+      absorbed[c] += muA[c] * total;
+    }
+  }
 }
 
 /// ComputeCollimatedSource, loads: integral of mu_s' E_c phi_a per tet and
-/// beam, then scattered to the points (and mu_a E_c, the absorbed power).
+/// beam (TetBeamLoads), then scattered to the points (and mu_a E_c, the
+/// absorbed power).
 void BeamLoads(const TetMesh& mesh, const OpticalProperties& material,
   CollimatedEvaluation evaluation, CollimatedSource& out)
 {
@@ -1131,37 +1256,9 @@ void BeamLoads(const TetMesh& mesh, const OpticalProperties& material,
 #pragma omp parallel for schedule(dynamic, 256)
   for (int t = 0; t < numTets; ++t)
   {
-    const int* v = mesh.GetTet(t);
-    const double volume = mesh.GetTetVolume(t);
-    std::fill_n(&tetLoad[12 * static_cast<size_t>(t)], 12, 0.0);
-    std::fill_n(&tetAbsorbed[3 * static_cast<size_t>(t)], 3, 0.0);
-    for (size_t b = 0; b < out.Beams.size(); ++b)
-    {
-      const std::vector<double>& fluence = out.Beams[b].Fluence;
-      const std::vector<double>& log = logs[b];
-      for (int c = 0; c < NumberOfChannels; ++c)
-      {
-        double e[4], logE[4];
-        for (int k = 0; k < 4; ++k)
-        {
-          e[k] = fluence[3 * static_cast<size_t>(v[k]) + c];
-          logE[k] = fast ? log[3 * static_cast<size_t>(v[k]) + c] : 0.0;
-        }
-        double moment[4], total = 0.0;
-        const bool lit = fast ? ContinuousWaveTetIntegrals(e, logE, volume, total, moment)
-                              : ReferenceTetIntegrals(e, volume, total, moment);
-        if (!lit)
-        {
-          continue;
-        }
-        const double sigma = muS[3 * static_cast<size_t>(t) + c];
-        for (int k = 0; k < 4; ++k)
-        {
-          tetLoad[12 * static_cast<size_t>(t) + 3 * k + c] += sigma * moment[k];
-        }
-        tetAbsorbed[3 * static_cast<size_t>(t) + c] += muA[3 * static_cast<size_t>(t) + c] * total;
-      }
-    }
+    TetBeamLoads(mesh.GetTet(t), mesh.GetTetVolume(t), out.Beams, &logs, fast,
+      &muA[3 * static_cast<size_t>(t)], &muS[3 * static_cast<size_t>(t)],
+      &tetLoad[12 * static_cast<size_t>(t)], &tetAbsorbed[3 * static_cast<size_t>(t)]);
   }
   for (int t = 0; t < numTets; ++t)
   {
@@ -1270,6 +1367,355 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
   // the points.
   BeamLoads(mesh, material, evaluation, out);
   return out;
+}
+
+//------------------------------------------------------------------------------
+struct CollimatedSourceCache::Internals
+{
+  bool Valid = false;
+  std::uint64_t Revision = 0;
+  int Points = 0, Tets = 0;
+  bool Shadows = false;
+  std::vector<LightSource> Beams;
+  double Diagonal = 0.0;
+  std::vector<std::vector<int>> Entries; ///< per beam and point: entry triangle or -1
+  std::vector<double> SurfaceEta, SurfaceExtinction;
+  std::vector<double> MuA, MuS;
+  CollimatedSource Source;
+
+  /// Whether `beams` run along the kept beams' directions (bit for bit).
+  bool SameDirections(const std::vector<LightSource>& beams) const
+  {
+    if (beams.size() != Beams.size())
+    {
+      return false;
+    }
+    for (size_t b = 0; b < beams.size(); ++b)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        if (beams[b].Direction[k] != Beams[b].Direction[k])
+        {
+          return false;
+        }
+      }
+    }
+    return true;
+  }
+
+  bool SamePowers(const std::vector<LightSource>& beams) const
+  {
+    for (size_t b = 0; b < beams.size(); ++b)
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        if (beams[b].Power[c] != Beams[b].Power[c])
+        {
+          return false;
+        }
+      }
+    }
+    return true;
+  }
+};
+
+namespace
+{
+/// A CollimatedSource of `numPoints` points and `numBeams` beams, zeroed.
+CollimatedSource SizedSource(int numPoints, size_t numBeams)
+{
+  CollimatedSource out;
+  out.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  out.Load.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  out.Beams.resize(numBeams);
+  for (CollimatedSource::Beam& beam : out.Beams)
+  {
+    beam.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+    beam.OpticalPath.assign(static_cast<size_t>(numPoints), 0.0);
+  }
+  return out;
+}
+
+/// CollimatedSourceCache: the tets whose mu_a or mu_s' differ from the kept
+/// ones or that have a point in `changedPoint`.
+std::vector<int> DirtyTets(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<double>& keptMuA, const std::vector<double>& keptMuS,
+  const std::vector<char>& changedPoint)
+{
+  const int numTets = mesh.GetNumberOfTets();
+  const std::vector<double>& muA = material.AbsorptionCoefficient;
+  const std::vector<double>& muS = material.ReducedScatteringCoefficient;
+  std::vector<int> dirty;
+  for (int t = 0; t < numTets; ++t)
+  {
+    const size_t at = 3 * static_cast<size_t>(t);
+    bool changed = muA[at] != keptMuA[at] || muA[at + 1] != keptMuA[at + 1] ||
+      muA[at + 2] != keptMuA[at + 2] || muS[at] != keptMuS[at] ||
+      muS[at + 1] != keptMuS[at + 1] || muS[at + 2] != keptMuS[at + 2];
+    const int* v = mesh.GetTet(t);
+    for (int k = 0; !changed && !changedPoint.empty() && k < 4; ++k)
+    {
+      changed = changedPoint[static_cast<size_t>(v[k])] != 0;
+    }
+    if (changed)
+    {
+      dirty.push_back(t);
+    }
+  }
+  return dirty;
+}
+} // namespace
+
+CollimatedSourceCache::CollimatedSourceCache()
+  : I_(new Internals)
+{
+}
+
+CollimatedSourceCache::~CollimatedSourceCache() = default;
+
+void CollimatedSourceCache::Clear()
+{
+  I_.reset(new Internals);
+}
+
+std::size_t CollimatedSourceCache::GetMemoryBytes() const
+{
+  const Internals& k = *I_;
+  std::size_t bytes = sizeof(double) *
+    (k.SurfaceEta.size() + k.SurfaceExtinction.size() + k.MuA.size() + k.MuS.size() +
+      k.Source.Fluence.size() + k.Source.Load.size());
+  for (const std::vector<int>& entries : k.Entries)
+  {
+    bytes += sizeof(int) * entries.size();
+  }
+  for (const CollimatedSource::Beam& beam : k.Source.Beams)
+  {
+    bytes += sizeof(double) * (beam.Fluence.size() + beam.OpticalPath.size());
+  }
+  return bytes;
+}
+
+CollimatedSource CollimatedSourceCache::Compute(const TetMesh& mesh,
+  const OpticalProperties& material, const std::vector<LightSource>& lights, bool shadows)
+{
+  Internals& k = *I_;
+  const int numPoints = mesh.GetNumberOfPoints();
+  const int numTets = mesh.GetNumberOfTets();
+  LastUpdate_ = "full";
+  TetsIntegrated_ = numTets;
+  material.Validate(numTets);
+  std::vector<LightSource> beams;
+  for (size_t l = 0; l < lights.size(); ++l)
+  {
+    ValidateLight(lights[l], l);
+    if (lights[l].Type == LightSource::Kind::Directional)
+    {
+      beams.push_back(lights[l]);
+    }
+  }
+  const std::uint64_t revision = mesh.GetGeometryRevision();
+  if (beams.empty() || mesh.GetNumberOfBoundaryTriangles() == 0 || revision == 0 ||
+    mesh.GetPointTetOffsets().size() != static_cast<size_t>(numPoints) + 1)
+  {
+    // Nothing to keep (no beam), or no way to know the geometry again.
+    Clear();
+    return ComputeCollimatedSource(mesh, material, lights, shadows);
+  }
+  const bool sameRays = k.Valid && k.Revision == revision && k.Points == numPoints &&
+    k.Tets == numTets && k.Shadows == shadows && k.SameDirections(beams);
+  CollimatedSource out;
+  if (!sameRays)
+  {
+    // Everything, as ComputeCollimatedSource (Fast) does it, the rays kept.
+    k.Valid = false;
+    out = SizedSource(numPoints, beams.size());
+    const std::shared_ptr<const BoundaryCasters> casters = BoundaryCastersOf(mesh, shadows);
+    EnteringPower(mesh, material.RefractiveIndex, beams, shadows, *casters, out);
+    CollimatedEntrySurface surface = MeshEntrySurface(mesh, material, casters->Diagonal);
+    k.Entries = CastBeamEntries(surface, nullptr, beams, shadows, mesh.GetPoints(),
+      BoundaryFlags(mesh), mesh.GetPointNormals());
+    EvaluateBeamField(surface, beams, mesh.GetPoints(), k.Entries, out);
+    BeamLoads(mesh, material, CollimatedEvaluation::Fast, out);
+    k.Revision = revision;
+    k.Points = numPoints;
+    k.Tets = numTets;
+    k.Shadows = shadows;
+    k.Diagonal = casters->Diagonal;
+    k.SurfaceEta.swap(surface.Eta);
+    k.SurfaceExtinction.swap(surface.Extinction);
+    k.MuA = material.AbsorptionCoefficient;
+    k.MuS = material.ReducedScatteringCoefficient;
+  }
+  else
+  {
+    // The kept rays: E_c again only if the material under the boundary or a
+    // power changed.
+    CollimatedEntrySurface surface = MeshEntrySurface(mesh, material, k.Diagonal);
+    const bool samePowers = k.SamePowers(beams);
+    const bool sameEta = surface.Eta == k.SurfaceEta;
+    std::vector<char> changedPoint;
+    if (samePowers && sameEta && surface.Extinction == k.SurfaceExtinction)
+    {
+      out.Fluence = k.Source.Fluence;
+      out.Beams = k.Source.Beams;
+      out.Load.assign(out.Fluence.size(), 0.0);
+    }
+    else
+    {
+      out = SizedSource(numPoints, beams.size());
+      EvaluateBeamField(surface, beams, mesh.GetPoints(), k.Entries, out);
+      changedPoint.assign(static_cast<size_t>(numPoints), 0);
+      for (size_t b = 0; b < beams.size(); ++b)
+      {
+        const std::vector<double>& now = out.Beams[b].Fluence;
+        const std::vector<double>& was = k.Source.Beams[b].Fluence;
+        for (size_t i = 0; i < now.size(); ++i)
+        {
+          if (now[i] != was[i])
+          {
+            changedPoint[i / 3] = 1;
+          }
+        }
+      }
+    }
+    if (samePowers && sameEta)
+    {
+      out.Entering = k.Source.Entering;
+    }
+    else
+    {
+      EnteringPower(mesh, material.RefractiveIndex, beams, shadows,
+        *BoundaryCastersOf(mesh, shadows), out);
+    }
+    const std::vector<int> dirty =
+      DirtyTets(mesh, material, k.MuA, k.MuS, changedPoint);
+    if (4 * dirty.size() > static_cast<size_t>(numTets))
+    {
+      std::fill(out.Load.begin(), out.Load.end(), 0.0);
+      BeamLoads(mesh, material, CollimatedEvaluation::Fast, out);
+      LastUpdate_ = "loads";
+    }
+    else
+    {
+      UpdateLoads(mesh, material, dirty, out);
+    }
+    for (const int t : dirty)
+    {
+      for (size_t at = 3 * static_cast<size_t>(t); at < 3 * static_cast<size_t>(t) + 3; ++at)
+      {
+        k.MuA[at] = material.AbsorptionCoefficient[at];
+        k.MuS[at] = material.ReducedScatteringCoefficient[at];
+      }
+    }
+    k.SurfaceEta.swap(surface.Eta);
+    k.SurfaceExtinction.swap(surface.Extinction);
+  }
+  k.Beams = beams;
+  k.Source = out;
+  k.Valid = true;
+  return out;
+}
+
+void CollimatedSourceCache::UpdateLoads(const TetMesh& mesh, const OpticalProperties& material,
+  const std::vector<int>& dirty, CollimatedSource& out)
+{
+  Internals& k = *I_;
+  out.Load = k.Source.Load;
+  out.Scattered = k.Source.Scattered;
+  out.Absorbed = k.Source.Absorbed;
+  LastUpdate_ = dirty.empty() ? "kept" : "loads";
+  TetsIntegrated_ = 0;
+  if (dirty.empty())
+  {
+    return;
+  }
+  const int numTets = mesh.GetNumberOfTets();
+  const std::vector<int>& offsets = mesh.GetPointTetOffsets();
+  const std::vector<int>& pointTets = mesh.GetPointTets();
+  // The ring: every tet around a dirty tet's vertices (their loads are
+  // summed again), numbered by position.
+  std::vector<int> position(static_cast<size_t>(numTets), -1);
+  std::vector<char> touched(static_cast<size_t>(mesh.GetNumberOfPoints()), 0);
+  std::vector<int> points, ring;
+  for (const int t : dirty)
+  {
+    const int* v = mesh.GetTet(t);
+    for (int j = 0; j < 4; ++j)
+    {
+      if (touched[static_cast<size_t>(v[j])])
+      {
+        continue;
+      }
+      touched[static_cast<size_t>(v[j])] = 1;
+      points.push_back(v[j]);
+      for (int p = offsets[v[j]]; p < offsets[v[j] + 1]; ++p)
+      {
+        const int u = pointTets[static_cast<size_t>(p)];
+        if (position[static_cast<size_t>(u)] < 0)
+        {
+          position[static_cast<size_t>(u)] = static_cast<int>(ring.size());
+          ring.push_back(u);
+        }
+      }
+    }
+  }
+  const std::vector<double>& muA = material.AbsorptionCoefficient;
+  const std::vector<double>& muS = material.ReducedScatteringCoefficient;
+  const int numRing = static_cast<int>(ring.size());
+  const int numDirty = static_cast<int>(dirty.size());
+  std::vector<double> load(12 * ring.size()), absorbed(3 * ring.size());
+  std::vector<double> oldLoad(12 * dirty.size()), oldAbsorbed(3 * dirty.size());
+#pragma omp parallel
+  {
+#pragma omp for schedule(dynamic, 64) nowait
+    for (int r = 0; r < numRing; ++r)
+    {
+      const int t = ring[static_cast<size_t>(r)];
+      const size_t at = 3 * static_cast<size_t>(t);
+      TetBeamLoads(mesh.GetTet(t), mesh.GetTetVolume(t), out.Beams, nullptr, true, &muA[at],
+        &muS[at], &load[12 * static_cast<size_t>(r)], &absorbed[3 * static_cast<size_t>(r)]);
+    }
+#pragma omp for schedule(dynamic, 64)
+    for (int d = 0; d < numDirty; ++d)
+    {
+      const int t = dirty[static_cast<size_t>(d)];
+      const size_t at = 3 * static_cast<size_t>(t);
+      TetBeamLoads(mesh.GetTet(t), mesh.GetTetVolume(t), k.Source.Beams, nullptr, true,
+        &k.MuA[at], &k.MuS[at], &oldLoad[12 * static_cast<size_t>(d)],
+        &oldAbsorbed[3 * static_cast<size_t>(d)]);
+    }
+  }
+  TetsIntegrated_ = numRing + numDirty;
+  // Each touched point's load summed again over its tets in ascending order,
+  // from 0, as BeamLoads sums it (GetPointTets lists them ascending).
+  for (const int i : points)
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      double sum = 0.0;
+      for (int p = offsets[i]; p < offsets[i + 1]; ++p)
+      {
+        const int u = pointTets[static_cast<size_t>(p)];
+        const int* v = mesh.GetTet(u);
+        const int corner = v[0] == i ? 0 : v[1] == i ? 1 : v[2] == i ? 2 : 3;
+        sum += load[12 * static_cast<size_t>(position[static_cast<size_t>(u)]) + 3 * corner + c];
+      }
+      out.Load[3 * static_cast<size_t>(i) + c] = sum;
+    }
+  }
+  // The power sums: the dirty tets' differences.
+  for (int d = 0; d < numDirty; ++d)
+  {
+    const size_t r = static_cast<size_t>(position[static_cast<size_t>(dirty[static_cast<size_t>(d)])]);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      for (int j = 0; j < 4; ++j)
+      {
+        out.Scattered[c] += load[12 * r + 3 * j + c] - oldLoad[12 * static_cast<size_t>(d) + 3 * j + c];
+      }
+      out.Absorbed[c] += absorbed[3 * r + c] - oldAbsorbed[3 * static_cast<size_t>(d) + c];
+    }
+  }
 }
 
 void ComputeCollimatedFrequencyLoad(const TetMesh& mesh, const OpticalProperties& material,

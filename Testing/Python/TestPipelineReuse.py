@@ -21,6 +21,16 @@ samples) -> Paint (a stroke outside the object) -> Solve Diffusion
    not re-run the solve's assembly ("incremental", 0 changed tets, set-up
    "kept"); a real stroke updates the touched rows ("incremental", "rows").
 4. Another uniform-light sample count recomputes the uniform term only.
+6. Every double point and cell array of each filter's output (Surface
+   Irradiance, Paint, Solve Diffusion, Outgoing Radiance) carries VTK's
+   range cache when the filter returns (vtkTranslucencyRanges.h: ParaView
+   reads it after every execution), and its cached ranges, finite ranges and
+   magnitude ranges equal VTK's own computation on a fresh copy bit for bit.
+5. Under the default collimated model (extended-moments for the directional
+   lights: the beam's volume source), a paint casts no ray: the solve's
+   source re-integrates the painted tets only ("loads"; a no-op paint:
+   "kept"), a turned light casts new rays ("full"), and each fluence equals
+   a new filter's solve of the same input (rtol 1e-7).
 
 Exits non-zero on failure (unittest).
 """
@@ -33,6 +43,8 @@ import numpy as np
 import translucency
 from TestPaint import marble_mesh
 from TestPipeline import Messages, array
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.vtkCommonCore import vtkAbstractArray, vtkDoubleArray
 from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
 
 
@@ -198,6 +210,105 @@ class PipelineReuseTest(unittest.TestCase):
         self.assertTrue(self.lights.GetUniformComputed())
         self.assert_irradiance_is_fresh()
 
+
+
+class DefaultModelPaintTest(unittest.TestCase):
+    """Item 5: the extended source kept across paints."""
+
+    def setUp(self):
+        self.grid = marble_mesh(3000)
+        self.lights = translucency.vtkSurfaceIrradiance()
+        self.lights.SetInputData(self.grid)
+        self.lights.AddDirectionalLight(0.3, -1.0, -0.5, 1.0)
+        self.lights.AddColouredDirectionalLight(-0.5, -0.2, -1.0, 0.8, 0.5, 0.2)
+        self.lights.SetUniformLightIrradiance(0.1)
+        self.lights.SetUniformLightSamples(8)
+        self.paint = translucency.vtkPaintScatteringCoefficients()
+        self.paint.SetInputConnection(self.lights.GetOutputPort())
+        self.paint.AddStrokePoint(40.0, 0.0, 0.0)  # outside the sphere of radius 5
+        self.paint.SetWidth(0.5)
+        self.paint.SetTargetAbsorptionCoefficient(0.02, 0.05, 0.1)
+        self.paint.SetTargetReducedScatteringCoefficient(1.5, 1.8, 2.0)
+        self.solve = new_solver()
+        self.solve.SetInputConnection(self.paint.GetOutputPort())
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetSolvedCollimatedModel(), 2)  # extended-moments
+        self.assertEqual(self.solve.GetLastCollimatedUpdate(), "full")
+
+    def assert_fluence_is_fresh(self):
+        copy = vtkUnstructuredGrid()
+        copy.ShallowCopy(self.paint.GetOutput())
+        solve = new_solver()
+        solve.SetInputData(copy)
+        run(solve)
+        self.assertEqual(solve.GetLastCollimatedUpdate(), "full")
+        np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
+                                   array(solve.GetOutput(), "Fluence"), rtol=1e-7)
+        np.testing.assert_array_equal(array(self.solve.GetOutput(), "CollimatedFluence"),
+                                      array(solve.GetOutput(), "CollimatedFluence"))
+
+    def test_paint_casts_no_ray(self):
+        self.paint.Modified()  # the same values painted
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetLastCollimatedUpdate(), "kept")
+        for x, y, z in ((0.0, 0.0, 0.0), (0.0, 5.0, 0.0)):  # inside; through the lit top
+            with self.subTest(stroke=(x, y, z)):
+                self.paint.RemoveAllStrokePoints()
+                self.paint.AddStrokePoint(x, y, z)
+                self.paint.SetWidth(1.0)
+                run(self.lights, self.paint, self.solve)
+                painted = self.paint.GetOutput().GetFieldData().GetArray("PaintedCellIds")
+                self.assertGreater(painted.GetNumberOfTuples(), 0)
+                self.assertEqual(self.solve.GetLastCollimatedUpdate(), "loads")
+                self.assert_fluence_is_fresh()
+        self.lights.RemoveAllDirectionalLights()
+        self.lights.AddDirectionalLight(*turned((0.3, -1.0, -0.5), 15.0), 1.0)
+        run(self.lights, self.paint, self.solve)
+        self.assertEqual(self.solve.GetLastCollimatedUpdate(), "full")
+        self.assert_fluence_is_fresh()
+
+
+class ArrayRangesTest(unittest.TestCase):
+    """Item 6: the range cache of the filters' outputs."""
+
+    def test_cached_ranges_equal_vtk(self):
+        grid = marble_mesh(3000)
+        lights = translucency.vtkSurfaceIrradiance()
+        lights.SetInputData(grid)
+        lights.AddDirectionalLight(0.3, -1.0, -0.5, 1.0)
+        lights.SetUniformLightSamples(8)
+        paint = translucency.vtkPaintScatteringCoefficients()
+        paint.SetInputConnection(lights.GetOutputPort())
+        paint.AddStrokePoint(0.0, 5.0, 0.0)
+        paint.SetWidth(1.0)
+        paint.SetTargetAbsorptionCoefficient(0.02, 0.05, 0.1)
+        paint.SetTargetReducedScatteringCoefficient(1.5, 1.8, 2.0)
+        solve = new_solver()
+        solve.SetInputConnection(paint.GetOutputPort())
+        radiance = translucency.vtkOutgoingRadiance()
+        radiance.SetInputConnection(solve.GetOutputPort())
+        run(lights, paint, solve, radiance)
+        checked = 0
+        for name, f in (("irradiance", lights), ("paint", paint), ("solve", solve),
+                        ("radiance", radiance)):
+            data = f.GetOutput()
+            for attributes in (data.GetPointData(), data.GetCellData()):
+                for a in range(attributes.GetNumberOfArrays()):
+                    array = attributes.GetArray(a)
+                    if not isinstance(array, vtkDoubleArray) or array.GetNumberOfTuples() == 0:
+                        continue
+                    label = "%s: %s" % (name, array.GetName())
+                    with self.subTest(array=label):
+                        self.assertTrue(array.GetInformation().Has(vtkAbstractArray.PER_COMPONENT()),
+                                        label + " has no cached range")
+                        fresh = numpy_to_vtk(vtk_to_numpy(array).copy(), deep=1)
+                        components = array.GetNumberOfComponents()
+                        for k in list(range(components)) + ([-1] if components > 1 else []):
+                            self.assertEqual(array.GetRange(k), fresh.GetRange(k), (label, k))
+                            self.assertEqual(array.GetFiniteRange(k), fresh.GetFiniteRange(k),
+                                             (label, k))
+                        checked += 1
+        self.assertGreater(checked, 10)
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

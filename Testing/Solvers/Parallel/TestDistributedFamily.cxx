@@ -166,13 +166,18 @@ TEST(DistributedFamily, OneRankEqualsTheSerialSolve)
     relit[k] *= 0.5 + 0.1 * static_cast<double>(k % 7);
   }
   const double tol = 1e-12;
+  // The default distributed linear solver (cg/boomeramg) and the
+  // distributed multigrid-agg (cg/aggregation, SchwarzAggregation.h).
+  for (const std::string linear : { "", "cg/aggregation" })
   for (const std::string name : { "divergence", "fem" })
   {
-    SCOPED_TRACE(name);
+    SCOPED_TRACE(name + " " + linear);
     DiffusionFrontEnd serial, distributed;
     serial.SetSolver(name);
     distributed.SetSolver(name);
     distributed.SetCommunicator(Self());
+    if (!linear.empty())
+      distributed.GetSolver().SetLinearSolver(linear);
     serial.GetSolver().SetRelTol(tol);
     distributed.GetSolver().SetRelTol(tol);
 
@@ -181,6 +186,8 @@ TEST(DistributedFamily, OneRankEqualsTheSerialSolve)
       const SolveResult a = SolveScene(serial, s, *q);
       const SolveResult b = SolveScene(distributed, s, *q);
       EXPECT_EQ(b.Report.Solver, name);
+      EXPECT_EQ(b.Report.LinearSolver,
+        (linear.empty() ? std::string("cg/boomeramg") : linear) + " (distributed)");
       EXPECT_EQ(b.Report.NumberOfUnknowns, s.Mesh->GetNumberOfPoints());
       for (int c = 0; c < NumberOfChannels; ++c)
       {
@@ -313,13 +320,18 @@ TEST(DistributedFamily, SharedAndOwnHierarchiesAgree)
   OpticalProperties painted = s.Material;
   for (std::size_t k = 0; k < painted.AbsorptionCoefficient.size(); k += 11)
     painted.AbsorptionCoefficient[k] *= 3.0;
+  // BoomerAMG (the default) and cg/aggregation (whose sharers share the
+  // block aggregation, each with its own values).
+  for (const std::string linear : { "", "cg/aggregation" })
   for (const std::string name : { "divergence", "fem" })
   {
-    SCOPED_TRACE(name);
+    SCOPED_TRACE(name + " " + linear);
     std::vector<double> fluence[2][3];
     for (const bool shared : { true, false })
     {
       DistributedVertexSolver solver(name);
+      if (!linear.empty())
+        solver.SetLinearSolver(linear);
       solver.SetSharedHierarchy(shared);
       solver.SetRelTol(1e-12);
       SolverReport report;
@@ -366,6 +378,8 @@ TEST(DistributedFamily, SharedAndOwnHierarchiesAgree)
     // that the smoother would diverge on.
     const Scene random = MakeScene();
     DistributedVertexSolver solver(name);
+    if (!linear.empty())
+      solver.SetLinearSolver(linear);
     solver.SetSharedHierarchy(true);
     solver.SetRelTol(1e-12);
     DiffusionProblem problem;
@@ -422,15 +436,24 @@ TEST(DistributedFamily, APaintIteratesTheWarmStartAtLeastOnce)
 TEST(DistributedFamily, NeverANonConvergedResult)
 {
   const Scene s = MakeScene();
+  for (const std::string linear : { "", "cg/aggregation" })
+  {
+    SCOPED_TRACE(linear);
+    DiffusionFrontEnd front;
+    front.SetCommunicator(Self());
+    if (!linear.empty())
+      front.GetSolver().SetLinearSolver(linear);
+    front.GetSolver().SetRelTol(1e-12);
+    front.GetSolver().SetMaxIter(1);
+    const std::string message = ErrorMessage([&] { SolveScene(front, s, s.Irradiance); });
+    EXPECT_TRUE(Contains(message,
+      "the distributed divergence solve did not converge, also after a full set-up"))
+      << message;
+    EXPECT_TRUE(Contains(message, "MaxIter 1")) << message;
+  }
   DiffusionFrontEnd front;
   front.SetCommunicator(Self());
   front.GetSolver().SetRelTol(1e-12);
-  front.GetSolver().SetMaxIter(1);
-  const std::string message = ErrorMessage([&] { SolveScene(front, s, s.Irradiance); });
-  EXPECT_TRUE(Contains(message,
-    "the distributed divergence solve did not converge, also after a full set-up"))
-    << message;
-  EXPECT_TRUE(Contains(message, "MaxIter 1")) << message;
   // The problem's point keys are required.
   front.GetSolver().SetMaxIter(2000);
   SolveResult result;
@@ -448,7 +471,8 @@ TEST(DistributedFamily, BoomerAMGCGIsARegistryComposition)
   EXPECT_EQ(solver->GetName(), "cg/boomeramg");
   EXPECT_EQ(CreateDistributedLinearSolver("HYPRE-AMG", Self())->GetName(), "cg/boomeramg");
   EXPECT_EQ(ErrorMessage([] { CreateDistributedLinearSolver("cg/jacobi", Self()); }),
-    "linear solver 'cg/jacobi' has no distributed variant (those with one: cg/boomeramg)");
+    "linear solver 'cg/jacobi' has no distributed variant (those with one: cg/aggregation, "
+    "cg/boomeramg)");
   EXPECT_TRUE(Contains(ErrorMessage([] { CreateDistributedLinearSolver("gmres", Self()); }),
     "linear solver 'gmres' has no distributed variant"));
   // An option it reads is checked.

@@ -259,4 +259,137 @@ TEST(CollimatedBeam, FastEqualsTheReferenceOnAHeterogeneousMaterial)
     "bunny, marble + ketchup + clear, from above");
 }
 
+/// CollimatedSourceCache against a fresh ComputeCollimatedSource of the same
+/// arguments: the beam field and the loads equal bit for bit, the power sums
+/// to rounding, and what the cache says it did.
+void ExpectCachedEqualsFresh(CollimatedSourceCache& cache, const TetMesh& mesh,
+  const OpticalProperties& material, const std::vector<LightSource>& lights,
+  const std::string& update, const std::string& what)
+{
+  const CollimatedSource cached = cache.Compute(mesh, material, lights, true);
+  const CollimatedSource fresh = ComputeCollimatedSource(mesh, material, lights, true);
+  EXPECT_EQ(cache.GetLastUpdate(), update) << what;
+  std::cout << what << ": " << cache.GetLastUpdate() << ", " << cache.GetTetsIntegrated() << " of "
+            << mesh.GetNumberOfTets() << " tets integrated\n";
+  EXPECT_EQ(cached.Fluence, fresh.Fluence) << what;
+  ASSERT_EQ(cached.Beams.size(), fresh.Beams.size()) << what;
+  for (size_t b = 0; b < fresh.Beams.size(); ++b)
+  {
+    EXPECT_EQ(cached.Beams[b].Fluence, fresh.Beams[b].Fluence) << what << ", beam " << b;
+    EXPECT_EQ(cached.Beams[b].OpticalPath, fresh.Beams[b].OpticalPath) << what << ", beam " << b;
+  }
+  EXPECT_EQ(cached.Load, fresh.Load) << what;
+  for (int c = 0; c < 3; ++c)
+  {
+    EXPECT_EQ(cached.Entering[c], fresh.Entering[c]) << what << ", channel " << c;
+    EXPECT_NEAR(cached.Scattered[c] / fresh.Scattered[c], 1.0, 1e-13) << what << ", channel " << c;
+    EXPECT_NEAR(cached.Absorbed[c] / fresh.Absorbed[c], 1.0, 1e-13) << what << ", channel " << c;
+  }
+}
+
+/// Tets with a vertex within `radius` of `centre`; `boundary`: whether one
+/// of them has a boundary triangle.
+std::vector<int> TetsNear(const TetMesh& mesh, const double centre[3], double radius, bool& boundary)
+{
+  std::vector<char> underTriangle(static_cast<size_t>(mesh.GetNumberOfTets()), 0);
+  for (const int t : mesh.GetBoundaryTriangleTets())
+  {
+    underTriangle[static_cast<size_t>(t)] = 1;
+  }
+  std::vector<int> tets;
+  boundary = false;
+  for (int t = 0; t < mesh.GetNumberOfTets(); ++t)
+  {
+    const int* v = mesh.GetTet(t);
+    for (int k = 0; k < 4; ++k)
+    {
+      const double* x = mesh.GetPoint(v[k]);
+      const double d2 = (x[0] - centre[0]) * (x[0] - centre[0]) +
+        (x[1] - centre[1]) * (x[1] - centre[1]) + (x[2] - centre[2]) * (x[2] - centre[2]);
+      if (d2 < radius * radius)
+      {
+        tets.push_back(t);
+        boundary = boundary || underTriangle[static_cast<size_t>(t)] != 0;
+        break;
+      }
+    }
+  }
+  return tets;
+}
+
+TEST(CollimatedSourceCache, PaintsRelightsAndPowersEqualAFreshSource)
+{
+  const TetMesh mesh = Bunny("pq1.4a1.5Q");
+  OpticalProperties material = Preset(mesh, "marble");
+  const MaterialPreset& ketchup = FindMaterialPreset("ketchup");
+  std::vector<LightSource> lights = { Directional(0.0, -1.0, -1.0, 1.0),
+    Directional(0.7, -0.2, 0.4, 2.5) };
+  CollimatedSourceCache cache;
+  ExpectCachedEqualsFresh(cache, mesh, material, lights, "full", "first call");
+  const long long all = cache.GetTetsIntegrated();
+  EXPECT_EQ(all, mesh.GetNumberOfTets());
+  ExpectCachedEqualsFresh(cache, mesh, material, lights, "kept", "the same arguments");
+  EXPECT_EQ(cache.GetTetsIntegrated(), 0);
+
+  // An interior stroke (no tet under the boundary): E_c unchanged, the
+  // stroke's tets and their neighbours integrated again.
+  bool boundary = true;
+  const double inside[3] = { -1.0, 10.0, 0.0 };
+  const std::vector<int> interior = TetsNear(mesh, inside, 3.0, boundary);
+  ASSERT_FALSE(boundary);
+  ASSERT_GT(interior.size(), 20u);
+  for (const int t : interior)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      material.AbsorptionCoefficient[3 * static_cast<size_t>(t) + c] = ketchup.Absorption[c];
+      material.ReducedScatteringCoefficient[3 * static_cast<size_t>(t) + c] =
+        ketchup.ReducedScattering[c];
+    }
+  }
+  ExpectCachedEqualsFresh(cache, mesh, material, lights, "loads", "interior stroke");
+  EXPECT_GE(cache.GetTetsIntegrated(), static_cast<long long>(interior.size()));
+  EXPECT_LT(cache.GetTetsIntegrated(), all / 10);
+
+  // A stroke through the lit surface: E_c changes behind it along the beams
+  // (the entry material), so more tets, but not all.
+  const double* top = nullptr;
+  for (const int p : mesh.GetBoundaryPoints())
+  {
+    if (!top || mesh.GetPoint(p)[1] + mesh.GetPoint(p)[2] > top[1] + top[2])
+    {
+      top = mesh.GetPoint(p);
+    }
+  }
+  const std::vector<int> surface = TetsNear(mesh, top, 2.5, boundary);
+  ASSERT_TRUE(boundary);
+  for (const int t : surface)
+  {
+    material.ReducedScatteringCoefficient[3 * static_cast<size_t>(t) + 1] *= 3.0;
+    material.RefractiveIndex[static_cast<size_t>(t)] = 1.45;
+  }
+  ExpectCachedEqualsFresh(cache, mesh, material, lights, "loads", "surface stroke, new index");
+  EXPECT_LT(cache.GetTetsIntegrated(), all / 2);
+
+  // A stroke undone (the material before it): equal again.
+  for (const int t : surface)
+  {
+    material.ReducedScatteringCoefficient[3 * static_cast<size_t>(t) + 1] /= 3.0;
+    material.RefractiveIndex[static_cast<size_t>(t)] = Preset(mesh, "marble").RefractiveIndex[0];
+  }
+  ExpectCachedEqualsFresh(cache, mesh, material, lights, "loads", "surface stroke undone");
+
+  // A brighter light: every lit point's E_c changes (the loads integrated
+  // anew, past a quarter of the tets); a turned light casts new rays.
+  lights[1].Power = { 2.0, 3.0, 4.0 };
+  ExpectCachedEqualsFresh(cache, mesh, material, lights, "loads", "brighter light");
+  EXPECT_EQ(cache.GetTetsIntegrated(), all);
+  lights[0].Direction = { 0.0, -1.0, -0.9 };
+  ExpectCachedEqualsFresh(cache, mesh, material, lights, "full", "turned light");
+  EXPECT_GT(cache.GetMemoryBytes(), 0u);
+  cache.Clear();
+  EXPECT_EQ(cache.GetMemoryBytes(), 0u);
+  ExpectCachedEqualsFresh(cache, mesh, material, lights, "full", "after Clear");
+}
+
 } // namespace

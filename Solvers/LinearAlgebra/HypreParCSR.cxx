@@ -1,0 +1,182 @@
+#include "HypreParCSR.h"
+
+#include "Error.h"
+
+#include <_hypre_parcsr_ls.h>
+
+#include <limits>
+#include <sstream>
+
+namespace translucency
+{
+namespace hypre
+{
+
+void Check(HYPRE_Int code, const std::string& who, const char* what)
+{
+  if (code != 0)
+  {
+    char message[256] = { 0 };
+    HYPRE_DescribeError(code, message);
+    HYPRE_ClearAllErrors();
+    std::ostringstream os;
+    os << who << ": " << what << " failed (hypre error " << code << ": " << message << ")";
+    throw Error(os.str());
+  }
+}
+
+HYPRE_IJMatrix BuildMatrix(MPI_Comm comm, int rowBegin, int rowEnd, const int* rowOffsets,
+  const int* columns, const double* values, std::vector<HYPRE_BigInt>& rowIds,
+  const std::string& who)
+{
+  const int rows = rowEnd - rowBegin;
+  HYPRE_IJMatrix a = nullptr;
+  // hypre's ranges are inclusive; an empty local block is [begin, begin - 1].
+  Check(HYPRE_IJMatrixCreate(comm, rowBegin, rowEnd - 1, rowBegin, rowEnd - 1, &a), who,
+    "matrix creation");
+  try
+  {
+    Check(HYPRE_IJMatrixSetObjectType(a, HYPRE_PARCSR), who, "matrix type");
+    std::vector<HYPRE_Int> diag(rows, 0), offd(rows, 0), sizes(rows);
+    rowIds.resize(rows);
+    for (int i = 0; i < rows; ++i)
+    {
+      rowIds[i] = rowBegin + i;
+      sizes[i] = rowOffsets[i + 1] - rowOffsets[i];
+      for (int k = rowOffsets[i]; k < rowOffsets[i + 1]; ++k)
+      {
+        (columns[k] >= rowBegin && columns[k] < rowEnd ? diag[i] : offd[i])++;
+      }
+    }
+    Check(HYPRE_IJMatrixSetDiagOffdSizes(a, diag.data(), offd.data()), who, "matrix sizes");
+    Check(HYPRE_IJMatrixInitialize(a), who, "matrix initialisation");
+    const std::size_t nnz = rows > 0 ? static_cast<std::size_t>(rowOffsets[rows]) : 0;
+    if (rows > 0)
+    {
+      std::vector<HYPRE_BigInt> cols(columns, columns + nnz);
+      Check(HYPRE_IJMatrixSetValues(a, rows, sizes.data(), rowIds.data(), cols.data(), values),
+        who, "setting the matrix values");
+    }
+    Check(HYPRE_IJMatrixAssemble(a), who, "matrix assembly");
+  }
+  catch (...)
+  {
+    HYPRE_IJMatrixDestroy(a);
+    throw;
+  }
+  return a;
+}
+
+std::uint64_t PatternFingerprint(int rows, const int* rowOffsets, const int* columns)
+{
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](int v) { h = (h ^ static_cast<std::uint32_t>(v)) * 1099511628211ull; };
+  for (int r = 0; r <= rows; ++r)
+    mix(rowOffsets[r]);
+  for (int k = 0; k < rowOffsets[rows]; ++k)
+    mix(columns[k]);
+  return h;
+}
+
+void ScatterValues(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
+  const int* columns, const double* values, std::vector<int>& places, std::uint64_t& pattern,
+  const std::string& who)
+{
+  const int rows = rowEnd - rowBegin;
+  hypre_ParCSRMatrix* a = nullptr;
+  HYPRE_IJMatrixGetObject(matrix, reinterpret_cast<void**>(&a));
+  hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(a);
+  hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(a);
+  const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
+  // A changed pattern finds its places again (or is refused), without a copy.
+  const std::uint64_t fingerprint = PatternFingerprint(rows, rowOffsets, columns);
+  if (places.size() != nnz || fingerprint != pattern)
+  {
+    places.clear();
+    const HYPRE_Int* di = hypre_CSRMatrixI(diag);
+    const HYPRE_Int* dj = hypre_CSRMatrixJ(diag);
+    const HYPRE_Int* oi = hypre_CSRMatrixI(offd);
+    const HYPRE_Int* oj = hypre_CSRMatrixJ(offd);
+    const HYPRE_BigInt* colMap = hypre_ParCSRMatrixColMapOffd(a);
+    const HYPRE_BigInt firstColumn = hypre_ParCSRMatrixFirstColDiag(a);
+    const HYPRE_BigInt lastColumn = firstColumn + hypre_CSRMatrixNumCols(diag) - 1;
+    std::vector<int> found(nnz);
+    for (int r = 0; r < rows; ++r)
+    {
+      for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
+      {
+        const HYPRE_BigInt column = columns[k];
+        int place = std::numeric_limits<int>::min();
+        if (column >= firstColumn && column <= lastColumn)
+        {
+          for (HYPRE_Int q = di[r]; q < di[r + 1]; ++q)
+            if (dj[q] == column - firstColumn)
+              place = q;
+        }
+        else if (oi && colMap)
+        {
+          for (HYPRE_Int q = oi[r]; q < oi[r + 1]; ++q)
+            if (colMap[oj[q]] == column)
+              place = -1 - static_cast<int>(q);
+        }
+        if (place == std::numeric_limits<int>::min())
+        {
+          throw Error(who + ": UpdateValues(): entry (" + std::to_string(rowBegin + r) + ", " +
+            std::to_string(column) + ") is not in the matrix of the last Setup() (a changed pattern)");
+        }
+        found[k] = place;
+      }
+    }
+    places = std::move(found);
+    pattern = fingerprint;
+  }
+  HYPRE_Complex* diagData = hypre_CSRMatrixData(diag);
+  HYPRE_Complex* offdData = hypre_CSRMatrixData(offd);
+  for (std::size_t k = 0; k < nnz; ++k)
+  {
+    const int place = places[k];
+    if (place >= 0)
+      diagData[place] = values[k];
+    else
+      offdData[-1 - place] = values[k];
+  }
+}
+
+int SolvePCG(HYPRE_Solver pcg, HYPRE_IJMatrix matrix, HYPRE_IJVector bVector,
+  HYPRE_IJVector xVector, const std::vector<HYPRE_BigInt>& rowIds, const double* bLocal,
+  double* xLocal, bool guess, double relTol, int maxIter, double& relRes, const std::string& who)
+{
+  const int rows = static_cast<int>(rowIds.size());
+  std::vector<double> zero;
+  if (!guess)
+    zero.assign(rows, 0.0);
+  Check(HYPRE_IJVectorSetValues(bVector, rows, rowIds.data(), bLocal), who,
+    "setting the right-hand side");
+  Check(HYPRE_IJVectorSetValues(xVector, rows, rowIds.data(), guess ? xLocal : zero.data()), who,
+    "setting the initial guess");
+  HYPRE_ParCSRMatrix a;
+  HYPRE_ParVector b, x;
+  HYPRE_IJMatrixGetObject(matrix, reinterpret_cast<void**>(&a));
+  HYPRE_IJVectorGetObject(bVector, reinterpret_cast<void**>(&b));
+  HYPRE_IJVectorGetObject(xVector, reinterpret_cast<void**>(&x));
+  HYPRE_PCGSetTol(pcg, relTol);
+  HYPRE_PCGSetMaxIter(pcg, maxIter);
+  const HYPRE_Int code = HYPRE_ParCSRPCGSolve(pcg, a, b, x);
+  // Not converging within maxIter is reported as an error code by hypre: it
+  // is not an error here (the caller reads the residual).
+  if (code != 0 && !HYPRE_CheckError(code, HYPRE_ERROR_CONV))
+  {
+    Check(code, who, "PCG solve");
+  }
+  HYPRE_ClearAllErrors();
+  HYPRE_Int iterations = 0;
+  HYPRE_Real residual = 0.0;
+  HYPRE_ParCSRPCGGetNumIterations(pcg, &iterations);
+  HYPRE_ParCSRPCGGetFinalRelativeResidualNorm(pcg, &residual);
+  Check(HYPRE_IJVectorGetValues(xVector, rows, rowIds.data(), xLocal), who, "reading the solution");
+  relRes = residual;
+  return iterations;
+}
+
+} // namespace hypre
+} // namespace translucency

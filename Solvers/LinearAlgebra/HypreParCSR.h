@@ -1,0 +1,67 @@
+/**
+ * @file HypreParCSR.h
+ * @brief What the two distributed linear solvers on hypre's ParCSR matrices
+ * share (HypreBoomerAMGPCG, "cg/boomeramg"; SchwarzAggregationPCG,
+ * "cg/aggregation"): one rank's whole rows handed to hypre once, new values
+ * scattered into the assembled matrix, and hypre's PCG run on them. Internal
+ * to the LinearAlgebra layer (hypre's headers stay out of HypreSolver.h).
+ */
+#pragma once
+
+#include <HYPRE.h>
+#include <HYPRE_parcsr_ls.h>
+
+#include <mpi.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace translucency
+{
+namespace hypre
+{
+
+/// Throws translucency::Error "<who>: <what> failed (hypre error <code>:
+/// <hypre's description>)" if `code` is not 0 (and clears hypre's errors).
+void Check(HYPRE_Int code, const std::string& who, const char* what);
+
+/**
+ * Collective: the IJ matrix (ParCSR) of this rank's rows [rowBegin, rowEnd)
+ * as CSR (rowOffsets from 0, global columns, every row whole), with exact
+ * diagonal/off-diagonal sizes and one HYPRE_IJMatrixSetValues, assembled.
+ * `rows` gets the global row ids. The caller destroys the matrix.
+ */
+HYPRE_IJMatrix BuildMatrix(MPI_Comm comm, int rowBegin, int rowEnd, const int* rowOffsets,
+  const int* columns, const double* values, std::vector<HYPRE_BigInt>& rows,
+  const std::string& who);
+
+/**
+ * New values of the same rows written straight into the assembled ParCSR
+ * blocks of `matrix` (rows [rowBegin, rowEnd)): each entry's place (>= 0 in
+ * the diagonal block, -1 - k in the off-diagonal one) found once per
+ * pattern (`places`, and `pattern` the fingerprint of the pattern they are
+ * of), then a scatter. Throws translucency::Error if an entry is not in the
+ * matrix (a changed pattern).
+ */
+void ScatterValues(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
+  const int* columns, const double* values, std::vector<int>& places, std::uint64_t& pattern,
+  const std::string& who);
+
+/// FNV-1a fingerprint of a CSR pattern (rows + 1 offsets, then the columns).
+std::uint64_t PatternFingerprint(int rows, const int* rowOffsets, const int* columns);
+
+/**
+ * Collective: hypre's ParCSR PCG `pcg` (set up on `matrix`, `bVector`,
+ * `xVector`) from x (`guess`) or zero until ||b - A x|| <= relTol ||b||
+ * or maxIter iterations; b and x are this rank's values (rows.size()).
+ * Returns the iterations; relRes the final relative residual. Not
+ * converging is not an error (the caller reads relRes); any other hypre
+ * error throws.
+ */
+int SolvePCG(HYPRE_Solver pcg, HYPRE_IJMatrix matrix, HYPRE_IJVector bVector,
+  HYPRE_IJVector xVector, const std::vector<HYPRE_BigInt>& rows, const double* b, double* x,
+  bool guess, double relTol, int maxIter, double& relRes, const std::string& who);
+
+} // namespace hypre
+} // namespace translucency
