@@ -7,6 +7,7 @@
 
 #include <vtkAlgorithm.h>
 #include <vtkDataObject.h>
+#include <vtkExecutive.h>
 #include <vtkInformationVector.h>
 #include <vtkObject.h>
 
@@ -118,10 +119,11 @@ int vtkTranslucencyDispatch::Run(vtkAlgorithm* self, vtkInformation* request,
   vtkInformationVector** inputVector, vtkInformationVector* outputVector, const Planner& planner,
   const Paths& paths, Record record)
 {
-  // The new output arrays' ranges, once, in parallel (vtkTranslucencyRanges.h:
-  // what ParaView asks for after every execution).
+  // Under ParaView's executive, the new output arrays' ranges, once, in
+  // parallel (vtkTranslucencyRanges.h: what ParaView asks for after every
+  // execution; elsewhere nothing asks, and nothing changes).
   const int result = RunPath(self, request, inputVector, outputVector, planner, paths, record);
-  if (result == 1)
+  if (result == 1 && vtkTranslucency::IsParaViewExecutive(self->GetExecutive()))
   {
     vtkTranslucency::CacheOutputRanges(outputVector);
   }

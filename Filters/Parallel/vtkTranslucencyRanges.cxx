@@ -3,6 +3,7 @@
 #include <vtkCellData.h>
 #include <vtkDataSet.h>
 #include <vtkDoubleArray.h>
+#include <vtkExecutive.h>
 #include <vtkInformation.h>
 #include <vtkInformationVector.h>
 #include <vtkNew.h>
@@ -136,4 +137,9 @@ int vtkTranslucency::CacheOutputRanges(vtkInformationVector* outputVector)
     cached += vtkTranslucency::CacheDataSetRanges(vtkDataObject::GetData(outputVector, port));
   }
   return cached;
+}
+
+bool vtkTranslucency::IsParaViewExecutive(vtkExecutive* executive)
+{
+  return executive && executive->IsA("vtkPVCompositeDataPipeline");
 }

@@ -20,6 +20,13 @@
  * vtkDataArray::L2_NORM_RANGE() and L2_NORM_FINITE_RANGE()); VTK keeps
  * them while the array is not modified after (its MTime check).
  *
+ * When: only under ParaView's executive (vtkPVCompositeDataPipeline, by
+ * class name: the filters do not link ParaView), where every execution is
+ * followed by that gather. A plain VTK pipeline (Python VTK, the command
+ * line) is left as it was: nothing there asks for every range, and an XML
+ * writer stores the cached magnitude ranges in the file (as it does after
+ * any GetRange() call).
+ *
  * Which arrays: the point and cell arrays of type double of each output data
  * set that have no valid cached component ranges yet (an array passed
  * through keeps the one computed upstream; one modified since its ranges
@@ -35,6 +42,7 @@
 
 class vtkDataArray;
 class vtkDataObject;
+class vtkExecutive;
 class vtkInformationVector;
 
 namespace vtkTranslucency
@@ -49,6 +57,9 @@ int CacheDataSetRanges(vtkDataObject* data);
 
 /// CacheDataSetRanges() on every output of a filter.
 int CacheOutputRanges(vtkInformationVector* outputVector);
+
+/// Whether `executive` is ParaView's (vtkPVCompositeDataPipeline or a subclass).
+bool IsParaViewExecutive(vtkExecutive* executive);
 }
 
 #endif

@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <exception>
 #include <functional>
 #include <map>
 #include <sstream>
@@ -842,7 +843,10 @@ public:
   }
 
   /// Solves A x = rhs from x (sized as rhs); false if `progress` aborted.
-  bool Solve(const std::vector<double>& rhs, std::vector<double>& x, SolverReport& report)
+  /// `zeroStart`: x is 0 (a cold start), so the first residual is rhs
+  /// without a product.
+  bool Solve(const std::vector<double>& rhs, std::vector<double>& x, SolverReport& report,
+    bool zeroStart = false)
   {
     const std::size_t size = rhs.size();
     for (std::vector<double>* v : { &R_, &P_, &V_, &PHat_, &S_, &SHat_, &T_ })
@@ -861,7 +865,15 @@ public:
         }
       }
     }
-    TrueResidual(rhs, x);
+    if (zeroStart)
+    {
+      R_ = rhs;
+      Rr_ = Bb_;
+    }
+    else
+    {
+      TrueResidual(rhs, x);
+    }
     for (int restart = 0; restart < 5; ++restart)
     {
       for (int c = 0; c < 3; ++c)
@@ -1556,7 +1568,37 @@ bool Sp3Solver::SolveBlocks(
     // The block diagonal of the real part, on the real and imaginary parts alike.
     for (std::size_t offset = 0; offset < size; offset += block)
     {
-      if (b.Multigrid)
+      if (b.Multigrid && numThreads == 2)
+      {
+        // Two threads: one cycle each, concurrently, in place of both
+        // threads meeting at every loop of each cycle in turn. Each
+        // cycle's loops then run on its one thread; multigrid-agg's
+        // results do not depend on the number of threads, so the bits are
+        // those of the cycles one after the other.
+        std::exception_ptr error[2];
+        AggregationMultigridSolver* cycles[2] = { b.Cycle1.get(), b.Cycle2.get() };
+#pragma omp parallel for schedule(static, 1) num_threads(2)
+        for (int k = 0; k < 2; ++k)
+        {
+          try
+          {
+            omp_set_num_threads(1);
+            cycles[k]->ApplyPreconditioner(r.data() + offset + k * half, z.data() + offset + k * half);
+          }
+          catch (...)
+          {
+            error[k] = std::current_exception();
+          }
+        }
+        for (const std::exception_ptr& e : error)
+        {
+          if (e)
+          {
+            std::rethrow_exception(e);
+          }
+        }
+      }
+      else if (b.Multigrid)
       {
         b.Cycle1->ApplyPreconditioner(r.data() + offset, z.data() + offset);
         b.Cycle2->ApplyPreconditioner(r.data() + offset + half, z.data() + offset + half);
@@ -1586,7 +1628,8 @@ bool Sp3Solver::SolveBlocks(
       }
     }
   }
-  if (x.size() != size)
+  const bool zeroStart = x.size() != size;
+  if (zeroStart)
   {
     x.assign(size, 0.0);
   }
@@ -1600,7 +1643,7 @@ bool Sp3Solver::SolveBlocks(
     return solver.Solve(rhs, x, report);
   }
   LockstepBiCgStab solver(product, precondition, RelTol_, MaxIter_, numThreads, progress);
-  return solver.Solve(rhs, x, report);
+  return solver.Solve(rhs, x, report, zeroStart);
 }
 
 void Sp3Solver::ComputeExitance(const DiffusionProblem& problem,

@@ -21,11 +21,14 @@ samples) -> Paint (a stroke outside the object) -> Solve Diffusion
    not re-run the solve's assembly ("incremental", 0 changed tets, set-up
    "kept"); a real stroke updates the touched rows ("incremental", "rows").
 4. Another uniform-light sample count recomputes the uniform term only.
-6. Every double point and cell array of each filter's output (Surface
-   Irradiance, Paint, Solve Diffusion, Outgoing Radiance) carries VTK's
-   range cache when the filter returns (vtkTranslucencyRanges.h: ParaView
-   reads it after every execution), and its cached ranges, finite ranges and
-   magnitude ranges equal VTK's own computation on a fresh copy bit for bit.
+6. Under ParaView's executive (vtkPVCompositeDataPipeline), every double
+   point and cell array of each filter's output (Surface Irradiance, Paint,
+   Solve Diffusion, Outgoing Radiance) carries VTK's range cache when the
+   filter returns (vtkTranslucencyRanges.h: ParaView reads it after every
+   execution), and its cached ranges, finite ranges and magnitude ranges
+   equal VTK's own computation on a fresh copy bit for bit; under VTK's own
+   executive no range is cached (the output, and a file written from it,
+   as before).
 5. Under the default collimated model (extended-moments for the directional
    lights: the beam's volume source), a paint casts no ray: the solve's
    source re-integrates the painted tets only ("loads"; a no-op paint:
@@ -46,6 +49,8 @@ from TestPipeline import Messages, array
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkAbstractArray, vtkDoubleArray
 from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
+from vtkmodules.vtkCommonExecutionModel import vtkCompositeDataPipeline
+from paraview.modules.vtkPVVTKExtensionsCore import vtkPVCompositeDataPipeline
 
 
 def run(*algorithms):
@@ -271,26 +276,38 @@ class DefaultModelPaintTest(unittest.TestCase):
 class ArrayRangesTest(unittest.TestCase):
     """Item 6: the range cache of the filters' outputs."""
 
-    def test_cached_ranges_equal_vtk(self):
+    def chain(self, executive):
         grid = marble_mesh(3000)
         lights = translucency.vtkSurfaceIrradiance()
+        paint = translucency.vtkPaintScatteringCoefficients()
+        solve = new_solver()
+        radiance = translucency.vtkOutgoingRadiance()
+        filters = (("irradiance", lights), ("paint", paint), ("solve", solve),
+                   ("radiance", radiance))
+        for _, f in filters:
+            f.SetExecutive(executive())  # before the connections, which it holds
         lights.SetInputData(grid)
         lights.AddDirectionalLight(0.3, -1.0, -0.5, 1.0)
         lights.SetUniformLightSamples(8)
-        paint = translucency.vtkPaintScatteringCoefficients()
         paint.SetInputConnection(lights.GetOutputPort())
         paint.AddStrokePoint(0.0, 5.0, 0.0)
         paint.SetWidth(1.0)
         paint.SetTargetAbsorptionCoefficient(0.02, 0.05, 0.1)
         paint.SetTargetReducedScatteringCoefficient(1.5, 1.8, 2.0)
-        solve = new_solver()
         solve.SetInputConnection(paint.GetOutputPort())
-        radiance = translucency.vtkOutgoingRadiance()
         radiance.SetInputConnection(solve.GetOutputPort())
         run(lights, paint, solve, radiance)
+        return filters
+
+    def test_vtk_executive_caches_nothing(self):
+        for name, f in self.chain(vtkCompositeDataPipeline):
+            irradiance = f.GetOutput().GetPointData().GetArray("Irradiance")
+            self.assertFalse(irradiance.GetInformation().Has(vtkAbstractArray.PER_COMPONENT()),
+                             name)
+
+    def test_cached_ranges_equal_vtk(self):
         checked = 0
-        for name, f in (("irradiance", lights), ("paint", paint), ("solve", solve),
-                        ("radiance", radiance)):
+        for name, f in self.chain(vtkPVCompositeDataPipeline):
             data = f.GetOutput()
             for attributes in (data.GetPointData(), data.GetCellData()):
                 for a in range(attributes.GetNumberOfArrays()):
