@@ -171,17 +171,15 @@ void AgreeOnError(MPI_Comm comm, const std::string& localError)
   throw Error(size > 1 ? "rank " + std::to_string(first) + ": " + message : message);
 }
 
-void DistributedNumbering::Build(
-  MPI_Comm comm, const std::vector<PointKey>& keys, const std::vector<char>& used)
+namespace
 {
-  MPI_Comm_rank(comm, &Rank_);
-  MPI_Comm_size(comm, &Size_);
+/// DistributedNumbering::Build: this rank's distinct keys (a piece may
+/// repeat a point), each point's distinct key in uniqueOf, and whether any
+/// of its points is used.
+void DistinctKeys(const std::vector<PointKey>& keys, const std::vector<char>& used,
+  std::vector<int>& uniqueOf, std::vector<PointKey>& uniqueKeys, std::vector<char>& uniqueUsed)
+{
   const std::size_t n = keys.size();
-
-  // This rank's distinct keys (a piece may repeat a point).
-  std::vector<int> uniqueOf(n);
-  std::vector<PointKey> uniqueKeys;
-  std::vector<char> uniqueUsed;
   uniqueKeys.reserve(n);
   uniqueUsed.reserve(n);
   {
@@ -200,6 +198,21 @@ void DistributedNumbering::Build(
       uniqueUsed[static_cast<std::size_t>(u)] |= used[i];
     }
   }
+}
+} // namespace
+
+void DistributedNumbering::Build(
+  MPI_Comm comm, const std::vector<PointKey>& keys, const std::vector<char>& used)
+{
+  MPI_Comm_rank(comm, &Rank_);
+  MPI_Comm_size(comm, &Size_);
+  const std::size_t n = keys.size();
+
+  // This rank's distinct keys (a piece may repeat a point).
+  std::vector<int> uniqueOf(n);
+  std::vector<PointKey> uniqueKeys;
+  std::vector<char> uniqueUsed;
+  DistinctKeys(keys, used, uniqueOf, uniqueKeys, uniqueUsed);
 
   // Round 1: keys to their homes, which choose the owners (lowest rank using it).
   std::vector<std::vector<KeyRecord>> out(static_cast<std::size_t>(Size_));

@@ -221,6 +221,72 @@ void DistributedVertexSolver::BuildGeometry(const TetMesh* mesh, const std::vect
   HaveGeometry_ = true;
 }
 
+namespace
+{
+/**
+ * BuildOwnedRows: the owned rows' pattern (per row the sorted distinct
+ * columns of its entries, `entryRow` local to this rank's rows) into
+ * `ownedOffsets` and `ownedColumns`, and each entry's place in it into
+ * `targets`.
+ */
+void OwnedPattern(int owned, const std::vector<int>& entryRow, const std::vector<int>& entryColumn,
+  std::vector<int>& targets, std::vector<int>& ownedOffsets, std::vector<int>& ownedColumns)
+{
+  std::vector<int> rowStart(static_cast<std::size_t>(owned) + 1, 0);
+  for (int r : entryRow)
+    ++rowStart[static_cast<std::size_t>(r) + 1];
+  for (int r = 0; r < owned; ++r)
+    rowStart[r + 1] += rowStart[r];
+  std::vector<int> byRow(entryRow.size());
+  {
+    std::vector<int> fill(rowStart.begin(), rowStart.end() - 1);
+    for (std::size_t e = 0; e < entryRow.size(); ++e)
+      byRow[static_cast<std::size_t>(fill[static_cast<std::size_t>(entryRow[e])]++)] =
+        static_cast<int>(e);
+  }
+  targets.assign(entryRow.size(), -1);
+  ownedOffsets.assign(static_cast<std::size_t>(owned) + 1, 0);
+  ownedColumns.clear();
+  ownedColumns.reserve(entryRow.size());
+  std::vector<int> row;
+  for (int r = 0; r < owned; ++r)
+  {
+    row.clear();
+    bool increasing = true;
+    for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
+    {
+      const int column = entryColumn[static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)])];
+      increasing = increasing && (row.empty() || column > row.back());
+      row.push_back(column);
+    }
+    if (increasing)
+    {
+      // Already sorted and distinct (a row of one local point whose
+      // neighbours' rows ascend with their local ids: one rank, most rows
+      // of a slab): each entry is its own place, no sort or search.
+      const int base = static_cast<int>(ownedColumns.size());
+      ownedColumns.insert(ownedColumns.end(), row.begin(), row.end());
+      ownedOffsets[r + 1] = static_cast<int>(ownedColumns.size());
+      for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
+        targets[static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)])] = base + k - rowStart[r];
+      continue;
+    }
+    std::sort(row.begin(), row.end());
+    row.erase(std::unique(row.begin(), row.end()), row.end());
+    const int base = static_cast<int>(ownedColumns.size());
+    ownedColumns.insert(ownedColumns.end(), row.begin(), row.end());
+    ownedOffsets[r + 1] = static_cast<int>(ownedColumns.size());
+    for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
+    {
+      const std::size_t e = static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)]);
+      targets[e] = base +
+        static_cast<int>(std::lower_bound(row.begin(), row.end(), entryColumn[e]) - row.begin());
+    }
+  }
+}
+
+} // namespace
+
 void DistributedVertexSolver::BuildOwnedRows()
 {
   // Whole owned rows, handed to hypre once (issue 32): every local CSR
@@ -323,57 +389,7 @@ void DistributedVertexSolver::BuildOwnedRows()
     entryColumn[numLocal + e] = recvPairs[2 * e + 1];
   }
   recvPairs = {};
-  std::vector<int> rowStart(static_cast<std::size_t>(owned) + 1, 0);
-  for (int r : entryRow)
-    ++rowStart[static_cast<std::size_t>(r) + 1];
-  for (int r = 0; r < owned; ++r)
-    rowStart[r + 1] += rowStart[r];
-  std::vector<int> byRow(entryRow.size());
-  {
-    std::vector<int> fill(rowStart.begin(), rowStart.end() - 1);
-    for (std::size_t e = 0; e < entryRow.size(); ++e)
-      byRow[static_cast<std::size_t>(fill[static_cast<std::size_t>(entryRow[e])]++)] =
-        static_cast<int>(e);
-  }
-  Targets_.assign(entryRow.size(), -1);
-  OwnedOffsets_.assign(static_cast<std::size_t>(owned) + 1, 0);
-  OwnedColumns_.clear();
-  OwnedColumns_.reserve(entryRow.size());
-  std::vector<int> row;
-  for (int r = 0; r < owned; ++r)
-  {
-    row.clear();
-    bool increasing = true;
-    for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
-    {
-      const int column = entryColumn[static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)])];
-      increasing = increasing && (row.empty() || column > row.back());
-      row.push_back(column);
-    }
-    if (increasing)
-    {
-      // Already sorted and distinct (a row of one local point whose
-      // neighbours' rows ascend with their local ids: one rank, most rows
-      // of a slab): each entry is its own place, no sort or search.
-      const int base = static_cast<int>(OwnedColumns_.size());
-      OwnedColumns_.insert(OwnedColumns_.end(), row.begin(), row.end());
-      OwnedOffsets_[r + 1] = static_cast<int>(OwnedColumns_.size());
-      for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
-        Targets_[static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)])] = base + k - rowStart[r];
-      continue;
-    }
-    std::sort(row.begin(), row.end());
-    row.erase(std::unique(row.begin(), row.end()), row.end());
-    const int base = static_cast<int>(OwnedColumns_.size());
-    OwnedColumns_.insert(OwnedColumns_.end(), row.begin(), row.end());
-    OwnedOffsets_[r + 1] = static_cast<int>(OwnedColumns_.size());
-    for (int k = rowStart[r]; k < rowStart[r + 1]; ++k)
-    {
-      const std::size_t e = static_cast<std::size_t>(byRow[static_cast<std::size_t>(k)]);
-      Targets_[e] = base +
-        static_cast<int>(std::lower_bound(row.begin(), row.end(), entryColumn[e]) - row.begin());
-    }
-  }
+  OwnedPattern(owned, entryRow, entryColumn, Targets_, OwnedOffsets_, OwnedColumns_);
   IdentityGather_ = numReceived == 0 && SendPositionsOff_.empty() &&
     LocalPositions_.size() == OwnedColumns_.size() && Targets_.size() == OwnedColumns_.size() &&
     HasTets() && LocalPositions_.size() == static_cast<std::size_t>(offsets[numPoints]);
