@@ -205,5 +205,21 @@ int SolvePCG(HYPRE_Solver pcg, HYPRE_IJMatrix matrix, HYPRE_IJVector bVector,
   return iterations;
 }
 
+void DestroyPCG(HYPRE_Solver& pcg, HYPRE_IJMatrix& matrix, HYPRE_IJVector& b, HYPRE_IJVector& x)
+{
+  if (pcg)
+    HYPRE_ParCSRPCGDestroy(pcg);
+  if (matrix)
+    HYPRE_IJMatrixDestroy(matrix);
+  if (b)
+    HYPRE_IJVectorDestroy(b);
+  if (x)
+    HYPRE_IJVectorDestroy(x);
+  pcg = nullptr;
+  matrix = nullptr;
+  b = nullptr;
+  x = nullptr;
+}
+
 } // namespace hypre
 } // namespace translucency

@@ -63,5 +63,9 @@ int SolvePCG(HYPRE_Solver pcg, HYPRE_IJMatrix matrix, HYPRE_IJVector bVector,
   HYPRE_IJVector xVector, const std::vector<HYPRE_BigInt>& rows, const double* b, double* x,
   bool guess, double relTol, int maxIter, double& relRes, const std::string& who);
 
+/// Destroys whichever of the PCG solver, the matrix and the two vectors
+/// exist and sets them to null (the distributed solvers' Free()).
+void DestroyPCG(HYPRE_Solver& pcg, HYPRE_IJMatrix& matrix, HYPRE_IJVector& b, HYPRE_IJVector& x);
+
 } // namespace hypre
 } // namespace translucency

@@ -168,16 +168,11 @@ HypreBoomerAMGPCG::~HypreBoomerAMGPCG()
 
 void HypreBoomerAMGPCG::Free()
 {
-  if (H_->PCG)
-    HYPRE_ParCSRPCGDestroy(H_->PCG);
+  // The PCG (which does not own its preconditioner) and the matrix and
+  // vectors, then BoomerAMG (which does not own the level-0 matrix).
+  hypre::DestroyPCG(H_->PCG, H_->A, H_->B, H_->X);
   if (H_->AMG)
     HYPRE_BoomerAMGDestroy(H_->AMG);
-  if (H_->A)
-    HYPRE_IJMatrixDestroy(H_->A);
-  if (H_->B)
-    HYPRE_IJVectorDestroy(H_->B);
-  if (H_->X)
-    HYPRE_IJVectorDestroy(H_->X);
   *H_ = Handles();
   Places_.clear();
   PlacePattern_ = 0;

@@ -224,14 +224,7 @@ SchwarzAggregationPCG::~SchwarzAggregationPCG()
 
 void SchwarzAggregationPCG::Free()
 {
-  if (H_->PCG)
-    HYPRE_ParCSRPCGDestroy(H_->PCG);
-  if (H_->A)
-    HYPRE_IJMatrixDestroy(H_->A);
-  if (H_->B)
-    HYPRE_IJVectorDestroy(H_->B);
-  if (H_->X)
-    HYPRE_IJVectorDestroy(H_->X);
+  hypre::DestroyPCG(H_->PCG, H_->A, H_->B, H_->X);
   *H_ = Handles();
   B_ = std::make_unique<Block>();
   Structure_.reset();

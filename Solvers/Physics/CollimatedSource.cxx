@@ -939,6 +939,21 @@ void EnteringPower(const TetMesh& mesh, const std::vector<double>& tetEta,
   }
 }
 
+/// A CollimatedSource of `numPoints` points and `numBeams` beams, zeroed.
+CollimatedSource SizedSource(int numPoints, size_t numBeams)
+{
+  CollimatedSource out;
+  out.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  out.Load.assign(3 * static_cast<size_t>(numPoints), 0.0);
+  out.Beams.resize(numBeams);
+  for (CollimatedSource::Beam& beam : out.Beams)
+  {
+    beam.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
+    beam.OpticalPath.assign(static_cast<size_t>(numPoints), 0.0);
+  }
+  return out;
+}
+
 /// The unit direction towards a beam's light, -d / |d|.
 void TowardsLight(const LightSource& beam, double w[3])
 {
@@ -1322,15 +1337,7 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
       beams.push_back(lights[l]);
     }
   }
-  CollimatedSource out;
-  out.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
-  out.Load.assign(3 * static_cast<size_t>(numPoints), 0.0);
-  out.Beams.resize(beams.size());
-  for (CollimatedSource::Beam& beam : out.Beams)
-  {
-    beam.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
-    beam.OpticalPath.assign(static_cast<size_t>(numPoints), 0.0);
-  }
+  CollimatedSource out = SizedSource(numPoints, beams.size());
   if (beams.empty() || mesh.GetNumberOfBoundaryTriangles() == 0)
   {
     return out;
@@ -1421,21 +1428,6 @@ struct CollimatedSourceCache::Internals
 
 namespace
 {
-/// A CollimatedSource of `numPoints` points and `numBeams` beams, zeroed.
-CollimatedSource SizedSource(int numPoints, size_t numBeams)
-{
-  CollimatedSource out;
-  out.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
-  out.Load.assign(3 * static_cast<size_t>(numPoints), 0.0);
-  out.Beams.resize(numBeams);
-  for (CollimatedSource::Beam& beam : out.Beams)
-  {
-    beam.Fluence.assign(3 * static_cast<size_t>(numPoints), 0.0);
-    beam.OpticalPath.assign(static_cast<size_t>(numPoints), 0.0);
-  }
-  return out;
-}
-
 /// CollimatedSourceCache: the tets whose mu_a or mu_s' differ from the kept
 /// ones or that have a point in `changedPoint`.
 std::vector<int> DirtyTets(const TetMesh& mesh, const OpticalProperties& material,
