@@ -132,6 +132,16 @@ double GlobalDiagonal(MPI_Comm comm, const std::vector<double>& points, std::siz
 
 } // namespace
 
+double TriangleHalfNormal(const double* p0, const double* p1, const double* p2, double n[3])
+{
+  const double e1[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
+  const double e2[3] = { p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2] };
+  n[0] = 0.5 * (e1[1] * e2[2] - e1[2] * e2[1]);
+  n[1] = 0.5 * (e1[2] * e2[0] - e1[0] * e2[2]);
+  n[2] = 0.5 * (e1[0] * e2[1] - e1[1] * e2[0]);
+  return std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
 void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   const std::vector<PointKey>& keys, const std::vector<char>& used,
   const std::vector<int>& triangles, const std::vector<double>& triangleEta,
@@ -267,14 +277,10 @@ void FindPieceBoundary(MPI_Comm comm, const std::vector<double>& points,
       continue;
     boundary.Physical[f] = 1;
     ++mine;
-    const double* p0 = &points[3 * static_cast<std::size_t>(triangles[3 * f])];
-    const double* p1 = &points[3 * static_cast<std::size_t>(triangles[3 * f + 1])];
-    const double* p2 = &points[3 * static_cast<std::size_t>(triangles[3 * f + 2])];
-    const double e1[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
-    const double e2[3] = { p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2] };
-    const double n[3] = { 0.5 * (e1[1] * e2[2] - e1[2] * e2[1]),
-      0.5 * (e1[2] * e2[0] - e1[0] * e2[2]), 0.5 * (e1[0] * e2[1] - e1[1] * e2[0]) };
-    const double area = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    double n[3];
+    const double area = TriangleHalfNormal(&points[3 * static_cast<std::size_t>(triangles[3 * f])],
+      &points[3 * static_cast<std::size_t>(triangles[3 * f + 1])],
+      &points[3 * static_cast<std::size_t>(triangles[3 * f + 2])], n);
     for (int m = 0; m < 3; ++m)
     {
       double* to = &sums[5 * static_cast<std::size_t>(triangles[3 * f + m])];

@@ -33,6 +33,10 @@ struct BoundarySurfaceReport
   double Milliseconds = 0.0;     ///< wall time of the numbering, counting and gather (this rank)
 };
 
+/// Half the cross product (p1 - p0) x (p2 - p0): the triangle's outward
+/// normal scaled by its area; returns the area.
+double TriangleHalfNormal(const double* p0, const double* p1, const double* p2, double n[3]);
+
 /**
  * Collective.
  * @param points this rank's points, 3 each (mm)

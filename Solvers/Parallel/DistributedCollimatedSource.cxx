@@ -5,7 +5,6 @@
 #include "TetMesh.h"
 
 #include <cmath>
-#include <cstring>
 
 namespace translucency
 {
@@ -24,12 +23,6 @@ double Seconds()
 double MillisecondsSince(double start)
 {
   return 1000.0 * (MPI_Wtime() - start);
-}
-
-bool SameBits(const std::vector<double>& a, const std::vector<double>& b)
-{
-  return a.size() == b.size() &&
-    (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
 }
 
 } // namespace
@@ -104,12 +97,8 @@ bool DistributedCollimatedSource::Kept(MPI_Comm comm, const TetMesh* mesh,
   const std::vector<PointKey>& keys, const OpticalProperties& material) const
 {
   const std::uint64_t revision = mesh ? mesh->GetGeometryRevision() : 0;
-  int mine = Valid_ && revision == Revision_ && keys == Keys_ &&
-      SameBits(material.AbsorptionCoefficient, Material_.AbsorptionCoefficient) &&
-      SameBits(material.ReducedScatteringCoefficient, Material_.ReducedScatteringCoefficient) &&
-      SameBits(material.RefractiveIndex, Material_.RefractiveIndex)
-    ? 1
-    : 0;
+  int mine =
+    Valid_ && revision == Revision_ && keys == Keys_ && material.SameCoefficients(Material_) ? 1 : 0;
   int all = 0;
   MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, comm);
   return all != 0;
@@ -157,14 +146,9 @@ void DistributedCollimatedSource::Gather(MPI_Comm comm, const TetMesh* mesh,
   for (std::size_t f = 0; f < Surface_.GetNumberOfTriangles(); ++f)
   {
     const int* tri = &Surface_.Triangles[3 * f];
-    const double* p0 = &x[3 * static_cast<std::size_t>(tri[0])];
-    const double* p1 = &x[3 * static_cast<std::size_t>(tri[1])];
-    const double* p2 = &x[3 * static_cast<std::size_t>(tri[2])];
-    const double e1[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
-    const double e2[3] = { p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2] };
-    const double n[3] = { 0.5 * (e1[1] * e2[2] - e1[2] * e2[1]),
-      0.5 * (e1[2] * e2[0] - e1[0] * e2[2]), 0.5 * (e1[0] * e2[1] - e1[1] * e2[0]) };
-    const double area = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    double n[3];
+    const double area = TriangleHalfNormal(&x[3 * static_cast<std::size_t>(tri[0])],
+      &x[3 * static_cast<std::size_t>(tri[1])], &x[3 * static_cast<std::size_t>(tri[2])], n);
     for (int m = 0; m < 3; ++m)
     {
       const std::size_t p = static_cast<std::size_t>(tri[m]);

@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <sstream>
 
 #include <time.h>
@@ -778,15 +777,7 @@ bool DistributedVertexSolver::CanShare(int c, int donor) const
 
 bool DistributedVertexSolver::SameMaterialEverywhere(const OpticalProperties& material) const
 {
-  auto same = [](const std::vector<double>& a, const std::vector<double>& b) {
-    return a.size() == b.size() &&
-      (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
-  };
-  int mine = HaveMaterial_ && same(material.AbsorptionCoefficient, Material_.AbsorptionCoefficient) &&
-      same(material.ReducedScatteringCoefficient, Material_.ReducedScatteringCoefficient) &&
-      same(material.RefractiveIndex, Material_.RefractiveIndex)
-    ? 1
-    : 0;
+  int mine = HaveMaterial_ && material.SameCoefficients(Material_) ? 1 : 0;
   int all = 0;
   MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, Comm_);
   return all != 0;

@@ -939,6 +939,25 @@ void EnteringPower(const TetMesh& mesh, const std::vector<double>& tetEta,
   }
 }
 
+/// The directional lights of `lights`, after checking every light
+/// (ValidateLight) and the material on numTets tets (the entry points'
+/// errors).
+std::vector<LightSource> ValidatedBeams(
+  const OpticalProperties& material, int numTets, const std::vector<LightSource>& lights)
+{
+  material.Validate(numTets);
+  std::vector<LightSource> beams;
+  for (size_t l = 0; l < lights.size(); ++l)
+  {
+    ValidateLight(lights[l], l);
+    if (lights[l].Type == LightSource::Kind::Directional)
+    {
+      beams.push_back(lights[l]);
+    }
+  }
+  return beams;
+}
+
 /// A CollimatedSource of `numPoints` points and `numBeams` beams, zeroed.
 CollimatedSource SizedSource(int numPoints, size_t numBeams)
 {
@@ -1327,16 +1346,7 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
 {
   const int numPoints = mesh.GetNumberOfPoints();
   const int numTets = mesh.GetNumberOfTets();
-  material.Validate(numTets);
-  std::vector<LightSource> beams;
-  for (size_t l = 0; l < lights.size(); ++l)
-  {
-    ValidateLight(lights[l], l);
-    if (lights[l].Type == LightSource::Kind::Directional)
-    {
-      beams.push_back(lights[l]);
-    }
-  }
+  const std::vector<LightSource> beams = ValidatedBeams(material, numTets, lights);
   CollimatedSource out = SizedSource(numPoints, beams.size());
   if (beams.empty() || mesh.GetNumberOfBoundaryTriangles() == 0)
   {
@@ -1495,16 +1505,7 @@ CollimatedSource CollimatedSourceCache::Compute(const TetMesh& mesh,
   const int numTets = mesh.GetNumberOfTets();
   LastUpdate_ = "full";
   TetsIntegrated_ = numTets;
-  material.Validate(numTets);
-  std::vector<LightSource> beams;
-  for (size_t l = 0; l < lights.size(); ++l)
-  {
-    ValidateLight(lights[l], l);
-    if (lights[l].Type == LightSource::Kind::Directional)
-    {
-      beams.push_back(lights[l]);
-    }
-  }
+  const std::vector<LightSource> beams = ValidatedBeams(material, numTets, lights);
   const std::uint64_t revision = mesh.GetGeometryRevision();
   if (beams.empty() || mesh.GetNumberOfBoundaryTriangles() == 0 || revision == 0 ||
     mesh.GetPointTetOffsets().size() != static_cast<size_t>(numPoints) + 1)

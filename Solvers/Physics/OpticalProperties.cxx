@@ -7,6 +7,7 @@
 #include <cctype>
 #include <climits>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 namespace translucency
@@ -42,6 +43,22 @@ OpticalProperties OpticalProperties::Uniform(int numTets,
     }
   }
   return p;
+}
+
+namespace
+{
+bool SameBits(const std::vector<double>& a, const std::vector<double>& b)
+{
+  return a.size() == b.size() &&
+    (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
+}
+}
+
+bool OpticalProperties::SameCoefficients(const OpticalProperties& other) const
+{
+  return SameBits(AbsorptionCoefficient, other.AbsorptionCoefficient) &&
+    SameBits(ReducedScatteringCoefficient, other.ReducedScatteringCoefficient) &&
+    SameBits(RefractiveIndex, other.RefractiveIndex);
 }
 
 void OpticalProperties::Validate(int numTets) const

@@ -55,6 +55,10 @@ struct OpticalProperties
    */
   void Validate(int numTets) const;
 
+  /// Whether mu_a, sigma_s' and eta equal `other`'s bit for bit (the
+  /// anisotropy is not compared): the kept-material tests of the solvers.
+  bool SameCoefficients(const OpticalProperties& other) const;
+
   /// kappa = 1 / (3 (mu_a + sigma_s')) of tet t, channel c (mm).
   double Kappa(int t, int c) const
   {
