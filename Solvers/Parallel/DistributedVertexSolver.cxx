@@ -1270,6 +1270,9 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
     report.CollimatedEntering = BeamResult_.Entering;
     report.CollimatedScattered = BeamResult_.Scattered;
     report.CollimatedAbsorbed = BeamResult_.Absorbed;
+    // What the beam did (kept rays and loads on a paint), as the serial
+    // solver's CollimatedSourceCache reports it.
+    report.Collimated = Beam_.GetLastUpdate();
     if (report.CollimatedFluence.size() != fluence.size())
       report.CollimatedFluence.assign(fluence.size(), 0.0);
   }
