@@ -1026,7 +1026,8 @@ void DistributedVertexSolver::FillStatistics(SolverReport& report) const
         OwnedColumns_.size() * (sizeof(int) + sizeof(double));
     }
   }
-  report.MemoryBytes = bytes;
+  // The beam kept across paints (the surface, rays, E_c and loads).
+  report.MemoryBytes = bytes + Beam_.GetMemoryBytes();
 }
 
 void DistributedVertexSolver::Solve(const std::vector<double>& points,
