@@ -69,13 +69,26 @@ std::vector<T> AllGather(MPI_Comm comm, const std::vector<T>& mine, long long& b
 /// a physical triangle. `gathered`: how to select the gathered path instead.
 std::vector<int> ClassifyTriangles(MPI_Comm comm, const DistributedNumbering& numbering,
   const std::vector<int>& triangles, const std::vector<double>& triangleEta,
-  const std::vector<int>& triangleTets, const char* gathered, std::vector<int>& rows)
+  const std::vector<int>& triangleTets, const char* gathered, std::vector<int>& rows,
+  const std::vector<char>* physical = nullptr)
 {
   const std::size_t numTriangles = triangles.size() / 3;
   rows.resize(3 * numTriangles);
   for (std::size_t k = 0; k < rows.size(); ++k)
     rows[k] = numbering.GetRow(triangles[k]);
-  std::vector<int> seen = CountSharedTriangles(comm, rows);
+  std::vector<int> seen;
+  if (physical) // (given on every rank or none: the count is collective)
+  {
+    // Counted by the caller (who checked the faces held by more than two).
+    AgreeOnError(comm, physical->size() == numTriangles ? std::string()
+        : "the boundary surface's gather: " + std::to_string(physical->size()) +
+          " physical flags for " + std::to_string(numTriangles) + " triangles");
+    seen.resize(numTriangles);
+    for (std::size_t f = 0; f < numTriangles; ++f)
+      seen[f] = (*physical)[f] ? 1 : 2;
+  }
+  else
+    seen = CountSharedTriangles(comm, rows);
   std::string error;
   for (std::size_t f = 0; f < numTriangles && error.empty(); ++f)
   {
@@ -148,7 +161,8 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   const std::vector<int>& triangleTets, BoundarySurface& surface,
   std::vector<int>& surfacePoint, std::vector<double>& rotations,
   BoundarySurfaceReport& report, const std::vector<double>* triangleData,
-  int valuesPerTriangle, std::vector<double>* gatheredData, std::vector<int>* gatheredTriangles)
+  int valuesPerTriangle, std::vector<double>* gatheredData, std::vector<int>* gatheredTriangles,
+  const DistributedNumbering* knownNumbering, const std::vector<char>* physical)
 {
   const Timer timer;
   report = BoundarySurfaceReport();
@@ -159,11 +173,13 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   surface.Diagonal = GlobalDiagonal(comm, points, numPoints);
 
   // Global rows, and the physical triangles: those no other rank has.
-  DistributedNumbering numbering;
-  numbering.Build(comm, keys, used);
+  DistributedNumbering built;
+  if (!knownNumbering)
+    built.Build(comm, keys, used);
+  const DistributedNumbering& numbering = knownNumbering ? *knownNumbering : built;
   std::vector<int> rows;
   const std::vector<int> seen = ClassifyTriangles(comm, numbering, triangles, triangleEta,
-    triangleTets, "TRANSLUCENCY_GATHERED_IRRADIANCE=1", rows);
+    triangleTets, "TRANSLUCENCY_GATHERED_IRRADIANCE=1", rows, physical);
   std::vector<TriangleRecord> myTriangles;
   std::vector<double> myData;
   const std::size_t perTriangle =

@@ -63,6 +63,11 @@ double TriangleHalfNormal(const double* p0, const double* p1, const double* p2, 
  *   sent: this rank's part of surface.Triangles, which comes after the
  *   lower ranks' parts (a caller may gather new values of them alone in
  *   this order, DistributedCollimatedSource)
+ * @param numbering, physical optional: the numbering of (keys, used) and,
+ *   per triangle, whether it is physical (1: no other rank holds it), as a
+ *   caller that has them already built them (DistributedVertexSolver: its
+ *   numbering and boundary count); then neither is built again here (each
+ *   given on every rank or on none)
  * Throws translucency::Error, with the same message on every rank, for a
  * triangle held by more than two ranks (overlapping pieces without ghost
  * marks) or an invalid refractive index under a physical triangle.
@@ -74,7 +79,8 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   std::vector<int>& surfacePoint, std::vector<double>& rotations,
   BoundarySurfaceReport& report, const std::vector<double>* triangleData = nullptr,
   int valuesPerTriangle = 0, std::vector<double>* gatheredData = nullptr,
-  std::vector<int>* gatheredTriangles = nullptr);
+  std::vector<int>* gatheredTriangles = nullptr, const DistributedNumbering* numbering = nullptr,
+  const std::vector<char>* physical = nullptr);
 
 /// A rank's part of the physical boundary (FindPieceBoundary()).
 struct PieceBoundary

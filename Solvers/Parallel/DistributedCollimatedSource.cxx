@@ -195,7 +195,8 @@ bool DistributedCollimatedSource::RefreshValues(
 
 void DistributedCollimatedSource::Gather(MPI_Comm comm, const TetMesh* mesh,
   const std::vector<PointKey>& keys, const std::vector<char>& used,
-  const OpticalProperties& material)
+  const OpticalProperties& material, const DistributedNumbering* numbering,
+  const std::vector<char>* physical)
 {
   Clear();
   // This rank's boundary triangles (of its own tets: partition faces
@@ -221,7 +222,7 @@ void DistributedCollimatedSource::Gather(MPI_Comm comm, const TetMesh* mesh,
   std::vector<int> surfacePoint;
   GatherBoundarySurface(comm, hasTets ? mesh->GetPoints() : noPoints, hasTets ? keys : noKeys,
     hasTets ? used : noUsed, triangles, eta, triangleTets, Surface_, surfacePoint, Rotations_,
-    report, &extinction, 3, &Extinction_, &MyTriangles_);
+    report, &extinction, 3, &Extinction_, &MyTriangles_, numbering, physical);
   MyValues_ = TriangleValues(hasTets ? mesh : nullptr, material);
   SurfacePoint_.assign(keys.size(), -1);
   for (std::size_t i = 0; i < surfacePoint.size() && i < keys.size(); ++i)
@@ -329,7 +330,7 @@ void DistributedCollimatedSource::SumOverRanks(MPI_Comm comm, bool raysCast, Col
 void DistributedCollimatedSource::Compute(MPI_Comm comm, const TetMesh* mesh,
   const std::vector<PointKey>& keys, const std::vector<char>& used,
   const OpticalProperties& material, const std::vector<LightSource>& lights, bool shadows,
-  CollimatedSource& out)
+  CollimatedSource& out, const DistributedNumbering* numbering, const std::vector<char>* physical)
 {
   GatherMs_ = RayMs_ = LoadMs_ = EnteringMs_ = 0.0;
   Gathered_ = ValuesGathered_ = false;
@@ -368,7 +369,7 @@ void DistributedCollimatedSource::Compute(MPI_Comm comm, const TetMesh* mesh,
   bool valuesChanged = false, etaChanged = false;
   if (!geometryKept)
   {
-    Gather(comm, mesh, keys, used, material);
+    Gather(comm, mesh, keys, used, material, numbering, physical);
     Gathered_ = true;
   }
   else

@@ -79,11 +79,16 @@ public:
    * same on every rank (the directional ones make beams, the others are
    * ignored). `out` gets Fluence, Beams and Load at the local points (3 per
    * point; Load is this rank's tets' share), and Entering, Scattered and
-   * Absorbed of the whole mesh (the same on every rank).
+   * Absorbed of the whole mesh (the same on every rank). `numbering` and
+   * `physical` (optional; on every rank or none): the numbering of (keys,
+   * used) and per boundary triangle of `mesh` whether it is physical, as the
+   * caller built them (DistributedVertexSolver), which a gather of the
+   * surface then does not build again (GatherBoundarySurface).
    */
   void Compute(MPI_Comm comm, const TetMesh* mesh, const std::vector<PointKey>& keys,
     const std::vector<char>& used, const OpticalProperties& material,
-    const std::vector<LightSource>& lights, bool shadows, CollimatedSource& out);
+    const std::vector<LightSource>& lights, bool shadows, CollimatedSource& out,
+    const DistributedNumbering* numbering = nullptr, const std::vector<char>* physical = nullptr);
   /// Forget everything kept.
   void Clear();
   /// Whether the last Compute gathered the surface (false: kept, or no beam).
@@ -115,7 +120,8 @@ private:
   /// Collective: whether the kept surface's geometry is of this call's pieces.
   bool GeometryKept(MPI_Comm comm, const TetMesh* mesh, const std::vector<PointKey>& keys) const;
   void Gather(MPI_Comm comm, const TetMesh* mesh, const std::vector<PointKey>& keys,
-    const std::vector<char>& used, const OpticalProperties& material);
+    const std::vector<char>& used, const OpticalProperties& material,
+    const DistributedNumbering* numbering, const std::vector<char>* physical);
   /// Collective: this rank's physical triangles' eta and mu_t' (4 each).
   std::vector<double> TriangleValues(const TetMesh* mesh, const OpticalProperties& material) const;
   /// Collective: the surface triangles' eta and mu_t' again when they

@@ -1121,8 +1121,9 @@ void DistributedVertexSolver::AddVolumeSources(const std::vector<PointKey>& keys
   BeamResult_ = CollimatedSource();
   if (IsExtendedCollimatedModel(Collimated_))
   {
+    // (The numbering and boundary count of step 1: not built again.)
     Beam_.Compute(Comm_, HasTets() ? Mesh_ : nullptr, keys, Used_, material, Lights_, Shadows_,
-      BeamResult_);
+      BeamResult_, &Numbering_, &PhysicalFace_);
     for (std::size_t k = 0; k < BeamResult_.Load.size(); ++k)
       localRhs[k] += 4.0 * BeamResult_.Load[k];
   }

@@ -7,8 +7,8 @@
 // collective) and checks with EXPECT (no early return before a collective).
 //
 // The independent references: a fresh DistributedCollimatedSource of the
-// same arguments (nothing kept: Load and E_c bit for bit on this rank's
-// points) and the serial CollimatedSourceCache on the whole mesh (E_c at
+// same arguments (nothing kept, and its surface gathered with a solver's
+// numbering: Load and E_c bit for bit on this rank's points) and the serial CollimatedSourceCache on the whole mesh (E_c at
 // every point and Load summed over the ranks, to rounding: the loads of a
 // point shared by ranks are summed in another order, the gathered surface's
 // triangles have another vertex order); and what each says it did.
@@ -180,8 +180,23 @@ void ExpectStep(DistributedCollimatedSource& kept, CollimatedSourceCache& serial
   const OpticalProperties material = PieceMaterial(s, whole);
   CollimatedSource cached, fresh;
   kept.Compute(MPI_COMM_WORLD, s.Piece.get(), s.Keys, s.Used, material, lights, shadows, cached);
+  // The fresh one with the numbering and boundary count a solver hands it
+  // (GatherBoundarySurface does not build them again), the kept one
+  // without: the same surface either way.
+  DistributedNumbering numbering;
+  numbering.Build(MPI_COMM_WORLD, s.Keys, s.Used);
+  std::vector<int> rows;
+  if (s.Piece)
+  {
+    for (const int p : s.Piece->GetBoundaryTriangles())
+      rows.push_back(numbering.GetRow(p));
+  }
+  std::vector<char> physical;
+  for (const int count : CountSharedTriangles(MPI_COMM_WORLD, rows))
+    physical.push_back(count == 1 ? 1 : 0);
   DistributedCollimatedSource anew;
-  anew.Compute(MPI_COMM_WORLD, s.Piece.get(), s.Keys, s.Used, material, lights, shadows, fresh);
+  anew.Compute(MPI_COMM_WORLD, s.Piece.get(), s.Keys, s.Used, material, lights, shadows, fresh,
+    &numbering, &physical);
   const CollimatedSource reference = serial.Compute(s.Whole, whole, lights, shadows);
 
   // What each did: the same words, the same on every rank.
