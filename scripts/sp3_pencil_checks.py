@@ -43,9 +43,16 @@ Independent computations, none using the project's code
                total reflectance against discrete ordinates. Ratios to the
                Monte Carlo over the annuli 2, 4, 6, 10, 15, 20 mm. About
                2 minutes plus the Monte Carlo.
+  transform MUA KAPPA...
+               int R(rho) I0(kappa rho) dA (the slab's transform at k =
+               i kappa; kappa = 0: the total diffuse reflectance; towards
+               mu_eff it weights the far field) of exact transport
+               (discrete ordinates with 48 x 16 directions per half range)
+               against SP1-SP7. About 2 minutes per kappa.
 
 Usage: sp3_pencil_checks.py milne 1.3 | sp3_pencil_checks.py mc 4000000 7 0.01
        sp3_pencil_checks.py orders 4000000 7 0.01 | sp3_pencil_checks.py hybrid 4000000 7 0.01
+       sp3_pencil_checks.py transform 0.01 0 0.1 0.15 0.165
 """
 import sys
 
@@ -305,15 +312,18 @@ def spn_setup(order, mua, eta=SLAB_ETA):
     return -p @ g, np.diag(sig[ev]), p @ b, e[ev] + e[od] @ b
 
 
-def spn_exitance(order, mua, k, z, load):
+def spn_exitance(order, mua, k, z, load, k2=None):
     """The exitance at the lit face (Hankel transform, W per W) of SP_N with
     the isotropic source whose P1 load int Q v dz is `load` (len(k), len(z)):
-    P1 Galerkin in z (consistent mass), block Thomas over the nodes for all k."""
+    P1 Galerkin in z (consistent mass), block Thomas over the nodes for all k.
+    `k2` (optional) gives k^2 directly (negative: the transform at k = i
+    kappa, int R(rho) I0(kappa rho) dA)."""
     d, sm, bd, e = spn_setup(order, mua)
-    ne, h, nn, kk = d.shape[0], np.diff(z), len(z), len(k)
+    k2 = k ** 2 if k2 is None else np.asarray(k2, float)
+    ne, h, nn, kk = d.shape[0], np.diff(z), len(z), len(k2)
     diag = np.zeros((kk, nn, ne, ne))
     off = np.zeros((kk, nn - 1, ne, ne))  # upper = lower (both symmetric in the nodes)
-    mk = sm[None] + k[:, None, None] ** 2 * d[None]
+    mk = sm[None] + k2[:, None, None] * d[None]
     for i in range(nn - 1):
         a = d[None] / h[i] + mk * h[i] / 3
         diag[:, i] += a
@@ -440,36 +450,49 @@ def single_scatter_exitance(mua, annuli=HYB_ANNULI):
     return np.array(out)
 
 
-def planar_reflectance(mua):
+def planar_reflectance(mua, kappa=0.0, azimuths=1):
     """Exact transport (discrete ordinates as in milne(), 48 directions per
-    half range, 1500 cells) of the planar problem: the total diffuse
-    reflectance of the normally incident beam, R~(k = 0), and its single-
-    scatter part."""
+    half range times `azimuths` Gauss-Legendre azimuths on [0, pi], 1500
+    cells) of the slab's transform at k = i kappa (1/mm; the lateral
+    dependence exp(kappa x), so each direction's total coefficient is
+    mu_t - kappa Omega_x): int R(rho) I0(kappa rho) dA of the normally
+    incident beam (kappa = 0: the total diffuse reflectance), and its
+    single-scatter part."""
     c, mut = SLAB_MUS / (mua + SLAB_MUS), mua + SLAB_MUS
     amp = (1 - ((SLAB_ETA - 1) / (SLAB_ETA + 1)) ** 2) * SLAB_MUS
     xg, wg = np.polynomial.legendre.leggauss(48)
-    mup, wp = 0.5 * (xg + 1), 0.5 * wg
+    xa, wa = np.polynomial.legendre.leggauss(azimuths)
+    mup = np.repeat(0.5 * (xg + 1), azimuths)
+    wp = np.repeat(0.5 * wg, azimuths) * np.tile(0.5 * wa, 48)
+    sig = 1 - kappa / mut * np.sqrt(1 - mup ** 2) * np.cos(np.tile(0.5 * np.pi * (xa + 1), 48))
     rm = fresnel_inside(mup, SLAB_ETA)
     cells = 1500
     d = SLAB_L * mut / cells  # optical depth
     edges = np.arange(cells + 1) * d
-    e = np.exp(-d / mup)[:, None]
+    e = np.exp(-sig * d / mup)[:, None]
+    sg = sig[:, None]
 
     def sweep(source):
-        phi, psi = np.zeros(source.shape), np.zeros((48, source.shape[1]))
+        phi, psi = np.zeros(source.shape), np.zeros((len(mup), source.shape[1]))
         for i in range(cells - 1, -1, -1):
-            out = psi * e + source[i][None, :] * (1 - e)
-            phi[i] += (wp[:, None] * (source[i][None, :] + (psi - out) * mup[:, None] / d)).sum(0)
+            out = psi * e + source[i][None, :] / sg * (1 - e)
+            phi[i] += (wp[:, None] * (source[i][None, :] + (psi - out) * mup[:, None] / d)
+                       / sg).sum(0)
             psi = out
         exit_ = (wp[:, None] * (1 - rm[:, None]) * psi * mup[:, None]).sum(0)
         psi = rm[:, None] * psi
         for i in range(cells):
-            out = psi * e + source[i][None, :] * (1 - e)
-            phi[i] += (wp[:, None] * (source[i][None, :] + (psi - out) * mup[:, None] / d)).sum(0)
+            out = psi * e + source[i][None, :] / sg * (1 - e)
+            phi[i] += (wp[:, None] * (source[i][None, :] + (psi - out) * mup[:, None] / d)
+                       / sg).sum(0)
             psi = out
         return phi, exit_
 
-    kphi, kexit = sweep(0.5 * c * np.eye(cells))
+    kphi, kexit = np.zeros((cells, cells)), np.zeros(cells)
+    for j in range(0, cells, 250):  # the scattering kernel, 250 unit sources at a time
+        unit = np.zeros((cells, min(250, cells - j)))
+        unit[np.arange(j, j + unit.shape[1]), np.arange(unit.shape[1])] = 0.5 * c
+        kphi[:, j:j + unit.shape[1]], kexit[j:j + unit.shape[1]] = sweep(unit)
     q = amp / mut * (np.exp(-edges[:-1]) - np.exp(-edges[1:])) / d
     b, bexit = sweep(0.5 * q[:, None])
     phi = np.linalg.solve(np.eye(cells) - kphi, b[:, 0])
@@ -528,9 +551,28 @@ def hybrid(photons, seed, mua):
             "%.3f" % (v[i] / mc[i]) for v in model.values()))
 
 
+
+def transform(mua, kappas):
+    """int R(rho) I0(kappa rho) dA (the transform at k = i kappa, weighting
+    the far field more as kappa grows towards mu_eff) of exact transport
+    (planar_reflectance with 16 azimuths) against SP_N of the beam's
+    first-collision source."""
+    z = depth_grid()
+    mut = mua + SLAB_MUS
+    amp = (1 - ((SLAB_ETA - 1) / (SLAB_ETA + 1)) ** 2) * SLAB_MUS
+    load = p1_load(z, amp * np.exp(-mut * z)[None, :])
+    for kappa in kappas:
+        exact, _ = planar_reflectance(mua, kappa, 16)
+        print("kappa %.3f /mm: transport %.5f | " % (kappa, exact) + " | ".join(
+            "SP%d / transport %.4f" % (o, spn_exitance(o, mua, None, z, load, [-kappa ** 2])[0]
+                                        / exact) for o in (1, 3, 5, 7)), flush=True)
+
+
 if __name__ == "__main__":
     if len(sys.argv) >= 2 and sys.argv[1] == "milne":
         milne(float(sys.argv[2]) if len(sys.argv) > 2 else 1.3)
+    elif len(sys.argv) >= 3 and sys.argv[1] == "transform":
+        transform(float(sys.argv[2]), [float(a) for a in sys.argv[3:]])
     elif len(sys.argv) >= 2 and sys.argv[1] == "hybrid":
         hybrid(int(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4]))
     elif len(sys.argv) >= 2 and sys.argv[1] in ("mc", "orders"):
