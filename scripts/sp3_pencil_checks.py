@@ -141,7 +141,7 @@ def milne(eta):
                            (1 + 2 * a_fit / 3) / i_exact))
 
 
-def monte_carlo(photons, seed, mua, orders=False, sources=None, quiet=False):
+def monte_carlo(photons, seed, mua, orders=False, sources=None):
     """The analog Monte Carlo; with `orders`, the exitance is also tallied by
     the number of scattering events before escape: 1, 2, 3 and >= 4. With
     `sources` = (radial edges, depth edges, n), the scattered weight of the
@@ -237,8 +237,6 @@ def monte_carlo(photons, seed, mua, orders=False, sources=None, quiet=False):
     if sources is not None:
         n = batches * batch
         return mean, events * (1 - specular) / n, byorder * (1 - specular) / n / area
-    if quiet:
-        return mean
     se = np.sqrt(np.maximum(tally2 / batches - (tally / batches) ** 2, 0) / (batches - 1)) \
         / batch / area * (1 - specular)
     for a, b, m, e in zip(EDGES[:-1], EDGES[1:], mean, se):
