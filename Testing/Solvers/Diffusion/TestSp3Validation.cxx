@@ -471,10 +471,11 @@ TEST(Sp3Validation, PointSourceInALargeMedium)
 // A measurement, run by hand (see the top of the file; 400k photons, about
 // 2 minutes on an idle 2-core machine): it prints the table of
 // Documentation/Solvers.md. The targets (5 % from 2 mm, 2 % from
-// 6 mm) are NOT met (+24 % at 2 mm, -6 to -10 % from 10 mm: the SP3 model
-// itself, Solvers.md "SP3" has the measurements that rule out the mesh and
-// the boundary coefficients), so the test asserts only what the table
-// needs: the reference's precision.
+// 6 mm) are NOT met (+24 % at 2 mm, -6 to -10 % from 10 mm: the SP_N model
+// itself, Solvers.md "SP3" has the measurements that rule out the mesh, the
+// boundary coefficients, the source (exact single scatter and up to five
+// exact scattering orders) and the angular order (SP5, SP7)), so the test
+// asserts only what the table needs: the reference's precision.
 /// The pencil-beam slab (60 x 60 x 30 mm, graded mesh, mu_a 0.01,
 /// mu_s' 1/mm, g = 0, eta 1.3, 1 W face-on at the origin) and its fibre
 /// detectors: radii 2, 4, 6, 10, 15, 20 mm (fibres 0.5, 1, 1, 2, 2, 2 mm),
