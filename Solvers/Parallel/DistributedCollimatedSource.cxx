@@ -388,16 +388,9 @@ void DistributedCollimatedSource::Compute(MPI_Comm comm, const TetMesh* mesh,
   // from their entry triangles (kept while the values under the surface
   // and the powers are). The same choice on every rank (agreed inputs).
   start = Seconds();
-  bool sameDirections = raysValid && geometryKept && RayShadows_ == shadows &&
-    RayBeams_.size() == beams.size();
-  bool samePowers = sameDirections;
-  for (std::size_t b = 0; sameDirections && b < beams.size(); ++b)
-  {
-    sameDirections = beams[b].Direction == RayBeams_[b].Direction;
-    samePowers = samePowers && beams[b].Power == RayBeams_[b].Power;
-  }
-  const bool raysKept = sameDirections;
-  samePowers = samePowers && raysKept;
+  const bool raysKept =
+    raysValid && geometryKept && RayShadows_ == shadows && SameBeamDirections(beams, RayBeams_);
+  const bool samePowers = raysKept && SameBeamPowers(beams, RayBeams_);
   if (hasTets)
   {
     CollimatedEntrySurface entry;

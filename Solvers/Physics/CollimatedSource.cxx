@@ -1643,42 +1643,45 @@ struct CollimatedSourceCache::Internals
   std::vector<double> Fluence; ///< the last result's E_c, summed over the beams
   std::array<double, NumberOfChannels> Entering{};
   CollimatedLoadCache Loads; ///< the last result's beams and loads
-
-  /// Whether `beams` run along the kept beams' directions (bit for bit).
-  bool SameDirections(const std::vector<LightSource>& beams) const
-  {
-    if (beams.size() != Beams.size())
-    {
-      return false;
-    }
-    for (size_t b = 0; b < beams.size(); ++b)
-    {
-      for (int k = 0; k < 3; ++k)
-      {
-        if (beams[b].Direction[k] != Beams[b].Direction[k])
-        {
-          return false;
-        }
-      }
-    }
-    return true;
-  }
-
-  bool SamePowers(const std::vector<LightSource>& beams) const
-  {
-    for (size_t b = 0; b < beams.size(); ++b)
-    {
-      for (int c = 0; c < NumberOfChannels; ++c)
-      {
-        if (beams[b].Power[c] != Beams[b].Power[c])
-        {
-          return false;
-        }
-      }
-    }
-    return true;
-  }
 };
+
+bool SameBeamDirections(const std::vector<LightSource>& a, const std::vector<LightSource>& b)
+{
+  if (a.size() != b.size())
+  {
+    return false;
+  }
+  for (size_t l = 0; l < a.size(); ++l)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      if (a[l].Direction[k] != b[l].Direction[k])
+      {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+bool SameBeamPowers(const std::vector<LightSource>& a, const std::vector<LightSource>& b)
+{
+  if (a.size() != b.size())
+  {
+    return false;
+  }
+  for (size_t l = 0; l < a.size(); ++l)
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      if (a[l].Power[c] != b[l].Power[c])
+      {
+        return false;
+      }
+    }
+  }
+  return true;
+}
 
 CollimatedSourceCache::CollimatedSourceCache()
   : I_(new Internals)
@@ -1723,7 +1726,7 @@ CollimatedSource CollimatedSourceCache::Compute(const TetMesh& mesh,
     return ComputeCollimatedSource(mesh, material, lights, shadows);
   }
   const bool sameRays = k.Valid && k.Revision == revision && k.Points == numPoints &&
-    k.Tets == numTets && k.Shadows == shadows && k.SameDirections(beams);
+    k.Tets == numTets && k.Shadows == shadows && SameBeamDirections(beams, k.Beams);
   CollimatedSource out;
   if (!sameRays)
   {
@@ -1749,7 +1752,7 @@ CollimatedSource CollimatedSourceCache::Compute(const TetMesh& mesh,
     // The kept rays: E_c again only if the material under the boundary or a
     // power changed.
     CollimatedEntrySurface surface = MeshEntrySurface(mesh, material, k.Diagonal);
-    const bool samePowers = k.SamePowers(beams);
+    const bool samePowers = SameBeamPowers(beams, k.Beams);
     const bool sameEta = surface.Eta == k.SurfaceEta;
     if (samePowers && sameEta && surface.Extinction == k.SurfaceExtinction)
     {

@@ -378,6 +378,15 @@ std::vector<CollimatedDeposit> ComputeCollimatedTimeLoad(const TetMesh& mesh,
   const OpticalProperties& material, const CollimatedSource& source,
   const std::vector<double>& times);
 
+///@{
+/// Whether two lists of beams run along the same directions (and have the
+/// same powers), in the same order, bit for bit: what decides whether the
+/// kept rays (and E_c) of CollimatedSourceCache and the distributed beam
+/// still hold.
+bool SameBeamDirections(const std::vector<LightSource>& a, const std::vector<LightSource>& b);
+bool SameBeamPowers(const std::vector<LightSource>& a, const std::vector<LightSource>& b);
+///@}
+
 /// The lights without the directional ones (what stays boundary irradiance
 /// under the extended model).
 std::vector<LightSource> NonCollimatedLights(const std::vector<LightSource>& lights);
