@@ -19,6 +19,10 @@ the same tets (issues 31 and 32; Documentation/Performance.md and Scaling.md).
    and *paint* (the stroke moved onto the top of the object, width 2.4 % of
    the diagonal), each timed the same way. Repeated RUNS times (default 3,
    env TRANSLUCENCY_MPI_RUNS) on a new chain; medians.
+   With the build's Python package on PYTHONPATH (build/lib/python3.11/
+   site-packages), Solve Diffusion's own set-up and PCG times (rank 0's
+   GetAssemblyTime, GetSolveTime) are recorded too ("solve setup", "solve
+   pcg") and what its beam and linear set-up did is printed.
 3. Writes the medians (seconds, per step and filter), the ranks and the tets
    to the JSON file. --table prints the Markdown
    table of two or more such files (the first is the baseline).
@@ -47,9 +51,9 @@ def table(paths):
                                         for r in runs) + " | ratio |")
     print("|---|---|" + "---|" * len(runs) + "---|")
     for step in STEPS:
-        for f in FILTERS + ("total",):
+        for f in FILTERS + ("total", "solve setup", "solve pcg"):
             values = [r["medians"][step].get(f) for r in runs]
-            if values[0] is None:
+            if any(v is None for v in values):
                 continue
             ratio = values[-1] / values[0] if values[0] > 0 else float("nan")
             print("| %s | %s | %s | %.2f |" % (step, f, " | ".join("%.3f" % v for v in values),
@@ -64,6 +68,11 @@ def main():
     runs = int(os.environ.get("TRANSLUCENCY_MPI_RUNS", "3"))
     distributed = int(os.environ.get("TRANSLUCENCY_MPI_DISTRIBUTED_SOLVE", "1"))
     LoadPlugin(plugin, ns=globals())
+    try:
+        import translucency  # noqa: F401  (the getters of Solve Diffusion)
+        wrapped = True
+    except ImportError:
+        wrapped = False
     pm = servermanager.vtkProcessModule.GetProcessModule()
     ranks = pm.GetNumberOfLocalPartitions()
     if ranks > 1:
@@ -87,7 +96,7 @@ def main():
         t = math.radians(degrees)
         return [0.0, -math.cos(t) + math.sin(t), -math.sin(t) - math.cos(t), 1.0]
 
-    times = {s: {f: [] for f in FILTERS + ("total",)} for s in STEPS}
+    times = {s: {f: [] for f in FILTERS + ("total", "solve setup", "solve pcg")} for s in STEPS}
     for run in range(runs):
         assign = AssignScatteringCoefficients(Input=reader, MaterialName="marble")  # noqa: F821
         light = SurfaceIrradiance(Input=assign, DirectionalLights=key_light(0.0),  # noqa: F821
@@ -112,10 +121,27 @@ def main():
                 times[step][f].append(seconds)
                 total += seconds
             times[step]["total"].append(total)
-            print("run %d %-8s %s total %.3f" % (run + 1, step, " ".join(
-                "%s %.3f" % (f, times[step][f][-1]) for f in FILTERS), total), flush=True)
+            # Solve Diffusion's own account (rank 0's filter): set-up
+            # (numbering, assembly with the beam, hierarchy) and PCG, and
+            # what its beam and linear set-up did.
+            # (Needs the build's Python package on PYTHONPATH for the getters.)
+            account = ""
+            core = solve.GetClientSideObject()
+            if wrapped and hasattr(core, "GetAssemblyTime"):
+                times[step]["solve setup"].append(core.GetAssemblyTime() / 1000.0)
+                times[step]["solve pcg"].append(core.GetSolveTime() / 1000.0)
+                account = " (solve: set-up %.3f, pcg %.3f, beam %s, %s)" % (
+                    times[step]["solve setup"][-1], times[step]["solve pcg"][-1],
+                    core.GetLastCollimatedUpdate() or "-", core.GetLastLinearSetup() or "-")
+            print("run %d %-8s %s total %.3f%s" % (
+                run + 1, step, " ".join("%s %.3f" % (f, times[step][f][-1]) for f in FILTERS),
+                total, account), flush=True)
         for proxy in (radiance, solve, paint, light, assign):
             Delete(proxy)
+    for s in STEPS:
+        for f in ("solve setup", "solve pcg"):
+            if not times[s][f]:
+                del times[s][f]
     result = {"ranks": ranks, "tets": info.GetNumberOfCells(), "runs": runs,
               "distributed_solve": distributed,
               "threads": os.environ.get("OMP_NUM_THREADS", ""),

@@ -34,6 +34,7 @@ for r in runs:
         r["mode"], r["tets"], r["cold_seconds"], r["relight_median_seconds"],
         " ".join("%.3f" % s for s in r["relight_seconds"])))
 print("GUI relight phases (medians, s): %s" % runs[1].get("relight_phase_median_seconds"))
+print("GUI cold phases (s): %s" % runs[1].get("cold_phase_seconds"))
 print("GUI / pvbatch: relight %.2f, cold %.2f" % (
     runs[1]["relight_median_seconds"] / runs[0]["relight_median_seconds"],
     runs[1]["cold_seconds"] / runs[0]["cold_seconds"]))

@@ -136,15 +136,30 @@ def run(results):
         else:
             radiance.UpdatePipeline()
 
+    if os.environ.get("TRANSLUCENCY_RELIGHT_DIAG") == "1":
+        print("cold starts at monotonic %.3f s" % time.monotonic(), flush=True)
     start = time.perf_counter()
+    cold = {}
     if GUI:
-        # Show runs the chain (cold); then the picture.
+        # Show runs the chain (cold); then the picture. Each part timed
+        # (cold_phase_seconds): the chain and its representation, the colour
+        # map, the panel, then update()'s pipeline, render and events.
+        t0 = time.perf_counter()
         display = Show(radiance, view)
+        t1 = time.perf_counter()
         ColorBy(display, ("POINTS", "Radiance", "Magnitude"))
+        t2 = time.perf_counter()
         SetActiveSource(light)  # its panel, with the line widget shown
         view.ResetCamera()
+        t3 = time.perf_counter()
+        cold = {"show": t1 - t0, "color_by": t2 - t1, "panel": t3 - t2}
     update()
     results["cold_seconds"] = time.perf_counter() - start
+    if os.environ.get("TRANSLUCENCY_RELIGHT_DIAG") == "1":
+        print("cold ended at monotonic %.3f s" % time.monotonic(), flush=True)
+    if GUI:
+        cold.update({name: v[0] for name, v in phases.items()})
+        results["cold_phase_seconds"] = cold
     if FIELDS:
         results["fluence"] = [fluence(solve)]
     relights = []

@@ -148,7 +148,7 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   const std::vector<int>& triangleTets, BoundarySurface& surface,
   std::vector<int>& surfacePoint, std::vector<double>& rotations,
   BoundarySurfaceReport& report, const std::vector<double>* triangleData,
-  int valuesPerTriangle, std::vector<double>* gatheredData)
+  int valuesPerTriangle, std::vector<double>* gatheredData, std::vector<int>* gatheredTriangles)
 {
   const Timer timer;
   report = BoundarySurfaceReport();
@@ -169,10 +169,14 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   const std::size_t perTriangle =
     triangleData && gatheredData ? static_cast<std::size_t>(std::max(0, valuesPerTriangle)) : 0;
   std::vector<char> onSurface(numPoints, 0);
+  if (gatheredTriangles)
+    gatheredTriangles->clear();
   for (std::size_t f = 0; f < numTriangles; ++f)
   {
     if (seen[f] != 1)
       continue;
+    if (gatheredTriangles)
+      gatheredTriangles->push_back(static_cast<int>(f));
     for (std::size_t k = 0; k < perTriangle; ++k)
       myData.push_back((*triangleData)[perTriangle * f + k]);
     TriangleRecord record;

@@ -58,6 +58,11 @@ double TriangleHalfNormal(const double* p0, const double* p1, const double* p2, 
  *   of each local triangle (valuesPerTriangle each, e.g. the extinction of
  *   its tet for the collimated beam), gathered with the physical triangles
  *   into gatheredData, in surface.Triangles' order
+ * @param gatheredTriangles optional output: this rank's triangles among
+ *   the gathered ones (indices into `triangles`), in the order they were
+ *   sent: this rank's part of surface.Triangles, which comes after the
+ *   lower ranks' parts (a caller may gather new values of them alone in
+ *   this order, DistributedCollimatedSource)
  * Throws translucency::Error, with the same message on every rank, for a
  * triangle held by more than two ranks (overlapping pieces without ghost
  * marks) or an invalid refractive index under a physical triangle.
@@ -68,7 +73,8 @@ void GatherBoundarySurface(MPI_Comm comm, const std::vector<double>& points,
   const std::vector<int>& triangleTets, BoundarySurface& surface,
   std::vector<int>& surfacePoint, std::vector<double>& rotations,
   BoundarySurfaceReport& report, const std::vector<double>* triangleData = nullptr,
-  int valuesPerTriangle = 0, std::vector<double>* gatheredData = nullptr);
+  int valuesPerTriangle = 0, std::vector<double>* gatheredData = nullptr,
+  std::vector<int>* gatheredTriangles = nullptr);
 
 /// A rank's part of the physical boundary (FindPieceBoundary()).
 struct PieceBoundary

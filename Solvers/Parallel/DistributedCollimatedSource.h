@@ -32,6 +32,7 @@
 #include <mpi.h>
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -51,10 +52,22 @@ void AgreeOnLights(MPI_Comm comm, bool have, std::vector<LightSource>& lights,
   double& uniformIrradiance, bool& shadows, CollimatedModel& model, int& flag);
 
 /**
- * The extended source of the directional lights on this rank's piece, and
- * the gathered surface it keeps across calls while every rank's piece
- * (geometry, keys, material) is the same, bit for bit (a relight gathers
- * nothing).
+ * The extended source of the directional lights on this rank's piece, kept
+ * across calls as the serial CollimatedSourceCache keeps it (issue 32: a
+ * paint must not cost a whole beam):
+ *  - the gathered surface's geometry, while every rank's piece (geometry
+ *    revision, keys) is the same; a paint that changes the material under the
+ *    surface gathers the values of the physical triangles again (eta, mu_t',
+ *    O(surface), no numbering);
+ *  - the entry triangle of each beam at each local point (the rays), while
+ *    the surface, the beams' directions and the shadow flag are the same;
+ *  - E_c, evaluated again from the kept rays only when the material under
+ *    the surface or a beam's power changed;
+ *  - the loads (CollimatedLoadCache on this rank's tets: the tets whose
+ *    material or vertex E_c changed, and the ring around them, integrated
+ *    again; Load equal to a fresh computation bit for bit);
+ *  - the entering power, while the surface's eta and the beams are the same.
+ * GetLastUpdate() says what the last Compute did, the same on every rank.
  */
 class DistributedCollimatedSource
 {
@@ -71,12 +84,26 @@ public:
   void Compute(MPI_Comm comm, const TetMesh* mesh, const std::vector<PointKey>& keys,
     const std::vector<char>& used, const OpticalProperties& material,
     const std::vector<LightSource>& lights, bool shadows, CollimatedSource& out);
-  /// Forget the kept surface.
+  /// Forget everything kept.
   void Clear();
   /// Whether the last Compute gathered the surface (false: kept, or no beam).
   bool GetSurfaceGathered() const { return Gathered_; }
+  /// Whether the last Compute gathered the surface triangles' values only
+  /// (a paint under the surface; the surface's geometry kept).
+  bool GetSurfaceValuesGathered() const { return ValuesGathered_; }
   /// Physical boundary triangles of the kept surface (the same on every rank).
   long long GetSurfaceTriangles() const { return static_cast<long long>(Surface_.GetNumberOfTriangles()); }
+  ///@{
+  /// What the last Compute did, the same on every rank (as
+  /// CollimatedSourceCache::GetLastUpdate()): "full" (rays cast, every tet
+  /// integrated; also without beams), "loads" (the kept rays, the tets in
+  /// GetTetsIntegrated() integrated again on some rank) or "kept" (nothing
+  /// changed on any rank); and the tets integrated, summed over the ranks.
+  const char* GetLastUpdate() const { return LastUpdate_; }
+  long long GetTetsIntegrated() const { return TetsIntegrated_; }
+  ///@}
+  /// Bytes this rank keeps (surface, rays, E_c, loads).
+  std::size_t GetMemoryBytes() const;
   /// Wall times of the last Compute on this rank (ms): the gather, the rays of
   /// this rank's points, the loads and the entering power.
   double GetGatherMilliseconds() const { return GatherMs_; }
@@ -85,26 +112,46 @@ public:
   double GetEnteringMilliseconds() const { return EnteringMs_; }
 
 private:
-  /// Collective: whether the kept surface is of this call's pieces.
-  bool Kept(MPI_Comm comm, const TetMesh* mesh, const std::vector<PointKey>& keys,
-    const OpticalProperties& material) const;
+  /// Collective: whether the kept surface's geometry is of this call's pieces.
+  bool GeometryKept(MPI_Comm comm, const TetMesh* mesh, const std::vector<PointKey>& keys) const;
   void Gather(MPI_Comm comm, const TetMesh* mesh, const std::vector<PointKey>& keys,
     const std::vector<char>& used, const OpticalProperties& material);
+  /// Collective: this rank's physical triangles' eta and mu_t' (4 each).
+  std::vector<double> TriangleValues(const TetMesh* mesh, const OpticalProperties& material) const;
+  /// Collective: the surface triangles' eta and mu_t' again when they
+  /// changed on some rank; returns whether they did.
+  bool RefreshValues(MPI_Comm comm, const TetMesh* mesh, const OpticalProperties& material);
   /// Collective: the beams' power entering the object (W per channel).
   std::array<double, NumberOfChannels> Entering(
     MPI_Comm comm, const std::vector<LightSource>& beams, bool shadows) const;
+  /// Collective: the loads' power sums and what the ranks' loads did.
+  void SumOverRanks(MPI_Comm comm, bool raysCast, CollimatedSource& out);
 
   bool Valid_ = false;
   bool Gathered_ = false;
+  bool ValuesGathered_ = false;
   std::uint64_t Revision_ = 0;
   std::vector<PointKey> Keys_;
-  OpticalProperties Material_;
   BoundarySurface Surface_;
   std::vector<double> Extinction_;   ///< 3 per surface triangle
   std::vector<double> PointArea_;    ///< per surface point: S_p
   std::vector<double> PointNormal_;  ///< 3 per surface point: outward unit normal
   std::vector<int> SurfacePoint_;    ///< per local point: its surface point, -1 if none
   std::vector<double> Rotations_;    ///< per surface point (unused: no uniform light here)
+  std::vector<int> MyTriangles_;     ///< this rank's gathered triangles (local indices)
+  std::vector<double> MyValues_;     ///< their eta and mu_t' as last gathered (4 each)
+
+  // The rays and the field of the last Compute (while Valid_).
+  bool RaysValid_ = false;
+  bool RayShadows_ = false;
+  std::vector<LightSource> RayBeams_;          ///< the beams the field is of
+  std::vector<std::vector<int>> Entries_;      ///< per beam and local point: entry triangle
+  std::vector<double> Fluence_;                ///< E_c summed over the beams, 3 per local point
+  std::array<double, NumberOfChannels> Entering_{};
+  CollimatedLoadCache Loads_;                  ///< this rank's tets' loads and the beams
+
+  const char* LastUpdate_ = "full";
+  long long TetsIntegrated_ = 0;
   double GatherMs_ = 0.0, RayMs_ = 0.0, LoadMs_ = 0.0, EnteringMs_ = 0.0;
 };
 

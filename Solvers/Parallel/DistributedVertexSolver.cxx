@@ -1026,7 +1026,8 @@ void DistributedVertexSolver::FillStatistics(SolverReport& report) const
         OwnedColumns_.size() * (sizeof(int) + sizeof(double));
     }
   }
-  report.MemoryBytes = bytes;
+  // The beam kept across paints (the surface, rays, E_c and loads).
+  report.MemoryBytes = bytes + Beam_.GetMemoryBytes();
 }
 
 void DistributedVertexSolver::Solve(const std::vector<double>& points,
@@ -1270,6 +1271,9 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
     report.CollimatedEntering = BeamResult_.Entering;
     report.CollimatedScattered = BeamResult_.Scattered;
     report.CollimatedAbsorbed = BeamResult_.Absorbed;
+    // What the beam did (kept rays and loads on a paint), as the serial
+    // solver's CollimatedSourceCache reports it.
+    report.Collimated = Beam_.GetLastUpdate();
     if (report.CollimatedFluence.size() != fluence.size())
       report.CollimatedFluence.assign(fluence.size(), 0.0);
   }

@@ -1332,6 +1332,25 @@ void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
   BeamFieldOnSurface(surface, nullptr, beams, shadows, points, onBoundary, normals, out);
 }
 
+std::vector<std::vector<int>> CastCollimatedBeamEntries(const CollimatedEntrySurface& surface,
+  const std::vector<LightSource>& beams, bool shadows, const std::vector<double>& points,
+  const std::vector<char>& onBoundary, const std::vector<double>& normals)
+{
+  if (beams.empty() || surface.Triangles->empty())
+  {
+    return std::vector<std::vector<int>>(
+      beams.size(), std::vector<int>(points.size() / 3, -1));
+  }
+  return CastBeamEntries(surface, nullptr, beams, shadows, points, onBoundary, normals);
+}
+
+void EvaluateCollimatedBeamField(const CollimatedEntrySurface& surface,
+  const std::vector<LightSource>& beams, const std::vector<double>& points,
+  const std::vector<std::vector<int>>& entries, CollimatedSource& out)
+{
+  EvaluateBeamField(surface, beams, points, entries, out);
+}
+
 void AddCollimatedLoads(const TetMesh& mesh, const OpticalProperties& material, CollimatedSource& out)
 {
   if (out.Load.size() != 3 * static_cast<size_t>(mesh.GetNumberOfPoints()))
@@ -1387,58 +1406,9 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
 }
 
 //------------------------------------------------------------------------------
-struct CollimatedSourceCache::Internals
-{
-  bool Valid = false;
-  std::uint64_t Revision = 0;
-  int Points = 0, Tets = 0;
-  bool Shadows = false;
-  std::vector<LightSource> Beams;
-  double Diagonal = 0.0;
-  std::vector<std::vector<int>> Entries; ///< per beam and point: entry triangle or -1
-  std::vector<double> SurfaceEta, SurfaceExtinction;
-  std::vector<double> MuA, MuS;
-  CollimatedSource Source;
-
-  /// Whether `beams` run along the kept beams' directions (bit for bit).
-  bool SameDirections(const std::vector<LightSource>& beams) const
-  {
-    if (beams.size() != Beams.size())
-    {
-      return false;
-    }
-    for (size_t b = 0; b < beams.size(); ++b)
-    {
-      for (int k = 0; k < 3; ++k)
-      {
-        if (beams[b].Direction[k] != Beams[b].Direction[k])
-        {
-          return false;
-        }
-      }
-    }
-    return true;
-  }
-
-  bool SamePowers(const std::vector<LightSource>& beams) const
-  {
-    for (size_t b = 0; b < beams.size(); ++b)
-    {
-      for (int c = 0; c < NumberOfChannels; ++c)
-      {
-        if (beams[b].Power[c] != Beams[b].Power[c])
-        {
-          return false;
-        }
-      }
-    }
-    return true;
-  }
-};
-
 namespace
 {
-/// CollimatedSourceCache: the tets whose mu_a or mu_s' differ from the kept
+/// CollimatedLoadCache: the tets whose mu_a or mu_s' differ from the kept
 /// ones or that have a point in `changedPoint`.
 std::vector<int> DirtyTets(const TetMesh& mesh, const OpticalProperties& material,
   const std::vector<double>& keptMuA, const std::vector<double>& keptMuS,
@@ -1455,7 +1425,7 @@ std::vector<int> DirtyTets(const TetMesh& mesh, const OpticalProperties& materia
       muA[at + 2] != keptMuA[at + 2] || muS[at] != keptMuS[at] ||
       muS[at + 1] != keptMuS[at + 1] || muS[at + 2] != keptMuS[at + 2];
     const int* v = mesh.GetTet(t);
-    for (int k = 0; !changed && !changedPoint.empty() && k < 4; ++k)
+    for (int k = 0; !changed && k < 4; ++k)
     {
       changed = changedPoint[static_cast<size_t>(v[k])] != 0;
     }
@@ -1466,156 +1436,104 @@ std::vector<int> DirtyTets(const TetMesh& mesh, const OpticalProperties& materia
   }
   return dirty;
 }
+
+/// CollimatedLoadCache: per point, whether any beam's E_c differs from the
+/// kept beams' (the same count and sizes).
+std::vector<char> ChangedPoints(const std::vector<CollimatedSource::Beam>& now,
+  const std::vector<CollimatedSource::Beam>& was, int numPoints)
+{
+  std::vector<char> changed(static_cast<size_t>(numPoints), 0);
+  for (size_t b = 0; b < now.size(); ++b)
+  {
+    const std::vector<double>& e = now[b].Fluence;
+    const std::vector<double>& kept = was[b].Fluence;
+    for (size_t i = 0; i < e.size(); ++i)
+    {
+      if (e[i] != kept[i])
+      {
+        changed[i / 3] = 1;
+      }
+    }
+  }
+  return changed;
+}
 } // namespace
 
-CollimatedSourceCache::CollimatedSourceCache()
-  : I_(new Internals)
+void CollimatedLoadCache::Clear()
 {
+  *this = CollimatedLoadCache();
 }
 
-CollimatedSourceCache::~CollimatedSourceCache() = default;
-
-void CollimatedSourceCache::Clear()
+std::size_t CollimatedLoadCache::GetMemoryBytes() const
 {
-  I_.reset(new Internals);
-}
-
-std::size_t CollimatedSourceCache::GetMemoryBytes() const
-{
-  const Internals& k = *I_;
-  std::size_t bytes = sizeof(double) *
-    (k.SurfaceEta.size() + k.SurfaceExtinction.size() + k.MuA.size() + k.MuS.size() +
-      k.Source.Fluence.size() + k.Source.Load.size());
-  for (const std::vector<int>& entries : k.Entries)
-  {
-    bytes += sizeof(int) * entries.size();
-  }
-  for (const CollimatedSource::Beam& beam : k.Source.Beams)
+  std::size_t bytes = sizeof(double) * (MuA_.size() + MuS_.size() + Load_.size());
+  for (const CollimatedSource::Beam& beam : Beams_)
   {
     bytes += sizeof(double) * (beam.Fluence.size() + beam.OpticalPath.size());
   }
   return bytes;
 }
 
-CollimatedSource CollimatedSourceCache::Compute(const TetMesh& mesh,
-  const OpticalProperties& material, const std::vector<LightSource>& lights, bool shadows)
+void CollimatedLoadCache::Update(
+  const TetMesh& mesh, const OpticalProperties& material, bool keep, CollimatedSource& out)
 {
-  Internals& k = *I_;
   const int numPoints = mesh.GetNumberOfPoints();
   const int numTets = mesh.GetNumberOfTets();
+  const std::uint64_t revision = mesh.GetGeometryRevision();
+  keep = keep && Valid_ && revision != 0 && revision == Revision_ && numPoints == Points_ &&
+    numTets == Tets_ && out.Beams.size() == Beams_.size() &&
+    mesh.GetPointTetOffsets().size() == static_cast<size_t>(numPoints) + 1;
+  for (size_t b = 0; keep && b < out.Beams.size(); ++b)
+  {
+    keep = out.Beams[b].Fluence.size() == 3 * static_cast<size_t>(numPoints) &&
+      Beams_[b].Fluence.size() == out.Beams[b].Fluence.size();
+  }
   LastUpdate_ = "full";
   TetsIntegrated_ = numTets;
-  const std::vector<LightSource> beams = ValidatedBeams(material, numTets, lights);
-  const std::uint64_t revision = mesh.GetGeometryRevision();
-  if (beams.empty() || mesh.GetNumberOfBoundaryTriangles() == 0 || revision == 0 ||
-    mesh.GetPointTetOffsets().size() != static_cast<size_t>(numPoints) + 1)
+  std::vector<int> dirty;
+  if (keep)
   {
-    // Nothing to keep (no beam), or no way to know the geometry again.
-    Clear();
-    return ComputeCollimatedSource(mesh, material, lights, shadows);
+    dirty = DirtyTets(mesh, material, MuA_, MuS_, ChangedPoints(out.Beams, Beams_, numPoints));
   }
-  const bool sameRays = k.Valid && k.Revision == revision && k.Points == numPoints &&
-    k.Tets == numTets && k.Shadows == shadows && k.SameDirections(beams);
-  CollimatedSource out;
-  if (!sameRays)
+  if (keep && 4 * dirty.size() <= static_cast<size_t>(numTets))
   {
-    // Everything, as ComputeCollimatedSource (Fast) does it, the rays kept.
-    k.Valid = false;
-    out = SizedSource(numPoints, beams.size());
-    const std::shared_ptr<const BoundaryCasters> casters = BoundaryCastersOf(mesh, shadows);
-    EnteringPower(mesh, material.RefractiveIndex, beams, shadows, *casters, out);
-    CollimatedEntrySurface surface = MeshEntrySurface(mesh, material, casters->Diagonal);
-    k.Entries = CastBeamEntries(surface, nullptr, beams, shadows, mesh.GetPoints(),
-      BoundaryFlags(mesh), mesh.GetPointNormals());
-    EvaluateBeamField(surface, beams, mesh.GetPoints(), k.Entries, out);
-    BeamLoads(mesh, material, CollimatedEvaluation::Fast, out);
-    k.Revision = revision;
-    k.Points = numPoints;
-    k.Tets = numTets;
-    k.Shadows = shadows;
-    k.Diagonal = casters->Diagonal;
-    k.SurfaceEta.swap(surface.Eta);
-    k.SurfaceExtinction.swap(surface.Extinction);
-    k.MuA = material.AbsorptionCoefficient;
-    k.MuS = material.ReducedScatteringCoefficient;
-  }
-  else
-  {
-    // The kept rays: E_c again only if the material under the boundary or a
-    // power changed.
-    CollimatedEntrySurface surface = MeshEntrySurface(mesh, material, k.Diagonal);
-    const bool samePowers = k.SamePowers(beams);
-    const bool sameEta = surface.Eta == k.SurfaceEta;
-    std::vector<char> changedPoint;
-    if (samePowers && sameEta && surface.Extinction == k.SurfaceExtinction)
-    {
-      out.Fluence = k.Source.Fluence;
-      out.Beams = k.Source.Beams;
-      out.Load.assign(out.Fluence.size(), 0.0);
-    }
-    else
-    {
-      out = SizedSource(numPoints, beams.size());
-      EvaluateBeamField(surface, beams, mesh.GetPoints(), k.Entries, out);
-      changedPoint.assign(static_cast<size_t>(numPoints), 0);
-      for (size_t b = 0; b < beams.size(); ++b)
-      {
-        const std::vector<double>& now = out.Beams[b].Fluence;
-        const std::vector<double>& was = k.Source.Beams[b].Fluence;
-        for (size_t i = 0; i < now.size(); ++i)
-        {
-          if (now[i] != was[i])
-          {
-            changedPoint[i / 3] = 1;
-          }
-        }
-      }
-    }
-    if (samePowers && sameEta)
-    {
-      out.Entering = k.Source.Entering;
-    }
-    else
-    {
-      EnteringPower(mesh, material.RefractiveIndex, beams, shadows,
-        *BoundaryCastersOf(mesh, shadows), out);
-    }
-    const std::vector<int> dirty =
-      DirtyTets(mesh, material, k.MuA, k.MuS, changedPoint);
-    if (4 * dirty.size() > static_cast<size_t>(numTets))
-    {
-      std::fill(out.Load.begin(), out.Load.end(), 0.0);
-      BeamLoads(mesh, material, CollimatedEvaluation::Fast, out);
-      LastUpdate_ = "loads";
-    }
-    else
-    {
-      UpdateLoads(mesh, material, dirty, out);
-    }
+    UpdateLoads(mesh, material, dirty, out);
     for (const int t : dirty)
     {
       for (size_t at = 3 * static_cast<size_t>(t); at < 3 * static_cast<size_t>(t) + 3; ++at)
       {
-        k.MuA[at] = material.AbsorptionCoefficient[at];
-        k.MuS[at] = material.ReducedScatteringCoefficient[at];
+        MuA_[at] = material.AbsorptionCoefficient[at];
+        MuS_[at] = material.ReducedScatteringCoefficient[at];
       }
     }
-    k.SurfaceEta.swap(surface.Eta);
-    k.SurfaceExtinction.swap(surface.Extinction);
   }
-  k.Beams = beams;
-  k.Source = out;
-  k.Valid = true;
-  return out;
+  else
+  {
+    // Every tet, as AddCollimatedLoads() on a fresh source.
+    out.Load.assign(3 * static_cast<size_t>(numPoints), 0.0);
+    out.Scattered = {};
+    out.Absorbed = {};
+    BeamLoads(mesh, material, CollimatedEvaluation::Fast, out);
+    LastUpdate_ = keep ? "loads" : "full";
+    MuA_ = material.AbsorptionCoefficient;
+    MuS_ = material.ReducedScatteringCoefficient;
+  }
+  Beams_ = out.Beams;
+  Load_ = out.Load;
+  Scattered_ = out.Scattered;
+  Absorbed_ = out.Absorbed;
+  Revision_ = revision;
+  Points_ = numPoints;
+  Tets_ = numTets;
+  Valid_ = true;
 }
 
-void CollimatedSourceCache::UpdateLoads(const TetMesh& mesh, const OpticalProperties& material,
+void CollimatedLoadCache::UpdateLoads(const TetMesh& mesh, const OpticalProperties& material,
   const std::vector<int>& dirty, CollimatedSource& out)
 {
-  Internals& k = *I_;
-  out.Load = k.Source.Load;
-  out.Scattered = k.Source.Scattered;
-  out.Absorbed = k.Source.Absorbed;
+  out.Load = Load_;
+  out.Scattered = Scattered_;
+  out.Absorbed = Absorbed_;
   LastUpdate_ = dirty.empty() ? "kept" : "loads";
   TetsIntegrated_ = 0;
   if (dirty.empty())
@@ -1673,8 +1591,8 @@ void CollimatedSourceCache::UpdateLoads(const TetMesh& mesh, const OpticalProper
     {
       const int t = dirty[static_cast<size_t>(d)];
       const size_t at = 3 * static_cast<size_t>(t);
-      TetBeamLoads(mesh.GetTet(t), mesh.GetTetVolume(t), k.Source.Beams, nullptr, true,
-        &k.MuA[at], &k.MuS[at], &oldLoad[12 * static_cast<size_t>(d)],
+      TetBeamLoads(mesh.GetTet(t), mesh.GetTetVolume(t), Beams_, nullptr, true, &MuA_[at],
+        &MuS_[at], &oldLoad[12 * static_cast<size_t>(d)],
         &oldAbsorbed[3 * static_cast<size_t>(d)]);
     }
   }
@@ -1709,6 +1627,161 @@ void CollimatedSourceCache::UpdateLoads(const TetMesh& mesh, const OpticalProper
       out.Absorbed[c] += absorbed[3 * r + c] - oldAbsorbed[3 * static_cast<size_t>(d) + c];
     }
   }
+}
+
+//------------------------------------------------------------------------------
+struct CollimatedSourceCache::Internals
+{
+  bool Valid = false;
+  std::uint64_t Revision = 0;
+  int Points = 0, Tets = 0;
+  bool Shadows = false;
+  std::vector<LightSource> Beams;
+  double Diagonal = 0.0;
+  std::vector<std::vector<int>> Entries; ///< per beam and point: entry triangle or -1
+  std::vector<double> SurfaceEta, SurfaceExtinction;
+  std::vector<double> Fluence; ///< the last result's E_c, summed over the beams
+  std::array<double, NumberOfChannels> Entering{};
+  CollimatedLoadCache Loads; ///< the last result's beams and loads
+
+  /// Whether `beams` run along the kept beams' directions (bit for bit).
+  bool SameDirections(const std::vector<LightSource>& beams) const
+  {
+    if (beams.size() != Beams.size())
+    {
+      return false;
+    }
+    for (size_t b = 0; b < beams.size(); ++b)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        if (beams[b].Direction[k] != Beams[b].Direction[k])
+        {
+          return false;
+        }
+      }
+    }
+    return true;
+  }
+
+  bool SamePowers(const std::vector<LightSource>& beams) const
+  {
+    for (size_t b = 0; b < beams.size(); ++b)
+    {
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        if (beams[b].Power[c] != Beams[b].Power[c])
+        {
+          return false;
+        }
+      }
+    }
+    return true;
+  }
+};
+
+CollimatedSourceCache::CollimatedSourceCache()
+  : I_(new Internals)
+{
+}
+
+CollimatedSourceCache::~CollimatedSourceCache() = default;
+
+void CollimatedSourceCache::Clear()
+{
+  I_.reset(new Internals);
+}
+
+std::size_t CollimatedSourceCache::GetMemoryBytes() const
+{
+  const Internals& k = *I_;
+  std::size_t bytes =
+    sizeof(double) * (k.SurfaceEta.size() + k.SurfaceExtinction.size() + k.Fluence.size()) +
+    k.Loads.GetMemoryBytes();
+  for (const std::vector<int>& entries : k.Entries)
+  {
+    bytes += sizeof(int) * entries.size();
+  }
+  return bytes;
+}
+
+CollimatedSource CollimatedSourceCache::Compute(const TetMesh& mesh,
+  const OpticalProperties& material, const std::vector<LightSource>& lights, bool shadows)
+{
+  Internals& k = *I_;
+  const int numPoints = mesh.GetNumberOfPoints();
+  const int numTets = mesh.GetNumberOfTets();
+  LastUpdate_ = "full";
+  TetsIntegrated_ = numTets;
+  const std::vector<LightSource> beams = ValidatedBeams(material, numTets, lights);
+  const std::uint64_t revision = mesh.GetGeometryRevision();
+  if (beams.empty() || mesh.GetNumberOfBoundaryTriangles() == 0 || revision == 0 ||
+    mesh.GetPointTetOffsets().size() != static_cast<size_t>(numPoints) + 1)
+  {
+    // Nothing to keep (no beam), or no way to know the geometry again.
+    Clear();
+    return ComputeCollimatedSource(mesh, material, lights, shadows);
+  }
+  const bool sameRays = k.Valid && k.Revision == revision && k.Points == numPoints &&
+    k.Tets == numTets && k.Shadows == shadows && k.SameDirections(beams);
+  CollimatedSource out;
+  if (!sameRays)
+  {
+    // Everything, as ComputeCollimatedSource (Fast) does it, the rays kept.
+    k.Valid = false;
+    out = SizedSource(numPoints, beams.size());
+    const std::shared_ptr<const BoundaryCasters> casters = BoundaryCastersOf(mesh, shadows);
+    EnteringPower(mesh, material.RefractiveIndex, beams, shadows, *casters, out);
+    CollimatedEntrySurface surface = MeshEntrySurface(mesh, material, casters->Diagonal);
+    k.Entries = CastBeamEntries(surface, nullptr, beams, shadows, mesh.GetPoints(),
+      BoundaryFlags(mesh), mesh.GetPointNormals());
+    EvaluateBeamField(surface, beams, mesh.GetPoints(), k.Entries, out);
+    k.Revision = revision;
+    k.Points = numPoints;
+    k.Tets = numTets;
+    k.Shadows = shadows;
+    k.Diagonal = casters->Diagonal;
+    k.SurfaceEta.swap(surface.Eta);
+    k.SurfaceExtinction.swap(surface.Extinction);
+  }
+  else
+  {
+    // The kept rays: E_c again only if the material under the boundary or a
+    // power changed.
+    CollimatedEntrySurface surface = MeshEntrySurface(mesh, material, k.Diagonal);
+    const bool samePowers = k.SamePowers(beams);
+    const bool sameEta = surface.Eta == k.SurfaceEta;
+    if (samePowers && sameEta && surface.Extinction == k.SurfaceExtinction)
+    {
+      out.Fluence = k.Fluence;
+      out.Beams = k.Loads.GetBeams();
+    }
+    else
+    {
+      out = SizedSource(numPoints, beams.size());
+      EvaluateBeamField(surface, beams, mesh.GetPoints(), k.Entries, out);
+    }
+    if (samePowers && sameEta)
+    {
+      out.Entering = k.Entering;
+    }
+    else
+    {
+      EnteringPower(mesh, material.RefractiveIndex, beams, shadows,
+        *BoundaryCastersOf(mesh, shadows), out);
+    }
+    k.SurfaceEta.swap(surface.Eta);
+    k.SurfaceExtinction.swap(surface.Extinction);
+  }
+  // The loads: the dirty tets only under the kept rays.
+  k.Loads.Update(mesh, material, sameRays, out);
+  LastUpdate_ = sameRays ? k.Loads.GetLastUpdate() : "full";
+  TetsIntegrated_ = k.Loads.GetTetsIntegrated();
+  k.Beams = beams;
+  k.Fluence = out.Fluence;
+  k.Entering = out.Entering;
+  k.Valid = true;
+  return out;
 }
 
 void ComputeCollimatedFrequencyLoad(const TetMesh& mesh, const OpticalProperties& material,

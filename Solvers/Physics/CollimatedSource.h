@@ -41,6 +41,7 @@
 #include <array>
 #include <cstddef>
 #include <complex>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -158,6 +159,61 @@ CollimatedSource ComputeCollimatedSource(const TetMesh& mesh, const OpticalPrope
   CollimatedEvaluation evaluation = CollimatedEvaluation::Fast);
 
 /**
+ * The loads of a beam field (AddCollimatedLoads(): Load, Scattered,
+ * Absorbed) kept across calls on one mesh geometry: the load half of
+ * CollimatedSourceCache, shared by the distributed beam on each rank's piece
+ * (Solvers/Parallel/DistributedCollimatedSource.h). Update() compares the
+ * beams' E_c at every point and the tets' mu_a and mu_s' with the last
+ * call's: the tets whose mu_a or mu_s' changed or that touch a point whose
+ * E_c changed ("dirty") are integrated again, with the tets around their
+ * vertices, whose loads are summed again in AddCollimatedLoads' order, so
+ * Load equals a fresh AddCollimatedLoads() bit for bit; Scattered and
+ * Absorbed are updated by the dirty tets' differences (equal to rounding,
+ * ~1e-16 relative per call). More than a quarter of the tets dirty, another
+ * geometry (TetMesh::GetGeometryRevision(), the point or tet count), another
+ * number of beams or `keep` false: every tet is integrated. Memory: the
+ * beams (32 bytes per point and beam), the loads (24 per point), mu_a and
+ * mu_s' (48 per tet).
+ */
+class CollimatedLoadCache
+{
+public:
+  /// out.Load, out.Scattered and out.Absorbed of out.Beams (E_c at every
+  /// point of `mesh`) over the tets of `mesh`; `keep` false integrates every
+  /// tet (new rays). `material` must be valid for the mesh.
+  void Update(const TetMesh& mesh, const OpticalProperties& material, bool keep,
+    CollimatedSource& out);
+  ///@{
+  /// What the last Update() did: "full" (nothing kept: every tet), "loads"
+  /// (the dirty tets and their ring, or every tet past a quarter dirty) or
+  /// "kept" (nothing dirty: the kept loads); and how many tets it integrated.
+  const char* GetLastUpdate() const { return LastUpdate_; }
+  long long GetTetsIntegrated() const { return TetsIntegrated_; }
+  ///@}
+  /// The beams of the last Update() (empty before).
+  const std::vector<CollimatedSource::Beam>& GetBeams() const { return Beams_; }
+  /// Forget everything kept.
+  void Clear();
+  /// Bytes held by what is kept.
+  std::size_t GetMemoryBytes() const;
+
+private:
+  /// Update(): Load, Scattered and Absorbed from the kept ones, the `dirty`
+  /// tets (and those around their vertices) integrated again.
+  void UpdateLoads(const TetMesh& mesh, const OpticalProperties& material,
+    const std::vector<int>& dirty, CollimatedSource& out);
+  bool Valid_ = false;
+  std::uint64_t Revision_ = 0;
+  int Points_ = 0, Tets_ = 0;
+  std::vector<double> MuA_, MuS_;
+  std::vector<CollimatedSource::Beam> Beams_;
+  std::vector<double> Load_;
+  std::array<double, NumberOfChannels> Scattered_{}, Absorbed_{};
+  const char* LastUpdate_ = "full";
+  long long TetsIntegrated_ = 0;
+};
+
+/**
  * ComputeCollimatedSource() (Fast) kept across the calls of an interactive
  * session (issue 31: a paint stroke must not cost a whole beam set-up).
  * What is kept from the last call: each beam's entry triangle per mesh point
@@ -207,10 +263,6 @@ public:
 
 private:
   struct Internals;
-  /// Compute(): Load, Scattered and Absorbed from the kept ones, the
-  /// `dirty` tets (and those around their vertices) integrated again.
-  void UpdateLoads(const TetMesh& mesh, const OpticalProperties& material,
-    const std::vector<int>& dirty, CollimatedSource& out);
   std::unique_ptr<Internals> I_;
   const char* LastUpdate_ = "full";
   long long TetsIntegrated_ = 0;
@@ -247,6 +299,31 @@ struct CollimatedEntrySurface
 void ComputeCollimatedBeamAtPoints(const CollimatedEntrySurface& surface,
   const std::vector<LightSource>& beams, bool shadows, const std::vector<double>& points,
   const std::vector<char>& onBoundary, const std::vector<double>& normals, CollimatedSource& out);
+
+/**
+ * The two halves of ComputeCollimatedBeamAtPoints() (Fast), for a caller
+ * that keeps the rays (CollimatedSourceCache, the distributed beam): per
+ * beam and query point, the index of the triangle of `surface` through which
+ * the beam reaches the point, or -1 (no entry, or the entry shadowed). It
+ * depends on the surface's geometry, the beams' directions, the shadow flag
+ * and the points, not on the material or the powers. Arguments as
+ * ComputeCollimatedBeamAtPoints().
+ */
+std::vector<std::vector<int>> CastCollimatedBeamEntries(const CollimatedEntrySurface& surface,
+  const std::vector<LightSource>& beams, bool shadows, const std::vector<double>& points,
+  const std::vector<char>& onBoundary, const std::vector<double>& normals);
+
+/**
+ * The optical half: E_c of every beam at the query points and the optical
+ * path, from the entry triangles of CastCollimatedBeamEntries() and the
+ * material under them (surface.Eta, surface.Extinction) and the beams'
+ * powers. out.Fluence and out.Beams must be sized to the points and zeroed;
+ * CastCollimatedBeamEntries() then this equal ComputeCollimatedBeamAtPoints()
+ * bit for bit.
+ */
+void EvaluateCollimatedBeamField(const CollimatedEntrySurface& surface,
+  const std::vector<LightSource>& beams, const std::vector<double>& points,
+  const std::vector<std::vector<int>>& entries, CollimatedSource& out);
 
 /**
  * ComputeCollimatedSource()'s load: the integral of mu_s' E_c phi_i over each
