@@ -360,11 +360,13 @@ def p1_load(z, q):
 def annulus_means(transform, annuli=HYB_ANNULI):
     """Means over annuli of the inverse Hankel transform of a smooth function
     of k given at SOLVE_K (spline in log k onto a fine trapezoid grid to
-    200 / mm): (1 / 2 pi) int f(k) k W(k) dk, W the annulus mean of J0(k rho)."""
+    200 / mm): (1 / 2 pi) int f(k) k W(k) dk, W the annulus mean of J0(k rho).
+    Steps of 0.001 / mm to 5 / mm, 0.002 beyond: halving them changes the
+    20 mm annulus by 0.1 % (steps of 0.05 beyond 40 / mm were 2-3 % off
+    there for the first-collision line source)."""
     from scipy.interpolate import CubicSpline
     from scipy.special import j1
-    k = np.concatenate([np.arange(0, 5, 0.005), np.arange(5, 40, 0.02),
-                        np.arange(40, 200.001, 0.05)])
+    k = np.concatenate([np.arange(0, 5, 0.001), np.arange(5, 200.001, 0.002)])
     wk = np.zeros_like(k)
     wk[:-1] += np.diff(k) / 2
     wk[1:] += np.diff(k) / 2
