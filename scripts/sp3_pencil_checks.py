@@ -44,7 +44,7 @@ Independent computations, none using the project's code
                Monte Carlo over the annuli 2, 4, 6, 10, 15, 20 mm; ETA
                (default 1.3) the relative index of both faces. About 2
                minutes plus the Monte Carlo.
-  transform MUA KAPPA...
+  transform MUA ETA KAPPA...
                int R(rho) I0(kappa rho) dA (the slab's transform at k =
                i kappa; kappa = 0: the total diffuse reflectance; towards
                mu_eff it weights the far field) of exact transport
@@ -53,7 +53,7 @@ Independent computations, none using the project's code
 
 Usage: sp3_pencil_checks.py milne 1.3 | sp3_pencil_checks.py mc 4000000 7 0.01
        sp3_pencil_checks.py orders 4000000 7 0.01 | sp3_pencil_checks.py hybrid 4000000 7 0.01
-       sp3_pencil_checks.py transform 0.01 0 0.1 0.15 0.165
+       sp3_pencil_checks.py transform 0.01 1.3 0 0.1 0.15 0.165
 """
 import sys
 
@@ -573,8 +573,9 @@ def transform(mua, kappas):
 if __name__ == "__main__":
     if len(sys.argv) >= 2 and sys.argv[1] == "milne":
         milne(float(sys.argv[2]) if len(sys.argv) > 2 else 1.3)
-    elif len(sys.argv) >= 3 and sys.argv[1] == "transform":
-        transform(float(sys.argv[2]), [float(a) for a in sys.argv[3:]])
+    elif len(sys.argv) >= 4 and sys.argv[1] == "transform":
+        SLAB_ETA = float(sys.argv[3])
+        transform(float(sys.argv[2]), [float(a) for a in sys.argv[4:]])
     elif len(sys.argv) >= 2 and sys.argv[1] == "hybrid":
         if len(sys.argv) > 5:
             SLAB_ETA = float(sys.argv[5])
