@@ -13,8 +13,10 @@ and <prefix>_surface.pvtp (the boundary surface with Radiance).
    Tetrahedralize Surface runs TetGen on rank 0.
 2. Redistribute DataSet spreads the tets over the ranks; Assign Scattering
    Coefficients, Surface Irradiance and Solve Diffusion keep that partition:
-   each gathers the pieces to rank 0, computes there and hands every rank its
-   own piece back with the new arrays (Documentation/Parallel.md).
+   Assign runs per piece, Surface Irradiance casts its rays against the
+   all-gathered boundary surface, and Solve Diffusion solves one distributed
+   system (hypre) with each rank's own tets; no rank holds the whole mesh
+   (Documentation/Parallel.md, "What runs where").
 3. Outgoing Radiance: the surface of physical boundary faces only (no
    partition faces), each rank the faces of its own tets.
 4. The counts printed are over all ranks: a point shared by two pieces is
