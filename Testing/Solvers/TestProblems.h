@@ -18,12 +18,14 @@
 #include "DiffusionSolver.h"
 #include "Error.h"
 #include "OpticalProperties.h"
+#include "TetMesh.h"
 
 #include <Eigen/Core>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -179,6 +181,47 @@ std::string ErrorMessage(F f)
 inline bool Contains(const std::string& text, const std::string& part)
 {
   return text.find(part) != std::string::npos;
+}
+
+/// The tets with a vertex within `radius` of `centre` (a paint stroke's
+/// footprint in the cache tests), in tet order.
+inline std::vector<int> TetsNear(
+  const TetMesh& mesh, const std::array<double, 3>& centre, double radius)
+{
+  std::vector<int> tets;
+  for (int t = 0; t < mesh.GetNumberOfTets(); ++t)
+  {
+    const int* v = mesh.GetTet(t);
+    for (int k = 0; k < 4; ++k)
+    {
+      const double* x = mesh.GetPoint(v[k]);
+      const double d2 = (x[0] - centre[0]) * (x[0] - centre[0]) +
+        (x[1] - centre[1]) * (x[1] - centre[1]) + (x[2] - centre[2]) * (x[2] - centre[2]);
+      if (d2 < radius * radius)
+      {
+        tets.push_back(t);
+        break;
+      }
+    }
+  }
+  return tets;
+}
+
+/// max |a - b| / max |b| (the difference itself when b is 0; 0 for equal
+/// vectors); infinite when the sizes differ, so that every bound fails.
+inline double RelativeDifference(const std::vector<double>& a, const std::vector<double>& b)
+{
+  if (a.size() != b.size())
+  {
+    return std::numeric_limits<double>::infinity();
+  }
+  double diff = 0.0, scale = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k)
+  {
+    diff = std::max(diff, std::abs(a[k] - b[k]));
+    scale = std::max(scale, std::abs(b[k]));
+  }
+  return scale > 0.0 ? diff / scale : diff;
 }
 
 } // namespace testing

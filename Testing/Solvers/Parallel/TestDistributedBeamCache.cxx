@@ -18,6 +18,7 @@
 #include "DistributedVertexSolver.h"
 #include "HypreSolver.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TestRandomProblems.h"
 #include "TetMesh.h"
 
@@ -31,6 +32,8 @@
 #include <memory>
 
 using namespace translucency;
+using translucency::testing::RelativeDifference;
+using translucency::testing::TetsNear;
 
 namespace
 {
@@ -129,45 +132,11 @@ OpticalProperties PieceMaterial(const Scene& s, const OpticalProperties& whole)
   return m;
 }
 
-/// Tets of the whole mesh with a vertex within `radius` of `centre`.
-std::vector<int> TetsNear(const TetMesh& mesh, const std::array<double, 3>& centre, double radius)
-{
-  std::vector<int> tets;
-  for (int t = 0; t < mesh.GetNumberOfTets(); ++t)
-  {
-    const int* v = mesh.GetTet(t);
-    for (int k = 0; k < 4; ++k)
-    {
-      const double* x = mesh.GetPoint(v[k]);
-      const double d2 = (x[0] - centre[0]) * (x[0] - centre[0]) +
-        (x[1] - centre[1]) * (x[1] - centre[1]) + (x[2] - centre[2]) * (x[2] - centre[2]);
-      if (d2 < radius * radius)
-      {
-        tets.push_back(t);
-        break;
-      }
-    }
-  }
-  return tets;
-}
-
 double Relative(double a, double b)
 {
   return std::abs(a - b) / std::max(std::abs(b), 1e-300);
 }
 
-/// max |a - b| / max |b|.
-double RelativeDifference(const std::vector<double>& a, const std::vector<double>& b)
-{
-  EXPECT_EQ(a.size(), b.size());
-  double diff = 0.0, scale = 0.0;
-  for (std::size_t k = 0; k < std::min(a.size(), b.size()); ++k)
-  {
-    diff = std::max(diff, std::abs(a[k] - b[k]));
-    scale = std::max(scale, std::abs(b[k]));
-  }
-  return scale > 0.0 ? diff / scale : diff;
-}
 
 /// One step: the kept distributed beam against a fresh one (bit for bit)
 /// and against the serial cache on the whole mesh (to rounding), and what

@@ -21,6 +21,7 @@
 #include <memory>
 
 using namespace translucency;
+using translucency::testing::RelativeDifference;
 using translucency::testing::Contains;
 using translucency::testing::ErrorMessage;
 
@@ -32,18 +33,6 @@ Communicator Self()
   return MakeCommunicator(GetSelfCommunicator());
 }
 
-/// max |a - b| / max |b| (0 for equal vectors).
-double RelativeDifference(const std::vector<double>& a, const std::vector<double>& b)
-{
-  EXPECT_EQ(a.size(), b.size());
-  double diff = 0.0, scale = 0.0;
-  for (std::size_t k = 0; k < std::min(a.size(), b.size()); ++k)
-  {
-    diff = std::max(diff, std::abs(a[k] - b[k]));
-    scale = std::max(scale, std::abs(b[k]));
-  }
-  return scale > 0.0 ? diff / scale : diff;
-}
 
 double Relative(double a, double b)
 {

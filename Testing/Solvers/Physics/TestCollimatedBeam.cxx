@@ -13,6 +13,7 @@
 #include "LightSources.h"
 #include "OpticalProperties.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetGenMeshes.h"
 #include "TetMesh.h"
 
@@ -291,29 +292,15 @@ void ExpectCachedEqualsFresh(CollimatedSourceCache& cache, const TetMesh& mesh,
 /// of them has a boundary triangle.
 std::vector<int> TetsNear(const TetMesh& mesh, const double centre[3], double radius, bool& boundary)
 {
+  std::vector<int> tets =
+    translucency::testing::TetsNear(mesh, { centre[0], centre[1], centre[2] }, radius);
   std::vector<char> underTriangle(static_cast<size_t>(mesh.GetNumberOfTets()), 0);
   for (const int t : mesh.GetBoundaryTriangleTets())
   {
     underTriangle[static_cast<size_t>(t)] = 1;
   }
-  std::vector<int> tets;
-  boundary = false;
-  for (int t = 0; t < mesh.GetNumberOfTets(); ++t)
-  {
-    const int* v = mesh.GetTet(t);
-    for (int k = 0; k < 4; ++k)
-    {
-      const double* x = mesh.GetPoint(v[k]);
-      const double d2 = (x[0] - centre[0]) * (x[0] - centre[0]) +
-        (x[1] - centre[1]) * (x[1] - centre[1]) + (x[2] - centre[2]) * (x[2] - centre[2]);
-      if (d2 < radius * radius)
-      {
-        tets.push_back(t);
-        boundary = boundary || underTriangle[static_cast<size_t>(t)] != 0;
-        break;
-      }
-    }
-  }
+  boundary = std::any_of(tets.begin(), tets.end(),
+    [&](int t) { return underTriangle[static_cast<size_t>(t)] != 0; });
   return tets;
 }
 

@@ -10,6 +10,7 @@
 #include "RayCaster.h"
 #include "ShadowCaster.h"
 #include "TestMeshes.h"
+#include "TestProblems.h"
 #include "TetMesh.h"
 
 #include <gtest/gtest.h>
@@ -23,6 +24,7 @@ namespace
 {
 
 using namespace translucency;
+using translucency::testing::RelativeDifference;
 
 /// An 8 mm cube in 6^3 cells with a 4 x 4 x 4 mm well dug from its top
 /// (the walls shadow the floor), the refractive index varying by tet.
@@ -48,18 +50,6 @@ void MakeWell(TetMesh& mesh, std::vector<double>& tetEta, double shift = 0.0)
   mesh.SetGeometry(points, tets);
 }
 
-/// Largest |a - b| relative to the largest |b|.
-double RelativeDifference(const std::vector<double>& a, const std::vector<double>& b)
-{
-  EXPECT_EQ(a.size(), b.size());
-  double diff = 0.0, scale = 0.0;
-  for (size_t k = 0; k < std::min(a.size(), b.size()); ++k)
-  {
-    diff = std::max(diff, std::abs(a[k] - b[k]));
-    scale = std::max(scale, std::abs(b[k]));
-  }
-  return scale > 0.0 ? diff / scale : diff;
-}
 
 std::vector<double> Full(const TetMesh& mesh, const std::vector<double>& eta,
   const std::vector<LightSource>& lights, double uniform, int samples, bool shadows)
