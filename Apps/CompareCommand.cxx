@@ -19,6 +19,7 @@
 #include "PowerReport.h"
 #include "Provenance.h"
 #include "Scene.h"
+#include "Utilities.h"
 
 #include "DiffusionSolverFactory.h"
 #include "Error.h"
@@ -842,8 +843,7 @@ void WriteStagedMultiblock(vtkMultiBlockDataSet* blocks, const std::string& outp
   vtkNew<vtkXMLMultiBlockDataWriter> writer;
   writer->SetInputData(blocks);
   writer->SetFileName((staging / "compare.vtm").c_str());
-  writer->SetDataModeToAppended();
-  writer->SetCompressorTypeToZLib();
+  ConfigureXmlWriter(writer);
   const bool wrote = writer->Write() != 0;
   std::error_code ec;
   for (fs::directory_iterator it(stagingPieces, ec), end; !ec && it != end; it.increment(ec))
