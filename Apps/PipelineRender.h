@@ -48,9 +48,12 @@ bool WriteRadiancePNG(vtkPolyData* surface, const RadianceImageOptions& options,
   const std::string& fileName, std::string& error);
 
 /// Render a slice of the fluence rate (options.Channel, log or linear
-/// options.LogScale, inferno, colour bar in W/mm^2) on options.SlicePlane.
+/// options.LogScale, inferno, colour bar in W/mm^2) on options.SlicePlane,
+/// with the object's silhouette for context: `silhouette` (the mesh's
+/// boundary surface, e.g. Outgoing Radiance's, when the caller has it), else
+/// the boundary extracted from `mesh` (vtkDataSetSurfaceFilter).
 bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions& options,
-  const std::string& fileName, std::string& error);
+  const std::string& fileName, std::string& error, vtkPolyData* silhouette = nullptr);
 
 /**
  * The frequency-domain slice (`render --frequency F --slice-png`): two panels
@@ -61,7 +64,8 @@ bool WriteFluenceSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions&
  * `frequency` (Hz) goes into the captions.
  */
 bool WriteAmplitudePhaseSlicePNG(vtkUnstructuredGrid* mesh, const RadianceImageOptions& options,
-  double frequency, const std::string& fileName, std::string& error);
+  double frequency, const std::string& fileName, std::string& error,
+  vtkPolyData* silhouette = nullptr);
 
 /**
  * Render `surface` coloured by its 1-component point array `arrayName` on the

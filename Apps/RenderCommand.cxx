@@ -191,8 +191,8 @@ void WriteRenderFiles(const RenderOptions& o, vtkUnstructuredGrid* solved,
       // Frequency domain: amplitude and phase side by side.
       if (o.Optics.Frequency > 0.0
             ? !WriteAmplitudePhaseSlicePNG(
-                solved, o.Image, o.Optics.Frequency, outputs.Add(slicePath), error)
-            : !WriteFluenceSlicePNG(solved, o.Image, outputs.Add(slicePath), error))
+                solved, o.Image, o.Optics.Frequency, outputs.Add(slicePath), error, outSurface)
+            : !WriteFluenceSlicePNG(solved, o.Image, outputs.Add(slicePath), error, outSurface))
         throw translucency::Error(error);
     }
     stages.push_back({ "render", MillisecondsSince(start) });
