@@ -27,6 +27,7 @@
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkStaticCellLocator.h>
+#include <vtkStreamingDemandDrivenPipeline.h>
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
@@ -256,10 +257,30 @@ double NearestInVolume(vtkImageData* volume, const VolumeArray& a, const int ijk
 }
 
 /// VOLUME: probed coefficients (one palette entry per tet) or table entries by id.
+/// The image on `inputs` (the Volume port) spans its whole extent.
+bool HasWholeImage(vtkInformationVector* inputs)
+{
+  vtkInformation* info =
+    inputs && inputs->GetNumberOfInformationObjects() > 0 ? inputs->GetInformationObject(0) : nullptr;
+  vtkImageData* image = info ? vtkImageData::SafeDownCast(info->Get(vtkDataObject::DATA_OBJECT()))
+                             : nullptr;
+  if (!image || !info->Has(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()) ||
+    image->GetNumberOfPoints() == 0)
+  {
+    return false;
+  }
+  int whole[6], extent[6];
+  info->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), whole);
+  image->GetExtent(extent);
+  return std::equal(whole, whole + 6, extent);
+}
+
+/// `firstTet`: the number errors give the first of `centroids`' tets (0, or
+/// a piece's first tet in the whole mesh under MPI).
 bool FieldFromVolume(vtkAlgorithm* self, vtkImageData* volume,
   const std::vector<Point3>& centroids, const std::string& absorptionName,
   const std::string& scatteringName, const std::string& idName, double eta,
-  const translucency::MaterialTable& table, MaterialField& field)
+  const translucency::MaterialTable& table, long long firstTet, MaterialField& field)
 {
   if (!volume)
   {
@@ -306,11 +327,11 @@ bool FieldFromVolume(vtkAlgorithm* self, vtkImageData* volume,
     else
     {
       MaterialCoefficients& m = field.Palette[i];
+      const int tet = static_cast<int>(firstTet + static_cast<long long>(i));
       ProbeVolume(volume, absorption, ijk, pc, m.Absorption.data());
-      translucency::CheckProbedValues(static_cast<int>(i), centroids[i], absorption.Name, m.Absorption);
+      translucency::CheckProbedValues(tet, centroids[i], absorption.Name, m.Absorption);
       ProbeVolume(volume, scattering, ijk, pc, m.ReducedScattering.data());
-      translucency::CheckProbedValues(
-        static_cast<int>(i), centroids[i], scattering.Name, m.ReducedScattering);
+      translucency::CheckProbedValues(tet, centroids[i], scattering.Name, m.ReducedScattering);
       m.RefractiveIndex = eta;
       field.Which[i] = static_cast<int>(i);
     }
@@ -321,7 +342,7 @@ bool FieldFromVolume(vtkAlgorithm* self, vtkImageData* volume,
       const Point3& x = centroids[tet];
       std::ostringstream os;
       os.precision(17);
-      os << "tet " << tet << " has material id " << id << " (volume array '" << idName
+      os << "tet " << firstTet + tet << " has material id " << id << " (volume array '" << idName
          << "' at its centroid (" << x[0] << ", " << x[1] << ", " << x[2] << "))";
       return os.str();
     });
@@ -425,7 +446,7 @@ bool vtkAssignScatteringCoefficients::ComputeMaterials(
   {
     return FieldFromVolume(this, volume, centroids, this->VolumeAbsorptionArrayName,
       this->VolumeScatteringArrayName, this->VolumeMaterialIdArrayName, this->RefractiveIndex,
-      table, field);
+      table, this->FirstTetNumber, field);
   }
   if (this->MaterialMode == VEINS)
   {
@@ -486,7 +507,24 @@ int vtkAssignScatteringCoefficients::RequestData(
 int vtkAssignScatteringCoefficients::RequestUpdateExtent(
   vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
-  return vtkTranslucencyDispatch::UpdateExtent(this, request, inputVector, outputVector);
+  const int result = vtkTranslucencyDispatch::UpdateExtent(this, request, inputVector, outputVector);
+  // VOLUME: every rank asks for the whole image (not the extent ParaView
+  // would give its piece), so that each rank probes its own tets, wherever
+  // they lie, without a gather of the mesh (PlanParallel).
+  vtkInformation* image = this->MaterialMode == VOLUME && inputVector[1] &&
+      inputVector[1]->GetNumberOfInformationObjects() > 0
+    ? inputVector[1]->GetInformationObject(0)
+    : nullptr;
+  if (result && image && image->Has(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()))
+  {
+    int whole[6];
+    image->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), whole);
+    image->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), 0);
+    image->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(), 1);
+    image->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_GHOST_LEVELS(), 0);
+    image->Set(vtkStreamingDemandDrivenPipeline::UPDATE_EXTENT(), whole, 6);
+  }
+  return result;
 }
 
 //------------------------------------------------------------------------------
@@ -495,9 +533,13 @@ vtkTranslucencyParallelPlan vtkAssignScatteringCoefficients::PlanParallel(
 {
   using Plan = vtkTranslucencyParallelPlan;
   const Plan::GatherMode mode = Plan::GatherMode::SameMesh;
-  if (this->MaterialMode == VOLUME)
+  vtkUnstructuredGrid* piece = vtkUnstructuredGrid::GetData(inputVector[0]);
+  const bool hasCells = piece && piece->GetNumberOfCells() > 0;
+  if (this->MaterialMode == VOLUME && comm.Any(hasCells && !HasWholeImage(inputVector[1])))
   {
-    return Plan::Gathered(mode, "the Volume mode needs the image around every tet");
+    // RequestUpdateExtent asked for the whole image: a source that ignored
+    // the request (or no image: the serial path's error) is gathered.
+    return Plan::Gathered(mode, "the Volume image is not whole on every rank with tets");
   }
   if (this->MaterialMode == LAYERS && !vtkTranslucency::CanDistribute(comm))
   {
@@ -506,8 +548,6 @@ vtkTranslucencyParallelPlan vtkAssignScatteringCoefficients::PlanParallel(
   }
   // vtkOriginalCellIds (added when missing) number the gathered mesh's
   // cells: the rank order unless ghost cells or cell GlobalIds reorder them.
-  vtkUnstructuredGrid* piece = vtkUnstructuredGrid::GetData(inputVector[0]);
-  const bool hasCells = piece && piece->GetNumberOfCells() > 0;
   const bool reordered = comm.Any(hasCells &&
     !piece->GetCellData()->GetArray(vtkTranslucency::OriginalCellIdsName) &&
     (vtkTranslucency::HasGhostCells(piece) || piece->GetCellData()->GetGlobalIds()));
@@ -518,6 +558,8 @@ vtkTranslucencyParallelPlan vtkAssignScatteringCoefficients::PlanParallel(
   }
   return Plan::PerPiece(mode, this->MaterialMode == LAYERS
       ? "the depths below the all-gathered physical boundary surface, per tet"
+      : this->MaterialMode == VOLUME
+      ? "each rank's tets probed in the whole image (every rank reads it), no mesh gather"
       : "per-tet values, no gather");
 }
 
@@ -606,8 +648,12 @@ int vtkAssignScatteringCoefficients::RequestPerPiece(vtkInformationVector** inpu
     try
     {
       this->WholeSurface = this->MaterialMode == LAYERS ? wholeSurface.Get() : nullptr;
-      aborted = !this->ComputeMaterials(input, nullptr, field); // Veins may abort
+      this->FirstTetNumber = offset;
+      // Veins and Volume may abort.
+      aborted = !this->ComputeMaterials(input,
+        this->MaterialMode == VOLUME ? vtkImageData::GetData(inputVector[1]) : nullptr, field);
       this->WholeSurface = nullptr;
+      this->FirstTetNumber = 0;
       if (!aborted)
       {
         field.Scale(this->ScaleFactor);
@@ -617,6 +663,7 @@ int vtkAssignScatteringCoefficients::RequestPerPiece(vtkInformationVector** inpu
     catch (const std::exception& e)
     {
       this->WholeSurface = nullptr;
+      this->FirstTetNumber = 0;
       local = e.what();
     }
   }

@@ -339,6 +339,10 @@ protected:
   /// LAYERS per piece: the whole object's boundary surface (all-gathered),
   /// set during RequestPerPiece only (not owned); null: this input's own.
   vtkPolyData* WholeSurface = nullptr;
+  /// VOLUME per piece: the number of this piece's first tet in the ranks'
+  /// order (vtkOriginalCellIds), so that an error names the tet as the whole
+  /// mesh numbers it; set during RequestPerPiece only.
+  long long FirstTetNumber = 0;
 
   std::string MaterialName = "marble";
   double AbsorptionCoefficient[3] = { 0.0021, 0.0041, 0.0071 };

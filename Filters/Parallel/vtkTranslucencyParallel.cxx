@@ -445,13 +445,16 @@ vtkSmartPointer<vtkDataObject> MergePointSets(const Pieces& pieces, PieceMaps* m
 
 vtkSmartPointer<vtkDataObject> Merge(const Pieces& pieces, PieceMaps* maps, std::string& error);
 
-/// Image pieces put together by their extents.
+/// Image pieces put together by their extents; one piece that spans all the
+/// others' (every rank read the whole image: Assign's Volume mode asks for
+/// it) is taken as it is.
 vtkSmartPointer<vtkDataObject> MergeImages(const Pieces& pieces)
 {
   vtkNew<vtkImageAppend> append;
   append->PreserveExtentsOn();
   vtkSmartPointer<vtkDataObject> only;
   int count = 0;
+  int all[6] = { VTK_INT_MAX, VTK_INT_MIN, VTK_INT_MAX, VTK_INT_MIN, VTK_INT_MAX, VTK_INT_MIN };
   for (const auto& p : pieces)
   {
     auto* image = vtkImageData::SafeDownCast(p);
@@ -460,6 +463,21 @@ vtkSmartPointer<vtkDataObject> MergeImages(const Pieces& pieces)
       append->AddInputData(image);
       only = p;
       ++count;
+      const int* e = image->GetExtent();
+      for (int k = 0; k < 3; ++k)
+      {
+        all[2 * k] = std::min(all[2 * k], e[2 * k]);
+        all[2 * k + 1] = std::max(all[2 * k + 1], e[2 * k + 1]);
+      }
+    }
+  }
+  for (const auto& p : pieces)
+  {
+    auto* image = vtkImageData::SafeDownCast(p);
+    if (count > 1 && image && image->GetNumberOfPoints() > 0 &&
+      std::equal(all, all + 6, image->GetExtent()))
+    {
+      return p;
     }
   }
   if (count <= 1)

@@ -27,7 +27,9 @@ an invalid RefractiveIndex on rank 1 only (the same error on every rank),
 after_error_B (a run after it), then Assign Scattering Coefficients (a spherical inclusion) on the 3-piece,
 1-piece and ghost-cell .pvtu (assign_<case>.pvtu; the serial ref_assign.vtu),
 veins on the 3-piece .pvtu and Redistribute DataSet (assignveins_<case>.pvtu;
-ref_assignveins.vtu),
+ref_assignveins.vtu), layers and the Volume mode (a Wavelet image) likewise
+(assignlayers_*, assignvolume_*; the Volume mode also gathered by
+TRANSLUCENCY_PARALLEL=gathered),
 with a line "assign <case> rank <r> path <path>", Stroke Cut (cut_<case>.pvtu,
 lines "cut <case> rank <r> path <path> in <cells> out <cells>" and "cutstats
 <case> rank <r> movable .. moved .. blocked .. front <tets> <points> bytes .."),
@@ -116,11 +118,30 @@ def paint(source, original=None):
                                        StrokeIsPolyline=1, Width=1.5, **extra)
 
 
-def assign(source, veins=False, layers=False):
+def volume_image():
+    # 1 mm voxels over the box and a voxel beyond (the Wavelet's extent):
+    # coefficients that vary with the Wavelet's RTData and with x, y, z, so
+    # that a tet probed in the wrong part of the image gets other values.
+    wavelet = Wavelet(WholeExtent=[-1, 17, -1, 17, -1, 15])
+    absorption = Calculator(Input=wavelet, ResultArrayName="AbsorptionCoefficient",
+                            ResultArrayType="Double",
+                            Function="(0.002 + 0.00005*RTData)*iHat + "
+                                     "(0.004 + 0.0001*coordsX*coordsY)*jHat + 0.01*kHat")
+    return Calculator(Input=absorption, ResultArrayName="ReducedScatteringCoefficient",
+                      ResultArrayType="Double",
+                      Function="(1 + 0.005*RTData)*iHat + 1.5*jHat + (2 + 0.1*coordsZ)*kHat")
+
+
+def assign(source, veins=False, layers=False, volume=False):
     # A spherical inclusion, or veins (per tet: computed on each piece under MPI),
     # or layers by depth (per piece on the all-gathered boundary surface; the
     # thicknesses keep the layer boundaries, 1.1 and 3.7 mm deep, away from the
-    # centroids' depths, multiples of 0.25 mm in this box).
+    # centroids' depths, multiples of 0.25 mm in this box), or probed in an image
+    # (per piece: every rank asks for the whole image, which ParaView would
+    # otherwise split by extent).
+    if volume:
+        return AssignScatteringCoefficients(Input=source, MaterialMode="Volume",
+                                            Volume=volume_image())
     if layers:
         return AssignScatteringCoefficients(Input=source, MaterialMode="Layers by Depth",
                                             Layers=["1.1", "skin1", "2.6", "ketchup",
@@ -234,6 +255,7 @@ if MODE == "prepare":
     SaveData(path("ref_assign.vtu"), proxy=assign(source))
     SaveData(path("ref_assignveins.vtu"), proxy=assign(source, veins=True))
     SaveData(path("ref_assignlayers.vtu"), proxy=assign(source, layers=True))
+    SaveData(path("ref_assignvolume.vtu"), proxy=assign(source, volume=True))
     _, painted = chain(paint(source), "B")
     SaveData(path("ref_paint.vtu"), proxy=painted)
     for kind in ("plane", "sphere", "relax", "stroke"):
@@ -314,10 +336,20 @@ elif MODE == "run":
             ("assignlayers_pvtu1", XMLPartitionedUnstructuredGridReader(
                 FileName=[path("mesh1.pvtu")])),
             ("assignlayers_redist", RedistributeDataSet(Input=XMLUnstructuredGridReader(
-                FileName=[path("mesh.vtu")])))):
+                FileName=[path("mesh.vtu")]))), ("assignvolume_pvtu3", pvtu3),
+            ("assignvolume_pvtu1", XMLPartitionedUnstructuredGridReader(
+                FileName=[path("mesh1.pvtu")])),
+            ("assignvolume_redist", RedistributeDataSet(Input=XMLUnstructuredGridReader(
+                FileName=[path("mesh.vtu")]))), ("assignvolume_gathered", pvtu3)):
         assigned = assign(source, veins=name.startswith("assignveins"),
-                          layers=name.startswith("assignlayers"))
+                          layers=name.startswith("assignlayers"),
+                          volume=name.startswith("assignvolume"))
+        # The one override: every filter gathers (the image pieces, whole on
+        # every rank, merged into one).
+        if name.endswith("_gathered"):
+            os.environ["TRANSLUCENCY_PARALLEL"] = "gathered"
         assigned.UpdatePipeline()
+        os.environ.pop("TRANSLUCENCY_PARALLEL", None)
         with open(path("irr_%d.txt" % RANK), "a") as f:
             f.write("assign %s rank %d path %s\n" % (
                 name, RANK, assigned.GetClientSideObject().GetParallelPath().replace(" ", "-")))

@@ -208,7 +208,7 @@ class DistributedIrradianceTest(MpiSuite):
                 (vtk_to_numpy(ghosts) & 1) == 0
             return keys, values, vtk_to_numpy(data.GetArray("vtkOriginalCellIds")), owned
         refs = {}
-        for name in ("assign", "assignveins", "assignlayers"):
+        for name in ("assign", "assignveins", "assignlayers", "assignvolume"):
             reader = vtkXMLUnstructuredGridReader()
             reader.SetFileName(os.path.join(self.work, "ref_%s.vtu" % name))
             reader.Update()
@@ -220,7 +220,12 @@ class DistributedIrradianceTest(MpiSuite):
                                ("assignveins_redist", "per-piece"),
                                ("assignlayers_pvtu3", "per-piece"),
                                ("assignlayers_pvtu1", "per-piece"),
-                               ("assignlayers_redist", "per-piece")):
+                               ("assignlayers_redist", "per-piece"),
+                               # every rank probes its own tets in the whole image
+                               ("assignvolume_pvtu3", "per-piece"),
+                               ("assignvolume_pvtu1", "per-piece"),
+                               ("assignvolume_redist", "per-piece"),
+                               ("assignvolume_gathered", "gathered")):
             ref = refs[case.split("_")[0]]
             paths = self.assign_paths.get(case, {})
             self.assertEqual(sorted(paths), list(range(RANKS)), case)

@@ -88,6 +88,25 @@ def tiny_mesh():
     return grid
 
 
+def unit_image():
+    """A 3 x 3 x 3 image over the unit cube (0.5 mm voxels) with uniform
+    coefficients: the Volume mode's second input."""
+    from vtkmodules.vtkCommonCore import vtkDoubleArray
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    image = vtkImageData()
+    image.SetDimensions(3, 3, 3)
+    image.SetSpacing(0.5, 0.5, 0.5)
+    for name, value in [("AbsorptionCoefficient", 0.01), ("ReducedScatteringCoefficient", 1.0)]:
+        array = vtkDoubleArray()
+        array.SetName(name)
+        array.SetNumberOfComponents(3)
+        array.SetNumberOfTuples(27)
+        for c in range(3):
+            array.FillComponent(c, value)
+        image.GetPointData().AddArray(array)
+    return image
+
+
 def surface():
     from vtkmodules.vtkFiltersCore import vtkTriangleFilter
     from vtkmodules.vtkFiltersSources import vtkCubeSource
@@ -111,6 +130,8 @@ def configurations():
     def assign(mode):
         f = on_mesh(t.vtkAssignScatteringCoefficients())
         getattr(f, "SetMaterialModeTo" + mode)()
+        if mode == "Volume":
+            f.SetVolumeData(unit_image())
         return ("vtkAssignScatteringCoefficients", f)
 
     def solve(**settings):
