@@ -5,7 +5,8 @@
 # dark; the second render re-uses the first one's tet mesh, out/demo.vtu).
 # The mesh is gmsh's HXT (--mesher hxt): about half TetGen's time on the bunny
 # at 200k tets, with better tets (Documentation/Performance.md, "End to end at
-# 200k tets").
+# 200k tets"). HXT's tet count differs slightly from one run to the next
+# (about 0.2 %: Documentation/Pipeline.md, "Mesher").
 # Usage: scripts/demo.sh [BUILD_DIR]
 set -euo pipefail
 build=${1:-build}
