@@ -81,8 +81,9 @@ struct MessageCollector
   std::string Last() const;
 };
 
-/// Every XML file the command line writes: appended binary data, zlib at
-/// level 1 (half the write time of VTK's default level 5, files ~3 % larger).
+/// Every XML file the command line writes: appended raw binary data (not
+/// base64), zlib at level 1 (half the write time of VTK's default level 5,
+/// files ~3 % larger; raw: 0.62x the time and 0.75x the bytes of base64).
 void ConfigureXmlWriter(vtkXMLWriter* writer);
 
 /// Write `data` with `writer` to a unique temporary next to `path`
