@@ -68,6 +68,23 @@ public:
   virtual void UpdateValues(const int* rowOffsets, const int* columns, const double* values) = 0;
 
   /**
+   * Collective: UpdateValues where only this rank's rows `rows` (numRows
+   * row numbers local to this rank, 0 .. rowEnd - rowBegin - 1, any order;
+   * none is allowed) changed since the last Setup, UpdateValues or
+   * UpdateRows; `values` holds every row's current values (the unchanged
+   * rows' too) on the pattern of the last Setup. A solver that can write
+   * only those rows does (HypreBoomerAMGPCG: hypre::ScatterRows); the
+   * default calls UpdateValues with every row. The preconditioner is kept,
+   * as with UpdateValues. Issue 32: a paint stroke changes ~1 % of the rows.
+   */
+  virtual void UpdateRows(const int* rowOffsets, const int* columns, const double* values,
+    const int* rows, int numRows)
+  {
+    (void)rows, (void)numRows;
+    UpdateValues(rowOffsets, columns, values);
+  }
+
+  /**
    * Collective: as Setup (the same rows, the matrix built from scratch), but
    * preconditioned by `donor`'s preconditioner instead of one of its own
    * (issue 32: one BoomerAMG hierarchy for the three colour channels, whose

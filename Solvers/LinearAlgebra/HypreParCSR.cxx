@@ -169,6 +169,40 @@ void ScatterValues(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* r
   }
 }
 
+void ScatterRows(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
+  const int* columns, const double* values, const int* rows, int numRows,
+  std::vector<int>& places, std::uint64_t& pattern, const std::string& who)
+{
+  const int numLocal = rowEnd - rowBegin;
+  if (places.size() != static_cast<std::size_t>(rowOffsets[numLocal]))
+  {
+    // No places yet (the first update after a Setup): found for every row.
+    ScatterValues(matrix, rowBegin, rowEnd, rowOffsets, columns, values, places, pattern, who);
+    return;
+  }
+  hypre_ParCSRMatrix* a = nullptr;
+  HYPRE_IJMatrixGetObject(matrix, reinterpret_cast<void**>(&a));
+  HYPRE_Complex* diagData = hypre_CSRMatrixData(hypre_ParCSRMatrixDiag(a));
+  HYPRE_Complex* offdData = hypre_CSRMatrixData(hypre_ParCSRMatrixOffd(a));
+  for (int n = 0; n < numRows; ++n)
+  {
+    const int r = rows[n];
+    if (r < 0 || r >= numLocal)
+    {
+      throw Error(who + ": UpdateRows(): row " + std::to_string(r) + " is not one of this rank's " +
+        std::to_string(numLocal) + " rows");
+    }
+    for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
+    {
+      const int place = places[static_cast<std::size_t>(k)];
+      if (place >= 0)
+        diagData[place] = values[k];
+      else
+        offdData[-1 - place] = values[k];
+    }
+  }
+}
+
 int SolvePCG(HYPRE_Solver pcg, HYPRE_IJMatrix matrix, HYPRE_IJVector bVector,
   HYPRE_IJVector xVector, const std::vector<HYPRE_BigInt>& rowIds, const double* bLocal,
   double* xLocal, bool guess, double relTol, int maxIter, double& relRes, const std::string& who)

@@ -48,6 +48,19 @@ void ScatterValues(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* r
   const int* columns, const double* values, std::vector<int>& places, std::uint64_t& pattern,
   const std::string& who);
 
+/**
+ * ScatterValues of the rows `rows` only (numRows row numbers local to this
+ * rank, 0 .. rowEnd - rowBegin - 1): their entries of `values` written to
+ * the places a ScatterValues of this matrix found (`places`; the pattern is
+ * the one they were found for, not fingerprinted again: the caller's
+ * contract). Without places (none found yet, or of another size) it is
+ * ScatterValues of every row. Throws translucency::Error for a row out of
+ * range.
+ */
+void ScatterRows(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
+  const int* columns, const double* values, const int* rows, int numRows,
+  std::vector<int>& places, std::uint64_t& pattern, const std::string& who);
+
 /// FNV-1a fingerprint of a CSR pattern (rows + 1 offsets, then the columns).
 std::uint64_t PatternFingerprint(int rows, const int* rowOffsets, const int* columns);
 
