@@ -1625,9 +1625,25 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
       report.Assembly, hierarchyMs);
     MatrixMeasures_ = OwnedMeasures_;
     MatrixRule_ = Rule_;
-    Material_.AbsorptionCoefficient = material.AbsorptionCoefficient;
-    Material_.ReducedScatteringCoefficient = material.ReducedScatteringCoefficient;
-    Material_.RefractiveIndex = material.RefractiveIndex;
+    if (rowsUpdate)
+    {
+      // The kept material differs from this one in the changed tets only.
+      for (const int t : changedTets)
+      {
+        const std::size_t k = static_cast<std::size_t>(t);
+        std::copy_n(material.AbsorptionCoefficient.begin() + 3 * k, 3,
+          Material_.AbsorptionCoefficient.begin() + 3 * k);
+        std::copy_n(material.ReducedScatteringCoefficient.begin() + 3 * k, 3,
+          Material_.ReducedScatteringCoefficient.begin() + 3 * k);
+        Material_.RefractiveIndex[k] = material.RefractiveIndex[k];
+      }
+    }
+    else
+    {
+      Material_.AbsorptionCoefficient = material.AbsorptionCoefficient;
+      Material_.ReducedScatteringCoefficient = material.ReducedScatteringCoefficient;
+      Material_.RefractiveIndex = material.RefractiveIndex;
+    }
     HaveMaterial_ = true;
   }
   system = DiffusionSystem();
