@@ -1379,10 +1379,14 @@ void DistributedVertexSolver::FillStatistics(SolverReport& report) const
   report.NumberOfNonZeros = Channels_[0] ? Channels_[0]->GetNumberOfNonZeros() : 0;
   std::size_t bytes = Numbering_.GetMemoryBytes() +
     (OwnedOffsets_.capacity() + OwnedColumns_.capacity() + LocalPositions_.capacity() +
-      Targets_.capacity() + SendPositionsOff_.capacity()) * sizeof(int);
+      Targets_.capacity() + SendPositionsOff_.capacity() + SendPoints_.capacity() +
+      RowEntryOffsets_.capacity() + RowEntries_.capacity()) * sizeof(int) +
+    (MatrixMeasures_.capacity() + OwnedMeasures_.capacity()) * sizeof(double);
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     bytes += Contributions_[c].capacity() * sizeof(double) + Solution_[c].capacity() * sizeof(double);
+    // The local values and partial rows kept for the changed-rows update.
+    bytes += (LocalValues_[c].capacity() + Received_[c].capacity()) * sizeof(double);
     if (Channels_[c])
     {
       // The hierarchy below the fine level with its interpolation, the two IJ
@@ -1504,6 +1508,101 @@ void DistributedVertexSolver::AddVolumeSources(const std::vector<PointKey>& keys
   }
 }
 
+DistributedVertexSolver::MatrixChange DistributedVertexSolver::FindMatrixChange(
+  bool sameMesh, const OpticalProperties& material, std::vector<int>& changedTets)
+{
+  // The same mesh, options, linear solvers and Robin rule (the collimated
+  // model's) everywhere, and the tets whose coefficients changed since the
+  // last matrices, counted over the ranks: none is a relight; a few
+  // (MaximumChangedFraction_ of all) the changed-rows update.
+  changedTets.clear();
+  ChangedTets_ = -1;
+  ChangedRowCount_ = 0;
+  bool ready = sameMesh && !OptionsChanged_;
+  for (int c = 0; c < NumberOfChannels; ++c)
+    ready = ready && Channels_[c] && Donor_[c] >= 0 && LinearSolverName() == ChannelLinear_[c];
+  int allReady = ready ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &allReady, 1, MPI_INT, MPI_MIN, Comm_);
+  if (!allReady || Rule_ != MatrixRule_)
+    return MatrixChange::Assemble;
+  const bool comparable = FindChangedTets(material, changedTets);
+  long long counts[4] = { comparable ? 0 : 1, static_cast<long long>(changedTets.size()),
+    Mesh_->GetNumberOfTets(), HaveLocalValues_ ? 0 : 1 };
+  MPI_Allreduce(MPI_IN_PLACE, counts, 4, MPI_LONG_LONG, MPI_SUM, Comm_);
+  if (counts[0] != 0)
+    return MatrixChange::Assemble;
+  if (counts[1] == 0)
+    return MatrixChange::None;
+  return ChangedRowsUpdate_ && counts[3] == 0 &&
+      static_cast<double>(counts[1]) <= MaximumChangedFraction_ * static_cast<double>(counts[2])
+    ? MatrixChange::ChangedRows
+    : MatrixChange::Assemble;
+}
+
+std::array<DistributedVertexSolver::ChannelSetup, NumberOfChannels>
+DistributedVertexSolver::UpdateMatrices(MatrixChange change, bool sameMesh,
+  const OpticalProperties& material, const std::vector<double>& irradiance,
+  const std::vector<int>& changedTets, DiffusionSystem& system, SolverReport& report,
+  double& hierarchyMs)
+{
+  std::array<ChannelSetup, NumberOfChannels> setup{};
+  if (change != MatrixChange::Assemble)
+  {
+    // The irradiance is checked here (AssembleLocal checks it otherwise).
+    std::string error;
+    try
+    {
+      if (HasTets())
+        CheckIrradiance(*Mesh_, irradiance);
+    }
+    catch (const Error& e)
+    {
+      error = e.what();
+    }
+    AgreeOnError(Comm_, error);
+  }
+  if (change == MatrixChange::None)
+  {
+    report.Assembly = "unchanged";
+    return setup;
+  }
+  HaveMaterial_ = false;
+  const bool rows = change == MatrixChange::ChangedRows;
+  std::vector<int> ownedRows;
+  std::array<bool, NumberOfChannels> rowsChanged{};
+  if (rows)
+  {
+    UpdateChangedRows(material, changedTets, ownedRows, rowsChanged);
+    ChangedTets_ = static_cast<long long>(changedTets.size());
+    ChangedRowCount_ = static_cast<long long>(ownedRows.size());
+  }
+  setup = SetUpMatrices(
+    sameMesh, system, rows ? &ownedRows : nullptr, rowsChanged, report.Assembly, hierarchyMs);
+  MatrixMeasures_ = OwnedMeasures_;
+  MatrixRule_ = Rule_;
+  if (rows)
+  {
+    // The kept material differs from this one in the changed tets only.
+    for (const int t : changedTets)
+    {
+      const std::size_t k = static_cast<std::size_t>(t);
+      std::copy_n(material.AbsorptionCoefficient.begin() + 3 * k, 3,
+        Material_.AbsorptionCoefficient.begin() + 3 * k);
+      std::copy_n(material.ReducedScatteringCoefficient.begin() + 3 * k, 3,
+        Material_.ReducedScatteringCoefficient.begin() + 3 * k);
+      Material_.RefractiveIndex[k] = material.RefractiveIndex[k];
+    }
+  }
+  else
+  {
+    Material_.AbsorptionCoefficient = material.AbsorptionCoefficient;
+    Material_.ReducedScatteringCoefficient = material.ReducedScatteringCoefficient;
+    Material_.RefractiveIndex = material.RefractiveIndex;
+  }
+  HaveMaterial_ = true;
+  return setup;
+}
+
 void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
   const OpticalProperties& material, const std::vector<double>& irradiance,
   std::vector<double>& fluence, SolverReport& report)
@@ -1551,29 +1650,10 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   // bit, the hierarchies kept) assembles the right-hand side only.
   start = MPI_Wtime();
   cpu = CpuMilliseconds();
-  bool ready = allSame != 0 && !OptionsChanged_;
-  for (int c = 0; c < NumberOfChannels; ++c)
-    ready = ready && Channels_[c] && Donor_[c] >= 0 && LinearSolverName() == ChannelLinear_[c];
-  int allReady = ready ? 1 : 0;
-  MPI_Allreduce(MPI_IN_PLACE, &allReady, 1, MPI_INT, MPI_MIN, Comm_);
-  // (A change of the Robin rule, the collimated model's, changes the matrix.)
-  // The tets whose coefficients changed since the last matrices, on every
-  // rank: none is a relight; a few (MaximumChangedFraction_ of all) the
-  // changed-rows update.
-  bool relight = false, rowsUpdate = false;
   std::vector<int> changedTets;
-  ChangedTets_ = -1;
-  ChangedRowCount_ = 0;
-  if (allReady && Rule_ == MatrixRule_)
-  {
-    const bool comparable = FindChangedTets(material, changedTets);
-    long long counts[4] = { comparable ? 0 : 1, static_cast<long long>(changedTets.size()),
-      Mesh_->GetNumberOfTets(), HaveLocalValues_ ? 0 : 1 };
-    MPI_Allreduce(MPI_IN_PLACE, counts, 4, MPI_LONG_LONG, MPI_SUM, Comm_);
-    relight = counts[0] == 0 && counts[1] == 0;
-    rowsUpdate = !relight && ChangedRowsUpdate_ && counts[0] == 0 && counts[3] == 0 &&
-      static_cast<double>(counts[1]) <= MaximumChangedFraction_ * static_cast<double>(counts[2]);
-  }
+  const MatrixChange change = FindMatrixChange(allSame != 0, material, changedTets);
+  const bool relight = change == MatrixChange::None;
+  const bool rowsUpdate = change == MatrixChange::ChangedRows;
   DiffusionSystem system;
   if (!relight && !rowsUpdate)
   {
@@ -1590,62 +1670,8 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   // 3. The hypre matrices and their hierarchies.
   double hierarchyMs = 0.0;
   const long long hierarchiesBefore = HierarchySetups_;
-  std::array<ChannelSetup, NumberOfChannels> setup{};
-  if (relight || rowsUpdate)
-  {
-    // The irradiance is checked here (AssembleLocal checks it otherwise).
-    std::string error;
-    try
-    {
-      if (HasTets())
-        CheckIrradiance(*Mesh_, irradiance);
-    }
-    catch (const Error& e)
-    {
-      error = e.what();
-    }
-    AgreeOnError(Comm_, error);
-  }
-  if (relight)
-  {
-    report.Assembly = "unchanged";
-  }
-  else
-  {
-    HaveMaterial_ = false;
-    std::vector<int> ownedRows;
-    std::array<bool, NumberOfChannels> rowsChanged{};
-    if (rowsUpdate)
-    {
-      UpdateChangedRows(material, changedTets, ownedRows, rowsChanged);
-      ChangedTets_ = static_cast<long long>(changedTets.size());
-      ChangedRowCount_ = static_cast<long long>(ownedRows.size());
-    }
-    setup = SetUpMatrices(allSame != 0, system, rowsUpdate ? &ownedRows : nullptr, rowsChanged,
-      report.Assembly, hierarchyMs);
-    MatrixMeasures_ = OwnedMeasures_;
-    MatrixRule_ = Rule_;
-    if (rowsUpdate)
-    {
-      // The kept material differs from this one in the changed tets only.
-      for (const int t : changedTets)
-      {
-        const std::size_t k = static_cast<std::size_t>(t);
-        std::copy_n(material.AbsorptionCoefficient.begin() + 3 * k, 3,
-          Material_.AbsorptionCoefficient.begin() + 3 * k);
-        std::copy_n(material.ReducedScatteringCoefficient.begin() + 3 * k, 3,
-          Material_.ReducedScatteringCoefficient.begin() + 3 * k);
-        Material_.RefractiveIndex[k] = material.RefractiveIndex[k];
-      }
-    }
-    else
-    {
-      Material_.AbsorptionCoefficient = material.AbsorptionCoefficient;
-      Material_.ReducedScatteringCoefficient = material.ReducedScatteringCoefficient;
-      Material_.RefractiveIndex = material.RefractiveIndex;
-    }
-    HaveMaterial_ = true;
-  }
+  const std::array<ChannelSetup, NumberOfChannels> setup = UpdateMatrices(
+    change, allSame != 0, material, irradiance, changedTets, system, report, hierarchyMs);
   system = DiffusionSystem();
   Timings_.Assembly = Milliseconds(start) - hierarchyMs;
   Timings_.AssemblyCpu = CpuMilliseconds() - cpu - HierarchyCpu_;

@@ -229,7 +229,8 @@ public:
    * values equal the last Solve's (a relight: the hierarchies are kept,
    * only the right-hand side is new; when every rank's mesh and material are
    * the last Solve's, bit for bit, nothing but the right-hand side is
-   * assembled); report.LinearSetup says "kept", "values" or "rebuilt" and
+   * assembled); report.LinearSetup says "kept", "values", "rows" (values-only,
+   * the changed rows only: SetChangedRowsUpdate) or "rebuilt" and
    * the counts so far, "(numberings N, hierarchies H)"; iterations and
    * residuals are the same on every rank. (The interface's Solve on a
    * TetMesh this solver builds.)
@@ -296,6 +297,23 @@ private:
   /// relight, the right-hand side only) and the load into localRhs.
   void AddBoundaryTerms(const OpticalProperties& material, const std::vector<double>& irradiance,
     DiffusionSystem* system, std::vector<double>& localRhs);
+  /// What the matrices need in this Solve (the same on every rank).
+  enum class MatrixChange
+  {
+    None,        ///< every rank's matrix values are the last set-up's (a relight)
+    ChangedRows, ///< a few tets changed: their rows only (SetChangedRowsUpdate)
+    Assemble     ///< the whole local matrices
+  };
+  /// Collective: the change, and this rank's changed tets (ChangedRows).
+  MatrixChange FindMatrixChange(
+    bool sameMesh, const OpticalProperties& material, std::vector<int>& changedTets);
+  /// Collective: the matrices after the assembly of `system` (Assemble) or
+  /// with the changed rows (ChangedRows), their hierarchies, and the
+  /// material they are of kept; report.Assembly. Returns what each channel got.
+  std::array<ChannelSetup, NumberOfChannels> UpdateMatrices(MatrixChange change, bool sameMesh,
+    const OpticalProperties& material, const std::vector<double>& irradiance,
+    const std::vector<int>& changedTets, DiffusionSystem& system, SolverReport& report,
+    double& hierarchyMs);
   /// This rank's tets whose coefficients differ from the last matrices'
   /// (Material_, bit for bit); false when there is nothing to compare with.
   bool FindChangedTets(const OpticalProperties& material, std::vector<int>& changed) const;
