@@ -73,8 +73,8 @@ public:
    * none is allowed) changed since the last Setup, UpdateValues or
    * UpdateRows; `values` holds every row's current values (the unchanged
    * rows' too) on the pattern of the last Setup. A solver that can write
-   * only those rows does (HypreBoomerAMGPCG: hypre::ScatterRows); the
-   * default calls UpdateValues with every row. The preconditioner is kept,
+   * only those rows does (HypreBoomerAMGPCG and SchwarzAggregationPCG:
+   * hypre::ScatterRows); the default calls UpdateValues with every row. The preconditioner is kept,
    * as with UpdateValues. Issue 32: a paint stroke changes ~1 % of the rows.
    */
   virtual void UpdateRows(const int* rowOffsets, const int* columns, const double* values,

@@ -248,8 +248,9 @@ TEST(DistributedPaintRows, EqualAWholeReassemblyAndAFreshSolve)
     RunStrokes(Size(), discretization, "");
 }
 
-// The aggregation Schwarz solver (no row update of its own: UpdateRows is
-// its UpdateValues of every row) gets the same matrices.
+// The aggregation Schwarz solver (its UpdateRows: the changed rows into the
+// hypre matrix, the block hierarchy's values on every level) gets the same
+// matrices.
 TEST(DistributedPaintRows, WithTheAggregationSolver)
 {
   RunStrokes(Size(), "divergence", "cg/aggregation");
