@@ -85,6 +85,19 @@ public:
   }
 
   /**
+   * After Setup or SetupShared (the same rows and columns): prepares what
+   * UpdateValues and UpdateRows need (the hypre solvers: each entry's place
+   * in the ParCSR blocks, hypre::FindPlaces), so that the first update
+   * after a set-up (a paint) costs what the next ones do; a caller that
+   * will update values calls it, one that sets up again at every change
+   * need not. Default: nothing.
+   */
+  virtual void PrepareUpdates(const int* rowOffsets, const int* columns)
+  {
+    (void)rowOffsets, (void)columns;
+  }
+
+  /**
    * Collective: as Setup (the same rows, the matrix built from scratch), but
    * preconditioned by `donor`'s preconditioner instead of one of its own
    * (issue 32: one BoomerAMG hierarchy for the three colour channels, whose

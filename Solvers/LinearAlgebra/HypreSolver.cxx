@@ -251,6 +251,16 @@ void HypreBoomerAMGPCG::UpdateRows(const int* rowOffsets, const int* columns,
   HierarchyMilliseconds_ = 0.0;
 }
 
+void HypreBoomerAMGPCG::PrepareUpdates(const int* rowOffsets, const int* columns)
+{
+  if (!H_->A)
+  {
+    throw Error("hypre-amg: PrepareUpdates() called before Setup()");
+  }
+  hypre::FindPlaces(H_->A, RowBegin_, RowEnd_, rowOffsets, columns, Places_, PlacePattern_,
+    "hypre-amg");
+}
+
 void HypreBoomerAMGPCG::BuildSolver(const HypreBoomerAMGPCG* shared)
 {
   Handles& h = *H_;

@@ -122,6 +122,8 @@ public:
    */
   void UpdateRows(const int* rowOffsets, const int* columns, const double* values,
     const int* rows, int numRows) override;
+  /// Each entry's place in the ParCSR blocks found now (hypre::FindPlaces).
+  void PrepareUpdates(const int* rowOffsets, const int* columns) override;
 
   /**
    * The matrix of these rows with `donor`'s BoomerAMG hierarchy as the

@@ -560,6 +560,15 @@ void SchwarzAggregationPCG::UpdateRows(const int* rowOffsets, const int* columns
   HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
 }
 
+void SchwarzAggregationPCG::PrepareUpdates(const int* rowOffsets, const int* columns)
+{
+  if (!H_->A)
+  {
+    throw Error(std::string(Who) + ": PrepareUpdates() called before Setup()");
+  }
+  hypre::FindPlaces(H_->A, RowBegin_, RowEnd_, rowOffsets, columns, Places_, PlacePattern_, Who);
+}
+
 void SchwarzAggregationPCG::ApplyPreconditioner(const double* r, double* z) const
 {
   if (!H_->PCG)

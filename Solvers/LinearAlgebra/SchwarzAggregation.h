@@ -79,6 +79,8 @@ public:
    */
   void UpdateRows(const int* rowOffsets, const int* columns, const double* values,
     const int* rows, int numRows) override;
+  /// Each entry's place in the hypre matrix found now (hypre::FindPlaces).
+  void PrepareUpdates(const int* rowOffsets, const int* columns) override;
 
   /**
    * As Setup, with `donor`'s aggregation (the hierarchy's structure: the

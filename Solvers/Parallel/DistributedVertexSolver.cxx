@@ -637,6 +637,7 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
 void DistributedVertexSolver::SetUpChannel(int c)
 {
   const double cpu = CpuMilliseconds();
+  double preparedCpu = 0.0; // PrepareUpdates: the matrix's share, not the hierarchy's
   std::string error;
   ForceFull_[c] = false;
   FullIterations_[c] = -1; // set by this Solve's PCG
@@ -656,6 +657,12 @@ void DistributedVertexSolver::SetUpChannel(int c)
     Channels_[c]->SetCoordinates(xyz.data(), static_cast<int>(FirstLocal_.size()));
     Channels_[c]->Setup(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), OwnedOffsets_.data(),
       OwnedColumns_.data(), Contributions_[c].data());
+    if (ValuesOnly_) // the next paint's values-only update: its places found now
+    {
+      const double before = CpuMilliseconds();
+      Channels_[c]->PrepareUpdates(OwnedOffsets_.data(), OwnedColumns_.data());
+      preparedCpu = CpuMilliseconds() - before;
+    }
     Donor_[c] = c;
     HierarchyDiagonal_[c] = OwnedDiagonal(Contributions_[c]);
     ++HierarchySetups_;
@@ -670,7 +677,7 @@ void DistributedVertexSolver::SetUpChannel(int c)
   {
     const double wall = Channels_[c]->GetMatrixMilliseconds() + Channels_[c]->GetHierarchyMilliseconds();
     const double share = wall > 0.0 ? Channels_[c]->GetHierarchyMilliseconds() / wall : 1.0;
-    HierarchyCpu_ += share * (CpuMilliseconds() - cpu);
+    HierarchyCpu_ += share * (CpuMilliseconds() - cpu - preparedCpu);
   }
   AgreeOnError(Comm_, error);
 }
@@ -694,6 +701,8 @@ void DistributedVertexSolver::ShareChannel(int c, int donor, double& hierarchyMs
     Donor_[c] = -1;
     shared = Channels_[c]->SetupShared(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(),
       OwnedOffsets_.data(), OwnedColumns_.data(), Contributions_[c].data(), *Channels_[donor]);
+    if (shared && ValuesOnly_)
+      Channels_[c]->PrepareUpdates(OwnedOffsets_.data(), OwnedColumns_.data());
     if (shared)
     {
       Donor_[c] = donor;
