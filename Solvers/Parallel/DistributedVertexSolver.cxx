@@ -188,6 +188,9 @@ void DistributedVertexSolver::BuildGeometry(const TetMesh* mesh, const std::vect
   Donor_ = { -1, -1, -1 };
   HaveMaterial_ = false;
   HaveLocalValues_ = false;
+  OwnedMeasures_.clear();
+  MatrixMeasures_.clear();
+  OwnedRobin_.clear();
   const std::size_t numPoints = keys.size();
   Mesh_ = mesh && mesh->GetNumberOfTets() > 0 ? mesh : &EmptyMesh_;
   std::string error;
@@ -598,23 +601,46 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
     return;
   }
   // S_i and sum of S_f eta_f around i over every rank's physical faces, at
-  // the owner, which adds the lumped Robin term (eq. 12-13).
-  const std::size_t numPoints = Keys_.size();
-  std::vector<double> measures(2 * numPoints, 0.0);
-  for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
+  // the owner, which adds the lumped Robin term (eq. 12-13). Kept, with
+  // each row's Robin coefficients, while no eta changed on any rank (a
+  // relight, a paint of mu_a and sigma_s' only: KeepMeasures_).
+  const bool keep = KeepMeasures_ && OwnedMeasures_.size() == 2 * FirstLocal_.size();
+  if (!keep)
   {
-    if (!PhysicalFace_[f])
-      continue;
-    const double eta = tetEta[triangleTets[f]];
-    for (int a = 0; a < 3; ++a)
+    const std::size_t numPoints = Keys_.size();
+    std::vector<double> measures(2 * numPoints, 0.0);
+    for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
     {
-      const std::size_t i = static_cast<std::size_t>(triangles[3 * f + a]);
-      measures[2 * i] += areas[f];
-      measures[2 * i + 1] += areas[f] * eta;
+      if (!PhysicalFace_[f])
+        continue;
+      const double eta = tetEta[triangleTets[f]];
+      for (int a = 0; a < 3; ++a)
+      {
+        const std::size_t i = static_cast<std::size_t>(triangles[3 * f + a]);
+        measures[2 * i] += areas[f];
+        measures[2 * i + 1] += areas[f] * eta;
+      }
     }
+    OwnedMeasures_ = Numbering_.SumToOwners(Comm_, measures, 2);
   }
-  OwnedMeasures_ = Numbering_.SumToOwners(Comm_, measures, 2);
   const std::vector<double>& owned = OwnedMeasures_;
+  if (!keep || RobinRule_ != Rule_ || OwnedRobin_.size() != owned.size())
+  {
+    // Each row's A and Fdr of its area-weighted eta (Fresnel's moments rule
+    // integrates for every eta it did not see last).
+    OwnedRobin_.assign(owned.size(), 0.0);
+    for (std::size_t r = 0; r < FirstLocal_.size(); ++r)
+    {
+      const double s = owned[2 * r];
+      if (!(s > 0.0))
+        continue;
+      const Fresnel::RobinCoefficients robin =
+        Fresnel::BoundaryCoefficients(owned[2 * r + 1] / s, Rule_);
+      OwnedRobin_[2 * r] = robin.A;
+      OwnedRobin_[2 * r + 1] = robin.Fdr;
+    }
+    RobinRule_ = Rule_;
+  }
   const int* diagonal = Mesh_->GetDiagonalPositions().data();
   for (std::size_t r = 0; r < FirstLocal_.size(); ++r)
   {
@@ -622,9 +648,7 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
     if (!(s > 0.0))
       continue;
     const std::size_t i = static_cast<std::size_t>(FirstLocal_[r]);
-    const double eta = owned[2 * r + 1] / s;
-    const Fresnel::RobinCoefficients robinCoefficients = Fresnel::BoundaryCoefficients(eta, Rule_);
-    const double a = robinCoefficients.A, fdr = robinCoefficients.Fdr;
+    const double a = OwnedRobin_[2 * r], fdr = OwnedRobin_[2 * r + 1];
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       if (system)
@@ -799,9 +823,10 @@ bool DistributedVertexSolver::CanShare(int c, int donor) const
 }
 
 bool DistributedVertexSolver::FindChangedTets(
-  const OpticalProperties& material, std::vector<int>& changed) const
+  const OpticalProperties& material, std::vector<int>& changed, long long& etaChanged) const
 {
   changed.clear();
+  etaChanged = 0;
   const std::size_t numTets = material.RefractiveIndex.size();
   if (!HaveMaterial_ || Material_.RefractiveIndex.size() != numTets ||
     Material_.AbsorptionCoefficient.size() != material.AbsorptionCoefficient.size() ||
@@ -821,11 +846,12 @@ bool DistributedVertexSolver::FindChangedTets(
   const double* e1 = material.RefractiveIndex.data();
   for (std::size_t t = 0; t < numTets; ++t)
   {
-    if (std::memcmp(a0 + 3 * t, a1 + 3 * t, 3 * sizeof(double)) != 0 ||
-      std::memcmp(s0 + 3 * t, s1 + 3 * t, 3 * sizeof(double)) != 0 ||
-      std::memcmp(e0 + t, e1 + t, sizeof(double)) != 0)
+    const bool eta = std::memcmp(e0 + t, e1 + t, sizeof(double)) != 0;
+    if (eta || std::memcmp(a0 + 3 * t, a1 + 3 * t, 3 * sizeof(double)) != 0 ||
+      std::memcmp(s0 + 3 * t, s1 + 3 * t, 3 * sizeof(double)) != 0)
     {
       changed.push_back(static_cast<int>(t));
+      etaChanged += eta ? 1 : 0;
     }
   }
   return true;
@@ -1527,6 +1553,7 @@ DistributedVertexSolver::MatrixChange DistributedVertexSolver::FindMatrixChange(
   changedTets.clear();
   ChangedTets_ = -1;
   ChangedRowCount_ = 0;
+  KeepMeasures_ = false;
   bool ready = sameMesh && !OptionsChanged_;
   for (int c = 0; c < NumberOfChannels; ++c)
     ready = ready && Channels_[c] && Donor_[c] >= 0 && LinearSolverName() == ChannelLinear_[c];
@@ -1534,12 +1561,15 @@ DistributedVertexSolver::MatrixChange DistributedVertexSolver::FindMatrixChange(
   MPI_Allreduce(MPI_IN_PLACE, &allReady, 1, MPI_INT, MPI_MIN, Comm_);
   if (!allReady || Rule_ != MatrixRule_)
     return MatrixChange::Assemble;
-  const bool comparable = FindChangedTets(material, changedTets);
-  long long counts[4] = { comparable ? 0 : 1, static_cast<long long>(changedTets.size()),
-    Mesh_->GetNumberOfTets(), HaveLocalValues_ ? 0 : 1 };
-  MPI_Allreduce(MPI_IN_PLACE, counts, 4, MPI_LONG_LONG, MPI_SUM, Comm_);
+  long long etaChanged = 0;
+  const bool comparable = FindChangedTets(material, changedTets, etaChanged);
+  long long counts[5] = { comparable ? 0 : 1, static_cast<long long>(changedTets.size()),
+    Mesh_->GetNumberOfTets(), HaveLocalValues_ ? 0 : 1, etaChanged };
+  MPI_Allreduce(MPI_IN_PLACE, counts, 5, MPI_LONG_LONG, MPI_SUM, Comm_);
   if (counts[0] != 0)
     return MatrixChange::Assemble;
+  // No eta changed on any rank: the divergence's boundary measures are the last ones.
+  KeepMeasures_ = counts[4] == 0;
   if (counts[1] == 0)
     return MatrixChange::None;
   return ChangedRowsUpdate_ && counts[3] == 0 &&

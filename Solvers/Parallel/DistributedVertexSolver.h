@@ -316,7 +316,8 @@ private:
     double& hierarchyMs);
   /// This rank's tets whose coefficients differ from the last matrices'
   /// (Material_, bit for bit); false when there is nothing to compare with.
-  bool FindChangedTets(const OpticalProperties& material, std::vector<int>& changed) const;
+  bool FindChangedTets(
+    const OpticalProperties& material, std::vector<int>& changed, long long& etaChanged) const;
   /**
    * The changed-rows update of the local values and the owned rows
    * (collective; SetChangedRowsUpdate): LocalValues_, Received_ and
@@ -462,6 +463,12 @@ private:
   std::array<std::vector<double>, NumberOfChannels> LocalValues_, Received_;
   bool HaveLocalValues_ = false;
   std::vector<double> MatrixMeasures_, OwnedMeasures_;
+  /// This Solve may keep OwnedMeasures_ (no eta changed on any rank since
+  /// they were summed: FindMatrixChange); OwnedRobin_ holds each owned
+  /// row's Robin A and Fdr of them under RobinRule_.
+  bool KeepMeasures_ = false;
+  std::vector<double> OwnedRobin_;
+  Fresnel::BoundaryRule RobinRule_ = Fresnel::BoundaryRule::Fit;
   std::array<std::unique_ptr<DistributedLinearSolver>, NumberOfChannels> Channels_;
   std::array<std::vector<double>, NumberOfChannels> Solution_;
   Timings Timings_;

@@ -144,11 +144,14 @@ long long ChangedTets(const OpticalProperties& a, const OpticalProperties& b)
   return n;
 }
 
-/// The strokes on a partition over `ranks` ranks (the others empty).
-void RunStrokes(int ranks, const std::string& discretization, const std::string& linear)
+/// The strokes on a partition over `ranks` ranks (the others empty); with
+/// `beam` the extended-moments collimated model of a directional light (its
+/// beam kept across the strokes, and the Robin terms of the moments rule).
+void RunStrokes(
+  int ranks, const std::string& discretization, const std::string& linear, bool beam = false)
 {
   SCOPED_TRACE(discretization + " " + (linear.empty() ? "(default linear solver)" : linear) + ", " +
-    std::to_string(ranks) + " ranks with tets");
+    std::to_string(ranks) + " ranks with tets" + (beam ? ", extended-moments beam" : ""));
   const Scene s = MakeScene(ranks);
   OpticalProperties whole = s.Material;
   const std::vector<double> wholeQ = translucency::testing::RandomIrradiance(s.Whole, 41);
@@ -185,6 +188,12 @@ void RunStrokes(int ranks, const std::string& discretization, const std::string&
     problem.Material = &material;
     problem.Irradiance = &q;
     problem.PointKeys = &s.Keys;
+    if (beam)
+    {
+      problem.Lights = { DirectionalLight({ 0.13, -1.0, -0.77 }, { 1.0, 0.7, 0.4 }) };
+      problem.Shadows = true;
+      problem.Collimated = CollimatedModel::ExtendedMoments;
+    }
     std::vector<double> fluence, wholeFluence, freshFluence;
     SolverReport report, wholeReport, freshReport;
     ASSERT_TRUE(rows.Solve(problem, fluence, report));
@@ -254,6 +263,14 @@ TEST(DistributedPaintRows, EqualAWholeReassemblyAndAFreshSolve)
 TEST(DistributedPaintRows, WithTheAggregationSolver)
 {
   RunStrokes(Size(), "divergence", "cg/aggregation");
+}
+
+// Under the extended-moments model (the default lights' in Solve Diffusion):
+// the kept beam and the moments rule's Robin terms, whose boundary
+// measures and coefficients are kept while no eta changes.
+TEST(DistributedPaintRows, UnderTheExtendedMomentsModel)
+{
+  RunStrokes(Size(), "divergence", "", true);
 }
 
 // The last rank's piece empty: it takes part in every exchange, with no
