@@ -15,10 +15,14 @@
 //
 // In one run, --rounds times (default 2): first every rank of MPI_COMM_WORLD
 // solves its slab (cold solve: numbering, assembly, AMG set-up, PCG; then a
-// relight: new right-hand side, hierarchy kept, warm start; then two paint
+// relight: new right-hand side, hierarchy kept, warm start; then three paint
 // strokes, each changing mu_a x5 and mu_s' x2 in a half ball under the top
 // face (~1 % of the tets): the first with a full hierarchy set-up, the
-// second with the values-only set-up, warm started; a new hierarchy is one
+// second with the values-only set-up (the first after a set-up: the
+// hypre matrices' entry places are found then), the third also values-only
+// and across the ranks' slab boundary (x = 0.5 size: a paint after a paint;
+// the changed rows only, DistributedVertexSolver::SetChangedRowsUpdate),
+// all warm started; a new hierarchy is one
 // BoomerAMG set-up shared by the three channels unless --own-hierarchies;
 // the relight must set up nothing: its numbering and hierarchy counts are
 // checked), then rank 0
@@ -150,12 +154,13 @@ Piece MakeSlab(int n, int i0, int i1, double size, bool coordinateKeys)
   return p;
 }
 
-/// Paint stroke k (1 or 2): mu_a x5 and mu_s' x2 in the tets whose
+/// Paint stroke k (1, 2 or 3): mu_a x5 and mu_s' x2 in the tets whose
 /// centroid lies within 0.17 size of a point on the top face (a half ball,
-/// ~1 % of the box), at x = 0.3 size (k = 1) or 0.7 size (k = 2).
+/// ~1 % of the box), at x = 0.3 size (k = 1), 0.7 size (k = 2) or 0.5 size
+/// (k = 3: across the boundary of 2 ranks' slabs).
 void Paint(Piece& p, double size, int k)
 {
-  const double centre[3] = { (k == 1 ? 0.3 : 0.7) * size, 0.5 * size, size };
+  const double centre[3] = { (k == 1 ? 0.3 : k == 2 ? 0.7 : 0.5) * size, 0.5 * size, size };
   const double radius = 0.17 * size;
   for (size_t t = 0; t < p.Tets.size() / 4; ++t)
   {
@@ -245,15 +250,15 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
     solver.SetMaxIter(1000);
     solver.SetNumberOfThreads(threads);
     solver.SetSharedHierarchy(shared);
-    static const char* phases[4] = { "cold", "relight", "paint (full set-up)",
-      "paint (values-only set-up)" };
-    for (int phase = 0; phase < 4; ++phase)
+    static const char* phases[5] = { "cold", "relight", "paint (full set-up)",
+      "paint (values-only set-up)", "paint (values-only, again, across the ranks)" };
+    for (int phase = 0; phase < 5; ++phase)
     {
       const std::vector<double> q = Irradiance(piece, size, phase >= 1);
       if (phase >= 2)
       {
         Paint(piece, size, phase - 1);
-        solver.SetValuesOnlySetup(phase == 3);
+        solver.SetValuesOnlySetup(phase >= 3);
       }
       translucency::SolverReport report;
       const long long numberings = solver.GetNumberOfNumberings(),
@@ -262,7 +267,7 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
       const double start = MPI_Wtime();
       const double cpuStart = CpuMilliseconds();
       solver.Solve(piece.Points, piece.Keys, piece.Tets, piece.Material, q, result.Fluence, report);
-      static const char* expected[4] = { "full", "unchanged", "full", "values-only" };
+      static const char* expected[5] = { "full", "unchanged", "full", "values-only", "values-only" };
       if (report.Assembly != expected[phase])
         throw translucency::Error(std::string("the ") + phases[phase] + " solve took the '" +
           report.Assembly + "' path, not '" + expected[phase] + "'");
@@ -272,7 +277,7 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
       const long long newNumberings = solver.GetNumberOfNumberings() - numberings,
                       newHierarchies = solver.GetNumberOfHierarchySetups() - hierarchies;
       const long long wantNumberings = phase == 0 ? 1 : 0;
-      const long long wantHierarchies = phase == 1 || phase == 3 ? 0 : (shared ? 1 : 3);
+      const long long wantHierarchies = phase == 1 || phase >= 3 ? 0 : (shared ? 1 : 3);
       if (newNumberings != wantNumberings ||
         (!report.Resolved && newHierarchies != wantHierarchies))
         throw translucency::Error(std::string("the ") + phases[phase] + " solve built " +
@@ -350,13 +355,13 @@ void CompareWithSingleRank(const std::vector<long long>& ids, const std::vector<
                    b = one.Fluence[3 * where[static_cast<size_t>(ids[k])] + c];
       worst = std::max(worst, std::abs(a - b) / std::abs(b));
     }
-  std::printf("max relative difference, %d ranks vs 1 (relit, twice painted fluence, every "
+  std::printf("max relative difference, %d ranks vs 1 (relit, three times painted fluence, every "
               "point of every rank): %.2e\n", size, worst);
   std::fflush(stdout);
 }
 
 /// The serial core path (Solve Diffusion with one process) on the whole
-/// box: the relit fluence after both paint strokes, to RelTol `tol` (the
+/// box: the relit fluence after the three paint strokes, to RelTol `tol` (the
 /// last distributed solve used the values-only set-up), against the
 /// gathered distributed fluence, and the power balances.
 void CompareWithSerial(const std::vector<long long>& ids, const std::vector<double>& fluence,
@@ -366,6 +371,7 @@ void CompareWithSerial(const std::vector<long long>& ids, const std::vector<doub
   Piece whole = MakeSlab(n, 0, n, sizeMm, coordinates);
   Paint(whole, sizeMm, 1);
   Paint(whole, sizeMm, 2);
+  Paint(whole, sizeMm, 3);
   translucency::TetMesh mesh;
   mesh.SetGeometry(whole.Points, whole.Tets);
   const std::vector<double> q = Irradiance(whole, sizeMm, true);

@@ -68,6 +68,36 @@ public:
   virtual void UpdateValues(const int* rowOffsets, const int* columns, const double* values) = 0;
 
   /**
+   * Collective: UpdateValues where only this rank's rows `rows` (numRows
+   * row numbers local to this rank, 0 .. rowEnd - rowBegin - 1, any order;
+   * none is allowed) changed since the last Setup, UpdateValues or
+   * UpdateRows; `values` holds every row's current values (the unchanged
+   * rows' too) on the pattern of the last Setup. A solver that can write
+   * only those rows does (HypreBoomerAMGPCG and SchwarzAggregationPCG:
+   * hypre::ScatterRows); the default calls UpdateValues with every row. The preconditioner is kept,
+   * as with UpdateValues. Issue 32: a paint stroke changes ~1 % of the rows.
+   */
+  virtual void UpdateRows(const int* rowOffsets, const int* columns, const double* values,
+    const int* rows, int numRows)
+  {
+    (void)rows, (void)numRows;
+    UpdateValues(rowOffsets, columns, values);
+  }
+
+  /**
+   * After Setup or SetupShared (the same rows and columns): prepares what
+   * UpdateValues and UpdateRows need (the hypre solvers: each entry's place
+   * in the ParCSR blocks, hypre::FindPlaces), so that the first update
+   * after a set-up (a paint) costs what the next ones do; a caller that
+   * will update values calls it, one that sets up again at every change
+   * need not. Default: nothing.
+   */
+  virtual void PrepareUpdates(const int* rowOffsets, const int* columns)
+  {
+    (void)rowOffsets, (void)columns;
+  }
+
+  /**
    * Collective: as Setup (the same rows, the matrix built from scratch), but
    * preconditioned by `donor`'s preconditioner instead of one of its own
    * (issue 32: one BoomerAMG hierarchy for the three colour channels, whose

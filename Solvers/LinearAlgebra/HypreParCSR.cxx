@@ -78,6 +78,82 @@ std::uint64_t PatternFingerprint(int rows, const int* rowOffsets, const int* col
   return h;
 }
 
+void FindPlaces(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
+  const int* columns, std::vector<int>& places, std::uint64_t& pattern, const std::string& who)
+{
+  const int rows = rowEnd - rowBegin;
+  hypre_ParCSRMatrix* a = nullptr;
+  HYPRE_IJMatrixGetObject(matrix, reinterpret_cast<void**>(&a));
+  hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(a);
+  hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(a);
+  const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
+  const std::uint64_t fingerprint = PatternFingerprint(rows, rowOffsets, columns);
+  places.clear();
+  const HYPRE_Int* di = hypre_CSRMatrixI(diag);
+  const HYPRE_Int* dj = hypre_CSRMatrixJ(diag);
+  const HYPRE_Int* oi = hypre_CSRMatrixI(offd);
+  const HYPRE_Int* oj = hypre_CSRMatrixJ(offd);
+  const HYPRE_BigInt* colMap = hypre_ParCSRMatrixColMapOffd(a);
+  const HYPRE_BigInt firstColumn = hypre_ParCSRMatrixFirstColDiag(a);
+  const HYPRE_BigInt lastColumn = firstColumn + hypre_CSRMatrixNumCols(diag) - 1;
+  std::vector<int> found(nnz);
+  for (int r = 0; r < rows; ++r)
+  {
+    // hypre keeps a row's entries in the order they were set, the
+    // diagonal moved first: with sorted columns each entry is where the
+    // previous one's successor is (the diagonal at the row's start), so
+    // a hint is tried before the row's search (issue 32: the search of
+    // every entry was quadratic in the row length).
+    HYPRE_Int diagHint = di[r] + 1, offdHint = oi ? oi[r] : 0;
+    for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
+    {
+      const HYPRE_BigInt column = columns[k];
+      int place = std::numeric_limits<int>::min();
+      if (column >= firstColumn && column <= lastColumn)
+      {
+        const HYPRE_Int local = static_cast<HYPRE_Int>(column - firstColumn);
+        if (di[r] < di[r + 1] && dj[di[r]] == local)
+          place = di[r];
+        else if (diagHint < di[r + 1] && dj[diagHint] == local)
+          place = diagHint++;
+        else
+        {
+          for (HYPRE_Int q = di[r]; q < di[r + 1]; ++q)
+            if (dj[q] == local)
+            {
+              place = q;
+              diagHint = q + 1;
+              break;
+            }
+        }
+      }
+      else if (oi && colMap)
+      {
+        if (offdHint < oi[r + 1] && colMap[oj[offdHint]] == column)
+          place = -1 - static_cast<int>(offdHint++);
+        else
+        {
+          for (HYPRE_Int q = oi[r]; q < oi[r + 1]; ++q)
+            if (colMap[oj[q]] == column)
+            {
+              place = -1 - static_cast<int>(q);
+              offdHint = q + 1;
+              break;
+            }
+        }
+      }
+      if (place == std::numeric_limits<int>::min())
+      {
+        throw Error(who + ": UpdateValues(): entry (" + std::to_string(rowBegin + r) + ", " +
+          std::to_string(column) + ") is not in the matrix of the last Setup() (a changed pattern)");
+      }
+      found[k] = place;
+    }
+  }
+  places = std::move(found);
+  pattern = fingerprint;
+}
+
 void ScatterValues(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
   const int* columns, const double* values, std::vector<int>& places, std::uint64_t& pattern,
   const std::string& who)
@@ -89,74 +165,8 @@ void ScatterValues(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* r
   hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(a);
   const std::size_t nnz = static_cast<std::size_t>(rowOffsets[rows]);
   // A changed pattern finds its places again (or is refused), without a copy.
-  const std::uint64_t fingerprint = PatternFingerprint(rows, rowOffsets, columns);
-  if (places.size() != nnz || fingerprint != pattern)
-  {
-    places.clear();
-    const HYPRE_Int* di = hypre_CSRMatrixI(diag);
-    const HYPRE_Int* dj = hypre_CSRMatrixJ(diag);
-    const HYPRE_Int* oi = hypre_CSRMatrixI(offd);
-    const HYPRE_Int* oj = hypre_CSRMatrixJ(offd);
-    const HYPRE_BigInt* colMap = hypre_ParCSRMatrixColMapOffd(a);
-    const HYPRE_BigInt firstColumn = hypre_ParCSRMatrixFirstColDiag(a);
-    const HYPRE_BigInt lastColumn = firstColumn + hypre_CSRMatrixNumCols(diag) - 1;
-    std::vector<int> found(nnz);
-    for (int r = 0; r < rows; ++r)
-    {
-      // hypre keeps a row's entries in the order they were set, the
-      // diagonal moved first: with sorted columns each entry is where the
-      // previous one's successor is (the diagonal at the row's start), so
-      // a hint is tried before the row's search (issue 32: the search of
-      // every entry was quadratic in the row length).
-      HYPRE_Int diagHint = di[r] + 1, offdHint = oi ? oi[r] : 0;
-      for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
-      {
-        const HYPRE_BigInt column = columns[k];
-        int place = std::numeric_limits<int>::min();
-        if (column >= firstColumn && column <= lastColumn)
-        {
-          const HYPRE_Int local = static_cast<HYPRE_Int>(column - firstColumn);
-          if (di[r] < di[r + 1] && dj[di[r]] == local)
-            place = di[r];
-          else if (diagHint < di[r + 1] && dj[diagHint] == local)
-            place = diagHint++;
-          else
-          {
-            for (HYPRE_Int q = di[r]; q < di[r + 1]; ++q)
-              if (dj[q] == local)
-              {
-                place = q;
-                diagHint = q + 1;
-                break;
-              }
-          }
-        }
-        else if (oi && colMap)
-        {
-          if (offdHint < oi[r + 1] && colMap[oj[offdHint]] == column)
-            place = -1 - static_cast<int>(offdHint++);
-          else
-          {
-            for (HYPRE_Int q = oi[r]; q < oi[r + 1]; ++q)
-              if (colMap[oj[q]] == column)
-              {
-                place = -1 - static_cast<int>(q);
-                offdHint = q + 1;
-                break;
-              }
-          }
-        }
-        if (place == std::numeric_limits<int>::min())
-        {
-          throw Error(who + ": UpdateValues(): entry (" + std::to_string(rowBegin + r) + ", " +
-            std::to_string(column) + ") is not in the matrix of the last Setup() (a changed pattern)");
-        }
-        found[k] = place;
-      }
-    }
-    places = std::move(found);
-    pattern = fingerprint;
-  }
+  if (places.size() != nnz || PatternFingerprint(rows, rowOffsets, columns) != pattern)
+    FindPlaces(matrix, rowBegin, rowEnd, rowOffsets, columns, places, pattern, who);
   HYPRE_Complex* diagData = hypre_CSRMatrixData(diag);
   HYPRE_Complex* offdData = hypre_CSRMatrixData(offd);
   for (std::size_t k = 0; k < nnz; ++k)
@@ -166,6 +176,40 @@ void ScatterValues(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* r
       diagData[place] = values[k];
     else
       offdData[-1 - place] = values[k];
+  }
+}
+
+void ScatterRows(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
+  const int* columns, const double* values, const int* rows, int numRows,
+  std::vector<int>& places, std::uint64_t& pattern, const std::string& who)
+{
+  const int numLocal = rowEnd - rowBegin;
+  if (places.size() != static_cast<std::size_t>(rowOffsets[numLocal]))
+  {
+    // No places yet (the first update after a Setup): found for every row.
+    ScatterValues(matrix, rowBegin, rowEnd, rowOffsets, columns, values, places, pattern, who);
+    return;
+  }
+  hypre_ParCSRMatrix* a = nullptr;
+  HYPRE_IJMatrixGetObject(matrix, reinterpret_cast<void**>(&a));
+  HYPRE_Complex* diagData = hypre_CSRMatrixData(hypre_ParCSRMatrixDiag(a));
+  HYPRE_Complex* offdData = hypre_CSRMatrixData(hypre_ParCSRMatrixOffd(a));
+  for (int n = 0; n < numRows; ++n)
+  {
+    const int r = rows[n];
+    if (r < 0 || r >= numLocal)
+    {
+      throw Error(who + ": UpdateRows(): row " + std::to_string(r) + " is not one of this rank's " +
+        std::to_string(numLocal) + " rows");
+    }
+    for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
+    {
+      const int place = places[static_cast<std::size_t>(k)];
+      if (place >= 0)
+        diagData[place] = values[k];
+      else
+        offdData[-1 - place] = values[k];
+    }
   }
 }
 

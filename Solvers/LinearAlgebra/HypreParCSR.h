@@ -37,6 +37,18 @@ HYPRE_IJMatrix BuildMatrix(MPI_Comm comm, int rowBegin, int rowEnd, const int* r
   const std::string& who);
 
 /**
+ * Each entry's place in the assembled ParCSR blocks of `matrix` (rows
+ * [rowBegin, rowEnd), CSR as given to BuildMatrix): >= 0 in the diagonal
+ * block, -1 - k in the off-diagonal one, into `places`, and the pattern's
+ * fingerprint into `pattern`. Throws translucency::Error if an entry is not
+ * in the matrix (a changed pattern). ScatterValues calls it when the pattern
+ * changed; a solver may call it once after its set-up, so that the first
+ * update after the set-up (a paint) does not search.
+ */
+void FindPlaces(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
+  const int* columns, std::vector<int>& places, std::uint64_t& pattern, const std::string& who);
+
+/**
  * New values of the same rows written straight into the assembled ParCSR
  * blocks of `matrix` (rows [rowBegin, rowEnd)): each entry's place (>= 0 in
  * the diagonal block, -1 - k in the off-diagonal one) found once per
@@ -47,6 +59,19 @@ HYPRE_IJMatrix BuildMatrix(MPI_Comm comm, int rowBegin, int rowEnd, const int* r
 void ScatterValues(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
   const int* columns, const double* values, std::vector<int>& places, std::uint64_t& pattern,
   const std::string& who);
+
+/**
+ * ScatterValues of the rows `rows` only (numRows row numbers local to this
+ * rank, 0 .. rowEnd - rowBegin - 1): their entries of `values` written to
+ * the places a ScatterValues of this matrix found (`places`; the pattern is
+ * the one they were found for, not fingerprinted again: the caller's
+ * contract). Without places (none found yet, or of another size) it is
+ * ScatterValues of every row. Throws translucency::Error for a row out of
+ * range.
+ */
+void ScatterRows(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
+  const int* columns, const double* values, const int* rows, int numRows,
+  std::vector<int>& places, std::uint64_t& pattern, const std::string& who);
 
 /// FNV-1a fingerprint of a CSR pattern (rows + 1 offsets, then the columns).
 std::uint64_t PatternFingerprint(int rows, const int* rowOffsets, const int* columns);

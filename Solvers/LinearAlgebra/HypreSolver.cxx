@@ -236,6 +236,31 @@ void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, 
   HierarchyMilliseconds_ = 0.0;
 }
 
+void HypreBoomerAMGPCG::UpdateRows(const int* rowOffsets, const int* columns,
+  const double* values, const int* rows, int numRows)
+{
+  Handles& h = *H_;
+  if (!h.A || !h.PCG)
+  {
+    throw Error("hypre-amg: UpdateRows() called before Setup()");
+  }
+  const double start = MPI_Wtime();
+  hypre::ScatterRows(h.A, RowBegin_, RowEnd_, rowOffsets, columns, values, rows, numRows, Places_,
+    PlacePattern_, "hypre-amg");
+  MatrixMilliseconds_ = 1000.0 * (MPI_Wtime() - start);
+  HierarchyMilliseconds_ = 0.0;
+}
+
+void HypreBoomerAMGPCG::PrepareUpdates(const int* rowOffsets, const int* columns)
+{
+  if (!H_->A)
+  {
+    throw Error("hypre-amg: PrepareUpdates() called before Setup()");
+  }
+  hypre::FindPlaces(H_->A, RowBegin_, RowEnd_, rowOffsets, columns, Places_, PlacePattern_,
+    "hypre-amg");
+}
+
 void HypreBoomerAMGPCG::BuildSolver(const HypreBoomerAMGPCG* shared)
 {
   Handles& h = *H_;

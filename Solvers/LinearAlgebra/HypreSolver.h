@@ -115,6 +115,17 @@ public:
   void UpdateValues(const int* rowOffsets, const int* columns, const double* values) override;
 
   /**
+   * UpdateValues of the changed rows only (collective; issue 32: a paint
+   * stroke): their entries written to the places the first UpdateValues
+   * after Setup found (hypre::ScatterRows; every row when none were found
+   * yet). The hierarchy is kept, as with UpdateValues.
+   */
+  void UpdateRows(const int* rowOffsets, const int* columns, const double* values,
+    const int* rows, int numRows) override;
+  /// Each entry's place in the ParCSR blocks found now (hypre::FindPlaces).
+  void PrepareUpdates(const int* rowOffsets, const int* columns) override;
+
+  /**
    * The matrix of these rows with `donor`'s BoomerAMG hierarchy as the
    * preconditioner (no set-up of its own): BoomerAMG's V-cycle smooths on
    * this matrix at the fine level (hypre_BoomerAMGSolve takes the fine

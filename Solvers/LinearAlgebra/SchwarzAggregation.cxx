@@ -543,6 +543,32 @@ void SchwarzAggregationPCG::UpdateValues(
   HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
 }
 
+void SchwarzAggregationPCG::UpdateRows(const int* rowOffsets, const int* columns,
+  const double* values, const int* rows, int numRows)
+{
+  Handles& h = *H_;
+  if (!h.A || !h.PCG)
+  {
+    throw Error(std::string(Who) + ": UpdateRows() called before Setup()");
+  }
+  const double start = MPI_Wtime();
+  hypre::ScatterRows(h.A, RowBegin_, RowEnd_, rowOffsets, columns, values, rows, numRows, Places_,
+    PlacePattern_, Who);
+  const double assembled = MPI_Wtime();
+  SetBlockValues(values); // the kept aggregation, the new matrix's values
+  MatrixMilliseconds_ = 1000.0 * (assembled - start);
+  HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
+}
+
+void SchwarzAggregationPCG::PrepareUpdates(const int* rowOffsets, const int* columns)
+{
+  if (!H_->A)
+  {
+    throw Error(std::string(Who) + ": PrepareUpdates() called before Setup()");
+  }
+  hypre::FindPlaces(H_->A, RowBegin_, RowEnd_, rowOffsets, columns, Places_, PlacePattern_, Who);
+}
+
 void SchwarzAggregationPCG::ApplyPreconditioner(const double* r, double* z) const
 {
   if (!H_->PCG)

@@ -72,6 +72,17 @@ public:
   void UpdateValues(const int* rowOffsets, const int* columns, const double* values) override;
 
   /**
+   * UpdateValues where only `rows` changed: those rows written into the
+   * hypre matrix (hypre::ScatterRows, the pattern not fingerprinted again),
+   * the block's values set up again on the kept aggregation as UpdateValues
+   * does (every level: no row update of the block hierarchy yet).
+   */
+  void UpdateRows(const int* rowOffsets, const int* columns, const double* values,
+    const int* rows, int numRows) override;
+  /// Each entry's place in the hypre matrix found now (hypre::FindPlaces).
+  void PrepareUpdates(const int* rowOffsets, const int* columns) override;
+
+  /**
    * As Setup, with `donor`'s aggregation (the hierarchy's structure: the
    * three channels share one pattern) and this matrix's own values: no
    * aggregation of its own, and the same preconditioner quality as Setup.

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 #include <time.h>
@@ -120,7 +121,10 @@ void DistributedVertexSolver::Reset()
     FullIterations_[c] = 0;
     ForceFull_[c] = false;
     Donor_[c] = -1;
+    LocalValues_[c].clear();
+    Received_[c].clear();
   }
+  HaveLocalValues_ = false;
   Material_ = OpticalProperties();
   HaveMaterial_ = false;
 }
@@ -183,6 +187,10 @@ void DistributedVertexSolver::BuildGeometry(const TetMesh* mesh, const std::vect
     x.clear();
   Donor_ = { -1, -1, -1 };
   HaveMaterial_ = false;
+  HaveLocalValues_ = false;
+  OwnedMeasures_.clear();
+  MatrixMeasures_.clear();
+  OwnedRobin_.clear();
   const std::size_t numPoints = keys.size();
   Mesh_ = mesh && mesh->GetNumberOfTets() > 0 ? mesh : &EmptyMesh_;
   std::string error;
@@ -311,7 +319,10 @@ void DistributedVertexSolver::BuildOwnedRows()
   // rank the (row, column) pairs of the entries it sends.
   std::vector<std::vector<int>> outgoing(static_cast<std::size_t>(ranks));
   std::vector<std::vector<int>> outgoingPositions(static_cast<std::size_t>(ranks));
+  std::vector<std::vector<int>> outgoingPoints(static_cast<std::size_t>(ranks));
   std::vector<int> localRows, localColumns;
+  RowEntryOffsets_.clear();
+  RowEntries_.clear();
   LocalPositions_.clear();
   if (HasTets())
   {
@@ -346,16 +357,19 @@ void DistributedVertexSolver::BuildOwnedRows()
         outgoing[static_cast<std::size_t>(owner)].push_back(row);
         outgoing[static_cast<std::size_t>(owner)].push_back(column);
         outgoingPositions[static_cast<std::size_t>(owner)].push_back(k);
+        outgoingPoints[static_cast<std::size_t>(owner)].push_back(static_cast<int>(i));
       }
     }
   }
   SendCounts_.assign(static_cast<std::size_t>(ranks), 0);
   SendPositionsOff_.clear();
+  SendPoints_.clear();
   for (int r = 0; r < ranks; ++r)
   {
     SendCounts_[r] = static_cast<int>(outgoingPositions[r].size());
     SendPositionsOff_.insert(
       SendPositionsOff_.end(), outgoingPositions[r].begin(), outgoingPositions[r].end());
+    SendPoints_.insert(SendPoints_.end(), outgoingPoints[r].begin(), outgoingPoints[r].end());
   }
   RecvCounts_.assign(static_cast<std::size_t>(ranks), 0);
   MPI_Alltoall(SendCounts_.data(), 1, MPI_INT, RecvCounts_.data(), 1, MPI_INT, Comm_);
@@ -396,8 +410,8 @@ void DistributedVertexSolver::BuildOwnedRows()
     IdentityGather_ = Targets_[e] == static_cast<int>(e) && LocalPositions_[e] == static_cast<int>(e);
 }
 
-void DistributedVertexSolver::GatherOwnedRows(
-  const std::vector<double>& local, std::vector<double>& ownedValues) const
+void DistributedVertexSolver::GatherOwnedRows(const std::vector<double>& local,
+  std::vector<double>& ownedValues, std::vector<double>* received) const
 {
   // This rank's entries into place, the partition rows' partial values sent
   // to their owners in the order BuildOwnedRows fixed (one exchange).
@@ -424,14 +438,16 @@ void DistributedVertexSolver::GatherOwnedRows(
     sendDispls[r + 1] = sendDispls[r] + SendCounts_[r];
     recvDispls[r + 1] = recvDispls[r] + RecvCounts_[r];
   }
-  std::vector<double> received(static_cast<std::size_t>(recvDispls[ranks]));
+  std::vector<double> partial(static_cast<std::size_t>(recvDispls[ranks]));
   if (ranks > 1)
   {
-    MPI_Alltoallv(send.data(), SendCounts_.data(), sendDispls.data(), MPI_DOUBLE, received.data(),
+    MPI_Alltoallv(send.data(), SendCounts_.data(), sendDispls.data(), MPI_DOUBLE, partial.data(),
       RecvCounts_.data(), recvDispls.data(), MPI_DOUBLE, Comm_);
   }
-  for (std::size_t e = 0; e < received.size(); ++e)
-    ownedValues[static_cast<std::size_t>(Targets_[numLocal + e])] += received[e];
+  for (std::size_t e = 0; e < partial.size(); ++e)
+    ownedValues[static_cast<std::size_t>(Targets_[numLocal + e])] += partial[e];
+  if (received)
+    received->swap(partial);
 }
 
 void DistributedVertexSolver::CheckPiece(const std::vector<double>& points,
@@ -585,22 +601,46 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
     return;
   }
   // S_i and sum of S_f eta_f around i over every rank's physical faces, at
-  // the owner, which adds the lumped Robin term (eq. 12-13).
-  const std::size_t numPoints = Keys_.size();
-  std::vector<double> measures(2 * numPoints, 0.0);
-  for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
+  // the owner, which adds the lumped Robin term (eq. 12-13). Kept, with
+  // each row's Robin coefficients, while no eta changed on any rank (a
+  // relight, a paint of mu_a and sigma_s' only: KeepMeasures_).
+  const bool keep = KeepMeasures_ && OwnedMeasures_.size() == 2 * FirstLocal_.size();
+  if (!keep)
   {
-    if (!PhysicalFace_[f])
-      continue;
-    const double eta = tetEta[triangleTets[f]];
-    for (int a = 0; a < 3; ++a)
+    const std::size_t numPoints = Keys_.size();
+    std::vector<double> measures(2 * numPoints, 0.0);
+    for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
     {
-      const std::size_t i = static_cast<std::size_t>(triangles[3 * f + a]);
-      measures[2 * i] += areas[f];
-      measures[2 * i + 1] += areas[f] * eta;
+      if (!PhysicalFace_[f])
+        continue;
+      const double eta = tetEta[triangleTets[f]];
+      for (int a = 0; a < 3; ++a)
+      {
+        const std::size_t i = static_cast<std::size_t>(triangles[3 * f + a]);
+        measures[2 * i] += areas[f];
+        measures[2 * i + 1] += areas[f] * eta;
+      }
     }
+    OwnedMeasures_ = Numbering_.SumToOwners(Comm_, measures, 2);
   }
-  const std::vector<double> owned = Numbering_.SumToOwners(Comm_, measures, 2);
+  const std::vector<double>& owned = OwnedMeasures_;
+  if (!keep || RobinRule_ != Rule_ || OwnedRobin_.size() != owned.size())
+  {
+    // Each row's A and Fdr of its area-weighted eta (Fresnel's moments rule
+    // integrates for every eta it did not see last).
+    OwnedRobin_.assign(owned.size(), 0.0);
+    for (std::size_t r = 0; r < FirstLocal_.size(); ++r)
+    {
+      const double s = owned[2 * r];
+      if (!(s > 0.0))
+        continue;
+      const Fresnel::RobinCoefficients robin =
+        Fresnel::BoundaryCoefficients(owned[2 * r + 1] / s, Rule_);
+      OwnedRobin_[2 * r] = robin.A;
+      OwnedRobin_[2 * r + 1] = robin.Fdr;
+    }
+    RobinRule_ = Rule_;
+  }
   const int* diagonal = Mesh_->GetDiagonalPositions().data();
   for (std::size_t r = 0; r < FirstLocal_.size(); ++r)
   {
@@ -608,9 +648,7 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
     if (!(s > 0.0))
       continue;
     const std::size_t i = static_cast<std::size_t>(FirstLocal_[r]);
-    const double eta = owned[2 * r + 1] / s;
-    const Fresnel::RobinCoefficients robinCoefficients = Fresnel::BoundaryCoefficients(eta, Rule_);
-    const double a = robinCoefficients.A, fdr = robinCoefficients.Fdr;
+    const double a = OwnedRobin_[2 * r], fdr = OwnedRobin_[2 * r + 1];
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       if (system)
@@ -623,6 +661,7 @@ void DistributedVertexSolver::AddBoundaryTerms(const OpticalProperties& material
 void DistributedVertexSolver::SetUpChannel(int c)
 {
   const double cpu = CpuMilliseconds();
+  double preparedCpu = 0.0; // PrepareUpdates: the matrix's share, not the hierarchy's
   std::string error;
   ForceFull_[c] = false;
   FullIterations_[c] = -1; // set by this Solve's PCG
@@ -642,6 +681,12 @@ void DistributedVertexSolver::SetUpChannel(int c)
     Channels_[c]->SetCoordinates(xyz.data(), static_cast<int>(FirstLocal_.size()));
     Channels_[c]->Setup(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(), OwnedOffsets_.data(),
       OwnedColumns_.data(), Contributions_[c].data());
+    if (ValuesOnly_) // the next paint's values-only update: its places found now
+    {
+      const double before = CpuMilliseconds();
+      Channels_[c]->PrepareUpdates(OwnedOffsets_.data(), OwnedColumns_.data());
+      preparedCpu = CpuMilliseconds() - before;
+    }
     Donor_[c] = c;
     HierarchyDiagonal_[c] = OwnedDiagonal(Contributions_[c]);
     ++HierarchySetups_;
@@ -656,7 +701,7 @@ void DistributedVertexSolver::SetUpChannel(int c)
   {
     const double wall = Channels_[c]->GetMatrixMilliseconds() + Channels_[c]->GetHierarchyMilliseconds();
     const double share = wall > 0.0 ? Channels_[c]->GetHierarchyMilliseconds() / wall : 1.0;
-    HierarchyCpu_ += share * (CpuMilliseconds() - cpu);
+    HierarchyCpu_ += share * (CpuMilliseconds() - cpu - preparedCpu);
   }
   AgreeOnError(Comm_, error);
 }
@@ -680,6 +725,8 @@ void DistributedVertexSolver::ShareChannel(int c, int donor, double& hierarchyMs
     Donor_[c] = -1;
     shared = Channels_[c]->SetupShared(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(),
       OwnedOffsets_.data(), OwnedColumns_.data(), Contributions_[c].data(), *Channels_[donor]);
+    if (shared && ValuesOnly_)
+      Channels_[c]->PrepareUpdates(OwnedOffsets_.data(), OwnedColumns_.data());
     if (shared)
     {
       Donor_[c] = donor;
@@ -775,17 +822,350 @@ bool DistributedVertexSolver::CanShare(int c, int donor) const
   return all != 0;
 }
 
-bool DistributedVertexSolver::SameMaterialEverywhere(const OpticalProperties& material) const
+bool DistributedVertexSolver::FindChangedTets(
+  const OpticalProperties& material, std::vector<int>& changed, long long& etaChanged) const
 {
-  int mine = HaveMaterial_ && material.SameCoefficients(Material_) ? 1 : 0;
-  int all = 0;
-  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, Comm_);
-  return all != 0;
+  changed.clear();
+  etaChanged = 0;
+  const std::size_t numTets = material.RefractiveIndex.size();
+  if (!HaveMaterial_ || Material_.RefractiveIndex.size() != numTets ||
+    Material_.AbsorptionCoefficient.size() != material.AbsorptionCoefficient.size() ||
+    Material_.ReducedScatteringCoefficient.size() != material.ReducedScatteringCoefficient.size() ||
+    material.AbsorptionCoefficient.size() != 3 * numTets ||
+    material.ReducedScatteringCoefficient.size() != 3 * numTets)
+  {
+    return false;
+  }
+  if (material.SameCoefficients(Material_))
+    return true; // a relight: one pass over the arrays
+  const double* a0 = Material_.AbsorptionCoefficient.data();
+  const double* a1 = material.AbsorptionCoefficient.data();
+  const double* s0 = Material_.ReducedScatteringCoefficient.data();
+  const double* s1 = material.ReducedScatteringCoefficient.data();
+  const double* e0 = Material_.RefractiveIndex.data();
+  const double* e1 = material.RefractiveIndex.data();
+  for (std::size_t t = 0; t < numTets; ++t)
+  {
+    const bool eta = std::memcmp(e0 + t, e1 + t, sizeof(double)) != 0;
+    if (eta || std::memcmp(a0 + 3 * t, a1 + 3 * t, 3 * sizeof(double)) != 0 ||
+      std::memcmp(s0 + 3 * t, s1 + 3 * t, 3 * sizeof(double)) != 0)
+    {
+      changed.push_back(static_cast<int>(t));
+      etaChanged += eta ? 1 : 0;
+    }
+  }
+  return true;
+}
+
+namespace
+{
+/// Which of DivergenceTetMatrix's `off` (pairs 01, 02, 03, 12, 13, 23) is
+/// entry (a, b) of a tet (ScatterTetMatrix's layout); -1 on the diagonal.
+constexpr int OffDiagonal[4][4] = { { -1, 0, 1, 2 }, { 0, -1, 3, 4 }, { 1, 3, -1, 5 },
+  { 2, 4, 5, -1 } };
+} // namespace
+
+void DistributedVertexSolver::UpdateChangedRows(const OpticalProperties& material,
+  const std::vector<int>& changedTets, std::vector<int>& ownedRows,
+  std::array<bool, NumberOfChannels>& changed)
+{
+  // The serial path's SetupChangedRows, distributed (issue 32): only the
+  // rows of the changed tets' vertices are assembled again, each value
+  // summed in the full assembly's order, so that LocalValues_, Received_
+  // and Contributions_ equal what AssembleLocal, AddBoundaryTerms and
+  // GatherOwnedRows would give.
+  HaveLocalValues_ = false; // until every row is the new one
+  const std::size_t numPoints = Keys_.size();
+  std::vector<char> rowFlag(numPoints, 0);
+  std::vector<int> rows;
+  auto flag = [&rowFlag, &rows](int i) {
+    if (!rowFlag[static_cast<std::size_t>(i)])
+    {
+      rowFlag[static_cast<std::size_t>(i)] = 1;
+      rows.push_back(i);
+    }
+  };
+  const int* tets = Mesh_->GetTets().data();
+  for (const int t : changedTets)
+  {
+    for (int a = 0; a < 4; ++a)
+      flag(tets[4 * static_cast<std::size_t>(t) + a]);
+  }
+  if (!Fem_)
+  {
+    // The divergence's Robin diagonal of an owned row comes from the
+    // boundary measures summed over the ranks: an eta changed on another
+    // rank changes it here. Such a row is assembled again at its first
+    // local point, where AddBoundaryTerms adds the term.
+    const bool comparable = MatrixMeasures_.size() == OwnedMeasures_.size();
+    for (std::size_t r = 0; r < FirstLocal_.size(); ++r)
+    {
+      if (FirstLocal_[r] >= 0 &&
+        (!comparable ||
+          std::memcmp(MatrixMeasures_.data() + 2 * r, OwnedMeasures_.data() + 2 * r,
+            2 * sizeof(double)) != 0))
+      {
+        flag(FirstLocal_[r]);
+      }
+    }
+  }
+  ResumLocalRows(material, rowFlag, rows);
+
+  // The owned rows to sum again: this rank's flagged points it owns, and
+  // those the other ranks sent changed partial entries of.
+  int rank = 0;
+  MPI_Comm_rank(Comm_, &rank);
+  const int owned = Numbering_.GetNumberOfOwnedRows();
+  const int rowBegin = Numbering_.GetRowBegin();
+  std::vector<char> ownedFlag(static_cast<std::size_t>(owned), 0);
+  for (const int i : rows)
+  {
+    if (Numbering_.GetOwner(i) == rank)
+      ownedFlag[static_cast<std::size_t>(Numbering_.GetRow(i) - rowBegin)] = 1;
+  }
+  ExchangeChangedEntries(rowFlag, ownedFlag);
+  if (RowEntryOffsets_.size() != static_cast<std::size_t>(owned) + 1)
+    BuildRowEntries();
+
+  // Each such row summed as GatherOwnedRows sums it: from zero, the local
+  // entries, then the received ones, in their order.
+  ownedRows.clear();
+  changed = {};
+  const std::size_t numLocal = LocalPositions_.size();
+  std::vector<double> row;
+  for (int r = 0; r < owned; ++r)
+  {
+    if (!ownedFlag[static_cast<std::size_t>(r)])
+      continue;
+    ownedRows.push_back(r);
+    const int begin = OwnedOffsets_[r], end = OwnedOffsets_[r + 1];
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      const std::vector<double>& local = LocalValues_[c];
+      if (IdentityGather_)
+      {
+        row.assign(local.begin() + begin, local.begin() + end);
+      }
+      else
+      {
+        row.assign(static_cast<std::size_t>(end - begin), 0.0);
+        for (int n = RowEntryOffsets_[r]; n < RowEntryOffsets_[r + 1]; ++n)
+        {
+          const std::size_t x = static_cast<std::size_t>(RowEntries_[static_cast<std::size_t>(n)]);
+          const double value = x < numLocal
+            ? local[static_cast<std::size_t>(LocalPositions_[x])]
+            : Received_[c][x - numLocal];
+          row[static_cast<std::size_t>(Targets_[x] - begin)] += value;
+        }
+      }
+      double* kept = Contributions_[c].data() + begin;
+      if (std::memcmp(kept, row.data(), row.size() * sizeof(double)) != 0)
+      {
+        changed[c] = true;
+        std::copy(row.begin(), row.end(), kept);
+      }
+    }
+  }
+}
+
+void DistributedVertexSolver::ResumLocalRows(const OpticalProperties& material,
+  const std::vector<char>& rowFlag, const std::vector<int>& rows)
+{
+  if (rows.empty())
+    return;
+  // Clear the rows; flag every tet that adds to one of them.
+  const int* rowOffsets = Mesh_->GetRowOffsets().data();
+  const int* pointTetOffsets = Mesh_->GetPointTetOffsets().data();
+  const int* pointTets = Mesh_->GetPointTets().data();
+  std::vector<char> tetFlag(static_cast<std::size_t>(Mesh_->GetNumberOfTets()), 0);
+  for (const int i : rows)
+  {
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      std::fill(LocalValues_[c].begin() + rowOffsets[i], LocalValues_[c].begin() + rowOffsets[i + 1],
+        0.0);
+    }
+    for (int k = pointTetOffsets[i]; k < pointTetOffsets[i + 1]; ++k)
+      tetFlag[static_cast<std::size_t>(pointTets[k])] = 1;
+  }
+
+  // The tets in the full assembly's order (the scatter schedule: every
+  // entry receives its contributions in this order in AssembleVertexSystem),
+  // the same element matrices (TetContributions.h), into the flagged rows.
+  const double* points = Mesh_->GetPoints().data();
+  const int* tets = Mesh_->GetTets().data();
+  const int* positions = Mesh_->GetTetNonZeroPositions().data();
+  const bool cached = GeometryCache_.IsValidFor(*Mesh_);
+  const double* muA = material.AbsorptionCoefficient.data();
+  const double* sigmaS = material.ReducedScatteringCoefficient.data();
+  for (const int t0 : Mesh_->GetScatterSchedule().Tets)
+  {
+    const std::size_t t = static_cast<std::size_t>(t0);
+    if (!tetFlag[t])
+      continue;
+    const int* tv = tets + 4 * t;
+    // The cached geometry has the bits ComputeTetGeometry gives.
+    const TetGeometry geometry = cached ? GeometryCache_.Get(t)
+                                        : ComputeTetGeometry(points + 3 * static_cast<std::size_t>(tv[0]),
+                                            points + 3 * static_cast<std::size_t>(tv[1]),
+                                            points + 3 * static_cast<std::size_t>(tv[2]),
+                                            points + 3 * static_cast<std::size_t>(tv[3]));
+    const int* pos = positions + 16 * t;
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      double diag[4], off[6];
+      if (Fem_)
+        FiniteElementTetMatrix(geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
+      else
+        DivergenceTetMatrix(geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
+      double* v = LocalValues_[c].data();
+      for (int a = 0; a < 4; ++a)
+      {
+        if (!rowFlag[static_cast<std::size_t>(tv[a])])
+          continue;
+        for (int b = 0; b < 4; ++b)
+          v[pos[4 * a + b]] += a == b ? diag[a] : off[OffDiagonal[a][b]];
+      }
+    }
+  }
+
+  // The Robin terms of these rows, as AddBoundaryTerms adds them (after
+  // every tet, in the same order).
+  if (Fem_)
+  {
+    const std::vector<int>& triangles = Mesh_->GetBoundaryTriangles();
+    const std::vector<int>& triangleTets = Mesh_->GetBoundaryTriangleTets();
+    const std::vector<double>& areas = Mesh_->GetBoundaryTriangleAreas();
+    for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
+    {
+      const int* tri = triangles.data() + 3 * f;
+      if (!PhysicalFace_[f] ||
+        !(rowFlag[static_cast<std::size_t>(tri[0])] || rowFlag[static_cast<std::size_t>(tri[1])] ||
+          rowFlag[static_cast<std::size_t>(tri[2])]))
+        continue;
+      const int t = triangleTets[f];
+      const int* tv = Mesh_->GetTet(t);
+      const int* pos = positions + 16 * static_cast<std::size_t>(t);
+      const int l[3] = { LocalIndex(tv, tri[0]), LocalIndex(tv, tri[1]), LocalIndex(tv, tri[2]) };
+      const Fresnel::RobinCoefficients robinCoefficients =
+        Fresnel::BoundaryCoefficients(material.RefractiveIndex[static_cast<std::size_t>(t)], Rule_);
+      double robin, load;
+      FiniteElementRobin(areas[f], robinCoefficients.A, robinCoefficients.Fdr, robin, load);
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        double* v = LocalValues_[c].data();
+        for (int a = 0; a < 3; ++a)
+        {
+          if (!rowFlag[static_cast<std::size_t>(tri[a])])
+            continue;
+          for (int b = 0; b < 3; ++b)
+            v[pos[4 * l[a] + l[b]]] += a == b ? robin + robin : robin;
+        }
+      }
+    }
+    return;
+  }
+  const int* diagonal = Mesh_->GetDiagonalPositions().data();
+  for (std::size_t r = 0; r < FirstLocal_.size(); ++r)
+  {
+    const int i = FirstLocal_[r];
+    if (i < 0 || !rowFlag[static_cast<std::size_t>(i)])
+      continue;
+    const double s = OwnedMeasures_[2 * r];
+    if (!(s > 0.0))
+      continue;
+    const double eta = OwnedMeasures_[2 * r + 1] / s;
+    const Fresnel::RobinCoefficients robinCoefficients = Fresnel::BoundaryCoefficients(eta, Rule_);
+    for (int c = 0; c < NumberOfChannels; ++c)
+      LocalValues_[c][static_cast<std::size_t>(diagonal[i])] +=
+        DivergenceRobinDiagonal(s, robinCoefficients.A);
+  }
+}
+
+void DistributedVertexSolver::ExchangeChangedEntries(
+  const std::vector<char>& rowFlag, std::vector<char>& ownedFlag)
+{
+  int ranks = 1;
+  MPI_Comm_size(Comm_, &ranks);
+  if (ranks == 1)
+    return;
+  // Per owner rank, the changed entries of its partition rows: the entry's
+  // number in this rank's send list to it (BuildOwnedRows' order) and its
+  // three channels' values, as doubles.
+  std::vector<int> sendCounts(static_cast<std::size_t>(ranks), 0),
+    recvCounts(static_cast<std::size_t>(ranks), 0);
+  std::vector<double> send;
+  std::size_t e = 0;
+  for (int r = 0; r < ranks; ++r)
+  {
+    const std::size_t before = send.size();
+    for (int n = 0; n < SendCounts_[r]; ++n, ++e)
+    {
+      if (!rowFlag[static_cast<std::size_t>(SendPoints_[e])])
+        continue;
+      const std::size_t k = static_cast<std::size_t>(SendPositionsOff_[e]);
+      send.push_back(static_cast<double>(n));
+      for (int c = 0; c < NumberOfChannels; ++c)
+        send.push_back(LocalValues_[c][k]);
+    }
+    sendCounts[r] = static_cast<int>(send.size() - before);
+  }
+  MPI_Alltoall(sendCounts.data(), 1, MPI_INT, recvCounts.data(), 1, MPI_INT, Comm_);
+  std::vector<int> sendDispls(ranks + 1, 0), recvDispls(ranks + 1, 0), entryDispls(ranks + 1, 0);
+  for (int r = 0; r < ranks; ++r)
+  {
+    sendDispls[r + 1] = sendDispls[r] + sendCounts[r];
+    recvDispls[r + 1] = recvDispls[r] + recvCounts[r];
+    entryDispls[r + 1] = entryDispls[r] + RecvCounts_[r];
+  }
+  std::vector<double> received(static_cast<std::size_t>(recvDispls[ranks]));
+  MPI_Alltoallv(send.data(), sendCounts.data(), sendDispls.data(), MPI_DOUBLE, received.data(),
+    recvCounts.data(), recvDispls.data(), MPI_DOUBLE, Comm_);
+
+  // Into the kept partial values; the owned rows they add to are flagged.
+  const std::size_t numLocal = LocalPositions_.size();
+  for (int r = 0; r < ranks; ++r)
+  {
+    for (int q = recvDispls[r]; q < recvDispls[r + 1]; q += 1 + NumberOfChannels)
+    {
+      const std::size_t entry = static_cast<std::size_t>(entryDispls[r]) +
+        static_cast<std::size_t>(received[static_cast<std::size_t>(q)]);
+      for (int c = 0; c < NumberOfChannels; ++c)
+        Received_[c][entry] = received[static_cast<std::size_t>(q + 1 + c)];
+      const int place = Targets_[numLocal + entry];
+      const int row = static_cast<int>(
+        std::upper_bound(OwnedOffsets_.begin(), OwnedOffsets_.end(), place) - OwnedOffsets_.begin()) - 1;
+      ownedFlag[static_cast<std::size_t>(row)] = 1;
+    }
+  }
+}
+
+void DistributedVertexSolver::BuildRowEntries()
+{
+  // A counting sort of the entries by their owned row, stable (ascending
+  // entry numbers within a row: GatherOwnedRows' order).
+  const int owned = Numbering_.GetNumberOfOwnedRows();
+  std::vector<int> placeRow(OwnedColumns_.size());
+  for (int r = 0; r < owned; ++r)
+    std::fill(placeRow.begin() + OwnedOffsets_[r], placeRow.begin() + OwnedOffsets_[r + 1], r);
+  RowEntryOffsets_.assign(static_cast<std::size_t>(owned) + 1, 0);
+  for (const int place : Targets_)
+    ++RowEntryOffsets_[static_cast<std::size_t>(placeRow[static_cast<std::size_t>(place)]) + 1];
+  for (int r = 0; r < owned; ++r)
+    RowEntryOffsets_[r + 1] += RowEntryOffsets_[r];
+  RowEntries_.assign(Targets_.size(), 0);
+  std::vector<int> fill(RowEntryOffsets_.begin(), RowEntryOffsets_.end() - 1);
+  for (std::size_t x = 0; x < Targets_.size(); ++x)
+  {
+    const std::size_t r = static_cast<std::size_t>(placeRow[static_cast<std::size_t>(Targets_[x])]);
+    RowEntries_[static_cast<std::size_t>(fill[r]++)] = static_cast<int>(x);
+  }
 }
 
 std::array<DistributedVertexSolver::ChannelSetup, NumberOfChannels>
-DistributedVertexSolver::SetUpMatrices(
-  bool sameMesh, DiffusionSystem& system, std::string& assembly, double& hierarchyMs)
+DistributedVertexSolver::SetUpMatrices(bool sameMesh, DiffusionSystem& system,
+  const std::vector<int>* changedRows, const std::array<bool, NumberOfChannels>& rowsChanged,
+  std::string& assembly, double& hierarchyMs)
 {
   // Rebuilt (values added, hierarchy set up) when changed, or, on the same
   // mesh, new values under the kept hierarchy. Returns what each channel got.
@@ -793,22 +1173,30 @@ DistributedVertexSolver::SetUpMatrices(
   std::array<bool, NumberOfChannels> fresh{};
   bool updated = false;
   std::string error;
+  HaveLocalValues_ = false; // until every channel's are the matrices'
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     // Another linear solver (SetLinearSolver) rebuilds the channel.
     const bool renamed = LinearSolverName() != ChannelLinear_[c];
     std::vector<double> values;
-    GatherOwnedRows(system.Values[c], values);
+    if (!changedRows)
+    {
+      // The whole local matrix gathered into owned rows; the local values
+      // and the partial rows received kept for a changed-rows update.
+      std::vector<double> received;
+      GatherOwnedRows(system.Values[c], values, &received);
+      LocalValues_[c].swap(system.Values[c]);
+      Received_[c].swap(received);
+    }
+    const bool differs = changedRows ? rowsChanged[c] : values != Contributions_[c];
     int changed =
-      (!Channels_[c] || Donor_[c] < 0 || OptionsChanged_ || renamed || values != Contributions_[c])
-      ? 1
-      : 0;
+      (!Channels_[c] || Donor_[c] < 0 || OptionsChanged_ || renamed || differs) ? 1 : 0;
     int anyChanged = 0;
     MPI_Allreduce(&changed, &anyChanged, 1, MPI_INT, MPI_MAX, Comm_);
     system.Values[c] = {};
     // Values only when every rank can (the same branch on every rank).
     int canUpdate = sameMesh && Channels_[c] && Donor_[c] >= 0 && !OptionsChanged_ && !renamed &&
-        !ForceFull_[c] && values.size() == Contributions_[c].size()
+        !ForceFull_[c] && (changedRows || values.size() == Contributions_[c].size())
       ? 1
       : 0;
     int allCanUpdate = 0;
@@ -817,7 +1205,16 @@ DistributedVertexSolver::SetUpMatrices(
     {
       try
       {
-        Channels_[c]->UpdateValues(OwnedOffsets_.data(), OwnedColumns_.data(), values.data());
+        if (changedRows)
+        {
+          // Contributions_ holds the new values; only these rows changed.
+          Channels_[c]->UpdateRows(OwnedOffsets_.data(), OwnedColumns_.data(),
+            Contributions_[c].data(), changedRows->data(), static_cast<int>(changedRows->size()));
+        }
+        else
+        {
+          Channels_[c]->UpdateValues(OwnedOffsets_.data(), OwnedColumns_.data(), values.data());
+        }
       }
       catch (const Error& e)
       {
@@ -845,14 +1242,17 @@ DistributedVertexSolver::SetUpMatrices(
       AgreeOnError(Comm_, error);
       updated = true;
       setup[c] = ChannelSetup::ValuesOnly;
-      Contributions_[c].swap(values);
+      if (!changedRows)
+        Contributions_[c].swap(values);
     }
     else if (anyChanged)
     {
-      Contributions_[c].swap(values);
+      if (!changedRows)
+        Contributions_[c].swap(values);
       fresh[c] = true;
     }
   }
+  HaveLocalValues_ = true;
   // New hierarchies: one for the three channels when all three need one
   // (the median channel's, shared), else each its own.
   const bool all = fresh[0] && fresh[1] && fresh[2];
@@ -1014,10 +1414,14 @@ void DistributedVertexSolver::FillStatistics(SolverReport& report) const
   report.NumberOfNonZeros = Channels_[0] ? Channels_[0]->GetNumberOfNonZeros() : 0;
   std::size_t bytes = Numbering_.GetMemoryBytes() +
     (OwnedOffsets_.capacity() + OwnedColumns_.capacity() + LocalPositions_.capacity() +
-      Targets_.capacity() + SendPositionsOff_.capacity()) * sizeof(int);
+      Targets_.capacity() + SendPositionsOff_.capacity() + SendPoints_.capacity() +
+      RowEntryOffsets_.capacity() + RowEntries_.capacity()) * sizeof(int) +
+    (MatrixMeasures_.capacity() + OwnedMeasures_.capacity()) * sizeof(double);
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     bytes += Contributions_[c].capacity() * sizeof(double) + Solution_[c].capacity() * sizeof(double);
+    // The local values and partial rows kept for the changed-rows update.
+    bytes += (LocalValues_[c].capacity() + Received_[c].capacity()) * sizeof(double);
     if (Channels_[c])
     {
       // The hierarchy below the fine level with its interpolation, the two IJ
@@ -1139,6 +1543,105 @@ void DistributedVertexSolver::AddVolumeSources(const std::vector<PointKey>& keys
   }
 }
 
+DistributedVertexSolver::MatrixChange DistributedVertexSolver::FindMatrixChange(
+  bool sameMesh, const OpticalProperties& material, std::vector<int>& changedTets)
+{
+  // The same mesh, options, linear solvers and Robin rule (the collimated
+  // model's) everywhere, and the tets whose coefficients changed since the
+  // last matrices, counted over the ranks: none is a relight; a few
+  // (MaximumChangedFraction_ of all) the changed-rows update.
+  changedTets.clear();
+  ChangedTets_ = -1;
+  ChangedRowCount_ = 0;
+  KeepMeasures_ = false;
+  bool ready = sameMesh && !OptionsChanged_;
+  for (int c = 0; c < NumberOfChannels; ++c)
+    ready = ready && Channels_[c] && Donor_[c] >= 0 && LinearSolverName() == ChannelLinear_[c];
+  int allReady = ready ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &allReady, 1, MPI_INT, MPI_MIN, Comm_);
+  if (!allReady || Rule_ != MatrixRule_)
+    return MatrixChange::Assemble;
+  long long etaChanged = 0;
+  const bool comparable = FindChangedTets(material, changedTets, etaChanged);
+  long long counts[5] = { comparable ? 0 : 1, static_cast<long long>(changedTets.size()),
+    Mesh_->GetNumberOfTets(), HaveLocalValues_ ? 0 : 1, etaChanged };
+  MPI_Allreduce(MPI_IN_PLACE, counts, 5, MPI_LONG_LONG, MPI_SUM, Comm_);
+  if (counts[0] != 0)
+    return MatrixChange::Assemble;
+  // No eta changed on any rank: the divergence's boundary measures are the last ones.
+  KeepMeasures_ = counts[4] == 0;
+  if (counts[1] == 0)
+    return MatrixChange::None;
+  return ChangedRowsUpdate_ && counts[3] == 0 &&
+      static_cast<double>(counts[1]) <= MaximumChangedFraction_ * static_cast<double>(counts[2])
+    ? MatrixChange::ChangedRows
+    : MatrixChange::Assemble;
+}
+
+std::array<DistributedVertexSolver::ChannelSetup, NumberOfChannels>
+DistributedVertexSolver::UpdateMatrices(MatrixChange change, bool sameMesh,
+  const OpticalProperties& material, const std::vector<double>& irradiance,
+  const std::vector<int>& changedTets, DiffusionSystem& system, SolverReport& report,
+  double& hierarchyMs)
+{
+  std::array<ChannelSetup, NumberOfChannels> setup{};
+  if (change != MatrixChange::Assemble)
+  {
+    // The irradiance is checked here (AssembleLocal checks it otherwise).
+    std::string error;
+    try
+    {
+      if (HasTets())
+        CheckIrradiance(*Mesh_, irradiance);
+    }
+    catch (const Error& e)
+    {
+      error = e.what();
+    }
+    AgreeOnError(Comm_, error);
+  }
+  if (change == MatrixChange::None)
+  {
+    report.Assembly = "unchanged";
+    return setup;
+  }
+  HaveMaterial_ = false;
+  const bool rows = change == MatrixChange::ChangedRows;
+  std::vector<int> ownedRows;
+  std::array<bool, NumberOfChannels> rowsChanged{};
+  if (rows)
+  {
+    UpdateChangedRows(material, changedTets, ownedRows, rowsChanged);
+    ChangedTets_ = static_cast<long long>(changedTets.size());
+    ChangedRowCount_ = static_cast<long long>(ownedRows.size());
+  }
+  setup = SetUpMatrices(
+    sameMesh, system, rows ? &ownedRows : nullptr, rowsChanged, report.Assembly, hierarchyMs);
+  MatrixMeasures_ = OwnedMeasures_;
+  MatrixRule_ = Rule_;
+  if (rows)
+  {
+    // The kept material differs from this one in the changed tets only.
+    for (const int t : changedTets)
+    {
+      const std::size_t k = static_cast<std::size_t>(t);
+      std::copy_n(material.AbsorptionCoefficient.begin() + 3 * k, 3,
+        Material_.AbsorptionCoefficient.begin() + 3 * k);
+      std::copy_n(material.ReducedScatteringCoefficient.begin() + 3 * k, 3,
+        Material_.ReducedScatteringCoefficient.begin() + 3 * k);
+      Material_.RefractiveIndex[k] = material.RefractiveIndex[k];
+    }
+  }
+  else
+  {
+    Material_.AbsorptionCoefficient = material.AbsorptionCoefficient;
+    Material_.ReducedScatteringCoefficient = material.ReducedScatteringCoefficient;
+    Material_.RefractiveIndex = material.RefractiveIndex;
+  }
+  HaveMaterial_ = true;
+  return setup;
+}
+
 void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
   const OpticalProperties& material, const std::vector<double>& irradiance,
   std::vector<double>& fluence, SolverReport& report)
@@ -1186,20 +1689,18 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   // bit, the hierarchies kept) assembles the right-hand side only.
   start = MPI_Wtime();
   cpu = CpuMilliseconds();
-  bool ready = allSame != 0 && !OptionsChanged_;
-  for (int c = 0; c < NumberOfChannels; ++c)
-    ready = ready && Channels_[c] && Donor_[c] >= 0 && LinearSolverName() == ChannelLinear_[c];
-  int allReady = ready ? 1 : 0;
-  MPI_Allreduce(MPI_IN_PLACE, &allReady, 1, MPI_INT, MPI_MIN, Comm_);
-  // (A change of the Robin rule, the collimated model's, changes the matrix.)
-  const bool relight = allReady && Rule_ == MatrixRule_ && SameMaterialEverywhere(material);
+  std::vector<int> changedTets;
+  const MatrixChange change = FindMatrixChange(allSame != 0, material, changedTets);
+  const bool relight = change == MatrixChange::None;
+  const bool rowsUpdate = change == MatrixChange::ChangedRows;
   DiffusionSystem system;
-  if (!relight)
+  if (!relight && !rowsUpdate)
   {
     AssembleLocal(material, irradiance, system);
   }
   std::vector<double> localRhs(3 * keys.size(), 0.0);
-  AddBoundaryTerms(material, irradiance, relight ? nullptr : &system, localRhs);
+  AddBoundaryTerms(
+    material, irradiance, relight || rowsUpdate ? nullptr : &system, localRhs);
   std::array<double, NumberOfChannels> localSourcePower{};
   AddVolumeSources(keys, material, localRhs, localSourcePower);
   const std::vector<double> rhs = Numbering_.SumToOwners(Comm_, localRhs, 3);
@@ -1208,33 +1709,8 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   // 3. The hypre matrices and their hierarchies.
   double hierarchyMs = 0.0;
   const long long hierarchiesBefore = HierarchySetups_;
-  std::array<ChannelSetup, NumberOfChannels> setup{};
-  if (relight)
-  {
-    // The irradiance is checked here (AssembleLocal checks it otherwise).
-    std::string error;
-    try
-    {
-      if (HasTets())
-        CheckIrradiance(*Mesh_, irradiance);
-    }
-    catch (const Error& e)
-    {
-      error = e.what();
-    }
-    AgreeOnError(Comm_, error);
-    report.Assembly = "unchanged";
-  }
-  else
-  {
-    HaveMaterial_ = false;
-    setup = SetUpMatrices(allSame != 0, system, report.Assembly, hierarchyMs);
-    MatrixRule_ = Rule_;
-    Material_.AbsorptionCoefficient = material.AbsorptionCoefficient;
-    Material_.ReducedScatteringCoefficient = material.ReducedScatteringCoefficient;
-    Material_.RefractiveIndex = material.RefractiveIndex;
-    HaveMaterial_ = true;
-  }
+  const std::array<ChannelSetup, NumberOfChannels> setup = UpdateMatrices(
+    change, allSame != 0, material, irradiance, changedTets, system, report, hierarchyMs);
   system = DiffusionSystem();
   Timings_.Assembly = Milliseconds(start) - hierarchyMs;
   Timings_.AssemblyCpu = CpuMilliseconds() - cpu - HierarchyCpu_;
@@ -1284,8 +1760,8 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   BeamResult_.Beams = {};
   std::ostringstream linear;
   linear << (HierarchySetups_ > hierarchiesBefore ? "rebuilt"
-                                                 : report.Assembly == "values-only" ? "values"
-                                                                                    : "kept")
+               : report.Assembly == "values-only"  ? (rowsUpdate ? "rows" : "values")
+                                                   : "kept")
          << " (numberings " << Numberings_ << ", hierarchies " << HierarchySetups_ << ")";
   report.LinearSetup = linear.str();
 }

@@ -113,6 +113,47 @@ public:
   void SetValuesOnlySetup(bool on) { ValuesOnly_ = on; }
   bool GetValuesOnlySetup() const { return ValuesOnly_; }
   /**
+   * Changed-rows update (default on; issue 32, the serial path's
+   * LinearSolver::SetupChangedRows): when the mesh, the Robin rule and the
+   * linear solvers are the last Solve's and at most
+   * GetMaximumChangedFraction() of the tets (over every rank) have another
+   * mu_a, sigma_s' or eta than the last matrices (bit for bit: the solver
+   * keeps that material for the relight test anyway, so it needs no
+   * DiffusionSolver::SetChangedTets hint), only the rows of the changed
+   * tets' vertices are assembled again: each rank re-sums its local rows of
+   * them (every tet around them, in the full assembly's order, and their
+   * Robin terms), sends only the changed entries of partition rows to their
+   * owners, and the owners re-sum only the owned rows that changed, in the
+   * order of the full gather, so the matrices equal a full assembly's bit
+   * for bit; the linear solvers get those rows only
+   * (DistributedLinearSolver::UpdateRows). The hierarchies follow the
+   * values-only rule above (a full set-up when it is off or a channel aged).
+   * Costs the local matrix values of the last assembly (3 doubles per local
+   * non-zero), kept. report.LinearSetup then starts with "rows". Off: the
+   * local matrices are assembled whole at every change.
+   */
+  void SetChangedRowsUpdate(bool on) { ChangedRowsUpdate_ = on; }
+  bool GetChangedRowsUpdate() const { return ChangedRowsUpdate_; }
+  /// Largest fraction of the tets (summed over the ranks, in [0, 1]) for
+  /// which the changed-rows update is taken (default 0.05, as
+  /// DiffusionFrontEnd's incremental assembly); beyond it the whole local
+  /// assembly is cheaper.
+  void SetMaximumChangedFraction(double fraction) { MaximumChangedFraction_ = fraction; }
+  double GetMaximumChangedFraction() const { return MaximumChangedFraction_; }
+  /// The last Solve on this rank: its changed tets (-1: the changed-rows
+  /// update did not run) and the owned rows it wrote into the matrices.
+  long long GetNumberOfChangedTets() const { return ChangedTets_; }
+  long long GetNumberOfChangedRows() const { return ChangedRowCount_; }
+  /**
+   * This rank's owned rows of channel c's matrix as the linear solver got
+   * them (CSR: row offsets from 0, sorted global columns, values; empty
+   * before the first Solve): the kept values a changed-rows update writes
+   * into, for tests against a full assembly.
+   */
+  const std::vector<int>& GetOwnedRowOffsets() const { return OwnedOffsets_; }
+  const std::vector<int>& GetOwnedColumns() const { return OwnedColumns_; }
+  const std::vector<double>& GetOwnedValues(int c) const { return Contributions_[c]; }
+  /**
    * One hierarchy for the three channels (default off; issue 32): when every
    * channel needs a new hierarchy (a new mesh, a full set-up), BoomerAMG is
    * set up once, on the channel whose matrix has the median trace (summed
@@ -188,7 +229,8 @@ public:
    * values equal the last Solve's (a relight: the hierarchies are kept,
    * only the right-hand side is new; when every rank's mesh and material are
    * the last Solve's, bit for bit, nothing but the right-hand side is
-   * assembled); report.LinearSetup says "kept", "values" or "rebuilt" and
+   * assembled); report.LinearSetup says "kept", "values", "rows" (values-only,
+   * the changed rows only: SetChangedRowsUpdate) or "rebuilt" and
    * the counts so far, "(numberings N, hierarchies H)"; iterations and
    * residuals are the same on every rank. (The interface's Solve on a
    * TetMesh this solver builds.)
@@ -255,10 +297,58 @@ private:
   /// relight, the right-hand side only) and the load into localRhs.
   void AddBoundaryTerms(const OpticalProperties& material, const std::vector<double>& irradiance,
     DiffusionSystem* system, std::vector<double>& localRhs);
-  /// Collective: every rank's material is the last set-up's, bit for bit.
-  bool SameMaterialEverywhere(const OpticalProperties& material) const;
-  std::array<ChannelSetup, NumberOfChannels> SetUpMatrices(
-    bool sameMesh, DiffusionSystem& system, std::string& assembly, double& hierarchyMs);
+  /// What the matrices need in this Solve (the same on every rank).
+  enum class MatrixChange
+  {
+    None,        ///< every rank's matrix values are the last set-up's (a relight)
+    ChangedRows, ///< a few tets changed: their rows only (SetChangedRowsUpdate)
+    Assemble     ///< the whole local matrices
+  };
+  /// Collective: the change, and this rank's changed tets (ChangedRows).
+  MatrixChange FindMatrixChange(
+    bool sameMesh, const OpticalProperties& material, std::vector<int>& changedTets);
+  /// Collective: the matrices after the assembly of `system` (Assemble) or
+  /// with the changed rows (ChangedRows), their hierarchies, and the
+  /// material they are of kept; report.Assembly. Returns what each channel got.
+  std::array<ChannelSetup, NumberOfChannels> UpdateMatrices(MatrixChange change, bool sameMesh,
+    const OpticalProperties& material, const std::vector<double>& irradiance,
+    const std::vector<int>& changedTets, DiffusionSystem& system, SolverReport& report,
+    double& hierarchyMs);
+  /// This rank's tets whose coefficients differ from the last matrices'
+  /// (Material_, bit for bit); false when there is nothing to compare with.
+  bool FindChangedTets(
+    const OpticalProperties& material, std::vector<int>& changed, long long& etaChanged) const;
+  /**
+   * The changed-rows update of the local values and the owned rows
+   * (collective; SetChangedRowsUpdate): LocalValues_, Received_ and
+   * Contributions_ of every channel as a full assembly would give them.
+   * `ownedRows` gets this rank's owned rows that were re-summed, `changed`
+   * per channel whether any of their values changed on this rank.
+   */
+  void UpdateChangedRows(const OpticalProperties& material, const std::vector<int>& changedTets,
+    std::vector<int>& ownedRows, std::array<bool, NumberOfChannels>& changed);
+  /// UpdateChangedRows, 1: the local rows `rows` (flagged in rowFlag) of
+  /// every channel re-summed from their tets and Robin terms.
+  void ResumLocalRows(const OpticalProperties& material, const std::vector<char>& rowFlag,
+    const std::vector<int>& rows);
+  /// UpdateChangedRows, 2 (collective): the changed entries of partition
+  /// rows sent to their owners into Received_; flags the owned rows they
+  /// add to.
+  void ExchangeChangedEntries(const std::vector<char>& rowFlag, std::vector<char>& ownedFlag);
+  /// Per owned row, its local and received entries in GatherOwnedRows' order
+  /// (RowEntryOffsets_, RowEntries_), once per mesh.
+  void BuildRowEntries();
+  /**
+   * The matrices after the assembly (collective): rebuilt (values added,
+   * hierarchy set up) when changed, or, on the same mesh, new values under
+   * the kept hierarchy. `changedRows` null: the values are `system`'s local
+   * ones, gathered into owned rows here; else Contributions_ holds them
+   * already (UpdateChangedRows) and only the owned rows *changedRows
+   * changed, in the channels `rowsChanged` names. Returns what each channel got.
+   */
+  std::array<ChannelSetup, NumberOfChannels> SetUpMatrices(bool sameMesh, DiffusionSystem& system,
+    const std::vector<int>* changedRows, const std::array<bool, NumberOfChannels>& rowsChanged,
+    std::string& assembly, double& hierarchyMs);
   void SetUpChannel(int c);
   /// Channel c's matrix under channel `donor`'s hierarchy (own set-up if the
   /// linear solver cannot share).
@@ -290,8 +380,10 @@ private:
   void BuildGeometry(const TetMesh* mesh, const std::vector<PointKey>& keys);
   void BuildOwnedRows();
   /// The owned rows' values (OwnedColumns_ order) of the local CSR values
-  /// `local`, with the other ranks' partial rows (collective).
-  void GatherOwnedRows(const std::vector<double>& local, std::vector<double>& ownedValues) const;
+  /// `local`, with the other ranks' partial rows (collective); `received`
+  /// (if not null) gets those partial values as they arrived.
+  void GatherOwnedRows(const std::vector<double>& local, std::vector<double>& ownedValues,
+    std::vector<double>* received = nullptr) const;
 
   MPI_Comm Comm_;
   std::string Name_;
@@ -307,6 +399,9 @@ private:
   }
   bool ValuesOnly_ = true;
   bool SharedHierarchy_ = false;
+  bool ChangedRowsUpdate_ = true;
+  double MaximumChangedFraction_ = 0.05;
+  long long ChangedTets_ = -1, ChangedRowCount_ = 0;
   /// Per channel: the channel whose hierarchy preconditions it (itself if
   /// its own; -1 none).
   std::array<int, NumberOfChannels> Donor_{ -1, -1, -1 };
@@ -348,10 +443,32 @@ private:
   /// Every local CSR entry is its own owned entry, in place (one rank):
   /// the owned rows' values are a copy of the local ones.
   bool IdentityGather_ = false;
+  /// Per entry sent (SendPositionsOff_ order), its local point.
+  std::vector<int> SendPoints_;
+  /// The changed-rows update: per owned row, the entries that add into it
+  /// (x < LocalPositions_.size(): local entry x, else received entry x -
+  /// LocalPositions_.size()), ascending, as GatherOwnedRows adds them
+  /// (built at the first update of a mesh; empty before).
+  std::vector<int> RowEntryOffsets_, RowEntries_;
 
   // The matrices' local contributions of the last Solve, their hierarchies
   // and solutions (owned rows).
   std::array<std::vector<double>, NumberOfChannels> Contributions_;
+  /// The local CSR values (element matrices and Robin terms) and the
+  /// partial rows received (GatherOwnedRows) of Contributions_, kept for the
+  /// changed-rows update (HaveLocalValues_), and the divergence's owned
+  /// boundary measures (S_i, sum S_f eta_f; 2 per owned row) they were
+  /// assembled with (MatrixMeasures_) and of the last boundary terms
+  /// (OwnedMeasures_).
+  std::array<std::vector<double>, NumberOfChannels> LocalValues_, Received_;
+  bool HaveLocalValues_ = false;
+  std::vector<double> MatrixMeasures_, OwnedMeasures_;
+  /// This Solve may keep OwnedMeasures_ (no eta changed on any rank since
+  /// they were summed: FindMatrixChange); OwnedRobin_ holds each owned
+  /// row's Robin A and Fdr of them under RobinRule_.
+  bool KeepMeasures_ = false;
+  std::vector<double> OwnedRobin_;
+  Fresnel::BoundaryRule RobinRule_ = Fresnel::BoundaryRule::Fit;
   std::array<std::unique_ptr<DistributedLinearSolver>, NumberOfChannels> Channels_;
   std::array<std::vector<double>, NumberOfChannels> Solution_;
   Timings Timings_;

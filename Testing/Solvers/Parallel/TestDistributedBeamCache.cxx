@@ -15,11 +15,10 @@
 #include "CollimatedSource.h"
 #include "DiffusionSolverFactory.h"
 #include "DistributedCollimatedSource.h"
+#include "DistributedSlabs.h"
 #include "DistributedVertexSolver.h"
 #include "HypreSolver.h"
-#include "TestMeshes.h"
 #include "TestProblems.h"
-#include "TestRandomProblems.h"
 #include "TetMesh.h"
 
 #include <gtest/gtest.h>
@@ -32,111 +31,21 @@
 #include <memory>
 
 using namespace translucency;
+using translucency::testing::MakeScene;
+using translucency::testing::PieceMaterial;
+using translucency::testing::Rank;
 using translucency::testing::RelativeDifference;
+using translucency::testing::Scene;
+using translucency::testing::Size;
 using translucency::testing::TetsNear;
 
 namespace
 {
 
-int Rank()
-{
-  EnsureHypreInitialized(); // MPI too, if nobody has
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  return rank;
-}
-
-int Size()
-{
-  EnsureHypreInitialized();
-  int size = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  return size;
-}
-
-/// The whole mesh (the same on every rank) and this rank's piece of it.
-struct Scene
-{
-  TetMesh Whole;
-  OpticalProperties Material; ///< per tet of Whole
-  std::shared_ptr<TetMesh> Piece; ///< null: no tets on this rank
-  std::vector<int> Tets;          ///< the piece's tets in Whole
-  std::vector<int> Points;        ///< the piece's points in Whole
-  std::vector<PointKey> Keys;
-  std::vector<char> Used;
-};
-
-/// A jittered cube of 6 x 12^3 tets, split in slabs along x over `ranks`
-/// ranks (the ranks above them get no tets).
-Scene MakeScene(int ranks)
-{
-  Scene s;
-  const translucency::testing::MeshData data = translucency::testing::CubeMesh(12, 5.0, 0.2, 7);
-  s.Whole.SetGeometry(data.Points, data.Tets);
-  s.Material = translucency::testing::RandomMaterial(s.Whole.GetNumberOfTets(), 31);
-  const int rank = Rank();
-  std::vector<int> local(static_cast<std::size_t>(s.Whole.GetNumberOfPoints()), -1);
-  std::vector<int> tets;
-  for (int t = 0; t < s.Whole.GetNumberOfTets(); ++t)
-  {
-    const int* v = s.Whole.GetTet(t);
-    double x = 0.0;
-    for (int k = 0; k < 4; ++k)
-      x += 0.25 * s.Whole.GetPoint(v[k])[0];
-    const int slab = std::min(ranks - 1, static_cast<int>(x / 5.0 * ranks));
-    if (slab != rank)
-      continue;
-    s.Tets.push_back(t);
-    for (int k = 0; k < 4; ++k)
-    {
-      int& id = local[static_cast<std::size_t>(v[k])];
-      if (id < 0)
-      {
-        id = static_cast<int>(s.Points.size());
-        s.Points.push_back(v[k]);
-      }
-      tets.push_back(id);
-    }
-  }
-  std::vector<double> points;
-  for (const int p : s.Points)
-  {
-    const double* x = s.Whole.GetPoint(p);
-    points.insert(points.end(), x, x + 3);
-    s.Keys.push_back(PointKeyFromId(p));
-  }
-  s.Used.assign(s.Points.size(), 1);
-  if (!s.Tets.empty())
-  {
-    s.Piece = std::make_shared<TetMesh>();
-    s.Piece->SetGeometry(points, tets);
-  }
-  return s;
-}
-
-/// The piece's share of a whole-mesh material.
-OpticalProperties PieceMaterial(const Scene& s, const OpticalProperties& whole)
-{
-  OpticalProperties m;
-  for (const int t : s.Tets)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      m.AbsorptionCoefficient.push_back(
-        whole.AbsorptionCoefficient[3 * static_cast<std::size_t>(t) + c]);
-      m.ReducedScatteringCoefficient.push_back(
-        whole.ReducedScatteringCoefficient[3 * static_cast<std::size_t>(t) + c]);
-    }
-    m.RefractiveIndex.push_back(whole.RefractiveIndex[static_cast<std::size_t>(t)]);
-  }
-  return m;
-}
-
 double Relative(double a, double b)
 {
   return std::abs(a - b) / std::max(std::abs(b), 1e-300);
 }
-
 
 /// One step: the kept distributed beam against a fresh one (bit for bit)
 /// and against the serial cache on the whole mesh (to rounding), and what
