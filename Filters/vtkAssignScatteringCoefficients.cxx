@@ -256,7 +256,6 @@ double NearestInVolume(vtkImageData* volume, const VolumeArray& a, const int ijk
   return a.Array->GetComponent(volume->ComputePointId(p), 0);
 }
 
-/// VOLUME: probed coefficients (one palette entry per tet) or table entries by id.
 /// The image on `inputs` (the Volume port) spans its whole extent.
 bool HasWholeImage(vtkInformationVector* inputs)
 {
@@ -275,6 +274,7 @@ bool HasWholeImage(vtkInformationVector* inputs)
   return std::equal(whole, whole + 6, extent);
 }
 
+/// VOLUME: probed coefficients (one palette entry per tet) or table entries by id.
 /// `firstTet`: the number errors give the first of `centroids`' tets (0, or
 /// a piece's first tet in the whole mesh under MPI).
 bool FieldFromVolume(vtkAlgorithm* self, vtkImageData* volume,
