@@ -78,6 +78,16 @@ std::uint64_t PatternFingerprint(int rows, const int* rowOffsets, const int* col
   return h;
 }
 
+/// Entry value into the ParCSR data at `place` (FindPlaces: >= 0 the diag
+/// block's index, else -1 - the offd block's).
+inline void WriteAtPlace(int place, double value, HYPRE_Complex* diagData, HYPRE_Complex* offdData)
+{
+  if (place >= 0)
+    diagData[place] = value;
+  else
+    offdData[-1 - place] = value;
+}
+
 void FindPlaces(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
   const int* columns, std::vector<int>& places, std::uint64_t& pattern, const std::string& who)
 {
@@ -170,13 +180,7 @@ void ScatterValues(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* r
   HYPRE_Complex* diagData = hypre_CSRMatrixData(diag);
   HYPRE_Complex* offdData = hypre_CSRMatrixData(offd);
   for (std::size_t k = 0; k < nnz; ++k)
-  {
-    const int place = places[k];
-    if (place >= 0)
-      diagData[place] = values[k];
-    else
-      offdData[-1 - place] = values[k];
-  }
+    WriteAtPlace(places[k], values[k], diagData, offdData);
 }
 
 void ScatterRows(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* rowOffsets,
@@ -203,13 +207,7 @@ void ScatterRows(HYPRE_IJMatrix matrix, int rowBegin, int rowEnd, const int* row
         std::to_string(numLocal) + " rows");
     }
     for (int k = rowOffsets[r]; k < rowOffsets[r + 1]; ++k)
-    {
-      const int place = places[static_cast<std::size_t>(k)];
-      if (place >= 0)
-        diagData[place] = values[k];
-      else
-        offdData[-1 - place] = values[k];
-    }
+      WriteAtPlace(places[static_cast<std::size_t>(k)], values[k], diagData, offdData);
   }
 }
 

@@ -28,6 +28,17 @@ inline int LocalIndex(const int* tv, int id)
   return tv[0] == id ? 0 : (tv[1] == id ? 1 : (tv[2] == id ? 2 : 3));
 }
 
+/// The element matrix of one tet and channel: fem's or the divergence's
+/// (the full assembly and the changed-rows update must give the same bits).
+inline void ElementMatrix(bool fem, const TetGeometry& geometry, double muA, double sigmaS,
+  double diag[4], double off[6])
+{
+  if (fem)
+    FiniteElementTetMatrix(geometry, muA, sigmaS, diag, off);
+  else
+    DivergenceTetMatrix(geometry, muA, sigmaS, diag, off);
+}
+
 double Milliseconds(double since)
 {
   return 1000.0 * (MPI_Wtime() - since);
@@ -534,10 +545,7 @@ void DistributedVertexSolver::AssembleLocal(const OpticalProperties& material,
       for (int c = 0; c < NumberOfChannels; ++c)
       {
         double diag[4], off[6];
-        if (fem)
-          FiniteElementTetMatrix(geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
-        else
-          DivergenceTetMatrix(geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
+        ElementMatrix(fem, geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
         ScatterTetMatrix(pointers->Values[c], pos, diag, off);
       }
     };
@@ -1014,10 +1022,7 @@ void DistributedVertexSolver::ResumLocalRows(const OpticalProperties& material,
     for (int c = 0; c < NumberOfChannels; ++c)
     {
       double diag[4], off[6];
-      if (Fem_)
-        FiniteElementTetMatrix(geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
-      else
-        DivergenceTetMatrix(geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
+      ElementMatrix(Fem_, geometry, muA[3 * t + c], sigmaS[3 * t + c], diag, off);
       double* v = LocalValues_[c].data();
       for (int a = 0; a < 4; ++a)
       {
