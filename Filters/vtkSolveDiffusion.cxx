@@ -791,8 +791,20 @@ int vtkSolveDiffusion::RequestSerial(
     // The material: the front end's kept copy when the input carries the
     // same coefficient arrays, unmodified, as the last solve (a relight);
     // else copied and validated.
-    const bool keptMaterial = in.SameMaterialArrays(input) && in.FrontEnd.HasKeptMaterial(mesh);
+    bool keptMaterial = in.SameMaterialArrays(input) && in.FrontEnd.HasKeptMaterial(mesh);
     in.KeepMaterialArrays(nullptr); // until this solve succeeds
+    if (!keptMaterial && in.FrontEnd.HasKeptMaterial(mesh))
+    {
+      // A paint stroke (new arrays on the same mesh): compared with the kept
+      // material in place and its changed tets written into it, without
+      // copying or validating the whole material again (issue 31).
+      const vtkIdType numTets = mesh->GetNumberOfTets();
+      keptMaterial = in.FrontEnd.UpdateKeptMaterial(mesh,
+        vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::AbsorptionName, 3, numTets),
+        vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::ScatteringName, 3, numTets),
+        vtkTranslucency::DoubleCellArrayValues(
+          input, vtkTranslucency::RefractiveIndexName, 1, numTets));
+    }
     translucency::OpticalProperties material;
     std::vector<double> irradiance;
     if ((!keptMaterial && !vtkTranslucency::ToOpticalProperties(input, material, error)) ||

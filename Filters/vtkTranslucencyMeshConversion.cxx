@@ -395,6 +395,19 @@ bool ToOpticalProperties(
   return true;
 }
 
+const double* DoubleCellArrayValues(
+  vtkUnstructuredGrid* grid, const char* name, int components, vtkIdType tuples)
+{
+  vtkDoubleArray* array =
+    grid ? vtkDoubleArray::FastDownCast(grid->GetCellData()->GetArray(name)) : nullptr;
+  if (!array || array->GetNumberOfComponents() != components ||
+    array->GetNumberOfTuples() != tuples || tuples == 0)
+  {
+    return nullptr;
+  }
+  return array->GetPointer(0);
+}
+
 bool ReadPointArray(vtkUnstructuredGrid* grid, const char* name, int components,
   std::vector<double>& values, std::string& error)
 {

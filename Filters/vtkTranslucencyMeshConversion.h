@@ -71,6 +71,13 @@ bool ToTetMesh(vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::stri
 bool ToOpticalProperties(
   vtkUnstructuredGrid* grid, translucency::OpticalProperties& material, std::string& error);
 
+/// The values of `grid`'s cell array `name` in place, when it is a
+/// vtkDoubleArray (contiguous) with `components` components and `tuples`
+/// tuples; null otherwise (absent, another type or shape: read it with
+/// ToOpticalProperties, which names the problem). No copy.
+const double* DoubleCellArrayValues(
+  vtkUnstructuredGrid* grid, const char* name, int components, vtkIdType tuples);
+
 /// Read a point array with `components` components as doubles. Fails if it
 /// is missing or has the wrong number of components.
 bool ReadPointArray(vtkUnstructuredGrid* grid, const char* name, int components,

@@ -130,8 +130,9 @@ def main():
             if wrapped and hasattr(core, "GetAssemblyTime"):
                 times[step]["solve setup"].append(core.GetAssemblyTime() / 1000.0)
                 times[step]["solve pcg"].append(core.GetSolveTime() / 1000.0)
-                account = " (solve: set-up %.3f, pcg %.3f, beam %s, %s)" % (
+                account = " (solve: set-up %.3f, pcg %.3f, iterations %s, beam %s, %s)" % (
                     times[step]["solve setup"][-1], times[step]["solve pcg"][-1],
+                    "/".join(str(core.GetNumberOfIterations(c)) for c in range(3)),
                     core.GetLastCollimatedUpdate() or "-", core.GetLastLinearSetup() or "-")
             print("run %d %-8s %s total %.3f%s" % (
                 run + 1, step, " ".join("%s %.3f" % (f, times[step][f][-1]) for f in FILTERS),

@@ -5,6 +5,8 @@
 #include "TetMesh.h"
 #include "Strings.h"
 
+#include <algorithm>
+#include <cmath>
 #include <complex>
 #include <cstring>
 #include <sstream>
@@ -71,6 +73,8 @@ void DiffusionFrontEnd::SetIncrementalAssembly(bool on)
 void DiffusionFrontEnd::ForgetLast()
 {
   HaveLast_ = false;
+  HavePendingChanges_ = false;
+  PendingChanges_.clear();
   LastMaterial_ = OpticalProperties();
   LastIrradiance_.clear();
 }
@@ -149,6 +153,18 @@ void DiffusionFrontEnd::DetectChangedTets(
   {
     const bool relit = std::memcmp(LastIrradiance_.data(), irradiance.data(),
                          irradiance.size() * sizeof(double)) != 0;
+    if (HavePendingChanges_)
+    {
+      // UpdateKeptMaterial wrote a paint stroke into the kept material.
+      HavePendingChanges_ = false;
+      if (PendingChanges_.size() <= limit)
+      {
+        ChangedTets_ = static_cast<long long>(PendingChanges_.size());
+        Solver_->SetChangedTets(std::move(PendingChanges_), relit);
+      }
+      PendingChanges_.clear(); // more than the limit: a full assembly
+      return;
+    }
     ChangedTets_ = 0;
     Solver_->SetChangedTets(std::vector<int>(), relit);
     return;
@@ -211,6 +227,81 @@ bool DiffusionFrontEnd::HasKeptMaterial(const std::shared_ptr<const TetMesh>& me
 {
   return HaveLast_ && mesh && mesh == Mesh_ &&
     LastMaterial_.RefractiveIndex.size() == static_cast<std::size_t>(mesh->GetNumberOfTets());
+}
+
+bool DiffusionFrontEnd::UpdateKeptMaterial(const std::shared_ptr<const TetMesh>& mesh,
+  const double* absorption, const double* scattering, const double* refractiveIndex)
+{
+  if (!HasKeptMaterial(mesh) || !absorption || !scattering || !refractiveIndex)
+  {
+    return false;
+  }
+  ++MaterialComparisons_;
+  OpticalProperties& kept = LastMaterial_;
+  const long long numTets = static_cast<long long>(kept.RefractiveIndex.size());
+  // Fixed chunks (not per thread): the changed tets come out in order at any
+  // thread count.
+  constexpr long long chunk = 16384;
+  const long long numChunks = (numTets + chunk - 1) / chunk;
+  std::vector<std::vector<int>> changed(static_cast<std::size_t>(numChunks));
+  bool invalid = false;
+  const double* keptA = kept.AbsorptionCoefficient.data();
+  const double* keptS = kept.ReducedScatteringCoefficient.data();
+  const double* keptEta = kept.RefractiveIndex.data();
+#pragma omp parallel for schedule(static) reduction(|| : invalid)
+  for (long long k = 0; k < numChunks; ++k)
+  {
+    std::vector<int>& mine = changed[static_cast<std::size_t>(k)];
+    const long long end = std::min(numTets, (k + 1) * chunk);
+    for (long long t = k * chunk; t < end; ++t)
+    {
+      // Bits, as FindChangedTets: a NaN that stays a NaN is no change.
+      if (std::memcmp(keptA + 3 * t, absorption + 3 * t, 3 * sizeof(double)) == 0 &&
+        std::memcmp(keptS + 3 * t, scattering + 3 * t, 3 * sizeof(double)) == 0 &&
+        std::memcmp(keptEta + t, refractiveIndex + t, sizeof(double)) == 0)
+      {
+        continue;
+      }
+      mine.push_back(static_cast<int>(t));
+      for (int c = 0; c < NumberOfChannels; ++c)
+      {
+        const double a = absorption[3 * t + c], s = scattering[3 * t + c];
+        invalid = invalid || !(std::isfinite(a) && a >= 0.0 && std::isfinite(s) && s >= 0.0 &&
+          a + s > 0.0);
+      }
+      invalid = invalid || !(std::isfinite(refractiveIndex[t]) && refractiveIndex[t] > 0.0);
+    }
+  }
+  if (invalid)
+  {
+    // Rare: Validate's message (its lowest invalid tet is a changed one, the
+    // others were valid), from a copy; the kept material is not touched.
+    OpticalProperties copy;
+    copy.AbsorptionCoefficient.assign(absorption, absorption + 3 * numTets);
+    copy.ReducedScatteringCoefficient.assign(scattering, scattering + 3 * numTets);
+    copy.RefractiveIndex.assign(refractiveIndex, refractiveIndex + numTets);
+    copy.Validate(static_cast<int>(numTets));
+    throw Error("DiffusionFrontEnd::UpdateKeptMaterial: invalid material"); // not reached
+  }
+  std::size_t total = 0;
+  for (const auto& c : changed)
+    total += c.size();
+  PendingChanges_.clear();
+  PendingChanges_.reserve(total);
+  for (const auto& c : changed)
+    PendingChanges_.insert(PendingChanges_.end(), c.begin(), c.end());
+  double* outA = kept.AbsorptionCoefficient.data();
+  double* outS = kept.ReducedScatteringCoefficient.data();
+  double* outEta = kept.RefractiveIndex.data();
+  for (const int t : PendingChanges_)
+  {
+    const std::size_t k = static_cast<std::size_t>(t);
+    std::copy(absorption + 3 * k, absorption + 3 * k + 3, outA + 3 * k);
+    std::copy(scattering + 3 * k, scattering + 3 * k + 3, outS + 3 * k);
+    outEta[k] = refractiveIndex[k];
+  }
+  HavePendingChanges_ = true;
+  return true;
 }
 
 bool DiffusionFrontEnd::SolveKeptMaterial(std::shared_ptr<const TetMesh> mesh,

@@ -206,8 +206,25 @@ public:
   bool SolveKeptMaterial(std::shared_ptr<const TetMesh> mesh, std::vector<double> irradiance,
     const DiffusionProblem& light, const SolveRequest& request, SolveResult& result);
 
+  /**
+   * A paint stroke without a copy of the material: the next solve's
+   * coefficients as the caller's contiguous per-tet arrays (3, 3 and 1
+   * values per tet, `mesh`'s tets in order) compared bit for bit with the
+   * kept material in one parallel pass; the changed tets' values are written
+   * into it and SolveKeptMaterial then solves with them, re-assembling only
+   * the changed tets' rows (as Solve would after FindChangedTets). Returns
+   * false, with nothing changed, unless HasKeptMaterial(mesh). Throws
+   * translucency::Error, with OpticalProperties::Validate's message (the
+   * lowest invalid tet), when a changed value is invalid; the kept material
+   * is then unchanged. The unchanged tets were validated by the solve that
+   * kept them.
+   */
+  bool UpdateKeptMaterial(const std::shared_ptr<const TetMesh>& mesh, const double* absorption,
+    const double* scattering, const double* refractiveIndex);
+
   /// How many times a solve compared its material tet by tet with the kept
-  /// one (FindChangedTets) since construction: SolveKeptMaterial does not.
+  /// one (FindChangedTets, UpdateKeptMaterial) since construction:
+  /// SolveKeptMaterial does not.
   long long GetNumberOfMaterialComparisons() const { return MaterialComparisons_; }
 
   /**
@@ -278,6 +295,9 @@ private:
   std::vector<double> LastIrradiance_;
   long long ChangedTets_ = -1;
   long long MaterialComparisons_ = 0;
+  /// The tets UpdateKeptMaterial found changed, for the next SolveKeptMaterial.
+  bool HavePendingChanges_ = false;
+  std::vector<int> PendingChanges_;
 };
 
 } // namespace translucency

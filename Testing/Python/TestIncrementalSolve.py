@@ -18,8 +18,9 @@ How to run (from a build tree; ctest sets the variables itself):
 5. A relight (the input carries the same coefficient arrays, unmodified)
    neither copies, validates nor compares the material (the filter's
    counters stay; issue 31), and its fluence equals a from-scratch solve; a
-   paint stroke (new arrays) and an array modified in place are read,
-   validated and compared again.
+   paint stroke (new arrays) and an array modified in place are compared
+   with the kept material in place (no copy); an invalid painted value is an
+   error naming its tet, and the next valid input solves as from scratch.
 
 Exits non-zero on failure (unittest).
 """
@@ -142,24 +143,61 @@ class IncrementalSolveTest(unittest.TestCase):
         self.assertEqual(self.solve.GetNumberOfMaterialComparisons(), 0)
         np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
                                    self.reference(self.paint.GetOutput()), rtol=1e-7)
-        # A paint stroke: new arrays, read and compared with the kept ones.
+        # A paint stroke: new arrays, compared with the kept material in
+        # place (no copy of the whole material: issue 31).
         self.paint.SetStrength(1.0)
         self.paint.SetTargetAbsorptionCoefficient(0.5, 0.5, 0.5)
         run(self.lights, self.paint, self.solve)
         self.assertEqual(self.solve.GetLastAssembly(), "incremental")
-        self.assertEqual(self.solve.GetNumberOfMaterialConversions(), 2)
+        self.assertEqual(self.solve.GetNumberOfMaterialConversions(), 1)
         self.assertEqual(self.solve.GetNumberOfMaterialComparisons(), 1)
-        # An array changed in place (and marked modified): read again.
+        np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
+                                   self.reference(self.paint.GetOutput()), rtol=1e-7)
+        # An array changed in place (and marked modified): compared again.
         absorption = self.paint.GetOutput().GetCellData().GetArray(ABSORPTION)
         absorption.SetComponent(7, 0, 2.0 * absorption.GetComponent(7, 0))
         absorption.Modified()
         self.solve.Modified()
         run(self.solve)
-        self.assertEqual(self.solve.GetNumberOfMaterialConversions(), 3)
+        self.assertEqual(self.solve.GetNumberOfMaterialConversions(), 1)
         self.assertEqual(self.solve.GetNumberOfMaterialComparisons(), 2)
         self.assertEqual(self.solve.GetNumberOfChangedTets(), 1)
         np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
                                    self.reference(self.paint.GetOutput()), rtol=1e-7)
+
+    def test_invalid_painted_value_is_an_error_and_loses_nothing(self):
+        # Issue 31: a paint is compared with the kept material in place; a
+        # painted value the model cannot take names its tet, the output is
+        # empty, and the next valid input solves as from scratch.
+        run(self.lights, self.paint, self.solve)
+        edited = vtkUnstructuredGrid()
+        edited.ShallowCopy(self.paint.GetOutput())
+        good = array(edited, ABSORPTION, cell=True).copy()
+        bad = good.copy()
+        bad[123, 1] = -0.5
+        vtk_bad = numpy_to_vtk(bad, deep=True)
+        vtk_bad.SetName(ABSORPTION)
+        edited.GetCellData().AddArray(vtk_bad)
+        self.solve.SetInputData(edited)
+        messages = Messages(self.solve)
+        try:
+            self.solve.Update()
+        finally:
+            messages.remove()
+        self.assertTrue(any("AbsorptionCoefficient of tet 123, channel G is -0.5" in m
+                            for m in messages.errors), messages.errors)
+        self.assertEqual(self.solve.GetOutput().GetNumberOfCells(), 0)
+        fixed = vtkUnstructuredGrid()
+        fixed.ShallowCopy(self.paint.GetOutput())
+        painted = good.copy()
+        painted[[5, 123]] *= 2.0
+        vtk_good = numpy_to_vtk(painted, deep=True)
+        vtk_good.SetName(ABSORPTION)
+        fixed.GetCellData().AddArray(vtk_good)
+        self.solve.SetInputData(fixed)
+        run(self.solve)
+        np.testing.assert_allclose(array(self.solve.GetOutput(), "Fluence"),
+                                   self.reference(fixed), rtol=1e-7)
 
     def test_falls_back_to_full_assembly(self):
         run(self.lights, self.paint, self.solve)

@@ -225,6 +225,79 @@ TEST(DiffusionFrontEnd, KeptMaterialRelightEqualsASolveFromScratch)
   EXPECT_FALSE(front.HasKeptMaterial(other.Mesh));
 }
 
+// Issue 31: a paint written into the kept material in place
+// (UpdateKeptMaterial) is the paint Solve finds by comparing copies: the
+// same changed tets, the same assembly, the same fluence bit for bit; an
+// invalid painted value is Validate's error and leaves the kept material as
+// it was; beyond MaximumChangedFraction it is a full assembly.
+TEST(DiffusionFrontEnd, PaintInPlaceEqualsAPaintByCopy)
+{
+  Scene s = MakeScene(6); // 1296 tets
+  DiffusionFrontEnd inPlace, byCopy;
+  SolveResult a, b;
+  ASSERT_TRUE(inPlace.Solve(s.Mesh, s.Material, s.Irradiance, {}, SolveRequest(), a));
+  ASSERT_TRUE(byCopy.Solve(s.Mesh, s.Material, s.Irradiance, {}, SolveRequest(), b));
+  ASSERT_EQ(a.Fluence, b.Fluence);
+
+  // Nothing kept for another mesh: refused, nothing done.
+  Scene other = MakeScene(6);
+  EXPECT_FALSE(inPlace.UpdateKeptMaterial(other.Mesh, s.Material.AbsorptionCoefficient.data(),
+    s.Material.ReducedScatteringCoefficient.data(), s.Material.RefractiveIndex.data()));
+
+  // A stroke over 1 % of the tets, with a relight.
+  OpticalProperties painted = s.Material;
+  const std::vector<int> changed = Paint(painted, 10, 97, 13);
+  std::vector<double> relit = s.Irradiance;
+  for (int i : s.Mesh->GetBoundaryPoints())
+    relit[3 * static_cast<size_t>(i) + 1] *= 0.8;
+  ASSERT_TRUE(inPlace.UpdateKeptMaterial(s.Mesh, painted.AbsorptionCoefficient.data(),
+    painted.ReducedScatteringCoefficient.data(), painted.RefractiveIndex.data()));
+  EXPECT_EQ(inPlace.GetNumberOfMaterialComparisons(), 1);
+  ASSERT_TRUE(inPlace.SolveKeptMaterial(s.Mesh, relit, {}, SolveRequest(), a));
+  ASSERT_TRUE(byCopy.Solve(s.Mesh, painted, relit, {}, SolveRequest(), b));
+  EXPECT_EQ(a.Report.Assembly, "incremental");
+  EXPECT_EQ(b.Report.Assembly, "incremental");
+  EXPECT_EQ(inPlace.GetNumberOfChangedTets(), static_cast<long long>(changed.size()));
+  EXPECT_EQ(byCopy.GetNumberOfChangedTets(), static_cast<long long>(changed.size()));
+  EXPECT_EQ(a.Fluence, b.Fluence);
+  const OpticalProperties* kept = inPlace.GetKeptMaterial();
+  ASSERT_NE(kept, nullptr);
+  EXPECT_EQ(kept->AbsorptionCoefficient, painted.AbsorptionCoefficient);
+  EXPECT_EQ(kept->ReducedScatteringCoefficient, painted.ReducedScatteringCoefficient);
+  EXPECT_EQ(kept->RefractiveIndex, painted.RefractiveIndex);
+
+  // An invalid value on a painted tet: Validate's message, the kept material
+  // unchanged.
+  OpticalProperties bad = painted;
+  Paint(bad, 3, 50, 5);
+  bad.AbsorptionCoefficient[3 * 103 + 2] = -1.0; // tet 103, channel B
+  bad.ReducedScatteringCoefficient[3 * 200] = std::numeric_limits<double>::quiet_NaN();
+  const std::string message = ErrorMessage([&] {
+    inPlace.UpdateKeptMaterial(s.Mesh, bad.AbsorptionCoefficient.data(),
+      bad.ReducedScatteringCoefficient.data(), bad.RefractiveIndex.data());
+  });
+  EXPECT_TRUE(Contains(message, "AbsorptionCoefficient of tet 103, channel B is -1")) << message;
+  EXPECT_EQ(kept->AbsorptionCoefficient, painted.AbsorptionCoefficient);
+  EXPECT_EQ(kept->ReducedScatteringCoefficient, painted.ReducedScatteringCoefficient);
+  EXPECT_EQ(kept->RefractiveIndex, painted.RefractiveIndex);
+  ASSERT_TRUE(inPlace.SolveKeptMaterial(s.Mesh, relit, {}, SolveRequest(), a));
+  EXPECT_EQ(inPlace.GetNumberOfChangedTets(), 0);
+  EXPECT_EQ(a.Fluence, b.Fluence);
+
+  // Beyond MaximumChangedFraction (5 %): a full assembly of the new values,
+  // as Solve does.
+  OpticalProperties wide = painted;
+  Paint(wide, 0, 3, 200); // 15 % of the tets
+  ASSERT_TRUE(inPlace.UpdateKeptMaterial(s.Mesh, wide.AbsorptionCoefficient.data(),
+    wide.ReducedScatteringCoefficient.data(), wide.RefractiveIndex.data()));
+  ASSERT_TRUE(inPlace.SolveKeptMaterial(s.Mesh, relit, {}, SolveRequest(), a));
+  ASSERT_TRUE(byCopy.Solve(s.Mesh, wide, relit, {}, SolveRequest(), b));
+  EXPECT_EQ(a.Report.Assembly, "full");
+  EXPECT_EQ(b.Report.Assembly, "full");
+  EXPECT_EQ(inPlace.GetNumberOfChangedTets(), -1);
+  EXPECT_EQ(a.Fluence, b.Fluence);
+}
+
 TEST(DiffusionFrontEnd, SolverByNameAndNoIncrementalForOtherSolvers)
 {
   Scene s = MakeScene(3);
