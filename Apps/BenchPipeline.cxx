@@ -348,7 +348,23 @@ int BenchPipeline(const PipelineBenchOptions& o)
     try
     {
       for (int r = 0; r < o.Runs; ++r)
+      {
         RunOnce(path.string(), o.Collimated, bounds, boundary, r, r == o.Runs - 1, steps, accuracy);
+        // Each run's figures, beside the medians below (a run that differs
+        // from the others shows here).
+        std::cout << "  run " << r + 1 << ":";
+        for (const char* step : { "cold", "relight", "paint", "cut" })
+        {
+          double total = 0.0;
+          for (const auto& [name, times] : steps[step].Filters)
+            if (name.find('.') == std::string::npos)
+              total += times.back();
+          std::cout << " " << step << " " << std::fixed << std::setprecision(1) << total << " ms";
+        }
+        std::cout << " (relight: irradiance " << steps["relight"].Filters["irradiance"].back()
+                  << ", solve set-up " << steps["relight"].Filters["solve.setup"].back() << ")"
+                  << std::defaultfloat << std::endl;
+      }
     }
     catch (...)
     {
