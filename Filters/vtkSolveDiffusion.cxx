@@ -284,7 +284,9 @@ vtkIdType vtkSolveDiffusion::GetNumberOfChangedTets() const
 
 vtkTypeInt64 vtkSolveDiffusion::GetNumberOfMaterialConversions() const
 {
-  return this->Internal->MaterialConversions;
+  // The serial path's and the distributed path's (this rank's piece).
+  return this->Internal->MaterialConversions +
+    this->Internal->Distributed.GetNumberOfMaterialConversions();
 }
 
 vtkTypeInt64 vtkSolveDiffusion::GetNumberOfMaterialComparisons() const

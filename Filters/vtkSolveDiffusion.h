@@ -559,11 +559,13 @@ public:
   /// IncrementalAssembly off).
   vtkIdType GetNumberOfChangedTets() const;
 
-  /// Serial executions that copied and validated the coefficient arrays
+  /// Executions that copied and validated the coefficient arrays
   /// (AbsorptionCoefficient, ReducedScatteringCoefficient, RefractiveIndex)
-  /// since construction. An execution whose input carries the same arrays,
-  /// unmodified (VTK modification time), as the last successful solve on the
-  /// same mesh (a relight) reuses the material kept from it instead.
+  /// since construction (under MPI: of this rank's piece). An execution whose
+  /// input carries the same arrays, unmodified (VTK modification time), as
+  /// the last successful solve on the same mesh (a relight) reuses the
+  /// material kept from it instead; a paint stroke in one process compares
+  /// the new arrays with it in place (GetNumberOfMaterialComparisons).
   vtkTypeInt64 GetNumberOfMaterialConversions() const;
   /// Serial solves that compared the material tet by tet with the last one
   /// (to find the tets a paint changed) since construction.

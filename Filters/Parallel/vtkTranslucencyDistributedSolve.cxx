@@ -42,6 +42,40 @@ struct vtkTranslucencyDistributedSolve::Impl
   /// Irradiance: the gathered surface and each light's terms kept across
   /// executions (a relight computes the changed light only).
   vtkTranslucencyDistributedIrradiance::State BeamIrradiance;
+  /// The coefficient arrays of the last successful solve and their times:
+  /// when the next input carries the same ones, unmodified, on the same
+  /// piece (a relight), the front end's kept material is solved again
+  /// instead of converting, validating and comparing the piece's material
+  /// (issues 31, 32; vtkSolveDiffusion's serial rule).
+  long long MaterialConversions = 0;
+  vtkDataArray* MaterialArrays[3] = { nullptr, nullptr, nullptr };
+  vtkMTimeType MaterialTimes[3] = { 0, 0, 0 };
+
+  bool SameMaterialArrays(vtkUnstructuredGrid* input) const
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      vtkDataArray* array = input ? input->GetCellData()->GetArray(MaterialArrayName(k)) : nullptr;
+      if (!array || array != this->MaterialArrays[k] || array->GetMTime() != this->MaterialTimes[k])
+        return false;
+    }
+    return true;
+  }
+  void KeepMaterialArrays(vtkUnstructuredGrid* input)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      vtkDataArray* array = input ? input->GetCellData()->GetArray(MaterialArrayName(k)) : nullptr;
+      this->MaterialArrays[k] = array;
+      this->MaterialTimes[k] = array ? array->GetMTime() : 0;
+    }
+  }
+  static const char* MaterialArrayName(int k)
+  {
+    static const char* names[3] = { vtkTranslucency::AbsorptionName,
+      vtkTranslucency::ScatteringName, vtkTranslucency::RefractiveIndexName };
+    return names[k];
+  }
 };
 
 namespace
@@ -66,11 +100,11 @@ void ConvertGeometry(vtkUnstructuredGrid* input, std::vector<double>& points,
 /// The owned cells' material and the points' irradiance. Throws
 /// translucency::Error (on this rank only).
 void ConvertValues(vtkUnstructuredGrid* input, const std::vector<vtkIdType>& kept,
-  translucency::OpticalProperties& material, std::vector<double>& irradiance)
+  bool readMaterial, translucency::OpticalProperties& material, std::vector<double>& irradiance)
 {
   std::string local;
   const vtkIdType numPoints = input ? input->GetNumberOfPoints() : 0;
-  if (!kept.empty())
+  if (!kept.empty() && readMaterial)
   {
     translucency::OpticalProperties all;
     if (!vtkTranslucency::ToOpticalProperties(input, all, local))
@@ -189,6 +223,7 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   // (vtkTranslucency::PieceGeometryKey: its VTK objects and their times).
   const std::string geometry = vtkTranslucency::PieceGeometryKey(input);
   const bool reuse = in.Mesh && !in.Geometry.empty() && geometry == in.Geometry;
+  bool sameMaterial = false;
   try
   {
     if (!reuse)
@@ -214,7 +249,12 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
       if (in.Mesh)
         in.Geometry = geometry;
     }
-    ConvertValues(input, in.Kept, material, irradiance);
+    // A relight: the same coefficient arrays, unmodified, on the same piece.
+    sameMaterial = reuse && in.Mesh && in.SameMaterialArrays(input) &&
+      in.FrontEnd.HasKeptMaterial(in.Mesh);
+    in.KeepMaterialArrays(nullptr); // until this solve succeeds
+    ConvertValues(input, in.Kept, !sameMaterial, material, irradiance);
+    in.MaterialConversions += sameMaterial || in.Kept.empty() ? 0 : 1;
   }
   catch (const std::exception& e)
   {
@@ -235,6 +275,15 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
     // The solver by name, its distributed variant by the registry's trait.
     in.FrontEnd.SetSolver(discretization);
     in.FrontEnd.SetCommunicator(translucency::MakeCommunicator(handle));
+    if (sameMaterial && !in.FrontEnd.HasKeptMaterial(in.Mesh))
+    {
+      // Another solver or communicator forgot the kept material: the same
+      // arrays (valid at the last solve) are read after all.
+      std::vector<double> unused;
+      ConvertValues(input, in.Kept, true, material, unused);
+      ++in.MaterialConversions;
+      sameMaterial = false;
+    }
     translucency::DiffusionSolver& solver = in.FrontEnd.GetSolver();
     solver.SetRelTol(relTol);
     solver.SetMaxIter(maxIter);
@@ -251,8 +300,15 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
     request.Detectors = detectors;
     request.AcceptUnconverged = acceptUnconverged;
     in.Result = translucency::SolveResult();
-    in.FrontEnd.Solve(in.Mesh, std::move(material), std::move(irradiance), light, request,
-      in.Result);
+    if (sameMaterial)
+    {
+      in.FrontEnd.SolveKeptMaterial(in.Mesh, std::move(irradiance), light, request, in.Result);
+    }
+    else
+    {
+      in.FrontEnd.Solve(in.Mesh, std::move(material), std::move(irradiance), light, request,
+        in.Result);
+    }
   }
   catch (const translucency::Error& e)
   {
@@ -283,12 +339,18 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
     in.Geometry.clear();
     return false;
   }
+  in.KeepMaterialArrays(input);
   fluence = std::move(in.Result.Fluence);
   in.Result.Fluence.clear();
   readings = in.Result.Readings;
   report = in.Result.Report;
   in.Solved = true;
   return true;
+}
+
+long long vtkTranslucencyDistributedSolve::GetNumberOfMaterialConversions() const
+{
+  return this->Internal->MaterialConversions;
 }
 
 bool vtkTranslucencyDistributedSolve::GetPowerBalance(
@@ -332,6 +394,11 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid*, const std::str
 bool vtkTranslucencyDistributedSolve::GetPowerBalance(double*, double*, double*) const
 {
   return false;
+}
+
+long long vtkTranslucencyDistributedSolve::GetNumberOfMaterialConversions() const
+{
+  return 0;
 }
 
 #endif

@@ -84,6 +84,11 @@ public:
    */
   bool GetPowerBalance(double injected[3], double absorbed[3], double escaped[3]) const;
 
+  /// Solves that read this rank's coefficient arrays since construction (a
+  /// relight on the same piece with the same arrays, unmodified, solves the
+  /// front end's kept material instead).
+  long long GetNumberOfMaterialConversions() const;
+
 private:
   struct Impl;
   std::unique_ptr<Impl> Internal;

@@ -342,7 +342,12 @@ bool DiffusionFrontEnd::SolveMaterial(std::shared_ptr<const TetMesh> mesh,
   // The incremental assembly of a paint is the in-process vertex solvers'
   // (the distributed variant keeps its hierarchy across paints itself).
   const bool continuous = request.Domain == SolveDomain::ContinuousWave;
-  const bool incremental = traits.UnknownsAtVertices && continuous && !Comm_.IsMPI();
+  // The material is kept for the next solve's SolveKeptMaterial (a relight)
+  // by every continuous-wave vertex solve, the distributed one too (its
+  // piece's material); only the in-process ones compare a new material with
+  // it (the distributed solver finds its changed tets itself).
+  const bool keeps = traits.UnknownsAtVertices && continuous;
+  const bool incremental = keeps && !Comm_.IsMPI();
   ChangedTets_ = -1;
   if (incremental)
   {
@@ -400,7 +405,7 @@ bool DiffusionFrontEnd::SolveMaterial(std::shared_ptr<const TetMesh> mesh,
     ForgetLast();
     throw;
   }
-  if (incremental && IncrementalAssembly_)
+  if (keeps && IncrementalAssembly_)
   {
     LastMaterial_ = std::move(material);
     LastIrradiance_ = std::move(irradiance);

@@ -188,8 +188,9 @@ public:
 
   /**
    * True when the front end keeps the material of its last successful solve
-   * on `mesh` (an in-process vertex solve in continuous wave with
-   * IncrementalAssembly on, for the changed-tet detection):
+   * on `mesh` (a vertex solve in continuous wave with IncrementalAssembly
+   * on, for the changed-tet detection in process; the distributed solve's
+   * piece too, for a relight):
    * SolveKeptMaterial may then be called. GetKeptMaterial() is that material
    * (null when there is none).
    */

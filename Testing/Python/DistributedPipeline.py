@@ -174,6 +174,10 @@ elif MODE == "run":
                 ",".join("%.6e" % o.GetFinalResidual(c) for c in range(3))))
             # What the solver set up, with its counts so far (issue 32).
             f.write("setup %s rank %d %s\n" % (case, RANK, o.GetLastLinearSetup() or "-"))
+            # The coefficient arrays read so far by this filter object (a
+            # relight reuses the kept material: issue 31).
+            f.write("conversions %s rank %d %d\n" % (case, RANK,
+                                                     o.GetNumberOfMaterialConversions()))
             if o.GetParallelPath() == "distributed":
                 # The whole object's balance, summed over the ranks in the solve.
                 f.write("balance %s rank %d %s\n" % (case, RANK, " ".join(

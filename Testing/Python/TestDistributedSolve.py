@@ -239,6 +239,22 @@ class DistributedSolveTest(MpiSuite):
             for rank in range(RANKS):
                 self.assertEqual(per_rank[rank], expected, "rank %d, %s" % (rank, case))
 
+    def test_relight_reads_no_material(self):
+        # Issues 31/32: the relight and the warm start carry the same
+        # coefficient arrays, unmodified: every rank solves its kept material
+        # again instead of reading its piece's arrays; a paint (new arrays)
+        # reads them.
+        conversions = {case: {rank: int(m.group(3)) for rank, m in per_rank.items()}
+                       for case, per_rank in self.rank_reports(
+                           "solves", r"^conversions (\S+) rank (\d+) (\d+)$").items()}
+        for rank in range(RANKS):
+            cold = conversions["pvtu3"][rank]
+            self.assertEqual(cold, 1, "rank %d" % rank)
+            self.assertEqual(conversions["relight"][rank], cold, "rank %d" % rank)
+            self.assertEqual(conversions["warm"][rank], cold, "rank %d" % rank)
+            self.assertEqual(conversions["paint"][rank], conversions["unpainted"][rank] + 1,
+                             "rank %d" % rank)
+
     def test_hierarchy_kept_and_warm_start(self):
         self.assertEqual(self.solves["pvtu3"][0][1], "full")
         self.assertEqual(self.solves["relight"][0][1], "unchanged")
