@@ -143,6 +143,19 @@ void ConvertValues(vtkUnstructuredGrid* input, const std::vector<vtkIdType>& kep
 
 namespace
 {
+/// Whether `kept` (the owned cells) is every cell of `input`, in order.
+bool OwnsEveryCell(vtkUnstructuredGrid* input, const std::vector<vtkIdType>& kept)
+{
+  if (!input || static_cast<vtkIdType>(kept.size()) != input->GetNumberOfCells())
+    return false;
+  for (std::size_t c = 0; c < kept.size(); ++c)
+  {
+    if (kept[c] != static_cast<vtkIdType>(c))
+      return false;
+  }
+  return true;
+}
+
 /**
  * Collective. The default model's irradiance: `irradiance` (every light)
  * without the directional lights' projected irradiance at this rank's
@@ -252,6 +265,20 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
     // A relight: the same coefficient arrays, unmodified, on the same piece.
     sameMaterial = reuse && in.Mesh && in.SameMaterialArrays(input) &&
       in.FrontEnd.HasKeptMaterial(in.Mesh);
+    if (!sameMaterial && reuse && in.Mesh && in.FrontEnd.HasKeptMaterial(in.Mesh) &&
+      OwnsEveryCell(input, in.Kept))
+    {
+      // A paint stroke on a piece without ghost cells (its cells are the
+      // mesh's tets, in order): the new arrays compared with the kept
+      // material in place and the changed tets written into it, as in one
+      // process (DiffusionFrontEnd::UpdateKeptMaterial), instead of copying,
+      // validating and gathering the piece's material.
+      const vtkIdType n = in.Mesh->GetNumberOfTets();
+      sameMaterial = in.FrontEnd.UpdateKeptMaterial(in.Mesh,
+        vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::AbsorptionName, 3, n),
+        vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::ScatteringName, 3, n),
+        vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::RefractiveIndexName, 1, n));
+    }
     in.KeepMaterialArrays(nullptr); // until this solve succeeds
     ConvertValues(input, in.Kept, !sameMaterial, material, irradiance);
     in.MaterialConversions += sameMaterial || in.Kept.empty() ? 0 : 1;
