@@ -28,7 +28,7 @@ struct vtkTranslucencyDistributedSolve::Impl
   translucency::DiffusionFrontEnd FrontEnd;
   /// The piece's mesh (owned tets), kept while its points and tets are the
   /// same: the front end keeps the hierarchy for the same mesh object.
-  std::shared_ptr<translucency::TetMesh> Mesh;
+  std::shared_ptr<const translucency::TetMesh> Mesh;
   std::vector<double> Points;
   std::vector<int> Tets;
   /// The piece's geometry key (vtkTranslucency::PieceGeometryKey) and owned
@@ -252,9 +252,25 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
       else if (!in.Mesh || points != in.Points || tets != in.Tets)
       {
         in.Mesh.reset();
-        auto mesh = std::make_shared<translucency::TetMesh>();
-        mesh->SetGeometry(points, tets);
-        in.Mesh = std::move(mesh);
+        if (OwnsEveryCell(input, kept))
+        {
+          // No ghost cells: the piece's tets are its cells, in order, and
+          // the topology is the one the distributed Surface Irradiance
+          // already built for this piece (vtkTranslucency::AcquireTetMesh's
+          // cache; vtkTranslucencyPieceFaces), not built a second time.
+          std::string acquireError;
+          in.Mesh = vtkTranslucency::AcquireTetMesh(input, acquireError);
+          if (!in.Mesh || in.Mesh->GetTets() != tets)
+          {
+            in.Mesh.reset(); // (not expected) built from the owned tets below
+          }
+        }
+        if (!in.Mesh)
+        {
+          auto mesh = std::make_shared<translucency::TetMesh>();
+          mesh->SetGeometry(points, tets);
+          in.Mesh = std::move(mesh);
+        }
         in.Points = points;
         in.Tets = tets;
       }
