@@ -286,6 +286,24 @@ void RunOnce(const std::string& path, const std::string& collimated, const doubl
   cut.Iterations.push_back(TotalIterations(chain.Solve));
 }
 
+/// Each run's figures, beside the medians printed at the end (a run that
+/// differs from the others shows here).
+void PrintRun(int run, std::map<std::string, StepTimes>& steps)
+{
+  std::cout << "  run " << run + 1 << ":";
+  for (const char* step : { "cold", "relight", "paint", "cut" })
+  {
+    double total = 0.0;
+    for (const auto& [name, times] : steps[step].Filters)
+      if (name.find('.') == std::string::npos)
+        total += times.back();
+    std::cout << " " << step << " " << std::fixed << std::setprecision(1) << total << " ms";
+  }
+  std::cout << " (relight: irradiance " << steps["relight"].Filters["irradiance"].back()
+            << ", solve set-up " << steps["relight"].Filters["solve.setup"].back() << ")"
+            << std::defaultfloat << std::endl;
+}
+
 double LoadAverage()
 {
   double load[1] = { 0.0 };
@@ -350,20 +368,7 @@ int BenchPipeline(const PipelineBenchOptions& o)
       for (int r = 0; r < o.Runs; ++r)
       {
         RunOnce(path.string(), o.Collimated, bounds, boundary, r, r == o.Runs - 1, steps, accuracy);
-        // Each run's figures, beside the medians below (a run that differs
-        // from the others shows here).
-        std::cout << "  run " << r + 1 << ":";
-        for (const char* step : { "cold", "relight", "paint", "cut" })
-        {
-          double total = 0.0;
-          for (const auto& [name, times] : steps[step].Filters)
-            if (name.find('.') == std::string::npos)
-              total += times.back();
-          std::cout << " " << step << " " << std::fixed << std::setprecision(1) << total << " ms";
-        }
-        std::cout << " (relight: irradiance " << steps["relight"].Filters["irradiance"].back()
-                  << ", solve set-up " << steps["relight"].Filters["solve.setup"].back() << ")"
-                  << std::defaultfloat << std::endl;
+        PrintRun(r, steps);
       }
     }
     catch (...)

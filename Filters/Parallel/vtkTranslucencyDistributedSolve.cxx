@@ -70,6 +70,14 @@ struct vtkTranslucencyDistributedSolve::Impl
       this->MaterialTimes[k] = array ? array->GetMTime() : 0;
     }
   }
+  /// Collective-free, may throw translucency::Error: the piece's geometry
+  /// converted (points, owned tets, Kept) and its TetMesh kept or acquired.
+  void SetPieceMesh(vtkUnstructuredGrid* input, const std::string& geometry,
+    std::vector<double>& points, std::vector<int>& tets);
+  /// Collective-free, may throw translucency::Error: the piece's material
+  /// (unless the kept one is solved again: returns true) and irradiance.
+  bool ReadPieceValues(vtkUnstructuredGrid* input, bool reuse,
+    translucency::OpticalProperties& material, std::vector<double>& irradiance);
   static const char* MaterialArrayName(int k)
   {
     static const char* names[3] = { vtkTranslucency::AbsorptionName,
@@ -208,6 +216,75 @@ void vtkTranslucencyDistributedSolve::AgreeOnLights(
     problem.UniformIrradiance, problem.Shadows, problem.Collimated, flag);
 }
 
+void vtkTranslucencyDistributedSolve::Impl::SetPieceMesh(vtkUnstructuredGrid* input,
+  const std::string& geometry, std::vector<double>& points, std::vector<int>& tets)
+{
+  Impl& in = *this;
+  in.Geometry.clear();
+  std::vector<vtkIdType> kept;
+  ConvertGeometry(input, points, tets, kept);
+  // The piece's TetMesh, kept while the piece is the same (a relight, a paint).
+  if (tets.empty())
+  {
+    in.Mesh.reset();
+  }
+  else if (!in.Mesh || points != in.Points || tets != in.Tets)
+  {
+    in.Mesh.reset();
+    if (OwnsEveryCell(input, kept))
+    {
+      // No ghost cells: the piece's tets are its cells, in order, and the
+      // topology is the one the distributed Surface Irradiance already
+      // built for this piece (vtkTranslucency::AcquireTetMesh's cache;
+      // vtkTranslucencyPieceFaces), not built a second time.
+      std::string acquireError;
+      in.Mesh = vtkTranslucency::AcquireTetMesh(input, acquireError);
+      if (!in.Mesh || in.Mesh->GetTets() != tets)
+      {
+        in.Mesh.reset(); // (not expected) built from the owned tets below
+      }
+    }
+    if (!in.Mesh)
+    {
+      auto mesh = std::make_shared<translucency::TetMesh>();
+      mesh->SetGeometry(points, tets);
+      in.Mesh = std::move(mesh);
+    }
+    in.Points = points;
+    in.Tets = tets;
+  }
+  in.Kept = std::move(kept);
+  if (in.Mesh)
+    in.Geometry = geometry;
+}
+
+bool vtkTranslucencyDistributedSolve::Impl::ReadPieceValues(vtkUnstructuredGrid* input,
+  bool reuse, translucency::OpticalProperties& material, std::vector<double>& irradiance)
+{
+  Impl& in = *this;
+  // A relight: the same coefficient arrays, unmodified, on the same piece.
+  bool sameMaterial = reuse && in.Mesh && in.SameMaterialArrays(input) &&
+    in.FrontEnd.HasKeptMaterial(in.Mesh);
+  if (!sameMaterial && reuse && in.Mesh && in.FrontEnd.HasKeptMaterial(in.Mesh) &&
+    OwnsEveryCell(input, in.Kept))
+  {
+    // A paint stroke on a piece without ghost cells (its cells are the
+    // mesh's tets, in order): the new arrays compared with the kept material
+    // in place and the changed tets written into it, as in one process
+    // (DiffusionFrontEnd::UpdateKeptMaterial), instead of copying,
+    // validating and gathering the piece's material.
+    const vtkIdType n = in.Mesh->GetNumberOfTets();
+    sameMaterial = in.FrontEnd.UpdateKeptMaterial(in.Mesh,
+      vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::AbsorptionName, 3, n),
+      vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::ScatteringName, 3, n),
+      vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::RefractiveIndexName, 1, n));
+  }
+  in.KeepMaterialArrays(nullptr); // until this solve succeeds
+  ConvertValues(input, in.Kept, !sameMaterial, material, irradiance);
+  in.MaterialConversions += sameMaterial || in.Kept.empty() ? 0 : 1;
+  return sameMaterial;
+}
+
 bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   const std::string& discretization, double relTol, int maxIter, bool warmStart, int threads,
   bool acceptUnconverged, const translucency::Sources* sources,
@@ -241,63 +318,9 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
   {
     if (!reuse)
     {
-      in.Geometry.clear();
-      std::vector<vtkIdType> kept;
-      ConvertGeometry(input, points, tets, kept);
-      // The piece's TetMesh, kept while the piece is the same (a relight, a paint).
-      if (tets.empty())
-      {
-        in.Mesh.reset();
-      }
-      else if (!in.Mesh || points != in.Points || tets != in.Tets)
-      {
-        in.Mesh.reset();
-        if (OwnsEveryCell(input, kept))
-        {
-          // No ghost cells: the piece's tets are its cells, in order, and
-          // the topology is the one the distributed Surface Irradiance
-          // already built for this piece (vtkTranslucency::AcquireTetMesh's
-          // cache; vtkTranslucencyPieceFaces), not built a second time.
-          std::string acquireError;
-          in.Mesh = vtkTranslucency::AcquireTetMesh(input, acquireError);
-          if (!in.Mesh || in.Mesh->GetTets() != tets)
-          {
-            in.Mesh.reset(); // (not expected) built from the owned tets below
-          }
-        }
-        if (!in.Mesh)
-        {
-          auto mesh = std::make_shared<translucency::TetMesh>();
-          mesh->SetGeometry(points, tets);
-          in.Mesh = std::move(mesh);
-        }
-        in.Points = points;
-        in.Tets = tets;
-      }
-      in.Kept = std::move(kept);
-      if (in.Mesh)
-        in.Geometry = geometry;
+      in.SetPieceMesh(input, geometry, points, tets);
     }
-    // A relight: the same coefficient arrays, unmodified, on the same piece.
-    sameMaterial = reuse && in.Mesh && in.SameMaterialArrays(input) &&
-      in.FrontEnd.HasKeptMaterial(in.Mesh);
-    if (!sameMaterial && reuse && in.Mesh && in.FrontEnd.HasKeptMaterial(in.Mesh) &&
-      OwnsEveryCell(input, in.Kept))
-    {
-      // A paint stroke on a piece without ghost cells (its cells are the
-      // mesh's tets, in order): the new arrays compared with the kept
-      // material in place and the changed tets written into it, as in one
-      // process (DiffusionFrontEnd::UpdateKeptMaterial), instead of copying,
-      // validating and gathering the piece's material.
-      const vtkIdType n = in.Mesh->GetNumberOfTets();
-      sameMaterial = in.FrontEnd.UpdateKeptMaterial(in.Mesh,
-        vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::AbsorptionName, 3, n),
-        vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::ScatteringName, 3, n),
-        vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::RefractiveIndexName, 1, n));
-    }
-    in.KeepMaterialArrays(nullptr); // until this solve succeeds
-    ConvertValues(input, in.Kept, !sameMaterial, material, irradiance);
-    in.MaterialConversions += sameMaterial || in.Kept.empty() ? 0 : 1;
+    sameMaterial = in.ReadPieceValues(input, reuse, material, irradiance);
   }
   catch (const std::exception& e)
   {
