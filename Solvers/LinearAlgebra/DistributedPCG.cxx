@@ -138,7 +138,10 @@ void SolveChannelsPCG(MPI_Comm comm, int rows,
     }
     stats[c].RelativeResidual = std::sqrt(rr) / normB[c];
     if (!std::isfinite(stats[c].RelativeResidual))
-      continue; // a non-finite b or A x: not converged
+    {
+      stats[c].Iterations = 1; // a breakdown in the first iteration: not converged
+      continue;
+    }
     // Within RelTol: no iteration, unless MinIter asks for one (a paint).
     active[c] = !(stats[c].RelativeResidual <= tol) || (control.MinIter[c] > 0 && rr > 0.0);
     stats[c].Converged = !active[c];
@@ -163,10 +166,12 @@ void SolveChannelsPCG(MPI_Comm comm, int rows,
       if (!active[c])
         continue;
       DistributedPCGChannel& ch = *channels[c];
-      // r != 0 here: r.z <= 0 is an indefinite preconditioner (a breakdown).
+      // r != 0 here: r.z <= 0 is an indefinite preconditioner (a breakdown,
+      // counted in the iteration it ends: at least one).
       if (!(rzNew[c] > 0.0) || !std::isfinite(rzNew[c]))
       {
         active[c] = false;
+        stats[c].Iterations = std::max(stats[c].Iterations, 1);
         continue;
       }
       const double beta = first ? 0.0 : rzNew[c] / rz[c];
@@ -214,7 +219,10 @@ void SolveChannelsPCG(MPI_Comm comm, int rows,
       alpha[c] = rz[c] / pq[c];
       if (!(pq[c] > 0.0) || !std::isfinite(alpha[c]))
       {
-        active[c] = false; // not SPD (or not finite): stopped, not converged
+        // Not SPD (or not finite): stopped, not converged, x the last
+        // iterate; the iteration counted (as the serial blocked PCG).
+        active[c] = false;
+        ++stats[c].Iterations;
         continue;
       }
       DistributedPCGChannel& ch = *channels[c];

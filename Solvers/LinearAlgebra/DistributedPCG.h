@@ -16,7 +16,9 @@
  *   MinIter asks for one), so a converged channel costs no V-cycle;
  * - channels drop out as they converge, stop by the change rule or break
  *   down (p.Ap <= 0, r.z <= 0 with r != 0, a non-finite value: stopped, not
- *   converged, x the last finite iterate) or reach MaxIter.
+ *   converged, x the last finite iterate, the iteration it happened in
+ *   counted, so at least one: DiffusionFrontEnd takes a channel with no
+ *   iteration for one that needed none) or reach MaxIter.
  *
  * Internal to the LinearAlgebra layer (MPI).
  */
