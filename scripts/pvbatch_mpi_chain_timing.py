@@ -22,7 +22,8 @@ the same tets (issues 31 and 32; Documentation/Performance.md and Scaling.md).
    With the build's Python package on PYTHONPATH (build/lib/python3.11/
    site-packages), Solve Diffusion's own set-up and PCG times (rank 0's
    GetAssemblyTime, GetSolveTime) are recorded too ("solve setup", "solve
-   pcg") and what its beam and linear set-up did is printed.
+   pcg") and its PCG iterations (R/G/B) and what its beam and linear set-up
+   did are printed.
 3. Writes the medians (seconds, per step and filter), the ranks and the tets
    to the JSON file. --table prints the Markdown
    table of two or more such files (the first is the baseline).
@@ -130,8 +131,9 @@ def main():
             if wrapped and hasattr(core, "GetAssemblyTime"):
                 times[step]["solve setup"].append(core.GetAssemblyTime() / 1000.0)
                 times[step]["solve pcg"].append(core.GetSolveTime() / 1000.0)
-                account = " (solve: set-up %.3f, pcg %.3f, beam %s, %s)" % (
+                account = " (solve: set-up %.3f, pcg %.3f, iterations %s, beam %s, %s)" % (
                     times[step]["solve setup"][-1], times[step]["solve pcg"][-1],
+                    "/".join(str(core.GetNumberOfIterations(c)) for c in range(3)),
                     core.GetLastCollimatedUpdate() or "-", core.GetLastLinearSetup() or "-")
             print("run %d %-8s %s total %.3f%s" % (
                 run + 1, step, " ".join("%s %.3f" % (f, times[step][f][-1]) for f in FILTERS),
