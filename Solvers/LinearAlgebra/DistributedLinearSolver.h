@@ -53,6 +53,17 @@ struct DistributedSolveControl
   /// This rank's observed rows (0 .. rowEnd - rowBegin - 1; may be empty on
   /// some ranks): the distributed solver's owned boundary rows.
   const std::vector<int>* ChangeRows = nullptr;
+  /**
+   * The three channels' iterations interleaved, their inner products in one
+   * MPI_Allreduce per reduction point (3 per iteration for the three), or
+   * (false, the default) one channel's PCG after the other's (3 per
+   * iteration and channel). The same iterates either way. Measured at 1M
+   * tets on 2 ranks of this project's 2-core machine (Documentation/
+   * Scaling.md, "Session 31"): interleaved ~25 % slower per iteration to
+   * RelTol 1e-8 (more time in Open MPI's progress engine), equal at the
+   * interactive RelTol.
+   */
+  bool FuseChannels = false;
 };
 
 /// How one channel of DistributedLinearSolver::SolveChannels ended (the
@@ -179,10 +190,11 @@ public:
    * The default solves the channels one after the other with Solve (hypre's
    * PCG for the hypre solvers: the preconditioner applied before each
    * convergence test, MinIter and the change rule not honoured).
-   * HypreBoomerAMGPCG and SchwarzAggregationPCG override it with one PCG
-   * for the channels together (DistributedPCG.h): the inner products of the
-   * three channels in one MPI_Allreduce per reduction point, convergence
-   * tested before the preconditioner, MinIter and the change rule.
+   * HypreBoomerAMGPCG and SchwarzAggregationPCG override it with the
+   * three-channel PCG of DistributedPCG.h: convergence tested before the
+   * preconditioner, MinIter and the change rule, and with FuseChannels the
+   * inner products of the three channels in one MPI_Allreduce per
+   * reduction point.
    */
   virtual void SolveChannels(const std::array<DistributedLinearSolver*, NumberOfChannels>& solvers,
     const std::array<const double*, NumberOfChannels>& b, const std::array<double*, NumberOfChannels>& x,

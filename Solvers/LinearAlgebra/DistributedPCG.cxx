@@ -155,12 +155,15 @@ public:
     return true;
   }
 
-  /// z = M r and r.z of the active channels, then p = z (first) or
-  /// z + beta p. False once a rank failed.
+  /// z = M r and r.z of the active channels, and beta for their next
+  /// direction p = z (first) or z + beta p, made in Iterate just before its
+  /// product. False once a rank failed.
   bool Precondition(bool first)
   {
     std::array<double, NC> rzNew{};
-    for (int c = 0; c < NC; ++c)
+    // The reverse of Iterate's order (FuseChannels): the channel whose
+    // matrix Iterate streamed last is preconditioned first.
+    for (int c = NC - 1; c >= 0; --c)
     {
       if (!Active[c])
         continue;
@@ -175,7 +178,6 @@ public:
     {
       if (!Active[c])
         continue;
-      DistributedPCGChannel& ch = *Channels[c];
       // r != 0 here: r.z <= 0 is an indefinite preconditioner (a breakdown,
       // counted in the iteration it ends: at least one).
       if (!(rzNew[c] > 0.0) || !std::isfinite(rzNew[c]))
@@ -184,13 +186,9 @@ public:
         Stats[c].Iterations = std::max(Stats[c].Iterations, 1);
         continue;
       }
-      const double beta = first ? 0.0 : rzNew[c] / Rz[c];
+      Beta[c] = first ? 0.0 : rzNew[c] / Rz[c];
+      FirstDirection[c] = first;
       Rz[c] = rzNew[c];
-      if (first)
-        std::copy_n(ch.Z, N, ch.P);
-      else
-        for (long long i = 0; i < N; ++i)
-          ch.P[i] = ch.Z[i] + beta * ch.P[i];
     }
     return true;
   }
@@ -206,6 +204,12 @@ public:
       if (!Active[c])
         continue;
       DistributedPCGChannel& ch = *Channels[c];
+      // The direction of Precondition's beta, then q = A p and p.q.
+      if (FirstDirection[c])
+        std::copy_n(ch.Z, N, ch.P);
+      else
+        for (long long i = 0; i < N; ++i)
+          ch.P[i] = ch.Z[i] + Beta[c] * ch.P[i];
       Reduce.Guard(ch.Multiply);
       for (long long i = 0; i < N; ++i)
         pq[c] += ch.P[i] * ch.Q[i];
@@ -215,7 +219,7 @@ public:
     // sums[c] r.r, sums[NC + c] ||alpha p||^2 and sums[2 NC + c] ||x||^2
     // over the observed rows.
     std::array<double, 3 * NC> sums{};
-    for (int c = 0; c < NC; ++c)
+    for (int c = NC - 1; c >= 0; --c) // the last product's channel first
     {
       if (Active[c])
         Update(c, pq[c], sums);
@@ -310,7 +314,9 @@ private:
   std::array<DistributedChannelStats, NC>& Stats;
   const std::vector<int>* ChangeRows = nullptr;
   std::array<bool, NC> Active{};
-  std::array<double, NC> NormB{}, Rz{};
+  std::array<double, NC> NormB{}, Rz{}, Beta{};
+  /// The next direction is z itself (the first iteration).
+  std::array<bool, NC> FirstDirection{};
   /// The change rule: per channel the last change and ratio (-1: unknown).
   std::array<double, NC> LastChange{ -1.0, -1.0, -1.0 }, LastRatio{ -1.0, -1.0, -1.0 };
 };
@@ -323,11 +329,28 @@ void SolveChannelsPCG(MPI_Comm comm, int rows,
   const std::array<bool, NumberOfChannels>& guess, const DistributedSolveControl& control,
   std::array<DistributedChannelStats, NumberOfChannels>& stats)
 {
-  ChannelsPCG pcg(comm, rows, channels, b, x, control, stats);
-  bool ok = pcg.Start(guess) && (!pcg.AnyActive() || pcg.Precondition(true));
-  for (int it = 0; ok && it < control.MaxIter && pcg.AnyActive(); ++it)
-    ok = pcg.Iterate() && (!pcg.AnyActive() || pcg.Precondition(false));
-  pcg.Finish();
+  auto solve = [&](const std::array<DistributedPCGChannel*, NC>& solved) {
+    ChannelsPCG pcg(comm, rows, solved, b, x, control, stats);
+    bool ok = pcg.Start(guess) && (!pcg.AnyActive() || pcg.Precondition(true));
+    for (int it = 0; ok && it < control.MaxIter && pcg.AnyActive(); ++it)
+      ok = pcg.Iterate() && (!pcg.AnyActive() || pcg.Precondition(false));
+    pcg.Finish();
+  };
+  if (control.FuseChannels)
+  {
+    solve(channels);
+    return;
+  }
+  // One channel after the other: the same iterations, each reduction of one
+  // channel.
+  for (int c = 0; c < NC; ++c)
+  {
+    if (!channels[c])
+      continue;
+    std::array<DistributedPCGChannel*, NC> one{};
+    one[c] = channels[c];
+    solve(one);
+  }
 }
 
 } // namespace translucency

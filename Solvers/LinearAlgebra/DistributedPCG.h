@@ -7,9 +7,11 @@
  * the serial blocked PCG's stopping rules (BlockedKernels.h: StartChannels,
  * UpdateChannels, ChangeRule) with global sums:
  *
- * - the inner products of the active channels summed in one MPI_Allreduce
- *   per reduction point (three per iteration: p.Ap; r.r with the change
- *   rule's sums; r.z), instead of one per product and channel;
+ * - three reduction points per iteration (p.Ap; r.r with the change rule's
+ *   sums; r.z), each one MPI_Allreduce: of the three channels together with
+ *   DistributedSolveControl::FuseChannels (the channels' iterations
+ *   interleaved), else of one channel (one channel's PCG after the
+ *   other's, the default: faster on this project's machine);
  * - convergence, ||b - A x||_2 <= RelTol ||b||_2 (the recursive residual,
  *   as hypre's PCG with the two-norm), tested before the preconditioner,
  *   also at the start (a warm start within RelTol costs no iteration unless

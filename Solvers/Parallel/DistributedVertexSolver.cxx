@@ -1350,6 +1350,7 @@ void DistributedVertexSolver::SolveChannels(const std::vector<double>& rhs,
   control.MaxIter = MaxIter_;
   control.ChangeTol = ChangeTol_;
   control.ChangeRows = ChangeTol_ > 0.0 ? &BoundaryRows_ : nullptr;
+  control.FuseChannels = FusedReductions_;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
     b[c].resize(static_cast<std::size_t>(owned));

@@ -18,8 +18,9 @@
  *  - each rank adds its tets' element matrices (TetContributions.h, the
  *    serial assemblies' expressions) to the rows of their vertices, off-rank
  *    rows through HYPRE_IJMatrixAddToValues.
- * Iterations and residuals are hypre's global ones (the same on every
- * rank). The hierarchy is kept while the matrix is unchanged (a relight),
+ * The three channels are solved in one PCG with the serial stopping rules
+ * (SetThreeChannelPCG); iterations and residuals are global (the same on
+ * every rank). The hierarchy is kept while the matrix is unchanged (a relight),
  * and the solve warm-starts from the previous solution on the same mesh.
  *
  * Every public call is collective over the communicator (ranks with empty
@@ -114,10 +115,10 @@ public:
   void SetValuesOnlySetup(bool on) { ValuesOnly_ = on; }
   bool GetValuesOnlySetup() const { return ValuesOnly_; }
   /**
-   * One PCG for the three channels (default on; issue 32,
-   * DistributedLinearSolver::SolveChannels, DistributedPCG.h): the channels'
-   * inner products in one MPI_Allreduce per reduction point, convergence
-   * tested before the preconditioner, and the serial stopping rules: a
+   * The three-channel PCG (default on; issue 32,
+   * DistributedLinearSolver::SolveChannels, DistributedPCG.h): convergence
+   * tested before the preconditioner (SetFusedReductions: the channels'
+   * inner products in one MPI_Allreduce), and the serial stopping rules: a
    * channel whose matrix values changed on the same mesh (a paint) iterates
    * at least once (LinearSolver::SetMinIter(1)), and with
    * DiffusionSolver::SetChangeTol > 0 (the filter's interactive RelTol) a
@@ -130,6 +131,12 @@ public:
    */
   void SetThreeChannelPCG(bool on) { ThreeChannelPCG_ = on; }
   bool GetThreeChannelPCG() const { return ThreeChannelPCG_; }
+  /// With SetThreeChannelPCG: the channels' iterations interleaved, their
+  /// inner products in one MPI_Allreduce per reduction point
+  /// (DistributedSolveControl::FuseChannels; default off: one channel's PCG
+  /// after the other's, measured faster, Documentation/Scaling.md).
+  void SetFusedReductions(bool on) { FusedReductions_ = on; }
+  bool GetFusedReductions() const { return FusedReductions_; }
   /// This rank's owned rows on the physical boundary (the change rule's rows).
   const std::vector<int>& GetBoundaryRows() const { return BoundaryRows_; }
   /**
@@ -422,6 +429,7 @@ private:
   }
   bool ValuesOnly_ = true;
   bool ThreeChannelPCG_ = true;
+  bool FusedReductions_ = false;
   bool SharedHierarchy_ = false;
   bool ChangedRowsUpdate_ = true;
   double MaximumChangedFraction_ = 0.05;

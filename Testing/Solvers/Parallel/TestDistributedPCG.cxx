@@ -1,6 +1,7 @@
 // One three-channel distributed PCG with the serial stopping rules (issue
 // 32, session 31): DistributedVertexSolver's SolveChannels
-// (DistributedLinearSolver::SolveChannels, DistributedPCG.h) against the
+// (DistributedLinearSolver::SolveChannels, DistributedPCG.h; the channels
+// one after the other, and fused, SetFusedReductions) against the
 // per-channel hypre PCG it replaced (SetThreeChannelPCG(false)), the change
 // rule (DiffusionSolver::SetChangeTol) against tight solves, and the guard
 // after a paint (at least one iteration). These tests run on MPI_COMM_WORLD:
@@ -173,12 +174,16 @@ void ExpectHyprePCG(int ranks, const std::string& discretization, const std::str
     std::to_string(ranks) + " ranks with tets of " + std::to_string(Size()));
   const Scene s = MakeScene(ranks);
   const Communicator world = MakeCommunicator(GetWorldCommunicator());
-  DistributedVertexSolver fused(discretization), hypre(discretization);
+  DistributedVertexSolver channels(discretization), fused(discretization), hypre(discretization);
+  Configure(channels, world, 1e-12, 0.0, linear);
   Configure(fused, world, 1e-12, 0.0, linear);
   Configure(hypre, world, 1e-12, 0.0, linear);
-  EXPECT_TRUE(fused.GetThreeChannelPCG());
+  EXPECT_TRUE(channels.GetThreeChannelPCG());
+  EXPECT_FALSE(channels.GetFusedReductions());
+  fused.SetFusedReductions(true);
   hypre.SetThreeChannelPCG(false);
-  const StepsRun a = RunSteps(s, fused);
+  const StepsRun a = RunSteps(s, channels);
+  const StepsRun f = RunSteps(s, fused);
   const StepsRun b = RunSteps(s, hypre);
   const std::vector<Step> steps = Steps();
   for (std::size_t k = 0; k < steps.size(); ++k)
@@ -194,8 +199,11 @@ void ExpectHyprePCG(int ranks, const std::string& discretization, const std::str
                 << "', fluence difference " << difference << "\n";
     }
     EXPECT_LT(difference, 1e-10);
+    // Fused reductions: the same iterates (sums of the same local terms).
+    EXPECT_EQ(f.Fluences[k], a.Fluences[k]);
     for (int c = 0; c < NumberOfChannels; ++c)
     {
+      EXPECT_EQ(f.Reports[k].Iterations[c], a.Reports[k].Iterations[c]) << "channel " << c;
       EXPECT_TRUE(a.Reports[k].Converged[c]) << "channel " << c;
       EXPECT_LE(a.Reports[k].Residual[c], 1e-12) << "channel " << c;
       EXPECT_FALSE(a.Reports[k].StoppedByChange[c]) << "channel " << c;
