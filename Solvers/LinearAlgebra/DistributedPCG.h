@@ -1,6 +1,6 @@
 /**
  * @file DistributedPCG.h
- * @brief One preconditioned conjugate gradient for the three colour
+ * @brief The preconditioned conjugate gradient of the three colour
  * channels of a distributed solve (issue 32), what the distributed linear
  * solvers' SolveChannels run: each channel its own matrix and
  * preconditioner, given as operations on the channel's work vectors, and
