@@ -6,7 +6,13 @@
 //       [--coordinates] [--no-single] [--serial] [--strong T] [--agg L] [--pmax P]
 //       [--interp I] [--coarsen C] [--tol TOL] [--threads T] [--rounds R]
 //       [--own-hierarchies] [--relax R] [--keep-transpose] [--linear NAME]
+//       [--change-tol T] [--hypre-pcg] [--fused]
 //
+// --change-tol T: the change rule (T = 3e-3 with --tol 1e-2 is Solve
+// Diffusion's interactive default; Documentation/Solvers.md, "The interactive
+// stopping rule"); --hypre-pcg: each channel by hypre's own PCG, the path
+// before the three-channel PCG (DistributedVertexSolver::SetThreeChannelPCG);
+// --fused: its channels' reductions fused (SetFusedReductions).
 // --linear: the distributed linear solver by registry name or composition
 // (default: the distributed solver's, "cg/boomeramg"; "cg/aggregation" is
 // additive Schwarz with one aggregation cycle per rank's block);
@@ -217,6 +223,13 @@ std::vector<double> SerialCpu, SerialWall;
 std::string LinearSolverName;
 /// --linear-option NAME=VALUE: added to the linear solver's options.
 std::vector<std::pair<std::string, double>> LinearOptions;
+/// --change-tol T: the change rule (DiffusionSolver::SetChangeTol; Solve
+/// Diffusion's interactive default is 3e-3 with --tol 1e-2).
+double ChangeTol = 0.0;
+/// --hypre-pcg: each channel by hypre's PCG (SetThreeChannelPCG(false)).
+bool HyprePCG = false;
+/// --fused: the three channels' reductions fused (SetFusedReductions).
+bool Fused = false;
 
 double Median(std::vector<double> v)
 {
@@ -247,6 +260,9 @@ Result Run(const char* label, MPI_Comm comm, int n, double size, const std::stri
     if (!LinearSolverName.empty())
       solver.SetLinearSolver(LinearSolverName);
     solver.SetRelTol(tol);
+    solver.SetChangeTol(ChangeTol);
+    solver.SetThreeChannelPCG(!HyprePCG);
+    solver.SetFusedReductions(Fused);
     solver.SetMaxIter(1000);
     solver.SetNumberOfThreads(threads);
     solver.SetSharedHierarchy(shared);
@@ -522,6 +538,12 @@ int main(int argc, char* argv[])
       options.KeepTranspose = 1;
     else if (arg == "--linear")
       LinearSolverName = next();
+    else if (arg == "--change-tol")
+      ChangeTol = std::atof(next());
+    else if (arg == "--hypre-pcg")
+      HyprePCG = true;
+    else if (arg == "--fused")
+      Fused = true;
     else if (arg == "--linear-option" && a + 1 < argc &&
       std::strchr(argv[a + 1], '=') != nullptr)
     {
@@ -536,7 +558,7 @@ int main(int argc, char* argv[])
                      "divergence|fem] [--coordinates] [--no-single] [--serial] [--strong T] [--agg L] "
                      "[--pmax P] [--interp I] [--coarsen C] [--tol TOL] [--threads T] [--rounds R] "
                      "[--own-hierarchies] [--relax R] [--keep-transpose] [--linear NAME] "
-                     "[--linear-option NAME=VALUE]\n";
+                     "[--linear-option NAME=VALUE] [--change-tol T] [--hypre-pcg] [--fused]\n";
       MPI_Finalize();
       return 2;
     }

@@ -75,6 +75,15 @@ const translucency::DiffusionSolverRegistry::Entry& SolverEntry(int solver)
 {
   return translucency::GetDiffusionSolverRegistry().GetEntries().at(static_cast<size_t>(solver));
 }
+
+/// The change rule of a RelTol: at the interactive RelTol or looser, the
+/// interactive rule also stops when the boundary fluence stops changing; a
+/// tighter RelTol asks for a residual-only solve. The serial and the
+/// distributed solves get the same.
+double InteractiveChangeTolFor(double relTol)
+{
+  return relTol >= translucency::InteractiveRelTol ? translucency::InteractiveChangeTol : 0.0;
+}
 }
 
 namespace
@@ -1074,11 +1083,7 @@ void vtkSolveDiffusion::Internals::Configure(vtkSolveDiffusion& self, int number
   translucency::DiffusionSolver& solver = this->FrontEnd.GetSolver();
   solver.SetNumberOfThreads(self.NumberOfThreads);
   solver.SetRelTol(self.RelTol);
-  // At the interactive RelTol (the default) or looser, the interactive rule
-  // also stops when the boundary fluence stops changing; a tighter RelTol
-  // asks for a residual-only solve.
-  solver.SetChangeTol(
-    self.RelTol >= translucency::InteractiveRelTol ? translucency::InteractiveChangeTol : 0.0);
+  solver.SetChangeTol(InteractiveChangeTolFor(self.RelTol));
   solver.SetMaxIter(self.MaxIter);
   solver.SetWarmStart(self.WarmStart);
   solver.SetLinearSolver(linearSolver);
@@ -1518,10 +1523,10 @@ int vtkSolveDiffusion::RequestDistributed(
   }
   std::vector<double> fluence, solvedIrradiance;
   translucency::SolverReport& report = in.Result.Report;
-  if (!in.Distributed.Solve(input, SolverEntry(this->Solver).Name, this->RelTol, this->MaxIter,
-        this->WarmStart, this->NumberOfThreads, this->AcceptUnconverged != 0, &in.SolvedSources,
-        in.Detectors, light, takeOutBeams, fluence, solvedIrradiance, in.Result.Readings, report,
-        error))
+  if (!in.Distributed.Solve(input, SolverEntry(this->Solver).Name, this->RelTol,
+        InteractiveChangeTolFor(this->RelTol), this->MaxIter, this->WarmStart,
+        this->NumberOfThreads, this->AcceptUnconverged != 0, &in.SolvedSources, in.Detectors,
+        light, takeOutBeams, fluence, solvedIrradiance, in.Result.Readings, report, error))
   {
     in.Result = translucency::SolveResult();
     vtkErrorMacro(<< error);

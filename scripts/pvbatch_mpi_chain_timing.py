@@ -22,7 +22,8 @@ the same tets (issues 31 and 32; Documentation/Performance.md and Scaling.md).
    With the build's Python package on PYTHONPATH (build/lib/python3.11/
    site-packages), Solve Diffusion's own set-up and PCG times (rank 0's
    GetAssemblyTime, GetSolveTime) are recorded too ("solve setup", "solve
-   pcg") and what its beam and linear set-up did is printed.
+   pcg") and its PCG iterations (R/G/B) and what its beam and linear set-up
+   did are printed.
 3. Writes the medians (seconds, per step and filter), the ranks and the tets
    to the JSON file. --table prints the Markdown
    table of two or more such files (the first is the baseline).

@@ -286,7 +286,8 @@ bool vtkTranslucencyDistributedSolve::Impl::ReadPieceValues(vtkUnstructuredGrid*
 }
 
 bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
-  const std::string& discretization, double relTol, int maxIter, bool warmStart, int threads,
+  const std::string& discretization, double relTol, double changeTol, int maxIter, bool warmStart,
+  int threads,
   bool acceptUnconverged, const translucency::Sources* sources,
   const std::vector<translucency::Detector>& detectors,
   const translucency::DiffusionProblem& lights, bool takeOutBeams, std::vector<double>& fluence,
@@ -352,6 +353,7 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
     }
     translucency::DiffusionSolver& solver = in.FrontEnd.GetSolver();
     solver.SetRelTol(relTol);
+    solver.SetChangeTol(changeTol);
     solver.SetMaxIter(maxIter);
     solver.SetWarmStart(warmStart);
     solver.SetNumberOfThreads(threads);

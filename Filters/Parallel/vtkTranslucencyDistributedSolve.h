@@ -53,7 +53,9 @@ public:
    * Collective. Solve on this rank's piece `input` with the registry's
    * distributed variant of `solver` (trait Distributed: "divergence" or
    * "fem"), through translucency::DiffusionFrontEnd on the controller's
-   * communicator; fluence gets 3 values per input point. `sources` (may be
+   * communicator, with relTol and the change rule's changeTol
+   * (DiffusionSolver::SetChangeTol: vtkSolveDiffusion's interactive rule, as
+   * the serial solve gets it); fluence gets 3 values per input point. `sources` (may be
    * null) are the interior sources, `detectors` read into `readings` (the
    * same on every rank). A solve that does not converge, also after a full
    * set-up, fails unless `acceptUnconverged`. `lights` (AgreeOnLights:
@@ -68,7 +70,7 @@ public:
    * false with `error` (the same on every rank) on failure.
    */
   bool Solve(vtkUnstructuredGrid* input, const std::string& solver, double relTol,
-    int maxIter, bool warmStart, int threads, bool acceptUnconverged,
+    double changeTol, int maxIter, bool warmStart, int threads, bool acceptUnconverged,
     const translucency::Sources* sources,
     const std::vector<translucency::Detector>& detectors,
     const translucency::DiffusionProblem& lights, bool takeOutBeams, std::vector<double>& fluence,

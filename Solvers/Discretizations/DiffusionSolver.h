@@ -111,6 +111,10 @@ struct SolverReport
   std::array<int, NumberOfChannels> Iterations{};
   std::array<double, NumberOfChannels> Residual{}; ///< relative residual
   std::array<bool, NumberOfChannels> Converged{};
+  /// Converged by the change rule (DiffusionSolver::SetChangeTol: the
+  /// boundary fluence stopped changing), not by RelTol
+  /// (LinearSolveStats::StoppedByChange).
+  std::array<bool, NumberOfChannels> StoppedByChange{};
   /// The first attempt did not converge and this report is of the re-solve
   /// after a full set-up (a new hierarchy, no warm start) in the same call
   /// (DiffusionFrontEnd::Solve, DistributedVertexSolver::Solve).

@@ -286,6 +286,7 @@ void ReportSolve(const DiffusionSystem& system, const LinearSolver& linear,
     report.Iterations[c] = stats[c].Iterations;
     report.Residual[c] = stats[c].RelativeResidual;
     report.Converged[c] = stats[c].Converged;
+    report.StoppedByChange[c] = stats[c].StoppedByChange;
   }
 }
 } // namespace

@@ -15,14 +15,68 @@
 #pragma once
 
 #include "Communicator.h"
+#include "OpticalProperties.h" // NumberOfChannels
 #include "SolverOptions.h"
 
+#include <array>
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace translucency
 {
+
+/**
+ * The stopping rules of DistributedLinearSolver::SolveChannels (the serial
+ * blocked PCG's, BlockedKernels.h: StartChannels, UpdateChannels,
+ * ChangeRule).
+ */
+struct DistributedSolveControl
+{
+  /// A channel converged when ||b - A x||_2 <= RelTol ||b||_2 (global norms).
+  double RelTol = 1e-6;
+  int MaxIter = 2000;
+  /// Per channel: at least this many iterations unless the residual is
+  /// exactly zero (LinearSolver::SetMinIter: 1 after a paint stroke, so that
+  /// a warm start within RelTol still sees the new matrix).
+  std::array<int, NumberOfChannels> MinIter{};
+  /**
+   * The change rule (LinearSolver::SetChangeRule) when > 0 and ChangeRows is
+   * not null: after iteration k >= max(3, MinIter), with Delta_k = ||x_k -
+   * x_{k-1}|| / ||x_k|| over the rows ChangeRows of every rank (global sums)
+   * and rho the larger of the last two ratios Delta_k / Delta_{k-1}, a
+   * channel also stops (converged, StoppedByChange) when Delta_k rho / (1 -
+   * rho) <= ChangeTol. 0: RelTol alone.
+   */
+  double ChangeTol = 0.0;
+  /// This rank's observed rows (0 .. rowEnd - rowBegin - 1; may be empty on
+  /// some ranks): the distributed solver's owned boundary rows.
+  const std::vector<int>* ChangeRows = nullptr;
+  /**
+   * The three channels' iterations interleaved, their inner products in one
+   * MPI_Allreduce per reduction point (3 per iteration for the three), or
+   * (false, the default) one channel's PCG after the other's (3 per
+   * iteration and channel). The same iterates either way. Measured at 1M
+   * tets on 2 ranks of this project's 2-core machine (Documentation/
+   * Scaling.md, "Session 31"): interleaved ~25 % slower per iteration to
+   * RelTol 1e-8 (more time in Open MPI's progress engine), equal at the
+   * interactive RelTol.
+   */
+  bool FuseChannels = false;
+};
+
+/// How one channel of DistributedLinearSolver::SolveChannels ended (the
+/// same on every rank).
+struct DistributedChannelStats
+{
+  int Iterations = 0;
+  double RelativeResidual = 0.0; ///< ||b - A x|| / ||b|| (PCG's recursive residual)
+  bool Converged = false;
+  /// Stopped by the change rule (DistributedSolveControl::ChangeTol), not by
+  /// RelTol; Converged is then true too.
+  bool StoppedByChange = false;
+};
 
 class DistributedLinearSolver
 {
@@ -124,6 +178,79 @@ public:
    */
   virtual int Solve(const double* b, double* x, bool guess, double relTol, int maxIter,
     double& relativeResidual) = 0;
+
+  /**
+   * Collective: the three channels' solves at once. solvers[c] (null: channel
+   * c is not solved, its stats untouched) are set up on the same rows and
+   * communicator (e.g. one per channel, this one among them); b[c] and x[c]
+   * hold rowEnd - rowBegin values, x[c] the initial guess if guess[c] (else
+   * it is zeroed). The rules of `control`; b = 0 gives x = 0, converged.
+   * Not converging (maxIter, a breakdown) is not an error: stats[c] says so.
+   *
+   * The default solves the channels one after the other with Solve (hypre's
+   * PCG for the hypre solvers: the preconditioner applied before each
+   * convergence test, MinIter and the change rule not honoured).
+   * HypreBoomerAMGPCG and SchwarzAggregationPCG override it with the
+   * three-channel PCG of DistributedPCG.h: convergence tested before the
+   * preconditioner, MinIter and the change rule, and with FuseChannels the
+   * inner products of the three channels in one MPI_Allreduce per
+   * reduction point.
+   */
+  virtual void SolveChannels(const std::array<DistributedLinearSolver*, NumberOfChannels>& solvers,
+    const std::array<const double*, NumberOfChannels>& b, const std::array<double*, NumberOfChannels>& x,
+    const std::array<bool, NumberOfChannels>& guess, const DistributedSolveControl& control,
+    std::array<DistributedChannelStats, NumberOfChannels>& stats)
+  {
+    SolveChannelsOneByOne(solvers, b, x, guess, control, stats);
+  }
+
+  /**
+   * The default SolveChannels, callable on any solver (the test hook that
+   * keeps the per-channel path reachable: DistributedVertexSolver::
+   * SetThreeChannelPCG(false)): per channel, ||b|| summed over the ranks
+   * (b = 0: x = 0, converged), then Solve.
+   */
+  void SolveChannelsOneByOne(const std::array<DistributedLinearSolver*, NumberOfChannels>& solvers,
+    const std::array<const double*, NumberOfChannels>& b, const std::array<double*, NumberOfChannels>& x,
+    const std::array<bool, NumberOfChannels>& guess, const DistributedSolveControl& control,
+    std::array<DistributedChannelStats, NumberOfChannels>& stats)
+  {
+    int rowBegin = 0, rowEnd = 0;
+    GetRows(rowBegin, rowEnd);
+    const int rows = rowEnd - rowBegin;
+    std::array<double, NumberOfChannels> norms{};
+    for (int c = 0; c < NumberOfChannels; ++c)
+      for (int r = 0; solvers[c] && r < rows; ++r)
+        norms[c] += b[c][r] * b[c][r];
+    SumOverRanks(norms.data(), NumberOfChannels);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      if (!solvers[c])
+        continue;
+      stats[c] = DistributedChannelStats();
+      if (norms[c] == 0.0)
+      {
+        for (int r = 0; r < rows; ++r)
+          x[c][r] = 0.0;
+        stats[c].Converged = true;
+        continue;
+      }
+      if (!guess[c])
+        for (int r = 0; r < rows; ++r)
+          x[c][r] = 0.0;
+      double residual = 0.0;
+      stats[c].Iterations =
+        solvers[c]->Solve(b[c], x[c], guess[c], control.RelTol, control.MaxIter, residual);
+      stats[c].RelativeResidual = residual;
+      stats[c].Converged = residual <= control.RelTol;
+    }
+  }
+
+  /// This rank's rows [rowBegin, rowEnd) of the last Setup (0, 0 before).
+  virtual void GetRows(int& rowBegin, int& rowEnd) const { rowBegin = rowEnd = 0; }
+  /// Collective: values[0 .. count) summed over the solver's ranks, in
+  /// place (one MPI_Allreduce). Default: one rank, nothing to do.
+  virtual void SumOverRanks(double* values, int count) const { (void)values, (void)count; }
 
   /// Levels and operator complexity of the preconditioner (1 and 1 without
   /// a hierarchy); non-zeros of the matrix summed over the ranks.

@@ -247,6 +247,79 @@ int SolvePCG(HYPRE_Solver pcg, HYPRE_IJMatrix matrix, HYPRE_IJVector bVector,
   return iterations;
 }
 
+void ChannelWork::Destroy()
+{
+  for (HYPRE_ParVector& v : V)
+  {
+    if (v)
+      hypre_ParVectorDestroy(reinterpret_cast<hypre_ParVector*>(v));
+    v = nullptr;
+  }
+}
+
+void SolveChannels(MPI_Comm comm, const std::array<HYPRE_IJMatrix, 3>& matrices,
+  const std::array<ChannelWork*, 3>& work, const ChannelPreconditioner& precondition,
+  const std::array<const double*, 3>& b, const std::array<double*, 3>& x,
+  const std::array<bool, 3>& guess, const DistributedSolveControl& control,
+  std::array<DistributedChannelStats, 3>& stats, const std::string& who)
+{
+  // A hypre error left by an earlier call would be returned by every later
+  // one (hypre's error flag is sticky).
+  HYPRE_ClearAllErrors();
+  std::array<DistributedPCGChannel, 3> channels;
+  std::array<DistributedPCGChannel*, 3> solved{};
+  int rows = 0;
+  for (int c = 0; c < 3; ++c)
+  {
+    if (!matrices[c])
+      continue;
+    hypre_ParCSRMatrix* a = nullptr;
+    HYPRE_IJMatrixGetObject(matrices[c], reinterpret_cast<void**>(&a));
+    rows = hypre_CSRMatrixNumRows(hypre_ParCSRMatrixDiag(a));
+    ChannelWork& w = *work[c];
+    if (!w.V[0] || hypre_VectorSize(hypre_ParVectorLocalVector(
+                     reinterpret_cast<hypre_ParVector*>(w.V[0]))) != rows)
+    {
+      w.Destroy();
+      for (HYPRE_ParVector& v : w.V)
+      {
+        hypre_ParVector* pv = hypre_ParVectorCreate(hypre_ParCSRMatrixComm(a),
+          hypre_ParCSRMatrixGlobalNumRows(a), hypre_ParCSRMatrixRowStarts(a));
+        hypre_ParVectorInitialize(pv);
+        v = reinterpret_cast<HYPRE_ParVector>(pv);
+      }
+    }
+    auto data = [&w](int k) {
+      return hypre_VectorData(hypre_ParVectorLocalVector(reinterpret_cast<hypre_ParVector*>(w.V[k])));
+    };
+    DistributedPCGChannel& ch = channels[c];
+    ch.R = data(0);
+    ch.Z = data(1);
+    ch.P = data(2);
+    ch.Q = data(3);
+    auto* r = reinterpret_cast<hypre_ParVector*>(w.V[0]);
+    auto* z = reinterpret_cast<hypre_ParVector*>(w.V[1]);
+    auto* p = reinterpret_cast<hypre_ParVector*>(w.V[2]);
+    auto* q = reinterpret_cast<hypre_ParVector*>(w.V[3]);
+    ch.Multiply = [a, p, q, &who]() {
+      Check(hypre_ParCSRMatrixMatvec(1.0, a, p, 0.0, q), who, "the matrix product");
+    };
+    ch.Precondition = [c, a, r, z, &precondition, &who]() {
+      // As hypre's PCG: z cleared, then one application (a V-cycle).
+      hypre_ParVectorSetConstantValues(z, 0.0);
+      const HYPRE_Int code = precondition(c, reinterpret_cast<HYPRE_ParCSRMatrix>(a),
+        reinterpret_cast<HYPRE_ParVector>(r), reinterpret_cast<HYPRE_ParVector>(z));
+      // hypre's PCG ignores the preconditioner's code; a convergence flag
+      // (a V-cycle is not iterated to a tolerance) is no error here either.
+      if (code != 0 && !HYPRE_CheckError(code, HYPRE_ERROR_CONV))
+        Check(code, who, "the preconditioner");
+      HYPRE_ClearAllErrors();
+    };
+    solved[c] = &ch;
+  }
+  SolveChannelsPCG(comm, rows, solved, b, x, guess, control, stats);
+}
+
 void DestroyPCG(HYPRE_Solver& pcg, HYPRE_IJMatrix& matrix, HYPRE_IJVector& b, HYPRE_IJVector& x)
 {
   if (pcg)

@@ -8,12 +8,16 @@
  */
 #pragma once
 
+#include "DistributedPCG.h"
+
 #include <HYPRE.h>
 #include <HYPRE_parcsr_ls.h>
 
 #include <mpi.h>
 
+#include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -87,6 +91,36 @@ std::uint64_t PatternFingerprint(int rows, const int* rowOffsets, const int* col
 int SolvePCG(HYPRE_Solver pcg, HYPRE_IJMatrix matrix, HYPRE_IJVector bVector,
   HYPRE_IJVector xVector, const std::vector<HYPRE_BigInt>& rows, const double* b, double* x,
   bool guess, double relTol, int maxIter, double& relRes, const std::string& who);
+
+/// One channel's work vectors of SolveChannels (r, z, p, q on the rows of
+/// its matrix), kept by the solver between solves; created at the first.
+struct ChannelWork
+{
+  std::array<HYPRE_ParVector, 4> V{ { nullptr, nullptr, nullptr, nullptr } };
+  ChannelWork() = default;
+  ChannelWork(const ChannelWork&) = delete;
+  ChannelWork& operator=(const ChannelWork&) = delete;
+  ~ChannelWork() { Destroy(); }
+  void Destroy();
+};
+
+/// Channel c's preconditioner z = M r on the ParCSR matrix `a` (returns
+/// hypre's error code; z need not be cleared by the caller).
+using ChannelPreconditioner =
+  std::function<HYPRE_Int(int c, HYPRE_ParCSRMatrix a, HYPRE_ParVector r, HYPRE_ParVector z)>;
+
+/**
+ * Collective: SolveChannelsPCG (DistributedPCG.h) on the channels with a
+ * non-null matrices[c] (each channel's rows the same; work[c] its vectors,
+ * made here on first use), the product hypre's (hypre_ParCSRMatrixMatvec)
+ * and the preconditioner `precondition`. A hypre error throws
+ * translucency::Error naming `who`.
+ */
+void SolveChannels(MPI_Comm comm, const std::array<HYPRE_IJMatrix, 3>& matrices,
+  const std::array<ChannelWork*, 3>& work, const ChannelPreconditioner& precondition,
+  const std::array<const double*, 3>& b, const std::array<double*, 3>& x,
+  const std::array<bool, 3>& guess, const DistributedSolveControl& control,
+  std::array<DistributedChannelStats, 3>& stats, const std::string& who);
 
 /// Destroys whichever of the PCG solver, the matrix and the two vectors
 /// exist and sets them to null (the distributed solvers' Free()).

@@ -141,6 +141,8 @@ struct HypreBoomerAMGPCG::Handles
   /// Another solver's BoomerAMG used as this one's preconditioner (not owned).
   HYPRE_Solver SharedAMG = nullptr;
   std::vector<HYPRE_BigInt> Rows;
+  /// SolveChannels' vectors r, z, p, q (made at its first call).
+  hypre::ChannelWork Work;
 };
 
 namespace
@@ -173,7 +175,10 @@ void HypreBoomerAMGPCG::Free()
   hypre::DestroyPCG(H_->PCG, H_->A, H_->B, H_->X);
   if (H_->AMG)
     HYPRE_BoomerAMGDestroy(H_->AMG);
-  *H_ = Handles();
+  H_->Work.Destroy();
+  H_->AMG = nullptr;
+  H_->SharedAMG = nullptr;
+  H_->Rows.clear();
   Places_.clear();
   PlacePattern_ = 0;
 }
@@ -365,6 +370,53 @@ int HypreBoomerAMGPCG::Solve(
   }
   return hypre::SolvePCG(h.PCG, h.A, h.B, h.X, h.Rows, bLocal, xLocal, guess, relTol, maxIter,
     relRes, "hypre-amg");
+}
+
+void HypreBoomerAMGPCG::SumOverRanks(double* values, int count) const
+{
+  MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_SUM, Comm_);
+}
+
+void HypreBoomerAMGPCG::SolveChannels(
+  const std::array<DistributedLinearSolver*, NumberOfChannels>& solvers,
+  const std::array<const double*, NumberOfChannels>& b, const std::array<double*, NumberOfChannels>& x,
+  const std::array<bool, NumberOfChannels>& guess, const DistributedSolveControl& control,
+  std::array<DistributedChannelStats, NumberOfChannels>& stats)
+{
+  // The same on every rank: the solvers' kinds, and whether they are set up.
+  std::array<HypreBoomerAMGPCG*, NumberOfChannels> own{};
+  std::array<HYPRE_IJMatrix, NumberOfChannels> matrices{};
+  std::array<hypre::ChannelWork*, NumberOfChannels> work{};
+  std::array<HYPRE_Solver, NumberOfChannels> amg{};
+  bool ours = true;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    if (!solvers[c])
+      continue;
+    own[c] = dynamic_cast<HypreBoomerAMGPCG*>(solvers[c]);
+    if (!own[c] || !own[c]->H_->PCG)
+    {
+      ours = false;
+      break;
+    }
+    if (own[c]->RowBegin_ != RowBegin_ || own[c]->RowEnd_ != RowEnd_)
+    {
+      throw Error("hypre-amg: SolveChannels() with channels on other rows");
+    }
+    matrices[c] = own[c]->H_->A;
+    work[c] = &own[c]->H_->Work;
+    amg[c] = own[c]->H_->AMG ? own[c]->H_->AMG : own[c]->H_->SharedAMG;
+  }
+  if (!ours)
+  {
+    SolveChannelsOneByOne(solvers, b, x, guess, control, stats);
+    return;
+  }
+  hypre::SolveChannels(Comm_, matrices, work,
+    [&amg](int c, HYPRE_ParCSRMatrix a, HYPRE_ParVector r, HYPRE_ParVector z) {
+      return HYPRE_BoomerAMGSolve(amg[c], a, r, z);
+    },
+    b, x, guess, control, stats, "hypre-amg");
 }
 
 HypreSolver::HypreSolver() = default;

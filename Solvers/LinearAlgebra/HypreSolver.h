@@ -144,6 +144,27 @@ public:
   int Solve(const double* b, double* x, bool guess, double relTol, int maxIter,
     double& relativeResidual) override;
 
+  /**
+   * The three channels in one PCG (DistributedPCG.h) when every solvers[c]
+   * given is a set-up HypreBoomerAMGPCG (else the per-channel default):
+   * each channel's product hypre's (hypre_ParCSRMatrixMatvec on its matrix)
+   * and its preconditioner one BoomerAMG V-cycle of its own or its shared
+   * hierarchy (HYPRE_BoomerAMGSolve on its matrix: what hypre's PCG applies
+   * in Solve), the channels' inner products in one MPI_Allreduce per
+   * reduction point, convergence tested before the V-cycle, MinIter and the
+   * change rule of `control`.
+   */
+  void SolveChannels(const std::array<DistributedLinearSolver*, NumberOfChannels>& solvers,
+    const std::array<const double*, NumberOfChannels>& b, const std::array<double*, NumberOfChannels>& x,
+    const std::array<bool, NumberOfChannels>& guess, const DistributedSolveControl& control,
+    std::array<DistributedChannelStats, NumberOfChannels>& stats) override;
+  void GetRows(int& rowBegin, int& rowEnd) const override
+  {
+    rowBegin = RowBegin_;
+    rowEnd = RowEnd_;
+  }
+  void SumOverRanks(double* values, int count) const override;
+
   /// Work of one PCG iteration in SpMVs with the fine matrix: 1 + the
   /// V-cycle's (3 sum_l nnz(A_l) + 2 sum_l nnz(P_l)) / nnz(A_0) (two
   /// smoothing sweeps and one residual per level, restriction and

@@ -47,8 +47,9 @@ if (TRANSLUCENCY_USE_HYPRE)
     message(STATUS "Linear solver 'hypre-amg': ${HYPRE_LIBRARY} (MPI ${MPI_C_VERSION})")
     # SchwarzAggregation.cxx: the distributed variant of multigrid-agg
     # (hypre's ParCSR PCG with an additive Schwarz aggregation cycle);
-    # HypreParCSR.cxx: what it shares with HypreSolver.cxx.
-    target_sources(TranslucencyLinearAlgebra PRIVATE HypreSolver.cxx HypreParCSR.cxx
+    # HypreParCSR.cxx: what it shares with HypreSolver.cxx; DistributedPCG.cxx:
+    # their three-channel PCG (SolveChannels).
+    target_sources(TranslucencyLinearAlgebra PRIVATE HypreSolver.cxx HypreParCSR.cxx DistributedPCG.cxx
       SchwarzAggregation.cxx)
     target_include_directories(TranslucencyLinearAlgebra PUBLIC
       $<BUILD_INTERFACE:${HYPRE_INCLUDE_DIR}>)

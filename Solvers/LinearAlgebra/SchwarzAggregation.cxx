@@ -47,6 +47,8 @@ struct SchwarzAggregationPCG::Handles
   HYPRE_Solver PCG = nullptr;
   std::vector<HYPRE_BigInt> Rows;
   std::uint64_t Pattern = 0; ///< fingerprint of the rows given to Setup
+  /// SolveChannels' vectors r, z, p, q (made at its first call).
+  hypre::ChannelWork Work;
 };
 
 /// The values of the owned block's hierarchy (the structure is
@@ -225,7 +227,9 @@ SchwarzAggregationPCG::~SchwarzAggregationPCG()
 void SchwarzAggregationPCG::Free()
 {
   hypre::DestroyPCG(H_->PCG, H_->A, H_->B, H_->X);
-  *H_ = Handles();
+  H_->Work.Destroy();
+  H_->Rows.clear();
+  H_->Pattern = 0;
   B_ = std::make_unique<Block>();
   Structure_.reset();
   OwnsStructure_ = false;
@@ -590,6 +594,55 @@ int SchwarzAggregationPCG::Solve(
   }
   return hypre::SolvePCG(
     h.PCG, h.A, h.B, h.X, h.Rows, bLocal, xLocal, guess, relTol, maxIter, relRes, Who);
+}
+
+void SchwarzAggregationPCG::SumOverRanks(double* values, int count) const
+{
+  MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_SUM, Comm_);
+}
+
+void SchwarzAggregationPCG::SolveChannels(
+  const std::array<DistributedLinearSolver*, NumberOfChannels>& solvers,
+  const std::array<const double*, NumberOfChannels>& b, const std::array<double*, NumberOfChannels>& x,
+  const std::array<bool, NumberOfChannels>& guess, const DistributedSolveControl& control,
+  std::array<DistributedChannelStats, NumberOfChannels>& stats)
+{
+  std::array<const SchwarzAggregationPCG*, NumberOfChannels> own{};
+  std::array<HYPRE_IJMatrix, NumberOfChannels> matrices{};
+  std::array<hypre::ChannelWork*, NumberOfChannels> work{};
+  bool ours = true;
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    if (!solvers[c])
+      continue;
+    auto* other = dynamic_cast<SchwarzAggregationPCG*>(solvers[c]);
+    if (!other || !other->H_->PCG)
+    {
+      ours = false;
+      break;
+    }
+    if (other->RowBegin_ != RowBegin_ || other->RowEnd_ != RowEnd_)
+    {
+      throw Error(std::string(Who) + ": SolveChannels() with channels on other rows");
+    }
+    own[c] = other;
+    matrices[c] = other->H_->A;
+    work[c] = &other->H_->Work;
+  }
+  if (!ours)
+  {
+    SolveChannelsOneByOne(solvers, b, x, guess, control, stats);
+    return;
+  }
+  hypre::SolveChannels(Comm_, matrices, work,
+    [&own](int c, HYPRE_ParCSRMatrix, HYPRE_ParVector r, HYPRE_ParVector z) -> HYPRE_Int {
+      const double* rl =
+        hypre_VectorData(hypre_ParVectorLocalVector(reinterpret_cast<hypre_ParVector*>(r)));
+      double* zl = hypre_VectorData(hypre_ParVectorLocalVector(reinterpret_cast<hypre_ParVector*>(z)));
+      own[c]->ApplyPreconditioner(rl, zl); // throws translucency::Error (caught per rank)
+      return 0;
+    },
+    b, x, guess, control, stats, Who);
 }
 
 int SchwarzAggregationPCG::GetNumberOfLevels() const

@@ -97,6 +97,23 @@ public:
   int Solve(const double* b, double* x, bool guess, double relTol, int maxIter,
     double& relativeResidual) override;
 
+  /**
+   * The three channels in one PCG (DistributedPCG.h) when every solvers[c]
+   * given is a set-up SchwarzAggregationPCG (else the per-channel default):
+   * hypre's product on each channel's matrix, its block cycle
+   * (ApplyPreconditioner) as the preconditioner, the rules of `control`.
+   */
+  void SolveChannels(const std::array<DistributedLinearSolver*, NumberOfChannels>& solvers,
+    const std::array<const double*, NumberOfChannels>& b, const std::array<double*, NumberOfChannels>& x,
+    const std::array<bool, NumberOfChannels>& guess, const DistributedSolveControl& control,
+    std::array<DistributedChannelStats, NumberOfChannels>& stats) override;
+  void GetRows(int& rowBegin, int& rowEnd) const override
+  {
+    rowBegin = RowBegin_;
+    rowEnd = RowEnd_;
+  }
+  void SumOverRanks(double* values, int count) const override;
+
   /// The levels of this rank's block hierarchy (at least 1 once set up).
   int GetNumberOfLevels() const override;
   /// sum_l nnz(A_l) / nnz(A_0) of this rank's block hierarchy.

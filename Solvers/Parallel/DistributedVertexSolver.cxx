@@ -233,6 +233,23 @@ void DistributedVertexSolver::BuildGeometry(const TetMesh* mesh, const std::vect
   }
   AgreeOnError(Comm_, error);
 
+  // The owned rows on the physical boundary: a vertex of a physical face on
+  // any rank (the owner need not hold that face), counted at the owners.
+  std::vector<double> onBoundary(numPoints, 0.0);
+  for (std::size_t f = 0; f < PhysicalFace_.size(); ++f)
+  {
+    if (PhysicalFace_[f])
+      for (int a = 0; a < 3; ++a)
+        onBoundary[static_cast<std::size_t>(triangles[3 * f + a])] = 1.0;
+  }
+  const std::vector<double> ownedBoundary = Numbering_.SumToOwners(Comm_, onBoundary, 1);
+  BoundaryRows_.clear();
+  for (std::size_t r = 0; r < ownedBoundary.size(); ++r)
+  {
+    if (ownedBoundary[r] > 0.0)
+      BoundaryRows_.push_back(static_cast<int>(r));
+  }
+
   BuildOwnedRows();
   Keys_ = keys;
   Revision_ = HasTets() ? Mesh_->GetGeometryRevision() : 0;
@@ -1308,10 +1325,15 @@ DistributedVertexSolver::SetUpMatrices(bool sameMesh, DiffusionSystem& system,
 }
 
 void DistributedVertexSolver::SolveChannels(const std::vector<double>& rhs,
-  const std::array<ChannelSetup, NumberOfChannels>& setup, std::vector<double>& solution,
-  SolverReport& report, double& hierarchyMs)
+  const std::array<ChannelSetup, NumberOfChannels>& setup, bool sameMesh,
+  std::vector<double>& solution, SolverReport& report, double& hierarchyMs)
 {
-  // PCG per channel, from the previous solution on the same unknowns.
+  // The three channels in one PCG (DistributedLinearSolver::SolveChannels),
+  // from the previous solution on the same unknowns, with the serial rules:
+  // at least one iteration in a channel whose matrix values changed on the
+  // same mesh (a paint: LinearSolver::SetMinIter(1), VertexDiffusionSolver),
+  // and the change rule over the owned boundary rows (ChangeTol_, set by
+  // the filter at the interactive RelTol).
   // Never a non-converged result from a kept or shared hierarchy: a channel
   // that does not converge under a hierarchy set up before this Solve
   // (values-only update after a paint, a relight) or on another channel's
@@ -1319,58 +1341,87 @@ void DistributedVertexSolver::SolveChannels(const std::vector<double>& rhs,
   // (issue 32: a kept hierarchy broke down after 1 iteration).
   const int owned = Numbering_.GetNumberOfOwnedRows();
   solution.assign(3 * static_cast<std::size_t>(owned), 0.0);
-  std::string error;
+  std::array<std::vector<double>, NumberOfChannels> b;
+  std::array<const double*, NumberOfChannels> bp{};
+  std::array<double*, NumberOfChannels> xp{};
+  std::array<bool, NumberOfChannels> guess{};
+  DistributedSolveControl control;
+  control.RelTol = RelTol_;
+  control.MaxIter = MaxIter_;
+  control.ChangeTol = ChangeTol_;
+  control.ChangeRows = ChangeTol_ > 0.0 ? &BoundaryRows_ : nullptr;
+  control.FuseChannels = FusedReductions_;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
-    std::vector<double> b(static_cast<std::size_t>(owned));
-    double norm = 0.0;
+    b[c].resize(static_cast<std::size_t>(owned));
     for (int r = 0; r < owned; ++r)
-    {
-      b[r] = rhs[3 * static_cast<std::size_t>(r) + c];
-      norm += b[r] * b[r];
-    }
-    double globalNorm = 0.0;
-    MPI_Allreduce(&norm, &globalNorm, 1, MPI_DOUBLE, MPI_SUM, Comm_);
+      b[c][static_cast<std::size_t>(r)] = rhs[3 * static_cast<std::size_t>(r) + c];
+    bp[c] = b[c].data();
     std::vector<double>& x = Solution_[c];
-    bool guess = WarmStart_ && x.size() == static_cast<std::size_t>(owned);
-    if (!guess)
+    guess[c] = WarmStart_ && x.size() == static_cast<std::size_t>(owned);
+    if (!guess[c])
       x.assign(static_cast<std::size_t>(owned), 0.0);
-    if (globalNorm == 0.0)
+    xp[c] = x.data();
+    control.MinIter[c] = sameMesh && setup[c] != ChannelSetup::Kept ? 1 : 0;
+  }
+  std::array<bool, NumberOfChannels> pending{ true, true, true };
+  std::string error;
+  for (int attempt = 0; attempt < 2 && (pending[0] || pending[1] || pending[2]); ++attempt)
+  {
+    std::array<DistributedLinearSolver*, NumberOfChannels> solvers{};
+    DistributedLinearSolver* first = nullptr;
+    for (int c = 0; c < NumberOfChannels; ++c)
     {
-      std::fill(x.begin(), x.end(), 0.0);
-      report.Converged[c] = true;
+      solvers[c] = pending[c] ? Channels_[c].get() : nullptr;
+      if (!first && solvers[c])
+        first = solvers[c];
     }
-    for (int attempt = 0; globalNorm != 0.0 && attempt < 2; ++attempt)
+    std::array<DistributedChannelStats, NumberOfChannels> stats{};
+    try
     {
-      double residual = 0.0;
-      try
-      {
-        report.Iterations[c] =
-          Channels_[c]->Solve(b.data(), x.data(), guess, RelTol_, MaxIter_, residual);
-      }
-      catch (const Error& e)
-      {
-        error = e.what();
-      }
-      AgreeOnError(Comm_, error);
-      report.Residual[c] = residual; // global: the same on every rank
-      report.Converged[c] = residual <= RelTol_;
-      const int iterations = report.Iterations[c];
+      if (ThreeChannelPCG_)
+        first->SolveChannels(solvers, bp, xp, guess, control, stats);
+      else
+        first->SolveChannelsOneByOne(solvers, bp, xp, guess, control, stats);
+    }
+    catch (const Error& e)
+    {
+      error = e.what();
+    }
+    AgreeOnError(Comm_, error);
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      if (!pending[c])
+        continue;
+      // Global: the same on every rank.
+      report.Iterations[c] = stats[c].Iterations;
+      report.Residual[c] = stats[c].RelativeResidual;
+      report.Converged[c] = stats[c].Converged;
+      report.StoppedByChange[c] = stats[c].StoppedByChange;
+      const int iterations = stats[c].Iterations;
       if (report.Converged[c] || setup[c] == ChannelSetup::Fresh || attempt > 0)
       {
+        pending[c] = false;
         if (FullIterations_[c] < 0)
           FullIterations_[c] = iterations;
         else if (setup[c] == ChannelSetup::ValuesOnly && iterations > 2 * std::max(FullIterations_[c], 5))
           ForceFull_[c] = true; // the kept hierarchy has aged: rebuild at the next change
-        break;
       }
+    }
+    for (int c = 0; c < NumberOfChannels; ++c)
+    {
+      if (!pending[c])
+        continue;
       SetUpChannel(c); // the kept or shared hierarchy failed: its own, solve again cold
       hierarchyMs += Channels_[c]->GetHierarchyMilliseconds();
       ReshareDependents(c, hierarchyMs); // the others that used c's old hierarchy
       report.Resolved = true;
-      guess = false;
-      std::fill(x.begin(), x.end(), 0.0);
+      guess[c] = false;
     }
+  }
+  for (int c = 0; c < NumberOfChannels; ++c)
+  {
+    const std::vector<double>& x = Solution_[c];
     for (int r = 0; r < owned; ++r)
       solution[3 * static_cast<std::size_t>(r) + c] = x[static_cast<std::size_t>(r)];
   }
@@ -1727,7 +1778,7 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   HierarchyCpu_ = 0.0;
   double retryMs = 0.0;
   std::vector<double> solution;
-  SolveChannels(rhs, setup, solution, report, retryMs);
+  SolveChannels(rhs, setup, allSame != 0, solution, report, retryMs);
   fluence = Numbering_.FetchFromOwners(Comm_, solution, 3);
   Timings_.Solve = Milliseconds(start) - retryMs;
   // The diffuse fluence read out below; Fluence = phi_d + E_c (the serial

@@ -18,8 +18,9 @@
  *  - each rank adds its tets' element matrices (TetContributions.h, the
  *    serial assemblies' expressions) to the rows of their vertices, off-rank
  *    rows through HYPRE_IJMatrixAddToValues.
- * Iterations and residuals are hypre's global ones (the same on every
- * rank). The hierarchy is kept while the matrix is unchanged (a relight),
+ * The three channels are solved in one PCG with the serial stopping rules
+ * (SetThreeChannelPCG); iterations and residuals are global (the same on
+ * every rank). The hierarchy is kept while the matrix is unchanged (a relight),
  * and the solve warm-starts from the previous solution on the same mesh.
  *
  * Every public call is collective over the communicator (ranks with empty
@@ -85,7 +86,8 @@ public:
    * of the model (ExtendedMoments: Fresnel::BoundaryRule::Moments); the
    * lights, shadows and model are the lowest rank with tets' (AgreeOnLights:
    * an empty piece may carry none). The PCG stopping rule is ||b - A x|| <=
-   * RelTol ||b|| per channel (global norms). Throws translucency::Error on
+   * RelTol ||b|| per channel (global norms), with the serial solvers'
+   * MinIter after a paint and change rule (SetThreeChannelPCG). Throws translucency::Error on
    * every rank on invalid input; returns true.
    */
   bool Solve(const DiffusionProblem& problem, std::vector<double>& fluence,
@@ -112,6 +114,31 @@ public:
    */
   void SetValuesOnlySetup(bool on) { ValuesOnly_ = on; }
   bool GetValuesOnlySetup() const { return ValuesOnly_; }
+  /**
+   * The three-channel PCG (default on; issue 32,
+   * DistributedLinearSolver::SolveChannels, DistributedPCG.h): convergence
+   * tested before the preconditioner (SetFusedReductions: the channels'
+   * inner products in one MPI_Allreduce), and the serial stopping rules: a
+   * channel whose matrix values changed on the same mesh (a paint) iterates
+   * at least once (LinearSolver::SetMinIter(1)), and with
+   * DiffusionSolver::SetChangeTol > 0 (the filter's interactive RelTol) a
+   * channel also stops when its boundary fluence stopped changing (the
+   * change rule over the physical boundary's rows, global sums;
+   * report.StoppedByChange). Off: each channel by the linear solver's
+   * Solve (hypre's PCG: the preconditioner applied before each convergence
+   * test, neither rule), the path before issue 32's session 31, kept for
+   * comparison.
+   */
+  void SetThreeChannelPCG(bool on) { ThreeChannelPCG_ = on; }
+  bool GetThreeChannelPCG() const { return ThreeChannelPCG_; }
+  /// With SetThreeChannelPCG: the channels' iterations interleaved, their
+  /// inner products in one MPI_Allreduce per reduction point
+  /// (DistributedSolveControl::FuseChannels; default off: one channel's PCG
+  /// after the other's, measured faster, Documentation/Scaling.md).
+  void SetFusedReductions(bool on) { FusedReductions_ = on; }
+  bool GetFusedReductions() const { return FusedReductions_; }
+  /// This rank's owned rows on the physical boundary (the change rule's rows).
+  const std::vector<int>& GetBoundaryRows() const { return BoundaryRows_; }
   /**
    * Changed-rows update (default on; issue 32, the serial path's
    * LinearSolver::SetupChangedRows): when the mesh, the Robin rule and the
@@ -366,9 +393,12 @@ private:
   /// This rank: every owned row's diagonal of `values` within [1/3, 1.8]
   /// of `diagonal` (the matrix a hierarchy was set up on).
   bool WithinSmootherRange(const std::vector<double>& values, const std::vector<double>& diagonal) const;
+  /// Collective: the three channels' PCG (again after a full set-up for a
+  /// channel a kept or shared hierarchy failed); sameMesh: the numbering is
+  /// the last Solve's (a channel whose values changed then iterates at least once).
   void SolveChannels(const std::vector<double>& rhs,
-    const std::array<ChannelSetup, NumberOfChannels>& setup, std::vector<double>& solution,
-    SolverReport& report, double& hierarchyMs);
+    const std::array<ChannelSetup, NumberOfChannels>& setup, bool sameMesh,
+    std::vector<double>& solution, SolverReport& report, double& hierarchyMs);
   /// SolvePiece's volume sources on this rank's points: the extended
   /// collimated models' beam (BeamResult_) and the interior sources, 4 x
   /// their loads as every right-hand side (collective).
@@ -398,6 +428,8 @@ private:
     return LinearSolver_.empty() ? std::string("cg/boomeramg") : LinearSolver_;
   }
   bool ValuesOnly_ = true;
+  bool ThreeChannelPCG_ = true;
+  bool FusedReductions_ = false;
   bool SharedHierarchy_ = false;
   bool ChangedRowsUpdate_ = true;
   double MaximumChangedFraction_ = 0.05;
@@ -431,6 +463,10 @@ private:
   TetGeometryCache GeometryCache_;
   DistributedNumbering Numbering_;
   std::vector<char> PhysicalFace_; ///< per local boundary triangle of Mesh_
+  /// The owned rows of vertices of a physical boundary face of any rank
+  /// (ascending): the rows the change rule watches (the serial solver's
+  /// TetMesh::GetBoundaryPoints()).
+  std::vector<int> BoundaryRows_;
   std::vector<char> Used_;         ///< per local point: a vertex of an owned tet
   std::vector<int> FirstLocal_;    ///< per owned row: its first local point
   /// The owned rows handed to hypre whole (CSR, global sorted columns), and

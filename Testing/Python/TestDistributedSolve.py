@@ -19,7 +19,7 @@ How to run (ctest does this, with 2 and with 3 ranks):
    "unchanged"; by counters on every rank: no numbering and no hierarchy
    set up since the cold solve's one numbering and three hierarchies) and
    the warm start of the same system needed at most 2
-   iterations; the pieces stay distributed; with 3 ranks on 2 pieces one
+   iterations (0 when it is within RelTol already); the pieces stay distributed; with 3 ranks on 2 pieces one
    rank has an empty piece; an invalid mu_a on rank 1 only gives rank 1's
    error on every rank, and the next solve works; no other error is logged
    and nothing hangs; with a point source (one empty piece at 3 ranks) and
@@ -116,7 +116,12 @@ class DistributedSolveTest(MpiSuite):
             self.assertEqual(path, "distributed", case)
             for rank in range(1, RANKS):
                 self.assertEqual(per_rank[rank], per_rank[0], "rank %d, case %s" % (rank, case))
-            self.assertTrue(all(int(k) > 0 for k in iterations.split(",")), case)
+            # The warm start of the same system may already be within RelTol:
+            # no iteration (the three-channel PCG tests convergence before
+            # the preconditioner, Parallel.md "The stopping rule"; hypre's
+            # PCG iterated at least once).
+            if case != "warm":
+                self.assertTrue(all(int(k) > 0 for k in iterations.split(",")), case)
             self.assertTrue(all(float(r) <= 2e-13 for r in residuals.split(",")), case)
 
     def numbers_per_rank(self, stem, key):
