@@ -30,6 +30,7 @@ struct vtkTranslucencyDistributedIrradiance::State::Impl
   vtkIdType NumberOfPoints = 0;
   std::vector<int> SurfacePoint; ///< per piece point: its surface point, -1 if none
   std::vector<int> Wanted;       ///< this rank's distinct surface points (sorted)
+  std::vector<int> WantedIndex;  ///< per piece point: its index in Wanted, -1 if none
   translucency::SurfacePointIrradianceCache Kernel;
   Report Gathered;               ///< the gather's figures
   bool SurfaceGathered = false;  ///< by the last Compute
@@ -111,6 +112,16 @@ void GatherInto(MPI_Comm comm, vtkUnstructuredGrid* input,
   }
   std::sort(state.Wanted.begin(), state.Wanted.end());
   state.Wanted.erase(std::unique(state.Wanted.begin(), state.Wanted.end()), state.Wanted.end());
+  // Each piece point's place among them, found once per gather (not per
+  // execution: a relight or a paint reads it).
+  state.WantedIndex.assign(state.SurfacePoint.size(), -1);
+  for (size_t i = 0; i < state.SurfacePoint.size(); ++i)
+  {
+    const int s = state.SurfacePoint[i];
+    if (s >= 0)
+      state.WantedIndex[i] = static_cast<int>(
+        std::lower_bound(state.Wanted.begin(), state.Wanted.end(), s) - state.Wanted.begin());
+  }
   std::vector<double> wantedRotations(state.Wanted.size());
   for (size_t k = 0; k < state.Wanted.size(); ++k)
     wantedRotations[k] = rotations[static_cast<size_t>(state.Wanted[k])];
@@ -184,16 +195,14 @@ bool vtkTranslucencyDistributedIrradiance::Compute(vtkUnstructuredGrid* input,
       error.clear();
       return false;
     }
-    const std::vector<int>& wanted = state.Wanted;
     q.assign(3 * static_cast<size_t>(numPoints), 0.0);
     for (vtkIdType i = 0; i < numPoints; ++i)
     {
-      const int s = state.SurfacePoint[static_cast<size_t>(i)];
-      if (s < 0)
+      const int k = state.WantedIndex[static_cast<size_t>(i)];
+      if (k < 0)
         continue;
-      const size_t k = static_cast<size_t>(
-        std::lower_bound(wanted.begin(), wanted.end(), s) - wanted.begin());
-      std::copy(values.begin() + 3 * k, values.begin() + 3 * k + 3, q.begin() + 3 * i);
+      std::copy(values.begin() + 3 * static_cast<size_t>(k),
+        values.begin() + 3 * static_cast<size_t>(k) + 3, q.begin() + 3 * i);
     }
     report.RayMilliseconds = timer.GetMilliseconds();
   }
