@@ -809,12 +809,10 @@ int vtkSolveDiffusion::RequestSerial(
       // A paint stroke (new arrays on the same mesh): compared with the kept
       // material in place and its changed tets written into it, without
       // copying or validating the whole material again (issue 31).
-      const vtkIdType numTets = mesh->GetNumberOfTets();
-      keptMaterial = in.FrontEnd.UpdateKeptMaterial(mesh,
-        vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::AbsorptionName, 3, numTets),
-        vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::ScatteringName, 3, numTets),
-        vtkTranslucency::DoubleCellArrayValues(
-          input, vtkTranslucency::RefractiveIndexName, 1, numTets));
+      const vtkTranslucency::CoefficientValues values =
+        vtkTranslucency::CoefficientArraysInPlace(input, mesh->GetNumberOfTets());
+      keptMaterial = in.FrontEnd.UpdateKeptMaterial(
+        mesh, values.Absorption, values.Scattering, values.RefractiveIndex);
     }
     translucency::OpticalProperties material;
     std::vector<double> irradiance;

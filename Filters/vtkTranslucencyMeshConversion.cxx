@@ -395,17 +395,19 @@ bool ToOpticalProperties(
   return true;
 }
 
-const double* DoubleCellArrayValues(
-  vtkUnstructuredGrid* grid, const char* name, int components, vtkIdType tuples)
+CoefficientValues CoefficientArraysInPlace(vtkUnstructuredGrid* grid, vtkIdType tuples)
 {
-  vtkDoubleArray* array =
-    grid ? vtkDoubleArray::FastDownCast(grid->GetCellData()->GetArray(name)) : nullptr;
-  if (!array || array->GetNumberOfComponents() != components ||
-    array->GetNumberOfTuples() != tuples || tuples == 0)
-  {
-    return nullptr;
-  }
-  return array->GetPointer(0);
+  auto values = [&](const char* name, int components) -> const double* {
+    vtkDoubleArray* array =
+      grid ? vtkDoubleArray::FastDownCast(grid->GetCellData()->GetArray(name)) : nullptr;
+    if (!array || array->GetNumberOfComponents() != components ||
+      array->GetNumberOfTuples() != tuples || tuples == 0)
+    {
+      return nullptr;
+    }
+    return array->GetPointer(0);
+  };
+  return { values(AbsorptionName, 3), values(ScatteringName, 3), values(RefractiveIndexName, 1) };
 }
 
 bool ReadPointArray(vtkUnstructuredGrid* grid, const char* name, int components,

@@ -71,12 +71,19 @@ bool ToTetMesh(vtkUnstructuredGrid* grid, translucency::TetMesh& mesh, std::stri
 bool ToOpticalProperties(
   vtkUnstructuredGrid* grid, translucency::OpticalProperties& material, std::string& error);
 
-/// The values of `grid`'s cell array `name` in place, when it is a
-/// vtkDoubleArray (contiguous) with `components` components and `tuples`
-/// tuples; null otherwise (absent, another type or shape: read it with
-/// ToOpticalProperties, which names the problem). No copy.
-const double* DoubleCellArrayValues(
-  vtkUnstructuredGrid* grid, const char* name, int components, vtkIdType tuples);
+/// The three coefficient cell arrays of `grid` in place, no copy.
+struct CoefficientValues
+{
+  const double* Absorption = nullptr;      ///< 3 per cell
+  const double* Scattering = nullptr;      ///< 3 per cell
+  const double* RefractiveIndex = nullptr; ///< 1 per cell
+};
+/// `grid`'s AbsorptionCoefficient, ReducedScatteringCoefficient and
+/// RefractiveIndex in place when each is a vtkDoubleArray (contiguous) of
+/// `tuples` tuples with 3, 3 and 1 components; each null otherwise (absent,
+/// another type or shape: read them with ToOpticalProperties, which names
+/// the problem).
+CoefficientValues CoefficientArraysInPlace(vtkUnstructuredGrid* grid, vtkIdType tuples);
 
 /// Read a point array with `components` components as doubles. Fails if it
 /// is missing or has the wrong number of components.

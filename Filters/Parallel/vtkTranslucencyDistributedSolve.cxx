@@ -219,18 +219,17 @@ void vtkTranslucencyDistributedSolve::AgreeOnLights(
 void vtkTranslucencyDistributedSolve::Impl::SetPieceMesh(vtkUnstructuredGrid* input,
   const std::string& geometry, std::vector<double>& points, std::vector<int>& tets)
 {
-  Impl& in = *this;
-  in.Geometry.clear();
+  this->Geometry.clear();
   std::vector<vtkIdType> kept;
   ConvertGeometry(input, points, tets, kept);
   // The piece's TetMesh, kept while the piece is the same (a relight, a paint).
   if (tets.empty())
   {
-    in.Mesh.reset();
+    this->Mesh.reset();
   }
-  else if (!in.Mesh || points != in.Points || tets != in.Tets)
+  else if (!this->Mesh || points != this->Points || tets != this->Tets)
   {
-    in.Mesh.reset();
+    this->Mesh.reset();
     if (OwnsEveryCell(input, kept))
     {
       // No ghost cells: the piece's tets are its cells, in order, and the
@@ -238,50 +237,47 @@ void vtkTranslucencyDistributedSolve::Impl::SetPieceMesh(vtkUnstructuredGrid* in
       // built for this piece (vtkTranslucency::AcquireTetMesh's cache;
       // vtkTranslucencyPieceFaces), not built a second time.
       std::string acquireError;
-      in.Mesh = vtkTranslucency::AcquireTetMesh(input, acquireError);
-      if (!in.Mesh || in.Mesh->GetTets() != tets)
+      this->Mesh = vtkTranslucency::AcquireTetMesh(input, acquireError);
+      if (!this->Mesh || this->Mesh->GetTets() != tets)
       {
-        in.Mesh.reset(); // (not expected) built from the owned tets below
+        this->Mesh.reset(); // (not expected) built from the owned tets below
       }
     }
-    if (!in.Mesh)
+    if (!this->Mesh)
     {
       auto mesh = std::make_shared<translucency::TetMesh>();
       mesh->SetGeometry(points, tets);
-      in.Mesh = std::move(mesh);
+      this->Mesh = std::move(mesh);
     }
-    in.Points = points;
-    in.Tets = tets;
+    this->Points = points;
+    this->Tets = tets;
   }
-  in.Kept = std::move(kept);
-  if (in.Mesh)
-    in.Geometry = geometry;
+  this->Kept = std::move(kept);
+  if (this->Mesh)
+    this->Geometry = geometry;
 }
 
 bool vtkTranslucencyDistributedSolve::Impl::ReadPieceValues(vtkUnstructuredGrid* input,
   bool reuse, translucency::OpticalProperties& material, std::vector<double>& irradiance)
 {
-  Impl& in = *this;
   // A relight: the same coefficient arrays, unmodified, on the same piece.
-  bool sameMaterial = reuse && in.Mesh && in.SameMaterialArrays(input) &&
-    in.FrontEnd.HasKeptMaterial(in.Mesh);
-  if (!sameMaterial && reuse && in.Mesh && in.FrontEnd.HasKeptMaterial(in.Mesh) &&
-    OwnsEveryCell(input, in.Kept))
+  const bool kept = reuse && this->Mesh && this->FrontEnd.HasKeptMaterial(this->Mesh);
+  bool sameMaterial = kept && this->SameMaterialArrays(input);
+  if (kept && !sameMaterial && OwnsEveryCell(input, this->Kept))
   {
     // A paint stroke on a piece without ghost cells (its cells are the
     // mesh's tets, in order): the new arrays compared with the kept material
     // in place and the changed tets written into it, as in one process
     // (DiffusionFrontEnd::UpdateKeptMaterial), instead of copying,
     // validating and gathering the piece's material.
-    const vtkIdType n = in.Mesh->GetNumberOfTets();
-    sameMaterial = in.FrontEnd.UpdateKeptMaterial(in.Mesh,
-      vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::AbsorptionName, 3, n),
-      vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::ScatteringName, 3, n),
-      vtkTranslucency::DoubleCellArrayValues(input, vtkTranslucency::RefractiveIndexName, 1, n));
+    const vtkTranslucency::CoefficientValues values =
+      vtkTranslucency::CoefficientArraysInPlace(input, this->Mesh->GetNumberOfTets());
+    sameMaterial = this->FrontEnd.UpdateKeptMaterial(
+      this->Mesh, values.Absorption, values.Scattering, values.RefractiveIndex);
   }
-  in.KeepMaterialArrays(nullptr); // until this solve succeeds
-  ConvertValues(input, in.Kept, !sameMaterial, material, irradiance);
-  in.MaterialConversions += sameMaterial || in.Kept.empty() ? 0 : 1;
+  this->KeepMaterialArrays(nullptr); // until this solve succeeds
+  ConvertValues(input, this->Kept, !sameMaterial, material, irradiance);
+  this->MaterialConversions += sameMaterial || this->Kept.empty() ? 0 : 1;
   return sameMaterial;
 }
 

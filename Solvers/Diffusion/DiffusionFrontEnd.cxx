@@ -73,8 +73,7 @@ void DiffusionFrontEnd::SetIncrementalAssembly(bool on)
 void DiffusionFrontEnd::ForgetLast()
 {
   HaveLast_ = false;
-  HavePendingChanges_ = false;
-  PendingChanges_.clear();
+  PendingChanges_.reset();
   LastMaterial_ = OpticalProperties();
   LastIrradiance_.clear();
 }
@@ -153,16 +152,17 @@ void DiffusionFrontEnd::DetectChangedTets(
   {
     const bool relit = std::memcmp(LastIrradiance_.data(), irradiance.data(),
                          irradiance.size() * sizeof(double)) != 0;
-    if (HavePendingChanges_)
+    if (PendingChanges_)
     {
-      // UpdateKeptMaterial wrote a paint stroke into the kept material.
-      HavePendingChanges_ = false;
-      if (PendingChanges_.size() <= limit)
+      // UpdateKeptMaterial wrote a paint stroke into the kept material;
+      // more than the limit: a full assembly.
+      std::vector<int> changed = std::move(*PendingChanges_);
+      PendingChanges_.reset();
+      if (changed.size() <= limit)
       {
-        ChangedTets_ = static_cast<long long>(PendingChanges_.size());
-        Solver_->SetChangedTets(std::move(PendingChanges_), relit);
+        ChangedTets_ = static_cast<long long>(changed.size());
+        Solver_->SetChangedTets(std::move(changed), relit);
       }
-      PendingChanges_.clear(); // more than the limit: a full assembly
       return;
     }
     ChangedTets_ = 0;
@@ -286,21 +286,21 @@ bool DiffusionFrontEnd::UpdateKeptMaterial(const std::shared_ptr<const TetMesh>&
   std::size_t total = 0;
   for (const auto& c : changed)
     total += c.size();
-  PendingChanges_.clear();
-  PendingChanges_.reserve(total);
+  std::vector<int> all;
+  all.reserve(total);
   for (const auto& c : changed)
-    PendingChanges_.insert(PendingChanges_.end(), c.begin(), c.end());
+    all.insert(all.end(), c.begin(), c.end());
   double* outA = kept.AbsorptionCoefficient.data();
   double* outS = kept.ReducedScatteringCoefficient.data();
   double* outEta = kept.RefractiveIndex.data();
-  for (const int t : PendingChanges_)
+  for (const int t : all)
   {
     const std::size_t k = static_cast<std::size_t>(t);
     std::copy(absorption + 3 * k, absorption + 3 * k + 3, outA + 3 * k);
     std::copy(scattering + 3 * k, scattering + 3 * k + 3, outS + 3 * k);
     outEta[k] = refractiveIndex[k];
   }
-  HavePendingChanges_ = true;
+  PendingChanges_ = std::move(all);
   return true;
 }
 

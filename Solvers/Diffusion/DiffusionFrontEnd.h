@@ -47,6 +47,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -297,8 +298,7 @@ private:
   long long ChangedTets_ = -1;
   long long MaterialComparisons_ = 0;
   /// The tets UpdateKeptMaterial found changed, for the next SolveKeptMaterial.
-  bool HavePendingChanges_ = false;
-  std::vector<int> PendingChanges_;
+  std::optional<std::vector<int>> PendingChanges_;
 };
 
 } // namespace translucency
