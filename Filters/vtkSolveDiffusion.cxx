@@ -298,6 +298,11 @@ vtkTypeInt64 vtkSolveDiffusion::GetNumberOfMaterialConversions() const
     this->Internal->Distributed.GetNumberOfMaterialConversions();
 }
 
+vtkTypeInt64 vtkSolveDiffusion::GetNumberOfBeamIrradianceReuses() const
+{
+  return this->Internal->Distributed.GetNumberOfBeamIrradianceReuses();
+}
+
 vtkTypeInt64 vtkSolveDiffusion::GetNumberOfMaterialComparisons() const
 {
   return this->Internal->FrontEnd.GetNumberOfMaterialComparisons();

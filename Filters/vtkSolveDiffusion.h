@@ -570,6 +570,11 @@ public:
   /// Serial solves that compared the material tet by tet with the last one
   /// (to find the tets a paint changed) since construction.
   vtkTypeInt64 GetNumberOfMaterialComparisons() const;
+  /// Distributed solves (this rank) that reused the last irradiance without
+  /// the directional lights' (the default collimated model) because the
+  /// piece, its RefractiveIndex and Irradiance arrays and the lights were
+  /// the same on every rank (a paint), since construction.
+  vtkTypeInt64 GetNumberOfBeamIrradianceReuses() const;
 
   ///@{
   /// Statistics of the last solve, per channel c in 0..2 (R, G, B).

@@ -42,12 +42,35 @@ struct vtkTranslucencyDistributedSolve::Impl
   /// Irradiance: the gathered surface and each light's terms kept across
   /// executions (a relight computes the changed light only).
   vtkTranslucencyDistributedIrradiance::State BeamIrradiance;
+  /// What the last TakeOutBeams was of (the piece, its RefractiveIndex and
+  /// Irradiance arrays and their times, the directional lights, the shadows)
+  /// and its result: a paint, which changes none of them, reuses it when
+  /// every rank can (TakeOutBeamsOnce).
+  struct BeamInputs
+  {
+    std::string Geometry;
+    vtkDataArray* Eta = nullptr;
+    vtkMTimeType EtaTime = 0;
+    vtkDataArray* Irradiance = nullptr;
+    vtkMTimeType IrradianceTime = 0;
+    std::vector<translucency::LightSource> Beams;
+    bool Shadows = false;
+    bool operator==(const BeamInputs& other) const;
+  };
+  bool HaveBeamFree = false;
+  BeamInputs BeamFreeInputs;
+  std::vector<double> BeamFree;
+  /// Collective: `irradiance` without the directional lights' (TakeOutBeams),
+  /// or the kept result when its inputs are the same on every rank.
+  void TakeOutBeamsOnce(MPI_Comm comm, vtkUnstructuredGrid* input, const std::string& geometry,
+    const translucency::DiffusionProblem& lights, std::vector<double>& irradiance);
   /// The coefficient arrays of the last successful solve and their times:
   /// when the next input carries the same ones, unmodified, on the same
   /// piece (a relight), the front end's kept material is solved again
   /// instead of converting, validating and comparing the piece's material
   /// (issues 31, 32; vtkSolveDiffusion's serial rule).
   long long MaterialConversions = 0;
+  long long BeamReuses = 0; ///< TakeOutBeamsOnce's reuses of its kept result
   vtkDataArray* MaterialArrays[3] = { nullptr, nullptr, nullptr };
   vtkMTimeType MaterialTimes[3] = { 0, 0, 0 };
 
@@ -204,6 +227,55 @@ void TakeOutBeams(vtkUnstructuredGrid* input, const translucency::DiffusionProbl
 }
 }
 
+bool vtkTranslucencyDistributedSolve::Impl::BeamInputs::operator==(const BeamInputs& other) const
+{
+  auto sameLight = [](const translucency::LightSource& a, const translucency::LightSource& b) {
+    return a.Type == b.Type && a.Direction == b.Direction && a.Position == b.Position &&
+      a.Power == b.Power && a.SpotCutoff == b.SpotCutoff && a.SpotExponent == b.SpotExponent;
+  };
+  return this->Geometry == other.Geometry && this->Eta == other.Eta &&
+    this->EtaTime == other.EtaTime && this->Irradiance == other.Irradiance &&
+    this->IrradianceTime == other.IrradianceTime && this->Shadows == other.Shadows &&
+    std::equal(this->Beams.begin(), this->Beams.end(), other.Beams.begin(), other.Beams.end(),
+      sameLight);
+}
+
+void vtkTranslucencyDistributedSolve::Impl::TakeOutBeamsOnce(MPI_Comm comm,
+  vtkUnstructuredGrid* input, const std::string& geometry,
+  const translucency::DiffusionProblem& lights, std::vector<double>& irradiance)
+{
+  BeamInputs inputs;
+  inputs.Geometry = geometry;
+  if (input)
+  {
+    inputs.Eta = input->GetCellData()->GetArray(vtkTranslucency::RefractiveIndexName);
+    inputs.Irradiance = input->GetPointData()->GetArray(vtkTranslucency::IrradianceName);
+  }
+  inputs.EtaTime = inputs.Eta ? inputs.Eta->GetMTime() : 0;
+  inputs.IrradianceTime = inputs.Irradiance ? inputs.Irradiance->GetMTime() : 0;
+  for (const translucency::LightSource& light : lights.Lights)
+  {
+    if (light.Type == translucency::LightSource::Kind::Directional)
+      inputs.Beams.push_back(light);
+  }
+  inputs.Shadows = lights.Shadows;
+  // The same arrays (objects and modification times), piece and lights give
+  // the same result; a paint changes only the coefficient arrays.
+  if (vtkTranslucency::SameOnEveryRank(comm,
+        this->HaveBeamFree && inputs == this->BeamFreeInputs &&
+          this->BeamFree.size() == irradiance.size()))
+  {
+    irradiance = this->BeamFree;
+    ++this->BeamReuses;
+    return;
+  }
+  this->HaveBeamFree = false;
+  TakeOutBeams(input, lights, this->BeamIrradiance, irradiance);
+  this->BeamFree = irradiance;
+  this->BeamFreeInputs = std::move(inputs);
+  this->HaveBeamFree = true;
+}
+
 void vtkTranslucencyDistributedSolve::AgreeOnLights(
   vtkUnstructuredGrid* input, translucency::DiffusionProblem& problem, int& flag)
 {
@@ -332,7 +404,7 @@ bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid* input,
     translucency::AgreeOnError(comm, local);
     if (takeOutBeams)
     {
-      TakeOutBeams(input, lights, in.BeamIrradiance, irradiance);
+      in.TakeOutBeamsOnce(comm, input, geometry, lights, irradiance);
       solvedIrradiance = irradiance;
     }
     // The solver by name, its distributed variant by the registry's trait.
@@ -417,6 +489,11 @@ long long vtkTranslucencyDistributedSolve::GetNumberOfMaterialConversions() cons
   return this->Internal->MaterialConversions;
 }
 
+long long vtkTranslucencyDistributedSolve::GetNumberOfBeamIrradianceReuses() const
+{
+  return this->Internal->BeamReuses;
+}
+
 bool vtkTranslucencyDistributedSolve::GetPowerBalance(
   double injected[3], double absorbed[3], double escaped[3]) const
 {
@@ -447,7 +524,7 @@ void vtkTranslucencyDistributedSolve::AgreeOnLights(
 }
 
 bool vtkTranslucencyDistributedSolve::Solve(vtkUnstructuredGrid*, const std::string&, double,
-  int, bool, int, bool, const translucency::Sources*, const std::vector<translucency::Detector>&,
+  double, int, bool, int, bool, const translucency::Sources*, const std::vector<translucency::Detector>&,
   const translucency::DiffusionProblem&, bool, std::vector<double>&, std::vector<double>&,
   std::vector<translucency::DetectorReading>&, translucency::SolverReport&, std::string& error)
 {
@@ -461,6 +538,11 @@ bool vtkTranslucencyDistributedSolve::GetPowerBalance(double*, double*, double*)
 }
 
 long long vtkTranslucencyDistributedSolve::GetNumberOfMaterialConversions() const
+{
+  return 0;
+}
+
+long long vtkTranslucencyDistributedSolve::GetNumberOfBeamIrradianceReuses() const
 {
   return 0;
 }

@@ -90,6 +90,10 @@ public:
   /// relight on the same piece with the same arrays, unmodified, solves the
   /// front end's kept material instead).
   long long GetNumberOfMaterialConversions() const;
+  /// Solves that took the directional lights' irradiance out of the default
+  /// model's Irradiance by reusing the last result (a paint: the same
+  /// piece, RefractiveIndex and Irradiance arrays and lights on every rank).
+  long long GetNumberOfBeamIrradianceReuses() const;
 
 private:
   struct Impl;

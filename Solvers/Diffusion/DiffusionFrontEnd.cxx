@@ -353,6 +353,18 @@ bool DiffusionFrontEnd::SolveMaterial(std::shared_ptr<const TetMesh> mesh,
   {
     DetectChangedTets(material, irradiance, kept);
   }
+  else if (keeps && kept)
+  {
+    // The kept material passed back to the distributed solver, which keeps
+    // the same material: it differs in the tets UpdateKeptMaterial wrote (a
+    // paint) or none (a relight), on this rank, so the solver neither
+    // compares nor validates the rest (DistributedVertexSolver::SetChangedTets;
+    // it counts the changes over the ranks and decides the update itself).
+    std::vector<int> changed;
+    if (PendingChanges_)
+      changed = std::move(*PendingChanges_);
+    Solver_->SetChangedTets(std::move(changed), true);
+  }
   ForgetLast(); // until this solve succeeds
 
   DiffusionProblem problem = light;

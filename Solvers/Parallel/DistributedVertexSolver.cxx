@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <utility>
 #include <sstream>
 
 #include <time.h>
@@ -138,6 +139,24 @@ void DistributedVertexSolver::Reset()
   HaveLocalValues_ = false;
   Material_ = OpticalProperties();
   HaveMaterial_ = false;
+  ChangedHint_.reset();
+}
+
+void DistributedVertexSolver::SetChangedTets(std::vector<int> changedTets, bool irradianceChanged)
+{
+  (void)irradianceChanged; // the right-hand side is assembled at every Solve
+  ChangedHint_ = std::move(changedTets);
+}
+
+bool DistributedVertexSolver::HintApplies(
+  const OpticalProperties& material, const std::vector<int>* hint) const
+{
+  const std::size_t numTets = material.RefractiveIndex.size();
+  return hint && HaveMaterial_ && Material_.RefractiveIndex.size() == numTets &&
+    Material_.AbsorptionCoefficient.size() == 3 * numTets &&
+    Material_.ReducedScatteringCoefficient.size() == 3 * numTets &&
+    material.AbsorptionCoefficient.size() == 3 * numTets &&
+    material.ReducedScatteringCoefficient.size() == 3 * numTets;
 }
 
 bool DistributedVertexSolver::GetTalliedReadouts(TalliedReadouts& readouts) const
@@ -516,7 +535,8 @@ void DistributedVertexSolver::CheckPiece(const std::vector<double>& points,
 }
 
 void DistributedVertexSolver::CheckPiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
-  const OpticalProperties& material, const std::vector<double>& irradiance) const
+  const OpticalProperties& material, const std::vector<double>& irradiance,
+  const std::vector<int>* hint) const
 {
   // Sizes (the mesh checked its ids; the values are checked by the assembly).
   const std::size_t numPoints = keys.size();
@@ -533,7 +553,10 @@ void DistributedVertexSolver::CheckPiece(const TetMesh* mesh, const std::vector<
          << " irradiance values (3 per point) do not match";
       throw Error(os.str());
     }
-    material.Validate(numTets);
+    if (HintApplies(material, hint))
+      material.ValidateTets(numTets, *hint); // the rest was valid at the last Solve
+    else
+      material.Validate(numTets);
   }
   catch (const Error& e)
   {
@@ -847,11 +870,26 @@ bool DistributedVertexSolver::CanShare(int c, int donor) const
   return all != 0;
 }
 
-bool DistributedVertexSolver::FindChangedTets(
-  const OpticalProperties& material, std::vector<int>& changed, long long& etaChanged) const
+bool DistributedVertexSolver::FindChangedTets(const OpticalProperties& material,
+  const std::vector<int>* hint, std::vector<int>& changed, long long& etaChanged) const
 {
   changed.clear();
   etaChanged = 0;
+  if (HintApplies(material, hint))
+  {
+    // The caller's kept material (SetChangedTets): only the hinted tets can
+    // differ from Material_; which of them changed eta is compared.
+    changed = *hint;
+    for (const int t : changed)
+    {
+      const std::size_t k = static_cast<std::size_t>(t);
+      etaChanged +=
+        std::memcmp(&Material_.RefractiveIndex[k], &material.RefractiveIndex[k], sizeof(double))
+        ? 1
+        : 0;
+    }
+    return true;
+  }
   const std::size_t numTets = material.RefractiveIndex.size();
   if (!HaveMaterial_ || Material_.RefractiveIndex.size() != numTets ||
     Material_.AbsorptionCoefficient.size() != material.AbsorptionCoefficient.size() ||
@@ -1497,6 +1535,7 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
 {
   // The piece's sizes and ids, then its TetMesh (kept while the arrays are
   // the same: its revision keys the numbering and the geometry cache).
+  ChangedHint_.reset(); // (the arrays carry no promise)
   CheckPiece(points, keys, tets, material, irradiance);
   std::string error;
   if (tets.empty())
@@ -1522,12 +1561,15 @@ void DistributedVertexSolver::Solve(const std::vector<double>& points,
     }
   }
   AgreeOnError(Comm_, error);
-  SolvePiece(tets.empty() ? nullptr : &OwnMesh_, keys, material, irradiance, fluence, report);
+  SolvePiece(
+    tets.empty() ? nullptr : &OwnMesh_, keys, material, irradiance, nullptr, fluence, report);
 }
 
 bool DistributedVertexSolver::Solve(
   const DiffusionProblem& problem, std::vector<double>& fluence, SolverReport& report)
 {
+  // SetChangedTets' promise is for this Solve only.
+  const std::optional<std::vector<int>> hint = std::exchange(ChangedHint_, std::nullopt);
   std::string error;
   if (!problem.PointKeys)
   {
@@ -1554,7 +1596,7 @@ bool DistributedVertexSolver::Solve(
   try
   {
     SolvePiece(problem.Mesh, *problem.PointKeys, *problem.Material, *problem.Irradiance,
-      fluence, report);
+      hint ? &*hint : nullptr, fluence, report);
   }
   catch (...)
   {
@@ -1599,8 +1641,8 @@ void DistributedVertexSolver::AddVolumeSources(const std::vector<PointKey>& keys
   }
 }
 
-DistributedVertexSolver::MatrixChange DistributedVertexSolver::FindMatrixChange(
-  bool sameMesh, const OpticalProperties& material, std::vector<int>& changedTets)
+DistributedVertexSolver::MatrixChange DistributedVertexSolver::FindMatrixChange(bool sameMesh,
+  const OpticalProperties& material, const std::vector<int>* hint, std::vector<int>& changedTets)
 {
   // The same mesh, options, linear solvers and Robin rule (the collimated
   // model's) everywhere, and the tets whose coefficients changed since the
@@ -1618,7 +1660,7 @@ DistributedVertexSolver::MatrixChange DistributedVertexSolver::FindMatrixChange(
   if (!allReady || Rule_ != MatrixRule_)
     return MatrixChange::Assemble;
   long long etaChanged = 0;
-  const bool comparable = FindChangedTets(material, changedTets, etaChanged);
+  const bool comparable = FindChangedTets(material, hint, changedTets, etaChanged);
   long long counts[5] = { comparable ? 0 : 1, static_cast<long long>(changedTets.size()),
     Mesh_->GetNumberOfTets(), HaveLocalValues_ ? 0 : 1, etaChanged };
   MPI_Allreduce(MPI_IN_PLACE, counts, 5, MPI_LONG_LONG, MPI_SUM, Comm_);
@@ -1700,7 +1742,7 @@ DistributedVertexSolver::UpdateMatrices(MatrixChange change, bool sameMesh,
 
 void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
   const OpticalProperties& material, const std::vector<double>& irradiance,
-  std::vector<double>& fluence, SolverReport& report)
+  const std::vector<int>* hint, std::vector<double>& fluence, SolverReport& report)
 {
   Timings_ = Timings();
   HierarchyCpu_ = 0.0;
@@ -1717,7 +1759,7 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   report.Assembly = "full";
 
   // 0. The piece's sizes.
-  CheckPiece(mesh, keys, material, irradiance);
+  CheckPiece(mesh, keys, material, irradiance, hint);
   if (mesh && mesh->GetNumberOfTets() == 0)
   {
     mesh = nullptr;
@@ -1746,7 +1788,7 @@ void DistributedVertexSolver::SolvePiece(const TetMesh* mesh, const std::vector<
   start = MPI_Wtime();
   cpu = CpuMilliseconds();
   std::vector<int> changedTets;
-  const MatrixChange change = FindMatrixChange(allSame != 0, material, changedTets);
+  const MatrixChange change = FindMatrixChange(allSame != 0, material, hint, changedTets);
   const bool relight = change == MatrixChange::None;
   const bool rowsUpdate = change == MatrixChange::ChangedRows;
   DiffusionSystem system;

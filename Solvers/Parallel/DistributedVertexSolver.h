@@ -53,6 +53,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -95,6 +96,16 @@ public:
   /// Forgets the hierarchies and the warm start (keeps the numbering of an
   /// unchanged mesh): the next Solve sets up from scratch.
   void Reset() override;
+  /**
+   * The caller's promise for the next Solve (DiffusionSolver::SetChangedTets;
+   * DiffusionFrontEnd makes it when it passes its kept material back: a
+   * relight, or a paint it compared in place): since the last successful
+   * Solve on this rank's mesh only `changedTets`' coefficients changed. That
+   * Solve then takes them as this rank's changed tets instead of comparing
+   * the whole material with the kept one, and validates only them. Used by
+   * the next Solve only; ignored when this solver kept no material.
+   */
+  void SetChangedTets(std::vector<int> changedTets, bool irradianceChanged = false) override;
   /// The detector readings and power balance of the last Solve (the same on
   /// every rank): injected = the physical faces' irradiance + the sources.
   bool GetTalliedReadouts(TalliedReadouts& readouts) const override;
@@ -309,14 +320,19 @@ private:
     Fresh       ///< set up from scratch
   };
   // The phases of Solve (each collective).
+  /// `hint`: this rank's changed tets promised by SetChangedTets (or null).
   void SolvePiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
     const OpticalProperties& material, const std::vector<double>& irradiance,
-    std::vector<double>& fluence, SolverReport& report);
+    const std::vector<int>* hint, std::vector<double>& fluence, SolverReport& report);
   void CheckPiece(const std::vector<double>& points, const std::vector<PointKey>& keys,
     const std::vector<int>& tets, const OpticalProperties& material,
     const std::vector<double>& irradiance) const;
   void CheckPiece(const TetMesh* mesh, const std::vector<PointKey>& keys,
-    const OpticalProperties& material, const std::vector<double>& irradiance) const;
+    const OpticalProperties& material, const std::vector<double>& irradiance,
+    const std::vector<int>* hint) const;
+  /// Whether SetChangedTets' promise applies to `material` (a kept material
+  /// of this rank's sizes to compare with).
+  bool HintApplies(const OpticalProperties& material, const std::vector<int>* hint) const;
   bool HasTets() const { return Mesh_->GetNumberOfTets() > 0; }
   void AssembleLocal(const OpticalProperties& material, const std::vector<double>& irradiance,
     DiffusionSystem& system);
@@ -332,8 +348,8 @@ private:
     Assemble     ///< the whole local matrices
   };
   /// Collective: the change, and this rank's changed tets (ChangedRows).
-  MatrixChange FindMatrixChange(
-    bool sameMesh, const OpticalProperties& material, std::vector<int>& changedTets);
+  MatrixChange FindMatrixChange(bool sameMesh, const OpticalProperties& material,
+    const std::vector<int>* hint, std::vector<int>& changedTets);
   /// Collective: the matrices after the assembly of `system` (Assemble) or
   /// with the changed rows (ChangedRows), their hierarchies, and the
   /// material they are of kept; report.Assembly. Returns what each channel got.
@@ -342,9 +358,10 @@ private:
     const std::vector<int>& changedTets, DiffusionSystem& system, SolverReport& report,
     double& hierarchyMs);
   /// This rank's tets whose coefficients differ from the last matrices'
-  /// (Material_, bit for bit); false when there is nothing to compare with.
-  bool FindChangedTets(
-    const OpticalProperties& material, std::vector<int>& changed, long long& etaChanged) const;
+  /// (Material_, bit for bit; with a `hint` that applies, the hinted tets
+  /// without comparing the others); false when there is nothing to compare with.
+  bool FindChangedTets(const OpticalProperties& material, const std::vector<int>* hint,
+    std::vector<int>& changed, long long& etaChanged) const;
   /**
    * The changed-rows update of the local values and the owned rows
    * (collective; SetChangedRowsUpdate): LocalValues_, Received_ and
@@ -427,6 +444,8 @@ private:
   {
     return LinearSolver_.empty() ? std::string("cg/boomeramg") : LinearSolver_;
   }
+  /// SetChangedTets' promise, taken by the next Solve.
+  std::optional<std::vector<int>> ChangedHint_;
   bool ValuesOnly_ = true;
   bool ThreeChannelPCG_ = true;
   bool FusedReductions_ = false;

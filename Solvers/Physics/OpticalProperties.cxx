@@ -61,6 +61,40 @@ bool OpticalProperties::SameCoefficients(const OpticalProperties& other) const
     SameBits(RefractiveIndex, other.RefractiveIndex);
 }
 
+void OpticalProperties::ValidateTets(int numTets, const std::vector<int>& tets) const
+{
+  const std::size_t n = static_cast<std::size_t>(std::max(numTets, 0));
+  bool valid = numTets >= 0 && AbsorptionCoefficient.size() == 3 * n &&
+    ReducedScatteringCoefficient.size() == 3 * n && RefractiveIndex.size() == n &&
+    (Anisotropy.empty() || Anisotropy.size() == 3 * n);
+  for (std::size_t k = 0; valid && k < tets.size(); ++k)
+  {
+    const int t = tets[k];
+    if (t < 0 || static_cast<std::size_t>(t) >= n)
+    {
+      Validate(numTets);
+      throw Error("OpticalProperties::ValidateTets: changed tet " + std::to_string(t) +
+        " is not one of the " + std::to_string(n) + " tets");
+    }
+    const std::size_t i = static_cast<std::size_t>(t);
+    for (int c = 0; c < 3; ++c)
+    {
+      const double a = AbsorptionCoefficient[3 * i + c], s = ReducedScatteringCoefficient[3 * i + c];
+      valid = valid && std::isfinite(a) && a >= 0.0 && std::isfinite(s) && s >= 0.0 && a + s > 0.0;
+      if (!Anisotropy.empty())
+      {
+        const double g = Anisotropy[3 * i + c];
+        valid = valid && std::isfinite(g) && g > -1.0 && g < 1.0;
+      }
+    }
+    valid = valid && std::isfinite(RefractiveIndex[i]) && RefractiveIndex[i] > 0.0;
+  }
+  if (!valid)
+  {
+    Validate(numTets); // names the array, tet, channel and value (throws)
+  }
+}
+
 void OpticalProperties::Validate(int numTets) const
 {
   if (numTets < 0)

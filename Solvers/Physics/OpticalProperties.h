@@ -55,6 +55,14 @@ struct OpticalProperties
    */
   void Validate(int numTets) const;
 
+  /**
+   * Validate for a material of which only `tets` can have changed since it
+   * was last validated (a paint of a kept material): the sizes for numTets
+   * tets and the listed tets' values; an invalid one gets Validate's
+   * message (its lowest invalid tet).
+   */
+  void ValidateTets(int numTets, const std::vector<int>& tets) const;
+
   /// Whether mu_a, sigma_s' and eta equal `other`'s bit for bit (the
   /// anisotropy is not compared): the kept-material tests of the solvers.
   bool SameCoefficients(const OpticalProperties& other) const;

@@ -375,6 +375,26 @@ elif MODE == "run":
             f.write("paint %s rank %d path %s\n" % (
                 name, RANK, source.GetClientSideObject().GetParallelPath().replace(" ", "-")))
         SaveData(path(name + ".pvtu"), proxy=proxy)
+    # A stroke after a solve of the same chain, painted after the light (the
+    # user's order: Irradiance -> Paint -> Solve; issue 32): every rank
+    # compares the new arrays with its kept material in place, tells the
+    # distributed solver the changed tets, and reuses the irradiance without
+    # the beams (the lights and the Irradiance array unchanged). The field
+    # must equal the serial painted chain's (ref_paint.vtu).
+    repaint = paint(SurfaceIrradiance(Input=pvtu3, Shadows=1, **LIGHTS["B"]))
+    repaint.Strength = 0.0
+    resolved = SolveDiffusion(Input=repaint, Solver="divergence", RelTol=TOL, MaxIter=20000)
+    resolved.UpdatePipeline()
+    repaint.Strength = 1.0
+    resolved.UpdatePipeline()
+    o = resolved.GetClientSideObject()
+    with open(path("irr_%d.txt" % RANK), "a") as f:
+        f.write("paint repaint_pvtu3 rank %d path %s\n" % (
+            RANK, repaint.GetClientSideObject().GetParallelPath().replace(" ", "-")))
+        f.write("repaint rank %d path %s beams %d conversions %d\n" % (
+            RANK, o.GetParallelPath(), o.GetNumberOfBeamIrradianceReuses(),
+            o.GetNumberOfMaterialConversions()))
+    SaveData(path("repaint_pvtu3.pvtu"), proxy=resolved)
     # Stroke Cut per piece -> the distributed chain: implicit cutters without
     # relaxation; with the relaxation a tilted plane (3 slabs with ids; one
     # piece, coordinate keys, empty pieces elsewhere) and a stroke (3 pieces

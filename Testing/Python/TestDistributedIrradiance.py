@@ -275,7 +275,7 @@ class DistributedIrradianceTest(MpiSuite):
         self.assertGreater(max(worst_relative(ref_f[i], unpainted[i], scale_f) for i in ref_f),
                            1e-3, "the paint changes the fluence")
         for case in ("paint_pvtu3", "paint_redist", "paint_twoport", "paint_pvtu2",
-                     "paint_pvtu1"):
+                     "paint_pvtu1", "repaint_pvtu3"):
             paths = self.paint_paths.get(case, {})
             self.assertEqual(sorted(paths), list(range(RANKS)), case)
             self.assertEqual(set(paths.values()), {"per-piece"}, case)
@@ -291,13 +291,13 @@ class DistributedIrradianceTest(MpiSuite):
                 mask = np.zeros(len(t), bool)
                 mask[c] = True
                 found_changed.update(t[mask & owned].tolist())
-                if case in ("paint_pvtu3", "paint_redist", "paint_twoport"):
+                if case in ("paint_pvtu3", "paint_redist", "paint_twoport", "repaint_pvtu3"):
                     for i, _, f in zip(*arrays(piece)):
                         worst_f = max(worst_f, worst_relative(f, ref_f[int(i)], scale_f))
                         points.add(int(i))
             self.assertEqual(sorted(seen), sorted(ref), "every tet once, " + case)
             self.assertEqual(found_changed, ref_changed, "PaintedCellIds, " + case)
-            if case in ("paint_pvtu3", "paint_redist", "paint_twoport"):
+            if case in ("paint_pvtu3", "paint_redist", "paint_twoport", "repaint_pvtu3"):
                 self.assertEqual(points, set(ref_f), "every point, " + case)
                 self.assertLessEqual(worst_f, 1e-6, "max relative Fluence difference, " + case)
             nonempty = sum(1 for p in pieces if p.GetNumberOfCells() > 0)
@@ -305,6 +305,23 @@ class DistributedIrradianceTest(MpiSuite):
                 self.assertEqual(nonempty, 1 if case == "paint_pvtu1" else 2, case)
             else:
                 self.assertGreater(nonempty, 1, "the pieces stay distributed, " + case)
+
+    def test_repaint_reuses_the_beam_free_irradiance(self):
+        # The stroke after a solve (repaint_pvtu3, whose field equals serial:
+        # test_paint_per_piece): the distributed solve on every rank, the
+        # directional lights' irradiance taken out once (the cold solve) and
+        # reused by the paint, the material read once (the paint compared in
+        # place).
+        reports = {case: {rank: m.groups()[2:] for rank, m in per_rank.items()}
+                   for case, per_rank in self.rank_reports(
+                       "irr", r"^(repaint) rank (\d+) path (\S+) beams (\d+) "
+                       r"conversions (\d+)$").items()}
+        per_rank = reports.get("repaint", {})
+        self.assertEqual(sorted(per_rank), list(range(RANKS)))
+        for rank, (path, beams, conversions) in per_rank.items():
+            self.assertEqual(path, "distributed", "rank %d" % rank)
+            self.assertEqual(int(beams), 1, "rank %d" % rank)
+            self.assertEqual(int(conversions), 1, "rank %d" % rank)
 
     def test_outgoing_radiance_per_piece(self):
         # Each rank output the physical faces of its own piece: together the

@@ -167,9 +167,13 @@ void RunStrokes(
     if (!linear.empty())
       solver.SetLinearSolver(linear);
   };
-  DistributedVertexSolver rows(discretization), values(discretization);
+  // `hinted` is told each stroke's changed tets of this rank's piece
+  // (SetChangedTets: the promise DiffusionFrontEnd makes for its kept
+  // material) instead of comparing and validating the whole material.
+  DistributedVertexSolver rows(discretization), values(discretization), hinted(discretization);
   configure(rows);
   configure(values);
+  configure(hinted);
   values.SetChangedRowsUpdate(false);
   EXPECT_TRUE(rows.GetChangedRowsUpdate());
 
@@ -183,6 +187,17 @@ void RunStrokes(
     stroke.Paint(s, whole);
     const long long changed = ChangedTets(before, whole);
     const OpticalProperties material = PieceMaterial(s, whole);
+    const OpticalProperties pieceBefore = PieceMaterial(s, before);
+    std::vector<int> pieceChanged;
+    for (std::size_t t = 0; t < material.RefractiveIndex.size(); ++t)
+    {
+      if (std::memcmp(&material.AbsorptionCoefficient[3 * t], &pieceBefore.AbsorptionCoefficient[3 * t],
+            3 * sizeof(double)) != 0 ||
+        std::memcmp(&material.ReducedScatteringCoefficient[3 * t],
+          &pieceBefore.ReducedScatteringCoefficient[3 * t], 3 * sizeof(double)) != 0 ||
+        material.RefractiveIndex[t] != pieceBefore.RefractiveIndex[t])
+        pieceChanged.push_back(static_cast<int>(t));
+    }
     DiffusionProblem problem;
     problem.Mesh = s.Piece.get();
     problem.Material = &material;
@@ -198,6 +213,10 @@ void RunStrokes(
     SolverReport report, wholeReport, freshReport;
     ASSERT_TRUE(rows.Solve(problem, fluence, report));
     ASSERT_TRUE(values.Solve(problem, wholeFluence, wholeReport));
+    std::vector<double> hintedFluence;
+    SolverReport hintedReport;
+    hinted.SetChangedTets(pieceChanged); // (the cold solve: no kept material, ignored)
+    ASSERT_TRUE(hinted.Solve(problem, hintedFluence, hintedReport));
     DistributedVertexSolver fresh(discretization);
     configure(fresh);
     ASSERT_TRUE(fresh.Solve(problem, freshFluence, freshReport));
@@ -231,6 +250,9 @@ void RunStrokes(
       EXPECT_EQ(rows.GetNumberOfChangedTets(), -1);
     }
     EXPECT_EQ(values.GetNumberOfChangedTets(), -1);
+    EXPECT_EQ(hinted.GetNumberOfChangedTets(), rows.GetNumberOfChangedTets());
+    EXPECT_EQ(hintedReport.Assembly, report.Assembly);
+    EXPECT_EQ(hintedReport.LinearSetup, report.LinearSetup);
     EXPECT_EQ(report.Resolved, wholeReport.Resolved);
     for (int c = 0; c < NumberOfChannels; ++c)
     {
@@ -244,6 +266,8 @@ void RunStrokes(
     // The fluence: the whole re-assembly's bit for bit (the same matrices
     // under the same kept hierarchies), the fresh solve's to the tolerance.
     EXPECT_EQ(fluence, wholeFluence);
+    EXPECT_EQ(hintedFluence, fluence);
+    ExpectSameMatrices(hinted, rows, "told the changed tets against comparing");
     const double difference = fluence.empty() ? 0.0 : RelativeDifference(fluence, freshFluence);
     EXPECT_LT(difference, 1e-10);
   }
@@ -271,6 +295,63 @@ TEST(DistributedPaintRows, WithTheAggregationSolver)
 TEST(DistributedPaintRows, UnderTheExtendedMomentsModel)
 {
   RunStrokes(Size(), "divergence", "", true);
+}
+
+// SetChangedTets' promise skips the comparison and the validation of the
+// rest, not of the promised tets: an invalid value there is refused on every
+// rank with the message of a full validation (the lowest invalid tet), and
+// the next solve, told nothing, compares and works.
+TEST(DistributedPaintRows, ThePromisedTetsAreValidated)
+{
+  const Scene s = MakeScene(Size());
+  const std::vector<double> wholeQ = translucency::testing::RandomIrradiance(s.Whole, 41);
+  std::vector<double> q;
+  for (const int p : s.Points)
+    for (int c = 0; c < 3; ++c)
+      q.push_back(wholeQ[3 * static_cast<std::size_t>(p) + c]);
+  DistributedVertexSolver solver("divergence");
+  solver.SetCommunicator(MakeCommunicator(GetWorldCommunicator()));
+  solver.SetRelTol(1e-10);
+  OpticalProperties material = PieceMaterial(s, s.Material);
+  DiffusionProblem problem;
+  problem.Mesh = s.Piece.get();
+  problem.Material = &material;
+  problem.Irradiance = &q;
+  problem.PointKeys = &s.Keys;
+  std::vector<double> fluence;
+  SolverReport report;
+  ASSERT_TRUE(solver.Solve(problem, fluence, report));
+  // Rank 0 paints a negative mu_a into its first tet and promises it.
+  std::vector<int> promised;
+  if (Rank() == 0 && !material.RefractiveIndex.empty())
+  {
+    material.AbsorptionCoefficient[1] = -2.0;
+    promised.push_back(0);
+  }
+  solver.SetChangedTets(promised);
+  std::string message;
+  try
+  {
+    solver.Solve(problem, fluence, report);
+  }
+  catch (const Error& e)
+  {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("AbsorptionCoefficient of tet 0, channel G is -2"), std::string::npos)
+    << message;
+  // Undone, told nothing: the solver compares with what it kept and solves.
+  if (Rank() == 0 && !material.RefractiveIndex.empty())
+    material.AbsorptionCoefficient[1] = PieceMaterial(s, s.Material).AbsorptionCoefficient[1];
+  std::vector<double> again;
+  ASSERT_TRUE(solver.Solve(problem, again, report));
+  DistributedVertexSolver fresh("divergence");
+  fresh.SetCommunicator(MakeCommunicator(GetWorldCommunicator()));
+  fresh.SetRelTol(1e-10);
+  std::vector<double> expected;
+  ASSERT_TRUE(fresh.Solve(problem, expected, report));
+  if (!expected.empty())
+    EXPECT_LT(RelativeDifference(again, expected), 1e-8);
 }
 
 // The last rank's piece empty: it takes part in every exchange, with no
