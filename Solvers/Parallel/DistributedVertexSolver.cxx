@@ -1477,7 +1477,8 @@ void DistributedVertexSolver::ReadOuts(const OpticalProperties& material,
   std::array<double, 4 * NumberOfChannels> sums{};
   if (HasTets())
   {
-    const PowerBalance local = ComputePowerBalance(
+    // (The material was validated by this Solve's CheckPiece.)
+    const PowerBalance local = ComputePowerBalanceOfValidMaterial(
       *Mesh_, material, fluence, &irradiance, Rule_, &PhysicalFace_);
     for (int c = 0; c < NumberOfChannels; ++c)
     {

@@ -47,8 +47,23 @@ PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& m
   const std::vector<double>& fluence, const std::vector<double>* irradiance,
   Fresnel::BoundaryRule rule, const std::vector<char>* boundaryFaces)
 {
+  material.Validate(mesh.GetNumberOfTets());
+  return ComputePowerBalanceOfValidMaterial(
+    mesh, material, fluence, irradiance, rule, boundaryFaces);
+}
+
+PowerBalance ComputePowerBalanceOfValidMaterial(const TetMesh& mesh,
+  const OpticalProperties& material, const std::vector<double>& fluence,
+  const std::vector<double>* irradiance, Fresnel::BoundaryRule rule,
+  const std::vector<char>* boundaryFaces)
+{
   const int numTets = mesh.GetNumberOfTets();
-  material.Validate(numTets);
+  const std::size_t n = static_cast<std::size_t>(numTets);
+  if (material.AbsorptionCoefficient.size() != 3 * n ||
+    material.ReducedScatteringCoefficient.size() != 3 * n || material.RefractiveIndex.size() != n)
+  {
+    material.Validate(numTets); // names the array and its size
+  }
   CheckPointArray(mesh, &fluence, "fluence");
   CheckPointArray(mesh, irradiance, "irradiance");
   PowerBalance balance;

@@ -46,6 +46,13 @@ PowerBalance ComputePowerBalance(const TetMesh& mesh, const OpticalProperties& m
   const std::vector<double>& fluence, const std::vector<double>* irradiance,
   Fresnel::BoundaryRule rule = Fresnel::BoundaryRule::Fit,
   const std::vector<char>* boundaryFaces = nullptr);
+/// ComputePowerBalance for a material the caller validated in the same
+/// solve (the distributed solver's every Solve): its sizes are checked, its
+/// values not again.
+PowerBalance ComputePowerBalanceOfValidMaterial(const TetMesh& mesh,
+  const OpticalProperties& material, const std::vector<double>& fluence,
+  const std::vector<double>* irradiance, Fresnel::BoundaryRule rule,
+  const std::vector<char>* boundaryFaces);
 
 /// A detector on the surface: a point or a fibre face of radius Radius.
 struct Detector
