@@ -107,6 +107,8 @@ SolverOptions BoomerAMGOptions::ToOptions() const
     { "amg-pmax", static_cast<double>(PMaxElmts) }, { "amg-strong-threshold", StrongThreshold },
     { "amg-relaxation", static_cast<double>(RelaxType) },
     { "amg-sweeps", static_cast<double>(NumSweeps) },
+    { "amg-relaxation-down", static_cast<double>(RelaxDown) },
+    { "amg-relaxation-up", static_cast<double>(RelaxUp) },
     { "amg-aggressive-levels", static_cast<double>(AggNumLevels) },
     { "amg-aggressive-interpolation", static_cast<double>(AggInterpType) },
     { "amg-keep-transpose", static_cast<double>(KeepTranspose) } };
@@ -122,6 +124,10 @@ void HypreBoomerAMGPCG::SetOptions(const SolverOptions& options)
   options.ReadNumber(who, "amg-strong-threshold", 0.0, "the strength threshold, in [0, 1)", o.StrongThreshold);
   options.ReadInteger(who, "amg-relaxation", 0, "a BoomerAMG relaxation code", o.RelaxType);
   options.ReadInteger(who, "amg-sweeps", 1, "sweeps, >= 1", o.NumSweeps);
+  options.ReadInteger(who, "amg-relaxation-down", -1,
+    "a BoomerAMG relaxation code of the down cycle (-1: amg-relaxation)", o.RelaxDown);
+  options.ReadInteger(who, "amg-relaxation-up", -1,
+    "a BoomerAMG relaxation code of the up cycle (-1: amg-relaxation)", o.RelaxUp);
   options.ReadInteger(who, "amg-aggressive-levels", 0, "levels, >= 0", o.AggNumLevels);
   options.ReadInteger(who, "amg-aggressive-interpolation", 0, "a BoomerAMG interpolation code", o.AggInterpType);
   options.ReadInteger(who, "amg-keep-transpose", 0, "0 or 1", o.KeepTranspose);
@@ -316,6 +322,10 @@ void HypreBoomerAMGPCG::BuildSolver(const HypreBoomerAMGPCG* shared)
   HYPRE_BoomerAMGSetStrongThreshold(h.AMG, o.StrongThreshold);
   HYPRE_BoomerAMGSetRelaxType(h.AMG, o.RelaxType);
   HYPRE_BoomerAMGSetNumSweeps(h.AMG, o.NumSweeps);
+  if (o.RelaxDown >= 0)
+    HYPRE_BoomerAMGSetCycleRelaxType(h.AMG, o.RelaxDown, 1);
+  if (o.RelaxUp >= 0)
+    HYPRE_BoomerAMGSetCycleRelaxType(h.AMG, o.RelaxUp, 2);
   if (o.AggNumLevels > 0)
   {
     HYPRE_BoomerAMGSetAggNumLevels(h.AMG, o.AggNumLevels);

@@ -468,6 +468,9 @@ TEST(DistributedFamily, BoomerAMGCGIsARegistryComposition)
   SolverOptions bad;
   bad.Set("amg-strong-threshold", 1.5);
   EXPECT_TRUE(Contains(ErrorMessage([&] { solver->SetOptions(bad); }), "amg-strong-threshold"));
+  SolverOptions badDown;
+  badDown.Set("amg-relaxation-down", -2.0); // -1 (amg-relaxation) or a hypre code
+  EXPECT_TRUE(Contains(ErrorMessage([&] { solver->SetOptions(badDown); }), "amg-relaxation-down"));
 
   // A 1-D Laplacian (+ identity) of 60 rows on one rank: the solve meets its
   // tolerance on the residual computed here; after a values-only update
