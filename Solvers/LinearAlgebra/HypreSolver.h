@@ -57,15 +57,17 @@ struct BoomerAMGOptions
   /// The settings measured best on the bunny diffusion system
   /// (Documentation/Scaling.md): HMIS, strong threshold 0.25, one level of
   /// aggressive coarsening with multipass interpolation, extended+i
-  /// elsewhere, l1 hybrid symmetric Gauss-Seidel, Pmax 4. (One hybrid
-  /// Gauss-Seidel sweep forward down and backward up, amg-relaxation-down 3
-  /// and -up 4, halves the sweeps: measured faster on one rank, no faster in
-  /// the 2-rank chain and more iterations on small pieces, Scaling.md.)
+  /// elsewhere, Pmax 4, and one l1 hybrid Gauss-Seidel sweep forward on the
+  /// way down (13) and backward on the way up (14): a symmetric V-cycle
+  /// (hypre's own default pair) at half the sweeps of the l1 symmetric sweep
+  /// (8) on both, convergent on any partition as the l1 smoothers are.
   static BoomerAMGOptions Tuned()
   {
     BoomerAMGOptions o;
     o.StrongThreshold = 0.25;
     o.AggNumLevels = 1;
+    o.RelaxDown = 13;
+    o.RelaxUp = 14;
     return o;
   }
 
