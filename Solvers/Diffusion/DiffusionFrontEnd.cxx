@@ -345,7 +345,8 @@ bool DiffusionFrontEnd::SolveMaterial(std::shared_ptr<const TetMesh> mesh,
   // The material is kept for the next solve's SolveKeptMaterial (a relight)
   // by every continuous-wave vertex solve, the distributed one too (its
   // piece's material); only the in-process ones compare a new material with
-  // it (the distributed solver finds its changed tets itself).
+  // it (the distributed solver compares a new one itself, and is told the
+  // changes of the kept one below).
   const bool keeps = traits.UnknownsAtVertices && continuous;
   const bool incremental = keeps && !Comm_.IsMPI();
   ChangedTets_ = -1;

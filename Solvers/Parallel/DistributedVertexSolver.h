@@ -156,8 +156,8 @@ public:
    * linear solvers are the last Solve's and at most
    * GetMaximumChangedFraction() of the tets (over every rank) have another
    * mu_a, sigma_s' or eta than the last matrices (bit for bit: the solver
-   * keeps that material for the relight test anyway, so it needs no
-   * DiffusionSolver::SetChangedTets hint), only the rows of the changed
+   * keeps that material for the relight test; SetChangedTets' promise, when
+   * given, replaces that comparison), only the rows of the changed
    * tets' vertices are assembled again: each rank re-sums its local rows of
    * them (every tet around them, in the full assembly's order, and their
    * Robin terms), sends only the changed entries of partition rows to their
