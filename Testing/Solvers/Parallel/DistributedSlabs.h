@@ -101,6 +101,16 @@ inline Scene MakeScene(int ranks)
   return s;
 }
 
+/// The piece's share of a whole-mesh per-point array (3 per point).
+inline std::vector<double> PiecePoints(const Scene& s, const std::vector<double>& whole)
+{
+  std::vector<double> piece;
+  for (const int p : s.Points)
+    for (int c = 0; c < 3; ++c)
+      piece.push_back(whole[3 * static_cast<std::size_t>(p) + c]);
+  return piece;
+}
+
 /// The piece's share of a whole-mesh material.
 inline OpticalProperties PieceMaterial(const Scene& s, const OpticalProperties& whole)
 {

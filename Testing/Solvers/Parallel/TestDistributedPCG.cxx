@@ -30,6 +30,7 @@
 using namespace translucency;
 using translucency::testing::MakeScene;
 using translucency::testing::PieceMaterial;
+using translucency::testing::PiecePoints;
 using translucency::testing::Rank;
 using translucency::testing::RelativeDifference;
 using translucency::testing::Scene;
@@ -62,16 +63,6 @@ void PaintStroke(const Scene& s, OpticalProperties& m)
   for (const int t : TetsNear(s.Whole, { 2.5, 2.5, 4.2 }, 0.9))
     for (int c = 0; c < 3; ++c)
       m.AbsorptionCoefficient[3 * static_cast<std::size_t>(t) + c] *= 3.0;
-}
-
-/// The piece's share of a whole-mesh per-point array (3 per point).
-std::vector<double> PiecePoints(const Scene& s, const std::vector<double>& whole)
-{
-  std::vector<double> piece;
-  for (const int p : s.Points)
-    for (int c = 0; c < 3; ++c)
-      piece.push_back(whole[3 * static_cast<std::size_t>(p) + c]);
-  return piece;
 }
 
 /// The whole mesh's fluence (3 per point of Whole) from every rank's piece

@@ -32,6 +32,7 @@
 using namespace translucency;
 using translucency::testing::MakeScene;
 using translucency::testing::PieceMaterial;
+using translucency::testing::PiecePoints;
 using translucency::testing::Rank;
 using translucency::testing::RelativeDifference;
 using translucency::testing::Scene;
@@ -154,11 +155,7 @@ void RunStrokes(
     std::to_string(ranks) + " ranks with tets" + (beam ? ", extended-moments beam" : ""));
   const Scene s = MakeScene(ranks);
   OpticalProperties whole = s.Material;
-  const std::vector<double> wholeQ = translucency::testing::RandomIrradiance(s.Whole, 41);
-  std::vector<double> q;
-  for (const int p : s.Points)
-    for (int c = 0; c < 3; ++c)
-      q.push_back(wholeQ[3 * static_cast<std::size_t>(p) + c]);
+  const std::vector<double> q = PiecePoints(s, translucency::testing::RandomIrradiance(s.Whole, 41));
   const Communicator world = MakeCommunicator(GetWorldCommunicator());
   auto configure = [&](DistributedVertexSolver& solver) {
     solver.SetCommunicator(world);
@@ -304,11 +301,7 @@ TEST(DistributedPaintRows, UnderTheExtendedMomentsModel)
 TEST(DistributedPaintRows, ThePromisedTetsAreValidated)
 {
   const Scene s = MakeScene(Size());
-  const std::vector<double> wholeQ = translucency::testing::RandomIrradiance(s.Whole, 41);
-  std::vector<double> q;
-  for (const int p : s.Points)
-    for (int c = 0; c < 3; ++c)
-      q.push_back(wholeQ[3 * static_cast<std::size_t>(p) + c]);
+  const std::vector<double> q = PiecePoints(s, translucency::testing::RandomIrradiance(s.Whole, 41));
   DistributedVertexSolver solver("divergence");
   solver.SetCommunicator(MakeCommunicator(GetWorldCommunicator()));
   solver.SetRelTol(1e-10);
