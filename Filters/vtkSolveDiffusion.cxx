@@ -741,13 +741,28 @@ vtkTranslucencyParallelPlan vtkSolveDiffusion::PlanParallel(
   const Plan::GatherMode mode = Plan::GatherMode::SameMesh;
   // By the registry's trait: the solvers with a distributed variant (a build
   // without the Parallel layer has none).
-  if (!SolverEntry(this->Solver).Properties.Distributed)
+  const translucency::DiffusionSolverTraits& traits = SolverEntry(this->Solver).Properties;
+  if (!traits.Distributed)
   {
-    return Plan::Gathered(mode, "the solver is serial (only divergence and fem run distributed)");
+    return Plan::Gathered(mode,
+      "the solver is serial (divergence and fem run distributed, montecarlo replicated)");
   }
   if (!this->DistributedSolve)
   {
     return Plan::Gathered(mode, "DistributedSolve is off");
+  }
+  if (traits.Replicated)
+  {
+    if (this->InteractiveDetector)
+    {
+      return Plan::Gathered(mode, "the interactive detector");
+    }
+    if (!vtkTranslucency::CanDistribute(comm))
+    {
+      return Plan::Gathered(mode, "this build has no MPI solvers (hypre and VTK's ParallelMPI)");
+    }
+    return Plan::Replicated("the whole mesh on every rank, the photons split over the ranks "
+                            "(memory: the one-process Monte Carlo's on every rank)");
   }
   if (this->ModulationFrequency != 0.0)
   {
@@ -1081,6 +1096,11 @@ void vtkSolveDiffusion::Internals::Configure(vtkSolveDiffusion& self, int number
   // The front end keeps the solver, detects the changed tets and
   // warm-starts; the settings go through the interface and its options hook.
   this->FrontEnd.SetSolver(entry.Name);
+  // The ranks of a replicated run (the Monte Carlo's photons split over
+  // them, vtkTranslucencyParallelPlan::Replicated); else in process.
+  this->FrontEnd.SetCommunicator(entry.Properties.Replicated
+      ? vtkTranslucency::ReplicatedSolverCommunicator()
+      : translucency::Communicator());
   this->FrontEnd.SetIncrementalAssembly(self.IncrementalAssembly);
   this->FrontEnd.SetMaximumChangedFraction(self.MaximumChangedFraction);
   translucency::DiffusionSolver& solver = this->FrontEnd.GetSolver();

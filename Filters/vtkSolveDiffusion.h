@@ -471,7 +471,10 @@ public:
   /// listed and interactive pencil beams, detectors and the extended
   /// collimated models are distributed). The distributed path always uses hypre's BoomerAMG-PCG
   /// (LinearSolver, IncrementalAssembly and NumberOfThreads' effect on the
-  /// solve do not apply).
+  /// solve do not apply). The montecarlo solver, on: the mesh is replicated
+  /// on every rank and the photons split over the ranks (the one-process
+  /// estimates up to the order of the additions; every rank holds the
+  /// one-process memory); off: it runs on rank 0 alone.
   vtkSetMacro(DistributedSolve, bool);
   vtkGetMacro(DistributedSolve, bool);
   vtkBooleanMacro(DistributedSolve, bool);

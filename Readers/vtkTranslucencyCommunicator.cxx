@@ -20,6 +20,8 @@ namespace
 {
 /// LocalScopes alive on this thread.
 thread_local int LocalDepth = 0;
+/// The innermost ReplicatedScope's communicator on this thread (or null).
+thread_local const vtkTranslucencyCommunicator* ReplicatedTop = nullptr;
 
 /// The body of a captured error message: the text after "<Class> (0x...): ".
 std::string MessageBody(const std::string& text)
@@ -232,4 +234,24 @@ vtkTranslucencyCommunicator::LocalScope::~LocalScope()
 bool vtkTranslucencyCommunicator::IsLocal()
 {
   return LocalDepth > 0;
+}
+
+//------------------------------------------------------------------------------
+vtkTranslucencyCommunicator::ReplicatedScope::ReplicatedScope(
+  const vtkTranslucencyCommunicator& comm)
+  : Previous(ReplicatedTop)
+  , Current(new vtkTranslucencyCommunicator(comm))
+{
+  ReplicatedTop = this->Current;
+}
+
+vtkTranslucencyCommunicator::ReplicatedScope::~ReplicatedScope()
+{
+  ReplicatedTop = this->Previous;
+  delete this->Current;
+}
+
+vtkTranslucencyCommunicator vtkTranslucencyCommunicator::Replicated()
+{
+  return ReplicatedTop ? *ReplicatedTop : Self();
 }

@@ -106,6 +106,28 @@ public:
   /// True inside a LocalScope on this thread.
   static bool IsLocal();
 
+  /**
+   * While alive, Replicated() on this thread is `comm` (nestable): the
+   * serial path of a replicated run (vtkTranslucencyParallelPlan::Replicated:
+   * every rank holds the whole data, inside a LocalScope) learns the ranks it
+   * may share its work with. Only a serial path that splits its own work
+   * (Solve Diffusion's Monte Carlo) reads it.
+   */
+  class TRANSLUCENCYREADERS_EXPORT ReplicatedScope
+  {
+  public:
+    explicit ReplicatedScope(const vtkTranslucencyCommunicator& comm);
+    ~ReplicatedScope();
+    ReplicatedScope(const ReplicatedScope&) = delete;
+    ReplicatedScope& operator=(const ReplicatedScope&) = delete;
+
+  private:
+    const vtkTranslucencyCommunicator* Previous;
+    const vtkTranslucencyCommunicator* Current;
+  };
+  /// The innermost ReplicatedScope's communicator on this thread, else Self().
+  static vtkTranslucencyCommunicator Replicated();
+
 private:
   vtkTranslucencyCommunicator() = default;
   /// Collective: the lowest rank's non-empty `local` on every rank ("" if

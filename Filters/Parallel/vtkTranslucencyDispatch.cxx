@@ -107,6 +107,10 @@ int RunPath(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** 
       return comm.RunAgreed(self, outputVector,
         [&]() { return path(inputVector, outputVector, comm); });
     }
+    case vtkTranslucencyParallelPlan::Kinds::Replicated:
+      record.Path = plan.GetKindName();
+      return vtkTranslucencyParallel::RunGathered(
+        self, request, inputVector, outputVector, plan.Mode, paths.Serial, comm, true);
     default:
       record.Path = "gathered";
       return vtkTranslucencyParallel::RunGathered(

@@ -16,9 +16,11 @@
  *    a path that fails on some ranks only ends with the same message on every
  *    rank and empty outputs (vtkTranslucencyCommunicator::RunAgreed), before
  *    any rank goes on to a collective the others would not reach;
- *  - the path: Serial (size one), PerPiece, Distributed, or Gathered
+ *  - the path: Serial (size one), PerPiece, Distributed, Gathered
  *    (vtkTranslucencyParallel::RunGathered: merge on rank 0, the serial path
- *    there inside a LocalScope, the outputs back);
+ *    there inside a LocalScope, the outputs back) or Replicated (the merged
+ *    data broadcast, the serial path on every rank inside a LocalScope and a
+ *    ReplicatedScope, rank 0's outputs back);
  *  - ParallelPath: the filter's GetParallelPath() (what ran) and
  *    GetParallelPlan() (what it declares for more than one process, with the
  *    reason; also in a one-process run, so the plan can be tested serially).

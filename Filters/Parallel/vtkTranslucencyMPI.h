@@ -7,6 +7,7 @@
 #ifndef vtkTranslucencyMPI_h
 #define vtkTranslucencyMPI_h
 
+#include "Communicator.h" // translucency::Communicator
 #include "vtkTranslucencyCommunicator.h"
 
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
@@ -21,6 +22,14 @@ namespace vtkTranslucency
  * MPI controller. False otherwise: those stages gather.
  */
 bool CanDistribute(const vtkTranslucencyCommunicator& comm);
+
+/**
+ * The core's communicator for a serial path run replicated on every rank
+ * (vtkTranslucencyCommunicator::Replicated(), when it is parallel and MPI
+ * and this build has the distributed paths); else none (an in-process
+ * solve).
+ */
+translucency::Communicator ReplicatedSolverCommunicator();
 
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
 /// The MPI communicator of `comm`, or nullptr (size one, or a controller

@@ -11,6 +11,7 @@
 #include <vtkCompositeDataSet.h>
 #include <vtkDataArray.h>
 #include <vtkDataObject.h>
+#include <vtkDataObjectTypes.h>
 #include <vtkDataSetAttributes.h>
 #include <vtkFieldData.h>
 #include <vtkIdList.h>
@@ -837,7 +838,7 @@ bool MergeInputVectors(vtkInformationVector** inputVector, const std::vector<Pie
 int RunSerialAlone(vtkAlgorithm* self, vtkInformation* request,
   std::vector<vtkSmartPointer<vtkInformationVector>>& inputs, vtkInformationVector* outputVector,
   const SerialRequest& serial, std::vector<vtkSmartPointer<vtkDataObject>>& serialOutputs,
-  std::string& error)
+  std::string& error, const vtkTranslucencyCommunicator& replicated)
 {
   std::vector<vtkInformationVector*> inputPointers;
   for (auto& vector : inputs)
@@ -863,6 +864,7 @@ int RunSerialAlone(vtkAlgorithm* self, vtkInformation* request,
   try
   {
     const vtkTranslucencyCommunicator::LocalScope alone;
+    const vtkTranslucencyCommunicator::ReplicatedScope sharing(replicated);
     status = serial(request, inputPointers.data(), outputs);
   }
   catch (const std::exception& e)
@@ -875,6 +877,79 @@ int RunSerialAlone(vtkAlgorithm* self, vtkInformation* request,
   }
   self->RemoveObserver(observer);
   return status;
+}
+
+/// Replicated: rank 0's merge outcome (`status`, `error`) on every rank
+/// and, if it merged, its merged inputs (`inputs`, filled on rank 0) on
+/// every rank, each port's information copied from this rank's own.
+/// Returns the agreed status.
+int BroadcastInputs(vtkMultiProcessController* controller, vtkInformationVector** inputVector,
+  int numInputs, int status, std::string& error,
+  std::vector<vtkSmartPointer<vtkInformationVector>>& inputs)
+{
+  const int rank = controller->GetLocalProcessId();
+  vtkMultiProcessStream outcome;
+  if (rank == 0)
+  {
+    outcome << status << error;
+    for (int port = 0; port < numInputs; ++port)
+    {
+      vtkDataObject* data = port < static_cast<int>(inputs.size()) &&
+          inputs[port]->GetNumberOfInformationObjects() > 0
+        ? inputs[port]->GetInformationObject(0)->Get(vtkDataObject::DATA_OBJECT())
+        : nullptr;
+      outcome << (data ? data->GetDataObjectType() : -1);
+    }
+  }
+  controller->Broadcast(outcome, 0);
+  outcome >> status >> error;
+  std::vector<int> types(static_cast<size_t>(numInputs), -1);
+  for (int& type : types)
+  {
+    outcome >> type;
+  }
+  if (!status)
+  {
+    return 0;
+  }
+  if (rank != 0)
+  {
+    inputs.clear();
+  }
+  for (int port = 0; port < numInputs; ++port)
+  {
+    if (types[port] < 0)
+    {
+      if (rank != 0)
+      {
+        inputs.push_back(vtkSmartPointer<vtkInformationVector>::New());
+      }
+      continue;
+    }
+    vtkSmartPointer<vtkDataObject> data;
+    if (rank == 0)
+    {
+      data = inputs[port]->GetInformationObject(0)->Get(vtkDataObject::DATA_OBJECT());
+    }
+    else
+    {
+      data.TakeReference(vtkDataObjectTypes::NewDataObject(types[port]));
+    }
+    controller->Broadcast(data, 0);
+    if (rank != 0)
+    {
+      auto vector = vtkSmartPointer<vtkInformationVector>::New();
+      vtkNew<vtkInformation> info;
+      if (inputVector[port]->GetNumberOfInformationObjects() > 0)
+      {
+        info->Copy(inputVector[port]->GetInformationObject(0));
+      }
+      info->Set(vtkDataObject::DATA_OBJECT(), data);
+      vector->Append(info);
+      inputs.push_back(vector);
+    }
+  }
+  return 1;
 }
 
 /// SameMesh's check on rank 0: the first output must be the merged input's
@@ -947,7 +1022,7 @@ void ScatterArrays(vtkMultiProcessController* controller, vtkDataObject* piece,
 //------------------------------------------------------------------------------
 int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
   vtkInformationVector* outputVector, GatherMode mode, const SerialRequest& serial,
-  const vtkTranslucencyCommunicator& comm)
+  const vtkTranslucencyCommunicator& comm, bool replicate)
 {
   vtkMultiProcessController* controller = comm.GetController();
   const int rank = controller->GetLocalProcessId();
@@ -964,11 +1039,38 @@ int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVecto
   PieceMaps maps;
   std::vector<std::string> passThrough; // rank 0: PassThroughFieldArrays
   std::vector<vtkSmartPointer<vtkDataObject>> serialOutputs(static_cast<size_t>(numOutputs));
+  std::vector<vtkSmartPointer<vtkInformationVector>> inputs;
+  if (replicate)
+  {
+    // 2'. Rank 0 merges; the merged inputs to every rank, which all run
+    // the serial path (sharing their work); a failure anywhere is agreed.
+    if (rank == 0)
+    {
+      status = MergeInputVectors(inputVector, gathered, maps, inputs, error);
+    }
+    status = BroadcastInputs(
+      controller, inputVector, self->GetNumberOfInputPorts(), status, error, inputs);
+    if (status)
+    {
+      status = RunSerialAlone(
+        self, request, inputs, outputVector, serial, serialOutputs, error, comm);
+      const std::string agreed =
+        comm.AgreeOnError(status ? std::string() : error.empty() ? "failed" : error);
+      if (status && !agreed.empty())
+      {
+        status = 0;
+        error = agreed; // another rank's ("rank r: ...")
+      }
+    }
+  }
+  if (rank == 0 && !replicate)
+  {
+    status = MergeInputVectors(inputVector, gathered, maps, inputs, error) &&
+      RunSerialAlone(self, request, inputs, outputVector, serial, serialOutputs, error,
+        vtkTranslucencyCommunicator::Self());
+  }
   if (rank == 0)
   {
-    std::vector<vtkSmartPointer<vtkInformationVector>> inputs;
-    status = MergeInputVectors(inputVector, gathered, maps, inputs, error) &&
-      RunSerialAlone(self, request, inputs, outputVector, serial, serialOutputs, error);
     if (status)
     {
       mode = CheckSameMesh(mode, gathered, inputs, serialOutputs[0]);

@@ -31,6 +31,15 @@
  *       type (Redistribute DataSet spreads it again).
  *     Outputs after the first are always RankZero.
  *
+ * Replicated (`replicate`, vtkTranslucencyParallelPlan::Replicated): after
+ * step 1 rank 0 broadcasts the merged inputs, and step 2 runs on every rank,
+ * inside a LocalScope and a vtkTranslucencyCommunicator::ReplicatedScope of
+ * `comm` (the serial path may share its work over the ranks: Solve
+ * Diffusion's Monte Carlo traces a share of the photons on each); a failure
+ * on any rank is every rank's (the lowest failing rank's message); step 3
+ * hands rank 0's outputs back as above. Every rank then holds the whole
+ * data for the run.
+ *
  * Every rank takes part in every collective (empty pieces, errors), so no
  * rank waits for another that returned early.
  */
@@ -59,13 +68,13 @@ using SerialRequest =
 
 /**
  * Collective over `comm` (more than one process). Run `serial` on the data
- * of every rank gathered to rank 0 and hand the outputs back (see the file
- * comment). Returns what RequestData must return (1 on success, 0 on every
- * rank on failure).
+ * of every rank gathered to rank 0 (to every rank if `replicate`) and hand
+ * the outputs back (see the file comment). Returns what RequestData must
+ * return (1 on success, 0 on every rank on failure).
  */
 int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVector** inputVector,
   vtkInformationVector* outputVector, GatherMode mode, const SerialRequest& serial,
-  const vtkTranslucencyCommunicator& comm);
+  const vtkTranslucencyCommunicator& comm, bool replicate = false);
 }
 
 #endif

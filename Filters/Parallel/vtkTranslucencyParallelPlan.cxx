@@ -31,6 +31,13 @@ vtkTranslucencyParallelPlan vtkTranslucencyParallelPlan::Gathered(
   return plan;
 }
 
+vtkTranslucencyParallelPlan vtkTranslucencyParallelPlan::Replicated(const std::string& reason)
+{
+  vtkTranslucencyParallelPlan plan = PerPiece(GatherMode::SameMesh, reason);
+  plan.Kind = Kinds::Replicated;
+  return plan;
+}
+
 const char* vtkTranslucencyParallelPlan::GetKindName() const
 {
   switch (this->Kind)
@@ -41,6 +48,8 @@ const char* vtkTranslucencyParallelPlan::GetKindName() const
       return "distributed";
     case Kinds::Gathered:
       return "gathered";
+    case Kinds::Replicated:
+      return "replicated";
     default:
       return "serial";
   }

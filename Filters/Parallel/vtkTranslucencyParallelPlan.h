@@ -35,7 +35,12 @@ struct vtkTranslucencyParallelPlan
     Serial,
     PerPiece,
     Distributed,
-    Gathered
+    Gathered,
+    /// Gathered to every rank: the serial path runs on each with the whole
+    /// data and shares its work over the ranks (the Monte Carlo's photons,
+    /// vtkTranslucencyParallel::RunGathered with `replicate`); the outputs
+    /// go back as GatherMode::SameMesh.
+    Replicated
   };
   using GatherMode = vtkTranslucencyParallel::GatherMode;
 
@@ -50,8 +55,9 @@ struct vtkTranslucencyParallelPlan
   static vtkTranslucencyParallelPlan PerPiece(GatherMode ifGathered, const std::string& reason);
   static vtkTranslucencyParallelPlan Distributed(GatherMode ifGathered, const std::string& reason);
   static vtkTranslucencyParallelPlan Gathered(GatherMode mode, const std::string& reason);
+  static vtkTranslucencyParallelPlan Replicated(const std::string& reason);
 
-  /// "serial", "per piece", "distributed" or "gathered".
+  /// "serial", "per piece", "distributed", "gathered" or "replicated".
   const char* GetKindName() const;
   /// "per piece: <reason>", "gathered (same mesh): <reason>", ...
   std::string Describe() const;

@@ -126,7 +126,9 @@ void DiffusionFrontEnd::CheckDomain(const SolveRequest& request) const
       ", the frequency domain by " +
       JoinNames(GetDiffusionSolverNamesWith(DiffusionTrait::Frequency)));
   }
-  if (Comm_.IsMPI() && request.Domain != SolveDomain::ContinuousWave)
+  // A replicated variant (the Monte Carlo's photons split over the ranks)
+  // has the whole problem on every rank: its time gates are its own.
+  if (Comm_.IsMPI() && !traits.Replicated && request.Domain != SolveDomain::ContinuousWave)
   {
     throw Error("the distributed " + SolverName_ +
       " solve is continuous wave only: the frequency domain and time gates are solved in one "

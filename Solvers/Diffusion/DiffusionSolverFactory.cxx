@@ -114,8 +114,8 @@ const DiffusionSolverRegistry& GetDiffusionSolverRegistry()
   return MutableRegistry();
 }
 
-void RegisterDistributedDiffusionSolver(
-  const std::string& name, std::function<std::unique_ptr<DiffusionSolver>()> create)
+void RegisterDistributedDiffusionSolver(const std::string& name,
+  std::function<std::unique_ptr<DiffusionSolver>()> create, bool replicated)
 {
   DiffusionSolverRegistry& registry = MutableRegistry();
   const std::string key = registry.Get(name).Name; // throws for an unknown name
@@ -126,6 +126,7 @@ void RegisterDistributedDiffusionSolver(
     if (entry.Name == key)
     {
       entry.Properties.Distributed = true;
+      entry.Properties.Replicated = replicated;
       entry.Properties.CreateDistributed = create;
     }
     updated.Add(std::move(entry));

@@ -45,6 +45,13 @@ struct DiffusionSolverTraits
    * DiffusionFrontEnd::SetCommunicator chooses it by this trait.
    */
   bool Distributed = false;
+  /**
+   * With Distributed: the variant takes the whole problem on every rank,
+   * not a piece, and splits its work over the ranks (the Monte Carlo's
+   * photons, ReplicatedMonteCarloSolver). The filters then replicate the
+   * whole mesh on every rank instead of handing each its piece.
+   */
+  bool Replicated = false;
   /// The distributed variant's factory (set with Distributed).
   std::function<std::unique_ptr<DiffusionSolver>()> CreateDistributed;
   /// The options its SetOptions reads (DiffusionOption names).
@@ -120,13 +127,15 @@ std::unique_ptr<DiffusionSolver> CreateDiffusionSolver(const std::string& name);
 
 /**
  * Registers `create` as the distributed variant of the registered solver
- * `name` (its traits then say Distributed). Called by the Parallel layer
- * when the library is loaded (Solvers/Parallel/DistributedVertexSolver.cxx),
+ * `name` (its traits then say Distributed, and Replicated if `replicated`:
+ * the variant takes the whole problem on every rank). Called by the
+ * Parallel layer when the library is loaded
+ * (Solvers/Parallel/DistributedVertexSolver.cxx, ReplicatedMonteCarlo.cxx),
  * so a build without it has no distributed variant. Throws
  * translucency::Error for an unknown name.
  */
-void RegisterDistributedDiffusionSolver(
-  const std::string& name, std::function<std::unique_ptr<DiffusionSolver>()> create);
+void RegisterDistributedDiffusionSolver(const std::string& name,
+  std::function<std::unique_ptr<DiffusionSolver>()> create, bool replicated = false);
 
 /**
  * A new distributed variant of the solver `name` (trait Distributed), to be

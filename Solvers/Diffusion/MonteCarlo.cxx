@@ -1152,6 +1152,9 @@ struct BatchPlan
 {
   long long Photons = 0;
   int Batches = 0;
+  /// The batches this process traces (all of them in one process; every
+  /// size-th from its rank when the run is shared).
+  std::vector<int> Mine;
   int Threads = 0;
   int Slots = 0;
   double TotalPhotons = 0.0; ///< over the lit channels (progress)
@@ -1163,7 +1166,7 @@ struct BatchPlan
 /// batches and time gates) on `mesh` with the sources of `tables` and
 /// `detectors` detectors.
 BatchPlan MakeBatchPlan(const MonteCarloSolver& solver, const TetMesh& mesh,
-  const LaunchTables& tables, int detectors)
+  const LaunchTables& tables, int detectors, int shareRank, int shareSize)
 {
   const TimeGates& gates = solver.GetTimeGates();
   BatchPlan plan;
@@ -1175,14 +1178,20 @@ BatchPlan MakeBatchPlan(const MonteCarloSolver& solver, const TetMesh& mesh,
   {
     litChannels += tables.Sources[c].Power > 0.0 ? 1 : 0;
   }
-  plan.TotalPhotons = static_cast<double>(plan.Photons) * std::max(1, litChannels);
   plan.NumTets = mesh.GetNumberOfTets();
   plan.NumPoints = mesh.GetNumberOfPoints();
   plan.DetectorItems = 2 * static_cast<std::size_t>(detectors);
   plan.GateItems = gates.Count != 0 ? plan.DetectorItems * gates.Count : 0;
   plan.Batches =
     static_cast<int>(std::min<long long>(solver.GetNumberOfBatches(), plan.Photons));
-  plan.Slots = std::min(plan.Threads, plan.Batches);
+  long long mine = 0; // this process's photons per channel (progress)
+  for (int b = shareRank; b < plan.Batches; b += shareSize)
+  {
+    plan.Mine.push_back(b);
+    mine += (b + 1LL) * plan.Photons / plan.Batches - b * plan.Photons / plan.Batches;
+  }
+  plan.TotalPhotons = static_cast<double>(mine) * std::max(1, litChannels);
+  plan.Slots = std::min(plan.Threads, static_cast<int>(plan.Mine.size()));
   return plan;
 }
 
@@ -1226,17 +1235,18 @@ void TraceBatches(const Tracer& tracer, const BatchPlan& plan, const TetMesh& me
   const std::vector<int>& pointTets = mesh.GetPointTets();
   const int numTets = plan.NumTets, numPoints = plan.NumPoints;
   const int numBatches = plan.Batches, slots = plan.Slots, threads = plan.Threads;
+  const int mine = static_cast<int>(plan.Mine.size());
   const long long numPhotons = plan.Photons;
-  for (int first = 0; first < numBatches && !stop; first += slots)
+  for (int first = 0; first < mine && !stop; first += slots)
   {
-    const int count = std::min(slots, numBatches - first);
+    const int count = std::min(slots, mine - first);
     // One batch per thread; only thread 0 (the calling thread) reports.
 #pragma omp parallel for num_threads(count) schedule(static, 1)
     for (int k = 0; k < count; ++k)
     {
       BatchTally& tally = tallies[k];
       tally.Reset(numTets, numPoints, plan.DetectorItems, plan.GateItems);
-      const long long b = first + k;
+      const long long b = plan.Mine[first + k];
       tally.Begin = b * numPhotons / numBatches;
       tally.End = (b + 1) * numPhotons / numBatches;
       for (long long p = tally.Begin; p < tally.End && !stop.load(std::memory_order_relaxed);
@@ -1304,6 +1314,39 @@ void TraceBatches(const Tracer& tracer, const BatchPlan& plan, const TetMesh& me
       }
       AddBalance(balance, tally.Balance);
     }
+  }
+}
+
+/// A run shared by several processes (MonteCarloSolver::SetShare): one
+/// channel's batch sums and power balance become their sums over the
+/// processes (`sum`: collective), and `stop` true on every process if one
+/// stopped (that is agreed first, so every process makes the same calls).
+void AddOverShare(const std::function<void(double*, std::size_t)>& sum, BatchSums& sums,
+  MonteCarloSolver::PowerBalance& balance, std::atomic<bool>& stop)
+{
+  MonteCarloSolver::PowerBalance& b = balance;
+  // The counts are below 2^53 (4.3e9 photons at most, MaxPhotons): exact as doubles.
+  double small[] = { stop ? 1.0 : 0.0, b.Injected, b.Absorbed, b.Escaped, b.RouletteGain, b.Lost,
+    static_cast<double>(b.Photons), static_cast<double>(b.LostPhotons),
+    static_cast<double>(b.Steps) };
+  sum(small, sizeof(small) / sizeof(small[0]));
+  stop = small[0] > 0.0;
+  b.Injected = small[1];
+  b.Absorbed = small[2];
+  b.Escaped = small[3];
+  b.RouletteGain = small[4];
+  b.Lost = small[5];
+  b.Photons = std::llround(small[6]);
+  b.LostPhotons = std::llround(small[7]);
+  b.Steps = std::llround(small[8]);
+  if (stop)
+  {
+    return;
+  }
+  for (std::vector<double>* v : { &sums.TetSum, &sums.FluenceA1, &sums.FluenceA2, &sums.ExitA1,
+         &sums.ExitA2, &sums.DetectorA1, &sums.DetectorA2, &sums.GateA1, &sums.GateA2 })
+  {
+    sum(v->data(), v->size());
   }
 }
 
@@ -1589,15 +1632,20 @@ bool MonteCarloSolver::Solve(
 
   // ---- Set-up: walk structure, per-light irradiance, source tables.
   auto start = Clock::now();
-  if (!ReportProgress(0.0))
-  {
-    return false;
-  }
   const Progress progress = [this](double fraction) { return ReportProgress(fraction); };
   const std::vector<double> pointEta =
     BoundaryPointRefractiveIndex(mesh, material.RefractiveIndex);
   LaunchTables tables;
-  if (!PrepareLights(problem, UniformLightSamples_, progress, tables.Lights))
+  bool aborted =
+    !ReportProgress(0.0) || !PrepareLights(problem, UniformLightSamples_, progress, tables.Lights);
+  if (ShareSize_ > 1)
+  {
+    // An abort on one process is every process's (the same calls on each).
+    double any = aborted ? 1.0 : 0.0;
+    SumOverShare(&any, 1);
+    aborted = any > 0.0;
+  }
+  if (aborted)
   {
     return false;
   }
@@ -1623,7 +1671,11 @@ bool MonteCarloSolver::Solve(
 
   // ---- Tracing.
   start = Clock::now();
-  const BatchPlan plan = MakeBatchPlan(*this, mesh, tables, detectorMap.Count);
+  const BatchPlan plan =
+    MakeBatchPlan(*this, mesh, tables, detectorMap.Count, ShareRank_, ShareSize_);
+  const auto sumOverShare = [this](double* values, std::size_t count)
+  { SumOverShare(values, count); };
+  long long tracedHere = 0;
   std::atomic<long long> done(0);
   std::atomic<bool> stop(false);
   Estimates estimates(plan, footprints, timed ? Gates_.Count : 0);
@@ -1668,6 +1720,11 @@ bool MonteCarloSolver::Solve(
     sums.Clear();
     TraceBatches(
       tracer, plan, mesh, progress, tallies, sums, estimates.Balances[c], done, stop);
+    tracedHere += estimates.Balances[c].Photons;
+    if (ShareSize_ > 1)
+    {
+      AddOverShare(sumOverShare, sums, estimates.Balances[c], stop);
+    }
     if (stop)
     {
       break;
@@ -1698,7 +1755,7 @@ bool MonteCarloSolver::Solve(
   GateReadingErrors_ = std::move(estimates.GateErrors);
   PhotonsTraced_ = traced;
   ThreadsUsed_ = plan.Slots;
-  Rate_ = solveMs > 0.0 ? traced / (solveMs * 1e-3) / plan.Slots : 0.0;
+  Rate_ = solveMs > 0.0 && plan.Slots > 0 ? tracedHere / (solveMs * 1e-3) / plan.Slots : 0.0;
 
   report = MakeReport(GetName(), numTets, tallyBytes + walk.Bytes(), tables, setupMs, solveMs);
   report.FluenceStandardError = std::move(estimates.PointFluenceError);

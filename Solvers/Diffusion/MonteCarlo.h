@@ -100,6 +100,14 @@ namespace translucency
  * Cost: NumberOfPhotons photons per channel that receives light (3N in
  * total for white light), OpenMP-parallel over the batches (at most
  * min(B, threads) threads are busy).
+ *
+ * Several processes (the Parallel layer's ReplicatedMonteCarloSolver, under
+ * MPI): every process holds the whole problem and calls Solve; process r of
+ * P traces the batches b with b % P == r, and the batch sums (and the power
+ * balance) are added over the processes (SumOverShare) before the read-out,
+ * so every process gets the estimates and standard errors of all B batches:
+ * the one-process results up to the order of the additions. At most B
+ * processes have work.
  */
 class MonteCarloSolver : public DiffusionSolver
 {
@@ -257,7 +265,30 @@ public:
   /// Photons per second per thread of the last Solve()'s tracing.
   double GetPhotonsPerSecondPerThread() const { return Rate_; }
 
+protected:
+  /**
+   * The share of this process when one run is split over P processes (see
+   * the class comment): it traces the batches b with b % size == rank.
+   * Default 0 of 1: every batch.
+   */
+  void SetShare(int rank, int size)
+  {
+    ShareRank_ = rank;
+    ShareSize_ = size;
+  }
+  int GetShareSize() const { return ShareSize_; }
+  /// Collective over the share's processes (every one calls it with the same
+  /// `count`): each of `values` becomes its sum over them, the same on every
+  /// process. The default (one process) leaves them.
+  virtual void SumOverShare(double* values, std::size_t count) const
+  {
+    (void)values;
+    (void)count;
+  }
+
 private:
+  int ShareRank_ = 0;
+  int ShareSize_ = 1;
   long long NumberOfPhotons_ = 1000000;
   long long MaxPhotons_ = 4294967296LL;
   unsigned long long Seed_ = 1;

@@ -26,7 +26,11 @@ ranks: an empty piece), src_pencil (a pencil beam on mesh3id) and src_aimed
 a point and a fibre detector (readings per rank in detectors_<rank>.txt;
 serial references ref_<kind>_divergence.vtu and ref_detectors.json); a
 point source outside the object (its errors, caught by observers, in
-outside_<rank>.txt), src_after_error (a solve after it).
+outside_<rank>.txt), src_after_error (a solve after it); mc and mc_tpsf
+(the Monte Carlo, continuous wave and time-gated, replicated: the photons
+split over the ranks) on mesh3id and, as mc_pvtu2 and mc_tpsf_pvtu2, on
+mesh2g (3 ranks: an empty piece), with their detector readings per rank in
+mc_<rank>.txt (serial references ref_mc.vtu, ref_mc_tpsf.vtu, ref_mc.json).
 """
 
 import os
@@ -70,6 +74,35 @@ def painted(source, target):
     if target:
         paint.TargetAbsorptionCoefficient = target
     return paint, SolveDiffusion(Input=paint, RelTol=TOL, MaxIter=20000)
+
+
+# The Monte Carlo (issue 32: the photons split over the ranks on a replicated
+# mesh): continuous wave with the two detectors, and time-gated (10 gates of
+# 0.2 ns: the detectors' TPSFs).
+MONTE_CARLO = {"mc": None, "mc_tpsf": [0.0, 2.0, 10]}
+
+
+def monte_carlo(source, gates):
+    lit = SurfaceIrradiance(Input=source, DirectionalLights=LIGHTS["a"], CollimatedModel=0)
+    solved = SolveDiffusion(Input=lit, Solver="montecarlo", NumberOfPhotons=20000, Seed=3,
+                            Detectors=DETECTORS)
+    if gates:
+        solved.TimeGates = gates
+    return solved
+
+
+def mc_readings(o, gates):
+    """The detectors' readings (CW: fluence and exitance per channel and
+    their standard errors; gated: the TPSFs)."""
+    values = []
+    for k in range(2):
+        if gates:
+            values += [f(k, g, c) for f in (o.GetDetectorFluenceTPSF, o.GetDetectorExitanceTPSF)
+                       for g in range(gates[2]) for c in range(3)]
+        else:
+            values += [o.GetDetectorFluence(k, c) for c in range(3)]
+            values += [o.GetDetectorExitance(k, c) for c in range(3)]
+    return values
 
 
 def path(name):
@@ -146,6 +179,13 @@ if MODE == "prepare":
         balances["src_" + kind] = balance(o)
     with open(path("ref_detectors.json"), "w") as f:
         json.dump(readings, f)
+    mc = {}
+    for name, gates in MONTE_CARLO.items():
+        solved = monte_carlo(source, gates)
+        SaveData(path("ref_%s.vtu" % name), proxy=solved)
+        mc[name] = mc_readings(solved.GetClientSideObject(), gates)
+    with open(path("ref_mc.json"), "w") as f:
+        json.dump(mc, f)
     for name, target in PAINTS.items():
         _, solved = painted(source, target)
         SaveData(path("ref_%s.vtu" % name), proxy=solved)
@@ -238,6 +278,18 @@ if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
                 "%.17g" % v for k in range(o.GetNumberOfDetectors()) for v in
                 [o.GetDetectorFluence(k, c) for c in range(3)] +
                 [o.GetDetectorExitance(k, c) for c in range(3)])))
+    # The Monte Carlo: every rank traces its share of the photons on the
+    # replicated mesh (path "replicated"); the 2-piece .pvtu gives 3 ranks an
+    # empty piece.
+    for name, gates in MONTE_CARLO.items():
+        for suffix, reader in (("", pvtu3), ("_pvtu2", XMLPartitionedUnstructuredGridReader(
+                FileName=[path("mesh2g.pvtu")]))):
+            solved = monte_carlo(reader, gates)
+            report(name + suffix, solved)
+            SaveData(path(name + suffix + ".pvtu"), proxy=solved)
+            with open(path("mc_%d.txt" % RANK), "a") as f:
+                f.write("mc %s rank %d %s\n" % (name + suffix, RANK, " ".join(
+                    "%.17g" % v for v in mc_readings(solved.GetClientSideObject(), gates))))
     # A point source outside the object: the same error on every rank, no
     # hang. Caught by observers (the filter's and its executive's), written
     # per rank, so the run's error log keeps only the case above.
@@ -265,6 +317,23 @@ if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
                 message = "executive: returned failure"
             f.write(" ".join(re.sub(r"0x[0-9a-fA-F]+", "0x", message).split()) + "\n")
     report("src_after_error", solve(pvtu3, "a")[1])
+    # The replicated Monte Carlo's error (a point source outside the object,
+    # found by every rank on the same whole mesh): the same text on every
+    # rank, an empty output, no hang.
+    outside_mc = monte_carlo(pvtu3, None)
+    outside_mc.PointSources = [20.0, 0.0, 0.0, 1.0, 1.0, 1.0]
+    caught = []
+    algorithm = outside_mc.GetClientSideObject()
+    algorithm.AddObserver("ErrorEvent", on_error)
+    algorithm.GetExecutive().AddObserver("ErrorEvent", on_error)
+    outside_mc.UpdatePipeline()
+    with open(path("mc_outside_%d.txt" % RANK), "w") as f:
+        f.write("path %s points %d\n" % (algorithm.GetParallelPath(),
+                                         algorithm.GetOutput().GetNumberOfPoints()))
+        for message in caught:
+            if "returned failure" in message:
+                message = "executive: returned failure"
+            f.write(" ".join(re.sub(r"0x[0-9a-fA-F]+", "0x", message).split()) + "\n")
 
     # Paint (issue 32): the unpainted chain first (Strength 0: the hierarchy
     # is set up), then the stroke, then mu_a x 1000: values-only set-ups

@@ -29,7 +29,10 @@ How to run (ctest does this, with 2 and with 3 ranks):
    painted (issue 32: the Paint filter's default targets, then mu_a x 1000,
    after an unpainted solve, so the hierarchy is kept and the values change)
    Fluence equals the serial painted Fluence to 1e-6; a solve that cannot
-   converge (MaxIter 1) is an error on every rank with an empty output.
+   converge (MaxIter 1) is an error on every rank with an empty output;
+   the Monte Carlo (continuous wave and time-gated, on 3 and 2 pieces) runs
+   replicated, its photons split over the ranks, and gives the serial
+   Fluence, standard errors and detector readings to round-off.
 """
 
 import os
@@ -196,6 +199,89 @@ class DistributedSolveTest(MpiSuite):
                                      injected)) for k in range(3))
             self.assertLessEqual(worst, 1e-9, "power balance %s: %s vs serial %s" %
                                  (case, got, expected))
+
+    def test_monte_carlo_replicated_equals_serial(self):
+        # Issue 32: the photons split over the ranks on the replicated mesh.
+        # Each rank traces every N-th batch of the one-process plan and the
+        # batch sums are added over the ranks: on the pieces with GlobalIds
+        # (merged in mesh.vtu's order) the serial run's estimates up to the
+        # order of the additions (1e-12; the standard errors, a cancelling
+        # difference of sums, 1e-9), at every point of every piece (the
+        # pieces keep their partition); the detectors' readings and TPSFs the
+        # same on every rank.
+        import json
+        with open(os.path.join(self.work, "ref_mc.json")) as f:
+            refs = json.load(f)
+        lines = self.numbers_per_rank("mc", "mc")
+        for name in ("mc", "mc_tpsf"):
+            reader = vtkXMLUnstructuredGridReader()
+            reader.SetFileName(os.path.join(self.work, "ref_%s.vtu" % name))
+            reader.Update()
+            ref_data = reader.GetOutput().GetPointData()
+            ids = vtk_to_numpy(ref_data.GetArray("PointIds")).tolist()
+            ref_fluence = dict(zip(ids, vtk_to_numpy(ref_data.GetArray("Fluence"))))
+            ref_error = dict(zip(ids, vtk_to_numpy(ref_data.GetArray("FluenceStandardError"))))
+            for suffix in ("", "_pvtu2"):
+                case = name + suffix
+                per_rank = self.solves.get(case, {})
+                self.assertEqual(sorted(per_rank), list(range(RANKS)), case)
+                for rank in range(RANKS):
+                    self.assertEqual(per_rank[rank][0], "replicated", "rank %d, %s" % (rank, case))
+                # The detectors' readings: the same on every rank.
+                self.assertEqual(sorted(lines.get(case, {})), list(range(RANKS)), case)
+                for rank, values in lines[case].items():
+                    self.assertEqual(values, lines[case][0], "%s rank %d" % (case, rank))
+                if suffix:
+                    # Without GlobalIds the pieces are merged in another point
+                    # and triangle order than mesh.vtu's, and the photons'
+                    # launch tables follow the order (Parallel.md): another
+                    # sample of the same estimate. Both within their errors.
+                    z = []
+                    for piece in pieces_of(os.path.join(self.work, case + ".pvtu")):
+                        if piece.GetNumberOfPoints() == 0:
+                            continue
+                        data = piece.GetPointData()
+                        for i, v, e in zip(vtk_to_numpy(data.GetArray("PointIds")),
+                                           vtk_to_numpy(data.GetArray("Fluence")),
+                                           vtk_to_numpy(data.GetArray("FluenceStandardError"))):
+                            combined = np.sqrt(e ** 2 + ref_error[int(i)] ** 2)
+                            z.append(np.abs(v - ref_fluence[int(i)]) / combined)
+                    z = np.concatenate(z)
+                    self.assertLess(float(np.mean(z > 4)), 0.01, case)
+                    self.assertTrue(0.5 < float(np.mean(z ** 2)) < 2.0, case)
+                    continue
+                for array, tol in (("Fluence", 1e-12), ("FluenceStandardError", 1e-9)):
+                    ref = dict(zip(ids, vtk_to_numpy(ref_data.GetArray(array))))
+                    scale = max(np.abs(v).max() for v in ref.values())
+                    self.assertGreater(scale, 0.0, case)
+                    seen, worst = set(), 0.0
+                    for piece in pieces_of(os.path.join(self.work, case + ".pvtu")):
+                        if piece.GetNumberOfPoints() == 0:
+                            continue
+                        pids = vtk_to_numpy(piece.GetPointData().GetArray("PointIds"))
+                        values = vtk_to_numpy(piece.GetPointData().GetArray(array))
+                        for i, v in zip(pids, values):
+                            worst = max(worst, worst_relative(v, ref[int(i)], scale))
+                            seen.add(int(i))
+                    self.assertEqual(seen, set(ref), "every point of " + case)
+                    self.assertLessEqual(worst, tol, "%s of %s" % (array, case))
+                # and the serial ones to round-off.
+                expected = np.array(refs[name])
+                self.assertGreater(np.abs(expected).max(), 0.0, case)
+                for rank, values in lines[case].items():
+                    got = np.array(values)
+                    self.assertEqual(got.shape, expected.shape, case)
+                    self.assertLessEqual(worst_relative(got, expected, np.abs(expected).max()),
+                                         1e-12, "%s rank %d: %s vs %s" % (case, rank, got,
+                                                                         expected))
+
+    def test_monte_carlo_error_on_every_rank(self):
+        texts = [self.rank_text("mc_outside", rank) for rank in range(RANKS)]
+        self.assertIn("path replicated points 0", texts[0])
+        self.assertIn("point source 1: position (20, 0, 0) is outside the object", texts[0])
+        self.assertIn("executive: returned failure", texts[0])
+        for rank in range(1, RANKS):
+            self.assertEqual(texts[rank], texts[0], "rank %d" % rank)
 
     def test_source_outside_same_error_everywhere(self):
         texts = [self.rank_text("outside", rank) for rank in range(RANKS)]

@@ -37,7 +37,7 @@ PUBLIC_FILTERS = [
     "vtkInverseDiffusion", "vtkOutgoingRadiance", "vtkPaintScatteringCoefficients",
     "vtkSolveDiffusion", "vtkStrokeCut", "vtkSurfaceIrradiance", "vtkTetrahedralizeSurface",
     "vtkTranslucentRadiosity"]
-PLANS = ("per piece", "distributed", "gathered (same mesh)", "gathered (rank 0)")
+PLANS = ("per piece", "distributed", "gathered (same mesh)", "gathered (rank 0)", "replicated")
 
 
 def table_rows():
@@ -192,8 +192,11 @@ def configurations():
         "Surface Irradiance": [single("vtkSurfaceIrradiance")],
         "Solve Diffusion, divergence and fem, continuous wave, any collimated model":
             [solve(), solve(Solver=1), solve(collimated=True)],
+        "Solve Diffusion, Monte Carlo (continuous wave or time gates)":
+            [solve(Solver=4), solve(Solver=4, TimeGates=(0.0, 1e-9, 4))],
         "Solve Diffusion, other cases": [
-            solve(Solver=2), solve(Solver=3), solve(Solver=4), solve(DistributedSolve=False),
+            solve(Solver=2), solve(Solver=3), solve(Solver=4, DistributedSolve=False),
+            solve(DistributedSolve=False),
             solve(ModulationFrequency=1e8), solve(TimeGates=(0.0, 1e-9, 4)),
             solve(InteractiveDetector=True)],
         "Outgoing Radiance": [single("vtkOutgoingRadiance")],

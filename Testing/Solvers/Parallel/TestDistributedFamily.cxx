@@ -92,14 +92,16 @@ SolveResult SolveScene(DiffusionFrontEnd& front, const Scene& s, const std::vect
 
 TEST(DistributedFamily, TheFrontEndPicksTheDistributedVariantByTrait)
 {
-  // The registry: divergence and fem have a distributed variant (registered
-  // by the Parallel layer), the others not.
+  // The registry: divergence and fem have a distributed variant on pieces,
+  // montecarlo one on the replicated problem (registered by the Parallel
+  // layer), the others none.
   EXPECT_EQ(GetDiffusionSolverNamesWith(DiffusionTrait::Distributed),
-    (std::vector<std::string>{ "divergence", "fem" }));
+    (std::vector<std::string>{ "divergence", "fem", "montecarlo" }));
   for (const auto& entry : GetDiffusionSolverRegistry().GetEntries())
   {
     SCOPED_TRACE(entry.Name);
     EXPECT_EQ(static_cast<bool>(entry.Properties.CreateDistributed), entry.Properties.Distributed);
+    EXPECT_EQ(entry.Properties.Replicated, entry.Name == "montecarlo");
   }
 
   DiffusionFrontEnd front;
@@ -118,7 +120,8 @@ TEST(DistributedFamily, TheFrontEndPicksTheDistributedVariantByTrait)
   // A solver without one is refused, naming those with one; the front end
   // keeps its solver.
   EXPECT_EQ(ErrorMessage([&] { front.SetSolver("quadgraph"); }),
-    "the quadgraph solver has no distributed variant (solvers with one: divergence, fem)");
+    "the quadgraph solver has no distributed variant (solvers with one: divergence, fem, "
+    "montecarlo)");
   EXPECT_EQ(front.GetSolverName(), "divergence");
   EXPECT_NE(dynamic_cast<DistributedVertexSolver*>(&front.GetSolver()), nullptr);
   // and the distributed solve is continuous wave only.
