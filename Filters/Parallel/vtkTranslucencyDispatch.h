@@ -18,8 +18,8 @@
  *    any rank goes on to a collective the others would not reach;
  *  - the path: Serial (size one), PerPiece, Distributed, Gathered
  *    (vtkTranslucencyParallel::RunGathered: merge on rank 0, the serial path
- *    there inside a LocalScope, the outputs back) or Replicated (the merged
- *    data broadcast, the serial path on every rank inside a LocalScope and a
+ *    there inside a LocalScope, the outputs back) or Replicated (the pieces
+ *    gathered to and merged on every rank, the serial path on every rank inside a LocalScope and a
  *    ReplicatedScope, rank 0's outputs back);
  *  - ParallelPath: the filter's GetParallelPath() (what ran) and
  *    GetParallelPlan() (what it declares for more than one process, with the

@@ -11,7 +11,6 @@
 #include <vtkCompositeDataSet.h>
 #include <vtkDataArray.h>
 #include <vtkDataObject.h>
-#include <vtkDataObjectTypes.h>
 #include <vtkDataSetAttributes.h>
 #include <vtkFieldData.h>
 #include <vtkIdList.h>
@@ -768,12 +767,12 @@ void CaptureError(vtkObject*, unsigned long, void* clientData, void* callData)
     *messages = MessageBody(static_cast<const char*>(callData));
   }
 }
-/// Step 1 of RunGathered: every input port's pieces to rank 0 (an
-/// unconnected port on every rank is skipped). `local`: this rank's piece
-/// per port (an empty grid for a rank without one).
+/// Step 1 of RunGathered: every input port's pieces to rank 0, or to every
+/// rank if `toEveryRank` (an unconnected port on every rank is skipped).
+/// `local`: this rank's piece per port (an empty grid for a rank without one).
 void GatherInputs(vtkMultiProcessController* controller, int numInputs,
   vtkInformationVector** inputVector, std::vector<Pieces>& gathered,
-  std::vector<vtkSmartPointer<vtkDataObject>>& local)
+  std::vector<vtkSmartPointer<vtkDataObject>>& local, bool toEveryRank)
 {
   gathered.assign(static_cast<size_t>(numInputs), {});
   local.assign(static_cast<size_t>(numInputs), nullptr);
@@ -793,7 +792,14 @@ void GatherInputs(vtkMultiProcessController* controller, int numInputs,
     {
       local[port] = vtkSmartPointer<vtkUnstructuredGrid>::New();
     }
-    controller->Gather(local[port], gathered[port], 0);
+    if (toEveryRank)
+    {
+      controller->AllGather(local[port], gathered[port]);
+    }
+    else
+    {
+      controller->Gather(local[port], gathered[port], 0);
+    }
   }
 }
 
@@ -879,79 +885,6 @@ int RunSerialAlone(vtkAlgorithm* self, vtkInformation* request,
   return status;
 }
 
-/// Replicated: rank 0's merge outcome (`status`, `error`) on every rank
-/// and, if it merged, its merged inputs (`inputs`, filled on rank 0) on
-/// every rank, each port's information copied from this rank's own.
-/// Returns the agreed status.
-int BroadcastInputs(vtkMultiProcessController* controller, vtkInformationVector** inputVector,
-  int numInputs, int status, std::string& error,
-  std::vector<vtkSmartPointer<vtkInformationVector>>& inputs)
-{
-  const int rank = controller->GetLocalProcessId();
-  vtkMultiProcessStream outcome;
-  if (rank == 0)
-  {
-    outcome << status << error;
-    for (int port = 0; port < numInputs; ++port)
-    {
-      vtkDataObject* data = port < static_cast<int>(inputs.size()) &&
-          inputs[port]->GetNumberOfInformationObjects() > 0
-        ? inputs[port]->GetInformationObject(0)->Get(vtkDataObject::DATA_OBJECT())
-        : nullptr;
-      outcome << (data ? data->GetDataObjectType() : -1);
-    }
-  }
-  controller->Broadcast(outcome, 0);
-  outcome >> status >> error;
-  std::vector<int> types(static_cast<size_t>(numInputs), -1);
-  for (int& type : types)
-  {
-    outcome >> type;
-  }
-  if (!status)
-  {
-    return 0;
-  }
-  if (rank != 0)
-  {
-    inputs.clear();
-  }
-  for (int port = 0; port < numInputs; ++port)
-  {
-    if (types[port] < 0)
-    {
-      if (rank != 0)
-      {
-        inputs.push_back(vtkSmartPointer<vtkInformationVector>::New());
-      }
-      continue;
-    }
-    vtkSmartPointer<vtkDataObject> data;
-    if (rank == 0)
-    {
-      data = inputs[port]->GetInformationObject(0)->Get(vtkDataObject::DATA_OBJECT());
-    }
-    else
-    {
-      data.TakeReference(vtkDataObjectTypes::NewDataObject(types[port]));
-    }
-    controller->Broadcast(data, 0);
-    if (rank != 0)
-    {
-      auto vector = vtkSmartPointer<vtkInformationVector>::New();
-      vtkNew<vtkInformation> info;
-      if (inputVector[port]->GetNumberOfInformationObjects() > 0)
-      {
-        info->Copy(inputVector[port]->GetInformationObject(0));
-      }
-      info->Set(vtkDataObject::DATA_OBJECT(), data);
-      vector->Append(info);
-      inputs.push_back(vector);
-    }
-  }
-  return 1;
-}
-
 /// SameMesh's check on rank 0: the first output must be the merged input's
 /// mesh (same numbers of points and cells); else it stays on rank 0.
 GatherMode CheckSameMesh(GatherMode mode, const std::vector<Pieces>& gathered,
@@ -1028,10 +961,10 @@ int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVecto
   const int rank = controller->GetLocalProcessId();
   const int numOutputs = self->GetNumberOfOutputPorts();
 
-  // 1. Every input port's pieces to rank 0.
+  // 1. Every input port's pieces to rank 0 (to every rank when replicated).
   std::vector<Pieces> gathered;
   std::vector<vtkSmartPointer<vtkDataObject>> local;
-  GatherInputs(controller, self->GetNumberOfInputPorts(), inputVector, gathered, local);
+  GatherInputs(controller, self->GetNumberOfInputPorts(), inputVector, gathered, local, replicate);
 
   // 2. Rank 0 merges and runs the filter's serial RequestData.
   int status = 1;
@@ -1042,14 +975,15 @@ int RunGathered(vtkAlgorithm* self, vtkInformation* request, vtkInformationVecto
   std::vector<vtkSmartPointer<vtkInformationVector>> inputs;
   if (replicate)
   {
-    // 2'. Rank 0 merges; the merged inputs to every rank, which all run
-    // the serial path (sharing their work); a failure anywhere is agreed.
-    if (rank == 0)
+    // 2'. Every rank merges the same pieces and runs the serial path
+    // (sharing its work over the ranks); a failure anywhere is agreed.
+    status = MergeInputVectors(inputVector, gathered, maps, inputs, error);
+    const std::string merged = comm.AgreeOnError(status ? std::string() : error);
+    if (status && !merged.empty())
     {
-      status = MergeInputVectors(inputVector, gathered, maps, inputs, error);
+      status = 0;
+      error = merged;
     }
-    status = BroadcastInputs(
-      controller, inputVector, self->GetNumberOfInputPorts(), status, error, inputs);
     if (status)
     {
       status = RunSerialAlone(

@@ -31,8 +31,9 @@
  *       type (Redistribute DataSet spreads it again).
  *     Outputs after the first are always RankZero.
  *
- * Replicated (`replicate`, vtkTranslucencyParallelPlan::Replicated): after
- * step 1 rank 0 broadcasts the merged inputs, and step 2 runs on every rank,
+ * Replicated (`replicate`, vtkTranslucencyParallelPlan::Replicated): step 1
+ * gathers the pieces to every rank (AllGather), each merges them alike, and
+ * step 2 runs on every rank,
  * inside a LocalScope and a vtkTranslucencyCommunicator::ReplicatedScope of
  * `comm` (the serial path may share its work over the ranks: Solve
  * Diffusion's Monte Carlo traces a share of the photons on each); a failure
