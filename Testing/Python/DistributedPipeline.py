@@ -290,50 +290,48 @@ if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
             with open(path("mc_%d.txt" % RANK), "a") as f:
                 f.write("mc %s rank %d %s\n" % (name + suffix, RANK, " ".join(
                     "%.17g" % v for v in mc_readings(solved.GetClientSideObject(), gates))))
-    # A point source outside the object: the same error on every rank, no
-    # hang. Caught by observers (the filter's and its executive's), written
-    # per rank, so the run's error log keeps only the case above.
     import re
     from vtkmodules.util.misc import calldata_type
     from vtkmodules.util.vtkConstants import VTK_STRING
+
+    def update_catching(proxy, name, header):
+        """Update `proxy` with its errors caught by observers (the filter's and
+        its executive's) and write them per rank to <name>_<rank>.txt after the
+        line header(algorithm), so the run's error log keeps only the one
+        expected case."""
+        caught = []
+
+        @calldata_type(VTK_STRING)
+        def on_error(obj, event, message):
+            caught.append(message)
+
+        algorithm = proxy.GetClientSideObject()
+        algorithm.AddObserver("ErrorEvent", on_error)
+        algorithm.GetExecutive().AddObserver("ErrorEvent", on_error)
+        proxy.UpdatePipeline()
+        with open(path("%s_%d.txt" % (name, RANK)), "w") as f:
+            f.write(header(algorithm) + "\n")
+            for message in caught:
+                # (the executive's message prints the request, with times that
+                # differ per process; the filter's without the object address)
+                if "returned failure" in message:
+                    message = "executive: returned failure"
+                f.write(" ".join(re.sub(r"0x[0-9a-fA-F]+", "0x", message).split()) + "\n")
+
+    # A point source outside the object: the same error on every rank, no
+    # hang. Caught by observers (the filter's and its executive's), written
+    # per rank, so the run's error log keeps only the case above.
     _, outside = solve(pvtu3, "a")
     outside.PointSources = [20.0, 0.0, 0.0, 1.0, 1.0, 1.0]
-    caught = []
-
-    @calldata_type(VTK_STRING)
-    def on_error(obj, event, message):
-        caught.append(message)
-
-    algorithm = outside.GetClientSideObject()
-    algorithm.AddObserver("ErrorEvent", on_error)
-    algorithm.GetExecutive().AddObserver("ErrorEvent", on_error)
-    outside.UpdatePipeline()
-    with open(path("outside_%d.txt" % RANK), "w") as f:
-        f.write("path %s\n" % algorithm.GetParallelPath())
-        for message in caught:
-            # (the executive's message prints the request, with times that
-            # differ per process; the filter's without the object address)
-            if "returned failure" in message:
-                message = "executive: returned failure"
-            f.write(" ".join(re.sub(r"0x[0-9a-fA-F]+", "0x", message).split()) + "\n")
+    update_catching(outside, "outside", lambda a: "path %s" % a.GetParallelPath())
     report("src_after_error", solve(pvtu3, "a")[1])
     # The replicated Monte Carlo's error (a point source outside the object,
     # found by every rank on the same whole mesh): the same text on every
     # rank, an empty output, no hang.
     outside_mc = monte_carlo(pvtu3, None)
     outside_mc.PointSources = [20.0, 0.0, 0.0, 1.0, 1.0, 1.0]
-    caught = []
-    algorithm = outside_mc.GetClientSideObject()
-    algorithm.AddObserver("ErrorEvent", on_error)
-    algorithm.GetExecutive().AddObserver("ErrorEvent", on_error)
-    outside_mc.UpdatePipeline()
-    with open(path("mc_outside_%d.txt" % RANK), "w") as f:
-        f.write("path %s points %d\n" % (algorithm.GetParallelPath(),
-                                         algorithm.GetOutput().GetNumberOfPoints()))
-        for message in caught:
-            if "returned failure" in message:
-                message = "executive: returned failure"
-            f.write(" ".join(re.sub(r"0x[0-9a-fA-F]+", "0x", message).split()) + "\n")
+    update_catching(outside_mc, "mc_outside", lambda a: "path %s points %d" % (
+        a.GetParallelPath(), a.GetOutput().GetNumberOfPoints()))
 
     # Paint (issue 32): the unpainted chain first (Strength 0: the hierarchy
     # is set up), then the stroke, then mu_a x 1000: values-only set-ups
@@ -352,19 +350,9 @@ if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
     # an empty output, never a field (caught by observers, written per rank).
     _, stuck = solve(pvtu3, "a")
     stuck.MaxIter = 1
-    caught = []
-    algorithm = stuck.GetClientSideObject()
-    algorithm.AddObserver("ErrorEvent", on_error)
-    algorithm.GetExecutive().AddObserver("ErrorEvent", on_error)
-    stuck.UpdatePipeline()
-    with open(path("stuck_%d.txt" % RANK), "w") as f:
-        f.write("path %s points %d fluence %s\n" % (
-            algorithm.GetParallelPath(), algorithm.GetOutput().GetNumberOfPoints(),
-            algorithm.GetOutput().GetPointData().GetArray("Fluence") is not None))
-        for message in caught:
-            if "returned failure" in message:
-                message = "executive: returned failure"
-            f.write(" ".join(re.sub(r"0x[0-9a-fA-F]+", "0x", message).split()) + "\n")
+    update_catching(stuck, "stuck", lambda a: "path %s points %d fluence %s" % (
+        a.GetParallelPath(), a.GetOutput().GetNumberOfPoints(),
+        a.GetOutput().GetPointData().GetArray("Fluence") is not None))
     print("run done", flush=True)
 else:
     sys.exit("mode must be prepare or run, not " + MODE)
