@@ -23,6 +23,8 @@ as .pvtu / .pvtp (one piece per rank) for TestParallel.py to compare:
   fracture, radiosity, volume: mesh.vtu (on rank 0) -> Fracture Tet Mesh,
             Translucent Radiosity with a floor, Assign from a Wavelet image
             (split by extent): totals printed as "summary" lines
+  overlap   mesh2o.pvtu (mesh2g's pieces without their ghost marks: one layer of
+            tets in both pieces), every stage gathered (TRANSLUCENCY_PARALLEL)
   error     Solve Diffusion without Irradiance: the same error on every rank
   detectors Redistribute DataSet -> ... -> Solve Diffusion with two detectors ->
             Detector Readings: a "detectors" line with the rows of all ranks'
@@ -148,6 +150,19 @@ if MODE == "prepare":
     add_ids(with_ids.GetPointData(), "PointIds", mesh.GetNumberOfPoints(), 1000, 7)
     add_ids(with_ids.GetCellData(), "CellIds", mesh.GetNumberOfCells(), 1000, 3)
     write_pieces(mesh, path("mesh2g"), 2, 1)
+    # mesh2o: mesh2g's pieces without their ghost marks (vtkGhostType
+    # removed): the two pieces overlap by one layer of unmarked tets, which a
+    # gather must take once.
+    import re
+    for k in range(2):
+        piece = read_mesh(path("mesh2g_%d.vtu" % k))
+        for data in (piece.GetCellData(), piece.GetPointData()):
+            data.RemoveArray("vtkGhostType")
+        write_mesh(piece, path("mesh2o_%d.vtu" % k))
+    with open(path("mesh2g.pvtu")) as f:
+        text = f.read().replace("mesh2g_", "mesh2o_").replace('GhostLevel="1"', 'GhostLevel="0"')
+    with open(path("mesh2o.pvtu"), "w") as f:
+        f.write(re.sub(r"\s*<PDataArray[^>]*vtkGhostType[^>]*/>", "", text))
     write_pieces(with_ids, path("mesh3id"), 3, 0)
     mark_global_ids(path("mesh3id"), 3, point="PointIds", cell="CellIds")
 
@@ -185,6 +200,14 @@ elif MODE == "run":
         XMLPartitionedUnstructuredGridReader(FileName=[path("mesh3id.pvtu")])),
         surface=False, samples=32)
     serial_stages(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))
+    # Overlapping pieces without ghost marks, every stage gathered (the
+    # override): the merge takes each overlapping tet once, so the serial
+    # Fluence comes back on every piece (a tet taken twice would be assembled
+    # twice).
+    os.environ["TRANSLUCENCY_PARALLEL"] = "gathered"
+    chain("par_overlap", XMLPartitionedUnstructuredGridReader(FileName=[path("mesh2o.pvtu")]),
+          surface=False)
+    del os.environ["TRANSLUCENCY_PARALLEL"]
     # No Irradiance array: every rank reports Solve Diffusion's error, none hangs.
     unlit = solve(XMLUnstructuredGridReader(FileName=[path("mesh.vtu")]))
     unlit.UpdatePipeline()

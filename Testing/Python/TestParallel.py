@@ -110,7 +110,7 @@ class ParallelTest(MpiSuite):
     def test_0_runs(self):
         self.assertEqual(self.result.returncode, 0, self.result.stderr[-3000:])
         for case in ("ply", "pvtu2", "pvtu3", "sp3", "redist", "cut", "paint", "cutids",
-                     "error"):
+                     "overlap", "error"):
             self.assertIn("case %s done" % case, self.result.stdout)
 
     def test_surface_read_by_one_rank(self):
@@ -130,6 +130,15 @@ class ParallelTest(MpiSuite):
         pieces = pieces_of(self.path("par_sp3.pvtu"))
         self.assertTrue(all(p.GetPointData().GetArray("SP3Phi1") is not None
                             for p in pieces if p.GetNumberOfPoints() > 0))
+
+    def test_overlapping_pieces_without_ghost_marks(self):
+        # The gather takes a tet that two pieces both bring once (only the
+        # cells on points of more than one piece are matched).
+        pieces = pieces_of(self.path("par_overlap.pvtu"))
+        ref = pieces_of(self.path("ref_mesh.pvtu"))
+        self.assertGreater(sum(p.GetNumberOfCells() for p in pieces),
+                           sum(p.GetNumberOfCells() for p in ref), "the pieces overlap")
+        self.check_fluence("overlap", "mesh", split=True)
 
     def test_pvtu_with_global_ids(self):
         self.check_fluence("pvtu3", "mesh", split=True)
