@@ -3,6 +3,7 @@
 #include "vtkTranslucencyCommunicator.h"
 #include "vtkTranslucencyGhosts.h"
 
+#include <vtkAbstractArray.h>
 #include <vtkAlgorithm.h>
 #include <vtkCallbackCommand.h>
 #include <vtkCellData.h>
@@ -176,6 +177,51 @@ struct MergeInputs
   vtkDataSetAttributes::FieldList CellFields;
 };
 
+/// The attribute tuples a merge takes from each piece (source id -> merged
+/// id), copied array by array at the end (vtkAbstractArray::InsertTuples:
+/// one typed loop per array, where vtkDataSetAttributes::CopyData per tuple
+/// visits every array for every tuple).
+class TupleCopies
+{
+public:
+  explicit TupleCopies(size_t pieces)
+    : From(pieces)
+    , To(pieces)
+  {
+  }
+  void Add(size_t piece, vtkIdType from, vtkIdType to)
+  {
+    this->From[piece].push_back(from);
+    this->To[piece].push_back(to);
+  }
+  /// Copy the recorded tuples of `attributes(piece)` into `output`, whose
+  /// arrays `fields` allocated (CopyAllocate).
+  template <class Attributes>
+  void Apply(const vtkDataSetAttributes::FieldList& fields, const MergeInputs& in,
+    Attributes attributes, vtkDataSetAttributes* output) const
+  {
+    vtkNew<vtkIdList> from, to;
+    for (size_t r = 0; r < this->From.size(); ++r)
+    {
+      if (this->From[r].empty())
+      {
+        continue;
+      }
+      from->SetNumberOfIds(static_cast<vtkIdType>(this->From[r].size()));
+      to->SetNumberOfIds(static_cast<vtkIdType>(this->To[r].size()));
+      std::copy(this->From[r].begin(), this->From[r].end(), from->begin());
+      std::copy(this->To[r].begin(), this->To[r].end(), to->begin());
+      fields.TransformData(in.InputIndex[r], attributes(in.Sets[r]), output,
+        [&](vtkAbstractArray* source, vtkAbstractArray* target)
+        { target->InsertTuples(to, from, source); });
+    }
+  }
+
+private:
+  std::vector<std::vector<vtkIdType>> From, To;
+};
+
+
 /// The points of the merged set: those of owned cells, and points of no cell
 /// at all (an orphan point is one in serial too), each once, in the order of
 /// first occurrence or, with GlobalIds, of the ids; a point of ghost cells
@@ -247,14 +293,16 @@ std::vector<std::vector<vtkIdType>> MergePoints(MergeInputs& in, vtkPointSet* me
   std::vector<vtkIdType> finalId(unique.size());
   vtkPoints* points = merged->GetPoints();
   points->SetNumberOfPoints(static_cast<vtkIdType>(unique.size()));
+  TupleCopies copies(sets.size());
   for (size_t k = 0; k < order.size(); ++k)
   {
     const PointRef& p = unique[static_cast<size_t>(order[k])];
     finalId[static_cast<size_t>(order[k])] = static_cast<vtkIdType>(k);
     points->SetPoint(static_cast<vtkIdType>(k), sets[p.Piece]->GetPoint(p.Id));
-    merged->GetPointData()->CopyData(in.PointFields, sets[p.Piece]->GetPointData(),
-      in.InputIndex[p.Piece], p.Id, static_cast<vtkIdType>(k));
+    copies.Add(p.Piece, p.Id, static_cast<vtkIdType>(k));
   }
+  copies.Apply(in.PointFields, in, [](vtkPointSet* s) { return s->GetPointData(); },
+    merged->GetPointData());
   for (size_t r = 0; r < sets.size(); ++r)
   {
     vtkPointSet* s = sets[r];
@@ -381,6 +429,7 @@ std::vector<std::vector<vtkIdType>> MergeCells(MergeInputs& in,
   std::vector<size_t> cellPiece;
   std::vector<vtkIdType> ids;
   vtkNew<vtkIdList> cellPoints;
+  TupleCopies copies(sets.size());
   for (const CellRef& cell : ownedCells)
   {
     vtkPointSet* s = sets[cell.Piece];
@@ -398,11 +447,12 @@ std::vector<std::vector<vtkIdType>> MergeCells(MergeInputs& in,
     const vtkIdType id = mergedGrid
       ? mergedGrid->InsertNextCell(type, static_cast<vtkIdType>(ids.size()), ids.data())
       : mergedPoly->InsertNextCell(type, static_cast<vtkIdType>(ids.size()), ids.data());
-    merged->GetCellData()->CopyData(
-      in.CellFields, s->GetCellData(), in.InputIndex[cell.Piece], cell.Id, id);
+    copies.Add(cell.Piece, cell.Id, id);
     cellMaps[cell.Piece][cell.Id] = id;
     cellPiece.push_back(cell.Piece);
   }
+  copies.Apply(in.CellFields, in, [](vtkPointSet* s) { return s->GetCellData(); },
+    merged->GetCellData());
   for (size_t r = 0; anyGhost && r < sets.size(); ++r)
   {
     vtkPointSet* s = sets[r];
