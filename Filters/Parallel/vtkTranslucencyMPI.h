@@ -10,6 +10,8 @@
 #include "Communicator.h" // translucency::Communicator
 #include "vtkTranslucencyCommunicator.h"
 
+#include <string>
+
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
 #include <vtkMPI.h>
 #endif
@@ -30,6 +32,18 @@ bool CanDistribute(const vtkTranslucencyCommunicator& comm);
  * solve).
  */
 translucency::Communicator ReplicatedSolverCommunicator();
+
+/**
+ * Collective over `comm` (every rank calls it). Whether every rank can hold
+ * a copy of `bytesPerCopy` bytes at once: on each node, the ranks on it
+ * times the copy within the node's available memory (MemAvailable of
+ * /proc/meminfo, or TRANSLUCENCY_REPLICATED_MEMORY GiB when that is set).
+ * The same answer on every rank; when false, `why` says what would not fit
+ * ("replicating ... on the N ranks of a node needs about X; the node has Y
+ * available"). True in a build without MPI paths and for size one.
+ */
+bool ReplicationFits(
+  const vtkTranslucencyCommunicator& comm, double bytesPerCopy, std::string& why);
 
 #ifdef TRANSLUCENCY_HAVE_DISTRIBUTED_SOLVE
 /// The MPI communicator of `comm`, or nullptr (size one, or a controller

@@ -290,6 +290,19 @@ if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
             with open(path("mc_%d.txt" % RANK), "a") as f:
                 f.write("mc %s rank %d %s\n" % (name + suffix, RANK, " ".join(
                     "%.17g" % v for v in mc_readings(solved.GetClientSideObject(), gates))))
+    # The node's memory too small for a copy per rank (the override
+    # TRANSLUCENCY_REPLICATED_MEMORY, in GiB): rank 0 traces alone (path
+    # "gathered"), the serial field all the same; an invalid override gathers
+    # too, naming it.
+    for name, memory in (("mc_small_memory", "0.000001"), ("mc_bad_memory", "lots")):
+        os.environ["TRANSLUCENCY_REPLICATED_MEMORY"] = memory
+        solved = monte_carlo(pvtu3, None)
+        report(name, solved)
+        SaveData(path(name + ".pvtu"), proxy=solved)
+        with open(path("mc_%d.txt" % RANK), "a") as f:
+            f.write("plan %s rank %d %s\n" % (name, RANK,
+                                              solved.GetClientSideObject().GetParallelPlan()))
+    del os.environ["TRANSLUCENCY_REPLICATED_MEMORY"]
     import re
     from vtkmodules.util.misc import calldata_type
     from vtkmodules.util.vtkConstants import VTK_STRING

@@ -275,6 +275,39 @@ class DistributedSolveTest(MpiSuite):
                                          1e-12, "%s rank %d: %s vs %s" % (case, rank, got,
                                                                          expected))
 
+    def test_monte_carlo_gathers_when_a_copy_per_rank_does_not_fit(self):
+        plans = {case: {rank: m.group(3) for rank, m in per_rank.items()}
+                 for case, per_rank in self.rank_reports(
+                     "mc", r"^plan (\S+) rank (\d+) (.*)$").items()}
+        expected = {
+            "mc_small_memory": r"^gathered \(same mesh\): the Monte Carlo on rank 0 alone: "
+                               r"rank 0: a copy of the whole mesh on each of the %d ranks of "
+                               r"this node needs about [\d.]+ MiB \([\d.e+]+ bytes\); the node "
+                               r"has 0\.00102 MiB \(1074 bytes\) "
+                               r"\(TRANSLUCENCY_REPLICATED_MEMORY\)$" % RANKS,
+            "mc_bad_memory": r"^gathered \(same mesh\): the Monte Carlo on rank 0 alone: rank 0: "
+                             r"TRANSLUCENCY_REPLICATED_MEMORY='lots' is not a number of GiB > 0$"}
+        reader = vtkXMLUnstructuredGridReader()
+        reader.SetFileName(os.path.join(self.work, "ref_mc.vtu"))
+        reader.Update()
+        ref = dict(zip(*by_id(reader.GetOutput())))
+        scale = max(np.abs(v).max() for v in ref.values())
+        for case, pattern in expected.items():
+            self.assertEqual(sorted(plans.get(case, {})), list(range(RANKS)), case)
+            for rank in range(RANKS):
+                self.assertRegex(plans[case][rank], pattern, "rank %d" % rank)
+                self.assertEqual(self.solves[case][rank][0], "gathered", case)
+            # rank 0 traced alone: the serial run's numbers (ids: the same order)
+            worst, seen = 0.0, set()
+            for piece in pieces_of(os.path.join(self.work, case + ".pvtu")):
+                if piece.GetNumberOfPoints() == 0:
+                    continue
+                for i, v in zip(*by_id(piece)):
+                    worst = max(worst, worst_relative(v, ref[int(i)], scale))
+                    seen.add(int(i))
+            self.assertEqual(seen, set(ref), case)
+            self.assertLessEqual(worst, 1e-12, case)
+
     def test_monte_carlo_error_on_every_rank(self):
         texts = [self.rank_text("mc_outside", rank) for rank in range(RANKS)]
         self.assertIn("path replicated points 0", texts[0])
