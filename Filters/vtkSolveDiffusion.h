@@ -474,7 +474,9 @@ public:
   /// solve do not apply). The montecarlo solver, on: the mesh is replicated
   /// on every rank and the photons split over the ranks (the one-process
   /// estimates up to the order of the additions; every rank holds the
-  /// one-process memory); off: it runs on rank 0 alone.
+  /// one-process memory, so when the ranks of a node would not fit in its
+  /// available memory, or TRANSLUCENCY_REPLICATED_MEMORY GiB, rank 0 traces
+  /// alone and GetParallelPlan() says why); off: it runs on rank 0 alone.
   vtkSetMacro(DistributedSolve, bool);
   vtkGetMacro(DistributedSolve, bool);
   vtkBooleanMacro(DistributedSolve, bool);
