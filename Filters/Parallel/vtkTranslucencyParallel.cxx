@@ -221,7 +221,6 @@ private:
   std::vector<std::vector<vtkIdType>> From, To;
 };
 
-
 /// The points of the merged set: those of owned cells, and points of no cell
 /// at all (an orphan point is one in serial too), each once, in the order of
 /// first occurrence or, with GlobalIds, of the ids; a point of ghost cells
