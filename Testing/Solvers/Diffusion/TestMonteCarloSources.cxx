@@ -13,6 +13,7 @@
 #include "GradedMeshes.h"
 #include "MonteCarlo.h"
 #include "TestMeshes.h"
+#include "TestMonteCarloScene.h"
 #include "TestProblems.h"
 #include "TetMesh.h"
 
@@ -358,28 +359,10 @@ TEST(MonteCarloSources, PencilBeamOnASlabMatchesDiffusionAndPatterson)
 // reads a field (the same footprint weights).
 TEST(MonteCarloSources, TalliesAreConsistent)
 {
-  const translucency::testing::MeshData data = translucency::testing::CubeMesh(6, 10.0, 0.2, 3);
-  TetMesh mesh;
-  mesh.SetGeometry(data.Points, data.Tets);
-  const double muA[3] = { 0.1, 0.2, 0.05 }, muS[3] = { 1.0, 0.5, 2.0 };
-  const OpticalProperties material = OpticalProperties::Uniform(mesh.GetNumberOfTets(), muA, muS, 1.4);
-  Sources sources;
-  PointSource point;
-  point.Position = { 4.1, 5.2, 3.3 };
-  point.Power = { 1.0, 0.5, 2.0 };
-  sources.AddPointSource(point);
-  PencilBeam beam;
-  beam.Position = { 5.0, 4.0, 10.0 };
-  beam.Direction = { 0.3, 0.0, -1.0 };
-  beam.Power = { 0.5, 1.0, 0.0 };
-  sources.AddPencilBeam(beam);
-  LightSource light;
-  light.Type = LightSource::Kind::Directional;
-  light.Direction = { 0.0, -1.0, 0.0 };
-  light.Power = { 0.002, 0.001, 0.0 };
-  DiffusionProblem problem = MakeProblem(mesh, material);
-  problem.Lights = { light };
-  problem.InteriorSources = &sources;
+  const translucency::testing::MonteCarloScene scene;
+  const TetMesh& mesh = scene.Mesh;
+  const OpticalProperties& material = scene.Material;
+  DiffusionProblem problem = scene.Problem();
   std::vector<Detector> detectors(3);
   detectors[0].Position = { 6.0, 5.0, 10.0 };
   detectors[1].Position = { 2.0, 10.0, 3.0 };

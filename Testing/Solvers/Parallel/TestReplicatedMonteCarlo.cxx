@@ -10,12 +10,9 @@
 // rank makes the same calls in the same order (EXPECT, no early return).
 #include "DiffusionSolverFactory.h"
 #include "DistributedSlabs.h" // Rank, Size
-#include "InteriorSources.h"
-#include "LightSources.h"
 #include "MonteCarlo.h"
 #include "ReplicatedMonteCarlo.h"
-#include "TestMeshes.h"
-#include "TestProblems.h"
+#include "TestMonteCarloScene.h"
 
 #include <gtest/gtest.h>
 
@@ -108,37 +105,18 @@ std::vector<double> Flatten(const std::vector<DetectorReading>& readings)
   return v;
 }
 
-/// A cube lit by a directional light and the uniform light (shadowed), with
-/// a point source and a pencil beam inside, two detectors and time gates:
-/// every tally the sums carry.
+/// The Monte Carlo tests' scene (a directional light, a point source and a
+/// pencil beam) with the shadowed uniform light too, two detectors and time
+/// gates: every tally the sums carry.
 struct Case
 {
-  TetMesh Mesh;
-  OpticalProperties Material;
-  Sources Interior;
+  translucency::testing::MonteCarloScene Scene;
   std::vector<Detector> Detectors;
   TimeGates Gates;
   DiffusionProblem Problem;
 
   Case()
   {
-    const translucency::testing::MeshData data = translucency::testing::CubeMesh(6, 10.0, 0.2, 3);
-    Mesh.SetGeometry(data.Points, data.Tets);
-    const double muA[3] = { 0.1, 0.2, 0.05 }, muS[3] = { 1.0, 0.5, 2.0 };
-    Material = OpticalProperties::Uniform(Mesh.GetNumberOfTets(), muA, muS, 1.4);
-    PointSource point;
-    point.Position = { 4.1, 5.2, 3.3 };
-    point.Power = { 1.0, 0.5, 2.0 };
-    Interior.AddPointSource(point);
-    PencilBeam beam;
-    beam.Position = { 5.0, 4.0, 10.0 };
-    beam.Direction = { 0.3, 0.0, -1.0 };
-    beam.Power = { 0.5, 1.0, 0.0 };
-    Interior.AddPencilBeam(beam);
-    LightSource light;
-    light.Type = LightSource::Kind::Directional;
-    light.Direction = { 0.0, -1.0, 0.0 };
-    light.Power = { 0.002, 0.001, 0.0 };
     Detectors.resize(2);
     Detectors[0].Position = { 6.0, 5.0, 10.0 };
     Detectors[1].Position = { 10.0, 5.0, 5.0 };
@@ -146,11 +124,9 @@ struct Case
     Gates.Start = 0.0;
     Gates.End = 40.0;
     Gates.Count = 50;
-    Problem = translucency::testing::MakeProblem(Mesh, Material);
-    Problem.Lights = { light };
+    Problem = Scene.Problem();
     Problem.UniformIrradiance = 0.001;
     Problem.Shadows = true;
-    Problem.InteriorSources = &Interior;
   }
 
   void Configure(MonteCarloSolver& solver, int batches) const
