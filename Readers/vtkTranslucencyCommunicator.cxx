@@ -240,15 +240,14 @@ bool vtkTranslucencyCommunicator::IsLocal()
 vtkTranslucencyCommunicator::ReplicatedScope::ReplicatedScope(
   const vtkTranslucencyCommunicator& comm)
   : Previous(ReplicatedTop)
-  , Current(new vtkTranslucencyCommunicator(comm))
+  , Current(comm)
 {
-  ReplicatedTop = this->Current;
+  ReplicatedTop = &this->Current;
 }
 
 vtkTranslucencyCommunicator::ReplicatedScope::~ReplicatedScope()
 {
   ReplicatedTop = this->Previous;
-  delete this->Current;
 }
 
 vtkTranslucencyCommunicator vtkTranslucencyCommunicator::Replicated()

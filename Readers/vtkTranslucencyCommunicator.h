@@ -113,18 +113,7 @@ public:
    * may share its work with. Only a serial path that splits its own work
    * (Solve Diffusion's Monte Carlo) reads it.
    */
-  class TRANSLUCENCYREADERS_EXPORT ReplicatedScope
-  {
-  public:
-    explicit ReplicatedScope(const vtkTranslucencyCommunicator& comm);
-    ~ReplicatedScope();
-    ReplicatedScope(const ReplicatedScope&) = delete;
-    ReplicatedScope& operator=(const ReplicatedScope&) = delete;
-
-  private:
-    const vtkTranslucencyCommunicator* Previous;
-    const vtkTranslucencyCommunicator* Current;
-  };
+  class ReplicatedScope;
   /// The innermost ReplicatedScope's communicator on this thread, else Self().
   static vtkTranslucencyCommunicator Replicated();
 
@@ -136,6 +125,19 @@ private:
   vtkMultiProcessController* Controller = nullptr;
   int Size = 1;
   int Rank = 0;
+};
+
+class TRANSLUCENCYREADERS_EXPORT vtkTranslucencyCommunicator::ReplicatedScope
+{
+public:
+  explicit ReplicatedScope(const vtkTranslucencyCommunicator& comm);
+  ~ReplicatedScope();
+  ReplicatedScope(const ReplicatedScope&) = delete;
+  ReplicatedScope& operator=(const ReplicatedScope&) = delete;
+
+private:
+  const vtkTranslucencyCommunicator* Previous;
+  vtkTranslucencyCommunicator Current;
 };
 
 #endif

@@ -106,15 +106,9 @@ bool vtkTranslucency::ReplicationFits(
     }
     why = text.str();
   }
-  const int rank = comm.GetRank();
   // The lowest rank that does not fit says why, on every rank.
-  const int first = comm.Min(fits ? comm.GetSize() : rank);
-  if (first == comm.GetSize())
-  {
-    return true;
-  }
-  why = comm.AgreeOnError(rank == first ? why : std::string());
-  return false;
+  why = comm.AgreeOnError(why);
+  return why.empty();
 }
 #else
 bool vtkTranslucency::ReplicationFits(const vtkTranslucencyCommunicator&, double, std::string& why)

@@ -1158,6 +1158,8 @@ struct BatchPlan
   int Threads = 0;
   int Slots = 0;
   double TotalPhotons = 0.0; ///< over the lit channels (progress)
+  /// The first photon of batch b (b = Batches: the end).
+  long long Begin(long long b) const { return b * Photons / Batches; }
   int NumTets = 0, NumPoints = 0;
   std::size_t DetectorItems = 0, GateItems = 0;
 };
@@ -1188,7 +1190,7 @@ BatchPlan MakeBatchPlan(const MonteCarloSolver& solver, const TetMesh& mesh,
   for (int b = shareRank; b < plan.Batches; b += shareSize)
   {
     plan.Mine.push_back(b);
-    mine += (b + 1LL) * plan.Photons / plan.Batches - b * plan.Photons / plan.Batches;
+    mine += plan.Begin(b + 1) - plan.Begin(b);
   }
   plan.TotalPhotons = static_cast<double>(mine) * std::max(1, litChannels);
   plan.Slots = std::min(plan.Threads, static_cast<int>(plan.Mine.size()));
@@ -1234,9 +1236,8 @@ void TraceBatches(const Tracer& tracer, const BatchPlan& plan, const TetMesh& me
   const std::vector<int>& pointTetOffsets = mesh.GetPointTetOffsets();
   const std::vector<int>& pointTets = mesh.GetPointTets();
   const int numTets = plan.NumTets, numPoints = plan.NumPoints;
-  const int numBatches = plan.Batches, slots = plan.Slots, threads = plan.Threads;
+  const int slots = plan.Slots, threads = plan.Threads;
   const int mine = static_cast<int>(plan.Mine.size());
-  const long long numPhotons = plan.Photons;
   for (int first = 0; first < mine && !stop; first += slots)
   {
     const int count = std::min(slots, mine - first);
@@ -1247,8 +1248,8 @@ void TraceBatches(const Tracer& tracer, const BatchPlan& plan, const TetMesh& me
       BatchTally& tally = tallies[k];
       tally.Reset(numTets, numPoints, plan.DetectorItems, plan.GateItems);
       const long long b = plan.Mine[first + k];
-      tally.Begin = b * numPhotons / numBatches;
-      tally.End = (b + 1) * numPhotons / numBatches;
+      tally.Begin = plan.Begin(b);
+      tally.End = plan.Begin(b + 1);
       for (long long p = tally.Begin; p < tally.End && !stop.load(std::memory_order_relaxed);
            p += Chunk)
       {
