@@ -139,13 +139,191 @@ void HypreBoomerAMGPCG::SetOptions(const SolverOptions& options)
   Options_ = o;
 }
 
+namespace
+{
+/**
+ * A channel's own Galerkin levels on another channel's BoomerAMG coarsening
+ * (HypreBoomerAMGPCG::SetupShared): the donor's interpolation P_l and
+ * coarse/fine splitting, this channel's coarse operators
+ * A_{l+1} = P_l^T A_l P_l from its own fine matrix, the l1 norms of its own
+ * levels for the smoother, and its own coarsest matrix for the Gaussian
+ * elimination. Applied by swapping them into the donor's BoomerAMG for the
+ * duration of one V-cycle (GalerkinSolve): the cycle is then the one
+ * BoomerAMG would run on a hierarchy of this channel's matrix with the
+ * donor's P. What the serial path's aggregation multigrid does across its
+ * channels (one aggregation, each channel's Galerkin values: Performance.md).
+ */
+struct GalerkinLevels
+{
+  HYPRE_Solver Donor = nullptr;
+  std::vector<hypre_ParCSRMatrix*> A;  ///< [0] unused (the caller's fine matrix); own from 1
+  std::vector<hypre_Vector*> L1;       ///< own l1 norms where the donor has them
+  HYPRE_Real* CoarseDense = nullptr;   ///< own coarsest matrix for relaxation 9, if any
+  GalerkinLevels() = default;
+  GalerkinLevels(const GalerkinLevels&) = delete;
+  GalerkinLevels& operator=(const GalerkinLevels&) = delete;
+  ~GalerkinLevels()
+  {
+    for (std::size_t l = 1; l < A.size(); ++l)
+      if (A[l])
+        hypre_ParCSRMatrixDestroy(A[l]);
+    for (hypre_Vector* v : L1)
+      if (v)
+        hypre_SeqVectorDestroy(v);
+    hypre_TFree(CoarseDense, HYPRE_MEMORY_HOST);
+  }
+
+  /// Exchanges these levels with the donor's (twice: back as they were).
+  void Swap()
+  {
+    auto* amg = reinterpret_cast<hypre_ParAMGData*>(Donor);
+    hypre_ParCSRMatrix** levels = hypre_ParAMGDataAArray(amg);
+    for (std::size_t l = 1; l < A.size(); ++l)
+      std::swap(levels[l], A[l]);
+    hypre_Vector** l1 = hypre_ParAMGDataL1Norms(amg);
+    for (std::size_t l = 0; l1 && l < L1.size(); ++l)
+      std::swap(l1[l], L1[l]);
+    if (CoarseDense)
+      std::swap(hypre_ParAMGDataAMat(amg), CoarseDense);
+  }
+};
+
+/// Whether a sharer can have its own Galerkin levels on `donor`'s
+/// coarsening: the relaxations whose set-up data GalerkinLevels rebuilds
+/// (l1 Gauss-Seidel 8/13/14 in natural order, on the coarsest level also
+/// Gaussian elimination 9 or none), and no other per-level data.
+bool GalerkinSharable(HYPRE_Solver donor)
+{
+  auto* amg = reinterpret_cast<hypre_ParAMGData*>(donor);
+  if (!amg || hypre_ParAMGDataNumLevels(amg) < 1 || hypre_ParAMGDataBlockMode(amg) ||
+    hypre_ParAMGDataRelaxOrder(amg) != 0 || hypre_ParAMGDataAdditive(amg) >= 0 ||
+    hypre_ParAMGDataMultAdditive(amg) >= 0 || hypre_ParAMGDataSimple(amg) >= 0 ||
+    hypre_ParAMGDataSmoothNumLevels(amg) > 0 || hypre_ParAMGDataSeqThreshold(amg) > 0 ||
+    hypre_ParAMGDataADropTol(amg) > 0.0 || hypre_ParAMGDataNonGalerkinTol(amg) > 0.0)
+    return false;
+  const HYPRE_Int* relax = hypre_ParAMGDataGridRelaxType(amg);
+  auto l1 = [](HYPRE_Int t) { return t == 8 || t == 13 || t == 14; };
+  return relax && l1(relax[1]) && l1(relax[2]) && (l1(relax[3]) || relax[3] == 9);
+}
+
+/**
+ * Collective: `fine`'s Galerkin levels on `donor`'s coarsening (every rank
+ * calls it; GalerkinSharable(donor) true). Throws translucency::Error on a
+ * hypre error.
+ */
+std::unique_ptr<GalerkinLevels> BuildGalerkinLevels(HYPRE_Solver donor, hypre_ParCSRMatrix* fine)
+{
+  auto* amg = reinterpret_cast<hypre_ParAMGData*>(donor);
+  const int levels = hypre_ParAMGDataNumLevels(amg);
+  auto g = std::make_unique<GalerkinLevels>();
+  g->Donor = donor;
+  g->A.assign(static_cast<std::size_t>(levels), nullptr);
+  hypre_ParCSRMatrix** P = hypre_ParAMGDataPArray(amg);
+  const HYPRE_Int keepTranspose = hypre_ParAMGDataKeepTranspose(amg);
+  hypre_ParCSRMatrix* a = fine;
+  for (int l = 0; l + 1 < levels; ++l)
+  {
+    // The coarse operator as BoomerAMG's set-up forms it (par_amg_setup.c):
+    // P^T A P with the donor's P.
+    hypre_ParCSRMatrix* coarse = nullptr;
+    if (hypre_ParAMGDataModularizedMatMat(amg))
+      coarse = hypre_ParCSRMatrixRAPKT(P[l], a, P[l], keepTranspose);
+    else
+      hypre_BoomerAMGBuildCoarseOperatorKT(P[l], a, P[l], keepTranspose, &coarse);
+    if (!coarse)
+      throw Error("hypre-amg: the shared hierarchy's coarse operator failed");
+    if (!hypre_ParCSRMatrixCommPkg(coarse))
+      hypre_MatvecCommPkgCreate(coarse);
+    hypre_ParCSRMatrixSetNumNonzeros(coarse);
+    hypre_ParCSRMatrixSetDNumNonzeros(coarse);
+    g->A[static_cast<std::size_t>(l) + 1] = coarse;
+    a = coarse;
+  }
+  // The smoother's l1 norms of this channel's levels (option 4, as the
+  // set-up for relaxations 8, 13 and 14 in natural order).
+  hypre_Vector** donorL1 = hypre_ParAMGDataL1Norms(amg);
+  if (donorL1)
+  {
+    g->L1.assign(static_cast<std::size_t>(levels), nullptr);
+    for (int l = 0; l < levels; ++l)
+    {
+      if (!donorL1[l])
+        continue;
+      hypre_ParCSRMatrix* m = l == 0 ? fine : g->A[static_cast<std::size_t>(l)];
+      HYPRE_Real* norms = nullptr;
+      hypre_ParCSRComputeL1Norms(m, 4, nullptr, &norms);
+      hypre_Vector* v = hypre_SeqVectorCreate(hypre_ParCSRMatrixNumRows(m));
+      hypre_VectorData(v) = norms;
+      hypre_SeqVectorInitialize_v2(v, hypre_ParCSRMatrixMemoryLocation(m));
+      g->L1[static_cast<std::size_t>(l)] = v;
+    }
+  }
+  // The coarsest level's dense copy for Gaussian elimination, laid out as
+  // hypre_GaussElimSetup lays out the donor's, on the donor's
+  // sub-communicator of the ranks with coarsest rows (the same rows here).
+  if (hypre_ParAMGDataGridRelaxType(amg)[3] == 9 && hypre_ParAMGDataAMat(amg))
+  {
+    hypre_ParCSRMatrix* c = levels > 1 ? g->A[static_cast<std::size_t>(levels) - 1] : fine;
+    hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(c);
+    hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(c);
+    const HYPRE_Int rows = hypre_CSRMatrixNumRows(diag);
+    const HYPRE_Int n = static_cast<HYPRE_Int>(hypre_ParCSRMatrixGlobalNumRows(c));
+    MPI_Comm sub = hypre_ParAMGDataNewComm(amg);
+    const HYPRE_Int* info = hypre_ParAMGDataCommInfo(amg);
+    if (rows > 0 && sub != MPI_COMM_NULL && info)
+    {
+      int ranks = 1;
+      MPI_Comm_size(sub, &ranks);
+      std::vector<int> counts(static_cast<std::size_t>(ranks)), displs(ranks + 1, 0);
+      for (int r = 0; r < ranks; ++r)
+      {
+        counts[r] = n * info[r];
+        displs[r + 1] = displs[r] + counts[r];
+      }
+      std::vector<HYPRE_Real> local(static_cast<std::size_t>(n) * rows, 0.0);
+      const HYPRE_BigInt first = hypre_ParCSRMatrixFirstRowIndex(c);
+      const HYPRE_BigInt* colMap = hypre_ParCSRMatrixColMapOffd(c);
+      for (HYPRE_Int i = 0; i < rows; ++i)
+      {
+        for (HYPRE_Int k = hypre_CSRMatrixI(diag)[i]; k < hypre_CSRMatrixI(diag)[i + 1]; ++k)
+          local[static_cast<std::size_t>(i) * n + (hypre_CSRMatrixJ(diag)[k] + first)] =
+            hypre_CSRMatrixData(diag)[k];
+        for (HYPRE_Int k = hypre_CSRMatrixI(offd)[i]; k < hypre_CSRMatrixI(offd)[i + 1]; ++k)
+          local[static_cast<std::size_t>(i) * n + colMap[hypre_CSRMatrixJ(offd)[k]]] =
+            hypre_CSRMatrixData(offd)[k];
+      }
+      g->CoarseDense = hypre_CTAlloc(HYPRE_Real, static_cast<std::size_t>(n) * n, HYPRE_MEMORY_HOST);
+      MPI_Allgatherv(local.data(), n * rows, MPI_DOUBLE, g->CoarseDense, counts.data(),
+        displs.data(), MPI_DOUBLE, sub);
+    }
+  }
+  return g;
+}
+
+/// The preconditioner of a channel with Galerkin levels: one V-cycle of the
+/// donor's BoomerAMG on them (`self` is the GalerkinLevels).
+HYPRE_Int GalerkinSolve(HYPRE_Solver self, HYPRE_ParCSRMatrix a, HYPRE_ParVector r, HYPRE_ParVector z)
+{
+  auto* g = reinterpret_cast<GalerkinLevels*>(self);
+  auto* amg = reinterpret_cast<hypre_ParAMGData*>(g->Donor);
+  hypre_ParCSRMatrix* donorFine = hypre_ParAMGDataAArray(amg)[0];
+  g->Swap();
+  const HYPRE_Int code = HYPRE_BoomerAMGSolve(g->Donor, a, r, z);
+  g->Swap();
+  hypre_ParAMGDataAArray(amg)[0] = donorFine; // the solve put this channel's there
+  return code;
+}
+} // namespace
+
 struct HypreBoomerAMGPCG::Handles
 {
   HYPRE_IJMatrix A = nullptr;
   HYPRE_IJVector B = nullptr, X = nullptr;
   HYPRE_Solver PCG = nullptr, AMG = nullptr;
-  /// Another solver's BoomerAMG used as this one's preconditioner (not owned).
+  /// Another solver's BoomerAMG whose coarsening this one shares (not owned).
   HYPRE_Solver SharedAMG = nullptr;
+  /// This channel's own levels on SharedAMG's coarsening.
+  std::unique_ptr<GalerkinLevels> Galerkin;
   std::vector<HYPRE_BigInt> Rows;
   /// SolveChannels' vectors r, z, p, q (made at its first call).
   hypre::ChannelWork Work;
@@ -184,6 +362,7 @@ void HypreBoomerAMGPCG::Free()
   H_->Work.Destroy();
   H_->AMG = nullptr;
   H_->SharedAMG = nullptr;
+  H_->Galerkin.reset();
   H_->Rows.clear();
   Places_.clear();
   PlacePattern_ = 0;
@@ -214,16 +393,17 @@ bool HypreBoomerAMGPCG::SetupShared(int rowBegin, int rowEnd, const int* rowOffs
 {
   const auto* other = dynamic_cast<const HypreBoomerAMGPCG*>(&donor);
   if (!other || other == this || !other->H_->AMG || !other->H_->PCG ||
-    other->RowBegin_ != rowBegin || other->RowEnd_ != rowEnd)
+    other->RowBegin_ != rowBegin || other->RowEnd_ != rowEnd || !GalerkinSharable(other->H_->AMG))
   {
     return false;
   }
   Free();
   const double start = MPI_Wtime();
   BuildMatrix(rowBegin, rowEnd, rowOffsets, columns, values);
+  const double assembled = MPI_Wtime();
+  MatrixMilliseconds_ = 1000.0 * (assembled - start);
   BuildSolver(other);
-  MatrixMilliseconds_ = 1000.0 * (MPI_Wtime() - start);
-  HierarchyMilliseconds_ = 0.0;
+  HierarchyMilliseconds_ = 1000.0 * (MPI_Wtime() - assembled);
   return true;
 }
 
@@ -289,28 +469,34 @@ void HypreBoomerAMGPCG::BuildSolver(const HypreBoomerAMGPCG* shared)
   HYPRE_IJVectorGetObject(h.B, reinterpret_cast<void**>(&b));
   HYPRE_IJVectorGetObject(h.X, reinterpret_cast<void**>(&x));
 
+  auto nonZeros = [](hypre_ParCSRMatrix* m) {
+    return static_cast<double>(hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixDiag(m)) +
+      hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixOffd(m)));
+  };
   if (shared)
   {
-    // The donor's hierarchy, its set-up already done (NoSetup); PCG's own
-    // vectors are set up on this matrix.
+    // The donor's coarsening with this matrix's own Galerkin levels (built
+    // here, collectively), its set-up otherwise the donor's (NoSetup); PCG's
+    // own vectors are set up on this matrix.
     h.SharedAMG = shared->H_->AMG;
+    h.Galerkin = BuildGalerkinLevels(h.SharedAMG, reinterpret_cast<hypre_ParCSRMatrix*>(a));
     Check(HYPRE_ParCSRPCGCreate(Comm_, &h.PCG), "PCG creation");
     HYPRE_PCGSetTwoNorm(h.PCG, 1);
     HYPRE_PCGSetPrintLevel(h.PCG, 0);
     HYPRE_PCGSetLogging(h.PCG, 1);
-    HYPRE_PCGSetPrecond(h.PCG, reinterpret_cast<HYPRE_PtrToSolverFcn>(HYPRE_BoomerAMGSolve),
-      reinterpret_cast<HYPRE_PtrToSolverFcn>(NoSetup), h.SharedAMG);
+    HYPRE_PCGSetPrecond(h.PCG, reinterpret_cast<HYPRE_PtrToSolverFcn>(GalerkinSolve),
+      reinterpret_cast<HYPRE_PtrToSolverFcn>(NoSetup), reinterpret_cast<HYPRE_Solver>(h.Galerkin.get()));
     Check(HYPRE_ParCSRPCGSetup(h.PCG, a, b, x), "PCG set-up");
-    auto* m = reinterpret_cast<hypre_ParCSRMatrix*>(a);
-    const double local = static_cast<double>(hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixDiag(m)) +
-      hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixOffd(m)));
-    double total = 0.0;
-    MPI_Allreduce(&local, &total, 1, MPI_DOUBLE, MPI_SUM, Comm_);
-    NonZeros_ = static_cast<long long>(total);
+    double local[2] = { nonZeros(reinterpret_cast<hypre_ParCSRMatrix*>(a)), 0.0 };
+    for (std::size_t l = 1; l < h.Galerkin->A.size(); ++l)
+      local[1] += nonZeros(h.Galerkin->A[l]);
+    double total[2] = { 0.0, 0.0 };
+    MPI_Allreduce(local, total, 2, MPI_DOUBLE, MPI_SUM, Comm_);
+    NonZeros_ = static_cast<long long>(total[0]);
     Levels_ = shared->Levels_;
-    OperatorComplexity_ = shared->OperatorComplexity_;
+    OperatorComplexity_ = total[0] > 0 ? (total[0] + total[1]) / total[0] : 0.0;
     IterationWork_ = shared->IterationWork_;
-    MemoryBytes_ = 0; // the hierarchy is the donor's
+    MemoryBytes_ = static_cast<std::size_t>(local[1] * 12.0); // own levels; P is the donor's
     return;
   }
   Check(HYPRE_BoomerAMGCreate(&h.AMG), "BoomerAMG creation");
@@ -349,10 +535,6 @@ void HypreBoomerAMGPCG::BuildSolver(const HypreBoomerAMGPCG* shared)
   auto* amg = reinterpret_cast<hypre_ParAMGData*>(h.AMG);
   Levels_ = hypre_ParAMGDataNumLevels(amg);
   double local[3] = { 0.0, 0.0, 0.0 }; // nnz(A_0), sum nnz(A_l), sum nnz(P_l)
-  auto nonZeros = [](hypre_ParCSRMatrix* m) {
-    return static_cast<double>(hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixDiag(m)) +
-      hypre_CSRMatrixNumNonzeros(hypre_ParCSRMatrixOffd(m)));
-  };
   for (int l = 0; l < Levels_; ++l)
   {
     const double nz = nonZeros(hypre_ParAMGDataAArray(amg)[l]);
@@ -398,6 +580,7 @@ void HypreBoomerAMGPCG::SolveChannels(
   std::array<HYPRE_IJMatrix, NumberOfChannels> matrices{};
   std::array<hypre::ChannelWork*, NumberOfChannels> work{};
   std::array<HYPRE_Solver, NumberOfChannels> amg{};
+  std::array<GalerkinLevels*, NumberOfChannels> galerkin{};
   bool ours = true;
   for (int c = 0; c < NumberOfChannels; ++c)
   {
@@ -416,6 +599,7 @@ void HypreBoomerAMGPCG::SolveChannels(
     matrices[c] = own[c]->H_->A;
     work[c] = &own[c]->H_->Work;
     amg[c] = own[c]->H_->AMG ? own[c]->H_->AMG : own[c]->H_->SharedAMG;
+    galerkin[c] = own[c]->H_->AMG ? nullptr : own[c]->H_->Galerkin.get();
   }
   if (!ours)
   {
@@ -423,8 +607,9 @@ void HypreBoomerAMGPCG::SolveChannels(
     return;
   }
   hypre::SolveChannels(Comm_, matrices, work,
-    [&amg](int c, HYPRE_ParCSRMatrix a, HYPRE_ParVector r, HYPRE_ParVector z) {
-      return HYPRE_BoomerAMGSolve(amg[c], a, r, z);
+    [&amg, &galerkin](int c, HYPRE_ParCSRMatrix a, HYPRE_ParVector r, HYPRE_ParVector z) {
+      return galerkin[c] ? GalerkinSolve(reinterpret_cast<HYPRE_Solver>(galerkin[c]), a, r, z)
+                         : HYPRE_BoomerAMGSolve(amg[c], a, r, z);
     },
     b, x, guess, control, stats, "hypre-amg");
 }

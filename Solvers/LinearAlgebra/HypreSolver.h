@@ -133,12 +133,18 @@ public:
   void PrepareUpdates(const int* rowOffsets, const int* columns) override;
 
   /**
-   * The matrix of these rows with `donor`'s BoomerAMG hierarchy as the
-   * preconditioner (no set-up of its own): BoomerAMG's V-cycle smooths on
-   * this matrix at the fine level (hypre_BoomerAMGSolve takes the fine
-   * matrix from its caller) and on the donor's coarse levels, with the
-   * donor's l1 norms. False if `donor` is not a set-up HypreBoomerAMGPCG on
-   * the same rows.
+   * The matrix of these rows on `donor`'s BoomerAMG coarsening (collective;
+   * no coarsening or interpolation of its own): the donor's splitting and
+   * interpolation P_l, and this matrix's own Galerkin levels
+   * A_{l+1} = P_l^T A_l P_l, their l1 norms for the smoother and its own
+   * coarsest matrix for the Gaussian elimination, swapped into the donor's
+   * BoomerAMG for each V-cycle. So the cycle is BoomerAMG's on a hierarchy
+   * of this matrix (an SPD preconditioner of it, whatever the donor's
+   * values), at the price of the products P^T A P instead of a whole set-up.
+   * False, with nothing built, if `donor` is not a set-up HypreBoomerAMGPCG
+   * on the same rows or uses a relaxation whose set-up data this does not
+   * rebuild (other than l1 Gauss-Seidel 8/13/14 in natural order, and
+   * Gaussian elimination 9 on the coarsest level).
    */
   bool SetupShared(int rowBegin, int rowEnd, const int* rowOffsets, const int* columns,
     const double* values, const DistributedLinearSolver& donor) override;

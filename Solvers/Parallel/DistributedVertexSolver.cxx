@@ -736,7 +736,6 @@ void DistributedVertexSolver::SetUpChannel(int c)
       preparedCpu = CpuMilliseconds() - before;
     }
     Donor_[c] = c;
-    HierarchyDiagonal_[c] = OwnedDiagonal(Contributions_[c]);
     ++HierarchySetups_;
   }
   catch (const Error& e)
@@ -756,6 +755,7 @@ void DistributedVertexSolver::SetUpChannel(int c)
 
 void DistributedVertexSolver::ShareChannel(int c, int donor, double& hierarchyMs)
 {
+  const double cpu = CpuMilliseconds();
   std::string error;
   bool shared = false;
   ForceFull_[c] = false;
@@ -778,7 +778,14 @@ void DistributedVertexSolver::ShareChannel(int c, int donor, double& hierarchyMs
     if (shared)
     {
       Donor_[c] = donor;
-      HierarchyDiagonal_[c] = HierarchyDiagonal_[donor];
+      // Its own Galerkin levels on the donor's coarsening: hierarchy work
+      // (the CPU share as in SetUpChannel).
+      const double matrix = Channels_[c]->GetMatrixMilliseconds();
+      const double levels = Channels_[c]->GetHierarchyMilliseconds();
+      hierarchyMs += levels;
+      HierarchyCpu_ += matrix + levels > 0.0
+        ? levels / (matrix + levels) * (CpuMilliseconds() - cpu)
+        : 0.0;
     }
   }
   catch (const Error& e)
@@ -823,51 +830,6 @@ int DistributedVertexSolver::MedianChannel() const
   std::array<int, NumberOfChannels> order{ 0, 1, 2 };
   std::sort(order.begin(), order.end(), [&trace](int a, int b) { return trace[a] < trace[b]; });
   return order[1];
-}
-
-std::vector<double> DistributedVertexSolver::OwnedDiagonal(const std::vector<double>& values) const
-{
-  const int rowBegin = Numbering_.GetRowBegin();
-  const int owned = Numbering_.GetNumberOfOwnedRows();
-  std::vector<double> diagonal(static_cast<std::size_t>(owned), 0.0);
-  for (int r = 0; r < owned && !values.empty(); ++r)
-  {
-    for (int k = OwnedOffsets_[r]; k < OwnedOffsets_[r + 1]; ++k)
-    {
-      if (OwnedColumns_[static_cast<std::size_t>(k)] == rowBegin + r)
-        diagonal[static_cast<std::size_t>(r)] = values[static_cast<std::size_t>(k)];
-    }
-  }
-  return diagonal;
-}
-
-bool DistributedVertexSolver::WithinSmootherRange(
-  const std::vector<double>& values, const std::vector<double>& diagonal) const
-{
-  // A hierarchy smooths the fine level with the l1 norms of the matrix it
-  // was set up on (its diagonal on one rank): on matrix `values` a
-  // symmetric Gauss-Seidel sweep with row weights d / d_setup, which
-  // converges only below 2. Within range: every owned row's ratio in
-  // [1/3, 1.8]. This rank's rows only (no communication). (The values-only
-  // set-up does not ask: a paint changes a few rows, and a channel whose
-  // kept hierarchy then fails is set up again and re-solved.)
-  const std::vector<double> d = OwnedDiagonal(values);
-  if (d.size() != diagonal.size())
-    return false;
-  for (std::size_t r = 0; r < d.size(); ++r)
-  {
-    if (!(d[r] > 0.0) || !(diagonal[r] > 0.0) || d[r] > 1.8 * diagonal[r] ||
-      diagonal[r] > 3.0 * d[r])
-      return false;
-  }
-  return true;
-}
-
-bool DistributedVertexSolver::CanShare(int c, int donor) const
-{
-  int mine = WithinSmootherRange(Contributions_[c], HierarchyDiagonal_[donor]) ? 1 : 0, all = 0;
-  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, Comm_);
-  return all != 0;
 }
 
 bool DistributedVertexSolver::FindChangedTets(const OpticalProperties& material,
@@ -1326,17 +1288,8 @@ DistributedVertexSolver::SetUpMatrices(bool sameMesh, DiffusionSystem& system,
     {
       if (c == donor)
         continue;
-      if (CanShare(c, donor))
-      {
-        ShareChannel(c, donor, hierarchyMs);
-        setup[c] = Donor_[c] == c ? ChannelSetup::Fresh : ChannelSetup::Shared;
-      }
-      else
-      {
-        SetUpChannel(c);
-        hierarchyMs += Channels_[c]->GetHierarchyMilliseconds();
-        setup[c] = ChannelSetup::Fresh;
-      }
+      ShareChannel(c, donor, hierarchyMs);
+      setup[c] = Donor_[c] == c ? ChannelSetup::Fresh : ChannelSetup::Shared;
     }
   }
   else

@@ -192,24 +192,21 @@ public:
   const std::vector<int>& GetOwnedColumns() const { return OwnedColumns_; }
   const std::vector<double>& GetOwnedValues(int c) const { return Contributions_[c]; }
   /**
-   * One hierarchy for the three channels (default off; issue 32): when every
-   * channel needs a new hierarchy (a new mesh, a full set-up), BoomerAMG is
-   * set up once, on the channel whose matrix has the median trace (summed
-   * over the ranks), and preconditions the channels whose diagonal is
-   * within [1/3, 1.8] of its at every row (CanShare: the fine-level smoother
-   * uses the donor's l1 norms; the others get their own)
-   * (DistributedLinearSolver::SetupShared: each channel's PCG iterates on
-   * its own matrix). The convergence check still guards each channel: one
-   * that does not converge under the shared hierarchy gets its own and is
-   * solved again (report.Resolved). Off (the default): one hierarchy per
-   * channel. The trade (Documentation/Scaling.md): a cold solve or full
-   * set-up saves up to two BoomerAMG set-ups, every later solve pays the
-   * shared channels' extra PCG iterations (a relight too); and after an
-   * extreme paint the fields differ from the own-hierarchy path at
-   * round-off level, points 1e-16 of the maximum, which
-   * ParaView.TestDistributedSolve's 1e-6-relative comparison there sees.
-   * Forced on in every filter solve, a cut box on 3 ranks at RelTol 1e-12
-   * iterated for minutes (Scaling.md, session 32): not investigated.
+   * One BoomerAMG coarsening for the three channels (default on; issue
+   * 32): when every channel needs a new hierarchy (a new mesh, a full
+   * set-up), BoomerAMG is set up once, on the channel whose matrix has the
+   * median trace (summed over the ranks), and the other two channels get
+   * their own Galerkin levels on its interpolation
+   * (DistributedLinearSolver::SetupShared: P^T A_c P per level, their own
+   * smoother norms and coarsest matrix), so that each channel's V-cycle is
+   * BoomerAMG's on a hierarchy of its own matrix, as the serial path's
+   * aggregation multigrid shares one aggregation between its channels. The
+   * convergence check still guards each channel: one that does not
+   * converge gets a hierarchy of its own and is solved again
+   * (report.Resolved). Measured at 1M tets on one rank (Scaling.md,
+   * session 34): BoomerAMG set-up ~350 ms against ~700-800 ms with a
+   * hierarchy per channel, at the same iterations. Off: one hierarchy per
+   * channel.
    */
   void SetSharedHierarchy(bool on) { SharedHierarchy_ = on; }
   bool GetSharedHierarchy() const { return SharedHierarchy_; }
@@ -404,14 +401,6 @@ private:
   void ReshareDependents(int donor, double& hierarchyMs);
   /// The channel whose matrix has the median global trace.
   int MedianChannel() const;
-  /// Collective: whether channel c may use `donor`'s hierarchy (every
-  /// row's diagonal ratio within the range its smoother converges in).
-  bool CanShare(int c, int donor) const;
-  /// The owned rows' diagonal entries of owned-row values (OwnedColumns_ order).
-  std::vector<double> OwnedDiagonal(const std::vector<double>& values) const;
-  /// This rank: every owned row's diagonal of `values` within [1/3, 1.8]
-  /// of `diagonal` (the matrix a hierarchy was set up on).
-  bool WithinSmootherRange(const std::vector<double>& values, const std::vector<double>& diagonal) const;
   /// Collective: the three channels' PCG (again after a full set-up for a
   /// channel a kept or shared hierarchy failed); sameMesh: the numbering is
   /// the last Solve's (a channel whose values changed then iterates at least once).
@@ -451,15 +440,13 @@ private:
   bool ValuesOnly_ = true;
   bool ThreeChannelPCG_ = true;
   bool FusedReductions_ = false;
-  bool SharedHierarchy_ = false;
+  bool SharedHierarchy_ = true;
   bool ChangedRowsUpdate_ = true;
   double MaximumChangedFraction_ = 0.05;
   long long ChangedTets_ = -1, ChangedRowCount_ = 0;
   /// Per channel: the channel whose hierarchy preconditions it (itself if
   /// its own; -1 none).
   std::array<int, NumberOfChannels> Donor_{ -1, -1, -1 };
-  /// Per channel: the owned diagonal of the matrix its hierarchy was set up on.
-  std::array<std::vector<double>, NumberOfChannels> HierarchyDiagonal_;
   long long Numberings_ = 0, HierarchySetups_ = 0;
   /// The material of the last matrices (a relight compares it, bit for bit).
   OpticalProperties Material_;

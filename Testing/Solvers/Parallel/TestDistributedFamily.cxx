@@ -366,24 +366,32 @@ TEST(DistributedFamily, SharedAndOwnHierarchiesAgree)
       EXPECT_LT(RelativeDifference(fluence[0][k], fluence[1][k]), 1e-8) << "solve " << k;
 
     // Channels unlike each other (the scene's independent random channels:
-    // diagonals several times apart) get a hierarchy each, not a shared one
-    // that the smoother would diverge on.
+    // diagonals several times apart) share the coarsening too: each has its
+    // own Galerkin levels and smoother norms, so each converges to RelTol
+    // without a second set-up, to the field of a hierarchy per channel.
     const Scene random = MakeScene();
-    DistributedVertexSolver solver(name);
-    if (!linear.empty())
-      solver.SetLinearSolver(linear);
-    solver.SetSharedHierarchy(true);
-    solver.SetRelTol(1e-12);
-    DiffusionProblem problem;
-    problem.Mesh = random.Mesh.get();
-    problem.Material = &random.Material;
-    problem.Irradiance = &random.Irradiance;
-    problem.PointKeys = &random.Keys;
-    SolverReport report;
-    std::vector<double> fluence3;
-    ASSERT_TRUE(solver.Solve(problem, fluence3, report));
-    EXPECT_EQ(report.LinearSetup, "rebuilt (numberings 1, hierarchies 3)");
-    EXPECT_FALSE(report.Resolved);
+    std::vector<double> unlike[2];
+    for (const bool shared : { true, false })
+    {
+      DistributedVertexSolver solver(name);
+      if (!linear.empty())
+        solver.SetLinearSolver(linear);
+      solver.SetSharedHierarchy(shared);
+      solver.SetRelTol(1e-12);
+      DiffusionProblem problem;
+      problem.Mesh = random.Mesh.get();
+      problem.Material = &random.Material;
+      problem.Irradiance = &random.Irradiance;
+      problem.PointKeys = &random.Keys;
+      SolverReport report;
+      ASSERT_TRUE(solver.Solve(problem, unlike[shared ? 0 : 1], report));
+      EXPECT_EQ(report.LinearSetup,
+        std::string("rebuilt (numberings 1, hierarchies ") + (shared ? "1)" : "3)"));
+      for (int c = 0; c < NumberOfChannels; ++c)
+        EXPECT_LE(report.Residual[c], 1e-12);
+      EXPECT_FALSE(report.Resolved);
+    }
+    EXPECT_LT(RelativeDifference(unlike[0], unlike[1]), 1e-8);
   }
 }
 
@@ -528,10 +536,10 @@ TEST(DistributedFamily, BoomerAMGCGIsARegistryComposition)
     ErrorMessage([&] { solver->UpdateValues(offsets.data(), moved.data(), shifted.data()); }),
     "not in the matrix of the last Setup"));
 
-  // Issue 32: a second solver preconditioned by the first one's hierarchy
-  // (one set-up for the three channels) solves its own matrix (the residual
-  // computed here), with no hierarchy of its own; a donor without a set-up
-  // is refused (false: nothing built).
+  // Issue 32: a second solver on the first one's coarsening (one BoomerAMG
+  // set-up for the three channels, each channel its own Galerkin levels)
+  // solves its own matrix (the residual computed here); a donor without a
+  // set-up is refused (false: nothing built).
   auto sharer = CreateDistributedLinearSolver("cg/boomeramg", Self());
   auto unset = CreateDistributedLinearSolver("cg/boomeramg", Self());
   EXPECT_FALSE(sharer->SetupShared(0, n, offsets.data(), columns.data(), values.data(), *unset));
@@ -543,13 +551,54 @@ TEST(DistributedFamily, BoomerAMGCGIsARegistryComposition)
       if (columns[k] == i)
         other[k] += 0.4;
   ASSERT_TRUE(sharer->SetupShared(0, n, offsets.data(), columns.data(), other.data(), *solver));
-  EXPECT_EQ(sharer->GetHierarchyMilliseconds(), 0.0);
   EXPECT_EQ(sharer->GetNumberOfLevels(), solver->GetNumberOfLevels());
   std::vector<double> z(n, 0.0);
   EXPECT_GT(sharer->Solve(b.data(), z.data(), false, 1e-12, 100, residual), 0);
   EXPECT_LE(residual, 1e-12);
   EXPECT_LE(relativeResidual(other, z), 1e-11);
   EXPECT_GT(relativeResidual(shifted, z), 1e-2); // its own matrix, not the donor's
+
+  // Its levels are its own: on a donor's coarsening, the matrix 2.5 A has
+  // the Galerkin levels 2.5 A_l and the l1 norms 2.5 d_l, so its V-cycle is
+  // the donor's divided by 2.5 and PCG takes the donor's iterations to
+  // x / 2.5 (an identity; with the donor's own coarse levels and norms, as
+  // before issue 32's Galerkin sharing, the cycle mixes the two scales).
+  auto donor = CreateDistributedLinearSolver("cg/boomeramg", Self());
+  donor->Setup(0, n, offsets.data(), columns.data(), values.data());
+  ASSERT_GT(donor->GetNumberOfLevels(), 2); // coarse levels and a coarsest to eliminate
+  std::vector<double> scaled(values), xd(n, 0.0), xs(n, 0.0);
+  for (double& v : scaled)
+    v *= 2.5;
+  auto scaledSharer = CreateDistributedLinearSolver("cg/boomeramg", Self());
+  ASSERT_TRUE(
+    scaledSharer->SetupShared(0, n, offsets.data(), columns.data(), scaled.data(), *donor));
+  double rd = 1.0, rs = 1.0;
+  const int itd = donor->Solve(b.data(), xd.data(), false, 1e-10, 100, rd);
+  const int its = scaledSharer->Solve(b.data(), xs.data(), false, 1e-10, 100, rs);
+  EXPECT_GT(itd, 1);
+  EXPECT_EQ(its, itd);
+  double d2 = 0.0, x2 = 0.0;
+  for (int i = 0; i < n; ++i)
+  {
+    d2 += (2.5 * xs[i] - xd[i]) * (2.5 * xs[i] - xd[i]);
+    x2 += xd[i] * xd[i];
+  }
+  EXPECT_LE(std::sqrt(d2 / x2), 1e-12);
+  // The three-channel PCG applies the same cycles: the donor's and the
+  // sharer's solutions again, from zero.
+  std::array<DistributedLinearSolver*, NumberOfChannels> pair{ donor.get(), scaledSharer.get(),
+    nullptr };
+  std::vector<double> yd(n, 0.0), ys(n, 0.0);
+  std::array<const double*, NumberOfChannels> bs{ b.data(), b.data(), nullptr };
+  std::array<double*, NumberOfChannels> xs2{ yd.data(), ys.data(), nullptr };
+  DistributedSolveControl control;
+  control.RelTol = 1e-10;
+  control.MaxIter = 100;
+  std::array<DistributedChannelStats, NumberOfChannels> stats{};
+  donor->SolveChannels(pair, bs, xs2, { false, false, false }, control, stats);
+  EXPECT_EQ(stats[0].Iterations, stats[1].Iterations);
+  for (int i = 0; i < n; ++i)
+    EXPECT_NEAR(2.5 * ys[i], yd[i], 1e-10 * std::sqrt(x2)) << i;
 
   // The distributed diffusion solver names the composition it used.
   const Scene s = MakeScene();
