@@ -779,6 +779,13 @@ vtkTranslucencyParallelPlan vtkSolveDiffusion::PlanParallel(
     if (!vtkTranslucency::ReplicationFits(
           comm, MonteCarloBytesPerTet * static_cast<double>(tets), why))
     {
+      // Not only in GetParallelPlan(): the run is as slow as one process's,
+      // which a user who asked for N ranks must hear of (once, from rank 0).
+      if (comm.GetRank() == 0)
+      {
+        vtkWarningMacro(<< "the Monte Carlo runs on rank 0 alone (no faster than one process): "
+                        << why);
+      }
       return Plan::Gathered(mode, "the Monte Carlo on rank 0 alone: " + why);
     }
     return Plan::Replicated("the whole mesh on every rank, the photons split over the ranks "

@@ -294,14 +294,25 @@ if vtkMultiProcessController.GetGlobalController().GetLocalProcessId() == 1:
     # TRANSLUCENCY_REPLICATED_MEMORY, in GiB): rank 0 traces alone (path
     # "gathered"), the serial field all the same; an invalid override gathers
     # too, naming it.
+    from vtkmodules.util.misc import calldata_type
+    from vtkmodules.util.vtkConstants import VTK_STRING
     for name, memory in (("mc_small_memory", "0.000001"), ("mc_bad_memory", "lots")):
         os.environ["TRANSLUCENCY_REPLICATED_MEMORY"] = memory
         solved = monte_carlo(pvtu3, None)
+        warnings = []
+
+        @calldata_type(VTK_STRING)
+        def on_warning(obj, event, message):
+            warnings.append(message)
+
+        solved.GetClientSideObject().AddObserver("WarningEvent", on_warning)
         report(name, solved)
         SaveData(path(name + ".pvtu"), proxy=solved)
         with open(path("mc_%d.txt" % RANK), "a") as f:
             f.write("plan %s rank %d %s\n" % (name, RANK,
                                               solved.GetClientSideObject().GetParallelPlan()))
+            for message in warnings:
+                f.write("warning %s rank %d %s\n" % (name, RANK, " ".join(message.split())))
     del os.environ["TRANSLUCENCY_REPLICATED_MEMORY"]
     import re
     from vtkmodules.util.misc import calldata_type

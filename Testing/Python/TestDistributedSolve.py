@@ -292,8 +292,15 @@ class DistributedSolveTest(MpiSuite):
         reader.Update()
         ref = dict(zip(*by_id(reader.GetOutput())))
         scale = max(np.abs(v).max() for v in ref.values())
+        # Said once, by rank 0, as a warning too (not only in the plan).
+        warnings = {case: {rank: m.group(3) for rank, m in per_rank.items()}
+                    for case, per_rank in self.rank_reports(
+                        "mc", r"^warning (\S+) rank (\d+) .*(the Monte Carlo runs on rank 0 "
+                              r"alone \(no faster than one process\): rank 0: .*)$").items()}
         for case, pattern in expected.items():
             self.assertEqual(sorted(plans.get(case, {})), list(range(RANKS)), case)
+            self.assertEqual(sorted(warnings.get(case, {})), [0], case)
+            self.assertIn(plans[case][0].split("rank 0 alone: ", 1)[1], warnings[case][0], case)
             for rank in range(RANKS):
                 self.assertRegex(plans[case][rank], pattern, "rank %d" % rank)
                 self.assertEqual(self.solves[case][rank][0], "gathered", case)
