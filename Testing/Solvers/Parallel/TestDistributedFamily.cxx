@@ -318,20 +318,27 @@ TEST(DistributedFamily, SharedAndOwnHierarchiesAgree)
   for (const std::string name : { "divergence", "fem" })
   {
     SCOPED_TRACE(name + " " + linear);
-    std::vector<double> fluence[2][3];
-    for (const bool shared : { true, false })
-    {
-      DistributedVertexSolver solver(name);
+    auto configure = [&linear](DistributedVertexSolver& solver, bool shared) {
       if (!linear.empty())
         solver.SetLinearSolver(linear);
       solver.SetSharedHierarchy(shared);
       solver.SetRelTol(1e-12);
-      SolverReport report;
+    };
+    auto problemOf = [](const Scene& scene) {
       DiffusionProblem problem;
-      problem.Mesh = s.Mesh.get();
-      problem.Material = &s.Material;
-      problem.Irradiance = &s.Irradiance;
-      problem.PointKeys = &s.Keys;
+      problem.Mesh = scene.Mesh.get();
+      problem.Material = &scene.Material;
+      problem.Irradiance = &scene.Irradiance;
+      problem.PointKeys = &scene.Keys;
+      return problem;
+    };
+    std::vector<double> fluence[2][3];
+    for (const bool shared : { true, false })
+    {
+      DistributedVertexSolver solver(name);
+      configure(solver, shared);
+      SolverReport report;
+      DiffusionProblem problem = problemOf(s);
       std::vector<double>* out = fluence[shared ? 0 : 1];
       const long long own = shared ? 1 : 3;
       ASSERT_TRUE(solver.Solve(problem, out[0], report));
@@ -374,15 +381,8 @@ TEST(DistributedFamily, SharedAndOwnHierarchiesAgree)
     for (const bool shared : { true, false })
     {
       DistributedVertexSolver solver(name);
-      if (!linear.empty())
-        solver.SetLinearSolver(linear);
-      solver.SetSharedHierarchy(shared);
-      solver.SetRelTol(1e-12);
-      DiffusionProblem problem;
-      problem.Mesh = random.Mesh.get();
-      problem.Material = &random.Material;
-      problem.Irradiance = &random.Irradiance;
-      problem.PointKeys = &random.Keys;
+      configure(solver, shared);
+      const DiffusionProblem problem = problemOf(random);
       SolverReport report;
       ASSERT_TRUE(solver.Solve(problem, unlike[shared ? 0 : 1], report));
       EXPECT_EQ(report.LinearSetup,
