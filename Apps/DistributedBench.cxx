@@ -29,12 +29,14 @@
 // and across the ranks' slab boundary (x = 0.5 size: a paint after a paint;
 // the changed rows only, DistributedVertexSolver::SetChangedRowsUpdate),
 // all warm started; a new hierarchy is one
-// BoomerAMG set-up shared by the three channels unless --own-hierarchies;
+// BoomerAMG coarsening for the three channels, the other two with their own
+// Galerkin levels on it (Solve Diffusion's default), unless --own-hierarchies;
 // the relight must set up nothing: its numbering and hierarchy counts are
 // checked), then rank 0
 // alone (MPI_COMM_SELF; the others sleep) solves the whole box the same way,
 // and the two fluences are compared at every point. --serial also compares
-// with the serial core path (the solver's default linear solver, cg-jacobi)
+// with the serial core path (the solver's default linear solver: multigrid-agg
+// from 20,000 unknowns, cg-jacobi below)
 // on the whole box: what Solve Diffusion computes with one process.
 // Times are the slowest rank's; memory is each rank's resident-set growth
 // while its solver and piece are alive (after malloc_trim: live memory), and
