@@ -599,6 +599,23 @@ TEST(DistributedFamily, BoomerAMGCGIsARegistryComposition)
   EXPECT_EQ(stats[0].Iterations, stats[1].Iterations);
   for (int i = 0; i < n; ++i)
     EXPECT_NEAR(2.5 * ys[i], yd[i], 1e-10 * std::sqrt(x2)) << i;
+  // A donor whose smoother's set-up data the sharer does not rebuild (6:
+  // hybrid symmetric Gauss-Seidel without l1 norms, which is not refused
+  // by hypre) is refused: false, nothing built (the channel then gets its own).
+  auto plain = CreateDistributedLinearSolver("cg/boomeramg", Self());
+  SolverOptions gaussSeidel;
+  gaussSeidel.Set("amg-relaxation", 6.0);
+  gaussSeidel.Set("amg-relaxation-down", -1.0); // both ways the relaxation above
+  gaussSeidel.Set("amg-relaxation-up", -1.0);
+  plain->SetOptions(gaussSeidel);
+  plain->Setup(0, n, offsets.data(), columns.data(), values.data());
+  auto refused = CreateDistributedLinearSolver("cg/boomeramg", Self());
+  EXPECT_FALSE(refused->SetupShared(0, n, offsets.data(), columns.data(), scaled.data(), *plain));
+  EXPECT_TRUE(Contains(ErrorMessage([&] {
+    double r = 0.0;
+    refused->Solve(b.data(), xs.data(), false, 1e-10, 100, r);
+  }),
+    "Solve() called before Setup()"));
 
   // The distributed diffusion solver names the composition it used.
   const Scene s = MakeScene();
