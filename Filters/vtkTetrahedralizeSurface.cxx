@@ -956,9 +956,11 @@ std::string ExplainMissedTarget(
     const size_t floor = knownFloor > 0 ? knownFloor : tets.size() / 4;
     if (static_cast<double>(floor) > (1.0 + TargetTolerance) * target)
     {
-      why << "The input surface's resolution sets the floor: its " << surface.Triangles.size()
-          << " triangles are kept by the " << s.Mesher
-          << " mesher, and the coarsest mesh it makes of this surface has " << floor
+      why << "The input surface's resolution sets the floor: the " << s.Mesher
+          << " mesher keeps its " << surface.Triangles.size()
+          << " triangles (it may split them, never merges them), and the coarsest mesh it "
+             "makes of this surface has "
+          << floor
           << " tets. For fewer tets, decimate the surface first (ParaView: Decimate; VTK: "
              "vtkQuadricDecimation)";
       if (vtkTetrahedralizeSurface::HasMesher("hxt"))
