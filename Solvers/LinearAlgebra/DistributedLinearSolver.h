@@ -153,11 +153,12 @@ public:
 
   /**
    * Collective: as Setup (the same rows, the matrix built from scratch), but
-   * preconditioned by `donor`'s preconditioner instead of one of its own
-   * (issue 32: one BoomerAMG hierarchy for the three colour channels, whose
-   * matrices differ only by mu_a and sigma_s'). Solve still iterates on this
-   * matrix to relTol, so only the convergence rate depends on how close the
-   * two matrices are. `donor` must be set up on the same rows and stay so
+   * with the structure of `donor`'s preconditioner instead of one of its own
+   * (issue 32: one BoomerAMG coarsening for the three colour channels, whose
+   * matrices differ only by mu_a and sigma_s'; each sharer keeps its own
+   * values on it: cg/boomeramg its Galerkin levels, cg/aggregation its
+   * aggregates' values). Solve still iterates on this matrix to relTol, so
+   * only the convergence rate depends on how close the two matrices are. `donor` must be set up on the same rows and stay so
    * while this solver is used: a new Setup of the donor needs a new
    * SetupShared here. Returns false, with nothing built, when this solver
    * cannot share with `donor` (the default: then call Setup).

@@ -191,7 +191,7 @@ struct GalerkinLevels
 /// Whether a sharer can have its own Galerkin levels on `donor`'s
 /// coarsening: the relaxations whose set-up data GalerkinLevels rebuilds
 /// (l1 Gauss-Seidel 8/13/14 in natural order, on the coarsest level also
-/// Gaussian elimination 9 or none), and no other per-level data.
+/// Gaussian elimination 9), and no other per-level data.
 bool GalerkinSharable(HYPRE_Solver donor)
 {
   auto* amg = reinterpret_cast<hypre_ParAMGData*>(donor);
