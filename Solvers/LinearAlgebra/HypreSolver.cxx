@@ -400,6 +400,17 @@ bool HypreBoomerAMGPCG::SetupShared(int rowBegin, int rowEnd, const int* rowOffs
   Free();
   const double start = MPI_Wtime();
   BuildMatrix(rowBegin, rowEnd, rowOffsets, columns, values);
+  // hypre::BuildMatrix lays out the same rows and columns the same way: the
+  // donor's entry places are this matrix's when its pattern is the donor's
+  // (a fingerprint pass instead of a search of every entry).
+  const int rows = rowEnd - rowBegin;
+  if (!other->Places_.empty() &&
+    other->Places_.size() == static_cast<std::size_t>(rows > 0 ? rowOffsets[rows] : 0) &&
+    hypre::PatternFingerprint(rows, rowOffsets, columns) == other->PlacePattern_)
+  {
+    Places_ = other->Places_;
+    PlacePattern_ = other->PlacePattern_;
+  }
   const double assembled = MPI_Wtime();
   MatrixMilliseconds_ = 1000.0 * (assembled - start);
   BuildSolver(other);
@@ -447,6 +458,13 @@ void HypreBoomerAMGPCG::PrepareUpdates(const int* rowOffsets, const int* columns
   if (!H_->A)
   {
     throw Error("hypre-amg: PrepareUpdates() called before Setup()");
+  }
+  // Places already of this pattern (a sharer's, from its donor): kept.
+  const int rows = RowEnd_ - RowBegin_;
+  if (!Places_.empty() && Places_.size() == static_cast<std::size_t>(rowOffsets[rows]) &&
+    hypre::PatternFingerprint(rows, rowOffsets, columns) == PlacePattern_)
+  {
+    return;
   }
   hypre::FindPlaces(H_->A, RowBegin_, RowEnd_, rowOffsets, columns, Places_, PlacePattern_,
     "hypre-amg");
