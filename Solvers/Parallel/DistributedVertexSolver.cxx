@@ -742,15 +742,19 @@ void DistributedVertexSolver::SetUpChannel(int c)
   {
     error = e.what();
   }
-  // The hierarchy's share of this channel's set-up, in CPU time (the
-  // matrix's share measured in wall time, scaled alike).
   if (Channels_[c])
-  {
-    const double wall = Channels_[c]->GetMatrixMilliseconds() + Channels_[c]->GetHierarchyMilliseconds();
-    const double share = wall > 0.0 ? Channels_[c]->GetHierarchyMilliseconds() / wall : 1.0;
-    HierarchyCpu_ += share * (CpuMilliseconds() - cpu - preparedCpu);
-  }
+    AddHierarchyCpu(c, CpuMilliseconds() - cpu - preparedCpu);
   AgreeOnError(Comm_, error);
+}
+
+void DistributedVertexSolver::AddHierarchyCpu(int c, double setupCpu)
+{
+  // The hierarchy's share of the channel's set-up, in CPU time (the matrix's
+  // share measured in wall time, scaled alike).
+  const double matrix = Channels_[c]->GetMatrixMilliseconds();
+  const double levels = Channels_[c]->GetHierarchyMilliseconds();
+  const double wall = matrix + levels;
+  HierarchyCpu_ += (wall > 0.0 ? levels / wall : 1.0) * setupCpu;
 }
 
 void DistributedVertexSolver::ShareChannel(int c, int donor, double& hierarchyMs)
@@ -773,19 +777,14 @@ void DistributedVertexSolver::ShareChannel(int c, int donor, double& hierarchyMs
     Donor_[c] = -1;
     shared = Channels_[c]->SetupShared(Numbering_.GetRowBegin(), Numbering_.GetRowEnd(),
       OwnedOffsets_.data(), OwnedColumns_.data(), Contributions_[c].data(), *Channels_[donor]);
-    if (shared && ValuesOnly_)
-      Channels_[c]->PrepareUpdates(OwnedOffsets_.data(), OwnedColumns_.data());
     if (shared)
     {
+      // Its own Galerkin levels on the donor's coarsening are hierarchy work.
       Donor_[c] = donor;
-      // Its own Galerkin levels on the donor's coarsening: hierarchy work
-      // (the CPU share as in SetUpChannel).
-      const double matrix = Channels_[c]->GetMatrixMilliseconds();
-      const double levels = Channels_[c]->GetHierarchyMilliseconds();
-      hierarchyMs += levels;
-      HierarchyCpu_ += matrix + levels > 0.0
-        ? levels / (matrix + levels) * (CpuMilliseconds() - cpu)
-        : 0.0;
+      hierarchyMs += Channels_[c]->GetHierarchyMilliseconds();
+      AddHierarchyCpu(c, CpuMilliseconds() - cpu);
+      if (ValuesOnly_)
+        Channels_[c]->PrepareUpdates(OwnedOffsets_.data(), OwnedColumns_.data());
     }
   }
   catch (const Error& e)

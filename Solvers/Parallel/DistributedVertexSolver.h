@@ -401,6 +401,9 @@ private:
   void ReshareDependents(int donor, double& hierarchyMs);
   /// The channel whose matrix has the median global trace.
   int MedianChannel() const;
+  /// Adds to HierarchyCpu_ the hierarchy's share of `setupCpu` (CPU ms of
+  /// channel c's last set-up), in the proportion of its wall times.
+  void AddHierarchyCpu(int c, double setupCpu);
   /// Collective: the three channels' PCG (again after a full set-up for a
   /// channel a kept or shared hierarchy failed); sameMesh: the numbering is
   /// the last Solve's (a channel whose values changed then iterates at least once).
