@@ -417,8 +417,11 @@ void CompareWithSerial(const std::vector<long long>& ids, const std::vector<doub
       const double b = expected[3 * where[static_cast<size_t>(ids[k])] + c];
       worst = std::max(worst, std::abs(fluence[3 * k + c] - b) / std::abs(b));
     }
-  std::printf("serial %s (%s, %.0f ms): max relative difference, %d ranks vs serial: %.2e\n",
-    solver.c_str(), report.LinearSolver.c_str(), 1000.0 * (MPI_Wtime() - start), size, worst);
+  std::printf("serial %s (%s, %.0f ms: set-up %.0f ms, solve %.0f ms, iterations %d %d %d): max "
+              "relative difference, %d ranks vs serial: %.2e\n",
+    solver.c_str(), report.LinearSolver.c_str(), 1000.0 * (MPI_Wtime() - start),
+    report.SetupMilliseconds, report.SolveMilliseconds, report.Iterations[0], report.Iterations[1],
+    report.Iterations[2], size, worst);
   // The power balance summed over the ranks (physical faces only) vs
   // the serial ComputePowerBalance of the whole box on the serial
   // solution: equal up to the solver tolerance (both fluences are

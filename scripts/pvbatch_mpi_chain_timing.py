@@ -23,7 +23,11 @@ the same tets (issues 31 and 32; Documentation/Performance.md and Scaling.md).
    site-packages), Solve Diffusion's own set-up and PCG times (rank 0's
    GetAssemblyTime, GetSolveTime) are recorded too ("solve setup", "solve
    pcg") and its PCG iterations (R/G/B) and what its beam and linear set-up
-   did are printed.
+   did are printed. "cpu" is this process's CPU seconds over the step (every
+   thread; under MPI rank 0's only), "cpu irradiance" and "cpu solve" those
+   two filters': CPU / wall of serial pvbatch is how many of the machine's
+   cores one process already keeps busy, which bounds what N ranks on the
+   same cores can gain.
 3. Writes the medians (seconds, per step and filter), the ranks and the tets
    to the JSON file. --table prints the Markdown
    table of two or more such files (the first is the baseline).
@@ -43,6 +47,8 @@ import time
 
 STEPS = ("cold", "relight", "paint")
 FILTERS = ("assign", "irradiance", "paint", "solve", "radiance")
+CPU_FILTERS = ("irradiance", "solve")
+CPU = ("cpu",) + tuple("cpu " + f for f in CPU_FILTERS)
 
 
 def table(paths):
@@ -52,7 +58,7 @@ def table(paths):
                                         for r in runs) + " | ratio |")
     print("|---|---|" + "---|" * len(runs) + "---|")
     for step in STEPS:
-        for f in FILTERS + ("total", "solve setup", "solve pcg"):
+        for f in FILTERS + ("total",) + CPU + ("solve setup", "solve pcg"):
             values = [r["medians"][step].get(f) for r in runs]
             if any(v is None for v in values):
                 continue
@@ -97,7 +103,7 @@ def main():
         t = math.radians(degrees)
         return [0.0, -math.cos(t) + math.sin(t), -math.sin(t) - math.cos(t), 1.0]
 
-    times = {s: {f: [] for f in FILTERS + ("total", "solve setup", "solve pcg")} for s in STEPS}
+    times = {s: {f: [] for f in FILTERS + ("total",) + CPU + ("solve setup", "solve pcg")} for s in STEPS}
     for run in range(runs):
         assign = AssignScatteringCoefficients(Input=reader, MaterialName="marble")  # noqa: F821
         light = SurfaceIrradiance(Input=assign, DirectionalLights=key_light(0.0),  # noqa: F821
@@ -115,13 +121,22 @@ def main():
                 paint.StrokePoints = [centre[0], bounds[3], centre[2]]
                 paint.Width = 0.024 * diag
             total = 0.0
+            cpu = 0.0
             for f in FILTERS:
                 start = time.perf_counter()
+                cpuStart = time.process_time()
                 proxies[f].UpdatePipeline()
                 seconds = time.perf_counter() - start
+                cpuSeconds = time.process_time() - cpuStart
+                cpu += cpuSeconds
+                if f in CPU_FILTERS:
+                    times[step]["cpu " + f].append(cpuSeconds)
                 times[step][f].append(seconds)
                 total += seconds
             times[step]["total"].append(total)
+            # This process's CPU seconds (every thread; under MPI rank 0's):
+            # CPU / wall of one process is how many cores it kept busy.
+            times[step]["cpu"].append(cpu)
             # Solve Diffusion's own account (rank 0's filter): set-up
             # (numbering, assembly with the beam, hierarchy) and PCG, and
             # what its beam and linear set-up did.
@@ -135,9 +150,9 @@ def main():
                     times[step]["solve setup"][-1], times[step]["solve pcg"][-1],
                     "/".join(str(core.GetNumberOfIterations(c)) for c in range(3)),
                     core.GetLastCollimatedUpdate() or "-", core.GetLastLinearSetup() or "-")
-            print("run %d %-8s %s total %.3f%s" % (
+            print("run %d %-8s %s total %.3f cpu %.3f%s" % (
                 run + 1, step, " ".join("%s %.3f" % (f, times[step][f][-1]) for f in FILTERS),
-                total, account), flush=True)
+                total, cpu, account), flush=True)
         for proxy in (radiance, solve, paint, light, assign):
             Delete(proxy)
     for s in STEPS:

@@ -9,6 +9,7 @@
 #include <_hypre_parcsr_ls.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
@@ -337,6 +338,90 @@ HYPRE_Int NoSetup(HYPRE_Solver, HYPRE_Matrix, HYPRE_Vector, HYPRE_Vector)
 {
   return 0;
 }
+
+/**
+ * The fine level's l1 norms of the smoother (the channel's own BoomerAMG's,
+ * or its own Galerkin levels'), or nullptr for a smoother without them or a
+ * one-level hierarchy.
+ */
+hypre_Vector* FineNorms(HYPRE_Solver amg, GalerkinLevels* galerkin)
+{
+  if (galerkin)
+    return galerkin->L1.empty() ? nullptr : galerkin->L1[0];
+  if (!amg)
+    return nullptr;
+  hypre_Vector** l1 = hypre_ParAMGDataL1Norms(reinterpret_cast<hypre_ParAMGData*>(amg));
+  return l1 ? l1[0] : nullptr;
+}
+
+/**
+ * The fine level's l1 norms of rows `rows` (local numbers; all rows when
+ * null) recomputed from the matrix's current values: BoomerAMG's option 4
+ * (natural order; hypre_ParCSRComputeL1Norms), per row |a_ii| plus half the
+ * absolute off-rank entries, truncated to |a_ii| when within 4/3 of it,
+ * with the diagonal's sign. After a values-only update (a paint) the kept
+ * hierarchy's l1 Gauss-Seidel sweeps would otherwise divide the new
+ * residual by the old norm: where a paint raised a row's diagonal more
+ * than twice (an absorber) the sweep over-corrects there and diverges, and
+ * the V-cycle is no longer a convergent preconditioner. Also called after
+ * every set-up (for every row), so that a row's norm never depends on
+ * whether it was last set by hypre or here. Throws translucency::Error on a
+ * zero diagonal.
+ */
+void RefreshFineNorms(HYPRE_IJMatrix ij, hypre_Vector* fine, const int* rows, int count)
+{
+  if (!fine)
+    return;
+  HYPRE_ParCSRMatrix a = nullptr;
+  HYPRE_IJMatrixGetObject(ij, reinterpret_cast<void**>(&a));
+  auto* m = reinterpret_cast<hypre_ParCSRMatrix*>(a);
+  const HYPRE_Int numRows = hypre_ParCSRMatrixNumRows(m);
+  if (hypre_VectorSize(fine) != numRows)
+  {
+    throw Error("hypre-amg: the kept hierarchy's fine level has " +
+      std::to_string(hypre_VectorSize(fine)) + " rows, the matrix " + std::to_string(numRows));
+  }
+  const hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(m);
+  const hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(m);
+  const HYPRE_Int* di = hypre_CSRMatrixI(diag);
+  const HYPRE_Int* dj = hypre_CSRMatrixJ(diag);
+  const HYPRE_Complex* dv = hypre_CSRMatrixData(diag);
+  const HYPRE_Int* oi = hypre_CSRMatrixNumCols(offd) > 0 ? hypre_CSRMatrixI(offd) : nullptr;
+  const HYPRE_Complex* ov = oi ? hypre_CSRMatrixData(offd) : nullptr;
+  HYPRE_Real* l1 = hypre_VectorData(fine);
+  const int n = rows ? count : numRows;
+  for (int k = 0; k < n; ++k)
+  {
+    const HYPRE_Int i = rows ? rows[k] : k;
+    if (i < 0 || i >= numRows)
+      throw Error("hypre-amg: row " + std::to_string(i) + " outside the rank's " +
+        std::to_string(numRows) + " rows");
+    HYPRE_Real d = 0.0;
+    for (HYPRE_Int e = di[i]; e < di[i + 1]; ++e)
+    {
+      if (dj[e] == i)
+      {
+        d = dv[e];
+        break;
+      }
+    }
+    const HYPRE_Real ad = std::abs(d);
+    HYPRE_Real norm = ad;
+    if (oi)
+    {
+      for (HYPRE_Int e = oi[i]; e < oi[i + 1]; ++e)
+        norm += 0.5 * std::abs(ov[e]);
+    }
+    if (norm <= 4.0 / 3.0 * ad)
+      norm = ad;
+    if (norm == 0.0)
+    {
+      throw Error("hypre-amg: row " + std::to_string(hypre_ParCSRMatrixFirstRowIndex(m) + i) +
+        " of the matrix has a zero diagonal and no off-rank entries (the smoother divides by it)");
+    }
+    l1[i] = d < 0.0 ? -norm : norm;
+  }
+}
 }
 
 HypreBoomerAMGPCG::HypreBoomerAMGPCG(MPI_Comm comm, const BoomerAMGOptions& options)
@@ -434,6 +519,7 @@ void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, 
   // matrix in hypre 2.26: TestDistributedFamily's (2A)^-1 = A^-1 / 2.)
   hypre::ScatterValues(h.A, RowBegin_, RowEnd_, rowOffsets, columns, values, Places_,
     PlacePattern_, "hypre-amg");
+  RefreshFineNorms(h.A, FineNorms(h.AMG, h.Galerkin.get()), nullptr, 0);
   MatrixMilliseconds_ = 1000.0 * (MPI_Wtime() - start);
   HierarchyMilliseconds_ = 0.0;
 }
@@ -449,8 +535,18 @@ void HypreBoomerAMGPCG::UpdateRows(const int* rowOffsets, const int* columns,
   const double start = MPI_Wtime();
   hypre::ScatterRows(h.A, RowBegin_, RowEnd_, rowOffsets, columns, values, rows, numRows, Places_,
     PlacePattern_, "hypre-amg");
+  RefreshFineNorms(h.A, FineNorms(h.AMG, h.Galerkin.get()), rows, numRows);
   MatrixMilliseconds_ = 1000.0 * (MPI_Wtime() - start);
   HierarchyMilliseconds_ = 0.0;
+}
+
+std::vector<double> HypreBoomerAMGPCG::GetFineSmootherNorms() const
+{
+  const hypre_Vector* fine = FineNorms(H_->AMG, H_->Galerkin.get());
+  if (!fine)
+    return {};
+  const HYPRE_Real* data = hypre_VectorData(fine);
+  return std::vector<double>(data, data + hypre_VectorSize(fine));
 }
 
 void HypreBoomerAMGPCG::PrepareUpdates(const int* rowOffsets, const int* columns)
@@ -515,6 +611,7 @@ void HypreBoomerAMGPCG::BuildSolver(const HypreBoomerAMGPCG* shared)
     OperatorComplexity_ = total[0] > 0 ? (total[0] + total[1]) / total[0] : 0.0;
     IterationWork_ = shared->IterationWork_;
     MemoryBytes_ = static_cast<std::size_t>(local[1] * 12.0); // own levels; P is the donor's
+    RefreshFineNorms(h.A, FineNorms(nullptr, h.Galerkin.get()), nullptr, 0);
     return;
   }
   Check(HYPRE_BoomerAMGCreate(&h.AMG), "BoomerAMG creation");
@@ -568,6 +665,7 @@ void HypreBoomerAMGPCG::BuildSolver(const HypreBoomerAMGPCG* shared)
   NonZeros_ = static_cast<long long>(total[0]);
   IterationWork_ = total[0] > 0 ? 1.0 + (3.0 * total[1] + 2.0 * total[2]) / total[0] : 0.0;
   MemoryBytes_ = static_cast<std::size_t>((local[1] - local[0] + local[2]) * 12.0);
+  RefreshFineNorms(h.A, FineNorms(h.AMG, nullptr), nullptr, 0);
 }
 
 int HypreBoomerAMGPCG::Solve(

@@ -113,9 +113,10 @@ public:
    * new values written straight into the assembled ParCSR matrix (each
    * entry's place found once per pattern); the hierarchy is kept: its fine
    * level is this matrix, so
-   * smoothing and residuals see the new values, the coarse levels and the
-   * smoother's l1 norms are the old matrix's (good while the change is
-   * small, a paint stroke). Throws
+   * smoothing and residuals see the new values, and so do the fine
+   * level's smoother norms (recomputed: GetFineSmootherNorms); the coarse
+   * levels are the old matrix's (good while the change is small, a paint
+   * stroke). Throws
    * translucency::Error if there is no Setup to update or an entry is not in
    * the matrix (a changed pattern).
    */
@@ -125,12 +126,24 @@ public:
    * UpdateValues of the changed rows only (collective; issue 32: a paint
    * stroke): their entries written to the places the first UpdateValues
    * after Setup found (hypre::ScatterRows; every row when none were found
-   * yet). The hierarchy is kept, as with UpdateValues.
+   * yet), and those rows' smoother norms recomputed. The hierarchy is kept,
+   * as with UpdateValues.
    */
   void UpdateRows(const int* rowOffsets, const int* columns, const double* values,
     const int* rows, int numRows) override;
   /// Each entry's place in the ParCSR blocks found now (hypre::FindPlaces).
   void PrepareUpdates(const int* rowOffsets, const int* columns) override;
+
+  /**
+   * The fine level's l1 norms of this channel's smoother on this rank's rows
+   * (its own BoomerAMG's, or its own Galerkin levels' when it shares a
+   * coarsening; empty for a smoother without them): what its V-cycle's l1
+   * Gauss-Seidel sweeps divide a row's residual by. Set up from the matrix,
+   * and recomputed from the new values by UpdateValues and (their rows)
+   * UpdateRows, as BoomerAMG's set-up computes them (option 4 of
+   * hypre_ParCSRComputeL1Norms). A diagnostic (tests).
+   */
+  std::vector<double> GetFineSmootherNorms() const;
 
   /**
    * The matrix of these rows on `donor`'s BoomerAMG coarsening (collective;

@@ -54,6 +54,17 @@ SOURCE_CASES = {"src_point": "ref_point_divergence", "src_pencil": "ref_pencil_d
                 "src_aimed": "ref_aimed_divergence"}
 
 
+# Two solves of one system to RelTol 1e-13 compared point by point at 1e-6
+# relative: relative to the point's own value, but not below 1e-9 of the
+# largest, so that the absolute tolerance never falls below 1e-15 of the
+# largest value (a few units in the last place of it: round-off of any
+# correct solve, below what the stopping rule can hold a point to). An
+# extreme absorber (paint_extreme) has points at 1e-13 of the maximum whose
+# two solves differ by 1.5e-16 of it; a difference of 1e-12 of the maximum
+# anywhere still fails.
+SOLVE_FLOOR = 1e-9
+
+
 def by_id(piece):
     ids = vtk_to_numpy(piece.GetPointData().GetArray("PointIds"))
     return ids, vtk_to_numpy(piece.GetPointData().GetArray("Fluence"))
@@ -98,7 +109,7 @@ class DistributedSolveTest(MpiSuite):
                 if piece.GetNumberOfPoints() == 0:
                     continue
                 for i, v in zip(*by_id(piece)):
-                    worst = max(worst, worst_relative(v, ref[int(i)], scale))
+                    worst = max(worst, worst_relative(v, ref[int(i)], scale, SOLVE_FLOOR))
                     seen.add(int(i))
             self.assertEqual(seen, set(ref), "every point of case " + case)
             self.assertLessEqual(worst, 1e-6, "max relative Fluence difference, case " + case)
@@ -146,7 +157,7 @@ class DistributedSolveTest(MpiSuite):
                     continue
                 nonempty += piece.GetNumberOfCells() > 0
                 for i, v in zip(*by_id(piece)):
-                    worst = max(worst, worst_relative(v, ref[int(i)], scale))
+                    worst = max(worst, worst_relative(v, ref[int(i)], scale, SOLVE_FLOOR))
                     seen.add(int(i))
             self.assertEqual(seen, set(ref), "every point of case " + case)
             self.assertLessEqual(worst, 1e-6, "max relative Fluence difference, case " + case)

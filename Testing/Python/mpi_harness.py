@@ -182,11 +182,11 @@ def pieces_of(name):
     return pieces
 
 
-def worst_relative(value, reference, scale):
-    """max |value - reference| / max(|reference|, 1e-12 scale)."""
+def worst_relative(value, reference, scale, floor=1e-12):
+    """max |value - reference| / max(|reference|, floor scale)."""
     import numpy as np
     return float(np.max(np.abs(value - reference) /
-                        np.maximum(np.abs(reference), 1e-12 * scale)))
+                        np.maximum(np.abs(reference), floor * scale)))
 
 
 def main():

@@ -6,7 +6,8 @@
 // rule (DiffusionSolver::SetChangeTol) against tight solves, and the guard
 // after a paint (at least one iteration). These tests run on MPI_COMM_WORLD:
 // on one rank as discovered by ctest (an MPI singleton) and on 2 and 3 ranks
-// through mpiexec (Testing/Solvers/CMakeLists.txt, Solvers.DistributedPCG2/3).
+// through mpiexec (Testing/Solvers/CMakeLists.txt, Solvers.DistributedPCG2/3);
+// with them BoomerAMG's kept hierarchy after a values-only update.
 // Every rank runs the same steps in the same order (the calls are
 // collective) and checks with EXPECT (no early return before a collective).
 #include "DistributedSlabs.h"
@@ -17,12 +18,15 @@
 
 #include <gtest/gtest.h>
 
+#include <HYPRE.h>
+#include <_hypre_parcsr_ls.h>
 #include <mpi.h>
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -469,4 +473,159 @@ TEST(DistributedPCG, GalerkinSharerIsTheScaledDonorOnEveryPartition)
   }
   MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
   EXPECT_LE(std::sqrt(sums[0] / sums[1]), 1e-12);
+}
+
+namespace
+{
+/// This rank's rows of the 3-D 7-point Laplacian of side^3 rows plus
+/// `shift` I (split by rows over the ranks), with `absorber` added to the
+/// diagonal of the rows in the bottom `absorberLayers` z-layers (a painted
+/// absorber, ~1/3 of the rows).
+struct LaplacianRows
+{
+  int Begin = 0, End = 0;
+  std::vector<int> Offsets{ 0 }, Columns;
+  std::vector<double> Values;
+  std::vector<int> Painted; ///< local numbers of the absorber's rows
+};
+
+LaplacianRows MakeLaplacianRows(int side, double shift, double absorber, int absorberLayers)
+{
+  const int ranks = Size(), rank = Rank(), n = side * side * side;
+  LaplacianRows m;
+  m.Begin = static_cast<int>(static_cast<long long>(n) * rank / ranks);
+  m.End = static_cast<int>(static_cast<long long>(n) * (rank + 1) / ranks);
+  for (int i = m.Begin; i < m.End; ++i)
+  {
+    const int x = i % side, y = (i / side) % side, z = i / (side * side);
+    std::vector<int> row{ i };
+    const int steps[3] = { 1, side, side * side };
+    const int at[3] = { x, y, z };
+    for (int d = 0; d < 3; ++d)
+    {
+      if (at[d] > 0)
+        row.push_back(i - steps[d]);
+      if (at[d] + 1 < side)
+        row.push_back(i + steps[d]);
+    }
+    std::sort(row.begin(), row.end());
+    const bool painted = z < absorberLayers;
+    if (painted)
+      m.Painted.push_back(i - m.Begin);
+    for (const int j : row)
+    {
+      m.Columns.push_back(j);
+      m.Values.push_back(j == i ? 6.0 + shift + (painted ? absorber : 0.0) : -1.0);
+    }
+    m.Offsets.push_back(static_cast<int>(m.Columns.size()));
+  }
+  return m;
+}
+
+/// hypre's own l1 norms (hypre_ParCSRComputeL1Norms, option 4: what
+/// BoomerAMG's set-up computes for the l1 Gauss-Seidel smoothers) of the
+/// matrix of these rows, built here through hypre's IJ interface.
+std::vector<double> HypreFineNorms(const LaplacianRows& m)
+{
+  HYPRE_IJMatrix ij = nullptr;
+  HYPRE_IJMatrixCreate(MPI_COMM_WORLD, m.Begin, m.End - 1, m.Begin, m.End - 1, &ij);
+  HYPRE_IJMatrixSetObjectType(ij, HYPRE_PARCSR);
+  HYPRE_IJMatrixInitialize(ij);
+  for (int r = 0; r < m.End - m.Begin; ++r)
+  {
+    HYPRE_Int count = m.Offsets[r + 1] - m.Offsets[r];
+    HYPRE_BigInt row = m.Begin + r;
+    std::vector<HYPRE_BigInt> columns(m.Columns.begin() + m.Offsets[r], m.Columns.begin() + m.Offsets[r + 1]);
+    HYPRE_IJMatrixSetValues(ij, 1, &count, &row, columns.data(), m.Values.data() + m.Offsets[r]);
+  }
+  HYPRE_IJMatrixAssemble(ij);
+  HYPRE_ParCSRMatrix a = nullptr;
+  HYPRE_IJMatrixGetObject(ij, reinterpret_cast<void**>(&a));
+  HYPRE_Real* norms = nullptr;
+  hypre_ParCSRComputeL1Norms(reinterpret_cast<hypre_ParCSRMatrix*>(a), 4, nullptr, &norms);
+  std::vector<double> result(norms, norms + (m.End - m.Begin));
+  hypre_TFree(norms, HYPRE_MEMORY_HOST);
+  HYPRE_IJMatrixDestroy(ij);
+  return result;
+}
+
+double WorstRelative(const std::vector<double>& a, const std::vector<double>& b)
+{
+  double worst = a.size() == b.size() ? 0.0 : 1.0;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i)
+    worst = std::max(worst, std::abs(a[i] - b[i]) / std::abs(b[i]));
+  MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  return worst;
+}
+} // namespace
+
+// Issue 32, session 35: a values-only update of a kept BoomerAMG hierarchy
+// (a paint) recomputes the fine level's smoother norms from the new values
+// (UpdateValues every row, UpdateRows the changed rows), for a channel with
+// its own hierarchy and for one on a shared coarsening. Checked against
+// hypre's own l1 norms of the new matrix (hypre_ParCSRComputeL1Norms, built
+// here), on every partition. An absorber painted into a third of the rows
+// (diagonal 6.1 -> 46.1): with the set-up's norms the l1 Gauss-Seidel sweep
+// divides those rows' residual by 6.1 and over-corrects 7.5-fold; with the
+// refreshed ones the kept hierarchy converges (its coarse levels stale: 12
+// -> 15 iterations on one rank, 14 -> 18 on three).
+TEST(DistributedPCG, ValuesOnlyUpdateRefreshesTheFineSmoother)
+{
+  const int side = 14;
+  const LaplacianRows before = MakeLaplacianRows(side, 0.1, 0.0, 0);
+  const LaplacianRows after = MakeLaplacianRows(side, 0.1, 40.0, 5);
+  const LaplacianRows otherBefore = MakeLaplacianRows(side, 1.3, 0.0, 0);
+  const LaplacianRows otherAfter = MakeLaplacianRows(side, 1.3, 40.0, 5);
+  long long painted = static_cast<long long>(after.Painted.size());
+  MPI_Allreduce(MPI_IN_PLACE, &painted, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  ASSERT_EQ(painted, 5LL * side * side);
+  const std::vector<double> expected = HypreFineNorms(after);
+  const std::vector<double> expectedOther = HypreFineNorms(otherAfter);
+  const std::vector<double> unpainted = HypreFineNorms(before);
+
+  const MPI_Comm* world = GetWorldCommunicator();
+  auto make = [world] {
+    return std::make_unique<HypreBoomerAMGPCG>(*world, BoomerAMGOptions::Tuned());
+  };
+  const int* o = before.Offsets.data();
+  const int* c = before.Columns.data();
+  auto whole = make(), rows = make(), sharer = make(), fresh = make();
+  whole->Setup(before.Begin, before.End, o, c, before.Values.data());
+  EXPECT_GE(whole->GetNumberOfLevels(), 3);
+  EXPECT_LE(WorstRelative(whole->GetFineSmootherNorms(), unpainted), 1e-14) << "the set-up's";
+  rows->Setup(before.Begin, before.End, o, c, before.Values.data());
+  ASSERT_TRUE(sharer->SetupShared(before.Begin, before.End, o, c, otherBefore.Values.data(), *whole));
+  rows->PrepareUpdates(o, c);
+  sharer->PrepareUpdates(o, c);
+
+  whole->UpdateValues(o, c, after.Values.data());
+  rows->UpdateRows(o, c, after.Values.data(), after.Painted.data(), static_cast<int>(after.Painted.size()));
+  sharer->UpdateValues(o, c, otherAfter.Values.data());
+  EXPECT_LE(WorstRelative(whole->GetFineSmootherNorms(), expected), 1e-14) << "UpdateValues";
+  EXPECT_LE(WorstRelative(rows->GetFineSmootherNorms(), expected), 1e-14) << "UpdateRows";
+  EXPECT_LE(WorstRelative(sharer->GetFineSmootherNorms(), expectedOther), 1e-14) << "a sharer";
+
+  // The kept hierarchies against a fresh set-up of the painted matrix.
+  fresh->Setup(after.Begin, after.End, o, c, after.Values.data());
+  std::vector<double> b(after.Values.size() ? static_cast<std::size_t>(after.End - after.Begin) : 0);
+  for (std::size_t i = 0; i < b.size(); ++i)
+    b[i] = std::sin(0.37 * static_cast<double>(after.Begin + static_cast<int>(i))) + 1.2;
+  auto solve = [&b](HypreBoomerAMGPCG& s, double& residual) {
+    std::vector<double> x(b.size(), 0.0);
+    return s.Solve(b.data(), x.data(), false, 1e-10, 100, residual);
+  };
+  double rFresh = 1.0, rWhole = 1.0, rRows = 1.0;
+  const int itFresh = solve(*fresh, rFresh), itWhole = solve(*whole, rWhole), itRows = solve(*rows, rRows);
+  if (Rank() == 0)
+    std::cout << "iterations to 1e-10: fresh " << itFresh << ", kept (every row) " << itWhole
+              << ", kept (changed rows) " << itRows << "\n";
+  EXPECT_LE(rWhole, 1e-10);
+  EXPECT_LE(rRows, 1e-10);
+  EXPECT_EQ(itRows, itWhole);
+  // Within the distributed solve's rule for an aged hierarchy (a values-only
+  // solve taking more than twice the full set-up's iterations is rebuilt at
+  // the next change: DistributedVertexSolver::SolveChannels). With the
+  // set-up's norms it breaks down after 8-9 iterations at a relative
+  // residual of 1.6-2.0 (1, 2 and 3 ranks).
+  EXPECT_LE(itWhole, 2 * itFresh);
 }
