@@ -7,7 +7,10 @@ How to run, from the repository root after `make build`:
 
 (as root, add --allow-run-as-root; on a machine with fewer cores than ranks,
 --oversubscribe). Writes <prefix>.pvtu (the solved tets, one piece per rank)
-and <prefix>_surface.pvtp (the boundary surface with Radiance).
+and <prefix>_surface.pvtp (the boundary surface with Radiance). A third
+argument meshes that surface file instead of the project's bunny; the script
+runs from any directory (it finds the bunny through the plugin's build or
+installation).
 
 1. The PLY reader reads on rank 0 (the other ranks get empty pieces);
    Tetrahedralize Surface runs TetGen on rank 0.
@@ -30,11 +33,30 @@ from paraview.simple import *  # noqa: F401,F403
 
 plugin, prefix = sys.argv[1], sys.argv[2]
 LoadPlugin(plugin, ns=globals())
-bunny = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "Data", "bunny.ply")
+
+
+def find_bunny():
+    """The surface to mesh: the third argument if given (any PLY, OBJ or
+    STL), else the project's bunny found by the translucency Python package
+    beside the plugin (<lib>/python3.*/site-packages of its build or
+    installation: $TRANSLUCENCY_DATA_DIR, the source tree, or the installed
+    share/translucency/Data), so that this script runs from any directory."""
+    if len(sys.argv) > 3:
+        return os.path.abspath(sys.argv[3])
+    import glob
+    lib = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(plugin))))
+    sys.path[:0] = sorted(glob.glob(os.path.join(lib, "python3*", "site-packages")))
+    import translucency
+    return translucency.find_data("bunny.ply")
+
+
+bunny = find_bunny()
 
 # 1. Read and mesh (rank 0).
 surface = TranslucencySurfaceReader(FileName=bunny)
-tets = TetrahedralizeSurface(Input=surface, TargetNumberOfTets=3000)
+# (the bunny's 3,674 triangles allow no fewer than ~45,000 tets: a smaller
+# target would only warn that the mesh is larger)
+tets = TetrahedralizeSurface(Input=surface, TargetNumberOfTets=40000)
 
 # 2. Partition, then the per-tet and per-point stages.
 pieces = RedistributeDataSet(Input=tets)
