@@ -142,6 +142,14 @@ void HypreBoomerAMGPCG::SetOptions(const SolverOptions& options)
 
 namespace
 {
+/// The assembled ParCSR matrix of an IJ matrix.
+hypre_ParCSRMatrix* ParCSROf(HYPRE_IJMatrix ij)
+{
+  HYPRE_ParCSRMatrix a = nullptr;
+  HYPRE_IJMatrixGetObject(ij, reinterpret_cast<void**>(&a));
+  return reinterpret_cast<hypre_ParCSRMatrix*>(a);
+}
+
 /**
  * A channel's own Galerkin levels on another channel's BoomerAMG coarsening
  * (HypreBoomerAMGPCG::SetupShared): the donor's interpolation P_l and
@@ -208,6 +216,87 @@ bool GalerkinSharable(HYPRE_Solver donor)
 }
 
 /**
+ * The fine level's l1 norms of the smoother (the channel's own BoomerAMG's,
+ * or its own Galerkin levels'), or nullptr for a smoother without them or a
+ * one-level hierarchy.
+ */
+hypre_Vector* FineNorms(HYPRE_Solver amg, GalerkinLevels* galerkin)
+{
+  if (galerkin)
+    return galerkin->L1.empty() ? nullptr : galerkin->L1[0];
+  if (!amg)
+    return nullptr;
+  hypre_Vector** l1 = hypre_ParAMGDataL1Norms(reinterpret_cast<hypre_ParAMGData*>(amg));
+  return l1 ? l1[0] : nullptr;
+}
+
+/**
+ * The fine level's l1 norms of rows `rows` (local numbers; all rows when
+ * null) recomputed from the matrix's current values: BoomerAMG's option 4
+ * (natural order; hypre_ParCSRComputeL1Norms), per row |a_ii| plus half the
+ * absolute off-rank entries, truncated to |a_ii| when within 4/3 of it,
+ * with the diagonal's sign. After a values-only update (a paint) the kept
+ * hierarchy's l1 Gauss-Seidel sweeps would otherwise divide the new
+ * residual by the old norm: where a paint raised a row's diagonal more
+ * than twice (an absorber) the sweep over-corrects there and diverges, and
+ * the V-cycle is no longer a convergent preconditioner. Also what every
+ * set-up's fine norms are (BoomerAMG's overwritten, a sharer's own computed
+ * here), so that a row's norm never depends on whether it was last set by
+ * hypre or here. Throws translucency::Error on a zero diagonal.
+ */
+void RefreshFineNorms(hypre_ParCSRMatrix* m, hypre_Vector* fine, const int* rows, int count)
+{
+  if (!fine)
+    return;
+  const HYPRE_Int numRows = hypre_ParCSRMatrixNumRows(m);
+  if (hypre_VectorSize(fine) != numRows)
+  {
+    throw Error("hypre-amg: the kept hierarchy's fine level has " +
+      std::to_string(hypre_VectorSize(fine)) + " rows, the matrix " + std::to_string(numRows));
+  }
+  const hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(m);
+  const hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(m);
+  const HYPRE_Int* di = hypre_CSRMatrixI(diag);
+  const HYPRE_Int* dj = hypre_CSRMatrixJ(diag);
+  const HYPRE_Complex* dv = hypre_CSRMatrixData(diag);
+  const HYPRE_Int* oi = hypre_CSRMatrixNumCols(offd) > 0 ? hypre_CSRMatrixI(offd) : nullptr;
+  const HYPRE_Complex* ov = oi ? hypre_CSRMatrixData(offd) : nullptr;
+  HYPRE_Real* l1 = hypre_VectorData(fine);
+  const int n = rows ? count : numRows;
+  for (int k = 0; k < n; ++k)
+  {
+    const HYPRE_Int i = rows ? rows[k] : k;
+    if (i < 0 || i >= numRows)
+      throw Error("hypre-amg: row " + std::to_string(i) + " outside the rank's " +
+        std::to_string(numRows) + " rows");
+    HYPRE_Real d = 0.0;
+    for (HYPRE_Int e = di[i]; e < di[i + 1]; ++e)
+    {
+      if (dj[e] == i)
+      {
+        d = dv[e];
+        break;
+      }
+    }
+    const HYPRE_Real ad = std::abs(d);
+    HYPRE_Real norm = ad;
+    if (oi)
+    {
+      for (HYPRE_Int e = oi[i]; e < oi[i + 1]; ++e)
+        norm += 0.5 * std::abs(ov[e]);
+    }
+    if (norm <= 4.0 / 3.0 * ad)
+      norm = ad;
+    if (norm == 0.0)
+    {
+      throw Error("hypre-amg: row " + std::to_string(hypre_ParCSRMatrixFirstRowIndex(m) + i) +
+        " of the matrix has a zero diagonal and no off-rank entries (the smoother divides by it)");
+    }
+    l1[i] = d < 0.0 ? -norm : norm;
+  }
+}
+
+/**
  * Collective: `fine`'s Galerkin levels on `donor`'s coarsening (every rank
  * calls it; GalerkinSharable(donor) true). Throws translucency::Error on a
  * hypre error.
@@ -251,12 +340,19 @@ std::unique_ptr<GalerkinLevels> BuildGalerkinLevels(HYPRE_Solver donor, hypre_Pa
       if (!donorL1[l])
         continue;
       hypre_ParCSRMatrix* m = l == 0 ? fine : g->A[static_cast<std::size_t>(l)];
+      hypre_Vector* v = hypre_SeqVectorCreate(hypre_ParCSRMatrixNumRows(m));
+      g->L1[static_cast<std::size_t>(l)] = v; // owned (destroyed) from here on
+      if (l == 0)
+      {
+        // The fine level's as every update recomputes them.
+        hypre_SeqVectorInitialize_v2(v, hypre_ParCSRMatrixMemoryLocation(m));
+        RefreshFineNorms(m, v, nullptr, 0);
+        continue;
+      }
       HYPRE_Real* norms = nullptr;
       hypre_ParCSRComputeL1Norms(m, 4, nullptr, &norms);
-      hypre_Vector* v = hypre_SeqVectorCreate(hypre_ParCSRMatrixNumRows(m));
       hypre_VectorData(v) = norms;
       hypre_SeqVectorInitialize_v2(v, hypre_ParCSRMatrixMemoryLocation(m));
-      g->L1[static_cast<std::size_t>(l)] = v;
     }
   }
   // The coarsest level's dense copy for Gaussian elimination, laid out as
@@ -339,89 +435,6 @@ HYPRE_Int NoSetup(HYPRE_Solver, HYPRE_Matrix, HYPRE_Vector, HYPRE_Vector)
   return 0;
 }
 
-/**
- * The fine level's l1 norms of the smoother (the channel's own BoomerAMG's,
- * or its own Galerkin levels'), or nullptr for a smoother without them or a
- * one-level hierarchy.
- */
-hypre_Vector* FineNorms(HYPRE_Solver amg, GalerkinLevels* galerkin)
-{
-  if (galerkin)
-    return galerkin->L1.empty() ? nullptr : galerkin->L1[0];
-  if (!amg)
-    return nullptr;
-  hypre_Vector** l1 = hypre_ParAMGDataL1Norms(reinterpret_cast<hypre_ParAMGData*>(amg));
-  return l1 ? l1[0] : nullptr;
-}
-
-/**
- * The fine level's l1 norms of rows `rows` (local numbers; all rows when
- * null) recomputed from the matrix's current values: BoomerAMG's option 4
- * (natural order; hypre_ParCSRComputeL1Norms), per row |a_ii| plus half the
- * absolute off-rank entries, truncated to |a_ii| when within 4/3 of it,
- * with the diagonal's sign. After a values-only update (a paint) the kept
- * hierarchy's l1 Gauss-Seidel sweeps would otherwise divide the new
- * residual by the old norm: where a paint raised a row's diagonal more
- * than twice (an absorber) the sweep over-corrects there and diverges, and
- * the V-cycle is no longer a convergent preconditioner. Also called after
- * every set-up (for every row), so that a row's norm never depends on
- * whether it was last set by hypre or here. Throws translucency::Error on a
- * zero diagonal.
- */
-void RefreshFineNorms(HYPRE_IJMatrix ij, hypre_Vector* fine, const int* rows, int count)
-{
-  if (!fine)
-    return;
-  HYPRE_ParCSRMatrix a = nullptr;
-  HYPRE_IJMatrixGetObject(ij, reinterpret_cast<void**>(&a));
-  auto* m = reinterpret_cast<hypre_ParCSRMatrix*>(a);
-  const HYPRE_Int numRows = hypre_ParCSRMatrixNumRows(m);
-  if (hypre_VectorSize(fine) != numRows)
-  {
-    throw Error("hypre-amg: the kept hierarchy's fine level has " +
-      std::to_string(hypre_VectorSize(fine)) + " rows, the matrix " + std::to_string(numRows));
-  }
-  const hypre_CSRMatrix* diag = hypre_ParCSRMatrixDiag(m);
-  const hypre_CSRMatrix* offd = hypre_ParCSRMatrixOffd(m);
-  const HYPRE_Int* di = hypre_CSRMatrixI(diag);
-  const HYPRE_Int* dj = hypre_CSRMatrixJ(diag);
-  const HYPRE_Complex* dv = hypre_CSRMatrixData(diag);
-  const HYPRE_Int* oi = hypre_CSRMatrixNumCols(offd) > 0 ? hypre_CSRMatrixI(offd) : nullptr;
-  const HYPRE_Complex* ov = oi ? hypre_CSRMatrixData(offd) : nullptr;
-  HYPRE_Real* l1 = hypre_VectorData(fine);
-  const int n = rows ? count : numRows;
-  for (int k = 0; k < n; ++k)
-  {
-    const HYPRE_Int i = rows ? rows[k] : k;
-    if (i < 0 || i >= numRows)
-      throw Error("hypre-amg: row " + std::to_string(i) + " outside the rank's " +
-        std::to_string(numRows) + " rows");
-    HYPRE_Real d = 0.0;
-    for (HYPRE_Int e = di[i]; e < di[i + 1]; ++e)
-    {
-      if (dj[e] == i)
-      {
-        d = dv[e];
-        break;
-      }
-    }
-    const HYPRE_Real ad = std::abs(d);
-    HYPRE_Real norm = ad;
-    if (oi)
-    {
-      for (HYPRE_Int e = oi[i]; e < oi[i + 1]; ++e)
-        norm += 0.5 * std::abs(ov[e]);
-    }
-    if (norm <= 4.0 / 3.0 * ad)
-      norm = ad;
-    if (norm == 0.0)
-    {
-      throw Error("hypre-amg: row " + std::to_string(hypre_ParCSRMatrixFirstRowIndex(m) + i) +
-        " of the matrix has a zero diagonal and no off-rank entries (the smoother divides by it)");
-    }
-    l1[i] = d < 0.0 ? -norm : norm;
-  }
-}
 }
 
 HypreBoomerAMGPCG::HypreBoomerAMGPCG(MPI_Comm comm, const BoomerAMGOptions& options)
@@ -519,7 +532,7 @@ void HypreBoomerAMGPCG::UpdateValues(const int* rowOffsets, const int* columns, 
   // matrix in hypre 2.26: TestDistributedFamily's (2A)^-1 = A^-1 / 2.)
   hypre::ScatterValues(h.A, RowBegin_, RowEnd_, rowOffsets, columns, values, Places_,
     PlacePattern_, "hypre-amg");
-  RefreshFineNorms(h.A, FineNorms(h.AMG, h.Galerkin.get()), nullptr, 0);
+  RefreshFineNorms(ParCSROf(h.A), FineNorms(h.AMG, h.Galerkin.get()), nullptr, 0);
   MatrixMilliseconds_ = 1000.0 * (MPI_Wtime() - start);
   HierarchyMilliseconds_ = 0.0;
 }
@@ -535,7 +548,7 @@ void HypreBoomerAMGPCG::UpdateRows(const int* rowOffsets, const int* columns,
   const double start = MPI_Wtime();
   hypre::ScatterRows(h.A, RowBegin_, RowEnd_, rowOffsets, columns, values, rows, numRows, Places_,
     PlacePattern_, "hypre-amg");
-  RefreshFineNorms(h.A, FineNorms(h.AMG, h.Galerkin.get()), rows, numRows);
+  RefreshFineNorms(ParCSROf(h.A), FineNorms(h.AMG, h.Galerkin.get()), rows, numRows);
   MatrixMilliseconds_ = 1000.0 * (MPI_Wtime() - start);
   HierarchyMilliseconds_ = 0.0;
 }
@@ -611,7 +624,6 @@ void HypreBoomerAMGPCG::BuildSolver(const HypreBoomerAMGPCG* shared)
     OperatorComplexity_ = total[0] > 0 ? (total[0] + total[1]) / total[0] : 0.0;
     IterationWork_ = shared->IterationWork_;
     MemoryBytes_ = static_cast<std::size_t>(local[1] * 12.0); // own levels; P is the donor's
-    RefreshFineNorms(h.A, FineNorms(nullptr, h.Galerkin.get()), nullptr, 0);
     return;
   }
   Check(HYPRE_BoomerAMGCreate(&h.AMG), "BoomerAMG creation");
@@ -665,7 +677,8 @@ void HypreBoomerAMGPCG::BuildSolver(const HypreBoomerAMGPCG* shared)
   NonZeros_ = static_cast<long long>(total[0]);
   IterationWork_ = total[0] > 0 ? 1.0 + (3.0 * total[1] + 2.0 * total[2]) / total[0] : 0.0;
   MemoryBytes_ = static_cast<std::size_t>((local[1] - local[0] + local[2]) * 12.0);
-  RefreshFineNorms(h.A, FineNorms(h.AMG, nullptr), nullptr, 0);
+  RefreshFineNorms(
+    reinterpret_cast<hypre_ParCSRMatrix*>(a), FineNorms(h.AMG, nullptr), nullptr, 0);
 }
 
 int HypreBoomerAMGPCG::Solve(
